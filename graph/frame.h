@@ -1,0 +1,59 @@
+#pragma once
+// The message that flows through the reconstruction graph, and the pipeline's configuration.
+
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "nodes/distance/hoppe_distance.h"
+#include "nodes/extract/marching_cubes.h"
+#include "nodes/filter/filter.h"
+#include "nodes/normals/normals.h"
+#include "nodes/normals/spatial_index.h"
+#include "nodes/optimize/mesh_cleanup.h"
+#include "nodes/voxelize/sparse_grid.h"
+#include "runtime/point_cloud.h"
+#include "runtime/tracing.h"
+#include "runtime/triangle_mesh.h"
+
+namespace meshflow {
+
+/// Configuration of every stage; defaults are the thesis's published ones.
+/// voxelize.voxel_size <= 0 means "choose from the point spacing" (suggest_voxel_size).
+struct ReconstructionConfig {
+  FilterConfig filter;
+  NormalsConfig normals;
+  VoxelizeConfig voxelize;
+  DistanceConfig distance;
+  ExtractConfig extract;
+  CleanupConfig cleanup;
+};
+
+/// One input (a point cloud) and everything the stages made of it. A frame that fails a stage
+/// keeps flowing with `error` set, so ordering and accounting stay exact.
+struct Frame {
+  std::uint64_t seq = 0;           ///< gapless, assigned by the pipeline in input order
+  std::string name;                ///< where the input came from (a path, "synthetic", ...)
+  std::function<PointCloud()> load;  ///< produces the input; called by the "read" stage
+
+  PointCloud cloud;                ///< after read: raw; after filter: filtered, with normals
+  FilterCounts filter_counts;
+  std::shared_ptr<const SpatialIndex> index;  ///< over cloud.positions, built by "normals"
+  float voxel_size = 0.0f;
+  SparseGrid grid;
+  DistanceField distance;
+  TriangleMesh mesh;               ///< after extract: raw; after optimize: cleaned
+  CleanupReport cleanup;
+
+  std::string error;               ///< empty while the frame is healthy
+  std::string failed_stage;
+  std::vector<StageRecord> timings;  ///< one record per stage that ran
+
+  bool ok() const { return error.empty(); }
+};
+
+using FramePtr = std::shared_ptr<Frame>;
+
+}  // namespace meshflow

@@ -1,0 +1,38 @@
+#pragma once
+// The reconstruction pipeline as a oneTBB flow graph:
+//
+//   source -> limiter(K) -> read -> filter -> normals -> voxelize -> distance -> extract
+//          -> optimize -> sequencer -> sink --(decrement)--> limiter
+//
+// Stages are stateless, so several frames (clouds) are in flight at once (at most K), and
+// each stage's kernel is itself parallel inside. The sink sees frames in input order.
+
+#include <cstddef>
+#include <functional>
+
+#include "graph/frame.h"
+
+namespace meshflow {
+
+class ReconstructionPipeline {
+ public:
+  /// `max_in_flight` (>= 1) bounds the frames inside the graph, and so memory.
+  explicit ReconstructionPipeline(ReconstructionConfig config, std::size_t max_in_flight = 2);
+
+  /// Pulls frames from `next` until it returns nullptr, runs them through every stage and
+  /// hands each finished frame (failed ones included, with `error` set) to `sink`, one at a
+  /// time and in the order `next` produced them. Blocks until all frames are done.
+  /// `next` and `sink` are called from graph threads, never concurrently with themselves.
+  void run(const std::function<FramePtr()>& next, const std::function<void(const FramePtr&)>& sink);
+
+  /// Reconstructs one in-memory cloud (convenience over run()).
+  FramePtr reconstruct(PointCloud cloud, std::string name = "cloud");
+
+  const ReconstructionConfig& config() const { return config_; }
+
+ private:
+  ReconstructionConfig config_;
+  std::size_t max_in_flight_;
+};
+
+}  // namespace meshflow

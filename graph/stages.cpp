@@ -1,0 +1,68 @@
+#include "graph/stages.h"
+
+#include <exception>
+
+#include "runtime/error.h"
+
+namespace meshflow::stages {
+
+std::uint64_t read(Frame& f, const ReconstructionConfig&) {
+  if (f.load) f.cloud = f.load();
+  return f.cloud.size();
+}
+
+std::uint64_t filter(Frame& f, const ReconstructionConfig& c) {
+  f.cloud = filter_cloud(f.cloud, c.filter, &f.filter_counts);
+  if (f.cloud.size() < 3) {
+    throw Error(f.name, "filter",
+                "only " + std::to_string(f.cloud.size()) + " finite points remain of " +
+                    std::to_string(f.filter_counts.input) + " (" +
+                    std::to_string(f.filter_counts.non_finite) + " NaN/Inf); need at least 3");
+  }
+  return f.cloud.size();
+}
+
+std::uint64_t normals(Frame& f, const ReconstructionConfig& c) {
+  auto index = std::make_shared<KdTreeIndex>(f.cloud.positions);
+  f.cloud.normals = estimate_normals(f.cloud, *index, c.normals);
+  f.index = std::move(index);
+  return f.cloud.size();
+}
+
+std::uint64_t voxelize(Frame& f, const ReconstructionConfig& c) {
+  VoxelizeConfig vc = c.voxelize;
+  if (!(vc.voxel_size > 0.0f)) vc.voxel_size = suggest_voxel_size(f.cloud, *f.index);
+  f.voxel_size = vc.voxel_size;
+  f.grid = meshflow::voxelize(f.cloud, vc);
+  return f.grid.cells.size();
+}
+
+std::uint64_t distance(Frame& f, const ReconstructionConfig& c) {
+  f.distance = hoppe_distance(f.grid, f.cloud, *f.index, c.distance);
+  return f.grid.corners.size();
+}
+
+std::uint64_t extract(Frame& f, const ReconstructionConfig& c) {
+  f.mesh = marching_cubes(f.grid, f.distance, c.extract);
+  return f.mesh.triangles.size();
+}
+
+std::uint64_t optimize(Frame& f, const ReconstructionConfig& c) {
+  f.mesh = clean_mesh(f.mesh, c.cleanup, &f.cleanup);
+  return f.mesh.triangles.size();
+}
+
+void run_stage(const char* name, StageFunction body, Frame& f, const ReconstructionConfig& c) {
+  if (!f.ok()) return;
+  StageRecord record{name, monotonic_seconds(), 0.0, current_thread_index(), 0};
+  try {
+    record.items = body(f, c);
+  } catch (const std::exception& e) {
+    f.error = e.what();
+    f.failed_stage = name;
+  }
+  record.end_s = monotonic_seconds();
+  f.timings.push_back(std::move(record));
+}
+
+}  // namespace meshflow::stages

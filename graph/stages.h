@@ -1,0 +1,25 @@
+#pragma once
+// Stage bodies: each calls one kernel on a Frame and returns the number of work items it
+// processed. They know nothing of the flow graph, so they can be tested and timed alone.
+
+#include <cstdint>
+
+#include "graph/frame.h"
+
+namespace meshflow::stages {
+
+std::uint64_t read(Frame& f, const ReconstructionConfig& c);      ///< points read
+std::uint64_t filter(Frame& f, const ReconstructionConfig& c);    ///< points kept
+std::uint64_t normals(Frame& f, const ReconstructionConfig& c);   ///< normals estimated
+std::uint64_t voxelize(Frame& f, const ReconstructionConfig& c);  ///< cells
+std::uint64_t distance(Frame& f, const ReconstructionConfig& c);  ///< corners evaluated
+std::uint64_t extract(Frame& f, const ReconstructionConfig& c);   ///< triangles
+std::uint64_t optimize(Frame& f, const ReconstructionConfig& c);  ///< triangles kept
+
+using StageFunction = std::uint64_t (*)(Frame&, const ReconstructionConfig&);
+
+/// Runs `body` on `f` unless the frame already failed, appending a StageRecord; a thrown
+/// exception becomes the frame's error. Thread-safe for distinct frames.
+void run_stage(const char* name, StageFunction body, Frame& f, const ReconstructionConfig& c);
+
+}  // namespace meshflow::stages

@@ -1,0 +1,75 @@
+#include "nodes/extract/cube_table.h"
+
+#include <cassert>
+
+namespace meshflow {
+namespace {
+
+// Faces with their corners counter-clockwise seen from outside the cube.
+constexpr std::array<std::array<int, 4>, 6> kFaces = {{{0, 4, 6, 2},   // x = 0
+                                                       {1, 3, 7, 5},   // x = 1
+                                                       {0, 1, 5, 4},   // y = 0
+                                                       {2, 6, 7, 3},   // y = 1
+                                                       {0, 2, 3, 1},   // z = 0
+                                                       {4, 5, 7, 6}}};  // z = 1
+
+int edge_between(int a, int b) {
+  for (int e = 0; e < 12; ++e) {
+    const auto& ce = kCubeEdges[static_cast<std::size_t>(e)];
+    if ((ce[0] == a && ce[1] == b) || (ce[0] == b && ce[1] == a)) return e;
+  }
+  assert(false);
+  return -1;
+}
+
+CubeCase build_case(int pattern) {
+  auto inside = [pattern](int c) { return (pattern >> c) & 1; };
+  // next[e] = the crossing edge that follows e on its loop.
+  std::array<int, 12> next;
+  next.fill(-1);
+  for (const auto& face : kFaces) {
+    // Walking the face counter-clockwise, each run of outside corners is entered by an
+    // inside->outside edge and left by an outside->inside edge; one segment cuts it off.
+    for (int i = 0; i < 4; ++i) {
+      const int a = face[static_cast<std::size_t>(i)], b = face[static_cast<std::size_t>((i + 1) % 4)];
+      if (!(inside(a) && !inside(b))) continue;
+      for (int j = 1; j < 4; ++j) {
+        const int c = face[static_cast<std::size_t>((i + j) % 4)];
+        const int d = face[static_cast<std::size_t>((i + j + 1) % 4)];
+        if (!inside(c) && inside(d)) {
+          next[static_cast<std::size_t>(edge_between(a, b))] = edge_between(c, d);
+          break;
+        }
+      }
+    }
+  }
+  CubeCase out;
+  std::array<bool, 12> used{};
+  for (int start = 0; start < 12; ++start) {
+    if (next[static_cast<std::size_t>(start)] < 0 || used[static_cast<std::size_t>(start)]) continue;
+    std::vector<int> loop;
+    for (int e = start; !used[static_cast<std::size_t>(e)]; e = next[static_cast<std::size_t>(e)]) {
+      used[static_cast<std::size_t>(e)] = true;
+      loop.push_back(e);
+    }
+    // The loop runs clockwise seen from outside; reverse the fan to wind counter-clockwise.
+    for (std::size_t k = 1; k + 1 < loop.size(); ++k) {
+      out.triangles.push_back({static_cast<std::uint8_t>(loop[0]), static_cast<std::uint8_t>(loop[k + 1]),
+                               static_cast<std::uint8_t>(loop[k])});
+    }
+  }
+  return out;
+}
+
+}  // namespace
+
+const std::array<CubeCase, 256>& cube_cases() {
+  static const std::array<CubeCase, 256> table = [] {
+    std::array<CubeCase, 256> t;
+    for (int p = 0; p < 256; ++p) t[static_cast<std::size_t>(p)] = build_case(p);
+    return t;
+  }();
+  return table;
+}
+
+}  // namespace meshflow

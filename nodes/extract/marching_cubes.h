@@ -1,0 +1,23 @@
+#pragma once
+// Marching cubes over a sparse grid with shared vertices (one per crossed grid edge).
+
+#include "nodes/distance/hoppe_distance.h"
+#include "nodes/voxelize/sparse_grid.h"
+#include "runtime/triangle_mesh.h"
+
+namespace meshflow {
+
+struct ExtractConfig {
+  float iso = 0.0f;             ///< iso-value of the surface (metres of signed distance)
+  bool vertex_normals = true;   ///< compute area-weighted vertex normals
+};
+
+/// Extracts the iso-surface of `field` over every cell of `grid` whose 8 corners are valid.
+/// Vertices are shared between cells (one per crossed edge, ordered by edge key): no duplicate
+/// vertices and no cracks; triangles wind counter-clockwise seen from the positive side, so
+/// face normals point where the field grows. Interpolation parameters are clamped to
+/// [1e-3, 1 - 1e-3] so no two vertices coincide. Parallel and deterministic; O(cells log cells).
+TriangleMesh marching_cubes(const SparseGrid& grid, const DistanceField& field,
+                            const ExtractConfig& config = {});
+
+}  // namespace meshflow

@@ -1,0 +1,56 @@
+#pragma once
+// Point-cloud filters: non-finite removal, crop box / range, voxel-grid downsampling and
+// statistical outlier removal. Each is a pure function; filter_cloud() composes them.
+// All are parallel and deterministic (same output for any thread count).
+
+#include <Eigen/Geometry>
+#include <cstdint>
+#include <optional>
+
+#include "runtime/point_cloud.h"
+
+namespace meshflow {
+
+/// What filter_cloud() removed, stage by stage.
+struct FilterCounts {
+  std::size_t input = 0;
+  std::size_t non_finite = 0;     ///< NaN or Inf coordinates
+  std::size_t cropped = 0;        ///< outside the crop box or the range limits
+  std::size_t merged = 0;         ///< folded into voxel-grid centroids
+  std::size_t outliers = 0;       ///< statistical outliers
+  std::size_t output = 0;
+};
+
+struct FilterConfig {
+  std::optional<Eigen::AlignedBox3f> crop_box;  ///< keep only points inside (metres, world)
+  float min_range = 0.0f;   ///< metres from the sensor origin (needs has_sensor_origin)
+  float max_range = 0.0f;   ///< metres from the sensor origin; 0 = unlimited
+  float voxel_size = 0.0f;  ///< voxel-grid downsampling cell in metres; 0 = off
+  int outlier_k = 0;        ///< neighbours for outlier removal; 0 = off (PCL's default is 50)
+  float outlier_stddev = 1.0f;  ///< remove points whose mean neighbour distance exceeds
+                                ///< mean + outlier_stddev * stddev over the cloud
+};
+
+/// Indices of points whose three coordinates are finite. O(n).
+std::vector<std::uint32_t> finite_point_indices(const PointCloud& cloud);
+
+/// Indices of points inside `box` (if set) and within [min_range, max_range] of the sensor
+/// origin (range limits ignored when the cloud has no sensor origin). O(n).
+std::vector<std::uint32_t> crop_indices(const PointCloud& cloud, const FilterConfig& config);
+
+/// One point per occupied cell of edge `voxel_size`: the centroid of the cell's points (and the
+/// mean of their normals, colours, intensities). Output ordered by cell key. O(n log n).
+PointCloud voxel_grid_downsample(const PointCloud& cloud, float voxel_size);
+
+/// Indices of points that are not statistical outliers: a point is an outlier if the mean
+/// distance to its k nearest neighbours exceeds mean + stddev_mul * stddev of that statistic
+/// over the cloud (PCL's StatisticalOutlierRemoval). O(n k log n).
+std::vector<std::uint32_t> statistical_inlier_indices(const PointCloud& cloud, int k,
+                                                      float stddev_mul);
+
+/// Applies, in order: non-finite removal, crop/range, voxel grid, outlier removal.
+/// `counts` (optional) receives what each step removed.
+PointCloud filter_cloud(const PointCloud& cloud, const FilterConfig& config,
+                        FilterCounts* counts = nullptr);
+
+}  // namespace meshflow

@@ -1,0 +1,104 @@
+#include "nodes/io/mesh_writers.h"
+
+#include <cstring>
+
+#include "nodes/io/atomic_file.h"
+#include "nodes/io/parse_util.h"
+#include "runtime/error.h"
+
+namespace meshflow::io {
+namespace {
+template <typename T>
+void put(std::string& buf, const T& v) {
+  char b[sizeof(T)];
+  std::memcpy(b, &v, sizeof(T));
+  buf.append(b, sizeof(T));
+}
+}  // namespace
+
+void write_ply(const std::string& path, const TriangleMesh& mesh, PlyEncoding encoding) {
+  AtomicOutputFile file(path);
+  std::ofstream& out = file.stream();
+  const bool normals = mesh.normals.size() == mesh.vertices.size() && !mesh.normals.empty();
+  const bool colors = mesh.colors.size() == mesh.vertices.size() && !mesh.colors.empty();
+  out << "ply\nformat " << (encoding == PlyEncoding::kBinary ? "binary_little_endian" : "ascii")
+      << " 1.0\ncomment written by meshflow\nelement vertex " << mesh.vertices.size()
+      << "\nproperty float x\nproperty float y\nproperty float z\n";
+  if (normals) out << "property float nx\nproperty float ny\nproperty float nz\n";
+  if (colors) out << "property uchar red\nproperty uchar green\nproperty uchar blue\n";
+  out << "element face " << mesh.triangles.size()
+      << "\nproperty list uchar uint vertex_indices\nend_header\n";
+  if (encoding == PlyEncoding::kAscii) {
+    char line[256];
+    for (std::size_t i = 0; i < mesh.vertices.size(); ++i) {
+      const auto& v = mesh.vertices[i];
+      int n = std::snprintf(line, sizeof line, "%.9g %.9g %.9g", v.x(), v.y(), v.z());
+      if (normals) {
+        const auto& nv = mesh.normals[i];
+        n += std::snprintf(line + n, sizeof line - static_cast<std::size_t>(n), " %.7g %.7g %.7g",
+                           nv.x(), nv.y(), nv.z());
+      }
+      if (colors) {
+        const auto& c = mesh.colors[i];
+        std::snprintf(line + n, sizeof line - static_cast<std::size_t>(n), " %d %d %d", c.r, c.g, c.b);
+      }
+      out << line << '\n';
+    }
+    for (const Triangle& t : mesh.triangles) out << "3 " << t[0] << ' ' << t[1] << ' ' << t[2] << '\n';
+  } else {
+    std::string buf;
+    buf.reserve(mesh.vertices.size() * 27 + mesh.triangles.size() * 13);
+    for (std::size_t i = 0; i < mesh.vertices.size(); ++i) {
+      for (int k = 0; k < 3; ++k) put(buf, mesh.vertices[i][k]);
+      if (normals) for (int k = 0; k < 3; ++k) put(buf, mesh.normals[i][k]);
+      if (colors) {
+        buf.push_back(static_cast<char>(mesh.colors[i].r));
+        buf.push_back(static_cast<char>(mesh.colors[i].g));
+        buf.push_back(static_cast<char>(mesh.colors[i].b));
+      }
+    }
+    for (const Triangle& t : mesh.triangles) {
+      buf.push_back(3);
+      for (std::uint32_t v : t) put(buf, v);
+    }
+    out.write(buf.data(), static_cast<std::streamsize>(buf.size()));
+  }
+  file.commit();
+}
+
+void write_obj(const std::string& path, const TriangleMesh& mesh) {
+  AtomicOutputFile file(path);
+  std::ofstream& out = file.stream();
+  const bool normals = mesh.normals.size() == mesh.vertices.size() && !mesh.normals.empty();
+  out << "# written by meshflow\n";
+  char line[128];
+  for (const auto& v : mesh.vertices) {
+    std::snprintf(line, sizeof line, "v %.9g %.9g %.9g\n", v.x(), v.y(), v.z());
+    out << line;
+  }
+  if (normals) {
+    for (const auto& n : mesh.normals) {
+      std::snprintf(line, sizeof line, "vn %.7g %.7g %.7g\n", n.x(), n.y(), n.z());
+      out << line;
+    }
+  }
+  for (const Triangle& t : mesh.triangles) {
+    if (normals) {
+      std::snprintf(line, sizeof line, "f %u//%u %u//%u %u//%u\n", t[0] + 1, t[0] + 1, t[1] + 1,
+                    t[1] + 1, t[2] + 1, t[2] + 1);
+    } else {
+      std::snprintf(line, sizeof line, "f %u %u %u\n", t[0] + 1, t[1] + 1, t[2] + 1);
+    }
+    out << line;
+  }
+  file.commit();
+}
+
+void write_mesh(const std::string& path, const TriangleMesh& mesh) {
+  const std::string ext = lower_extension(path);
+  if (ext == ".ply") return write_ply(path, mesh);
+  if (ext == ".obj") return write_obj(path, mesh);
+  throw Error(path, "", "unknown mesh format '" + ext + "' (expected .ply or .obj)");
+}
+
+}  // namespace meshflow::io

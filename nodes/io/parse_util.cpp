@@ -1,0 +1,93 @@
+#include "nodes/io/parse_util.h"
+
+#include <cctype>
+#include <charconv>
+#include <cmath>
+#include <filesystem>
+
+#include "runtime/error.h"
+
+namespace meshflow::io {
+
+void split_whitespace(std::string_view line, std::vector<std::string_view>& tokens) {
+  tokens.clear();
+  std::size_t i = 0;
+  const std::size_t n = line.size();
+  while (i < n) {
+    while (i < n && (line[i] == ' ' || line[i] == '\t' || line[i] == '\r')) ++i;
+    const std::size_t start = i;
+    while (i < n && line[i] != ' ' && line[i] != '\t' && line[i] != '\r') ++i;
+    if (i > start) tokens.push_back(line.substr(start, i - start));
+  }
+}
+
+double parse_number(std::string_view token, const std::string& source,
+                    const std::string& location, std::string_view field) {
+  std::string_view t = token;
+  if (!t.empty() && t.front() == '+') t.remove_prefix(1);
+  double value = 0.0;
+  const auto [end, ec] = std::from_chars(t.data(), t.data() + t.size(), value);
+  if (ec == std::errc::result_out_of_range) {
+    throw Error(source, location,
+                "field '" + std::string(field) + "': value '" + std::string(token) +
+                    "' is out of the range of a double");
+  }
+  if (ec != std::errc() || end != t.data() + t.size() || t.empty()) {
+    throw Error(source, location,
+                "field '" + std::string(field) + "': expected a number, got '" +
+                    std::string(token) + "'");
+  }
+  return value;
+}
+
+std::uint64_t parse_count(std::string_view token, const std::string& source,
+                          const std::string& location, std::string_view field) {
+  std::uint64_t value = 0;
+  const auto [end, ec] = std::from_chars(token.data(), token.data() + token.size(), value);
+  if (ec != std::errc() || end != token.data() + token.size() || token.empty()) {
+    throw Error(source, location,
+                "field '" + std::string(field) + "': expected a non-negative integer, got '" +
+                    std::string(token) + "'");
+  }
+  return value;
+}
+
+void check_coordinates(const Eigen::Vector3d& p, const std::string& source,
+                       const std::string& location) {
+  for (int i = 0; i < 3; ++i) {
+    if (std::isfinite(p[i]) && std::abs(p[i]) > kMaxAbsCoordinate) {
+      char buf[64];
+      std::snprintf(buf, sizeof buf, "%g", p[i]);
+      throw Error(source, location,
+                  std::string("coordinate ") + "xyz"[i] + " = " + buf +
+                      " is beyond +-1e6 m: corrupt data or wrong units");
+    }
+  }
+}
+
+std::ifstream open_input(const std::string& path) {
+  if (std::filesystem::is_directory(path)) throw Error(path, "", "is a directory, not a file");
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw Error(path, "", "cannot open file for reading");
+  return in;
+}
+
+std::uint64_t file_size(const std::string& path) {
+  std::error_code ec;
+  const auto size = std::filesystem::file_size(path, ec);
+  return ec ? 0 : static_cast<std::uint64_t>(size);
+}
+
+std::string lower_extension(const std::string& path) {
+  std::string ext = std::filesystem::path(path).extension().string();
+  for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return ext;
+}
+
+bool read_line(std::istream& in, std::string& line) {
+  if (!std::getline(in, line)) return false;
+  while (!line.empty() && (line.back() == '\r' || line.back() == '\n')) line.pop_back();
+  return true;
+}
+
+}  // namespace meshflow::io

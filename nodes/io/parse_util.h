@@ -1,0 +1,46 @@
+#pragma once
+// Helpers shared by the text and binary readers: tokenizing, number parsing with precise
+// error messages, and coordinate sanity checks.
+
+#include <Eigen/Core>
+#include <cstdint>
+#include <fstream>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace meshflow::io {
+
+/// Coordinates beyond this magnitude (metres) are rejected as corrupt data or wrong units.
+constexpr double kMaxAbsCoordinate = 1e6;
+
+/// Splits `line` at spaces, tabs and carriage returns into `tokens` (views into `line`).
+void split_whitespace(std::string_view line, std::vector<std::string_view>& tokens);
+
+/// Parses a decimal floating-point token ("1.5", "-2e3", "nan", "inf"). Throws meshflow::Error
+/// naming `source`, `location` and `field` when the token is not a number or overflows double.
+double parse_number(std::string_view token, const std::string& source,
+                    const std::string& location, std::string_view field);
+
+/// Parses a non-negative integer token; throws meshflow::Error like parse_number.
+std::uint64_t parse_count(std::string_view token, const std::string& source,
+                          const std::string& location, std::string_view field);
+
+/// Throws meshflow::Error if a finite component of p exceeds kMaxAbsCoordinate.
+/// NaN/Inf are allowed here (organized clouds use them); the filter stage removes them.
+void check_coordinates(const Eigen::Vector3d& p, const std::string& source,
+                       const std::string& location);
+
+/// Opens `path` for binary reading or throws meshflow::Error("cannot open").
+std::ifstream open_input(const std::string& path);
+
+/// Size of the file in bytes (0 if unknown).
+std::uint64_t file_size(const std::string& path);
+
+/// Lower-cased extension including the dot (".ply"), or "" if none.
+std::string lower_extension(const std::string& path);
+
+/// Reads one line without its end-of-line characters; false at end of file.
+bool read_line(std::istream& in, std::string& line);
+
+}  // namespace meshflow::io

@@ -1,0 +1,19 @@
+#pragma once
+// PLY point reader: ascii, binary_little_endian and binary_big_endian.
+
+#include <string>
+
+#include "runtime/point_cloud.h"
+
+namespace meshflow::io {
+
+/// Reads the `vertex` element of a PLY file into a PointCloud (metres as stored).
+/// Recognised properties: x y z (required); nx ny nz (or normal_x..); red green blue
+/// (or r g b / diffuse_*; 8-bit, 16-bit or float 0..1); intensity (or scalar_intensity,
+/// reflectance). Every other property and element, list properties included, is skipped.
+/// Throws meshflow::Error naming the file and the header line, element row or field on
+/// malformed, truncated or inconsistent input (including data past the declared counts).
+/// Streams the file: memory is the size of the output plus a fixed buffer. O(file size).
+PointCloud read_ply(const std::string& path);
+
+}  // namespace meshflow::io

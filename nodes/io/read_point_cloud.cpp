@@ -1,0 +1,22 @@
+#include "nodes/io/read_point_cloud.h"
+
+#include "nodes/io/parse_util.h"
+#include "nodes/io/pcd_reader.h"
+#include "nodes/io/ply_reader.h"
+#include "nodes/io/scan3d_reader.h"
+#include "nodes/io/xyz_reader.h"
+#include "runtime/error.h"
+
+namespace meshflow::io {
+
+PointCloud read_point_cloud(const std::string& path) {
+  const std::string ext = lower_extension(path);
+  if (ext == ".ply") return read_ply(path);
+  if (ext == ".pcd") return read_pcd(path);
+  if (ext == ".xyz" || ext == ".txt" || ext == ".pts" || ext == ".asc") return read_xyz(path);
+  if (ext == ".3d") return read_3dtk_scan(path);
+  throw Error(path, "", "unknown point cloud format '" + ext +
+                            "' (expected .ply, .pcd, .xyz, .txt, .pts, .asc or .3d)");
+}
+
+}  // namespace meshflow::io

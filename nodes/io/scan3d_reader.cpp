@@ -1,0 +1,104 @@
+#include "nodes/io/scan3d_reader.h"
+
+#include <charconv>
+#include <cmath>
+#include <filesystem>
+
+#include "nodes/io/parse_util.h"
+#include "runtime/error.h"
+
+namespace meshflow::io {
+namespace {
+
+// 3DTK's left-handed (x right, y up, z forward) cm frame to meshflow's right-handed metres:
+// x' = z, y' = -x, z' = y (the inverse of 3DTK's .xyz importer).
+Eigen::Matrix3d tdtk_to_meshflow() {
+  Eigen::Matrix3d m;
+  m << 0, 0, 1, -1, 0, 0, 0, 1, 0;
+  return m;
+}
+
+Eigen::Vector3d read_triple(std::istream& in, const std::string& path, int line_no,
+                            const char* what) {
+  std::string line;
+  std::vector<std::string_view> tok;
+  const std::string loc = "line " + std::to_string(line_no);
+  if (!read_line(in, line)) throw Error(path, loc, std::string("missing ") + what);
+  split_whitespace(line, tok);
+  if (tok.size() != 3) throw Error(path, loc, std::string("expected 3 numbers: ") + what);
+  Eigen::Vector3d v;
+  for (int i = 0; i < 3; ++i) v[i] = parse_number(tok[static_cast<std::size_t>(i)], path, loc, what);
+  if (!v.allFinite()) throw Error(path, loc, std::string("non-finite ") + what);
+  return v;
+}
+
+bool is_three_numbers(const std::vector<std::string_view>& tok) {
+  if (tok.size() != 3) return false;
+  for (std::string_view t : tok) {
+    double v;
+    const auto [end, ec] = std::from_chars(t.data(), t.data() + t.size(), v);
+    if (ec != std::errc() || end != t.data() + t.size()) return false;
+  }
+  return true;
+}
+
+}  // namespace
+
+Eigen::Isometry3f read_3dtk_pose(const std::string& path) {
+  std::ifstream in = open_input(path);
+  const Eigen::Vector3d t_cm = read_triple(in, path, 1, "translation tx ty tz (cm)");
+  const Eigen::Vector3d deg = read_triple(in, path, 2, "rotation rx ry rz (degrees)");
+  const Eigen::Vector3d rad = deg * (M_PI / 180.0);
+  // 3DTK: R = Rx * Ry * Rz, p_world = R * p_scan + t, all in its own frame.
+  const Eigen::Matrix3d r = (Eigen::AngleAxisd(rad.x(), Eigen::Vector3d::UnitX()) *
+                             Eigen::AngleAxisd(rad.y(), Eigen::Vector3d::UnitY()) *
+                             Eigen::AngleAxisd(rad.z(), Eigen::Vector3d::UnitZ()))
+                                .toRotationMatrix();
+  const Eigen::Matrix3d c = tdtk_to_meshflow();
+  Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+  pose.linear() = c * r * c.transpose();
+  pose.translation() = c * t_cm * 0.01;
+  return pose.cast<float>();
+}
+
+PointCloud read_3dtk_scan(const std::string& path, const Scan3dOptions& options,
+                          const std::string& pose_path) {
+  std::ifstream in = open_input(path);
+  std::string resolved_pose = pose_path;
+  if (resolved_pose.empty()) {
+    resolved_pose = std::filesystem::path(path).replace_extension(".pose").string();
+    if (!std::filesystem::exists(resolved_pose)) resolved_pose.clear();
+  }
+  const Eigen::Isometry3f pose =
+      resolved_pose.empty() ? Eigen::Isometry3f::Identity() : read_3dtk_pose(resolved_pose);
+  const Eigen::Matrix3d c = tdtk_to_meshflow();
+
+  PointCloud cloud;
+  cloud.positions.reserve(file_size(path) / 24 + 1);
+  std::string line;
+  std::vector<std::string_view> tok;
+  const double min2 = options.min_range_cm * options.min_range_cm;
+  const double max2 = options.max_range_cm * options.max_range_cm;
+  for (int line_no = 1; read_line(in, line); ++line_no) {
+    split_whitespace(line, tok);
+    if (tok.empty()) continue;
+    const std::string loc = "line " + std::to_string(line_no);
+    if (line_no == 1 && !is_three_numbers(tok)) continue;  // legacy "360 x 225" header
+    if (tok.size() < 3) {
+      throw Error(path, loc, "expected x y z (cm), found " + std::to_string(tok.size()) + " values");
+    }
+    const Eigen::Vector3d p_cm(parse_number(tok[0], path, loc, "x"),
+                               parse_number(tok[1], path, loc, "y"),
+                               parse_number(tok[2], path, loc, "z"));
+    if (!p_cm.allFinite()) throw Error(path, loc, "non-finite coordinate");
+    check_coordinates(p_cm * 0.01, path, loc);
+    const double r2 = p_cm.squaredNorm();
+    if (r2 < min2 || r2 >= max2) continue;
+    cloud.positions.push_back(pose * (c * p_cm * 0.01).cast<float>());
+  }
+  cloud.sensor_origin = pose.translation();
+  cloud.has_sensor_origin = true;
+  return cloud;
+}
+
+}  // namespace meshflow::io

@@ -1,0 +1,60 @@
+#pragma once
+// Spatial search over a point set: one small interface, FLANN's kd-tree behind it, and a
+// brute-force implementation that serves as the test oracle.
+
+#include <Eigen/Core>
+#include <cstdint>
+#include <memory>
+#include <vector>
+
+namespace meshflow {
+
+/// Nearest-neighbour queries over a fixed point set. Implementations do not own the points:
+/// the caller keeps `points` alive and unchanged while the index is used.
+/// All query methods are const and safe to call concurrently from many threads.
+class SpatialIndex {
+ public:
+  virtual ~SpatialIndex() = default;
+
+  /// Writes the (up to) k nearest points to q, closest first, as indices and squared
+  /// distances (m^2); returns how many were found (min(k, size())). Ties break arbitrarily
+  /// but deterministically. O(log n + k) expected for the kd-tree, O(n) brute force.
+  virtual std::size_t knn(const Eigen::Vector3f& q, std::size_t k, std::uint32_t* indices,
+                          float* squared_distances) const = 0;
+
+  /// Indices of all points within `radius` metres of q, closest first.
+  virtual std::vector<std::uint32_t> radius_search(const Eigen::Vector3f& q, float radius) const = 0;
+
+  virtual std::size_t size() const = 0;
+};
+
+/// FLANN single kd-tree (exact search). Build O(n log n), single-threaded.
+class KdTreeIndex final : public SpatialIndex {
+ public:
+  explicit KdTreeIndex(const std::vector<Eigen::Vector3f>& points);
+  ~KdTreeIndex() override;
+  std::size_t knn(const Eigen::Vector3f& q, std::size_t k, std::uint32_t* indices,
+                  float* squared_distances) const override;
+  std::vector<std::uint32_t> radius_search(const Eigen::Vector3f& q, float radius) const override;
+  std::size_t size() const override { return size_; }
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+  std::size_t size_;
+};
+
+/// Exhaustive search; the oracle for tests. O(n) per query.
+class BruteForceIndex final : public SpatialIndex {
+ public:
+  explicit BruteForceIndex(const std::vector<Eigen::Vector3f>& points) : points_(points) {}
+  std::size_t knn(const Eigen::Vector3f& q, std::size_t k, std::uint32_t* indices,
+                  float* squared_distances) const override;
+  std::vector<std::uint32_t> radius_search(const Eigen::Vector3f& q, float radius) const override;
+  std::size_t size() const override { return points_.size(); }
+
+ private:
+  const std::vector<Eigen::Vector3f>& points_;
+};
+
+}  // namespace meshflow

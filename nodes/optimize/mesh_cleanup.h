@@ -1,0 +1,31 @@
+#pragma once
+// First optimization step: remove degenerate triangles and small disconnected components.
+
+#include <cstddef>
+
+#include "runtime/triangle_mesh.h"
+
+namespace meshflow {
+
+struct CleanupConfig {
+  bool remove_degenerate = true;  ///< repeated vertex indices, zero area, duplicated faces
+  /// Connected components (by shared vertices) with fewer triangles are removed; 0 = keep all.
+  std::size_t min_component_triangles = 20;
+};
+
+struct CleanupReport {
+  std::size_t degenerate_triangles = 0;
+  std::size_t duplicate_triangles = 0;
+  std::size_t components = 0;           ///< components before removal
+  std::size_t removed_components = 0;
+  std::size_t removed_component_triangles = 0;
+  std::size_t removed_vertices = 0;     ///< vertices no longer referenced, compacted away
+};
+
+/// Returns a cleaned copy of `mesh`: triangles kept in their order, unreferenced vertices
+/// dropped and the rest renumbered in their order (normals and colours follow).
+/// Deterministic. O(V + T log T).
+TriangleMesh clean_mesh(const TriangleMesh& mesh, const CleanupConfig& config,
+                        CleanupReport* report = nullptr);
+
+}  // namespace meshflow

@@ -1,0 +1,38 @@
+#include "runtime/point_cloud.h"
+
+#include <tbb/parallel_for.h>
+
+namespace meshflow {
+namespace {
+template <typename T>
+void gather(const std::vector<T>& in, const std::vector<std::uint32_t>& indices,
+            std::vector<T>& out) {
+  if (in.empty()) return;
+  out.resize(indices.size());
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, indices.size(), 4096),
+                    [&](const tbb::blocked_range<std::size_t>& r) {
+                      for (std::size_t i = r.begin(); i != r.end(); ++i) out[i] = in[indices[i]];
+                    });
+}
+}  // namespace
+
+PointCloud select_points(const PointCloud& cloud, const std::vector<std::uint32_t>& indices) {
+  PointCloud out;
+  gather(cloud.positions, indices, out.positions);
+  gather(cloud.normals, indices, out.normals);
+  gather(cloud.colors, indices, out.colors);
+  gather(cloud.intensities, indices, out.intensities);
+  out.sensor_origin = cloud.sensor_origin;
+  out.has_sensor_origin = cloud.has_sensor_origin;
+  return out;
+}
+
+Eigen::AlignedBox3f finite_bounds(const PointCloud& cloud) {
+  Eigen::AlignedBox3f box;
+  for (const auto& p : cloud.positions) {
+    if (p.allFinite()) box.extend(p);
+  }
+  return box;
+}
+
+}  // namespace meshflow

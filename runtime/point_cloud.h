@@ -1,0 +1,47 @@
+#pragma once
+// PointCloud: structure of arrays in metres, world frame unless stated otherwise.
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <cstdint>
+#include <vector>
+
+namespace meshflow {
+
+struct Rgb8 {
+  std::uint8_t r = 0, g = 0, b = 0;
+  bool operator==(const Rgb8& o) const { return r == o.r && g == o.g && b == o.b; }
+};
+
+/// A point cloud as parallel arrays. `positions` is always present; `normals`, `colors` and
+/// `intensities` are either empty or exactly as long as `positions`.
+/// An organized cloud (from a depth camera or a range grid) has width * height == size()
+/// and height > 1; invalid pixels are NaN. Filters that drop points make it unorganized.
+struct PointCloud {
+  std::vector<Eigen::Vector3f> positions;    ///< metres
+  std::vector<Eigen::Vector3f> normals;      ///< unit length, oriented towards the sensor
+  std::vector<Rgb8> colors;                  ///< 8-bit RGB
+  std::vector<float> intensities;            ///< sensor units, unscaled
+  std::uint32_t width = 0;                   ///< organized grid width (0 if unorganized)
+  std::uint32_t height = 0;                  ///< organized grid height (0 if unorganized)
+  Eigen::Vector3f sensor_origin = Eigen::Vector3f::Zero();  ///< where the sensor stood
+  bool has_sensor_origin = false;
+
+  std::size_t size() const { return positions.size(); }
+  bool empty() const { return positions.empty(); }
+  bool has_normals() const { return !normals.empty(); }
+  bool has_colors() const { return !colors.empty(); }
+  bool has_intensities() const { return !intensities.empty(); }
+  bool is_organized() const {
+    return height > 1 && static_cast<std::size_t>(width) * height == positions.size();
+  }
+};
+
+/// Returns the points at `indices` (in that order) with all their attributes; the result is
+/// unorganized and keeps the sensor origin. O(indices.size()), parallel, deterministic.
+PointCloud select_points(const PointCloud& cloud, const std::vector<std::uint32_t>& indices);
+
+/// Axis-aligned bounds of the finite points (an empty box if there are none). O(n).
+Eigen::AlignedBox3f finite_bounds(const PointCloud& cloud);
+
+}  // namespace meshflow

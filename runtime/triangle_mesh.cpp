@@ -1,0 +1,60 @@
+#include "runtime/triangle_mesh.h"
+
+#include <tbb/parallel_sort.h>
+
+#include <algorithm>
+
+namespace meshflow {
+
+Eigen::Vector3f face_normal(const TriangleMesh& mesh, const Triangle& t) {
+  const Eigen::Vector3f& a = mesh.vertices[t[0]];
+  const Eigen::Vector3f n = (mesh.vertices[t[1]] - a).cross(mesh.vertices[t[2]] - a);
+  const float len = n.norm();
+  return len > 0.0f ? Eigen::Vector3f(n / len) : Eigen::Vector3f::Zero();
+}
+
+void compute_vertex_normals(TriangleMesh& mesh) {
+  mesh.normals.assign(mesh.vertices.size(), Eigen::Vector3f::Zero());
+  for (const Triangle& t : mesh.triangles) {
+    const Eigen::Vector3f& a = mesh.vertices[t[0]];
+    // Unnormalized cross product = normal weighted by twice the area.
+    const Eigen::Vector3f n = (mesh.vertices[t[1]] - a).cross(mesh.vertices[t[2]] - a);
+    for (std::uint32_t v : t) mesh.normals[v] += n;
+  }
+  for (auto& n : mesh.normals) {
+    const float len = n.norm();
+    n = len > 0.0f ? Eigen::Vector3f(n / len) : Eigen::Vector3f::Zero();
+  }
+}
+
+EdgeStatistics edge_statistics(const TriangleMesh& mesh) {
+  // Key: (min vertex, max vertex) with the direction in the lowest bit.
+  std::vector<std::uint64_t> keys;
+  keys.reserve(mesh.triangles.size() * 3);
+  for (const Triangle& t : mesh.triangles) {
+    for (int i = 0; i < 3; ++i) {
+      const std::uint64_t a = t[i], b = t[(i + 1) % 3];
+      const std::uint64_t lo = std::min(a, b), hi = std::max(a, b);
+      keys.push_back(((lo << 32 | hi) << 1) | (a < b ? 0u : 1u));
+    }
+  }
+  tbb::parallel_sort(keys.begin(), keys.end());
+  EdgeStatistics stats;
+  for (std::size_t i = 0; i < keys.size();) {
+    std::size_t j = i;
+    std::size_t forward = 0;
+    while (j < keys.size() && (keys[j] >> 1) == (keys[i] >> 1)) {
+      forward += (keys[j] & 1u) == 0 ? 1 : 0;
+      ++j;
+    }
+    const std::size_t count = j - i;
+    ++stats.edges;
+    if (count == 1) ++stats.boundary_edges;
+    if (count > 2) ++stats.non_manifold_edges;
+    if (count == 2 && forward != 1) ++stats.inconsistent_edges;
+    i = j;
+  }
+  return stats;
+}
+
+}  // namespace meshflow

@@ -1,0 +1,45 @@
+#pragma once
+// TriangleMesh: an indexed triangle mesh in metres.
+
+#include <Eigen/Core>
+#include <array>
+#include <cstdint>
+#include <vector>
+
+#include "runtime/point_cloud.h"
+
+namespace meshflow {
+
+using Triangle = std::array<std::uint32_t, 3>;
+
+/// Indexed triangles; counter-clockwise winding seen from outside (the normal side).
+/// `normals` and `colors` are per vertex and either empty or as long as `vertices`.
+struct TriangleMesh {
+  std::vector<Eigen::Vector3f> vertices;
+  std::vector<Triangle> triangles;
+  std::vector<Eigen::Vector3f> normals;
+  std::vector<Rgb8> colors;
+
+  bool empty() const { return triangles.empty(); }
+};
+
+/// Unit face normal of triangle t (zero for a degenerate triangle).
+Eigen::Vector3f face_normal(const TriangleMesh& mesh, const Triangle& t);
+
+/// Recomputes `normals` as area-weighted averages of the adjacent face normals.
+/// Serial O(V + T) accumulation: deterministic and cheaper than the stages that produce meshes.
+void compute_vertex_normals(TriangleMesh& mesh);
+
+/// Edge incidence counts of a mesh, for validity checks and `meshflow info`.
+struct EdgeStatistics {
+  std::size_t edges = 0;                ///< distinct undirected edges
+  std::size_t boundary_edges = 0;       ///< edges with one adjacent face
+  std::size_t non_manifold_edges = 0;   ///< edges with three or more adjacent faces
+  std::size_t inconsistent_edges = 0;   ///< two faces traversing the edge in the same direction
+  bool closed() const { return boundary_edges == 0 && non_manifold_edges == 0; }
+};
+
+/// Counts edges by incidence. O(T log T) (sorts the 3T directed edges).
+EdgeStatistics edge_statistics(const TriangleMesh& mesh);
+
+}  // namespace meshflow

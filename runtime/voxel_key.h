@@ -1,0 +1,45 @@
+#pragma once
+// Packed integer cell keys for sparse voxel grids: 21 bits per axis in one uint64.
+// Sorting keys orders cells z-major, then y, then x.
+
+#include <Eigen/Core>
+#include <cassert>
+#include <cmath>
+#include <cstdint>
+
+namespace meshflow {
+
+using VoxelKey = std::uint64_t;
+
+constexpr int kKeyBitsPerAxis = 21;
+constexpr std::int32_t kKeyOffset = 1 << (kKeyBitsPerAxis - 1);  ///< index 0 maps to this
+constexpr std::int32_t kMaxCellIndex = kKeyOffset - 2;  ///< keeps +1 neighbours packable
+constexpr std::uint64_t kKeyAxisMask = (std::uint64_t{1} << kKeyBitsPerAxis) - 1;
+
+/// True when every component of the cell index can be packed, with room for one neighbour.
+inline bool cell_index_in_range(const Eigen::Vector3i& c) {
+  return (c.array().abs() <= kMaxCellIndex).all();
+}
+
+/// Packs a cell index; precondition: cell_index_in_range(c) (or one step beyond it).
+inline VoxelKey pack_key(const Eigen::Vector3i& c) {
+  assert((c.array().abs() < kKeyOffset).all());
+  return (static_cast<std::uint64_t>(c.z() + kKeyOffset) << (2 * kKeyBitsPerAxis)) |
+         (static_cast<std::uint64_t>(c.y() + kKeyOffset) << kKeyBitsPerAxis) |
+         static_cast<std::uint64_t>(c.x() + kKeyOffset);
+}
+
+inline Eigen::Vector3i unpack_key(VoxelKey k) {
+  return {static_cast<std::int32_t>(k & kKeyAxisMask) - kKeyOffset,
+          static_cast<std::int32_t>((k >> kKeyBitsPerAxis) & kKeyAxisMask) - kKeyOffset,
+          static_cast<std::int32_t>((k >> (2 * kKeyBitsPerAxis)) & kKeyAxisMask) - kKeyOffset};
+}
+
+/// Cell containing p for cells of edge `voxel_size` with a corner at the origin.
+inline Eigen::Vector3i cell_of(const Eigen::Vector3f& p, float voxel_size) {
+  return {static_cast<std::int32_t>(std::floor(p.x() / voxel_size)),
+          static_cast<std::int32_t>(std::floor(p.y() / voxel_size)),
+          static_cast<std::int32_t>(std::floor(p.z() / voxel_size))};
+}
+
+}  // namespace meshflow

@@ -1,0 +1,84 @@
+#include "graph/pipeline.h"
+
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <random>
+#include <thread>
+
+#include "graph/stages.h"
+#include "nodes/synthetic/shapes.h"
+#include "runtime/error.h"
+
+namespace meshflow {
+namespace {
+
+ReconstructionConfig sphere_config() {
+  ReconstructionConfig c;
+  c.voxelize.voxel_size = 0.1f;
+  c.normals.orientation = NormalOrientation::kAwayFromViewpoint;
+  return c;
+}
+
+TEST(Pipeline, ManyFramesInFlightArriveInOrderAndFailuresFlowThrough) {
+  ReconstructionPipeline pipeline(sphere_config(), 4);
+  const int frames = 12;
+  int produced = 0;
+  std::vector<FramePtr> out;
+  std::mt19937 rng(3);
+  pipeline.run(
+      [&]() -> FramePtr {
+        if (produced == frames) return nullptr;
+        auto f = std::make_shared<Frame>();
+        const int i = produced++;
+        f->name = "frame" + std::to_string(i);
+        const int delay_ms = static_cast<int>(rng() % 15);
+        f->load = [i, delay_ms] {
+          std::this_thread::sleep_for(std::chrono::milliseconds(delay_ms));  // random stage delays
+          if (i == 5) throw Error("frame5.ply", "line 3", "unreadable");
+          return synthetic::sample_surface(synthetic::Sphere{{0, 0, 0}, 1.0f + 0.05f * i}, 0.05f, 0.0f, 1);
+        };
+        return f;
+      },
+      [&](const FramePtr& f) { out.push_back(f); });
+  ASSERT_EQ(out.size(), static_cast<std::size_t>(frames));
+  for (int i = 0; i < frames; ++i) {
+    EXPECT_EQ(out[static_cast<std::size_t>(i)]->seq, static_cast<std::uint64_t>(i));
+    EXPECT_EQ(out[static_cast<std::size_t>(i)]->name, "frame" + std::to_string(i));
+    if (i == 5) {
+      EXPECT_FALSE(out[5]->ok());
+      EXPECT_EQ(out[5]->failed_stage, "read");
+      EXPECT_NE(out[5]->error.find("frame5.ply: line 3: unreadable"), std::string::npos);
+      EXPECT_EQ(out[5]->timings.size(), 1u) << "later stages skip a failed frame";
+    } else {
+      EXPECT_TRUE(out[static_cast<std::size_t>(i)]->ok()) << out[static_cast<std::size_t>(i)]->error;
+      EXPECT_GT(out[static_cast<std::size_t>(i)]->mesh.triangles.size(), 100u);
+      EXPECT_EQ(out[static_cast<std::size_t>(i)]->timings.size(), 7u);
+    }
+  }
+}
+
+TEST(Pipeline, EmptyOrAllNaNCloudFailsInTheFilterStage) {
+  ReconstructionPipeline pipeline(sphere_config());
+  PointCloud nan_cloud;
+  nan_cloud.positions.assign(10, Eigen::Vector3f::Constant(std::nanf("")));
+  const FramePtr f = pipeline.reconstruct(nan_cloud, "nan.xyz");
+  EXPECT_FALSE(f->ok());
+  EXPECT_EQ(f->failed_stage, "filter");
+  EXPECT_NE(f->error.find("10 NaN/Inf"), std::string::npos) << f->error;
+  EXPECT_FALSE(pipeline.reconstruct(PointCloud{}, "empty")->ok());
+}
+
+TEST(Pipeline, StagesRecordTimingsAndItems) {
+  Frame f;
+  f.cloud = synthetic::sample_surface(synthetic::Sphere{}, 0.05f, 0.0f, 1);
+  const ReconstructionConfig c = sphere_config();
+  stages::run_stage("filter", stages::filter, f, c);
+  stages::run_stage("normals", stages::normals, f, c);
+  ASSERT_EQ(f.timings.size(), 2u);
+  EXPECT_EQ(f.timings[1].items, f.cloud.size());
+  EXPECT_GE(f.timings[1].end_s, f.timings[1].start_s);
+}
+
+}  // namespace
+}  // namespace meshflow

@@ -1,0 +1,56 @@
+#include "nodes/io/mesh_writers.h"
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+
+#include "nodes/io/ply_reader.h"
+#include "runtime/error.h"
+#include "test_support.h"
+
+namespace meshflow::io {
+namespace {
+
+TriangleMesh sample_mesh() {
+  TriangleMesh m;
+  m.vertices = {{0.125f, -1.5f, 2}, {1, 0, 0}, {0, 1, 0}};
+  m.triangles = {{0, 1, 2}};
+  m.colors = {{1, 2, 3}, {4, 5, 6}, {7, 8, 9}};
+  compute_vertex_normals(m);
+  return m;
+}
+
+TEST(MeshWriters, PlyRoundTripBinaryAndAscii) {
+  const TriangleMesh m = sample_mesh();
+  const std::string dir = test::temp_dir();
+  for (PlyEncoding enc : {PlyEncoding::kBinary, PlyEncoding::kAscii}) {
+    const std::string path = dir + (enc == PlyEncoding::kBinary ? "/b.ply" : "/a.ply");
+    write_ply(path, m, enc);
+    const PointCloud c = read_ply(path);  // reads the vertex element, skips faces
+    ASSERT_EQ(c.size(), 3u);
+    for (std::size_t i = 0; i < 3; ++i) {
+      EXPECT_EQ(c.positions[i], m.vertices[i]);
+      EXPECT_TRUE(c.normals[i].isApprox(m.normals[i], 1e-6f));
+      EXPECT_EQ(c.colors[i], m.colors[i]);
+    }
+    EXPECT_FALSE(std::filesystem::exists(path + ".tmp"));
+  }
+}
+
+TEST(MeshWriters, ObjHasOneBasedFaces) {
+  const std::string path = test::temp_dir() + "/m.obj";
+  write_obj(path, sample_mesh());
+  std::ifstream in(path);
+  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  EXPECT_NE(text.find("f 1//1 2//2 3//3"), std::string::npos);
+  EXPECT_NE(text.find("v 0.125 -1.5 2"), std::string::npos);
+}
+
+TEST(MeshWriters, UnwritableOrUnknownOutputIsAnError) {
+  EXPECT_THROW(write_mesh("/nonexistent-dir/m.ply", sample_mesh()), Error);
+  EXPECT_THROW(write_mesh(test::temp_dir() + "/m.stl", sample_mesh()), Error);
+}
+
+}  // namespace
+}  // namespace meshflow::io

@@ -1,0 +1,133 @@
+#include "nodes/io/pcd_reader.h"
+
+#include <gtest/gtest.h>
+#include <lzf.h>
+
+#include <cmath>
+#include <cstring>
+
+#include "runtime/error.h"
+#include "test_support.h"
+
+namespace meshflow::io {
+namespace {
+
+float packed_rgb(std::uint8_t r, std::uint8_t g, std::uint8_t b) {
+  const std::uint32_t bits = (std::uint32_t{r} << 16) | (std::uint32_t{g} << 8) | b;
+  float f;
+  std::memcpy(&f, &bits, 4);
+  return f;
+}
+
+TEST(PcdReader, AsciiWithNormalsAndExtraField) {
+  const std::string path = test::temp_dir() + "/a.pcd";
+  test::write_file(path,
+                   "# .PCD v0.7\nVERSION 0.7\nFIELDS x y z normal_x normal_y normal_z curvature\n"
+                   "SIZE 4 4 4 4 4 4 4\nTYPE F F F F F F F\nCOUNT 1 1 1 1 1 1 1\nWIDTH 2\nHEIGHT 1\n"
+                   "VIEWPOINT 0 0 0 1 0 0 0\nPOINTS 2\nDATA ascii\n1 2 3 0 0 1 0.1\n4 5 6 1 0 0 0.2\n");
+  const PointCloud c = read_pcd(path);
+  ASSERT_EQ(c.size(), 2u);
+  EXPECT_EQ(c.positions[1], Eigen::Vector3f(4, 5, 6));
+  EXPECT_EQ(c.normals[0], Eigen::Vector3f(0, 0, 1));
+  EXPECT_FALSE(c.is_organized());
+}
+
+std::string binary_header(const char* data, int w, int h) {
+  return "VERSION 0.7\nFIELDS x y z pad rgb intensity\nSIZE 4 4 4 2 4 4\nTYPE F F F U F F\n"
+         "COUNT 1 1 1 2 1 1\nWIDTH " + std::to_string(w) + "\nHEIGHT " + std::to_string(h) +
+         "\nPOINTS " + std::to_string(w * h) + "\nDATA " + data + "\n";
+}
+
+struct Row {
+  float x, y, z;
+  std::uint16_t pad[2];
+  float rgb, intensity;
+};
+
+std::vector<Row> organized_rows() {
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  return {{0, 0, 1, {0, 0}, packed_rgb(255, 0, 0), 1},
+          {nan, nan, nan, {0, 0}, packed_rgb(0, 0, 0), 0},
+          {1, 0, 1, {7, 7}, packed_rgb(0, 255, 0), 2},
+          {1, 1, 1, {0, 0}, packed_rgb(1, 2, 3), 3}};
+}
+
+void expect_organized(const PointCloud& c) {
+  ASSERT_EQ(c.size(), 4u);
+  EXPECT_TRUE(c.is_organized());
+  EXPECT_EQ(c.width, 2u);
+  EXPECT_TRUE(std::isnan(c.positions[1].x()));
+  EXPECT_EQ(c.positions[2], Eigen::Vector3f(1, 0, 1));
+  EXPECT_EQ(c.colors[3], (Rgb8{1, 2, 3}));
+  EXPECT_EQ(c.intensities[2], 2.0f);
+}
+
+TEST(PcdReader, BinaryOrganizedWithNaNAndPackedColour) {
+  const auto rows = organized_rows();
+  std::string body;
+  for (const Row& r : rows) {
+    body.append(reinterpret_cast<const char*>(&r.x), 12);
+    body.append(reinterpret_cast<const char*>(r.pad), 4);
+    body.append(reinterpret_cast<const char*>(&r.rgb), 8);
+  }
+  const std::string path = test::temp_dir() + "/b.pcd";
+  test::write_file(path, binary_header("binary", 2, 2) + body);
+  expect_organized(read_pcd(path));
+}
+
+TEST(PcdReader, BinaryCompressedFieldMajor) {
+  const auto rows = organized_rows();
+  std::string raw;  // field-major: all x, all y, all z, all pad, all rgb, all intensity
+  for (int f = 0; f < 6; ++f) {
+    for (const Row& r : rows) {
+      const float* fl[] = {&r.x, &r.y, &r.z, nullptr, &r.rgb, &r.intensity};
+      if (f == 3) raw.append(reinterpret_cast<const char*>(r.pad), 4);
+      else raw.append(reinterpret_cast<const char*>(fl[f]), 4);
+    }
+  }
+  std::string packed(raw.size() * 2 + 16, '\0');
+  const unsigned n = lzf_compress(raw.data(), static_cast<unsigned>(raw.size()), packed.data(),
+                                  static_cast<unsigned>(packed.size()));
+  ASSERT_GT(n, 0u);
+  const std::uint32_t sizes[2] = {n, static_cast<std::uint32_t>(raw.size())};
+  const std::string path = test::temp_dir() + "/c.pcd";
+  test::write_file(path, binary_header("binary_compressed", 2, 2) +
+                             std::string(reinterpret_cast<const char*>(sizes), 8) + packed.substr(0, n) +
+                             std::string(100, '\0'));
+  expect_organized(read_pcd(path));
+}
+
+TEST(PcdReader, BrokenFilesGiveOneClearError) {
+  for (const char* name : {"empty.pcd", "truncated.pcd", "inconsistent_header.pcd"}) {
+    const std::string path = test::fixture(std::string("bad/") + name);
+    try {
+      read_pcd(path);
+      FAIL() << name;
+    } catch (const Error& e) {
+      EXPECT_EQ(e.source(), path);
+    }
+  }
+}
+
+TEST(PcdReader, RealKinectFramesAndBunny) {
+  MESHFLOW_REQUIRE_DATA("kinect_pcl/office1.pcd");
+  const PointCloud office = read_pcd(test::data_path("kinect_pcl/office1.pcd"));
+  EXPECT_EQ(office.size(), 307200u);
+  EXPECT_TRUE(office.is_organized());
+  std::size_t finite = 0;
+  for (const auto& p : office.positions) finite += p.allFinite() ? 1 : 0;
+  EXPECT_EQ(finite, 254456u);
+  const PointCloud mug = read_pcd(test::data_path("kinect_pcl/table_scene_mug_stereo_textured.pcd"));
+  finite = 0;
+  for (const auto& p : mug.positions) finite += p.allFinite() ? 1 : 0;
+  EXPECT_EQ(finite, 209280u);
+  ASSERT_TRUE(mug.has_colors());
+  const PointCloud bun0 = read_pcd(test::data_path("objects/bun0.pcd"));
+  EXPECT_EQ(bun0.size(), 397u);
+  ASSERT_TRUE(bun0.has_normals());
+  EXPECT_NEAR(bun0.normals[0].norm(), 1.0f, 1e-4f);
+  EXPECT_EQ(read_pcd(test::data_path("objects/bunny.pcd")).size(), 397u);
+}
+
+}  // namespace
+}  // namespace meshflow::io

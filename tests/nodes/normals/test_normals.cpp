@@ -1,0 +1,91 @@
+#include "nodes/normals/normals.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+
+#include "nodes/synthetic/shapes.h"
+#include "runtime/threads.h"
+
+namespace meshflow {
+namespace {
+
+TEST(Normals, PlaneNormalsFaceTheViewpoint) {
+  PointCloud c;
+  for (int i = 0; i < 40; ++i)
+    for (int j = 0; j < 40; ++j) c.positions.emplace_back(0.01f * i, 0.01f * j, 0.0f);
+  c.sensor_origin = Eigen::Vector3f(0.2f, 0.2f, -1.0f);
+  c.has_sensor_origin = true;
+  const KdTreeIndex index(c.positions);
+  const auto normals = estimate_normals(c, index, NormalsConfig{});
+  for (const auto& n : normals) EXPECT_NEAR(n.z(), -1.0f, 1e-4f);
+}
+
+TEST(Normals, SphereNormalsMatchTheAnalyticOnesAndPointOutward) {
+  const synthetic::Sphere sphere{{0.1f, -0.2f, 0.3f}, 1.0f};
+  PointCloud c = synthetic::sample_surface(sphere, 0.03f, 0.0f, 1);
+  NormalsConfig config;
+  config.orientation = NormalOrientation::kAwayFromViewpoint;
+  config.viewpoint = sphere.center;
+  const KdTreeIndex index(c.positions);
+  const auto normals = estimate_normals(c, index, config);
+  double worst = 0.0;
+  for (std::size_t i = 0; i < c.size(); ++i) {
+    const Eigen::Vector3f truth = (c.positions[i] - sphere.center).normalized();
+    worst = std::max(worst, std::acos(std::min(1.0f, normals[i].dot(truth))) * 180.0 / M_PI);
+  }
+  EXPECT_LT(worst, 3.0) << "degrees";
+}
+
+TEST(Normals, AdaptiveKFixesLaserLineNeighbourhoods) {
+  // Scan lines: dense along x (1 mm), 5 cm apart in y, on the plane z = 0.2 x.
+  PointCloud c;
+  for (int row = 0; row < 10; ++row)
+    for (int i = 0; i < 300; ++i) {
+      const float x = 0.001f * i, y = 0.05f * row;
+      c.positions.emplace_back(x, y, 0.2f * x);
+    }
+  c.sensor_origin = Eigen::Vector3f(0.15f, 0.25f, 1.0f);
+  c.has_sensor_origin = true;
+  const KdTreeIndex index(c.positions);
+  const Eigen::Vector3f truth = Eigen::Vector3f(-0.2f, 0.0f, 1.0f).normalized();
+  NormalsConfig config;
+  config.ki = 0;
+  auto bad_fraction = [&](const std::vector<Eigen::Vector3f>& normals) {
+    std::size_t bad = 0;
+    for (const auto& n : normals) bad += n.dot(truth) < 0.99f ? 1 : 0;
+    return static_cast<double>(bad) / static_cast<double>(normals.size());
+  };
+  const double fixed = bad_fraction(estimate_normals(c, index, config));
+  config.adaptive_k = true;
+  config.adaptive_max_k = 1200;
+  const double adaptive = bad_fraction(estimate_normals(c, index, config));
+  EXPECT_GT(fixed, 0.5) << "collinear neighbourhoods make fixed-k PCA ill-posed";
+  EXPECT_LT(adaptive, 0.05);
+}
+
+TEST(Normals, FitPlaneNormal) {
+  const std::vector<Eigen::Vector3f> pts = {{0, 0, 1}, {1, 0, 1}, {0, 1, 1}, {1, 1, 1}};
+  EXPECT_NEAR(std::abs(fit_plane_normal(pts).z()), 1.0f, 1e-6f);
+  EXPECT_TRUE(fit_plane_normal({{0, 0, 0}}).isZero());
+}
+
+TEST(Normals, SameResultWithOneAndTwoThreads) {
+  PointCloud c = synthetic::sample_surface(synthetic::Box{}, 0.05f, 0.005f, 3);
+  c.has_sensor_origin = true;
+  const KdTreeIndex index(c.positions);
+  std::vector<Eigen::Vector3f> one, two;
+  {
+    ThreadLimit limit(1);
+    one = estimate_normals(c, index, NormalsConfig{});
+  }
+  {
+    ThreadLimit limit(2);
+    two = estimate_normals(c, index, NormalsConfig{});
+  }
+  EXPECT_EQ(one, two);
+}
+
+}  // namespace
+}  // namespace meshflow

@@ -1,0 +1,59 @@
+#include "nodes/voxelize/sparse_grid.h"
+
+#include <gtest/gtest.h>
+
+#include <random>
+#include <set>
+
+#include "runtime/error.h"
+
+namespace meshflow {
+namespace {
+
+TEST(SparseGrid, MatchesBruteForceCellAndCornerSets) {
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<float> u(-0.5f, 0.5f);
+  PointCloud c;
+  for (int i = 0; i < 500; ++i) c.positions.emplace_back(u(rng), u(rng), 0.3f * u(rng));
+  const float voxel = 0.07f;
+  for (int dilation : {0, 1}) {
+    const SparseGrid grid = voxelize(c, VoxelizeConfig{voxel, dilation});
+    std::set<VoxelKey> cells, corners;
+    for (const auto& p : c.positions) {
+      const Eigen::Vector3i cell = cell_of(p, voxel);
+      for (int dz = -dilation; dz <= dilation; ++dz)
+        for (int dy = -dilation; dy <= dilation; ++dy)
+          for (int dx = -dilation; dx <= dilation; ++dx) cells.insert(pack_key(cell + Eigen::Vector3i(dx, dy, dz)));
+    }
+    for (VoxelKey k : cells)
+      for (int i = 0; i < 8; ++i) corners.insert(pack_key(unpack_key(k) + Eigen::Vector3i(i & 1, (i >> 1) & 1, i >> 2)));
+    EXPECT_EQ(grid.cells, std::vector<VoxelKey>(cells.begin(), cells.end()));
+    EXPECT_EQ(grid.corners, std::vector<VoxelKey>(corners.begin(), corners.end()));
+    for (std::size_t i = 0; i < grid.cells.size(); ++i) {
+      const Eigen::Vector3f origin = unpack_key(grid.cells[i]).cast<float>() * voxel;
+      for (int k = 0; k < 8; ++k) {
+        const Eigen::Vector3f expected = origin + voxel * Eigen::Vector3f(k & 1, (k >> 1) & 1, k >> 2);
+        EXPECT_TRUE(grid.corner_position(grid.cell_corners[i][static_cast<std::size_t>(k)]).isApprox(expected, 1e-5f));
+      }
+    }
+  }
+}
+
+TEST(SparseGrid, RejectsCoordinatesBeyondTheKeyRange) {
+  PointCloud c;
+  c.positions = {{0, 0, 0}, {1e5f, 0, 0}};
+  EXPECT_THROW(voxelize(c, VoxelizeConfig{0.01f, 1}), Error);
+  EXPECT_THROW(voxelize(c, VoxelizeConfig{0.0f, 1}), Error);
+}
+
+TEST(SparseGrid, KeysRoundTrip) {
+  for (const Eigen::Vector3i& c : {Eigen::Vector3i(0, 0, 0), Eigen::Vector3i(-5, 7, -1000000),
+                                  Eigen::Vector3i(kMaxCellIndex, -kMaxCellIndex, 3)}) {
+    EXPECT_EQ(unpack_key(pack_key(c)), c);
+  }
+  EXPECT_LT(pack_key({5, 0, 0}), pack_key({0, 1, 0}));
+  EXPECT_LT(pack_key({0, 9, 0}), pack_key({0, 0, 1}));
+}
+
+}  // namespace
+}  // namespace meshflow

@@ -1,0 +1,40 @@
+#pragma once
+// Helpers shared by the tests: data locations, temporary files, mesh error statistics.
+
+#include <functional>
+#include <string>
+
+#include "runtime/point_cloud.h"
+#include "runtime/triangle_mesh.h"
+
+namespace meshflow::test {
+
+/// $MESHFLOW_DATA, or ../shared/data beside the source tree. Tests that need it skip when absent.
+std::string data_dir();
+bool has_data(const std::string& relative);
+std::string data_path(const std::string& relative);
+
+/// Path of a fixture under tests/data.
+std::string fixture(const std::string& relative);
+
+/// A fresh empty directory for one test; removed at process exit is not guaranteed.
+std::string temp_dir();
+
+/// Writes `content` to `path` (binary).
+void write_file(const std::string& path, const std::string& content);
+
+struct ErrorStats {
+  double mean = 0.0, max = 0.0;
+};
+/// Distance statistics of every mesh vertex under `distance` (e.g. to an analytic surface).
+ErrorStats vertex_errors(const TriangleMesh& mesh,
+                         const std::function<float(const Eigen::Vector3f&)>& distance);
+
+}  // namespace meshflow::test
+
+#define MESHFLOW_REQUIRE_DATA(relative)                                                        \
+  do {                                                                                         \
+    if (!::meshflow::test::has_data(relative))                                                 \
+      GTEST_SKIP() << "real data not found: " << ::meshflow::test::data_path(relative)         \
+                   << " (set MESHFLOW_DATA to the shared data directory)";                     \
+  } while (0)

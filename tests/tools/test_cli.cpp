@@ -1,0 +1,91 @@
+// Runs the meshflow executable: exit codes, error messages and no partial output.
+
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include "test_support.h"
+
+namespace meshflow {
+namespace {
+
+struct CliRun {
+  int exit_code;
+  std::string out, err;
+};
+
+CliRun run_cli(const std::string& args) {
+  const std::string dir = test::temp_dir();
+  const std::string cmd = std::string(MESHFLOW_CLI) + " " + args + " >" + dir + "/out 2>" + dir + "/err";
+  const int status = std::system(cmd.c_str());
+  auto slurp = [](const std::string& p) {
+    std::ifstream in(p);
+    std::stringstream s;
+    s << in.rdbuf();
+    return s.str();
+  };
+  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, slurp(dir + "/out"), slurp(dir + "/err")};
+}
+
+TEST(Cli, BrokenInputsFailWithOneLineNamingTheFileAndNoOutput) {
+  const std::string out_dir = test::temp_dir();
+  for (const char* name : {"truncated_binary.ply", "count_too_large.ply", "count_too_small.ply",
+                           "non_numeric.ply", "empty.ply", "unknown_type.ply", "huge_coordinates.ply",
+                           "nan_rows.xyz", "overflow.xyz", "bad_columns.xyz", "empty.pcd",
+                           "truncated.pcd", "inconsistent_header.pcd", "truncated.3d", "not_a_ply.ply"}) {
+    const std::string input = test::fixture(std::string("bad/") + name);
+    const std::string output = out_dir + "/" + name + ".ply";
+    const CliRun r = run_cli("reconstruct " + input + " -o " + output);
+    EXPECT_EQ(r.exit_code, 1) << name << ": " << r.err;
+    EXPECT_NE(r.err.find(input), std::string::npos) << name << ": " << r.err;
+    EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+    EXPECT_FALSE(std::filesystem::exists(output)) << name;
+    EXPECT_FALSE(std::filesystem::exists(output + ".tmp")) << name;
+  }
+}
+
+TEST(Cli, UsageErrorsExitWithTwo) {
+  EXPECT_EQ(run_cli("").exit_code, 2);
+  EXPECT_EQ(run_cli("reconstruct").exit_code, 2);
+  EXPECT_EQ(run_cli("reconstruct a.ply -o b.ply --kn 1").exit_code, 2);
+  EXPECT_EQ(run_cli("frobnicate").exit_code, 2);
+  EXPECT_EQ(run_cli("--help").exit_code, 0);
+}
+
+TEST(Cli, MissingFileAndUnknownFormat) {
+  const std::string out = test::temp_dir() + "/m.ply";
+  CliRun r = run_cli("reconstruct /nonexistent/cloud.ply -o " + out);
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.err.find("cannot open"), std::string::npos) << r.err;
+  r = run_cli("reconstruct cloud.las -o " + out);
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.err.find("unknown point cloud format"), std::string::npos) << r.err;
+}
+
+TEST(Cli, ReconstructsAndReportsDroppedNaNRows) {
+  const std::string out = test::temp_dir() + "/plane.obj";
+  const CliRun r = run_cli("reconstruct " + test::fixture("good/plane_with_nan_rows.xyz") + " -o " + out +
+                        " --voxel 0.05 --threads 2");
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.err.find("dropped 2 non-finite"), std::string::npos) << r.err;
+  EXPECT_TRUE(std::filesystem::exists(out));
+  EXPECT_NE(r.out.find("normals"), std::string::npos) << "prints the per-stage table";
+}
+
+TEST(Cli, InfoAndDemo) {
+  CliRun r = run_cli("info " + test::fixture("good/plane_with_nan_rows.xyz"));
+  EXPECT_EQ(r.exit_code, 0);
+  EXPECT_NE(r.out.find("1600 (1598 finite, 2 NaN/Inf)"), std::string::npos) << r.out;
+  const std::string out = test::temp_dir() + "/demo.ply";
+  r = run_cli("demo --voxel 0.1 -o " + out);
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("accuracy"), std::string::npos);
+  EXPECT_TRUE(std::filesystem::exists(out));
+}
+
+}  // namespace
+}  // namespace meshflow

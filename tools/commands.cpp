@@ -1,0 +1,157 @@
+#include <cstdio>
+#include <memory>
+#include <string>
+
+#include "graph/pipeline.h"
+#include "nodes/io/mesh_writers.h"
+#include "nodes/io/parse_util.h"
+#include "nodes/io/read_point_cloud.h"
+#include "runtime/error.h"
+#include "runtime/threads.h"
+#include "tools/commands.h"
+#include "tools/report.h"
+
+namespace meshflow::cli {
+
+void print_frame_report(const Frame& f, double wall_s, int threads) {
+  const FilterCounts& c = f.filter_counts;
+  std::printf("input      %s: %zu points\n", f.name.c_str(), c.input);
+  if (c.non_finite > 0) std::printf("filter     dropped %zu NaN/Inf points\n", c.non_finite);
+  if (c.cropped + c.merged + c.outliers > 0) {
+    std::printf("filter     cropped %zu, merged %zu, outliers %zu\n", c.cropped, c.merged, c.outliers);
+  }
+  std::printf("grid       voxel %.4g m, %zu cells, %zu corners (%zu valid)\n", f.voxel_size,
+              f.grid.cells.size(), f.grid.corners.size(), f.distance.valid_count());
+  std::printf("mesh       %zu vertices, %zu triangles (removed %zu degenerate, %zu in %zu small components)\n",
+              f.mesh.vertices.size(), f.mesh.triangles.size(),
+              f.cleanup.degenerate_triangles + f.cleanup.duplicate_triangles,
+              f.cleanup.removed_component_triangles, f.cleanup.removed_components);
+  std::printf("time       %.1f ms on %d thread%s\n", 1e3 * wall_s, threads, threads == 1 ? "" : "s");
+  std::printf("%s", format_stage_table(summarize_stages(f.timings), wall_s).c_str());
+}
+
+void throw_if_failed(const Frame& f) {
+  if (!f.ok()) throw std::runtime_error(f.error);
+}
+
+namespace {
+
+struct ReconstructOptions {
+  std::string input;
+  std::string output;
+  float voxel = 0.0f;
+  int kn = 10, ki = 10, kd = 5;
+  int threads = 0;
+  bool adaptive_k = false;
+  float max_distance = 2.0f;
+  std::size_t min_component = 20;
+  float filter_voxel = 0.0f;
+  int outlier_k = 0;
+  float min_range = 0.0f, max_range = 0.0f;
+  bool quiet = false;
+};
+
+void run_reconstruct(const ReconstructOptions& o) {
+  ThreadLimit limit(o.threads);
+  ReconstructionConfig config;
+  config.voxelize.voxel_size = o.voxel;
+  config.normals.kn = o.kn;
+  config.normals.ki = o.ki;
+  config.normals.adaptive_k = o.adaptive_k;
+  config.distance.kd = o.kd;
+  config.distance.max_distance_voxels = o.max_distance;
+  config.cleanup.min_component_triangles = o.min_component;
+  config.filter.voxel_size = o.filter_voxel;
+  config.filter.outlier_k = o.outlier_k;
+  config.filter.min_range = o.min_range;
+  config.filter.max_range = o.max_range;
+  // Fail on an unwritable output before spending time on reconstruction.
+  const std::string ext = io::lower_extension(o.output);
+  if (ext != ".ply" && ext != ".obj") {
+    throw Error(o.output, "", "unknown mesh format '" + ext + "' (expected .ply or .obj)");
+  }
+
+  ReconstructionPipeline pipeline(config, 1);
+  auto frame = std::make_shared<Frame>();
+  frame->name = o.input;
+  const std::string path = o.input;
+  frame->load = [path] { return io::read_point_cloud(path); };
+  const double t0 = monotonic_seconds();
+  bool given = false;
+  pipeline.run([&]() -> FramePtr { return given ? nullptr : (given = true, frame); },
+               [](const FramePtr&) {});
+  throw_if_failed(*frame);
+  if (frame->mesh.empty()) {
+    throw Error(o.input, "", "no surface was extracted (voxel size " +
+                                 std::to_string(frame->voxel_size) + " m too small or too large?)");
+  }
+  io::write_mesh(o.output, frame->mesh);
+  const double wall = monotonic_seconds() - t0;
+  if (frame->filter_counts.non_finite > 0) {
+    std::fprintf(stderr, "meshflow: note: %s: dropped %zu non-finite (NaN/Inf) points\n",
+                 o.input.c_str(), frame->filter_counts.non_finite);
+  }
+  if (!o.quiet) {
+    print_frame_report(*frame, wall, limit.threads());
+    std::printf("output     %s\n", o.output.c_str());
+  }
+}
+
+}  // namespace
+
+void add_reconstruct_command(CLI::App& app) {
+  auto opts = std::make_shared<ReconstructOptions>();
+  CLI::App* cmd = app.add_subcommand("reconstruct", "Reconstruct a mesh from one point cloud");
+  cmd->add_option("input", opts->input, "Point cloud: .ply .pcd .xyz .txt .pts .asc .3d")->required();
+  cmd->add_option("-o,--output", opts->output, "Output mesh (.ply or .obj)")->required();
+  cmd->add_option("--voxel", opts->voxel, "Voxel size in metres (default: 3x the median point spacing)")
+      ->check(CLI::NonNegativeNumber);
+  cmd->add_option("--kn", opts->kn, "Neighbours for normal estimation")->check(CLI::Range(3, 1000));
+  cmd->add_option("--ki", opts->ki, "Neighbours for normal interpolation (0 = off)")->check(CLI::Range(0, 1000));
+  cmd->add_option("--kd", opts->kd, "Tangent planes averaged per distance sample")->check(CLI::Range(1, 64));
+  cmd->add_option("--threads", opts->threads, "Worker threads (default: all cores)")->check(CLI::NonNegativeNumber);
+  cmd->add_flag("--adaptive-k", opts->adaptive_k, "Grow kn where neighbourhoods are degenerate");
+  cmd->add_option("--max-distance", opts->max_distance, "Distance samples farther than this many voxels from the data are invalid")
+      ->check(CLI::PositiveNumber);
+  cmd->add_option("--min-component", opts->min_component, "Remove mesh components with fewer triangles");
+  cmd->add_option("--filter-voxel", opts->filter_voxel, "Voxel-grid downsampling before meshing, metres (0 = off)")
+      ->check(CLI::NonNegativeNumber);
+  cmd->add_option("--outlier-k", opts->outlier_k, "Statistical outlier removal with k neighbours (0 = off)")
+      ->check(CLI::NonNegativeNumber);
+  cmd->add_option("--min-range", opts->min_range, "Drop points closer to the sensor, metres")->check(CLI::NonNegativeNumber);
+  cmd->add_option("--max-range", opts->max_range, "Drop points farther from the sensor, metres (0 = off)")
+      ->check(CLI::NonNegativeNumber);
+  cmd->add_flag("-q,--quiet", opts->quiet, "Print nothing on success");
+  cmd->callback([opts] { run_reconstruct(*opts); });
+}
+
+void add_info_command(CLI::App& app) {
+  auto path = std::make_shared<std::string>();
+  CLI::App* cmd = app.add_subcommand("info", "Print counts, bounds and fields of a point cloud");
+  cmd->add_option("file", *path, "Point cloud file")->required();
+  cmd->callback([path] {
+    const PointCloud cloud = io::read_point_cloud(*path);
+    std::size_t finite = 0;
+    for (const auto& p : cloud.positions) finite += p.allFinite() ? 1 : 0;
+    std::printf("file        %s\n", path->c_str());
+    std::printf("points      %zu (%zu finite, %zu NaN/Inf)\n", cloud.size(), finite, cloud.size() - finite);
+    if (cloud.is_organized()) std::printf("organized   %u x %u\n", cloud.width, cloud.height);
+    std::string fields = "x y z";
+    if (cloud.has_normals()) fields += " normals";
+    if (cloud.has_colors()) fields += " rgb";
+    if (cloud.has_intensities()) fields += " intensity";
+    std::printf("fields      %s\n", fields.c_str());
+    const Eigen::AlignedBox3f box = finite_bounds(cloud);
+    if (!box.isEmpty()) {
+      std::printf("bounds min  %.4f %.4f %.4f m\n", box.min().x(), box.min().y(), box.min().z());
+      std::printf("bounds max  %.4f %.4f %.4f m\n", box.max().x(), box.max().y(), box.max().z());
+      std::printf("extent      %.4f x %.4f x %.4f m\n", box.sizes().x(), box.sizes().y(), box.sizes().z());
+    }
+    if (cloud.has_sensor_origin) {
+      std::printf("sensor      %.4f %.4f %.4f m\n", cloud.sensor_origin.x(), cloud.sensor_origin.y(),
+                  cloud.sensor_origin.z());
+    }
+  });
+}
+
+}  // namespace meshflow::cli

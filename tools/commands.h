@@ -1,0 +1,13 @@
+#pragma once
+// Subcommands of the meshflow CLI. Each registers its options on `app` and runs when chosen;
+// failures throw (meshflow::Error for bad input) and main() maps them to exit codes.
+
+#include <CLI/CLI.hpp>
+
+namespace meshflow::cli {
+
+void add_reconstruct_command(CLI::App& app);
+void add_info_command(CLI::App& app);
+void add_demo_command(CLI::App& app);
+
+}  // namespace meshflow::cli

@@ -22,6 +22,32 @@ int edge_between(int a, int b) {
   return -1;
 }
 
+// True when cube edges a and b lie on a common face.
+bool share_face(int a, int b) {
+  for (const auto& face : kFaces) {
+    int hits = 0;
+    for (int i = 0; i < 4; ++i) {
+      const int e = edge_between(face[static_cast<std::size_t>(i)], face[static_cast<std::size_t>((i + 1) % 4)]);
+      hits += (e == a || e == b) ? 1 : 0;
+    }
+    if (hits == 2) return true;
+  }
+  return false;
+}
+
+// A fan apex whose diagonals all cross the cube's interior. A diagonal lying on a face (possible
+// when a loop passes both segments of an ambiguous face) could be created by the neighbouring
+// cell too, giving an edge with four faces.
+std::size_t fan_apex(const std::vector<int>& loop) {
+  const std::size_t n = loop.size();
+  for (std::size_t a = 0; a < n; ++a) {
+    bool ok = true;
+    for (std::size_t k = 2; k + 1 < n && ok; ++k) ok = !share_face(loop[a], loop[(a + k) % n]);
+    if (ok) return a;
+  }
+  return n;  // none (never happens for the 256 cases)
+}
+
 CubeCase build_case(int pattern) {
   auto inside = [pattern](int c) { return (pattern >> c) & 1; };
   // next[e] = the crossing edge that follows e on its loop.
@@ -53,9 +79,14 @@ CubeCase build_case(int pattern) {
       loop.push_back(e);
     }
     // The loop runs clockwise seen from outside; reverse the fan to wind counter-clockwise.
-    for (std::size_t k = 1; k + 1 < loop.size(); ++k) {
-      out.triangles.push_back({static_cast<std::uint8_t>(loop[0]), static_cast<std::uint8_t>(loop[k + 1]),
-                               static_cast<std::uint8_t>(loop[k])});
+    const std::size_t n = loop.size();
+    const std::size_t apex = fan_apex(loop);
+    assert(apex < n && "every loop of the 256 cases has a valid apex (checked by the tests)");
+    const std::size_t a = apex < n ? apex : 0;
+    for (std::size_t k = 1; k + 1 < n; ++k) {
+      out.triangles.push_back({static_cast<std::uint8_t>(loop[a]),
+                               static_cast<std::uint8_t>(loop[(a + k + 1) % n]),
+                               static_cast<std::uint8_t>(loop[(a + k) % n])});
     }
   }
   return out;

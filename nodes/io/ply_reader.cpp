@@ -273,9 +273,10 @@ class ElementReader {
           read_exact(buf, scalar_size(p.count_type), e, row);
           const double n = decode_scalar(buf, p.count_type, swap);
           if (n < 0) throw Error(path_, where(e, row), "negative list length in '" + p.name + "'");
-          in_.ignore(static_cast<std::streamsize>(n) *
-                     static_cast<std::streamsize>(scalar_size(p.type)));
-          if (!in_) throw Error(path_, where(e, row), "file ends inside list '" + p.name + "'");
+          const auto skip = static_cast<std::streamsize>(n) *
+                            static_cast<std::streamsize>(scalar_size(p.type));
+          in_.ignore(skip);
+          if (in_.gcount() != skip) throw Error(path_, where(e, row), "file ends inside list '" + p.name + "'");
           values[i] = 0.0;
         } else {
           read_exact(buf, scalar_size(p.type), e, row);

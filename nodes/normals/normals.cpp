@@ -8,34 +8,46 @@
 namespace meshflow {
 namespace {
 
-Eigen::Vector3f plane_normal(const std::vector<Eigen::Vector3f>& pts, std::size_t n) {
-  if (n < 3) return Eigen::Vector3f::Zero();
-  Eigen::Vector3d mean = Eigen::Vector3d::Zero();
-  for (std::size_t i = 0; i < n; ++i) mean += pts[i].cast<double>();
-  mean /= static_cast<double>(n);
+struct LocalFrame {
+  Eigen::Vector3d mean;
+  Eigen::Matrix3d axes;  // columns: principal axes, smallest variance first
+};
+
+LocalFrame principal_frame(const std::vector<Eigen::Vector3f>& pts, std::size_t n) {
+  LocalFrame f{Eigen::Vector3d::Zero(), Eigen::Matrix3d::Identity()};
+  for (std::size_t i = 0; i < n; ++i) f.mean += pts[i].cast<double>();
+  f.mean /= static_cast<double>(n);
   Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
   for (std::size_t i = 0; i < n; ++i) {
-    const Eigen::Vector3d d = pts[i].cast<double>() - mean;
+    const Eigen::Vector3d d = pts[i].cast<double>() - f.mean;
     cov.noalias() += d * d.transpose();
   }
   Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> solver;
   solver.computeDirect(cov);
-  return solver.eigenvectors().col(0).normalized().cast<float>();
+  f.axes = solver.eigenvectors();
+  return f;
 }
 
-// True when the neighbourhood's bounding box is not degenerate (thesis criterion).
-bool box_well_shaped(const std::vector<Eigen::Vector3f>& pts, std::size_t n, float ratio) {
-  Eigen::AlignedBox3f box;
-  for (std::size_t i = 0; i < n; ++i) box.extend(pts[i]);
-  Eigen::Vector3f e = box.sizes();
-  std::sort(e.data(), e.data() + 3);
-  return e[1] >= ratio * e[2];
+// Thesis criterion: the neighbourhood's bounding box must not be degenerate. The box is taken
+// in the neighbours' principal frame, so a sloped scan line is recognised as a line.
+bool box_well_shaped(const std::vector<Eigen::Vector3f>& pts, std::size_t n, const LocalFrame& f,
+                     float ratio) {
+  Eigen::Vector2d lo = Eigen::Vector2d::Constant(1e300), hi = -lo;
+  for (std::size_t i = 0; i < n; ++i) {
+    const Eigen::Vector3d d = pts[i].cast<double>() - f.mean;
+    const Eigen::Vector2d c(d.dot(f.axes.col(1)), d.dot(f.axes.col(2)));
+    lo = lo.cwiseMin(c);
+    hi = hi.cwiseMax(c);
+  }
+  const Eigen::Vector2d extent = hi - lo;  // (middle axis, major axis)
+  return extent.x() >= ratio * extent.y();
 }
 
 }  // namespace
 
 Eigen::Vector3f fit_plane_normal(const std::vector<Eigen::Vector3f>& points) {
-  return plane_normal(points, points.size());
+  if (points.size() < 3) return Eigen::Vector3f::Zero();
+  return principal_frame(points, points.size()).axes.col(0).normalized().cast<float>();
 }
 
 std::vector<Eigen::Vector3f> estimate_normals(const PointCloud& cloud, const SpatialIndex& index,
@@ -65,15 +77,18 @@ std::vector<Eigen::Vector3f> estimate_normals(const PointCloud& cloud, const Spa
       found_count[i] = static_cast<std::uint32_t>(found);
       std::size_t k = std::min(kn, found);
       for (std::size_t j = 0; j < k; ++j) pts[j] = cloud.positions[idx[j]];
-      if (config.adaptive_k) {
-        while (!box_well_shaped(pts, k, config.adaptive_ratio) &&
+      Eigen::Vector3f normal = Eigen::Vector3f::Zero();
+      if (k >= 3) {
+        LocalFrame frame = principal_frame(pts, k);
+        while (config.adaptive_k && !box_well_shaped(pts, k, frame, config.adaptive_ratio) &&
                k < static_cast<std::size_t>(config.adaptive_max_k) && k < index.size()) {
           const std::size_t want = std::min<std::size_t>(2 * k, static_cast<std::size_t>(config.adaptive_max_k));
           k = index.knn(p, want, idx.data(), d2.data());
           for (std::size_t j = 0; j < k; ++j) pts[j] = cloud.positions[idx[j]];
+          frame = principal_frame(pts, k);
         }
+        normal = frame.axes.col(0).normalized().cast<float>();
       }
-      Eigen::Vector3f normal = plane_normal(pts, k);
       const Eigen::Vector3f to_view = viewpoint - p;
       if (normal.isZero()) normal = to_view.normalized();
       if (sign * normal.dot(to_view) < 0.0f) normal = -normal;

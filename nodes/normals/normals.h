@@ -19,9 +19,10 @@ enum class NormalOrientation {
 struct NormalsConfig {
   int kn = 10;  ///< neighbours of the plane fit (thesis default kn = 10)
   int ki = 10;  ///< neighbours averaged in normal interpolation; 0 or 1 = off (thesis ki = 10)
-  /// Thesis bounding-box criterion: when the kn neighbours' bounding box is degenerate (its
-  /// middle extent below `adaptive_ratio` x its largest, as for points along one laser line)
-  /// k is doubled until the box is well shaped or `adaptive_max_k` is reached.
+  /// Thesis bounding-box criterion: when the kn neighbours' bounding box (taken in their
+  /// principal frame) is degenerate, its middle extent below `adaptive_ratio` x its largest as
+  /// for points along one laser line, k is doubled until the box is well shaped or
+  /// `adaptive_max_k` is reached.
   bool adaptive_k = false;
   float adaptive_ratio = 0.2f;
   int adaptive_max_k = 80;

@@ -1,0 +1,68 @@
+#include "bench_support.h"
+
+#include <cstdlib>
+#include <filesystem>
+#include <map>
+#include <memory>
+
+#include "graph/stages.h"
+#include "nodes/io/scan3d_reader.h"
+#include "nodes/synthetic/scan_simulator.h"
+
+namespace meshflow::bench {
+
+std::string kurt3d_path() {
+  const char* env = std::getenv("MESHFLOW_DATA");
+  const std::string dir = env != nullptr && *env != '\0' ? env : std::string(MESHFLOW_SOURCE_DIR) + "/../shared/data";
+  return dir + "/kurt3d/scan000.3d";
+}
+
+const PointCloud* input_cloud(Input input) {
+  static const PointCloud synthetic = [] {
+    synthetic::ScanConfig scan;  // 500 x 200 rays = 100k points in the demo room
+    scan.azimuth_steps = 500;
+    scan.elevation_steps = 200;
+    scan.noise_sigma = 0.002f;
+    return synthetic::simulate_scan(synthetic::demo_room_scene(), scan);
+  }();
+  static const std::unique_ptr<PointCloud> kurt = []() -> std::unique_ptr<PointCloud> {
+    if (!std::filesystem::exists(kurt3d_path())) return nullptr;
+    return std::make_unique<PointCloud>(io::read_3dtk_scan(kurt3d_path()));
+  }();
+  return input == kSynthetic ? &synthetic : kurt.get();
+}
+
+const Frame* prepared_frame(Input input, const std::string& stage) {
+  static std::map<std::pair<int, std::string>, std::unique_ptr<Frame>> cache;
+  auto& slot = cache[{input, stage}];
+  if (slot) return slot.get();
+  const PointCloud* cloud = input_cloud(input);
+  if (cloud == nullptr) return nullptr;
+  ReconstructionConfig config;
+  config.voxelize.voxel_size = 0.05f;
+  slot = std::make_unique<Frame>();
+  slot->cloud = *cloud;
+  const std::pair<const char*, stages::StageFunction> order[] = {
+      {"filter", stages::filter}, {"normals", stages::normals}, {"voxelize", stages::voxelize},
+      {"distance", stages::distance}, {"extract", stages::extract}, {"optimize", stages::optimize}};
+  for (const auto& [name, fn] : order) {
+    if (stage == name) break;
+    stages::run_stage(name, fn, *slot, config);
+  }
+  return slot.get();
+}
+
+const PointCloud* require(benchmark::State& state, Input input) {
+  const PointCloud* cloud = input_cloud(input);
+  if (cloud == nullptr) state.SkipWithError(("kurt3d data not found at " + kurt3d_path()).c_str());
+  return cloud;
+}
+
+void thread_and_input_args(benchmark::internal::Benchmark* b) {
+  b->ArgNames({"threads", "input"});
+  for (int input : {kSynthetic, kKurt3d})
+    for (int threads : {1, 2}) b->Args({threads, input});
+  b->Unit(benchmark::kMillisecond)->UseRealTime();
+}
+
+}  // namespace meshflow::bench

@@ -1,0 +1,32 @@
+#pragma once
+// Inputs shared by the benchmarks: a synthetic 100k-point scan and, when present, kurt3d
+// scan000. Every benchmark takes the thread count as its first argument (1 or 2).
+
+#include <benchmark/benchmark.h>
+
+#include <string>
+
+#include "graph/frame.h"
+#include "runtime/point_cloud.h"
+
+namespace meshflow::bench {
+
+enum Input : int { kSynthetic = 0, kKurt3d = 1 };
+
+/// The input cloud (cached); nullptr when kurt3d is requested but $MESHFLOW_DATA lacks it.
+const PointCloud* input_cloud(Input input);
+
+/// Path of kurt3d/scan000.3d under $MESHFLOW_DATA (default ../shared/data).
+std::string kurt3d_path();
+
+/// A frame advanced through the stages up to and excluding `stage` ("normals", "voxelize",
+/// "distance", "extract", "optimize"), at 5 cm voxels; cached per input.
+const Frame* prepared_frame(Input input, const std::string& stage);
+
+/// Skips with a message when the input is missing; returns the cloud otherwise.
+const PointCloud* require(benchmark::State& state, Input input);
+
+/// Registers the standard argument grid: threads {1, 2} x inputs {synthetic, kurt3d}.
+void thread_and_input_args(benchmark::internal::Benchmark* b);
+
+}  // namespace meshflow::bench

@@ -1,0 +1,11 @@
+#!/usr/bin/env bash
+# Installs meshflow's build dependencies from Debian packages (needs root or sudo).
+set -euo pipefail
+SUDO=""
+if [ "$(id -u)" -ne 0 ]; then SUDO="sudo"; fi
+export DEBIAN_FRONTEND=noninteractive
+$SUDO apt-get update
+$SUDO apt-get install -y --no-install-recommends \
+  g++ cmake ninja-build pkg-config \
+  libtbb-dev libeigen3-dev libflann-dev liblz4-dev liblzf-dev \
+  libcli11-dev libgtest-dev libgmock-dev libbenchmark-dev

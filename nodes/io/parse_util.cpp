@@ -40,6 +40,16 @@ double parse_number(std::string_view token, const std::string& source,
   return value;
 }
 
+double parse_number(std::string_view token, const std::string& source, std::size_t line,
+                    std::string_view field) {
+  std::string_view t = token;
+  if (!t.empty() && t.front() == '+') t.remove_prefix(1);
+  double value = 0.0;
+  const auto [end, ec] = std::from_chars(t.data(), t.data() + t.size(), value);
+  if (ec == std::errc() && end == t.data() + t.size() && !t.empty()) return value;
+  return parse_number(token, source, "line " + std::to_string(line), field);  // throws
+}
+
 std::uint64_t parse_count(std::string_view token, const std::string& source,
                           const std::string& location, std::string_view field) {
   std::uint64_t value = 0;
@@ -63,6 +73,10 @@ void check_coordinates(const Eigen::Vector3d& p, const std::string& source,
                       " is beyond +-1e6 m: corrupt data or wrong units");
     }
   }
+}
+
+void check_coordinates(const Eigen::Vector3d& p, const std::string& source, std::size_t line) {
+  if ((p.array().abs() > kMaxAbsCoordinate).any()) check_coordinates(p, source, "line " + std::to_string(line));
 }
 
 std::ifstream open_input(const std::string& path) {

@@ -22,6 +22,10 @@ void split_whitespace(std::string_view line, std::vector<std::string_view>& toke
 double parse_number(std::string_view token, const std::string& source,
                     const std::string& location, std::string_view field);
 
+/// As above with the location "line N", formatted only when there is an error.
+double parse_number(std::string_view token, const std::string& source, std::size_t line,
+                    std::string_view field);
+
 /// Parses a non-negative integer token; throws meshflow::Error like parse_number.
 std::uint64_t parse_count(std::string_view token, const std::string& source,
                           const std::string& location, std::string_view field);
@@ -30,6 +34,9 @@ std::uint64_t parse_count(std::string_view token, const std::string& source,
 /// NaN/Inf are allowed here (organized clouds use them); the filter stage removes them.
 void check_coordinates(const Eigen::Vector3d& p, const std::string& source,
                        const std::string& location);
+
+/// As above with the location "line N", formatted only when there is an error.
+void check_coordinates(const Eigen::Vector3d& p, const std::string& source, std::size_t line);
 
 /// Opens `path` for binary reading or throws meshflow::Error("cannot open").
 std::ifstream open_input(const std::string& path);

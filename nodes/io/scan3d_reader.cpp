@@ -5,6 +5,7 @@
 #include <filesystem>
 
 #include "nodes/io/parse_util.h"
+#include "nodes/io/text_chunks.h"
 #include "runtime/error.h"
 
 namespace meshflow::io {
@@ -63,7 +64,7 @@ Eigen::Isometry3f read_3dtk_pose(const std::string& path) {
 
 PointCloud read_3dtk_scan(const std::string& path, const Scan3dOptions& options,
                           const std::string& pose_path) {
-  std::ifstream in = open_input(path);
+  const std::string text = read_whole_file(path);
   std::string resolved_pose = pose_path;
   if (resolved_pose.empty()) {
     resolved_pose = std::filesystem::path(path).replace_extension(".pose").string();
@@ -72,30 +73,41 @@ PointCloud read_3dtk_scan(const std::string& path, const Scan3dOptions& options,
   const Eigen::Isometry3f pose =
       resolved_pose.empty() ? Eigen::Isometry3f::Identity() : read_3dtk_pose(resolved_pose);
   const Eigen::Matrix3d c = tdtk_to_meshflow();
-
-  PointCloud cloud;
-  cloud.positions.reserve(file_size(path) / 24 + 1);
-  std::string line;
-  std::vector<std::string_view> tok;
   const double min2 = options.min_range_cm * options.min_range_cm;
   const double max2 = options.max_range_cm * options.max_range_cm;
-  for (int line_no = 1; read_line(in, line); ++line_no) {
-    split_whitespace(line, tok);
-    if (tok.empty()) continue;
-    const std::string loc = "line " + std::to_string(line_no);
-    if (line_no == 1 && !is_three_numbers(tok)) continue;  // legacy "360 x 225" header
-    if (tok.size() < 3) {
-      throw Error(path, loc, "expected x y z (cm), found " + std::to_string(tok.size()) + " values");
-    }
-    const Eigen::Vector3d p_cm(parse_number(tok[0], path, loc, "x"),
-                               parse_number(tok[1], path, loc, "y"),
-                               parse_number(tok[2], path, loc, "z"));
-    if (!p_cm.allFinite()) throw Error(path, loc, "non-finite coordinate");
-    check_coordinates(p_cm * 0.01, path, loc);
-    const double r2 = p_cm.squaredNorm();
-    if (r2 < min2 || r2 >= max2) continue;
-    cloud.positions.push_back(pose * (c * p_cm * 0.01).cast<float>());
-  }
+
+  using Points = std::vector<Eigen::Vector3f>;
+  const auto parts = parse_chunks<Points>(
+      split_into_line_chunks(text), [&](const TextChunk& chunk, Points& out) {
+        std::vector<std::string_view> tok;
+        std::size_t line_no = chunk.first_line;
+        std::size_t start = 0;
+        for (; start < chunk.text.size(); ++line_no) {
+          std::size_t end = chunk.text.find('\n', start);
+          if (end == std::string_view::npos) end = chunk.text.size();
+          split_whitespace(chunk.text.substr(start, end - start), tok);
+          start = end + 1;
+          if (tok.empty()) continue;
+          if (line_no == 1 && !is_three_numbers(tok)) continue;  // legacy "360 x 225" header
+          if (tok.size() < 3) {
+            throw Error(path, "line " + std::to_string(line_no),
+                        "expected x y z (cm), found " + std::to_string(tok.size()) + " values");
+          }
+          const Eigen::Vector3d p_cm(parse_number(tok[0], path, line_no, "x"),
+                                     parse_number(tok[1], path, line_no, "y"),
+                                     parse_number(tok[2], path, line_no, "z"));
+          if (!p_cm.allFinite()) throw Error(path, "line " + std::to_string(line_no), "non-finite coordinate");
+          check_coordinates(p_cm * 0.01, path, line_no);
+          const double r2 = p_cm.squaredNorm();
+          if (r2 < min2 || r2 >= max2) continue;
+          out.push_back(pose * (c * p_cm * 0.01).cast<float>());
+        }
+      });
+  PointCloud cloud;
+  std::size_t total = 0;
+  for (const Points& p : parts) total += p.size();
+  cloud.positions.reserve(total);
+  for (const Points& p : parts) cloud.positions.insert(cloud.positions.end(), p.begin(), p.end());
   cloud.sensor_origin = pose.translation();
   cloud.has_sensor_origin = true;
   return cloud;

@@ -3,6 +3,7 @@
 #include <flann/flann.hpp>
 
 #include <algorithm>
+#include <limits>
 #include <numeric>
 
 namespace meshflow {
@@ -24,31 +25,49 @@ KdTreeIndex::KdTreeIndex(const std::vector<Eigen::Vector3f>& points) : size_(poi
 
 KdTreeIndex::~KdTreeIndex() = default;
 
+namespace {
+
+// k-nearest result set writing straight into the caller's arrays: no heap allocation per
+// query (FLANN's own result sets allocate), ties broken by the smaller index.
+class CallerKnnResult final : public flann::ResultSet<float> {
+ public:
+  CallerKnnResult(std::size_t k, std::uint32_t* indices, float* dists)
+      : k_(k), indices_(indices), dists_(dists) {}
+  bool full() const override { return count_ == k_; }
+  float worstDist() const override {
+    return count_ == k_ ? dists_[k_ - 1] : std::numeric_limits<float>::max();
+  }
+  void addPoint(float dist, std::size_t index) override {
+    const auto idx = static_cast<std::uint32_t>(index);
+    if (count_ == k_ && !(dist < dists_[k_ - 1] || (dist == dists_[k_ - 1] && idx < indices_[k_ - 1]))) {
+      return;
+    }
+    std::size_t i = count_ < k_ ? count_++ : k_ - 1;
+    for (; i > 0 && (dists_[i - 1] > dist || (dists_[i - 1] == dist && indices_[i - 1] > idx)); --i) {
+      dists_[i] = dists_[i - 1];
+      indices_[i] = indices_[i - 1];
+    }
+    dists_[i] = dist;
+    indices_[i] = idx;
+  }
+  std::size_t size() const { return count_; }
+
+ private:
+  std::size_t k_;
+  std::uint32_t* indices_;
+  float* dists_;
+  std::size_t count_ = 0;
+};
+
+}  // namespace
+
 std::size_t KdTreeIndex::knn(const Eigen::Vector3f& q, std::size_t k, std::uint32_t* indices,
                              float* squared_distances) const {
   k = std::min(k, size_);
   if (k == 0) return 0;
-  flann::KNNSimpleResultSet<float> result(k);
-  impl_->tree.findNeighbors(result, q.data(), flann::SearchParams(flann::FLANN_CHECKS_UNLIMITED, 0.0f, true));
-  std::size_t idx[64];
-  float d2[64];
-  std::vector<std::size_t> idx_big;
-  std::vector<float> d2_big;
-  std::size_t* ip = idx;
-  float* dp = d2;
-  if (k > 64) {
-    idx_big.resize(k);
-    d2_big.resize(k);
-    ip = idx_big.data();
-    dp = d2_big.data();
-  }
-  result.copy(ip, dp, k, true);
-  const std::size_t found = std::min(k, result.size());
-  for (std::size_t i = 0; i < found; ++i) {
-    indices[i] = static_cast<std::uint32_t>(ip[i]);
-    squared_distances[i] = dp[i];
-  }
-  return found;
+  CallerKnnResult result(k, indices, squared_distances);
+  impl_->tree.findNeighbors(result, q.data(), flann::SearchParams(flann::FLANN_CHECKS_UNLIMITED, 0.0f, false));
+  return result.size();
 }
 
 std::vector<std::uint32_t> KdTreeIndex::radius_search(const Eigen::Vector3f& q, float radius) const {

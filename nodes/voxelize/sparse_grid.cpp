@@ -1,36 +1,49 @@
 #include "nodes/voxelize/sparse_grid.h"
 
 #include <tbb/parallel_for.h>
-#include <tbb/parallel_sort.h>
 
 #include <algorithm>
+#include <cassert>
 #include <cmath>
 
 #include "nodes/normals/spatial_index.h"
 #include "runtime/error.h"
+#include "runtime/parallel.h"
+#include "runtime/radix_sort.h"
 
 namespace meshflow {
 namespace {
 
-void sort_unique(std::vector<VoxelKey>& keys) {
-  tbb::parallel_sort(keys.begin(), keys.end());
-  keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
+// Sorted union of sorted `keys` and the same keys shifted by `delta` (a one-cell step along one
+// axis; shifting preserves the order of packed keys). Linear.
+std::vector<VoxelKey> union_with_shift(const std::vector<VoxelKey>& keys, VoxelKey delta) {
+  std::vector<VoxelKey> out;
+  out.reserve(keys.size() * 2);
+  std::size_t i = 0, j = 0;
+  const std::size_t n = keys.size();
+  while (i < n || j < n) {
+    const VoxelKey a = i < n ? keys[i] : ~VoxelKey{0};
+    const VoxelKey b = j < n ? keys[j] + delta : ~VoxelKey{0};
+    const VoxelKey next = std::min(a, b);
+    if (out.empty() || out.back() != next) out.push_back(next);
+    if (a == next) ++i;
+    if (b == next) ++j;
+  }
+  return out;
 }
 
-// Keys of `cells` shifted by every offset in [lo, hi]^3 (per axis), sorted and unique.
-std::vector<VoxelKey> expand(const std::vector<VoxelKey>& cells, int lo, int hi) {
-  const int side = hi - lo + 1;
-  const std::size_t per_cell = static_cast<std::size_t>(side * side * side);
-  std::vector<VoxelKey> out(cells.size() * per_cell);
-  tbb::parallel_for(std::size_t{0}, cells.size(), [&](std::size_t i) {
-    const Eigen::Vector3i c = unpack_key(cells[i]);
-    std::size_t at = i * per_cell;
-    for (int dz = lo; dz <= hi; ++dz)
-      for (int dy = lo; dy <= hi; ++dy)
-        for (int dx = lo; dx <= hi; ++dx) out[at++] = pack_key(c + Eigen::Vector3i(dx, dy, dz));
-  });
-  sort_unique(out);
-  return out;
+// For sorted `subset` shifted by `delta` (every shifted key present in sorted `superset`),
+// writes the superset index of each into column `column` of `out`. Linear walk.
+void locate_shifted(const std::vector<VoxelKey>& subset, VoxelKey delta,
+                    const std::vector<VoxelKey>& superset,
+                    std::vector<std::array<std::uint32_t, 8>>& out, std::size_t column) {
+  std::size_t j = 0;
+  for (std::size_t i = 0; i < subset.size(); ++i) {
+    const VoxelKey key = subset[i] + delta;
+    while (superset[j] < key) ++j;
+    assert(superset[j] == key);
+    out[i][column] = static_cast<std::uint32_t>(j);
+  }
 }
 
 }  // namespace
@@ -46,30 +59,52 @@ SparseGrid voxelize(const PointCloud& cloud, const VoxelizeConfig& config) {
   if (!(config.voxel_size > 0.0f) || !std::isfinite(config.voxel_size)) {
     throw Error("voxelize", "voxel_size", "must be a positive number of metres");
   }
-  const int dilation = std::max(0, std::min(config.dilation, 4));
+  if (!(config.margin >= 0.0f && config.margin <= 2.0f)) {
+    throw Error("voxelize", "margin", "must be between 0 and 2 voxels");
+  }
   SparseGrid grid;
   grid.voxel_size = config.voxel_size;
-  std::vector<VoxelKey> occupied(cloud.size());
-  tbb::parallel_for(std::size_t{0}, cloud.size(), [&](std::size_t i) {
-    const Eigen::Vector3i c = cell_of(cloud.positions[i], config.voxel_size);
-    if (!cell_index_in_range(c - Eigen::Vector3i::Constant(dilation)) ||
-        !cell_index_in_range(c + Eigen::Vector3i::Constant(dilation + 1))) {
+  const float reach = config.margin * config.voxel_size;
+
+  // 1. Cells overlapping each point's margin cube: count, prefix sum, fill, sort, unique.
+  const std::size_t n = cloud.size();
+  std::vector<std::uint32_t> offsets(n);
+  std::vector<std::array<Eigen::Vector3i, 2>> ranges(n);
+  tbb::parallel_for(std::size_t{0}, n, [&](std::size_t i) {
+    const Eigen::Vector3f& p = cloud.positions[i];
+    const Eigen::Vector3i lo = cell_of(p - Eigen::Vector3f::Constant(reach), config.voxel_size);
+    const Eigen::Vector3i hi = cell_of(p + Eigen::Vector3f::Constant(reach), config.voxel_size);
+    if (!p.allFinite() || !cell_index_in_range(lo) || !cell_index_in_range(hi)) {
       throw Error("voxelize", "point " + std::to_string(i),
                   "lies outside the grid's range for a voxel size of " +
                       std::to_string(config.voxel_size) + " m (coordinates too large or not finite)");
     }
-    occupied[i] = pack_key(c);
+    ranges[i] = {lo, hi};
+    const Eigen::Vector3i span = hi - lo + Eigen::Vector3i::Ones();
+    offsets[i] = static_cast<std::uint32_t>(span.prod());
   });
-  sort_unique(occupied);
-  grid.cells = dilation > 0 ? expand(occupied, -dilation, dilation) : std::move(occupied);
-  grid.corners = expand(grid.cells, 0, 1);
+  grid.cells.resize(exclusive_scan_in_place(offsets));
+  tbb::parallel_for(std::size_t{0}, n, [&](std::size_t i) {
+    const auto& [lo, hi] = ranges[i];
+    std::uint32_t at = offsets[i];
+    for (int z = lo.z(); z <= hi.z(); ++z)
+      for (int y = lo.y(); y <= hi.y(); ++y)
+        for (int x = lo.x(); x <= hi.x(); ++x) grid.cells[at++] = pack_key({x, y, z});
+  });
+  radix_sort_unique(grid.cells);
+
+  // 2. Corners: the cells dilated by one step in +x, +y and +z (separable, linear merges).
+  grid.corners = grid.cells;
+  for (int axis = 0; axis < 3; ++axis) {
+    grid.corners = union_with_shift(grid.corners, VoxelKey{1} << (axis * kKeyBitsPerAxis));
+  }
+
+  // 3. Corner indices of each cell: one linear walk per corner offset, the 8 walks in parallel.
   grid.cell_corners.resize(grid.cells.size());
-  tbb::parallel_for(std::size_t{0}, grid.cells.size(), [&](std::size_t i) {
-    const Eigen::Vector3i c = unpack_key(grid.cells[i]);
-    for (int k = 0; k < 8; ++k) {
-      grid.cell_corners[i][static_cast<std::size_t>(k)] =
-          grid.find_corner(c + Eigen::Vector3i(k & 1, (k >> 1) & 1, (k >> 2) & 1));
-    }
+  tbb::parallel_for(0, 8, [&](int k) {
+    const VoxelKey delta = (VoxelKey(k & 1)) | (VoxelKey((k >> 1) & 1) << kKeyBitsPerAxis) |
+                           (VoxelKey((k >> 2) & 1) << (2 * kKeyBitsPerAxis));
+    locate_shifted(grid.cells, delta, grid.corners, grid.cell_corners, static_cast<std::size_t>(k));
   });
   return grid;
 }

@@ -14,8 +14,10 @@ namespace meshflow {
 
 struct VoxelizeConfig {
   float voxel_size = 0.05f;  ///< cell edge in metres
-  int dilation = 1;  ///< also create cells within this many cells of an occupied one, so the
-                     ///< surface between samples is never cut off at a missing cell
+  /// Every cell that overlaps the cube of half-size `margin` voxels around a point is created,
+  /// not only the cell containing it, so a surface passing near a cell border is never cut off
+  /// at a missing neighbour cell. 0.5 = the 2 x 2 x 2 cells nearest to each point.
+  float margin = 0.5f;
 };
 
 /// Cells are addressed by the packed index of their minimum corner; corner c of a cell
@@ -34,10 +36,10 @@ struct SparseGrid {
   std::uint32_t find_corner(const Eigen::Vector3i& c) const;
 };
 
-/// Builds the grid by parallel sort + unique of cell keys (deterministic, no locks):
-/// occupied cells, dilated by config.dilation, then their 8 corners.
-/// Throws meshflow::Error if a point lies outside the packable range (about +-1e6 cells) or the
-/// voxel size is not positive. O(n log n + cells log cells).
+/// Builds the grid from sorted unique keys (deterministic, no locks): the cells around every
+/// point (radix sort + unique), then their corners by separable merges, then each cell's corner
+/// indices by linear walks. Throws meshflow::Error if a point lies outside the packable range
+/// (about +-1e6 cells) or the voxel size or margin is invalid. O(n + cells), parallel inside.
 SparseGrid voxelize(const PointCloud& cloud, const VoxelizeConfig& config);
 
 /// A voxel size suited to the sampling: `factor` x the median nearest-neighbour spacing of a

@@ -33,6 +33,10 @@ struct Case {
   double max_mean_voxels;
 };
 
+void PrintTo(const Case& c, std::ostream* os) {
+  *os << "noise " << c.noise_voxels << " voxel, mean error bound " << c.max_mean_voxels << " voxel";
+}
+
 class Accuracy : public ::testing::TestWithParam<Case> {};
 
 TEST_P(Accuracy, Sphere) {

@@ -15,7 +15,7 @@ TEST(HoppeDistance, ExactOnAPlaneWithExactNormals) {
       c.normals.emplace_back(0, 0, 1);
     }
   const KdTreeIndex index(c.positions);
-  const SparseGrid grid = voxelize(c, VoxelizeConfig{0.02f, 1});
+  const SparseGrid grid = voxelize(c, VoxelizeConfig{0.02f, 0.5f});
   const DistanceField field = hoppe_distance(grid, c, index, DistanceConfig{});
   std::size_t checked = 0;
   for (std::size_t i = 0; i < grid.corners.size(); ++i) {
@@ -32,7 +32,7 @@ TEST(HoppeDistance, NearTheTrueSignedDistanceOfASphereAndInvalidFarAway) {
   for (const auto& p : c.positions) c.normals.push_back(p.normalized());
   const KdTreeIndex index(c.positions);
   const float voxel = 0.025f;
-  const SparseGrid grid = voxelize(c, VoxelizeConfig{voxel, 1});
+  const SparseGrid grid = voxelize(c, VoxelizeConfig{voxel, 0.5f});
   DistanceConfig config;
   const DistanceField field = hoppe_distance(grid, c, index, config);
   for (std::size_t i = 0; i < grid.corners.size(); ++i) {

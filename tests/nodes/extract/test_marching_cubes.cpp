@@ -20,7 +20,7 @@ std::pair<SparseGrid, DistanceField> dense_field(int n, float voxel, F f) {
     for (int y = -n; y < n; ++y)
       for (int x = -n; x < n; ++x)
         c.positions.emplace_back((x + 0.5f) * voxel, (y + 0.5f) * voxel, (z + 0.5f) * voxel);
-  SparseGrid grid = voxelize(c, VoxelizeConfig{voxel, 0});
+  SparseGrid grid = voxelize(c, VoxelizeConfig{voxel, 0.0f});
   DistanceField field;
   for (std::size_t i = 0; i < grid.corners.size(); ++i) {
     field.values.push_back(f(grid.corner_position(i), i));

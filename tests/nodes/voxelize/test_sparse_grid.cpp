@@ -16,14 +16,23 @@ TEST(SparseGrid, MatchesBruteForceCellAndCornerSets) {
   PointCloud c;
   for (int i = 0; i < 500; ++i) c.positions.emplace_back(u(rng), u(rng), 0.3f * u(rng));
   const float voxel = 0.07f;
-  for (int dilation : {0, 1}) {
-    const SparseGrid grid = voxelize(c, VoxelizeConfig{voxel, dilation});
+  for (float margin : {0.0f, 0.5f, 1.3f}) {
+    const SparseGrid grid = voxelize(c, VoxelizeConfig{voxel, margin});
     std::set<VoxelKey> cells, corners;
     for (const auto& p : c.positions) {
+      // Brute force: test every cell within 3 of the point's cell for overlap with its cube.
       const Eigen::Vector3i cell = cell_of(p, voxel);
-      for (int dz = -dilation; dz <= dilation; ++dz)
-        for (int dy = -dilation; dy <= dilation; ++dy)
-          for (int dx = -dilation; dx <= dilation; ++dx) cells.insert(pack_key(cell + Eigen::Vector3i(dx, dy, dz)));
+      for (int dz = -3; dz <= 3; ++dz)
+        for (int dy = -3; dy <= 3; ++dy)
+          for (int dx = -3; dx <= 3; ++dx) {
+            const Eigen::Vector3i q = cell + Eigen::Vector3i(dx, dy, dz);
+            const Eigen::Vector3f lo = q.cast<float>() * voxel;
+            const Eigen::Vector3f hi = lo + Eigen::Vector3f::Constant(voxel);
+            const Eigen::Vector3f r = Eigen::Vector3f::Constant(margin * voxel);
+            if (((p + r).array() >= lo.array()).all() && ((p - r).array() < hi.array()).all()) {
+              cells.insert(pack_key(q));
+            }
+          }
     }
     for (VoxelKey k : cells)
       for (int i = 0; i < 8; ++i) corners.insert(pack_key(unpack_key(k) + Eigen::Vector3i(i & 1, (i >> 1) & 1, i >> 2)));
@@ -42,8 +51,10 @@ TEST(SparseGrid, MatchesBruteForceCellAndCornerSets) {
 TEST(SparseGrid, RejectsCoordinatesBeyondTheKeyRange) {
   PointCloud c;
   c.positions = {{0, 0, 0}, {1e5f, 0, 0}};
-  EXPECT_THROW(voxelize(c, VoxelizeConfig{0.01f, 1}), Error);
-  EXPECT_THROW(voxelize(c, VoxelizeConfig{0.0f, 1}), Error);
+  EXPECT_THROW(voxelize(c, VoxelizeConfig{0.01f, 0.5f}), Error);
+  EXPECT_THROW(voxelize(c, VoxelizeConfig{0.0f, 0.5f}), Error);
+  c.positions.pop_back();
+  EXPECT_THROW(voxelize(c, VoxelizeConfig{0.01f, -1.0f}), Error);
 }
 
 TEST(SparseGrid, KeysRoundTrip) {

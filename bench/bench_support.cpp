@@ -13,7 +13,8 @@ namespace meshflow::bench {
 
 std::string kurt3d_path() {
   const char* env = std::getenv("MESHFLOW_DATA");
-  const std::string dir = env != nullptr && *env != '\0' ? env : std::string(MESHFLOW_SOURCE_DIR) + "/../shared/data";
+  const std::string dir =
+      env != nullptr && *env != '\0' ? env : std::string(MESHFLOW_SOURCE_DIR) + "/../shared/data";
   return dir + "/kurt3d/scan000.3d";
 }
 
@@ -43,7 +44,7 @@ const Frame* prepared_frame(Input input, const std::string& stage) {
   slot = std::make_unique<Frame>();
   slot->cloud = *cloud;
   const std::pair<const char*, stages::StageFunction> order[] = {
-      {"filter", stages::filter}, {"normals", stages::normals}, {"voxelize", stages::voxelize},
+      {"filter", stages::filter},     {"normals", stages::normals}, {"voxelize", stages::voxelize},
       {"distance", stages::distance}, {"extract", stages::extract}, {"optimize", stages::optimize}};
   for (const auto& [name, fn] : order) {
     if (stage == name) break;

@@ -34,20 +34,20 @@ struct ReconstructionConfig {
 /// One input (a point cloud) and everything the stages made of it. A frame that fails a stage
 /// keeps flowing with `error` set, so ordering and accounting stay exact.
 struct Frame {
-  std::uint64_t seq = 0;           ///< gapless, assigned by the pipeline in input order
-  std::string name;                ///< where the input came from (a path, "synthetic", ...)
+  std::uint64_t seq = 0;             ///< gapless, assigned by the pipeline in input order
+  std::string name;                  ///< where the input came from (a path, "synthetic", ...)
   std::function<PointCloud()> load;  ///< produces the input; called by the "read" stage
 
-  PointCloud cloud;                ///< after read: raw; after filter: filtered, with normals
+  PointCloud cloud;  ///< after read: raw; after filter: filtered, with normals
   FilterCounts filter_counts;
   std::shared_ptr<const SpatialIndex> index;  ///< over cloud.positions, built by "normals"
   float voxel_size = 0.0f;
   SparseGrid grid;
   DistanceField distance;
-  TriangleMesh mesh;               ///< after extract: raw; after optimize: cleaned
+  TriangleMesh mesh;  ///< after extract: raw; after optimize: cleaned
   CleanupReport cleanup;
 
-  std::string error;               ///< empty while the frame is healthy
+  std::string error;  ///< empty while the frame is healthy
   std::string failed_stage;
   std::vector<StageRecord> timings;  ///< one record per stage that ran
 

@@ -31,7 +31,8 @@ using StageNode = flow::function_node<FramePtr, FramePtr>;
 
 }  // namespace
 
-ReconstructionPipeline::ReconstructionPipeline(ReconstructionConfig config, std::size_t max_in_flight)
+ReconstructionPipeline::ReconstructionPipeline(ReconstructionConfig config,
+                                               std::size_t max_in_flight)
     : config_(std::move(config)), max_in_flight_(std::max<std::size_t>(1, max_in_flight)) {}
 
 void ReconstructionPipeline::run(const std::function<FramePtr()>& next,
@@ -56,11 +57,11 @@ void ReconstructionPipeline::run(const std::function<FramePtr()>& next,
   StageNode extract(g, flow::unlimited, StageNodeBody("extract", stages::extract, config_));
   StageNode optimize(g, flow::unlimited, StageNodeBody("optimize", stages::optimize, config_));
   flow::sequencer_node<FramePtr> in_order(g, [](const FramePtr& f) { return f->seq; });
-  flow::function_node<FramePtr, flow::continue_msg> deliver(
-      g, flow::serial, [&](const FramePtr& f) {
-        sink(f);
-        return flow::continue_msg();
-      });
+  flow::function_node<FramePtr, flow::continue_msg> deliver(g, flow::serial,
+                                                            [&](const FramePtr& f) {
+                                                              sink(f);
+                                                              return flow::continue_msg();
+                                                            });
 
   flow::make_edge(source, limiter);
   flow::make_edge(limiter, read);
@@ -84,7 +85,8 @@ FramePtr ReconstructionPipeline::reconstruct(PointCloud cloud, std::string name)
   frame->cloud = std::move(cloud);
   bool given = false;
   FramePtr result;
-  run([&]() -> FramePtr {
+  run(
+      [&]() -> FramePtr {
         if (given) return nullptr;
         given = true;
         return frame;

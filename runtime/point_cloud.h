@@ -18,12 +18,12 @@ struct Rgb8 {
 /// An organized cloud (from a depth camera or a range grid) has width * height == size()
 /// and height > 1; invalid pixels are NaN. Filters that drop points make it unorganized.
 struct PointCloud {
-  std::vector<Eigen::Vector3f> positions;    ///< metres
-  std::vector<Eigen::Vector3f> normals;      ///< unit length, oriented towards the sensor
-  std::vector<Rgb8> colors;                  ///< 8-bit RGB
-  std::vector<float> intensities;            ///< sensor units, unscaled
-  std::uint32_t width = 0;                   ///< organized grid width (0 if unorganized)
-  std::uint32_t height = 0;                  ///< organized grid height (0 if unorganized)
+  std::vector<Eigen::Vector3f> positions;  ///< metres
+  std::vector<Eigen::Vector3f> normals;    ///< unit length, oriented towards the sensor
+  std::vector<Rgb8> colors;                ///< 8-bit RGB
+  std::vector<float> intensities;          ///< sensor units, unscaled
+  std::uint32_t width = 0;                 ///< organized grid width (0 if unorganized)
+  std::uint32_t height = 0;                ///< organized grid height (0 if unorganized)
   Eigen::Vector3f sensor_origin = Eigen::Vector3f::Zero();  ///< where the sensor stood
   bool has_sensor_origin = false;
 

@@ -39,7 +39,8 @@ std::vector<StageSummary> summarize_stages(const std::vector<StageRecord>& recor
     for (double v : d) s.total_s += v;
     s.mean_s = s.total_s / static_cast<double>(d.size());
     s.p50_s = d[d.size() / 2];
-    s.p95_s = d[std::min(d.size() - 1, static_cast<std::size_t>(0.95 * static_cast<double>(d.size())))];
+    s.p95_s =
+        d[std::min(d.size() - 1, static_cast<std::size_t>(0.95 * static_cast<double>(d.size())))];
     s.max_s = d.back();
   }
   return out;

@@ -16,11 +16,11 @@ std::uint32_t current_thread_index();
 
 /// One execution of one stage on one frame.
 struct StageRecord {
-  std::string stage;        ///< stage name, e.g. "normals"
-  double start_s = 0.0;     ///< monotonic_seconds() at start
-  double end_s = 0.0;       ///< monotonic_seconds() at end
-  std::uint32_t thread = 0; ///< current_thread_index() of the thread that started it
-  std::uint64_t items = 0;  ///< work items the stage processed (points, corners, triangles)
+  std::string stage;         ///< stage name, e.g. "normals"
+  double start_s = 0.0;      ///< monotonic_seconds() at start
+  double end_s = 0.0;        ///< monotonic_seconds() at end
+  std::uint32_t thread = 0;  ///< current_thread_index() of the thread that started it
+  std::uint64_t items = 0;   ///< work items the stage processed (points, corners, triangles)
   double duration_s() const { return end_s - start_s; }
 };
 

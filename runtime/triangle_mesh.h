@@ -32,10 +32,10 @@ void compute_vertex_normals(TriangleMesh& mesh);
 
 /// Edge incidence counts of a mesh, for validity checks and `meshflow info`.
 struct EdgeStatistics {
-  std::size_t edges = 0;                ///< distinct undirected edges
-  std::size_t boundary_edges = 0;       ///< edges with one adjacent face
-  std::size_t non_manifold_edges = 0;   ///< edges with three or more adjacent faces
-  std::size_t inconsistent_edges = 0;   ///< two faces traversing the edge in the same direction
+  std::size_t edges = 0;               ///< distinct undirected edges
+  std::size_t boundary_edges = 0;      ///< edges with one adjacent face
+  std::size_t non_manifold_edges = 0;  ///< edges with three or more adjacent faces
+  std::size_t inconsistent_edges = 0;  ///< two faces traversing the edge in the same direction
   bool closed() const { return boundary_edges == 0 && non_manifold_edges == 0; }
 };
 

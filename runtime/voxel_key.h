@@ -13,7 +13,7 @@ using VoxelKey = std::uint64_t;
 
 constexpr int kKeyBitsPerAxis = 21;
 constexpr std::int32_t kKeyOffset = 1 << (kKeyBitsPerAxis - 1);  ///< index 0 maps to this
-constexpr std::int32_t kMaxCellIndex = kKeyOffset - 2;  ///< keeps +1 neighbours packable
+constexpr std::int32_t kMaxCellIndex = kKeyOffset - 2;           ///< keeps +1 neighbours packable
 constexpr std::uint64_t kKeyAxisMask = (std::uint64_t{1} << kKeyBitsPerAxis) - 1;
 
 /// True when every component of the cell index can be packed, with room for one neighbour.

@@ -26,8 +26,9 @@ std::string fixture(const std::string& relative) {
 
 std::string temp_dir() {
   static std::atomic<int> counter{0};
-  const auto dir = std::filesystem::temp_directory_path() /
-                   ("meshflow_test_" + std::to_string(::getpid()) + "_" + std::to_string(counter++));
+  const auto dir =
+      std::filesystem::temp_directory_path() /
+      ("meshflow_test_" + std::to_string(::getpid()) + "_" + std::to_string(counter++));
   std::filesystem::remove_all(dir);
   std::filesystem::create_directories(dir);
   return dir.string();

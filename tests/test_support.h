@@ -32,9 +32,9 @@ ErrorStats vertex_errors(const TriangleMesh& mesh,
 
 }  // namespace meshflow::test
 
-#define MESHFLOW_REQUIRE_DATA(relative)                                                        \
-  do {                                                                                         \
-    if (!::meshflow::test::has_data(relative))                                                 \
-      GTEST_SKIP() << "real data not found: " << ::meshflow::test::data_path(relative)         \
-                   << " (set MESHFLOW_DATA to the shared data directory)";                     \
+#define MESHFLOW_REQUIRE_DATA(relative)                                                \
+  do {                                                                                 \
+    if (!::meshflow::test::has_data(relative))                                         \
+      GTEST_SKIP() << "real data not found: " << ::meshflow::test::data_path(relative) \
+                   << " (set MESHFLOW_DATA to the shared data directory)";             \
   } while (0)

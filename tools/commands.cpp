@@ -18,15 +18,19 @@ void print_frame_report(const Frame& f, double wall_s, int threads) {
   std::printf("input      %s: %zu points\n", f.name.c_str(), c.input);
   if (c.non_finite > 0) std::printf("filter     dropped %zu NaN/Inf points\n", c.non_finite);
   if (c.cropped + c.merged + c.outliers > 0) {
-    std::printf("filter     cropped %zu, merged %zu, outliers %zu\n", c.cropped, c.merged, c.outliers);
+    std::printf("filter     cropped %zu, merged %zu, outliers %zu\n", c.cropped, c.merged,
+                c.outliers);
   }
   std::printf("grid       voxel %.4g m, %zu cells, %zu corners (%zu valid)\n", f.voxel_size,
               f.grid.cells.size(), f.grid.corners.size(), f.distance.valid_count());
-  std::printf("mesh       %zu vertices, %zu triangles (removed %zu degenerate, %zu in %zu small components)\n",
-              f.mesh.vertices.size(), f.mesh.triangles.size(),
-              f.cleanup.degenerate_triangles + f.cleanup.duplicate_triangles,
-              f.cleanup.removed_component_triangles, f.cleanup.removed_components);
-  std::printf("time       %.1f ms on %d thread%s\n", 1e3 * wall_s, threads, threads == 1 ? "" : "s");
+  std::printf(
+      "mesh       %zu vertices, %zu triangles (removed %zu degenerate, %zu in %zu small "
+      "components)\n",
+      f.mesh.vertices.size(), f.mesh.triangles.size(),
+      f.cleanup.degenerate_triangles + f.cleanup.duplicate_triangles,
+      f.cleanup.removed_component_triangles, f.cleanup.removed_components);
+  std::printf("time       %.1f ms on %d thread%s\n", 1e3 * wall_s, threads,
+              threads == 1 ? "" : "s");
   std::printf("%s", format_stage_table(summarize_stages(f.timings), wall_s).c_str());
 }
 
@@ -82,8 +86,9 @@ void run_reconstruct(const ReconstructOptions& o) {
                [](const FramePtr&) {});
   throw_if_failed(*frame);
   if (frame->mesh.empty()) {
-    throw Error(o.input, "", "no surface was extracted (voxel size " +
-                                 std::to_string(frame->voxel_size) + " m too small or too large?)");
+    throw Error(o.input, "",
+                "no surface was extracted (voxel size " + std::to_string(frame->voxel_size) +
+                    " m too small or too large?)");
   }
   io::write_mesh(o.output, frame->mesh);
   const double wall = monotonic_seconds() - t0;
@@ -102,24 +107,35 @@ void run_reconstruct(const ReconstructOptions& o) {
 void add_reconstruct_command(CLI::App& app) {
   auto opts = std::make_shared<ReconstructOptions>();
   CLI::App* cmd = app.add_subcommand("reconstruct", "Reconstruct a mesh from one point cloud");
-  cmd->add_option("input", opts->input, "Point cloud: .ply .pcd .xyz .txt .pts .asc .3d")->required();
+  cmd->add_option("input", opts->input, "Point cloud: .ply .pcd .xyz .txt .pts .asc .3d")
+      ->required();
   cmd->add_option("-o,--output", opts->output, "Output mesh (.ply or .obj)")->required();
-  cmd->add_option("--voxel", opts->voxel, "Voxel size in metres (default: 3x the median point spacing)")
+  cmd->add_option("--voxel", opts->voxel,
+                  "Voxel size in metres (default: 3x the median point spacing)")
       ->check(CLI::NonNegativeNumber);
   cmd->add_option("--kn", opts->kn, "Neighbours for normal estimation")->check(CLI::Range(3, 1000));
-  cmd->add_option("--ki", opts->ki, "Neighbours for normal interpolation (0 = off)")->check(CLI::Range(0, 1000));
-  cmd->add_option("--kd", opts->kd, "Tangent planes averaged per distance sample")->check(CLI::Range(1, 64));
-  cmd->add_option("--threads", opts->threads, "Worker threads (default: all cores)")->check(CLI::NonNegativeNumber);
+  cmd->add_option("--ki", opts->ki, "Neighbours for normal interpolation (0 = off)")
+      ->check(CLI::Range(0, 1000));
+  cmd->add_option("--kd", opts->kd, "Tangent planes averaged per distance sample")
+      ->check(CLI::Range(1, 64));
+  cmd->add_option("--threads", opts->threads, "Worker threads (default: all cores)")
+      ->check(CLI::NonNegativeNumber);
   cmd->add_flag("--adaptive-k", opts->adaptive_k, "Grow kn where neighbourhoods are degenerate");
-  cmd->add_option("--max-distance", opts->max_distance, "Distance samples farther than this many voxels from the data are invalid")
+  cmd->add_option("--max-distance", opts->max_distance,
+                  "Distance samples farther than this many voxels from the data are invalid")
       ->check(CLI::PositiveNumber);
-  cmd->add_option("--min-component", opts->min_component, "Remove mesh components with fewer triangles");
-  cmd->add_option("--filter-voxel", opts->filter_voxel, "Voxel-grid downsampling before meshing, metres (0 = off)")
+  cmd->add_option("--min-component", opts->min_component,
+                  "Remove mesh components with fewer triangles");
+  cmd->add_option("--filter-voxel", opts->filter_voxel,
+                  "Voxel-grid downsampling before meshing, metres (0 = off)")
       ->check(CLI::NonNegativeNumber);
-  cmd->add_option("--outlier-k", opts->outlier_k, "Statistical outlier removal with k neighbours (0 = off)")
+  cmd->add_option("--outlier-k", opts->outlier_k,
+                  "Statistical outlier removal with k neighbours (0 = off)")
       ->check(CLI::NonNegativeNumber);
-  cmd->add_option("--min-range", opts->min_range, "Drop points closer to the sensor, metres")->check(CLI::NonNegativeNumber);
-  cmd->add_option("--max-range", opts->max_range, "Drop points farther from the sensor, metres (0 = off)")
+  cmd->add_option("--min-range", opts->min_range, "Drop points closer to the sensor, metres")
+      ->check(CLI::NonNegativeNumber);
+  cmd->add_option("--max-range", opts->max_range,
+                  "Drop points farther from the sensor, metres (0 = off)")
       ->check(CLI::NonNegativeNumber);
   cmd->add_flag("-q,--quiet", opts->quiet, "Print nothing on success");
   cmd->callback([opts] { run_reconstruct(*opts); });
@@ -134,7 +150,8 @@ void add_info_command(CLI::App& app) {
     std::size_t finite = 0;
     for (const auto& p : cloud.positions) finite += p.allFinite() ? 1 : 0;
     std::printf("file        %s\n", path->c_str());
-    std::printf("points      %zu (%zu finite, %zu NaN/Inf)\n", cloud.size(), finite, cloud.size() - finite);
+    std::printf("points      %zu (%zu finite, %zu NaN/Inf)\n", cloud.size(), finite,
+                cloud.size() - finite);
     if (cloud.is_organized()) std::printf("organized   %u x %u\n", cloud.width, cloud.height);
     std::string fields = "x y z";
     if (cloud.has_normals()) fields += " normals";
@@ -145,11 +162,12 @@ void add_info_command(CLI::App& app) {
     if (!box.isEmpty()) {
       std::printf("bounds min  %.4f %.4f %.4f m\n", box.min().x(), box.min().y(), box.min().z());
       std::printf("bounds max  %.4f %.4f %.4f m\n", box.max().x(), box.max().y(), box.max().z());
-      std::printf("extent      %.4f x %.4f x %.4f m\n", box.sizes().x(), box.sizes().y(), box.sizes().z());
+      std::printf("extent      %.4f x %.4f x %.4f m\n", box.sizes().x(), box.sizes().y(),
+                  box.sizes().z());
     }
     if (cloud.has_sensor_origin) {
-      std::printf("sensor      %.4f %.4f %.4f m\n", cloud.sensor_origin.x(), cloud.sensor_origin.y(),
-                  cloud.sensor_origin.z());
+      std::printf("sensor      %.4f %.4f %.4f m\n", cloud.sensor_origin.x(),
+                  cloud.sensor_origin.y(), cloud.sensor_origin.z());
     }
   });
 }

@@ -29,7 +29,9 @@ void run_demo(const DemoOptions& o) {
   const synthetic::Scene scene = synthetic::demo_room_scene();
   synthetic::ScanConfig scan;
   scan.noise_sigma = o.noise;
-  std::printf("demo       simulated laser scan of an 8 x 6 x 3 m room with a block, a cabinet and a ball\n");
+  std::printf(
+      "demo       simulated laser scan of an 8 x 6 x 3 m room with a block, a cabinet and a "
+      "ball\n");
   std::printf("           %d x %d rays from (%.1f, %.1f, %.1f) m, range noise %.1f mm\n",
               scan.azimuth_steps, scan.elevation_steps, scan.origin.x(), scan.origin.y(),
               scan.origin.z(), 1e3 * o.noise);
@@ -55,10 +57,13 @@ void run_demo(const DemoOptions& o) {
   if (!errors.empty()) {
     const double mean = sum / static_cast<double>(errors.size());
     const float p95 = errors[errors.size() * 95 / 100];
-    std::printf("accuracy   vertex-to-true-surface distance: mean %.2f mm (%.3f voxel), p95 %.2f mm, max %.2f mm\n",
-                1e3 * mean, mean / o.voxel, 1e3 * p95, 1e3 * errors.back());
+    std::printf(
+        "accuracy   vertex-to-true-surface distance: mean %.2f mm (%.3f voxel), p95 %.2f mm, max "
+        "%.2f mm\n",
+        1e3 * mean, mean / o.voxel, 1e3 * p95, 1e3 * errors.back());
   }
-  std::printf("throughput %.2f M points/s\n", static_cast<double>(frame->filter_counts.input) / wall * 1e-6);
+  std::printf("throughput %.2f M points/s\n",
+              static_cast<double>(frame->filter_counts.input) / wall * 1e-6);
   std::printf("output     %s\n", o.output.c_str());
 }
 
@@ -66,11 +71,14 @@ void run_demo(const DemoOptions& o) {
 
 void add_demo_command(CLI::App& app) {
   auto opts = std::make_shared<DemoOptions>();
-  CLI::App* cmd = app.add_subcommand("demo", "Reconstruct a built-in synthetic scene and report speed and accuracy");
+  CLI::App* cmd = app.add_subcommand(
+      "demo", "Reconstruct a built-in synthetic scene and report speed and accuracy");
   cmd->add_option("-o,--output", opts->output, "Output mesh (.ply or .obj)");
   cmd->add_option("--voxel", opts->voxel, "Voxel size in metres")->check(CLI::PositiveNumber);
-  cmd->add_option("--noise", opts->noise, "Range noise of the simulated scanner, metres")->check(CLI::NonNegativeNumber);
-  cmd->add_option("--threads", opts->threads, "Worker threads (default: all cores)")->check(CLI::NonNegativeNumber);
+  cmd->add_option("--noise", opts->noise, "Range noise of the simulated scanner, metres")
+      ->check(CLI::NonNegativeNumber);
+  cmd->add_option("--threads", opts->threads, "Worker threads (default: all cores)")
+      ->check(CLI::NonNegativeNumber);
   cmd->callback([opts] { run_demo(*opts); });
 }
 

@@ -19,7 +19,8 @@ void BM_PipelineEndToEnd(benchmark::State& state) {
   ReconstructionConfig config;
   config.voxelize.voxel_size = 0.05f;
   ReconstructionPipeline pipeline(config, 1);
-  const std::string out = (std::filesystem::temp_directory_path() / "meshflow_bench_mesh.ply").string();
+  const std::string out =
+      (std::filesystem::temp_directory_path() / "meshflow_bench_mesh.ply").string();
   for (auto _ : state) {
     auto frame = std::make_shared<Frame>();
     if (input == kKurt3d) {
@@ -33,7 +34,8 @@ void BM_PipelineEndToEnd(benchmark::State& state) {
     if (!frame->ok()) state.SkipWithError(frame->error.c_str());
   }
   std::filesystem::remove(out);
-  state.counters["points/s"] = benchmark::Counter(static_cast<double>(cloud->size()), benchmark::Counter::kIsIterationInvariantRate);
+  state.counters["points/s"] = benchmark::Counter(static_cast<double>(cloud->size()),
+                                                  benchmark::Counter::kIsIterationInvariantRate);
 }
 BENCHMARK(BM_PipelineEndToEnd)->Apply(thread_and_input_args);
 

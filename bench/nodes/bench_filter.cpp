@@ -13,7 +13,8 @@ void BM_FilterVoxelGridAndOutliers(benchmark::State& state) {
   config.voxel_size = 0.02f;
   config.outlier_k = 8;
   for (auto _ : state) benchmark::DoNotOptimize(filter_cloud(*cloud, config).size());
-  state.counters["points/s"] = benchmark::Counter(static_cast<double>(cloud->size()), benchmark::Counter::kIsIterationInvariantRate);
+  state.counters["points/s"] = benchmark::Counter(static_cast<double>(cloud->size()),
+                                                  benchmark::Counter::kIsIterationInvariantRate);
 }
 BENCHMARK(BM_FilterVoxelGridAndOutliers)->Apply(thread_and_input_args);
 

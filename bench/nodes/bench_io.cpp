@@ -12,7 +12,8 @@ void BM_Read3dtkScan(benchmark::State& state) {
   if (require(state, kKurt3d) == nullptr) return;
   std::size_t points = 0;
   for (auto _ : state) points = io::read_3dtk_scan(kurt3d_path()).size();
-  state.counters["points/s"] = benchmark::Counter(static_cast<double>(points), benchmark::Counter::kIsIterationInvariantRate);
+  state.counters["points/s"] = benchmark::Counter(static_cast<double>(points),
+                                                  benchmark::Counter::kIsIterationInvariantRate);
 }
 BENCHMARK(BM_Read3dtkScan)->Unit(benchmark::kMillisecond)->UseRealTime();
 
@@ -26,7 +27,8 @@ void BM_PlyBinaryRoundTrip(benchmark::State& state) {
     benchmark::DoNotOptimize(io::read_ply(path).size());
   }
   std::filesystem::remove(path);
-  state.counters["points/s"] = benchmark::Counter(static_cast<double>(cloud->size()), benchmark::Counter::kIsIterationInvariantRate);
+  state.counters["points/s"] = benchmark::Counter(static_cast<double>(cloud->size()),
+                                                  benchmark::Counter::kIsIterationInvariantRate);
 }
 BENCHMARK(BM_PlyBinaryRoundTrip)->Unit(benchmark::kMillisecond)->UseRealTime();
 

@@ -6,11 +6,11 @@ namespace meshflow {
 namespace {
 
 // Faces with their corners counter-clockwise seen from outside the cube.
-constexpr std::array<std::array<int, 4>, 6> kFaces = {{{0, 4, 6, 2},   // x = 0
-                                                       {1, 3, 7, 5},   // x = 1
-                                                       {0, 1, 5, 4},   // y = 0
-                                                       {2, 6, 7, 3},   // y = 1
-                                                       {0, 2, 3, 1},   // z = 0
+constexpr std::array<std::array<int, 4>, 6> kFaces = {{{0, 4, 6, 2},    // x = 0
+                                                       {1, 3, 7, 5},    // x = 1
+                                                       {0, 1, 5, 4},    // y = 0
+                                                       {2, 6, 7, 3},    // y = 1
+                                                       {0, 2, 3, 1},    // z = 0
                                                        {4, 5, 7, 6}}};  // z = 1
 
 int edge_between(int a, int b) {
@@ -27,7 +27,8 @@ bool share_face(int a, int b) {
   for (const auto& face : kFaces) {
     int hits = 0;
     for (int i = 0; i < 4; ++i) {
-      const int e = edge_between(face[static_cast<std::size_t>(i)], face[static_cast<std::size_t>((i + 1) % 4)]);
+      const int e = edge_between(face[static_cast<std::size_t>(i)],
+                                 face[static_cast<std::size_t>((i + 1) % 4)]);
       hits += (e == a || e == b) ? 1 : 0;
     }
     if (hits == 2) return true;
@@ -57,7 +58,8 @@ CubeCase build_case(int pattern) {
     // Walking the face counter-clockwise, each run of outside corners is entered by an
     // inside->outside edge and left by an outside->inside edge; one segment cuts it off.
     for (int i = 0; i < 4; ++i) {
-      const int a = face[static_cast<std::size_t>(i)], b = face[static_cast<std::size_t>((i + 1) % 4)];
+      const int a = face[static_cast<std::size_t>(i)],
+                b = face[static_cast<std::size_t>((i + 1) % 4)];
       if (!(inside(a) && !inside(b))) continue;
       for (int j = 1; j < 4; ++j) {
         const int c = face[static_cast<std::size_t>((i + j) % 4)];
@@ -72,7 +74,8 @@ CubeCase build_case(int pattern) {
   CubeCase out;
   std::array<bool, 12> used{};
   for (int start = 0; start < 12; ++start) {
-    if (next[static_cast<std::size_t>(start)] < 0 || used[static_cast<std::size_t>(start)]) continue;
+    if (next[static_cast<std::size_t>(start)] < 0 || used[static_cast<std::size_t>(start)])
+      continue;
     std::vector<int> loop;
     for (int e = start; !used[static_cast<std::size_t>(e)]; e = next[static_cast<std::size_t>(e)]) {
       used[static_cast<std::size_t>(e)] = true;

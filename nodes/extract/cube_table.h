@@ -16,9 +16,18 @@ namespace meshflow {
 
 /// Corner c of a cube is at (c & 1, (c >> 1) & 1, (c >> 2) & 1).
 /// Edge e joins corners kCubeEdges[e][0] < kCubeEdges[e][1] along axis kCubeEdgeAxis[e].
-constexpr std::array<std::array<int, 2>, 12> kCubeEdges = {{{0, 1}, {2, 3}, {4, 5}, {6, 7},
-                                                             {0, 2}, {1, 3}, {4, 6}, {5, 7},
-                                                             {0, 4}, {1, 5}, {2, 6}, {3, 7}}};
+constexpr std::array<std::array<int, 2>, 12> kCubeEdges = {{{0, 1},
+                                                            {2, 3},
+                                                            {4, 5},
+                                                            {6, 7},
+                                                            {0, 2},
+                                                            {1, 3},
+                                                            {4, 6},
+                                                            {5, 7},
+                                                            {0, 4},
+                                                            {1, 5},
+                                                            {2, 6},
+                                                            {3, 7}}};
 constexpr std::array<int, 12> kCubeEdgeAxis = {0, 0, 0, 0, 1, 1, 1, 1, 2, 2, 2, 2};
 
 /// Triangles of one case as triples of cube edge indices.

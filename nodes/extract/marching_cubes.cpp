@@ -19,7 +19,9 @@ struct EdgeRef {
 };
 
 std::uint64_t edge_key(const std::array<std::uint32_t, 8>& corners, int e) {
-  return static_cast<std::uint64_t>(corners[static_cast<std::size_t>(kCubeEdges[static_cast<std::size_t>(e)][0])]) * 3 +
+  return static_cast<std::uint64_t>(
+             corners[static_cast<std::size_t>(kCubeEdges[static_cast<std::size_t>(e)][0])]) *
+             3 +
          static_cast<std::uint64_t>(kCubeEdgeAxis[static_cast<std::size_t>(e)]);
 }
 

@@ -8,8 +8,8 @@
 namespace meshflow {
 
 struct ExtractConfig {
-  float iso = 0.0f;             ///< iso-value of the surface (metres of signed distance)
-  bool vertex_normals = true;   ///< compute area-weighted vertex normals
+  float iso = 0.0f;            ///< iso-value of the surface (metres of signed distance)
+  bool vertex_normals = true;  ///< compute area-weighted vertex normals
 };
 
 /// Extracts the iso-surface of `field` over every cell of `grid` whose 8 corners are valid.

@@ -49,7 +49,8 @@ PointCloud voxel_grid_downsample(const PointCloud& cloud, float voxel_size) {
   tbb::parallel_sort(keyed.begin(), keyed.end());
   std::vector<std::uint32_t> starts;
   for (std::size_t i = 0; i < n; ++i) {
-    if (i == 0 || keyed[i].first != keyed[i - 1].first) starts.push_back(static_cast<std::uint32_t>(i));
+    if (i == 0 || keyed[i].first != keyed[i - 1].first)
+      starts.push_back(static_cast<std::uint32_t>(i));
   }
   const std::size_t cells = starts.size();
   starts.push_back(static_cast<std::uint32_t>(n));
@@ -69,7 +70,8 @@ PointCloud voxel_grid_downsample(const PointCloud& cloud, float voxel_size) {
       const std::uint32_t i = keyed[k].second;
       sum += cloud.positions[i].cast<double>();
       if (cloud.has_normals()) nsum += cloud.normals[i].cast<double>();
-      if (cloud.has_colors()) csum += Eigen::Vector3d(cloud.colors[i].r, cloud.colors[i].g, cloud.colors[i].b);
+      if (cloud.has_colors())
+        csum += Eigen::Vector3d(cloud.colors[i].r, cloud.colors[i].g, cloud.colors[i].b);
       if (cloud.has_intensities()) isum += cloud.intensities[i];
     }
     const double count = starts[c + 1] - starts[c];
@@ -93,17 +95,18 @@ std::vector<std::uint32_t> statistical_inlier_indices(const PointCloud& cloud, i
   const KdTreeIndex index(cloud.positions);
   const std::size_t kq = static_cast<std::size_t>(k) + 1;  // the point itself comes first
   std::vector<float> mean_distance(n);
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 1024),
-                    [&](const tbb::blocked_range<std::size_t>& r) {
-                      std::vector<std::uint32_t> idx(kq);
-                      std::vector<float> d2(kq);
-                      for (std::size_t i = r.begin(); i != r.end(); ++i) {
-                        const std::size_t found = index.knn(cloud.positions[i], kq, idx.data(), d2.data());
-                        double s = 0.0;
-                        for (std::size_t j = 1; j < found; ++j) s += std::sqrt(d2[j]);
-                        mean_distance[i] = found > 1 ? static_cast<float>(s / static_cast<double>(found - 1)) : 0.0f;
-                      }
-                    });
+  tbb::parallel_for(
+      tbb::blocked_range<std::size_t>(0, n, 1024), [&](const tbb::blocked_range<std::size_t>& r) {
+        std::vector<std::uint32_t> idx(kq);
+        std::vector<float> d2(kq);
+        for (std::size_t i = r.begin(); i != r.end(); ++i) {
+          const std::size_t found = index.knn(cloud.positions[i], kq, idx.data(), d2.data());
+          double s = 0.0;
+          for (std::size_t j = 1; j < found; ++j) s += std::sqrt(d2[j]);
+          mean_distance[i] =
+              found > 1 ? static_cast<float>(s / static_cast<double>(found - 1)) : 0.0f;
+        }
+      });
   // Serial sums: deterministic regardless of thread count.
   double sum = 0.0, sum2 = 0.0;
   for (float d : mean_distance) {
@@ -131,7 +134,8 @@ PointCloud filter_cloud(const PointCloud& cloud, const FilterConfig& config, Fil
   c.merged = before - out.size();
   before = out.size();
   if (config.outlier_k > 0) {
-    out = select_points(out, statistical_inlier_indices(out, config.outlier_k, config.outlier_stddev));
+    out = select_points(out,
+                        statistical_inlier_indices(out, config.outlier_k, config.outlier_stddev));
   }
   c.outliers = before - out.size();
   c.output = out.size();

@@ -14,19 +14,19 @@ namespace meshflow {
 /// What filter_cloud() removed, stage by stage.
 struct FilterCounts {
   std::size_t input = 0;
-  std::size_t non_finite = 0;     ///< NaN or Inf coordinates
-  std::size_t cropped = 0;        ///< outside the crop box or the range limits
-  std::size_t merged = 0;         ///< folded into voxel-grid centroids
-  std::size_t outliers = 0;       ///< statistical outliers
+  std::size_t non_finite = 0;  ///< NaN or Inf coordinates
+  std::size_t cropped = 0;     ///< outside the crop box or the range limits
+  std::size_t merged = 0;      ///< folded into voxel-grid centroids
+  std::size_t outliers = 0;    ///< statistical outliers
   std::size_t output = 0;
 };
 
 struct FilterConfig {
   std::optional<Eigen::AlignedBox3f> crop_box;  ///< keep only points inside (metres, world)
-  float min_range = 0.0f;   ///< metres from the sensor origin (needs has_sensor_origin)
-  float max_range = 0.0f;   ///< metres from the sensor origin; 0 = unlimited
-  float voxel_size = 0.0f;  ///< voxel-grid downsampling cell in metres; 0 = off
-  int outlier_k = 0;        ///< neighbours for outlier removal; 0 = off (PCL's default is 50)
+  float min_range = 0.0f;       ///< metres from the sensor origin (needs has_sensor_origin)
+  float max_range = 0.0f;       ///< metres from the sensor origin; 0 = unlimited
+  float voxel_size = 0.0f;      ///< voxel-grid downsampling cell in metres; 0 = off
+  int outlier_k = 0;            ///< neighbours for outlier removal; 0 = off (PCL's default is 50)
   float outlier_stddev = 1.0f;  ///< remove points whose mean neighbour distance exceeds
                                 ///< mean + outlier_stddev * stddev over the cloud
 };

@@ -7,7 +7,16 @@
 
 namespace meshflow::io {
 
-enum class ScalarType : std::uint8_t { kInt8, kUint8, kInt16, kUint16, kInt32, kUint32, kFloat32, kFloat64 };
+enum class ScalarType : std::uint8_t {
+  kInt8,
+  kUint8,
+  kInt16,
+  kUint16,
+  kInt32,
+  kUint32,
+  kFloat32,
+  kFloat64
+};
 
 /// Size in bytes of one value.
 inline std::size_t scalar_size(ScalarType t) {
@@ -21,14 +30,43 @@ inline double decode_scalar(const unsigned char* p, ScalarType t, bool swap) {
   const std::size_t n = scalar_size(t);
   for (std::size_t i = 0; i < n; ++i) b[i] = swap ? p[n - 1 - i] : p[i];
   switch (t) {
-    case ScalarType::kInt8: { std::int8_t v; std::memcpy(&v, b, 1); return v; }
-    case ScalarType::kUint8: return b[0];
-    case ScalarType::kInt16: { std::int16_t v; std::memcpy(&v, b, 2); return v; }
-    case ScalarType::kUint16: { std::uint16_t v; std::memcpy(&v, b, 2); return v; }
-    case ScalarType::kInt32: { std::int32_t v; std::memcpy(&v, b, 4); return v; }
-    case ScalarType::kUint32: { std::uint32_t v; std::memcpy(&v, b, 4); return v; }
-    case ScalarType::kFloat32: { float v; std::memcpy(&v, b, 4); return v; }
-    case ScalarType::kFloat64: { double v; std::memcpy(&v, b, 8); return v; }
+    case ScalarType::kInt8: {
+      std::int8_t v;
+      std::memcpy(&v, b, 1);
+      return v;
+    }
+    case ScalarType::kUint8:
+      return b[0];
+    case ScalarType::kInt16: {
+      std::int16_t v;
+      std::memcpy(&v, b, 2);
+      return v;
+    }
+    case ScalarType::kUint16: {
+      std::uint16_t v;
+      std::memcpy(&v, b, 2);
+      return v;
+    }
+    case ScalarType::kInt32: {
+      std::int32_t v;
+      std::memcpy(&v, b, 4);
+      return v;
+    }
+    case ScalarType::kUint32: {
+      std::uint32_t v;
+      std::memcpy(&v, b, 4);
+      return v;
+    }
+    case ScalarType::kFloat32: {
+      float v;
+      std::memcpy(&v, b, 4);
+      return v;
+    }
+    case ScalarType::kFloat64: {
+      double v;
+      std::memcpy(&v, b, 8);
+      return v;
+    }
   }
   return 0.0;
 }

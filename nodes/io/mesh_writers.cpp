@@ -40,17 +40,20 @@ void write_ply(const std::string& path, const TriangleMesh& mesh, PlyEncoding en
       }
       if (colors) {
         const auto& c = mesh.colors[i];
-        std::snprintf(line + n, sizeof line - static_cast<std::size_t>(n), " %d %d %d", c.r, c.g, c.b);
+        std::snprintf(line + n, sizeof line - static_cast<std::size_t>(n), " %d %d %d", c.r, c.g,
+                      c.b);
       }
       out << line << '\n';
     }
-    for (const Triangle& t : mesh.triangles) out << "3 " << t[0] << ' ' << t[1] << ' ' << t[2] << '\n';
+    for (const Triangle& t : mesh.triangles)
+      out << "3 " << t[0] << ' ' << t[1] << ' ' << t[2] << '\n';
   } else {
     std::string buf;
     buf.reserve(mesh.vertices.size() * 27 + mesh.triangles.size() * 13);
     for (std::size_t i = 0; i < mesh.vertices.size(); ++i) {
       for (int k = 0; k < 3; ++k) put(buf, mesh.vertices[i][k]);
-      if (normals) for (int k = 0; k < 3; ++k) put(buf, mesh.normals[i][k]);
+      if (normals)
+        for (int k = 0; k < 3; ++k) put(buf, mesh.normals[i][k]);
       if (colors) {
         buf.push_back(static_cast<char>(mesh.colors[i].r));
         buf.push_back(static_cast<char>(mesh.colors[i].g));

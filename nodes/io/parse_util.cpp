@@ -21,8 +21,8 @@ void split_whitespace(std::string_view line, std::vector<std::string_view>& toke
   }
 }
 
-double parse_number(std::string_view token, const std::string& source,
-                    const std::string& location, std::string_view field) {
+double parse_number(std::string_view token, const std::string& source, const std::string& location,
+                    std::string_view field) {
   std::string_view t = token;
   if (!t.empty() && t.front() == '+') t.remove_prefix(1);
   double value = 0.0;
@@ -33,9 +33,9 @@ double parse_number(std::string_view token, const std::string& source,
                     "' is out of the range of a double");
   }
   if (ec != std::errc() || end != t.data() + t.size() || t.empty()) {
-    throw Error(source, location,
-                "field '" + std::string(field) + "': expected a number, got '" +
-                    std::string(token) + "'");
+    throw Error(
+        source, location,
+        "field '" + std::string(field) + "': expected a number, got '" + std::string(token) + "'");
   }
   return value;
 }
@@ -76,7 +76,8 @@ void check_coordinates(const Eigen::Vector3d& p, const std::string& source,
 }
 
 void check_coordinates(const Eigen::Vector3d& p, const std::string& source, std::size_t line) {
-  if ((p.array().abs() > kMaxAbsCoordinate).any()) check_coordinates(p, source, "line " + std::to_string(line));
+  if ((p.array().abs() > kMaxAbsCoordinate).any())
+    check_coordinates(p, source, "line " + std::to_string(line));
 }
 
 std::ifstream open_input(const std::string& path) {

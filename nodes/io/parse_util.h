@@ -19,8 +19,8 @@ void split_whitespace(std::string_view line, std::vector<std::string_view>& toke
 
 /// Parses a decimal floating-point token ("1.5", "-2e3", "nan", "inf"). Throws meshflow::Error
 /// naming `source`, `location` and `field` when the token is not a number or overflows double.
-double parse_number(std::string_view token, const std::string& source,
-                    const std::string& location, std::string_view field);
+double parse_number(std::string_view token, const std::string& source, const std::string& location,
+                    std::string_view field);
 
 /// As above with the location "line N", formatted only when there is an error.
 double parse_number(std::string_view token, const std::string& source, std::size_t line,

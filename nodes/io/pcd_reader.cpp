@@ -20,7 +20,7 @@ struct PcdField {
   std::size_t size = 4;
   char type = 'F';
   std::size_t count = 1;
-  std::size_t offset = 0;  // bytes from the start of a binary row
+  std::size_t offset = 0;            // bytes from the start of a binary row
   std::optional<ScalarType> scalar;  // nullopt for types meshflow cannot decode (e.g. 64-bit ints)
 };
 
@@ -61,18 +61,26 @@ PcdHeader parse_header(std::istream& in, const std::string& path) {
     const std::string_view key = tok[0];
     if (key == "VERSION" || key == "VIEWPOINT") continue;
     if (key == "FIELDS" || key == "COLUMNS") {
-      for (std::size_t i = 1; i < tok.size(); ++i) { PcdField f; f.name = std::string(tok[i]); h.fields.push_back(f); }
+      for (std::size_t i = 1; i < tok.size(); ++i) {
+        PcdField f;
+        f.name = std::string(tok[i]);
+        h.fields.push_back(f);
+      }
     } else if (key == "SIZE") {
-      for (std::size_t i = 1; i < tok.size(); ++i) sizes.push_back(parse_count(tok[i], path, where, "SIZE"));
+      for (std::size_t i = 1; i < tok.size(); ++i)
+        sizes.push_back(parse_count(tok[i], path, where, "SIZE"));
     } else if (key == "TYPE") {
       for (std::size_t i = 1; i < tok.size(); ++i) {
-        if (tok[i].size() != 1 || std::string_view("FIU").find(tok[i][0]) == std::string_view::npos) {
-          throw Error(path, where, "unknown TYPE '" + std::string(tok[i]) + "' (expected F, I or U)");
+        if (tok[i].size() != 1 ||
+            std::string_view("FIU").find(tok[i][0]) == std::string_view::npos) {
+          throw Error(path, where,
+                      "unknown TYPE '" + std::string(tok[i]) + "' (expected F, I or U)");
         }
         types.push_back(tok[i][0]);
       }
     } else if (key == "COUNT") {
-      for (std::size_t i = 1; i < tok.size(); ++i) counts.push_back(parse_count(tok[i], path, where, "COUNT"));
+      for (std::size_t i = 1; i < tok.size(); ++i)
+        counts.push_back(parse_count(tok[i], path, where, "COUNT"));
     } else if (key == "WIDTH" && tok.size() == 2) {
       h.width = parse_count(tok[1], path, where, "WIDTH");
     } else if (key == "HEIGHT" && tok.size() == 2) {
@@ -81,10 +89,14 @@ PcdHeader parse_header(std::istream& in, const std::string& path) {
       h.points = parse_count(tok[1], path, where, "POINTS");
       have_points = true;
     } else if (key == "DATA" && tok.size() == 2) {
-      if (tok[1] == "ascii") h.data = PcdData::kAscii;
-      else if (tok[1] == "binary") h.data = PcdData::kBinary;
-      else if (tok[1] == "binary_compressed") h.data = PcdData::kBinaryCompressed;
-      else throw Error(path, where, "unknown DATA type '" + std::string(tok[1]) + "'");
+      if (tok[1] == "ascii")
+        h.data = PcdData::kAscii;
+      else if (tok[1] == "binary")
+        h.data = PcdData::kBinary;
+      else if (tok[1] == "binary_compressed")
+        h.data = PcdData::kBinaryCompressed;
+      else
+        throw Error(path, where, "unknown DATA type '" + std::string(tok[1]) + "'");
       have_data = true;
     } else {
       throw Error(path, where, "unknown or malformed header entry '" + std::string(key) + "'");
@@ -101,8 +113,8 @@ PcdHeader parse_header(std::istream& in, const std::string& path) {
   if (!have_points) h.points = h.width * h.height;
   if (h.width * h.height != h.points) {
     throw Error(path, "header",
-                "WIDTH x HEIGHT = " + std::to_string(h.width * h.height) + " but POINTS = " +
-                    std::to_string(h.points));
+                "WIDTH x HEIGHT = " + std::to_string(h.width * h.height) +
+                    " but POINTS = " + std::to_string(h.points));
   }
   for (std::size_t i = 0; i < n; ++i) {
     PcdField& f = h.fields[i];
@@ -111,7 +123,8 @@ PcdHeader parse_header(std::istream& in, const std::string& path) {
     f.count = counts.empty() ? 1 : counts[i];
     f.scalar = pcd_scalar(f.type, f.size);
     if (f.size == 0 || f.size > 8) {
-      throw Error(path, "header", "field '" + f.name + "' has invalid SIZE " + std::to_string(f.size));
+      throw Error(path, "header",
+                  "field '" + f.name + "' has invalid SIZE " + std::to_string(f.size));
     }
     f.offset = h.row_bytes;
     h.row_bytes += f.size * f.count;
@@ -127,10 +140,15 @@ struct PcdLayout {
   PcdLayout(const PcdHeader& h, const std::string& path) {
     for (std::size_t i = 0; i < h.fields.size(); ++i) {
       const std::string& name = h.fields[i].name;
-      int* slot = name == "x" ? &x : name == "y" ? &y : name == "z" ? &z
-                : name == "normal_x" ? &nx : name == "normal_y" ? &ny : name == "normal_z" ? &nz
-                : (name == "rgb" || name == "rgba") ? &rgb
-                : name == "intensity" ? &intensity : nullptr;
+      int* slot = name == "x"                         ? &x
+                  : name == "y"                       ? &y
+                  : name == "z"                       ? &z
+                  : name == "normal_x"                ? &nx
+                  : name == "normal_y"                ? &ny
+                  : name == "normal_z"                ? &nz
+                  : (name == "rgb" || name == "rgba") ? &rgb
+                  : name == "intensity"               ? &intensity
+                                                      : nullptr;
       if (slot == nullptr) continue;
       if (!h.fields[i].scalar) {
         throw Error(path, "header", "field '" + name + "' has an unsupported TYPE/SIZE");
@@ -167,7 +185,8 @@ struct PointSink {
       cloud.colors.push_back(Rgb8{static_cast<std::uint8_t>(c >> 16),
                                   static_cast<std::uint8_t>(c >> 8), static_cast<std::uint8_t>(c)});
     }
-    if (layout.intensity >= 0) cloud.intensities.push_back(static_cast<float>(value(layout.intensity)));
+    if (layout.intensity >= 0)
+      cloud.intensities.push_back(static_cast<float>(value(layout.intensity)));
   }
 };
 
@@ -205,7 +224,8 @@ void read_ascii(std::istream& in, const PcdHeader& h, PointSink& sink) {
         std::memcpy(&b, &v, 4);
         return b;
       }
-      return static_cast<std::uint32_t>(parse_count(tok[first[fi]], sink.path, loc, h.fields[fi].name));
+      return static_cast<std::uint32_t>(
+          parse_count(tok[first[fi]], sink.path, loc, h.fields[fi].name));
     };
     sink.add(i, value, bits);
   }
@@ -219,15 +239,21 @@ void read_binary(std::istream& in, const PcdHeader& h, PointSink& sink) {
     buffer.resize(rows * h.row_bytes);
     in.read(reinterpret_cast<char*>(buffer.data()), static_cast<std::streamsize>(buffer.size()));
     if (static_cast<std::size_t>(in.gcount()) != buffer.size()) {
-      throw Error(sink.path, "point " + std::to_string(i + static_cast<std::uint64_t>(in.gcount()) / h.row_bytes),
-                  "file ends early: POINTS declares " + std::to_string(h.points) + " rows of " +
-                      std::to_string(h.row_bytes) + " bytes");
+      throw Error(
+          sink.path,
+          "point " + std::to_string(i + static_cast<std::uint64_t>(in.gcount()) / h.row_bytes),
+          "file ends early: POINTS declares " + std::to_string(h.points) + " rows of " +
+              std::to_string(h.row_bytes) + " bytes");
     }
     for (std::uint64_t r = 0; r < rows; ++r) {
       const unsigned char* row = buffer.data() + r * h.row_bytes;
       auto at = [&](int f) { return row + h.fields[static_cast<std::size_t>(f)].offset; };
-      sink.add(i + r, [&](int f) { return decode_scalar(at(f), *h.fields[static_cast<std::size_t>(f)].scalar, false); },
-               [&](int f) { return decode_bits32(at(f), false); });
+      sink.add(
+          i + r,
+          [&](int f) {
+            return decode_scalar(at(f), *h.fields[static_cast<std::size_t>(f)].scalar, false);
+          },
+          [&](int f) { return decode_bits32(at(f), false); });
     }
     i += rows;
   }
@@ -236,13 +262,15 @@ void read_binary(std::istream& in, const PcdHeader& h, PointSink& sink) {
 void read_compressed(std::istream& in, const PcdHeader& h, PointSink& sink) {
   unsigned char sizes[8];
   in.read(reinterpret_cast<char*>(sizes), 8);
-  if (in.gcount() != 8) throw Error(sink.path, "binary_compressed block", "file ends before the block sizes");
+  if (in.gcount() != 8)
+    throw Error(sink.path, "binary_compressed block", "file ends before the block sizes");
   const std::uint32_t compressed = decode_bits32(sizes, false);
   const std::uint32_t uncompressed = decode_bits32(sizes + 4, false);
   if (uncompressed != h.points * h.row_bytes) {
-    throw Error(sink.path, "binary_compressed block",
-                "uncompressed size " + std::to_string(uncompressed) + " does not match POINTS x row size = " +
-                    std::to_string(h.points * h.row_bytes));
+    throw Error(
+        sink.path, "binary_compressed block",
+        "uncompressed size " + std::to_string(uncompressed) +
+            " does not match POINTS x row size = " + std::to_string(h.points * h.row_bytes));
   }
   std::vector<unsigned char> packed(compressed);
   in.read(reinterpret_cast<char*>(packed.data()), compressed);
@@ -263,8 +291,12 @@ void read_compressed(std::istream& in, const PcdHeader& h, PointSink& sink) {
       const auto fi = static_cast<std::size_t>(f);
       return data.data() + base[fi] + i * h.fields[fi].size * h.fields[fi].count;
     };
-    sink.add(i, [&](int f) { return decode_scalar(at(f), *h.fields[static_cast<std::size_t>(f)].scalar, false); },
-             [&](int f) { return decode_bits32(at(f), false); });
+    sink.add(
+        i,
+        [&](int f) {
+          return decode_scalar(at(f), *h.fields[static_cast<std::size_t>(f)].scalar, false);
+        },
+        [&](int f) { return decode_bits32(at(f), false); });
   }
 }
 
@@ -279,9 +311,15 @@ PointCloud read_pcd(const std::string& path) {
   cloud.positions.reserve(static_cast<std::size_t>(std::min(header.points, plausible)));
   PointSink sink{header, layout, cloud, path};
   switch (header.data) {
-    case PcdData::kAscii: read_ascii(in, header, sink); break;
-    case PcdData::kBinary: read_binary(in, header, sink); break;
-    case PcdData::kBinaryCompressed: read_compressed(in, header, sink); break;
+    case PcdData::kAscii:
+      read_ascii(in, header, sink);
+      break;
+    case PcdData::kBinary:
+      read_binary(in, header, sink);
+      break;
+    case PcdData::kBinaryCompressed:
+      read_compressed(in, header, sink);
+      break;
   }
   if (header.height > 1) {
     cloud.width = static_cast<std::uint32_t>(header.width);

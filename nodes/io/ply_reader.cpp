@@ -73,10 +73,14 @@ PlyHeader parse_header(std::istream& in, const std::string& path) {
     if (tok[0] == "end_header") break;
     if (tok[0] == "format") {
       if (tok.size() != 3) throw Error(path, where, "expected 'format TYPE 1.0'");
-      if (tok[1] == "ascii") header.format = PlyFormat::kAscii;
-      else if (tok[1] == "binary_little_endian") header.format = PlyFormat::kBinaryLittle;
-      else if (tok[1] == "binary_big_endian") header.format = PlyFormat::kBinaryBig;
-      else throw Error(path, where, "unknown format '" + std::string(tok[1]) + "'");
+      if (tok[1] == "ascii")
+        header.format = PlyFormat::kAscii;
+      else if (tok[1] == "binary_little_endian")
+        header.format = PlyFormat::kBinaryLittle;
+      else if (tok[1] == "binary_big_endian")
+        header.format = PlyFormat::kBinaryBig;
+      else
+        throw Error(path, where, "unknown format '" + std::string(tok[1]) + "'");
       have_format = true;
     } else if (tok[0] == "element") {
       if (tok.size() != 3) throw Error(path, where, "expected 'element NAME COUNT'");
@@ -121,12 +125,17 @@ struct FieldMap {
 
   explicit FieldMap(const PlyElement& e) {
     prop.fill(-1);
-    static const std::array<std::vector<std::string_view>, kSlots> kNames = {{
-        {"x"}, {"y"}, {"z"},
-        {"nx", "normal_x"}, {"ny", "normal_y"}, {"nz", "normal_z"},
-        {"red", "r", "diffuse_red"}, {"green", "g", "diffuse_green"},
-        {"blue", "b", "diffuse_blue"},
-        {"intensity", "scalar_intensity", "reflectance"}}};
+    static const std::array<std::vector<std::string_view>, kSlots> kNames = {
+        {{"x"},
+         {"y"},
+         {"z"},
+         {"nx", "normal_x"},
+         {"ny", "normal_y"},
+         {"nz", "normal_z"},
+         {"red", "r", "diffuse_red"},
+         {"green", "g", "diffuse_green"},
+         {"blue", "b", "diffuse_blue"},
+         {"intensity", "scalar_intensity", "reflectance"}}};
     for (int s = 0; s < kSlots; ++s) {
       for (std::size_t i = 0; i < e.properties.size(); ++i) {
         const auto& names = kNames[static_cast<std::size_t>(s)];
@@ -225,9 +234,9 @@ class ElementReader {
         }
       }
       if (t != tok.size()) {
-        throw Error(path_, loc,
-                    "expected " + std::to_string(t) + " values, found " +
-                        std::to_string(tok.size()));
+        throw Error(
+            path_, loc,
+            "expected " + std::to_string(t) + " values, found " + std::to_string(tok.size()));
       }
       sink(values, row);
     }
@@ -242,13 +251,12 @@ class ElementReader {
     for (std::uint64_t row = 0; row < e.count;) {
       const std::uint64_t rows = std::min(kRowsPerChunk, e.count - row);
       buffer.resize(rows * row_bytes);
-      in_.read(reinterpret_cast<char*>(buffer.data()),
-               static_cast<std::streamsize>(buffer.size()));
+      in_.read(reinterpret_cast<char*>(buffer.data()), static_cast<std::streamsize>(buffer.size()));
       const auto got = static_cast<std::uint64_t>(in_.gcount());
       if (got != buffer.size()) {
         throw Error(path_, where(e, row + got / row_bytes),
-                    "file ends early: the header declares " + std::to_string(e.count) + " rows of " +
-                        std::to_string(row_bytes) + " bytes");
+                    "file ends early: the header declares " + std::to_string(e.count) +
+                        " rows of " + std::to_string(row_bytes) + " bytes");
       }
       for (std::uint64_t r = 0; r < rows; ++r) {
         const unsigned char* p = buffer.data() + r * row_bytes;
@@ -273,10 +281,11 @@ class ElementReader {
           read_exact(buf, scalar_size(p.count_type), e, row);
           const double n = decode_scalar(buf, p.count_type, swap);
           if (n < 0) throw Error(path_, where(e, row), "negative list length in '" + p.name + "'");
-          const auto skip = static_cast<std::streamsize>(n) *
-                            static_cast<std::streamsize>(scalar_size(p.type));
+          const auto skip =
+              static_cast<std::streamsize>(n) * static_cast<std::streamsize>(scalar_size(p.type));
           in_.ignore(skip);
-          if (in_.gcount() != skip) throw Error(path_, where(e, row), "file ends inside list '" + p.name + "'");
+          if (in_.gcount() != skip)
+            throw Error(path_, where(e, row), "file ends inside list '" + p.name + "'");
           values[i] = 0.0;
         } else {
           read_exact(buf, scalar_size(p.type), e, row);

@@ -15,8 +15,9 @@ PointCloud read_point_cloud(const std::string& path) {
   if (ext == ".pcd") return read_pcd(path);
   if (ext == ".xyz" || ext == ".txt" || ext == ".pts" || ext == ".asc") return read_xyz(path);
   if (ext == ".3d") return read_3dtk_scan(path);
-  throw Error(path, "", "unknown point cloud format '" + ext +
-                            "' (expected .ply, .pcd, .xyz, .txt, .pts, .asc or .3d)");
+  throw Error(path, "",
+              "unknown point cloud format '" + ext +
+                  "' (expected .ply, .pcd, .xyz, .txt, .pts, .asc or .3d)");
 }
 
 }  // namespace meshflow::io

@@ -28,7 +28,8 @@ Eigen::Vector3d read_triple(std::istream& in, const std::string& path, int line_
   split_whitespace(line, tok);
   if (tok.size() != 3) throw Error(path, loc, std::string("expected 3 numbers: ") + what);
   Eigen::Vector3d v;
-  for (int i = 0; i < 3; ++i) v[i] = parse_number(tok[static_cast<std::size_t>(i)], path, loc, what);
+  for (int i = 0; i < 3; ++i)
+    v[i] = parse_number(tok[static_cast<std::size_t>(i)], path, loc, what);
   if (!v.allFinite()) throw Error(path, loc, std::string("non-finite ") + what);
   return v;
 }
@@ -77,8 +78,8 @@ PointCloud read_3dtk_scan(const std::string& path, const Scan3dOptions& options,
   const double max2 = options.max_range_cm * options.max_range_cm;
 
   using Points = std::vector<Eigen::Vector3f>;
-  const auto parts = parse_chunks<Points>(
-      split_into_line_chunks(text), [&](const TextChunk& chunk, Points& out) {
+  const auto parts =
+      parse_chunks<Points>(split_into_line_chunks(text), [&](const TextChunk& chunk, Points& out) {
         std::vector<std::string_view> tok;
         std::size_t line_no = chunk.first_line;
         std::size_t start = 0;
@@ -96,7 +97,8 @@ PointCloud read_3dtk_scan(const std::string& path, const Scan3dOptions& options,
           const Eigen::Vector3d p_cm(parse_number(tok[0], path, line_no, "x"),
                                      parse_number(tok[1], path, line_no, "y"),
                                      parse_number(tok[2], path, line_no, "z"));
-          if (!p_cm.allFinite()) throw Error(path, "line " + std::to_string(line_no), "non-finite coordinate");
+          if (!p_cm.allFinite())
+            throw Error(path, "line " + std::to_string(line_no), "non-finite coordinate");
           check_coordinates(p_cm * 0.01, path, line_no);
           const double r2 = p_cm.squaredNorm();
           if (r2 < min2 || r2 >= max2) continue;

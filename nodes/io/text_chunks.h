@@ -21,7 +21,8 @@ struct TextChunk {
 std::string read_whole_file(const std::string& path);
 
 /// Splits `text` into chunks of about `chunk_bytes` that end at line ends. O(n).
-std::vector<TextChunk> split_into_line_chunks(std::string_view text, std::size_t chunk_bytes = 1 << 18);
+std::vector<TextChunk> split_into_line_chunks(std::string_view text,
+                                              std::size_t chunk_bytes = 1 << 18);
 
 /// Calls parse(chunk, result) for every chunk in parallel and returns the results in chunk
 /// order. If chunks throw, the exception of the earliest such chunk is rethrown, so the error

@@ -66,48 +66,53 @@ std::vector<Eigen::Vector3f> estimate_normals(const PointCloud& cloud, const Spa
   std::vector<std::uint32_t> table(n * table_k);
   std::vector<std::uint32_t> found_count(n);
   std::vector<Eigen::Vector3f> normals(n);
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 512), [&](const tbb::blocked_range<std::size_t>& r) {
-    std::vector<std::uint32_t> idx(static_cast<std::size_t>(std::max<int>(config.adaptive_max_k, static_cast<int>(table_k))));
-    std::vector<float> d2(idx.size());
-    std::vector<Eigen::Vector3f> pts(idx.size());
-    for (std::size_t i = r.begin(); i != r.end(); ++i) {
-      const Eigen::Vector3f& p = cloud.positions[i];
-      std::size_t found = index.knn(p, table_k, idx.data(), d2.data());
-      std::copy(idx.begin(), idx.begin() + static_cast<std::ptrdiff_t>(found), table.begin() + static_cast<std::ptrdiff_t>(i * table_k));
-      found_count[i] = static_cast<std::uint32_t>(found);
-      std::size_t k = std::min(kn, found);
-      for (std::size_t j = 0; j < k; ++j) pts[j] = cloud.positions[idx[j]];
-      Eigen::Vector3f normal = Eigen::Vector3f::Zero();
-      if (k >= 3) {
-        LocalFrame frame = principal_frame(pts, k);
-        while (config.adaptive_k && !box_well_shaped(pts, k, frame, config.adaptive_ratio) &&
-               k < static_cast<std::size_t>(config.adaptive_max_k) && k < index.size()) {
-          const std::size_t want = std::min<std::size_t>(2 * k, static_cast<std::size_t>(config.adaptive_max_k));
-          k = index.knn(p, want, idx.data(), d2.data());
+  tbb::parallel_for(
+      tbb::blocked_range<std::size_t>(0, n, 512), [&](const tbb::blocked_range<std::size_t>& r) {
+        std::vector<std::uint32_t> idx(static_cast<std::size_t>(
+            std::max<int>(config.adaptive_max_k, static_cast<int>(table_k))));
+        std::vector<float> d2(idx.size());
+        std::vector<Eigen::Vector3f> pts(idx.size());
+        for (std::size_t i = r.begin(); i != r.end(); ++i) {
+          const Eigen::Vector3f& p = cloud.positions[i];
+          std::size_t found = index.knn(p, table_k, idx.data(), d2.data());
+          std::copy(idx.begin(), idx.begin() + static_cast<std::ptrdiff_t>(found),
+                    table.begin() + static_cast<std::ptrdiff_t>(i * table_k));
+          found_count[i] = static_cast<std::uint32_t>(found);
+          std::size_t k = std::min(kn, found);
           for (std::size_t j = 0; j < k; ++j) pts[j] = cloud.positions[idx[j]];
-          frame = principal_frame(pts, k);
+          Eigen::Vector3f normal = Eigen::Vector3f::Zero();
+          if (k >= 3) {
+            LocalFrame frame = principal_frame(pts, k);
+            while (config.adaptive_k && !box_well_shaped(pts, k, frame, config.adaptive_ratio) &&
+                   k < static_cast<std::size_t>(config.adaptive_max_k) && k < index.size()) {
+              const std::size_t want =
+                  std::min<std::size_t>(2 * k, static_cast<std::size_t>(config.adaptive_max_k));
+              k = index.knn(p, want, idx.data(), d2.data());
+              for (std::size_t j = 0; j < k; ++j) pts[j] = cloud.positions[idx[j]];
+              frame = principal_frame(pts, k);
+            }
+            normal = frame.axes.col(0).normalized().cast<float>();
+          }
+          const Eigen::Vector3f to_view = viewpoint - p;
+          if (normal.isZero()) normal = to_view.normalized();
+          if (sign * normal.dot(to_view) < 0.0f) normal = -normal;
+          normals[i] = normal;
         }
-        normal = frame.axes.col(0).normalized().cast<float>();
-      }
-      const Eigen::Vector3f to_view = viewpoint - p;
-      if (normal.isZero()) normal = to_view.normalized();
-      if (sign * normal.dot(to_view) < 0.0f) normal = -normal;
-      normals[i] = normal;
-    }
-  });
+      });
   if (ki <= 1) return normals;
 
   // Pass 2: interpolation over the ki nearest neighbours' oriented normals.
   std::vector<Eigen::Vector3f> smoothed(n);
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 1024), [&](const tbb::blocked_range<std::size_t>& r) {
-    for (std::size_t i = r.begin(); i != r.end(); ++i) {
-      Eigen::Vector3f sum = Eigen::Vector3f::Zero();
-      const std::size_t k = std::min<std::size_t>(ki, found_count[i]);
-      for (std::size_t j = 0; j < k; ++j) sum += normals[table[i * table_k + j]];
-      const float len = sum.norm();
-      smoothed[i] = len > 0.0f ? Eigen::Vector3f(sum / len) : normals[i];
-    }
-  });
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 1024),
+                    [&](const tbb::blocked_range<std::size_t>& r) {
+                      for (std::size_t i = r.begin(); i != r.end(); ++i) {
+                        Eigen::Vector3f sum = Eigen::Vector3f::Zero();
+                        const std::size_t k = std::min<std::size_t>(ki, found_count[i]);
+                        for (std::size_t j = 0; j < k; ++j) sum += normals[table[i * table_k + j]];
+                        const float len = sum.norm();
+                        smoothed[i] = len > 0.0f ? Eigen::Vector3f(sum / len) : normals[i];
+                      }
+                    });
   return smoothed;
 }
 

@@ -39,11 +39,13 @@ class CallerKnnResult final : public flann::ResultSet<float> {
   }
   void addPoint(float dist, std::size_t index) override {
     const auto idx = static_cast<std::uint32_t>(index);
-    if (count_ == k_ && !(dist < dists_[k_ - 1] || (dist == dists_[k_ - 1] && idx < indices_[k_ - 1]))) {
+    if (count_ == k_ &&
+        !(dist < dists_[k_ - 1] || (dist == dists_[k_ - 1] && idx < indices_[k_ - 1]))) {
       return;
     }
     std::size_t i = count_ < k_ ? count_++ : k_ - 1;
-    for (; i > 0 && (dists_[i - 1] > dist || (dists_[i - 1] == dist && indices_[i - 1] > idx)); --i) {
+    for (; i > 0 && (dists_[i - 1] > dist || (dists_[i - 1] == dist && indices_[i - 1] > idx));
+         --i) {
       dists_[i] = dists_[i - 1];
       indices_[i] = indices_[i - 1];
     }
@@ -66,14 +68,17 @@ std::size_t KdTreeIndex::knn(const Eigen::Vector3f& q, std::size_t k, std::uint3
   k = std::min(k, size_);
   if (k == 0) return 0;
   CallerKnnResult result(k, indices, squared_distances);
-  impl_->tree.findNeighbors(result, q.data(), flann::SearchParams(flann::FLANN_CHECKS_UNLIMITED, 0.0f, false));
+  impl_->tree.findNeighbors(result, q.data(),
+                            flann::SearchParams(flann::FLANN_CHECKS_UNLIMITED, 0.0f, false));
   return result.size();
 }
 
-std::vector<std::uint32_t> KdTreeIndex::radius_search(const Eigen::Vector3f& q, float radius) const {
+std::vector<std::uint32_t> KdTreeIndex::radius_search(const Eigen::Vector3f& q,
+                                                      float radius) const {
   if (size_ == 0) return {};
   flann::RadiusResultSet<float> result(radius * radius);
-  impl_->tree.findNeighbors(result, q.data(), flann::SearchParams(flann::FLANN_CHECKS_UNLIMITED, 0.0f, true));
+  impl_->tree.findNeighbors(result, q.data(),
+                            flann::SearchParams(flann::FLANN_CHECKS_UNLIMITED, 0.0f, true));
   const std::size_t n = result.size();
   std::vector<std::size_t> idx(n);
   std::vector<float> d2(n);
@@ -103,7 +108,8 @@ std::size_t BruteForceIndex::knn(const Eigen::Vector3f& q, std::size_t k, std::u
   return k;
 }
 
-std::vector<std::uint32_t> BruteForceIndex::radius_search(const Eigen::Vector3f& q, float radius) const {
+std::vector<std::uint32_t> BruteForceIndex::radius_search(const Eigen::Vector3f& q,
+                                                          float radius) const {
   std::vector<std::pair<float, std::uint32_t>> hits;
   for (std::size_t i = 0; i < points_.size(); ++i) {
     const float d2 = (points_[i] - q).squaredNorm();

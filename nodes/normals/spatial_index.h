@@ -23,7 +23,8 @@ class SpatialIndex {
                           float* squared_distances) const = 0;
 
   /// Indices of all points within `radius` metres of q, closest first.
-  virtual std::vector<std::uint32_t> radius_search(const Eigen::Vector3f& q, float radius) const = 0;
+  virtual std::vector<std::uint32_t> radius_search(const Eigen::Vector3f& q,
+                                                   float radius) const = 0;
 
   virtual std::size_t size() const = 0;
 };

@@ -46,7 +46,8 @@ struct DisjointSets {
 
 }  // namespace
 
-TriangleMesh clean_mesh(const TriangleMesh& mesh, const CleanupConfig& config, CleanupReport* report) {
+TriangleMesh clean_mesh(const TriangleMesh& mesh, const CleanupConfig& config,
+                        CleanupReport* report) {
   CleanupReport r;
   std::vector<Triangle> kept;
   kept.reserve(mesh.triangles.size());
@@ -84,7 +85,8 @@ TriangleMesh clean_mesh(const TriangleMesh& mesh, const CleanupConfig& config, C
   if (config.min_component_triangles > 0) {
     kept.erase(std::remove_if(kept.begin(), kept.end(),
                               [&](const Triangle& t) {
-                                return component_size[sets.find(t[0])] < config.min_component_triangles;
+                                return component_size[sets.find(t[0])] <
+                                       config.min_component_triangles;
                               }),
                kept.end());
   }

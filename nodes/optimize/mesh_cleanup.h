@@ -16,10 +16,10 @@ struct CleanupConfig {
 struct CleanupReport {
   std::size_t degenerate_triangles = 0;
   std::size_t duplicate_triangles = 0;
-  std::size_t components = 0;           ///< components before removal
+  std::size_t components = 0;  ///< components before removal
   std::size_t removed_components = 0;
   std::size_t removed_component_triangles = 0;
-  std::size_t removed_vertices = 0;     ///< vertices no longer referenced, compacted away
+  std::size_t removed_vertices = 0;  ///< vertices no longer referenced, compacted away
 };
 
 /// Returns a cleaned copy of `mesh`: triangles kept in their order, unreferenced vertices

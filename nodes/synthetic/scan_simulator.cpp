@@ -56,9 +56,9 @@ float gaussian(std::uint64_t key) {
 Scene demo_room_scene() {
   Scene s;
   s.room = Box{{0.0f, 0.0f, 1.5f}, {4.0f, 3.0f, 1.5f}};
-  s.boxes.push_back(Box{{1.8f, 0.8f, 0.375f}, {0.6f, 0.4f, 0.375f}});    // table-sized block
-  s.boxes.push_back(Box{{-3.4f, -2.2f, 0.9f}, {0.5f, 0.6f, 0.9f}});     // cabinet in a corner
-  s.spheres.push_back(Sphere{{-1.2f, 1.5f, 0.5f}, 0.5f});                // ball on the floor
+  s.boxes.push_back(Box{{1.8f, 0.8f, 0.375f}, {0.6f, 0.4f, 0.375f}});  // table-sized block
+  s.boxes.push_back(Box{{-3.4f, -2.2f, 0.9f}, {0.5f, 0.6f, 0.9f}});    // cabinet in a corner
+  s.spheres.push_back(Sphere{{-1.2f, 1.5f, 0.5f}, 0.5f});              // ball on the floor
   return s;
 }
 
@@ -72,8 +72,10 @@ PointCloud simulate_scan(const Scene& scene, const ScanConfig& config) {
   tbb::parallel_for(std::size_t{0}, rays, [&](std::size_t r) {
     const int i = static_cast<int>(r % static_cast<std::size_t>(na));
     const int j = static_cast<int>(r / static_cast<std::size_t>(na));
-    const float az = 2.0f * static_cast<float>(M_PI) * static_cast<float>(i) / static_cast<float>(na);
-    const float el = ne > 1 ? e0 + (e1 - e0) * static_cast<float>(j) / static_cast<float>(ne - 1) : e0;
+    const float az =
+        2.0f * static_cast<float>(M_PI) * static_cast<float>(i) / static_cast<float>(na);
+    const float el =
+        ne > 1 ? e0 + (e1 - e0) * static_cast<float>(j) / static_cast<float>(ne - 1) : e0;
     const Eigen::Vector3f d(std::cos(el) * std::cos(az), std::cos(el) * std::sin(az), std::sin(el));
     const Eigen::Vector3f& o = config.origin;
     float t = slab(scene.room, o, d).second;  // exit through the room's walls
@@ -83,7 +85,8 @@ PointCloud simulate_scan(const Scene& scene, const ScanConfig& config) {
     }
     for (const Sphere& s : scene.spheres) t = std::min(t, hit_sphere(s, o, d));
     if (!(t < kNoHit)) return;
-    if (config.noise_sigma > 0.0f) t += config.noise_sigma * gaussian((std::uint64_t{config.seed} << 32) ^ r);
+    if (config.noise_sigma > 0.0f)
+      t += config.noise_sigma * gaussian((std::uint64_t{config.seed} << 32) ^ r);
     hits[r] = o + t * d;
     hit[r] = 1;
   });

@@ -23,11 +23,11 @@ Scene demo_room_scene();
 
 struct ScanConfig {
   Eigen::Vector3f origin = {0.0f, 0.0f, 1.2f};  ///< scanner position, metres
-  int azimuth_steps = 720;     ///< rays per full turn
-  int elevation_steps = 240;   ///< rays from min to max elevation
+  int azimuth_steps = 720;                      ///< rays per full turn
+  int elevation_steps = 240;                    ///< rays from min to max elevation
   float min_elevation_deg = -70.0f;
   float max_elevation_deg = 70.0f;
-  float noise_sigma = 0.0f;    ///< Gaussian range noise, metres
+  float noise_sigma = 0.0f;  ///< Gaussian range noise, metres
   std::uint32_t seed = 1;
 };
 

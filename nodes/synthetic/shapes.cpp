@@ -15,8 +15,8 @@ void add_noise(PointCloud& cloud, float sigma, std::uint32_t seed) {
 }
 
 // Regular grid of points on the rectangle origin + s*u + t*v, s in [0,1], t in [0,1].
-void sample_rectangle(const Eigen::Vector3f& origin, const Eigen::Vector3f& u, const Eigen::Vector3f& v,
-                      float spacing, PointCloud& out) {
+void sample_rectangle(const Eigen::Vector3f& origin, const Eigen::Vector3f& u,
+                      const Eigen::Vector3f& v, float spacing, PointCloud& out) {
   const int nu = std::max(1, static_cast<int>(std::ceil(u.norm() / spacing)));
   const int nv = std::max(1, static_cast<int>(std::ceil(v.norm() / spacing)));
   for (int j = 0; j <= nv; ++j) {
@@ -40,7 +40,9 @@ float surface_distance(const Sphere& s, const Eigen::Vector3f& p) {
   return std::abs((p - s.center).norm() - s.radius);
 }
 
-float surface_distance(const Box& b, const Eigen::Vector3f& p) { return std::abs(signed_distance(b, p)); }
+float surface_distance(const Box& b, const Eigen::Vector3f& p) {
+  return std::abs(signed_distance(b, p));
+}
 
 float surface_distance(const StepPlane& s, const Eigen::Vector3f& p) {
   // Distance in the xz cross-section to the polyline (-inf,0)-(0,0)-(0,h)-(+inf,h).
@@ -60,7 +62,9 @@ PointCloud sample_surface(const Sphere& s, float spacing, float noise_sigma, std
     const double z = 1.0 - 2.0 * (i + 0.5) / n;
     const double r = std::sqrt(1.0 - z * z);
     const double phi = golden * i;
-    cloud.positions.push_back(s.center + s.radius * Eigen::Vector3d(r * std::cos(phi), r * std::sin(phi), z).cast<float>());
+    cloud.positions.push_back(
+        s.center +
+        s.radius * Eigen::Vector3d(r * std::cos(phi), r * std::sin(phi), z).cast<float>());
   }
   add_noise(cloud, noise_sigma, seed);
   return cloud;
@@ -80,7 +84,8 @@ PointCloud sample_surface(const Box& b, float spacing, float noise_sigma, std::u
   return cloud;
 }
 
-PointCloud sample_surface(const StepPlane& s, float spacing, float noise_sigma, std::uint32_t seed) {
+PointCloud sample_surface(const StepPlane& s, float spacing, float noise_sigma,
+                          std::uint32_t seed) {
   PointCloud cloud;
   const float e = s.half_extent;
   sample_rectangle({-e, -e, 0.0f}, {e, 0, 0}, {0, 2 * e, 0}, spacing, cloud);

@@ -77,7 +77,8 @@ SparseGrid voxelize(const PointCloud& cloud, const VoxelizeConfig& config) {
     if (!p.allFinite() || !cell_index_in_range(lo) || !cell_index_in_range(hi)) {
       throw Error("voxelize", "point " + std::to_string(i),
                   "lies outside the grid's range for a voxel size of " +
-                      std::to_string(config.voxel_size) + " m (coordinates too large or not finite)");
+                      std::to_string(config.voxel_size) +
+                      " m (coordinates too large or not finite)");
     }
     ranges[i] = {lo, hi};
     const Eigen::Vector3i span = hi - lo + Eigen::Vector3i::Ones();
@@ -121,7 +122,8 @@ float suggest_voxel_size(const PointCloud& cloud, const SpatialIndex& index, flo
     index.knn(cloud.positions[i], 2, idx, d2);
     spacing[s] = std::sqrt(d2[1]);
   });
-  std::nth_element(spacing.begin(), spacing.begin() + static_cast<std::ptrdiff_t>(samples / 2), spacing.end());
+  std::nth_element(spacing.begin(), spacing.begin() + static_cast<std::ptrdiff_t>(samples / 2),
+                   spacing.end());
   const float median = spacing[samples / 2];
   const float diagonal = finite_bounds(cloud).diagonal().norm();
   return std::max(factor * median, diagonal / 2000.0f);

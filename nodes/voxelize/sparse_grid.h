@@ -24,8 +24,8 @@ struct VoxelizeConfig {
 /// (c = x + 2y + 4z, bits selecting +1 along each axis) is cell_corners[cell][c].
 struct SparseGrid {
   float voxel_size = 0.0f;
-  std::vector<VoxelKey> cells;    ///< sorted, unique
-  std::vector<VoxelKey> corners;  ///< sorted, unique
+  std::vector<VoxelKey> cells;                             ///< sorted, unique
+  std::vector<VoxelKey> corners;                           ///< sorted, unique
   std::vector<std::array<std::uint32_t, 8>> cell_corners;  ///< indices into `corners`
 
   /// World position (metres) of corner i.

@@ -36,7 +36,8 @@ TEST(Pipeline, ManyFramesInFlightArriveInOrderAndFailuresFlowThrough) {
         f->load = [i, delay_ms] {
           std::this_thread::sleep_for(std::chrono::milliseconds(delay_ms));  // random stage delays
           if (i == 5) throw Error("frame5.ply", "line 3", "unreadable");
-          return synthetic::sample_surface(synthetic::Sphere{{0, 0, 0}, 1.0f + 0.05f * i}, 0.05f, 0.0f, 1);
+          return synthetic::sample_surface(synthetic::Sphere{{0, 0, 0}, 1.0f + 0.05f * i}, 0.05f,
+                                           0.0f, 1);
         };
         return f;
       },
@@ -51,7 +52,8 @@ TEST(Pipeline, ManyFramesInFlightArriveInOrderAndFailuresFlowThrough) {
       EXPECT_NE(out[5]->error.find("frame5.ply: line 3: unreadable"), std::string::npos);
       EXPECT_EQ(out[5]->timings.size(), 1u) << "later stages skip a failed frame";
     } else {
-      EXPECT_TRUE(out[static_cast<std::size_t>(i)]->ok()) << out[static_cast<std::size_t>(i)]->error;
+      EXPECT_TRUE(out[static_cast<std::size_t>(i)]->ok())
+          << out[static_cast<std::size_t>(i)]->error;
       EXPECT_GT(out[static_cast<std::size_t>(i)]->mesh.triangles.size(), 100u);
       EXPECT_EQ(out[static_cast<std::size_t>(i)]->timings.size(), 7u);
     }

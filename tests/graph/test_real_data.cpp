@@ -28,8 +28,9 @@ TEST(RealData, Kurt3dScan000At5cm) {
   frame->load = [path] { return io::read_point_cloud(path); };
   FramePtr result;
   bool given = false;
-  ReconstructionPipeline(config).run([&]() -> FramePtr { return given ? nullptr : (given = true, frame); },
-                                     [&](const FramePtr& f) { result = f; });
+  ReconstructionPipeline(config).run(
+      [&]() -> FramePtr { return given ? nullptr : (given = true, frame); },
+      [&](const FramePtr& f) { result = f; });
   ASSERT_TRUE(result->ok()) << result->error;
   expect_plausible(result->mesh, 60000, 250000);
 }

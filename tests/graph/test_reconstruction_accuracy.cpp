@@ -41,16 +41,20 @@ class Accuracy : public ::testing::TestWithParam<Case> {};
 
 TEST_P(Accuracy, Sphere) {
   const synthetic::Sphere sphere{{0.01f, 0.02f, -0.03f}, 1.0f};
-  const auto cloud = synthetic::sample_surface(sphere, kVoxel / 4, GetParam().noise_voxels * kVoxel, 1);
+  const auto cloud =
+      synthetic::sample_surface(sphere, kVoxel / 4, GetParam().noise_voxels * kVoxel, 1);
   const FramePtr f = reconstruct(closed_shape_config(sphere.center), cloud);
-  const auto err = test::vertex_errors(f->mesh, [&](const Eigen::Vector3f& p) { return synthetic::surface_distance(sphere, p); });
+  const auto err = test::vertex_errors(
+      f->mesh, [&](const Eigen::Vector3f& p) { return synthetic::surface_distance(sphere, p); });
   EXPECT_LT(err.mean / kVoxel, GetParam().max_mean_voxels);
   const EdgeStatistics stats = edge_statistics(f->mesh);
-  EXPECT_TRUE(stats.closed()) << stats.boundary_edges << " boundary, " << stats.non_manifold_edges << " non-manifold";
+  EXPECT_TRUE(stats.closed()) << stats.boundary_edges << " boundary, " << stats.non_manifold_edges
+                              << " non-manifold";
   EXPECT_EQ(stats.inconsistent_edges, 0u);
   std::size_t outward = 0;
   for (const Triangle& t : f->mesh.triangles) {
-    const Eigen::Vector3f c = (f->mesh.vertices[t[0]] + f->mesh.vertices[t[1]] + f->mesh.vertices[t[2]]) / 3.0f;
+    const Eigen::Vector3f c =
+        (f->mesh.vertices[t[0]] + f->mesh.vertices[t[1]] + f->mesh.vertices[t[2]]) / 3.0f;
     outward += face_normal(f->mesh, t).dot((c - sphere.center).normalized()) > 0.0f ? 1 : 0;
   }
   EXPECT_EQ(outward, f->mesh.triangles.size());
@@ -58,23 +62,27 @@ TEST_P(Accuracy, Sphere) {
 
 TEST_P(Accuracy, Box) {
   const synthetic::Box box{{0.02f, -0.01f, 0.03f}, {0.6f, 0.45f, 0.3f}};
-  const auto cloud = synthetic::sample_surface(box, kVoxel / 4, GetParam().noise_voxels * kVoxel, 2);
+  const auto cloud =
+      synthetic::sample_surface(box, kVoxel / 4, GetParam().noise_voxels * kVoxel, 2);
   const FramePtr f = reconstruct(closed_shape_config(box.center), cloud);
-  const auto err = test::vertex_errors(f->mesh, [&](const Eigen::Vector3f& p) { return synthetic::surface_distance(box, p); });
+  const auto err = test::vertex_errors(
+      f->mesh, [&](const Eigen::Vector3f& p) { return synthetic::surface_distance(box, p); });
   EXPECT_LT(err.mean / kVoxel, GetParam().max_mean_voxels);
   EXPECT_EQ(edge_statistics(f->mesh).non_manifold_edges, 0u);
 }
 
 TEST_P(Accuracy, PlaneWithStep) {
   const synthetic::StepPlane step{1.0f, 0.25f};
-  const auto cloud = synthetic::sample_surface(step, kVoxel / 4, GetParam().noise_voxels * kVoxel, 3);
+  const auto cloud =
+      synthetic::sample_surface(step, kVoxel / 4, GetParam().noise_voxels * kVoxel, 3);
   ReconstructionConfig config;
   config.voxelize.voxel_size = kVoxel;
   config.normals.orientation = NormalOrientation::kTowardViewpoint;
   // The sensor sees the wall from the low side, so all normals agree in orientation.
   config.normals.viewpoint = Eigen::Vector3f(-1.0f, 0.1f, 3.0f);
   const FramePtr f = reconstruct(config, cloud);
-  const auto err = test::vertex_errors(f->mesh, [&](const Eigen::Vector3f& p) { return synthetic::surface_distance(step, p); });
+  const auto err = test::vertex_errors(
+      f->mesh, [&](const Eigen::Vector3f& p) { return synthetic::surface_distance(step, p); });
   EXPECT_LT(err.mean / kVoxel, GetParam().max_mean_voxels);
   EXPECT_EQ(edge_statistics(f->mesh).non_manifold_edges, 0u);
 }
@@ -82,7 +90,8 @@ TEST_P(Accuracy, PlaneWithStep) {
 INSTANTIATE_TEST_SUITE_P(Reconstruction, Accuracy,
                          ::testing::Values(Case{0.0f, 0.1}, Case{0.2f, 0.25}),
                          [](const ::testing::TestParamInfo<Case>& param_info) {
-                           return param_info.param.noise_voxels == 0.0f ? std::string("Exact") : std::string("Noisy");
+                           return param_info.param.noise_voxels == 0.0f ? std::string("Exact")
+                                                                        : std::string("Noisy");
                          });
 
 TEST(Reconstruction, SameMeshVertexForVertexWithOneAndTwoThreads) {

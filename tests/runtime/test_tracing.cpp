@@ -8,8 +8,8 @@ namespace meshflow {
 namespace {
 
 TEST(Tracing, SummarizesStagesInFirstSeenOrder) {
-  std::vector<StageRecord> records = {{"b", 0.0, 0.2, 0, 10}, {"a", 0.0, 0.1, 0, 5},
-                                      {"b", 1.0, 1.4, 1, 10}};
+  std::vector<StageRecord> records = {
+      {"b", 0.0, 0.2, 0, 10}, {"a", 0.0, 0.1, 0, 5}, {"b", 1.0, 1.4, 1, 10}};
   const auto s = summarize_stages(records);
   ASSERT_EQ(s.size(), 2u);
   EXPECT_EQ(s[0].stage, "b");

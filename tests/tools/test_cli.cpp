@@ -20,7 +20,8 @@ struct CliRun {
 
 CliRun run_cli(const std::string& args) {
   const std::string dir = test::temp_dir();
-  const std::string cmd = std::string(MESHFLOW_CLI) + " " + args + " >" + dir + "/out 2>" + dir + "/err";
+  const std::string cmd =
+      std::string(MESHFLOW_CLI) + " " + args + " >" + dir + "/out 2>" + dir + "/err";
   const int status = std::system(cmd.c_str());
   auto slurp = [](const std::string& p) {
     std::ifstream in(p);
@@ -33,10 +34,11 @@ CliRun run_cli(const std::string& args) {
 
 TEST(Cli, BrokenInputsFailWithOneLineNamingTheFileAndNoOutput) {
   const std::string out_dir = test::temp_dir();
-  for (const char* name : {"truncated_binary.ply", "count_too_large.ply", "count_too_small.ply",
-                           "non_numeric.ply", "empty.ply", "unknown_type.ply", "huge_coordinates.ply",
-                           "nan_rows.xyz", "overflow.xyz", "bad_columns.xyz", "empty.pcd",
-                           "truncated.pcd", "inconsistent_header.pcd", "truncated.3d", "not_a_ply.ply"}) {
+  for (const char* name :
+       {"truncated_binary.ply", "count_too_large.ply", "count_too_small.ply", "non_numeric.ply",
+        "empty.ply", "unknown_type.ply", "huge_coordinates.ply", "nan_rows.xyz", "overflow.xyz",
+        "bad_columns.xyz", "empty.pcd", "truncated.pcd", "inconsistent_header.pcd", "truncated.3d",
+        "not_a_ply.ply"}) {
     const std::string input = test::fixture(std::string("bad/") + name);
     const std::string output = out_dir + "/" + name + ".ply";
     const CliRun r = run_cli("reconstruct " + input + " -o " + output);
@@ -68,8 +70,8 @@ TEST(Cli, MissingFileAndUnknownFormat) {
 
 TEST(Cli, ReconstructsAndReportsDroppedNaNRows) {
   const std::string out = test::temp_dir() + "/plane.obj";
-  const CliRun r = run_cli("reconstruct " + test::fixture("good/plane_with_nan_rows.xyz") + " -o " + out +
-                        " --voxel 0.05 --threads 2");
+  const CliRun r = run_cli("reconstruct " + test::fixture("good/plane_with_nan_rows.xyz") + " -o " +
+                           out + " --voxel 0.05 --threads 2");
   EXPECT_EQ(r.exit_code, 0) << r.err;
   EXPECT_NE(r.err.find("dropped 2 non-finite"), std::string::npos) << r.err;
   EXPECT_TRUE(std::filesystem::exists(out));

@@ -21,10 +21,11 @@ float packed_rgb(std::uint8_t r, std::uint8_t g, std::uint8_t b) {
 
 TEST(PcdReader, AsciiWithNormalsAndExtraField) {
   const std::string path = test::temp_dir() + "/a.pcd";
-  test::write_file(path,
-                   "# .PCD v0.7\nVERSION 0.7\nFIELDS x y z normal_x normal_y normal_z curvature\n"
-                   "SIZE 4 4 4 4 4 4 4\nTYPE F F F F F F F\nCOUNT 1 1 1 1 1 1 1\nWIDTH 2\nHEIGHT 1\n"
-                   "VIEWPOINT 0 0 0 1 0 0 0\nPOINTS 2\nDATA ascii\n1 2 3 0 0 1 0.1\n4 5 6 1 0 0 0.2\n");
+  test::write_file(
+      path,
+      "# .PCD v0.7\nVERSION 0.7\nFIELDS x y z normal_x normal_y normal_z curvature\n"
+      "SIZE 4 4 4 4 4 4 4\nTYPE F F F F F F F\nCOUNT 1 1 1 1 1 1 1\nWIDTH 2\nHEIGHT 1\n"
+      "VIEWPOINT 0 0 0 1 0 0 0\nPOINTS 2\nDATA ascii\n1 2 3 0 0 1 0.1\n4 5 6 1 0 0 0.2\n");
   const PointCloud c = read_pcd(path);
   ASSERT_EQ(c.size(), 2u);
   EXPECT_EQ(c.positions[1], Eigen::Vector3f(4, 5, 6));
@@ -34,8 +35,9 @@ TEST(PcdReader, AsciiWithNormalsAndExtraField) {
 
 std::string binary_header(const char* data, int w, int h) {
   return "VERSION 0.7\nFIELDS x y z pad rgb intensity\nSIZE 4 4 4 2 4 4\nTYPE F F F U F F\n"
-         "COUNT 1 1 1 2 1 1\nWIDTH " + std::to_string(w) + "\nHEIGHT " + std::to_string(h) +
-         "\nPOINTS " + std::to_string(w * h) + "\nDATA " + data + "\n";
+         "COUNT 1 1 1 2 1 1\nWIDTH " +
+         std::to_string(w) + "\nHEIGHT " + std::to_string(h) + "\nPOINTS " + std::to_string(w * h) +
+         "\nDATA " + data + "\n";
 }
 
 struct Row {
@@ -81,8 +83,10 @@ TEST(PcdReader, BinaryCompressedFieldMajor) {
   for (int f = 0; f < 6; ++f) {
     for (const Row& r : rows) {
       const float* fl[] = {&r.x, &r.y, &r.z, nullptr, &r.rgb, &r.intensity};
-      if (f == 3) raw.append(reinterpret_cast<const char*>(r.pad), 4);
-      else raw.append(reinterpret_cast<const char*>(fl[f]), 4);
+      if (f == 3)
+        raw.append(reinterpret_cast<const char*>(r.pad), 4);
+      else
+        raw.append(reinterpret_cast<const char*>(fl[f]), 4);
     }
   }
   std::string packed(raw.size() * 2 + 16, '\0');
@@ -92,8 +96,8 @@ TEST(PcdReader, BinaryCompressedFieldMajor) {
   const std::uint32_t sizes[2] = {n, static_cast<std::uint32_t>(raw.size())};
   const std::string path = test::temp_dir() + "/c.pcd";
   test::write_file(path, binary_header("binary_compressed", 2, 2) +
-                             std::string(reinterpret_cast<const char*>(sizes), 8) + packed.substr(0, n) +
-                             std::string(100, '\0'));
+                             std::string(reinterpret_cast<const char*>(sizes), 8) +
+                             packed.substr(0, n) + std::string(100, '\0'));
   expect_organized(read_pcd(path));
 }
 
@@ -117,7 +121,8 @@ TEST(PcdReader, RealKinectFramesAndBunny) {
   std::size_t finite = 0;
   for (const auto& p : office.positions) finite += p.allFinite() ? 1 : 0;
   EXPECT_EQ(finite, 254456u);
-  const PointCloud mug = read_pcd(test::data_path("kinect_pcl/table_scene_mug_stereo_textured.pcd"));
+  const PointCloud mug =
+      read_pcd(test::data_path("kinect_pcl/table_scene_mug_stereo_textured.pcd"));
   finite = 0;
   for (const auto& p : mug.positions) finite += p.allFinite() ? 1 : 0;
   EXPECT_EQ(finite, 209280u);

@@ -21,14 +21,16 @@ std::string bytes(T v, bool big_endian) {
 // A file with an element before the vertices, extra scalar and list properties inside the
 // vertex element, and a face element after it: the reader must skip all of them correctly.
 std::string binary_ply(bool big) {
-  std::string h = std::string("ply\nformat ") + (big ? "binary_big_endian" : "binary_little_endian") +
-                  " 1.0\ncomment test\nelement camera 1\nproperty double fx\nproperty list uchar int ids\n"
-                  "element vertex 2\nproperty double x\nproperty float y\nproperty float z\n"
-                  "property short extra\nproperty list uchar float junk\nproperty float nx\n"
-                  "property float ny\nproperty float nz\nproperty uchar red\nproperty uchar green\n"
-                  "property uchar blue\nproperty float intensity\n"
-                  "element face 1\nproperty list uchar int vertex_indices\nend_header\n";
-  h += bytes(525.0, big) + bytes<std::uint8_t>(2, big) + bytes<std::int32_t>(7, big) + bytes<std::int32_t>(8, big);
+  std::string h =
+      std::string("ply\nformat ") + (big ? "binary_big_endian" : "binary_little_endian") +
+      " 1.0\ncomment test\nelement camera 1\nproperty double fx\nproperty list uchar int ids\n"
+      "element vertex 2\nproperty double x\nproperty float y\nproperty float z\n"
+      "property short extra\nproperty list uchar float junk\nproperty float nx\n"
+      "property float ny\nproperty float nz\nproperty uchar red\nproperty uchar green\n"
+      "property uchar blue\nproperty float intensity\n"
+      "element face 1\nproperty list uchar int vertex_indices\nend_header\n";
+  h += bytes(525.0, big) + bytes<std::uint8_t>(2, big) + bytes<std::int32_t>(7, big) +
+       bytes<std::int32_t>(8, big);
   for (int i = 0; i < 2; ++i) {
     h += bytes(1.5 + i, big) + bytes(-2.0f, big) + bytes(3.25f, big) + bytes<std::int16_t>(-7, big);
     h += bytes<std::uint8_t>(static_cast<std::uint8_t>(i + 1), big);
@@ -36,7 +38,8 @@ std::string binary_ply(bool big) {
     h += bytes(0.0f, big) + bytes(0.0f, big) + bytes(1.0f, big);
     h += std::string{static_cast<char>(10 + i), 20, static_cast<char>(200)} + bytes(0.5f, big);
   }
-  h += bytes<std::uint8_t>(3, big) + bytes<std::int32_t>(0, big) + bytes<std::int32_t>(1, big) + bytes<std::int32_t>(0, big);
+  h += bytes<std::uint8_t>(3, big) + bytes<std::int32_t>(0, big) + bytes<std::int32_t>(1, big) +
+       bytes<std::int32_t>(0, big);
   return h;
 }
 
@@ -62,11 +65,12 @@ TEST(PlyReader, BinaryLittleAndBigEndianWithSkippedPropertiesAndElements) {
 
 TEST(PlyReader, AsciiWithListsAndCrLf) {
   const std::string path = test::temp_dir() + "/a.ply";
-  test::write_file(path,
-                   "ply\r\nformat ascii 1.0\r\nelement vertex 2\r\nproperty float x\r\nproperty float y\r\n"
-                   "property float z\r\nproperty list uchar int junk\r\nproperty uchar red\r\n"
-                   "property uchar green\r\nproperty uchar blue\r\nend_header\r\n"
-                   "1 2 3 2 5 6 255 0 0\r\n4 5 6 0 0 255 0\r\n");
+  test::write_file(
+      path,
+      "ply\r\nformat ascii 1.0\r\nelement vertex 2\r\nproperty float x\r\nproperty float y\r\n"
+      "property float z\r\nproperty list uchar int junk\r\nproperty uchar red\r\n"
+      "property uchar green\r\nproperty uchar blue\r\nend_header\r\n"
+      "1 2 3 2 5 6 255 0 0\r\n4 5 6 0 0 255 0\r\n");
   const PointCloud c = read_ply(path);
   ASSERT_EQ(c.size(), 2u);
   EXPECT_EQ(c.positions[1], Eigen::Vector3f(4, 5, 6));
@@ -96,9 +100,7 @@ TEST(PlyReader, BrokenFilesGiveOneClearError) {
   expect_error("not_a_ply.ply", "not a PLY file");
 }
 
-TEST(PlyReader, MissingFileNamesThePath) {
-  EXPECT_THROW(read_ply("/nonexistent/x.ply"), Error);
-}
+TEST(PlyReader, MissingFileNamesThePath) { EXPECT_THROW(read_ply("/nonexistent/x.ply"), Error); }
 
 // Fuzz-style corruption: every truncation and many byte flips of a valid file either parse or
 // throw meshflow::Error; nothing else escapes (ASan/UBSan in CI catch memory errors).

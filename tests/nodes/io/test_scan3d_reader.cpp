@@ -27,7 +27,8 @@ TEST(Scan3dReader, AppliesThePose) {
   ASSERT_EQ(c.size(), 1u);
   EXPECT_TRUE(c.sensor_origin.isApprox(Eigen::Vector3f(1, 0, 0)));
   // Ry(90) maps 3DTK z to 3DTK x (right), which is meshflow -y.
-  EXPECT_TRUE(c.positions[0].isApprox(Eigen::Vector3f(1, -1, 0), 1e-5f)) << c.positions[0].transpose();
+  EXPECT_TRUE(c.positions[0].isApprox(Eigen::Vector3f(1, -1, 0), 1e-5f))
+      << c.positions[0].transpose();
 }
 
 TEST(Scan3dReader, TruncatedLineIsAnError) {

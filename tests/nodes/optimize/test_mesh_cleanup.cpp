@@ -20,11 +20,11 @@ TEST(MeshCleanup, RemovesDegenerateDuplicateAndSmallComponents) {
   m.vertices.insert(m.vertices.end(), {{0, 5, 0}, {1, 5, 0}, {0, 6, 0}, {1, 6, 0}});
   m.triangles.push_back({b, b + 1, b + 2});
   m.triangles.push_back({b + 1, b + 3, b + 2});
-  m.triangles.push_back({0, 0, 1});                 // repeated index
-  m.vertices.emplace_back(2.0f, 0.0f, 0.0f);        // collinear with vertices 0 and 2
-  m.triangles.push_back({0, 2, b + 4});             // zero area
-  m.triangles.push_back({2, 0, 1});                 // duplicate of triangle 0 (other rotation)
-  m.vertices.emplace_back(9, 9, 9);                 // unreferenced
+  m.triangles.push_back({0, 0, 1});           // repeated index
+  m.vertices.emplace_back(2.0f, 0.0f, 0.0f);  // collinear with vertices 0 and 2
+  m.triangles.push_back({0, 2, b + 4});       // zero area
+  m.triangles.push_back({2, 0, 1});           // duplicate of triangle 0 (other rotation)
+  m.vertices.emplace_back(9, 9, 9);           // unreferenced
   compute_vertex_normals(m);
 
   CleanupReport report;

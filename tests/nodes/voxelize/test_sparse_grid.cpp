@@ -35,14 +35,17 @@ TEST(SparseGrid, MatchesBruteForceCellAndCornerSets) {
           }
     }
     for (VoxelKey k : cells)
-      for (int i = 0; i < 8; ++i) corners.insert(pack_key(unpack_key(k) + Eigen::Vector3i(i & 1, (i >> 1) & 1, i >> 2)));
+      for (int i = 0; i < 8; ++i)
+        corners.insert(pack_key(unpack_key(k) + Eigen::Vector3i(i & 1, (i >> 1) & 1, i >> 2)));
     EXPECT_EQ(grid.cells, std::vector<VoxelKey>(cells.begin(), cells.end()));
     EXPECT_EQ(grid.corners, std::vector<VoxelKey>(corners.begin(), corners.end()));
     for (std::size_t i = 0; i < grid.cells.size(); ++i) {
       const Eigen::Vector3f origin = unpack_key(grid.cells[i]).cast<float>() * voxel;
       for (int k = 0; k < 8; ++k) {
-        const Eigen::Vector3f expected = origin + voxel * Eigen::Vector3f(k & 1, (k >> 1) & 1, k >> 2);
-        EXPECT_TRUE(grid.corner_position(grid.cell_corners[i][static_cast<std::size_t>(k)]).isApprox(expected, 1e-5f));
+        const Eigen::Vector3f expected =
+            origin + voxel * Eigen::Vector3f(k & 1, (k >> 1) & 1, k >> 2);
+        EXPECT_TRUE(grid.corner_position(grid.cell_corners[i][static_cast<std::size_t>(k)])
+                        .isApprox(expected, 1e-5f));
       }
     }
   }
@@ -59,7 +62,7 @@ TEST(SparseGrid, RejectsCoordinatesBeyondTheKeyRange) {
 
 TEST(SparseGrid, KeysRoundTrip) {
   for (const Eigen::Vector3i& c : {Eigen::Vector3i(0, 0, 0), Eigen::Vector3i(-5, 7, -1000000),
-                                  Eigen::Vector3i(kMaxCellIndex, -kMaxCellIndex, 3)}) {
+                                   Eigen::Vector3i(kMaxCellIndex, -kMaxCellIndex, 3)}) {
     EXPECT_EQ(unpack_key(pack_key(c)), c);
   }
   EXPECT_LT(pack_key({5, 0, 0}), pack_key({0, 1, 0}));

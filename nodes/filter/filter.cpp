@@ -25,7 +25,10 @@ std::vector<std::uint32_t> crop_indices(const PointCloud& cloud, const FilterCon
                                              : std::numeric_limits<float>::infinity();
   return parallel_select_indices(cloud.size(), [&](std::size_t i) {
     const Eigen::Vector3f& p = cloud.positions[i];
-    if (config.crop_box && !config.crop_box->contains(p)) return false;
+    if ((p.array() < config.crop_min.array()).any() ||
+        (p.array() > config.crop_max.array()).any()) {
+      return false;
+    }
     if (use_range) {
       const float r2 = (p - cloud.sensor_origin).squaredNorm();
       if (r2 < min2 || r2 > max2) return false;
@@ -125,7 +128,10 @@ PointCloud filter_cloud(const PointCloud& cloud, const FilterConfig& config, Fil
   PointCloud out = select_points(cloud, finite_point_indices(cloud));
   c.non_finite = c.input - out.size();
   std::size_t before = out.size();
-  if (config.crop_box || config.min_range > 0.0f || config.max_range > 0.0f) {
+  constexpr float kInf = std::numeric_limits<float>::infinity();
+  const bool crop =
+      (config.crop_min.array() > -kInf).any() || (config.crop_max.array() < kInf).any();
+  if (crop || config.min_range > 0.0f || config.max_range > 0.0f) {
     out = select_points(out, crop_indices(out, config));
   }
   c.cropped = before - out.size();

@@ -5,7 +5,7 @@
 
 #include <Eigen/Geometry>
 #include <cstdint>
-#include <optional>
+#include <limits>
 
 #include "runtime/point_cloud.h"
 
@@ -22,7 +22,9 @@ struct FilterCounts {
 };
 
 struct FilterConfig {
-  std::optional<Eigen::AlignedBox3f> crop_box;  ///< keep only points inside (metres, world)
+  /// Keep only points inside [crop_min, crop_max] (metres, world); the default keeps all.
+  Eigen::Vector3f crop_min = Eigen::Vector3f::Constant(-std::numeric_limits<float>::infinity());
+  Eigen::Vector3f crop_max = Eigen::Vector3f::Constant(std::numeric_limits<float>::infinity());
   float min_range = 0.0f;       ///< metres from the sensor origin (needs has_sensor_origin)
   float max_range = 0.0f;       ///< metres from the sensor origin; 0 = unlimited
   float voxel_size = 0.0f;      ///< voxel-grid downsampling cell in metres; 0 = off
@@ -34,7 +36,7 @@ struct FilterConfig {
 /// Indices of points whose three coordinates are finite. O(n).
 std::vector<std::uint32_t> finite_point_indices(const PointCloud& cloud);
 
-/// Indices of points inside `box` (if set) and within [min_range, max_range] of the sensor
+/// Indices of points inside [crop_min, crop_max] and within [min_range, max_range] of the sensor
 /// origin (range limits ignored when the cloud has no sensor origin). O(n).
 std::vector<std::uint32_t> crop_indices(const PointCloud& cloud, const FilterConfig& config);
 

@@ -36,8 +36,8 @@ TEST(Filter, CropBoxAndRange) {
   c.sensor_origin = Eigen::Vector3f(0.5f, 0, 0);
   c.has_sensor_origin = true;
   FilterConfig config;
-  config.crop_box =
-      Eigen::AlignedBox3f(Eigen::Vector3f(-1, -1, -0.5f), Eigen::Vector3f(1, 1, 0.5f));
+  config.crop_min = Eigen::Vector3f(-1, -1, -0.5f);
+  config.crop_max = Eigen::Vector3f(1, 1, 0.5f);
   config.min_range = 0.2f;
   config.max_range = 0.9f;
   const PointCloud out = filter_cloud(c, config);

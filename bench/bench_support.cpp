@@ -43,12 +43,9 @@ const Frame* prepared_frame(Input input, const std::string& stage) {
   config.voxelize.voxel_size = 0.05f;
   slot = std::make_unique<Frame>();
   slot->cloud = *cloud;
-  const std::pair<const char*, stages::StageFunction> order[] = {
-      {"filter", stages::filter},     {"normals", stages::normals}, {"voxelize", stages::voxelize},
-      {"distance", stages::distance}, {"extract", stages::extract}, {"optimize", stages::optimize}};
-  for (const auto& [name, fn] : order) {
-    if (stage == name) break;
-    stages::run_stage(name, fn, *slot, config);
+  for (const stages::NamedStage& s : stages::kPointCloudStages) {
+    if (stage == s.name) break;
+    stages::run_stage(s.name, s.body, *slot, config);  // "read" is a no-op: no loader set
   }
   return slot.get();
 }

@@ -40,7 +40,7 @@ struct Frame {
 
   PointCloud cloud;  ///< after read: raw; after filter: filtered, with normals
   FilterCounts filter_counts;
-  std::shared_ptr<const SpatialIndex> index;  ///< over cloud.positions, built by "normals"
+  std::shared_ptr<const SpatialIndex> index;  ///< over cloud.positions, built by "index"
   float voxel_size = 0.0f;
   SparseGrid grid;
   DistanceField distance;

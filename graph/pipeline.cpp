@@ -51,6 +51,7 @@ void ReconstructionPipeline::run(const std::function<FramePtr()>& next,
   flow::limiter_node<FramePtr> limiter(g, max_in_flight_);
   StageNode read(g, flow::unlimited, StageNodeBody("read", stages::read, config_));
   StageNode filter(g, flow::unlimited, StageNodeBody("filter", stages::filter, config_));
+  StageNode index(g, flow::unlimited, StageNodeBody("index", stages::index, config_));
   StageNode normals(g, flow::unlimited, StageNodeBody("normals", stages::normals, config_));
   StageNode voxelize(g, flow::unlimited, StageNodeBody("voxelize", stages::voxelize, config_));
   StageNode distance(g, flow::unlimited, StageNodeBody("distance", stages::distance, config_));
@@ -66,7 +67,8 @@ void ReconstructionPipeline::run(const std::function<FramePtr()>& next,
   flow::make_edge(source, limiter);
   flow::make_edge(limiter, read);
   flow::make_edge(read, filter);
-  flow::make_edge(filter, normals);
+  flow::make_edge(filter, index);
+  flow::make_edge(index, normals);
   flow::make_edge(normals, voxelize);
   flow::make_edge(voxelize, distance);
   flow::make_edge(distance, extract);

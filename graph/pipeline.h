@@ -1,7 +1,7 @@
 #pragma once
 // The reconstruction pipeline as a oneTBB flow graph:
 //
-//   source -> limiter(K) -> read -> filter -> normals -> voxelize -> distance -> extract
+//   source -> limiter(K) -> read -> filter -> index -> normals -> voxelize -> distance -> extract
 //          -> optimize -> sequencer -> sink --(decrement)--> limiter
 //
 // Stages are stateless, so several frames (clouds) are in flight at once (at most K), and

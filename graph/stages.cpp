@@ -22,10 +22,13 @@ std::uint64_t filter(Frame& f, const ReconstructionConfig& c) {
   return f.cloud.size();
 }
 
+std::uint64_t index(Frame& f, const ReconstructionConfig&) {
+  f.index = std::make_shared<KdTreeIndex>(f.cloud.positions);
+  return f.cloud.size();
+}
+
 std::uint64_t normals(Frame& f, const ReconstructionConfig& c) {
-  auto index = std::make_shared<KdTreeIndex>(f.cloud.positions);
-  f.cloud.normals = estimate_normals(f.cloud, *index, c.normals);
-  f.index = std::move(index);
+  f.cloud.normals = estimate_normals(f.cloud, *f.index, c.normals);
   return f.cloud.size();
 }
 
@@ -51,6 +54,10 @@ std::uint64_t optimize(Frame& f, const ReconstructionConfig& c) {
   f.mesh = clean_mesh(f.mesh, c.cleanup, &f.cleanup);
   return f.mesh.triangles.size();
 }
+
+const NamedStage kPointCloudStages[8] = {
+    {"read", read},         {"filter", filter},     {"index", index},     {"normals", normals},
+    {"voxelize", voxelize}, {"distance", distance}, {"extract", extract}, {"optimize", optimize}};
 
 void run_stage(const char* name, StageFunction body, Frame& f, const ReconstructionConfig& c) {
   if (!f.ok()) return;

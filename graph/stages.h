@@ -10,6 +10,7 @@ namespace meshflow::stages {
 
 std::uint64_t read(Frame& f, const ReconstructionConfig& c);      ///< points read
 std::uint64_t filter(Frame& f, const ReconstructionConfig& c);    ///< points kept
+std::uint64_t index(Frame& f, const ReconstructionConfig& c);     ///< points indexed (kd-tree)
 std::uint64_t normals(Frame& f, const ReconstructionConfig& c);   ///< normals estimated
 std::uint64_t voxelize(Frame& f, const ReconstructionConfig& c);  ///< cells
 std::uint64_t distance(Frame& f, const ReconstructionConfig& c);  ///< corners evaluated
@@ -17,6 +18,14 @@ std::uint64_t extract(Frame& f, const ReconstructionConfig& c);   ///< triangles
 std::uint64_t optimize(Frame& f, const ReconstructionConfig& c);  ///< triangles kept
 
 using StageFunction = std::uint64_t (*)(Frame&, const ReconstructionConfig&);
+
+struct NamedStage {
+  const char* name;
+  StageFunction body;
+};
+
+/// The point-cloud stages in pipeline order (the order ReconstructionPipeline wires them).
+extern const NamedStage kPointCloudStages[8];
 
 /// Runs `body` on `f` unless the frame already failed, appending a StageRecord; a thrown
 /// exception becomes the frame's error. Thread-safe for distinct frames.

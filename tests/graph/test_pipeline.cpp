@@ -55,7 +55,7 @@ TEST(Pipeline, ManyFramesInFlightArriveInOrderAndFailuresFlowThrough) {
       EXPECT_TRUE(out[static_cast<std::size_t>(i)]->ok())
           << out[static_cast<std::size_t>(i)]->error;
       EXPECT_GT(out[static_cast<std::size_t>(i)]->mesh.triangles.size(), 100u);
-      EXPECT_EQ(out[static_cast<std::size_t>(i)]->timings.size(), 7u);
+      EXPECT_EQ(out[static_cast<std::size_t>(i)]->timings.size(), 8u);
     }
   }
 }
@@ -76,10 +76,12 @@ TEST(Pipeline, StagesRecordTimingsAndItems) {
   f.cloud = synthetic::sample_surface(synthetic::Sphere{}, 0.05f, 0.0f, 1);
   const ReconstructionConfig c = sphere_config();
   stages::run_stage("filter", stages::filter, f, c);
+  stages::run_stage("index", stages::index, f, c);
   stages::run_stage("normals", stages::normals, f, c);
-  ASSERT_EQ(f.timings.size(), 2u);
-  EXPECT_EQ(f.timings[1].items, f.cloud.size());
-  EXPECT_GE(f.timings[1].end_s, f.timings[1].start_s);
+  ASSERT_EQ(f.timings.size(), 3u);
+  EXPECT_EQ(f.timings[2].items, f.cloud.size());
+  EXPECT_GE(f.timings[2].end_s, f.timings[2].start_s);
+  EXPECT_EQ(f.cloud.normals.size(), f.cloud.size());
 }
 
 }  // namespace

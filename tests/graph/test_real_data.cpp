@@ -4,6 +4,7 @@
 
 #include "graph/pipeline.h"
 #include "nodes/io/read_point_cloud.h"
+#include "runtime/threads.h"
 #include "test_support.h"
 
 namespace meshflow {
@@ -19,20 +20,45 @@ void expect_plausible(const TriangleMesh& mesh, std::size_t min_tris, std::size_
   EXPECT_EQ(stats.inconsistent_edges, 0u);
 }
 
-TEST(RealData, Kurt3dScan000At5cm) {
-  MESHFLOW_REQUIRE_DATA("kurt3d/scan000.3d");
-  ReconstructionConfig config;
-  config.voxelize.voxel_size = 0.05f;
+// File read to mesh through the graph, as `meshflow reconstruct` runs it.
+FramePtr reconstruct_file(const std::string& path, const ReconstructionConfig& config) {
   auto frame = std::make_shared<Frame>();
-  const std::string path = test::data_path("kurt3d/scan000.3d");
+  frame->name = path;
   frame->load = [path] { return io::read_point_cloud(path); };
   FramePtr result;
   bool given = false;
   ReconstructionPipeline(config).run(
       [&]() -> FramePtr { return given ? nullptr : (given = true, frame); },
       [&](const FramePtr& f) { result = f; });
+  return result;
+}
+
+TEST(RealData, Kurt3dScan000At5cm) {
+  MESHFLOW_REQUIRE_DATA("kurt3d/scan000.3d");
+  ReconstructionConfig config;
+  config.voxelize.voxel_size = 0.05f;
+  const FramePtr result = reconstruct_file(test::data_path("kurt3d/scan000.3d"), config);
   ASSERT_TRUE(result->ok()) << result->error;
   expect_plausible(result->mesh, 60000, 250000);
+  EXPECT_GT(result->filter_counts.input, 76000u);
+}
+
+TEST(RealData, Kurt3dSameMeshWithOneAndTwoThreads) {
+  MESHFLOW_REQUIRE_DATA("kurt3d/scan001.3d");
+  ReconstructionConfig config;
+  config.voxelize.voxel_size = 0.05f;
+  FramePtr one, two;
+  {
+    ThreadLimit limit(1);
+    one = reconstruct_file(test::data_path("kurt3d/scan001.3d"), config);
+  }
+  {
+    ThreadLimit limit(2);
+    two = reconstruct_file(test::data_path("kurt3d/scan001.3d"), config);
+  }
+  ASSERT_TRUE(one->ok() && two->ok());
+  EXPECT_EQ(one->mesh.vertices, two->mesh.vertices);
+  EXPECT_EQ(one->mesh.triangles, two->mesh.triangles);
 }
 
 TEST(RealData, StanfordBunny) {

@@ -3,6 +3,8 @@
 
 #include <gtest/gtest.h>
 
+#include <cstdio>
+
 #include "graph/pipeline.h"
 #include "nodes/synthetic/shapes.h"
 #include "runtime/threads.h"
@@ -19,6 +21,13 @@ ReconstructionConfig closed_shape_config(const Eigen::Vector3f& centre) {
   c.normals.orientation = NormalOrientation::kAwayFromViewpoint;
   c.normals.viewpoint = centre;
   return c;
+}
+
+// Prints and records the measured error so test logs carry the numbers.
+void report(const char* shape, const test::ErrorStats& err) {
+  std::printf("[ accuracy ] %s: mean %.4f voxel, max %.3f voxel\n", shape, err.mean / kVoxel,
+              err.max / kVoxel);
+  ::testing::Test::RecordProperty("mean_error_voxels", std::to_string(err.mean / kVoxel));
 }
 
 FramePtr reconstruct(const ReconstructionConfig& config, PointCloud cloud) {
@@ -46,6 +55,7 @@ TEST_P(Accuracy, Sphere) {
   const FramePtr f = reconstruct(closed_shape_config(sphere.center), cloud);
   const auto err = test::vertex_errors(
       f->mesh, [&](const Eigen::Vector3f& p) { return synthetic::surface_distance(sphere, p); });
+  report("sphere", err);
   EXPECT_LT(err.mean / kVoxel, GetParam().max_mean_voxels);
   const EdgeStatistics stats = edge_statistics(f->mesh);
   EXPECT_TRUE(stats.closed()) << stats.boundary_edges << " boundary, " << stats.non_manifold_edges
@@ -67,6 +77,7 @@ TEST_P(Accuracy, Box) {
   const FramePtr f = reconstruct(closed_shape_config(box.center), cloud);
   const auto err = test::vertex_errors(
       f->mesh, [&](const Eigen::Vector3f& p) { return synthetic::surface_distance(box, p); });
+  report("box", err);
   EXPECT_LT(err.mean / kVoxel, GetParam().max_mean_voxels);
   EXPECT_EQ(edge_statistics(f->mesh).non_manifold_edges, 0u);
 }
@@ -83,6 +94,7 @@ TEST_P(Accuracy, PlaneWithStep) {
   const FramePtr f = reconstruct(config, cloud);
   const auto err = test::vertex_errors(
       f->mesh, [&](const Eigen::Vector3f& p) { return synthetic::surface_distance(step, p); });
+  report("plane with step", err);
   EXPECT_LT(err.mean / kVoxel, GetParam().max_mean_voxels);
   EXPECT_EQ(edge_statistics(f->mesh).non_manifold_edges, 0u);
 }

@@ -36,6 +36,8 @@ struct ReconstructionConfig {
 struct Frame {
   std::uint64_t seq = 0;             ///< gapless, assigned by the pipeline in input order
   std::string name;                  ///< where the input came from (a path, "synthetic", ...)
+  std::size_t source_index = 0;      ///< position in the source sequence (seq counts fed frames)
+  double timestamp_s = 0.0;          ///< capture time from the sequence, seconds
   std::function<PointCloud()> load;  ///< produces the input; called by the "read" stage
 
   PointCloud cloud;  ///< after read: raw; after filter: filtered, with normals

@@ -61,7 +61,7 @@ const NamedStage kPointCloudStages[8] = {
 
 void run_stage(const char* name, StageFunction body, Frame& f, const ReconstructionConfig& c) {
   if (!f.ok()) return;
-  StageRecord record{name, monotonic_seconds(), 0.0, current_thread_index(), 0};
+  StageRecord record{name, monotonic_seconds(), 0.0, current_thread_index(), 0, f.seq};
   try {
     record.items = body(f, c);
   } catch (const std::exception& e) {

@@ -46,20 +46,70 @@ std::vector<StageSummary> summarize_stages(const std::vector<StageRecord>& recor
   return out;
 }
 
+namespace {
+double total_stage_seconds(const std::vector<StageSummary>& summaries) {
+  double total = 0.0;
+  for (const StageSummary& s : summaries) total += s.total_s;
+  return total;
+}
+}  // namespace
+
 std::string format_stage_table(const std::vector<StageSummary>& summaries, double wall_s) {
   std::string out;
   char line[256];
-  std::snprintf(line, sizeof line, "%-12s %6s %10s %10s %10s %7s %14s\n", "stage", "calls",
-                "mean ms", "p95 ms", "max ms", "share", "items/s");
+  const double busy = total_stage_seconds(summaries);
+  std::snprintf(line, sizeof line, "%-10s %6s %9s %9s %9s %9s %7s %12s\n", "stage", "calls",
+                "mean ms", "p50 ms", "p95 ms", "max ms", "share", "items/s");
   out += line;
   for (const StageSummary& s : summaries) {
-    const double share = wall_s > 0.0 ? 100.0 * s.total_s / wall_s : 0.0;
+    const double share = busy > 0.0 ? 100.0 * s.total_s / busy : 0.0;
     const double rate = s.total_s > 0.0 ? static_cast<double>(s.items) / s.total_s : 0.0;
-    std::snprintf(line, sizeof line, "%-12s %6zu %10.2f %10.2f %10.2f %6.1f%% %14.3g\n",
-                  s.stage.c_str(), s.calls, 1e3 * s.mean_s, 1e3 * s.p95_s, 1e3 * s.max_s, share,
-                  rate);
+    std::snprintf(line, sizeof line, "%-10s %6zu %9.2f %9.2f %9.2f %9.2f %6.1f%% %12.3g\n",
+                  s.stage.c_str(), s.calls, 1e3 * s.mean_s, 1e3 * s.p50_s, 1e3 * s.p95_s,
+                  1e3 * s.max_s, share, rate);
     out += line;
   }
+  if (wall_s > 0.0) {
+    std::snprintf(line, sizeof line, "stage time / wall time = %.2f (stages running at once)\n",
+                  busy / wall_s);
+    out += line;
+  }
+  return out;
+}
+
+std::string format_stage_csv(const std::vector<StageSummary>& summaries, double wall_s) {
+  std::string out =
+      "stage,calls,total_ms,mean_ms,p50_ms,p95_ms,max_ms,share,items,items_per_s,wall_ms\n";
+  const double busy = total_stage_seconds(summaries);
+  char line[320];
+  for (const StageSummary& s : summaries) {
+    std::snprintf(line, sizeof line, "%s,%zu,%.4f,%.4f,%.4f,%.4f,%.4f,%.5f,%llu,%.6g,%.4f\n",
+                  s.stage.c_str(), s.calls, 1e3 * s.total_s, 1e3 * s.mean_s, 1e3 * s.p50_s,
+                  1e3 * s.p95_s, 1e3 * s.max_s, busy > 0.0 ? s.total_s / busy : 0.0,
+                  static_cast<unsigned long long>(s.items),
+                  s.total_s > 0.0 ? static_cast<double>(s.items) / s.total_s : 0.0, 1e3 * wall_s);
+    out += line;
+  }
+  return out;
+}
+
+std::string chrome_trace_json(const std::vector<StageRecord>& records) {
+  double t0 = records.empty() ? 0.0 : records.front().start_s;
+  for (const StageRecord& r : records) t0 = std::min(t0, r.start_s);
+  std::string out = "{\"displayTimeUnit\":\"ms\",\"traceEvents\":[";
+  char event[384];
+  for (std::size_t i = 0; i < records.size(); ++i) {
+    const StageRecord& r = records[i];
+    // Stage names are meshflow's own identifiers (no characters that need JSON escaping).
+    std::snprintf(event, sizeof event,
+                  "%s\n{\"name\":\"%s\",\"cat\":\"stage\",\"ph\":\"X\",\"ts\":%.3f,\"dur\":%.3f,"
+                  "\"pid\":1,\"tid\":%u,\"args\":{\"frame\":%llu,\"items\":%llu}}",
+                  i == 0 ? "" : ",", r.stage.c_str(), 1e6 * (r.start_s - t0), 1e6 * r.duration_s(),
+                  r.thread, static_cast<unsigned long long>(r.frame),
+                  static_cast<unsigned long long>(r.items));
+    out += event;
+  }
+  out += "\n]}\n";
   return out;
 }
 

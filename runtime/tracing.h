@@ -21,6 +21,7 @@ struct StageRecord {
   double end_s = 0.0;        ///< monotonic_seconds() at end
   std::uint32_t thread = 0;  ///< current_thread_index() of the thread that started it
   std::uint64_t items = 0;   ///< work items the stage processed (points, corners, triangles)
+  std::uint64_t frame = 0;   ///< sequence number of the frame it worked on
   double duration_s() const { return end_s - start_s; }
 };
 
@@ -35,7 +36,16 @@ struct StageSummary {
 /// Groups records by stage, in order of first appearance. O(n log n).
 std::vector<StageSummary> summarize_stages(const std::vector<StageRecord>& records);
 
-/// Human-readable table of `summaries`; share of wall time relative to `wall_s`.
+/// Human-readable table of `summaries`: calls, mean, p50, p95, max (ms), share of all stage
+/// time, work items/s; then the busy/wall ratio (average number of stages running at once).
 std::string format_stage_table(const std::vector<StageSummary>& summaries, double wall_s);
+
+/// The same table as CSV (header line, one row per stage, times in milliseconds).
+std::string format_stage_csv(const std::vector<StageSummary>& summaries, double wall_s);
+
+/// Chrome trace-event JSON ("X" complete events, one per record: name = stage,
+/// tid = thread index, args = frame and items), loadable in Perfetto and chrome://tracing.
+/// Timestamps are microseconds relative to the earliest record.
+std::string chrome_trace_json(const std::vector<StageRecord>& records);
 
 }  // namespace meshflow

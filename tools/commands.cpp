@@ -9,6 +9,7 @@
 #include "runtime/error.h"
 #include "runtime/threads.h"
 #include "tools/commands.h"
+#include "tools/pipeline_options.h"
 #include "tools/report.h"
 
 namespace meshflow::cli {
@@ -43,32 +44,13 @@ namespace {
 struct ReconstructOptions {
   std::string input;
   std::string output;
-  float voxel = 0.0f;
-  int kn = 10, ki = 10, kd = 5;
-  int threads = 0;
-  bool adaptive_k = false;
-  float max_distance = 2.0f;
-  std::size_t min_component = 20;
-  float filter_voxel = 0.0f;
-  int outlier_k = 0;
-  float min_range = 0.0f, max_range = 0.0f;
+  PipelineOptions pipeline;
   bool quiet = false;
 };
 
 void run_reconstruct(const ReconstructOptions& o) {
-  ThreadLimit limit(o.threads);
-  ReconstructionConfig config;
-  config.voxelize.voxel_size = o.voxel;
-  config.normals.kn = o.kn;
-  config.normals.ki = o.ki;
-  config.normals.adaptive_k = o.adaptive_k;
-  config.distance.kd = o.kd;
-  config.distance.max_distance_voxels = o.max_distance;
-  config.cleanup.min_component_triangles = o.min_component;
-  config.filter.voxel_size = o.filter_voxel;
-  config.filter.outlier_k = o.outlier_k;
-  config.filter.min_range = o.min_range;
-  config.filter.max_range = o.max_range;
+  ThreadLimit limit(o.pipeline.threads);
+  const ReconstructionConfig config = o.pipeline.config();
   // Fail on an unwritable output before spending time on reconstruction.
   const std::string ext = io::lower_extension(o.output);
   if (ext != ".ply" && ext != ".obj") {
@@ -110,33 +92,7 @@ void add_reconstruct_command(CLI::App& app) {
   cmd->add_option("input", opts->input, "Point cloud: .ply .pcd .xyz .txt .pts .asc .3d")
       ->required();
   cmd->add_option("-o,--output", opts->output, "Output mesh (.ply or .obj)")->required();
-  cmd->add_option("--voxel", opts->voxel,
-                  "Voxel size in metres (default: 3x the median point spacing)")
-      ->check(CLI::NonNegativeNumber);
-  cmd->add_option("--kn", opts->kn, "Neighbours for normal estimation")->check(CLI::Range(3, 1000));
-  cmd->add_option("--ki", opts->ki, "Neighbours for normal interpolation (0 = off)")
-      ->check(CLI::Range(0, 1000));
-  cmd->add_option("--kd", opts->kd, "Tangent planes averaged per distance sample")
-      ->check(CLI::Range(1, 64));
-  cmd->add_option("--threads", opts->threads, "Worker threads (default: all cores)")
-      ->check(CLI::NonNegativeNumber);
-  cmd->add_flag("--adaptive-k", opts->adaptive_k, "Grow kn where neighbourhoods are degenerate");
-  cmd->add_option("--max-distance", opts->max_distance,
-                  "Distance samples farther than this many voxels from the data are invalid")
-      ->check(CLI::PositiveNumber);
-  cmd->add_option("--min-component", opts->min_component,
-                  "Remove mesh components with fewer triangles");
-  cmd->add_option("--filter-voxel", opts->filter_voxel,
-                  "Voxel-grid downsampling before meshing, metres (0 = off)")
-      ->check(CLI::NonNegativeNumber);
-  cmd->add_option("--outlier-k", opts->outlier_k,
-                  "Statistical outlier removal with k neighbours (0 = off)")
-      ->check(CLI::NonNegativeNumber);
-  cmd->add_option("--min-range", opts->min_range, "Drop points closer to the sensor, metres")
-      ->check(CLI::NonNegativeNumber);
-  cmd->add_option("--max-range", opts->max_range,
-                  "Drop points farther from the sensor, metres (0 = off)")
-      ->check(CLI::NonNegativeNumber);
+  add_pipeline_options(cmd, opts->pipeline);
   cmd->add_flag("-q,--quiet", opts->quiet, "Print nothing on success");
   cmd->callback([opts] { run_reconstruct(*opts); });
 }

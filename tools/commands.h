@@ -9,5 +9,7 @@ namespace meshflow::cli {
 void add_reconstruct_command(CLI::App& app);
 void add_info_command(CLI::App& app);
 void add_demo_command(CLI::App& app);
+void add_run_command(CLI::App& app);
+void add_profile_command(CLI::App& app);
 
 }  // namespace meshflow::cli

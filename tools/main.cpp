@@ -14,6 +14,8 @@ int main(int argc, char** argv) {
   meshflow::cli::add_reconstruct_command(app);
   meshflow::cli::add_info_command(app);
   meshflow::cli::add_demo_command(app);
+  meshflow::cli::add_run_command(app);
+  meshflow::cli::add_profile_command(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {

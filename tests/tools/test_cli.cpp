@@ -6,6 +6,8 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <nlohmann/json.hpp>
+#include <set>
 #include <sstream>
 
 #include "test_support.h"
@@ -87,6 +89,75 @@ TEST(Cli, InfoAndDemo) {
   EXPECT_EQ(r.exit_code, 0) << r.err;
   EXPECT_NE(r.out.find("accuracy"), std::string::npos);
   EXPECT_TRUE(std::filesystem::exists(out));
+}
+
+// A 3DTK directory with a good scan, a truncated one and another good one.
+std::string scan_directory_with_a_bad_frame() {
+  const std::string dir = test::temp_dir();
+  std::string scan;
+  for (int i = 0; i < 40; ++i)
+    for (int j = 0; j < 40; ++j)
+      scan += std::to_string(2 * i - 40) + " " + std::to_string(2 * j - 40) + " 300\n";
+  for (const char* name : {"scan000", "scan001", "scan002"}) {
+    test::write_file(dir + "/" + name + ".3d",
+                     std::string(name) == "scan001" ? "100 0 50\n120 10\n" : scan);
+    test::write_file(dir + "/" + name + ".pose", "0 0 0\n0 0 0\n");
+  }
+  return dir;
+}
+
+TEST(Cli, RunReportsABadFrameAndContinuesStrictStops) {
+  const std::string seq = scan_directory_with_a_bad_frame();
+  const std::string out = test::temp_dir();
+  CliRun r = run_cli("run " + seq + " -o " + out + " --voxel 0.05 --in-flight 2");
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.err.find("frame 1 ("), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("scan001.3d: line 2"), std::string::npos) << r.err;
+  EXPECT_NE(r.out.find("2 ok, 1 failed"), std::string::npos) << r.out;
+  EXPECT_TRUE(std::filesystem::exists(out + "/frame_000000.ply"));
+  EXPECT_FALSE(std::filesystem::exists(out + "/frame_000001.ply"));
+  EXPECT_TRUE(std::filesystem::exists(out + "/frame_000002.ply"));
+
+  const std::string strict_out = test::temp_dir();
+  r = run_cli("run " + seq + " -o " + strict_out + " --voxel 0.05 --in-flight 1 --strict");
+  EXPECT_EQ(r.exit_code, 1) << r.err;
+  EXPECT_NE(r.err.find("--strict"), std::string::npos) << r.err;
+  EXPECT_FALSE(std::filesystem::exists(strict_out + "/frame_000002.ply"));
+}
+
+TEST(Cli, RunMergedAndUsageErrors) {
+  const std::string out = test::temp_dir();
+  CliRun r = run_cli("run --synthetic --max-frames 2 --merged -o " + out + " --voxel 0.1");
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_TRUE(std::filesystem::exists(out + "/merged.ply"));
+  EXPECT_EQ(run_cli("run -o " + out).exit_code, 2) << "neither SEQUENCE nor --synthetic";
+  EXPECT_EQ(run_cli("run --synthetic -o " + out + " --merged --per-frame").exit_code, 2);
+}
+
+TEST(Cli, ProfileWritesTraceAndCsv) {
+  const std::string dir = test::temp_dir();
+  const CliRun r = run_cli("profile --synthetic --max-frames 3 --in-flight 2 --voxel 0.1 --trace " +
+                           dir + "/trace.json --csv " + dir + "/stages.csv");
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  for (const char* stage : {"read", "normals", "distance", "extract"}) {
+    EXPECT_NE(r.out.find(stage), std::string::npos) << r.out;
+  }
+  EXPECT_NE(r.out.find("p50 ms"), std::string::npos);
+  std::ifstream trace(dir + "/trace.json");
+  const nlohmann::json json = nlohmann::json::parse(trace);
+  ASSERT_TRUE(json.contains("traceEvents"));
+  EXPECT_EQ(json["traceEvents"].size(), 3u * 8u);
+  std::set<std::uint64_t> frames;
+  for (const auto& e : json["traceEvents"]) {
+    EXPECT_EQ(e["ph"], "X");
+    EXPECT_GE(e["dur"].get<double>(), 0.0);
+    frames.insert(e["args"]["frame"].get<std::uint64_t>());
+  }
+  EXPECT_EQ(frames.size(), 3u);
+  std::ifstream csv(dir + "/stages.csv");
+  std::string header;
+  std::getline(csv, header);
+  EXPECT_EQ(header.rfind("stage,calls,total_ms", 0), 0u);
 }
 
 }  // namespace

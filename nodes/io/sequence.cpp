@@ -1,0 +1,78 @@
+#include "nodes/io/sequence.h"
+
+#include <algorithm>
+#include <filesystem>
+#include <regex>
+#include <vector>
+
+#include "nodes/io/read_point_cloud.h"
+#include "nodes/io/scan3d_reader.h"
+#include "runtime/error.h"
+
+namespace meshflow::io {
+namespace {
+
+namespace fs = std::filesystem;
+
+class SingleFileSequence final : public Sequence {
+ public:
+  explicit SingleFileSequence(std::string path) : path_(std::move(path)) {}
+  std::size_t size() const override { return 1; }
+  SequenceFrame frame(std::size_t) const override {
+    const std::string path = path_;
+    return {0, 0.0, path, [path] { return read_point_cloud(path); }};
+  }
+  std::string description() const override { return "point cloud " + path_ + " (1 frame)"; }
+
+ private:
+  std::string path_;
+};
+
+class ScanDirectorySequence final : public Sequence {
+ public:
+  ScanDirectorySequence(std::string directory, std::vector<std::string> scans)
+      : directory_(std::move(directory)), scans_(std::move(scans)) {}
+  std::size_t size() const override { return scans_.size(); }
+  SequenceFrame frame(std::size_t i) const override {
+    const std::string scan = scans_[i];
+    const std::string pose = fs::path(scan).replace_extension(".pose").string();
+    return {i, static_cast<double>(i), scan, [scan, pose] {
+              if (!fs::exists(pose)) throw Error(pose, "", "pose file missing for " + scan);
+              return read_3dtk_scan(scan, Scan3dOptions{}, pose);
+            }};
+  }
+  std::string description() const override {
+    return "3DTK scans in " + directory_ + " (" + std::to_string(scans_.size()) + " frames)";
+  }
+
+ private:
+  std::string directory_;
+  std::vector<std::string> scans_;
+};
+
+}  // namespace
+
+std::unique_ptr<Sequence> open_3dtk_directory(const std::string& directory) {
+  static const std::regex kScanName(R"(scan(\d+)\.3d)");
+  std::vector<std::pair<long, std::string>> scans;
+  for (const auto& entry : fs::directory_iterator(directory)) {
+    std::smatch m;
+    const std::string name = entry.path().filename().string();
+    if (entry.is_regular_file() && std::regex_match(name, m, kScanName)) {
+      scans.emplace_back(std::stol(m[1].str()), entry.path().string());
+    }
+  }
+  if (scans.empty()) throw Error(directory, "", "no scanNNN.3d files (3DTK format) found");
+  std::sort(scans.begin(), scans.end());
+  std::vector<std::string> paths;
+  for (auto& s : scans) paths.push_back(std::move(s.second));
+  return std::make_unique<ScanDirectorySequence>(directory, std::move(paths));
+}
+
+std::unique_ptr<Sequence> open_sequence(const std::string& path) {
+  if (fs::is_directory(path)) return open_3dtk_directory(path);
+  if (!fs::exists(path)) throw Error(path, "", "no such file or directory");
+  return std::make_unique<SingleFileSequence>(path);
+}
+
+}  // namespace meshflow::io

@@ -1,0 +1,68 @@
+#include "tools/pipeline_options.h"
+
+#include "nodes/synthetic/scan_sequence.h"
+
+namespace meshflow::cli {
+
+ReconstructionConfig PipelineOptions::config() const {
+  ReconstructionConfig c;
+  c.voxelize.voxel_size = voxel;
+  c.normals.kn = kn;
+  c.normals.ki = ki;
+  c.normals.adaptive_k = adaptive_k;
+  c.distance.kd = kd;
+  c.distance.max_distance_voxels = max_distance;
+  c.cleanup.min_component_triangles = min_component;
+  c.filter.voxel_size = filter_voxel;
+  c.filter.outlier_k = outlier_k;
+  c.filter.min_range = min_range;
+  c.filter.max_range = max_range;
+  return c;
+}
+
+void add_pipeline_options(CLI::App* cmd, PipelineOptions& o) {
+  cmd->add_option("--voxel", o.voxel, "Voxel size in metres (default: 3x the median point spacing)")
+      ->check(CLI::NonNegativeNumber);
+  cmd->add_option("--kn", o.kn, "Neighbours for normal estimation")->check(CLI::Range(3, 1000));
+  cmd->add_option("--ki", o.ki, "Neighbours for normal interpolation (0 = off)")
+      ->check(CLI::Range(0, 1000));
+  cmd->add_option("--kd", o.kd, "Tangent planes averaged per distance sample")
+      ->check(CLI::Range(1, 64));
+  cmd->add_option("--threads", o.threads, "Worker threads (default: all cores)")
+      ->check(CLI::NonNegativeNumber);
+  cmd->add_flag("--adaptive-k", o.adaptive_k, "Grow kn where neighbourhoods are degenerate");
+  cmd->add_option("--max-distance", o.max_distance,
+                  "Distance samples farther than this many voxels from the data are invalid")
+      ->check(CLI::PositiveNumber);
+  cmd->add_option("--min-component", o.min_component,
+                  "Remove mesh components with fewer triangles");
+  cmd->add_option("--filter-voxel", o.filter_voxel,
+                  "Voxel-grid downsampling before meshing, metres (0 = off)")
+      ->check(CLI::NonNegativeNumber);
+  cmd->add_option("--outlier-k", o.outlier_k,
+                  "Statistical outlier removal with k neighbours (0 = off)")
+      ->check(CLI::NonNegativeNumber);
+  cmd->add_option("--min-range", o.min_range, "Drop points closer to the sensor, metres")
+      ->check(CLI::NonNegativeNumber);
+  cmd->add_option("--max-range", o.max_range,
+                  "Drop points farther from the sensor, metres (0 = off)")
+      ->check(CLI::NonNegativeNumber);
+}
+
+void add_sequence_options(CLI::App* cmd, SequenceArgument& a) {
+  cmd->add_option("sequence", a.path,
+                  "A directory of 3DTK scans (scanNNN.3d + .pose) or one point cloud file");
+  cmd->add_flag("--synthetic", a.synthetic, "Use the built-in synthetic laser-scan sequence");
+  cmd->add_option("--in-flight", a.in_flight, "Frames in the pipeline at once")
+      ->check(CLI::Range(1, 64));
+  cmd->add_option("--every", a.every, "Take every N-th frame")->check(CLI::Range(1, 1000000));
+  cmd->add_option("--max-frames", a.max_frames, "Stop after N frames (0 = all)");
+}
+
+std::unique_ptr<io::Sequence> open_sequence_argument(const SequenceArgument& a) {
+  if (a.synthetic) return synthetic::make_scan_sequence(synthetic::demo_room_scene());
+  if (a.path.empty()) throw CLI::ValidationError("sequence", "give a SEQUENCE path or --synthetic");
+  return io::open_sequence(a.path);
+}
+
+}  // namespace meshflow::cli

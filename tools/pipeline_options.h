@@ -1,0 +1,49 @@
+#pragma once
+// Command-line options that configure the reconstruction stages, shared by the subcommands.
+
+#include <CLI/CLI.hpp>
+
+#include <cstddef>
+#include <memory>
+#include <string>
+
+#include "graph/frame.h"
+#include "nodes/io/sequence.h"
+
+namespace meshflow::cli {
+
+struct PipelineOptions {
+  float voxel = 0.0f;
+  int kn = 10, ki = 10, kd = 5;
+  int threads = 0;
+  bool adaptive_k = false;
+  float max_distance = 2.0f;
+  std::size_t min_component = 20;
+  float filter_voxel = 0.0f;
+  int outlier_k = 0;
+  float min_range = 0.0f, max_range = 0.0f;
+
+  ReconstructionConfig config() const;
+};
+
+/// Registers --voxel --kn --ki --kd --threads --adaptive-k --max-distance --min-component
+/// --filter-voxel --outlier-k --min-range --max-range on `cmd`, writing into `options`.
+void add_pipeline_options(CLI::App* cmd, PipelineOptions& options);
+
+/// The SEQUENCE argument of run/profile: a path, or the built-in synthetic sequence.
+struct SequenceArgument {
+  std::string path;
+  bool synthetic = false;
+  std::size_t in_flight = 2;
+  std::size_t every = 1;
+  std::size_t max_frames = 0;
+};
+
+/// Registers SEQUENCE, --synthetic, --in-flight, --every and --max-frames on `cmd`.
+void add_sequence_options(CLI::App* cmd, SequenceArgument& argument);
+
+/// Opens the sequence the user named; throws meshflow::Error (or CLI::ValidationError when
+/// neither a path nor --synthetic was given).
+std::unique_ptr<io::Sequence> open_sequence_argument(const SequenceArgument& argument);
+
+}  // namespace meshflow::cli

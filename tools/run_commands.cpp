@@ -1,0 +1,175 @@
+// `meshflow run` (mesh a recorded sequence) and `meshflow profile` (where the time goes).
+
+#include <unistd.h>
+
+#include <cstdio>
+#include <filesystem>
+#include <memory>
+#include <string>
+
+#include "graph/sequence_runner.h"
+#include "nodes/io/atomic_file.h"
+#include "nodes/io/mesh_writers.h"
+#include "runtime/error.h"
+#include "runtime/threads.h"
+#include "tools/commands.h"
+#include "tools/pipeline_options.h"
+
+namespace meshflow::cli {
+namespace {
+
+std::size_t selected_frames(const io::Sequence& seq, const SequenceArgument& a) {
+  const std::size_t n = (seq.size() + a.every - 1) / a.every;
+  return a.max_frames > 0 ? std::min(n, a.max_frames) : n;
+}
+
+// Progress on stderr: rewritten in place on a terminal, a line every few seconds otherwise.
+class ProgressLine {
+ public:
+  explicit ProgressLine(std::size_t total) : total_(total), tty_(::isatty(::fileno(stderr)) != 0) {}
+  void update(std::size_t done) {
+    const double now = monotonic_seconds();
+    if (done < total_ && now - last_ < (tty_ ? 0.25 : 5.0)) return;
+    last_ = now;
+    const double elapsed = now - start_;
+    const double rate = elapsed > 0.0 ? static_cast<double>(done) / elapsed : 0.0;
+    const double eta = rate > 0.0 ? static_cast<double>(total_ - done) / rate : 0.0;
+    std::fprintf(stderr, "%s%zu/%zu frames  %.2f frames/s  ETA %.0f s%s", tty_ ? "\r" : "", done,
+                 total_, rate, eta, tty_ ? "" : "\n");
+    if (tty_ && done == total_) std::fputc('\n', stderr);
+  }
+
+ private:
+  std::size_t total_;
+  bool tty_;
+  double start_ = monotonic_seconds();
+  double last_ = -1e9;
+};
+
+void report_failure(const Frame& f) {
+  std::fprintf(stderr, "meshflow: frame %zu (%s) failed in %s: %s\n", f.source_index,
+               f.name.c_str(), f.failed_stage.c_str(), f.error.c_str());
+}
+
+void print_run_summary(const io::Sequence& seq, const SequenceRunStats& stats, int threads,
+                       std::size_t in_flight) {
+  std::printf("sequence   %s\n", seq.description().c_str());
+  std::printf(
+      "frames     %zu ok, %zu failed%s; %.3f s wall, %.2f frames/s on %d thread%s, %zu in flight\n",
+      stats.frames_ok, stats.frames_failed, stats.stopped_early ? " (stopped: --strict)" : "",
+      stats.wall_s, stats.frames_per_second(), threads, threads == 1 ? "" : "s", in_flight);
+  std::printf("%s", format_stage_table(summarize_stages(stats.records), stats.wall_s).c_str());
+}
+
+struct RunOptions {
+  PipelineOptions pipeline;
+  SequenceArgument sequence;
+  std::string output_dir;
+  bool merged = false;
+  bool strict = false;
+};
+
+void append_mesh(TriangleMesh& into, const TriangleMesh& mesh) {
+  const auto offset = static_cast<std::uint32_t>(into.vertices.size());
+  into.vertices.insert(into.vertices.end(), mesh.vertices.begin(), mesh.vertices.end());
+  into.normals.insert(into.normals.end(), mesh.normals.begin(), mesh.normals.end());
+  for (const Triangle& t : mesh.triangles)
+    into.triangles.push_back({t[0] + offset, t[1] + offset, t[2] + offset});
+}
+
+void run_run(const RunOptions& o) {
+  ThreadLimit limit(o.pipeline.threads);
+  const auto sequence = open_sequence_argument(o.sequence);
+  std::error_code ec;
+  std::filesystem::create_directories(o.output_dir, ec);
+  if (ec || !std::filesystem::is_directory(o.output_dir)) {
+    throw Error(o.output_dir, "", "cannot create output directory");
+  }
+  ReconstructionPipeline pipeline(o.pipeline.config(), o.sequence.in_flight);
+  ProgressLine progress(selected_frames(*sequence, o.sequence));
+  TriangleMesh merged;
+  std::size_t done = 0, written = 0;
+  const SequenceRunOptions run_options{o.sequence.every, o.sequence.max_frames, o.strict};
+  const SequenceRunStats stats =
+      run_sequence(pipeline, *sequence, run_options, [&](const Frame& f) {
+        progress.update(++done);
+        if (!f.ok()) return report_failure(f);
+        if (o.merged) return append_mesh(merged, f.mesh);
+        char name[64];
+        std::snprintf(name, sizeof name, "frame_%06zu.ply", f.source_index);
+        io::write_ply((std::filesystem::path(o.output_dir) / name).string(), f.mesh);
+        ++written;
+      });
+  if (o.merged && !merged.empty()) {
+    io::write_ply((std::filesystem::path(o.output_dir) / "merged.ply").string(), merged);
+    written = 1;
+  }
+  print_run_summary(*sequence, stats, limit.threads(), o.sequence.in_flight);
+  std::printf("output     %zu mesh file%s in %s\n", written, written == 1 ? "" : "s",
+              o.output_dir.c_str());
+  if (stats.stopped_early) throw std::runtime_error("stopped at the first failed frame (--strict)");
+  if (stats.frames_ok == 0) throw std::runtime_error("no frame could be reconstructed");
+}
+
+struct ProfileOptions {
+  PipelineOptions pipeline;
+  SequenceArgument sequence;
+  std::string trace_path;
+  std::string csv_path;
+};
+
+void write_text(const std::string& path, const std::string& text) {
+  io::AtomicOutputFile file(path);
+  file.stream() << text;
+  file.commit();
+}
+
+void run_profile(const ProfileOptions& o) {
+  ThreadLimit limit(o.pipeline.threads);
+  const auto sequence = open_sequence_argument(o.sequence);
+  ReconstructionPipeline pipeline(o.pipeline.config(), o.sequence.in_flight);
+  const SequenceRunOptions run_options{o.sequence.every, o.sequence.max_frames, false};
+  const SequenceRunStats stats = run_sequence(pipeline, *sequence, run_options, [](const Frame& f) {
+    if (!f.ok()) report_failure(f);
+  });
+  print_run_summary(*sequence, stats, limit.threads(), o.sequence.in_flight);
+  const auto summaries = summarize_stages(stats.records);
+  if (!o.trace_path.empty()) {
+    write_text(o.trace_path, chrome_trace_json(stats.records));
+    std::printf("trace      %s (open in https://ui.perfetto.dev or chrome://tracing)\n",
+                o.trace_path.c_str());
+  }
+  if (!o.csv_path.empty()) {
+    write_text(o.csv_path, format_stage_csv(summaries, stats.wall_s));
+    std::printf("csv        %s\n", o.csv_path.c_str());
+  }
+}
+
+}  // namespace
+
+void add_run_command(CLI::App& app) {
+  auto o = std::make_shared<RunOptions>();
+  CLI::App* cmd = app.add_subcommand(
+      "run", "Mesh every frame of a recorded sequence through the pipelined graph");
+  add_sequence_options(cmd, o->sequence);
+  cmd->add_option("-o,--output", o->output_dir, "Output directory")->required();
+  auto* per_frame = cmd->add_flag("--per-frame", "One mesh per frame, frame_NNNNNN.ply (default)");
+  cmd->add_flag("--merged", o->merged, "One mesh of all frames, merged.ply")->excludes(per_frame);
+  cmd->add_flag("--strict", o->strict, "Stop at the first bad frame (exit code 1)");
+  add_pipeline_options(cmd, o->pipeline);
+  cmd->callback([o] { run_run(*o); });
+}
+
+void add_profile_command(CLI::App& app) {
+  auto o = std::make_shared<ProfileOptions>();
+  CLI::App* cmd =
+      app.add_subcommand("profile", "Per-stage timings of a sequence run, with a Chrome trace");
+  add_sequence_options(cmd, o->sequence);
+  cmd->add_option("--trace", o->trace_path,
+                  "Write a Chrome trace-event JSON (Perfetto, chrome://tracing)");
+  cmd->add_option("--csv", o->csv_path, "Write the stage table as CSV");
+  add_pipeline_options(cmd, o->pipeline);
+  cmd->callback([o] { run_profile(*o); });
+}
+
+}  // namespace meshflow::cli

@@ -9,11 +9,13 @@
 
 #include "nodes/distance/hoppe_distance.h"
 #include "nodes/extract/marching_cubes.h"
+#include "nodes/filter/depth_filter.h"
 #include "nodes/filter/filter.h"
 #include "nodes/normals/normals.h"
 #include "nodes/normals/spatial_index.h"
 #include "nodes/optimize/mesh_cleanup.h"
 #include "nodes/voxelize/sparse_grid.h"
+#include "runtime/depth_frame.h"
 #include "runtime/point_cloud.h"
 #include "runtime/tracing.h"
 #include "runtime/triangle_mesh.h"
@@ -23,6 +25,7 @@ namespace meshflow {
 /// Configuration of every stage; defaults are the thesis's published ones.
 /// voxelize.voxel_size <= 0 means "choose from the point spacing" (suggest_voxel_size).
 struct ReconstructionConfig {
+  DepthFilterConfig depth_filter;  ///< depth-image inputs only
   FilterConfig filter;
   NormalsConfig normals;
   VoxelizeConfig voxelize;
@@ -38,7 +41,12 @@ struct Frame {
   std::string name;                  ///< where the input came from (a path, "synthetic", ...)
   std::size_t source_index = 0;      ///< position in the source sequence (seq counts fed frames)
   double timestamp_s = 0.0;          ///< capture time from the sequence, seconds
-  std::function<PointCloud()> load;  ///< produces the input; called by the "read" stage
+  std::function<PointCloud()> load;  ///< produces a cloud input; called by the "read" stage
+  std::function<DepthFrame()> load_depth;  ///< or a depth-image input (set one of the two)
+
+  std::shared_ptr<DepthFrame> depth;  ///< the depth input until "filter" back-projects it
+  DepthFilterCounts depth_counts;
+  bool normals_from_image = false;    ///< normals came from image neighbours (depth input)
 
   PointCloud cloud;  ///< after read: raw; after filter: filtered, with normals
   FilterCounts filter_counts;

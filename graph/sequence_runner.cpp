@@ -27,6 +27,7 @@ SequenceRunStats run_sequence(ReconstructionPipeline& pipeline, const io::Sequen
         frame->source_index = source.index;
         frame->timestamp_s = source.timestamp_s;
         frame->load = std::move(source.load);
+        frame->load_depth = std::move(source.load_depth);
         return frame;
       },
       [&](const FramePtr& f) {

@@ -2,16 +2,32 @@
 
 #include <exception>
 
+#include "nodes/normals/organized_normals.h"
 #include "runtime/error.h"
 
 namespace meshflow::stages {
 
 std::uint64_t read(Frame& f, const ReconstructionConfig&) {
+  if (f.load_depth) {
+    f.depth = std::make_shared<DepthFrame>(f.load_depth());
+    return f.depth->depth.total();
+  }
   if (f.load) f.cloud = f.load();
   return f.cloud.size();
 }
 
 std::uint64_t filter(Frame& f, const ReconstructionConfig& c) {
+  if (f.depth) {  // depth image -> filtered depth -> organized cloud with image normals
+    const cv::Mat depth_m = filter_depth(*f.depth, c.depth_filter, &f.depth_counts);
+    if (f.depth_counts.valid == 0) {
+      throw Error(f.name, "depth", "no valid depth pixel (" + std::to_string(f.depth_counts.invalid) +
+                                       " without measurement, " + std::to_string(f.depth_counts.out_of_range) +
+                                       " out of range)");
+    }
+    f.cloud = back_project(*f.depth, depth_m);
+    f.normals_from_image = true;
+    f.depth.reset();  // the image is no longer needed: keep frames in flight small
+  }
   f.cloud = filter_cloud(f.cloud, c.filter, &f.filter_counts);
   if (f.cloud.size() < 3) {
     throw Error(f.name, "filter",
@@ -28,6 +44,7 @@ std::uint64_t index(Frame& f, const ReconstructionConfig&) {
 }
 
 std::uint64_t normals(Frame& f, const ReconstructionConfig& c) {
+  if (f.normals_from_image) return 0;  // already estimated from image neighbours
   f.cloud.normals = estimate_normals(f.cloud, *f.index, c.normals);
   return f.cloud.size();
 }

@@ -20,7 +20,7 @@ class SingleFileSequence final : public Sequence {
   std::size_t size() const override { return 1; }
   SequenceFrame frame(std::size_t) const override {
     const std::string path = path_;
-    return {0, 0.0, path, [path] { return read_point_cloud(path); }};
+    return {0, 0.0, path, [path] { return read_point_cloud(path); }, {}};
   }
   std::string description() const override { return "point cloud " + path_ + " (1 frame)"; }
 
@@ -39,7 +39,8 @@ class ScanDirectorySequence final : public Sequence {
     return {i, static_cast<double>(i), scan, [scan, pose] {
               if (!fs::exists(pose)) throw Error(pose, "", "pose file missing for " + scan);
               return read_3dtk_scan(scan, Scan3dOptions{}, pose);
-            }};
+            },
+            {}};
   }
   std::string description() const override {
     return "3DTK scans in " + directory_ + " (" + std::to_string(scans_.size()) + " frames)";

@@ -7,6 +7,7 @@
 #include <memory>
 #include <string>
 
+#include "runtime/depth_frame.h"
 #include "runtime/point_cloud.h"
 
 namespace meshflow::io {
@@ -20,6 +21,8 @@ struct SequenceFrame {
   /// Valid while the Sequence that made it lives.
   /// Throws meshflow::Error naming the file and the problem. Safe to call from any thread.
   std::function<PointCloud()> load;
+  /// For depth-camera sequences instead of `load`: the depth image with intrinsics and pose.
+  std::function<DepthFrame()> load_depth;
 };
 
 /// A random-access sequence of frames. frame() is cheap (no I/O); thread-safe.
@@ -32,8 +35,10 @@ class Sequence {
   virtual std::string description() const = 0;
 };
 
-/// Opens `path` as a sequence: a directory of 3DTK scans (scanNNN.3d with scanNNN.pose), or
-/// a single point-cloud file (one frame). Throws meshflow::Error when the path holds none.
+/// Opens `path` as a sequence: a Redwood / Open3D RGB-D directory (depth/, trajectory.log), a
+/// TUM RGB-D directory (depth.txt, groundtruth.txt), a directory of 3DTK scans (scanNNN.3d with
+/// scanNNN.pose), or a single point-cloud file (one frame). Throws meshflow::Error when the path
+/// holds none of these.
 std::unique_ptr<Sequence> open_sequence(const std::string& path);
 
 /// The frames of a 3DTK directory: every scanNNN.3d in numeric order, each with its

@@ -77,7 +77,8 @@ class BrokenSequence final : public io::Sequence {
               c.sensor_origin = Eigen::Vector3f(0.3f, 0.3f, 1.0f);
               c.has_sensor_origin = true;
               return c;
-            }};
+            },
+            {}};
   }
   std::string description() const override { return "broken"; }
 };

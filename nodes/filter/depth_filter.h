@@ -1,0 +1,41 @@
+#pragma once
+// Depth-image filtering: range limits, optional median / bilateral smoothing, and removal of
+// occlusion edges (depth discontinuities) with hysteresis, as in the depth-map triangulation
+// work the method builds on. Output is depth in metres (CV_32F, 0 = invalid).
+
+#include <cstddef>
+#include <opencv2/core.hpp>
+
+#include "runtime/depth_frame.h"
+
+namespace meshflow {
+
+struct DepthFilterConfig {
+  float min_depth = 0.1f;   ///< metres; nearer pixels are invalid
+  float max_depth = 10.0f;  ///< metres; farther pixels are invalid
+  int median_kernel = 0;    ///< 3 or 5 = median filter of that size; 0 = off
+  float bilateral_sigma_depth = 0.0f;  ///< metres; > 0 enables a 5x5 bilateral filter
+  /// Relative depth jump |d - d_n| / min(d, d_n) to a 4-neighbour that marks an occlusion edge:
+  /// pixels above `edge_high` are edges, pixels above `edge_low` are edges when connected
+  /// (8-neighbourhood) to one, so edges are continuous. 0 disables edge removal.
+  float edge_high = 0.06f;
+  float edge_low = 0.03f;
+};
+
+struct DepthFilterCounts {
+  std::size_t pixels = 0;
+  std::size_t invalid = 0;       ///< no measurement in the input
+  std::size_t out_of_range = 0;
+  std::size_t edges = 0;         ///< removed as occlusion edges
+  std::size_t valid = 0;         ///< left for back-projection
+};
+
+/// Filters `frame`'s depth. Deterministic; O(pixels).
+cv::Mat filter_depth(const DepthFrame& frame, const DepthFilterConfig& config,
+                     DepthFilterCounts* counts = nullptr);
+
+/// Occlusion-edge mask (CV_8U, 255 = edge) of a metric depth image (0 = invalid), with
+/// hysteresis between `low` and `high` relative jumps. O(pixels).
+cv::Mat occlusion_edges(const cv::Mat& depth_m, float high, float low);
+
+}  // namespace meshflow

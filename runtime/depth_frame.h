@@ -1,0 +1,31 @@
+#pragma once
+// DepthFrame: one depth image with its camera model and pose.
+
+#include <Eigen/Geometry>
+#include <cstdint>
+#include <opencv2/core.hpp>
+
+namespace meshflow {
+
+/// Pinhole camera: pixel (u, v) of a point (x, y, z) in the camera frame (x right, y down,
+/// z forward, metres) is u = fx x / z + cx, v = fy y / z + cy.
+struct PinholeIntrinsics {
+  int width = 640, height = 480;
+  float fx = 525.0f, fy = 525.0f, cx = 319.5f, cy = 239.5f;
+};
+
+/// A depth image: CV_16U in units of 1/depth_scale metres (0 = no measurement), or CV_32F in
+/// metres (0 or NaN = no measurement); optional colour (CV_8UC3, RGB order, same size).
+struct DepthFrame {
+  cv::Mat depth;
+  float depth_scale = 1000.0f;  ///< raw units per metre for CV_16U (1000 = mm, 5000 = TUM)
+  cv::Mat color;
+  PinholeIntrinsics intrinsics;
+  Eigen::Isometry3f T_world_camera = Eigen::Isometry3f::Identity();
+  double timestamp_s = 0.0;
+};
+
+/// Depth of `frame` in metres as CV_32F; invalid pixels are 0. O(pixels).
+cv::Mat depth_in_metres(const DepthFrame& frame);
+
+}  // namespace meshflow

@@ -1,5 +1,6 @@
 #include "tools/pipeline_options.h"
 
+#include "nodes/synthetic/depth_sequence.h"
 #include "nodes/synthetic/scan_sequence.h"
 
 namespace meshflow::cli {
@@ -52,7 +53,11 @@ void add_pipeline_options(CLI::App* cmd, PipelineOptions& o) {
 void add_sequence_options(CLI::App* cmd, SequenceArgument& a) {
   cmd->add_option("sequence", a.path,
                   "A directory of 3DTK scans (scanNNN.3d + .pose) or one point cloud file");
-  cmd->add_flag("--synthetic", a.synthetic, "Use the built-in synthetic laser-scan sequence");
+  auto* scans =
+      cmd->add_flag("--synthetic", a.synthetic, "Use the built-in synthetic laser-scan sequence");
+  cmd->add_flag("--synthetic-depth", a.synthetic_depth,
+                "Use the built-in synthetic depth-camera sequence (640x480)")
+      ->excludes(scans);
   cmd->add_option("--in-flight", a.in_flight, "Frames in the pipeline at once")
       ->check(CLI::Range(1, 64));
   cmd->add_option("--every", a.every, "Take every N-th frame")->check(CLI::Range(1, 1000000));
@@ -61,7 +66,10 @@ void add_sequence_options(CLI::App* cmd, SequenceArgument& a) {
 
 std::unique_ptr<io::Sequence> open_sequence_argument(const SequenceArgument& a) {
   if (a.synthetic) return synthetic::make_scan_sequence(synthetic::demo_room_scene());
-  if (a.path.empty()) throw CLI::ValidationError("sequence", "give a SEQUENCE path or --synthetic");
+  if (a.synthetic_depth) return synthetic::make_depth_sequence(synthetic::demo_room_scene());
+  if (a.path.empty())
+    throw CLI::ValidationError("sequence",
+                               "give a SEQUENCE path, --synthetic or --synthetic-depth");
   return io::open_sequence(a.path);
 }
 

@@ -33,13 +33,15 @@ void add_pipeline_options(CLI::App* cmd, PipelineOptions& options);
 /// The SEQUENCE argument of run/profile: a path, or the built-in synthetic sequence.
 struct SequenceArgument {
   std::string path;
-  bool synthetic = false;
+  bool synthetic = false;        ///< built-in laser-scan sequence
+  bool synthetic_depth = false;  ///< built-in depth-camera sequence
   std::size_t in_flight = 2;
   std::size_t every = 1;
   std::size_t max_frames = 0;
 };
 
-/// Registers SEQUENCE, --synthetic, --in-flight, --every and --max-frames on `cmd`.
+/// Registers SEQUENCE, --synthetic, --synthetic-depth, --in-flight, --every and --max-frames on
+/// `cmd`.
 void add_sequence_options(CLI::App* cmd, SequenceArgument& argument);
 
 /// Opens the sequence the user named; throws meshflow::Error (or CLI::ValidationError when

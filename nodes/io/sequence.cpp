@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "nodes/io/read_point_cloud.h"
+#include "nodes/io/rgbd_sequences.h"
 #include "nodes/io/scan3d_reader.h"
 #include "runtime/error.h"
 
@@ -36,7 +37,10 @@ class ScanDirectorySequence final : public Sequence {
   SequenceFrame frame(std::size_t i) const override {
     const std::string scan = scans_[i];
     const std::string pose = fs::path(scan).replace_extension(".pose").string();
-    return {i, static_cast<double>(i), scan, [scan, pose] {
+    return {i,
+            static_cast<double>(i),
+            scan,
+            [scan, pose] {
               if (!fs::exists(pose)) throw Error(pose, "", "pose file missing for " + scan);
               return read_3dtk_scan(scan, Scan3dOptions{}, pose);
             },
@@ -71,7 +75,12 @@ std::unique_ptr<Sequence> open_3dtk_directory(const std::string& directory) {
 }
 
 std::unique_ptr<Sequence> open_sequence(const std::string& path) {
-  if (fs::is_directory(path)) return open_3dtk_directory(path);
+  if (fs::is_directory(path)) {
+    const fs::path dir(path);
+    if (fs::exists(dir / "depth.txt")) return open_tum_directory(path);
+    if (fs::is_directory(dir / "depth")) return open_redwood_directory(path);
+    return open_3dtk_directory(path);
+  }
   if (!fs::exists(path)) throw Error(path, "", "no such file or directory");
   return std::make_unique<SingleFileSequence>(path);
 }

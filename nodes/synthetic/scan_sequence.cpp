@@ -19,8 +19,11 @@ class ScanSequence final : public io::Sequence {
                                              static_cast<float>(1.0 * std::sin(angle)), -0.3f);
     scan.seed = static_cast<std::uint32_t>(i + 1);
     const Scene* scene = &scene_;
-    return {i, 0.1 * static_cast<double>(i), "synthetic scan " + std::to_string(i),
-            [scene, scan] { return simulate_scan(*scene, scan); }, {}};
+    return {i,
+            0.1 * static_cast<double>(i),
+            "synthetic scan " + std::to_string(i),
+            [scene, scan] { return simulate_scan(*scene, scan); },
+            {}};
   }
   std::string description() const override {
     return "synthetic laser scans of the demo room (" + std::to_string(config_.frames) + " frames)";

@@ -4,7 +4,9 @@
 
 #include <algorithm>
 #include <cmath>
+
 #include <limits>
+#include "nodes/synthetic/hashed_noise.h"
 
 namespace meshflow::synthetic {
 namespace {
@@ -37,21 +39,18 @@ float hit_sphere(const Sphere& s, const Eigen::Vector3f& o, const Eigen::Vector3
   return t > 0.0f ? t : kNoHit;
 }
 
-std::uint64_t splitmix(std::uint64_t x) {
-  x += 0x9e3779b97f4a7c15ull;
-  x = (x ^ (x >> 30)) * 0xbf58476d1ce4e5b9ull;
-  x = (x ^ (x >> 27)) * 0x94d049bb133111ebull;
-  return x ^ (x >> 31);
-}
-
-float gaussian(std::uint64_t key) {
-  const std::uint64_t a = splitmix(key), b = splitmix(a);
-  const double u1 = (static_cast<double>(a >> 11) + 1.0) / 9007199254740993.0;
-  const double u2 = static_cast<double>(b >> 11) / 9007199254740992.0;
-  return static_cast<float>(std::sqrt(-2.0 * std::log(u1)) * std::cos(2.0 * M_PI * u2));
-}
-
 }  // namespace
+
+float cast_ray(const Scene& scene, const Eigen::Vector3f& o, const Eigen::Vector3f& d) {
+  float t = slab(scene.room, o, d).second;  // exit through the room's walls
+  if (!(t > 0.0f)) t = kNoHit;
+  for (const Box& b : scene.boxes) {
+    const auto [t0, t1] = slab(b, o, d);
+    if (t0 <= t1 && t0 > 0.0f) t = std::min(t, t0);
+  }
+  for (const Sphere& s : scene.spheres) t = std::min(t, hit_sphere(s, o, d));
+  return t;
+}
 
 Scene demo_room_scene() {
   Scene s;
@@ -78,15 +77,10 @@ PointCloud simulate_scan(const Scene& scene, const ScanConfig& config) {
         ne > 1 ? e0 + (e1 - e0) * static_cast<float>(j) / static_cast<float>(ne - 1) : e0;
     const Eigen::Vector3f d(std::cos(el) * std::cos(az), std::cos(el) * std::sin(az), std::sin(el));
     const Eigen::Vector3f& o = config.origin;
-    float t = slab(scene.room, o, d).second;  // exit through the room's walls
-    for (const Box& b : scene.boxes) {
-      const auto [t0, t1] = slab(b, o, d);
-      if (t0 <= t1 && t0 > 0.0f) t = std::min(t, t0);
-    }
-    for (const Sphere& s : scene.spheres) t = std::min(t, hit_sphere(s, o, d));
+    float t = cast_ray(scene, o, d);
     if (!(t < kNoHit)) return;
     if (config.noise_sigma > 0.0f)
-      t += config.noise_sigma * gaussian((std::uint64_t{config.seed} << 32) ^ r);
+      t += config.noise_sigma * hashed_gaussian((std::uint64_t{config.seed} << 32) ^ r);
     hits[r] = o + t * d;
     hit[r] = 1;
   });

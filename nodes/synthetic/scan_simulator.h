@@ -36,6 +36,9 @@ struct ScanConfig {
 /// deterministic for any thread count. O(rays x objects).
 PointCloud simulate_scan(const Scene& scene, const ScanConfig& config);
 
+/// Distance along the unit direction `d` from `o` to the first surface hit (infinity if none).
+float cast_ray(const Scene& scene, const Eigen::Vector3f& o, const Eigen::Vector3f& d);
+
 /// Unsigned distance from p to the nearest surface of the scene, metres.
 float surface_distance(const Scene& scene, const Eigen::Vector3f& p);
 

@@ -68,7 +68,10 @@ class BrokenSequence final : public io::Sequence {
  public:
   std::size_t size() const override { return 6; }
   io::SequenceFrame frame(std::size_t i) const override {
-    return {i, 0.0, "frame" + std::to_string(i), [i] {
+    return {i,
+            0.0,
+            "frame" + std::to_string(i),
+            [i] {
               if (i == 2)
                 throw Error("scan002.3d", "line 7", "expected x y z (cm), found 2 values");
               PointCloud c;

@@ -1,0 +1,331 @@
+#include "nodes/io/rgbd_sequences.h"
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "nodes/io/parse_util.h"
+#include "runtime/error.h"
+
+namespace meshflow::io {
+namespace {
+
+namespace fs = std::filesystem;
+
+std::vector<std::string> sorted_files(const fs::path& dir,
+                                      const std::vector<std::string>& extensions) {
+  std::vector<std::string> files;
+  if (!fs::is_directory(dir)) return files;
+  for (const auto& e : fs::directory_iterator(dir)) {
+    const std::string ext = lower_extension(e.path().string());
+    if (e.is_regular_file() &&
+        std::find(extensions.begin(), extensions.end(), ext) != extensions.end()) {
+      files.push_back(e.path().string());
+    }
+  }
+  std::sort(files.begin(), files.end());
+  return files;
+}
+
+std::string first_json(const fs::path& dir) {
+  const auto files = sorted_files(dir, {".json"});
+  return files.empty() ? std::string() : files.front();
+}
+
+cv::Mat read_color_image(const std::string& path) {
+  cv::Mat bgr = cv::imread(path, cv::IMREAD_COLOR);
+  if (bgr.empty()) throw Error(path, "", "cannot read colour image (missing or corrupt)");
+  cv::Mat rgb;
+  cv::cvtColor(bgr, rgb, cv::COLOR_BGR2RGB);
+  return rgb;
+}
+
+// Checks the depth image against the intrinsics and attaches colour when its size matches.
+DepthFrame make_frame(const std::string& depth_path, const std::string& color_path, float scale,
+                      const PinholeIntrinsics& k, const Eigen::Isometry3f& pose, double timestamp) {
+  DepthFrame f;
+  f.depth = read_depth_image(depth_path);
+  if (f.depth.cols != k.width || f.depth.rows != k.height) {
+    throw Error(depth_path, "",
+                "image is " + std::to_string(f.depth.cols) + "x" + std::to_string(f.depth.rows) +
+                    " but the intrinsics are for " + std::to_string(k.width) + "x" +
+                    std::to_string(k.height));
+  }
+  f.depth_scale = scale;
+  f.intrinsics = k;
+  f.T_world_camera = pose;
+  f.timestamp_s = timestamp;
+  if (!color_path.empty()) {
+    cv::Mat color = read_color_image(color_path);
+    if (color.size() == f.depth.size()) f.color = color;
+  }
+  return f;
+}
+
+class RedwoodSequence final : public Sequence {
+ public:
+  RedwoodSequence(std::string dir, std::vector<std::string> depth, std::vector<std::string> color,
+                  std::string trajectory, std::vector<Eigen::Isometry3f> poses, PinholeIntrinsics k)
+      : dir_(std::move(dir)),
+        depth_(std::move(depth)),
+        color_(std::move(color)),
+        trajectory_(std::move(trajectory)),
+        poses_(std::move(poses)),
+        k_(k) {}
+  std::size_t size() const override { return depth_.size(); }
+  SequenceFrame frame(std::size_t i) const override {
+    SequenceFrame f;
+    f.index = i;
+    f.timestamp_s = static_cast<double>(i) / 30.0;
+    f.name = depth_[i];
+    const std::string depth = depth_[i];
+    const std::string color = i < color_.size() ? color_[i] : std::string();
+    const bool has_pose = i < poses_.size();
+    const Eigen::Isometry3f pose = has_pose ? poses_[i] : Eigen::Isometry3f::Identity();
+    const std::string trajectory = trajectory_;
+    const PinholeIntrinsics k = k_;
+    f.load_depth = [=] {
+      if (!has_pose) {
+        throw Error(trajectory, "",
+                    "pose missing for frame " + std::to_string(i) + " (" + depth + ")");
+      }
+      return make_frame(depth, color, 1000.0f, k, pose, static_cast<double>(i) / 30.0);
+    };
+    return f;
+  }
+  std::string description() const override {
+    return "Redwood RGB-D frames in " + dir_ + " (" + std::to_string(depth_.size()) + " frames)";
+  }
+
+ private:
+  std::string dir_;
+  std::vector<std::string> depth_, color_;
+  std::string trajectory_;
+  std::vector<Eigen::Isometry3f> poses_;
+  PinholeIntrinsics k_;
+};
+
+struct TimedFile {
+  double t;
+  std::string file;
+};
+
+std::vector<TimedFile> read_timed_list(const std::string& path, const fs::path& base) {
+  std::ifstream in = open_input(path);
+  std::vector<TimedFile> out;
+  std::string line;
+  std::vector<std::string_view> tok;
+  for (std::size_t n = 1; read_line(in, line); ++n) {
+    split_whitespace(line, tok);
+    if (tok.empty() || tok[0].front() == '#') continue;
+    if (tok.size() != 2)
+      throw Error(path, "line " + std::to_string(n), "expected 'timestamp filename'");
+    out.push_back(
+        {parse_number(tok[0], path, n, "timestamp"), (base / std::string(tok[1])).string()});
+  }
+  return out;
+}
+
+struct TimedPose {
+  double t;
+  Eigen::Isometry3f pose;
+};
+
+std::vector<TimedPose> read_tum_groundtruth(const std::string& path) {
+  std::ifstream in = open_input(path);
+  std::vector<TimedPose> out;
+  std::string line;
+  std::vector<std::string_view> tok;
+  static const char* kFields[] = {"timestamp", "tx", "ty", "tz", "qx", "qy", "qz", "qw"};
+  for (std::size_t n = 1; read_line(in, line); ++n) {
+    split_whitespace(line, tok);
+    if (tok.empty() || tok[0].front() == '#') continue;
+    if (tok.size() != 8)
+      throw Error(path, "line " + std::to_string(n), "expected 'timestamp tx ty tz qx qy qz qw'");
+    double v[8];
+    for (int k = 0; k < 8; ++k)
+      v[k] = parse_number(tok[static_cast<std::size_t>(k)], path, n, kFields[k]);
+    const Eigen::Quaternionf q(static_cast<float>(v[7]), static_cast<float>(v[4]),
+                               static_cast<float>(v[5]), static_cast<float>(v[6]));
+    if (!(std::abs(q.norm() - 1.0f) < 1e-2f))
+      throw Error(path, "line " + std::to_string(n), "quaternion is not unit length");
+    Eigen::Isometry3f pose = Eigen::Isometry3f::Identity();
+    pose.linear() = q.normalized().toRotationMatrix();
+    pose.translation() = Eigen::Vector3f(static_cast<float>(v[1]), static_cast<float>(v[2]),
+                                         static_cast<float>(v[3]));
+    out.push_back({v[0], pose});
+  }
+  std::sort(out.begin(), out.end(),
+            [](const TimedPose& a, const TimedPose& b) { return a.t < b.t; });
+  return out;
+}
+
+class TumSequence final : public Sequence {
+ public:
+  TumSequence(std::string dir, std::vector<TimedFile> depth, std::vector<TimedFile> rgb,
+              std::vector<TimedPose> poses, PinholeIntrinsics k)
+      : dir_(std::move(dir)),
+        depth_(std::move(depth)),
+        rgb_(std::move(rgb)),
+        poses_(std::move(poses)),
+        k_(k) {}
+  std::size_t size() const override { return depth_.size(); }
+  SequenceFrame frame(std::size_t i) const override {
+    constexpr double kMaxGap = 0.02;  // seconds, as TUM's associate.py
+    SequenceFrame f;
+    f.index = i;
+    f.timestamp_s = depth_[i].t;
+    f.name = depth_[i].file;
+    const TimedPose* pose = nearest(poses_, depth_[i].t, kMaxGap);
+    const TimedFile* rgb = nearest(rgb_, depth_[i].t, kMaxGap);
+    const std::string depth = depth_[i].file, color = rgb ? rgb->file : std::string();
+    const double t = depth_[i].t;
+    const std::string list = (fs::path(dir_) / "depth.txt").string();
+    const bool has_pose = pose != nullptr;
+    const Eigen::Isometry3f T = has_pose ? pose->pose : Eigen::Isometry3f::Identity();
+    const PinholeIntrinsics k = k_;
+    f.load_depth = [=] {
+      if (!has_pose) {
+        char when[32];
+        std::snprintf(when, sizeof when, "%.6f", t);
+        throw Error(list, std::string("timestamp ") + when, "no ground-truth pose within 20 ms");
+      }
+      return make_frame(depth, color, 5000.0f, k, T, t);
+    };
+    return f;
+  }
+  std::string description() const override {
+    return "TUM RGB-D frames in " + dir_ + " (" + std::to_string(depth_.size()) + " frames)";
+  }
+
+ private:
+  template <typename T>
+  static const T* nearest(const std::vector<T>& items, double t, double max_gap) {
+    const T* best = nullptr;
+    for (const T& item : items) {
+      if (std::abs(item.t - t) <= max_gap &&
+          (best == nullptr || std::abs(item.t - t) < std::abs(best->t - t)))
+        best = &item;
+    }
+    return best;
+  }
+
+  std::string dir_;
+  std::vector<TimedFile> depth_, rgb_;
+  std::vector<TimedPose> poses_;
+  PinholeIntrinsics k_;
+};
+
+}  // namespace
+
+cv::Mat read_depth_image(const std::string& path) {
+  if (!fs::exists(path)) throw Error(path, "", "depth image missing");
+  cv::Mat depth = cv::imread(path, cv::IMREAD_ANYDEPTH);
+  if (depth.empty())
+    throw Error(path, "", "cannot decode depth image (corrupt or unsupported format)");
+  if (depth.type() != CV_16U) throw Error(path, "", "expected a 16-bit single-channel depth image");
+  return depth;
+}
+
+std::vector<Eigen::Isometry3f> read_trajectory_log(const std::string& path) {
+  std::ifstream in = open_input(path);
+  std::vector<Eigen::Isometry3f> poses;
+  std::string line;
+  std::vector<std::string_view> tok;
+  std::size_t n = 0;
+  auto next_line = [&]() {
+    do {
+      if (!read_line(in, line)) return false;
+      ++n;
+      split_whitespace(line, tok);
+    } while (tok.empty());
+    return true;
+  };
+  while (next_line()) {
+    if (tok.size() != 3)
+      throw Error(path, "line " + std::to_string(n), "expected the block header 'i j k'");
+    Eigen::Matrix4d m;
+    for (int r = 0; r < 4; ++r) {
+      if (!next_line())
+        throw Error(path, "line " + std::to_string(n + 1), "file ends inside a 4x4 matrix");
+      if (tok.size() != 4)
+        throw Error(path, "line " + std::to_string(n), "expected 4 matrix entries");
+      for (int c = 0; c < 4; ++c)
+        m(r, c) = parse_number(tok[static_cast<std::size_t>(c)], path, n, "matrix");
+    }
+    if (!m.allFinite() || (m.row(3) - Eigen::RowVector4d(0, 0, 0, 1)).norm() > 1e-6 ||
+        (m.block<3, 3>(0, 0).transpose() * m.block<3, 3>(0, 0) - Eigen::Matrix3d::Identity())
+                .norm() > 1e-3) {
+      throw Error(path, "line " + std::to_string(n), "matrix is not a rigid transform");
+    }
+    Eigen::Isometry3d pose(m);
+    poses.push_back(pose.cast<float>());
+  }
+  return poses;
+}
+
+PinholeIntrinsics read_intrinsics_json(const std::string& path) {
+  std::ifstream in = open_input(path);
+  nlohmann::json j;
+  try {
+    j = nlohmann::json::parse(in);
+  } catch (const nlohmann::json::exception& e) {
+    throw Error(path, "", std::string("invalid JSON: ") + e.what());
+  }
+  if (!j.contains("intrinsic_matrix") || !j["intrinsic_matrix"].is_array() ||
+      j["intrinsic_matrix"].size() != 9 || !j.contains("width") || !j.contains("height")) {
+    throw Error(
+        path, "",
+        "expected {\"width\", \"height\", \"intrinsic_matrix\": [9 numbers, column-major]}");
+  }
+  try {
+    const auto& m = j["intrinsic_matrix"];
+    PinholeIntrinsics k;
+    k.width = j["width"].get<int>();
+    k.height = j["height"].get<int>();
+    k.fx = m[0].get<float>();
+    k.fy = m[4].get<float>();
+    k.cx = m[6].get<float>();
+    k.cy = m[7].get<float>();
+    if (k.width <= 0 || k.height <= 0 || !(k.fx > 0.0f) || !(k.fy > 0.0f))
+      throw Error(path, "", "non-positive size or focal length");
+    return k;
+  } catch (const nlohmann::json::exception& e) {
+    throw Error(path, "intrinsic_matrix", std::string("expected numbers: ") + e.what());
+  }
+}
+
+std::unique_ptr<Sequence> open_redwood_directory(const std::string& directory) {
+  const fs::path dir(directory);
+  auto depth = sorted_files(dir / "depth", {".png"});
+  if (depth.empty()) throw Error(directory, "depth/", "no depth PNG files");
+  auto color = sorted_files(dir / "color", {".jpg", ".jpeg", ".png"});
+  if (color.size() != depth.size()) color.clear();  // pair only when the counts agree
+  std::string trajectory = (dir / "trajectory.log").string();
+  if (!fs::exists(trajectory)) trajectory = (dir / "odometry.log").string();
+  if (!fs::exists(trajectory))
+    throw Error(directory, "", "no trajectory.log or odometry.log with the camera poses");
+  const std::string json = first_json(dir);
+  const PinholeIntrinsics k = json.empty() ? PinholeIntrinsics{} : read_intrinsics_json(json);
+  return std::make_unique<RedwoodSequence>(directory, std::move(depth), std::move(color),
+                                           trajectory, read_trajectory_log(trajectory), k);
+}
+
+std::unique_ptr<Sequence> open_tum_directory(const std::string& directory) {
+  const fs::path dir(directory);
+  auto depth = read_timed_list((dir / "depth.txt").string(), dir);
+  if (depth.empty()) throw Error((dir / "depth.txt").string(), "", "lists no depth images");
+  std::vector<TimedFile> rgb;
+  if (fs::exists(dir / "rgb.txt")) rgb = read_timed_list((dir / "rgb.txt").string(), dir);
+  auto poses = read_tum_groundtruth((dir / "groundtruth.txt").string());
+  const std::string json = first_json(dir);
+  const PinholeIntrinsics k = json.empty() ? PinholeIntrinsics{} : read_intrinsics_json(json);
+  return std::make_unique<TumSequence>(directory, std::move(depth), std::move(rgb),
+                                       std::move(poses), k);
+}
+
+}  // namespace meshflow::io

@@ -1,0 +1,39 @@
+#pragma once
+// RGB-D sequence readers: the Redwood / Open3D layout and the TUM RGB-D layout.
+
+#include <Eigen/Geometry>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "nodes/io/sequence.h"
+#include "runtime/depth_frame.h"
+
+namespace meshflow::io {
+
+/// Reads a 16-bit single-channel depth image (PNG, TIFF) into frame.depth (CV_16U).
+/// Throws meshflow::Error naming the file when it is missing, corrupt or of another type.
+cv::Mat read_depth_image(const std::string& path);
+
+/// Reads a Redwood .log trajectory: blocks of one "i j k" line and four rows of a row-major
+/// camera-to-world 4x4 matrix. Returns one pose per block, in block order. Throws
+/// meshflow::Error naming the file and line on malformed input.
+std::vector<Eigen::Isometry3f> read_trajectory_log(const std::string& path);
+
+/// Reads Open3D's camera JSON ({"width", "height", "intrinsic_matrix": 9 numbers, column-major}).
+PinholeIntrinsics read_intrinsics_json(const std::string& path);
+
+/// A Redwood / Open3D RGB-D directory: depth/*.png (16-bit, mm), optional color/*.jpg|png paired
+/// by sorted order, trajectory.log (or odometry.log) with one camera-to-world pose per frame, and
+/// a camera JSON (the first *.json in the directory; PrimeSense defaults if none). A frame
+/// without a pose fails to load with a message naming the trajectory file.
+std::unique_ptr<Sequence> open_redwood_directory(const std::string& directory);
+
+/// A TUM RGB-D directory: depth.txt ("timestamp filename" lines, '#' comments), depth PNGs with
+/// depth scale 5000, groundtruth.txt ("timestamp tx ty tz qx qy qz qw", world from camera),
+/// associated by nearest timestamp within 20 ms, optional rgb.txt, intrinsics from a camera
+/// JSON in the directory or the ROS defaults (525, 525, 319.5, 239.5). A frame without a pose
+/// within 20 ms fails to load, naming depth.txt and its timestamp.
+std::unique_ptr<Sequence> open_tum_directory(const std::string& directory);
+
+}  // namespace meshflow::io

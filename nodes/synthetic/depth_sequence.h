@@ -1,0 +1,35 @@
+#pragma once
+// A synthetic depth camera moving through the analytic demo room: ray-cast depth images with
+// exact poses, the ground truth for the depth path and `meshflow run --synthetic-depth`.
+
+#include <memory>
+
+#include "nodes/io/sequence.h"
+#include "nodes/synthetic/scan_simulator.h"
+#include "runtime/depth_frame.h"
+
+namespace meshflow::synthetic {
+
+/// Camera pose looking from `eye` towards `target` with world +z up (+y when looking straight
+/// up or down), in meshflow's camera convention (x right, y down, z forward).
+Eigen::Isometry3f look_at(const Eigen::Vector3f& eye, const Eigen::Vector3f& target);
+
+/// Ray-casts `scene` through every pixel: CV_16U depth in millimetres (depth_scale 1000, 0 where
+/// nothing is hit), plus Gaussian range noise of `noise_sigma` metres (hash of seed and pixel, so
+/// deterministic for any thread count). Parallel over rows.
+DepthFrame render_depth(const Scene& scene, const PinholeIntrinsics& intrinsics,
+                        const Eigen::Isometry3f& T_world_camera, float noise_sigma = 0.0f,
+                        std::uint32_t seed = 1);
+
+struct DepthSequenceConfig {
+  int frames = 8;
+  PinholeIntrinsics intrinsics;  ///< 640 x 480, f = 525 by default
+  float noise_sigma = 0.001f;    ///< metres
+};
+
+/// The camera turns on the spot at the room's centre, one frame per 1/frames of a full turn,
+/// looking slightly down at the walls and furniture.
+std::unique_ptr<io::Sequence> make_depth_sequence(const Scene& scene,
+                                                  const DepthSequenceConfig& config = {});
+
+}  // namespace meshflow::synthetic

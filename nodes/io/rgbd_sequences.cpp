@@ -220,7 +220,66 @@ class TumSequence final : public Sequence {
   PinholeIntrinsics k_;
 };
 
+class DepthImageSequence final : public Sequence {
+ public:
+  DepthImageSequence(std::string dir, std::vector<std::string> depth,
+                     std::vector<std::string> color, PinholeIntrinsics k)
+      : dir_(std::move(dir)), depth_(std::move(depth)), color_(std::move(color)), k_(k) {}
+  std::size_t size() const override { return depth_.size(); }
+  SequenceFrame frame(std::size_t i) const override {
+    SequenceFrame f;
+    f.index = i;
+    f.timestamp_s = static_cast<double>(i);
+    f.name = depth_[i];
+    const std::string depth = depth_[i];
+    const std::string color = i < color_.size() ? color_[i] : std::string();
+    const PinholeIntrinsics k = k_;
+    f.load_depth = [=] {
+      return make_frame(depth, color, 1000.0f, k, Eigen::Isometry3f::Identity(),
+                        static_cast<double>(i));
+    };
+    return f;
+  }
+  std::string description() const override {
+    return "depth images in " + dir_ + " (" + std::to_string(depth_.size()) + " frames, no poses)";
+  }
+
+ private:
+  std::string dir_;
+  std::vector<std::string> depth_, color_;
+  PinholeIntrinsics k_;
+};
+
+std::vector<std::string> files_containing(const std::vector<std::string>& files,
+                                          const std::vector<std::string>& words) {
+  std::vector<std::string> out;
+  for (const std::string& f : files) {
+    const std::string name = fs::path(f).filename().string();
+    for (const std::string& w : words) {
+      if (name.find(w) != std::string::npos) {
+        out.push_back(f);
+        break;
+      }
+    }
+  }
+  return out;
+}
+
 }  // namespace
+
+std::unique_ptr<Sequence> open_depth_image_directory(const std::string& directory) {
+  const auto images = sorted_files(directory, {".png", ".tif", ".tiff", ".jpg", ".jpeg"});
+  auto depth = files_containing(images, {"depth"});
+  if (depth.empty()) throw Error(directory, "", "no depth images (*depth*.png / .tif / .tiff)");
+  auto color = files_containing(images, {"rgb", "color"});
+  if (color.size() != depth.size()) color.clear();
+  const std::string json = first_json(directory);
+  PinholeIntrinsics k;
+  k.cx = 320.0f;  // PCL's Kinect grabber convention
+  k.cy = 240.0f;
+  if (!json.empty()) k = read_intrinsics_json(json);
+  return std::make_unique<DepthImageSequence>(directory, std::move(depth), std::move(color), k);
+}
 
 cv::Mat read_depth_image(const std::string& path) {
   if (!fs::exists(path)) throw Error(path, "", "depth image missing");

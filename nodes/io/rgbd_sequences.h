@@ -36,4 +36,11 @@ std::unique_ptr<Sequence> open_redwood_directory(const std::string& directory);
 /// within 20 ms fails to load, naming depth.txt and its timestamp.
 std::unique_ptr<Sequence> open_tum_directory(const std::string& directory);
 
+/// A directory of depth images without poses (e.g. a PCL grabber's *_depth.tiff): every image
+/// whose name contains "depth" (.png, .tif, .tiff; 16-bit, millimetres), in name order, paired
+/// with the *rgb* / *color* images when their counts agree. Intrinsics from a camera JSON in the
+/// directory or Kinect defaults (525, 525, 320, 240). Frames are in the camera frame (identity
+/// pose): meshed per frame, not fused.
+std::unique_ptr<Sequence> open_depth_image_directory(const std::string& directory);
+
 }  // namespace meshflow::io

@@ -5,6 +5,7 @@
 #include <regex>
 #include <vector>
 
+#include "nodes/io/parse_util.h"
 #include "nodes/io/read_point_cloud.h"
 #include "nodes/io/rgbd_sequences.h"
 #include "nodes/io/scan3d_reader.h"
@@ -28,6 +29,37 @@ class SingleFileSequence final : public Sequence {
  private:
   std::string path_;
 };
+
+// Clouds from files in name order (e.g. organized PCD frames of a grabber), no poses.
+class CloudFileSequence final : public Sequence {
+ public:
+  CloudFileSequence(std::string directory, std::vector<std::string> files)
+      : directory_(std::move(directory)), files_(std::move(files)) {}
+  std::size_t size() const override { return files_.size(); }
+  SequenceFrame frame(std::size_t i) const override {
+    const std::string path = files_[i];
+    return {i, static_cast<double>(i), path, [path] { return read_point_cloud(path); }, {}};
+  }
+  std::string description() const override {
+    return "point clouds in " + directory_ + " (" + std::to_string(files_.size()) +
+           " frames, no poses)";
+  }
+
+ private:
+  std::string directory_;
+  std::vector<std::string> files_;
+};
+
+std::vector<std::string> files_with_extension(const std::string& directory,
+                                              const std::string& ext) {
+  std::vector<std::string> out;
+  for (const auto& entry : fs::directory_iterator(directory)) {
+    if (entry.is_regular_file() && lower_extension(entry.path().string()) == ext)
+      out.push_back(entry.path().string());
+  }
+  std::sort(out.begin(), out.end());
+  return out;
+}
 
 class ScanDirectorySequence final : public Sequence {
  public:
@@ -79,6 +111,16 @@ std::unique_ptr<Sequence> open_sequence(const std::string& path) {
     const fs::path dir(path);
     if (fs::exists(dir / "depth.txt")) return open_tum_directory(path);
     if (fs::is_directory(dir / "depth")) return open_redwood_directory(path);
+    for (const char* ext : {".pcd", ".ply"}) {
+      auto clouds = files_with_extension(path, ext);
+      if (!clouds.empty()) return std::make_unique<CloudFileSequence>(path, std::move(clouds));
+    }
+    for (const char* ext : {".tiff", ".tif", ".png"}) {
+      for (const auto& f : files_with_extension(path, ext)) {
+        if (fs::path(f).filename().string().find("depth") != std::string::npos)
+          return open_depth_image_directory(path);
+      }
+    }
     return open_3dtk_directory(path);
   }
   if (!fs::exists(path)) throw Error(path, "", "no such file or directory");

@@ -100,5 +100,19 @@ TEST(DepthPath, RealRedwoodFramesPerFrameAt1cm) {
   EXPECT_EQ(stats.frames_ok, 5u);
 }
 
+TEST(DepthPath, RealKinectTiffFramesPerFrame) {
+  MESHFLOW_REQUIRE_DATA("kinect_pcl/grabber_sequences/tiff");
+  const auto seq = io::open_sequence(test::data_path("kinect_pcl/grabber_sequences/tiff"));
+  ReconstructionConfig config;
+  config.voxelize.voxel_size = 0.01f;
+  ReconstructionPipeline pipeline(config, 2);
+  const SequenceRunStats stats = run_sequence(pipeline, *seq, {}, [&](const Frame& f) {
+    ASSERT_TRUE(f.ok()) << f.error;
+    EXPECT_GT(f.mesh.triangles.size(), 50000u);
+    EXPECT_EQ(edge_statistics(f.mesh).non_manifold_edges, 0u);
+  });
+  EXPECT_EQ(stats.frames_ok, 3u);
+}
+
 }  // namespace
 }  // namespace meshflow

@@ -93,6 +93,42 @@ TEST(RgbdSequences, MalformedTrajectoryAndIntrinsics) {
   EXPECT_THROW(read_intrinsics_json(dir + "/d.json"), Error);
 }
 
+TEST(RgbdSequences, DepthImageDirectoryWithoutPoses) {
+  const std::string dir = test::temp_dir();
+  write_depth_png(dir + "/a_depth.png", 1200);
+  write_depth_png(dir + "/b_depth.png", 1300);
+  ASSERT_TRUE(
+      cv::imwrite(dir + "/a_rgb.png", cv::Mat(6, 8, CV_8UC3, cv::Scalar(255, 0, 0))));  // BGR blue
+  ASSERT_TRUE(
+      cv::imwrite(dir + "/b_rgb.png", cv::Mat(6, 8, CV_8UC3, cv::Scalar(0, 0, 255))));  // BGR red
+  test::write_file(dir + "/camera.json", kCameraJson);
+  const auto seq = open_sequence(dir);
+  ASSERT_EQ(seq->size(), 2u);
+  EXPECT_NE(seq->description().find("no poses"), std::string::npos);
+  const DepthFrame f = seq->frame(1).load_depth();
+  EXPECT_EQ(f.depth.at<std::uint16_t>(2, 2), 1300);
+  EXPECT_TRUE(f.T_world_camera.matrix().isIdentity());
+  EXPECT_EQ(f.color.at<cv::Vec3b>(0, 0), cv::Vec3b(255, 0, 0)) << "colour is stored RGB";
+}
+
+TEST(RgbdSequences, RealKinectGrabberFrames) {
+  MESHFLOW_REQUIRE_DATA("kinect_pcl/grabber_sequences/tiff");
+  const auto tiff = open_sequence(test::data_path("kinect_pcl/grabber_sequences/tiff"));
+  ASSERT_EQ(tiff->size(), 3u);
+  const DepthFrame f = tiff->frame(0).load_depth();
+  EXPECT_EQ(f.depth.cols, 640);
+  const int invalid = static_cast<int>(f.depth.total()) - cv::countNonZero(f.depth);
+  EXPECT_GT(invalid, 35000);  // 35.6k-35.9k pixels without depth
+  EXPECT_LT(invalid, 36500);
+  const auto pcd = open_sequence(test::data_path("kinect_pcl/grabber_sequences/pcd"));
+  ASSERT_EQ(pcd->size(), 3u);
+  const PointCloud c = pcd->frame(0).load();
+  EXPECT_TRUE(c.is_organized());
+  std::size_t finite = 0;
+  for (const auto& p : c.positions) finite += p.allFinite() ? 1 : 0;
+  EXPECT_EQ(finite, 271575u);
+}
+
 TEST(RgbdSequences, RealRedwoodFrames) {
   MESHFLOW_REQUIRE_DATA("rgbd_redwood/trajectory.log");
   const auto seq = open_sequence(test::data_path("rgbd_redwood"));

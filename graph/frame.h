@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "nodes/distance/hoppe_distance.h"
+#include "nodes/distance/projective_distance.h"
 #include "nodes/extract/marching_cubes.h"
 #include "nodes/filter/depth_filter.h"
 #include "nodes/filter/filter.h"
@@ -29,7 +30,8 @@ struct ReconstructionConfig {
   FilterConfig filter;
   NormalsConfig normals;
   VoxelizeConfig voxelize;
-  DistanceConfig distance;
+  DistanceConfig distance;              ///< clouds (Hoppe)
+  ProjectiveDistanceConfig projective;  ///< depth frames
   ExtractConfig extract;
   CleanupConfig cleanup;
 };
@@ -44,9 +46,11 @@ struct Frame {
   std::function<PointCloud()> load;  ///< produces a cloud input; called by the "read" stage
   std::function<DepthFrame()> load_depth;  ///< or a depth-image input (set one of the two)
 
-  std::shared_ptr<DepthFrame> depth;  ///< the depth input until "filter" back-projects it
+  /// The depth input; after "filter" its image is the filtered depth in metres (CV_32F), kept
+  /// for the projective distance and released by "distance".
+  std::shared_ptr<DepthFrame> depth;
   DepthFilterCounts depth_counts;
-  bool normals_from_image = false;    ///< normals came from image neighbours (depth input)
+  bool normals_from_image = false;  ///< normals came from image neighbours (depth input)
 
   PointCloud cloud;  ///< after read: raw; after filter: filtered, with normals
   FilterCounts filter_counts;

@@ -20,13 +20,16 @@ std::uint64_t filter(Frame& f, const ReconstructionConfig& c) {
   if (f.depth) {  // depth image -> filtered depth -> organized cloud with image normals
     const cv::Mat depth_m = filter_depth(*f.depth, c.depth_filter, &f.depth_counts);
     if (f.depth_counts.valid == 0) {
-      throw Error(f.name, "depth", "no valid depth pixel (" + std::to_string(f.depth_counts.invalid) +
-                                       " without measurement, " + std::to_string(f.depth_counts.out_of_range) +
-                                       " out of range)");
+      throw Error(f.name, "depth",
+                  "no valid depth pixel (" + std::to_string(f.depth_counts.invalid) +
+                      " without measurement, " + std::to_string(f.depth_counts.out_of_range) +
+                      " out of range)");
     }
     f.cloud = back_project(*f.depth, depth_m);
     f.normals_from_image = true;
-    f.depth.reset();  // the image is no longer needed: keep frames in flight small
+    f.depth->depth = depth_m;  // keep only the filtered metric depth for the distance stage
+    f.depth->depth_scale = 1.0f;
+    f.depth->color.release();
   }
   f.cloud = filter_cloud(f.cloud, c.filter, &f.filter_counts);
   if (f.cloud.size() < 3) {
@@ -39,6 +42,7 @@ std::uint64_t filter(Frame& f, const ReconstructionConfig& c) {
 }
 
 std::uint64_t index(Frame& f, const ReconstructionConfig&) {
+  if (f.depth) return 0;  // depth frames need no search: image normals, projective distance
   f.index = std::make_shared<KdTreeIndex>(f.cloud.positions);
   return f.cloud.size();
 }
@@ -51,13 +55,22 @@ std::uint64_t normals(Frame& f, const ReconstructionConfig& c) {
 
 std::uint64_t voxelize(Frame& f, const ReconstructionConfig& c) {
   VoxelizeConfig vc = c.voxelize;
-  if (!(vc.voxel_size > 0.0f)) vc.voxel_size = suggest_voxel_size(f.cloud, *f.index);
+  if (!(vc.voxel_size > 0.0f)) {
+    vc.voxel_size = f.depth ? suggest_voxel_size_for_depth(f.cloud, f.depth->intrinsics.fx)
+                            : suggest_voxel_size(f.cloud, *f.index);
+  }
   f.voxel_size = vc.voxel_size;
   f.grid = meshflow::voxelize(f.cloud, vc);
   return f.grid.cells.size();
 }
 
 std::uint64_t distance(Frame& f, const ReconstructionConfig& c) {
+  if (f.depth) {
+    f.distance = projective_distance(f.grid, f.depth->depth, f.depth->intrinsics,
+                                     f.depth->T_world_camera, c.projective);
+    f.depth.reset();  // keep frames in flight small
+    return f.grid.corners.size();
+  }
   f.distance = hoppe_distance(f.grid, f.cloud, *f.index, c.distance);
   return f.grid.corners.size();
 }

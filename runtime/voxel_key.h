@@ -1,5 +1,6 @@
 #pragma once
-// Packed integer cell keys for sparse voxel grids: 21 bits per axis in one uint64.
+// Packed integer cell keys for sparse voxel grids: 19 bits per axis (about +-262k cells, e.g.
+// +-2.6 km at 1 cm voxels) in the low 57 bits of a uint64; the top bits stay free for tags.
 // Sorting keys orders cells z-major, then y, then x.
 
 #include <Eigen/Core>
@@ -11,7 +12,8 @@ namespace meshflow {
 
 using VoxelKey = std::uint64_t;
 
-constexpr int kKeyBitsPerAxis = 21;
+constexpr int kKeyBitsPerAxis = 19;
+constexpr int kKeyBits = 3 * kKeyBitsPerAxis;                    ///< bits used by a packed key
 constexpr std::int32_t kKeyOffset = 1 << (kKeyBitsPerAxis - 1);  ///< index 0 maps to this
 constexpr std::int32_t kMaxCellIndex = kKeyOffset - 2;           ///< keeps +1 neighbours packable
 constexpr std::uint64_t kKeyAxisMask = (std::uint64_t{1} << kKeyBitsPerAxis) - 1;

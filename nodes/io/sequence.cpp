@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <filesystem>
-#include <regex>
 #include <vector>
 
 #include "nodes/io/parse_util.h"
@@ -87,17 +86,29 @@ class ScanDirectorySequence final : public Sequence {
   std::vector<std::string> scans_;
 };
 
+// NNN of a file named "scanNNN.3d", or -1 for any other name.
+long scan_number(const std::string& name) {
+  const std::string prefix = "scan", suffix = ".3d";
+  if (name.size() <= prefix.size() + suffix.size() || name.compare(0, prefix.size(), prefix) != 0 ||
+      name.compare(name.size() - suffix.size(), suffix.size(), suffix) != 0) {
+    return -1;
+  }
+  const std::string digits =
+      name.substr(prefix.size(), name.size() - prefix.size() - suffix.size());
+  if (digits.size() > 9 ||
+      !std::all_of(digits.begin(), digits.end(), [](char c) { return c >= '0' && c <= '9'; })) {
+    return -1;
+  }
+  return std::stol(digits);
+}
+
 }  // namespace
 
 std::unique_ptr<Sequence> open_3dtk_directory(const std::string& directory) {
-  static const std::regex kScanName(R"(scan(\d+)\.3d)");
   std::vector<std::pair<long, std::string>> scans;
   for (const auto& entry : fs::directory_iterator(directory)) {
-    std::smatch m;
-    const std::string name = entry.path().filename().string();
-    if (entry.is_regular_file() && std::regex_match(name, m, kScanName)) {
-      scans.emplace_back(std::stol(m[1].str()), entry.path().string());
-    }
+    const long number = scan_number(entry.path().filename().string());
+    if (entry.is_regular_file() && number >= 0) scans.emplace_back(number, entry.path().string());
   }
   if (scans.empty()) throw Error(directory, "", "no scanNNN.3d files (3DTK format) found");
   std::sort(scans.begin(), scans.end());

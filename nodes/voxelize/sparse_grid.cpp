@@ -46,6 +46,98 @@ void locate_shifted(const std::vector<VoxelKey>& subset, VoxelKey delta,
   }
 }
 
+// Throws unless the cells from p - reach to p + reach can be packed.
+std::array<Eigen::Vector3i, 2> cell_range(const Eigen::Vector3f& p, float voxel, float reach,
+                                          std::size_t i) {
+  const Eigen::Vector3i lo = cell_of(p - Eigen::Vector3f::Constant(reach), voxel);
+  const Eigen::Vector3i hi = cell_of(p + Eigen::Vector3f::Constant(reach), voxel);
+  if (!p.allFinite() || !cell_index_in_range(lo) || !cell_index_in_range(hi)) {
+    throw Error("voxelize", "point " + std::to_string(i),
+                "lies outside the grid's range for a voxel size of " + std::to_string(voxel) +
+                    " m (coordinates too large or not finite)");
+  }
+  return {lo, hi};
+}
+
+// Exact union of the cells overlapping every point's cube (any margin): up to (2m+1)^3 keys per
+// point, then radix sort + unique.
+std::vector<VoxelKey> cells_by_enumeration(const PointCloud& cloud, float voxel, float reach) {
+  const std::size_t n = cloud.size();
+  std::vector<std::uint32_t> offsets(n);
+  std::vector<std::array<Eigen::Vector3i, 2>> ranges(n);
+  tbb::parallel_for(std::size_t{0}, n, [&](std::size_t i) {
+    ranges[i] = cell_range(cloud.positions[i], voxel, reach, i);
+    offsets[i] =
+        static_cast<std::uint32_t>((ranges[i][1] - ranges[i][0] + Eigen::Vector3i::Ones()).prod());
+  });
+  std::vector<VoxelKey> cells(exclusive_scan_in_place(offsets));
+  tbb::parallel_for(std::size_t{0}, n, [&](std::size_t i) {
+    const auto& [lo, hi] = ranges[i];
+    std::uint32_t at = offsets[i];
+    for (int z = lo.z(); z <= hi.z(); ++z)
+      for (int y = lo.y(); y <= hi.y(); ++y)
+        for (int x = lo.x(); x <= hi.x(); ++x) cells[at++] = pack_key({x, y, z});
+  });
+  radix_sort_unique(cells);
+  return cells;
+}
+
+// For margins below one voxel a point's cube reaches at most one cell beyond its own along
+// each axis. Each point contributes its cell's key tagged with 6 bits (cube crosses the low /
+// high face in x, y, z); after sort + unique the tags of a cell are OR-ed and the cell is
+// expanded towards the tagged faces. n keys are sorted instead of up to 8n. The result contains
+// every cell the exact union has, plus at most the few cells that combine the tags of different
+// points of one cell (harmless: their corners are near data too).
+std::vector<VoxelKey> cells_by_face_flags(const PointCloud& cloud, float voxel, float reach) {
+  const std::size_t n = cloud.size();
+  std::vector<std::uint64_t> tagged(n);
+  tbb::parallel_for(std::size_t{0}, n, [&](std::size_t i) {
+    const auto [lo, hi] = cell_range(cloud.positions[i], voxel, reach, i);
+    const Eigen::Vector3i c = cell_of(cloud.positions[i], voxel);
+    std::uint64_t flags = 0;
+    for (int a = 0; a < 3; ++a) {
+      flags |= (lo[a] < c[a] ? 1u : 0u) << (2 * a);
+      flags |= (hi[a] > c[a] ? 2u : 0u) << (2 * a);
+    }
+    tagged[i] = (pack_key(c) << 6) | flags;
+  });
+  radix_sort_unique(tagged);
+  // OR the tags of each cell (runs of equal key), then count and emit the expanded cells.
+  std::vector<std::pair<VoxelKey, std::uint32_t>> occupied;
+  for (std::size_t i = 0; i < tagged.size(); ++i) {
+    const VoxelKey key = tagged[i] >> 6;
+    const auto flags = static_cast<std::uint32_t>(tagged[i] & 63u);
+    if (occupied.empty() || occupied.back().first != key)
+      occupied.emplace_back(key, flags);
+    else
+      occupied.back().second |= flags;
+  }
+  std::vector<std::uint32_t> offsets(occupied.size());
+  tbb::parallel_for(std::size_t{0}, occupied.size(), [&](std::size_t i) {
+    std::uint32_t count = 1;
+    for (int a = 0; a < 3; ++a)
+      count *=
+          1 + ((occupied[i].second >> (2 * a)) & 1u) + ((occupied[i].second >> (2 * a + 1)) & 1u);
+    offsets[i] = count;
+  });
+  std::vector<VoxelKey> cells(exclusive_scan_in_place(offsets));
+  tbb::parallel_for(std::size_t{0}, occupied.size(), [&](std::size_t i) {
+    const Eigen::Vector3i c = unpack_key(occupied[i].first);
+    const std::uint32_t f = occupied[i].second;
+    Eigen::Vector3i lo, hi;
+    for (int a = 0; a < 3; ++a) {
+      lo[a] = c[a] - static_cast<int>((f >> (2 * a)) & 1u);
+      hi[a] = c[a] + static_cast<int>((f >> (2 * a + 1)) & 1u);
+    }
+    std::uint32_t at = offsets[i];
+    for (int z = lo.z(); z <= hi.z(); ++z)
+      for (int y = lo.y(); y <= hi.y(); ++y)
+        for (int x = lo.x(); x <= hi.x(); ++x) cells[at++] = pack_key({x, y, z});
+  });
+  radix_sort_unique(cells);
+  return cells;
+}
+
 }  // namespace
 
 std::uint32_t SparseGrid::find_corner(const Eigen::Vector3i& c) const {
@@ -66,33 +158,9 @@ SparseGrid voxelize(const PointCloud& cloud, const VoxelizeConfig& config) {
   grid.voxel_size = config.voxel_size;
   const float reach = config.margin * config.voxel_size;
 
-  // 1. Cells overlapping each point's margin cube: count, prefix sum, fill, sort, unique.
-  const std::size_t n = cloud.size();
-  std::vector<std::uint32_t> offsets(n);
-  std::vector<std::array<Eigen::Vector3i, 2>> ranges(n);
-  tbb::parallel_for(std::size_t{0}, n, [&](std::size_t i) {
-    const Eigen::Vector3f& p = cloud.positions[i];
-    const Eigen::Vector3i lo = cell_of(p - Eigen::Vector3f::Constant(reach), config.voxel_size);
-    const Eigen::Vector3i hi = cell_of(p + Eigen::Vector3f::Constant(reach), config.voxel_size);
-    if (!p.allFinite() || !cell_index_in_range(lo) || !cell_index_in_range(hi)) {
-      throw Error("voxelize", "point " + std::to_string(i),
-                  "lies outside the grid's range for a voxel size of " +
-                      std::to_string(config.voxel_size) +
-                      " m (coordinates too large or not finite)");
-    }
-    ranges[i] = {lo, hi};
-    const Eigen::Vector3i span = hi - lo + Eigen::Vector3i::Ones();
-    offsets[i] = static_cast<std::uint32_t>(span.prod());
-  });
-  grid.cells.resize(exclusive_scan_in_place(offsets));
-  tbb::parallel_for(std::size_t{0}, n, [&](std::size_t i) {
-    const auto& [lo, hi] = ranges[i];
-    std::uint32_t at = offsets[i];
-    for (int z = lo.z(); z <= hi.z(); ++z)
-      for (int y = lo.y(); y <= hi.y(); ++y)
-        for (int x = lo.x(); x <= hi.x(); ++x) grid.cells[at++] = pack_key({x, y, z});
-  });
-  radix_sort_unique(grid.cells);
+  // 1. Cells overlapping each point's margin cube.
+  grid.cells = config.margin < 1.0f ? cells_by_face_flags(cloud, config.voxel_size, reach)
+                                    : cells_by_enumeration(cloud, config.voxel_size, reach);
 
   // 2. Corners: the cells dilated by one step in +x, +y and +z (separable, linear merges).
   grid.corners = grid.cells;
@@ -127,6 +195,22 @@ float suggest_voxel_size(const PointCloud& cloud, const SpatialIndex& index, flo
   const float median = spacing[samples / 2];
   const float diagonal = finite_bounds(cloud).diagonal().norm();
   return std::max(factor * median, diagonal / 2000.0f);
+}
+
+}  // namespace meshflow
+
+namespace meshflow {
+
+float suggest_voxel_size_for_depth(const PointCloud& cloud, float focal_px, float factor) {
+  if (cloud.empty() || !(focal_px > 0.0f)) return 0.01f;
+  const std::size_t samples = std::min<std::size_t>(cloud.size(), 2001);
+  std::vector<float> range(samples);
+  for (std::size_t s = 0; s < samples; ++s) {
+    range[s] = (cloud.positions[s * cloud.size() / samples] - cloud.sensor_origin).norm();
+  }
+  std::nth_element(range.begin(), range.begin() + static_cast<std::ptrdiff_t>(samples / 2),
+                   range.end());
+  return factor * range[samples / 2] / focal_px;
 }
 
 }  // namespace meshflow

@@ -48,4 +48,8 @@ SparseGrid voxelize(const PointCloud& cloud, const VoxelizeConfig& config);
 class SpatialIndex;
 float suggest_voxel_size(const PointCloud& cloud, const SpatialIndex& index, float factor = 3.0f);
 
+/// For a cloud back-projected from a depth image with focal length `focal_px`: `factor` x the
+/// pixel footprint (distance / focal) at the median distance from the sensor. Metres.
+float suggest_voxel_size_for_depth(const PointCloud& cloud, float focal_px, float factor = 3.0f);
+
 }  // namespace meshflow

@@ -11,12 +11,15 @@
 
 namespace meshflow::bench {
 
-enum Input : int { kSynthetic = 0, kKurt3d = 1 };
+enum Input : int { kSynthetic = 0, kKurt3d = 1, kRedwood = 2, kSyntheticDepth = 3 };
 
 /// The input cloud (cached); nullptr when kurt3d is requested but $MESHFLOW_DATA lacks it.
 const PointCloud* input_cloud(Input input);
 
-/// Path of kurt3d/scan000.3d under $MESHFLOW_DATA (default ../shared/data).
+/// $MESHFLOW_DATA (default ../shared/data beside the source tree).
+std::string data_dir();
+
+/// Path of kurt3d/scan000.3d under data_dir().
 std::string kurt3d_path();
 
 /// A frame advanced through the stages up to and excluding `stage` ("normals", "voxelize",

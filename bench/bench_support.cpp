@@ -11,12 +11,13 @@
 
 namespace meshflow::bench {
 
-std::string kurt3d_path() {
+std::string data_dir() {
   const char* env = std::getenv("MESHFLOW_DATA");
-  const std::string dir =
-      env != nullptr && *env != '\0' ? env : std::string(MESHFLOW_SOURCE_DIR) + "/../shared/data";
-  return dir + "/kurt3d/scan000.3d";
+  return env != nullptr && *env != '\0' ? env
+                                        : std::string(MESHFLOW_SOURCE_DIR) + "/../shared/data";
 }
+
+std::string kurt3d_path() { return data_dir() + "/kurt3d/scan000.3d"; }
 
 const PointCloud* input_cloud(Input input) {
   static const PointCloud synthetic = [] {

@@ -28,4 +28,10 @@ struct DepthFrame {
 /// Depth of `frame` in metres as CV_32F; invalid pixels are 0. O(pixels).
 cv::Mat depth_in_metres(const DepthFrame& frame);
 
+/// Makes OpenCV run its functions on the calling thread (cv::setNumThreads(0)), once per
+/// process. meshflow parallelizes across frames and pixels with oneTBB under one thread limit;
+/// OpenCV's own parallel backend would oversubscribe the cores and escape that limit.
+/// Called by every meshflow function that uses OpenCV. Thread-safe.
+void run_opencv_on_calling_thread();
+
 }  // namespace meshflow

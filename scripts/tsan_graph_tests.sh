@@ -31,5 +31,5 @@ cmake -S . -B "$work/meshflow" -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DMESH
   -DMESHFLOW_SANITIZE=thread -DMESHFLOW_BUILD_BENCHMARKS=OFF -DCMAKE_PREFIX_PATH="$work/tbb-install" \
   -DTBB_DIR="$work/tbb-install/lib/cmake/TBB"
 cmake --build "$work/meshflow"
-TSAN_OPTIONS="halt_on_error=1 second_deadlock_stack=1" \
+TSAN_OPTIONS="halt_on_error=1 second_deadlock_stack=1 suppressions=$PWD/scripts/tsan.supp" \
   ctest --test-dir "$work/meshflow" --output-on-failure -j2 -R 'Pipeline|SequenceRunner|DepthPath|Reconstruction\.Same|Cli\.Run|Cli\.Profile'

@@ -64,6 +64,7 @@ cv::Mat occlusion_edges(const cv::Mat& depth_m, float high, float low) {
 
 cv::Mat filter_depth(const DepthFrame& frame, const DepthFilterConfig& config,
                      DepthFilterCounts* counts) {
+  run_opencv_on_calling_thread();
   DepthFilterCounts c;
   cv::Mat d = depth_in_metres(frame);
   c.pixels = static_cast<std::size_t>(d.total());

@@ -37,6 +37,7 @@ std::string first_json(const fs::path& dir) {
 }
 
 cv::Mat read_color_image(const std::string& path) {
+  run_opencv_on_calling_thread();
   cv::Mat bgr = cv::imread(path, cv::IMREAD_COLOR);
   if (bgr.empty()) throw Error(path, "", "cannot read colour image (missing or corrupt)");
   cv::Mat rgb;
@@ -282,6 +283,7 @@ std::unique_ptr<Sequence> open_depth_image_directory(const std::string& director
 }
 
 cv::Mat read_depth_image(const std::string& path) {
+  run_opencv_on_calling_thread();
   if (!fs::exists(path)) throw Error(path, "", "depth image missing");
   cv::Mat depth = cv::imread(path, cv::IMREAD_ANYDEPTH);
   if (depth.empty())

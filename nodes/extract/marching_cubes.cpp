@@ -11,11 +11,14 @@
 namespace meshflow {
 namespace {
 
-// A crossed grid edge: key = lower corner index * 3 + axis; `upper` = its other corner.
+// A crossed grid edge as one active cell sees it: key = lower corner index * 3 + axis,
+// `upper` = its other corner, `slot` = where the cell listed it (cells list their crossed edges
+// in local edge order, so a cell finds the vertex of its k-th crossed edge at its k-th slot).
 struct EdgeRef {
   std::uint64_t key;
   std::uint32_t upper;
-  bool operator<(const EdgeRef& o) const { return key < o.key; }
+  std::uint32_t slot;
+  bool operator<(const EdgeRef& o) const { return key < o.key || (key == o.key && slot < o.slot); }
 };
 
 std::uint64_t edge_key(const std::array<std::uint32_t, 8>& corners, int e) {
@@ -65,14 +68,20 @@ TriangleMesh marching_cubes(const SparseGrid& grid, const DistanceField& field,
     for (int e = 0; e < 12; ++e) {
       const auto& ce = kCubeEdges[static_cast<std::size_t>(e)];
       if (((p >> ce[0]) & 1) == ((p >> ce[1]) & 1)) continue;
-      edges[at++] = EdgeRef{edge_key(grid.cell_corners[cell], e),
-                            grid.cell_corners[cell][static_cast<std::size_t>(ce[1])]};
+      edges[at] = EdgeRef{edge_key(grid.cell_corners[cell], e),
+                          grid.cell_corners[cell][static_cast<std::size_t>(ce[1])], at};
+      ++at;
     }
   });
   tbb::parallel_sort(edges.begin(), edges.end());
-  edges.erase(std::unique(edges.begin(), edges.end(),
-                          [](const EdgeRef& a, const EdgeRef& b) { return a.key == b.key; }),
-              edges.end());
+  // One vertex per distinct key, numbered in key order; every slot learns its vertex.
+  std::vector<std::uint32_t> slot_vertex(edges.size());
+  std::size_t unique = 0;
+  for (std::size_t i = 0; i < edges.size(); ++i) {
+    if (unique == 0 || edges[i].key != edges[unique - 1].key) edges[unique++] = edges[i];
+    slot_vertex[edges[i].slot] = static_cast<std::uint32_t>(unique - 1);
+  }
+  edges.resize(unique);
 
   TriangleMesh mesh;
   mesh.vertices.resize(edges.size());
@@ -92,13 +101,17 @@ TriangleMesh marching_cubes(const SparseGrid& grid, const DistanceField& field,
   mesh.triangles.resize(exclusive_scan_in_place(tri_offsets));
   tbb::parallel_for(std::size_t{0}, active.size(), [&](std::size_t a) {
     const std::size_t cell = active[a];
+    const int p = pattern[cell];
+    std::array<std::uint32_t, 12> local_vertex{};  // vertex of each crossed local edge
+    std::uint32_t slot = edge_offsets[a];
+    for (int e = 0; e < 12; ++e) {
+      const auto& ce = kCubeEdges[static_cast<std::size_t>(e)];
+      if (((p >> ce[0]) & 1) != ((p >> ce[1]) & 1))
+        local_vertex[static_cast<std::size_t>(e)] = slot_vertex[slot++];
+    }
+    auto vertex_of = [&](int e) { return local_vertex[static_cast<std::size_t>(e)]; };
     std::uint32_t at = tri_offsets[a];
-    auto vertex_of = [&](int e) {
-      const std::uint64_t key = edge_key(grid.cell_corners[cell], e);
-      const auto it = std::lower_bound(edges.begin(), edges.end(), EdgeRef{key, 0});
-      return static_cast<std::uint32_t>(it - edges.begin());
-    };
-    for (const auto& tri : cases[pattern[cell]].triangles) {
+    for (const auto& tri : cases[p].triangles) {
       mesh.triangles[at++] = Triangle{vertex_of(tri[0]), vertex_of(tri[1]), vertex_of(tri[2])};
     }
   });

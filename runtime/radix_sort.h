@@ -8,7 +8,8 @@
 namespace meshflow {
 
 /// Sorts `keys` ascending (LSD radix, 11-bit digits; digits that are equal in every key are
-/// skipped, so keys spanning a small range cost few passes). O(n) time, O(n) extra memory.
+/// skipped, so keys spanning a small range cost few passes). Each pass is parallel over fixed
+/// blocks of keys; the result is the same for any thread count. O(n) time, O(n) extra memory.
 void radix_sort(std::vector<std::uint64_t>& keys);
 
 /// radix_sort() followed by removal of duplicates.

@@ -11,7 +11,7 @@ namespace {
 TEST(RadixSort, MatchesStdSortOnWideAndNarrowKeys) {
   std::mt19937_64 rng(9);
   for (std::uint64_t range : {std::uint64_t{1000}, std::uint64_t{1} << 40, ~std::uint64_t{0}}) {
-    std::vector<std::uint64_t> keys(50000);
+    std::vector<std::uint64_t> keys(300000);  // several parallel blocks
     for (auto& k : keys) k = rng() % range + (range < 1000000 ? (std::uint64_t{7} << 50) : 0);
     std::vector<std::uint64_t> expected = keys;
     std::sort(expected.begin(), expected.end());

@@ -46,6 +46,13 @@ void locate_shifted(const std::vector<VoxelKey>& subset, VoxelKey delta,
   }
 }
 
+// Writes the keys of the cells lo..hi (inclusive, z-major) to out.
+void write_cell_block(const Eigen::Vector3i& lo, const Eigen::Vector3i& hi, VoxelKey* out) {
+  for (int z = lo.z(); z <= hi.z(); ++z)
+    for (int y = lo.y(); y <= hi.y(); ++y)
+      for (int x = lo.x(); x <= hi.x(); ++x) *out++ = pack_key({x, y, z});
+}
+
 // Throws unless the cells from p - reach to p + reach can be packed.
 std::array<Eigen::Vector3i, 2> cell_range(const Eigen::Vector3f& p, float voxel, float reach,
                                           std::size_t i) {
@@ -72,11 +79,7 @@ std::vector<VoxelKey> cells_by_enumeration(const PointCloud& cloud, float voxel,
   });
   std::vector<VoxelKey> cells(exclusive_scan_in_place(offsets));
   tbb::parallel_for(std::size_t{0}, n, [&](std::size_t i) {
-    const auto& [lo, hi] = ranges[i];
-    std::uint32_t at = offsets[i];
-    for (int z = lo.z(); z <= hi.z(); ++z)
-      for (int y = lo.y(); y <= hi.y(); ++y)
-        for (int x = lo.x(); x <= hi.x(); ++x) cells[at++] = pack_key({x, y, z});
+    write_cell_block(ranges[i][0], ranges[i][1], &cells[offsets[i]]);
   });
   radix_sort_unique(cells);
   return cells;
@@ -129,10 +132,7 @@ std::vector<VoxelKey> cells_by_face_flags(const PointCloud& cloud, float voxel, 
       lo[a] = c[a] - static_cast<int>((f >> (2 * a)) & 1u);
       hi[a] = c[a] + static_cast<int>((f >> (2 * a + 1)) & 1u);
     }
-    std::uint32_t at = offsets[i];
-    for (int z = lo.z(); z <= hi.z(); ++z)
-      for (int y = lo.y(); y <= hi.y(); ++y)
-        for (int x = lo.x(); x <= hi.x(); ++x) cells[at++] = pack_key({x, y, z});
+    write_cell_block(lo, hi, &cells[offsets[i]]);
   });
   radix_sort_unique(cells);
   return cells;

@@ -93,7 +93,8 @@ cv::Mat filter_depth(const DepthFrame& frame, const DepthFilterConfig& config,
     d = smoothed;
   }
   if (config.edge_high > 0.0f) {
-    const cv::Mat edges = occlusion_edges(d, config.edge_high, std::min(config.edge_low, config.edge_high));
+    const cv::Mat edges =
+        occlusion_edges(d, config.edge_high, std::min(config.edge_low, config.edge_high));
     c.edges = static_cast<std::size_t>(cv::countNonZero(edges));
     d.setTo(0.0f, edges);
   }

@@ -11,9 +11,9 @@
 namespace meshflow {
 
 struct DepthFilterConfig {
-  float min_depth = 0.1f;   ///< metres; nearer pixels are invalid
-  float max_depth = 10.0f;  ///< metres; farther pixels are invalid
-  int median_kernel = 0;    ///< 3 or 5 = median filter of that size; 0 = off
+  float min_depth = 0.1f;              ///< metres; nearer pixels are invalid
+  float max_depth = 10.0f;             ///< metres; farther pixels are invalid
+  int median_kernel = 0;               ///< 3 or 5 = median filter of that size; 0 = off
   float bilateral_sigma_depth = 0.0f;  ///< metres; > 0 enables a 5x5 bilateral filter
   /// Relative depth jump |d - d_n| / min(d, d_n) to a 4-neighbour that marks an occlusion edge:
   /// pixels above `edge_high` are edges, pixels above `edge_low` are edges when connected
@@ -24,10 +24,10 @@ struct DepthFilterConfig {
 
 struct DepthFilterCounts {
   std::size_t pixels = 0;
-  std::size_t invalid = 0;       ///< no measurement in the input
+  std::size_t invalid = 0;  ///< no measurement in the input
   std::size_t out_of_range = 0;
-  std::size_t edges = 0;         ///< removed as occlusion edges
-  std::size_t valid = 0;         ///< left for back-projection
+  std::size_t edges = 0;  ///< removed as occlusion edges
+  std::size_t valid = 0;  ///< left for back-projection
 };
 
 /// Filters `frame`'s depth. Deterministic; O(pixels).

@@ -14,31 +14,6 @@
 
 namespace meshflow::cli {
 
-void print_frame_report(const Frame& f, double wall_s, int threads) {
-  const FilterCounts& c = f.filter_counts;
-  std::printf("input      %s: %zu points\n", f.name.c_str(), c.input);
-  if (c.non_finite > 0) std::printf("filter     dropped %zu NaN/Inf points\n", c.non_finite);
-  if (c.cropped + c.merged + c.outliers > 0) {
-    std::printf("filter     cropped %zu, merged %zu, outliers %zu\n", c.cropped, c.merged,
-                c.outliers);
-  }
-  std::printf("grid       voxel %.4g m, %zu cells, %zu corners (%zu valid)\n", f.voxel_size,
-              f.grid.cells.size(), f.grid.corners.size(), f.distance.valid_count());
-  std::printf(
-      "mesh       %zu vertices, %zu triangles (removed %zu degenerate, %zu in %zu small "
-      "components)\n",
-      f.mesh.vertices.size(), f.mesh.triangles.size(),
-      f.cleanup.degenerate_triangles + f.cleanup.duplicate_triangles,
-      f.cleanup.removed_component_triangles, f.cleanup.removed_components);
-  std::printf("time       %.1f ms on %d thread%s\n", 1e3 * wall_s, threads,
-              threads == 1 ? "" : "s");
-  std::printf("%s", format_stage_table(summarize_stages(f.timings), wall_s).c_str());
-}
-
-void throw_if_failed(const Frame& f) {
-  if (!f.ok()) throw std::runtime_error(f.error);
-}
-
 namespace {
 
 struct ReconstructOptions {

@@ -27,6 +27,12 @@ PointCloud select_points(const PointCloud& cloud, const std::vector<std::uint32_
   return out;
 }
 
+std::size_t count_finite_points(const PointCloud& cloud) {
+  std::size_t n = 0;
+  for (const auto& p : cloud.positions) n += p.allFinite() ? 1 : 0;
+  return n;
+}
+
 Eigen::AlignedBox3f finite_bounds(const PointCloud& cloud) {
   Eigen::AlignedBox3f box;
   for (const auto& p : cloud.positions) {

@@ -41,6 +41,9 @@ struct PointCloud {
 /// unorganized and keeps the sensor origin. O(indices.size()), parallel, deterministic.
 PointCloud select_points(const PointCloud& cloud, const std::vector<std::uint32_t>& indices);
 
+/// Number of points whose three coordinates are finite. O(n).
+std::size_t count_finite_points(const PointCloud& cloud);
+
 /// Axis-aligned bounds of the finite points (an empty box if there are none). O(n).
 Eigen::AlignedBox3f finite_bounds(const PointCloud& cloud);
 

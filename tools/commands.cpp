@@ -78,8 +78,7 @@ void add_info_command(CLI::App& app) {
   cmd->add_option("file", *path, "Point cloud file")->required();
   cmd->callback([path] {
     const PointCloud cloud = io::read_point_cloud(*path);
-    std::size_t finite = 0;
-    for (const auto& p : cloud.positions) finite += p.allFinite() ? 1 : 0;
+    const std::size_t finite = count_finite_points(cloud);
     std::printf("file        %s\n", path->c_str());
     std::printf("points      %zu (%zu finite, %zu NaN/Inf)\n", cloud.size(), finite,
                 cloud.size() - finite);

@@ -67,47 +67,51 @@ DepthFrame make_frame(const std::string& depth_path, const std::string& color_pa
   return f;
 }
 
-class RedwoodSequence final : public Sequence {
+// Depth images listed in order, paired with colour images, under one camera model. Poses come
+// from a trajectory file (Redwood) or, without one, every frame is in the camera frame.
+struct DepthImageList {
+  std::string description;  // e.g. "Redwood RGB-D frames in DIR"
+  std::vector<std::string> depth, color;
+  PinholeIntrinsics intrinsics;
+  double frame_period_s = 1.0;  // timestamps are index x period
+  std::string trajectory;       // empty: identity poses
+  std::vector<Eigen::Isometry3f> poses;
+};
+
+class DepthImageListSequence final : public Sequence {
  public:
-  RedwoodSequence(std::string dir, std::vector<std::string> depth, std::vector<std::string> color,
-                  std::string trajectory, std::vector<Eigen::Isometry3f> poses, PinholeIntrinsics k)
-      : dir_(std::move(dir)),
-        depth_(std::move(depth)),
-        color_(std::move(color)),
-        trajectory_(std::move(trajectory)),
-        poses_(std::move(poses)),
-        k_(k) {}
-  std::size_t size() const override { return depth_.size(); }
+  explicit DepthImageListSequence(DepthImageList list) : list_(std::move(list)) {}
+  std::size_t size() const override { return list_.depth.size(); }
   SequenceFrame frame(std::size_t i) const override {
     SequenceFrame f;
     f.index = i;
-    f.timestamp_s = static_cast<double>(i) / 30.0;
-    f.name = depth_[i];
-    const std::string depth = depth_[i];
-    const std::string color = i < color_.size() ? color_[i] : std::string();
-    const bool has_pose = i < poses_.size();
-    const Eigen::Isometry3f pose = has_pose ? poses_[i] : Eigen::Isometry3f::Identity();
-    const std::string trajectory = trajectory_;
-    const PinholeIntrinsics k = k_;
+    f.timestamp_s = static_cast<double>(i) * list_.frame_period_s;
+    f.name = list_.depth[i];
+    const std::string depth = list_.depth[i];
+    const std::string color = i < list_.color.size() ? list_.color[i] : std::string();
+    const bool posed = !list_.trajectory.empty();
+    const bool has_pose = !posed || i < list_.poses.size();
+    const Eigen::Isometry3f pose =
+        posed && has_pose ? list_.poses[i] : Eigen::Isometry3f::Identity();
+    const std::string trajectory = list_.trajectory;
+    const PinholeIntrinsics k = list_.intrinsics;
+    const double t = f.timestamp_s;
     f.load_depth = [=] {
       if (!has_pose) {
         throw Error(trajectory, "",
                     "pose missing for frame " + std::to_string(i) + " (" + depth + ")");
       }
-      return make_frame(depth, color, 1000.0f, k, pose, static_cast<double>(i) / 30.0);
+      return make_frame(depth, color, 1000.0f, k, pose, t);
     };
     return f;
   }
   std::string description() const override {
-    return "Redwood RGB-D frames in " + dir_ + " (" + std::to_string(depth_.size()) + " frames)";
+    return list_.description + " (" + std::to_string(list_.depth.size()) + " frames" +
+           (list_.trajectory.empty() ? ", no poses)" : ")");
   }
 
  private:
-  std::string dir_;
-  std::vector<std::string> depth_, color_;
-  std::string trajectory_;
-  std::vector<Eigen::Isometry3f> poses_;
-  PinholeIntrinsics k_;
+  DepthImageList list_;
 };
 
 struct TimedFile {
@@ -221,36 +225,6 @@ class TumSequence final : public Sequence {
   PinholeIntrinsics k_;
 };
 
-class DepthImageSequence final : public Sequence {
- public:
-  DepthImageSequence(std::string dir, std::vector<std::string> depth,
-                     std::vector<std::string> color, PinholeIntrinsics k)
-      : dir_(std::move(dir)), depth_(std::move(depth)), color_(std::move(color)), k_(k) {}
-  std::size_t size() const override { return depth_.size(); }
-  SequenceFrame frame(std::size_t i) const override {
-    SequenceFrame f;
-    f.index = i;
-    f.timestamp_s = static_cast<double>(i);
-    f.name = depth_[i];
-    const std::string depth = depth_[i];
-    const std::string color = i < color_.size() ? color_[i] : std::string();
-    const PinholeIntrinsics k = k_;
-    f.load_depth = [=] {
-      return make_frame(depth, color, 1000.0f, k, Eigen::Isometry3f::Identity(),
-                        static_cast<double>(i));
-    };
-    return f;
-  }
-  std::string description() const override {
-    return "depth images in " + dir_ + " (" + std::to_string(depth_.size()) + " frames, no poses)";
-  }
-
- private:
-  std::string dir_;
-  std::vector<std::string> depth_, color_;
-  PinholeIntrinsics k_;
-};
-
 std::vector<std::string> files_containing(const std::vector<std::string>& files,
                                           const std::vector<std::string>& words) {
   std::vector<std::string> out;
@@ -279,7 +253,12 @@ std::unique_ptr<Sequence> open_depth_image_directory(const std::string& director
   k.cx = 320.0f;  // PCL's Kinect grabber convention
   k.cy = 240.0f;
   if (!json.empty()) k = read_intrinsics_json(json);
-  return std::make_unique<DepthImageSequence>(directory, std::move(depth), std::move(color), k);
+  DepthImageList list;
+  list.description = "depth images in " + directory;
+  list.depth = std::move(depth);
+  list.color = std::move(color);
+  list.intrinsics = k;
+  return std::make_unique<DepthImageListSequence>(std::move(list));
 }
 
 cv::Mat read_depth_image(const std::string& path) {
@@ -371,9 +350,15 @@ std::unique_ptr<Sequence> open_redwood_directory(const std::string& directory) {
   if (!fs::exists(trajectory))
     throw Error(directory, "", "no trajectory.log or odometry.log with the camera poses");
   const std::string json = first_json(dir);
-  const PinholeIntrinsics k = json.empty() ? PinholeIntrinsics{} : read_intrinsics_json(json);
-  return std::make_unique<RedwoodSequence>(directory, std::move(depth), std::move(color),
-                                           trajectory, read_trajectory_log(trajectory), k);
+  DepthImageList list;
+  list.description = "Redwood RGB-D frames in " + directory;
+  list.depth = std::move(depth);
+  list.color = std::move(color);
+  list.intrinsics = json.empty() ? PinholeIntrinsics{} : read_intrinsics_json(json);
+  list.frame_period_s = 1.0 / 30.0;
+  list.poses = read_trajectory_log(trajectory);
+  list.trajectory = trajectory;
+  return std::make_unique<DepthImageListSequence>(std::move(list));
 }
 
 std::unique_ptr<Sequence> open_tum_directory(const std::string& directory) {

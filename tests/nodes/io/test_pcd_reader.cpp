@@ -118,14 +118,11 @@ TEST(PcdReader, RealKinectFramesAndBunny) {
   const PointCloud office = read_pcd(test::data_path("kinect_pcl/office1.pcd"));
   EXPECT_EQ(office.size(), 307200u);
   EXPECT_TRUE(office.is_organized());
-  std::size_t finite = 0;
-  for (const auto& p : office.positions) finite += p.allFinite() ? 1 : 0;
+  const std::size_t finite = count_finite_points(office);
   EXPECT_EQ(finite, 254456u);
   const PointCloud mug =
       read_pcd(test::data_path("kinect_pcl/table_scene_mug_stereo_textured.pcd"));
-  finite = 0;
-  for (const auto& p : mug.positions) finite += p.allFinite() ? 1 : 0;
-  EXPECT_EQ(finite, 209280u);
+  EXPECT_EQ(count_finite_points(mug), 209280u);
   ASSERT_TRUE(mug.has_colors());
   const PointCloud bun0 = read_pcd(test::data_path("objects/bun0.pcd"));
   EXPECT_EQ(bun0.size(), 397u);

@@ -124,8 +124,7 @@ TEST(RgbdSequences, RealKinectGrabberFrames) {
   ASSERT_EQ(pcd->size(), 3u);
   const PointCloud c = pcd->frame(0).load();
   EXPECT_TRUE(c.is_organized());
-  std::size_t finite = 0;
-  for (const auto& p : c.positions) finite += p.allFinite() ? 1 : 0;
+  const std::size_t finite = count_finite_points(c);
   EXPECT_EQ(finite, 271575u);
 }
 

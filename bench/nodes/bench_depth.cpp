@@ -1,0 +1,78 @@
+// The depth-frame kernels on one synthetic 640 x 480 frame of the demo room, 1 cm voxels.
+
+#include "bench_support.h"
+#include "nodes/distance/projective_distance.h"
+#include "nodes/filter/depth_filter.h"
+#include "nodes/normals/organized_normals.h"
+#include "nodes/synthetic/depth_sequence.h"
+#include "nodes/voxelize/sparse_grid.h"
+#include "runtime/threads.h"
+
+namespace meshflow::bench {
+namespace {
+
+const DepthFrame& room_frame() {
+  static const DepthFrame frame = [] {
+    const synthetic::Scene scene = synthetic::demo_room_scene();
+    const Eigen::Vector3f eye = scene.room.center;
+    return synthetic::render_depth(scene, PinholeIntrinsics{},
+                                   synthetic::look_at(eye, eye + Eigen::Vector3f(1, 0.3f, -0.35f)),
+                                   0.001f);
+  }();
+  return frame;
+}
+
+void BM_DepthFilter(benchmark::State& state) {
+  ThreadLimit limit(static_cast<int>(state.range(0)));
+  for (auto _ : state)
+    benchmark::DoNotOptimize(filter_depth(room_frame(), DepthFilterConfig{}).data);
+  state.counters["pixels/s"] =
+      benchmark::Counter(640.0 * 480.0, benchmark::Counter::kIsIterationInvariantRate);
+}
+BENCHMARK(BM_DepthFilter)
+    ->ArgName("threads")
+    ->Arg(1)
+    ->Arg(2)
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
+
+void BM_BackProject(benchmark::State& state) {
+  const cv::Mat depth = filter_depth(room_frame(), DepthFilterConfig{});
+  ThreadLimit limit(static_cast<int>(state.range(0)));
+  for (auto _ : state) benchmark::DoNotOptimize(back_project(room_frame(), depth).size());
+  state.counters["pixels/s"] =
+      benchmark::Counter(640.0 * 480.0, benchmark::Counter::kIsIterationInvariantRate);
+}
+BENCHMARK(BM_BackProject)
+    ->ArgName("threads")
+    ->Arg(1)
+    ->Arg(2)
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
+
+void BM_ProjectiveDistance(benchmark::State& state) {
+  const cv::Mat depth = filter_depth(room_frame(), DepthFilterConfig{});
+  const PointCloud cloud = back_project(room_frame(), depth);
+  PointCloud finite;
+  for (const auto& p : cloud.positions) {
+    if (p.allFinite()) finite.positions.push_back(p);
+  }
+  const SparseGrid grid = voxelize(finite, VoxelizeConfig{0.01f, 0.5f});
+  ThreadLimit limit(static_cast<int>(state.range(0)));
+  const DepthFrame& f = room_frame();
+  for (auto _ : state) {
+    benchmark::DoNotOptimize(
+        projective_distance(grid, depth, f.intrinsics, f.T_world_camera).values.data());
+  }
+  state.counters["corners/s"] = benchmark::Counter(static_cast<double>(grid.corners.size()),
+                                                   benchmark::Counter::kIsIterationInvariantRate);
+}
+BENCHMARK(BM_ProjectiveDistance)
+    ->ArgName("threads")
+    ->Arg(1)
+    ->Arg(2)
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
+
+}  // namespace
+}  // namespace meshflow::bench

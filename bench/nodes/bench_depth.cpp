@@ -22,6 +22,20 @@ const DepthFrame& room_frame() {
   return frame;
 }
 
+// The frame's filtered depth, back-projected, finite points only (what voxelize receives).
+const PointCloud& room_cloud() {
+  static const PointCloud cloud = [] {
+    const PointCloud organized =
+        back_project(room_frame(), filter_depth(room_frame(), DepthFilterConfig{}));
+    PointCloud finite;
+    for (const auto& p : organized.positions) {
+      if (p.allFinite()) finite.positions.push_back(p);
+    }
+    return finite;
+  }();
+  return cloud;
+}
+
 void BM_DepthFilter(benchmark::State& state) {
   ThreadLimit limit(static_cast<int>(state.range(0)));
   for (auto _ : state)
@@ -50,14 +64,24 @@ BENCHMARK(BM_BackProject)
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
 
+void BM_VoxelizeDepthFrame(benchmark::State& state) {
+  ThreadLimit limit(static_cast<int>(state.range(0)));
+  std::size_t cells = 0;
+  for (auto _ : state) cells = voxelize(room_cloud(), VoxelizeConfig{0.01f, 0.5f}).cells.size();
+  state.counters["points/s"] = benchmark::Counter(static_cast<double>(room_cloud().size()),
+                                                  benchmark::Counter::kIsIterationInvariantRate);
+  state.counters["cells"] = static_cast<double>(cells);
+}
+BENCHMARK(BM_VoxelizeDepthFrame)
+    ->ArgName("threads")
+    ->Arg(1)
+    ->Arg(2)
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
+
 void BM_ProjectiveDistance(benchmark::State& state) {
   const cv::Mat depth = filter_depth(room_frame(), DepthFilterConfig{});
-  const PointCloud cloud = back_project(room_frame(), depth);
-  PointCloud finite;
-  for (const auto& p : cloud.positions) {
-    if (p.allFinite()) finite.positions.push_back(p);
-  }
-  const SparseGrid grid = voxelize(finite, VoxelizeConfig{0.01f, 0.5f});
+  const SparseGrid grid = voxelize(room_cloud(), VoxelizeConfig{0.01f, 0.5f});
   ThreadLimit limit(static_cast<int>(state.range(0)));
   const DepthFrame& f = room_frame();
   for (auto _ : state) {

@@ -14,22 +14,134 @@
 namespace meshflow {
 namespace {
 
-// Sorted union of sorted `keys` and the same keys shifted by `delta` (a one-cell step along one
-// axis; shifting preserves the order of packed keys). Linear.
-std::vector<VoxelKey> union_with_shift(const std::vector<VoxelKey>& keys, VoxelKey delta) {
-  std::vector<VoxelKey> out;
-  out.reserve(keys.size() * 2);
-  std::size_t i = 0, j = 0;
-  const std::size_t n = keys.size();
-  while (i < n || j < n) {
-    const VoxelKey a = i < n ? keys[i] : ~VoxelKey{0};
-    const VoxelKey b = j < n ? keys[j] + delta : ~VoxelKey{0};
-    const VoxelKey next = std::min(a, b);
-    if (out.empty() || out.back() != next) out.push_back(next);
-    if (a == next) ++i;
-    if (b == next) ++j;
+// Keys relative to the bounding box of one grid, each axis just wide enough for the box (plus
+// one step for corners). They sort in the same z, y, x order as packed keys but span far fewer
+// bits, so the radix sorts need 2-3 passes instead of 6. Converted to packed keys at the end.
+class CompactKeys {
+ public:
+  // Box of cell indices lo..hi (inclusive); throws if a corner of it cannot be packed.
+  CompactKeys(const Eigen::Vector3i& lo, const Eigen::Vector3i& hi) : origin_(lo) {
+    if (!cell_index_in_range(lo) || !cell_index_in_range(hi)) {
+      throw Error("voxelize", "points",
+                  "lie outside the grid's range (coordinates too large for the voxel size)");
+    }
+    for (int a = 0; a < 3; ++a) {
+      const auto span = static_cast<std::uint32_t>(hi[a] - lo[a] + 2);  // + the corner step
+      while ((std::uint32_t{1} << bits_[a]) < span) ++bits_[a];
+    }
+    shift_ = {0, bits_[0], bits_[0] + bits_[1]};
   }
+  VoxelKey pack(const Eigen::Vector3i& c) const {
+    const Eigen::Vector3i r = c - origin_;
+    return (VoxelKey(r.z()) << shift_[2]) | (VoxelKey(r.y()) << shift_[1]) | VoxelKey(r.x());
+  }
+  Eigen::Vector3i unpack(VoxelKey k) const {
+    Eigen::Vector3i r;
+    for (int a = 0; a < 3; ++a)
+      r[a] = static_cast<int>((k >> shift_[a]) & ((VoxelKey{1} << bits_[a]) - 1));
+    return r + origin_;
+  }
+  /// Difference between the keys of neighbouring cells along `axis`.
+  VoxelKey step(int axis) const { return VoxelKey{1} << shift_[axis]; }
+  /// Rewrites sorted compact keys as (equally sorted) packed keys, in parallel.
+  void to_packed(std::vector<VoxelKey>& keys) const {
+    tbb::parallel_for(std::size_t{0}, keys.size(),
+                      [&](std::size_t i) { keys[i] = pack_key(unpack(keys[i])); });
+  }
+
+ private:
+  Eigen::Vector3i origin_;
+  std::array<int, 3> bits_{0, 0, 0};
+  std::array<int, 3> shift_{0, 0, 0};
+};
+
+// The compact key frame of the cells reached by every finite point of `cloud`.
+CompactKeys compact_keys_for(const PointCloud& cloud, float voxel, float reach) {
+  const Eigen::AlignedBox3f box = finite_bounds(cloud);
+  if (box.isEmpty()) return CompactKeys(Eigen::Vector3i::Zero(), Eigen::Vector3i::Zero());
+  const Eigen::Vector3f r = Eigen::Vector3f::Constant(reach);
+  return CompactKeys(cell_of(box.min() - r, voxel), cell_of(box.max() + r, voxel));
+}
+
+// Flagged keys: a compact key shifted left by 3, its low bits saying "the block also spans
+// the next cell along x (bit 0), y (bit 1), z (bit 2)". Sorting flagged keys sorts the keys.
+constexpr int kFlagBits = 3;
+constexpr VoxelKey kAllFlags = 7;
+
+// Merges keys[i0, i1) with the flagged keys[j0, j1) shifted by `step` along their key part,
+// appending to `out`. Both inputs are sorted; equal keys become one with OR-ed flags.
+void merge_shifted(const std::vector<VoxelKey>& keys, std::size_t i0, std::size_t i1,
+                   std::size_t j0, std::size_t j1, VoxelKey step, VoxelKey flag,
+                   std::vector<VoxelKey>& out) {
+  const VoxelKey none = ~VoxelKey{0};
+  auto next_flagged = [&](std::size_t j) {
+    while (j < j1 && (keys[j] & flag) == 0) ++j;
+    return j;
+  };
+  std::size_t i = i0, j = next_flagged(j0);
+  while (i < i1 || j < j1) {
+    const VoxelKey a = i < i1 ? keys[i] >> kFlagBits : none;
+    const VoxelKey b = j < j1 ? (keys[j] >> kFlagBits) + step : none;
+    if (a <= b) {
+      out.push_back(keys[i++] | (a == b ? keys[j] & kAllFlags : 0));
+      if (a == b) j = next_flagged(j + 1);
+    } else {
+      out.push_back((b << kFlagBits) | (keys[j] & kAllFlags));
+      j = next_flagged(j + 1);
+    }
+  }
+}
+
+// Sorted flagged keys with unique key parts -> the same keys plus, for each key flagged along
+// `axis`, its neighbour one step further along `axis` (carrying the flags; flags of keys that
+// meet are OR-ed). Shifting preserves order, so this is a linear merge, split into fixed blocks
+// of the unshifted keys (each block takes the shifted keys falling into its key range) that are
+// merged in parallel and concatenated in order.
+std::vector<VoxelKey> dilate_along(const std::vector<VoxelKey>& keys, int axis,
+                                   const CompactKeys& frame) {
+  constexpr std::size_t kBlock = 16384;
+  const VoxelKey step = frame.step(axis);
+  const VoxelKey flag = VoxelKey{1} << axis;
+  const std::size_t n = keys.size();
+  const std::size_t blocks = std::max<std::size_t>(1, (n + kBlock - 1) / kBlock);
+  // First shifted key at or after the key at index i (n for i == n).
+  auto shifted_bound = [&](std::size_t i) -> std::size_t {
+    if (i >= n) return n;
+    const VoxelKey key = keys[i] >> kFlagBits;
+    std::size_t lo = 0, hi = n;
+    while (lo < hi) {
+      const std::size_t mid = (lo + hi) / 2;
+      if ((keys[mid] >> kFlagBits) + step < key)
+        lo = mid + 1;
+      else
+        hi = mid;
+    }
+    return lo;
+  };
+  std::vector<std::vector<VoxelKey>> parts(blocks);
+  tbb::parallel_for(std::size_t{0}, blocks, [&](std::size_t b) {
+    const std::size_t i0 = b * kBlock, i1 = std::min(n, i0 + kBlock);
+    const std::size_t j0 = b == 0 ? 0 : shifted_bound(i0);
+    const std::size_t j1 = b + 1 == blocks ? n : shifted_bound(i1);
+    parts[b].reserve(2 * (i1 - i0));
+    merge_shifted(keys, i0, i1, j0, j1, step, flag, parts[b]);
+  });
+  std::vector<std::size_t> offsets(blocks);
+  for (std::size_t b = 0; b < blocks; ++b) offsets[b] = parts[b].size();
+  std::vector<VoxelKey> out(exclusive_scan_in_place(offsets));
+  tbb::parallel_for(std::size_t{0}, blocks, [&](std::size_t b) {
+    std::copy(parts[b].begin(), parts[b].end(),
+              out.begin() + static_cast<std::ptrdiff_t>(offsets[b]));
+  });
   return out;
+}
+
+// Keys of flagged blocks, each dilated along the axes its flags name; flags dropped.
+std::vector<VoxelKey> expand_blocks(std::vector<VoxelKey> flagged, const CompactKeys& frame) {
+  for (int axis = 0; axis < 3; ++axis) flagged = dilate_along(flagged, axis, frame);
+  tbb::parallel_for(std::size_t{0}, flagged.size(),
+                    [&](std::size_t i) { flagged[i] >>= kFlagBits; });
+  return flagged;
 }
 
 // For sorted `subset` shifted by `delta` (every shifted key present in sorted `superset`),
@@ -47,10 +159,11 @@ void locate_shifted(const std::vector<VoxelKey>& subset, VoxelKey delta,
 }
 
 // Writes the keys of the cells lo..hi (inclusive, z-major) to out.
-void write_cell_block(const Eigen::Vector3i& lo, const Eigen::Vector3i& hi, VoxelKey* out) {
+void write_cell_block(const Eigen::Vector3i& lo, const Eigen::Vector3i& hi, const CompactKeys& keys,
+                      VoxelKey* out) {
   for (int z = lo.z(); z <= hi.z(); ++z)
     for (int y = lo.y(); y <= hi.y(); ++y)
-      for (int x = lo.x(); x <= hi.x(); ++x) *out++ = pack_key({x, y, z});
+      for (int x = lo.x(); x <= hi.x(); ++x) *out++ = keys.pack({x, y, z});
 }
 
 // Throws unless the cells from p - reach to p + reach can be packed.
@@ -68,7 +181,8 @@ std::array<Eigen::Vector3i, 2> cell_range(const Eigen::Vector3f& p, float voxel,
 
 // Exact union of the cells overlapping every point's cube (any margin): up to (2m+1)^3 keys per
 // point, then radix sort + unique.
-std::vector<VoxelKey> cells_by_enumeration(const PointCloud& cloud, float voxel, float reach) {
+std::vector<VoxelKey> cells_by_enumeration(const PointCloud& cloud, float voxel, float reach,
+                                           const CompactKeys& keys) {
   const std::size_t n = cloud.size();
   std::vector<std::uint32_t> offsets(n);
   std::vector<std::array<Eigen::Vector3i, 2>> ranges(n);
@@ -79,63 +193,38 @@ std::vector<VoxelKey> cells_by_enumeration(const PointCloud& cloud, float voxel,
   });
   std::vector<VoxelKey> cells(exclusive_scan_in_place(offsets));
   tbb::parallel_for(std::size_t{0}, n, [&](std::size_t i) {
-    write_cell_block(ranges[i][0], ranges[i][1], &cells[offsets[i]]);
+    write_cell_block(ranges[i][0], ranges[i][1], keys, &cells[offsets[i]]);
   });
   radix_sort_unique(cells);
   return cells;
 }
 
-// For margins below one voxel a point's cube reaches at most one cell beyond its own along
-// each axis. Each point contributes its cell's key tagged with 6 bits (cube crosses the low /
-// high face in x, y, z); after sort + unique the tags of a cell are OR-ed and the cell is
-// expanded towards the tagged faces. n keys are sorted instead of up to 8n. The result contains
-// every cell the exact union has, plus at most the few cells that combine the tags of different
-// points of one cell (harmless: their corners are near data too).
-std::vector<VoxelKey> cells_by_face_flags(const PointCloud& cloud, float voxel, float reach) {
+// For margins below one voxel a point's cube spans one or two cells along each axis: a block
+// given by its lowest cell and three flags. The n flagged keys are sorted, blocks with the same
+// lowest cell OR their flags, and the blocks are expanded by three separable merges. The result
+// contains every cell of the exact union, plus the rare cells that combine the flags of
+// different points with the same lowest cell (harmless: they touch those points' cubes).
+std::vector<VoxelKey> cells_by_block_flags(const PointCloud& cloud, float voxel, float reach,
+                                           const CompactKeys& frame) {
   const std::size_t n = cloud.size();
-  std::vector<std::uint64_t> tagged(n);
+  std::vector<VoxelKey> flagged(n);
   tbb::parallel_for(std::size_t{0}, n, [&](std::size_t i) {
     const auto [lo, hi] = cell_range(cloud.positions[i], voxel, reach, i);
-    const Eigen::Vector3i c = cell_of(cloud.positions[i], voxel);
-    std::uint64_t flags = 0;
-    for (int a = 0; a < 3; ++a) {
-      flags |= (lo[a] < c[a] ? 1u : 0u) << (2 * a);
-      flags |= (hi[a] > c[a] ? 2u : 0u) << (2 * a);
-    }
-    tagged[i] = (pack_key(c) << 6) | flags;
+    VoxelKey flags = 0;
+    for (int a = 0; a < 3; ++a) flags |= VoxelKey(hi[a] > lo[a] ? 1 : 0) << a;
+    flagged[i] = (frame.pack(lo) << kFlagBits) | flags;
   });
-  radix_sort_unique(tagged);
-  // OR the tags of each cell (runs of equal key), then count and emit the expanded cells.
-  std::vector<std::pair<VoxelKey, std::uint32_t>> occupied;
-  for (std::size_t i = 0; i < tagged.size(); ++i) {
-    const VoxelKey key = tagged[i] >> 6;
-    const auto flags = static_cast<std::uint32_t>(tagged[i] & 63u);
-    if (occupied.empty() || occupied.back().first != key)
-      occupied.emplace_back(key, flags);
+  radix_sort_unique(flagged);
+  // OR the flags of runs with the same key (serial, linear; runs are short).
+  std::size_t out = 0;
+  for (std::size_t i = 0; i < flagged.size(); ++i) {
+    if (out > 0 && (flagged[out - 1] >> kFlagBits) == (flagged[i] >> kFlagBits))
+      flagged[out - 1] |= flagged[i] & kAllFlags;
     else
-      occupied.back().second |= flags;
+      flagged[out++] = flagged[i];
   }
-  std::vector<std::uint32_t> offsets(occupied.size());
-  tbb::parallel_for(std::size_t{0}, occupied.size(), [&](std::size_t i) {
-    std::uint32_t count = 1;
-    for (int a = 0; a < 3; ++a)
-      count *=
-          1 + ((occupied[i].second >> (2 * a)) & 1u) + ((occupied[i].second >> (2 * a + 1)) & 1u);
-    offsets[i] = count;
-  });
-  std::vector<VoxelKey> cells(exclusive_scan_in_place(offsets));
-  tbb::parallel_for(std::size_t{0}, occupied.size(), [&](std::size_t i) {
-    const Eigen::Vector3i c = unpack_key(occupied[i].first);
-    const std::uint32_t f = occupied[i].second;
-    Eigen::Vector3i lo, hi;
-    for (int a = 0; a < 3; ++a) {
-      lo[a] = c[a] - static_cast<int>((f >> (2 * a)) & 1u);
-      hi[a] = c[a] + static_cast<int>((f >> (2 * a + 1)) & 1u);
-    }
-    write_cell_block(lo, hi, &cells[offsets[i]]);
-  });
-  radix_sort_unique(cells);
-  return cells;
+  flagged.resize(out);
+  return expand_blocks(std::move(flagged), frame);
 }
 
 }  // namespace
@@ -158,23 +247,26 @@ SparseGrid voxelize(const PointCloud& cloud, const VoxelizeConfig& config) {
   grid.voxel_size = config.voxel_size;
   const float reach = config.margin * config.voxel_size;
 
-  // 1. Cells overlapping each point's margin cube.
-  grid.cells = config.margin < 1.0f ? cells_by_face_flags(cloud, config.voxel_size, reach)
-                                    : cells_by_enumeration(cloud, config.voxel_size, reach);
+  // 1. Cells overlapping each point's margin cube, as compact keys.
+  const CompactKeys keys = compact_keys_for(cloud, config.voxel_size, reach);
+  grid.cells = config.margin < 1.0f ? cells_by_block_flags(cloud, config.voxel_size, reach, keys)
+                                    : cells_by_enumeration(cloud, config.voxel_size, reach, keys);
 
-  // 2. Corners: the cells dilated by one step in +x, +y and +z (separable, linear merges).
-  grid.corners = grid.cells;
-  for (int axis = 0; axis < 3; ++axis) {
-    grid.corners = union_with_shift(grid.corners, VoxelKey{1} << (axis * kKeyBitsPerAxis));
-  }
+  // 2. Corners: each cell as a 2 x 2 x 2 block of corners (separable, linear merges).
+  std::vector<VoxelKey> flagged(grid.cells.size());
+  tbb::parallel_for(std::size_t{0}, flagged.size(),
+                    [&](std::size_t i) { flagged[i] = (grid.cells[i] << kFlagBits) | kAllFlags; });
+  grid.corners = expand_blocks(std::move(flagged), keys);
 
   // 3. Corner indices of each cell: one linear walk per corner offset, the 8 walks in parallel.
   grid.cell_corners.resize(grid.cells.size());
   tbb::parallel_for(0, 8, [&](int k) {
-    const VoxelKey delta = (VoxelKey(k & 1)) | (VoxelKey((k >> 1) & 1) << kKeyBitsPerAxis) |
-                           (VoxelKey((k >> 2) & 1) << (2 * kKeyBitsPerAxis));
+    const VoxelKey delta =
+        ((k & 1) ? keys.step(0) : 0) | ((k & 2) ? keys.step(1) : 0) | ((k & 4) ? keys.step(2) : 0);
     locate_shifted(grid.cells, delta, grid.corners, grid.cell_corners, static_cast<std::size_t>(k));
   });
+  keys.to_packed(grid.cells);
+  keys.to_packed(grid.corners);
   return grid;
 }
 

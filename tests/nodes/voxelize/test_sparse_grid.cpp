@@ -43,7 +43,7 @@ TEST(SparseGrid, MatchesBruteForceCellAndCornerSets) {
           << "margin " << margin;
       EXPECT_EQ(grid.corners, std::vector<VoxelKey>(corners.begin(), corners.end()));
     } else {
-      // Face-flag expansion: every exact cell, plus only neighbours of occupied cells.
+      // Block-flag expansion: every exact cell, plus only neighbours of occupied cells.
       std::set<VoxelKey> occupied;
       for (const auto& p : c.positions) occupied.insert(pack_key(cell_of(p, voxel)));
       const std::set<VoxelKey> got(grid.cells.begin(), grid.cells.end());

@@ -25,13 +25,18 @@ std::uint64_t filter(Frame& f, const ReconstructionConfig& c) {
                       " without measurement, " + std::to_string(f.depth_counts.out_of_range) +
                       " out of range)");
     }
-    f.cloud = back_project(*f.depth, depth_m);
+    f.cloud = back_project_valid(*f.depth, depth_m);  // finite points with normals only
     f.normals_from_image = true;
     f.depth->depth = depth_m;  // keep only the filtered metric depth for the distance stage
     f.depth->depth_scale = 1.0f;
     f.depth->color.release();
   }
-  f.cloud = filter_cloud(f.cloud, c.filter, &f.filter_counts);
+  if (f.depth && c.filter.keeps_every_finite_point()) {  // nothing left to filter: no copy
+    f.filter_counts = FilterCounts{};
+    f.filter_counts.input = f.filter_counts.output = f.cloud.size();
+  } else {
+    f.cloud = filter_cloud(f.cloud, c.filter, &f.filter_counts);
+  }
   if (f.cloud.size() < 3) {
     throw Error(f.name, "filter",
                 "only " + std::to_string(f.cloud.size()) + " finite points remain of " +

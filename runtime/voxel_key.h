@@ -37,11 +37,19 @@ inline Eigen::Vector3i unpack_key(VoxelKey k) {
           static_cast<std::int32_t>((k >> (2 * kKeyBitsPerAxis)) & kKeyAxisMask) - kKeyOffset};
 }
 
+/// floor(x) as an integer, inline (std::floor is a library call on baseline x86-64). Exact for
+/// |x| <= 2^30; larger values saturate at +-2^30 and NaN gives -2^30, both outside the key range.
+inline std::int32_t floor_to_int(float x) {
+  constexpr float kLimit = 1073741824.0f;  // 2^30
+  const float c = x >= -kLimit ? (x <= kLimit ? x : kLimit) : -kLimit;
+  const auto i = static_cast<std::int32_t>(c);  // rounds towards zero
+  return c < static_cast<float>(i) ? i - 1 : i;
+}
+
 /// Cell containing p for cells of edge `voxel_size` with a corner at the origin.
 inline Eigen::Vector3i cell_of(const Eigen::Vector3f& p, float voxel_size) {
-  return {static_cast<std::int32_t>(std::floor(p.x() / voxel_size)),
-          static_cast<std::int32_t>(std::floor(p.y() / voxel_size)),
-          static_cast<std::int32_t>(std::floor(p.z() / voxel_size))};
+  return {floor_to_int(p.x() / voxel_size), floor_to_int(p.y() / voxel_size),
+          floor_to_int(p.z() / voxel_size)};
 }
 
 }  // namespace meshflow

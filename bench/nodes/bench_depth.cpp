@@ -64,6 +64,20 @@ BENCHMARK(BM_BackProject)
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
 
+void BM_BackProjectValid(benchmark::State& state) {
+  const cv::Mat depth = filter_depth(room_frame(), DepthFilterConfig{});
+  ThreadLimit limit(static_cast<int>(state.range(0)));
+  for (auto _ : state) benchmark::DoNotOptimize(back_project_valid(room_frame(), depth).size());
+  state.counters["pixels/s"] =
+      benchmark::Counter(640.0 * 480.0, benchmark::Counter::kIsIterationInvariantRate);
+}
+BENCHMARK(BM_BackProjectValid)
+    ->ArgName("threads")
+    ->Arg(1)
+    ->Arg(2)
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
+
 void BM_VoxelizeDepthFrame(benchmark::State& state) {
   ThreadLimit limit(static_cast<int>(state.range(0)));
   std::size_t cells = 0;

@@ -1,9 +1,10 @@
 #include "nodes/extract/marching_cubes.h"
 
 #include <tbb/parallel_for.h>
-#include <tbb/parallel_sort.h>
 
 #include <algorithm>
+#include <atomic>
+#include <memory>
 
 #include "nodes/extract/cube_table.h"
 #include "runtime/parallel.h"
@@ -11,21 +12,23 @@
 namespace meshflow {
 namespace {
 
-// A crossed grid edge as one active cell sees it: key = lower corner index * 3 + axis,
-// `upper` = its other corner, `slot` = where the cell listed it (cells list their crossed edges
-// in local edge order, so a cell finds the vertex of its k-th crossed edge at its k-th slot).
-struct EdgeRef {
-  std::uint64_t key;
-  std::uint32_t upper;
-  std::uint32_t slot;
-  bool operator<(const EdgeRef& o) const { return key < o.key || (key == o.key && slot < o.slot); }
-};
-
-std::uint64_t edge_key(const std::array<std::uint32_t, 8>& corners, int e) {
-  return static_cast<std::uint64_t>(
+// Grid edges are numbered lower corner index * 3 + axis.
+std::size_t edge_key(const std::array<std::uint32_t, 8>& corners, int e) {
+  return static_cast<std::size_t>(
              corners[static_cast<std::size_t>(kCubeEdges[static_cast<std::size_t>(e)][0])]) *
              3 +
-         static_cast<std::uint64_t>(kCubeEdgeAxis[static_cast<std::size_t>(e)]);
+         static_cast<std::size_t>(kCubeEdgeAxis[static_cast<std::size_t>(e)]);
+}
+
+constexpr std::uint32_t kNoEdge = UINT32_MAX;
+
+// Calls f(local edge e, its two corners) for every edge of case `pattern` that crosses the surface.
+template <typename F>
+void for_each_crossed_edge(int pattern, F f) {
+  for (int e = 0; e < 12; ++e) {
+    const auto& ce = kCubeEdges[static_cast<std::size_t>(e)];
+    if (((pattern >> ce[0]) & 1) != ((pattern >> ce[1]) & 1)) f(e, ce[0], ce[1]);
+  }
 }
 
 }  // namespace
@@ -52,45 +55,45 @@ TriangleMesh marching_cubes(const SparseGrid& grid, const DistanceField& field,
   const std::vector<std::uint32_t> active =
       parallel_select_indices(cells, [&](std::size_t i) { return pattern[i] != 0; });
 
-  // 2. Crossed edges of active cells, sorted and unique: one vertex each.
-  std::vector<std::uint32_t> edge_offsets(active.size());
+  // 2. Crossed edges of active cells, one vertex each. Every cell sharing an edge marks it in a
+  // table over all grid edges with the same value (its upper corner; relaxed atomics, no
+  // order needed), then vertices are numbered in table order by a parallel scan over fixed
+  // blocks, so numbering and positions do not depend on the thread count.
+  const std::size_t table_size = grid.corners.size() * 3;
+  std::unique_ptr<std::atomic<std::uint32_t>[]> upper(new std::atomic<std::uint32_t>[table_size]);
+  tbb::parallel_for(std::size_t{0}, table_size,
+                    [&](std::size_t k) { upper[k].store(kNoEdge, std::memory_order_relaxed); });
   tbb::parallel_for(std::size_t{0}, active.size(), [&](std::size_t a) {
-    const int p = pattern[active[a]];
+    const auto& corners = grid.cell_corners[active[a]];
+    for_each_crossed_edge(pattern[active[a]], [&](int e, int, int c1) {
+      upper[edge_key(corners, e)].store(corners[static_cast<std::size_t>(c1)],
+                                        std::memory_order_relaxed);
+    });
+  });
+  const std::size_t blocks = (table_size + kParallelBlock - 1) / kParallelBlock;
+  std::vector<std::uint32_t> block_offsets(blocks);
+  tbb::parallel_for(std::size_t{0}, blocks, [&](std::size_t b) {
     std::uint32_t count = 0;
-    for (const auto& e : kCubeEdges) count += ((p >> e[0]) & 1) != ((p >> e[1]) & 1) ? 1u : 0u;
-    edge_offsets[a] = count;
+    for (std::size_t k = b * kParallelBlock; k < std::min(table_size, (b + 1) * kParallelBlock);
+         ++k)
+      count += upper[k].load(std::memory_order_relaxed) != kNoEdge ? 1u : 0u;
+    block_offsets[b] = count;
   });
-  std::vector<EdgeRef> edges(exclusive_scan_in_place(edge_offsets));
-  tbb::parallel_for(std::size_t{0}, active.size(), [&](std::size_t a) {
-    const std::size_t cell = active[a];
-    const int p = pattern[cell];
-    std::uint32_t at = edge_offsets[a];
-    for (int e = 0; e < 12; ++e) {
-      const auto& ce = kCubeEdges[static_cast<std::size_t>(e)];
-      if (((p >> ce[0]) & 1) == ((p >> ce[1]) & 1)) continue;
-      edges[at] = EdgeRef{edge_key(grid.cell_corners[cell], e),
-                          grid.cell_corners[cell][static_cast<std::size_t>(ce[1])], at};
-      ++at;
-    }
-  });
-  tbb::parallel_sort(edges.begin(), edges.end());
-  // One vertex per distinct key, numbered in key order; every slot learns its vertex.
-  std::vector<std::uint32_t> slot_vertex(edges.size());
-  std::size_t unique = 0;
-  for (std::size_t i = 0; i < edges.size(); ++i) {
-    if (unique == 0 || edges[i].key != edges[unique - 1].key) edges[unique++] = edges[i];
-    slot_vertex[edges[i].slot] = static_cast<std::uint32_t>(unique - 1);
-  }
-  edges.resize(unique);
-
   TriangleMesh mesh;
-  mesh.vertices.resize(edges.size());
-  tbb::parallel_for(std::size_t{0}, edges.size(), [&](std::size_t v) {
-    const auto lower = static_cast<std::uint32_t>(edges[v].key / 3);
-    const std::uint32_t upper = edges[v].upper;
-    const float d0 = field.values[lower] - config.iso, d1 = field.values[upper] - config.iso;
-    const float t = std::clamp(d0 / (d0 - d1), 1e-3f, 1.0f - 1e-3f);
-    mesh.vertices[v] = grid.corner_position(lower) * (1.0f - t) + grid.corner_position(upper) * t;
+  mesh.vertices.resize(exclusive_scan_in_place(block_offsets));
+  std::vector<std::uint32_t> edge_vertex(table_size);  // valid where upper[k] != kNoEdge
+  tbb::parallel_for(std::size_t{0}, blocks, [&](std::size_t b) {
+    std::uint32_t v = block_offsets[b];
+    for (std::size_t k = b * kParallelBlock; k < std::min(table_size, (b + 1) * kParallelBlock);
+         ++k) {
+      const std::uint32_t hi = upper[k].load(std::memory_order_relaxed);
+      if (hi == kNoEdge) continue;
+      const auto lo = static_cast<std::uint32_t>(k / 3);
+      const float d0 = field.values[lo] - config.iso, d1 = field.values[hi] - config.iso;
+      const float t = std::clamp(d0 / (d0 - d1), 1e-3f, 1.0f - 1e-3f);
+      mesh.vertices[v] = grid.corner_position(lo) * (1.0f - t) + grid.corner_position(hi) * t;
+      edge_vertex[k] = v++;
+    }
   });
 
   // 3. Triangles per active cell, in cell order.
@@ -102,14 +105,7 @@ TriangleMesh marching_cubes(const SparseGrid& grid, const DistanceField& field,
   tbb::parallel_for(std::size_t{0}, active.size(), [&](std::size_t a) {
     const std::size_t cell = active[a];
     const int p = pattern[cell];
-    std::array<std::uint32_t, 12> local_vertex{};  // vertex of each crossed local edge
-    std::uint32_t slot = edge_offsets[a];
-    for (int e = 0; e < 12; ++e) {
-      const auto& ce = kCubeEdges[static_cast<std::size_t>(e)];
-      if (((p >> ce[0]) & 1) != ((p >> ce[1]) & 1))
-        local_vertex[static_cast<std::size_t>(e)] = slot_vertex[slot++];
-    }
-    auto vertex_of = [&](int e) { return local_vertex[static_cast<std::size_t>(e)]; };
+    auto vertex_of = [&](int e) { return edge_vertex[edge_key(grid.cell_corners[cell], e)]; };
     std::uint32_t at = tri_offsets[a];
     for (const auto& tri : cases[p].triangles) {
       mesh.triangles[at++] = Triangle{vertex_of(tri[0]), vertex_of(tri[1]), vertex_of(tri[2])};

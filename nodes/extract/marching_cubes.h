@@ -13,10 +13,10 @@ struct ExtractConfig {
 };
 
 /// Extracts the iso-surface of `field` over every cell of `grid` whose 8 corners are valid.
-/// Vertices are shared between cells (one per crossed edge, ordered by edge key): no duplicate
+/// Vertices are shared between cells (one per crossed edge, numbered in edge order): no duplicate
 /// vertices and no cracks; triangles wind counter-clockwise seen from the positive side, so
 /// face normals point where the field grows. Interpolation parameters are clamped to
-/// [1e-3, 1 - 1e-3] so no two vertices coincide. Parallel and deterministic; O(cells log cells).
+/// [1e-3, 1 - 1e-3] so no two vertices coincide. Parallel and deterministic; O(cells + corners).
 TriangleMesh marching_cubes(const SparseGrid& grid, const DistanceField& field,
                             const ExtractConfig& config = {});
 

@@ -31,6 +31,13 @@ struct FilterConfig {
   int outlier_k = 0;            ///< neighbours for outlier removal; 0 = off (PCL's default is 50)
   float outlier_stddev = 1.0f;  ///< remove points whose mean neighbour distance exceeds
                                 ///< mean + outlier_stddev * stddev over the cloud
+
+  /// True when filter_cloud() with this config removes nothing but non-finite points.
+  bool keeps_every_finite_point() const {
+    constexpr float kInf = std::numeric_limits<float>::infinity();
+    return (crop_min.array() == -kInf).all() && (crop_max.array() == kInf).all() &&
+           min_range <= 0.0f && max_range <= 0.0f && voxel_size <= 0.0f && outlier_k <= 0;
+  }
 };
 
 /// Indices of points whose three coordinates are finite. O(n).

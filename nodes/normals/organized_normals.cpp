@@ -2,66 +2,150 @@
 
 #include <tbb/parallel_for.h>
 
+#include <algorithm>
 #include <limits>
+#include <vector>
+
+#include "runtime/parallel.h"
 
 namespace meshflow {
+namespace {
+
+// Back-projects pixels of a metric depth image on the fly (no intermediate camera-frame image:
+// a point is three multiplications, cheaper than the memory traffic of storing it).
+class PixelSurface {
+ public:
+  PixelSurface(const DepthFrame& frame, const cv::Mat& depth_m)
+      : depth_(depth_m),
+        T_(frame.T_world_camera),
+        rotation_(frame.T_world_camera.linear()),
+        ray_x_(static_cast<std::size_t>(depth_m.cols)),
+        ray_y_(static_cast<std::size_t>(depth_m.rows)) {
+    const PinholeIntrinsics& k = frame.intrinsics;
+    for (int u = 0; u < depth_m.cols; ++u)
+      ray_x_[static_cast<std::size_t>(u)] = (static_cast<float>(u) - k.cx) / k.fx;
+    for (int v = 0; v < depth_m.rows; ++v)
+      ray_y_[static_cast<std::size_t>(v)] = (static_cast<float>(v) - k.cy) / k.fy;
+  }
+
+  // World-frame point and camera-facing normal of pixel (u, v); false if the pixel has no depth
+  // or lacks a valid neighbour in both image directions.
+  inline bool at(int u, int v, Eigen::Vector3f& position, Eigen::Vector3f& normal) const {
+    const float* row = depth_.ptr<float>(v);
+    const float* above = v > 0 ? depth_.ptr<float>(v - 1) : nullptr;
+    const float* below = v + 1 < depth_.rows ? depth_.ptr<float>(v + 1) : nullptr;
+    const float ry = ray_y_[static_cast<std::size_t>(v)];
+    Eigen::Vector3f c, l, r, up, dn;
+    if (!point(row, u, ry, c)) return false;
+    const bool has_l = u > 0 && point(row, u - 1, ry, l);
+    const bool has_r = u + 1 < depth_.cols && point(row, u + 1, ry, r);
+    const bool has_up =
+        above != nullptr && point(above, u, ray_y_[static_cast<std::size_t>(v - 1)], up);
+    const bool has_dn =
+        below != nullptr && point(below, u, ray_y_[static_cast<std::size_t>(v + 1)], dn);
+    if ((!has_l && !has_r) || (!has_up && !has_dn)) return false;
+    const Eigen::Vector3f dx = (has_r ? r : c) - (has_l ? l : c);
+    const Eigen::Vector3f dy = (has_dn ? dn : c) - (has_up ? up : c);
+    Eigen::Vector3f n = dx.cross(dy);
+    const float len = n.norm();
+    if (!(len > 0.0f)) return false;
+    n /= len;
+    if (n.dot(-c) < 0.0f) n = -n;  // towards the camera at the origin
+    position = T_ * c;
+    normal = rotation_ * n;
+    return true;
+  }
+
+ private:
+  // Camera-frame point of pixel u of a depth row whose ray y-slope is `ry`; false without depth.
+  inline bool point(const float* row, int u, float ry, Eigen::Vector3f& p) const {
+    const float d = row[u];
+    if (!(d > 0.0f)) return false;
+    p = {ray_x_[static_cast<std::size_t>(u)] * d, ry * d, d};
+    return true;
+  }
+
+  const cv::Mat& depth_;
+  Eigen::Isometry3f T_;
+  Eigen::Matrix3f rotation_;
+  std::vector<float> ray_x_, ray_y_;  // (u - cx) / fx per column, (v - cy) / fy per row
+};
+
+bool has_matching_color(const DepthFrame& frame, const cv::Mat& depth_m) {
+  return !frame.color.empty() && frame.color.size() == depth_m.size() &&
+         frame.color.type() == CV_8UC3;
+}
+
+Rgb8 color_at(const DepthFrame& frame, int u, int v) {
+  const cv::Vec3b rgb = frame.color.at<cv::Vec3b>(v, u);
+  return Rgb8{rgb[0], rgb[1], rgb[2]};
+}
+
+void set_sensor_origin(const DepthFrame& frame, PointCloud& cloud) {
+  cloud.sensor_origin = frame.T_world_camera.translation();
+  cloud.has_sensor_origin = true;
+}
+
+}  // namespace
 
 PointCloud back_project(const DepthFrame& frame, const cv::Mat& depth_m) {
-  const PinholeIntrinsics& k = frame.intrinsics;
   const int w = depth_m.cols, h = depth_m.rows;
-  const float nan = std::numeric_limits<float>::quiet_NaN();
-  const Eigen::Vector3f kNaN = Eigen::Vector3f::Constant(nan);
-  std::vector<Eigen::Vector3f> camera(static_cast<std::size_t>(w) * static_cast<std::size_t>(h),
-                                      kNaN);
-  tbb::parallel_for(0, h, [&](int v) {
-    for (int u = 0; u < w; ++u) {
-      const float d = depth_m.at<float>(v, u);
-      if (d > 0.0f) {
-        camera[static_cast<std::size_t>(v * w + u)] = {(static_cast<float>(u) - k.cx) * d / k.fx,
-                                                       (static_cast<float>(v) - k.cy) * d / k.fy,
-                                                       d};
-      }
-    }
-  });
+  const std::size_t n = static_cast<std::size_t>(w) * static_cast<std::size_t>(h);
+  const Eigen::Vector3f kNaN = Eigen::Vector3f::Constant(std::numeric_limits<float>::quiet_NaN());
   PointCloud cloud;
   cloud.width = static_cast<std::uint32_t>(w);
   cloud.height = static_cast<std::uint32_t>(h);
-  cloud.positions.assign(camera.size(), kNaN);
-  cloud.normals.assign(camera.size(), kNaN);
-  const bool color =
-      !frame.color.empty() && frame.color.size() == depth_m.size() && frame.color.type() == CV_8UC3;
-  if (color) cloud.colors.resize(camera.size());
-  const Eigen::Matrix3f rotation = frame.T_world_camera.linear();
+  cloud.positions.resize(n);
+  cloud.normals.resize(n);
+  const bool color = has_matching_color(frame, depth_m);
+  if (color) cloud.colors.resize(n);
+  const PixelSurface surface(frame, depth_m);
   tbb::parallel_for(0, h, [&](int v) {
-    auto at = [&](int x, int y) -> const Eigen::Vector3f* {
-      if (x < 0 || y < 0 || x >= w || y >= h) return nullptr;
-      const Eigen::Vector3f& p = camera[static_cast<std::size_t>(y * w + x)];
-      return p.allFinite() ? &p : nullptr;
-    };
     for (int u = 0; u < w; ++u) {
-      const std::size_t i = static_cast<std::size_t>(v * w + u);
-      const Eigen::Vector3f* c = at(u, v);
-      if (c == nullptr) continue;
-      const Eigen::Vector3f *l = at(u - 1, v), *r = at(u + 1, v), *up = at(u, v - 1),
-                            *dn = at(u, v + 1);
-      if ((l == nullptr && r == nullptr) || (up == nullptr && dn == nullptr)) continue;
-      const Eigen::Vector3f dx = (r ? *r : *c) - (l ? *l : *c);
-      const Eigen::Vector3f dy = (dn ? *dn : *c) - (up ? *up : *c);
-      Eigen::Vector3f n = dx.cross(dy);
-      const float len = n.norm();
-      if (!(len > 0.0f)) continue;
-      n /= len;
-      if (n.dot(-*c) < 0.0f) n = -n;  // towards the camera at the origin
-      cloud.positions[i] = frame.T_world_camera * *c;
-      cloud.normals[i] = rotation * n;
-      if (color) {
-        const cv::Vec3b rgb = frame.color.at<cv::Vec3b>(v, u);
-        cloud.colors[i] = Rgb8{rgb[0], rgb[1], rgb[2]};
+      const std::size_t i =
+          static_cast<std::size_t>(v) * static_cast<std::size_t>(w) + static_cast<std::size_t>(u);
+      if (!surface.at(u, v, cloud.positions[i], cloud.normals[i])) {
+        cloud.positions[i] = kNaN;
+        cloud.normals[i] = kNaN;
+      } else if (color) {
+        cloud.colors[i] = color_at(frame, u, v);
       }
     }
   });
-  cloud.sensor_origin = frame.T_world_camera.translation();
-  cloud.has_sensor_origin = true;
+  set_sensor_origin(frame, cloud);
+  return cloud;
+}
+
+PointCloud back_project_valid(const DepthFrame& frame, const cv::Mat& depth_m) {
+  const int w = depth_m.cols, h = depth_m.rows;
+  const bool color = has_matching_color(frame, depth_m);
+  const PixelSurface surface(frame, depth_m);
+  // Pass 1 counts each row's valid pixels, pass 2 writes them at the row's offset (recomputing
+  // a pixel is cheaper than buffering it).
+  std::vector<std::size_t> offsets(static_cast<std::size_t>(h));
+  tbb::parallel_for(0, h, [&](int v) {
+    std::size_t count = 0;
+    Eigen::Vector3f p, n;
+    for (int u = 0; u < w; ++u) count += surface.at(u, v, p, n) ? 1 : 0;
+    offsets[static_cast<std::size_t>(v)] = count;
+  });
+  const std::size_t total = exclusive_scan_in_place(offsets);
+  PointCloud cloud;
+  cloud.positions.resize(total);
+  cloud.normals.resize(total);
+  if (color) cloud.colors.resize(total);
+  tbb::parallel_for(0, h, [&](int v) {
+    std::size_t i = offsets[static_cast<std::size_t>(v)];
+    Eigen::Vector3f p, n;
+    for (int u = 0; u < w; ++u) {
+      if (!surface.at(u, v, p, n)) continue;
+      cloud.positions[i] = p;
+      cloud.normals[i] = n;
+      if (color) cloud.colors[i] = color_at(frame, u, v);
+      ++i;
+    }
+  });
+  set_sensor_origin(frame, cloud);
   return cloud;
 }
 

@@ -16,4 +16,9 @@ namespace meshflow {
 /// Colours are copied when the frame has them. Parallel over rows, deterministic; O(pixels).
 PointCloud back_project(const DepthFrame& frame, const cv::Mat& depth_m);
 
+/// The points of back_project() that have a position and a normal, in row-major pixel order,
+/// as an unorganized cloud (what the reconstruction needs; skips storing the invalid pixels).
+/// Same values as back_project(); parallel over rows, deterministic; O(pixels).
+PointCloud back_project_valid(const DepthFrame& frame, const cv::Mat& depth_m);
+
 }  // namespace meshflow

@@ -144,17 +144,19 @@ std::vector<VoxelKey> expand_blocks(std::vector<VoxelKey> flagged, const Compact
   return flagged;
 }
 
-// For sorted `subset` shifted by `delta` (every shifted key present in sorted `superset`),
-// writes the superset index of each into column `column` of `out`. Linear walk.
-void locate_shifted(const std::vector<VoxelKey>& subset, VoxelKey delta,
-                    const std::vector<VoxelKey>& superset,
-                    std::vector<std::array<std::uint32_t, 8>>& out, std::size_t column) {
+// For sorted cells shifted by `delta` (every shifted key and its +x neighbour present in the
+// sorted corners), writes the corner index of each into column `column` of `out`, and that of
+// its +x neighbour into column + 1: it directly follows (no key sorts between them). Linear walk.
+void locate_corner_pair(const std::vector<VoxelKey>& cells, VoxelKey delta,
+                        const std::vector<VoxelKey>& corners,
+                        std::vector<std::array<std::uint32_t, 8>>& out, std::size_t column) {
   std::size_t j = 0;
-  for (std::size_t i = 0; i < subset.size(); ++i) {
-    const VoxelKey key = subset[i] + delta;
-    while (superset[j] < key) ++j;
-    assert(superset[j] == key);
+  for (std::size_t i = 0; i < cells.size(); ++i) {
+    const VoxelKey key = cells[i] + delta;
+    while (corners[j] < key) ++j;
+    assert(corners[j] == key);
     out[i][column] = static_cast<std::uint32_t>(j);
+    out[i][column + 1] = static_cast<std::uint32_t>(j + 1);
   }
 }
 
@@ -206,13 +208,30 @@ std::vector<VoxelKey> cells_by_enumeration(const PointCloud& cloud, float voxel,
 // different points with the same lowest cell (harmless: they touch those points' cubes).
 std::vector<VoxelKey> cells_by_block_flags(const PointCloud& cloud, float voxel, float reach,
                                            const CompactKeys& frame) {
+  // Neighbouring points (scan or pixel order) mostly share their block: each fixed block of
+  // points drops repeats of the previous key before the sort.
   const std::size_t n = cloud.size();
-  std::vector<VoxelKey> flagged(n);
-  tbb::parallel_for(std::size_t{0}, n, [&](std::size_t i) {
-    const auto [lo, hi] = cell_range(cloud.positions[i], voxel, reach, i);
-    VoxelKey flags = 0;
-    for (int a = 0; a < 3; ++a) flags |= VoxelKey(hi[a] > lo[a] ? 1 : 0) << a;
-    flagged[i] = (frame.pack(lo) << kFlagBits) | flags;
+  const std::size_t blocks = (n + kParallelBlock - 1) / kParallelBlock;
+  std::vector<VoxelKey> keys(n);
+  std::vector<std::size_t> counts(blocks);
+  tbb::parallel_for(std::size_t{0}, blocks, [&](std::size_t b) {
+    const std::size_t begin = b * kParallelBlock, end = std::min(n, begin + kParallelBlock);
+    std::size_t out = begin;
+    for (std::size_t i = begin; i < end; ++i) {
+      const auto [lo, hi] = cell_range(cloud.positions[i], voxel, reach, i);
+      VoxelKey flags = 0;
+      for (int a = 0; a < 3; ++a) flags |= VoxelKey(hi[a] > lo[a] ? 1 : 0) << a;
+      const VoxelKey key = (frame.pack(lo) << kFlagBits) | flags;
+      if (out == begin || keys[out - 1] != key) keys[out++] = key;
+    }
+    counts[b] = out - begin;
+  });
+  std::vector<std::size_t> offsets = counts;
+  std::vector<VoxelKey> flagged(exclusive_scan_in_place(offsets));
+  tbb::parallel_for(std::size_t{0}, blocks, [&](std::size_t b) {
+    const auto first = keys.begin() + static_cast<std::ptrdiff_t>(b * kParallelBlock);
+    std::copy(first, first + static_cast<std::ptrdiff_t>(counts[b]),
+              flagged.begin() + static_cast<std::ptrdiff_t>(offsets[b]));
   });
   radix_sort_unique(flagged);
   // OR the flags of runs with the same key (serial, linear; runs are short).
@@ -258,12 +277,13 @@ SparseGrid voxelize(const PointCloud& cloud, const VoxelizeConfig& config) {
                     [&](std::size_t i) { flagged[i] = (grid.cells[i] << kFlagBits) | kAllFlags; });
   grid.corners = expand_blocks(std::move(flagged), keys);
 
-  // 3. Corner indices of each cell: one linear walk per corner offset, the 8 walks in parallel.
+  // 3. Corner indices of each cell: one linear walk per pair of corners along x (0-1, 2-3, 4-5,
+  // 6-7), the 4 walks in parallel.
   grid.cell_corners.resize(grid.cells.size());
-  tbb::parallel_for(0, 8, [&](int k) {
-    const VoxelKey delta =
-        ((k & 1) ? keys.step(0) : 0) | ((k & 2) ? keys.step(1) : 0) | ((k & 4) ? keys.step(2) : 0);
-    locate_shifted(grid.cells, delta, grid.corners, grid.cell_corners, static_cast<std::size_t>(k));
+  tbb::parallel_for(0, 4, [&](int pair) {
+    const VoxelKey delta = ((pair & 1) ? keys.step(1) : 0) | ((pair & 2) ? keys.step(2) : 0);
+    locate_corner_pair(grid.cells, delta, grid.corners, grid.cell_corners,
+                       static_cast<std::size_t>(2 * pair));
   });
   keys.to_packed(grid.cells);
   keys.to_packed(grid.corners);

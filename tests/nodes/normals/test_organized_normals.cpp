@@ -29,5 +29,35 @@ TEST(OrganizedNormals, FrontoParallelPlaneInTheWorldFrame) {
   EXPECT_NEAR((p - Eigen::Vector3f(1, 2, 1)).norm(), std::hypot(0.78f, 0.5f * 2.0f / 50.0f), 1e-4f);
 }
 
+TEST(OrganizedNormals, ValidOnlyBackProjectionKeepsTheFinitePixelsInOrder) {
+  const synthetic::Scene scene = synthetic::demo_room_scene();
+  const Eigen::Vector3f eye = scene.room.center;
+  PinholeIntrinsics k{64, 48, 52.5f, 52.5f, 31.5f, 23.5f};
+  DepthFrame f = synthetic::render_depth(
+      scene, k, synthetic::look_at(eye, eye + Eigen::Vector3f(1, 0.3f, -0.35f)), 0.0f);
+  cv::Mat depth = depth_in_metres(f);
+  depth.at<float>(10, 10) = 0.0f;  // holes: isolated pixels lose their normals too
+  depth.at<float>(11, 12) = 0.0f;
+  f.color = cv::Mat(48, 64, CV_8UC3);
+  cv::randu(f.color, cv::Scalar::all(0), cv::Scalar::all(255));
+  const PointCloud organized = back_project(f, depth);
+  const PointCloud valid = back_project_valid(f, depth);
+  EXPECT_FALSE(valid.is_organized());
+  EXPECT_TRUE(valid.has_sensor_origin);
+  ASSERT_EQ(valid.colors.size(), valid.size());
+  std::size_t j = 0;
+  for (std::size_t i = 0; i < organized.size(); ++i) {
+    if (!organized.positions[i].allFinite()) continue;
+    ASSERT_LT(j, valid.size());
+    EXPECT_EQ(valid.positions[j], organized.positions[i]);
+    EXPECT_EQ(valid.normals[j], organized.normals[i]);
+    EXPECT_EQ(valid.colors[j].r, organized.colors[i].r);
+    ++j;
+  }
+  EXPECT_EQ(j, valid.size());
+  EXPECT_GT(j, 64u * 48u * 9u / 10u);
+  EXPECT_LE(j, 64u * 48u - 2u);
+}
+
 }  // namespace
 }  // namespace meshflow

@@ -3,6 +3,8 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
+#include <limits>
 #include <random>
 #include <set>
 
@@ -77,6 +79,21 @@ TEST(SparseGrid, RejectsCoordinatesBeyondTheKeyRange) {
   EXPECT_THROW(voxelize(c, VoxelizeConfig{0.0f, 0.5f}), Error);
   c.positions.pop_back();
   EXPECT_THROW(voxelize(c, VoxelizeConfig{0.01f, -1.0f}), Error);
+}
+
+TEST(SparseGrid, FloorToIntMatchesStdFloor) {
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<float> u(-3e5f, 3e5f);
+  for (int i = 0; i < 100000; ++i) {
+    const float x = i < 50 ? static_cast<float>(i - 25) * 0.5f : u(rng);
+    EXPECT_EQ(floor_to_int(x), static_cast<std::int32_t>(std::floor(x))) << x;
+  }
+  EXPECT_EQ(floor_to_int(-0.0f), 0);
+  EXPECT_EQ(floor_to_int(-1e-30f), -1);
+  EXPECT_EQ(floor_to_int(1e20f), 1 << 30);
+  EXPECT_EQ(floor_to_int(-std::numeric_limits<float>::infinity()), -(1 << 30));
+  EXPECT_EQ(floor_to_int(std::numeric_limits<float>::quiet_NaN()), -(1 << 30));
+  EXPECT_FALSE(cell_index_in_range(cell_of({1e20f, 0, 0}, 0.01f)));
 }
 
 TEST(SparseGrid, KeysRoundTrip) {

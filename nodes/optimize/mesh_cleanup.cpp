@@ -1,9 +1,11 @@
 #include "nodes/optimize/mesh_cleanup.h"
 
-#include <tbb/parallel_sort.h>
+#include <tbb/parallel_for.h>
 
 #include <algorithm>
 #include <numeric>
+
+#include "runtime/radix_sort.h"
 
 namespace meshflow {
 namespace {
@@ -14,18 +16,38 @@ bool is_degenerate(const TriangleMesh& mesh, const Triangle& t) {
   return (mesh.vertices[t[1]] - a).cross(mesh.vertices[t[2]] - a).squaredNorm() == 0.0f;
 }
 
-// Marks the second and later copies of a face with the same vertex set.
+Triangle sorted_corners(Triangle t) {
+  std::sort(t.begin(), t.end());
+  return t;
+}
+
+// Marks the second and later copies (by index) of a face with the same vertex set. Copies share
+// their lowest vertex, so faces are grouped by it with a radix sort of (lowest vertex, index)
+// and only the few faces of a group are compared. O(n) plus O(g log g) per group of g faces.
 std::vector<bool> duplicate_faces(const std::vector<Triangle>& tris) {
-  std::vector<std::pair<Triangle, std::uint32_t>> sorted(tris.size());
-  for (std::size_t i = 0; i < tris.size(); ++i) {
-    Triangle t = tris[i];
-    std::sort(t.begin(), t.end());
-    sorted[i] = {t, static_cast<std::uint32_t>(i)};
-  }
-  tbb::parallel_sort(sorted.begin(), sorted.end());
+  std::vector<std::uint64_t> by_lowest(tris.size());
+  tbb::parallel_for(std::size_t{0}, tris.size(), [&](std::size_t i) {
+    const Triangle& t = tris[i];
+    by_lowest[i] = (std::uint64_t{std::min({t[0], t[1], t[2]})} << 32) | i;
+  });
+  radix_sort(by_lowest);
   std::vector<bool> dup(tris.size(), false);
-  for (std::size_t i = 1; i < sorted.size(); ++i) {
-    if (sorted[i].first == sorted[i - 1].first) dup[sorted[i].second] = true;
+  std::vector<std::pair<Triangle, std::uint32_t>> group;
+  for (std::size_t begin = 0; begin < by_lowest.size();) {
+    std::size_t end = begin + 1;
+    while (end < by_lowest.size() && (by_lowest[end] >> 32) == (by_lowest[begin] >> 32)) ++end;
+    if (end - begin > 1) {
+      group.clear();
+      for (std::size_t i = begin; i < end; ++i) {
+        const auto index = static_cast<std::uint32_t>(by_lowest[i] & 0xffffffffu);
+        group.emplace_back(sorted_corners(tris[index]), index);
+      }
+      std::sort(group.begin(), group.end());  // equal faces together, lowest index first
+      for (std::size_t i = 1; i < group.size(); ++i) {
+        if (group[i].first == group[i - 1].first) dup[group[i].second] = true;
+      }
+    }
+    begin = end;
   }
   return dup;
 }

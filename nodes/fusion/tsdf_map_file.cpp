@@ -1,0 +1,197 @@
+#include "nodes/fusion/tsdf_map_file.h"
+
+#include <cmath>
+#include <cstring>
+#include <fstream>
+#include <iterator>
+#include <vector>
+
+#include "nodes/io/atomic_file.h"
+#include "runtime/error.h"
+
+namespace meshflow::io {
+namespace {
+
+constexpr char kMagic[8] = {'M', 'F', 'T', 'S', 'D', 'F', '\r', '\n'};
+constexpr std::uint32_t kVersion = 1;
+constexpr std::size_t kHeaderBytes = 8 + 4 + 4 + 4 + 4 + 4 + 4 + 8;
+constexpr std::size_t kVoxelBytes = 4 + 4 + 4;
+constexpr std::size_t kBlockBytes = 12 + kTsdfBlockVoxels * kVoxelBytes;
+
+std::uint64_t fnv1a(const unsigned char* data, std::size_t n) {
+  std::uint64_t h = 14695981039346656037ull;
+  for (std::size_t i = 0; i < n; ++i) {
+    h ^= data[i];
+    h *= 1099511628211ull;
+  }
+  return h;
+}
+
+// Little-endian encoding into a byte buffer.
+class Writer {
+ public:
+  void bytes(const void* p, std::size_t n) {
+    const auto* b = static_cast<const unsigned char*>(p);
+    out.insert(out.end(), b, b + n);
+  }
+  void u32(std::uint32_t v) {
+    for (int i = 0; i < 4; ++i) out.push_back(static_cast<unsigned char>(v >> (8 * i)));
+  }
+  void u64(std::uint64_t v) {
+    for (int i = 0; i < 8; ++i) out.push_back(static_cast<unsigned char>(v >> (8 * i)));
+  }
+  void i32(std::int32_t v) { u32(static_cast<std::uint32_t>(v)); }
+  void f32(float v) {
+    std::uint32_t bits;
+    std::memcpy(&bits, &v, 4);
+    u32(bits);
+  }
+  std::vector<unsigned char> out;
+};
+
+// Little-endian decoding with the field name in every error.
+class Reader {
+ public:
+  Reader(const std::string& path, const std::vector<unsigned char>& data)
+      : path_(path), data_(data) {}
+  std::uint32_t u32(const char* field) {
+    need(4, field);
+    std::uint32_t v = 0;
+    for (int i = 0; i < 4; ++i)
+      v |= static_cast<std::uint32_t>(data_[at_ + static_cast<std::size_t>(i)]) << (8 * i);
+    at_ += 4;
+    return v;
+  }
+  std::uint64_t u64(const char* field) {
+    const std::uint64_t lo = u32(field);
+    return lo | (static_cast<std::uint64_t>(u32(field)) << 32);
+  }
+  std::int32_t i32(const char* field) { return static_cast<std::int32_t>(u32(field)); }
+  float f32(const char* field) {
+    const std::uint32_t bits = u32(field);
+    float v;
+    std::memcpy(&v, &bits, 4);
+    return v;
+  }
+  std::uint8_t u8(const char* field) {
+    need(1, field);
+    return data_[at_++];
+  }
+  std::size_t position() const { return at_; }
+  [[noreturn]] void fail(const std::string& field, const std::string& problem) const {
+    throw Error(path_, field + " at byte " + std::to_string(at_), problem);
+  }
+
+ private:
+  void need(std::size_t n, const char* field) const {
+    if (at_ + n > data_.size()) fail(field, "file ends early (truncated)");
+  }
+  const std::string& path_;
+  const std::vector<unsigned char>& data_;
+  std::size_t at_ = 0;
+};
+
+}  // namespace
+
+void write_tsdf_map(const std::string& path, const TsdfVolume& volume) {
+  const TsdfConfig& c = volume.config();
+  Writer w;
+  w.out.reserve(kHeaderBytes + volume.block_count() * kBlockBytes + 8);
+  w.bytes(kMagic, sizeof kMagic);
+  w.u32(kVersion);
+  w.u32(kTsdfBlockSide);
+  w.f32(c.voxel_size);
+  w.f32(c.truncation_voxels);
+  w.f32(c.max_weight);
+  w.u32((c.weighting == TsdfWeighting::kInverseDepth ? 1u : 0u) | (c.fuse_color ? 2u : 0u));
+  w.u64(volume.block_count());
+  for (std::uint32_t i : volume.blocks_in_key_order()) {
+    const TsdfBlock& b = volume.block(i);
+    for (int a = 0; a < 3; ++a) w.i32(b.coords[a]);
+    for (const TsdfVoxel& v : b.voxels) {
+      w.f32(v.distance);
+      w.f32(v.weight);
+      const unsigned char rgb0[4] = {v.color.r, v.color.g, v.color.b, 0};
+      w.bytes(rgb0, 4);
+    }
+  }
+  w.u64(fnv1a(w.out.data(), w.out.size()));
+  AtomicOutputFile file(path);
+  file.stream().write(reinterpret_cast<const char*>(w.out.data()),
+                      static_cast<std::streamsize>(w.out.size()));
+  file.commit();
+}
+
+TsdfVolume read_tsdf_map(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw Error(path, "", "cannot open the map file");
+  const std::vector<unsigned char> data((std::istreambuf_iterator<char>(in)),
+                                        std::istreambuf_iterator<char>());
+  Reader r(path, data);
+  if (data.size() < sizeof kMagic || std::memcmp(data.data(), kMagic, sizeof kMagic) != 0) {
+    throw Error(path, "magic", "not a meshflow TSDF map (expected \"MFTSDF\" at byte 0)");
+  }
+  for (std::size_t i = 0; i < sizeof kMagic; ++i) r.u8("magic");
+  const std::uint32_t version = r.u32("version");
+  if (version != kVersion) {
+    r.fail("version", "is " + std::to_string(version) + "; this build reads version " +
+                          std::to_string(kVersion));
+  }
+  if (r.u32("block side") != kTsdfBlockSide) r.fail("block side", "must be 8");
+  TsdfConfig config;
+  config.voxel_size = r.f32("voxel size");
+  config.truncation_voxels = r.f32("truncation");
+  config.max_weight = r.f32("max weight");
+  const std::uint32_t flags = r.u32("flags");
+  if (flags > 3u) r.fail("flags", "unknown bits set");
+  config.weighting = (flags & 1u) ? TsdfWeighting::kInverseDepth : TsdfWeighting::kConstant;
+  config.fuse_color = (flags & 2u) != 0;
+  const std::uint64_t blocks = r.u64("block count");
+  const std::uint64_t expected = kHeaderBytes + 8;
+  if (blocks > (data.size() - std::min<std::size_t>(data.size(), expected)) / kBlockBytes ||
+      expected + blocks * kBlockBytes != data.size()) {
+    r.fail("block count", std::to_string(blocks) + " blocks need " +
+                              std::to_string(expected + blocks * kBlockBytes) +
+                              " bytes, the file has " + std::to_string(data.size()) +
+                              " (truncated or corrupt)");
+  }
+  const std::uint64_t stored_hash = [&] {
+    std::uint64_t h = 0;
+    for (int i = 0; i < 8; ++i)
+      h |= static_cast<std::uint64_t>(data[data.size() - 8 + static_cast<std::size_t>(i)])
+           << (8 * i);
+    return h;
+  }();
+  if (stored_hash != fnv1a(data.data(), data.size() - 8)) {
+    throw Error(path, "checksum", "does not match the contents (corrupt file)");
+  }
+  TsdfVolume volume = [&] {
+    try {
+      return TsdfVolume(config);
+    } catch (const Error& e) {
+      throw Error(path, "header", e.problem());
+    }
+  }();
+  std::array<TsdfVoxel, kTsdfBlockVoxels> voxels;
+  for (std::uint64_t b = 0; b < blocks; ++b) {
+    Eigen::Vector3i coords;
+    for (int a = 0; a < 3; ++a) coords[a] = r.i32("block coordinates");
+    for (TsdfVoxel& v : voxels) {
+      v.distance = r.f32("voxel distance");
+      v.weight = r.f32("voxel weight");
+      v.color = Rgb8{r.u8("voxel colour"), r.u8("voxel colour"), r.u8("voxel colour")};
+      r.u8("voxel padding");
+      if (!std::isfinite(v.distance)) r.fail("voxel distance", "is not finite");
+      if (!std::isfinite(v.weight) || v.weight < 0.0f)
+        r.fail("voxel weight", "must be finite and >= 0");
+    }
+    try {
+      volume.insert_block(coords, voxels);
+    } catch (const Error& e) {
+      r.fail(e.location(), e.problem());
+    }
+  }
+  return volume;
+}
+
+}  // namespace meshflow::io

@@ -1,0 +1,216 @@
+#include "nodes/fusion/tsdf_volume.h"
+
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+
+#include "runtime/error.h"
+#include "runtime/parallel.h"
+#include "runtime/radix_sort.h"
+
+namespace meshflow {
+namespace {
+
+Eigen::Vector3i block_of_voxel(const Eigen::Vector3i& voxel) {
+  // Floor division by 8 for negative indices too.
+  return {voxel.x() >> 3, voxel.y() >> 3, voxel.z() >> 3};
+}
+
+// Keys of the blocks whose voxels lie within the truncation band of row v's valid pixels: for
+// each pixel, every block overlapping the box around the ray segment depth +- truncation.
+// Repeats of the previous key are skipped (neighbouring pixels share blocks).
+void touched_blocks_of_row(const cv::Mat& depth, int v, const PinholeIntrinsics& k,
+                           const Eigen::Isometry3f& T, float voxel, float truncation,
+                           std::vector<VoxelKey>& out, std::size_t& pixels) {
+  const float* row = depth.ptr<float>(v);
+  const float ry = (static_cast<float>(v) - k.cy) / k.fy;
+  for (int u = 0; u < depth.cols; ++u) {
+    const float d = row[u];
+    if (!(d > 0.0f) || !std::isfinite(d)) continue;
+    ++pixels;
+    const Eigen::Vector3f ray((static_cast<float>(u) - k.cx) / k.fx, ry, 1.0f);
+    const Eigen::Vector3f near_point = T * (ray * std::max(d - truncation, 0.0f));
+    const Eigen::Vector3f far_point = T * (ray * (d + truncation));
+    const Eigen::Vector3f lo = near_point.cwiseMin(far_point) / voxel;
+    const Eigen::Vector3f hi = near_point.cwiseMax(far_point) / voxel;
+    const Eigen::Vector3i vlo(floor_to_int(lo.x()), floor_to_int(lo.y()), floor_to_int(lo.z()));
+    const Eigen::Vector3i vhi(floor_to_int(hi.x()) + 1, floor_to_int(hi.y()) + 1,
+                              floor_to_int(hi.z()) + 1);
+    const Eigen::Vector3i blo = block_of_voxel(vlo), bhi = block_of_voxel(vhi);
+    if (!cell_index_in_range(blo) || !cell_index_in_range(bhi)) {
+      throw Error("tsdf", "pixel (" + std::to_string(u) + ", " + std::to_string(v) + ")",
+                  "maps outside the volume's range (pose or depth far too large)");
+    }
+    for (int z = blo.z(); z <= bhi.z(); ++z)
+      for (int y = blo.y(); y <= bhi.y(); ++y)
+        for (int x = blo.x(); x <= bhi.x(); ++x) {
+          const VoxelKey key = pack_key({x, y, z});
+          if (out.empty() || out.back() != key) out.push_back(key);
+        }
+  }
+}
+
+float observation_weight(TsdfWeighting scheme, float depth) {
+  return scheme == TsdfWeighting::kInverseDepth ? 1.0f / (depth * depth) : 1.0f;
+}
+
+}  // namespace
+
+TsdfVolume::TsdfVolume(const TsdfConfig& config) : config_(config) {
+  if (!(config.voxel_size > 0.0f) || !std::isfinite(config.voxel_size)) {
+    throw Error("tsdf", "voxel_size", "must be a positive number of metres");
+  }
+  if (!(config.truncation_voxels > 0.0f) || !std::isfinite(config.truncation_voxels)) {
+    throw Error("tsdf", "truncation_voxels", "must be a positive number of voxels");
+  }
+  if (!(config.max_weight > 0.0f)) throw Error("tsdf", "max_weight", "must be positive");
+}
+
+std::size_t TsdfVolume::memory_bytes() const {
+  return blocks_.size() * sizeof(TsdfBlock) +
+         index_.size() * (sizeof(VoxelKey) + sizeof(std::uint32_t) + 2 * sizeof(void*));
+}
+
+const TsdfBlock* TsdfVolume::find(const Eigen::Vector3i& block_coords) const {
+  if (!cell_index_in_range(block_coords)) return nullptr;
+  const auto it = index_.find(pack_key(block_coords));
+  return it == index_.end() ? nullptr : &blocks_[it->second];
+}
+
+std::vector<std::uint32_t> TsdfVolume::blocks_in_key_order() const {
+  std::vector<std::uint64_t> keyed(blocks_.size());
+  for (std::size_t i = 0; i < blocks_.size(); ++i) {
+    // Block keys use 57 bits; the index is recovered through the map after sorting.
+    keyed[i] = pack_key(blocks_[i].coords);
+  }
+  radix_sort(keyed);
+  std::vector<std::uint32_t> order(keyed.size());
+  for (std::size_t i = 0; i < keyed.size(); ++i) order[i] = index_.at(keyed[i]);
+  return order;
+}
+
+std::uint32_t TsdfVolume::allocate(const Eigen::Vector3i& coords) {
+  const auto id = static_cast<std::uint32_t>(blocks_.size());
+  blocks_.emplace_back();
+  blocks_.back().coords = coords;
+  index_.emplace(pack_key(coords), id);
+  return id;
+}
+
+void TsdfVolume::insert_block(const Eigen::Vector3i& coords,
+                              const std::array<TsdfVoxel, kTsdfBlockVoxels>& voxels) {
+  if (!cell_index_in_range(coords)) {
+    throw Error("tsdf", "block coordinates", "outside the packable range");
+  }
+  if (index_.count(pack_key(coords)) != 0) {
+    throw Error("tsdf",
+                "block (" + std::to_string(coords.x()) + ", " + std::to_string(coords.y()) + ", " +
+                    std::to_string(coords.z()) + ")",
+                "appears twice");
+  }
+  TsdfBlock& block = blocks_[allocate(coords)];
+  block.voxels = voxels;
+  block.modified = ++generation_;
+}
+
+IntegrationStats TsdfVolume::integrate(const DepthFrame& frame) {
+  IntegrationStats stats;
+  const cv::Mat depth = depth_in_metres(frame);
+  const PinholeIntrinsics& k = frame.intrinsics;
+  if (!(k.fx > 0.0f) || !(k.fy > 0.0f))
+    throw Error("tsdf", "intrinsics", "focal lengths must be positive");
+  const float voxel = config_.voxel_size, truncation = config_.truncation();
+  const Eigen::Isometry3f T = frame.T_world_camera;
+
+  // 1. Touched blocks: per row (local buffers), then sorted and unique.
+  const int rows = depth.rows;
+  std::vector<std::vector<VoxelKey>> row_keys(static_cast<std::size_t>(rows));
+  std::vector<std::size_t> row_pixels(static_cast<std::size_t>(rows), 0);
+  tbb::parallel_for(0, rows, [&](int v) {
+    touched_blocks_of_row(depth, v, k, T, voxel, truncation, row_keys[static_cast<std::size_t>(v)],
+                          row_pixels[static_cast<std::size_t>(v)]);
+  });
+  std::vector<std::size_t> offsets(static_cast<std::size_t>(rows));
+  for (int v = 0; v < rows; ++v) {
+    offsets[static_cast<std::size_t>(v)] = row_keys[static_cast<std::size_t>(v)].size();
+    stats.pixels_used += row_pixels[static_cast<std::size_t>(v)];
+  }
+  std::vector<VoxelKey> keys(exclusive_scan_in_place(offsets));
+  tbb::parallel_for(0, rows, [&](int v) {
+    const auto& r = row_keys[static_cast<std::size_t>(v)];
+    std::copy(r.begin(), r.end(),
+              keys.begin() + static_cast<std::ptrdiff_t>(offsets[static_cast<std::size_t>(v)]));
+  });
+  radix_sort_unique(keys);
+
+  // 2. Allocation, serial and in key order (deterministic block numbering).
+  std::vector<std::uint32_t> touched(keys.size());
+  for (std::size_t i = 0; i < keys.size(); ++i) {
+    const auto it = index_.find(keys[i]);
+    if (it != index_.end()) {
+      touched[i] = it->second;
+    } else {
+      touched[i] = allocate(unpack_key(keys[i]));
+      ++stats.blocks_allocated;
+    }
+  }
+  stats.blocks_touched = touched.size();
+
+  // 3. Update, one task per block; a voxel's new state depends only on its old state and the
+  // frame, so the order of blocks does not matter.
+  ++generation_;
+  const Eigen::Isometry3f T_cw = T.inverse();
+  const Eigen::Matrix3f R = T_cw.linear();
+  const bool color = config_.fuse_color && !frame.color.empty() &&
+                     frame.color.size() == depth.size() && frame.color.type() == CV_8UC3;
+  std::vector<std::size_t> updated(touched.size(), 0);
+  tbb::parallel_for(std::size_t{0}, touched.size(), [&](std::size_t t) {
+    TsdfBlock& block = blocks_[touched[t]];
+    const Eigen::Vector3i origin = block.coords * kTsdfBlockSide;
+    std::size_t count = 0;
+    for (int z = 0; z < kTsdfBlockSide; ++z)
+      for (int y = 0; y < kTsdfBlockSide; ++y) {
+        const Eigen::Vector3f row_start = (origin + Eigen::Vector3i(0, y, z)).cast<float>() * voxel;
+        Eigen::Vector3f pc = T_cw * row_start;
+        const Eigen::Vector3f step = R.col(0) * voxel;
+        for (int x = 0; x < kTsdfBlockSide; ++x, pc += step) {
+          if (!(pc.z() > 0.0f)) continue;
+          const float inv_z = 1.0f / pc.z();
+          const float uf = k.fx * pc.x() * inv_z + k.cx, vf = k.fy * pc.y() * inv_z + k.cy;
+          if (!(uf > -0.5f && vf > -0.5f && uf < static_cast<float>(depth.cols) - 0.5f &&
+                vf < static_cast<float>(depth.rows) - 0.5f)) {
+            continue;  // outside the image (or NaN)
+          }
+          const int u = static_cast<int>(uf + 0.5f), v = static_cast<int>(vf + 0.5f);
+          const float d = depth.at<float>(v, u);
+          if (!(d > 0.0f) || !std::isfinite(d)) continue;
+          const float sdf = d - pc.z();
+          if (sdf < -truncation) continue;  // hidden behind the surface: unknown
+          TsdfVoxel& vox =
+              block.voxels[static_cast<std::size_t>(x + kTsdfBlockSide * (y + kTsdfBlockSide * z))];
+          const float w = observation_weight(config_.weighting, d);
+          const float total = vox.weight + w;
+          vox.distance = (vox.distance * vox.weight + std::min(sdf, truncation) * w) / total;
+          if (color) {
+            const cv::Vec3b c = frame.color.at<cv::Vec3b>(v, u);
+            auto blend = [&](std::uint8_t old, std::uint8_t now) {
+              return static_cast<std::uint8_t>(std::lround(
+                  (static_cast<float>(old) * vox.weight + static_cast<float>(now) * w) / total));
+            };
+            vox.color =
+                Rgb8{blend(vox.color.r, c[0]), blend(vox.color.g, c[1]), blend(vox.color.b, c[2])};
+          }
+          vox.weight = std::min(total, config_.max_weight);
+          ++count;
+        }
+      }
+    if (count > 0) block.modified = generation_;
+    updated[t] = count;
+  });
+  for (std::size_t c : updated) stats.voxels_updated += c;
+  return stats;
+}
+
+}  // namespace meshflow

@@ -1,0 +1,101 @@
+#pragma once
+// A sparse, block-hashed truncated signed distance volume (KinectFusion-style fusion of posed
+// depth frames, on CPU cores). Space is divided into blocks of 8 x 8 x 8 voxels, allocated only
+// where a frame's truncation band passes; each voxel keeps a distance, a weight and a colour.
+
+#include <Eigen/Geometry>
+#include <array>
+#include <cstdint>
+#include <deque>
+#include <unordered_map>
+#include <vector>
+
+#include "runtime/depth_frame.h"
+#include "runtime/point_cloud.h"
+#include "runtime/voxel_key.h"
+
+namespace meshflow {
+
+constexpr int kTsdfBlockSide = 8;
+constexpr int kTsdfBlockVoxels = kTsdfBlockSide * kTsdfBlockSide * kTsdfBlockSide;
+
+enum class TsdfWeighting {
+  kConstant,      ///< every observation weighs 1
+  kInverseDepth,  ///< weight 1 / depth^2 (metres): near measurements count more (noise ~ depth^2)
+};
+
+struct TsdfConfig {
+  float voxel_size = 0.01f;        ///< metres
+  float truncation_voxels = 4.0f;  ///< truncation distance in voxels
+  TsdfWeighting weighting = TsdfWeighting::kConstant;
+  float max_weight = 256.0f;  ///< accumulated weight is capped here (a slowly moving average)
+  bool fuse_color = true;     ///< average the frame's colour into the voxels when it has one
+
+  float truncation() const { return truncation_voxels * voxel_size; }
+};
+
+/// One voxel: the signed distance to the surface along the camera ray (metres, clipped to
+/// +-truncation; positive in front of the surface), its accumulated weight (0 = never observed)
+/// and its colour.
+struct TsdfVoxel {
+  float distance = 0.0f;
+  float weight = 0.0f;
+  Rgb8 color;
+};
+
+/// Block (bx, by, bz) holds voxels (8 bx + x, 8 by + y, 8 bz + z) for x, y, z in 0..7; voxel
+/// (i, j, k) samples the point (i, j, k) * voxel_size. Voxel (x, y, z) is voxels[x + 8 y + 64 z].
+struct TsdfBlock {
+  Eigen::Vector3i coords;
+  std::array<TsdfVoxel, kTsdfBlockVoxels> voxels;
+  std::uint64_t modified = 0;  ///< the volume's generation when a voxel last changed
+};
+
+struct IntegrationStats {
+  std::size_t pixels_used = 0;       ///< valid depth pixels
+  std::size_t blocks_touched = 0;    ///< blocks the truncation band passes through
+  std::size_t blocks_allocated = 0;  ///< of which new
+  std::size_t voxels_updated = 0;    ///< voxels whose distance was fused
+};
+
+class TsdfVolume {
+ public:
+  /// Throws meshflow::Error on a non-positive or non-finite voxel size or truncation.
+  explicit TsdfVolume(const TsdfConfig& config = {});
+
+  /// Fuses one depth frame (any depth format of DepthFrame; pixels <= 0 or NaN are ignored)
+  /// seen from frame.T_world_camera: allocates the blocks its truncation band touches (serial,
+  /// in key order), then updates those blocks in parallel, one task per block. Voxels behind the
+  /// measured depth by more than the truncation are left alone. The result does not depend on
+  /// the number of threads. Not thread-safe against other calls on the same volume.
+  /// O(pixels + touched blocks x 512).
+  IntegrationStats integrate(const DepthFrame& frame);
+
+  const TsdfConfig& config() const { return config_; }
+  std::size_t block_count() const { return blocks_.size(); }
+  /// Bytes held by the blocks and their index.
+  std::size_t memory_bytes() const;
+  /// Incremented by every integrate(); blocks record it when they change.
+  std::uint64_t generation() const { return generation_; }
+
+  /// Block i (0 <= i < block_count(), in allocation order), or nullptr for find() misses.
+  const TsdfBlock& block(std::size_t i) const { return blocks_[i]; }
+  const TsdfBlock* find(const Eigen::Vector3i& block_coords) const;
+  /// Block indices sorted by block key (z, then y, then x): a deterministic iteration order.
+  std::vector<std::uint32_t> blocks_in_key_order() const;
+
+  /// Adds a block with the given voxels (used by the map reader). Throws meshflow::Error if the
+  /// block exists already or its coordinates cannot be packed.
+  void insert_block(const Eigen::Vector3i& coords,
+                    const std::array<TsdfVoxel, kTsdfBlockVoxels>& voxels);
+
+ private:
+  std::uint32_t allocate(const Eigen::Vector3i& coords);
+
+  TsdfConfig config_;
+  std::deque<TsdfBlock> blocks_;                       // stable addresses while growing
+  std::unordered_map<VoxelKey, std::uint32_t> index_;  // pack_key(block coords) -> block
+  std::uint64_t generation_ = 0;
+};
+
+}  // namespace meshflow

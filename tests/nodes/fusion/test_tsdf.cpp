@@ -1,0 +1,263 @@
+// TSDF fusion: accuracy against the analytic scene, coverage, determinism, incremental
+// extraction, the map file, and the real Redwood frames.
+
+#include <gtest/gtest.h>
+
+#include <cstring>
+#include <fstream>
+
+#include "nodes/fusion/tsdf_map_file.h"
+#include "nodes/fusion/tsdf_mesher.h"
+#include "nodes/fusion/tsdf_volume.h"
+#include "nodes/io/sequence.h"
+#include "nodes/normals/spatial_index.h"
+#include "nodes/synthetic/depth_sequence.h"
+#include "runtime/error.h"
+#include "runtime/threads.h"
+#include "test_support.h"
+
+namespace meshflow {
+namespace {
+
+constexpr float kVoxel = 0.03f;
+
+// A small camera turning in the demo room: 8 frames, 45 degrees apart, overlapping.
+std::vector<DepthFrame> room_frames(int frames = 8, float noise = 0.001f) {
+  synthetic::DepthSequenceConfig c;
+  c.frames = frames;
+  c.noise_sigma = noise;
+  c.intrinsics = PinholeIntrinsics{160, 120, 131.25f, 131.25f, 79.5f, 59.5f};
+  const auto seq = synthetic::make_depth_sequence(synthetic::demo_room_scene(), c);
+  std::vector<DepthFrame> out;
+  for (std::size_t i = 0; i < seq->size(); ++i) out.push_back(seq->frame(i).load_depth());
+  return out;
+}
+
+TsdfVolume fuse(const std::vector<DepthFrame>& frames, std::size_t first = 0,
+                std::size_t count = SIZE_MAX) {
+  TsdfVolume volume(TsdfConfig{kVoxel});
+  for (std::size_t i = first; i < std::min(frames.size(), first + count); ++i)
+    volume.integrate(frames[i]);
+  return volume;
+}
+
+void expect_same_volume(const TsdfVolume& a, const TsdfVolume& b) {
+  ASSERT_EQ(a.block_count(), b.block_count());
+  const auto oa = a.blocks_in_key_order(), ob = b.blocks_in_key_order();
+  for (std::size_t i = 0; i < oa.size(); ++i) {
+    const TsdfBlock &ba = a.block(oa[i]), &bb = b.block(ob[i]);
+    ASSERT_EQ(ba.coords, bb.coords);
+    for (std::size_t v = 0; v < ba.voxels.size(); ++v) {
+      ASSERT_EQ(ba.voxels[v].distance, bb.voxels[v].distance);
+      ASSERT_EQ(ba.voxels[v].weight, bb.voxels[v].weight);
+      ASSERT_EQ(ba.voxels[v].color, bb.voxels[v].color);
+    }
+  }
+}
+
+TEST(Tsdf, FusedRoomIsWithinHalfAVoxelOfTheTrueSurface) {
+  const synthetic::Scene scene = synthetic::demo_room_scene();
+  const TsdfVolume volume = fuse(room_frames());
+  TsdfMesher mesher;
+  const TriangleMesh mesh = mesher.extract(volume);
+  ASSERT_GT(mesh.triangles.size(), 20000u);
+  const auto err = test::vertex_errors(
+      mesh, [&](const Eigen::Vector3f& p) { return synthetic::surface_distance(scene, p); });
+  std::printf(
+      "[ accuracy ] fused room: mean %.4f voxel, max %.3f voxel, %zu triangles, %zu blocks\n",
+      err.mean / kVoxel, err.max / kVoxel, mesh.triangles.size(), volume.block_count());
+  EXPECT_LT(err.mean / kVoxel, 0.5);
+  const EdgeStatistics edges = edge_statistics(mesh);
+  EXPECT_EQ(edges.non_manifold_edges, 0u);
+  EXPECT_EQ(edges.inconsistent_edges, 0u);
+  for (const auto& p : mesh.vertices) ASSERT_TRUE(p.allFinite());
+}
+
+TEST(Tsdf, NoHolesWhereFramesOverlap) {
+  // Surface points seen by two neighbouring frames (visible in both depth images) must each
+  // have a mesh vertex within one voxel.
+  const std::vector<DepthFrame> frames = room_frames(8, 0.0f);
+  const TsdfVolume volume = fuse(frames);
+  const TriangleMesh mesh = TsdfMesher().extract(volume);
+  const KdTreeIndex index(mesh.vertices);
+  std::size_t checked = 0, holes = 0;
+  for (std::size_t f = 0; f < frames.size(); ++f) {
+    const DepthFrame& a = frames[f];
+    const DepthFrame& b = frames[(f + 1) % frames.size()];
+    const cv::Mat da = depth_in_metres(a), db = depth_in_metres(b);
+    const PinholeIntrinsics& k = a.intrinsics;
+    const Eigen::Isometry3f b_from_world = b.T_world_camera.inverse();
+    for (int v = 4; v < da.rows - 4; v += 4)
+      for (int u = 4; u < da.cols - 4; u += 4) {
+        const float d = da.at<float>(v, u);
+        if (!(d > 0.0f)) continue;
+        const Eigen::Vector3f p =
+            a.T_world_camera * Eigen::Vector3f((u - k.cx) * d / k.fx, (v - k.cy) * d / k.fy, d);
+        const Eigen::Vector3f q = b_from_world * p;
+        if (q.z() <= 0.0f) continue;
+        const int ub = static_cast<int>(std::lround(k.fx * q.x() / q.z() + k.cx));
+        const int vb = static_cast<int>(std::lround(k.fy * q.y() / q.z() + k.cy));
+        if (ub < 4 || vb < 4 || ub >= db.cols - 4 || vb >= db.rows - 4) continue;
+        if (std::abs(db.at<float>(vb, ub) - q.z()) > 0.5f * kVoxel) continue;  // occluded in b
+        std::uint32_t nearest;
+        float d2;
+        index.knn(p, 1, &nearest, &d2);
+        ++checked;
+        if (std::sqrt(d2) > kVoxel) ++holes;
+      }
+  }
+  std::printf("[ coverage ] %zu surface points seen twice, %zu without a vertex within a voxel\n",
+              checked, holes);
+  EXPECT_GT(checked, 500u);
+  EXPECT_EQ(holes, 0u);
+}
+
+TEST(Tsdf, BlocksStayInTheTruncationBand) {
+  const synthetic::Scene scene = synthetic::demo_room_scene();
+  const TsdfVolume volume = fuse(room_frames(4, 0.0f));
+  const float block = kVoxel * kTsdfBlockSide;
+  // A block is allocated because some voxel of it is within the truncation of a measured point:
+  // its centre is within truncation + the half-diagonal (+ one voxel of rounding) of the surface.
+  const float bound = volume.config().truncation() + 0.5f * std::sqrt(3.0f) * block + kVoxel;
+  for (std::size_t i = 0; i < volume.block_count(); ++i) {
+    const Eigen::Vector3f centre =
+        (volume.block(i).coords.cast<float>() + Eigen::Vector3f::Constant(0.5f)) * block -
+        Eigen::Vector3f::Constant(0.5f * kVoxel);
+    ASSERT_LT(synthetic::surface_distance(scene, centre), bound)
+        << volume.block(i).coords.transpose();
+  }
+  EXPECT_GT(volume.memory_bytes(), volume.block_count() * sizeof(TsdfBlock) - 1);
+}
+
+TEST(Tsdf, SameMapWithOneAndTwoThreads) {
+  const std::vector<DepthFrame> frames = room_frames(3);
+  auto fused = [&](int threads) {
+    ThreadLimit limit(threads);
+    return fuse(frames);
+  };
+  const TsdfVolume one = fused(1), two = fused(2);
+  expect_same_volume(one, two);
+  ThreadLimit limit1(1);
+  const TriangleMesh m1 = TsdfMesher().extract(one);
+  ThreadLimit limit2(2);
+  const TriangleMesh m2 = TsdfMesher().extract(one);
+  EXPECT_EQ(m1.vertices, m2.vertices);
+  EXPECT_EQ(m1.triangles, m2.triangles);
+}
+
+TEST(Tsdf, IncrementalExtractionEqualsAFreshOne) {
+  const std::vector<DepthFrame> frames = room_frames(8);
+  TsdfVolume volume(TsdfConfig{kVoxel});
+  TsdfMesher incremental;
+  for (std::size_t i = 0; i < 4; ++i) volume.integrate(frames[i]);
+  incremental.extract(volume);
+  volume.integrate(frames[4]);  // one more frame changes only part of the map
+  TsdfExtractStats stats;
+  const TriangleMesh again = incremental.extract(volume, &stats);
+  EXPECT_GT(stats.blocks_cached, 0u);
+  EXPECT_GT(stats.blocks_meshed, 0u);
+  const TriangleMesh fresh = TsdfMesher().extract(volume);
+  EXPECT_EQ(again.vertices, fresh.vertices);
+  EXPECT_EQ(again.triangles, fresh.triangles);
+  EXPECT_EQ(again.colors, fresh.colors);
+  TsdfExtractStats unchanged;
+  incremental.extract(volume, &unchanged);
+  EXPECT_EQ(unchanged.blocks_meshed, 0u);
+}
+
+TEST(Tsdf, ColourIsFusedIntoTheVoxels) {
+  std::vector<DepthFrame> frames = room_frames(1, 0.0f);
+  frames[0].color = cv::Mat(frames[0].depth.size(), CV_8UC3, cv::Scalar(200, 100, 50));
+  const TsdfVolume volume = fuse(frames);
+  const TriangleMesh mesh = TsdfMesher().extract(volume);
+  ASSERT_EQ(mesh.colors.size(), mesh.vertices.size());
+  ASSERT_FALSE(mesh.colors.empty());
+  for (const Rgb8& c : mesh.colors) ASSERT_EQ(c, (Rgb8{200, 100, 50}));
+}
+
+TEST(TsdfMapFile, SaveLoadExtractGivesTheSameMesh) {
+  const TsdfVolume volume = fuse(room_frames(2));
+  const std::string path = test::temp_dir() + "/room.tsdf";
+  io::write_tsdf_map(path, volume);
+  const TsdfVolume loaded = io::read_tsdf_map(path);
+  expect_same_volume(volume, loaded);
+  EXPECT_EQ(loaded.config().voxel_size, kVoxel);
+  const TriangleMesh a = TsdfMesher().extract(volume), b = TsdfMesher().extract(loaded);
+  EXPECT_EQ(a.vertices, b.vertices);
+  EXPECT_EQ(a.triangles, b.triangles);
+}
+
+std::string read_bytes(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+}
+
+void expect_map_error(const std::string& path, const std::string& fragment) {
+  try {
+    io::read_tsdf_map(path);
+    ADD_FAILURE() << "no error for " << path;
+  } catch (const Error& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find(path), std::string::npos) << what;
+    EXPECT_NE(what.find(fragment), std::string::npos) << what;
+  }
+}
+
+TEST(TsdfMapFile, CorruptOrTruncatedFilesFailClearly) {
+  const std::string dir = test::temp_dir();
+  const std::string good = dir + "/good.tsdf";
+  io::write_tsdf_map(good, fuse(room_frames(1)));
+  const std::string bytes = read_bytes(good);
+  ASSERT_GT(bytes.size(), 10000u);
+
+  test::write_file(dir + "/truncated.tsdf", bytes.substr(0, bytes.size() - 100));
+  expect_map_error(dir + "/truncated.tsdf", "truncated");
+  test::write_file(dir + "/header_only.tsdf", bytes.substr(0, 20));
+  expect_map_error(dir + "/header_only.tsdf", "truncated");
+  test::write_file(dir + "/empty.tsdf", "");
+  expect_map_error(dir + "/empty.tsdf", "magic");
+  std::string flipped = bytes;
+  flipped[bytes.size() / 2] = static_cast<char>(flipped[bytes.size() / 2] ^ 0x10);
+  test::write_file(dir + "/flipped.tsdf", flipped);
+  expect_map_error(dir + "/flipped.tsdf", "checksum");
+  std::string version = bytes;
+  version[8] = 7;
+  test::write_file(dir + "/version.tsdf", version);
+  expect_map_error(dir + "/version.tsdf", "version");
+  test::write_file(dir + "/text.tsdf", "ply\nformat ascii 1.0\n");
+  expect_map_error(dir + "/text.tsdf", "magic");
+  expect_map_error(dir + "/missing.tsdf", "cannot open");
+}
+
+TEST(Tsdf, RejectsBadConfiguration) {
+  EXPECT_THROW(TsdfVolume(TsdfConfig{0.0f}), Error);
+  TsdfConfig c;
+  c.truncation_voxels = -1.0f;
+  EXPECT_THROW(TsdfVolume{c}, Error);
+}
+
+TEST(Tsdf, RealRedwoodFramesFuseToACoherentMesh) {
+  MESHFLOW_REQUIRE_DATA("rgbd_redwood/trajectory.log");
+  const auto seq = io::open_sequence(test::data_path("rgbd_redwood"));
+  ASSERT_EQ(seq->size(), 5u);
+  TsdfVolume volume(TsdfConfig{0.01f});
+  for (std::size_t i = 0; i < seq->size(); ++i) {
+    const IntegrationStats s = volume.integrate(seq->frame(i).load_depth());
+    EXPECT_GT(s.pixels_used, 150000u);
+    EXPECT_GT(s.voxels_updated, 500000u);
+  }
+  const TriangleMesh mesh = TsdfMesher().extract(volume);
+  std::printf("[ redwood ] %zu blocks, %.1f MB, %zu vertices, %zu triangles\n",
+              volume.block_count(), static_cast<double>(volume.memory_bytes()) / 1e6,
+              mesh.vertices.size(), mesh.triangles.size());
+  EXPECT_GT(mesh.triangles.size(), 100000u);
+  EXPECT_LT(mesh.triangles.size(), 2000000u);
+  for (const auto& p : mesh.vertices) ASSERT_TRUE(p.allFinite());
+  const EdgeStatistics edges = edge_statistics(mesh);
+  EXPECT_EQ(edges.non_manifold_edges, 0u);
+  EXPECT_EQ(edges.inconsistent_edges, 0u);
+  EXPECT_LT(edges.boundary_edges, edges.edges / 20);  // a coherent surface, not fragments
+}
+
+}  // namespace
+}  // namespace meshflow

@@ -12,6 +12,7 @@
 #include "nodes/extract/marching_cubes.h"
 #include "nodes/filter/depth_filter.h"
 #include "nodes/filter/filter.h"
+#include "nodes/fusion/tsdf_volume.h"
 #include "nodes/normals/normals.h"
 #include "nodes/normals/spatial_index.h"
 #include "nodes/optimize/mesh_cleanup.h"
@@ -58,8 +59,9 @@ struct Frame {
   float voxel_size = 0.0f;
   SparseGrid grid;
   DistanceField distance;
-  TriangleMesh mesh;  ///< after extract: raw; after optimize: cleaned
+  TriangleMesh mesh;  ///< after extract: raw; after optimize: cleaned (fusion: the map so far)
   CleanupReport cleanup;
+  IntegrationStats integration;  ///< fusion: what integrating this frame did
 
   std::string error;  ///< empty while the frame is healthy
   std::string failed_stage;

@@ -14,16 +14,25 @@
 
 namespace meshflow {
 
-class ReconstructionPipeline {
+/// A flow graph that frames pass through: what run_sequence() drives.
+class FramePipeline {
  public:
-  /// `max_in_flight` (>= 1) bounds the frames inside the graph, and so memory.
-  explicit ReconstructionPipeline(ReconstructionConfig config, std::size_t max_in_flight = 2);
-
+  virtual ~FramePipeline() = default;
   /// Pulls frames from `next` until it returns nullptr, runs them through every stage and
   /// hands each finished frame (failed ones included, with `error` set) to `sink`, one at a
   /// time and in the order `next` produced them. Blocks until all frames are done.
   /// `next` and `sink` are called from graph threads, never concurrently with themselves.
-  void run(const std::function<FramePtr()>& next, const std::function<void(const FramePtr&)>& sink);
+  virtual void run(const std::function<FramePtr()>& next,
+                   const std::function<void(const FramePtr&)>& sink) = 0;
+};
+
+class ReconstructionPipeline : public FramePipeline {
+ public:
+  /// `max_in_flight` (>= 1) bounds the frames inside the graph, and so memory.
+  explicit ReconstructionPipeline(ReconstructionConfig config, std::size_t max_in_flight = 2);
+
+  void run(const std::function<FramePtr()>& next,
+           const std::function<void(const FramePtr&)>& sink) override;
 
   /// Reconstructs one in-memory cloud (convenience over run()).
   FramePtr reconstruct(PointCloud cloud, std::string name = "cloud");

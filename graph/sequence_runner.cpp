@@ -5,7 +5,7 @@
 
 namespace meshflow {
 
-SequenceRunStats run_sequence(ReconstructionPipeline& pipeline, const io::Sequence& sequence,
+SequenceRunStats run_sequence(FramePipeline& pipeline, const io::Sequence& sequence,
                               const SequenceRunOptions& options,
                               const std::function<void(const Frame&)>& on_frame) {
   SequenceRunStats stats;

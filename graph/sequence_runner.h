@@ -1,6 +1,6 @@
 #pragma once
-// Runs a recorded sequence through a ReconstructionPipeline: frame selection, strict mode and
-// the accounting that `meshflow run` and `meshflow profile` report.
+// Runs a recorded sequence through a frame pipeline (per-frame meshing or fusion): frame selection,
+// strict mode and the accounting that `meshflow run` and `meshflow profile` report.
 
 #include <cstddef>
 #include <functional>
@@ -33,7 +33,7 @@ struct SequenceRunStats {
 /// finished frame, in sequence order, one at a time (failed frames included, `error` set).
 /// In strict mode, frames after the first failure are neither fed nor delivered.
 /// Frames are released after `on_frame` returns, so memory stays bounded by the frames in flight.
-SequenceRunStats run_sequence(ReconstructionPipeline& pipeline, const io::Sequence& sequence,
+SequenceRunStats run_sequence(FramePipeline& pipeline, const io::Sequence& sequence,
                               const SequenceRunOptions& options,
                               const std::function<void(const Frame&)>& on_frame);
 

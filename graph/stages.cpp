@@ -46,6 +46,16 @@ std::uint64_t filter(Frame& f, const ReconstructionConfig& c) {
   return f.cloud.size();
 }
 
+std::uint64_t filter_depth_image(Frame& f, const ReconstructionConfig& c) {
+  if (!f.depth) throw Error(f.name, "input", "fusion needs depth images, not point clouds");
+  f.depth->depth = filter_depth(*f.depth, c.depth_filter, &f.depth_counts);
+  f.depth->depth_scale = 1.0f;
+  if (f.depth_counts.valid == 0) {
+    throw Error(f.name, "depth", "no valid depth pixel");
+  }
+  return f.depth_counts.valid;
+}
+
 std::uint64_t index(Frame& f, const ReconstructionConfig&) {
   if (f.depth) return 0;  // depth frames need no search: image normals, projective distance
   f.index = std::make_shared<KdTreeIndex>(f.cloud.positions);
@@ -95,10 +105,15 @@ const NamedStage kPointCloudStages[8] = {
     {"voxelize", voxelize}, {"distance", distance}, {"extract", extract}, {"optimize", optimize}};
 
 void run_stage(const char* name, StageFunction body, Frame& f, const ReconstructionConfig& c) {
+  run_stage(
+      name, [&](Frame& frame) { return body(frame, c); }, f);
+}
+
+void run_stage(const char* name, const std::function<std::uint64_t(Frame&)>& body, Frame& f) {
   if (!f.ok()) return;
   StageRecord record{name, monotonic_seconds(), 0.0, current_thread_index(), 0, f.seq};
   try {
-    record.items = body(f, c);
+    record.items = body(f);
   } catch (const std::exception& e) {
     f.error = e.what();
     f.failed_stage = name;

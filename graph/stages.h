@@ -3,6 +3,7 @@
 // processed. They know nothing of the flow graph, so they can be tested and timed alone.
 
 #include <cstdint>
+#include <functional>
 
 #include "graph/frame.h"
 
@@ -17,6 +18,10 @@ std::uint64_t distance(Frame& f, const ReconstructionConfig& c);  ///< corners e
 std::uint64_t extract(Frame& f, const ReconstructionConfig& c);   ///< triangles
 std::uint64_t optimize(Frame& f, const ReconstructionConfig& c);  ///< triangles kept
 
+/// Fusion's filter: the depth filter only (no back-projection); keeps the frame's colour.
+/// Fails frames that are not depth images.
+std::uint64_t filter_depth_image(Frame& f, const ReconstructionConfig& c);  ///< valid pixels
+
 using StageFunction = std::uint64_t (*)(Frame&, const ReconstructionConfig&);
 
 struct NamedStage {
@@ -30,5 +35,9 @@ extern const NamedStage kPointCloudStages[8];
 /// Runs `body` on `f` unless the frame already failed, appending a StageRecord; a thrown
 /// exception becomes the frame's error. Thread-safe for distinct frames.
 void run_stage(const char* name, StageFunction body, Frame& f, const ReconstructionConfig& c);
+
+/// The same for a stage with state of its own (e.g. fusion into a map): `body` returns the
+/// number of work items.
+void run_stage(const char* name, const std::function<std::uint64_t(Frame&)>& body, Frame& f);
 
 }  // namespace meshflow::stages

@@ -7,7 +7,9 @@
 #include <memory>
 #include <string>
 
+#include "graph/fusion_pipeline.h"
 #include "graph/sequence_runner.h"
+#include "nodes/fusion/tsdf_map_file.h"
 #include "nodes/io/atomic_file.h"
 #include "nodes/io/mesh_writers.h"
 #include "runtime/error.h"
@@ -67,7 +69,74 @@ struct RunOptions {
   std::string output_dir;
   bool merged = false;
   bool strict = false;
+  bool fuse = false;
+  std::size_t mesh_every = 0;
+  float truncation_voxels = 4.0f;
+  std::string save_map, load_map;
 };
+
+std::unique_ptr<io::Sequence> open_output(const RunOptions& o) {
+  auto sequence = open_sequence_argument(o.sequence);
+  std::error_code ec;
+  std::filesystem::create_directories(o.output_dir, ec);
+  if (ec || !std::filesystem::is_directory(o.output_dir)) {
+    throw Error(o.output_dir, "", "cannot create output directory");
+  }
+  return sequence;
+}
+
+void finish_run(const SequenceRunStats& stats) {
+  if (stats.stopped_early) throw std::runtime_error("stopped at the first failed frame (--strict)");
+  if (stats.frames_ok == 0) throw std::runtime_error("no frame could be reconstructed");
+}
+
+// `meshflow run --fuse`: every frame into one TSDF map, fused.ply at the end (and
+// fused_NNNNNN.ply after every --mesh-every frames).
+void run_fusion(const RunOptions& o) {
+  ThreadLimit limit(o.pipeline.threads);
+  const auto sequence = open_output(o);
+  FusionConfig config;
+  config.frames = o.pipeline.config();
+  config.tsdf.voxel_size = o.pipeline.voxel > 0.0f ? o.pipeline.voxel : 0.01f;
+  config.tsdf.truncation_voxels = o.truncation_voxels;
+  config.mesh_every = o.mesh_every;
+  const auto pipeline = o.load_map.empty()
+                            ? std::make_unique<FusionPipeline>(config, o.sequence.in_flight)
+                            : std::make_unique<FusionPipeline>(config, o.sequence.in_flight,
+                                                               io::read_tsdf_map(o.load_map));
+  ProgressLine progress(selected_frames(*sequence, o.sequence));
+  std::size_t done = 0, written = 0;
+  const std::filesystem::path dir(o.output_dir);
+  const SequenceRunOptions run_options{o.sequence.every, o.sequence.max_frames, o.strict};
+  const SequenceRunStats stats =
+      run_sequence(*pipeline, *sequence, run_options, [&](const Frame& f) {
+        progress.update(++done);
+        if (!f.ok()) return report_failure(f);
+        if (f.mesh.empty()) return;
+        char name[64];
+        std::snprintf(name, sizeof name, "fused_%06zu.ply", f.source_index);
+        io::write_ply((dir / name).string(), f.mesh);
+        ++written;
+      });
+  const double t0 = monotonic_seconds();
+  const TriangleMesh mesh = pipeline->extract_mesh();
+  const double extract_s = monotonic_seconds() - t0;
+  if (!mesh.empty()) {
+    io::write_ply((dir / "fused.ply").string(), mesh);
+    ++written;
+  }
+  if (!o.save_map.empty()) io::write_tsdf_map(o.save_map, pipeline->map());
+  print_run_summary(*sequence, stats, limit.threads(), o.sequence.in_flight);
+  const TsdfVolume& map = pipeline->map();
+  std::printf("map        %zu blocks of 8^3 voxels at %.4f m, %.1f MB%s%s\n", map.block_count(),
+              map.config().voxel_size, static_cast<double>(map.memory_bytes()) / 1e6,
+              o.save_map.empty() ? "" : ", saved to ", o.save_map.c_str());
+  std::printf("mesh       %zu vertices, %zu triangles, extracted in %.1f ms\n",
+              mesh.vertices.size(), mesh.triangles.size(), extract_s * 1e3);
+  std::printf("output     %zu mesh file%s in %s\n", written, written == 1 ? "" : "s",
+              o.output_dir.c_str());
+  finish_run(stats);
+}
 
 void append_mesh(TriangleMesh& into, const TriangleMesh& mesh) {
   const auto offset = static_cast<std::uint32_t>(into.vertices.size());
@@ -78,13 +147,9 @@ void append_mesh(TriangleMesh& into, const TriangleMesh& mesh) {
 }
 
 void run_run(const RunOptions& o) {
+  if (o.fuse) return run_fusion(o);
   ThreadLimit limit(o.pipeline.threads);
-  const auto sequence = open_sequence_argument(o.sequence);
-  std::error_code ec;
-  std::filesystem::create_directories(o.output_dir, ec);
-  if (ec || !std::filesystem::is_directory(o.output_dir)) {
-    throw Error(o.output_dir, "", "cannot create output directory");
-  }
+  const auto sequence = open_output(o);
   ReconstructionPipeline pipeline(o.pipeline.config(), o.sequence.in_flight);
   ProgressLine progress(selected_frames(*sequence, o.sequence));
   TriangleMesh merged;
@@ -107,8 +172,7 @@ void run_run(const RunOptions& o) {
   print_run_summary(*sequence, stats, limit.threads(), o.sequence.in_flight);
   std::printf("output     %zu mesh file%s in %s\n", written, written == 1 ? "" : "s",
               o.output_dir.c_str());
-  if (stats.stopped_early) throw std::runtime_error("stopped at the first failed frame (--strict)");
-  if (stats.frames_ok == 0) throw std::runtime_error("no frame could be reconstructed");
+  finish_run(stats);
 }
 
 struct ProfileOptions {
@@ -154,8 +218,24 @@ void add_run_command(CLI::App& app) {
   add_sequence_options(cmd, o->sequence);
   cmd->add_option("-o,--output", o->output_dir, "Output directory")->required();
   auto* per_frame = cmd->add_flag("--per-frame", "One mesh per frame, frame_NNNNNN.ply (default)");
-  cmd->add_flag("--merged", o->merged, "One mesh of all frames, merged.ply")->excludes(per_frame);
+  auto* merged = cmd->add_flag("--merged", o->merged, "One mesh of all frames, merged.ply")
+                     ->excludes(per_frame);
   cmd->add_flag("--strict", o->strict, "Stop at the first bad frame (exit code 1)");
+  auto* fuse = cmd->add_flag("--fuse", o->fuse,
+                             "Fuse depth frames into one TSDF map (--voxel, default 0.01 m); "
+                             "writes fused.ply")
+                   ->excludes(per_frame)
+                   ->excludes(merged);
+  cmd->add_option("--mesh-every", o->mesh_every,
+                  "With --fuse: also write the map's mesh after every N frames")
+      ->needs(fuse);
+  cmd->add_option("--truncation", o->truncation_voxels, "With --fuse: truncation in voxels")
+      ->check(CLI::PositiveNumber)
+      ->needs(fuse);
+  cmd->add_option("--save-map", o->save_map, "With --fuse: write the TSDF map to this file")
+      ->needs(fuse);
+  cmd->add_option("--load-map", o->load_map, "With --fuse: start from this TSDF map (resume a run)")
+      ->needs(fuse);
   add_pipeline_options(cmd, o->pipeline);
   cmd->callback([o] { run_run(*o); });
 }

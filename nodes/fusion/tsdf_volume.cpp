@@ -18,13 +18,37 @@ Eigen::Vector3i block_of_voxel(const Eigen::Vector3i& voxel) {
   return {voxel.x() >> 3, voxel.y() >> 3, voxel.z() >> 3};
 }
 
+// The last few distinct keys a row emitted: neighbouring pixels touch the same handful of
+// blocks, so checking these few drops almost every repeat before the global sort.
+class RecentKeys {
+ public:
+  bool seen_or_add(VoxelKey key) {
+    for (VoxelKey k : keys_) {
+      if (k == key) return true;
+    }
+    keys_[next_] = key;
+    next_ = (next_ + 1) % keys_.size();
+    return false;
+  }
+
+ private:
+  std::array<VoxelKey, 16> keys_ = [] {
+    std::array<VoxelKey, 16> a;
+    a.fill(~VoxelKey{0});  // never a packed key
+    return a;
+  }();
+  std::size_t next_ = 0;
+};
+
 // Keys of the blocks whose voxels lie within the truncation band of row v's valid pixels: for
 // each pixel, every block overlapping the box around the ray segment depth +- truncation.
-// Repeats of the previous key are skipped (neighbouring pixels share blocks).
+// Keys the row emitted recently are skipped; the caller sorts and dedupes the rest.
 void touched_blocks_of_row(const cv::Mat& depth, int v, const PinholeIntrinsics& k,
                            const Eigen::Isometry3f& T, float voxel, float truncation,
                            std::vector<VoxelKey>& out, std::size_t& pixels) {
   const float* row = depth.ptr<float>(v);
+  RecentKeys recent;
+  Eigen::Vector3i last_lo(1, 1, 1), last_hi(0, 0, 0);  // an empty box
   const float ry = (static_cast<float>(v) - k.cy) / k.fy;
   for (int u = 0; u < depth.cols; ++u) {
     const float d = row[u];
@@ -39,6 +63,9 @@ void touched_blocks_of_row(const cv::Mat& depth, int v, const PinholeIntrinsics&
     const Eigen::Vector3i vhi(floor_to_int(hi.x()) + 1, floor_to_int(hi.y()) + 1,
                               floor_to_int(hi.z()) + 1);
     const Eigen::Vector3i blo = block_of_voxel(vlo), bhi = block_of_voxel(vhi);
+    if (blo == last_lo && bhi == last_hi) continue;  // same blocks as the previous pixel
+    last_lo = blo;
+    last_hi = bhi;
     if (!cell_index_in_range(blo) || !cell_index_in_range(bhi)) {
       throw Error("tsdf", "pixel (" + std::to_string(u) + ", " + std::to_string(v) + ")",
                   "maps outside the volume's range (pose or depth far too large)");
@@ -47,7 +74,7 @@ void touched_blocks_of_row(const cv::Mat& depth, int v, const PinholeIntrinsics&
       for (int y = blo.y(); y <= bhi.y(); ++y)
         for (int x = blo.x(); x <= bhi.x(); ++x) {
           const VoxelKey key = pack_key({x, y, z});
-          if (out.empty() || out.back() != key) out.push_back(key);
+          if (!recent.seen_or_add(key)) out.push_back(key);
         }
   }
 }
@@ -196,8 +223,9 @@ IntegrationStats TsdfVolume::integrate(const DepthFrame& frame) {
           if (color) {
             const cv::Vec3b c = frame.color.at<cv::Vec3b>(v, u);
             auto blend = [&](std::uint8_t old, std::uint8_t now) {
-              return static_cast<std::uint8_t>(std::lround(
-                  (static_cast<float>(old) * vox.weight + static_cast<float>(now) * w) / total));
+              return static_cast<std::uint8_t>(
+                  (static_cast<float>(old) * vox.weight + static_cast<float>(now) * w) / total +
+                  0.5f);  // round to nearest: the value is >= 0
             };
             vox.color =
                 Rgb8{blend(vox.color.r, c[0]), blend(vox.color.g, c[1]), blend(vox.color.b, c[2])};

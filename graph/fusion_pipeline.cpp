@@ -1,0 +1,93 @@
+#include "graph/fusion_pipeline.h"
+
+#include <oneapi/tbb/flow_graph.h>
+
+#include <algorithm>
+
+#include "graph/stages.h"
+#include "runtime/error.h"
+
+namespace meshflow {
+namespace flow = tbb::flow;
+
+FusionPipeline::FusionPipeline(FusionConfig config, std::size_t max_in_flight)
+    : FusionPipeline(config, max_in_flight, TsdfVolume(config.tsdf)) {}
+
+FusionPipeline::FusionPipeline(FusionConfig config, std::size_t max_in_flight, TsdfVolume map)
+    : config_(std::move(config)),
+      max_in_flight_(std::max<std::size_t>(1, max_in_flight)),
+      map_(std::move(map)) {
+  if (map_.config().voxel_size != config_.tsdf.voxel_size) {
+    throw Error("fusion", "voxel size",
+                "the map has " + std::to_string(map_.config().voxel_size) + " m voxels, the run " +
+                    std::to_string(config_.tsdf.voxel_size) + " m");
+  }
+}
+
+std::uint64_t FusionPipeline::integrate(Frame& f) {
+  f.integration = map_.integrate(*f.depth);
+  f.depth.reset();
+  ++integrated_;
+  return f.integration.voxels_updated;
+}
+
+void FusionPipeline::run(const std::function<FramePtr()>& next,
+                         const std::function<void(const FramePtr&)>& sink) {
+  using StageNode = flow::function_node<FramePtr, FramePtr>;
+  const ReconstructionConfig& c = config_.frames;
+  flow::graph g;
+  std::uint64_t seq = 0;
+  flow::input_node<FramePtr> source(g, [&](tbb::flow_control& fc) -> FramePtr {
+    FramePtr f = next();
+    if (!f) {
+      fc.stop();
+      return nullptr;
+    }
+    f->seq = seq++;
+    return f;
+  });
+  flow::limiter_node<FramePtr> limiter(g, max_in_flight_);
+  StageNode read(g, flow::unlimited, [&](const FramePtr& f) {
+    stages::run_stage("read", stages::read, *f, c);
+    return f;
+  });
+  StageNode filter(g, flow::unlimited, [&](const FramePtr& f) {
+    stages::run_stage("filter", stages::filter_depth_image, *f, c);
+    return f;
+  });
+  flow::sequencer_node<FramePtr> in_order(g, [](const FramePtr& f) { return f->seq; });
+  StageNode integrate(g, flow::serial, [&](const FramePtr& f) {
+    stages::run_stage(
+        "integrate", [this](Frame& frame) { return this->integrate(frame); }, *f);
+    if (f->ok() && config_.mesh_every > 0 && integrated_ % config_.mesh_every == 0) {
+      stages::run_stage(
+          "extract",
+          [this](Frame& frame) {
+            frame.mesh = extract_mesh();
+            return static_cast<std::uint64_t>(frame.mesh.triangles.size());
+          },
+          *f);
+    }
+    return f;
+  });
+  flow::function_node<FramePtr, flow::continue_msg> deliver(g, flow::serial,
+                                                            [&](const FramePtr& f) {
+                                                              sink(f);
+                                                              return flow::continue_msg();
+                                                            });
+  flow::make_edge(source, limiter);
+  flow::make_edge(limiter, read);
+  flow::make_edge(read, filter);
+  flow::make_edge(filter, in_order);
+  flow::make_edge(in_order, integrate);
+  flow::make_edge(integrate, deliver);
+  flow::make_edge(deliver, limiter.decrementer());
+  source.activate();
+  g.wait_for_all();
+}
+
+TriangleMesh FusionPipeline::extract_mesh() {
+  return clean_mesh(mesher_.extract(map_), config_.frames.cleanup);
+}
+
+}  // namespace meshflow

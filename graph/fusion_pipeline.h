@@ -1,0 +1,53 @@
+#pragma once
+// Fusion of a posed depth sequence into one TSDF map, as a oneTBB flow graph:
+//
+//   source -> limiter(K) -> read -> filter -> sequencer -> integrate (serial, holds the map)
+//          -> sink --(decrement)--> limiter
+//
+// Reading and filtering run for several frames at once; integration takes frames one at a time
+// in input order (so the map does not depend on scheduling), each frame parallel inside.
+
+#include <cstddef>
+
+#include "graph/pipeline.h"
+#include "nodes/fusion/tsdf_mesher.h"
+#include "nodes/fusion/tsdf_volume.h"
+
+namespace meshflow {
+
+struct FusionConfig {
+  ReconstructionConfig frames;  ///< depth_filter applies to every frame; cleanup to the meshes
+  TsdfConfig tsdf;
+  /// > 0: after every N-th integrated frame, the frame carries the map's mesh so far (extracted
+  /// incrementally) in Frame::mesh.
+  std::size_t mesh_every = 0;
+};
+
+class FusionPipeline : public FramePipeline {
+ public:
+  /// A pipeline fusing into a new empty map.
+  FusionPipeline(FusionConfig config, std::size_t max_in_flight = 2);
+  /// A pipeline that goes on fusing into `map` (e.g. read from a map file to resume a run).
+  /// Throws meshflow::Error when the map's voxel size differs from config.tsdf's.
+  FusionPipeline(FusionConfig config, std::size_t max_in_flight, TsdfVolume map);
+
+  void run(const std::function<FramePtr()>& next,
+           const std::function<void(const FramePtr&)>& sink) override;
+
+  /// The map's surface (incremental marching cubes, then the configured clean-up).
+  TriangleMesh extract_mesh();
+
+  const TsdfVolume& map() const { return map_; }
+  const FusionConfig& config() const { return config_; }
+
+ private:
+  std::uint64_t integrate(Frame& f);
+
+  FusionConfig config_;
+  std::size_t max_in_flight_;
+  TsdfVolume map_;
+  TsdfMesher mesher_;
+  std::size_t integrated_ = 0;
+};
+
+}  // namespace meshflow

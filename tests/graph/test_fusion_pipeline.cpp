@@ -1,0 +1,82 @@
+// Fusion through the flow graph: same map as integrating the filtered frames in order, meshes
+// every N frames, failed frames reported and skipped.
+
+#include <gtest/gtest.h>
+
+#include "graph/fusion_pipeline.h"
+#include "graph/sequence_runner.h"
+#include "nodes/synthetic/depth_sequence.h"
+#include "nodes/synthetic/scan_sequence.h"
+#include "runtime/error.h"
+
+namespace meshflow {
+namespace {
+
+std::unique_ptr<io::Sequence> small_depth_sequence(int frames) {
+  synthetic::DepthSequenceConfig c;
+  c.frames = frames;
+  c.intrinsics = PinholeIntrinsics{160, 120, 131.25f, 131.25f, 79.5f, 59.5f};
+  return synthetic::make_depth_sequence(synthetic::demo_room_scene(), c);
+}
+
+TEST(FusionPipeline, MatchesSequentialIntegrationAndMeshesEveryNFrames) {
+  const auto seq = small_depth_sequence(6);
+  FusionConfig config;
+  config.tsdf.voxel_size = 0.04f;
+  config.mesh_every = 2;
+  FusionPipeline pipeline(config, 3);
+  std::vector<std::size_t> order, meshed;
+  const SequenceRunStats stats = run_sequence(pipeline, *seq, {}, [&](const Frame& f) {
+    ASSERT_TRUE(f.ok()) << f.error;
+    order.push_back(f.source_index);
+    EXPECT_GT(f.integration.voxels_updated, 10000u);
+    if (!f.mesh.empty()) meshed.push_back(f.source_index);
+  });
+  EXPECT_EQ(stats.frames_ok, 6u);
+  EXPECT_EQ(order, (std::vector<std::size_t>{0, 1, 2, 3, 4, 5}));
+  EXPECT_EQ(meshed, (std::vector<std::size_t>{1, 3, 5}));
+
+  TsdfVolume direct(config.tsdf);
+  for (std::size_t i = 0; i < seq->size(); ++i) {
+    DepthFrame frame = seq->frame(i).load_depth();
+    frame.depth = filter_depth(frame, config.frames.depth_filter);
+    frame.depth_scale = 1.0f;
+    direct.integrate(frame);
+  }
+  ASSERT_EQ(direct.block_count(), pipeline.map().block_count());
+  const auto a = direct.blocks_in_key_order(), b = pipeline.map().blocks_in_key_order();
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    for (std::size_t v = 0; v < kTsdfBlockVoxels; ++v) {
+      ASSERT_EQ(direct.block(a[i]).voxels[v].distance,
+                pipeline.map().block(b[i]).voxels[v].distance);
+      ASSERT_EQ(direct.block(a[i]).voxels[v].weight, pipeline.map().block(b[i]).voxels[v].weight);
+    }
+  }
+  const TriangleMesh mesh = pipeline.extract_mesh();
+  EXPECT_GT(mesh.triangles.size(), 5000u);
+  EXPECT_EQ(edge_statistics(mesh).non_manifold_edges, 0u);
+}
+
+TEST(FusionPipeline, PointCloudFramesFailWithAClearErrorAndTheRunGoesOn) {
+  const auto scans = synthetic::make_scan_sequence(synthetic::demo_room_scene());
+  FusionPipeline pipeline(FusionConfig{}, 2);
+  std::size_t failed = 0;
+  const SequenceRunStats stats = run_sequence(pipeline, *scans, {}, [&](const Frame& f) {
+    ASSERT_FALSE(f.ok());
+    EXPECT_EQ(f.failed_stage, "filter");
+    EXPECT_NE(f.error.find("depth images"), std::string::npos) << f.error;
+    ++failed;
+  });
+  EXPECT_EQ(failed, scans->size());
+  EXPECT_EQ(stats.frames_failed, scans->size());
+  EXPECT_EQ(pipeline.map().block_count(), 0u);
+}
+
+TEST(FusionPipeline, ResumingFromAMapNeedsTheSameVoxelSize) {
+  FusionConfig config;
+  config.tsdf.voxel_size = 0.02f;
+  EXPECT_THROW(FusionPipeline(config, 2, TsdfVolume(TsdfConfig{0.01f})), Error);
+}
+
+}  // namespace
+}  // namespace meshflow

@@ -78,8 +78,9 @@ class TsdfVolume {
   /// Incremented by every integrate(); blocks record it when they change.
   std::uint64_t generation() const { return generation_; }
 
-  /// Block i (0 <= i < block_count(), in allocation order), or nullptr for find() misses.
+  /// Block i, 0 <= i < block_count(), numbered in allocation order.
   const TsdfBlock& block(std::size_t i) const { return blocks_[i]; }
+  /// The block with these block coordinates, or nullptr if it was never allocated. O(1).
   const TsdfBlock* find(const Eigen::Vector3i& block_coords) const;
   /// Block indices sorted by block key (z, then y, then x): a deterministic iteration order.
   std::vector<std::uint32_t> blocks_in_key_order() const;

@@ -4,7 +4,7 @@
 
 #include <algorithm>
 
-#include "graph/stages.h"
+#include "graph/frame_graph.h"
 #include "runtime/error.h"
 
 namespace meshflow {
@@ -33,28 +33,13 @@ std::uint64_t FusionPipeline::integrate(Frame& f) {
 
 void FusionPipeline::run(const std::function<FramePtr()>& next,
                          const std::function<void(const FramePtr&)>& sink) {
-  using StageNode = flow::function_node<FramePtr, FramePtr>;
+  using detail::StageNode;
+  using detail::StageNodeBody;
   const ReconstructionConfig& c = config_.frames;
   flow::graph g;
-  std::uint64_t seq = 0;
-  flow::input_node<FramePtr> source(g, [&](tbb::flow_control& fc) -> FramePtr {
-    FramePtr f = next();
-    if (!f) {
-      fc.stop();
-      return nullptr;
-    }
-    f->seq = seq++;
-    return f;
-  });
-  flow::limiter_node<FramePtr> limiter(g, max_in_flight_);
-  StageNode read(g, flow::unlimited, [&](const FramePtr& f) {
-    stages::run_stage("read", stages::read, *f, c);
-    return f;
-  });
-  StageNode filter(g, flow::unlimited, [&](const FramePtr& f) {
-    stages::run_stage("filter", stages::filter_depth_image, *f, c);
-    return f;
-  });
+  detail::FrameGraphEnds ends(g, max_in_flight_, next, sink);
+  StageNode read(g, flow::unlimited, StageNodeBody("read", stages::read, c));
+  StageNode filter(g, flow::unlimited, StageNodeBody("filter", stages::filter_depth_image, c));
   flow::sequencer_node<FramePtr> in_order(g, [](const FramePtr& f) { return f->seq; });
   StageNode integrate(g, flow::serial, [&](const FramePtr& f) {
     stages::run_stage(
@@ -70,20 +55,12 @@ void FusionPipeline::run(const std::function<FramePtr()>& next,
     }
     return f;
   });
-  flow::function_node<FramePtr, flow::continue_msg> deliver(g, flow::serial,
-                                                            [&](const FramePtr& f) {
-                                                              sink(f);
-                                                              return flow::continue_msg();
-                                                            });
-  flow::make_edge(source, limiter);
-  flow::make_edge(limiter, read);
+  flow::make_edge(ends.entry(), read);
   flow::make_edge(read, filter);
   flow::make_edge(filter, in_order);
   flow::make_edge(in_order, integrate);
-  flow::make_edge(integrate, deliver);
-  flow::make_edge(deliver, limiter.decrementer());
-  source.activate();
-  g.wait_for_all();
+  flow::make_edge(integrate, ends.exit());
+  ends.run(g);
 }
 
 TriangleMesh FusionPipeline::extract_mesh() {

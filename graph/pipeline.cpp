@@ -4,32 +4,13 @@
 
 #include <algorithm>
 
-#include "graph/stages.h"
+#include "graph/frame_graph.h"
 
 namespace meshflow {
 namespace flow = tbb::flow;
 
-namespace {
-
-// A flow-graph body that runs one stage on the frame it is given and passes the frame on.
-class StageNodeBody {
- public:
-  StageNodeBody(const char* name, stages::StageFunction fn, const ReconstructionConfig& config)
-      : name_(name), fn_(fn), config_(&config) {}
-  FramePtr operator()(const FramePtr& frame) const {
-    stages::run_stage(name_, fn_, *frame, *config_);
-    return frame;
-  }
-
- private:
-  const char* name_;
-  stages::StageFunction fn_;
-  const ReconstructionConfig* config_;
-};
-
-using StageNode = flow::function_node<FramePtr, FramePtr>;
-
-}  // namespace
+using detail::StageNode;
+using detail::StageNodeBody;
 
 ReconstructionPipeline::ReconstructionPipeline(ReconstructionConfig config,
                                                std::size_t max_in_flight)
@@ -38,17 +19,7 @@ ReconstructionPipeline::ReconstructionPipeline(ReconstructionConfig config,
 void ReconstructionPipeline::run(const std::function<FramePtr()>& next,
                                  const std::function<void(const FramePtr&)>& sink) {
   flow::graph g;
-  std::uint64_t seq = 0;
-  flow::input_node<FramePtr> source(g, [&](tbb::flow_control& fc) -> FramePtr {
-    FramePtr f = next();
-    if (!f) {
-      fc.stop();
-      return nullptr;
-    }
-    f->seq = seq++;
-    return f;
-  });
-  flow::limiter_node<FramePtr> limiter(g, max_in_flight_);
+  detail::FrameGraphEnds ends(g, max_in_flight_, next, sink);
   StageNode read(g, flow::unlimited, StageNodeBody("read", stages::read, config_));
   StageNode filter(g, flow::unlimited, StageNodeBody("filter", stages::filter, config_));
   StageNode index(g, flow::unlimited, StageNodeBody("index", stages::index, config_));
@@ -58,14 +29,8 @@ void ReconstructionPipeline::run(const std::function<FramePtr()>& next,
   StageNode extract(g, flow::unlimited, StageNodeBody("extract", stages::extract, config_));
   StageNode optimize(g, flow::unlimited, StageNodeBody("optimize", stages::optimize, config_));
   flow::sequencer_node<FramePtr> in_order(g, [](const FramePtr& f) { return f->seq; });
-  flow::function_node<FramePtr, flow::continue_msg> deliver(g, flow::serial,
-                                                            [&](const FramePtr& f) {
-                                                              sink(f);
-                                                              return flow::continue_msg();
-                                                            });
 
-  flow::make_edge(source, limiter);
-  flow::make_edge(limiter, read);
+  flow::make_edge(ends.entry(), read);
   flow::make_edge(read, filter);
   flow::make_edge(filter, index);
   flow::make_edge(index, normals);
@@ -74,11 +39,8 @@ void ReconstructionPipeline::run(const std::function<FramePtr()>& next,
   flow::make_edge(distance, extract);
   flow::make_edge(extract, optimize);
   flow::make_edge(optimize, in_order);
-  flow::make_edge(in_order, deliver);
-  flow::make_edge(deliver, limiter.decrementer());
-
-  source.activate();
-  g.wait_for_all();
+  flow::make_edge(in_order, ends.exit());
+  ends.run(g);
 }
 
 FramePtr ReconstructionPipeline::reconstruct(PointCloud cloud, std::string name) {

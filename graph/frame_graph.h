@@ -1,0 +1,78 @@
+#pragma once
+// Flow-graph parts every frame pipeline shares (internal to graph/): the numbered source feeding
+// a limiter of K frames in flight, the serial delivery to the sink that releases the limiter,
+// and the node body that runs one stateless stage.
+
+#include <oneapi/tbb/flow_graph.h>
+
+#include <algorithm>
+#include <cstdint>
+#include <functional>
+
+#include "graph/frame.h"
+#include "graph/stages.h"
+
+namespace meshflow::detail {
+
+/// A flow-graph body that runs one stage on the frame it is given and passes the frame on.
+class StageNodeBody {
+ public:
+  StageNodeBody(const char* name, stages::StageFunction fn, const ReconstructionConfig& config)
+      : name_(name), fn_(fn), config_(&config) {}
+  FramePtr operator()(const FramePtr& frame) const {
+    stages::run_stage(name_, fn_, *frame, *config_);
+    return frame;
+  }
+
+ private:
+  const char* name_;
+  stages::StageFunction fn_;
+  const ReconstructionConfig* config_;
+};
+
+using StageNode = tbb::flow::function_node<FramePtr, FramePtr>;
+
+/// source -> limiter(K) ... deliver(sink) --(decrement)--> limiter. The source numbers frames
+/// (Frame::seq) in the order `next` returns them; connect the first stage to entry() and the
+/// in-order end of the stages to exit(). `next` and `sink` must outlive run().
+class FrameGraphEnds {
+ public:
+  FrameGraphEnds(tbb::flow::graph& g, std::size_t max_in_flight,
+                 const std::function<FramePtr()>& next,
+                 const std::function<void(const FramePtr&)>& sink)
+      : source_(g,
+                [this, &next](tbb::flow_control& fc) -> FramePtr {
+                  FramePtr f = next();
+                  if (!f) {
+                    fc.stop();
+                    return nullptr;
+                  }
+                  f->seq = seq_++;
+                  return f;
+                }),
+        limiter_(g, std::max<std::size_t>(1, max_in_flight)),
+        deliver_(g, tbb::flow::serial, [&sink](const FramePtr& f) {
+          sink(f);
+          return tbb::flow::continue_msg();
+        }) {
+    tbb::flow::make_edge(source_, limiter_);
+    tbb::flow::make_edge(deliver_, limiter_.decrementer());
+  }
+
+  tbb::flow::limiter_node<FramePtr>& entry() { return limiter_; }
+  tbb::flow::function_node<FramePtr, tbb::flow::continue_msg>& exit() { return deliver_; }
+
+  /// Starts the source and waits until every frame has been delivered.
+  void run(tbb::flow::graph& g) {
+    source_.activate();
+    g.wait_for_all();
+  }
+
+ private:
+  std::uint64_t seq_ = 0;
+  tbb::flow::input_node<FramePtr> source_;
+  tbb::flow::limiter_node<FramePtr> limiter_;
+  tbb::flow::function_node<FramePtr, tbb::flow::continue_msg> deliver_;
+};
+
+}  // namespace meshflow::detail

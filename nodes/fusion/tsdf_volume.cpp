@@ -42,30 +42,37 @@ class RecentKeys {
 
 // Keys of the blocks whose voxels lie within the truncation band of row v's valid pixels: for
 // each pixel, every block overlapping the box around the ray segment depth +- truncation.
-// Keys the row emitted recently are skipped; the caller sorts and dedupes the rest.
+// Keys inside the previous pixel's box or emitted recently are skipped; the caller sorts and
+// dedupes the rest. The ray is advanced incrementally along the row (in voxel units).
 void touched_blocks_of_row(const cv::Mat& depth, int v, const PinholeIntrinsics& k,
                            const Eigen::Isometry3f& T, float voxel, float truncation,
                            std::vector<VoxelKey>& out, std::size_t& pixels) {
   const float* row = depth.ptr<float>(v);
   RecentKeys recent;
   Eigen::Vector3i last_lo(1, 1, 1), last_hi(0, 0, 0);  // an empty box
+  const float inv_voxel = 1.0f / voxel;
+  const Eigen::Matrix3f R = T.linear() * inv_voxel;
+  const Eigen::Vector3f origin = T.translation() * inv_voxel;
   const float ry = (static_cast<float>(v) - k.cy) / k.fy;
-  for (int u = 0; u < depth.cols; ++u) {
+  const Eigen::Vector3f ray_step = R.col(0) / k.fx;                   // per pixel along u
+  Eigen::Vector3f ray = R * Eigen::Vector3f(-k.cx / k.fx, ry, 1.0f);  // world ray at u = 0
+  auto inside = [](const Eigen::Vector3i& p, const Eigen::Vector3i& lo, const Eigen::Vector3i& hi) {
+    return p.x() >= lo.x() && p.y() >= lo.y() && p.z() >= lo.z() && p.x() <= hi.x() &&
+           p.y() <= hi.y() && p.z() <= hi.z();
+  };
+  for (int u = 0; u < depth.cols; ++u, ray += ray_step) {
     const float d = row[u];
     if (!(d > 0.0f) || !std::isfinite(d)) continue;
     ++pixels;
-    const Eigen::Vector3f ray((static_cast<float>(u) - k.cx) / k.fx, ry, 1.0f);
-    const Eigen::Vector3f near_point = T * (ray * std::max(d - truncation, 0.0f));
-    const Eigen::Vector3f far_point = T * (ray * (d + truncation));
-    const Eigen::Vector3f lo = near_point.cwiseMin(far_point) / voxel;
-    const Eigen::Vector3f hi = near_point.cwiseMax(far_point) / voxel;
+    const Eigen::Vector3f near_point = origin + ray * std::max(d - truncation, 0.0f);
+    const Eigen::Vector3f far_point = origin + ray * (d + truncation);
+    const Eigen::Vector3f lo = near_point.cwiseMin(far_point);
+    const Eigen::Vector3f hi = near_point.cwiseMax(far_point);
     const Eigen::Vector3i vlo(floor_to_int(lo.x()), floor_to_int(lo.y()), floor_to_int(lo.z()));
     const Eigen::Vector3i vhi(floor_to_int(hi.x()) + 1, floor_to_int(hi.y()) + 1,
                               floor_to_int(hi.z()) + 1);
     const Eigen::Vector3i blo = block_of_voxel(vlo), bhi = block_of_voxel(vhi);
-    if (blo == last_lo && bhi == last_hi) continue;  // same blocks as the previous pixel
-    last_lo = blo;
-    last_hi = bhi;
+    if (inside(blo, last_lo, last_hi) && inside(bhi, last_lo, last_hi)) continue;
     if (!cell_index_in_range(blo) || !cell_index_in_range(bhi)) {
       throw Error("tsdf", "pixel (" + std::to_string(u) + ", " + std::to_string(v) + ")",
                   "maps outside the volume's range (pose or depth far too large)");
@@ -73,9 +80,13 @@ void touched_blocks_of_row(const cv::Mat& depth, int v, const PinholeIntrinsics&
     for (int z = blo.z(); z <= bhi.z(); ++z)
       for (int y = blo.y(); y <= bhi.y(); ++y)
         for (int x = blo.x(); x <= bhi.x(); ++x) {
-          const VoxelKey key = pack_key({x, y, z});
+          const Eigen::Vector3i b(x, y, z);
+          if (inside(b, last_lo, last_hi)) continue;
+          const VoxelKey key = pack_key(b);
           if (!recent.seen_or_add(key)) out.push_back(key);
         }
+    last_lo = blo;
+    last_hi = bhi;
   }
 }
 
@@ -219,12 +230,13 @@ IntegrationStats TsdfVolume::integrate(const DepthFrame& frame) {
               block.voxels[static_cast<std::size_t>(x + kTsdfBlockSide * (y + kTsdfBlockSide * z))];
           const float w = observation_weight(config_.weighting, d);
           const float total = vox.weight + w;
-          vox.distance = (vox.distance * vox.weight + std::min(sdf, truncation) * w) / total;
+          const float inv_total = 1.0f / total;
+          vox.distance = (vox.distance * vox.weight + std::min(sdf, truncation) * w) * inv_total;
           if (color) {
             const cv::Vec3b c = frame.color.at<cv::Vec3b>(v, u);
             auto blend = [&](std::uint8_t old, std::uint8_t now) {
               return static_cast<std::uint8_t>(
-                  (static_cast<float>(old) * vox.weight + static_cast<float>(now) * w) / total +
+                  (static_cast<float>(old) * vox.weight + static_cast<float>(now) * w) * inv_total +
                   0.5f);  // round to nearest: the value is >= 0
             };
             vox.color =

@@ -1,0 +1,51 @@
+#include "nodes/extract/edge_vertices.h"
+
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+
+#include "runtime/parallel.h"
+
+namespace meshflow {
+namespace {
+constexpr std::uint32_t kUnmarked = UINT32_MAX;
+}
+
+EdgeVertexTable::EdgeVertexTable(std::size_t corners, std::size_t directions)
+    : directions_(directions),
+      size_(corners * directions),
+      upper_(new std::atomic<std::uint32_t>[corners * directions]) {
+  tbb::parallel_for(std::size_t{0}, size_,
+                    [&](std::size_t k) { upper_[k].store(kUnmarked, std::memory_order_relaxed); });
+}
+
+std::vector<Eigen::Vector3f> EdgeVertexTable::place_vertices(const SparseGrid& grid,
+                                                             const DistanceField& field,
+                                                             float iso) {
+  const std::size_t blocks = (size_ + kParallelBlock - 1) / kParallelBlock;
+  auto block_end = [&](std::size_t b) { return std::min(size_, (b + 1) * kParallelBlock); };
+  std::vector<std::uint32_t> block_offsets(blocks);
+  tbb::parallel_for(std::size_t{0}, blocks, [&](std::size_t b) {
+    std::uint32_t count = 0;
+    for (std::size_t k = b * kParallelBlock; k < block_end(b); ++k)
+      count += upper(k) != kUnmarked ? 1u : 0u;
+    block_offsets[b] = count;
+  });
+  std::vector<Eigen::Vector3f> vertices(exclusive_scan_in_place(block_offsets));
+  vertex_.assign(size_, kUnmarked);
+  tbb::parallel_for(std::size_t{0}, blocks, [&](std::size_t b) {
+    std::uint32_t v = block_offsets[b];
+    for (std::size_t k = b * kParallelBlock; k < block_end(b); ++k) {
+      const std::uint32_t hi = upper(k);
+      if (hi == kUnmarked) continue;
+      const std::uint32_t lo = lower(k);
+      const float d0 = field.values[lo] - iso, d1 = field.values[hi] - iso;
+      const float t = std::clamp(d0 / (d0 - d1), 1e-3f, 1.0f - 1e-3f);
+      vertices[v] = grid.corner_position(lo) * (1.0f - t) + grid.corner_position(hi) * t;
+      vertex_[k] = v++;
+    }
+  });
+  return vertices;
+}
+
+}  // namespace meshflow

@@ -1,0 +1,51 @@
+#pragma once
+// One shared vertex per crossed grid edge, numbered independently of the thread count. Used by
+// every extraction method: cells mark the lattice segments their surface crosses, then vertices
+// are numbered in table order and placed by linear interpolation of the field.
+
+#include <atomic>
+#include <cstdint>
+#include <memory>
+#include <vector>
+
+#include "nodes/distance/hoppe_distance.h"
+#include "nodes/voxelize/sparse_grid.h"
+
+namespace meshflow {
+
+/// A table over lattice segments "corner i, direction d" (d < directions), each joining corner
+/// i to a corner with larger coordinates. Marking is thread-safe (relaxed atomics: every cell
+/// sharing a segment writes the same upper corner); numbering runs after all marks.
+class EdgeVertexTable {
+ public:
+  EdgeVertexTable(std::size_t corners, std::size_t directions);
+
+  /// Segment id of (lower corner, direction).
+  std::size_t segment(std::uint32_t lower, std::size_t direction) const {
+    return static_cast<std::size_t>(lower) * directions_ + direction;
+  }
+  /// Marks segment `s` as crossed; `upper` is its other corner. Thread-safe.
+  void mark(std::size_t s, std::uint32_t upper) {
+    upper_[s].store(upper, std::memory_order_relaxed);
+  }
+
+  /// Numbers the marked segments in table order and returns one vertex per segment, at the
+  /// iso-crossing of the linear interpolation between its corners (parameter clamped to
+  /// [1e-3, 1 - 1e-3] so no two vertices coincide). Parallel over fixed blocks; O(table).
+  std::vector<Eigen::Vector3f> place_vertices(const SparseGrid& grid, const DistanceField& field,
+                                              float iso);
+
+  /// Vertex of a marked segment (valid after place_vertices).
+  std::uint32_t vertex(std::size_t s) const { return vertex_[s]; }
+  /// Lower and upper corner of a marked segment.
+  std::uint32_t lower(std::size_t s) const { return static_cast<std::uint32_t>(s / directions_); }
+  std::uint32_t upper(std::size_t s) const { return upper_[s].load(std::memory_order_relaxed); }
+
+ private:
+  std::size_t directions_;
+  std::size_t size_;
+  std::unique_ptr<std::atomic<std::uint32_t>[]> upper_;
+  std::vector<std::uint32_t> vertex_;
+};
+
+}  // namespace meshflow

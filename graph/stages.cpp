@@ -2,6 +2,7 @@
 
 #include <exception>
 
+#include "nodes/extract/extract_surface.h"
 #include "nodes/normals/organized_normals.h"
 #include "runtime/error.h"
 
@@ -91,7 +92,7 @@ std::uint64_t distance(Frame& f, const ReconstructionConfig& c) {
 }
 
 std::uint64_t extract(Frame& f, const ReconstructionConfig& c) {
-  f.mesh = marching_cubes(f.grid, f.distance, c.extract);
+  f.mesh = extract_surface(f.grid, f.distance, f.cloud, f.index.get(), c.extract);
   return f.mesh.triangles.size();
 }
 

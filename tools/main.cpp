@@ -16,6 +16,7 @@ int main(int argc, char** argv) {
   meshflow::cli::add_demo_command(app);
   meshflow::cli::add_run_command(app);
   meshflow::cli::add_profile_command(app);
+  meshflow::cli::add_eval_command(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {

@@ -1,5 +1,6 @@
 #include "tools/pipeline_options.h"
 
+#include "nodes/extract/extract_surface.h"
 #include "nodes/synthetic/depth_sequence.h"
 #include "nodes/synthetic/scan_sequence.h"
 
@@ -18,6 +19,7 @@ ReconstructionConfig PipelineOptions::config() const {
   c.filter.outlier_k = outlier_k;
   c.filter.min_range = min_range;
   c.filter.max_range = max_range;
+  c.extract.method = parse_extract_method(extract);
   return c;
 }
 
@@ -45,6 +47,9 @@ void add_pipeline_options(CLI::App* cmd, PipelineOptions& o) {
       ->check(CLI::NonNegativeNumber);
   cmd->add_option("--min-range", o.min_range, "Drop points closer to the sensor, metres")
       ->check(CLI::NonNegativeNumber);
+  cmd->add_option("--extract", o.extract,
+                  "Extraction: mc (marching cubes), mt (marching tetrahedra), pmc (planar MC)")
+      ->check(CLI::IsMember({"mc", "mt", "pmc"}));
   cmd->add_option("--max-range", o.max_range,
                   "Drop points farther from the sensor, metres (0 = off)")
       ->check(CLI::NonNegativeNumber);

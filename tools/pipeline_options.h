@@ -22,12 +22,13 @@ struct PipelineOptions {
   float filter_voxel = 0.0f;
   int outlier_k = 0;
   float min_range = 0.0f, max_range = 0.0f;
+  std::string extract = "mc";
 
   ReconstructionConfig config() const;
 };
 
 /// Registers --voxel --kn --ki --kd --threads --adaptive-k --max-distance --min-component
-/// --filter-voxel --outlier-k --min-range --max-range on `cmd`, writing into `options`.
+/// --filter-voxel --outlier-k --min-range --max-range --extract on `cmd`, writing into `options`.
 void add_pipeline_options(CLI::App* cmd, PipelineOptions& options);
 
 /// The SEQUENCE argument of run/profile: a path, or the built-in synthetic sequence.

@@ -7,9 +7,17 @@
 
 namespace meshflow {
 
+/// Extraction methods of the `extract` stage (thesis, Wiemann 2013, compares them on one grid).
+enum class ExtractMethod {
+  kMarchingCubes,       ///< marching_cubes
+  kMarchingTetrahedra,  ///< marching_tetrahedra: six tetrahedra per cell, no ambiguities
+  kPlanarMarchingCubes  ///< planar_marching_cubes: border moved onto the data contour
+};
+
 struct ExtractConfig {
   float iso = 0.0f;            ///< iso-value of the surface (metres of signed distance)
   bool vertex_normals = true;  ///< compute area-weighted vertex normals
+  ExtractMethod method = ExtractMethod::kMarchingCubes;  ///< used by extract_surface
 };
 
 /// Extracts the iso-surface of `field` over every cell of `grid` whose 8 corners are valid.

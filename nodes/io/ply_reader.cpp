@@ -200,6 +200,9 @@ class ElementReader {
   }
 
   int line() const { return line_; }
+  /// While on, the items of the row's last list property are kept (list()) instead of skipped.
+  void collect_lists(bool on) { collect_lists_ = on; }
+  const std::vector<double>& list() const { return list_; }
 
  private:
   std::string where(const PlyElement& e, std::uint64_t row) const {
@@ -227,8 +230,13 @@ class ElementReader {
         if (p.is_list) {
           const std::uint64_t n = parse_count(tok[t++], path_, loc, p.name);
           if (tok.size() - t < n) throw Error(path_, loc, "list '" + p.name + "' is short");
+          if (collect_lists_) {
+            list_.clear();
+            for (std::uint64_t j = 0; j < n; ++j)
+              list_.push_back(parse_number(tok[t + j], path_, loc, p.name));
+          }
           t += n;
-          values[i] = 0.0;
+          values[i] = static_cast<double>(n);
         } else {
           values[i] = parse_number(tok[t++], path_, loc, p.name);
         }
@@ -281,12 +289,20 @@ class ElementReader {
           read_exact(buf, scalar_size(p.count_type), e, row);
           const double n = decode_scalar(buf, p.count_type, swap);
           if (n < 0) throw Error(path_, where(e, row), "negative list length in '" + p.name + "'");
-          const auto skip =
-              static_cast<std::streamsize>(n) * static_cast<std::streamsize>(scalar_size(p.type));
-          in_.ignore(skip);
-          if (in_.gcount() != skip)
-            throw Error(path_, where(e, row), "file ends inside list '" + p.name + "'");
-          values[i] = 0.0;
+          if (collect_lists_) {
+            list_.clear();
+            for (double j = 0; j < n; ++j) {
+              read_exact(buf, scalar_size(p.type), e, row);
+              list_.push_back(decode_scalar(buf, p.type, swap));
+            }
+          } else {
+            const auto skip =
+                static_cast<std::streamsize>(n) * static_cast<std::streamsize>(scalar_size(p.type));
+            in_.ignore(skip);
+            if (in_.gcount() != skip)
+              throw Error(path_, where(e, row), "file ends inside list '" + p.name + "'");
+          }
+          values[i] = n;
         } else {
           read_exact(buf, scalar_size(p.type), e, row);
           values[i] = decode_scalar(buf, p.type, swap);
@@ -308,11 +324,18 @@ class ElementReader {
   const std::string& path_;
   PlyFormat format_;
   int line_ = 0;
+  bool collect_lists_ = false;
+  std::vector<double> list_;
 };
 
 }  // namespace
 
-PointCloud read_ply(const std::string& path) {
+namespace {
+
+// Reads the vertex element into `cloud` and, when `triangles` is given, the face element's
+// vertex index lists (polygons fan-triangulated) into it.
+void read_ply_elements(const std::string& path, PointCloud& cloud,
+                       std::vector<Triangle>* triangles) {
   std::ifstream in = open_input(path);
   const PlyHeader header = parse_header(in, path);
   const auto vertex_it = std::find_if(header.elements.begin(), header.elements.end(),
@@ -324,8 +347,17 @@ PointCloud read_ply(const std::string& path) {
       throw Error(path, "header", std::string("vertex element lacks property '") + "xyz"[s] + "'");
     }
   }
+  const auto face_it = std::find_if(header.elements.begin(), header.elements.end(),
+                                    [](const PlyElement& e) { return e.name == "face"; });
+  if (triangles && face_it != header.elements.end()) {
+    const auto& props = face_it->properties;
+    if (props.empty() || !props.back().is_list ||
+        (props.back().name != "vertex_indices" && props.back().name != "vertex_index")) {
+      throw Error(path, "header",
+                  "the face element's last property must be the list 'vertex_indices'");
+    }
+  }
 
-  PointCloud cloud;
   // Never trust the declared count for allocation: a lying header must not exhaust memory.
   const std::uint64_t plausible = file_size(path) / 3 + 1;
   const std::size_t reserve = static_cast<std::size_t>(std::min(vertex_it->count, plausible));
@@ -337,6 +369,25 @@ PointCloud read_ply(const std::string& path) {
       reader.read(e, [&](const std::vector<double>& v, std::uint64_t row) {
         append_vertex(v, map, cloud, path, row);
       });
+    } else if (triangles && face_it != header.elements.end() && &e == &*face_it) {
+      reader.collect_lists(true);
+      reader.read(e, [&](const std::vector<double>&, std::uint64_t row) {
+        const std::vector<double>& ids = reader.list();
+        const std::string where = "face " + std::to_string(row);
+        if (ids.size() < 3) throw Error(path, where, "a face needs at least 3 vertex indices");
+        for (double id : ids) {
+          if (!(id >= 0.0) || id >= static_cast<double>(vertex_it->count) || id != std::floor(id)) {
+            throw Error(path, where,
+                        "vertex index " + std::to_string(id) + " is not in [0, " +
+                            std::to_string(vertex_it->count) + ")");
+          }
+        }
+        for (std::size_t k = 2; k < ids.size(); ++k)
+          triangles->push_back({static_cast<std::uint32_t>(ids[0]),
+                                static_cast<std::uint32_t>(ids[k - 1]),
+                                static_cast<std::uint32_t>(ids[k])});
+      });
+      reader.collect_lists(false);
     } else {
       reader.read(e, [](const std::vector<double>&, std::uint64_t) {});
     }
@@ -349,7 +400,24 @@ PointCloud read_ply(const std::string& path) {
                   "unexpected extra data: the header's element counts do not match the file");
     }
   }
+}
+
+}  // namespace
+
+PointCloud read_ply(const std::string& path) {
+  PointCloud cloud;
+  read_ply_elements(path, cloud, nullptr);
   return cloud;
+}
+
+TriangleMesh read_ply_mesh(const std::string& path) {
+  PointCloud cloud;
+  TriangleMesh mesh;
+  read_ply_elements(path, cloud, &mesh.triangles);
+  mesh.vertices = std::move(cloud.positions);
+  mesh.normals = std::move(cloud.normals);
+  mesh.colors = std::move(cloud.colors);
+  return mesh;
 }
 
 }  // namespace meshflow::io

@@ -4,6 +4,7 @@
 #include <string>
 
 #include "runtime/point_cloud.h"
+#include "runtime/triangle_mesh.h"
 
 namespace meshflow::io {
 
@@ -15,5 +16,12 @@ namespace meshflow::io {
 /// malformed, truncated or inconsistent input (including data past the declared counts).
 /// Streams the file: memory is the size of the output plus a fixed buffer. O(file size).
 PointCloud read_ply(const std::string& path);
+
+/// Reads a PLY mesh: the vertex element as in read_ply (positions, normals, colours) and the
+/// `face` element's `vertex_indices` lists (polygons are fan-triangulated). Throws
+/// A file without a `face` element gives a mesh without triangles (a point set). Throws
+/// meshflow::Error naming the file and face row for an index out of range or a face with fewer
+/// than 3 vertices, and on everything read_ply rejects. O(file size).
+TriangleMesh read_ply_mesh(const std::string& path);
 
 }  // namespace meshflow::io

@@ -1,0 +1,46 @@
+#include "nodes/extract/extract_surface.h"
+
+#include <string>
+
+#include "nodes/extract/marching_tetrahedra.h"
+#include "nodes/extract/planar_marching_cubes.h"
+#include "runtime/error.h"
+
+namespace meshflow {
+
+TriangleMesh extract_surface(const SparseGrid& grid, const DistanceField& field,
+                             const PointCloud& cloud, const SpatialIndex* index,
+                             const ExtractConfig& config) {
+  switch (config.method) {
+    case ExtractMethod::kMarchingTetrahedra:
+      return marching_tetrahedra(grid, field, config);
+    case ExtractMethod::kPlanarMarchingCubes:
+      if (index == nullptr)
+        throw Error("extract", "method pmc", "needs a point index (point-cloud input)");
+      return planar_marching_cubes(grid, field, cloud, *index, config);
+    case ExtractMethod::kMarchingCubes:
+      break;
+  }
+  return marching_cubes(grid, field, config);
+}
+
+ExtractMethod parse_extract_method(const std::string& name) {
+  if (name == "mc") return ExtractMethod::kMarchingCubes;
+  if (name == "mt") return ExtractMethod::kMarchingTetrahedra;
+  if (name == "pmc") return ExtractMethod::kPlanarMarchingCubes;
+  throw Error("extract", "method '" + name + "'", "expected mc, mt or pmc");
+}
+
+const char* extract_method_name(ExtractMethod method) {
+  switch (method) {
+    case ExtractMethod::kMarchingTetrahedra:
+      return "mt";
+    case ExtractMethod::kPlanarMarchingCubes:
+      return "pmc";
+    case ExtractMethod::kMarchingCubes:
+      break;
+  }
+  return "mc";
+}
+
+}  // namespace meshflow

@@ -1,0 +1,23 @@
+#pragma once
+// The `extract` stage's entry point: one call for every extraction method.
+
+#include <string>
+
+#include "nodes/extract/marching_cubes.h"
+#include "nodes/normals/spatial_index.h"
+#include "runtime/point_cloud.h"
+
+namespace meshflow {
+
+/// Runs config.method over `grid` and `field`. `cloud` and `index` (over cloud.positions) are
+/// the data the field came from; planar marching cubes needs them and throws meshflow::Error
+/// when `index` is null (depth-image frames build none). Parallel and deterministic.
+TriangleMesh extract_surface(const SparseGrid& grid, const DistanceField& field,
+                             const PointCloud& cloud, const SpatialIndex* index,
+                             const ExtractConfig& config);
+
+/// "mc", "mt", "pmc" -> method; throws meshflow::Error naming the accepted names otherwise.
+ExtractMethod parse_extract_method(const std::string& name);
+const char* extract_method_name(ExtractMethod method);
+
+}  // namespace meshflow

@@ -1,0 +1,112 @@
+#include "nodes/extract/planar_marching_cubes.h"
+
+#include <gtest/gtest.h>
+
+#include <cstdio>
+
+#include "nodes/distance/hoppe_distance.h"
+#include "nodes/eval/surface_eval.h"
+#include "runtime/threads.h"
+
+namespace meshflow {
+namespace {
+
+constexpr float kVoxel = 0.05f;
+constexpr float kHeight = 0.0123f;  // off the lattice planes
+
+// Distance from (x, y) to the boundary of the axis-aligned rectangle [lo, hi].
+float to_rectangle_outline(const Eigen::Vector2f& q, const Eigen::Vector2f& lo,
+                           const Eigen::Vector2f& hi) {
+  const Eigen::Vector2f c = (lo + hi) / 2, h = (hi - lo) / 2;
+  const Eigen::Vector2f d = (q - c).cwiseAbs() - h;
+  return std::abs(d.cwiseMax(0.0f).norm() + std::min(d.maxCoeff(), 0.0f));
+}
+
+struct HoledPatch {
+  Eigen::Vector2f outer_lo{-0.5f, -0.35f}, outer_hi{0.5f, 0.35f};
+  Eigen::Vector2f hole_lo{-0.15f, -0.1f}, hole_hi{0.1f, 0.12f};
+  PointCloud cloud;
+
+  HoledPatch() {
+    const float step = kVoxel / 6;
+    for (float y = outer_lo.y(); y <= outer_hi.y() + 1e-6f; y += step)
+      for (float x = outer_lo.x(); x <= outer_hi.x() + 1e-6f; x += step) {
+        const bool in_hole =
+            x > hole_lo.x() && x < hole_hi.x() && y > hole_lo.y() && y < hole_hi.y();
+        if (in_hole) continue;
+        cloud.positions.emplace_back(x, y, kHeight);
+        cloud.normals.emplace_back(0.0f, 0.0f, 1.0f);
+      }
+  }
+  float contour_distance(const Eigen::Vector3f& p) const {
+    const Eigen::Vector2f q(p.x(), p.y());
+    return std::min(to_rectangle_outline(q, outer_lo, outer_hi),
+                    to_rectangle_outline(q, hole_lo, hole_hi));
+  }
+};
+
+// Distances of the border vertices (on an edge used once) to the true contour, in voxels.
+DistanceStats border_error(const TriangleMesh& mesh, const HoledPatch& patch) {
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> edges;
+  for (const Triangle& t : mesh.triangles)
+    for (int k = 0; k < 3; ++k)
+      edges.emplace_back(std::min(t[k], t[(k + 1) % 3]), std::max(t[k], t[(k + 1) % 3]));
+  std::sort(edges.begin(), edges.end());
+  std::vector<float> errors;
+  std::vector<std::uint8_t> seen(mesh.vertices.size(), 0);
+  for (std::size_t i = 0; i < edges.size();) {
+    std::size_t j = i;
+    while (j < edges.size() && edges[j] == edges[i]) ++j;
+    if (j - i == 1)
+      for (std::uint32_t v : {edges[i].first, edges[i].second})
+        if (!seen[v]) {
+          seen[v] = 1;
+          errors.push_back(patch.contour_distance(mesh.vertices[v]) / kVoxel);
+        }
+    i = j;
+  }
+  return distance_stats(errors);
+}
+
+TEST(PlanarMarchingCubes, MovesTheBorderOfAHoledRectangleOntoTheDataContour) {
+  const HoledPatch patch;
+  const KdTreeIndex index(patch.cloud.positions);
+  const SparseGrid grid = voxelize(patch.cloud, VoxelizeConfig{kVoxel, 0.5f});
+  const DistanceField field = hoppe_distance(grid, patch.cloud, index, DistanceConfig{});
+  const TriangleMesh mc = marching_cubes(grid, field);
+  const TriangleMesh pmc = planar_marching_cubes(grid, field, patch.cloud, index);
+  const DistanceStats before = border_error(mc, patch), after = border_error(pmc, patch);
+  std::printf(
+      "[ pmc ] border to true contour: mc mean %.3f max %.3f voxel; pmc mean %.3f p95 %.3f "
+      "max %.3f voxel (%zu border vertices)\n",
+      before.mean, before.max, after.mean, after.p95, after.max, after.samples);
+  EXPECT_EQ(mesh_topology(pmc).boundary_loops, 2u);  // the outline and the hole
+  EXPECT_GT(before.mean, 0.3);
+  EXPECT_LT(after.max, 0.2);
+  // Heights are kept: every vertex stays on the plane.
+  for (const auto& v : pmc.vertices) EXPECT_NEAR(v.z(), kHeight, 0.02f * kVoxel);
+  EXPECT_LE(pmc.triangles.size(), mc.triangles.size());
+  EXPECT_EQ(mesh_topology(pmc).edges.non_manifold_edges, 0u);
+  EXPECT_EQ(mesh_topology(pmc).degenerate_faces, 0u);
+}
+
+TEST(PlanarMarchingCubes, SameOutputWithOneAndTwoThreads) {
+  const HoledPatch patch;
+  const KdTreeIndex index(patch.cloud.positions);
+  const SparseGrid grid = voxelize(patch.cloud, VoxelizeConfig{kVoxel, 0.5f});
+  const DistanceField field = hoppe_distance(grid, patch.cloud, index, DistanceConfig{});
+  TriangleMesh one, two;
+  {
+    ThreadLimit limit(1);
+    one = planar_marching_cubes(grid, field, patch.cloud, index);
+  }
+  {
+    ThreadLimit limit(2);
+    two = planar_marching_cubes(grid, field, patch.cloud, index);
+  }
+  EXPECT_EQ(one.vertices, two.vertices);
+  EXPECT_EQ(one.triangles, two.triangles);
+}
+
+}  // namespace
+}  // namespace meshflow

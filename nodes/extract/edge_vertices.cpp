@@ -32,7 +32,7 @@ std::vector<Eigen::Vector3f> EdgeVertexTable::place_vertices(const SparseGrid& g
     block_offsets[b] = count;
   });
   std::vector<Eigen::Vector3f> vertices(exclusive_scan_in_place(block_offsets));
-  vertex_.assign(size_, kUnmarked);
+  vertex_.reset(new std::uint32_t[size_]);  // uninitialised: read only where marked
   tbb::parallel_for(std::size_t{0}, blocks, [&](std::size_t b) {
     std::uint32_t v = block_offsets[b];
     for (std::size_t k = b * kParallelBlock; k < block_end(b); ++k) {

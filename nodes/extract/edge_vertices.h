@@ -45,7 +45,7 @@ class EdgeVertexTable {
   std::size_t directions_;
   std::size_t size_;
   std::unique_ptr<std::atomic<std::uint32_t>[]> upper_;
-  std::vector<std::uint32_t> vertex_;
+  std::unique_ptr<std::uint32_t[]> vertex_;  // written for marked segments only
 };
 
 }  // namespace meshflow

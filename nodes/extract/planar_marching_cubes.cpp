@@ -1,6 +1,7 @@
 #include "nodes/extract/planar_marching_cubes.h"
 
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_sort.h>
 
 #include <Eigen/Geometry>
 #include <algorithm>
@@ -29,7 +30,8 @@ BorderVertices border_vertices(const TriangleMesh& mesh) {
       const std::uint32_t b = mesh.triangles[t][static_cast<std::size_t>((k + 1) % 3)];
       edges.push_back({std::min(a, b), std::max(a, b), a, b, t});
     }
-  std::sort(edges.begin(), edges.end(), [](const Directed& x, const Directed& y) {
+  // A total order (each directed edge has one triangle): the parallel sort is deterministic.
+  tbb::parallel_sort(edges.begin(), edges.end(), [](const Directed& x, const Directed& y) {
     return std::tie(x.lo, x.hi, x.tri) < std::tie(y.lo, y.hi, y.tri);
   });
   std::vector<Eigen::Vector3f> outward(mesh.vertices.size(), Eigen::Vector3f::Zero());

@@ -1,5 +1,5 @@
 #pragma once
-// Marching tetrahedra over a sparse grid (thesis, Wiemann 2013, ch. 4: the MT variant compared
+// Marching tetrahedra over a sparse grid (thesis, Wiemann 2013: the MT variant compared
 // with marching cubes): every cell is split into six tetrahedra around its main diagonal
 // (Kuhn/Freudenthal split), which is one global triangulation of the lattice, so tetrahedron
 // faces match across cells and the surface has no ambiguous cases and no holes.

@@ -57,4 +57,32 @@ EdgeStatistics edge_statistics(const TriangleMesh& mesh) {
   return stats;
 }
 
+std::vector<BorderEdge> border_edges(const TriangleMesh& mesh) {
+  struct Directed {
+    std::uint64_t key;  // min vertex << 32 | max vertex
+    BorderEdge edge;
+  };
+  std::vector<Directed> edges;
+  edges.reserve(mesh.triangles.size() * 3);
+  for (std::uint32_t t = 0; t < mesh.triangles.size(); ++t) {
+    for (int i = 0; i < 3; ++i) {
+      const std::uint32_t a = mesh.triangles[t][i], b = mesh.triangles[t][(i + 1) % 3];
+      const std::uint64_t key = std::uint64_t{std::min(a, b)} << 32 | std::max(a, b);
+      edges.push_back({key, {a, b, t}});
+    }
+  }
+  // A total order (a triangle has an edge once): the parallel sort is deterministic.
+  tbb::parallel_sort(edges.begin(), edges.end(), [](const Directed& x, const Directed& y) {
+    return x.key != y.key ? x.key < y.key : x.edge.triangle < y.edge.triangle;
+  });
+  std::vector<BorderEdge> border;
+  for (std::size_t i = 0; i < edges.size();) {
+    std::size_t j = i;
+    while (j < edges.size() && edges[j].key == edges[i].key) ++j;
+    if (j - i == 1) border.push_back(edges[i].edge);
+    i = j;
+  }
+  return border;
+}
+
 }  // namespace meshflow

@@ -42,4 +42,13 @@ struct EdgeStatistics {
 /// Counts edges by incidence. O(T log T) (sorts the 3T directed edges).
 EdgeStatistics edge_statistics(const TriangleMesh& mesh);
 
+/// An edge used by one triangle only, directed as that triangle traverses it (a -> b).
+struct BorderEdge {
+  std::uint32_t a, b, triangle;
+};
+
+/// The border edges of a mesh, ordered by (min vertex, max vertex). O(T log T), parallel sort,
+/// deterministic.
+std::vector<BorderEdge> border_edges(const TriangleMesh& mesh);
+
 }  // namespace meshflow

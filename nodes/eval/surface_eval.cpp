@@ -51,28 +51,13 @@ MeshTopology mesh_topology(const TriangleMesh& mesh) {
     if (f[0] == f[1] || f[1] == f[2] || f[0] == f[2] || face_normal(mesh, f).isZero())
       ++t.degenerate_faces;
   }
-  // Boundary edges: undirected edges used once. Loops: components of the boundary-edge graph.
-  std::vector<std::pair<std::uint32_t, std::uint32_t>> edges;
-  edges.reserve(mesh.triangles.size() * 3);
-  for (const Triangle& f : mesh.triangles)
-    for (int k = 0; k < 3; ++k) {
-      const std::uint32_t a = f[static_cast<std::size_t>(k)],
-                          b = f[static_cast<std::size_t>((k + 1) % 3)];
-      edges.emplace_back(std::min(a, b), std::max(a, b));
-    }
-  std::sort(edges.begin(), edges.end());
+  // Loops: connected components of the border-edge graph.
   std::vector<std::uint32_t> parent(mesh.vertices.size());
   std::iota(parent.begin(), parent.end(), 0u);
   std::vector<std::uint8_t> on_boundary(mesh.vertices.size(), 0);
-  for (std::size_t i = 0; i < edges.size();) {
-    std::size_t j = i;
-    while (j < edges.size() && edges[j] == edges[i]) ++j;
-    if (j - i == 1) {
-      const auto [a, b] = edges[i];
-      on_boundary[a] = on_boundary[b] = 1;
-      parent[find_root(parent, a)] = find_root(parent, b);
-    }
-    i = j;
+  for (const BorderEdge& e : border_edges(mesh)) {
+    on_boundary[e.a] = on_boundary[e.b] = 1;
+    parent[find_root(parent, e.a)] = find_root(parent, e.b);
   }
   for (std::uint32_t v = 0; v < mesh.vertices.size(); ++v)
     if (on_boundary[v] && find_root(parent, v) == v) ++t.boundary_loops;

@@ -1,7 +1,6 @@
 #include "nodes/extract/planar_marching_cubes.h"
 
 #include <tbb/parallel_for.h>
-#include <tbb/parallel_sort.h>
 
 #include <Eigen/Geometry>
 #include <algorithm>
@@ -17,41 +16,18 @@ struct BorderVertices {
 };
 
 BorderVertices border_vertices(const TriangleMesh& mesh) {
-  // Directed edges (a, b, triangle); an edge is on the border when its reverse is absent and it
-  // appears once.
-  struct Directed {
-    std::uint32_t lo, hi, a, b, tri;
-  };
-  std::vector<Directed> edges;
-  edges.reserve(mesh.triangles.size() * 3);
-  for (std::uint32_t t = 0; t < mesh.triangles.size(); ++t)
-    for (int k = 0; k < 3; ++k) {
-      const std::uint32_t a = mesh.triangles[t][static_cast<std::size_t>(k)];
-      const std::uint32_t b = mesh.triangles[t][static_cast<std::size_t>((k + 1) % 3)];
-      edges.push_back({std::min(a, b), std::max(a, b), a, b, t});
-    }
-  // A total order (each directed edge has one triangle): the parallel sort is deterministic.
-  tbb::parallel_sort(edges.begin(), edges.end(), [](const Directed& x, const Directed& y) {
-    return std::tie(x.lo, x.hi, x.tri) < std::tie(y.lo, y.hi, y.tri);
-  });
   std::vector<Eigen::Vector3f> outward(mesh.vertices.size(), Eigen::Vector3f::Zero());
   std::vector<Eigen::Vector3f> normal(mesh.vertices.size(), Eigen::Vector3f::Zero());
   std::vector<std::uint8_t> on_border(mesh.vertices.size(), 0);
-  for (std::size_t i = 0; i < edges.size();) {
-    std::size_t j = i;
-    while (j < edges.size() && edges[j].lo == edges[i].lo && edges[j].hi == edges[i].hi) ++j;
-    if (j - i == 1) {
-      const Directed& e = edges[i];
-      const Eigen::Vector3f n = face_normal(mesh, mesh.triangles[e.tri]);
-      // Counter-clockwise seen from n: the triangle lies left of a -> b, outside to the right.
-      const Eigen::Vector3f o = (mesh.vertices[e.b] - mesh.vertices[e.a]).cross(n).normalized();
-      for (std::uint32_t v : {e.a, e.b}) {
-        outward[v] += o;
-        normal[v] += n;
-        on_border[v] = 1;
-      }
+  for (const BorderEdge& e : border_edges(mesh)) {
+    const Eigen::Vector3f n = face_normal(mesh, mesh.triangles[e.triangle]);
+    // Counter-clockwise seen from n: the triangle lies left of a -> b, outside to the right.
+    const Eigen::Vector3f o = (mesh.vertices[e.b] - mesh.vertices[e.a]).cross(n).normalized();
+    for (std::uint32_t v : {e.a, e.b}) {
+      outward[v] += o;
+      normal[v] += n;
+      on_border[v] = 1;
     }
-    i = j;
   }
   BorderVertices out;
   for (std::uint32_t v = 0; v < mesh.vertices.size(); ++v) {

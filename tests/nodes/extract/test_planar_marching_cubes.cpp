@@ -47,24 +47,14 @@ struct HoledPatch {
 
 // Distances of the border vertices (on an edge used once) to the true contour, in voxels.
 DistanceStats border_error(const TriangleMesh& mesh, const HoledPatch& patch) {
-  std::vector<std::pair<std::uint32_t, std::uint32_t>> edges;
-  for (const Triangle& t : mesh.triangles)
-    for (int k = 0; k < 3; ++k)
-      edges.emplace_back(std::min(t[k], t[(k + 1) % 3]), std::max(t[k], t[(k + 1) % 3]));
-  std::sort(edges.begin(), edges.end());
   std::vector<float> errors;
   std::vector<std::uint8_t> seen(mesh.vertices.size(), 0);
-  for (std::size_t i = 0; i < edges.size();) {
-    std::size_t j = i;
-    while (j < edges.size() && edges[j] == edges[i]) ++j;
-    if (j - i == 1)
-      for (std::uint32_t v : {edges[i].first, edges[i].second})
-        if (!seen[v]) {
-          seen[v] = 1;
-          errors.push_back(patch.contour_distance(mesh.vertices[v]) / kVoxel);
-        }
-    i = j;
-  }
+  for (const BorderEdge& e : border_edges(mesh))
+    for (std::uint32_t v : {e.a, e.b})
+      if (!seen[v]) {
+        seen[v] = 1;
+        errors.push_back(patch.contour_distance(mesh.vertices[v]) / kVoxel);
+      }
   return distance_stats(errors);
 }
 

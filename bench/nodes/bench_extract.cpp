@@ -27,7 +27,8 @@ BENCHMARK(BM_Extract)
                    {kSynthetic, kKurt3d},
                    {static_cast<int>(ExtractMethod::kMarchingCubes),
                     static_cast<int>(ExtractMethod::kMarchingTetrahedra),
-                    static_cast<int>(ExtractMethod::kPlanarMarchingCubes)}})
+                    static_cast<int>(ExtractMethod::kPlanarMarchingCubes),
+                    static_cast<int>(ExtractMethod::kExtendedMarchingCubes)}})
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
 

@@ -86,6 +86,7 @@ CubeCase build_case(int pattern) {
     const std::size_t apex = fan_apex(loop);
     assert(apex < n && "every loop of the 256 cases has a valid apex (checked by the tests)");
     const std::size_t a = apex < n ? apex : 0;
+    out.loops.emplace_back(loop.begin(), loop.end());
     for (std::size_t k = 1; k + 1 < n; ++k) {
       out.triangles.push_back({static_cast<std::uint8_t>(loop[a]),
                                static_cast<std::uint8_t>(loop[(a + k + 1) % n]),

@@ -33,6 +33,10 @@ constexpr std::array<int, 12> kCubeEdgeAxis = {0, 0, 0, 0, 1, 1, 1, 1, 2, 2, 2, 
 /// Triangles of one case as triples of cube edge indices.
 struct CubeCase {
   std::vector<std::array<std::uint8_t, 3>> triangles;
+  /// The closed iso-contours the triangles fill, as cube edges in order, clockwise seen from
+  /// outside (so a fan (apex, loop[k + 1], loop[k]) winds counter-clockwise). A loop of n
+  /// edges owns the next n - 2 entries of `triangles`, loops in order.
+  std::vector<std::vector<std::uint8_t>> loops;
 };
 
 /// The 256 cases, indexed by the pattern with bit c set when corner c is inside (< iso).

@@ -33,6 +33,7 @@ std::vector<Eigen::Vector3f> EdgeVertexTable::place_vertices(const SparseGrid& g
   });
   std::vector<Eigen::Vector3f> vertices(exclusive_scan_in_place(block_offsets));
   vertex_.reset(new std::uint32_t[size_]);  // uninitialised: read only where marked
+  segment_of_vertex_.resize(vertices.size());
   tbb::parallel_for(std::size_t{0}, blocks, [&](std::size_t b) {
     std::uint32_t v = block_offsets[b];
     for (std::size_t k = b * kParallelBlock; k < block_end(b); ++k) {
@@ -42,6 +43,7 @@ std::vector<Eigen::Vector3f> EdgeVertexTable::place_vertices(const SparseGrid& g
       const float d0 = field.values[lo] - iso, d1 = field.values[hi] - iso;
       const float t = std::clamp(d0 / (d0 - d1), 1e-3f, 1.0f - 1e-3f);
       vertices[v] = grid.corner_position(lo) * (1.0f - t) + grid.corner_position(hi) * t;
+      segment_of_vertex_[v] = k;
       vertex_[k] = v++;
     }
   });

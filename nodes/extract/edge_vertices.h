@@ -37,6 +37,10 @@ class EdgeVertexTable {
 
   /// Vertex of a marked segment (valid after place_vertices).
   std::uint32_t vertex(std::size_t s) const { return vertex_[s]; }
+  /// The segment vertex v lies on (valid after place_vertices).
+  std::size_t segment_of_vertex(std::uint32_t v) const { return segment_of_vertex_[v]; }
+  /// Direction of segment s.
+  std::size_t direction(std::size_t s) const { return s % directions_; }
   /// Lower and upper corner of a marked segment.
   std::uint32_t lower(std::size_t s) const { return static_cast<std::uint32_t>(s / directions_); }
   std::uint32_t upper(std::size_t s) const { return upper_[s].load(std::memory_order_relaxed); }
@@ -46,6 +50,7 @@ class EdgeVertexTable {
   std::size_t size_;
   std::unique_ptr<std::atomic<std::uint32_t>[]> upper_;
   std::unique_ptr<std::uint32_t[]> vertex_;  // written for marked segments only
+  std::vector<std::size_t> segment_of_vertex_;
 };
 
 }  // namespace meshflow

@@ -2,6 +2,7 @@
 
 #include <string>
 
+#include "nodes/extract/extended_marching_cubes.h"
 #include "nodes/extract/marching_tetrahedra.h"
 #include "nodes/extract/planar_marching_cubes.h"
 #include "runtime/error.h"
@@ -18,6 +19,10 @@ TriangleMesh extract_surface(const SparseGrid& grid, const DistanceField& field,
       if (index == nullptr)
         throw Error("extract", "method pmc", "needs a point index (point-cloud input)");
       return planar_marching_cubes(grid, field, cloud, *index, config);
+    case ExtractMethod::kExtendedMarchingCubes:
+      if (index == nullptr)
+        throw Error("extract", "method emc", "needs a point index (point-cloud input)");
+      return extended_marching_cubes(grid, field, cloud, *index, config);
     case ExtractMethod::kMarchingCubes:
       break;
   }
@@ -28,7 +33,8 @@ ExtractMethod parse_extract_method(const std::string& name) {
   if (name == "mc") return ExtractMethod::kMarchingCubes;
   if (name == "mt") return ExtractMethod::kMarchingTetrahedra;
   if (name == "pmc") return ExtractMethod::kPlanarMarchingCubes;
-  throw Error("extract", "method '" + name + "'", "expected mc, mt or pmc");
+  if (name == "emc") return ExtractMethod::kExtendedMarchingCubes;
+  throw Error("extract", "method '" + name + "'", "expected mc, mt, emc or pmc");
 }
 
 const char* extract_method_name(ExtractMethod method) {
@@ -37,6 +43,8 @@ const char* extract_method_name(ExtractMethod method) {
       return "mt";
     case ExtractMethod::kPlanarMarchingCubes:
       return "pmc";
+    case ExtractMethod::kExtendedMarchingCubes:
+      return "emc";
     case ExtractMethod::kMarchingCubes:
       break;
   }

@@ -10,13 +10,14 @@
 namespace meshflow {
 
 /// Runs config.method over `grid` and `field`. `cloud` and `index` (over cloud.positions) are
-/// the data the field came from; planar marching cubes needs them and throws meshflow::Error
+/// the data the field came from; planar and extended marching cubes need them (emc also the
+/// normals) and throw meshflow::Error
 /// when `index` is null (depth-image frames build none). Parallel and deterministic.
 TriangleMesh extract_surface(const SparseGrid& grid, const DistanceField& field,
                              const PointCloud& cloud, const SpatialIndex* index,
                              const ExtractConfig& config);
 
-/// "mc", "mt", "pmc" -> method; throws meshflow::Error naming the accepted names otherwise.
+/// "mc", "mt", "emc", "pmc" -> method; throws meshflow::Error naming the accepted names otherwise.
 ExtractMethod parse_extract_method(const std::string& name);
 const char* extract_method_name(ExtractMethod method);
 

@@ -9,9 +9,10 @@ namespace meshflow {
 
 /// Extraction methods of the `extract` stage (thesis, Wiemann 2013, compares them on one grid).
 enum class ExtractMethod {
-  kMarchingCubes,       ///< marching_cubes
-  kMarchingTetrahedra,  ///< marching_tetrahedra: six tetrahedra per cell, no ambiguities
-  kPlanarMarchingCubes  ///< planar_marching_cubes: border moved onto the data contour
+  kMarchingCubes,         ///< marching_cubes
+  kMarchingTetrahedra,    ///< marching_tetrahedra: six tetrahedra per cell, no ambiguities
+  kPlanarMarchingCubes,   ///< planar_marching_cubes: border moved onto the data contour
+  kExtendedMarchingCubes  ///< extended_marching_cubes: sharp edges and corners kept
 };
 
 struct ExtractConfig {

@@ -14,42 +14,8 @@ namespace {
 
 constexpr float kVoxel = 0.05f;
 
-struct NamedSolid {
-  std::string name;
-  synthetic::Solid solid;
-};
-
-synthetic::Solid sphere_solid(const synthetic::Sphere& sphere, float spacing) {
-  synthetic::Solid solid;
-  solid.sdf = [sphere](const Eigen::Vector3f& p) {
-    return (p - sphere.center).norm() - sphere.radius;
-  };
-  solid.samples = synthetic::sample_surface(sphere, spacing, 0.0f, 1);
-  for (const auto& p : solid.samples.positions)
-    solid.samples.normals.push_back((p - sphere.center).normalized());
-  return solid;
-}
-
-// The analytic shapes, sampled at a quarter voxel. The offsets keep faces off the grid
-// planes (a face exactly on a lattice plane is a valid but degenerate-prone input).
-std::vector<NamedSolid> test_solids() {
-  const float s = kVoxel / 4;
-  const Eigen::Vector3f c(0.013f, -0.021f, 0.007f);
-  return {
-      {"cube", make_solid(synthetic::box_polytope(c, {0.4f, 0.4f, 0.4f}), s)},
-      {"chamfered cube", make_solid(synthetic::chamfered_box(c, {0.4f, 0.4f, 0.4f}, 0.15f), s)},
-      {"two boxes",
-       make_union(make_solid(synthetic::box_polytope(c, {0.4f, 0.25f, 0.2f}), s),
-                  make_solid(synthetic::box_polytope(c + Eigen::Vector3f(0.25f, 0.2f, 0.15f),
-                                                     {0.2f, 0.2f, 0.2f}),
-                             s))},
-      {"cylinder", make_solid(synthetic::Cylinder{c, 0.35f, 0.3f}, s)},
-      {"sphere", sphere_solid({c, 0.4f}, s)},
-  };
-}
-
 TEST(MarchingTetrahedra, ClosedOrientedAndNearTheSurfaceOnEveryShape) {
-  for (const auto& named : test_solids()) {
+  for (const auto& named : test::test_solids(kVoxel)) {
     SCOPED_TRACE(named.name);
     const auto s = test::sampled_solid(named.solid, kVoxel);
     const TriangleMesh mt = marching_tetrahedra(s.grid, s.field);
@@ -100,7 +66,7 @@ TEST(MarchingTetrahedra, SphereFieldHasSharedVerticesAndNoDegenerateTriangles) {
 }
 
 TEST(MarchingTetrahedra, SameOutputWithOneAndTwoThreads) {
-  const auto s = test::sampled_solid(test_solids()[2].solid, kVoxel);
+  const auto s = test::sampled_solid(test::test_solids(kVoxel)[2].solid, kVoxel);
   TriangleMesh one, two;
   {
     ThreadLimit limit(1);

@@ -1,0 +1,179 @@
+#include "nodes/extract/extended_marching_cubes.h"
+
+#include <gtest/gtest.h>
+
+#include <cstdio>
+
+#include "nodes/eval/mesh_distance_index.h"
+#include "nodes/eval/surface_eval.h"
+#include "runtime/threads.h"
+#include "solid_fixture.h"
+
+namespace meshflow {
+namespace {
+
+constexpr float kVoxel = 0.05f;
+
+TriangleMesh emc_of(const test::SampledSolid& s, const ExtendedMcConfig& emc = {}) {
+  return extended_marching_cubes(s.grid, s.field, s.solid.samples, *s.index, ExtractConfig{}, emc);
+}
+
+TEST(SharpFeature, TwoPlanesMeetInAnEdgeAndThreeInACorner) {
+  const Eigen::AlignedBox3f cell(Eigen::Vector3f(0, 0, 0), Eigen::Vector3f(1, 1, 1));
+  // Planes x = 0.6 (normal +x) and y = 0.3 (normal +y): the feature line is x = 0.6, y = 0.3.
+  const std::vector<Eigen::Vector3f> points = {
+      {0.6f, 0.0f, 0.2f}, {0.6f, 0.1f, 0.9f}, {0.9f, 0.3f, 0.1f}, {1.0f, 0.3f, 0.7f}};
+  const std::vector<Eigen::Vector3f> normals = {Eigen::Vector3f::UnitX(), Eigen::Vector3f::UnitX(),
+                                                Eigen::Vector3f::UnitY(), Eigen::Vector3f::UnitY()};
+  const FeaturePoint edge = sharp_feature(points.data(), normals.data(), 4, cell);
+  ASSERT_EQ(edge.kind, FeatureKind::kEdge);
+  EXPECT_NEAR(edge.position.x(), 0.6f, 1e-5f);
+  EXPECT_NEAR(edge.position.y(), 0.3f, 1e-5f);
+  EXPECT_NEAR(edge.position.z(), 0.475f, 1e-5f);  // the centroid's height: nearest on the line
+
+  auto with_z = points;
+  auto with_z_normals = normals;
+  with_z.emplace_back(0.2f, 0.1f, 0.45f);  // plane z = 0.45, normal +z
+  with_z_normals.push_back(Eigen::Vector3f::UnitZ());
+  const FeaturePoint corner = sharp_feature(with_z.data(), with_z_normals.data(), 5, cell);
+  ASSERT_EQ(corner.kind, FeatureKind::kCorner);
+  EXPECT_LT((corner.position - Eigen::Vector3f(0.6f, 0.3f, 0.45f)).norm(), 1e-5f);
+
+  // A flat patch (normals 10 degrees apart at most) has no feature.
+  const std::vector<Eigen::Vector3f> flat = {Eigen::Vector3f::UnitZ(),
+                                             Eigen::Vector3f(0.17f, 0, 0.98f).normalized()};
+  EXPECT_EQ(sharp_feature(points.data(), flat.data(), 2, cell).kind, FeatureKind::kNone);
+}
+
+TEST(SharpFeature, FeaturesFarOutsideTheCellAreRejectedAndNearOnesClamped) {
+  const Eigen::AlignedBox3f cell(Eigen::Vector3f(0, 0, 0), Eigen::Vector3f(1, 1, 1));
+  const std::vector<Eigen::Vector3f> normals = {Eigen::Vector3f::UnitX(), Eigen::Vector3f::UnitY()};
+  // The planes x = 1.1, y = 0.5 meet 0.1 outside the cell: clamped onto its face.
+  const std::vector<Eigen::Vector3f> near = {{1.1f, 0.2f, 0.5f}, {0.5f, 0.5f, 0.5f}};
+  const FeaturePoint clamped = sharp_feature(near.data(), normals.data(), 2, cell);
+  ASSERT_EQ(clamped.kind, FeatureKind::kEdge);
+  EXPECT_FLOAT_EQ(clamped.position.x(), 1.0f);
+  // x = 3 is two cells away: rejected.
+  const std::vector<Eigen::Vector3f> far = {{3.0f, 0.2f, 0.5f}, {0.5f, 0.5f, 0.5f}};
+  EXPECT_EQ(sharp_feature(far.data(), normals.data(), 2, cell).kind, FeatureKind::kNone);
+}
+
+TEST(DirectedDistance, HitsTheDiskPlaneExactlyAndSkipsDisksFacingTheWrongWay) {
+  // Points on the plane x = 0.337, normals +x; a grid edge along x from 0.3 to 0.35.
+  PointCloud cloud;
+  for (int i = -3; i <= 3; ++i)
+    for (int j = -3; j <= 3; ++j) {
+      cloud.positions.emplace_back(0.337f, 0.01f * static_cast<float>(i),
+                                   0.01f * static_cast<float>(j));
+      cloud.normals.push_back(Eigen::Vector3f::UnitX());
+    }
+  const KdTreeIndex index(cloud.positions);
+  const Eigen::Vector3f lower(0.3f, 0.002f, -0.003f), guess(0.32f, 0.002f, -0.003f);
+  const EdgeHit hit = directed_edge_hit(lower, 0, kVoxel, true, guess, 0.0f, cloud, index, kVoxel);
+  EXPECT_TRUE(hit.from_disk);
+  EXPECT_NEAR(hit.position.x(), 0.337f, 1e-6f);
+  EXPECT_FLOAT_EQ(hit.position.y(), lower.y());
+  EXPECT_EQ(hit.normal, Eigen::Vector3f::UnitX());
+  // Entering the solid along +x needs normals pointing -x: none qualify, the guess stays.
+  const EdgeHit wrong =
+      directed_edge_hit(lower, 0, kVoxel, false, guess, 0.0f, cloud, index, kVoxel);
+  EXPECT_FALSE(wrong.from_disk);
+  EXPECT_EQ(wrong.position, guess);
+  // An edge along y is parallel to the disks: no hit.
+  EXPECT_FALSE(
+      directed_edge_hit(lower, 1, kVoxel, true, guess, 0.0f, cloud, index, kVoxel).from_disk);
+}
+
+TEST(ExtendedMarchingCubes, ClosedOrientedAndNearTheSurfaceOnEveryShape) {
+  for (const auto& named : test::test_solids(kVoxel)) {
+    SCOPED_TRACE(named.name);
+    const auto s = test::sampled_solid(named.solid, kVoxel);
+    const TriangleMesh emc = emc_of(s);
+    const TriangleMesh mc = marching_cubes(s.grid, s.field);
+    ASSERT_GT(emc.triangles.size(), 100u);
+    const MeshTopology topology = mesh_topology(emc);
+    EXPECT_TRUE(topology.edges.closed()) << topology.edges.boundary_edges << " boundary, "
+                                         << topology.edges.non_manifold_edges << " non-manifold";
+    EXPECT_EQ(topology.edges.inconsistent_edges, 0u);
+    EXPECT_EQ(topology.degenerate_faces, 0u);
+    std::vector<float> emc_error, mc_error;
+    for (const auto& v : emc.vertices) emc_error.push_back(std::abs(s.solid.sdf(v)) / kVoxel);
+    for (const auto& v : mc.vertices) mc_error.push_back(std::abs(s.solid.sdf(v)) / kVoxel);
+    const DistanceStats e = distance_stats(emc_error), m = distance_stats(mc_error);
+    std::printf(
+        "[ emc ] %s: %zu triangles (mc %zu); |sdf| of vertices mean %.4f max %.4f voxel "
+        "(mc mean %.4f max %.4f)\n",
+        named.name.c_str(), emc.triangles.size(), mc.triangles.size(), e.mean, e.max, m.mean,
+        m.max);
+    EXPECT_LT(e.mean, m.mean);
+    EXPECT_LT(e.mean, 0.02);
+  }
+}
+
+// Distances (voxels) from points every 0.05 voxel along the box's 12 edges to the mesh surface,
+// and from the 8 corners to the nearest mesh vertex.
+struct BoxFeatureError {
+  DistanceStats edges, corners;
+};
+
+BoxFeatureError box_feature_error(const TriangleMesh& mesh, const Eigen::Vector3f& center,
+                                  const Eigen::Vector3f& half) {
+  const MeshDistanceIndex surface(mesh);
+  std::vector<float> edge_error, corner_error;
+  for (int c = 0; c < 8; ++c) {
+    const Eigen::Vector3f sign(c & 1 ? 1.f : -1.f, c & 2 ? 1.f : -1.f, c & 4 ? 1.f : -1.f);
+    const Eigen::Vector3f corner = center + sign.cwiseProduct(half);
+    float nearest = std::numeric_limits<float>::infinity();
+    for (const auto& v : mesh.vertices) nearest = std::min(nearest, (v - corner).norm());
+    corner_error.push_back(nearest / kVoxel);
+    for (int axis = 0; axis < 3; ++axis) {
+      if (sign[axis] > 0) continue;  // each edge once, from its lower corner
+      for (float t = 0.0f; t <= 2.0f * half[axis]; t += 0.05f * kVoxel) {
+        Eigen::Vector3f p = corner;
+        p[axis] += t;
+        edge_error.push_back(surface.closest(p).distance / kVoxel);
+      }
+    }
+  }
+  return {distance_stats(edge_error), distance_stats(corner_error)};
+}
+
+TEST(ExtendedMarchingCubes, KeepsTheBoxEdgesAndCornersWhereMarchingCubesRoundsThem) {
+  const Eigen::Vector3f center(0.013f, -0.021f, 0.007f), half(0.4f, 0.4f, 0.4f);
+  const auto s = test::sampled_solid(test::test_solids(kVoxel)[0].solid, kVoxel);
+  const BoxFeatureError emc = box_feature_error(emc_of(s), center, half);
+  const BoxFeatureError mc = box_feature_error(marching_cubes(s.grid, s.field), center, half);
+  ExtendedMcConfig no_flips;
+  no_flips.flip_edges = false;
+  const BoxFeatureError fans_only = box_feature_error(emc_of(s, no_flips), center, half);
+  std::printf(
+      "[ emc ] box edges to mesh (voxels): emc mean %.4f p95 %.4f max %.4f; fans only "
+      "mean %.4f p95 %.4f; mc mean %.4f p95 %.4f\n",
+      emc.edges.mean, emc.edges.p95, emc.edges.max, fans_only.edges.mean, fans_only.edges.p95,
+      mc.edges.mean, mc.edges.p95);
+  std::printf("[ emc ] box corners to nearest vertex (voxels): emc max %.4f; mc mean %.4f\n",
+              emc.corners.max, mc.corners.mean);
+  EXPECT_LT(emc.edges.p95, 0.05);
+  EXPECT_LT(emc.corners.max, 0.05);
+  EXPECT_GT(mc.edges.mean, 0.1);
+  EXPECT_GT(mc.corners.mean, 0.2);
+  EXPECT_LT(emc.edges.mean, fans_only.edges.mean);  // the flips run along the edges
+}
+
+TEST(ExtendedMarchingCubes, SameOutputWithOneAndTwoThreads) {
+  const auto s = test::sampled_solid(test::test_solids(kVoxel)[2].solid, kVoxel);
+  TriangleMesh one, two;
+  {
+    ThreadLimit limit(1);
+    one = emc_of(s);
+  }
+  {
+    ThreadLimit limit(2);
+    two = emc_of(s);
+  }
+  EXPECT_EQ(one.vertices, two.vertices);
+  EXPECT_EQ(one.triangles, two.triangles);
+}
+
+}  // namespace
+}  // namespace meshflow

@@ -13,20 +13,6 @@ Eigen::Vector3f face_normal(const TriangleMesh& mesh, const Triangle& t) {
   return len > 0.0f ? Eigen::Vector3f(n / len) : Eigen::Vector3f::Zero();
 }
 
-void compute_vertex_normals(TriangleMesh& mesh) {
-  mesh.normals.assign(mesh.vertices.size(), Eigen::Vector3f::Zero());
-  for (const Triangle& t : mesh.triangles) {
-    const Eigen::Vector3f& a = mesh.vertices[t[0]];
-    // Unnormalized cross product = normal weighted by twice the area.
-    const Eigen::Vector3f n = (mesh.vertices[t[1]] - a).cross(mesh.vertices[t[2]] - a);
-    for (std::uint32_t v : t) mesh.normals[v] += n;
-  }
-  for (auto& n : mesh.normals) {
-    const float len = n.norm();
-    n = len > 0.0f ? Eigen::Vector3f(n / len) : Eigen::Vector3f::Zero();
-  }
-}
-
 EdgeStatistics edge_statistics(const TriangleMesh& mesh) {
   // Key: (min vertex, max vertex) with the direction in the lowest bit.
   std::vector<std::uint64_t> keys;

@@ -26,8 +26,11 @@ struct TriangleMesh {
 /// Unit face normal of triangle t (zero for a degenerate triangle).
 Eigen::Vector3f face_normal(const TriangleMesh& mesh, const Triangle& t);
 
-/// Recomputes `normals` as area-weighted averages of the adjacent face normals.
-/// Serial O(V + T) accumulation: deterministic and cheaper than the stages that produce meshes.
+/// Recomputes `normals` as area-weighted averages of the adjacent face normals (unit length;
+/// zero for a vertex without area around it). Parallel over vertex ranges (one per worker, each
+/// scanning all triangles); every vertex sums its faces in triangle order, so the result is
+/// bit-identical for any thread count. O(V + T x workers) reads, O(T) arithmetic.
+/// Implemented in runtime/vertex_normals.cpp.
 void compute_vertex_normals(TriangleMesh& mesh);
 
 /// Edge incidence counts of a mesh, for validity checks and `meshflow info`.

@@ -7,16 +7,16 @@
 #include "runtime/parallel.h"
 
 namespace meshflow {
-namespace {
-constexpr std::uint32_t kUnmarked = UINT32_MAX;
-}
-
 EdgeVertexTable::EdgeVertexTable(std::size_t corners, std::size_t directions)
     : directions_(directions),
       size_(corners * directions),
-      upper_(new std::atomic<std::uint32_t>[corners * directions]) {
-  tbb::parallel_for(std::size_t{0}, size_,
-                    [&](std::size_t k) { upper_[k].store(kUnmarked, std::memory_order_relaxed); });
+      marked_(new std::uint8_t[corners * directions]),
+      upper_(new std::uint32_t[corners * directions]) {  // uninitialised: read where marked
+  const std::size_t blocks = (size_ + kParallelBlock - 1) / kParallelBlock;
+  tbb::parallel_for(std::size_t{0}, blocks, [&](std::size_t b) {
+    const std::size_t begin = b * kParallelBlock, end = std::min(size_, begin + kParallelBlock);
+    std::fill(marked_.get() + begin, marked_.get() + end, std::uint8_t{0});
+  });
 }
 
 std::vector<Eigen::Vector3f> EdgeVertexTable::place_vertices(const SparseGrid& grid,
@@ -27,8 +27,7 @@ std::vector<Eigen::Vector3f> EdgeVertexTable::place_vertices(const SparseGrid& g
   std::vector<std::uint32_t> block_offsets(blocks);
   tbb::parallel_for(std::size_t{0}, blocks, [&](std::size_t b) {
     std::uint32_t count = 0;
-    for (std::size_t k = b * kParallelBlock; k < block_end(b); ++k)
-      count += upper(k) != kUnmarked ? 1u : 0u;
+    for (std::size_t k = b * kParallelBlock; k < block_end(b); ++k) count += marked_[k];
     block_offsets[b] = count;
   });
   std::vector<Eigen::Vector3f> vertices(exclusive_scan_in_place(block_offsets));
@@ -37,8 +36,8 @@ std::vector<Eigen::Vector3f> EdgeVertexTable::place_vertices(const SparseGrid& g
   tbb::parallel_for(std::size_t{0}, blocks, [&](std::size_t b) {
     std::uint32_t v = block_offsets[b];
     for (std::size_t k = b * kParallelBlock; k < block_end(b); ++k) {
-      const std::uint32_t hi = upper(k);
-      if (hi == kUnmarked) continue;
+      if (!marked_[k]) continue;
+      const std::uint32_t hi = upper_[k];
       const std::uint32_t lo = lower(k);
       const float d0 = field.values[lo] - iso, d1 = field.values[hi] - iso;
       const float t = std::clamp(d0 / (d0 - d1), 1e-3f, 1.0f - 1e-3f);

@@ -3,7 +3,6 @@
 // every extraction method: cells mark the lattice segments their surface crosses, then vertices
 // are numbered in table order and placed by linear interpolation of the field.
 
-#include <atomic>
 #include <cstdint>
 #include <memory>
 #include <vector>
@@ -14,8 +13,10 @@
 namespace meshflow {
 
 /// A table over lattice segments "corner i, direction d" (d < directions), each joining corner
-/// i to a corner with larger coordinates. Marking is thread-safe (relaxed atomics: every cell
-/// sharing a segment writes the same upper corner); numbering runs after all marks.
+/// i to a corner with larger coordinates. One byte per segment flags it (so the numbering pass
+/// scans bytes, not words); the upper corner is stored for flagged segments only. Marking is
+/// thread-safe (relaxed atomic stores: every cell sharing a segment writes the same values);
+/// numbering runs after all marks, ordered after them by the join of the marking loop.
 class EdgeVertexTable {
  public:
   EdgeVertexTable(std::size_t corners, std::size_t directions);
@@ -26,7 +27,8 @@ class EdgeVertexTable {
   }
   /// Marks segment `s` as crossed; `upper` is its other corner. Thread-safe.
   void mark(std::size_t s, std::uint32_t upper) {
-    upper_[s].store(upper, std::memory_order_relaxed);
+    __atomic_store_n(&upper_[s], upper, __ATOMIC_RELAXED);
+    __atomic_store_n(&marked_[s], std::uint8_t{1}, __ATOMIC_RELAXED);
   }
 
   /// Numbers the marked segments in table order and returns one vertex per segment, at the
@@ -43,12 +45,15 @@ class EdgeVertexTable {
   std::size_t direction(std::size_t s) const { return s % directions_; }
   /// Lower and upper corner of a marked segment.
   std::uint32_t lower(std::size_t s) const { return static_cast<std::uint32_t>(s / directions_); }
-  std::uint32_t upper(std::size_t s) const { return upper_[s].load(std::memory_order_relaxed); }
+  std::uint32_t upper(std::size_t s) const { return upper_[s]; }
 
  private:
   std::size_t directions_;
   std::size_t size_;
-  std::unique_ptr<std::atomic<std::uint32_t>[]> upper_;
+  // GCC/Clang __atomic builtins on plain arrays: atomic while marking, plain (vectorisable)
+  // reads once the marking loop has joined.
+  std::unique_ptr<std::uint8_t[]> marked_;
+  std::unique_ptr<std::uint32_t[]> upper_;   // written for marked segments only
   std::unique_ptr<std::uint32_t[]> vertex_;  // written for marked segments only
   std::vector<std::size_t> segment_of_vertex_;
 };

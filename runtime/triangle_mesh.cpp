@@ -4,6 +4,9 @@
 
 #include <algorithm>
 
+#include "runtime/parallel.h"
+#include "runtime/vertex_triangles.h"
+
 namespace meshflow {
 
 Eigen::Vector3f face_normal(const TriangleMesh& mesh, const Triangle& t) {
@@ -44,30 +47,28 @@ EdgeStatistics edge_statistics(const TriangleMesh& mesh) {
 }
 
 std::vector<BorderEdge> border_edges(const TriangleMesh& mesh) {
-  struct Directed {
-    std::uint64_t key;  // min vertex << 32 | max vertex
-    BorderEdge edge;
-  };
-  std::vector<Directed> edges;
-  edges.reserve(mesh.triangles.size() * 3);
-  for (std::uint32_t t = 0; t < mesh.triangles.size(); ++t) {
-    for (int i = 0; i < 3; ++i) {
-      const std::uint32_t a = mesh.triangles[t][i], b = mesh.triangles[t][(i + 1) % 3];
-      const std::uint64_t key = std::uint64_t{std::min(a, b)} << 32 | std::max(a, b);
-      edges.push_back({key, {a, b, t}});
+  const VertexTriangles around = vertex_triangles(mesh);
+  const auto& tris = mesh.triangles;
+  // Edge i of triangle t (t[i] -> t[i + 1]) is a border edge when no other triangle around
+  // t[i] also has t[i + 1] as a corner.
+  auto is_border = [&](std::size_t t, int i) {
+    const std::uint32_t a = tris[t][static_cast<std::size_t>(i)];
+    const std::uint32_t b = tris[t][static_cast<std::size_t>((i + 1) % 3)];
+    for (const std::uint32_t* s = around.begin(a); s != around.end(a); ++s) {
+      if (*s == t) continue;
+      const Triangle& other = tris[*s];
+      if (other[0] == b || other[1] == b || other[2] == b) return false;
     }
-  }
-  // A total order (a triangle has an edge once): the parallel sort is deterministic.
-  tbb::parallel_sort(edges.begin(), edges.end(), [](const Directed& x, const Directed& y) {
-    return x.key != y.key ? x.key < y.key : x.edge.triangle < y.edge.triangle;
+    return true;
+  };
+  const std::vector<std::uint32_t> corners = parallel_select_indices(
+      tris.size() * 3, [&](std::size_t c) { return is_border(c / 3, static_cast<int>(c % 3)); });
+  std::vector<BorderEdge> border(corners.size());
+  tbb::parallel_for(std::size_t{0}, corners.size(), [&](std::size_t k) {
+    const std::uint32_t t = corners[k] / 3;
+    const std::size_t i = corners[k] % 3;
+    border[k] = BorderEdge{tris[t][i], tris[t][(i + 1) % 3], t};
   });
-  std::vector<BorderEdge> border;
-  for (std::size_t i = 0; i < edges.size();) {
-    std::size_t j = i;
-    while (j < edges.size() && edges[j].key == edges[i].key) ++j;
-    if (j - i == 1) border.push_back(edges[i].edge);
-    i = j;
-  }
   return border;
 }
 

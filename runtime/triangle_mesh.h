@@ -50,8 +50,8 @@ struct BorderEdge {
   std::uint32_t a, b, triangle;
 };
 
-/// The border edges of a mesh, ordered by (min vertex, max vertex). O(T log T), parallel sort,
-/// deterministic.
+/// The border edges of a mesh, in triangle order (then edge order within the triangle).
+/// Parallel over vertex_triangles(); deterministic. O(V + T x workers + T x valence).
 std::vector<BorderEdge> border_edges(const TriangleMesh& mesh);
 
 }  // namespace meshflow

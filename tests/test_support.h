@@ -22,6 +22,8 @@ std::string temp_dir();
 
 /// Writes `content` to `path` (binary).
 void write_file(const std::string& path, const std::string& content);
+/// The whole file at `path` (binary); empty when it cannot be read.
+std::string read_file(const std::string& path);
 
 struct ErrorStats {
   double mean = 0.0, max = 0.0;

@@ -6,6 +6,8 @@
 #include <algorithm>
 #include <utility>
 
+#include "runtime/parallel.h"
+
 namespace meshflow {
 namespace {
 
@@ -71,10 +73,14 @@ void move_border_to_contour(TriangleMesh& mesh, const PointCloud& cloud, const S
   for (std::size_t i = 0; i < border.ids.size(); ++i) mesh.vertices[border.ids[i]] = moved[i];
   // A border triangle whose three vertices now lie on one straight contour has no area left:
   // drop it (its inner edge becomes the border, on the contour too).
-  mesh.triangles.erase(
-      std::remove_if(mesh.triangles.begin(), mesh.triangles.end(),
-                     [&](const Triangle& t) { return face_normal(mesh, t).isZero(); }),
-      mesh.triangles.end());
+  const std::vector<std::uint32_t> kept = parallel_select_indices(
+      mesh.triangles.size(),
+      [&](std::size_t t) { return !face_normal(mesh, mesh.triangles[t]).isZero(); });
+  if (kept.size() == mesh.triangles.size()) return;
+  std::vector<Triangle> triangles(kept.size());
+  tbb::parallel_for(std::size_t{0}, kept.size(),
+                    [&](std::size_t k) { triangles[k] = mesh.triangles[kept[k]]; });
+  mesh.triangles = std::move(triangles);
 }
 
 TriangleMesh planar_marching_cubes(const SparseGrid& grid, const DistanceField& field,

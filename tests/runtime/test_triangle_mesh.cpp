@@ -2,6 +2,12 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <map>
+
+#include "runtime/threads.h"
+#include "runtime/vertex_triangles.h"
+
 namespace meshflow {
 namespace {
 
@@ -40,6 +46,84 @@ TEST(TriangleMesh, VertexNormalsPointOutwardOnATetrahedron) {
     EXPECT_GT(m.normals[i].dot(m.vertices[i] - centroid), 0.0f);
   }
   EXPECT_TRUE(face_normal(m, m.triangles[0]).isApprox(Eigen::Vector3f(0, 0, -1)));
+}
+
+// An n x n vertex grid on a wavy height field, two triangles per quad, vertices numbered in a
+// scrambled order so rows of the incidence are not contiguous in the triangle list.
+TriangleMesh wavy_grid(std::uint32_t n) {
+  TriangleMesh m;
+  std::vector<std::uint32_t> id(n * n);
+  for (std::uint32_t i = 0; i < n * n; ++i) id[i] = (i * 7919u) % (n * n);  // n*n prime to 7919
+  m.vertices.resize(n * n);
+  for (std::uint32_t y = 0; y < n; ++y)
+    for (std::uint32_t x = 0; x < n; ++x)
+      m.vertices[id[y * n + x]] = {static_cast<float>(x), static_cast<float>(y),
+                                   std::sin(0.3f * static_cast<float>(x * y))};
+  for (std::uint32_t y = 0; y + 1 < n; ++y)
+    for (std::uint32_t x = 0; x + 1 < n; ++x) {
+      const std::uint32_t a = id[y * n + x], b = id[y * n + x + 1], c = id[(y + 1) * n + x],
+                          d = id[(y + 1) * n + x + 1];
+      m.triangles.push_back({a, b, d});
+      m.triangles.push_back({a, d, c});
+    }
+  return m;
+}
+
+TEST(VertexTriangles, MatchesABruteForceIncidenceWithOneAndTwoThreads) {
+  const TriangleMesh m = wavy_grid(150);
+  std::vector<std::vector<std::uint32_t>> oracle(m.vertices.size());
+  for (std::uint32_t t = 0; t < m.triangles.size(); ++t)
+    for (std::uint32_t v : m.triangles[t]) oracle[v].push_back(t);
+  for (int threads : {1, 2}) {
+    ThreadLimit limit(threads);
+    const VertexTriangles around = vertex_triangles(m);
+    ASSERT_EQ(around.offsets.size(), m.vertices.size() + 1);
+    for (std::uint32_t v = 0; v < m.vertices.size(); ++v)
+      ASSERT_EQ(std::vector<std::uint32_t>(around.begin(v), around.end(v)), oracle[v]) << v;
+  }
+}
+
+TEST(TriangleMesh, BorderEdgesOfAGridAreItsOutlineDirectedAsTheirTriangles) {
+  const std::uint32_t n = 150;
+  const TriangleMesh m = wavy_grid(n);
+  // Oracle: undirected edges used once, from a map.
+  std::map<std::pair<std::uint32_t, std::uint32_t>, int> uses;
+  for (const Triangle& t : m.triangles)
+    for (int i = 0; i < 3; ++i) ++uses[std::minmax(t[i], t[(i + 1) % 3])];
+  std::size_t expected = 0;
+  for (const auto& [edge, count] : uses) expected += count == 1 ? 1 : 0;
+  ASSERT_EQ(expected, 4u * (n - 1));
+  for (int threads : {1, 2}) {
+    ThreadLimit limit(threads);
+    const std::vector<BorderEdge> border = border_edges(m);
+    ASSERT_EQ(border.size(), expected);
+    for (const BorderEdge& e : border) {
+      EXPECT_EQ(uses[std::minmax(e.a, e.b)], 1);
+      const Triangle& t = m.triangles[e.triangle];
+      const bool directed = (t[0] == e.a && t[1] == e.b) || (t[1] == e.a && t[2] == e.b) ||
+                            (t[2] == e.a && t[0] == e.b);
+      EXPECT_TRUE(directed);
+    }
+    EXPECT_TRUE(std::is_sorted(border.begin(), border.end(), [](const auto& x, const auto& y) {
+      return x.triangle < y.triangle;
+    }));
+  }
+}
+
+TEST(TriangleMesh, VertexNormalsAreTheSerialSumsWithOneAndTwoThreads) {
+  TriangleMesh m = wavy_grid(150);
+  std::vector<Eigen::Vector3f> serial(m.vertices.size(), Eigen::Vector3f::Zero());
+  for (const Triangle& t : m.triangles) {
+    const Eigen::Vector3f n =
+        (m.vertices[t[1]] - m.vertices[t[0]]).cross(m.vertices[t[2]] - m.vertices[t[0]]);
+    for (std::uint32_t v : t) serial[v] += n;
+  }
+  for (auto& n : serial) n.normalize();
+  for (int threads : {1, 2}) {
+    ThreadLimit limit(threads);
+    compute_vertex_normals(m);
+    EXPECT_EQ(m.normals, serial);  // bit-identical: each vertex sums in triangle order
+  }
 }
 
 }  // namespace

@@ -4,6 +4,7 @@
 
 #include <cstring>
 
+#include "nodes/io/mesh_writers.h"
 #include "runtime/error.h"
 #include "test_support.h"
 
@@ -122,6 +123,39 @@ TEST(PlyReader, TruncationsAndByteFlipsNeverCrash) {
     try {
       read_ply(path);
     } catch (const Error&) {
+    }
+  }
+}
+
+// The same corruption against the mesh reader (faces: list counts and vertex indices are the
+// fields a flipped byte breaks), for both encodings; a valid result must index its vertices.
+TEST(PlyReader, MeshTruncationsAndByteFlipsNeverCrash) {
+  TriangleMesh mesh;
+  mesh.vertices = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+  mesh.triangles = {{0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {1, 2, 3}};
+  compute_vertex_normals(mesh);
+  const std::string path = test::temp_dir() + "/fuzz_mesh.ply";
+  for (auto encoding : {PlyEncoding::kBinary, PlyEncoding::kAscii}) {
+    write_ply(path, mesh, encoding);
+    const std::string good = test::read_file(path);
+    auto parse_or_error = [&](const std::string& contents) {
+      test::write_file(path, contents);
+      try {
+        const TriangleMesh m = read_ply_mesh(path);
+        for (const Triangle& t : m.triangles)
+          for (std::uint32_t v : t) EXPECT_LT(v, m.vertices.size());
+      } catch (const Error&) {
+      }
+    };
+    for (std::size_t len = 0; len < good.size(); ++len) parse_or_error(good.substr(0, len));
+    std::uint32_t state = 777;
+    for (int trial = 0; trial < 300; ++trial) {
+      std::string bad = good;
+      for (int k = 0; k < 2; ++k) {
+        state = state * 1664525u + 1013904223u;
+        bad[state % bad.size()] = static_cast<char>(state >> 24);
+      }
+      parse_or_error(bad);
     }
   }
 }

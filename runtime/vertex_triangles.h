@@ -1,0 +1,28 @@
+#pragma once
+// Vertex -> triangle incidence of an indexed mesh (compressed rows), the adjacency that border
+// detection and mesh clean-up walk.
+
+#include <cstdint>
+#include <vector>
+
+#include "runtime/triangle_mesh.h"
+
+namespace meshflow {
+
+/// Triangles around each vertex: around(v) lists every triangle that has v as a corner, in
+/// ascending triangle order (a triangle repeating v is listed once per repetition).
+struct VertexTriangles {
+  std::vector<std::uint32_t> offsets;    ///< vertex count + 1
+  std::vector<std::uint32_t> triangles;  ///< 3 x triangle count
+
+  const std::uint32_t* begin(std::uint32_t v) const { return triangles.data() + offsets[v]; }
+  const std::uint32_t* end(std::uint32_t v) const { return triangles.data() + offsets[v + 1]; }
+};
+
+/// Builds the incidence in parallel over vertex ranges (one per worker; each scans all
+/// triangles twice, counting then filling its own rows), so no atomics are needed and the
+/// result is the same for any thread count. Triangles must index existing vertices.
+/// O(V + T x workers) reads, O(V + T) memory.
+VertexTriangles vertex_triangles(const TriangleMesh& mesh);
+
+}  // namespace meshflow

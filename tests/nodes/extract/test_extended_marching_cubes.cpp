@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <array>
 #include <cstdio>
 
 #include "nodes/eval/mesh_distance_index.h"
@@ -96,6 +98,11 @@ TEST(ExtendedMarchingCubes, ClosedOrientedAndNearTheSurfaceOnEveryShape) {
                                          << topology.edges.non_manifold_edges << " non-manifold";
     EXPECT_EQ(topology.edges.inconsistent_edges, 0u);
     EXPECT_EQ(topology.degenerate_faces, 0u);
+    // Shared vertices: no two at the same position.
+    std::vector<std::array<float, 3>> keys;
+    for (const auto& v : emc.vertices) keys.push_back({v.x(), v.y(), v.z()});
+    std::sort(keys.begin(), keys.end());
+    EXPECT_EQ(std::adjacent_find(keys.begin(), keys.end()), keys.end());
     std::vector<float> emc_error, mc_error;
     for (const auto& v : emc.vertices) emc_error.push_back(std::abs(s.solid.sdf(v)) / kVoxel);
     for (const auto& v : mc.vertices) mc_error.push_back(std::abs(s.solid.sdf(v)) / kVoxel);

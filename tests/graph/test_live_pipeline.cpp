@@ -1,0 +1,175 @@
+#include "graph/live_pipeline.h"
+
+#include <gtest/gtest.h>
+
+#include <atomic>
+#include <chrono>
+#include <map>
+#include <mutex>
+#include <thread>
+
+#include "nodes/synthetic/depth_sequence.h"
+#include "nodes/synthetic/shapes.h"
+#include "runtime/error.h"
+
+namespace meshflow {
+namespace {
+
+LiveConfig sphere_config(LivePolicy policy, std::size_t in_flight, std::size_t waiting) {
+  LiveConfig c;
+  c.reconstruction.voxelize.voxel_size = 0.1f;
+  c.reconstruction.normals.orientation = NormalOrientation::kAwayFromViewpoint;
+  c.policy = policy;
+  c.frames_in_flight = in_flight;
+  c.max_waiting = waiting;
+  return c;
+}
+
+PointCloud sphere(int i) {
+  return synthetic::sample_surface(
+      synthetic::Sphere{{0, 0, 0}, 1.0f + 0.05f * static_cast<float>(i)}, 0.05f, 0.0f, 1);
+}
+
+// What the callback saw, guarded for reading from the test thread.
+struct Received {
+  std::mutex mutex;
+  std::vector<LiveResult> results;
+  void add(LiveResult& r) {
+    std::lock_guard<std::mutex> lock(mutex);
+    results.push_back(std::move(r));
+  }
+};
+
+TEST(LivePipeline, QueuePolicyDeliversEveryFrameInOrderWithFailuresReported) {
+  Received got;
+  LivePipeline live(sphere_config(LivePolicy::kQueue, 2, 16), [&](LiveResult& r) { got.add(r); });
+  for (int i = 0; i < 10; ++i) {
+    const auto push = live.push(i == 4 ? PointCloud{} : sphere(i));  // frame 4 is empty
+    EXPECT_EQ(push.status, LivePipeline::PushStatus::kAccepted);
+    EXPECT_EQ(push.seq, static_cast<std::uint64_t>(i));
+  }
+  live.flush();
+  ASSERT_EQ(got.results.size(), 10u);
+  for (std::size_t i = 0; i < 10; ++i) {
+    const LiveResult& r = got.results[i];
+    EXPECT_EQ(r.seq, i);
+    if (i == 4) {
+      EXPECT_FALSE(r.ok);
+      EXPECT_NE(r.error.find("frame 4"), std::string::npos) << r.error;
+      continue;
+    }
+    EXPECT_TRUE(r.ok) << r.error;
+    EXPECT_GT(r.mesh.triangles.size(), 100u);
+    EXPECT_GE(r.timings.size(), 8u);
+    EXPECT_GT(r.latency_s, 0.0);
+  }
+  const LiveStats s = live.stats();
+  EXPECT_EQ(s.pushed, 10u);
+  EXPECT_EQ(s.delivered, 10u);
+  EXPECT_EQ(s.failed, 1u);
+  EXPECT_EQ(s.dropped + s.rejected, 0u);
+  EXPECT_EQ(s.waiting + s.in_flight, 0u);
+  EXPECT_GT(s.latency_p99_s, 0.0);
+  EXPECT_GE(s.latency_p99_s, s.latency_p50_s);
+}
+
+TEST(LivePipeline, QueuePolicyRefusesFramesWhileFullAndLosesNoAcceptedOne) {
+  Received got;
+  LivePipeline live(sphere_config(LivePolicy::kQueue, 1, 2), [&](LiveResult& r) { got.add(r); });
+  std::vector<PointCloud> clouds;
+  for (int i = 0; i < 12; ++i) clouds.push_back(sphere(i));
+  std::vector<std::uint64_t> accepted;
+  for (int i = 0; i < 12; ++i) {
+    const auto push = live.push(std::move(clouds[static_cast<std::size_t>(i)]));
+    if (push.status == LivePipeline::PushStatus::kAccepted) accepted.push_back(push.seq);
+    EXPECT_LE(live.stats().waiting, 2u);
+  }
+  live.flush();
+  const LiveStats s = live.stats();
+  EXPECT_GT(s.rejected, 0u);  // 12 pushes in microseconds against ~10 ms frames
+  EXPECT_EQ(s.rejected + accepted.size(), 12u);
+  ASSERT_EQ(got.results.size(), accepted.size());
+  for (std::size_t i = 0; i < accepted.size(); ++i) EXPECT_EQ(got.results[i].seq, accepted[i]);
+}
+
+TEST(LivePipeline, RealtimePolicyDropsTheOldestAndBoundsTheFramesAhead) {
+  // Frames delivered between a frame's push and its own delivery are the latency in frames:
+  // at most frames_in_flight + max_waiting (anything older was dropped).
+  std::mutex mutex;
+  std::map<std::uint64_t, std::uint64_t> delivered_at_push;
+  std::uint64_t delivered = 0;
+  std::vector<std::uint64_t> order, frames_ahead;
+  LivePipeline live(sphere_config(LivePolicy::kRealtime, 1, 1), [&](LiveResult& r) {
+    std::lock_guard<std::mutex> lock(mutex);
+    order.push_back(r.seq);
+    frames_ahead.push_back(delivered - delivered_at_push.at(r.seq));
+    ++delivered;
+  });
+  const std::vector<PointCloud> clouds = {sphere(0), sphere(1), sphere(2)};
+  for (int i = 0; i < 30; ++i) {
+    {
+      std::lock_guard<std::mutex> lock(mutex);
+      delivered_at_push[static_cast<std::uint64_t>(i)] = delivered;
+    }
+    const auto push = live.push(clouds[static_cast<std::size_t>(i % 3)]);
+    EXPECT_NE(push.status, LivePipeline::PushStatus::kRejected);
+    EXPECT_LE(live.stats().waiting, 1u);
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  }
+  live.flush();
+  const LiveStats s = live.stats();
+  EXPECT_GT(s.dropped, 0u);
+  EXPECT_EQ(s.delivered + s.dropped, 30u);
+  ASSERT_EQ(order.size(), s.delivered);
+  EXPECT_TRUE(std::is_sorted(order.begin(), order.end()));
+  EXPECT_EQ(order.back(), 29u);  // the newest frame is never the one dropped
+  for (std::uint64_t ahead : frames_ahead) EXPECT_LE(ahead, 2u);
+}
+
+TEST(LivePipeline, DestructionWithFramesInFlightMakesNoLaterCallback) {
+  std::atomic<int> calls{0};
+  {
+    LivePipeline live(sphere_config(LivePolicy::kQueue, 2, 8), [&](LiveResult&) { ++calls; });
+    std::vector<PointCloud> clouds;
+    for (int i = 0; i < 8; ++i) clouds.push_back(sphere(i));
+    for (auto& cloud : clouds) live.push(std::move(cloud));
+  }  // destroyed at once: waiting frames discarded, in-flight ones finished silently
+  const int at_destruction = calls.load();
+  std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  EXPECT_EQ(calls.load(), at_destruction);
+  EXPECT_LT(at_destruction, 8);
+}
+
+TEST(LivePipeline, PushFromOneThreadWhileCallbacksRunOnOthersAndDepthFramesWork) {
+  const synthetic::Scene scene = synthetic::demo_room_scene();
+  synthetic::DepthSequenceConfig camera;
+  camera.frames = 3;
+  camera.intrinsics = PinholeIntrinsics{160, 120, 131.25f, 131.25f, 79.5f, 59.5f};
+  const auto seq = synthetic::make_depth_sequence(scene, camera);
+  LiveConfig config;
+  config.reconstruction.voxelize.voxel_size = 0.05f;
+  config.policy = LivePolicy::kQueue;
+  config.max_waiting = 8;
+  Received got;
+  std::atomic<bool> callback_on_pusher{false};
+  const auto pusher = std::this_thread::get_id();
+  LivePipeline live(config, [&](LiveResult& r) {
+    if (std::this_thread::get_id() == pusher) callback_on_pusher = true;
+    got.add(r);
+  });
+  for (std::size_t i = 0; i < seq->size(); ++i) live.push(seq->frame(i).load_depth());
+  live.flush();
+  EXPECT_FALSE(callback_on_pusher.load());
+  ASSERT_EQ(got.results.size(), 3u);
+  for (const LiveResult& r : got.results) {
+    EXPECT_TRUE(r.ok) << r.error;
+    EXPECT_GT(r.mesh.triangles.size(), 1000u);
+  }
+}
+
+TEST(LivePipeline, EmptyCallbackIsAnError) {
+  EXPECT_THROW(LivePipeline(LiveConfig{}, nullptr), Error);
+}
+
+}  // namespace
+}  // namespace meshflow

@@ -1,6 +1,7 @@
 #include "graph/live_pipeline.h"
 
 #include <oneapi/tbb/flow_graph.h>
+#include <oneapi/tbb/global_control.h>
 #include <oneapi/tbb/task_arena.h>
 
 #include <algorithm>
@@ -17,6 +18,10 @@ namespace flow = tbb::flow;
 namespace {
 constexpr std::size_t kLatencyWindow = 4096;
 
+int arena_threads(const LiveConfig& c) {
+  return c.threads > 0 ? c.threads : tbb::this_task_arena::max_concurrency();
+}
+
 double percentile(std::vector<double> values, double q) {
   if (values.empty()) return 0.0;
   const std::size_t k =
@@ -29,6 +34,11 @@ double percentile(std::vector<double> values, double q) {
 struct LivePipeline::Impl {
   LiveConfig config;
   Callback callback;
+  // Nobody joins the arena (push() only enqueues), so all its threads must be workers; oneTBB
+  // caps workers at (allowed parallelism - 1) for the whole process, so the cap is raised by
+  // one while the pipeline lives (an application's own lower cap still wins: the minimum of
+  // the active controls applies).
+  tbb::global_control workers;
   tbb::task_arena arena;
   flow::graph graph;
 
@@ -50,7 +60,8 @@ struct LivePipeline::Impl {
   Impl(LiveConfig c, Callback cb)
       : config(std::move(c)),
         callback(std::move(cb)),
-        arena(config.threads > 0 ? config.threads : tbb::task_arena::automatic, 0) {
+        workers(tbb::global_control::max_allowed_parallelism, arena_threads(config) + 1),
+        arena(arena_threads(config), 0) {
     config.frames_in_flight = std::max<std::size_t>(1, config.frames_in_flight);
     config.max_waiting = std::max<std::size_t>(1, config.max_waiting);
     arena.execute([&] { build_graph(); });

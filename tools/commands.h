@@ -12,5 +12,6 @@ void add_demo_command(CLI::App& app);
 void add_run_command(CLI::App& app);
 void add_profile_command(CLI::App& app);
 void add_eval_command(CLI::App& app);
+void add_live_command(CLI::App& app);
 
 }  // namespace meshflow::cli

@@ -1,6 +1,8 @@
-// Reconstructs a synthetic sphere through the installed meshflow library.
+// Reconstructs a synthetic sphere through the installed meshflow library: once as a batch call
+// and once through the embedding API (push frames, meshes arrive in a callback).
 #include <cstdio>
 
+#include "graph/live_pipeline.h"
 #include "graph/pipeline.h"
 #include "nodes/synthetic/shapes.h"
 
@@ -17,5 +19,18 @@ int main() {
   }
   std::printf("consumer: %zu points -> %zu triangles\n", cloud.size(),
               frame->mesh.triangles.size());
-  return 0;
+
+  meshflow::LiveConfig live_config;
+  live_config.reconstruction = config;
+  live_config.policy = meshflow::LivePolicy::kQueue;
+  std::size_t meshes = 0;
+  {
+    meshflow::LivePipeline live(live_config, [&](meshflow::LiveResult& r) {
+      meshes += r.ok && !r.mesh.triangles.empty() ? 1 : 0;
+    });
+    for (int i = 0; i < 3; ++i) live.push(cloud);
+    live.flush();
+  }
+  std::printf("consumer: live API delivered %zu of 3 meshes\n", meshes);
+  return meshes == 3 ? 0 : 1;
 }

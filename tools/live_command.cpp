@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "graph/live_pipeline.h"
+#include "runtime/error.h"
 #include "tools/commands.h"
 #include "tools/pipeline_options.h"
 
@@ -22,6 +23,7 @@ struct LiveOptions {
   double rate_hz = 30.0;
   std::string policy = "realtime";
   std::size_t waiting = 2;
+  std::size_t loops = 1;
 };
 
 using SensorFrame = std::variant<PointCloud, DepthFrame>;
@@ -43,6 +45,7 @@ std::vector<SensorFrame> load_frames(const io::Sequence& sequence, const Sequenc
 void run_live(const LiveOptions& o) {
   const auto sequence = open_sequence_argument(o.sequence);
   const std::vector<SensorFrame> frames = load_frames(*sequence, o.sequence);
+  if (frames.empty()) throw Error(sequence->description(), "frames", "none selected");
   LiveConfig config;
   config.reconstruction = o.pipeline.config();
   config.threads = o.pipeline.threads;
@@ -56,18 +59,19 @@ void run_live(const LiveOptions& o) {
       std::fprintf(stderr, "meshflow: frame %llu failed in %s: %s\n",
                    static_cast<unsigned long long>(r.seq), r.failed_stage.c_str(), r.error.c_str());
   });
-  std::printf("live       %s: %zu frames at %.1f Hz, policy %s, %zu in flight, %zu waiting\n",
-              sequence->description().c_str(), frames.size(), o.rate_hz, o.policy.c_str(),
+  std::printf("live       %s: %zu frames x %zu at %.1f Hz, policy %s, %zu in flight, %zu waiting\n",
+              sequence->description().c_str(), frames.size(), o.loops, o.rate_hz, o.policy.c_str(),
               config.frames_in_flight, config.max_waiting);
   using Clock = std::chrono::steady_clock;
   const auto period = std::chrono::duration<double>(1.0 / o.rate_hz);
   const auto start = Clock::now();
   double worst_push_s = 0.0;
-  for (std::size_t i = 0; i < frames.size(); ++i) {
+  const std::size_t pushes = frames.size() * o.loops;
+  for (std::size_t i = 0; i < pushes; ++i) {
     std::this_thread::sleep_until(
         start + std::chrono::duration_cast<Clock::duration>(period * static_cast<double>(i)));
     const auto before = Clock::now();
-    std::visit([&](const auto& frame) { live.push(frame); }, frames[i]);
+    std::visit([&](const auto& frame) { live.push(frame); }, frames[i % frames.size()]);
     worst_push_s =
         std::max(worst_push_s, std::chrono::duration<double>(Clock::now() - before).count());
   }
@@ -99,6 +103,8 @@ void add_live_command(CLI::App& app) {
       ->check(CLI::IsMember({"realtime", "queue"}));
   cmd->add_option("--waiting", o->waiting, "Frames that may wait for a slot")
       ->check(CLI::Range(1, 1024));
+  cmd->add_option("--loops", o->loops, "Replay the frames this many times")
+      ->check(CLI::Range(1, 100000));
   add_pipeline_options(cmd, o->pipeline);
   cmd->callback([o] { run_live(*o); });
 }

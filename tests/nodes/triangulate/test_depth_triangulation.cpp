@@ -1,0 +1,156 @@
+#include "nodes/triangulate/depth_triangulation.h"
+
+#include <gtest/gtest.h>
+
+#include <cstdio>
+
+#include "nodes/eval/surface_eval.h"
+#include "nodes/io/read_point_cloud.h"
+#include "nodes/io/sequence.h"
+#include "nodes/synthetic/depth_sequence.h"
+#include "runtime/error.h"
+#include "runtime/threads.h"
+#include "test_support.h"
+
+namespace meshflow {
+namespace {
+
+constexpr float kFocal = 262.5f;
+
+// A 320 x 240 ray-cast frame of the demo room: the ball and the table stand in front of the
+// floor and the far walls, so the image has occlusion edges.
+DepthFrame room_frame() {
+  const PinholeIntrinsics k{320, 240, kFocal, kFocal, 159.5f, 119.5f};
+  return synthetic::render_depth(synthetic::demo_room_scene(), k,
+                                 synthetic::look_at({-2.5f, -1.5f, 1.4f}, {0.5f, 1.0f, 0.5f}));
+}
+
+// Distance from every triangle's centroid to the scene, in pixel footprints (distance from the
+// camera / focal length): a triangle cutting a convex corner or a curved surface stays within
+// about one footprint; one bridging an occlusion edge hangs in the air between the near and the
+// far surface, many footprints away.
+DistanceStats centroid_distances(const TriangleMesh& mesh, const Eigen::Vector3f& eye) {
+  const synthetic::Scene scene = synthetic::demo_room_scene();
+  std::vector<float> d;
+  for (const Triangle& t : mesh.triangles) {
+    const Eigen::Vector3f c = (mesh.vertices[t[0]] + mesh.vertices[t[1]] + mesh.vertices[t[2]]) / 3;
+    d.push_back(synthetic::surface_distance(scene, c) / ((c - eye).norm() / kFocal));
+  }
+  return distance_stats(d);
+}
+
+TEST(DepthTriangulation, NoTriangleBridgesAnOcclusionEdgeOnARayCastFrame) {
+  const DepthFrame frame = room_frame();
+  TriangulationCounts counts;
+  const TriangleMesh mesh = triangulate_depth(frame, {}, &counts);
+  const Eigen::Vector3f eye = frame.T_world_camera.translation();
+  const DistanceStats kept = centroid_distances(mesh, eye);
+  // Without occlusion handling the same frame does get bridging triangles.
+  DepthTriangulationConfig naive;
+  naive.filter.edge_high = 0.0f;
+  naive.max_view_angle_deg = 90.0f;
+  naive.max_edge_ratio = 1e9f;
+  const DistanceStats bridged = centroid_distances(triangulate_depth(frame, naive), eye);
+  std::printf(
+      "[ triangulate ] %zu triangles; centroid to scene max %.2f pixel footprints (without "
+      "occlusion "
+      "handling: max %.1f); %zu edge pixels, %zu view / %zu shape rejections\n",
+      mesh.triangles.size(), kept.max, bridged.max, counts.filter.edges, counts.rejected_view,
+      counts.rejected_shape);
+  EXPECT_GT(mesh.triangles.size(), 100000u);
+  EXPECT_LT(kept.max, 1.0);
+  EXPECT_GT(bridged.max, 10.0);
+  const MeshTopology topology = mesh_topology(mesh);
+  EXPECT_EQ(topology.edges.non_manifold_edges, 0u);
+  EXPECT_EQ(topology.edges.inconsistent_edges, 0u);
+  EXPECT_EQ(topology.degenerate_faces, 0u);
+  // Every triangle faces the camera.
+  for (const Triangle& t : mesh.triangles) {
+    const Eigen::Vector3f c = (mesh.vertices[t[0]] + mesh.vertices[t[1]] + mesh.vertices[t[2]]) / 3;
+    ASSERT_GT(face_normal(mesh, t).dot(eye - c), 0.0f);
+  }
+}
+
+TEST(DepthTriangulation, SharedVerticesOnlyUsedPixelsAndSameResultWithOneAndTwoThreads) {
+  const DepthFrame frame = room_frame();
+  TriangleMesh one, two;
+  {
+    ThreadLimit limit(1);
+    one = triangulate_depth(frame);
+  }
+  {
+    ThreadLimit limit(2);
+    two = triangulate_depth(frame);
+  }
+  EXPECT_EQ(one.vertices, two.vertices);
+  EXPECT_EQ(one.triangles, two.triangles);
+  std::vector<std::uint8_t> used(one.vertices.size(), 0);
+  for (const Triangle& t : one.triangles)
+    for (std::uint32_t v : t) used[v] = 1;
+  EXPECT_EQ(std::count(used.begin(), used.end(), 0), 0);  // no unreferenced vertex
+  EXPECT_LE(one.vertices.size(), static_cast<std::size_t>(320 * 240));
+  // A flat wall seen head-on: exactly two triangles per quad, all kept.
+  DepthFrame wall;
+  wall.intrinsics = PinholeIntrinsics{8, 6, 10.0f, 10.0f, 3.5f, 2.5f};
+  wall.depth = cv::Mat(6, 8, CV_16U, cv::Scalar(2000));
+  const TriangleMesh flat = triangulate_depth(wall);
+  EXPECT_EQ(flat.vertices.size(), 48u);
+  EXPECT_EQ(flat.triangles.size(), 2u * 7u * 5u);
+  EXPECT_TRUE(mesh_topology(flat).boundary_loops == 1u);
+}
+
+TEST(DepthTriangulation, BadInputGivesAClearError) {
+  EXPECT_THROW(triangulate_depth(DepthFrame{}), Error);
+  DepthFrame wrong;
+  wrong.depth = cv::Mat(10, 10, CV_16U, cv::Scalar(1000));  // intrinsics say 640 x 480
+  try {
+    triangulate_depth(wrong);
+    FAIL() << "expected an error";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("intrinsics"), std::string::npos) << e.what();
+  }
+  PointCloud unorganized;
+  unorganized.positions = {{0, 0, 1}, {1, 0, 1}};
+  EXPECT_THROW(triangulate_organized(unorganized), Error);
+}
+
+void expect_valid_frame_mesh(const TriangleMesh& mesh, std::size_t min_triangles) {
+  EXPECT_GT(mesh.triangles.size(), min_triangles);
+  for (const auto& v : mesh.vertices) ASSERT_TRUE(v.allFinite());
+  const MeshTopology topology = mesh_topology(mesh);
+  EXPECT_EQ(topology.edges.non_manifold_edges, 0u);
+  EXPECT_EQ(topology.edges.inconsistent_edges, 0u);
+  EXPECT_EQ(topology.degenerate_faces, 0u);
+}
+
+TEST(DepthTriangulation, RedwoodFramesTriangulate) {
+  MESHFLOW_REQUIRE_DATA("rgbd_redwood/trajectory.log");
+  const auto sequence = io::open_sequence(test::data_path("rgbd_redwood"));
+  for (std::size_t i = 0; i < sequence->size(); ++i) {
+    TriangulationCounts counts;
+    const TriangleMesh mesh = triangulate_depth(sequence->frame(i).load_depth(), {}, &counts);
+    std::printf(
+        "[ triangulate ] redwood frame %zu: %zu valid pixels, %zu edge pixels -> %zu "
+        "triangles\n",
+        i, counts.filter.valid, counts.filter.edges, mesh.triangles.size());
+    expect_valid_frame_mesh(mesh, 200000);
+  }
+}
+
+TEST(DepthTriangulation, KinectOrganizedCloudsTriangulate) {
+  MESHFLOW_REQUIRE_DATA("kinect_pcl/office1.pcd");
+  for (const char* name :
+       {"kinect_pcl/office1.pcd", "kinect_pcl/table_scene_mug_stereo_textured.pcd"}) {
+    if (!test::has_data(name)) continue;
+    const PointCloud cloud = io::read_point_cloud(test::data_path(name));
+    ASSERT_TRUE(cloud.is_organized()) << name;
+    TriangulationCounts counts;
+    const TriangleMesh mesh = triangulate_organized(cloud, {}, &counts);
+    std::printf("[ triangulate ] %s: %zu valid, %zu edge pixels -> %zu triangles\n", name,
+                counts.filter.valid, counts.filter.edges, mesh.triangles.size());
+    expect_valid_frame_mesh(mesh, 100000);
+  }
+}
+
+}  // namespace
+}  // namespace meshflow

@@ -1,0 +1,154 @@
+#include "nodes/triangulate/pixel_grid.h"
+
+#include <tbb/parallel_for.h>
+
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <string>
+
+#include "runtime/error.h"
+#include "runtime/parallel.h"
+
+namespace meshflow {
+namespace {
+constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
+}
+
+PointGrid grid_from_depth(const DepthFrame& frame, const DepthFilterConfig& filter,
+                          DepthFilterCounts* counts) {
+  if (frame.depth.empty()) throw Error("depth frame", "depth", "empty image");
+  if (frame.depth.cols != frame.intrinsics.width || frame.depth.rows != frame.intrinsics.height)
+    throw Error("depth frame", "intrinsics",
+                "image is " + std::to_string(frame.depth.cols) + "x" +
+                    std::to_string(frame.depth.rows) + ", intrinsics say " +
+                    std::to_string(frame.intrinsics.width) + "x" +
+                    std::to_string(frame.intrinsics.height));
+  const cv::Mat depth = filter_depth(frame, filter, counts);
+  PointGrid g;
+  g.width = depth.cols;
+  g.height = depth.rows;
+  g.points.resize(static_cast<std::size_t>(g.width) * static_cast<std::size_t>(g.height));
+  g.eye = frame.T_world_camera.translation();
+  const PinholeIntrinsics& k = frame.intrinsics;
+  tbb::parallel_for(0, g.height, [&](int v) {
+    const float* row = depth.ptr<float>(v);
+    for (int u = 0; u < g.width; ++u) {
+      const float z = row[u];
+      Eigen::Vector3f& p = g.points[g.index(u, v)];
+      if (!(z > 0.0f)) {
+        p = Eigen::Vector3f::Constant(kNaN);
+        continue;
+      }
+      const Eigen::Vector3f camera((static_cast<float>(u) - k.cx) / k.fx * z,
+                                   (static_cast<float>(v) - k.cy) / k.fy * z, z);
+      p = frame.T_world_camera * camera;
+    }
+  });
+  return g;
+}
+
+PointGrid grid_from_organized(const PointCloud& cloud, const DepthFilterConfig& filter,
+                              DepthFilterCounts* counts) {
+  if (!cloud.is_organized())
+    throw Error("point cloud", "width/height",
+                "an organized cloud (width x height == points, height > 1) is needed; got " +
+                    std::to_string(cloud.width) + "x" + std::to_string(cloud.height) + " for " +
+                    std::to_string(cloud.size()) + " points");
+  DepthFilterCounts c;
+  PointGrid g;
+  g.width = static_cast<int>(cloud.width);
+  g.height = static_cast<int>(cloud.height);
+  g.eye = cloud.has_sensor_origin ? cloud.sensor_origin : Eigen::Vector3f::Zero();
+  g.points = cloud.positions;
+  // Range image for the limits and the occlusion edges (0 = invalid).
+  cv::Mat range(g.height, g.width, CV_32F);
+  c.pixels = g.points.size();
+  for (int v = 0; v < g.height; ++v)
+    for (int u = 0; u < g.width; ++u) {
+      const Eigen::Vector3f& p = g.points[g.index(u, v)];
+      float& r = range.at<float>(v, u);
+      r = 0.0f;
+      if (!p.allFinite()) {
+        ++c.invalid;
+        continue;
+      }
+      const float d = (p - g.eye).norm();
+      if (d < filter.min_depth || d > filter.max_depth) {
+        ++c.out_of_range;
+        continue;
+      }
+      r = d;
+    }
+  if (filter.edge_high > 0.0f) {
+    const cv::Mat edges =
+        occlusion_edges(range, filter.edge_high, std::min(filter.edge_low, filter.edge_high));
+    c.edges = static_cast<std::size_t>(cv::countNonZero(edges));
+    range.setTo(0.0f, edges);
+  }
+  for (int v = 0; v < g.height; ++v)
+    for (int u = 0; u < g.width; ++u) {
+      if (range.at<float>(v, u) > 0.0f)
+        ++c.valid;
+      else
+        g.points[g.index(u, v)] = Eigen::Vector3f::Constant(kNaN);
+    }
+  if (counts != nullptr) *counts = c;
+  return g;
+}
+
+OcclusionTriangleTest::OcclusionTriangleTest(float max_view_angle_deg, float max_edge_ratio)
+    : min_cos_view_(std::cos(max_view_angle_deg * 3.14159265f / 180.0f)),
+      max_ratio_squared_(max_edge_ratio * max_edge_ratio) {}
+
+OcclusionTriangleTest::Verdict OcclusionTriangleTest::operator()(const Eigen::Vector3f& p0,
+                                                                 const Eigen::Vector3f& p1,
+                                                                 const Eigen::Vector3f& p2,
+                                                                 const Eigen::Vector3f& eye) const {
+  const Eigen::Vector3f normal = (p1 - p0).cross(p2 - p0);
+  const Eigen::Vector3f ray = (p0 + p1 + p2) / 3.0f - eye;
+  if (!(std::abs(normal.dot(ray)) >= min_cos_view_ * normal.norm() * ray.norm())) return kViewAngle;
+  const float e0 = (p1 - p0).squaredNorm(), e1 = (p2 - p1).squaredNorm(),
+              e2 = (p0 - p2).squaredNorm();
+  if (!(std::max({e0, e1, e2}) <= max_ratio_squared_ * std::min({e0, e1, e2}))) return kShape;
+  return kKeep;
+}
+
+TriangleMesh mesh_from_pixel_triangles(const PointGrid& grid,
+                                       const std::vector<Triangle>& pixel_triangles) {
+  const std::size_t pixels = grid.points.size();
+  std::vector<std::uint32_t> vertex_of(pixels, 0);
+  // Mark used pixels (every writer stores the same 1), then number them in row-major order.
+  tbb::parallel_for(std::size_t{0}, pixel_triangles.size(), [&](std::size_t t) {
+    for (std::uint32_t p : pixel_triangles[t])
+      __atomic_store_n(&vertex_of[p], 1u, __ATOMIC_RELAXED);
+  });
+  const std::size_t h = static_cast<std::size_t>(grid.height),
+                    w = static_cast<std::size_t>(grid.width);
+  std::vector<std::uint32_t> row_offsets(h, 0);
+  tbb::parallel_for(std::size_t{0}, h, [&](std::size_t v) {
+    std::uint32_t n = 0;
+    for (std::size_t u = 0; u < w; ++u) n += vertex_of[v * w + u];
+    row_offsets[v] = n;
+  });
+  TriangleMesh mesh;
+  mesh.vertices.resize(exclusive_scan_in_place(row_offsets));
+  tbb::parallel_for(std::size_t{0}, h, [&](std::size_t v) {
+    std::uint32_t next = row_offsets[v];
+    for (std::size_t u = 0; u < w; ++u) {
+      std::uint32_t& id = vertex_of[v * w + u];
+      if (id == 0) continue;
+      id = next++;
+      mesh.vertices[id] = grid.points[v * w + u];
+    }
+  });
+  mesh.triangles.resize(pixel_triangles.size());
+  tbb::parallel_for(std::size_t{0}, pixel_triangles.size(), [&](std::size_t t) {
+    const Triangle& p = pixel_triangles[t];
+    mesh.triangles[t] = Triangle{vertex_of[p[0]], vertex_of[p[1]], vertex_of[p[2]]};
+  });
+  return mesh;
+}
+
+}  // namespace meshflow

@@ -1,0 +1,23 @@
+#pragma once
+// The triangles of one 2 x 2 pixel quad: the unit of the naive depth-map triangulation, and of
+// the restricted quadtree where it refines down to single pixels.
+
+#include <cstddef>
+#include <vector>
+
+#include "nodes/triangulate/pixel_grid.h"
+
+namespace meshflow {
+
+struct QuadRejections {
+  std::size_t view = 0, shape = 0;  ///< triangles the occlusion test dropped, by reason
+};
+
+/// Appends the triangles (pixel indices, counter-clockwise seen from the camera) of the quad
+/// with corners (u, v) and (u + 1, v + 1): two along the shorter 3D diagonal when all four
+/// pixels are valid, one when three are, none otherwise; `keep` drops occlusion triangles
+/// (counted in `rejected` when given). The quad must lie inside the grid. O(1).
+void append_quad_triangles(const PointGrid& grid, int u, int v, const OcclusionTriangleTest& keep,
+                           std::vector<Triangle>& out, QuadRejections* rejected);
+
+}  // namespace meshflow

@@ -1,0 +1,227 @@
+#include "nodes/triangulate/restricted_quadtree.h"
+
+#include <algorithm>
+#include <array>
+#include <cstdint>
+
+#include "nodes/triangulate/quad_triangles.h"
+
+namespace meshflow {
+namespace {
+
+enum BlockState : std::uint8_t { kCenter = 1, kSplit = 2, kEmpty = 4 };
+
+// Counts of invalid pixels over rectangles (summed-area table); pixels outside the image count
+// as invalid.
+class InvalidCounts {
+ public:
+  explicit InvalidCounts(const PointGrid& g)
+      : w_(g.width), h_(g.height), sum_((g.width + 1) * static_cast<std::size_t>(g.height + 1), 0) {
+    for (int v = 0; v < h_; ++v) {
+      std::uint32_t row = 0;
+      for (int u = 0; u < w_; ++u) {
+        row += g.valid(g.index(u, v)) ? 0u : 1u;
+        at(u + 1, v + 1) = at(u + 1, v) + row;
+      }
+    }
+  }
+  /// Invalid pixels in [x0, x1] x [y0, y1] (inclusive), counting those outside the image.
+  std::int64_t invalid(int x0, int y0, int x1, int y1) const {
+    const std::int64_t area = static_cast<std::int64_t>(x1 - x0 + 1) * (y1 - y0 + 1);
+    const int cx0 = std::max(x0, 0), cy0 = std::max(y0, 0);
+    const int cx1 = std::min(x1, w_ - 1), cy1 = std::min(y1, h_ - 1);
+    if (cx0 > cx1 || cy0 > cy1) return area;
+    const std::int64_t inside = static_cast<std::int64_t>(cx1 - cx0 + 1) * (cy1 - cy0 + 1);
+    const std::int64_t bad = static_cast<std::int64_t>(at(cx1 + 1, cy1 + 1)) - at(cx0, cy1 + 1) -
+                             at(cx1 + 1, cy0) + at(cx0, cy0);
+    return area - inside + bad;
+  }
+
+ private:
+  std::uint32_t& at(int u, int v) {
+    return sum_[static_cast<std::size_t>(v) * static_cast<std::size_t>(w_ + 1) +
+                static_cast<std::size_t>(u)];
+  }
+  std::uint32_t at(int u, int v) const {
+    return sum_[static_cast<std::size_t>(v) * static_cast<std::size_t>(w_ + 1) +
+                static_cast<std::size_t>(u)];
+  }
+  int w_, h_;
+  std::vector<std::uint32_t> sum_;
+};
+
+class Quadtree {
+ public:
+  Quadtree(const PointGrid& g, const OcclusionTriangleTest& keep, const QuadtreeConfig& config)
+      : g_(g), keep_(keep), config_(config), invalid_(g), mid_(g.points.size(), 0) {
+    root_ = 2;
+    while (root_ < g.width - 1 || root_ < g.height - 1) root_ *= 2;
+  }
+
+  std::vector<Triangle> run() {
+    for (int s = 2; s <= root_; s *= 2) select_level(s);
+    std::vector<Triangle> out;
+    for (int s = root_; s >= 2; s /= 2) emit_level(s, out);
+    return out;
+  }
+
+ private:
+  int blocks(int s) const { return root_ / s; }
+  std::uint8_t& state(int s, int bx, int by) {
+    return states_[level(s)][static_cast<std::size_t>(by) * static_cast<std::size_t>(blocks(s)) +
+                             static_cast<std::size_t>(bx)];
+  }
+  static std::size_t level(int s) {
+    std::size_t l = 0;
+    while ((2 << l) < s) ++l;
+    return l;
+  }
+  bool inside(int u, int v) const { return u >= 0 && v >= 0 && u < g_.width && v < g_.height; }
+  const Eigen::Vector3f& p(int u, int v) const { return g_.points[g_.index(u, v)]; }
+  float threshold(const Eigen::Vector3f& x) const {
+    return config_.error_per_depth2 * (x - g_.eye).squaredNorm();
+  }
+  // Needed: farther from `approx` than the depth-dependent threshold.
+  bool needed(int u, int v, const Eigen::Vector3f& approx) const {
+    const Eigen::Vector3f& x = p(u, v);
+    return (x - approx).norm() > threshold(x);
+  }
+  // True when the (u0, v0)-(u1, v1) diagonal is the shorter one of block (x0, y0, s).
+  bool main_diagonal_shorter(int x0, int y0, int s) const {
+    return (p(x0, y0) - p(x0 + s, y0 + s)).squaredNorm() <=
+           (p(x0 + s, y0) - p(x0, y0 + s)).squaredNorm();
+  }
+  std::uint8_t& mid(int u, int v) { return mid_[g_.index(u, v)]; }
+  bool mid_selected(int u, int v) const { return inside(u, v) && mid_[g_.index(u, v)] != 0; }
+
+  // The midpoints of block (x0, y0, s): top, right, bottom, left, with their edge ends.
+  struct Edge {
+    int mu, mv, au, av, bu, bv;
+  };
+  static std::array<Edge, 4> edges(int x0, int y0, int s) {
+    const int h = s / 2;
+    return {{{x0 + h, y0, x0, y0, x0 + s, y0},
+             {x0 + s, y0 + h, x0 + s, y0, x0 + s, y0 + s},
+             {x0 + h, y0 + s, x0, y0 + s, x0 + s, y0 + s},
+             {x0, y0 + h, x0, y0, x0, y0 + s}}};
+  }
+
+  void select_level(int s) {
+    const int n = blocks(s);
+    states_.emplace_back(static_cast<std::size_t>(n) * static_cast<std::size_t>(n), 0);
+    const int h = s / 2;
+    for (int by = 0; by < n; ++by)
+      for (int bx = 0; bx < n; ++bx) {
+        const int x0 = bx * s, y0 = by * s;
+        std::uint8_t& st = state(s, bx, by);
+        const std::int64_t bad = invalid_.invalid(x0, y0, x0 + s, y0 + s);
+        if (bad == static_cast<std::int64_t>(s + 1) * (s + 1)) {
+          st = kEmpty;
+          continue;
+        }
+        bool split = bad > 0;  // holds an invalid pixel or crosses the border
+        if (s > 2 && !split)
+          for (int c = 0; c < 4 && !split; ++c)
+            split = (state(h, 2 * bx + (c & 1), 2 * by + (c >> 1)) & kCenter) != 0;
+        if (split) {
+          st = kCenter | kSplit;
+          for (const Edge& e : edges(x0, y0, s))
+            if (inside(e.mu, e.mv)) mid(e.mu, e.mv) = 1;
+          continue;
+        }
+        const bool main = main_diagonal_shorter(x0, y0, s);
+        const Eigen::Vector3f diagonal_mid =
+            main ? Eigen::Vector3f((p(x0, y0) + p(x0 + s, y0 + s)) / 2)
+                 : Eigen::Vector3f((p(x0 + s, y0) + p(x0, y0 + s)) / 2);
+        if (needed(x0 + h, y0 + h, diagonal_mid)) st |= kCenter;
+        for (const Edge& e : edges(x0, y0, s))
+          if (needed(e.mu, e.mv, (p(e.au, e.av) + p(e.bu, e.bv)) / 2)) mid(e.mu, e.mv) = 1;
+      }
+    // A needed midpoint needs the centres of both blocks sharing its edge.
+    for (int by = 0; by < n; ++by)
+      for (int bx = 0; bx < n; ++bx) {
+        std::uint8_t& st = state(s, bx, by);
+        if (st & (kEmpty | kCenter)) continue;
+        for (const Edge& e : edges(bx * s, by * s, s))
+          if (mid_selected(e.mu, e.mv)) st |= kCenter;
+      }
+  }
+
+  void add(std::vector<Triangle>& out, int u0, int v0, int u1, int v1, int u2, int v2) const {
+    if (!inside(u0, v0) || !inside(u1, v1) || !inside(u2, v2)) return;
+    const std::size_t a = g_.index(u0, v0), b = g_.index(u1, v1), c = g_.index(u2, v2);
+    if (!g_.valid(a) || !g_.valid(b) || !g_.valid(c)) return;
+    if (keep_(g_.points[a], g_.points[b], g_.points[c], g_.eye) != OcclusionTriangleTest::kKeep)
+      return;
+    out.push_back(Triangle{static_cast<std::uint32_t>(a), static_cast<std::uint32_t>(b),
+                           static_cast<std::uint32_t>(c)});
+  }
+
+  void emit_level(int s, std::vector<Triangle>& out) {
+    const int n = blocks(s);
+    for (int by = 0; by < n; ++by)
+      for (int bx = 0; bx < n; ++bx) {
+        const std::uint8_t st = state(s, bx, by);
+        if (st & kEmpty) continue;
+        const bool parent_split = s == root_ || (state(2 * s, bx / 2, by / 2) & kSplit) != 0;
+        if (!parent_split) continue;
+        const int x0 = bx * s, y0 = by * s, h = s / 2;
+        if (st & kSplit) {
+          if (s == 2)  // holds an invalid pixel: per pixel quad, as the naive triangulation
+            for (int v = y0; v < y0 + 2; ++v)
+              for (int u = x0; u < x0 + 2; ++u)
+                append_quad_triangles(g_, u, v, keep_, out, nullptr);
+          continue;  // otherwise the children are emitted at the next level
+        }
+        if (st & kCenter) {  // fan around the centre through the needed midpoints
+          const int cu = x0 + h, cv = y0 + h;
+          const std::array<std::array<int, 2>, 8> ring = {{{x0, y0},
+                                                           {x0, y0 + h},
+                                                           {x0, y0 + s},
+                                                           {x0 + h, y0 + s},
+                                                           {x0 + s, y0 + s},
+                                                           {x0 + s, y0 + h},
+                                                           {x0 + s, y0},
+                                                           {x0 + h, y0}}};
+          std::array<std::array<int, 2>, 8> used{};
+          int k = 0;
+          for (int i = 0; i < 8; ++i)
+            if (i % 2 == 0 || mid_selected(ring[static_cast<std::size_t>(i)][0],
+                                           ring[static_cast<std::size_t>(i)][1]))
+              used[static_cast<std::size_t>(k++)] = ring[static_cast<std::size_t>(i)];
+          for (int i = 0; i < k; ++i) {
+            const auto& a = used[static_cast<std::size_t>(i)];
+            const auto& b = used[static_cast<std::size_t>((i + 1) % k)];
+            add(out, cu, cv, a[0], a[1], b[0], b[1]);
+          }
+          continue;
+        }
+        if (main_diagonal_shorter(x0, y0, s)) {
+          add(out, x0, y0, x0, y0 + s, x0 + s, y0 + s);
+          add(out, x0, y0, x0 + s, y0 + s, x0 + s, y0);
+        } else {
+          add(out, x0, y0, x0, y0 + s, x0 + s, y0);
+          add(out, x0 + s, y0, x0, y0 + s, x0 + s, y0 + s);
+        }
+      }
+  }
+
+  const PointGrid& g_;
+  const OcclusionTriangleTest& keep_;
+  QuadtreeConfig config_;
+  InvalidCounts invalid_;
+  std::vector<std::uint8_t> mid_;                  // per pixel: a needed midpoint
+  std::vector<std::vector<std::uint8_t>> states_;  // per level (size 2, 4, ...), per block
+  int root_ = 2;
+};
+
+}  // namespace
+
+std::vector<Triangle> restricted_quadtree_triangles(const PointGrid& grid,
+                                                    const OcclusionTriangleTest& keep,
+                                                    const QuadtreeConfig& config) {
+  if (grid.width < 2 || grid.height < 2) return {};
+  return Quadtree(grid, keep, config).run();
+}
+
+}  // namespace meshflow

@@ -16,7 +16,8 @@ struct QuadRejections {
 /// Appends the triangles (pixel indices, counter-clockwise seen from the camera) of the quad
 /// with corners (u, v) and (u + 1, v + 1): two along the shorter 3D diagonal when all four
 /// pixels are valid, one when three are, none otherwise; `keep` drops occlusion triangles
-/// (counted in `rejected` when given). The quad must lie inside the grid. O(1).
+/// (counted in `rejected` when given). Requires 0 <= u < width - 1 and 0 <= v < height - 1.
+/// O(1).
 void append_quad_triangles(const PointGrid& grid, int u, int v, const OcclusionTriangleTest& keep,
                            std::vector<Triangle>& out, QuadRejections* rejected);
 

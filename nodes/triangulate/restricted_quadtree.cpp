@@ -167,9 +167,9 @@ class Quadtree {
         if (!parent_split) continue;
         const int x0 = bx * s, y0 = by * s, h = s / 2;
         if (st & kSplit) {
-          if (s == 2)  // holds an invalid pixel: per pixel quad, as the naive triangulation
-            for (int v = y0; v < y0 + 2; ++v)
-              for (int u = x0; u < x0 + 2; ++u)
+          if (s == 2)  // holds an invalid pixel: per pixel quad inside the image, as naive
+            for (int v = y0; v < std::min(y0 + 2, g_.height - 1); ++v)
+              for (int u = x0; u < std::min(x0 + 2, g_.width - 1); ++u)
                 append_quad_triangles(g_, u, v, keep_, out, nullptr);
           continue;  // otherwise the children are emitted at the next level
         }

@@ -7,6 +7,8 @@
 
 #include "graph/stages.h"
 #include "nodes/io/scan3d_reader.h"
+#include "nodes/io/sequence.h"
+#include "nodes/synthetic/depth_sequence.h"
 #include "nodes/synthetic/scan_simulator.h"
 
 namespace meshflow::bench {
@@ -62,6 +64,26 @@ void thread_and_input_args(benchmark::internal::Benchmark* b) {
   for (int input : {kSynthetic, kKurt3d})
     for (int threads : {1, 2}) b->Args({threads, input});
   b->Unit(benchmark::kMillisecond)->UseRealTime();
+}
+
+const std::vector<DepthFrame>& depth_frames(bool redwood) {
+  static const std::vector<DepthFrame> real = [] {
+    std::vector<DepthFrame> out;
+    const std::string dir = data_dir() + "/rgbd_redwood";
+    if (!std::filesystem::exists(dir)) return out;
+    const auto seq = io::open_sequence(dir);
+    for (std::size_t i = 0; i < seq->size(); ++i) out.push_back(seq->frame(i).load_depth());
+    return out;
+  }();
+  static const std::vector<DepthFrame> synthetic = [] {
+    synthetic::DepthSequenceConfig c;
+    c.frames = 40;  // 9 degrees apart; the first 5 are used
+    const auto seq = synthetic::make_depth_sequence(synthetic::demo_room_scene(), c);
+    std::vector<DepthFrame> out;
+    for (std::size_t i = 0; i < 5; ++i) out.push_back(seq->frame(i).load_depth());
+    return out;
+  }();
+  return redwood ? real : synthetic;
 }
 
 }  // namespace meshflow::bench

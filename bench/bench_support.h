@@ -5,6 +5,7 @@
 #include <benchmark/benchmark.h>
 
 #include <string>
+#include <vector>
 
 #include "graph/frame.h"
 #include "runtime/point_cloud.h"
@@ -28,6 +29,10 @@ const Frame* prepared_frame(Input input, const std::string& stage);
 
 /// Skips with a message when the input is missing; returns the cloud otherwise.
 const PointCloud* require(benchmark::State& state, Input input);
+
+/// Five 640 x 480 depth frames: the Redwood frames (empty when $MESHFLOW_DATA lacks them), or
+/// the first five of a 40-frame synthetic turn in the demo room. Cached.
+const std::vector<DepthFrame>& depth_frames(bool redwood);
 
 /// Registers the standard argument grid: threads {1, 2} x inputs {synthetic, kurt3d}.
 void thread_and_input_args(benchmark::internal::Benchmark* b);

@@ -1,41 +1,17 @@
 // TSDF fusion: integration of 640 x 480 depth frames (the 5 Redwood frames when present, else
 // 5 synthetic frames of the demo room) at 1 cm and 5 mm, and extraction of the fused mesh.
 
-#include <filesystem>
-
 #include "bench_support.h"
 #include "nodes/fusion/tsdf_mesher.h"
 #include "nodes/fusion/tsdf_volume.h"
-#include "nodes/io/sequence.h"
-#include "nodes/synthetic/depth_sequence.h"
 #include "runtime/threads.h"
 
 namespace meshflow::bench {
 namespace {
 
-const std::vector<DepthFrame>& frames(bool redwood) {
-  static const std::vector<DepthFrame> real = [] {
-    std::vector<DepthFrame> out;
-    const std::string dir = data_dir() + "/rgbd_redwood";
-    if (!std::filesystem::exists(dir)) return out;
-    const auto seq = io::open_sequence(dir);
-    for (std::size_t i = 0; i < seq->size(); ++i) out.push_back(seq->frame(i).load_depth());
-    return out;
-  }();
-  static const std::vector<DepthFrame> synthetic = [] {
-    synthetic::DepthSequenceConfig c;
-    c.frames = 40;  // 9 degrees apart; the first 5 are used
-    const auto seq = synthetic::make_depth_sequence(synthetic::demo_room_scene(), c);
-    std::vector<DepthFrame> out;
-    for (std::size_t i = 0; i < 5; ++i) out.push_back(seq->frame(i).load_depth());
-    return out;
-  }();
-  return redwood ? real : synthetic;
-}
-
 // Args: threads, voxel in 0.1 mm, input (1 = Redwood, 0 = synthetic).
 void BM_TsdfIntegrate(benchmark::State& state) {
-  const auto& input = frames(state.range(2) == 1);
+  const auto& input = depth_frames(state.range(2) == 1);
   if (input.empty()) return state.SkipWithError("rgbd_redwood not found");
   ThreadLimit limit(static_cast<int>(state.range(0)));
   const float voxel = static_cast<float>(state.range(1)) * 1e-4f;
@@ -63,7 +39,7 @@ BENCHMARK(BM_TsdfIntegrate)
     ->UseRealTime();
 
 void BM_TsdfExtract(benchmark::State& state) {
-  const auto& input = frames(state.range(2) == 1);
+  const auto& input = depth_frames(state.range(2) == 1);
   if (input.empty()) return state.SkipWithError("rgbd_redwood not found");
   TsdfVolume volume(TsdfConfig{static_cast<float>(state.range(1)) * 1e-4f});
   for (const DepthFrame& f : input) volume.integrate(f);

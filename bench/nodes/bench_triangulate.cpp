@@ -1,0 +1,37 @@
+// Per-frame depth-map triangulation of a 640 x 480 frame (the first Redwood frame when present,
+// else a synthetic frame of the demo room): depth filter with occlusion edges, back-projection,
+// triangulation and compaction into a mesh, as one call.
+
+#include "bench_support.h"
+#include "nodes/triangulate/depth_triangulation.h"
+#include "runtime/threads.h"
+
+namespace meshflow::bench {
+namespace {
+
+// Args: threads, input (1 = Redwood, 0 = synthetic), method (0 = naive, 1 = restricted quadtree).
+void BM_TriangulateDepth(benchmark::State& state) {
+  const bool redwood = state.range(1) == 1;
+  const auto& frames = depth_frames(redwood);
+  if (frames.empty()) {
+    state.SkipWithError("Redwood frames not found under $MESHFLOW_DATA");
+    return;
+  }
+  DepthTriangulationConfig config;
+  config.method = state.range(2) == 1 ? DepthTriangulationMethod::kRestrictedQuadtree
+                                      : DepthTriangulationMethod::kNaive;
+  state.SetLabel(std::string(redwood ? "redwood " : "synthetic ") +
+                 (state.range(2) == 1 ? "rqt" : "naive"));
+  ThreadLimit limit(static_cast<int>(state.range(0)));
+  std::size_t triangles = 0;
+  for (auto _ : state) triangles = triangulate_depth(frames.front(), config).triangles.size();
+  state.counters["triangles"] = static_cast<double>(triangles);
+}
+BENCHMARK(BM_TriangulateDepth)
+    ->ArgNames({"threads", "redwood", "method"})
+    ->ArgsProduct({{1, 2}, {0, 1}, {0, 1}})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
+
+}  // namespace
+}  // namespace meshflow::bench

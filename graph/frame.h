@@ -16,6 +16,7 @@
 #include "nodes/normals/normals.h"
 #include "nodes/normals/spatial_index.h"
 #include "nodes/optimize/mesh_cleanup.h"
+#include "nodes/triangulate/depth_triangulation.h"
 #include "nodes/voxelize/sparse_grid.h"
 #include "runtime/depth_frame.h"
 #include "runtime/point_cloud.h"
@@ -35,6 +36,7 @@ struct ReconstructionConfig {
   ProjectiveDistanceConfig projective;  ///< depth frames
   ExtractConfig extract;
   CleanupConfig cleanup;
+  DepthTriangulationConfig triangulation;  ///< the per-frame depth-map path (LivePipeline)
 };
 
 /// One input (a point cloud) and everything the stages made of it. A frame that fails a stage

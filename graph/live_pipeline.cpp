@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <condition_variable>
 #include <deque>
+#include <iterator>
 #include <mutex>
 
 #include "graph/frame_graph.h"
@@ -68,7 +69,13 @@ struct LivePipeline::Impl {
   }
 
   void build_graph() {
-    for (const auto& stage : stages::kPointCloudStages)
+    const auto& chain =
+        config.triangulate_depth_maps
+            ? std::vector<stages::NamedStage>(std::begin(stages::kDepthTriangulationStages),
+                                              std::end(stages::kDepthTriangulationStages))
+            : std::vector<stages::NamedStage>(std::begin(stages::kPointCloudStages),
+                                              std::end(stages::kPointCloudStages));
+    for (const auto& stage : chain)
       stages.push_back(std::make_unique<detail::StageNode>(
           graph, flow::unlimited,
           detail::StageNodeBody(stage.name, stage.body, config.reconstruction)));

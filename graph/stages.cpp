@@ -101,6 +101,15 @@ std::uint64_t optimize(Frame& f, const ReconstructionConfig& c) {
   return f.mesh.triangles.size();
 }
 
+std::uint64_t triangulate(Frame& f, const ReconstructionConfig& c) {
+  if (!f.depth) throw Error(f.name, "input", "depth-map triangulation needs a depth image");
+  f.mesh = triangulate_depth(*f.depth, c.triangulation);
+  f.depth.reset();
+  return f.mesh.triangles.size();
+}
+
+const NamedStage kDepthTriangulationStages[2] = {{"read", read}, {"triangulate", triangulate}};
+
 const NamedStage kPointCloudStages[8] = {
     {"read", read},         {"filter", filter},     {"index", index},     {"normals", normals},
     {"voxelize", voxelize}, {"distance", distance}, {"extract", extract}, {"optimize", optimize}};

@@ -22,6 +22,10 @@ std::uint64_t optimize(Frame& f, const ReconstructionConfig& c);  ///< triangles
 /// Fails frames that are not depth images.
 std::uint64_t filter_depth_image(Frame& f, const ReconstructionConfig& c);  ///< valid pixels
 
+/// Depth-map triangulation of a depth frame straight into `mesh` (c.triangulation; no voxel
+/// grid). Fails frames that are not depth images.
+std::uint64_t triangulate(Frame& f, const ReconstructionConfig& c);  ///< triangles
+
 using StageFunction = std::uint64_t (*)(Frame&, const ReconstructionConfig&);
 
 struct NamedStage {
@@ -31,6 +35,8 @@ struct NamedStage {
 
 /// The point-cloud stages in pipeline order (the order ReconstructionPipeline wires them).
 extern const NamedStage kPointCloudStages[8];
+/// The per-frame depth-map path: read, triangulate.
+extern const NamedStage kDepthTriangulationStages[2];
 
 /// Runs `body` on `f` unless the frame already failed, appending a StageRecord; a thrown
 /// exception becomes the frame's error. Thread-safe for distinct frames.

@@ -24,6 +24,8 @@ struct LiveOptions {
   std::string policy = "realtime";
   std::size_t waiting = 2;
   std::size_t loops = 1;
+  std::string triangulate;  ///< "", "naive" or "rqt"
+  float rqt_error = QuadtreeConfig{}.error_per_depth2;
 };
 
 using SensorFrame = std::variant<PointCloud, DepthFrame>;
@@ -52,6 +54,11 @@ void run_live(const LiveOptions& o) {
   config.frames_in_flight = o.sequence.in_flight;
   config.max_waiting = o.waiting;
   config.policy = o.policy == "queue" ? LivePolicy::kQueue : LivePolicy::kRealtime;
+  config.triangulate_depth_maps = !o.triangulate.empty();
+  config.reconstruction.triangulation.method = o.triangulate == "rqt"
+                                                   ? DepthTriangulationMethod::kRestrictedQuadtree
+                                                   : DepthTriangulationMethod::kNaive;
+  config.reconstruction.triangulation.quadtree.error_per_depth2 = o.rqt_error;
   std::size_t triangles = 0;
   LivePipeline live(config, [&](LiveResult& r) {
     triangles += r.mesh.triangles.size();
@@ -103,6 +110,13 @@ void add_live_command(CLI::App& app) {
       ->check(CLI::IsMember({"realtime", "queue"}));
   cmd->add_option("--waiting", o->waiting, "Frames that may wait for a slot")
       ->check(CLI::Range(1, 1024));
+  cmd->add_option("--triangulate", o->triangulate,
+                  "Depth frames: triangulate each depth map (naive or rqt) instead of the "
+                  "volumetric stages")
+      ->check(CLI::IsMember({"naive", "rqt"}));
+  cmd->add_option("--rqt-error", o->rqt_error,
+                  "rqt: allowed deviation per squared depth, 1/m (error <= k depth^2)")
+      ->check(CLI::PositiveNumber);
   cmd->add_option("--loops", o->loops, "Replay the frames this many times")
       ->check(CLI::Range(1, 100000));
   add_pipeline_options(cmd, o->pipeline);

@@ -167,6 +167,30 @@ TEST(LivePipeline, PushFromOneThreadWhileCallbacksRunOnOthersAndDepthFramesWork)
   }
 }
 
+TEST(LivePipeline, TriangulatesDepthMapsPerFrameAndFailsCloudsClearly) {
+  synthetic::DepthSequenceConfig camera;
+  camera.frames = 2;
+  camera.intrinsics = PinholeIntrinsics{160, 120, 131.25f, 131.25f, 79.5f, 59.5f};
+  const auto seq = synthetic::make_depth_sequence(synthetic::demo_room_scene(), camera);
+  LiveConfig config;
+  config.policy = LivePolicy::kQueue;
+  config.triangulate_depth_maps = true;
+  config.reconstruction.triangulation.method = DepthTriangulationMethod::kRestrictedQuadtree;
+  Received got;
+  LivePipeline live(config, [&](LiveResult& r) { got.add(r); });
+  live.push(seq->frame(0).load_depth());
+  live.push(sphere(0));  // not a depth image
+  live.push(seq->frame(1).load_depth());
+  live.flush();
+  ASSERT_EQ(got.results.size(), 3u);
+  EXPECT_TRUE(got.results[0].ok) << got.results[0].error;
+  EXPECT_GT(got.results[0].mesh.triangles.size(), 500u);
+  EXPECT_EQ(got.results[0].timings.size(), 2u);  // read, triangulate
+  EXPECT_FALSE(got.results[1].ok);
+  EXPECT_NE(got.results[1].error.find("depth image"), std::string::npos) << got.results[1].error;
+  EXPECT_TRUE(got.results[2].ok) << got.results[2].error;
+}
+
 TEST(LivePipeline, EmptyCallbackIsAnError) {
   EXPECT_THROW(LivePipeline(LiveConfig{}, nullptr), Error);
 }

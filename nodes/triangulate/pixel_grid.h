@@ -48,7 +48,7 @@ class OcclusionTriangleTest {
                      const Eigen::Vector3f& p2, const Eigen::Vector3f& eye) const;
 
  private:
-  float min_cos_view_, max_ratio_squared_;
+  float min_cos_view_squared_, max_ratio_squared_;
 };
 
 /// The mesh of `pixel_triangles` (corners are pixel indices of `grid`): vertices are the used

@@ -67,6 +67,9 @@ class Quadtree {
 
  private:
   int blocks(int s) const { return root_ / s; }
+  // Blocks of size s that reach into the image along x / y (the others are empty).
+  int blocks_x(int s) const { return (g_.width - 1 + s - 1) / s; }
+  int blocks_y(int s) const { return (g_.height - 1 + s - 1) / s; }
   std::uint8_t& state(int s, int bx, int by) {
     return states_[level(s)][static_cast<std::size_t>(by) * static_cast<std::size_t>(blocks(s)) +
                              static_cast<std::size_t>(bx)];
@@ -108,12 +111,14 @@ class Quadtree {
 
   void select_level(int s) {
     const int n = blocks(s);
-    states_.emplace_back(static_cast<std::size_t>(n) * static_cast<std::size_t>(n), 0);
+    states_.emplace_back(static_cast<std::size_t>(n) * static_cast<std::size_t>(n), kEmpty);
     const int h = s / 2;
-    for (int by = 0; by < n; ++by)
-      for (int bx = 0; bx < n; ++bx) {
+    const int nx = blocks_x(s), ny = blocks_y(s);
+    for (int by = 0; by < ny; ++by)
+      for (int bx = 0; bx < nx; ++bx) {
         const int x0 = bx * s, y0 = by * s;
         std::uint8_t& st = state(s, bx, by);
+        st = 0;
         const std::int64_t bad = invalid_.invalid(x0, y0, x0 + s, y0 + s);
         if (bad == static_cast<std::int64_t>(s + 1) * (s + 1)) {
           st = kEmpty;
@@ -138,8 +143,8 @@ class Quadtree {
           if (needed(e.mu, e.mv, (p(e.au, e.av) + p(e.bu, e.bv)) / 2)) mid(e.mu, e.mv) = 1;
       }
     // A needed midpoint needs the centres of both blocks sharing its edge.
-    for (int by = 0; by < n; ++by)
-      for (int bx = 0; bx < n; ++bx) {
+    for (int by = 0; by < ny; ++by)
+      for (int bx = 0; bx < nx; ++bx) {
         std::uint8_t& st = state(s, bx, by);
         if (st & (kEmpty | kCenter)) continue;
         for (const Edge& e : edges(bx * s, by * s, s))
@@ -158,9 +163,9 @@ class Quadtree {
   }
 
   void emit_level(int s, std::vector<Triangle>& out) {
-    const int n = blocks(s);
-    for (int by = 0; by < n; ++by)
-      for (int bx = 0; bx < n; ++bx) {
+    const int nx = blocks_x(s), ny = blocks_y(s);
+    for (int by = 0; by < ny; ++by)
+      for (int bx = 0; bx < nx; ++bx) {
         const std::uint8_t st = state(s, bx, by);
         if (st & kEmpty) continue;
         const bool parent_split = s == root_ || (state(2 * s, bx / 2, by / 2) & kSplit) != 0;

@@ -10,19 +10,25 @@
 namespace meshflow {
 namespace {
 
-// Largest relative jump from pixel (u, v) to a valid 4-neighbour (0 if none).
-float max_relative_jump(const cv::Mat& d, int u, int v) {
-  const float c = d.at<float>(v, u);
-  float jump = 0.0f;
-  const int du[] = {1, -1, 0, 0}, dv[] = {0, 0, 1, -1};
-  for (int k = 0; k < 4; ++k) {
-    const int x = u + du[k], y = v + dv[k];
-    if (x < 0 || y < 0 || x >= d.cols || y >= d.rows) continue;
-    const float n = d.at<float>(y, x);
-    if (n <= 0.0f) continue;
-    jump = std::max(jump, std::abs(c - n) / std::min(c, n));
-  }
-  return jump;
+// 2 when some valid 4-neighbour differs from pixel u of row `row` by more than `high` of the
+// nearer depth, 1 when by more than `low`, else 0 (comparisons without divisions).
+std::uint8_t jump_level(const float* above, const float* row, const float* below, int u, int cols,
+                        float high, float low) {
+  const float c = row[u];
+  std::uint8_t level = 0;
+  auto check = [&](float n) {
+    if (!(n > 0.0f)) return;
+    const float diff = std::abs(c - n), nearer = std::min(c, n);
+    if (diff > high * nearer)
+      level = 2;
+    else if (diff > low * nearer && level == 0)
+      level = 1;
+  };
+  if (u + 1 < cols) check(row[u + 1]);
+  if (u > 0) check(row[u - 1]);
+  if (below != nullptr) check(below[u]);
+  if (above != nullptr) check(above[u]);
+  return level;
 }
 
 }  // namespace
@@ -32,10 +38,13 @@ cv::Mat occlusion_edges(const cv::Mat& depth_m, float high, float low) {
   // 2 = strong edge, 1 = weak candidate, 0 = not an edge.
   cv::Mat level(depth_m.size(), CV_8U, cv::Scalar(0));
   tbb::parallel_for(0, depth_m.rows, [&](int v) {
+    const float* row = depth_m.ptr<float>(v);
+    const float* above = v > 0 ? depth_m.ptr<float>(v - 1) : nullptr;
+    const float* below = v + 1 < depth_m.rows ? depth_m.ptr<float>(v + 1) : nullptr;
+    std::uint8_t* out = level.ptr<std::uint8_t>(v);
     for (int u = 0; u < depth_m.cols; ++u) {
-      if (depth_m.at<float>(v, u) <= 0.0f) continue;
-      const float jump = max_relative_jump(depth_m, u, v);
-      level.at<std::uint8_t>(v, u) = jump > high ? 2 : (jump > low ? 1 : 0);
+      if (!(row[u] > 0.0f)) continue;
+      out[u] = jump_level(above, row, below, u, depth_m.cols, high, low);
     }
   });
   // Hysteresis: grow strong edges into connected weak pixels (breadth-first, serial).

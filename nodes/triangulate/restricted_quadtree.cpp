@@ -81,13 +81,11 @@ class Quadtree {
   }
   bool inside(int u, int v) const { return u >= 0 && v >= 0 && u < g_.width && v < g_.height; }
   const Eigen::Vector3f& p(int u, int v) const { return g_.points[g_.index(u, v)]; }
-  float threshold(const Eigen::Vector3f& x) const {
-    return config_.error_per_depth2 * (x - g_.eye).squaredNorm();
-  }
-  // Needed: farther from `approx` than the depth-dependent threshold.
+  // Needed: farther from `approx` than error_per_depth2 x depth^2 (compared squared).
   bool needed(int u, int v, const Eigen::Vector3f& approx) const {
     const Eigen::Vector3f& x = p(u, v);
-    return (x - approx).norm() > threshold(x);
+    const float threshold = config_.error_per_depth2 * (x - g_.eye).squaredNorm();
+    return (x - approx).squaredNorm() > threshold * threshold;
   }
   // True when the (u0, v0)-(u1, v1) diagonal is the shorter one of block (x0, y0, s).
   bool main_diagonal_shorter(int x0, int y0, int s) const {

@@ -1,5 +1,7 @@
 #include "nodes/triangulate/restricted_quadtree.h"
 
+#include <tbb/parallel_for.h>
+
 #include <algorithm>
 #include <array>
 #include <cstdint>
@@ -74,6 +76,10 @@ class Quadtree {
     return states_[level(s)][static_cast<std::size_t>(by) * static_cast<std::size_t>(blocks(s)) +
                              static_cast<std::size_t>(bx)];
   }
+  std::uint8_t state(int s, int bx, int by) const {
+    return states_[level(s)][static_cast<std::size_t>(by) * static_cast<std::size_t>(blocks(s)) +
+                             static_cast<std::size_t>(bx)];
+  }
   static std::size_t level(int s) {
     std::size_t l = 0;
     while ((2 << l) < s) ++l;
@@ -107,47 +113,73 @@ class Quadtree {
              {x0, y0 + h, x0, y0, x0, y0 + s}}};
   }
 
+  // Level s in three passes, each parallel over rows with one writer per value: block states
+  // (empty / split), then every edge midpoint once, then block centres.
   void select_level(int s) {
     const int n = blocks(s);
     states_.emplace_back(static_cast<std::size_t>(n) * static_cast<std::size_t>(n), kEmpty);
     const int h = s / 2;
     const int nx = blocks_x(s), ny = blocks_y(s);
-    for (int by = 0; by < ny; ++by)
+    tbb::parallel_for(0, ny, [&](int by) {
       for (int bx = 0; bx < nx; ++bx) {
         const int x0 = bx * s, y0 = by * s;
-        std::uint8_t& st = state(s, bx, by);
-        st = 0;
         const std::int64_t bad = invalid_.invalid(x0, y0, x0 + s, y0 + s);
+        std::uint8_t st = 0;
         if (bad == static_cast<std::int64_t>(s + 1) * (s + 1)) {
           st = kEmpty;
-          continue;
+        } else {
+          bool split = bad > 0;  // holds an invalid pixel or crosses the border
+          if (s > 2 && !split)
+            for (int c = 0; c < 4 && !split; ++c)
+              split = (state(h, 2 * bx + (c & 1), 2 * by + (c >> 1)) & kCenter) != 0;
+          if (split) st = kCenter | kSplit;
         }
-        bool split = bad > 0;  // holds an invalid pixel or crosses the border
-        if (s > 2 && !split)
-          for (int c = 0; c < 4 && !split; ++c)
-            split = (state(h, 2 * bx + (c & 1), 2 * by + (c >> 1)) & kCenter) != 0;
-        if (split) {
-          st = kCenter | kSplit;
-          for (const Edge& e : edges(x0, y0, s))
-            if (inside(e.mu, e.mv)) mid(e.mu, e.mv) = 1;
-          continue;
-        }
-        const bool main = main_diagonal_shorter(x0, y0, s);
-        const Eigen::Vector3f diagonal_mid =
-            main ? Eigen::Vector3f((p(x0, y0) + p(x0 + s, y0 + s)) / 2)
-                 : Eigen::Vector3f((p(x0 + s, y0) + p(x0, y0 + s)) / 2);
-        if (needed(x0 + h, y0 + h, diagonal_mid)) st |= kCenter;
-        for (const Edge& e : edges(x0, y0, s))
-          if (needed(e.mu, e.mv, (p(e.au, e.av) + p(e.bu, e.bv)) / 2)) mid(e.mu, e.mv) = 1;
+        state(s, bx, by) = st;
       }
-    // A needed midpoint needs the centres of both blocks sharing its edge.
-    for (int by = 0; by < ny; ++by)
+    });
+    // Midpoints: of the edge between a block and its neighbour (-1 / nx / ny = outside).
+    auto block_state = [&](int bx, int by) -> std::uint8_t {
+      if (bx < 0 || by < 0 || bx >= nx || by >= ny) return kEmpty;
+      return state(s, bx, by);
+    };
+    auto decide = [&](int mu, int mv, int au, int av, int bu, int bv, std::uint8_t one,
+                      std::uint8_t other) {
+      if (!inside(mu, mv)) return;
+      if ((one | other) & kSplit) {  // a refined neighbour uses the midpoint as a corner
+        mid(mu, mv) = 1;
+        return;
+      }
+      // A clean block on either side: the edge's pixels are valid.
+      const bool clean = !(one & kEmpty) || !(other & kEmpty);
+      mid(mu, mv) = clean && needed(mu, mv, (p(au, av) + p(bu, bv)) / 2) ? 1 : 0;
+    };
+    tbb::parallel_for(0, ny + 1, [&](int by) {
+      for (int bx = 0; bx <= nx; ++bx) {
+        const int x0 = bx * s, y0 = by * s;
+        if (bx < nx)  // horizontal edge on top of block (bx, by)
+          decide(x0 + h, y0, x0, y0, x0 + s, y0, block_state(bx, by - 1), block_state(bx, by));
+        if (by < ny)  // vertical edge left of block (bx, by)
+          decide(x0, y0 + h, x0, y0, x0, y0 + s, block_state(bx - 1, by), block_state(bx, by));
+      }
+    });
+    // Centres: needed themselves, or by a needed midpoint of the block's edges.
+    tbb::parallel_for(0, ny, [&](int by) {
       for (int bx = 0; bx < nx; ++bx) {
         std::uint8_t& st = state(s, bx, by);
-        if (st & (kEmpty | kCenter)) continue;
-        for (const Edge& e : edges(bx * s, by * s, s))
-          if (mid_selected(e.mu, e.mv)) st |= kCenter;
+        if (st & (kEmpty | kSplit)) continue;
+        const int x0 = bx * s, y0 = by * s;
+        bool center = false;
+        for (const Edge& e : edges(x0, y0, s)) center = center || mid_selected(e.mu, e.mv);
+        if (!center) {
+          const bool main = main_diagonal_shorter(x0, y0, s);
+          const Eigen::Vector3f diagonal_mid =
+              main ? Eigen::Vector3f((p(x0, y0) + p(x0 + s, y0 + s)) / 2)
+                   : Eigen::Vector3f((p(x0 + s, y0) + p(x0, y0 + s)) / 2);
+          center = needed(x0 + h, y0 + h, diagonal_mid);
+        }
+        if (center) st |= kCenter;
       }
+    });
   }
 
   void add(std::vector<Triangle>& out, int u0, int v0, int u1, int v1, int u2, int v2) const {
@@ -160,53 +192,60 @@ class Quadtree {
                            static_cast<std::uint32_t>(c)});
   }
 
-  void emit_level(int s, std::vector<Triangle>& out) {
-    const int nx = blocks_x(s), ny = blocks_y(s);
-    for (int by = 0; by < ny; ++by)
-      for (int bx = 0; bx < nx; ++bx) {
-        const std::uint8_t st = state(s, bx, by);
-        if (st & kEmpty) continue;
-        const bool parent_split = s == root_ || (state(2 * s, bx / 2, by / 2) & kSplit) != 0;
-        if (!parent_split) continue;
-        const int x0 = bx * s, y0 = by * s, h = s / 2;
-        if (st & kSplit) {
-          if (s == 2)  // holds an invalid pixel: per pixel quad inside the image, as naive
-            for (int v = y0; v < std::min(y0 + 2, g_.height - 1); ++v)
-              for (int u = x0; u < std::min(x0 + 2, g_.width - 1); ++u)
-                append_quad_triangles(g_, u, v, keep_, out, nullptr);
-          continue;  // otherwise the children are emitted at the next level
-        }
-        if (st & kCenter) {  // fan around the centre through the needed midpoints
-          const int cu = x0 + h, cv = y0 + h;
-          const std::array<std::array<int, 2>, 8> ring = {{{x0, y0},
-                                                           {x0, y0 + h},
-                                                           {x0, y0 + s},
-                                                           {x0 + h, y0 + s},
-                                                           {x0 + s, y0 + s},
-                                                           {x0 + s, y0 + h},
-                                                           {x0 + s, y0},
-                                                           {x0 + h, y0}}};
-          std::array<std::array<int, 2>, 8> used{};
-          int k = 0;
-          for (int i = 0; i < 8; ++i)
-            if (i % 2 == 0 || mid_selected(ring[static_cast<std::size_t>(i)][0],
-                                           ring[static_cast<std::size_t>(i)][1]))
-              used[static_cast<std::size_t>(k++)] = ring[static_cast<std::size_t>(i)];
-          for (int i = 0; i < k; ++i) {
-            const auto& a = used[static_cast<std::size_t>(i)];
-            const auto& b = used[static_cast<std::size_t>((i + 1) % k)];
-            add(out, cu, cv, a[0], a[1], b[0], b[1]);
-          }
-          continue;
-        }
-        if (main_diagonal_shorter(x0, y0, s)) {
-          add(out, x0, y0, x0, y0 + s, x0 + s, y0 + s);
-          add(out, x0, y0, x0 + s, y0 + s, x0 + s, y0);
-        } else {
-          add(out, x0, y0, x0, y0 + s, x0 + s, y0);
-          add(out, x0 + s, y0, x0, y0 + s, x0 + s, y0 + s);
-        }
+  // The leaves of level s, rows in parallel, appended to `out` in row order.
+  void emit_level(int s, std::vector<Triangle>& all) {
+    const int ny = blocks_y(s);
+    std::vector<std::vector<Triangle>> rows(static_cast<std::size_t>(ny));
+    tbb::parallel_for(0, ny, [&](int by) { emit_row(s, by, rows[static_cast<std::size_t>(by)]); });
+    for (const auto& row : rows) all.insert(all.end(), row.begin(), row.end());
+  }
+
+  void emit_row(int s, int by, std::vector<Triangle>& out) const {
+    const int nx = blocks_x(s);
+    for (int bx = 0; bx < nx; ++bx) {
+      const std::uint8_t st = state(s, bx, by);
+      if (st & kEmpty) continue;
+      const bool parent_split = s == root_ || (state(2 * s, bx / 2, by / 2) & kSplit) != 0;
+      if (!parent_split) continue;
+      const int x0 = bx * s, y0 = by * s, h = s / 2;
+      if (st & kSplit) {
+        if (s == 2)  // holds an invalid pixel: per pixel quad inside the image, as naive
+          for (int v = y0; v < std::min(y0 + 2, g_.height - 1); ++v)
+            for (int u = x0; u < std::min(x0 + 2, g_.width - 1); ++u)
+              append_quad_triangles(g_, u, v, keep_, out, nullptr);
+        continue;  // otherwise the children are emitted at the next level
       }
+      if (st & kCenter) {  // fan around the centre through the needed midpoints
+        const int cu = x0 + h, cv = y0 + h;
+        const std::array<std::array<int, 2>, 8> ring = {{{x0, y0},
+                                                         {x0, y0 + h},
+                                                         {x0, y0 + s},
+                                                         {x0 + h, y0 + s},
+                                                         {x0 + s, y0 + s},
+                                                         {x0 + s, y0 + h},
+                                                         {x0 + s, y0},
+                                                         {x0 + h, y0}}};
+        std::array<std::array<int, 2>, 8> used{};
+        int k = 0;
+        for (int i = 0; i < 8; ++i)
+          if (i % 2 == 0 || mid_selected(ring[static_cast<std::size_t>(i)][0],
+                                         ring[static_cast<std::size_t>(i)][1]))
+            used[static_cast<std::size_t>(k++)] = ring[static_cast<std::size_t>(i)];
+        for (int i = 0; i < k; ++i) {
+          const auto& a = used[static_cast<std::size_t>(i)];
+          const auto& b = used[static_cast<std::size_t>((i + 1) % k)];
+          add(out, cu, cv, a[0], a[1], b[0], b[1]);
+        }
+        continue;
+      }
+      if (main_diagonal_shorter(x0, y0, s)) {
+        add(out, x0, y0, x0, y0 + s, x0 + s, y0 + s);
+        add(out, x0, y0, x0 + s, y0 + s, x0 + s, y0);
+      } else {
+        add(out, x0, y0, x0, y0 + s, x0 + s, y0);
+        add(out, x0 + s, y0, x0, y0 + s, x0 + s, y0 + s);
+      }
+    }
   }
 
   const PointGrid& g_;

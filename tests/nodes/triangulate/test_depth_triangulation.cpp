@@ -181,6 +181,20 @@ TEST(RestrictedQuadtree, CrackFreeCompleteAndFarSmallerThanTheNaiveMesh) {
   }
 }
 
+TEST(RestrictedQuadtree, SameTrianglesWithOneAndTwoThreads) {
+  const PointGrid grid = grid_from_depth(room_frame(0.003f), DepthFilterConfig{});
+  std::vector<Triangle> one, two;
+  {
+    ThreadLimit limit(1);
+    one = triangulate_grid(grid, quadtree_config());
+  }
+  {
+    ThreadLimit limit(2);
+    two = triangulate_grid(grid, quadtree_config());
+  }
+  EXPECT_EQ(one, two);
+}
+
 TEST(RestrictedQuadtree, FlatWallIsFewTrianglesAndTheBorderRefines) {
   // A wall seen head-on, 33 x 17 pixels, 0.1 m per pixel: blocks crossing the image border
   // refine down to pixel quads, the rest stays coarse.

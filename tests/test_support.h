@@ -5,6 +5,7 @@
 #include <string>
 
 #include "runtime/point_cloud.h"
+#include "runtime/threads.h"
 #include "runtime/triangle_mesh.h"
 
 namespace meshflow::test {
@@ -24,6 +25,13 @@ std::string temp_dir();
 void write_file(const std::string& path, const std::string& content);
 /// The whole file at `path` (binary); empty when it cannot be read.
 std::string read_file(const std::string& path);
+
+/// f() run under a limit of `threads` worker threads (for 1-vs-N determinism tests).
+template <typename F>
+auto with_threads(int threads, F f) {
+  ThreadLimit limit(threads);
+  return f();
+}
 
 struct ErrorStats {
   double mean = 0.0, max = 0.0;

@@ -45,22 +45,28 @@ std::vector<Triangle> triangulate_grid(const PointGrid& grid,
   return naive_triangles(grid, keep, counts);
 }
 
-TriangleMesh triangulate_depth(const DepthFrame& frame, const DepthTriangulationConfig& config,
-                               TriangulationCounts* counts) {
-  TriangulationCounts c;
-  const PointGrid grid = grid_from_depth(frame, config.filter, &c.filter);
+namespace {
+
+// Triangulates and compacts `grid` (made with c.filter filled in); reports c through `counts`.
+TriangleMesh grid_mesh(const PointGrid& grid, const DepthTriangulationConfig& config,
+                       TriangulationCounts& c, TriangulationCounts* counts) {
   TriangleMesh mesh = mesh_from_pixel_triangles(grid, triangulate_grid(grid, config, &c));
   if (counts != nullptr) *counts = c;
   return mesh;
 }
 
+}  // namespace
+
+TriangleMesh triangulate_depth(const DepthFrame& frame, const DepthTriangulationConfig& config,
+                               TriangulationCounts* counts) {
+  TriangulationCounts c;
+  return grid_mesh(grid_from_depth(frame, config.filter, &c.filter), config, c, counts);
+}
+
 TriangleMesh triangulate_organized(const PointCloud& cloud, const DepthTriangulationConfig& config,
                                    TriangulationCounts* counts) {
   TriangulationCounts c;
-  const PointGrid grid = grid_from_organized(cloud, config.filter, &c.filter);
-  TriangleMesh mesh = mesh_from_pixel_triangles(grid, triangulate_grid(grid, config, &c));
-  if (counts != nullptr) *counts = c;
-  return mesh;
+  return grid_mesh(grid_from_organized(cloud, config.filter, &c.filter), config, c, counts);
 }
 
 }  // namespace meshflow

@@ -10,6 +10,7 @@
 #include "nodes/eval/surface_eval.h"
 #include "runtime/threads.h"
 #include "solid_fixture.h"
+#include "test_support.h"
 
 namespace meshflow {
 namespace {
@@ -169,15 +170,8 @@ TEST(ExtendedMarchingCubes, KeepsTheBoxEdgesAndCornersWhereMarchingCubesRoundsTh
 
 TEST(ExtendedMarchingCubes, SameOutputWithOneAndTwoThreads) {
   const auto s = test::sampled_solid(test::test_solids(kVoxel)[2].solid, kVoxel);
-  TriangleMesh one, two;
-  {
-    ThreadLimit limit(1);
-    one = emc_of(s);
-  }
-  {
-    ThreadLimit limit(2);
-    two = emc_of(s);
-  }
+  const TriangleMesh one = test::with_threads(1, [&] { return emc_of(s); });
+  const TriangleMesh two = test::with_threads(2, [&] { return emc_of(s); });
   EXPECT_EQ(one.vertices, two.vertices);
   EXPECT_EQ(one.triangles, two.triangles);
 }

@@ -76,15 +76,8 @@ TEST(DepthTriangulation, NoTriangleBridgesAnOcclusionEdgeOnARayCastFrame) {
 
 TEST(DepthTriangulation, SharedVerticesOnlyUsedPixelsAndSameResultWithOneAndTwoThreads) {
   const DepthFrame frame = room_frame();
-  TriangleMesh one, two;
-  {
-    ThreadLimit limit(1);
-    one = triangulate_depth(frame);
-  }
-  {
-    ThreadLimit limit(2);
-    two = triangulate_depth(frame);
-  }
+  const TriangleMesh one = test::with_threads(1, [&] { return triangulate_depth(frame); });
+  const TriangleMesh two = test::with_threads(2, [&] { return triangulate_depth(frame); });
   EXPECT_EQ(one.vertices, two.vertices);
   EXPECT_EQ(one.triangles, two.triangles);
   std::vector<std::uint8_t> used(one.vertices.size(), 0);
@@ -183,16 +176,8 @@ TEST(RestrictedQuadtree, CrackFreeCompleteAndFarSmallerThanTheNaiveMesh) {
 
 TEST(RestrictedQuadtree, SameTrianglesWithOneAndTwoThreads) {
   const PointGrid grid = grid_from_depth(room_frame(0.003f), DepthFilterConfig{});
-  std::vector<Triangle> one, two;
-  {
-    ThreadLimit limit(1);
-    one = triangulate_grid(grid, quadtree_config());
-  }
-  {
-    ThreadLimit limit(2);
-    two = triangulate_grid(grid, quadtree_config());
-  }
-  EXPECT_EQ(one, two);
+  EXPECT_EQ(test::with_threads(1, [&] { return triangulate_grid(grid, quadtree_config()); }),
+            test::with_threads(2, [&] { return triangulate_grid(grid, quadtree_config()); }));
 }
 
 TEST(RestrictedQuadtree, FlatWallIsFewTrianglesAndTheBorderRefines) {

@@ -1,0 +1,45 @@
+#pragma once
+// Quadric error metric decimation (Garland & Heckbert 1997) with the constraints of the depth-map
+// triangulation work the method builds on: half-edge collapses that keep every vertex at its
+// measured position, errors divided by depth^2 (sensor noise grows with depth^2), no collapse
+// that turns a face by more than 60 degrees, borders collapsed only along themselves, and a
+// penalty that keeps sharp edges and avoids needle triangles.
+
+#include <Eigen/Core>
+#include <cstddef>
+
+#include "runtime/triangle_mesh.h"
+
+namespace meshflow {
+
+struct QemConfig {
+  float target_ratio = 0.25f;  ///< stop when this share of the triangles is left
+  /// Errors are divided by depth^2, the squared distance of the kept vertex from `viewpoint`
+  /// (metres); off: plain quadric errors.
+  bool divide_by_depth2 = true;
+  Eigen::Vector3f viewpoint = Eigen::Vector3f::Zero();
+  float max_normal_turn_deg = 60.0f;  ///< no face may turn more than this in one collapse
+  /// A border vertex collapses only onto a border neighbour along its border, and only when
+  /// its two border edges turn by less than this (nearly parallel), so outlines keep shape.
+  float max_border_turn_deg = 10.0f;
+  float sharp_edge_deg = 60.0f;  ///< collapsing an edge whose two faces differ more is penalised
+  float min_angle_deg = 13.0f;   ///< a collapse leaving a smaller inner angle is penalised
+  float penalty = 10.0f;         ///< the factor of both penalties
+};
+
+struct QemReport {
+  std::size_t collapses = 0;
+  std::size_t rejected_topology = 0;  ///< would make the mesh non-manifold
+  std::size_t rejected_normal = 0;    ///< would turn or degenerate a face
+  std::size_t rejected_border = 0;    ///< would move a border off itself
+};
+
+/// Decimates `mesh` by half-edge collapses u -> v in order of increasing (penalised) error
+/// (Q_u + Q_v)(v), until target_ratio of the triangles remain or no valid collapse is left.
+/// Output vertices are a subset of the input vertices (same positions, same order); triangles
+/// stay consistently oriented and manifold where the input was. Serial, deterministic;
+/// O(T log T).
+TriangleMesh qem_decimate(const TriangleMesh& mesh, const QemConfig& config = {},
+                          QemReport* report = nullptr);
+
+}  // namespace meshflow

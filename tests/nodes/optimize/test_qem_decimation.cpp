@@ -1,0 +1,176 @@
+#include "nodes/optimize/qem_decimation.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdio>
+#include <map>
+
+#include "nodes/eval/completeness.h"
+#include "nodes/eval/surface_eval.h"
+#include "nodes/synthetic/depth_sequence.h"
+#include "nodes/triangulate/depth_triangulation.h"
+
+namespace meshflow {
+namespace {
+
+// An n x n grid over [0, 1]^2 with heights z(x, y), two triangles per cell (upward normals).
+template <typename Height>
+TriangleMesh height_field(int n, Height z) {
+  TriangleMesh m;
+  for (int j = 0; j < n; ++j)
+    for (int i = 0; i < n; ++i) {
+      const float x = static_cast<float>(i) / static_cast<float>(n - 1);
+      const float y = static_cast<float>(j) / static_cast<float>(n - 1);
+      m.vertices.emplace_back(x, y, z(x, y));
+    }
+  auto id = [n](int i, int j) { return static_cast<std::uint32_t>(j * n + i); };
+  for (int j = 0; j + 1 < n; ++j)
+    for (int i = 0; i + 1 < n; ++i) {
+      m.triangles.push_back({id(i, j), id(i + 1, j), id(i + 1, j + 1)});
+      m.triangles.push_back({id(i, j), id(i + 1, j + 1), id(i, j + 1)});
+    }
+  return m;
+}
+
+float wave(float x, float y) { return 0.05f * std::sin(6.0f * x) * std::cos(4.0f * y); }
+
+Eigen::Vector3f wave_normal(float x, float y) {
+  const float dx = 0.3f * std::cos(6.0f * x) * std::cos(4.0f * y);
+  const float dy = -0.2f * std::sin(6.0f * x) * std::sin(4.0f * y);
+  return Eigen::Vector3f(-dx, -dy, 1.0f).normalized();
+}
+
+QemConfig plain_config() {
+  QemConfig c;
+  c.divide_by_depth2 = false;
+  return c;
+}
+
+TEST(QemDecimation, KeepsMeasuredVerticesTopologyBorderAndNormals) {
+  const TriangleMesh in = height_field(80, wave);
+  QemReport report;
+  const TriangleMesh out = qem_decimate(in, plain_config(), &report);
+  std::printf(
+      "[ qem ] %zu -> %zu triangles; %zu collapses, rejected: %zu topology, %zu normal, "
+      "%zu border; Hausdorff %.5f\n",
+      in.triangles.size(), out.triangles.size(), report.collapses, report.rejected_topology,
+      report.rejected_normal, report.rejected_border, hausdorff_distance(out, in));
+  EXPECT_LE(out.triangles.size(), in.triangles.size() / 4 + 1);
+  const MeshTopology topology = mesh_topology(out);
+  EXPECT_EQ(topology.edges.non_manifold_edges, 0u);
+  EXPECT_EQ(topology.edges.inconsistent_edges, 0u);
+  EXPECT_EQ(topology.degenerate_faces, 0u);
+  EXPECT_EQ(topology.boundary_loops, 1u);
+  // Vertices stay where they were measured.
+  std::map<std::array<float, 3>, bool> measured;
+  for (const auto& v : in.vertices) measured[{v.x(), v.y(), v.z()}] = true;
+  for (const auto& v : out.vertices) EXPECT_TRUE(measured.count({v.x(), v.y(), v.z()}));
+  // The border keeps its shape: border vertices stay on the unit square's outline, and the
+  // four corners are kept (the border turns there).
+  for (const BorderEdge& e : border_edges(out))
+    for (std::uint32_t v : {e.a, e.b}) {
+      const Eigen::Vector3f& p = out.vertices[v];
+      EXPECT_TRUE(p.x() == 0.0f || p.x() == 1.0f || p.y() == 0.0f || p.y() == 1.0f);
+    }
+  for (const auto& corner :
+       {Eigen::Vector2f(0, 0), Eigen::Vector2f(1, 0), Eigen::Vector2f(0, 1), Eigen::Vector2f(1, 1)})
+    EXPECT_TRUE(std::any_of(out.vertices.begin(), out.vertices.end(), [&](const auto& v) {
+      return v.x() == corner.x() && v.y() == corner.y();
+    }));
+  // No face turned over: every normal within 60 degrees of the surface's at its centroid.
+  for (const Triangle& t : out.triangles) {
+    const Eigen::Vector3f c = (out.vertices[t[0]] + out.vertices[t[1]] + out.vertices[t[2]]) / 3;
+    EXPECT_GT(face_normal(out, t).dot(wave_normal(c.x(), c.y())), 0.5f);
+  }
+  EXPECT_LT(hausdorff_distance(out, in), 0.01);
+}
+
+TEST(QemDecimation, NeedleAndSharpEdgePenaltiesLeaveFewerThinTriangles) {
+  const TriangleMesh in = height_field(60, [](float x, float y) {
+    return 0.3f * std::abs(x - 0.5f) + 0.01f * std::sin(17.0f * y);  // a valley with ripples
+  });
+  auto thin = [](const TriangleMesh& m) {
+    std::size_t n = 0;
+    for (const Triangle& t : m.triangles)
+      for (int i = 0; i < 3; ++i) {
+        const Eigen::Vector3f e1 = m.vertices[t[(i + 1) % 3]] - m.vertices[t[i]];
+        const Eigen::Vector3f e2 = m.vertices[t[(i + 2) % 3]] - m.vertices[t[i]];
+        if (std::atan2(e1.cross(e2).norm(), e1.dot(e2)) < 13.0f * 3.14159265f / 180.0f) {
+          ++n;
+          break;
+        }
+      }
+    return n;
+  };
+  QemConfig no_penalty = plain_config();
+  no_penalty.penalty = 1.0f;
+  const std::size_t with = thin(qem_decimate(in, plain_config()));
+  const std::size_t without = thin(qem_decimate(in, no_penalty));
+  std::printf(
+      "[ qem ] triangles with an angle under 13 degrees: %zu with the penalty, %zu "
+      "without\n",
+      with, without);
+  EXPECT_LT(with, without);
+}
+
+TEST(QemDecimation, DividingByDepthSquaredThinsTheFarPartMore) {
+  // A noisy plane from 1 m to 5 m ahead of the viewpoint (noise grows with depth^2).
+  const TriangleMesh in = height_field(70, [](float x, float y) {
+    const float depth = 1.0f + 4.0f * y;
+    const float hash = std::sin(12.9898f * x * 70.0f + 78.233f * y * 70.0f) * 43758.5453f;
+    return 0.002f * depth * depth * (hash - std::floor(hash) - 0.5f);
+  });
+  QemConfig depth = plain_config();
+  depth.divide_by_depth2 = true;
+  depth.viewpoint = Eigen::Vector3f(0.5f, -1.0f, 0.0f);  // y = 0 is 1 m away
+  auto far_share = [](const TriangleMesh& m) {
+    std::size_t far = 0;
+    for (const auto& v : m.vertices) far += v.y() > 0.5f ? 1 : 0;
+    return static_cast<double>(far) / static_cast<double>(m.vertices.size());
+  };
+  const double with = far_share(qem_decimate(in, depth));
+  const double without = far_share(qem_decimate(in, plain_config()));
+  std::printf("[ qem ] share of vertices in the far half: %.3f dividing by depth^2, %.3f not\n",
+              with, without);
+  EXPECT_LT(with, without);
+}
+
+TEST(QemDecimation, RoomFrameQualityForNaiveAndQuadtreeMeshes) {
+  const PinholeIntrinsics k{320, 240, 262.5f, 262.5f, 159.5f, 119.5f};
+  const DepthFrame frame =
+      synthetic::render_depth(synthetic::demo_room_scene(), k,
+                              synthetic::look_at({-2.5f, -1.5f, 1.4f}, {0.5f, 1.0f, 0.5f}), 0.001f);
+  const PointGrid grid = grid_from_depth(frame, DepthFilterConfig{});
+  DepthTriangulationConfig rqt_config;
+  rqt_config.method = DepthTriangulationMethod::kRestrictedQuadtree;
+  const TriangleMesh naive = mesh_from_pixel_triangles(grid, triangulate_grid(grid, {}));
+  const TriangleMesh rqt = mesh_from_pixel_triangles(grid, triangulate_grid(grid, rqt_config));
+  QemConfig qem;
+  qem.viewpoint = grid.eye;
+  const TriangleMesh naive_qem = qem_decimate(naive, qem);
+  const TriangleMesh rqt_qem = qem_decimate(rqt, qem);
+  for (const auto& [name, m] :
+       {std::pair<const char*, const TriangleMesh*>{"naive+qem", &naive_qem},
+        {"rqt", &rqt},
+        {"rqt+qem", &rqt_qem}}) {
+    const Completeness c = completeness(*m, naive, k, frame.T_world_camera);
+    std::printf(
+        "[ qem ] %-9s %7zu triangles (%.1f%% of naive), Hausdorff %.4f m, h_n %.4f, "
+        "h_c %.4f\n",
+        name, m->triangles.size(),
+        100.0 * static_cast<double>(m->triangles.size()) /
+            static_cast<double>(naive.triangles.size()),
+        hausdorff_distance(*m, naive), c.kept(), c.genuine());
+    const MeshTopology topology = mesh_topology(*m);
+    EXPECT_EQ(topology.edges.non_manifold_edges, 0u) << name;
+    EXPECT_EQ(topology.edges.inconsistent_edges, 0u) << name;
+    EXPECT_GE(c.kept(), 0.98) << name;
+  }
+  EXPECT_LE(naive_qem.triangles.size(), naive.triangles.size() / 4 + 1);
+}
+
+}  // namespace
+}  // namespace meshflow

@@ -9,7 +9,8 @@
 namespace meshflow::bench {
 namespace {
 
-// Args: threads, input (1 = Redwood, 0 = synthetic), method (0 = naive, 1 = restricted quadtree).
+// Args: threads, input (1 = Redwood, 0 = synthetic), method (0 = naive, 1 = restricted quadtree,
+// 2 = restricted quadtree then QEM decimation to 25 %).
 void BM_TriangulateDepth(benchmark::State& state) {
   const bool redwood = state.range(1) == 1;
   const auto& frames = depth_frames(redwood);
@@ -18,10 +19,11 @@ void BM_TriangulateDepth(benchmark::State& state) {
     return;
   }
   DepthTriangulationConfig config;
-  config.method = state.range(2) == 1 ? DepthTriangulationMethod::kRestrictedQuadtree
+  config.method = state.range(2) >= 1 ? DepthTriangulationMethod::kRestrictedQuadtree
                                       : DepthTriangulationMethod::kNaive;
-  state.SetLabel(std::string(redwood ? "redwood " : "synthetic ") +
-                 (state.range(2) == 1 ? "rqt" : "naive"));
+  if (state.range(2) == 2) config.decimate_to = 0.25f;
+  const char* names[] = {"naive", "rqt", "rqt+qem25%"};
+  state.SetLabel(std::string(redwood ? "redwood " : "synthetic ") + names[state.range(2)]);
   ThreadLimit limit(static_cast<int>(state.range(0)));
   std::size_t triangles = 0;
   for (auto _ : state) triangles = triangulate_depth(frames.front(), config).triangles.size();
@@ -29,7 +31,7 @@ void BM_TriangulateDepth(benchmark::State& state) {
 }
 BENCHMARK(BM_TriangulateDepth)
     ->ArgNames({"threads", "redwood", "method"})
-    ->ArgsProduct({{1, 2}, {0, 1}, {0, 1}})
+    ->ArgsProduct({{1, 2}, {0, 1}, {0, 1, 2}})
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
 

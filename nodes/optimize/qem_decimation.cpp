@@ -37,7 +37,8 @@ class Decimator {
         cos_turn_(std::cos(config.max_normal_turn_deg * kDegrees)),
         cos_border_(std::cos(config.max_border_turn_deg * kDegrees)),
         cos_sharp_(std::cos(config.sharp_edge_deg * kDegrees)),
-        min_angle_(config.min_angle_deg * kDegrees) {
+        cos2_min_angle_(
+            static_cast<float>(std::pow(std::cos(config.min_angle_deg * kDegrees), 2))) {
     for (std::uint32_t t = 0; t < t_.size(); ++t) {
       for (std::uint32_t v : t_[t]) around_[v].push_back(t);
       // Area-weighted plane quadric of the face, added to its corners.
@@ -145,8 +146,9 @@ class Decimator {
             p_[n[static_cast<std::size_t>((i + 1) % 3)]] - p_[n[static_cast<std::size_t>(i)]];
         const Eigen::Vector3f e2 =
             p_[n[static_cast<std::size_t>((i + 2) % 3)]] - p_[n[static_cast<std::size_t>(i)]];
-        const float angle = std::atan2(e1.cross(e2).norm(), e1.dot(e2));
-        penalise = angle < min_angle_;
+        // angle < min  <=>  cos(angle) > cos(min), compared squared (no trigonometry).
+        const float dot = e1.dot(e2);
+        penalise = dot > 0.0f && dot * dot > cos2_min_angle_ * e1.squaredNorm() * e2.squaredNorm();
       }
     }
     return penalise ? cost * cfg_.penalty : cost;
@@ -249,7 +251,7 @@ class Decimator {
   std::vector<std::uint32_t> stamp_;
   std::size_t alive_;
   float cos_turn_, cos_border_, cos_sharp_;
-  double min_angle_;
+  float cos2_min_angle_;
   std::priority_queue<Candidate, std::vector<Candidate>, std::greater<Candidate>> heap_;
 };
 

@@ -51,6 +51,12 @@ namespace {
 TriangleMesh grid_mesh(const PointGrid& grid, const DepthTriangulationConfig& config,
                        TriangulationCounts& c, TriangulationCounts* counts) {
   TriangleMesh mesh = mesh_from_pixel_triangles(grid, triangulate_grid(grid, config, &c));
+  if (config.decimate_to > 0.0f && config.decimate_to < 1.0f) {
+    QemConfig qem = config.decimation;
+    qem.target_ratio = config.decimate_to;
+    qem.viewpoint = grid.eye;
+    mesh = qem_decimate(mesh, qem);
+  }
   if (counts != nullptr) *counts = c;
   return mesh;
 }

@@ -8,6 +8,7 @@
 
 #include <cstddef>
 
+#include "nodes/optimize/qem_decimation.h"
 #include "nodes/triangulate/pixel_grid.h"
 #include "nodes/triangulate/restricted_quadtree.h"
 
@@ -25,6 +26,10 @@ struct DepthTriangulationConfig {
   /// A triangle whose longest edge exceeds this many times its shortest is a sliver across a
   /// jump.
   float max_edge_ratio = 8.0f;
+  /// When in (0, 1): QEM decimation (qem_decimate, depth from the camera) down to this share
+  /// of the triangles after triangulation; 0 = off.
+  float decimate_to = 0.0f;
+  QemConfig decimation;  ///< its other settings (target_ratio and viewpoint are set per frame)
 };
 
 struct TriangulationCounts {

@@ -152,6 +152,7 @@ TEST(QemDecimation, RoomFrameQualityForNaiveAndQuadtreeMeshes) {
   qem.viewpoint = grid.eye;
   const TriangleMesh naive_qem = qem_decimate(naive, qem);
   const TriangleMesh rqt_qem = qem_decimate(rqt, qem);
+  std::printf("[ qem ] naive     %7zu triangles\n", naive.triangles.size());
   for (const auto& [name, m] :
        {std::pair<const char*, const TriangleMesh*>{"naive+qem", &naive_qem},
         {"rqt", &rqt},

@@ -213,10 +213,11 @@ class Decimator {
     live(v);
     q_[v] += q_[u];
     ++report_.collapses;
+    // Only candidates with u or v are stale (Q_v changed); others around v keep their entries,
+    // whose costs and validity are checked again when they come up.
     ++stamp_[u];
     ++stamp_[v];
     const auto around_v = neighbours(v);
-    for (std::uint32_t n : around_v) ++stamp_[n];
     for (std::uint32_t n : around_v) {
       push(v, n);
       push(n, v);

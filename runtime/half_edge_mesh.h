@@ -1,0 +1,76 @@
+#pragma once
+// An index-based half-edge mesh for mesh optimisation: every triangle is three half-edges, each
+// knowing the vertex it points to, the next half-edge of its face and its twin on the
+// neighbouring face (none on a border). Built from a TriangleMesh, with non-manifold input
+// reported instead of corrupting the structure; edited in place (edge flips); converted back
+// with compaction.
+
+#include <Eigen/Core>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "runtime/triangle_mesh.h"
+
+namespace meshflow {
+
+class HalfEdgeMesh {
+ public:
+  static constexpr std::uint32_t kNone = UINT32_MAX;
+
+  /// Builds the structure. Throws meshflow::Error naming the first offending edge or vertex for
+  /// input that is not an oriented 2-manifold with border: an edge used by more than two
+  /// triangles or twice in the same direction, a vertex whose triangles form more than one fan
+  /// (a "bow tie"), a triangle repeating a vertex or an index out of range. O(T log T).
+  explicit HalfEdgeMesh(const TriangleMesh& mesh);
+
+  std::size_t vertex_count() const { return positions_.size(); }
+  std::size_t half_edge_count() const { return to_.size(); }
+  std::size_t face_count() const { return to_.size() / 3; }
+
+  // Navigation (h: half-edge index, 3 per face: face f owns 3f, 3f + 1, 3f + 2).
+  std::uint32_t to(std::uint32_t h) const { return to_[h]; }
+  std::uint32_t from(std::uint32_t h) const { return to_[prev(h)]; }
+  static std::uint32_t next(std::uint32_t h) { return h - h % 3 + (h + 1) % 3; }
+  static std::uint32_t prev(std::uint32_t h) { return h - h % 3 + (h + 2) % 3; }
+  static std::uint32_t face(std::uint32_t h) { return h / 3; }
+  std::uint32_t twin(std::uint32_t h) const { return twin_[h]; }
+  bool is_border(std::uint32_t h) const { return twin_[h] == kNone; }
+  const Eigen::Vector3f& position(std::uint32_t v) const { return positions_[v]; }
+
+  /// A half-edge leaving v (the one whose ring walk covers all of v's faces: on a border vertex,
+  /// the border half-edge leaving it), or kNone for an isolated vertex.
+  std::uint32_t outgoing(std::uint32_t v) const { return out_[v]; }
+  bool is_border_vertex(std::uint32_t v) const;
+
+  /// The half-edges leaving v, counter-clockwise (seen from the normal side) from outgoing(v).
+  /// O(valence).
+  std::vector<std::uint32_t> ring(std::uint32_t v) const;
+
+  /// Every border loop as its half-edges in order (each followed by the border half-edge
+  /// leaving its target), loops ordered by their smallest half-edge. O(H).
+  std::vector<std::vector<std::uint32_t>> border_loops() const;
+
+  /// Flips the interior edge of h = a -> b: its faces (a, b, c) and (b, a, d) become (a, d, c)
+  /// and (d, b, c), replacing edge a-b by c-d; face and half-edge indices are reused. Refused
+  /// (returns false, nothing changes) on a border edge, when c-d already exists, when a or b is
+  /// interior with only three faces (the flip would fold two faces onto each other), or when a
+  /// new face would have no area or face against the old pair (the quad is not convex at c-d).
+  /// O(valence).
+  bool flip(std::uint32_t h);
+
+  /// Checks every invariant (twins are mutual and opposite, outgoing half-edges leave their
+  /// vertex, faces are non-degenerate); returns an empty string or the first violation.
+  std::string check() const;
+
+  /// The triangles back, referenced vertices only, in vertex order. O(V + T).
+  TriangleMesh to_triangle_mesh() const;
+
+ private:
+  std::vector<Eigen::Vector3f> positions_;
+  std::vector<std::uint32_t> to_, twin_, out_;
+  std::uint32_t find_half_edge(std::uint32_t a, std::uint32_t b) const;  // a -> b or kNone
+  void set_outgoing(std::uint32_t v);
+};
+
+}  // namespace meshflow

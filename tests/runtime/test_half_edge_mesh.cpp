@@ -1,0 +1,132 @@
+#include "runtime/half_edge_mesh.h"
+
+#include <gtest/gtest.h>
+
+#include "runtime/error.h"
+
+namespace meshflow {
+namespace {
+
+TriangleMesh tetrahedron() {
+  TriangleMesh m;
+  m.vertices = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+  m.triangles = {{0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {1, 2, 3}};
+  return m;
+}
+
+// An n x n vertex grid in the plane z = 0, two triangles per cell, counter-clockwise from +z.
+TriangleMesh grid(std::uint32_t n) {
+  TriangleMesh m;
+  for (std::uint32_t j = 0; j < n; ++j)
+    for (std::uint32_t i = 0; i < n; ++i)
+      m.vertices.emplace_back(static_cast<float>(i), static_cast<float>(j), 0.0f);
+  for (std::uint32_t j = 0; j + 1 < n; ++j)
+    for (std::uint32_t i = 0; i + 1 < n; ++i) {
+      const std::uint32_t a = j * n + i;
+      m.triangles.push_back({a, a + 1, a + n + 1});
+      m.triangles.push_back({a, a + n + 1, a + n});
+    }
+  return m;
+}
+
+TEST(HalfEdgeMesh, ClosedTetrahedronHasMutualTwinsAndFullRings) {
+  const HalfEdgeMesh h(tetrahedron());
+  EXPECT_EQ(h.check(), "");
+  EXPECT_EQ(h.face_count(), 4u);
+  EXPECT_TRUE(h.border_loops().empty());
+  for (std::uint32_t v = 0; v < 4; ++v) {
+    EXPECT_FALSE(h.is_border_vertex(v));
+    EXPECT_EQ(h.ring(v).size(), 3u);
+    for (std::uint32_t e : h.ring(v)) EXPECT_EQ(h.from(e), v);
+  }
+  const TriangleMesh back = h.to_triangle_mesh();
+  EXPECT_EQ(back.triangles, tetrahedron().triangles);
+  EXPECT_EQ(back.vertices, tetrahedron().vertices);
+}
+
+TEST(HalfEdgeMesh, GridBorderIsOneLoopAndRingsMatchValences) {
+  const HalfEdgeMesh h(grid(5));
+  EXPECT_EQ(h.check(), "");
+  const auto loops = h.border_loops();
+  ASSERT_EQ(loops.size(), 1u);
+  EXPECT_EQ(loops[0].size(), 16u);
+  for (std::size_t i = 0; i < loops[0].size(); ++i)  // consecutive, closed
+    EXPECT_EQ(h.to(loops[0][i]), h.from(loops[0][(i + 1) % loops[0].size()]));
+  EXPECT_TRUE(h.is_border_vertex(0));
+  EXPECT_FALSE(h.is_border_vertex(12));  // the centre
+  EXPECT_EQ(h.ring(12).size(), 6u);
+  EXPECT_EQ(h.ring(0).size(), 2u);  // corner (0, 0): two faces
+}
+
+TEST(HalfEdgeMesh, FlipReplacesTheDiagonalAndRefusesInvalidFlips) {
+  TriangleMesh quad;
+  quad.vertices = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}};
+  quad.triangles = {{0, 1, 2}, {0, 2, 3}};
+  HalfEdgeMesh h(quad);
+  // The only interior half-edges are the two halves of the diagonal 0-2.
+  std::uint32_t diagonal = HalfEdgeMesh::kNone;
+  for (std::uint32_t e = 0; e < h.half_edge_count(); ++e)
+    if (!h.is_border(e)) diagonal = e;
+  ASSERT_NE(diagonal, HalfEdgeMesh::kNone);
+  EXPECT_TRUE(h.flip(diagonal));
+  EXPECT_EQ(h.check(), "");
+  const TriangleMesh flipped = h.to_triangle_mesh();
+  // The new diagonal joins 1 and 3; both faces still face +z.
+  for (const Triangle& t : flipped.triangles) {
+    EXPECT_TRUE((t[0] == 1 || t[1] == 1 || t[2] == 1) && (t[0] == 3 || t[1] == 3 || t[2] == 3));
+    EXPECT_GT(face_normal(flipped, t).z(), 0.0f);
+  }
+  EXPECT_EQ(h.border_loops().size(), 1u);
+  // Border edges do not flip; in a tetrahedron every flip would duplicate an edge.
+  for (std::uint32_t e = 0; e < h.half_edge_count(); ++e)
+    if (h.is_border(e)) {
+      EXPECT_FALSE(h.flip(e));
+    }
+  HalfEdgeMesh tet(tetrahedron());
+  for (std::uint32_t e = 0; e < tet.half_edge_count(); ++e) EXPECT_FALSE(tet.flip(e));
+  EXPECT_EQ(tet.check(), "");
+}
+
+TEST(HalfEdgeMesh, ManyFlipsOnAGridKeepEveryInvariant) {
+  HalfEdgeMesh h(grid(12));
+  std::size_t flips = 0;
+  for (std::uint32_t e = 0; e < h.half_edge_count(); e += 7) flips += h.flip(e) ? 1 : 0;
+  EXPECT_GT(flips, 20u);
+  EXPECT_EQ(h.check(), "");
+  const TriangleMesh m = h.to_triangle_mesh();
+  const EdgeStatistics s = edge_statistics(m);
+  EXPECT_EQ(s.non_manifold_edges, 0u);
+  EXPECT_EQ(s.inconsistent_edges, 0u);
+  EXPECT_EQ(s.boundary_edges, 44u);  // the outline is untouched
+  for (const Triangle& t : m.triangles) EXPECT_GT(face_normal(m, t).z(), 0.0f);
+}
+
+TEST(HalfEdgeMesh, NonManifoldInputIsReportedNotStored) {
+  TriangleMesh fin = tetrahedron();
+  fin.vertices.emplace_back(1, 1, 1);
+  fin.triangles.push_back({0, 1, 4});  // edge 0-1 now in three triangles
+  try {
+    HalfEdgeMesh h(fin);
+    FAIL() << "expected an error";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("edge 0-1"), std::string::npos) << e.what();
+  }
+  TriangleMesh bow_tie;  // two triangles sharing only vertex 0
+  bow_tie.vertices = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {-1, 0, 0}, {-1, -1, 0}};
+  bow_tie.triangles = {{0, 1, 2}, {0, 3, 4}};
+  try {
+    HalfEdgeMesh h(bow_tie);
+    FAIL() << "expected an error";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("vertex 0"), std::string::npos) << e.what();
+  }
+  TriangleMesh bad_index = tetrahedron();
+  bad_index.triangles[2][1] = 9;
+  EXPECT_THROW(HalfEdgeMesh{bad_index}, Error);
+  TriangleMesh repeated = tetrahedron();
+  repeated.triangles[0] = {1, 1, 2};
+  EXPECT_THROW(HalfEdgeMesh{repeated}, Error);
+}
+
+}  // namespace
+}  // namespace meshflow

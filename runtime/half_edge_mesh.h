@@ -26,7 +26,8 @@ class HalfEdgeMesh {
 
   std::size_t vertex_count() const { return positions_.size(); }
   std::size_t half_edge_count() const { return to_.size(); }
-  std::size_t face_count() const { return to_.size() / 3; }
+  std::size_t face_count() const { return to_.size() / 3; }  ///< slots, removed ones included
+  bool face_alive(std::uint32_t f) const { return alive_[f] != 0; }
 
   // Navigation (h: half-edge index, 3 per face: face f owns 3f, 3f + 1, 3f + 2).
   std::uint32_t to(std::uint32_t h) const { return to_[h]; }
@@ -59,8 +60,21 @@ class HalfEdgeMesh {
   /// O(valence).
   bool flip(std::uint32_t h);
 
-  /// Checks every invariant (twins are mutual and opposite, outgoing half-edges leave their
-  /// vertex, faces are non-degenerate); returns an empty string or the first violation.
+  /// Collapses h = a -> b: a is removed, its faces join b (which keeps its position), and the
+  /// one or two faces along a-b disappear. Refused (false, nothing changes) when the result
+  /// would not be a manifold (a and b share a neighbour other than the edge's opposite
+  /// vertices, or both lie on the border while a-b is interior, or the mesh would shrink below
+  /// a tetrahedron), or when a face moving with a would lose its area or turn against its old
+  /// normal. O(valence).
+  bool collapse(std::uint32_t h);
+
+  /// Splits the edge of h = a -> b at `p` (metres): a new vertex m, and each face along the
+  /// edge becomes two. Returns m. O(1) plus O(valence) to refresh outgoing half-edges.
+  std::uint32_t split(std::uint32_t h, const Eigen::Vector3f& p);
+
+  /// Checks every invariant (twins are mutual, opposite and alive; outgoing half-edges leave
+  /// their vertex; every vertex's faces form one fan; no face repeats a vertex); returns an
+  /// empty string or the first violation. O(V + H).
   std::string check() const;
 
   /// The triangles back, referenced vertices only, in vertex order. O(V + T).
@@ -69,6 +83,9 @@ class HalfEdgeMesh {
  private:
   std::vector<Eigen::Vector3f> positions_;
   std::vector<std::uint32_t> to_, twin_, out_;
+  std::vector<std::uint8_t> alive_;                                      // per face slot
+  std::vector<std::uint32_t> neighbours(std::uint32_t v) const;          // sorted
+  void link(std::uint32_t x, std::uint32_t y);                           // make x and y twins
   std::uint32_t find_half_edge(std::uint32_t a, std::uint32_t b) const;  // a -> b or kNone
   void set_outgoing(std::uint32_t v);
 };

@@ -38,6 +38,8 @@ class HalfEdgeMesh {
   std::uint32_t twin(std::uint32_t h) const { return twin_[h]; }
   bool is_border(std::uint32_t h) const { return twin_[h] == kNone; }
   const Eigen::Vector3f& position(std::uint32_t v) const { return positions_[v]; }
+  /// Moves vertex v (metres). Safe from many threads for distinct vertices.
+  void set_position(std::uint32_t v, const Eigen::Vector3f& p) { positions_[v] = p; }
 
   /// A half-edge leaving v (the one whose ring walk covers all of v's faces: on a border vertex,
   /// the border half-edge leaving it), or kNone for an isolated vertex.

@@ -1,0 +1,140 @@
+#include "nodes/optimize/planar_regions.h"
+
+#include <tbb/parallel_for.h>
+
+#include <Eigen/Eigenvalues>
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <cmath>
+
+namespace meshflow {
+namespace {
+
+Eigen::Vector3f unit_face_normal(const HalfEdgeMesh& m, std::uint32_t f) {
+  const Eigen::Vector3f& a = m.position(m.from(3 * f));
+  const Eigen::Vector3f n =
+      (m.position(m.from(3 * f + 1)) - a).cross(m.position(m.from(3 * f + 2)) - a);
+  const float len = n.norm();
+  return len > 0.0f ? Eigen::Vector3f(n / len) : Eigen::Vector3f::Zero();
+}
+
+// Least-squares plane through the region's vertices, oriented like `side`.
+void fit_plane(const HalfEdgeMesh& m, PlanarRegion& r, const Eigen::Vector3f& side) {
+  std::vector<std::uint32_t> vertices;
+  for (std::uint32_t f : r.faces)
+    for (std::uint32_t k = 0; k < 3; ++k) vertices.push_back(m.from(3 * f + k));
+  std::sort(vertices.begin(), vertices.end());
+  vertices.erase(std::unique(vertices.begin(), vertices.end()), vertices.end());
+  Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
+  for (std::uint32_t v : vertices) centroid += m.position(v).cast<double>();
+  centroid /= static_cast<double>(vertices.size());
+  Eigen::Matrix3d covariance = Eigen::Matrix3d::Zero();
+  for (std::uint32_t v : vertices) {
+    const Eigen::Vector3d d = m.position(v).cast<double>() - centroid;
+    covariance += d * d.transpose();
+  }
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eigen(covariance);
+  Eigen::Vector3f n = eigen.eigenvectors().col(0).cast<float>().normalized();
+  if (n.dot(side) < 0.0f) n = -n;
+  r.normal = n;
+  r.offset = n.dot(centroid.cast<float>());
+}
+
+RegionClass classify(const Eigen::Vector3f& n, const Eigen::Vector3f& up) {
+  const float c = n.dot(up.normalized());
+  if (c > 0.9f) return RegionClass::kFloor;     // faces up: a floor or a table top
+  if (c < -0.9f) return RegionClass::kCeiling;  // faces down
+  if (std::abs(c) < 0.2f) return RegionClass::kWall;
+  return RegionClass::kOther;
+}
+
+}  // namespace
+
+const char* region_class_name(RegionClass c) {
+  switch (c) {
+    case RegionClass::kFloor:
+      return "floor";
+    case RegionClass::kCeiling:
+      return "ceiling";
+    case RegionClass::kWall:
+      return "wall";
+    case RegionClass::kOther:
+      break;
+  }
+  return "other";
+}
+
+PlanarSegmentation grow_planar_regions(const HalfEdgeMesh& m, const PlanarRegionConfig& config) {
+  const std::size_t faces = m.face_count();
+  std::vector<Eigen::Vector3f> normals(faces);
+  tbb::parallel_for(std::size_t{0}, faces, [&](std::size_t f) {
+    normals[f] = m.face_alive(static_cast<std::uint32_t>(f))
+                     ? unit_face_normal(m, static_cast<std::uint32_t>(f))
+                     : Eigen::Vector3f::Zero();
+  });
+  PlanarSegmentation out;
+  out.region_of_face.assign(faces, -1);
+  std::vector<std::uint8_t> visited(faces, 0);
+  std::vector<Eigen::Vector3f> sides;
+  std::vector<std::uint32_t> queue;
+  for (std::uint32_t seed = 0; seed < faces; ++seed) {
+    if (visited[seed] || !m.face_alive(seed) || normals[seed].isZero()) continue;
+    // Breadth-first across edges; faces of a dropped region stay visited (they are not seeds).
+    queue.assign(1, seed);
+    visited[seed] = 1;
+    for (std::size_t head = 0; head < queue.size(); ++head) {
+      const std::uint32_t f = queue[head];
+      for (std::uint32_t k = 0; k < 3; ++k) {
+        const std::uint32_t t = m.twin(3 * f + k);
+        if (t == HalfEdgeMesh::kNone) continue;
+        const std::uint32_t g = HalfEdgeMesh::face(t);
+        if (visited[g] || normals[g].dot(normals[seed]) <= config.normal_threshold) continue;
+        visited[g] = 1;
+        queue.push_back(g);
+      }
+    }
+    if (queue.size() < config.min_region_faces) {
+      for (std::uint32_t f : queue) visited[f] = 0;  // may still join a later region
+      visited[seed] = 1;                             // but is no seed again
+      continue;
+    }
+    PlanarRegion r;
+    r.faces = queue;
+    std::sort(r.faces.begin(), r.faces.end());
+    Eigen::Vector3f side = Eigen::Vector3f::Zero();
+    for (std::uint32_t f : r.faces) {
+      out.region_of_face[f] = static_cast<std::int32_t>(out.regions.size());
+      side += normals[f];
+    }
+    sides.push_back(side);
+    out.regions.push_back(std::move(r));
+  }
+  tbb::parallel_for(std::size_t{0}, out.regions.size(), [&](std::size_t i) {
+    fit_plane(m, out.regions[i], sides[i]);
+    out.regions[i].kind = classify(out.regions[i].normal, config.up);
+  });
+  return out;
+}
+
+std::size_t project_onto_planes(HalfEdgeMesh& m, const PlanarSegmentation& s) {
+  const std::size_t vertex_count = m.vertex_count();
+  std::vector<std::uint8_t> moved(vertex_count, 0);
+  tbb::parallel_for(std::size_t{0}, vertex_count, [&](std::size_t vi) {
+    const auto v = static_cast<std::uint32_t>(vi);
+    const std::vector<std::uint32_t> ring = m.ring(v);
+    if (ring.empty()) return;
+    const std::int32_t region = s.region_of_face[HalfEdgeMesh::face(ring.front())];
+    if (region < 0) return;
+    for (std::uint32_t h : ring)
+      if (s.region_of_face[HalfEdgeMesh::face(h)] != region) return;
+    const PlanarRegion& r = s.regions[static_cast<std::size_t>(region)];
+    const Eigen::Vector3f p = m.position(v);
+    m.set_position(v, p - (r.normal.dot(p) - r.offset) * r.normal);
+    moved[v] = 1;
+  });
+  std::size_t count = 0;
+  for (std::uint8_t x : moved) count += x;
+  return count;
+}
+
+}  // namespace meshflow

@@ -1,0 +1,53 @@
+#pragma once
+// Planar regions of a mesh (the reconstruction thesis's optimisation stage): region growing
+// over neighbouring faces with similar normals, a least-squares plane per region, vertices
+// projected onto their region's plane, and regions classified by their normal.
+
+#include <Eigen/Core>
+#include <cstdint>
+#include <vector>
+
+#include "runtime/half_edge_mesh.h"
+
+namespace meshflow {
+
+struct PlanarRegionConfig {
+  /// A face joins a region when its unit normal's dot product with the region's seed normal
+  /// exceeds this (thesis default 0.85, about 32 degrees).
+  float normal_threshold = 0.85f;
+  /// Smaller regions are dropped (their faces stay unassigned or join later regions). 50 keeps
+  /// the demo room at 5 cm to 48 regions covering 97 % of its faces (10: 146 fragments).
+  std::size_t min_region_faces = 50;
+  Eigen::Vector3f up = Eigen::Vector3f::UnitZ();  ///< world up, for the classification
+};
+
+enum class RegionClass { kFloor, kCeiling, kWall, kOther };
+const char* region_class_name(RegionClass c);
+
+struct PlanarRegion {
+  std::vector<std::uint32_t> faces;                   ///< ascending
+  Eigen::Vector3f normal = Eigen::Vector3f::UnitZ();  ///< unit, the faces' side
+  float offset = 0.0f;                                ///< the plane is normal . x = offset (metres)
+  RegionClass kind = RegionClass::kOther;
+};
+
+struct PlanarSegmentation {
+  std::vector<std::int32_t> region_of_face;  ///< per face slot; -1 = in no region
+  std::vector<PlanarRegion> regions;         ///< by first face
+};
+
+/// Grows regions from seeds in face order (breadth-first across edges to faces within the
+/// normal threshold of the seed), keeps those with at least min_region_faces faces, fits each a
+/// plane through its vertices (least squares: the centroid and the smallest principal axis,
+/// oriented like the faces) and classifies it: floor / ceiling when the normal is within about
+/// 25 degrees of up / down, wall when within about 12 degrees of horizontal. Serial growth,
+/// plane fits parallel per region; deterministic. O(F log F).
+PlanarSegmentation grow_planar_regions(const HalfEdgeMesh& mesh,
+                                       const PlanarRegionConfig& config = {});
+
+/// Moves every vertex whose faces all lie in one region onto that region's plane (orthogonal
+/// projection); vertices shared by regions or touching unassigned faces stay. Returns how many
+/// moved. Parallel over regions' vertices; O(V + F).
+std::size_t project_onto_planes(HalfEdgeMesh& mesh, const PlanarSegmentation& segmentation);
+
+}  // namespace meshflow

@@ -1,0 +1,104 @@
+#include "nodes/optimize/planar_regions.h"
+
+#include <gtest/gtest.h>
+
+#include <cstdio>
+
+#include "graph/pipeline.h"
+#include "nodes/synthetic/scan_simulator.h"
+
+namespace meshflow {
+namespace {
+
+constexpr float kVoxel = 0.05f;
+
+// The demo room (8 x 6 x 3 m, a table-sized box, a cabinet, a ball) scanned from its centre and
+// reconstructed at 5 cm.
+TriangleMesh room_mesh() {
+  synthetic::ScanConfig scan;
+  scan.azimuth_steps = 1440;
+  scan.elevation_steps = 480;
+  const PointCloud cloud = synthetic::simulate_scan(synthetic::demo_room_scene(), scan);
+  ReconstructionConfig config;
+  config.voxelize.voxel_size = kVoxel;
+  return ReconstructionPipeline(config).reconstruct(cloud, "room")->mesh;
+}
+
+TEST(PlanarRegions, RoomSegmentsIntoClassifiedPlanesAndProjectsOntoThem) {
+  const TriangleMesh mesh = room_mesh();
+  ASSERT_GT(mesh.triangles.size(), 10000u);
+  HalfEdgeMesh h(mesh);
+  const PlanarSegmentation s = grow_planar_regions(h);
+  std::size_t floors = 0, ceilings = 0, walls = 0, assigned = 0;
+  for (const PlanarRegion& r : s.regions) {
+    floors += r.kind == RegionClass::kFloor ? 1 : 0;
+    ceilings += r.kind == RegionClass::kCeiling ? 1 : 0;
+    walls += r.kind == RegionClass::kWall ? 1 : 0;
+    assigned += r.faces.size();
+  }
+  std::printf(
+      "[ planes ] %zu triangles -> %zu regions (%zu floor/top, %zu ceiling, %zu wall), "
+      "%.1f%% of faces assigned\n",
+      mesh.triangles.size(), s.regions.size(), floors, ceilings, walls,
+      100.0 * static_cast<double>(assigned) / static_cast<double>(mesh.triangles.size()));
+  EXPECT_GE(s.regions.size(), 6u);
+  EXPECT_LE(s.regions.size(), 80u);  // a few dozen
+  EXPECT_GE(floors, 2u);             // the floor and the table / cabinet tops
+  EXPECT_GE(ceilings, 1u);
+  EXPECT_GE(walls, 4u);
+  // The largest region facing up is the floor, z = 0.
+  const PlanarRegion* floor = nullptr;
+  for (const PlanarRegion& r : s.regions)
+    if (r.kind == RegionClass::kFloor && (!floor || r.faces.size() > floor->faces.size()))
+      floor = &r;
+  ASSERT_NE(floor, nullptr);
+  EXPECT_GT(floor->normal.z(), 0.999f);
+  EXPECT_NEAR(floor->offset, 0.0f, 0.1f * kVoxel);
+  // After projection, the floor's interior vertices lie on the true floor within 0.1 voxel.
+  const std::size_t moved = project_onto_planes(h, s);
+  EXPECT_GT(moved, 1000u);
+  std::size_t on_floor = 0;
+  for (std::uint32_t f : floor->faces)
+    for (std::uint32_t k = 0; k < 3; ++k) {
+      const std::uint32_t v = h.from(3 * f + k);
+      bool interior = true;
+      for (std::uint32_t e : h.ring(v))
+        interior = interior && s.region_of_face[HalfEdgeMesh::face(e)] == s.region_of_face[f];
+      if (!interior) continue;
+      EXPECT_NEAR(h.position(v).z(), 0.0f, 0.1f * kVoxel);
+      ++on_floor;
+    }
+  EXPECT_GT(on_floor, 1000u);
+  EXPECT_EQ(h.check(), "");
+}
+
+TEST(PlanarRegions, ABentSheetSplitsAtTheBendAndSmallRegionsAreDropped) {
+  // Two planes meeting at 90 degrees along x = 0, 20 x 10 vertices each side.
+  TriangleMesh m;
+  const int n = 10;
+  for (int j = 0; j < n; ++j)
+    for (int i = -n; i <= n; ++i) {
+      const float x = static_cast<float>(i) * 0.1f;
+      m.vertices.emplace_back(x, static_cast<float>(j) * 0.1f, x > 0 ? x : 0.0f);
+    }
+  const int w = 2 * n + 1;
+  for (int j = 0; j + 1 < n; ++j)
+    for (int i = 0; i + 1 < w; ++i) {
+      const auto a = static_cast<std::uint32_t>(j * w + i);
+      const auto width = static_cast<std::uint32_t>(w);
+      m.triangles.push_back({a, a + 1, a + width + 1});
+      m.triangles.push_back({a, a + width + 1, a + width});
+    }
+  HalfEdgeMesh h(m);
+  const PlanarSegmentation s = grow_planar_regions(h);
+  ASSERT_EQ(s.regions.size(), 2u);
+  EXPECT_EQ(s.regions[0].kind, RegionClass::kFloor);  // z = 0, facing up
+  EXPECT_NEAR(s.regions[1].normal.dot(Eigen::Vector3f(-1, 0, 1).normalized()), 1.0f, 1e-4f);
+  for (std::int32_t r : s.region_of_face) EXPECT_GE(r, 0);
+  PlanarRegionConfig big;
+  big.min_region_faces = 1000;
+  EXPECT_TRUE(grow_planar_regions(h, big).regions.empty());
+}
+
+}  // namespace
+}  // namespace meshflow

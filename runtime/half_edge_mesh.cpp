@@ -137,12 +137,8 @@ bool HalfEdgeMesh::flip(std::uint32_t h) {
   const std::uint32_t x_bc = twin_[bc], x_ca = twin_[ca], x_ad = twin_[ad], x_db = twin_[db];
   const std::uint32_t f1 = 3 * face(h), f2 = 3 * face(t);
   // Face 1 = (a, d, c): a->d, d->c, c->a. Face 2 = (d, b, c): d->b, b->c, c->d.
-  to_[f1] = d;
-  to_[f1 + 1] = c;
-  to_[f1 + 2] = a;
-  to_[f2] = b;
-  to_[f2 + 1] = c;
-  to_[f2 + 2] = d;
+  set_face(f1, d, c, a);
+  set_face(f2, b, c, d);
   link(f1, x_ad);
   link(f1 + 2, x_ca);
   link(f2, x_db);
@@ -154,6 +150,13 @@ bool HalfEdgeMesh::flip(std::uint32_t h) {
   out_[c] = f1 + 2;
   for (std::uint32_t v : {a, b, c, d}) set_outgoing(v);
   return true;
+}
+
+void HalfEdgeMesh::set_face(std::uint32_t first, std::uint32_t to0, std::uint32_t to1,
+                            std::uint32_t to2) {
+  to_[first] = to0;
+  to_[first + 1] = to1;
+  to_[first + 2] = to2;
 }
 
 void HalfEdgeMesh::link(std::uint32_t x, std::uint32_t y) {
@@ -249,12 +252,8 @@ std::uint32_t HalfEdgeMesh::split(std::uint32_t h, const Eigen::Vector3f& p) {
   };
   // Face 1 becomes (a, m, c): a->m, m->c, c->a; the new face g1 is (m, b, c): m->b, b->c, c->m.
   const std::uint32_t f1 = 3 * face(h), g1 = new_face();
-  to_[f1] = m;
-  to_[f1 + 1] = c;
-  to_[f1 + 2] = a;
-  to_[g1] = b;
-  to_[g1 + 1] = c;
-  to_[g1 + 2] = m;
+  set_face(f1, m, c, a);
+  set_face(g1, b, c, m);
   twin_[f1] = kNone;
   link(f1 + 1, g1 + 2);
   link(f1 + 2, x_ca);
@@ -266,12 +265,8 @@ std::uint32_t HalfEdgeMesh::split(std::uint32_t h, const Eigen::Vector3f& p) {
     const std::uint32_t x_ad = twin_[next(t)], x_db = twin_[prev(t)];
     // Face 2 becomes (b, m, d): b->m, m->d, d->b; the new face g2 is (m, a, d): m->a, a->d, d->m.
     const std::uint32_t f2 = 3 * face(t), g2 = new_face();
-    to_[f2] = m;
-    to_[f2 + 1] = d;
-    to_[f2 + 2] = b;
-    to_[g2] = a;
-    to_[g2 + 1] = d;
-    to_[g2 + 2] = m;
+    set_face(f2, m, d, b);
+    set_face(g2, a, d, m);
     link(f2 + 1, g2 + 2);
     link(f2 + 2, x_db);
     link(g2 + 1, x_ad);

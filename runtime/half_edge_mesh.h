@@ -85,9 +85,11 @@ class HalfEdgeMesh {
  private:
   std::vector<Eigen::Vector3f> positions_;
   std::vector<std::uint32_t> to_, twin_, out_;
-  std::vector<std::uint8_t> alive_;                                      // per face slot
-  std::vector<std::uint32_t> neighbours(std::uint32_t v) const;          // sorted
-  void link(std::uint32_t x, std::uint32_t y);                           // make x and y twins
+  std::vector<std::uint8_t> alive_;                              // per face slot
+  std::vector<std::uint32_t> neighbours(std::uint32_t v) const;  // sorted
+  void link(std::uint32_t x, std::uint32_t y);                   // make x and y twins
+  // The targets of the three half-edges of the face whose first half-edge is `first`.
+  void set_face(std::uint32_t first, std::uint32_t to0, std::uint32_t to1, std::uint32_t to2);
   std::uint32_t find_half_edge(std::uint32_t a, std::uint32_t b) const;  // a -> b or kNone
   void set_outgoing(std::uint32_t v);
 };

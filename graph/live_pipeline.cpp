@@ -41,7 +41,7 @@ struct LivePipeline::Impl {
   // the active controls applies).
   tbb::global_control workers;
   tbb::task_arena arena;
-  flow::graph graph;
+  std::unique_ptr<flow::graph> graph;  // made inside `arena`: a graph runs in its creator's arena
 
   mutable std::mutex mutex;         // guards everything below
   std::condition_variable settled;  // in_flight == 0 and waiting empty
@@ -65,7 +65,10 @@ struct LivePipeline::Impl {
         arena(arena_threads(config), 0) {
     config.frames_in_flight = std::max<std::size_t>(1, config.frames_in_flight);
     config.max_waiting = std::max<std::size_t>(1, config.max_waiting);
-    arena.execute([&] { build_graph(); });
+    arena.execute([&] {
+      graph = std::make_unique<flow::graph>();
+      build_graph();
+    });
   }
 
   void build_graph() {
@@ -77,13 +80,13 @@ struct LivePipeline::Impl {
                                               std::end(stages::kPointCloudStages));
     for (const auto& stage : chain)
       stages.push_back(std::make_unique<detail::StageNode>(
-          graph, flow::unlimited,
+          *graph, flow::unlimited,
           detail::StageNodeBody(stage.name, stage.body, config.reconstruction)));
     for (std::size_t i = 1; i < stages.size(); ++i) flow::make_edge(*stages[i - 1], *stages[i]);
     in_order = std::make_unique<flow::sequencer_node<FramePtr>>(
-        graph, [](const FramePtr& f) { return f->seq; });
+        *graph, [](const FramePtr& f) { return f->seq; });
     deliver = std::make_unique<flow::function_node<FramePtr, flow::continue_msg>>(
-        graph, flow::serial, [this](const FramePtr& f) {
+        *graph, flow::serial, [this](const FramePtr& f) {
           finish(f);
           return flow::continue_msg();
         });
@@ -97,9 +100,10 @@ struct LivePipeline::Impl {
     f->seq = next_dispatch++;
     ++in_flight;
   }
-  void start(const FramePtr& f) {
-    arena.execute([&] { stages.front()->try_put(f); });
-  }
+  // Hands f to the first stage. From a thread outside the arena, try_put submits the node's
+  // task into the graph's arena and returns at once (arena.execute would wait for a free slot
+  // while the workers are busy, blocking push()).
+  void start(const FramePtr& f) { stages.front()->try_put(f); }
 
   Push push(const FramePtr& f) {
     f->submitted_s = monotonic_seconds();
@@ -201,7 +205,7 @@ LivePipeline::~LivePipeline() {
   }
   impl_->wait_settled();
   // The last finish() has returned to the graph; let its task end before the nodes go.
-  impl_->arena.execute([&] { impl_->graph.wait_for_all(); });
+  impl_->arena.execute([&] { impl_->graph->wait_for_all(); });
 }
 
 LivePipeline::Push LivePipeline::push(PointCloud cloud, double timestamp_s) {

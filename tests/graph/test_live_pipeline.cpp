@@ -2,8 +2,10 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <atomic>
 #include <chrono>
+#include <future>
 #include <map>
 #include <mutex>
 #include <thread>
@@ -189,6 +191,55 @@ TEST(LivePipeline, TriangulatesDepthMapsPerFrameAndFailsCloudsClearly) {
   EXPECT_FALSE(got.results[1].ok);
   EXPECT_NE(got.results[1].error.find("depth image"), std::string::npos) << got.results[1].error;
   EXPECT_TRUE(got.results[2].ok) << got.results[2].error;
+}
+
+// Stage spans (start, end) of six frames pushed at once, with `threads` arena threads. (How
+// many of several threads actually join is up to oneTBB's scheduler, so only the one-thread
+// case is asserted.)
+std::vector<std::pair<double, double>> stage_spans(int threads) {
+  LiveConfig config = sphere_config(LivePolicy::kQueue, 4, 8);
+  config.threads = threads;
+  Received got;
+  LivePipeline live(config, [&](LiveResult& r) { got.add(r); });
+  for (int i = 0; i < 6; ++i) live.push(sphere(i));
+  live.flush();
+  EXPECT_EQ(got.results.size(), 6u);
+  std::vector<std::pair<double, double>> spans;
+  for (const LiveResult& r : got.results)
+    for (const StageRecord& t : r.timings) spans.emplace_back(t.start_s, t.end_s);
+  std::sort(spans.begin(), spans.end());
+  return spans;
+}
+
+std::size_t overlaps(const std::vector<std::pair<double, double>>& spans) {
+  std::size_t n = 0;
+  for (std::size_t i = 1; i < spans.size(); ++i) n += spans[i].first < spans[i - 1].second ? 1 : 0;
+  return n;
+}
+
+TEST(LivePipeline, OneThreadRunsOneStageAtATime) { EXPECT_EQ(overlaps(stage_spans(1)), 0u); }
+
+TEST(LivePipeline, PushReturnsWhileEveryPipelineThreadIsBusy) {
+  LiveConfig config = sphere_config(LivePolicy::kQueue, 2, 8);
+  config.threads = 1;
+  std::promise<void> release;
+  std::shared_future<void> released = release.get_future().share();
+  std::atomic<bool> in_callback{false};
+  LivePipeline live(config, [&](LiveResult&) {
+    in_callback = true;
+    released.wait();  // holds the pipeline's only thread
+  });
+  live.push(sphere(0));
+  while (!in_callback) std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  const std::vector<PointCloud> clouds = {sphere(1), sphere(2), sphere(3)};
+  auto pushes = std::async(std::launch::async, [&] {
+    for (const auto& c : clouds) live.push(c);
+  });
+  EXPECT_EQ(pushes.wait_for(std::chrono::seconds(10)), std::future_status::ready);
+  release.set_value();
+  pushes.wait();
+  live.flush();
+  EXPECT_EQ(live.stats().delivered, 4u);
 }
 
 TEST(LivePipeline, EmptyCallbackIsAnError) {

@@ -15,7 +15,7 @@
 #include "nodes/fusion/tsdf_volume.h"
 #include "nodes/normals/normals.h"
 #include "nodes/normals/spatial_index.h"
-#include "nodes/optimize/mesh_cleanup.h"
+#include "nodes/optimize/optimize_mesh.h"
 #include "nodes/triangulate/depth_triangulation.h"
 #include "nodes/voxelize/sparse_grid.h"
 #include "runtime/depth_frame.h"
@@ -35,7 +35,7 @@ struct ReconstructionConfig {
   DistanceConfig distance;              ///< clouds (Hoppe)
   ProjectiveDistanceConfig projective;  ///< depth frames
   ExtractConfig extract;
-  CleanupConfig cleanup;
+  OptimizeConfig optimize;                 ///< steps (default: clean, holes) and their settings
   DepthTriangulationConfig triangulation;  ///< the per-frame depth-map path (LivePipeline)
 };
 
@@ -62,8 +62,8 @@ struct Frame {
   float voxel_size = 0.0f;
   SparseGrid grid;
   DistanceField distance;
-  TriangleMesh mesh;  ///< after extract: raw; after optimize: cleaned (fusion: the map so far)
-  CleanupReport cleanup;
+  TriangleMesh mesh;  ///< after extract: raw; after optimize: optimised (fusion: the map so far)
+  OptimizeReport optimize;       ///< what each optimisation step did
   IntegrationStats integration;  ///< fusion: what integrating this frame did
 
   std::string error;  ///< empty while the frame is healthy

@@ -64,7 +64,7 @@ void FusionPipeline::run(const std::function<FramePtr()>& next,
 }
 
 TriangleMesh FusionPipeline::extract_mesh() {
-  return clean_mesh(mesher_.extract(map_), config_.frames.cleanup);
+  return optimize_mesh(mesher_.extract(map_), config_.frames.optimize);
 }
 
 }  // namespace meshflow

@@ -16,7 +16,7 @@
 namespace meshflow {
 
 struct FusionConfig {
-  ReconstructionConfig frames;  ///< depth_filter applies to every frame; cleanup to the meshes
+  ReconstructionConfig frames;  ///< depth_filter applies to every frame; optimize to the meshes
   TsdfConfig tsdf;
   /// > 0: after every N-th integrated frame, the frame carries the map's mesh so far (extracted
   /// incrementally) in Frame::mesh.
@@ -34,7 +34,7 @@ class FusionPipeline : public FramePipeline {
   void run(const std::function<FramePtr()>& next,
            const std::function<void(const FramePtr&)>& sink) override;
 
-  /// The map's surface (incremental marching cubes, then the configured clean-up).
+  /// The map's surface (incremental marching cubes, then the configured optimisation steps).
   TriangleMesh extract_mesh();
 
   const TsdfVolume& map() const { return map_; }

@@ -97,7 +97,7 @@ std::uint64_t extract(Frame& f, const ReconstructionConfig& c) {
 }
 
 std::uint64_t optimize(Frame& f, const ReconstructionConfig& c) {
-  f.mesh = clean_mesh(f.mesh, c.cleanup, &f.cleanup);
+  f.mesh = optimize_mesh(f.mesh, c.optimize, &f.optimize);
   return f.mesh.triangles.size();
 }
 

@@ -8,8 +8,10 @@
 namespace meshflow {
 
 VertexTriangles vertex_triangles(const TriangleMesh& mesh) {
-  const std::size_t vertex_count = mesh.vertices.size();
-  const auto& tris = mesh.triangles;
+  return vertex_triangles(mesh.triangles, mesh.vertices.size());
+}
+
+VertexTriangles vertex_triangles(const std::vector<Triangle>& tris, std::size_t vertex_count) {
   VertexTriangles out;
   out.offsets.assign(vertex_count + 1, 0);
   out.triangles.resize(tris.size() * 3);

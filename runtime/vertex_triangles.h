@@ -24,5 +24,7 @@ struct VertexTriangles {
 /// result is the same for any thread count. Triangles must index existing vertices.
 /// O(V + T x workers) reads, O(V + T) memory.
 VertexTriangles vertex_triangles(const TriangleMesh& mesh);
+/// The same for bare triangles over `vertex_count` vertices.
+VertexTriangles vertex_triangles(const std::vector<Triangle>& triangles, std::size_t vertex_count);
 
 }  // namespace meshflow

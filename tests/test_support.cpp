@@ -45,6 +45,20 @@ std::string read_file(const std::string& path) {
   return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
 }
 
+TriangleMesh grid_mesh(std::uint32_t n) {
+  TriangleMesh m;
+  for (std::uint32_t j = 0; j < n; ++j)
+    for (std::uint32_t i = 0; i < n; ++i)
+      m.vertices.emplace_back(static_cast<float>(i), static_cast<float>(j), 0.0f);
+  for (std::uint32_t j = 0; j + 1 < n; ++j)
+    for (std::uint32_t i = 0; i + 1 < n; ++i) {
+      const std::uint32_t a = j * n + i;
+      m.triangles.push_back({a, a + 1, a + n + 1});
+      m.triangles.push_back({a, a + n + 1, a + n});
+    }
+  return m;
+}
+
 ErrorStats vertex_errors(const TriangleMesh& mesh,
                          const std::function<float(const Eigen::Vector3f&)>& distance) {
   ErrorStats s;

@@ -33,6 +33,10 @@ auto with_threads(int threads, F f) {
   return f();
 }
 
+/// An n x n vertex grid in the plane z = 0 with unit spacing (vertex j * n + i at (i, j, 0)),
+/// two triangles per cell, counter-clockwise seen from +z.
+TriangleMesh grid_mesh(std::uint32_t n);
+
 struct ErrorStats {
   double mean = 0.0, max = 0.0;
 };

@@ -14,12 +14,16 @@ ReconstructionConfig PipelineOptions::config() const {
   c.normals.adaptive_k = adaptive_k;
   c.distance.kd = kd;
   c.distance.max_distance_voxels = max_distance;
-  c.cleanup.min_component_triangles = min_component;
+  c.optimize.cleanup.min_component_triangles = min_component;
   c.filter.voxel_size = filter_voxel;
   c.filter.outlier_k = outlier_k;
   c.filter.min_range = min_range;
   c.filter.max_range = max_range;
   c.extract.method = parse_extract_method(extract);
+  c.optimize.steps = parse_optimize_steps(optimize);
+  c.optimize.holes.max_edges = max_hole;
+  c.optimize.decimate.target_ratio = decimate_to;
+  c.optimize.retriangulation.contour_tolerance = contour_tolerance;
   return c;
 }
 
@@ -54,6 +58,23 @@ void add_pipeline_options(CLI::App* cmd, PipelineOptions& o) {
   cmd->add_option("--max-range", o.max_range,
                   "Drop points farther from the sensor, metres (0 = off)")
       ->check(CLI::NonNegativeNumber);
+  cmd->add_option("--optimize", o.optimize,
+                  "Mesh optimisation: default (clean,holes), none, or a list of clean, holes, "
+                  "planes, retriangulate, decimate in the order to run")
+      ->check([](const std::string& list) -> std::string {
+        try {
+          parse_optimize_steps(list);
+          return "";
+        } catch (const std::exception& e) {
+          return e.what();
+        }
+      });
+  cmd->add_option("--max-hole", o.max_hole, "holes step: close border loops up to this many edges");
+  cmd->add_option("--contour-tolerance", o.contour_tolerance,
+                  "retriangulate step: Douglas-Peucker tolerance of region contours, metres")
+      ->check(CLI::NonNegativeNumber);
+  cmd->add_option("--decimate-to", o.decimate_to, "decimate step: share of the triangles to keep")
+      ->check(CLI::Range(0.0f, 1.0f));
 }
 
 void add_sequence_options(CLI::App* cmd, SequenceArgument& a) {

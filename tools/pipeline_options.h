@@ -23,12 +23,17 @@ struct PipelineOptions {
   int outlier_k = 0;
   float min_range = 0.0f, max_range = 0.0f;
   std::string extract = "mc";
+  std::string optimize = "default";
+  std::size_t max_hole = 30;
+  float decimate_to = 0.25f;
+  float contour_tolerance = 0.02f;
 
   ReconstructionConfig config() const;
 };
 
 /// Registers --voxel --kn --ki --kd --threads --adaptive-k --max-distance --min-component
-/// --filter-voxel --outlier-k --min-range --max-range --extract on `cmd`, writing into `options`.
+/// --filter-voxel --outlier-k --min-range --max-range --extract --optimize --max-hole
+/// --contour-tolerance --decimate-to on `cmd`, writing into `options`.
 void add_pipeline_options(CLI::App* cmd, PipelineOptions& options);
 
 /// The SEQUENCE argument of run/profile: a path, or the built-in synthetic sequence.

@@ -15,12 +15,10 @@ void print_frame_report(const Frame& f, double wall_s, int threads) {
   }
   std::printf("grid       voxel %.4g m, %zu cells, %zu corners (%zu valid)\n", f.voxel_size,
               f.grid.cells.size(), f.grid.corners.size(), f.distance.valid_count());
-  std::printf(
-      "mesh       %zu vertices, %zu triangles (removed %zu degenerate, %zu in %zu small "
-      "components)\n",
-      f.mesh.vertices.size(), f.mesh.triangles.size(),
-      f.cleanup.degenerate_triangles + f.cleanup.duplicate_triangles,
-      f.cleanup.removed_component_triangles, f.cleanup.removed_components);
+  std::printf("mesh       %zu vertices, %zu triangles\n", f.mesh.vertices.size(),
+              f.mesh.triangles.size());
+  if (!f.optimize.steps.empty())
+    std::printf("optimize\n%s", format_optimize_report(f.optimize).c_str());
   std::printf("time       %.1f ms on %d thread%s\n", 1e3 * wall_s, threads,
               threads == 1 ? "" : "s");
   std::printf("%s", format_stage_table(summarize_stages(f.timings), wall_s).c_str());

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <numeric>
 
+#include "nodes/optimize/manifold_repair.h"
 #include "runtime/radix_sort.h"
 
 namespace meshflow {
@@ -133,6 +134,7 @@ TriangleMesh clean_mesh(const TriangleMesh& mesh, const CleanupConfig& config,
   for (std::size_t i = 0; i < kept.size(); ++i) {
     out.triangles[i] = Triangle{remap[kept[i][0]], remap[kept[i][1]], remap[kept[i][2]]};
   }
+  if (config.split_non_manifold_vertices) r.split_vertices = split_non_manifold_vertices(out);
   if (report != nullptr) *report = r;
   return out;
 }

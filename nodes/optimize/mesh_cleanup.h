@@ -11,6 +11,9 @@ struct CleanupConfig {
   bool remove_degenerate = true;  ///< repeated vertex indices, zero area, duplicated faces
   /// Connected components (by shared vertices) with fewer triangles are removed; 0 = keep all.
   std::size_t min_component_triangles = 20;
+  /// Vertices joining several fans of triangles are split, one copy per fan (manifold_repair.h),
+  /// so the half-edge steps can run.
+  bool split_non_manifold_vertices = true;
 };
 
 struct CleanupReport {
@@ -20,10 +23,12 @@ struct CleanupReport {
   std::size_t removed_components = 0;
   std::size_t removed_component_triangles = 0;
   std::size_t removed_vertices = 0;  ///< vertices no longer referenced, compacted away
+  std::size_t split_vertices = 0;    ///< copies added at non-manifold vertices
 };
 
 /// Returns a cleaned copy of `mesh`: triangles kept in their order, unreferenced vertices
-/// dropped and the rest renumbered in their order (normals and colours follow).
+/// dropped and the rest renumbered in their order (normals and colours follow), then copies of
+/// non-manifold vertices appended.
 /// Deterministic. O(V + T log T).
 TriangleMesh clean_mesh(const TriangleMesh& mesh, const CleanupConfig& config,
                         CleanupReport* report = nullptr);

@@ -1,91 +1,140 @@
 #include "nodes/optimize/qem_decimation.h"
 
+#include <tbb/combinable.h>
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_sort.h>
+
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
-#include <queue>
-#include <tuple>
+#include <limits>
 #include <vector>
+
+#include "runtime/vertex_triangles.h"
 
 namespace meshflow {
 namespace {
 
-using Quadric = Eigen::Matrix4d;
 constexpr double kDegrees = 3.14159265358979 / 180.0;
+constexpr double kNoCollapse = std::numeric_limits<double>::infinity();
 
-struct Candidate {
-  double cost;
-  std::uint32_t u, v;    // collapse u into v
-  std::uint32_t su, sv;  // stamps of u and v when queued
-  bool operator>(const Candidate& o) const {
-    return std::tie(cost, u, v) > std::tie(o.cost, o.u, o.v);
+// Symmetric 4x4 quadric, upper triangle: a2 ab ac ad b2 bc bd c2 cd d2.
+struct Quadric {
+  double q[10] = {0, 0, 0, 0, 0, 0, 0, 0, 0, 0};
+
+  static Quadric plane(const Eigen::Vector3d& n, double d, double weight) {
+    Quadric k;
+    const double p[4] = {n.x(), n.y(), n.z(), d};
+    int i = 0;
+    for (int r = 0; r < 4; ++r)
+      for (int c = r; c < 4; ++c) k.q[i++] = weight * p[r] * p[c];
+    return k;
+  }
+  void add(const Quadric& o) {
+    for (int i = 0; i < 10; ++i) q[i] += o.q[i];
+  }
+  // (this + o)(x): x^T (A + B) x for x = (p, 1).
+  double error(const Quadric& o, const Eigen::Vector3f& pf) const {
+    double s[10];
+    for (int i = 0; i < 10; ++i) s[i] = q[i] + o.q[i];
+    const double x = pf.x(), y = pf.y(), z = pf.z();
+    return s[0] * x * x + 2 * s[1] * x * y + 2 * s[2] * x * z + 2 * s[3] * x + s[4] * y * y +
+           2 * s[5] * y * z + 2 * s[6] * y + s[7] * z * z + 2 * s[8] * z + s[9];
   }
 };
 
+// The best collapse of one vertex, found at the start of a pass.
+struct Candidate {
+  double cost = kNoCollapse;
+  std::uint32_t from = 0, to = 0;
+};
+
+// A pass reads the mesh as it was when the pass started (incidence rows, positions, quadrics):
+// every collapse u -> v locks u and its neighbours, so no later collapse of the same pass
+// touches a row that changed; the next pass re-evaluates only the vertices next to a change.
 class Decimator {
  public:
-  Decimator(const TriangleMesh& mesh, const QemConfig& config, QemReport& report)
-      : cfg_(config),
-        report_(report),
-        p_(mesh.vertices),
+  Decimator(const TriangleMesh& mesh, const QemConfig& config)
+      : in_(mesh),
+        cfg_(config),
         t_(mesh.triangles),
-        tri_alive_(mesh.triangles.size(), 1),
-        around_(mesh.vertices.size()),
-        q_(mesh.vertices.size(), Quadric::Zero()),
-        stamp_(mesh.vertices.size(), 0),
-        alive_(mesh.triangles.size()),
-        cos_turn_(std::cos(config.max_normal_turn_deg * kDegrees)),
-        cos_border_(std::cos(config.max_border_turn_deg * kDegrees)),
-        cos_sharp_(std::cos(config.sharp_edge_deg * kDegrees)),
+        alive_(mesh.triangles.size(), 1),
+        q_(mesh.vertices.size()),
+        cos_turn_(static_cast<float>(std::cos(config.max_normal_turn_deg * kDegrees))),
+        cos_border_(static_cast<float>(std::cos(config.max_border_turn_deg * kDegrees))),
+        cos_sharp_(static_cast<float>(std::cos(config.sharp_edge_deg * kDegrees))),
         cos2_min_angle_(
             static_cast<float>(std::pow(std::cos(config.min_angle_deg * kDegrees), 2))) {
-    for (std::uint32_t t = 0; t < t_.size(); ++t) {
-      for (std::uint32_t v : t_[t]) around_[v].push_back(t);
-      // Area-weighted plane quadric of the face, added to its corners.
-      const Eigen::Vector3d a = p_[t_[t][0]].cast<double>();
-      const Eigen::Vector3d n =
-          (p_[t_[t][1]].cast<double>() - a).cross(p_[t_[t][2]].cast<double>() - a);
+    // Area-weighted plane quadric of every face, summed at its corners (serial: the sums must
+    // not depend on the thread count).
+    for (const Triangle& t : t_) {
+      const Eigen::Vector3d a = p(t[0]).cast<double>();
+      const Eigen::Vector3d n = (p(t[1]).cast<double>() - a).cross(p(t[2]).cast<double>() - a);
       const double area2 = n.norm();
       if (!(area2 > 0.0)) continue;
-      Eigen::Vector4d plane;
-      plane << n / area2, -(n / area2).dot(a);
-      const Quadric k = 0.5 * area2 * plane * plane.transpose();
-      for (std::uint32_t v : t_[t]) q_[v] += k;
+      const Eigen::Vector3d unit = n / area2;
+      const Quadric k = Quadric::plane(unit, -unit.dot(a), 0.5 * area2);
+      for (std::uint32_t v : t) q_[v].add(k);
     }
   }
 
-  TriangleMesh run(std::size_t target) {
-    std::vector<std::uint64_t> edges;
-    for (const Triangle& t : t_)
-      for (int i = 0; i < 3; ++i) {
-        const std::uint32_t a = t[static_cast<std::size_t>(i)],
-                            b = t[static_cast<std::size_t>((i + 1) % 3)];
-        edges.push_back(std::uint64_t{std::min(a, b)} << 32 | std::max(a, b));
+  TriangleMesh run(std::size_t target, QemReport& report) {
+    std::size_t alive = t_.size();
+    const std::size_t n = in_.vertices.size();
+    std::vector<Candidate> best(n);
+    std::vector<std::uint8_t> locked(n, 1), dirty(n);
+    tbb::combinable<QemReport> rejected;
+    while (alive > target) {
+      compact_faces();
+      around_ = vertex_triangles(t_, n);
+      // Only vertices within one ring of a change need a new best collapse: a vertex's best
+      // depends on its own faces and its neighbours' faces and quadrics.
+      std::fill(dirty.begin(), dirty.end(), 0);
+      for (std::uint32_t v = 0; v < n; ++v) {
+        if (!locked[v]) continue;
+        dirty[v] = 1;
+        for (const std::uint32_t* f = around_.begin(v); f != around_.end(v); ++f)
+          for (std::uint32_t x : t_[*f]) dirty[x] = 1;
       }
-    std::sort(edges.begin(), edges.end());
-    edges.erase(std::unique(edges.begin(), edges.end()), edges.end());
-    for (std::uint64_t e : edges) {
-      push(static_cast<std::uint32_t>(e >> 32), static_cast<std::uint32_t>(e));
-      push(static_cast<std::uint32_t>(e), static_cast<std::uint32_t>(e >> 32));
-    }
-    while (alive_ > target && !heap_.empty()) {
-      const Candidate c = heap_.top();
-      heap_.pop();
-      if (c.su != stamp_[c.u] || c.sv != stamp_[c.v] || around_[c.u].empty()) continue;
-      const double cost = collapse_cost(c.u, c.v);
-      if (cost > c.cost * (1.0 + 1e-9) + 1e-30) {  // penalties changed since it was queued
-        heap_.push(Candidate{cost, c.u, c.v, c.su, c.sv});
-        continue;
+      tbb::parallel_for(std::size_t{0}, n, [&](std::size_t u) {
+        if (dirty[u]) best[u] = best_collapse(static_cast<std::uint32_t>(u), rejected.local());
+      });
+      std::vector<Candidate> order;
+      for (const Candidate& c : best)
+        if (c.cost < kNoCollapse) order.push_back(c);
+      if (order.empty()) break;
+      tbb::parallel_sort(order.begin(), order.end(), [](const Candidate& a, const Candidate& b) {
+        return a.cost < b.cost || (a.cost == b.cost && a.from < b.from);
+      });
+      // Greedy within the pass, but only up to 1.5 x the cost of the collapse that would reach
+      // the target if every collapse removed two faces, so cheap collapses elsewhere get their
+      // turn in the next pass before expensive ones are taken here.
+      const std::size_t goal = std::min(order.size(), (alive - target + 1) / 2);
+      const double limit = 1.5 * order[std::max<std::size_t>(goal, 1) - 1].cost;
+      std::fill(locked.begin(), locked.end(), 0);
+      std::size_t collapsed = 0;
+      for (const Candidate& c : order) {
+        if (alive <= target || (c.cost > limit && collapsed > 0)) break;
+        if (locked[c.from] || locked[c.to]) continue;
+        alive -= collapse(c.from, c.to, locked);
+        ++collapsed;
       }
-      if (!valid(c.u, c.v)) continue;
-      collapse(c.u, c.v);
+      report.collapses += collapsed;
+      ++report.passes;
     }
+    rejected.combine_each([&](const QemReport& r) {
+      report.rejected_topology += r.rejected_topology;
+      report.rejected_normal += r.rejected_normal;
+      report.rejected_border += r.rejected_border;
+    });
+    compact_faces();
     return compact();
   }
 
  private:
+  const Eigen::Vector3f& p(std::uint32_t v) const { return in_.vertices[v]; }
   Eigen::Vector3f normal(const Triangle& t) const {
-    return (p_[t[1]] - p_[t[0]]).cross(p_[t[2]] - p_[t[0]]);
+    return (p(t[1]) - p(t[0])).cross(p(t[2]) - p(t[0]));
   }
   static bool has(const Triangle& t, std::uint32_t v) {
     return t[0] == v || t[1] == v || t[2] == v;
@@ -95,57 +144,65 @@ class Decimator {
       if (x == u) x = v;
     return t;
   }
-  // Alive triangles around u, dropping dead entries.
-  std::vector<std::uint32_t>& live(std::uint32_t u) {
-    auto& list = around_[u];
-    list.erase(
-        std::remove_if(list.begin(), list.end(), [&](std::uint32_t t) { return !tri_alive_[t]; }),
-        list.end());
-    return list;
+
+  // Sorted distinct neighbours of v, from its incidence row.
+  void neighbours(std::uint32_t v, std::vector<std::uint32_t>& out) const {
+    out.clear();
+    for (const std::uint32_t* f = around_.begin(v); f != around_.end(v); ++f)
+      for (std::uint32_t x : t_[*f])
+        if (x != v) out.push_back(x);
+    std::sort(out.begin(), out.end());
+    out.erase(std::unique(out.begin(), out.end()), out.end());
   }
-  std::vector<std::uint32_t> neighbours(std::uint32_t u) {
-    std::vector<std::uint32_t> n;
-    for (std::uint32_t t : live(u))
-      for (std::uint32_t x : t_[t])
-        if (x != u) n.push_back(x);
-    std::sort(n.begin(), n.end());
-    n.erase(std::unique(n.begin(), n.end()), n.end());
+  std::size_t shared_faces(std::uint32_t u, std::uint32_t v, std::uint32_t shared[2]) const {
+    std::size_t n = 0;
+    for (const std::uint32_t* f = around_.begin(u); f != around_.end(u); ++f)
+      if (has(t_[*f], v)) {
+        if (n < 2) shared[n] = *f;
+        ++n;
+      }
     return n;
   }
-  std::vector<std::uint32_t> edge_triangles(std::uint32_t u, std::uint32_t v) {
-    std::vector<std::uint32_t> out;
-    for (std::uint32_t t : live(u))
-      if (has(t_[t], v)) out.push_back(t);
-    return out;
-  }
-  bool border_edge(std::uint32_t u, std::uint32_t v) { return edge_triangles(u, v).size() == 1; }
 
-  void push(std::uint32_t u, std::uint32_t v) {
-    heap_.push(Candidate{collapse_cost(u, v), u, v, stamp_[u], stamp_[v]});
+  // The cheapest valid collapse u -> v over u's neighbours v (cost kNoCollapse when none).
+  Candidate best_collapse(std::uint32_t u, QemReport& rejected) const {
+    Candidate best;
+    best.from = u;
+    if (around_.begin(u) == around_.end(u)) return best;
+    thread_local std::vector<std::uint32_t> nu, nv, border;
+    neighbours(u, nu);
+    // Border edges at u: neighbours sharing one face with u.
+    border.clear();
+    std::uint32_t shared[2];
+    for (std::uint32_t x : nu)
+      if (shared_faces(u, x, shared) == 1) border.push_back(x);
+    for (std::uint32_t v : nu) {
+      const double cost = collapse_cost(u, v);
+      if (!(cost < best.cost)) continue;
+      if (!valid(u, v, nu, nv, border, rejected)) continue;
+      best.cost = cost;
+      best.to = v;
+    }
+    return best;
   }
 
-  double collapse_cost(std::uint32_t u, std::uint32_t v) {
-    Eigen::Vector4d x;
-    x << p_[v].cast<double>(), 1.0;
-    double cost = std::max(0.0, x.dot((q_[u] + q_[v]) * x));
+  double collapse_cost(std::uint32_t u, std::uint32_t v) const {
+    double cost = std::max(0.0, q_[u].error(q_[v], p(v)));
     if (cfg_.divide_by_depth2)
-      cost /= std::max(1e-6, static_cast<double>((p_[v] - cfg_.viewpoint).squaredNorm()));
-    const auto shared = edge_triangles(u, v);
+      cost /= std::max(1e-6, static_cast<double>((p(v) - cfg_.viewpoint).squaredNorm()));
+    std::uint32_t shared[2];
     bool penalise = false;
-    if (shared.size() == 2) {
+    if (shared_faces(u, v, shared) == 2) {
       const Eigen::Vector3f a = normal(t_[shared[0]]).normalized(),
                             b = normal(t_[shared[1]]).normalized();
       penalise = a.dot(b) < cos_sharp_;
     }
-    for (std::uint32_t t : live(u)) {
-      if (penalise) break;
-      if (has(t_[t], v)) continue;
-      const Triangle n = replaced(t_[t], u, v);
-      for (int i = 0; i < 3 && !penalise; ++i) {
-        const Eigen::Vector3f e1 =
-            p_[n[static_cast<std::size_t>((i + 1) % 3)]] - p_[n[static_cast<std::size_t>(i)]];
-        const Eigen::Vector3f e2 =
-            p_[n[static_cast<std::size_t>((i + 2) % 3)]] - p_[n[static_cast<std::size_t>(i)]];
+    for (const std::uint32_t* f = around_.begin(u); f != around_.end(u) && !penalise; ++f) {
+      if (has(t_[*f], v)) continue;
+      const Triangle n = replaced(t_[*f], u, v);
+      for (std::size_t i = 0; i < 3 && !penalise; ++i) {
+        const Eigen::Vector3f e1 = p(n[(i + 1) % 3]) - p(n[i]);
+        const Eigen::Vector3f e2 = p(n[(i + 2) % 3]) - p(n[i]);
         // angle < min  <=>  cos(angle) > cos(min), compared squared (no trigonometry).
         const float dot = e1.dot(e2);
         penalise = dot > 0.0f && dot * dot > cos2_min_angle_ * e1.squaredNorm() * e2.squaredNorm();
@@ -154,106 +211,114 @@ class Decimator {
     return penalise ? cost * cfg_.penalty : cost;
   }
 
-  bool valid(std::uint32_t u, std::uint32_t v) {
-    const auto shared = edge_triangles(u, v);
-    if (shared.empty() || shared.size() > 2) {
-      ++report_.rejected_topology;
+  bool valid(std::uint32_t u, std::uint32_t v, const std::vector<std::uint32_t>& nu,
+             std::vector<std::uint32_t>& nv, const std::vector<std::uint32_t>& border_at_u,
+             QemReport& rejected) const {
+    std::uint32_t shared[2];
+    const std::size_t shared_count = shared_faces(u, v, shared);
+    if (shared_count == 0 || shared_count > 2) {
+      ++rejected.rejected_topology;
       return false;
     }
     // Link condition: the common neighbours are exactly the edge's opposite vertices.
-    const auto nu = neighbours(u), nv = neighbours(v);
-    std::vector<std::uint32_t> common;
-    std::set_intersection(nu.begin(), nu.end(), nv.begin(), nv.end(), std::back_inserter(common));
-    if (common.size() != shared.size()) {
-      ++report_.rejected_topology;
+    neighbours(v, nv);
+    std::size_t common = 0;
+    for (auto a = nu.cbegin(), b = nv.cbegin(); a != nu.cend() && b != nv.cend();) {
+      if (*a < *b) {
+        ++a;
+      } else if (*b < *a) {
+        ++b;
+      } else {
+        ++common;
+        ++a;
+        ++b;
+      }
+    }
+    if (common != shared_count) {
+      ++rejected.rejected_topology;
       return false;
     }
     // Borders: u on a border moves only along it, onto the next border vertex, where the
     // border runs nearly straight.
-    std::vector<std::uint32_t> border_at_u;
-    for (std::uint32_t n : nu)
-      if (border_edge(u, n)) border_at_u.push_back(n);
     if (!border_at_u.empty()) {
-      const bool along = shared.size() == 1 && border_at_u.size() == 2 &&
+      const bool along = shared_count == 1 && border_at_u.size() == 2 &&
                          (border_at_u[0] == v || border_at_u[1] == v);
       if (!along) {
-        ++report_.rejected_border;
+        ++rejected.rejected_border;
         return false;
       }
       const std::uint32_t w = border_at_u[0] == v ? border_at_u[1] : border_at_u[0];
-      const Eigen::Vector3f in = (p_[u] - p_[w]).normalized(), out = (p_[v] - p_[u]).normalized();
+      const Eigen::Vector3f in = (p(u) - p(w)).normalized(), out = (p(v) - p(u)).normalized();
       if (!(in.dot(out) >= cos_border_)) {
-        ++report_.rejected_border;
+        ++rejected.rejected_border;
         return false;
       }
     }
     // Faces that stay: no flip, no degeneration, no turn beyond the limit.
-    for (std::uint32_t t : live(u)) {
-      if (has(t_[t], v)) continue;
-      const Eigen::Vector3f before = normal(t_[t]), after = normal(replaced(t_[t], u, v));
+    for (const std::uint32_t* f = around_.begin(u); f != around_.end(u); ++f) {
+      if (has(t_[*f], v)) continue;
+      const Eigen::Vector3f before = normal(t_[*f]), after = normal(replaced(t_[*f], u, v));
       const float b = before.norm(), a = after.norm();
       if (!(a > 1e-12f * std::max(1.0f, b)) || !(before.dot(after) >= cos_turn_ * a * b)) {
-        ++report_.rejected_normal;
+        ++rejected.rejected_normal;
         return false;
       }
     }
     return true;
   }
 
-  void collapse(std::uint32_t u, std::uint32_t v) {
-    for (std::uint32_t t : edge_triangles(u, v)) {
-      tri_alive_[t] = 0;
-      --alive_;
+  // Applies u -> v and locks u and its neighbours (v among them): the vertices whose faces or
+  // quadric change. A later collapse of the pass touching none of them reads only rows that
+  // are still current. Returns the faces removed (one on a border edge, two inside).
+  std::size_t collapse(std::uint32_t u, std::uint32_t v, std::vector<std::uint8_t>& locked) {
+    for (const std::uint32_t* f = around_.begin(u); f != around_.end(u); ++f)
+      for (std::uint32_t x : t_[*f]) locked[x] = 1;
+    std::size_t removed = 0;
+    for (const std::uint32_t* f = around_.begin(u); f != around_.end(u); ++f) {
+      if (has(t_[*f], v)) {
+        alive_[*f] = 0;
+        ++removed;
+      } else {
+        t_[*f] = replaced(t_[*f], u, v);
+      }
     }
-    for (std::uint32_t t : live(u)) {
-      t_[t] = replaced(t_[t], u, v);
-      around_[v].push_back(t);
-    }
-    around_[u].clear();
-    live(v);
-    q_[v] += q_[u];
-    ++report_.collapses;
-    // Only candidates with u or v are stale (Q_v changed); others around v keep their entries,
-    // whose costs and validity are checked again when they come up.
-    ++stamp_[u];
-    ++stamp_[v];
-    const auto around_v = neighbours(v);
-    for (std::uint32_t n : around_v) {
-      push(v, n);
-      push(n, v);
-    }
+    q_[v].add(q_[u]);
+    return removed;
+  }
+
+  // Drops removed faces from t_ (keeping the order of the rest).
+  void compact_faces() {
+    std::size_t kept = 0;
+    for (std::size_t f = 0; f < t_.size(); ++f)
+      if (alive_[f]) t_[kept++] = t_[f];
+    t_.resize(kept);
+    alive_.assign(kept, 1);
   }
 
   TriangleMesh compact() const {
     TriangleMesh out;
-    std::vector<std::uint32_t> id(p_.size(), UINT32_MAX);
-    for (std::uint32_t t = 0; t < t_.size(); ++t)
-      if (tri_alive_[t])
-        for (std::uint32_t v : t_[t]) id[v] = 0;
-    for (std::uint32_t v = 0; v < p_.size(); ++v) {
+    const std::size_t n = in_.vertices.size();
+    std::vector<std::uint32_t> id(n, UINT32_MAX);
+    for (const Triangle& t : t_)
+      for (std::uint32_t v : t) id[v] = 0;
+    for (std::uint32_t v = 0; v < n; ++v) {
       if (id[v] == UINT32_MAX) continue;
       id[v] = static_cast<std::uint32_t>(out.vertices.size());
-      out.vertices.push_back(p_[v]);
+      out.vertices.push_back(p(v));
+      if (in_.normals.size() == n) out.normals.push_back(in_.normals[v]);
+      if (in_.colors.size() == n) out.colors.push_back(in_.colors[v]);
     }
-    for (std::uint32_t t = 0; t < t_.size(); ++t)
-      if (tri_alive_[t])
-        out.triangles.push_back(Triangle{id[t_[t][0]], id[t_[t][1]], id[t_[t][2]]});
+    for (const Triangle& t : t_) out.triangles.push_back(Triangle{id[t[0]], id[t[1]], id[t[2]]});
     return out;
   }
 
+  const TriangleMesh& in_;
   const QemConfig& cfg_;
-  QemReport& report_;
-  std::vector<Eigen::Vector3f> p_;
   std::vector<Triangle> t_;
-  std::vector<std::uint8_t> tri_alive_;
-  std::vector<std::vector<std::uint32_t>>
-      around_;  // vertex -> triangles (dead ones dropped lazily)
-  std::vector<Quadric, Eigen::aligned_allocator<Quadric>> q_;
-  std::vector<std::uint32_t> stamp_;
-  std::size_t alive_;
-  float cos_turn_, cos_border_, cos_sharp_;
-  float cos2_min_angle_;
-  std::priority_queue<Candidate, std::vector<Candidate>, std::greater<Candidate>> heap_;
+  std::vector<std::uint8_t> alive_;
+  std::vector<Quadric> q_;
+  VertexTriangles around_;
+  float cos_turn_, cos_border_, cos_sharp_, cos2_min_angle_;
 };
 
 }  // namespace
@@ -262,7 +327,7 @@ TriangleMesh qem_decimate(const TriangleMesh& mesh, const QemConfig& config, Qem
   QemReport r;
   const auto target = static_cast<std::size_t>(std::ceil(
       static_cast<double>(mesh.triangles.size()) * static_cast<double>(config.target_ratio)));
-  TriangleMesh out = Decimator(mesh, config, r).run(target);
+  TriangleMesh out = Decimator(mesh, config).run(target, r);
   if (report != nullptr) *report = r;
   return out;
 }

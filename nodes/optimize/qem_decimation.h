@@ -29,16 +29,22 @@ struct QemConfig {
 
 struct QemReport {
   std::size_t collapses = 0;
+  std::size_t passes = 0;
+  // Candidate collapses refused (every pass counts its own):
   std::size_t rejected_topology = 0;  ///< would make the mesh non-manifold
   std::size_t rejected_normal = 0;    ///< would turn or degenerate a face
   std::size_t rejected_border = 0;    ///< would move a border off itself
 };
 
-/// Decimates `mesh` by half-edge collapses u -> v in order of increasing (penalised) error
-/// (Q_u + Q_v)(v), until target_ratio of the triangles remain or no valid collapse is left.
-/// Output vertices are a subset of the input vertices (same positions, same order); triangles
-/// stay consistently oriented and manifold where the input was. Serial, deterministic;
-/// O(T log T).
+/// Decimates `mesh` by half-edge collapses u -> v (v keeps its position) in passes: each pass
+/// finds every vertex's cheapest valid collapse, cost (Q_u + Q_v)(v) with the penalties, in
+/// parallel (re-evaluating only vertices next to a change), sorts them and applies them
+/// cheapest first, skipping any whose ends are next to an earlier collapse of the pass and
+/// stopping at 1.5 x the cost of the collapse that would reach the target; passes repeat until
+/// target_ratio of the triangles remain or no valid collapse is left. Output vertices are a subset
+/// of the input vertices (same positions, same order, normals and colours kept); triangles stay
+/// consistently oriented and manifold where the input was. Deterministic: the same output for any
+/// thread count. About O(T x valence^2) per pass, a handful of passes.
 TriangleMesh qem_decimate(const TriangleMesh& mesh, const QemConfig& config = {},
                           QemReport* report = nullptr);
 

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include "runtime/error.h"
+#include "test_support.h"
 
 namespace meshflow {
 namespace {
@@ -14,20 +15,7 @@ TriangleMesh tetrahedron() {
   return m;
 }
 
-// An n x n vertex grid in the plane z = 0, two triangles per cell, counter-clockwise from +z.
-TriangleMesh grid(std::uint32_t n) {
-  TriangleMesh m;
-  for (std::uint32_t j = 0; j < n; ++j)
-    for (std::uint32_t i = 0; i < n; ++i)
-      m.vertices.emplace_back(static_cast<float>(i), static_cast<float>(j), 0.0f);
-  for (std::uint32_t j = 0; j + 1 < n; ++j)
-    for (std::uint32_t i = 0; i + 1 < n; ++i) {
-      const std::uint32_t a = j * n + i;
-      m.triangles.push_back({a, a + 1, a + n + 1});
-      m.triangles.push_back({a, a + n + 1, a + n});
-    }
-  return m;
-}
+TriangleMesh grid(std::uint32_t n) { return test::grid_mesh(n); }
 
 TEST(HalfEdgeMesh, ClosedTetrahedronHasMutualTwinsAndFullRings) {
   const HalfEdgeMesh h(tetrahedron());

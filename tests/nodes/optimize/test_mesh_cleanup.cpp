@@ -2,6 +2,10 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+
+#include "runtime/half_edge_mesh.h"
+
 namespace meshflow {
 namespace {
 
@@ -46,6 +50,41 @@ TEST(MeshCleanup, KeepsEverythingWhenDisabled) {
   m.triangles = {{0, 1, 2}};
   const TriangleMesh out = clean_mesh(m, CleanupConfig{true, 0});
   EXPECT_EQ(out.triangles, m.triangles);
+}
+
+TEST(MeshCleanup, SplitsVerticesWhereTwoSheetsTouch) {
+  // Two closed tetrahedra touching at vertex 0 (two fans there), and a bow tie of two
+  // triangles at vertex 4.
+  TriangleMesh m;
+  m.vertices = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}, {-1, 0, 0}, {0, -1, 0}, {0, 0, -1}};
+  m.triangles = {{0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {1, 2, 3},   // first tetrahedron
+                 {0, 4, 5}, {0, 6, 4}, {0, 5, 6}, {4, 6, 5}};  // second, mirrored
+  const std::size_t first_tetrahedron = m.vertices.size();
+  m.vertices.insert(m.vertices.end(), {{5, 0, 0}, {6, 0, 0}, {5, 1, 0}, {4, 0, 0}, {4, -1, 0}});
+  const auto b = static_cast<std::uint32_t>(first_tetrahedron);
+  m.triangles.push_back({b, b + 1, b + 2});
+  m.triangles.push_back({b, b + 3, b + 4});
+  compute_vertex_normals(m);
+  CleanupConfig config;
+  config.min_component_triangles = 0;
+  CleanupReport report;
+  const TriangleMesh out = clean_mesh(m, config, &report);
+  EXPECT_EQ(report.split_vertices, 2u);
+  ASSERT_EQ(out.vertices.size(), m.vertices.size() + 2);
+  EXPECT_EQ(out.vertices[m.vertices.size()], m.vertices[0]);  // the copy sits where it was
+  EXPECT_EQ(out.normals.size(), out.vertices.size());
+  for (std::size_t t = 0; t < 4; ++t) EXPECT_EQ(out.triangles[t], m.triangles[t]);  // kept 0
+  for (std::size_t t = 4; t < 8; ++t)
+    EXPECT_EQ(std::count(out.triangles[t].begin(), out.triangles[t].end(), 0u), 0);
+  std::string problem;
+  try {
+    problem = HalfEdgeMesh(out).check();
+  } catch (const std::exception& e) {
+    problem = e.what();
+  }
+  EXPECT_EQ(problem, "");
+  config.split_non_manifold_vertices = false;
+  EXPECT_EQ(clean_mesh(m, config).vertices.size(), m.vertices.size());
 }
 
 }  // namespace

@@ -4,28 +4,16 @@
 
 #include <cstdio>
 
-#include "graph/pipeline.h"
-#include "nodes/synthetic/scan_simulator.h"
+#include "room_fixture.h"
 
 namespace meshflow {
 namespace {
 
-constexpr float kVoxel = 0.05f;
-
-// The demo room (8 x 6 x 3 m, a table-sized box, a cabinet, a ball) scanned from its centre and
-// reconstructed at 5 cm.
-TriangleMesh room_mesh() {
-  synthetic::ScanConfig scan;
-  scan.azimuth_steps = 1440;
-  scan.elevation_steps = 480;
-  const PointCloud cloud = synthetic::simulate_scan(synthetic::demo_room_scene(), scan);
-  ReconstructionConfig config;
-  config.voxelize.voxel_size = kVoxel;
-  return ReconstructionPipeline(config).reconstruct(cloud, "room")->mesh;
-}
+constexpr float kVoxel = test::kRoomVoxel;
+using test::room_mesh;
 
 TEST(PlanarRegions, RoomSegmentsIntoClassifiedPlanesAndProjectsOntoThem) {
-  const TriangleMesh mesh = room_mesh();
+  const TriangleMesh& mesh = room_mesh();
   ASSERT_GT(mesh.triangles.size(), 10000u);
   HalfEdgeMesh h(mesh);
   const PlanarSegmentation s = grow_planar_regions(h);

@@ -1,0 +1,163 @@
+#include "nodes/optimize/hole_filling.h"
+
+#include <tbb/parallel_for.h>
+
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <limits>
+#include <numeric>
+#include <vector>
+
+#include "runtime/half_edge_mesh.h"
+
+namespace meshflow {
+namespace {
+
+std::uint64_t edge_key(std::uint32_t a, std::uint32_t b) {
+  return std::uint64_t{std::min(a, b)} << 32 | std::max(a, b);
+}
+
+// Every undirected edge of the mesh, sorted, for "would this diagonal duplicate an edge?".
+std::vector<std::uint64_t> sorted_edges(const TriangleMesh& mesh) {
+  std::vector<std::uint64_t> edges;
+  edges.reserve(mesh.triangles.size() * 3);
+  for (const Triangle& t : mesh.triangles)
+    for (std::size_t i = 0; i < 3; ++i) edges.push_back(edge_key(t[i], t[(i + 1) % 3]));
+  std::sort(edges.begin(), edges.end());
+  edges.erase(std::unique(edges.begin(), edges.end()), edges.end());
+  return edges;
+}
+
+// Component label (a representative vertex) of every vertex: union-find over triangle corners.
+std::vector<std::uint32_t> vertex_components(const TriangleMesh& mesh) {
+  std::vector<std::uint32_t> parent(mesh.vertices.size());
+  std::iota(parent.begin(), parent.end(), 0u);
+  auto root = [&](std::uint32_t v) {
+    while (parent[v] != v) v = parent[v] = parent[parent[v]];
+    return v;
+  };
+  for (const Triangle& t : mesh.triangles)
+    for (std::size_t i = 1; i < 3; ++i) {
+      const std::uint32_t a = root(t[0]), b = root(t[i]);
+      if (a != b) parent[std::max(a, b)] = std::min(a, b);
+    }
+  for (std::uint32_t v = 0; v < parent.size(); ++v) parent[v] = root(v);
+  return parent;
+}
+
+// Minimum-weight triangulation of the polygon `loop` (vertex indices in border order) by
+// dynamic programming over its diagonals; triangles come out reversed against the border so
+// they face like the surrounding mesh. Empty when every triangulation needs an existing edge.
+std::vector<Triangle> triangulate_loop(const std::vector<std::uint32_t>& loop,
+                                       const std::vector<Eigen::Vector3f>& positions,
+                                       const std::vector<std::uint64_t>& edges) {
+  const std::size_t n = loop.size();
+  constexpr double kInfinity = std::numeric_limits<double>::infinity();
+  std::vector<double> weight(n * n, kInfinity);
+  std::vector<std::uint32_t> split(n * n, 0);
+  auto at = [n](std::size_t i, std::size_t j) { return i * n + j; };
+  auto usable = [&](std::size_t i, std::size_t j) {         // i < j
+    if (j == i + 1 || (i == 0 && j == n - 1)) return true;  // a border edge
+    return !std::binary_search(edges.begin(), edges.end(), edge_key(loop[i], loop[j]));
+  };
+  auto triangle_weight = [&](std::size_t i, std::size_t m, std::size_t j) -> double {
+    const Eigen::Vector3d a = positions[loop[i]].cast<double>(),
+                          b = positions[loop[m]].cast<double>(),
+                          c = positions[loop[j]].cast<double>();
+    const double area = 0.5 * (b - a).cross(c - a).norm();
+    const double squares = (b - a).squaredNorm() + (c - b).squaredNorm() + (a - c).squaredNorm();
+    // Collinear corners (a straight stretch of border) would make a triangle without area.
+    if (!(area > 1e-4 * squares)) return kInfinity;
+    return area + 0.1 * squares;
+  };
+  for (std::size_t i = 0; i + 1 < n; ++i) weight[at(i, i + 1)] = 0.0;
+  for (std::size_t span = 2; span < n; ++span)
+    for (std::size_t i = 0; i + span < n; ++i) {
+      const std::size_t j = i + span;
+      if (!usable(i, j)) continue;
+      for (std::size_t m = i + 1; m < j; ++m) {
+        const double w = weight[at(i, m)] + weight[at(m, j)];
+        if (!(w < weight[at(i, j)])) continue;  // also skips infinite sub-polygons
+        const double total = w + triangle_weight(i, m, j);
+        if (total < weight[at(i, j)]) {
+          weight[at(i, j)] = total;
+          split[at(i, j)] = static_cast<std::uint32_t>(m);
+        }
+      }
+    }
+  std::vector<Triangle> triangles;
+  if (weight[at(0, n - 1)] == kInfinity) return triangles;
+  std::vector<std::pair<std::size_t, std::size_t>> pending{{0, n - 1}};
+  while (!pending.empty()) {
+    const auto [i, j] = pending.back();
+    pending.pop_back();
+    if (j < i + 2) continue;
+    const std::size_t m = split[at(i, j)];
+    triangles.push_back(Triangle{loop[j], loop[m], loop[i]});
+    pending.emplace_back(i, m);
+    pending.emplace_back(m, j);
+  }
+  return triangles;
+}
+
+}  // namespace
+
+TriangleMesh fill_holes(const TriangleMesh& mesh, const HoleFillingConfig& config,
+                        HoleFillingReport* report) {
+  HoleFillingReport r;
+  const HalfEdgeMesh h(mesh);
+  const std::vector<std::vector<std::uint32_t>> loops = h.border_loops();
+  r.loops = loops.size();
+
+  // The outer border of each component: its longest loop (the first on ties).
+  std::vector<double> lengths(loops.size(), 0.0);
+  for (std::size_t l = 0; l < loops.size(); ++l)
+    for (std::uint32_t e : loops[l])
+      lengths[l] += static_cast<double>((h.position(h.to(e)) - h.position(h.from(e))).norm());
+  std::vector<std::uint8_t> outer(loops.size(), 0);
+  if (config.keep_outer_border) {
+    const std::vector<std::uint32_t> component = vertex_components(mesh);
+    std::vector<std::size_t> longest(mesh.vertices.size(), SIZE_MAX);
+    for (std::size_t l = 0; l < loops.size(); ++l) {
+      std::size_t& best = longest[component[h.from(loops[l].front())]];
+      if (best == SIZE_MAX || lengths[l] > lengths[best]) best = l;
+    }
+    for (std::size_t best : longest)
+      if (best != SIZE_MAX) outer[best] = 1;
+  }
+
+  std::vector<std::vector<std::uint32_t>> holes;
+  for (std::size_t l = 0; l < loops.size(); ++l) {
+    if (outer[l]) {
+      ++r.outer_borders;
+    } else if (loops[l].size() > config.max_edges) {
+      ++r.too_large;
+    } else {
+      std::vector<std::uint32_t> vertices;
+      vertices.reserve(loops[l].size());
+      for (std::uint32_t e : loops[l]) vertices.push_back(h.from(e));
+      holes.push_back(std::move(vertices));
+    }
+  }
+
+  const std::vector<std::uint64_t> edges = sorted_edges(mesh);
+  std::vector<std::vector<Triangle>> fills(holes.size());
+  tbb::parallel_for(std::size_t{0}, holes.size(), [&](std::size_t i) {
+    fills[i] = triangulate_loop(holes[i], mesh.vertices, edges);
+  });
+
+  TriangleMesh out = mesh;
+  for (const std::vector<Triangle>& fill : fills) {
+    if (fill.empty()) {
+      ++r.not_fillable;
+      continue;
+    }
+    ++r.filled;
+    r.added_triangles += fill.size();
+    out.triangles.insert(out.triangles.end(), fill.begin(), fill.end());
+  }
+  if (report != nullptr) *report = r;
+  return out;
+}
+
+}  // namespace meshflow

@@ -1,0 +1,42 @@
+#pragma once
+// Hole filling (the reconstruction thesis's optimisation stage): border loops of up to a given
+// number of edges are closed by a minimum-weight triangulation of the loop; the outer border of
+// every connected component (its longest loop) always stays open, so a scan keeps its outline.
+
+#include <cstddef>
+
+#include "runtime/triangle_mesh.h"
+
+namespace meshflow {
+
+struct HoleFillingConfig {
+  /// Loops with more border edges stay open (at 5 cm voxels, 30 edges is a hole of about 0.5 m
+  /// across: a gap between scan lines, an occluded patch behind a small object).
+  std::size_t max_edges = 30;
+  /// The longest loop of each connected component is its outer border and is never closed. Off:
+  /// every loop up to max_edges is a hole (closed objects with several holes).
+  bool keep_outer_border = true;
+};
+
+struct HoleFillingReport {
+  std::size_t loops = 0;          ///< border loops found
+  std::size_t outer_borders = 0;  ///< kept as the outline of their component
+  std::size_t too_large = 0;      ///< more than max_edges edges
+  std::size_t filled = 0;         ///< closed
+  std::size_t not_fillable = 0;   ///< every triangulation would duplicate an existing edge
+  std::size_t added_triangles = 0;
+};
+
+/// Returns `mesh` with its small holes closed. Each hole (loop of n border vertices) gets the
+/// n - 2 triangles minimising the sum of area + 0.1 x squared edge lengths (the second term
+/// prefers short diagonals where areas tie, as in a flat hole) among the triangulations that
+/// add no edge already in the mesh and no triangle without area (its area below 1e-4 of its
+/// squared edge lengths), oriented like the faces around it; no vertices are added.
+/// Vertices, normals and colours are kept as they are; new triangles follow the old ones,
+/// holes in the order of their smallest border half-edge. Throws meshflow::Error for input
+/// that is not an oriented 2-manifold (see HalfEdgeMesh). Loops are triangulated in parallel;
+/// the output does not depend on the thread count. O(T log T + sum of n^3 over holes).
+TriangleMesh fill_holes(const TriangleMesh& mesh, const HoleFillingConfig& config = {},
+                        HoleFillingReport* report = nullptr);
+
+}  // namespace meshflow

@@ -1,0 +1,181 @@
+#include "nodes/optimize/optimize_mesh.h"
+
+#include <algorithm>
+#include <cstdio>
+#include <sstream>
+
+#include "runtime/error.h"
+#include "runtime/half_edge_mesh.h"
+#include "runtime/tracing.h"
+
+namespace meshflow {
+namespace {
+
+constexpr OptimizeStep kAllSteps[] = {OptimizeStep::kClean, OptimizeStep::kHoles,
+                                      OptimizeStep::kPlanes, OptimizeStep::kRetriangulate,
+                                      OptimizeStep::kDecimate};
+
+std::string format(const char* pattern, std::size_t a, std::size_t b = 0, std::size_t c = 0,
+                   std::size_t d = 0) {
+  char text[200];
+  std::snprintf(text, sizeof text, pattern, a, b, c, d);
+  return text;
+}
+
+TriangleMesh clean_step(const TriangleMesh& mesh, const OptimizeConfig& config,
+                        OptimizeReport& report, OptimizeStepReport& step) {
+  TriangleMesh out = clean_mesh(mesh, config.cleanup, &report.cleanup);
+  const CleanupReport& c = report.cleanup;
+  step.detail = format("removed %zu degenerate/duplicate, %zu in %zu small components",
+                       c.degenerate_triangles + c.duplicate_triangles,
+                       c.removed_component_triangles, c.removed_components) +
+                format(", %zu non-manifold vertices split", c.split_vertices);
+  return out;
+}
+
+TriangleMesh holes_step(const TriangleMesh& mesh, const OptimizeConfig& config,
+                        OptimizeStepReport& step) {
+  HoleFillingReport r;
+  TriangleMesh out = fill_holes(mesh, config.holes, &r);
+  step.detail = format("%zu holes filled (+%zu triangles), %zu larger than allowed, %zu outlines",
+                       r.filled, r.added_triangles, r.too_large, r.outer_borders);
+  if (r.not_fillable > 0) step.detail += format(", %zu not fillable", r.not_fillable);
+  return out;
+}
+
+TriangleMesh planes_step(const TriangleMesh& mesh, const OptimizeConfig& config,
+                         OptimizeStepReport& step) {
+  HalfEdgeMesh h(mesh);
+  const PlanarSegmentation s = grow_planar_regions(h, config.planes);
+  const std::size_t moved = project_onto_planes(h, s);
+  std::size_t counts[4] = {0, 0, 0, 0};
+  for (const PlanarRegion& r : s.regions) ++counts[static_cast<int>(r.kind)];
+  step.detail = format("%zu planar regions (%zu floor, %zu ceiling, %zu wall)", s.regions.size(),
+                       counts[0], counts[1], counts[2]) +
+                format(", %zu vertices projected", moved);
+  TriangleMesh out = mesh;  // same topology: only positions change
+  for (std::uint32_t v = 0; v < out.vertices.size(); ++v) out.vertices[v] = h.position(v);
+  return out;
+}
+
+TriangleMesh retriangulate_step(const TriangleMesh& mesh, const OptimizeConfig& config,
+                                OptimizeStepReport& step) {
+  const PlanarSegmentation s = grow_planar_regions(HalfEdgeMesh(mesh), config.planes);
+  RetriangulationReport r;
+  TriangleMesh out = retriangulate_regions(mesh, s, config.retriangulation, &r);
+  step.detail = format("%zu of %zu regions retriangulated (-%zu +%zu triangles)", r.retriangulated,
+                       r.regions, r.removed_faces, r.added_faces) +
+                format(", %zu of %zu contour vertices dropped", r.dropped_contour_vertices,
+                       r.contour_vertices);
+  char deviation[64];
+  std::snprintf(deviation, sizeof deviation, " (within %.4f m)", r.max_contour_deviation);
+  step.detail += deviation;
+  return out;
+}
+
+TriangleMesh decimate_step(const TriangleMesh& mesh, const OptimizeConfig& config,
+                           OptimizeStepReport& step) {
+  QemReport r;
+  TriangleMesh out = qem_decimate(mesh, config.decimate, &r);
+  step.detail = format("%zu collapses; refused %zu topology, %zu normal, %zu border", r.collapses,
+                       r.rejected_topology, r.rejected_normal, r.rejected_border);
+  return out;
+}
+
+}  // namespace
+
+const char* optimize_step_name(OptimizeStep step) {
+  switch (step) {
+    case OptimizeStep::kClean:
+      return "clean";
+    case OptimizeStep::kHoles:
+      return "holes";
+    case OptimizeStep::kPlanes:
+      return "planes";
+    case OptimizeStep::kRetriangulate:
+      return "retriangulate";
+    case OptimizeStep::kDecimate:
+      break;
+  }
+  return "decimate";
+}
+
+std::vector<OptimizeStep> parse_optimize_steps(const std::string& list) {
+  if (list == "default") return OptimizeConfig{}.steps;
+  std::vector<OptimizeStep> steps;
+  if (list == "none") return steps;
+  std::stringstream in(list);
+  std::string name;
+  while (std::getline(in, name, ',')) {
+    bool known = false;
+    for (OptimizeStep s : kAllSteps)
+      if (name == optimize_step_name(s)) {
+        steps.push_back(s);
+        known = true;
+      }
+    if (!known)
+      throw Error("--optimize", "step '" + name + "'",
+                  "expected default, none, or a comma-separated list of clean, holes, planes, "
+                  "retriangulate, decimate");
+  }
+  return steps;
+}
+
+TriangleMesh optimize_mesh(const TriangleMesh& mesh, const OptimizeConfig& config,
+                           OptimizeReport* report) {
+  OptimizeReport r;
+  TriangleMesh current = mesh;
+  const bool had_normals = !mesh.normals.empty() && mesh.normals.size() == mesh.vertices.size();
+  for (OptimizeStep s : config.steps) {
+    OptimizeStepReport step;
+    step.step = s;
+    step.triangles_in = current.triangles.size();
+    const double start = monotonic_seconds();
+    try {
+      switch (s) {
+        case OptimizeStep::kClean:
+          current = clean_step(current, config, r, step);
+          break;
+        case OptimizeStep::kHoles:
+          current = holes_step(current, config, step);
+          break;
+        case OptimizeStep::kPlanes:
+          current = planes_step(current, config, step);
+          break;
+        case OptimizeStep::kRetriangulate:
+          current = retriangulate_step(current, config, step);
+          break;
+        case OptimizeStep::kDecimate:
+          current = decimate_step(current, config, step);
+          break;
+      }
+    } catch (const Error& e) {  // not a 2-manifold: this step cannot run, the mesh goes on
+      step.skipped = true;
+      step.detail = std::string("skipped: ") + e.what();
+    }
+    step.seconds = monotonic_seconds() - start;
+    step.triangles_out = current.triangles.size();
+    r.steps.push_back(std::move(step));
+  }
+  const bool moved = std::any_of(r.steps.begin(), r.steps.end(), [](const OptimizeStepReport& s) {
+    return (s.step == OptimizeStep::kPlanes || s.step == OptimizeStep::kRetriangulate) &&
+           !s.skipped;
+  });
+  if (had_normals && (moved || current.normals.size() != current.vertices.size()))
+    compute_vertex_normals(current);
+  if (report != nullptr) *report = std::move(r);
+  return current;
+}
+
+std::string format_optimize_report(const OptimizeReport& report) {
+  std::string out;
+  for (const OptimizeStepReport& s : report.steps) {
+    char line[160];
+    std::snprintf(line, sizeof line, "  %-9s %9zu -> %9zu triangles %8.1f ms  ",
+                  optimize_step_name(s.step), s.triangles_in, s.triangles_out, 1e3 * s.seconds);
+    out += line + s.detail + "\n";
+  }
+  return out;
+}
+
+}  // namespace meshflow

@@ -1,0 +1,122 @@
+#include "nodes/optimize/retriangulate_regions.h"
+
+#include <gtest/gtest.h>
+
+#include <cstdio>
+
+#include "nodes/eval/completeness.h"
+#include "room_fixture.h"
+#include "runtime/half_edge_mesh.h"
+#include "test_support.h"
+
+namespace meshflow {
+namespace {
+
+double total_area(const TriangleMesh& m) {
+  double area = 0.0;
+  for (const Triangle& t : m.triangles)
+    area += 0.5 * static_cast<double>((m.vertices[t[1]] - m.vertices[t[0]])
+                                          .cross(m.vertices[t[2]] - m.vertices[t[0]])
+                                          .norm());
+  return area;
+}
+
+TriangleMesh retriangulated(const TriangleMesh& m, RetriangulationReport& report,
+                            const RetriangulationConfig& config = {}) {
+  const PlanarSegmentation s = grow_planar_regions(HalfEdgeMesh(m));
+  return retriangulate_regions(m, s, config, &report);
+}
+
+TEST(RetriangulateRegions, AFlatSheetWithAHoleBecomesItsEightCornersAndKeepsItsArea) {
+  const TriangleMesh full = test::grid_mesh(20);
+  TriangleMesh m;
+  m.vertices = full.vertices;
+  for (const Triangle& t : full.triangles) {
+    const Eigen::Vector3f c =
+        (full.vertices[t[0]] + full.vertices[t[1]] + full.vertices[t[2]]) / 3.0f;
+    if (!(c.x() > 6 && c.x() < 10 && c.y() > 6 && c.y() < 10)) m.triangles.push_back(t);
+  }
+  RetriangulationReport report;
+  const TriangleMesh out = retriangulated(m, report);
+  EXPECT_EQ(report.regions, 1u);
+  EXPECT_EQ(report.retriangulated, 1u);
+  EXPECT_EQ(report.contour_vertices, 4u * 19u + 16u);
+  EXPECT_EQ(report.dropped_contour_vertices, report.contour_vertices - 8u);
+  EXPECT_EQ(out.vertices.size(), 8u);
+  EXPECT_EQ(out.triangles.size(), 8u);  // 8 vertices + 2 x 1 hole - 2
+  EXPECT_NEAR(total_area(out), 19.0 * 19.0 - 16.0, 1e-3);
+  const HalfEdgeMesh h(out);
+  EXPECT_EQ(h.check(), "");
+  EXPECT_EQ(h.border_loops().size(), 2u);
+  for (const Triangle& t : out.triangles) EXPECT_GT(face_normal(out, t).z(), 0.999f);
+}
+
+TEST(RetriangulateRegions, NeighbouringRegionsShareTheirSimplifiedBoundary) {
+  // Two planes meeting at 90 degrees along x = 0 (the bend is a chain shared by both).
+  TriangleMesh m;
+  const int n = 10;
+  for (int j = 0; j < n; ++j)
+    for (int i = -n; i <= n; ++i) {
+      const float x = static_cast<float>(i) * 0.1f;
+      m.vertices.emplace_back(x, static_cast<float>(j) * 0.1f, x > 0 ? x : 0.0f);
+    }
+  const auto w = static_cast<std::uint32_t>(2 * n + 1);
+  for (std::uint32_t j = 0; j + 1 < static_cast<std::uint32_t>(n); ++j)
+    for (std::uint32_t i = 0; i + 1 < w; ++i) {
+      const std::uint32_t a = j * w + i;
+      m.triangles.push_back({a, a + 1, a + w + 1});
+      m.triangles.push_back({a, a + w + 1, a + w});
+    }
+  RetriangulationReport report;
+  const TriangleMesh out = retriangulated(m, report);
+  EXPECT_EQ(report.retriangulated, 2u);
+  EXPECT_EQ(out.vertices.size(), 6u);  // the four corners and the two ends of the bend
+  EXPECT_EQ(out.triangles.size(), 4u);
+  const EdgeStatistics edges = edge_statistics(out);
+  EXPECT_EQ(edges.non_manifold_edges, 0u);
+  EXPECT_EQ(edges.inconsistent_edges, 0u);
+  EXPECT_EQ(edges.boundary_edges, 6u);  // one outline: the bend is an interior edge
+  EXPECT_NEAR(total_area(out), total_area(m), 1e-4);
+}
+
+TEST(RetriangulateRegions, RoomRegionsShrinkWithinTheContourTolerance) {
+  const TriangleMesh& in = test::room_mesh();
+  RetriangulationConfig config;
+  config.contour_tolerance = 0.5f * test::kRoomVoxel;
+  RetriangulationReport report;
+  const TriangleMesh out = retriangulated(in, report, config);
+  const double hausdorff = hausdorff_distance(out, in);
+  std::printf(
+      "[ retriangulate ] %zu -> %zu triangles; %zu of %zu regions, %zu of %zu contour vertices "
+      "dropped (max deviation %.4f m); Hausdorff %.4f m\n",
+      in.triangles.size(), out.triangles.size(), report.retriangulated, report.regions,
+      report.dropped_contour_vertices, report.contour_vertices, report.max_contour_deviation,
+      hausdorff);
+  EXPECT_GE(report.retriangulated, report.regions * 3 / 4);
+  EXPECT_LT(out.triangles.size(), in.triangles.size() / 2);
+  EXPECT_LE(report.max_contour_deviation, config.contour_tolerance);
+  EXPECT_GT(report.dropped_contour_vertices, report.contour_vertices / 4);
+  EXPECT_LT(hausdorff, 2.0 * config.contour_tolerance);
+  std::string problem;
+  try {
+    problem = HalfEdgeMesh(out).check();
+  } catch (const std::exception& e) {
+    problem = e.what();
+  }
+  EXPECT_EQ(problem, "");
+  EXPECT_EQ(edge_statistics(out).non_manifold_edges, 0u);
+  EXPECT_EQ(edge_statistics(out).inconsistent_edges, 0u);
+}
+
+TEST(RetriangulateRegions, SameMeshWithOneAndTwoThreads) {
+  auto run = [] {
+    RetriangulationReport report;
+    return retriangulated(test::room_mesh(), report);
+  };
+  const TriangleMesh one = test::with_threads(1, run), two = test::with_threads(2, run);
+  EXPECT_EQ(one.triangles, two.triangles);
+  EXPECT_EQ(one.vertices, two.vertices);
+}
+
+}  // namespace
+}  // namespace meshflow

@@ -32,8 +32,8 @@ TriangleMesh read_reference(const std::string& path) {
 }
 
 void print_distances(const char* label, const DistanceStats& s) {
-  std::printf("%-18s mean %.6f  rms %.6f  p95 %.6f  max %.6f m  (%zu samples)\n", label, s.mean,
-              s.rms, s.p95, s.max, s.samples);
+  std::printf("%-18s mean %.6f  rms %.6f  median %.6f  p95 %.6f  max %.6f m  (%zu samples)\n",
+              label, s.mean, s.rms, s.median, s.p95, s.max, s.samples);
 }
 
 }  // namespace

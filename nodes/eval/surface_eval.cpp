@@ -37,10 +37,15 @@ DistanceStats distance_stats(std::vector<float> d) {
   }
   s.mean = sum / static_cast<double>(d.size());
   s.rms = std::sqrt(sum_sq / static_cast<double>(d.size()));
-  const std::size_t rank =
-      std::min(d.size() - 1, static_cast<std::size_t>(std::ceil(0.95 * d.size())) - 1);
-  std::nth_element(d.begin(), d.begin() + static_cast<std::ptrdiff_t>(rank), d.end());
-  s.p95 = d[rank];
+  auto quantile = [&](double q) {
+    const std::size_t rank =
+        std::min(d.size() - 1,
+                 std::max<std::size_t>(1, static_cast<std::size_t>(std::ceil(q * d.size()))) - 1);
+    std::nth_element(d.begin(), d.begin() + static_cast<std::ptrdiff_t>(rank), d.end());
+    return static_cast<double>(d[rank]);
+  };
+  s.median = quantile(0.5);
+  s.p95 = quantile(0.95);
   return s;
 }
 

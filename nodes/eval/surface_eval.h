@@ -11,11 +11,12 @@
 namespace meshflow {
 
 struct DistanceStats {
-  double mean = 0.0, rms = 0.0, p95 = 0.0, max = 0.0;  ///< metres
+  double mean = 0.0, rms = 0.0, median = 0.0, p95 = 0.0, max = 0.0;  ///< metres
   std::size_t samples = 0;
 };
 
-/// Statistics of a list of distances (p95: the value below which 95 % lie, nearest rank).
+/// Statistics of a list of distances (median, p95: the values below which 50 % and 95 % lie,
+/// nearest rank).
 DistanceStats distance_stats(std::vector<float> distances);
 
 struct MeshTopology {

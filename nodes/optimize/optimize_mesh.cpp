@@ -77,8 +77,9 @@ TriangleMesh decimate_step(const TriangleMesh& mesh, const OptimizeConfig& confi
                            OptimizeStepReport& step) {
   QemReport r;
   TriangleMesh out = qem_decimate(mesh, config.decimate, &r);
-  step.detail = format("%zu collapses; refused %zu topology, %zu normal, %zu border", r.collapses,
-                       r.rejected_topology, r.rejected_normal, r.rejected_border);
+  step.detail = format("%zu collapses in %zu passes", r.collapses, r.passes) +
+                format("; refused %zu topology, %zu normal, %zu border", r.rejected_topology,
+                       r.rejected_normal, r.rejected_border);
   return out;
 }
 

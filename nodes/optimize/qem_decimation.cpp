@@ -170,14 +170,27 @@ class Decimator {
     best.from = u;
     if (around_.begin(u) == around_.end(u)) return best;
     thread_local std::vector<std::uint32_t> nu, nv, border;
+    thread_local std::vector<std::pair<double, std::uint32_t>> candidates;
     neighbours(u, nu);
     // Border edges at u: neighbours sharing one face with u.
     border.clear();
     std::uint32_t shared[2];
     for (std::uint32_t x : nu)
       if (shared_faces(u, x, shared) == 1) border.push_back(x);
-    for (std::uint32_t v : nu) {
-      const double cost = collapse_cost(u, v);
+    // A border vertex may only move along its border (see valid()): two candidates at most.
+    if (!border.empty() && border.size() != 2) {
+      rejected.rejected_border += nu.size();
+      return best;
+    }
+    candidates.clear();
+    for (std::uint32_t v : border.empty() ? nu : border)
+      candidates.emplace_back(quadric_cost(u, v), v);
+    std::sort(candidates.begin(), candidates.end());
+    // Penalties only multiply the quadric cost, so candidates are tried in its order until it
+    // alone exceeds the best penalised cost found.
+    for (const auto& [quadric, v] : candidates) {
+      if (!(quadric < best.cost)) break;
+      const double cost = penalised(u, v, quadric);
       if (!(cost < best.cost)) continue;
       if (!valid(u, v, nu, nv, border, rejected)) continue;
       best.cost = cost;
@@ -186,10 +199,16 @@ class Decimator {
     return best;
   }
 
-  double collapse_cost(std::uint32_t u, std::uint32_t v) const {
+  // (Q_u + Q_v)(v), divided by depth^2 when configured.
+  double quadric_cost(std::uint32_t u, std::uint32_t v) const {
     double cost = std::max(0.0, q_[u].error(q_[v], p(v)));
     if (cfg_.divide_by_depth2)
       cost /= std::max(1e-6, static_cast<double>((p(v) - cfg_.viewpoint).squaredNorm()));
+    return cost;
+  }
+
+  // The quadric cost times the penalty where the edge is sharp or a needle would appear.
+  double penalised(std::uint32_t u, std::uint32_t v, double cost) const {
     std::uint32_t shared[2];
     bool penalise = false;
     if (shared_faces(u, v, shared) == 2) {

@@ -6,7 +6,9 @@
 #include "nodes/io/mesh_writers.h"
 #include "nodes/io/parse_util.h"
 #include "nodes/io/read_point_cloud.h"
+#include "nodes/io/textured_obj.h"
 #include "runtime/error.h"
+#include "runtime/half_edge_mesh.h"
 #include "runtime/threads.h"
 #include "tools/commands.h"
 #include "tools/pipeline_options.h"
@@ -21,7 +23,19 @@ struct ReconstructOptions {
   std::string output;
   PipelineOptions pipeline;
   bool quiet = false;
+  bool texture = false;
 };
+
+// Textures the planar regions of the frame's mesh from its coloured points and writes OBJ +
+// MTL + PNG; returns the number of textures.
+std::size_t write_textured(const std::string& output, const Frame& frame,
+                           const ReconstructionConfig& config) {
+  const PlanarSegmentation regions =
+      grow_planar_regions(HalfEdgeMesh(frame.mesh), config.optimize.planes);
+  const TexturedMesh textured = texture_planar_regions(frame.mesh, regions, frame.cloud);
+  io::write_textured_obj(output, textured);
+  return textured.textures.size();
+}
 
 void run_reconstruct(const ReconstructOptions& o) {
   ThreadLimit limit(o.pipeline.threads);
@@ -31,6 +45,8 @@ void run_reconstruct(const ReconstructOptions& o) {
   if (ext != ".ply" && ext != ".obj") {
     throw Error(o.output, "", "unknown mesh format '" + ext + "' (expected .ply or .obj)");
   }
+  if (o.texture && ext != ".obj")
+    throw Error(o.output, "", "--texture writes OBJ + MTL + PNG: give an .obj output");
 
   ReconstructionPipeline pipeline(config, 1);
   auto frame = std::make_shared<Frame>();
@@ -47,7 +63,13 @@ void run_reconstruct(const ReconstructOptions& o) {
                 "no surface was extracted (voxel size " + std::to_string(frame->voxel_size) +
                     " m too small or too large?)");
   }
-  io::write_mesh(o.output, frame->mesh);
+  if (o.texture && !frame->cloud.has_colors())
+    throw Error(o.input, "", "--texture needs coloured points (the input has no colours)");
+  std::size_t textures = 0;
+  if (o.texture)
+    textures = write_textured(o.output, *frame, config);
+  else
+    io::write_mesh(o.output, frame->mesh);
   const double wall = monotonic_seconds() - t0;
   if (frame->filter_counts.non_finite > 0) {
     std::fprintf(stderr, "meshflow: note: %s: dropped %zu non-finite (NaN/Inf) points\n",
@@ -55,6 +77,7 @@ void run_reconstruct(const ReconstructOptions& o) {
   }
   if (!o.quiet) {
     print_frame_report(*frame, wall, limit.threads());
+    if (o.texture) std::printf("textures   %zu planar regions textured\n", textures);
     std::printf("output     %s\n", o.output.c_str());
   }
 }
@@ -69,6 +92,8 @@ void add_reconstruct_command(CLI::App& app) {
   cmd->add_option("-o,--output", opts->output, "Output mesh (.ply or .obj)")->required();
   add_pipeline_options(cmd, opts->pipeline);
   cmd->add_flag("-q,--quiet", opts->quiet, "Print nothing on success");
+  cmd->add_flag("--texture", opts->texture,
+                "Texture planar regions from the points' colours (OBJ + MTL + PNG output)");
   cmd->callback([opts] { run_reconstruct(*opts); });
 }
 

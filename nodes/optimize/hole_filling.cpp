@@ -8,7 +8,7 @@
 #include <numeric>
 #include <vector>
 
-#include "runtime/half_edge_mesh.h"
+#include "runtime/vertex_triangles.h"
 
 namespace meshflow {
 namespace {
@@ -17,15 +17,58 @@ std::uint64_t edge_key(std::uint32_t a, std::uint32_t b) {
   return std::uint64_t{std::min(a, b)} << 32 | std::max(a, b);
 }
 
-// Every undirected edge of the mesh, sorted, for "would this diagonal duplicate an edge?".
-std::vector<std::uint64_t> sorted_edges(const TriangleMesh& mesh) {
+// The mesh's edges between vertices of `loop` (sorted keys), for "would this diagonal duplicate
+// an edge?". `in_loop` marks the loop's vertices.
+std::vector<std::uint64_t> edges_within(const TriangleMesh& mesh, const VertexTriangles& around,
+                                        const std::vector<std::uint32_t>& loop,
+                                        const std::vector<std::uint8_t>& in_loop) {
   std::vector<std::uint64_t> edges;
-  edges.reserve(mesh.triangles.size() * 3);
-  for (const Triangle& t : mesh.triangles)
-    for (std::size_t i = 0; i < 3; ++i) edges.push_back(edge_key(t[i], t[(i + 1) % 3]));
+  for (std::uint32_t v : loop)
+    for (const std::uint32_t* t = around.begin(v); t != around.end(v); ++t)
+      for (std::uint32_t x : mesh.triangles[*t])
+        if (x != v && in_loop[x]) edges.push_back(edge_key(v, x));
   std::sort(edges.begin(), edges.end());
   edges.erase(std::unique(edges.begin(), edges.end()), edges.end());
   return edges;
+}
+
+// Border loops as vertex lists (each vertex followed by the target of its border edge), in the
+// order of their first border edge. A loop through a vertex with two border edges leaving it
+// (a non-manifold vertex) is ambiguous and is not returned; `ambiguous` counts such loops.
+std::vector<std::vector<std::uint32_t>> border_loops(const TriangleMesh& mesh,
+                                                     std::size_t& ambiguous) {
+  constexpr std::uint32_t kNoEdge = UINT32_MAX, kTwoEdges = UINT32_MAX - 1;
+  const std::vector<BorderEdge> border = border_edges(mesh);
+  std::vector<std::uint32_t> leaving(mesh.vertices.size(), kNoEdge);
+  for (std::uint32_t e = 0; e < border.size(); ++e) {
+    std::uint32_t& slot = leaving[border[e].a];
+    slot = slot == kNoEdge ? e : kTwoEdges;
+  }
+  std::vector<std::vector<std::uint32_t>> loops;
+  std::vector<std::uint8_t> walked(border.size(), 0);
+  ambiguous = 0;
+  for (std::uint32_t start = 0; start < border.size(); ++start) {
+    if (walked[start]) continue;
+    std::vector<std::uint32_t> loop;
+    bool closed = false;
+    for (std::uint32_t e = start;;) {
+      walked[e] = 1;
+      loop.push_back(border[e].a);
+      const std::uint32_t next = leaving[border[e].b];
+      if (next >= kTwoEdges) break;  // no way on, or two
+      if (next == start) {
+        closed = true;
+        break;
+      }
+      if (walked[next]) break;
+      e = next;
+    }
+    if (closed)
+      loops.push_back(std::move(loop));
+    else
+      ++ambiguous;
+  }
+  return loops;
 }
 
 // Component label (a representative vertex) of every vertex: union-find over triangle corners.
@@ -51,6 +94,7 @@ std::vector<std::uint32_t> vertex_components(const TriangleMesh& mesh) {
 std::vector<Triangle> triangulate_loop(const std::vector<std::uint32_t>& loop,
                                        const std::vector<Eigen::Vector3f>& positions,
                                        const std::vector<std::uint64_t>& edges) {
+  if (loop.size() < 3) return {};
   const std::size_t n = loop.size();
   constexpr double kInfinity = std::numeric_limits<double>::infinity();
   std::vector<double> weight(n * n, kInfinity);
@@ -105,45 +149,49 @@ std::vector<Triangle> triangulate_loop(const std::vector<std::uint32_t>& loop,
 TriangleMesh fill_holes(const TriangleMesh& mesh, const HoleFillingConfig& config,
                         HoleFillingReport* report) {
   HoleFillingReport r;
-  const HalfEdgeMesh h(mesh);
-  const std::vector<std::vector<std::uint32_t>> loops = h.border_loops();
-  r.loops = loops.size();
+  std::size_t ambiguous = 0;
+  const std::vector<std::vector<std::uint32_t>> loops = border_loops(mesh, ambiguous);
+  r.loops = loops.size() + ambiguous;
+  r.not_fillable = ambiguous;
 
   // The outer border of each component: its longest loop (the first on ties).
   std::vector<double> lengths(loops.size(), 0.0);
   for (std::size_t l = 0; l < loops.size(); ++l)
-    for (std::uint32_t e : loops[l])
-      lengths[l] += static_cast<double>((h.position(h.to(e)) - h.position(h.from(e))).norm());
+    for (std::size_t i = 0; i < loops[l].size(); ++i)
+      lengths[l] += static_cast<double>(
+          (mesh.vertices[loops[l][(i + 1) % loops[l].size()]] - mesh.vertices[loops[l][i]]).norm());
   std::vector<std::uint8_t> outer(loops.size(), 0);
   if (config.keep_outer_border) {
     const std::vector<std::uint32_t> component = vertex_components(mesh);
     std::vector<std::size_t> longest(mesh.vertices.size(), SIZE_MAX);
     for (std::size_t l = 0; l < loops.size(); ++l) {
-      std::size_t& best = longest[component[h.from(loops[l].front())]];
+      std::size_t& best = longest[component[loops[l].front()]];
       if (best == SIZE_MAX || lengths[l] > lengths[best]) best = l;
     }
     for (std::size_t best : longest)
       if (best != SIZE_MAX) outer[best] = 1;
   }
 
-  std::vector<std::vector<std::uint32_t>> holes;
+  std::vector<const std::vector<std::uint32_t>*> holes;
   for (std::size_t l = 0; l < loops.size(); ++l) {
-    if (outer[l]) {
+    if (outer[l])
       ++r.outer_borders;
-    } else if (loops[l].size() > config.max_edges) {
+    else if (loops[l].size() > config.max_edges)
       ++r.too_large;
-    } else {
-      std::vector<std::uint32_t> vertices;
-      vertices.reserve(loops[l].size());
-      for (std::uint32_t e : loops[l]) vertices.push_back(h.from(e));
-      holes.push_back(std::move(vertices));
-    }
+    else
+      holes.push_back(&loops[l]);
   }
 
-  const std::vector<std::uint64_t> edges = sorted_edges(mesh);
+  // Loops share no vertex (each border vertex has one border edge leaving it), so each hole's
+  // marks and triangulation are its own.
+  const VertexTriangles around = vertex_triangles(mesh);
+  std::vector<std::uint8_t> in_hole(mesh.vertices.size(), 0);
+  for (const auto* hole : holes)
+    for (std::uint32_t v : *hole) in_hole[v] = 1;
   std::vector<std::vector<Triangle>> fills(holes.size());
   tbb::parallel_for(std::size_t{0}, holes.size(), [&](std::size_t i) {
-    fills[i] = triangulate_loop(holes[i], mesh.vertices, edges);
+    fills[i] =
+        triangulate_loop(*holes[i], mesh.vertices, edges_within(mesh, around, *holes[i], in_hole));
   });
 
   TriangleMesh out = mesh;

@@ -27,15 +27,17 @@ struct HoleFillingReport {
   std::size_t added_triangles = 0;
 };
 
-/// Returns `mesh` with its small holes closed. Each hole (loop of n border vertices) gets the
-/// n - 2 triangles minimising the sum of area + 0.1 x squared edge lengths (the second term
-/// prefers short diagonals where areas tie, as in a flat hole) among the triangulations that
-/// add no edge already in the mesh and no triangle without area (its area below 1e-4 of its
-/// squared edge lengths), oriented like the faces around it; no vertices are added.
-/// Vertices, normals and colours are kept as they are; new triangles follow the old ones,
-/// holes in the order of their smallest border half-edge. Throws meshflow::Error for input
-/// that is not an oriented 2-manifold (see HalfEdgeMesh). Loops are triangulated in parallel;
-/// the output does not depend on the thread count. O(T log T + sum of n^3 over holes).
+/// Returns `mesh` with its small holes closed. Border loops are followed along the border
+/// edges (runtime border_edges); a loop through a vertex with two border edges leaving it (a
+/// non-manifold vertex, which the clean step splits) is ambiguous, left open and counted as not
+/// fillable. Each hole (loop of n border vertices) gets the n - 2 triangles minimising the sum
+/// of area + 0.1 x squared edge lengths (the second term prefers short diagonals where areas
+/// tie, as in a flat hole) among the triangulations that add no edge already in the mesh and
+/// no triangle without area (its area below 1e-4 of its squared edge lengths), oriented like
+/// the faces around it; no vertices are added, so edges elsewhere are untouched. Vertices,
+/// normals and colours are kept as they are; new triangles follow the old ones, holes in the
+/// order of their first border edge. Loops are triangulated in parallel; the output does not
+/// depend on the thread count. O(T + sum of n^3 over holes).
 TriangleMesh fill_holes(const TriangleMesh& mesh, const HoleFillingConfig& config = {},
                         HoleFillingReport* report = nullptr);
 

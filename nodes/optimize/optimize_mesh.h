@@ -58,7 +58,7 @@ struct OptimizeReport {
 /// Runs config.steps on `mesh` in order and returns the result; normals and colours follow
 /// their vertices, and normals are recomputed from the faces when a planes step moved
 /// vertices. A step that
-/// cannot run on this mesh (non-manifold input for holes, planes, retriangulate) is skipped with
+/// cannot run on this mesh (non-manifold input for planes, retriangulate) is skipped with
 /// its reason in the report rather than failing the frame. Each step is parallel where its
 /// kernel is and deterministic; see the kernels for costs.
 TriangleMesh optimize_mesh(const TriangleMesh& mesh, const OptimizeConfig& config,

@@ -84,8 +84,9 @@ TEST(OptimizeMesh, EveryStepLeavesTheRoomValidAndDecimationStaysClose) {
   EXPECT_LT(hausdorff, 0.5 * test::kRoomVoxel);
 }
 
-TEST(OptimizeMesh, NonManifoldInputSkipsTheHalfEdgeStepsWithTheReason) {
-  // Three triangles on one edge (0-1): clean and decimate run, the half-edge steps pass it on.
+TEST(OptimizeMesh, NonManifoldInputSkipsThePlanarStepsWithTheReason) {
+  // Three triangles on one edge (0-1): clean, holes and decimate run, the half-edge steps pass
+  // it on.
   TriangleMesh m;
   m.vertices = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}};
   m.triangles = {{0, 1, 2}, {1, 0, 3}, {0, 1, 4}};
@@ -97,12 +98,14 @@ TEST(OptimizeMesh, NonManifoldInputSkipsTheHalfEdgeStepsWithTheReason) {
   EXPECT_EQ(out.triangles, m.triangles);
   ASSERT_EQ(report.steps.size(), 5u);
   EXPECT_FALSE(report.steps[0].skipped);
-  EXPECT_TRUE(report.steps[1].skipped);
+  EXPECT_FALSE(report.steps[1].skipped);  // holes: the loops through vertex 1 are ambiguous
+  EXPECT_NE(report.steps[1].detail.find("not fillable"), std::string::npos)
+      << report.steps[1].detail;
   EXPECT_TRUE(report.steps[2].skipped);
   EXPECT_TRUE(report.steps[3].skipped);
   EXPECT_FALSE(report.steps[4].skipped);  // QEM refuses the collapses it cannot make
-  EXPECT_NE(report.steps[1].detail.find("skipped"), std::string::npos);
-  EXPECT_NE(report.steps[1].detail.find("edge"), std::string::npos) << report.steps[1].detail;
+  EXPECT_NE(report.steps[2].detail.find("skipped"), std::string::npos);
+  EXPECT_NE(report.steps[2].detail.find("edge"), std::string::npos) << report.steps[2].detail;
 }
 
 TEST(OptimizeMesh, SameMeshWithOneAndTwoThreads) {

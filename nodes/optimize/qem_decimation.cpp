@@ -169,14 +169,22 @@ class Decimator {
     Candidate best;
     best.from = u;
     if (around_.begin(u) == around_.end(u)) return best;
-    thread_local std::vector<std::uint32_t> nu, nv, border;
+    thread_local std::vector<std::uint32_t> corners, nu, nv, border;
     thread_local std::vector<std::pair<double, std::uint32_t>> candidates;
-    neighbours(u, nu);
-    // Border edges at u: neighbours sharing one face with u.
+    // Neighbours, and the border ones among them (sharing one face with u): each neighbour
+    // appears once per face it shares with u.
+    corners.clear();
+    for (const std::uint32_t* f = around_.begin(u); f != around_.end(u); ++f)
+      for (std::uint32_t x : t_[*f])
+        if (x != u) corners.push_back(x);
+    std::sort(corners.begin(), corners.end());
+    nu.clear();
     border.clear();
-    std::uint32_t shared[2];
-    for (std::uint32_t x : nu)
-      if (shared_faces(u, x, shared) == 1) border.push_back(x);
+    for (std::size_t i = 0, j = 0; i < corners.size(); i = j) {
+      while (j < corners.size() && corners[j] == corners[i]) ++j;
+      nu.push_back(corners[i]);
+      if (j - i == 1) border.push_back(corners[i]);
+    }
     // A border vertex may only move along its border (see valid()): two candidates at most.
     if (!border.empty() && border.size() != 2) {
       rejected.rejected_border += nu.size();

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <set>
 
+#include "mesh_fixtures.h"
 #include "runtime/half_edge_mesh.h"
 #include "test_support.h"
 
@@ -16,20 +17,18 @@ constexpr std::uint32_t kGrid = 20;
 // The 20 x 20 grid with three holes: the star of vertex (5, 14) (6 edges), the 2 x 2 cells at
 // (12..14, 12..14) (8 edges) and the 5 x 5 cells at (3..8, 3..8) (20 edges).
 TriangleMesh holed_grid() {
-  const TriangleMesh full = test::grid_mesh(kGrid);
   const std::uint32_t star = 14 * kGrid + 5;
-  auto in_block = [](const Eigen::Vector3f& c, float lo, float hi) {
-    return c.x() > lo && c.x() < hi && c.y() > lo && c.y() < hi;
-  };
-  TriangleMesh m;
-  m.vertices = full.vertices;
-  for (const Triangle& t : full.triangles) {
-    const Eigen::Vector3f c =
-        (full.vertices[t[0]] + full.vertices[t[1]] + full.vertices[t[2]]) / 3.0f;
-    const bool removed =
-        std::count(t.begin(), t.end(), star) > 0 || in_block(c, 12, 14) || in_block(c, 3, 8);
-    if (!removed) m.triangles.push_back(t);
-  }
+  const TriangleMesh full = test::grid_mesh(kGrid);
+  TriangleMesh m = test::without_faces(full, [](const Eigen::Vector3f& c) {
+    auto in_block = [&](float lo, float hi) {
+      return c.x() > lo && c.x() < hi && c.y() > lo && c.y() < hi;
+    };
+    return in_block(12, 14) || in_block(3, 8);
+  });
+  m.triangles.erase(
+      std::remove_if(m.triangles.begin(), m.triangles.end(),
+                     [&](const Triangle& t) { return std::count(t.begin(), t.end(), star) > 0; }),
+      m.triangles.end());
   return m;
 }
 
@@ -55,8 +54,8 @@ TEST(HoleFilling, ClosesSmallHolesOfAFlatScanAndKeepsItsOutlineAndLargeHoles) {
   ASSERT_EQ(out.triangles.size(), in.triangles.size() + report.added_triangles);
   EXPECT_TRUE(std::equal(in.triangles.begin(), in.triangles.end(), out.triangles.begin()));
 
+  ASSERT_EQ(test::half_edge_problem(out), "");
   const HalfEdgeMesh h(out);
-  EXPECT_EQ(h.check(), "");
   const auto loops = h.border_loops();
   ASSERT_EQ(loops.size(), 2u);  // the outline and the 20-edge hole
   std::set<std::size_t> sizes{loops[0].size(), loops[1].size()};
@@ -98,14 +97,9 @@ TEST(HoleFilling, TheOnlyLoopOfAComponentIsItsOutlineUnlessToldOtherwise) {
 
 TEST(HoleFilling, StraightBordersGetNoTrianglesWithoutArea) {
   // A 2 x 3 cell hole: its border has three collinear vertices on each long side.
-  const TriangleMesh full = test::grid_mesh(8);
-  TriangleMesh m;
-  m.vertices = full.vertices;
-  for (const Triangle& t : full.triangles) {
-    const Eigen::Vector3f c =
-        (full.vertices[t[0]] + full.vertices[t[1]] + full.vertices[t[2]]) / 3.0f;
-    if (!(c.x() > 2 && c.x() < 4 && c.y() > 2 && c.y() < 5)) m.triangles.push_back(t);
-  }
+  const TriangleMesh m = test::without_faces(test::grid_mesh(8), [](const Eigen::Vector3f& c) {
+    return c.x() > 2 && c.x() < 4 && c.y() > 2 && c.y() < 5;
+  });
   HoleFillingReport report;
   const TriangleMesh out = fill_holes(m, {}, &report);
   EXPECT_EQ(report.filled, 1u);

@@ -4,7 +4,7 @@
 
 #include <algorithm>
 
-#include "runtime/half_edge_mesh.h"
+#include "mesh_fixtures.h"
 
 namespace meshflow {
 namespace {
@@ -76,13 +76,7 @@ TEST(MeshCleanup, SplitsVerticesWhereTwoSheetsTouch) {
   for (std::size_t t = 0; t < 4; ++t) EXPECT_EQ(out.triangles[t], m.triangles[t]);  // kept 0
   for (std::size_t t = 4; t < 8; ++t)
     EXPECT_EQ(std::count(out.triangles[t].begin(), out.triangles[t].end(), 0u), 0);
-  std::string problem;
-  try {
-    problem = HalfEdgeMesh(out).check();
-  } catch (const std::exception& e) {
-    problem = e.what();
-  }
-  EXPECT_EQ(problem, "");
+  EXPECT_EQ(test::half_edge_problem(out), "");
   config.split_non_manifold_vertices = false;
   EXPECT_EQ(clean_mesh(m, config).vertices.size(), m.vertices.size());
 }

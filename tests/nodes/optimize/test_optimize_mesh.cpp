@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cstdio>
 
+#include "mesh_fixtures.h"
 #include "nodes/eval/completeness.h"
 #include "room_fixture.h"
 #include "runtime/error.h"
@@ -20,13 +21,7 @@ void expect_valid(const TriangleMesh& m, const char* step) {
   const EdgeStatistics e = edge_statistics(m);
   EXPECT_EQ(e.non_manifold_edges, 0u);
   EXPECT_EQ(e.inconsistent_edges, 0u);
-  std::string problem;
-  try {
-    problem = HalfEdgeMesh(m).check();
-  } catch (const Error& error) {
-    problem = error.what();
-  }
-  EXPECT_EQ(problem, "");
+  EXPECT_EQ(test::half_edge_problem(m), "");
   std::vector<Triangle> sorted;
   for (const Triangle& t : m.triangles) {
     EXPECT_GT((m.vertices[t[1]] - m.vertices[t[0]])

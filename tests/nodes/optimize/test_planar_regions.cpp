@@ -4,6 +4,7 @@
 
 #include <cstdio>
 
+#include "mesh_fixtures.h"
 #include "room_fixture.h"
 
 namespace meshflow {
@@ -61,22 +62,7 @@ TEST(PlanarRegions, RoomSegmentsIntoClassifiedPlanesAndProjectsOntoThem) {
 }
 
 TEST(PlanarRegions, ABentSheetSplitsAtTheBendAndSmallRegionsAreDropped) {
-  // Two planes meeting at 90 degrees along x = 0, 20 x 10 vertices each side.
-  TriangleMesh m;
-  const int n = 10;
-  for (int j = 0; j < n; ++j)
-    for (int i = -n; i <= n; ++i) {
-      const float x = static_cast<float>(i) * 0.1f;
-      m.vertices.emplace_back(x, static_cast<float>(j) * 0.1f, x > 0 ? x : 0.0f);
-    }
-  const int w = 2 * n + 1;
-  for (int j = 0; j + 1 < n; ++j)
-    for (int i = 0; i + 1 < w; ++i) {
-      const auto a = static_cast<std::uint32_t>(j * w + i);
-      const auto width = static_cast<std::uint32_t>(w);
-      m.triangles.push_back({a, a + 1, a + width + 1});
-      m.triangles.push_back({a, a + width + 1, a + width});
-    }
+  const TriangleMesh m = test::bent_sheet();
   HalfEdgeMesh h(m);
   const PlanarSegmentation s = grow_planar_regions(h);
   ASSERT_EQ(s.regions.size(), 2u);

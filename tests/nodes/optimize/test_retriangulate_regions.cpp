@@ -4,6 +4,7 @@
 
 #include <cstdio>
 
+#include "mesh_fixtures.h"
 #include "nodes/eval/completeness.h"
 #include "room_fixture.h"
 #include "runtime/half_edge_mesh.h"
@@ -28,14 +29,9 @@ TriangleMesh retriangulated(const TriangleMesh& m, RetriangulationReport& report
 }
 
 TEST(RetriangulateRegions, AFlatSheetWithAHoleBecomesItsEightCornersAndKeepsItsArea) {
-  const TriangleMesh full = test::grid_mesh(20);
-  TriangleMesh m;
-  m.vertices = full.vertices;
-  for (const Triangle& t : full.triangles) {
-    const Eigen::Vector3f c =
-        (full.vertices[t[0]] + full.vertices[t[1]] + full.vertices[t[2]]) / 3.0f;
-    if (!(c.x() > 6 && c.x() < 10 && c.y() > 6 && c.y() < 10)) m.triangles.push_back(t);
-  }
+  const TriangleMesh m = test::without_faces(test::grid_mesh(20), [](const Eigen::Vector3f& c) {
+    return c.x() > 6 && c.x() < 10 && c.y() > 6 && c.y() < 10;
+  });
   RetriangulationReport report;
   const TriangleMesh out = retriangulated(m, report);
   EXPECT_EQ(report.regions, 1u);
@@ -52,21 +48,8 @@ TEST(RetriangulateRegions, AFlatSheetWithAHoleBecomesItsEightCornersAndKeepsItsA
 }
 
 TEST(RetriangulateRegions, NeighbouringRegionsShareTheirSimplifiedBoundary) {
-  // Two planes meeting at 90 degrees along x = 0 (the bend is a chain shared by both).
-  TriangleMesh m;
-  const int n = 10;
-  for (int j = 0; j < n; ++j)
-    for (int i = -n; i <= n; ++i) {
-      const float x = static_cast<float>(i) * 0.1f;
-      m.vertices.emplace_back(x, static_cast<float>(j) * 0.1f, x > 0 ? x : 0.0f);
-    }
-  const auto w = static_cast<std::uint32_t>(2 * n + 1);
-  for (std::uint32_t j = 0; j + 1 < static_cast<std::uint32_t>(n); ++j)
-    for (std::uint32_t i = 0; i + 1 < w; ++i) {
-      const std::uint32_t a = j * w + i;
-      m.triangles.push_back({a, a + 1, a + w + 1});
-      m.triangles.push_back({a, a + w + 1, a + w});
-    }
+  // The bend along x = 0 is a contour chain shared by both planes.
+  const TriangleMesh m = test::bent_sheet();
   RetriangulationReport report;
   const TriangleMesh out = retriangulated(m, report);
   EXPECT_EQ(report.retriangulated, 2u);
@@ -97,13 +80,7 @@ TEST(RetriangulateRegions, RoomRegionsShrinkWithinTheContourTolerance) {
   EXPECT_LE(report.max_contour_deviation, config.contour_tolerance);
   EXPECT_GT(report.dropped_contour_vertices, report.contour_vertices / 4);
   EXPECT_LT(hausdorff, 2.0 * config.contour_tolerance);
-  std::string problem;
-  try {
-    problem = HalfEdgeMesh(out).check();
-  } catch (const std::exception& e) {
-    problem = e.what();
-  }
-  EXPECT_EQ(problem, "");
+  EXPECT_EQ(test::half_edge_problem(out), "");
   EXPECT_EQ(edge_statistics(out).non_manifold_edges, 0u);
   EXPECT_EQ(edge_statistics(out).inconsistent_edges, 0u);
 }

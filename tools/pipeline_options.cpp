@@ -24,6 +24,7 @@ ReconstructionConfig PipelineOptions::config() const {
   c.optimize.holes.max_edges = max_hole;
   c.optimize.decimate.target_ratio = decimate_to;
   c.optimize.retriangulation.contour_tolerance = contour_tolerance;
+  c.optimize.planes.max_projection = max_projection;
   return c;
 }
 
@@ -72,6 +73,9 @@ void add_pipeline_options(CLI::App* cmd, PipelineOptions& o) {
   cmd->add_option("--max-hole", o.max_hole, "holes step: close border loops up to this many edges");
   cmd->add_option("--contour-tolerance", o.contour_tolerance,
                   "retriangulate step: Douglas-Peucker tolerance of region contours, metres")
+      ->check(CLI::NonNegativeNumber);
+  cmd->add_option("--max-projection", o.max_projection,
+                  "planes step: vertices farther from their plane stay, metres (0 = no limit)")
       ->check(CLI::NonNegativeNumber);
   cmd->add_option("--decimate-to", o.decimate_to, "decimate step: share of the triangles to keep")
       ->check(CLI::Range(0.0f, 1.0f));

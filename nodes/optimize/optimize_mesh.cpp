@@ -47,7 +47,7 @@ TriangleMesh planes_step(const TriangleMesh& mesh, const OptimizeConfig& config,
                          OptimizeStepReport& step) {
   HalfEdgeMesh h(mesh);
   const PlanarSegmentation s = grow_planar_regions(h, config.planes);
-  const std::size_t moved = project_onto_planes(h, s);
+  const std::size_t moved = project_onto_planes(h, s, config.planes.max_projection);
   std::size_t counts[4] = {0, 0, 0, 0};
   for (const PlanarRegion& r : s.regions) ++counts[static_cast<int>(r.kind)];
   step.detail = format("%zu planar regions (%zu floor, %zu ceiling, %zu wall)", s.regions.size(),

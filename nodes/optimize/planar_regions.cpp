@@ -116,7 +116,8 @@ PlanarSegmentation grow_planar_regions(const HalfEdgeMesh& m, const PlanarRegion
   return out;
 }
 
-std::size_t project_onto_planes(HalfEdgeMesh& m, const PlanarSegmentation& s) {
+std::size_t project_onto_planes(HalfEdgeMesh& m, const PlanarSegmentation& s,
+                                float max_projection) {
   const std::size_t vertex_count = m.vertex_count();
   std::vector<std::uint8_t> moved(vertex_count, 0);
   tbb::parallel_for(std::size_t{0}, vertex_count, [&](std::size_t vi) {
@@ -129,7 +130,9 @@ std::size_t project_onto_planes(HalfEdgeMesh& m, const PlanarSegmentation& s) {
       if (s.region_of_face[HalfEdgeMesh::face(h)] != region) return;
     const PlanarRegion& r = s.regions[static_cast<std::size_t>(region)];
     const Eigen::Vector3f p = m.position(v);
-    m.set_position(v, p - (r.normal.dot(p) - r.offset) * r.normal);
+    const float distance = r.normal.dot(p) - r.offset;
+    if (max_projection > 0.0f && std::abs(distance) > max_projection) return;
+    m.set_position(v, p - distance * r.normal);
     moved[v] = 1;
   });
   std::size_t count = 0;

@@ -19,6 +19,10 @@ struct PlanarRegionConfig {
   /// the demo room at 5 cm to 48 regions covering 97 % of its faces (10: 146 fragments).
   std::size_t min_region_faces = 50;
   Eigen::Vector3f up = Eigen::Vector3f::UnitZ();  ///< world up, for the classification
+  /// project_onto_planes leaves vertices farther than this (metres) from their plane where
+  /// they are: clutter that joined a region within the normal threshold is not flattened.
+  /// 0: no limit (the thesis).
+  float max_projection = 0.0f;
 };
 
 enum class RegionClass { kFloor, kCeiling, kWall, kOther };
@@ -46,8 +50,10 @@ PlanarSegmentation grow_planar_regions(const HalfEdgeMesh& mesh,
                                        const PlanarRegionConfig& config = {});
 
 /// Moves every vertex whose faces all lie in one region onto that region's plane (orthogonal
-/// projection); vertices shared by regions or touching unassigned faces stay. Returns how many
-/// moved. Parallel over regions' vertices; O(V + F).
-std::size_t project_onto_planes(HalfEdgeMesh& mesh, const PlanarSegmentation& segmentation);
+/// projection) when it lies within max_projection of it (0: any distance); vertices shared by
+/// regions or touching unassigned faces stay. Returns how many moved. Parallel over vertices;
+/// O(V + F).
+std::size_t project_onto_planes(HalfEdgeMesh& mesh, const PlanarSegmentation& segmentation,
+                                float max_projection = 0.0f);
 
 }  // namespace meshflow

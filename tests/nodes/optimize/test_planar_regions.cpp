@@ -2,10 +2,12 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <cstdio>
 
 #include "mesh_fixtures.h"
 #include "room_fixture.h"
+#include "test_support.h"
 
 namespace meshflow {
 namespace {
@@ -72,6 +74,27 @@ TEST(PlanarRegions, ABentSheetSplitsAtTheBendAndSmallRegionsAreDropped) {
   PlanarRegionConfig big;
   big.min_region_faces = 1000;
   EXPECT_TRUE(grow_planar_regions(h, big).regions.empty());
+}
+
+TEST(PlanarRegions, ProjectionLeavesVerticesBeyondTheLimitWhereTheyAre) {
+  // A flat 10 x 10 sheet with one interior vertex lifted 0.4 (its faces tilt by less than the
+  // normal threshold, so they stay in the sheet's region).
+  TriangleMesh m = test::grid_mesh(10);
+  const std::uint32_t lifted = 5 * 10 + 5;
+  m.vertices[lifted].z() = 0.4f;
+  for (const float limit : {0.0f, 0.2f}) {
+    HalfEdgeMesh h(m);
+    const PlanarSegmentation s = grow_planar_regions(h, PlanarRegionConfig{0.85f, 10});
+    ASSERT_EQ(s.regions.size(), 1u);
+    const std::size_t moved = project_onto_planes(h, s, limit);
+    const float offset = std::abs(h.position(lifted).z() - m.vertices[lifted].z());
+    if (limit == 0.0f) {
+      EXPECT_GT(offset, 0.3f);  // flattened with the rest
+    } else {
+      EXPECT_EQ(offset, 0.0f);  // 0.4 from the plane: left alone
+      EXPECT_GT(moved, 0u);     // the interior vertices near the plane still moved
+    }
+  }
 }
 
 }  // namespace

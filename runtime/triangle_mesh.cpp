@@ -3,6 +3,7 @@
 #include <tbb/parallel_sort.h>
 
 #include <algorithm>
+#include <cstdint>
 
 #include "runtime/parallel.h"
 #include "runtime/vertex_triangles.h"
@@ -70,6 +71,27 @@ std::vector<BorderEdge> border_edges(const TriangleMesh& mesh) {
     border[k] = BorderEdge{tris[t][i], tris[t][(i + 1) % 3], t};
   });
   return border;
+}
+
+TriangleMesh compact_vertices(const TriangleMesh& source, const std::vector<Triangle>& triangles) {
+  const std::size_t n = source.vertices.size();
+  std::vector<std::uint32_t> id(n, UINT32_MAX);
+  for (const Triangle& t : triangles)
+    for (std::uint32_t v : t) id[v] = 0;
+  const bool normals = source.normals.size() == n;
+  const bool colors = source.colors.size() == n;
+  TriangleMesh out;
+  for (std::size_t v = 0; v < n; ++v) {
+    if (id[v] == UINT32_MAX) continue;
+    id[v] = static_cast<std::uint32_t>(out.vertices.size());
+    out.vertices.push_back(source.vertices[v]);
+    if (normals) out.normals.push_back(source.normals[v]);
+    if (colors) out.colors.push_back(source.colors[v]);
+  }
+  out.triangles.reserve(triangles.size());
+  for (const Triangle& t : triangles)
+    out.triangles.push_back(Triangle{id[t[0]], id[t[1]], id[t[2]]});
+  return out;
 }
 
 }  // namespace meshflow

@@ -54,4 +54,9 @@ struct BorderEdge {
 /// Parallel over vertex_triangles(); deterministic. O(V + T x workers + T x valence).
 std::vector<BorderEdge> border_edges(const TriangleMesh& mesh);
 
+/// A mesh of `triangles` (indices into source.vertices) that keeps only the referenced vertices,
+/// in their original order, with their normals and colours; triangles are renumbered, their
+/// order kept. O(V + T); not parallel.
+TriangleMesh compact_vertices(const TriangleMesh& source, const std::vector<Triangle>& triangles);
+
 }  // namespace meshflow

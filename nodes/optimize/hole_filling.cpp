@@ -8,6 +8,7 @@
 #include <numeric>
 #include <vector>
 
+#include "runtime/disjoint_sets.h"
 #include "runtime/vertex_triangles.h"
 
 namespace meshflow {
@@ -73,19 +74,12 @@ std::vector<std::vector<std::uint32_t>> border_loops(const TriangleMesh& mesh,
 
 // Component label (a representative vertex) of every vertex: union-find over triangle corners.
 std::vector<std::uint32_t> vertex_components(const TriangleMesh& mesh) {
-  std::vector<std::uint32_t> parent(mesh.vertices.size());
-  std::iota(parent.begin(), parent.end(), 0u);
-  auto root = [&](std::uint32_t v) {
-    while (parent[v] != v) v = parent[v] = parent[parent[v]];
-    return v;
-  };
-  for (const Triangle& t : mesh.triangles)
-    for (std::size_t i = 1; i < 3; ++i) {
-      const std::uint32_t a = root(t[0]), b = root(t[i]);
-      if (a != b) parent[std::max(a, b)] = std::min(a, b);
-    }
-  for (std::uint32_t v = 0; v < parent.size(); ++v) parent[v] = root(v);
-  return parent;
+  DisjointSets sets(mesh.vertices.size());
+  for (const Triangle& t : mesh.triangles) {
+    sets.unite(t[0], t[1]);
+    sets.unite(t[0], t[2]);
+  }
+  return sets.labels();
 }
 
 // Minimum-weight triangulation of the polygon `loop` (vertex indices in border order) by

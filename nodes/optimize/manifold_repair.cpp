@@ -3,10 +3,10 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
-#include <numeric>
 #include <utility>
 #include <vector>
 
+#include "runtime/disjoint_sets.h"
 #include "runtime/vertex_triangles.h"
 
 namespace meshflow {
@@ -18,12 +18,7 @@ namespace {
 std::uint32_t fans_around(const TriangleMesh& mesh, std::uint32_t v, const std::uint32_t* begin,
                           const std::uint32_t* end, std::uint32_t* fan) {
   const auto k = static_cast<std::uint32_t>(end - begin);
-  std::vector<std::uint32_t> parent(k);
-  std::iota(parent.begin(), parent.end(), 0u);
-  auto root = [&](std::uint32_t i) {
-    while (parent[i] != i) i = parent[i] = parent[parent[i]];
-    return i;
-  };
+  DisjointSets sets(k);
   // Triangles sharing an edge v-x are in one fan: sort (x, triangle slot) and join equal x.
   std::vector<std::pair<std::uint32_t, std::uint32_t>> spokes;
   for (std::uint32_t i = 0; i < k; ++i)
@@ -31,16 +26,13 @@ std::uint32_t fans_around(const TriangleMesh& mesh, std::uint32_t v, const std::
       if (x != v) spokes.emplace_back(x, i);
   std::sort(spokes.begin(), spokes.end());
   for (std::size_t s = 1; s < spokes.size(); ++s)
-    if (spokes[s].first == spokes[s - 1].first) {
-      const std::uint32_t a = root(spokes[s].second), b = root(spokes[s - 1].second);
-      if (a != b) parent[std::max(a, b)] = std::min(a, b);
-    }
+    if (spokes[s].first == spokes[s - 1].first) sets.unite(spokes[s].second, spokes[s - 1].second);
   // Roots are the lowest slot of their fan, so numbering roots in slot order numbers fans by
   // their lowest triangle.
   std::vector<std::uint32_t> number(k, 0);
   std::uint32_t fans = 0;
   for (std::uint32_t i = 0; i < k; ++i) {
-    const std::uint32_t r = root(i);
+    const std::uint32_t r = sets.find(i);
     if (r == i) number[i] = fans++;
     fan[i] = number[r];
   }

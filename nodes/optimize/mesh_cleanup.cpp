@@ -3,9 +3,9 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
-#include <numeric>
 
 #include "nodes/optimize/manifold_repair.h"
+#include "runtime/disjoint_sets.h"
 #include "runtime/radix_sort.h"
 
 namespace meshflow {
@@ -52,20 +52,6 @@ std::vector<bool> duplicate_faces(const std::vector<Triangle>& tris) {
   }
   return dup;
 }
-
-struct DisjointSets {
-  std::vector<std::uint32_t> parent;
-  explicit DisjointSets(std::size_t n) : parent(n) { std::iota(parent.begin(), parent.end(), 0u); }
-  std::uint32_t find(std::uint32_t x) {
-    while (parent[x] != x) x = parent[x] = parent[parent[x]];
-    return x;
-  }
-  void unite(std::uint32_t a, std::uint32_t b) {
-    a = find(a);
-    b = find(b);
-    if (a != b) parent[std::max(a, b)] = std::min(a, b);
-  }
-};
 
 }  // namespace
 
@@ -114,26 +100,8 @@ TriangleMesh clean_mesh(const TriangleMesh& mesh, const CleanupConfig& config,
                kept.end());
   }
 
-  // Compact vertices, keeping their order.
-  std::vector<std::uint32_t> remap(mesh.vertices.size(), UINT32_MAX);
-  for (const Triangle& t : kept) {
-    for (std::uint32_t v : t) remap[v] = 0;
-  }
-  TriangleMesh out;
-  const bool normals = mesh.normals.size() == mesh.vertices.size();
-  const bool colors = mesh.colors.size() == mesh.vertices.size();
-  for (std::size_t v = 0; v < mesh.vertices.size(); ++v) {
-    if (remap[v] == UINT32_MAX) continue;
-    remap[v] = static_cast<std::uint32_t>(out.vertices.size());
-    out.vertices.push_back(mesh.vertices[v]);
-    if (normals) out.normals.push_back(mesh.normals[v]);
-    if (colors) out.colors.push_back(mesh.colors[v]);
-  }
+  TriangleMesh out = compact_vertices(mesh, kept);
   r.removed_vertices = mesh.vertices.size() - out.vertices.size();
-  out.triangles.resize(kept.size());
-  for (std::size_t i = 0; i < kept.size(); ++i) {
-    out.triangles[i] = Triangle{remap[kept[i][0]], remap[kept[i][1]], remap[kept[i][2]]};
-  }
   if (config.split_non_manifold_vertices) r.split_vertices = split_non_manifold_vertices(out);
   if (report != nullptr) *report = r;
   return out;

@@ -128,7 +128,7 @@ class Decimator {
       report.rejected_border += r.rejected_border;
     });
     compact_faces();
-    return compact();
+    return compact_vertices(in_, t_);
   }
 
  private:
@@ -320,23 +320,6 @@ class Decimator {
       if (alive_[f]) t_[kept++] = t_[f];
     t_.resize(kept);
     alive_.assign(kept, 1);
-  }
-
-  TriangleMesh compact() const {
-    TriangleMesh out;
-    const std::size_t n = in_.vertices.size();
-    std::vector<std::uint32_t> id(n, UINT32_MAX);
-    for (const Triangle& t : t_)
-      for (std::uint32_t v : t) id[v] = 0;
-    for (std::uint32_t v = 0; v < n; ++v) {
-      if (id[v] == UINT32_MAX) continue;
-      id[v] = static_cast<std::uint32_t>(out.vertices.size());
-      out.vertices.push_back(p(v));
-      if (in_.normals.size() == n) out.normals.push_back(in_.normals[v]);
-      if (in_.colors.size() == n) out.colors.push_back(in_.colors[v]);
-    }
-    for (const Triangle& t : t_) out.triangles.push_back(Triangle{id[t[0]], id[t[1]], id[t[2]]});
-    return out;
   }
 
   const TriangleMesh& in_;

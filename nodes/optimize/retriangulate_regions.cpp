@@ -381,7 +381,6 @@ TriangleMesh retriangulate_regions(const TriangleMesh& mesh, const PlanarSegment
   std::vector<std::uint8_t> kept(regions);
   for (std::size_t i = 0; i < regions; ++i) kept[i] = state[i] == kKept ? 1 : 0;
 
-  TriangleMesh out;
   std::vector<Triangle> triangles;
   for (std::uint32_t f = 0; f < mesh.triangles.size(); ++f) {
     const std::int32_t region = region_of_face[f];
@@ -403,24 +402,8 @@ TriangleMesh retriangulate_regions(const TriangleMesh& mesh, const PlanarSegment
     }
     triangles.insert(triangles.end(), fills[i].begin(), fills[i].end());
   }
-  // Referenced vertices only, in their order.
-  std::vector<std::uint32_t> id(mesh.vertices.size(), HalfEdgeMesh::kNone);
-  for (const Triangle& t : triangles)
-    for (std::uint32_t v : t) id[v] = 0;
-  const bool normals = mesh.normals.size() == mesh.vertices.size();
-  const bool colors = mesh.colors.size() == mesh.vertices.size();
-  for (std::uint32_t v = 0; v < mesh.vertices.size(); ++v) {
-    if (id[v] == HalfEdgeMesh::kNone) continue;
-    id[v] = static_cast<std::uint32_t>(out.vertices.size());
-    out.vertices.push_back(mesh.vertices[v]);
-    if (normals) out.normals.push_back(mesh.normals[v]);
-    if (colors) out.colors.push_back(mesh.colors[v]);
-  }
-  out.triangles.reserve(triangles.size());
-  for (const Triangle& t : triangles)
-    out.triangles.push_back(Triangle{id[t[0]], id[t[1]], id[t[2]]});
   if (report != nullptr) *report = r;
-  return out;
+  return compact_vertices(mesh, triangles);
 }
 
 }  // namespace meshflow

@@ -61,7 +61,7 @@ void add_pipeline_options(CLI::App* cmd, PipelineOptions& o) {
       ->check(CLI::NonNegativeNumber);
   cmd->add_option("--optimize", o.optimize,
                   "Mesh optimisation: default (clean,holes), none, or a list of clean, holes, "
-                  "planes, retriangulate, decimate in the order to run")
+                  "planes, sharpen, retriangulate, decimate in the order to run")
       ->check([](const std::string& list) -> std::string {
         try {
           parse_optimize_steps(list);

@@ -11,9 +11,9 @@
 namespace meshflow {
 namespace {
 
-constexpr OptimizeStep kAllSteps[] = {OptimizeStep::kClean, OptimizeStep::kHoles,
-                                      OptimizeStep::kPlanes, OptimizeStep::kRetriangulate,
-                                      OptimizeStep::kDecimate};
+constexpr OptimizeStep kAllSteps[] = {OptimizeStep::kClean,         OptimizeStep::kHoles,
+                                      OptimizeStep::kPlanes,        OptimizeStep::kSharpen,
+                                      OptimizeStep::kRetriangulate, OptimizeStep::kDecimate};
 
 std::string format(const char* pattern, std::size_t a, std::size_t b = 0, std::size_t c = 0,
                    std::size_t d = 0) {
@@ -58,6 +58,17 @@ TriangleMesh planes_step(const TriangleMesh& mesh, const OptimizeConfig& config,
   return out;
 }
 
+TriangleMesh sharpen_step(const TriangleMesh& mesh, const OptimizeConfig& config,
+                          OptimizeStepReport& step) {
+  const PlanarSegmentation s = grow_planar_regions(HalfEdgeMesh(mesh), config.planes);
+  SharpEdgeReport r;
+  TriangleMesh out = sharpen_creases(mesh, s, config.sharpen, &r);
+  step.detail = format("%zu creases: %zu vertices onto planes, %zu onto lines, %zu onto corners",
+                       r.creases, r.to_plane, r.to_line, r.to_corner) +
+                format(", %zu edges cut", r.split_edges);
+  return out;
+}
+
 TriangleMesh retriangulate_step(const TriangleMesh& mesh, const OptimizeConfig& config,
                                 OptimizeStepReport& step) {
   const PlanarSegmentation s = grow_planar_regions(HalfEdgeMesh(mesh), config.planes);
@@ -93,6 +104,8 @@ const char* optimize_step_name(OptimizeStep step) {
       return "holes";
     case OptimizeStep::kPlanes:
       return "planes";
+    case OptimizeStep::kSharpen:
+      return "sharpen";
     case OptimizeStep::kRetriangulate:
       return "retriangulate";
     case OptimizeStep::kDecimate:
@@ -117,7 +130,7 @@ std::vector<OptimizeStep> parse_optimize_steps(const std::string& list) {
     if (!known)
       throw Error("--optimize", "step '" + name + "'",
                   "expected default, none, or a comma-separated list of clean, holes, planes, "
-                  "retriangulate, decimate");
+                  "sharpen, retriangulate, decimate");
   }
   return steps;
 }
@@ -143,6 +156,9 @@ TriangleMesh optimize_mesh(const TriangleMesh& mesh, const OptimizeConfig& confi
         case OptimizeStep::kPlanes:
           current = planes_step(current, config, step);
           break;
+        case OptimizeStep::kSharpen:
+          current = sharpen_step(current, config, step);
+          break;
         case OptimizeStep::kRetriangulate:
           current = retriangulate_step(current, config, step);
           break;
@@ -159,7 +175,8 @@ TriangleMesh optimize_mesh(const TriangleMesh& mesh, const OptimizeConfig& confi
     r.steps.push_back(std::move(step));
   }
   const bool moved = std::any_of(r.steps.begin(), r.steps.end(), [](const OptimizeStepReport& s) {
-    return (s.step == OptimizeStep::kPlanes || s.step == OptimizeStep::kRetriangulate) &&
+    return (s.step == OptimizeStep::kPlanes || s.step == OptimizeStep::kSharpen ||
+            s.step == OptimizeStep::kRetriangulate) &&
            !s.skipped;
   });
   if (had_normals && (moved || current.normals.size() != current.vertices.size()))

@@ -1,7 +1,8 @@
 #pragma once
 // The optimisation stage as a composition of steps, run in the order the user lists them:
 // clean (degenerate faces, small components), holes (close small border loops), planes
-// (planar regions, vertices projected onto their plane), retriangulate (planar regions
+// (planar regions, vertices projected onto their plane), sharpen (the bevels between planar
+// regions cut along the planes' intersection lines), retriangulate (planar regions
 // triangulated anew from their simplified contours), decimate (constrained QEM).
 
 #include <string>
@@ -12,15 +13,16 @@
 #include "nodes/optimize/planar_regions.h"
 #include "nodes/optimize/qem_decimation.h"
 #include "nodes/optimize/retriangulate_regions.h"
+#include "nodes/optimize/sharp_edges.h"
 #include "runtime/triangle_mesh.h"
 
 namespace meshflow {
 
-enum class OptimizeStep { kClean, kHoles, kPlanes, kRetriangulate, kDecimate };
+enum class OptimizeStep { kClean, kHoles, kPlanes, kSharpen, kRetriangulate, kDecimate };
 const char* optimize_step_name(OptimizeStep step);
 
 /// "default" (clean, holes), "none", or a comma-separated list of step names in the order they
-/// should run ("clean,holes,planes,retriangulate,decimate"); a step may repeat. Throws
+/// should run ("clean,holes,planes,sharpen,retriangulate,decimate"); a step may repeat. Throws
 /// meshflow::Error naming the unknown step and the valid names.
 std::vector<OptimizeStep> parse_optimize_steps(const std::string& list);
 
@@ -28,7 +30,8 @@ struct OptimizeConfig {
   std::vector<OptimizeStep> steps{OptimizeStep::kClean, OptimizeStep::kHoles};
   CleanupConfig cleanup;
   HoleFillingConfig holes;
-  PlanarRegionConfig planes;  ///< planes and retriangulate
+  PlanarRegionConfig planes;  ///< planes, sharpen and retriangulate
+  SharpEdgeConfig sharpen;
   RetriangulationConfig retriangulation;
   /// Decimation defaults for a reconstructed map: plain quadric errors (no depth weighting),
   /// a quarter of the triangles kept.
@@ -58,7 +61,7 @@ struct OptimizeReport {
 /// Runs config.steps on `mesh` in order and returns the result; normals and colours follow
 /// their vertices, and normals are recomputed from the faces when a planes step moved
 /// vertices. A step that
-/// cannot run on this mesh (non-manifold input for planes, retriangulate) is skipped with
+/// cannot run on this mesh (non-manifold input for planes, sharpen, retriangulate) is skipped with
 /// its reason in the report rather than failing the frame. Each step is parallel where its
 /// kernel is and deterministic; see the kernels for costs.
 TriangleMesh optimize_mesh(const TriangleMesh& mesh, const OptimizeConfig& config,

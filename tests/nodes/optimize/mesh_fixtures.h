@@ -21,15 +21,15 @@ inline TriangleMesh without_faces(const TriangleMesh& mesh,
   return out;
 }
 
-/// Two planes meeting at 90 degrees along x = 0: z = 0 for x <= 0 and z = x beyond, 21 x 10
-/// vertices 10 cm apart, two triangles per cell facing up.
-inline TriangleMesh bent_sheet() {
+/// The sheet z = height(x) over x in [-1, 1], y in [0, 0.9], 21 x 10 vertices 10 cm apart,
+/// two triangles per cell facing up.
+inline TriangleMesh profile_sheet(const std::function<float(float)>& height) {
   TriangleMesh m;
   const int n = 10;
   for (int j = 0; j < n; ++j)
     for (int i = -n; i <= n; ++i) {
       const float x = static_cast<float>(i) * 0.1f;
-      m.vertices.emplace_back(x, static_cast<float>(j) * 0.1f, x > 0 ? x : 0.0f);
+      m.vertices.emplace_back(x, static_cast<float>(j) * 0.1f, height(x));
     }
   const auto w = static_cast<std::uint32_t>(2 * n + 1);
   for (std::uint32_t j = 0; j + 1 < static_cast<std::uint32_t>(n); ++j)
@@ -39,6 +39,11 @@ inline TriangleMesh bent_sheet() {
       m.triangles.push_back({a, a + w + 1, a + w});
     }
   return m;
+}
+
+/// Two planes meeting at 90 degrees along x = 0: z = 0 for x <= 0 and z = x beyond.
+inline TriangleMesh bent_sheet() {
+  return profile_sheet([](float x) { return x > 0 ? x : 0.0f; });
 }
 
 /// "" when the mesh builds into a valid half-edge mesh, else the first problem found.

@@ -19,7 +19,8 @@ HalfEdgeMesh::HalfEdgeMesh(const TriangleMesh& mesh)
       to_(mesh.triangles.size() * 3),
       twin_(mesh.triangles.size() * 3, kNone),
       out_(mesh.vertices.size(), kNone),
-      alive_(mesh.triangles.size(), 1) {
+      alive_(mesh.triangles.size(), 1),
+      live_faces_(mesh.triangles.size()) {
   const std::size_t v_count = positions_.size();
   for (std::uint32_t f = 0; f < mesh.triangles.size(); ++f) {
     const Triangle& t = mesh.triangles[f];
@@ -186,9 +187,7 @@ bool HalfEdgeMesh::collapse(std::uint32_t h) {
   std::vector<std::uint32_t> common;
   std::set_intersection(na.begin(), na.end(), nb.begin(), nb.end(), std::back_inserter(common));
   if (common.size() != (t != kNone ? 2u : 1u)) return false;
-  std::size_t live_faces = 0;
-  for (std::uint8_t f : alive_) live_faces += f;
-  if (live_faces <= 4) return false;
+  if (live_faces_ <= 4) return false;
   // Geometry: faces that move with a keep area and orientation.
   const std::vector<std::uint32_t> around_a = ring(a);
   for (std::uint32_t e : around_a) {
@@ -206,12 +205,14 @@ bool HalfEdgeMesh::collapse(std::uint32_t h) {
   const std::uint32_t x_bc = twin_[next(h)], x_ca = twin_[prev(h)];
   link(x_bc, x_ca);
   alive_[face(h)] = 0;
+  --live_faces_;
   std::uint32_t x_ad = kNone, x_db = kNone;
   if (t != kNone) {
     x_ad = twin_[next(t)];
     x_db = twin_[prev(t)];
     link(x_ad, x_db);
     alive_[face(t)] = 0;
+    --live_faces_;
   }
   // a's remaining half-edges now start / end at b.
   for (std::uint32_t e : around_a)
@@ -248,6 +249,7 @@ std::uint32_t HalfEdgeMesh::split(std::uint32_t h, const Eigen::Vector3f& p) {
     to_.resize(to_.size() + 3, kNone);
     twin_.resize(twin_.size() + 3, kNone);
     alive_.push_back(1);
+    ++live_faces_;
     return f;
   };
   // Face 1 becomes (a, m, c): a->m, m->c, c->a; the new face g1 is (m, b, c): m->b, b->c, c->m.

@@ -28,6 +28,7 @@ class HalfEdgeMesh {
   std::size_t half_edge_count() const { return to_.size(); }
   std::size_t face_count() const { return to_.size() / 3; }  ///< slots, removed ones included
   bool face_alive(std::uint32_t f) const { return alive_[f] != 0; }
+  std::size_t live_face_count() const { return live_faces_; }
 
   // Navigation (h: half-edge index, 3 per face: face f owns 3f, 3f + 1, 3f + 2).
   std::uint32_t to(std::uint32_t h) const { return to_[h]; }
@@ -85,7 +86,8 @@ class HalfEdgeMesh {
  private:
   std::vector<Eigen::Vector3f> positions_;
   std::vector<std::uint32_t> to_, twin_, out_;
-  std::vector<std::uint8_t> alive_;                              // per face slot
+  std::vector<std::uint8_t> alive_;  // per face slot
+  std::size_t live_faces_ = 0;
   std::vector<std::uint32_t> neighbours(std::uint32_t v) const;  // sorted
   void link(std::uint32_t x, std::uint32_t y);                   // make x and y twins
   // The targets of the three half-edges of the face whose first half-edge is `first`.

@@ -73,6 +73,18 @@ std::vector<BorderEdge> border_edges(const TriangleMesh& mesh) {
   return border;
 }
 
+float median_edge_length(const TriangleMesh& mesh) {
+  std::vector<float> lengths;
+  lengths.reserve(3 * mesh.triangles.size());
+  for (const Triangle& t : mesh.triangles)
+    for (std::size_t k = 0; k < 3; ++k)
+      lengths.push_back((mesh.vertices[t[(k + 1) % 3]] - mesh.vertices[t[k]]).norm());
+  if (lengths.empty()) return 0.0f;
+  const auto middle = lengths.begin() + static_cast<std::ptrdiff_t>(lengths.size() / 2);
+  std::nth_element(lengths.begin(), middle, lengths.end());
+  return *middle;
+}
+
 TriangleMesh compact_vertices(const TriangleMesh& source, const std::vector<Triangle>& triangles) {
   const std::size_t n = source.vertices.size();
   std::vector<std::uint32_t> id(n, UINT32_MAX);

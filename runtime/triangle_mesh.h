@@ -54,6 +54,10 @@ struct BorderEdge {
 /// Parallel over vertex_triangles(); deterministic. O(V + T x workers + T x valence).
 std::vector<BorderEdge> border_edges(const TriangleMesh& mesh);
 
+/// The median length of the triangles' edges (each interior edge counted twice), metres;
+/// 0 for no triangles. O(T).
+float median_edge_length(const TriangleMesh& mesh);
+
 /// A mesh of `triangles` (indices into source.vertices) that keeps only the referenced vertices,
 /// in their original order, with their normals and colours; triangles are renumbered, their
 /// order kept. O(V + T); not parallel.

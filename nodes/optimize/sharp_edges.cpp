@@ -93,7 +93,7 @@ class CreaseSharpener {
                   const SharpEdgeConfig& config)
       : mesh_(mesh), seg_(s), cfg_(config), h_(mesh) {
     for (const PlanarRegion& r : s.regions) planes_.push_back(Plane{r.normal, r.offset});
-    const float edge = median_edge_length();
+    const float edge = median_edge_length(mesh);
     max_move_ = config.max_move > 0.0f ? config.max_move : 2.0f * edge;
     const float min_width = config.min_region_width > 0.0f ? config.min_region_width : 4.0f * edge;
     large_.resize(s.regions.size());
@@ -126,18 +126,6 @@ class CreaseSharpener {
   }
 
  private:
-  float median_edge_length() const {
-    std::vector<float> lengths;
-    lengths.reserve(h_.half_edge_count());
-    for (std::uint32_t e = 0; e < h_.half_edge_count(); ++e)
-      if (h_.face_alive(HalfEdgeMesh::face(e)))
-        lengths.push_back((h_.position(h_.to(e)) - h_.position(h_.from(e))).norm());
-    if (lengths.empty()) return 0.0f;
-    auto middle = lengths.begin() + static_cast<std::ptrdiff_t>(lengths.size() / 2);
-    std::nth_element(lengths.begin(), middle, lengths.end());
-    return *middle;
-  }
-
   // Fits each taking-part region's plane again through its inner vertices only (those whose
   // faces all lie along it): the segmentation's fit includes the bevel's vertices, which tilt
   // and shift a plane by a good part of the bevel's height.

@@ -13,7 +13,8 @@ namespace {
 
 constexpr OptimizeStep kAllSteps[] = {OptimizeStep::kClean,         OptimizeStep::kHoles,
                                       OptimizeStep::kPlanes,        OptimizeStep::kSharpen,
-                                      OptimizeStep::kRetriangulate, OptimizeStep::kDecimate};
+                                      OptimizeStep::kRetriangulate, OptimizeStep::kRemesh,
+                                      OptimizeStep::kDecimate};
 
 std::string format(const char* pattern, std::size_t a, std::size_t b = 0, std::size_t c = 0,
                    std::size_t d = 0) {
@@ -84,6 +85,20 @@ TriangleMesh retriangulate_step(const TriangleMesh& mesh, const OptimizeConfig& 
   return out;
 }
 
+TriangleMesh remesh_step(const TriangleMesh& mesh, const OptimizeConfig& config,
+                         OptimizeStepReport& step) {
+  AdaptiveRemeshReport r;
+  TriangleMesh out = adaptive_remesh(mesh, config.remesh, &r);
+  step.detail = format("%zu -> %zu vertices (%zu splits, %zu collapses", r.vertices_in,
+                       r.vertices_out, r.splits, r.collapses) +
+                format(", %zu flips)", r.flips);
+  char lengths[120];
+  std::snprintf(lengths, sizeof lengths, ", target edges %.4f-%.4f m at tolerance %.4f m",
+                r.min_target, r.max_target, r.tolerance);
+  step.detail += lengths;
+  return out;
+}
+
 TriangleMesh decimate_step(const TriangleMesh& mesh, const OptimizeConfig& config,
                            OptimizeStepReport& step) {
   QemReport r;
@@ -108,6 +123,8 @@ const char* optimize_step_name(OptimizeStep step) {
       return "sharpen";
     case OptimizeStep::kRetriangulate:
       return "retriangulate";
+    case OptimizeStep::kRemesh:
+      return "remesh";
     case OptimizeStep::kDecimate:
       break;
   }
@@ -130,7 +147,7 @@ std::vector<OptimizeStep> parse_optimize_steps(const std::string& list) {
     if (!known)
       throw Error("--optimize", "step '" + name + "'",
                   "expected default, none, or a comma-separated list of clean, holes, planes, "
-                  "sharpen, retriangulate, decimate");
+                  "sharpen, retriangulate, remesh, decimate");
   }
   return steps;
 }
@@ -162,6 +179,9 @@ TriangleMesh optimize_mesh(const TriangleMesh& mesh, const OptimizeConfig& confi
         case OptimizeStep::kRetriangulate:
           current = retriangulate_step(current, config, step);
           break;
+        case OptimizeStep::kRemesh:
+          current = remesh_step(current, config, step);
+          break;
         case OptimizeStep::kDecimate:
           current = decimate_step(current, config, step);
           break;
@@ -176,7 +196,7 @@ TriangleMesh optimize_mesh(const TriangleMesh& mesh, const OptimizeConfig& confi
   }
   const bool moved = std::any_of(r.steps.begin(), r.steps.end(), [](const OptimizeStepReport& s) {
     return (s.step == OptimizeStep::kPlanes || s.step == OptimizeStep::kSharpen ||
-            s.step == OptimizeStep::kRetriangulate) &&
+            s.step == OptimizeStep::kRetriangulate || s.step == OptimizeStep::kRemesh) &&
            !s.skipped;
   });
   if (had_normals && (moved || current.normals.size() != current.vertices.size()))

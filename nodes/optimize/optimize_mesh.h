@@ -3,11 +3,13 @@
 // clean (degenerate faces, small components), holes (close small border loops), planes
 // (planar regions, vertices projected onto their plane), sharpen (the bevels between planar
 // regions cut along the planes' intersection lines), retriangulate (planar regions
-// triangulated anew from their simplified contours), decimate (constrained QEM).
+// triangulated anew from their simplified contours), remesh (curvature-aware: large triangles
+// where the surface is flat, small ones where it bends), decimate (constrained QEM).
 
 #include <string>
 #include <vector>
 
+#include "nodes/optimize/adaptive_remesh.h"
 #include "nodes/optimize/hole_filling.h"
 #include "nodes/optimize/mesh_cleanup.h"
 #include "nodes/optimize/planar_regions.h"
@@ -18,12 +20,12 @@
 
 namespace meshflow {
 
-enum class OptimizeStep { kClean, kHoles, kPlanes, kSharpen, kRetriangulate, kDecimate };
+enum class OptimizeStep { kClean, kHoles, kPlanes, kSharpen, kRetriangulate, kRemesh, kDecimate };
 const char* optimize_step_name(OptimizeStep step);
 
 /// "default" (clean, holes), "none", or a comma-separated list of step names in the order they
-/// should run ("clean,holes,planes,sharpen,retriangulate,decimate"); a step may repeat. Throws
-/// meshflow::Error naming the unknown step and the valid names.
+/// should run ("clean,holes,planes,sharpen,retriangulate,remesh,decimate"); a step may repeat.
+/// Throws meshflow::Error naming the unknown step and the valid names.
 std::vector<OptimizeStep> parse_optimize_steps(const std::string& list);
 
 struct OptimizeConfig {
@@ -33,6 +35,7 @@ struct OptimizeConfig {
   PlanarRegionConfig planes;  ///< planes, sharpen and retriangulate
   SharpEdgeConfig sharpen;
   RetriangulationConfig retriangulation;
+  AdaptiveRemeshConfig remesh;
   /// Decimation defaults for a reconstructed map: plain quadric errors (no depth weighting),
   /// a quarter of the triangles kept.
   QemConfig decimate = [] {
@@ -61,7 +64,7 @@ struct OptimizeReport {
 /// Runs config.steps on `mesh` in order and returns the result; normals and colours follow
 /// their vertices, and normals are recomputed from the faces when a planes step moved
 /// vertices. A step that
-/// cannot run on this mesh (non-manifold input for planes, sharpen, retriangulate) is skipped with
+/// cannot run on this mesh (non-manifold input for the half-edge steps) is skipped with
 /// its reason in the report rather than failing the frame. Each step is parallel where its
 /// kernel is and deterministic; see the kernels for costs.
 TriangleMesh optimize_mesh(const TriangleMesh& mesh, const OptimizeConfig& config,

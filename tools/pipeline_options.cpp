@@ -25,6 +25,7 @@ ReconstructionConfig PipelineOptions::config() const {
   c.optimize.decimate.target_ratio = decimate_to;
   c.optimize.retriangulation.contour_tolerance = contour_tolerance;
   c.optimize.planes.max_projection = max_projection;
+  c.optimize.remesh.tolerance = remesh_tolerance;
   return c;
 }
 
@@ -61,7 +62,7 @@ void add_pipeline_options(CLI::App* cmd, PipelineOptions& o) {
       ->check(CLI::NonNegativeNumber);
   cmd->add_option("--optimize", o.optimize,
                   "Mesh optimisation: default (clean,holes), none, or a list of clean, holes, "
-                  "planes, sharpen, retriangulate, decimate in the order to run")
+                  "planes, sharpen, retriangulate, remesh, decimate in the order to run")
       ->check([](const std::string& list) -> std::string {
         try {
           parse_optimize_steps(list);
@@ -76,6 +77,10 @@ void add_pipeline_options(CLI::App* cmd, PipelineOptions& o) {
       ->check(CLI::NonNegativeNumber);
   cmd->add_option("--max-projection", o.max_projection,
                   "planes step: vertices farther from their plane stay, metres (0 = no limit)")
+      ->check(CLI::NonNegativeNumber);
+  cmd->add_option("--remesh-tolerance", o.remesh_tolerance,
+                  "remesh step: largest deviation of an edge from the surface, metres "
+                  "(0 = a quarter of the median edge)")
       ->check(CLI::NonNegativeNumber);
   cmd->add_option("--decimate-to", o.decimate_to, "decimate step: share of the triangles to keep")
       ->check(CLI::Range(0.0f, 1.0f));

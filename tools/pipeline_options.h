@@ -28,13 +28,15 @@ struct PipelineOptions {
   float decimate_to = 0.25f;
   float contour_tolerance = 0.02f;
   float max_projection = 0.0f;
+  float remesh_tolerance = 0.0f;
 
   ReconstructionConfig config() const;
 };
 
 /// Registers --voxel --kn --ki --kd --threads --adaptive-k --max-distance --min-component
 /// --filter-voxel --outlier-k --min-range --max-range --extract --optimize --max-hole
-/// --contour-tolerance --max-projection --decimate-to on `cmd`, writing into `options`.
+/// --contour-tolerance --max-projection --remesh-tolerance --decimate-to on `cmd`, writing into
+/// `options`.
 void add_pipeline_options(CLI::App* cmd, PipelineOptions& options);
 
 /// The SEQUENCE argument of run/profile: a path, or the built-in synthetic sequence.

@@ -50,13 +50,13 @@ void BM_MeshCleanup(benchmark::State& state) {
 BENCHMARK(BM_MeshCleanup)->Apply(thread_and_input_args);
 
 // One optimisation step alone on the cleaned mesh: 0 holes, 1 planes, 2 retriangulate,
-// 3 decimate (QEM to 25 %, no depth weighting), 4 sharpen.
+// 3 decimate (QEM to 25 %, no depth weighting), 4 sharpen, 5 remesh (curvature-aware).
 void BM_OptimizeStep(benchmark::State& state) {
   const TriangleMesh* mesh = cleaned_mesh(state);
   if (mesh == nullptr) return;
-  const OptimizeStep steps[] = {OptimizeStep::kHoles, OptimizeStep::kPlanes,
+  const OptimizeStep steps[] = {OptimizeStep::kHoles,         OptimizeStep::kPlanes,
                                 OptimizeStep::kRetriangulate, OptimizeStep::kDecimate,
-                                OptimizeStep::kSharpen};
+                                OptimizeStep::kSharpen,       OptimizeStep::kRemesh};
   OptimizeConfig config;
   config.steps = {steps[state.range(2)]};
   state.SetLabel(optimize_step_name(config.steps[0]));
@@ -67,7 +67,7 @@ void BM_OptimizeStep(benchmark::State& state) {
   count_triangles(state, *mesh, out);
 }
 BENCHMARK(BM_OptimizeStep)
-    ->ArgsProduct({{1, 2}, {kSynthetic, kKurt3d}, {0, 1, 2, 3, 4}})
+    ->ArgsProduct({{1, 2}, {kSynthetic, kKurt3d}, {0, 1, 2, 3, 4, 5}})
     ->ArgNames({"threads", "input", "step"})
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();

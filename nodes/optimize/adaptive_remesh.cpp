@@ -18,6 +18,7 @@ using Vec3 = Eigen::Vector3f;
 constexpr std::uint32_t kNone = HalfEdgeMesh::kNone;
 constexpr float kSplitAbove = 4.0f / 3.0f;  // Botsch & Kobbelt's thresholds around the target
 constexpr float kCollapseBelow = 4.0f / 5.0f;
+constexpr float kSmallestMove = 0.05f;  // relaxation leaves vertices this close (x target) alone
 
 /// The remesher's state: the mesh and what each vertex carries alongside it.
 struct Remesher {
@@ -56,15 +57,42 @@ Vec3 vertex_normal(const HalfEdgeMesh& h, std::uint32_t v) {
   return n.squaredNorm() > 0.0f ? Vec3(n.normalized()) : n;
 }
 
+/// Every vertex's neighbours in compressed rows: a snapshot of the mesh's connectivity for the
+/// passes that read it many times without changing it. Parallel over vertices; O(V x valence).
+struct Adjacency {
+  std::vector<std::uint32_t> offsets;  // vertex_count + 1
+  std::vector<std::uint32_t> vertices;
+  std::size_t valence(std::uint32_t v) const { return offsets[v + 1] - offsets[v]; }
+  const std::uint32_t* begin(std::uint32_t v) const { return vertices.data() + offsets[v]; }
+  const std::uint32_t* end(std::uint32_t v) const { return vertices.data() + offsets[v + 1]; }
+};
+
+Adjacency adjacency(const HalfEdgeMesh& h) {
+  const std::size_t n = h.vertex_count();
+  Adjacency a;
+  a.offsets.assign(n + 1, 0);
+  tbb::parallel_for(std::size_t{0}, n, [&](std::size_t v) {
+    a.offsets[v + 1] =
+        static_cast<std::uint32_t>(neighbour_vertices(h, static_cast<std::uint32_t>(v)).size());
+  });
+  for (std::size_t v = 0; v < n; ++v) a.offsets[v + 1] += a.offsets[v];
+  a.vertices.resize(a.offsets[n]);
+  tbb::parallel_for(std::size_t{0}, n, [&](std::size_t v) {
+    const std::vector<std::uint32_t> around = neighbour_vertices(h, static_cast<std::uint32_t>(v));
+    std::copy(around.begin(), around.end(), a.vertices.begin() + a.offsets[v]);
+  });
+  return a;
+}
+
 /// The vertices within `rings` edges of v, v excluded.
-std::vector<std::uint32_t> neighbourhood(const HalfEdgeMesh& h, std::uint32_t v, int rings) {
+std::vector<std::uint32_t> neighbourhood(const Adjacency& adj, std::uint32_t v, int rings) {
   std::vector<std::uint32_t> found{v};
   std::size_t begin = 0;
   for (int r = 0; r < rings; ++r) {
     const std::size_t end = found.size();
     for (std::size_t i = begin; i < end; ++i)
-      for (std::uint32_t w : neighbour_vertices(h, found[i]))
-        if (std::find(found.begin(), found.end(), w) == found.end()) found.push_back(w);
+      for (const std::uint32_t* w = adj.begin(found[i]); w != adj.end(found[i]); ++w)
+        if (std::find(found.begin(), found.end(), *w) == found.end()) found.push_back(*w);
     begin = end;
   }
   found.erase(found.begin());
@@ -75,9 +103,9 @@ std::vector<std::uint32_t> neighbourhood(const HalfEdgeMesh& h, std::uint32_t v,
 /// z = a x^2 + b xy + c y^2 + d x + e y + f over its neighbourhood, in the frame of v's normal
 /// (the constant and linear terms absorb noise and a tilted normal). 0 with fewer than six
 /// neighbours or without a normal.
-float fitted_curvature(const HalfEdgeMesh& h, std::uint32_t v, int rings) {
+float fitted_curvature(const HalfEdgeMesh& h, const Adjacency& adj, std::uint32_t v, int rings) {
   const Vec3 n = vertex_normal(h, v);
-  const std::vector<std::uint32_t> near = neighbourhood(h, v, rings);
+  const std::vector<std::uint32_t> near = neighbourhood(adj, v, rings);
   if (n.squaredNorm() == 0.0f || near.size() < 6) return 0.0f;
   const Vec3 t1 = n.unitOrthogonal(), t2 = n.cross(t1);
   const Vec3& p = h.position(v);
@@ -105,9 +133,9 @@ float fitted_curvature(const HalfEdgeMesh& h, std::uint32_t v, int rings) {
 
 /// Target lengths from curvatures, clamped, then limited so that they grow by at most
 /// `gradation` per metre from any vertex (Jacobi sweeps until stable).
-std::vector<float> target_lengths(const HalfEdgeMesh& h, const std::vector<float>& curvature,
-                                  float tolerance, float min_edge, float max_edge,
-                                  float gradation) {
+std::vector<float> target_lengths(const HalfEdgeMesh& h, const Adjacency& adj,
+                                  const std::vector<float>& curvature, float tolerance,
+                                  float min_edge, float max_edge, float gradation) {
   const std::size_t n = h.vertex_count();
   std::vector<float> target(n);
   for (std::size_t v = 0; v < n; ++v) {
@@ -121,8 +149,9 @@ std::vector<float> target_lengths(const HalfEdgeMesh& h, const std::vector<float
     std::vector<std::uint8_t> changed(n, 0);
     tbb::parallel_for(std::size_t{0}, n, [&](std::size_t v) {
       float t = target[v];
-      for (std::uint32_t w : neighbour_vertices(h, static_cast<std::uint32_t>(v)))
-        t = std::min(t, target[w] + gradation * (h.position(w) - h.position(v)).norm());
+      for (const std::uint32_t* w = adj.begin(static_cast<std::uint32_t>(v));
+           w != adj.end(static_cast<std::uint32_t>(v)); ++w)
+        t = std::min(t, target[*w] + gradation * (h.position(*w) - h.position(v)).norm());
       next[v] = t;
       changed[v] = t < target[v] ? 1 : 0;
     });
@@ -257,10 +286,10 @@ std::size_t collapse_short_edges(Remesher& r) {
   return collapses;
 }
 
-int valence_deviation(const HalfEdgeMesh& h, std::uint32_t v, int change) {
-  const int valence = static_cast<int>(neighbour_vertices(h, v).size()) + change;
+int valence_deviation(const HalfEdgeMesh& h, const std::vector<int>& valence, std::uint32_t v,
+                      int change) {
   const int ideal = h.is_border_vertex(v) ? 4 : 6;
-  return (valence - ideal) * (valence - ideal);
+  return (valence[v] + change - ideal) * (valence[v] + change - ideal);
 }
 
 /// Flips interior edges whose flip brings the four vertices' valences closer to 6 (4 on a
@@ -269,15 +298,19 @@ int valence_deviation(const HalfEdgeMesh& h, std::uint32_t v, int change) {
 std::size_t flip_towards_regular_valence(Remesher& r) {
   HalfEdgeMesh& h = r.mesh;
   std::size_t flips = 0;
+  std::vector<int> valence(h.vertex_count());
+  tbb::parallel_for(std::size_t{0}, valence.size(), [&](std::size_t v) {
+    valence[v] = static_cast<int>(neighbour_vertices(h, static_cast<std::uint32_t>(v)).size());
+  });
   for (std::uint32_t e : edges(h)) {
     if (h.is_border(e)) continue;
     const std::uint32_t t = h.twin(e);
     const std::uint32_t a = h.from(e), b = h.to(e);
     const std::uint32_t c = h.to(HalfEdgeMesh::next(e)), d = h.to(HalfEdgeMesh::next(t));
-    const int before = valence_deviation(h, a, 0) + valence_deviation(h, b, 0) +
-                       valence_deviation(h, c, 0) + valence_deviation(h, d, 0);
-    const int after = valence_deviation(h, a, -1) + valence_deviation(h, b, -1) +
-                      valence_deviation(h, c, 1) + valence_deviation(h, d, 1);
+    const int before = valence_deviation(h, valence, a, 0) + valence_deviation(h, valence, b, 0) +
+                       valence_deviation(h, valence, c, 0) + valence_deviation(h, valence, d, 0);
+    const int after = valence_deviation(h, valence, a, -1) + valence_deviation(h, valence, b, -1) +
+                      valence_deviation(h, valence, c, 1) + valence_deviation(h, valence, d, 1);
     if (after >= before) continue;
     const Vec3 &pa = h.position(a), &pb = h.position(b), &pc = h.position(c), &pd = h.position(d);
     const Vec3 n1 = face_cross(h, HalfEdgeMesh::face(e)), n2 = face_cross(h, HalfEdgeMesh::face(t));
@@ -285,7 +318,12 @@ std::size_t flip_towards_regular_valence(Remesher& r) {
     const Vec3 across = (pb - pa).cross(pd - pc);
     if (across.squaredNorm() == 0.0f) continue;
     if (std::abs((pc - pa).dot(across)) > r.tolerance * across.norm()) continue;  // diagonals apart
-    if (h.flip(e)) ++flips;
+    if (!h.flip(e)) continue;
+    --valence[a];
+    --valence[b];
+    ++valence[c];
+    ++valence[d];
+    ++flips;
   }
   return flips;
 }
@@ -309,6 +347,7 @@ void relax_tangentially(Remesher& r) {
     const Vec3 normal = vertex_normal(h, v);
     Vec3 step = centroid - h.position(v);
     step -= normal * normal.dot(step);
+    if (step.norm() < kSmallestMove * r.target[v]) return;  // settled
     const Vec3 projected = onto_input(r, h.position(v) + step, normal);
     if (projected != h.position(v) + step) moved[i] = projected;  // else: no surface to follow
   });
@@ -367,12 +406,14 @@ TriangleMesh adaptive_remesh(const TriangleMesh& mesh, const AdaptiveRemeshConfi
 
   const std::size_t n = r.mesh.vertex_count();
   r.curvature.assign(n, 0.0f);
+  const Adjacency adj = adjacency(r.mesh);
   tbb::parallel_for(std::size_t{0}, n, [&](std::size_t v) {
     if (!removed(r.mesh, static_cast<std::uint32_t>(v)))
       r.curvature[v] =
-          fitted_curvature(r.mesh, static_cast<std::uint32_t>(v), config.curvature_rings);
+          fitted_curvature(r.mesh, adj, static_cast<std::uint32_t>(v), config.curvature_rings);
   });
-  r.target = target_lengths(r.mesh, r.curvature, r.tolerance, min_edge, max_edge, config.gradation);
+  r.target =
+      target_lengths(r.mesh, adj, r.curvature, r.tolerance, min_edge, max_edge, config.gradation);
 
   for (int i = 0; i < config.iterations; ++i) {
     rep.splits += split_long_edges(r);

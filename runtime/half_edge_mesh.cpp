@@ -133,6 +133,9 @@ bool HalfEdgeMesh::flip(std::uint32_t h) {
   const Eigen::Vector3f before = normal(a, b, c) + normal(b, a, d);
   const Eigen::Vector3f n1 = normal(a, d, c), n2 = normal(d, b, c);
   if (!(n1.dot(before) > 0.0f && n2.dot(before) > 0.0f)) return false;
+  if (!has_area(positions_[a], positions_[d], positions_[c]) ||
+      !has_area(positions_[d], positions_[b], positions_[c]))
+    return false;
   // Outer half-edges and their twins before rewriting.
   const std::uint32_t bc = next(h), ca = prev(h), ad = next(t), db = prev(t);
   const std::uint32_t x_bc = twin_[bc], x_ca = twin_[ca], x_ad = twin_[ad], x_db = twin_[db];
@@ -198,7 +201,8 @@ bool HalfEdgeMesh::collapse(std::uint32_t h) {
         (positions_[x] - positions_[a]).cross(positions_[y] - positions_[a]);
     const Eigen::Vector3f after =
         (positions_[x] - positions_[b]).cross(positions_[y] - positions_[b]);
-    if (!(after.dot(before) > 0.0f)) return false;
+    if (!(after.dot(before) > 0.0f) || !has_area(positions_[b], positions_[x], positions_[y]))
+      return false;
   }
   // The faces along a-b go; their outer edges pair up: (c->b's twin, a->c's twin), and on the
   // other side (a->d's twin... d->a), (b->d).

@@ -17,6 +17,16 @@ Eigen::Vector3f face_normal(const TriangleMesh& mesh, const Triangle& t) {
   return len > 0.0f ? Eigen::Vector3f(n / len) : Eigen::Vector3f::Zero();
 }
 
+bool has_area(const Eigen::Vector3f& a, const Eigen::Vector3f& b, const Eigen::Vector3f& c) {
+  const Eigen::Vector3f ab = b - a, bc = c - b, ca = a - c;
+  const float at_a = ab.cross(-ca).squaredNorm(), at_b = bc.cross(-ab).squaredNorm(),
+              at_c = ca.cross(-bc).squaredNorm();
+  const float longest = std::max({ab.squaredNorm(), bc.squaredNorm(), ca.squaredNorm()});
+  constexpr float kFlattest = 1e-6f;
+  return at_a > 0.0f && at_b > 0.0f && at_c > 0.0f &&
+         at_a >= kFlattest * kFlattest * longest * longest;
+}
+
 EdgeStatistics edge_statistics(const TriangleMesh& mesh) {
   // Key: (min vertex, max vertex) with the direction in the lowest bit.
   std::vector<std::uint64_t> keys;

@@ -26,6 +26,12 @@ struct TriangleMesh {
 /// Unit face normal of triangle t (zero for a degenerate triangle).
 Eigen::Vector3f face_normal(const TriangleMesh& mesh, const Triangle& t);
 
+/// Whether triangle (a, b, c) has an area float arithmetic sees from every corner: its edges'
+/// cross product is non-zero at each corner and at least 1e-6 of its longest edge squared (no
+/// needle or sliver flatter than a millionth of its length). Mesh edits use it to refuse faces
+/// that later steps would count as degenerate. O(1).
+bool has_area(const Eigen::Vector3f& a, const Eigen::Vector3f& b, const Eigen::Vector3f& c);
+
 /// Recomputes `normals` as area-weighted averages of the adjacent face normals (unit length;
 /// zero for a vertex without area around it). Parallel over vertex ranges (one per worker, each
 /// scanning all triangles); every vertex sums its faces in triangle order, so the result is

@@ -50,6 +50,11 @@ Vec3 face_cross(const HalfEdgeMesh& h, std::uint32_t f) {
   return (h.position(h.to(3 * f)) - a).cross(h.position(h.to(3 * f + 1)) - a);
 }
 
+bool face_has_area(const HalfEdgeMesh& h, std::uint32_t f) {
+  return has_area(h.position(h.to(3 * f + 2)), h.position(h.to(3 * f)),
+                  h.position(h.to(3 * f + 1)));
+}
+
 /// Area-weighted unit normal at v (zero without area).
 Vec3 vertex_normal(const HalfEdgeMesh& h, std::uint32_t v) {
   Vec3 n = Vec3::Zero();
@@ -199,6 +204,17 @@ bool longest_in_faces(const HalfEdgeMesh& h, std::uint32_t e) {
   return true;
 }
 
+/// Whether splitting the edge of e at p leaves every new face with area.
+bool split_keeps_area(const HalfEdgeMesh& h, std::uint32_t e, const Vec3& p) {
+  for (std::uint32_t side : {e, h.twin(e)}) {
+    if (side == kNone) continue;
+    const Vec3& c = h.position(h.to(HalfEdgeMesh::next(side)));
+    if (!has_area(h.position(h.from(side)), p, c) || !has_area(p, h.position(h.to(side)), c))
+      return false;
+  }
+  return true;
+}
+
 std::size_t split_long_edges(Remesher& r) {
   HalfEdgeMesh& h = r.mesh;
   std::size_t splits = 0;
@@ -208,8 +224,9 @@ std::size_t split_long_edges(Remesher& r) {
       continue;
     Vec3 normal = face_cross(h, HalfEdgeMesh::face(e));
     if (!h.is_border(e)) normal += face_cross(h, HalfEdgeMesh::face(h.twin(e)));
-    const Vec3 midpoint = 0.5f * (h.position(a) + h.position(b));
-    h.split(e, onto_input(r, midpoint, normal.normalized()));  // the new vertex is the last one
+    const Vec3 at = onto_input(r, 0.5f * (h.position(a) + h.position(b)), normal.normalized());
+    if (!split_keeps_area(h, e, at)) continue;
+    h.split(e, at);  // the new vertex is the last one
     r.target.push_back(0.5f * (r.target[a] + r.target[b]));
     r.curvature.push_back(0.5f * (r.curvature[a] + r.curvature[b]));
     if (!r.colors.empty()) {
@@ -256,7 +273,7 @@ bool collapse_allowed(const Remesher& r, std::uint32_t e) {
     if (b == v || c == v) continue;  // disappears with the edge
     const Vec3 before = face_cross(h, f);
     const Vec3 after = (h.position(b) - pv).cross(h.position(c) - pv);
-    if (after.squaredNorm() == 0.0f ||
+    if (!has_area(pv, h.position(b), h.position(c)) ||
         before.dot(after) < r.min_turn_cos * before.norm() * after.norm())
       return false;
     nearest = std::min(
@@ -361,7 +378,7 @@ void relax_tangentially(Remesher& r) {
     h.set_position(v, moved[v]);
     for (std::size_t k = 0; k < ring.size(); ++k) {
       const Vec3 after = face_cross(h, HalfEdgeMesh::face(ring[k]));
-      if (after.squaredNorm() == 0.0f ||
+      if (!face_has_area(h, HalfEdgeMesh::face(ring[k])) ||
           before[k].dot(after) < r.min_turn_cos * before[k].norm() * after.norm()) {
         h.set_position(v, old);
         break;

@@ -284,9 +284,11 @@ class Decimator {
     // Faces that stay: no flip, no degeneration, no turn beyond the limit.
     for (const std::uint32_t* f = around_.begin(u); f != around_.end(u); ++f) {
       if (has(t_[*f], v)) continue;
-      const Eigen::Vector3f before = normal(t_[*f]), after = normal(replaced(t_[*f], u, v));
+      const Triangle moved = replaced(t_[*f], u, v);
+      const Eigen::Vector3f before = normal(t_[*f]), after = normal(moved);
       const float b = before.norm(), a = after.norm();
-      if (!(a > 1e-12f * std::max(1.0f, b)) || !(before.dot(after) >= cos_turn_ * a * b)) {
+      if (!has_area(p(moved[0]), p(moved[1]), p(moved[2])) ||
+          !(before.dot(after) >= cos_turn_ * a * b)) {
         ++rejected.rejected_normal;
         return false;
       }

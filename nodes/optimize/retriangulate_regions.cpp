@@ -237,9 +237,10 @@ RegionTriangulation triangulate_region(const std::vector<Loop>& loops,
   Cdt cdt;
   std::size_t vertices = 0, outer_loops = 0;
   double loop_area = 0.0;
+  std::vector<std::vector<Cdt::Vertex_handle>> loop_handles;
   for (const Loop& loop : loops) {
     double area = 0.0;
-    std::vector<Cdt::Vertex_handle> handles;
+    std::vector<Cdt::Vertex_handle>& handles = loop_handles.emplace_back();
     for (std::uint32_t v : loop) {
       if (!keep[v]) continue;
       Cdt::Vertex_handle handle = cdt.insert(plane_point(v));
@@ -312,9 +313,62 @@ RegionTriangulation triangulate_region(const std::vector<Loop>& loops,
   const std::size_t holes = loops.size() - outer_loops;
   if (vertices + 2 * holes < 2 * outer_loops + 1) return {};  // (faulty stays empty)
   const std::size_t expected = vertices + 2 * holes - 2 * outer_loops;
-  if (triangles.size() != expected || std::abs(loop_area - inside_area) > 1e-4 * inside_area)
+  if (triangles.size() != expected || std::abs(loop_area - inside_area) > 1e-4 * inside_area) {
     triangles.clear();
+    // A loop with the outside on its left is folded over in the plane (a sliver of the
+    // region turned over, as cutting creases can leave): its vertices are the fault.
+    for (const std::vector<Cdt::Vertex_handle>& handles : loop_handles) {
+      Cdt::Face_handle face;
+      int i = 0;
+      if (!cdt.is_edge(handles[0], handles[1], face, i)) continue;
+      if (face->vertex(Cdt::ccw(i)) != handles[0]) face = face->neighbor(i);  // the left side
+      if (face->info() % 2 != 0) continue;
+      for (const Cdt::Vertex_handle& v : handles) out.faulty.push_back(v->info().index);
+    }
+  }
   return out;
+}
+
+std::uint64_t edge_key(std::uint32_t a, std::uint32_t b) {
+  return static_cast<std::uint64_t>(std::min(a, b)) << 32 | std::max(a, b);
+}
+
+// An edge that two new triangulations create both, or one creates while the faces that stay
+// have it too, would join more than two faces. Each region whose triangulation has such an
+// edge fails, with the edge's ends as its fault (it gives up its faces there and tries again).
+void fail_at_shared_new_edges(const TriangleMesh& mesh,
+                              const std::vector<std::int32_t>& region_of_face,
+                              const std::vector<std::uint8_t>& state,
+                              std::vector<RegionTriangulation>& results) {
+  auto replaced = [&](std::int32_t region) {
+    return region >= 0 && state[static_cast<std::size_t>(region)] != kKept &&
+           !results[static_cast<std::size_t>(region)].triangles.empty();
+  };
+  std::vector<std::uint64_t> keys;
+  auto add = [&](const Triangle& t) {
+    for (int k = 0; k < 3; ++k) keys.push_back(edge_key(t[k], t[(k + 1) % 3]));
+  };
+  for (std::uint32_t f = 0; f < mesh.triangles.size(); ++f)
+    if (!replaced(region_of_face[f])) add(mesh.triangles[f]);
+  for (const RegionTriangulation& result : results)
+    for (const Triangle& t : result.triangles) add(t);
+  std::sort(keys.begin(), keys.end());
+  std::vector<std::uint64_t> crowded;
+  for (std::size_t i = 2; i < keys.size(); ++i)
+    if (keys[i] == keys[i - 2] && (crowded.empty() || crowded.back() != keys[i]))
+      crowded.push_back(keys[i]);
+  if (crowded.empty()) return;
+  for (std::size_t i = 0; i < results.size(); ++i) {
+    if (!replaced(static_cast<std::int32_t>(i))) continue;
+    std::vector<std::uint32_t> faulty;
+    for (const Triangle& t : results[i].triangles)
+      for (int k = 0; k < 3; ++k)
+        if (std::binary_search(crowded.begin(), crowded.end(), edge_key(t[k], t[(k + 1) % 3])))
+          faulty.insert(faulty.end(), {t[k], t[(k + 1) % 3]});
+    if (faulty.empty()) continue;
+    results[i].triangles.clear();
+    results[i].faulty = std::move(faulty);
+  }
 }
 
 }  // namespace
@@ -361,6 +415,7 @@ TriangleMesh retriangulate_regions(const TriangleMesh& mesh, const PlanarSegment
                                                           segmentation.regions[i].normal)
                                      : RegionTriangulation{};
     });
+    fail_at_shared_new_edges(mesh, region_of_face, state, results);
     changed = 0;
     for (std::size_t i = 0; i < regions; ++i) {
       if (state[i] == kKept || !results[i].triangles.empty()) continue;

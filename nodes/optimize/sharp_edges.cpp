@@ -172,10 +172,14 @@ class CreaseSharpener {
     return false;
   }
 
-  // Whether face f now faces against `before` (its normal then) or lost its area; faces that
-  // had no area to begin with do not count.
+  // Whether face f now faces against `before` (its normal then) or lost its area (has_area:
+  // a sliver flatter than a millionth counts as lost); faces that had no area to begin with do
+  // not count.
   bool turned(std::uint32_t f, const Eigen::Vector3f& before) const {
-    return before.squaredNorm() > 0.0f && normal(f).dot(before) <= 0.0f;
+    return before.squaredNorm() > 0.0f &&
+           (normal(f).dot(before) <= 0.0f ||
+            !has_area(h_.position(h_.from(3 * f)), h_.position(h_.from(3 * f + 1)),
+                      h_.position(h_.from(3 * f + 2))));
   }
 
   // The width of a strip with the same spread across the region's main direction as its face

@@ -21,8 +21,9 @@ void BM_TriangulateDepth(benchmark::State& state) {
   DepthTriangulationConfig config;
   config.method = state.range(2) >= 1 ? DepthTriangulationMethod::kRestrictedQuadtree
                                       : DepthTriangulationMethod::kNaive;
-  if (state.range(2) == 2) config.decimate_to = 0.25f;
-  const char* names[] = {"naive", "rqt", "rqt+qem25%"};
+  if (state.range(2) == 2 || state.range(2) == 4) config.decimate_to = 0.25f;
+  if (state.range(2) >= 3) config.filter.median_kernel = 5;
+  const char* names[] = {"naive", "rqt", "rqt+qem25%", "median5+rqt", "median5+rqt+qem25%"};
   state.SetLabel(std::string(redwood ? "redwood " : "synthetic ") + names[state.range(2)]);
   ThreadLimit limit(static_cast<int>(state.range(0)));
   std::size_t triangles = 0;
@@ -31,7 +32,7 @@ void BM_TriangulateDepth(benchmark::State& state) {
 }
 BENCHMARK(BM_TriangulateDepth)
     ->ArgNames({"threads", "redwood", "method"})
-    ->ArgsProduct({{1, 2}, {0, 1}, {0, 1, 2}})
+    ->ArgsProduct({{1, 2}, {0, 1}, {0, 1, 2, 3, 4}})
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
 

@@ -10,25 +10,29 @@
 namespace meshflow {
 namespace {
 
-// 2 when some valid 4-neighbour differs from pixel u of row `row` by more than `high` of the
-// nearer depth, 1 when by more than `low`, else 0 (comparisons without divisions).
-std::uint8_t jump_level(const float* above, const float* row, const float* below, int u, int cols,
-                        float high, float low) {
-  const float c = row[u];
-  std::uint8_t level = 0;
-  auto check = [&](float n) {
-    if (!(n > 0.0f)) return;
-    const float diff = std::abs(c - n), nearer = std::min(c, n);
-    if (diff > high * nearer)
-      level = 2;
-    else if (diff > low * nearer && level == 0)
-      level = 1;
-  };
-  if (u + 1 < cols) check(row[u + 1]);
-  if (u > 0) check(row[u - 1]);
-  if (below != nullptr) check(below[u]);
-  if (above != nullptr) check(above[u]);
-  return level;
+// 2 when valid neighbour n differs from valid pixel c by more than `high` of the nearer depth,
+// 1 when by more than `low`, else 0 (no divisions, no branches: the row loop vectorises).
+inline std::uint8_t jump(float c, float n, float high, float low) {
+  const float diff = std::abs(c - n), nearer = std::min(c, n);
+  const bool both = (c > 0.0f) & (n > 0.0f);
+  return static_cast<std::uint8_t>(both * ((diff > high * nearer) + (diff > low * nearer)));
+}
+
+// The levels of row `row` (the largest jump to any 4-neighbour; `above` / `below` are null at
+// the image's top / bottom) into `out`.
+void jump_levels(const float* above, const float* row, const float* below, int cols, float high,
+                 float low, std::uint8_t* out) {
+  if (cols == 1) out[0] = 0;
+  if (cols >= 2) {  // left and right neighbours (jump() is symmetric)
+    out[0] = jump(row[0], row[1], high, low);
+    out[cols - 1] = jump(row[cols - 1], row[cols - 2], high, low);
+  }
+  for (int u = 1; u + 1 < cols; ++u)
+    out[u] = std::max(jump(row[u], row[u - 1], high, low), jump(row[u], row[u + 1], high, low));
+  for (const float* other : {above, below}) {
+    if (other == nullptr) continue;
+    for (int u = 0; u < cols; ++u) out[u] = std::max(out[u], jump(row[u], other[u], high, low));
+  }
 }
 
 }  // namespace
@@ -38,14 +42,10 @@ cv::Mat occlusion_edges(const cv::Mat& depth_m, float high, float low) {
   // 2 = strong edge, 1 = weak candidate, 0 = not an edge.
   cv::Mat level(depth_m.size(), CV_8U, cv::Scalar(0));
   tbb::parallel_for(0, depth_m.rows, [&](int v) {
-    const float* row = depth_m.ptr<float>(v);
     const float* above = v > 0 ? depth_m.ptr<float>(v - 1) : nullptr;
     const float* below = v + 1 < depth_m.rows ? depth_m.ptr<float>(v + 1) : nullptr;
-    std::uint8_t* out = level.ptr<std::uint8_t>(v);
-    for (int u = 0; u < depth_m.cols; ++u) {
-      if (!(row[u] > 0.0f)) continue;
-      out[u] = jump_level(above, row, below, u, depth_m.cols, high, low);
-    }
+    jump_levels(above, depth_m.ptr<float>(v), below, depth_m.cols, high, low,
+                level.ptr<std::uint8_t>(v));
   });
   // Hysteresis: grow strong edges into connected weak pixels (breadth-first, serial).
   cv::Mat edges(depth_m.size(), CV_8U, cv::Scalar(0));
@@ -77,16 +77,18 @@ cv::Mat filter_depth(const DepthFrame& frame, const DepthFilterConfig& config,
   DepthFilterCounts c;
   cv::Mat d = depth_in_metres(frame);
   c.pixels = static_cast<std::size_t>(d.total());
-  for (int v = 0; v < d.rows; ++v) {
+  for (int v = 0; v < d.rows; ++v) {  // branch-free, so it vectorises
     float* row = d.ptr<float>(v);
+    std::size_t invalid = 0, out_of_range = 0;
     for (int u = 0; u < d.cols; ++u) {
-      if (row[u] <= 0.0f) {
-        ++c.invalid;
-      } else if (row[u] < config.min_depth || row[u] > config.max_depth) {
-        row[u] = 0.0f;
-        ++c.out_of_range;
-      }
+      const bool measured = row[u] > 0.0f;
+      const bool outside = measured & ((row[u] < config.min_depth) | (row[u] > config.max_depth));
+      invalid += !measured;
+      out_of_range += outside;
+      row[u] = outside ? 0.0f : row[u];
     }
+    c.invalid += invalid;
+    c.out_of_range += out_of_range;
   }
   if (config.median_kernel == 3 || config.median_kernel == 5) {
     cv::Mat smoothed;
@@ -107,7 +109,12 @@ cv::Mat filter_depth(const DepthFrame& frame, const DepthFilterConfig& config,
     c.edges = static_cast<std::size_t>(cv::countNonZero(edges));
     d.setTo(0.0f, edges);
   }
-  c.valid = static_cast<std::size_t>(cv::countNonZero(d > 0.0f));
+  for (int v = 0; v < d.rows; ++v) {
+    const float* row = d.ptr<float>(v);
+    std::size_t valid = 0;
+    for (int u = 0; u < d.cols; ++u) valid += row[u] > 0.0f;
+    c.valid += valid;
+  }
   if (counts != nullptr) *counts = c;
   return d;
 }

@@ -32,8 +32,16 @@ PointGrid grid_from_depth(const DepthFrame& frame, const DepthFilterConfig& filt
   g.points.resize(static_cast<std::size_t>(g.width) * static_cast<std::size_t>(g.height));
   g.eye = frame.T_world_camera.translation();
   const PinholeIntrinsics& k = frame.intrinsics;
+  // World point of pixel (u, v) at depth z: eye + z (R (x_u, y_v, 1)) with x_u = (u - cx) / fx
+  // and y_v = (v - cy) / fy, so each row needs one ray per column, with no division.
+  const Eigen::Matrix3f rotation = frame.T_world_camera.rotation();
+  std::vector<float> x_of_column(static_cast<std::size_t>(g.width));
+  for (int u = 0; u < g.width; ++u)
+    x_of_column[static_cast<std::size_t>(u)] = (static_cast<float>(u) - k.cx) / k.fx;
   tbb::parallel_for(0, g.height, [&](int v) {
     const float* row = depth.ptr<float>(v);
+    const Eigen::Vector3f row_ray =
+        rotation.col(1) * ((static_cast<float>(v) - k.cy) / k.fy) + rotation.col(2);
     for (int u = 0; u < g.width; ++u) {
       const float z = row[u];
       Eigen::Vector3f& p = g.points[g.index(u, v)];
@@ -41,9 +49,7 @@ PointGrid grid_from_depth(const DepthFrame& frame, const DepthFilterConfig& filt
         p = Eigen::Vector3f::Constant(kNaN);
         continue;
       }
-      const Eigen::Vector3f camera((static_cast<float>(u) - k.cx) / k.fx * z,
-                                   (static_cast<float>(v) - k.cy) / k.fy * z, z);
-      p = frame.T_world_camera * camera;
+      p = g.eye + z * (rotation.col(0) * x_of_column[static_cast<std::size_t>(u)] + row_ray);
     }
   });
   return g;

@@ -88,8 +88,7 @@ class Quadtree {
   bool inside(int u, int v) const { return u >= 0 && v >= 0 && u < g_.width && v < g_.height; }
   const Eigen::Vector3f& p(int u, int v) const { return g_.points[g_.index(u, v)]; }
   // Needed: farther from `approx` than error_per_depth2 x depth^2 (compared squared).
-  bool needed(int u, int v, const Eigen::Vector3f& approx) const {
-    const Eigen::Vector3f& x = p(u, v);
+  bool needed(const Eigen::Vector3f& x, const Eigen::Vector3f& approx) const {
     const float threshold = config_.error_per_depth2 * (x - g_.eye).squaredNorm();
     return (x - approx).squaredNorm() > threshold * threshold;
   }
@@ -98,20 +97,7 @@ class Quadtree {
     return (p(x0, y0) - p(x0 + s, y0 + s)).squaredNorm() <=
            (p(x0 + s, y0) - p(x0, y0 + s)).squaredNorm();
   }
-  std::uint8_t& mid(int u, int v) { return mid_[g_.index(u, v)]; }
   bool mid_selected(int u, int v) const { return inside(u, v) && mid_[g_.index(u, v)] != 0; }
-
-  // The midpoints of block (x0, y0, s): top, right, bottom, left, with their edge ends.
-  struct Edge {
-    int mu, mv, au, av, bu, bv;
-  };
-  static std::array<Edge, 4> edges(int x0, int y0, int s) {
-    const int h = s / 2;
-    return {{{x0 + h, y0, x0, y0, x0 + s, y0},
-             {x0 + s, y0 + h, x0 + s, y0, x0 + s, y0 + s},
-             {x0 + h, y0 + s, x0, y0 + s, x0 + s, y0 + s},
-             {x0, y0 + h, x0, y0, x0, y0 + s}}};
-  }
 
   // Level s in three passes, each parallel over rows with one writer per value: block states
   // (empty / split), then every edge midpoint once, then block centres.
@@ -137,47 +123,63 @@ class Quadtree {
         state(s, bx, by) = st;
       }
     });
-    // Midpoints: of the edge between a block and its neighbour (-1 / nx / ny = outside).
-    auto block_state = [&](int bx, int by) -> std::uint8_t {
-      if (bx < 0 || by < 0 || bx >= nx || by >= ny) return kEmpty;
-      return state(s, bx, by);
-    };
-    auto decide = [&](int mu, int mv, int au, int av, int bu, int bv, std::uint8_t one,
-                      std::uint8_t other) {
-      if (!inside(mu, mv)) return;
-      if ((one | other) & kSplit) {  // a refined neighbour uses the midpoint as a corner
-        mid(mu, mv) = 1;
-        return;
-      }
-      // A clean block on either side: the edge's pixels are valid.
+    // Midpoints: of the edge between a block and its neighbour (outside blocks are empty). A
+    // refined neighbour uses the midpoint as a corner; otherwise, with a clean block on either
+    // side (all its pixels valid, so the edge's are), the midpoint is needed when it lies too
+    // far from the edge's chord. Rows of blocks in parallel; every midpoint has one writer.
+    auto decide = [&](std::uint8_t one, std::uint8_t other, const Eigen::Vector3f& m,
+                      const Eigen::Vector3f& a, const Eigen::Vector3f& b) -> std::uint8_t {
+      if ((one | other) & kSplit) return 1;
       const bool clean = !(one & kEmpty) || !(other & kEmpty);
-      mid(mu, mv) = clean && needed(mu, mv, (p(au, av) + p(bu, bv)) / 2) ? 1 : 0;
+      return clean && needed(m, (a + b) / 2) ? 1 : 0;
     };
+    const std::uint8_t outside = kEmpty;
     tbb::parallel_for(0, ny + 1, [&](int by) {
-      for (int bx = 0; bx <= nx; ++bx) {
-        const int x0 = bx * s, y0 = by * s;
-        if (bx < nx)  // horizontal edge on top of block (bx, by)
-          decide(x0 + h, y0, x0, y0, x0 + s, y0, block_state(bx, by - 1), block_state(bx, by));
-        if (by < ny)  // vertical edge left of block (bx, by)
-          decide(x0, y0 + h, x0, y0, x0, y0 + s, block_state(bx - 1, by), block_state(bx, by));
+      const int y0 = by * s;
+      const std::uint8_t* upper = by > 0 ? &state(s, 0, by - 1) : nullptr;
+      const std::uint8_t* lower = by < ny ? &state(s, 0, by) : nullptr;
+      if (y0 < g_.height) {  // horizontal edges on top of the blocks of row by
+        const Eigen::Vector3f* row = &g_.points[g_.index(0, y0)];
+        std::uint8_t* mids = &mid_[g_.index(0, y0)];
+        for (int bx = 0, x0 = 0; bx < nx && x0 + h < g_.width; ++bx, x0 += s)
+          mids[x0 + h] =
+              decide(upper != nullptr ? upper[bx] : outside, lower != nullptr ? lower[bx] : outside,
+                     row[x0 + h], row[x0], row[std::min(x0 + s, g_.width - 1)]);
+      }
+      if (lower != nullptr && y0 + h < g_.height) {  // vertical edges left of the blocks
+        const Eigen::Vector3f* top = &g_.points[g_.index(0, y0)];
+        const Eigen::Vector3f* middle = &g_.points[g_.index(0, y0 + h)];
+        const Eigen::Vector3f* bottom = &g_.points[g_.index(0, std::min(y0 + s, g_.height - 1))];
+        std::uint8_t* mids = &mid_[g_.index(0, y0 + h)];
+        for (int bx = 0, x0 = 0; bx <= nx && x0 < g_.width; ++bx, x0 += s)
+          mids[x0] = decide(bx > 0 ? lower[bx - 1] : outside, bx < nx ? lower[bx] : outside,
+                            middle[x0], top[x0], bottom[x0]);
       }
     });
-    // Centres: needed themselves, or by a needed midpoint of the block's edges.
+    // Centres: needed themselves, or by a needed midpoint of the block's edges. Only blocks
+    // that are neither empty nor split get one, and those lie inside the image with every
+    // pixel valid, so their rows are read directly.
     tbb::parallel_for(0, ny, [&](int by) {
+      const int y0 = by * s, y1 = std::min(y0 + s, g_.height - 1), ym = std::min(y0 + h, y1);
+      const std::uint8_t* mid_top = &mid_[g_.index(0, y0)];
+      const std::uint8_t* mid_middle = &mid_[g_.index(0, ym)];
+      const std::uint8_t* mid_bottom = &mid_[g_.index(0, y1)];
+      const Eigen::Vector3f* top = &g_.points[g_.index(0, y0)];
+      const Eigen::Vector3f* middle = &g_.points[g_.index(0, ym)];
+      const Eigen::Vector3f* bottom = &g_.points[g_.index(0, y1)];
+      std::uint8_t* states = &state(s, 0, by);
       for (int bx = 0; bx < nx; ++bx) {
-        std::uint8_t& st = state(s, bx, by);
-        if (st & (kEmpty | kSplit)) continue;
-        const int x0 = bx * s, y0 = by * s;
-        bool center = false;
-        for (const Edge& e : edges(x0, y0, s)) center = center || mid_selected(e.mu, e.mv);
+        if (states[bx] & (kEmpty | kSplit)) continue;
+        const int x0 = bx * s, x1 = x0 + s, xm = x0 + h;
+        bool center = mid_top[xm] || mid_bottom[xm] || mid_middle[x0] || mid_middle[x1];
         if (!center) {
-          const bool main = main_diagonal_shorter(x0, y0, s);
-          const Eigen::Vector3f diagonal_mid =
-              main ? Eigen::Vector3f((p(x0, y0) + p(x0 + s, y0 + s)) / 2)
-                   : Eigen::Vector3f((p(x0 + s, y0) + p(x0, y0 + s)) / 2);
-          center = needed(x0 + h, y0 + h, diagonal_mid);
+          const bool main = (top[x0] - bottom[x1]).squaredNorm() <=
+                            (top[x1] - bottom[x0]).squaredNorm();  // the shorter diagonal
+          const Eigen::Vector3f diagonal_mid = main ? Eigen::Vector3f((top[x0] + bottom[x1]) / 2)
+                                                    : Eigen::Vector3f((top[x1] + bottom[x0]) / 2);
+          center = needed(middle[xm], diagonal_mid);
         }
-        if (center) st |= kCenter;
+        if (center) states[bx] |= kCenter;
       }
     });
   }

@@ -82,20 +82,21 @@ class Decimator {
     std::size_t alive = t_.size();
     const std::size_t n = in_.vertices.size();
     std::vector<Candidate> best(n);
-    std::vector<std::uint8_t> locked(n, 1), dirty(n);
+    std::vector<std::uint8_t> locked(n), dirty(n, 1);
+    std::vector<std::uint32_t> targets;  // the kept vertex of every collapse of the last pass
     tbb::combinable<QemReport> rejected;
     while (alive > target) {
       compact_faces();
       around_ = vertex_triangles(t_, n);
-      // Only vertices within one ring of a change need a new best collapse: a vertex's best
-      // depends on its own faces and its neighbours' faces and quadrics.
-      std::fill(dirty.begin(), dirty.end(), 0);
-      for (std::uint32_t v = 0; v < n; ++v) {
-        if (!locked[v]) continue;
-        dirty[v] = 1;
+      // After u -> v, exactly the vertices of v's faces need a new best collapse: a vertex w's
+      // best reads its own faces (changed only around v), its neighbours' quadrics (only v's
+      // changed) and, for the link condition of w -> x, the common neighbours of w and x,
+      // which change only when w was next to u or is next to v.
+      if (!targets.empty()) std::fill(dirty.begin(), dirty.end(), 0);
+      for (std::uint32_t v : targets)
         for (const std::uint32_t* f = around_.begin(v); f != around_.end(v); ++f)
           for (std::uint32_t x : t_[*f]) dirty[x] = 1;
-      }
+      targets.clear();
       tbb::parallel_for(std::size_t{0}, n, [&](std::size_t u) {
         if (dirty[u]) best[u] = best_collapse(static_cast<std::uint32_t>(u), rejected.local());
       });
@@ -117,6 +118,8 @@ class Decimator {
         if (alive <= target || (c.cost > limit && collapsed > 0)) break;
         if (locked[c.from] || locked[c.to]) continue;
         alive -= collapse(c.from, c.to, locked);
+        targets.push_back(c.to);
+        best[c.from].cost = kNoCollapse;  // removed
         ++collapsed;
       }
       report.collapses += collapsed;

@@ -136,9 +136,7 @@ class Decimator {
 
  private:
   const Eigen::Vector3f& p(std::uint32_t v) const { return in_.vertices[v]; }
-  Eigen::Vector3f normal(const Triangle& t) const {
-    return (p(t[1]) - p(t[0])).cross(p(t[2]) - p(t[0]));
-  }
+
   static bool has(const Triangle& t, std::uint32_t v) {
     return t[0] == v || t[1] == v || t[2] == v;
   }
@@ -157,14 +155,28 @@ class Decimator {
     std::sort(out.begin(), out.end());
     out.erase(std::unique(out.begin(), out.end()), out.end());
   }
-  std::size_t shared_faces(std::uint32_t u, std::uint32_t v, std::uint32_t shared[2]) const {
-    std::size_t n = 0;
-    for (const std::uint32_t* f = around_.begin(u); f != around_.end(u); ++f)
-      if (has(t_[*f], v)) {
-        if (n < 2) shared[n] = *f;
-        ++n;
-      }
-    return n;
+
+  // One face (u, a, b) around the vertex being evaluated, counter-clockwise from u, with its
+  // area vector (p(a) - p(u)) x (p(b) - p(u)) and that vector's length: computed once per
+  // vertex, read by every candidate's checks.
+  struct FanFace {
+    std::uint32_t a, b;
+    Eigen::Vector3f before;
+    float before_norm;
+  };
+
+  void build_fan(std::uint32_t u, std::vector<FanFace>& fan) const {
+    fan.clear();
+    for (const std::uint32_t* f = around_.begin(u); f != around_.end(u); ++f) {
+      const Triangle& t = t_[*f];
+      const int i = t[0] == u ? 0 : t[1] == u ? 1 : 2;
+      FanFace face;
+      face.a = t[static_cast<std::size_t>((i + 1) % 3)];
+      face.b = t[static_cast<std::size_t>((i + 2) % 3)];
+      face.before = (p(face.a) - p(u)).cross(p(face.b) - p(u));
+      face.before_norm = face.before.norm();
+      fan.push_back(face);
+    }
   }
 
   // The cheapest valid collapse u -> v over u's neighbours v (cost kNoCollapse when none).
@@ -174,6 +186,7 @@ class Decimator {
     if (around_.begin(u) == around_.end(u)) return best;
     thread_local std::vector<std::uint32_t> corners, nu, nv, border;
     thread_local std::vector<std::pair<double, std::uint32_t>> candidates;
+    thread_local std::vector<FanFace> fan;
     // Neighbours, and the border ones among them (sharing one face with u): each neighbour
     // appears once per face it shares with u.
     corners.clear();
@@ -197,13 +210,14 @@ class Decimator {
     for (std::uint32_t v : border.empty() ? nu : border)
       candidates.emplace_back(quadric_cost(u, v), v);
     std::sort(candidates.begin(), candidates.end());
+    build_fan(u, fan);
     // Penalties only multiply the quadric cost, so candidates are tried in its order until it
     // alone exceeds the best penalised cost found.
     for (const auto& [quadric, v] : candidates) {
       if (!(quadric < best.cost)) break;
-      const double cost = penalised(u, v, quadric);
+      const double cost = penalised(fan, v, quadric);
       if (!(cost < best.cost)) continue;
-      if (!valid(u, v, nu, nv, border, rejected)) continue;
+      if (!valid(u, v, fan, nu, nv, border, rejected)) continue;
       best.cost = cost;
       best.to = v;
     }
@@ -218,34 +232,38 @@ class Decimator {
     return cost;
   }
 
-  // The quadric cost times the penalty where the edge is sharp or a needle would appear.
-  double penalised(std::uint32_t u, std::uint32_t v, double cost) const {
-    std::uint32_t shared[2];
-    bool penalise = false;
-    if (shared_faces(u, v, shared) == 2) {
-      const Eigen::Vector3f a = normal(t_[shared[0]]).normalized(),
-                            b = normal(t_[shared[1]]).normalized();
-      penalise = a.dot(b) < cos_sharp_;
-    }
-    for (const std::uint32_t* f = around_.begin(u); f != around_.end(u) && !penalise; ++f) {
-      if (has(t_[*f], v)) continue;
-      const Triangle n = replaced(t_[*f], u, v);
-      for (std::size_t i = 0; i < 3 && !penalise; ++i) {
-        const Eigen::Vector3f e1 = p(n[(i + 1) % 3]) - p(n[i]);
-        const Eigen::Vector3f e2 = p(n[(i + 2) % 3]) - p(n[i]);
-        // angle < min  <=>  cos(angle) > cos(min), compared squared (no trigonometry).
-        const float dot = e1.dot(e2);
-        penalise = dot > 0.0f && dot * dot > cos2_min_angle_ * e1.squaredNorm() * e2.squaredNorm();
-      }
+  // The quadric cost times the penalty where the edge is sharp (its two faces, around u, differ
+  // by more than sharp_edge_deg) or a needle would appear (a face (v, a, b) replacing (u, a, b)
+  // with an inner angle below min_angle_deg).
+  double penalised(const std::vector<FanFace>& fan, std::uint32_t v, double cost) const {
+    const FanFace* shared[2] = {nullptr, nullptr};
+    std::size_t shared_count = 0;
+    for (const FanFace& face : fan)
+      if (face.a == v || face.b == v) shared[std::min<std::size_t>(shared_count++, 1)] = &face;
+    bool penalise =
+        shared_count == 2 && shared[0]->before.dot(shared[1]->before) <
+                                 cos_sharp_ * shared[0]->before_norm * shared[1]->before_norm;
+    const Eigen::Vector3f& pv = p(v);
+    for (std::size_t k = 0; k < fan.size() && !penalise; ++k) {
+      const FanFace& face = fan[k];
+      if (face.a == v || face.b == v) continue;
+      const Eigen::Vector3f va = p(face.a) - pv, vb = p(face.b) - pv, ab = p(face.b) - p(face.a);
+      const float la = va.squaredNorm(), lb = vb.squaredNorm(), lab = ab.squaredNorm();
+      // angle < min  <=>  cos(angle) > cos(min), compared squared (no trigonometry).
+      auto needle = [&](float dot, float l1, float l2) {
+        return dot > 0.0f && dot * dot > cos2_min_angle_ * l1 * l2;
+      };
+      penalise =
+          needle(va.dot(vb), la, lb) || needle(-va.dot(ab), la, lab) || needle(vb.dot(ab), lb, lab);
     }
     return penalise ? cost * cfg_.penalty : cost;
   }
 
-  bool valid(std::uint32_t u, std::uint32_t v, const std::vector<std::uint32_t>& nu,
-             std::vector<std::uint32_t>& nv, const std::vector<std::uint32_t>& border_at_u,
-             QemReport& rejected) const {
-    std::uint32_t shared[2];
-    const std::size_t shared_count = shared_faces(u, v, shared);
+  bool valid(std::uint32_t u, std::uint32_t v, const std::vector<FanFace>& fan,
+             const std::vector<std::uint32_t>& nu, std::vector<std::uint32_t>& nv,
+             const std::vector<std::uint32_t>& border_at_u, QemReport& rejected) const {
+    std::size_t shared_count = 0;
+    for (const FanFace& face : fan) shared_count += face.a == v || face.b == v ? 1 : 0;
     if (shared_count == 0 || shared_count > 2) {
       ++rejected.rejected_topology;
       return false;
@@ -285,13 +303,12 @@ class Decimator {
       }
     }
     // Faces that stay: no flip, no degeneration, no turn beyond the limit.
-    for (const std::uint32_t* f = around_.begin(u); f != around_.end(u); ++f) {
-      if (has(t_[*f], v)) continue;
-      const Triangle moved = replaced(t_[*f], u, v);
-      const Eigen::Vector3f before = normal(t_[*f]), after = normal(moved);
-      const float b = before.norm(), a = after.norm();
-      if (!has_area(p(moved[0]), p(moved[1]), p(moved[2])) ||
-          !(before.dot(after) >= cos_turn_ * a * b)) {
+    const Eigen::Vector3f& pv = p(v);
+    for (const FanFace& face : fan) {
+      if (face.a == v || face.b == v) continue;
+      const Eigen::Vector3f after = (p(face.a) - pv).cross(p(face.b) - pv);
+      if (!(face.before.dot(after) >= cos_turn_ * after.norm() * face.before_norm) ||
+          !has_area(pv, p(face.a), p(face.b))) {
         ++rejected.rejected_normal;
         return false;
       }

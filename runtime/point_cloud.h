@@ -13,6 +13,14 @@ struct Rgb8 {
   bool operator==(const Rgb8& o) const { return r == o.r && g == o.g && b == o.b; }
 };
 
+/// The colour halfway between a and b (each channel rounded half up), e.g. for a vertex that
+/// splits an edge. O(1).
+inline Rgb8 midpoint_color(const Rgb8& a, const Rgb8& b) {
+  return Rgb8{static_cast<std::uint8_t>((a.r + b.r + 1) / 2),
+              static_cast<std::uint8_t>((a.g + b.g + 1) / 2),
+              static_cast<std::uint8_t>((a.b + b.b + 1) / 2)};
+}
+
 /// A point cloud as parallel arrays. `positions` is always present; `normals`, `colors` and
 /// `intensities` are either empty or exactly as long as `positions`.
 /// An organized cloud (from a depth camera or a range grid) has width * height == size()

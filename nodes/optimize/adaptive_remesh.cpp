@@ -229,12 +229,7 @@ std::size_t split_long_edges(Remesher& r) {
     h.split(e, at);  // the new vertex is the last one
     r.target.push_back(0.5f * (r.target[a] + r.target[b]));
     r.curvature.push_back(0.5f * (r.curvature[a] + r.curvature[b]));
-    if (!r.colors.empty()) {
-      const Rgb8 &ca = r.colors[a], &cb = r.colors[b];
-      r.colors.push_back({static_cast<std::uint8_t>((ca.r + cb.r + 1) / 2),
-                          static_cast<std::uint8_t>((ca.g + cb.g + 1) / 2),
-                          static_cast<std::uint8_t>((ca.b + cb.b + 1) / 2)});
-    }
+    if (!r.colors.empty()) r.colors.push_back(midpoint_color(r.colors[a], r.colors[b]));
     ++splits;
   }
   return splits;

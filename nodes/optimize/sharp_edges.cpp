@@ -439,10 +439,8 @@ class CreaseSharpener {
     if (mesh_.colors.size() == mesh_.vertices.size()) {
       out.colors = mesh_.colors;
       for (const auto& [u, w] : colors_) {
-        const Rgb8 a = out.colors[u], b = out.colors[w];
-        out.colors.push_back(Rgb8{static_cast<std::uint8_t>((a.r + b.r + 1) / 2),
-                                  static_cast<std::uint8_t>((a.g + b.g + 1) / 2),
-                                  static_cast<std::uint8_t>((a.b + b.b + 1) / 2)});
+        const Rgb8 a = out.colors[u], b = out.colors[w];  // copies: push_back may reallocate
+        out.colors.push_back(midpoint_color(a, b));
       }
     }
     for (std::uint32_t f = 0; f < h_.face_count(); ++f)

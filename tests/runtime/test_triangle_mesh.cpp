@@ -110,6 +110,15 @@ TEST(TriangleMesh, BorderEdgesOfAGridAreItsOutlineDirectedAsTheirTriangles) {
   }
 }
 
+TEST(TriangleMesh, HasAreaRefusesPointsLinesAndSlivers) {
+  const Eigen::Vector3f a(0, 0, 0), b(1, 0, 0), c(0, 1, 0);
+  EXPECT_TRUE(has_area(a, b, c));
+  EXPECT_TRUE(has_area(a, b, Eigen::Vector3f(0.5f, 1e-4f, 0)));   // thin, but 1e-4 of its length
+  EXPECT_FALSE(has_area(a, a, c));                                // two corners on one point
+  EXPECT_FALSE(has_area(a, b, Eigen::Vector3f(2, 0, 0)));         // collinear
+  EXPECT_FALSE(has_area(a, b, Eigen::Vector3f(0.5f, 1e-8f, 0)));  // flatter than a millionth
+}
+
 TEST(TriangleMesh, VertexNormalsAreTheSerialSumsWithOneAndTwoThreads) {
   TriangleMesh m = wavy_grid(150);
   std::vector<Eigen::Vector3f> serial(m.vertices.size(), Eigen::Vector3f::Zero());

@@ -6,6 +6,7 @@
 
 #include "mesh_fixtures.h"
 #include "nodes/eval/completeness.h"
+#include "nodes/optimize/sharp_edges.h"
 #include "room_fixture.h"
 #include "runtime/half_edge_mesh.h"
 #include "test_support.h"
@@ -83,6 +84,21 @@ TEST(RetriangulateRegions, RoomRegionsShrinkWithinTheContourTolerance) {
   EXPECT_EQ(test::half_edge_problem(out), "");
   EXPECT_EQ(edge_statistics(out).non_manifold_edges, 0u);
   EXPECT_EQ(edge_statistics(out).inconsistent_edges, 0u);
+}
+
+TEST(RetriangulateRegions, AfterSharpeningEveryRoomRegionIsRetriangulated) {
+  // Cutting creases can leave a few faces of a region folded over in its plane (a contour
+  // loop running the wrong way); the region repairs that instead of staying as it was.
+  const TriangleMesh& in = test::room_mesh();
+  const TriangleMesh sharp = sharpen_creases(in, grow_planar_regions(HalfEdgeMesh(in)));
+  RetriangulationReport report;
+  const TriangleMesh out = retriangulated(sharp, report);
+  std::printf("[ retriangulate ] after sharpen: %zu -> %zu triangles, %zu of %zu regions\n",
+              sharp.triangles.size(), out.triangles.size(), report.retriangulated, report.regions);
+  EXPECT_EQ(report.retriangulated, report.regions);
+  EXPECT_LT(out.triangles.size(), sharp.triangles.size() / 10);
+  EXPECT_EQ(test::half_edge_problem(out), "");
+  EXPECT_EQ(edge_statistics(out).non_manifold_edges, 0u);
 }
 
 TEST(RetriangulateRegions, SameMeshWithOneAndTwoThreads) {

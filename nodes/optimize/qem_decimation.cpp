@@ -146,16 +146,6 @@ class Decimator {
     return t;
   }
 
-  // Sorted distinct neighbours of v, from its incidence row.
-  void neighbours(std::uint32_t v, std::vector<std::uint32_t>& out) const {
-    out.clear();
-    for (const std::uint32_t* f = around_.begin(v); f != around_.end(v); ++f)
-      for (std::uint32_t x : t_[*f])
-        if (x != v) out.push_back(x);
-    std::sort(out.begin(), out.end());
-    out.erase(std::unique(out.begin(), out.end()), out.end());
-  }
-
   // One face (u, a, b) around the vertex being evaluated, counter-clockwise from u, with its
   // area vector (p(a) - p(u)) x (p(b) - p(u)) and that vector's length: computed once per
   // vertex, read by every candidate's checks.
@@ -184,7 +174,7 @@ class Decimator {
     Candidate best;
     best.from = u;
     if (around_.begin(u) == around_.end(u)) return best;
-    thread_local std::vector<std::uint32_t> corners, nu, nv, border;
+    thread_local std::vector<std::uint32_t> corners, nu, border;
     thread_local std::vector<std::pair<double, std::uint32_t>> candidates;
     thread_local std::vector<FanFace> fan;
     // Neighbours, and the border ones among them (sharing one face with u): each neighbour
@@ -217,7 +207,7 @@ class Decimator {
       if (!(quadric < best.cost)) break;
       const double cost = penalised(fan, v, quadric);
       if (!(cost < best.cost)) continue;
-      if (!valid(u, v, fan, nu, nv, border, rejected)) continue;
+      if (!valid(u, v, fan, nu, border, rejected)) continue;
       best.cost = cost;
       best.to = v;
     }
@@ -260,8 +250,8 @@ class Decimator {
   }
 
   bool valid(std::uint32_t u, std::uint32_t v, const std::vector<FanFace>& fan,
-             const std::vector<std::uint32_t>& nu, std::vector<std::uint32_t>& nv,
-             const std::vector<std::uint32_t>& border_at_u, QemReport& rejected) const {
+             const std::vector<std::uint32_t>& nu, const std::vector<std::uint32_t>& border_at_u,
+             QemReport& rejected) const {
     std::size_t shared_count = 0;
     for (const FanFace& face : fan) shared_count += face.a == v || face.b == v ? 1 : 0;
     if (shared_count == 0 || shared_count > 2) {
@@ -269,18 +259,15 @@ class Decimator {
       return false;
     }
     // Link condition: the common neighbours are exactly the edge's opposite vertices.
-    neighbours(v, nv);
+    // (u's few neighbours, each looked up among v's faces: no sorting.)
     std::size_t common = 0;
-    for (auto a = nu.cbegin(), b = nv.cbegin(); a != nu.cend() && b != nv.cend();) {
-      if (*a < *b) {
-        ++a;
-      } else if (*b < *a) {
-        ++b;
-      } else {
-        ++common;
-        ++a;
-        ++b;
-      }
+    for (std::uint32_t x : nu) {
+      if (x == v) continue;
+      for (const std::uint32_t* f = around_.begin(v); f != around_.end(v); ++f)
+        if (has(t_[*f], x)) {
+          ++common;
+          break;
+        }
     }
     if (common != shared_count) {
       ++rejected.rejected_topology;

@@ -45,14 +45,25 @@ std::vector<std::uint32_t> neighbour_vertices(const HalfEdgeMesh& h, std::uint32
   return out;
 }
 
+/// Face f's vertices in its winding order (the first half-edge runs from the first to the second).
+Triangle corners(const HalfEdgeMesh& h, std::uint32_t f) {
+  return {h.to(3 * f + 2), h.to(3 * f), h.to(3 * f + 1)};
+}
+
 Vec3 face_cross(const HalfEdgeMesh& h, std::uint32_t f) {
-  const Vec3& a = h.position(h.to(3 * f + 2));
-  return (h.position(h.to(3 * f)) - a).cross(h.position(h.to(3 * f + 1)) - a);
+  const Triangle t = corners(h, f);
+  const Vec3& a = h.position(t[0]);
+  return (h.position(t[1]) - a).cross(h.position(t[2]) - a);
 }
 
 bool face_has_area(const HalfEdgeMesh& h, std::uint32_t f) {
-  return has_area(h.position(h.to(3 * f + 2)), h.position(h.to(3 * f)),
-                  h.position(h.to(3 * f + 1)));
+  const Triangle t = corners(h, f);
+  return has_area(h.position(t[0]), h.position(t[1]), h.position(t[2]));
+}
+
+/// Whether the face area vector `after` is within the turn whose cosine is `min_cos` of `before`.
+bool within_turn(const Vec3& before, const Vec3& after, float min_cos) {
+  return before.dot(after) >= min_cos * before.norm() * after.norm();
 }
 
 /// Area-weighted unit normal at v (zero without area).
@@ -67,7 +78,6 @@ Vec3 vertex_normal(const HalfEdgeMesh& h, std::uint32_t v) {
 struct Adjacency {
   std::vector<std::uint32_t> offsets;  // vertex_count + 1
   std::vector<std::uint32_t> vertices;
-  std::size_t valence(std::uint32_t v) const { return offsets[v + 1] - offsets[v]; }
   const std::uint32_t* begin(std::uint32_t v) const { return vertices.data() + offsets[v]; }
   const std::uint32_t* end(std::uint32_t v) const { return vertices.data() + offsets[v + 1]; }
 };
@@ -268,8 +278,7 @@ bool collapse_allowed(const Remesher& r, std::uint32_t e) {
     if (b == v || c == v) continue;  // disappears with the edge
     const Vec3 before = face_cross(h, f);
     const Vec3 after = (h.position(b) - pv).cross(h.position(c) - pv);
-    if (!has_area(pv, h.position(b), h.position(c)) ||
-        before.dot(after) < r.min_turn_cos * before.norm() * after.norm())
+    if (!has_area(pv, h.position(b), h.position(c)) || !within_turn(before, after, r.min_turn_cos))
       return false;
     nearest = std::min(
         nearest, (closest_point_on_triangle(pu, pv, h.position(b), h.position(c)) - pu).norm());
@@ -326,7 +335,7 @@ std::size_t flip_towards_regular_valence(Remesher& r) {
     if (after >= before) continue;
     const Vec3 &pa = h.position(a), &pb = h.position(b), &pc = h.position(c), &pd = h.position(d);
     const Vec3 n1 = face_cross(h, HalfEdgeMesh::face(e)), n2 = face_cross(h, HalfEdgeMesh::face(t));
-    if (n1.dot(n2) < r.min_turn_cos * n1.norm() * n2.norm()) continue;
+    if (!within_turn(n1, n2, r.min_turn_cos)) continue;
     const Vec3 across = (pb - pa).cross(pd - pc);
     if (across.squaredNorm() == 0.0f) continue;
     if (std::abs((pc - pa).dot(across)) > r.tolerance * across.norm()) continue;  // diagonals apart
@@ -374,7 +383,7 @@ void relax_tangentially(Remesher& r) {
     for (std::size_t k = 0; k < ring.size(); ++k) {
       const Vec3 after = face_cross(h, HalfEdgeMesh::face(ring[k]));
       if (!face_has_area(h, HalfEdgeMesh::face(ring[k])) ||
-          before[k].dot(after) < r.min_turn_cos * before[k].norm() * after.norm()) {
+          !within_turn(before[k], after, r.min_turn_cos)) {
         h.set_position(v, old);
         break;
       }
@@ -391,7 +400,7 @@ TriangleMesh output_mesh(const Remesher& r) {
   std::vector<Triangle> triangles;
   triangles.reserve(h.live_face_count());
   for (std::uint32_t f = 0; f < h.face_count(); ++f)
-    if (h.face_alive(f)) triangles.push_back({h.to(3 * f + 2), h.to(3 * f), h.to(3 * f + 1)});
+    if (h.face_alive(f)) triangles.push_back(corners(h, f));
   return compact_vertices(all, triangles);
 }
 

@@ -26,6 +26,7 @@ struct LiveOptions {
   std::size_t loops = 1;
   std::string triangulate;  ///< "", "naive" or "rqt"
   float rqt_error = QuadtreeConfig{}.error_per_depth2;
+  float rqt_noise_multiple = QuadtreeConfig{}.noise_multiple;
   float decimate = 0.0f;
 };
 
@@ -60,6 +61,7 @@ void run_live(const LiveOptions& o) {
                                                    ? DepthTriangulationMethod::kRestrictedQuadtree
                                                    : DepthTriangulationMethod::kNaive;
   config.reconstruction.triangulation.quadtree.error_per_depth2 = o.rqt_error;
+  config.reconstruction.triangulation.quadtree.noise_multiple = o.rqt_noise_multiple;
   config.reconstruction.triangulation.decimate_to = o.decimate;
   std::size_t triangles = 0;
   LivePipeline live(config, [&](LiveResult& r) {
@@ -119,6 +121,10 @@ void add_live_command(CLI::App& app) {
   cmd->add_option("--rqt-error", o->rqt_error,
                   "rqt: allowed deviation per squared depth, 1/m (error <= k depth^2)")
       ->check(CLI::PositiveNumber);
+  cmd->add_option("--rqt-noise-multiple", o->rqt_noise_multiple,
+                  "rqt: raise that allowance to this many times each frame's estimated depth "
+                  "noise per squared depth (0 = off)")
+      ->check(CLI::Range(0.0, 100.0));
   cmd->add_option("--decimate", o->decimate,
                   "With --triangulate: QEM-decimate each frame's mesh to this share (e.g. 0.25)")
       ->check(CLI::Range(0.0, 1.0));

@@ -41,7 +41,8 @@ std::vector<Triangle> triangulate_grid(const PointGrid& grid,
   if (grid.width < 2 || grid.height < 2) return {};
   const OcclusionTriangleTest keep(config.max_view_angle_deg, config.max_edge_ratio);
   if (config.method == DepthTriangulationMethod::kRestrictedQuadtree)
-    return restricted_quadtree_triangles(grid, keep, config.quadtree);
+    return restricted_quadtree_triangles(
+        grid, keep, config.quadtree, counts != nullptr ? &counts->threshold_per_depth2 : nullptr);
   return naive_triangles(grid, keep, counts);
 }
 

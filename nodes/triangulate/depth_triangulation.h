@@ -36,6 +36,8 @@ struct TriangulationCounts {
   DepthFilterCounts filter;        ///< pre-processing
   std::size_t rejected_view = 0;   ///< naive: triangles dropped for their viewing angle
   std::size_t rejected_shape = 0;  ///< naive: triangles dropped for their edge ratio
+  /// rqt: the threshold coefficient used (1/m; quadtree_threshold_per_depth2)
+  float threshold_per_depth2 = 0.0f;
 };
 
 /// Triangulates a depth frame in the world frame (T_world_camera; metres). Triangles wind

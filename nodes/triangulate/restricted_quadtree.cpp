@@ -6,6 +6,7 @@
 #include <array>
 #include <cstdint>
 
+#include "nodes/triangulate/depth_noise.h"
 #include "nodes/triangulate/quad_triangles.h"
 
 namespace meshflow {
@@ -54,8 +55,12 @@ class InvalidCounts {
 
 class Quadtree {
  public:
-  Quadtree(const PointGrid& g, const OcclusionTriangleTest& keep, const QuadtreeConfig& config)
-      : g_(g), keep_(keep), config_(config), invalid_(g), mid_(g.points.size(), 0) {
+  Quadtree(const PointGrid& g, const OcclusionTriangleTest& keep, float threshold_per_depth2)
+      : g_(g),
+        keep_(keep),
+        threshold_per_depth2_(threshold_per_depth2),
+        invalid_(g),
+        mid_(g.points.size(), 0) {
     root_ = 2;
     while (root_ < g.width - 1 || root_ < g.height - 1) root_ *= 2;
   }
@@ -87,9 +92,9 @@ class Quadtree {
   }
   bool inside(int u, int v) const { return u >= 0 && v >= 0 && u < g_.width && v < g_.height; }
   const Eigen::Vector3f& p(int u, int v) const { return g_.points[g_.index(u, v)]; }
-  // Needed: farther from `approx` than error_per_depth2 x depth^2 (compared squared).
+  // Needed: farther from `approx` than the threshold x depth^2 (compared squared).
   bool needed(const Eigen::Vector3f& x, const Eigen::Vector3f& approx) const {
-    const float threshold = config_.error_per_depth2 * (x - g_.eye).squaredNorm();
+    const float threshold = threshold_per_depth2_ * (x - g_.eye).squaredNorm();
     return (x - approx).squaredNorm() > threshold * threshold;
   }
   // True when the (u0, v0)-(u1, v1) diagonal is the shorter one of block (x0, y0, s).
@@ -252,7 +257,7 @@ class Quadtree {
 
   const PointGrid& g_;
   const OcclusionTriangleTest& keep_;
-  QuadtreeConfig config_;
+  float threshold_per_depth2_;
   InvalidCounts invalid_;
   std::vector<std::uint8_t> mid_;                  // per pixel: a needed midpoint
   std::vector<std::vector<std::uint8_t>> states_;  // per level (size 2, 4, ...), per block
@@ -261,11 +266,19 @@ class Quadtree {
 
 }  // namespace
 
+float quadtree_threshold_per_depth2(const PointGrid& grid, const QuadtreeConfig& config) {
+  if (!(config.noise_multiple > 0.0f)) return config.error_per_depth2;
+  return std::max(config.error_per_depth2, config.noise_multiple * estimate_noise_per_depth2(grid));
+}
+
 std::vector<Triangle> restricted_quadtree_triangles(const PointGrid& grid,
                                                     const OcclusionTriangleTest& keep,
-                                                    const QuadtreeConfig& config) {
+                                                    const QuadtreeConfig& config,
+                                                    float* threshold_used) {
   if (grid.width < 2 || grid.height < 2) return {};
-  return Quadtree(grid, keep, config).run();
+  const float threshold = quadtree_threshold_per_depth2(grid, config);
+  if (threshold_used != nullptr) *threshold_used = threshold;
+  return Quadtree(grid, keep, threshold).run();
 }
 
 }  // namespace meshflow

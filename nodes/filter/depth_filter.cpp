@@ -7,6 +7,8 @@
 #include <opencv2/imgproc.hpp>
 #include <vector>
 
+#include "runtime/simd.h"
+
 namespace meshflow {
 namespace {
 
@@ -20,8 +22,8 @@ inline std::uint8_t jump(float c, float n, float high, float low) {
 
 // The levels of row `row` (the largest jump to any 4-neighbour; `above` / `below` are null at
 // the image's top / bottom) into `out`.
-void jump_levels(const float* above, const float* row, const float* below, int cols, float high,
-                 float low, std::uint8_t* out) {
+MESHFLOW_AVX2_CLONES void jump_levels(const float* above, const float* row, const float* below,
+                                      int cols, float high, float low, std::uint8_t* out) {
   if (cols == 1) out[0] = 0;
   if (cols >= 2) {  // left and right neighbours (jump() is symmetric)
     out[0] = jump(row[0], row[1], high, low);
@@ -33,6 +35,28 @@ void jump_levels(const float* above, const float* row, const float* below, int c
     if (other == nullptr) continue;
     for (int u = 0; u < cols; ++u) out[u] = std::max(out[u], jump(row[u], other[u], high, low));
   }
+}
+
+// Zeroes the pixels of `row` outside [min_depth, max_depth]; counts the unmeasured (0) and the
+// zeroed ones (branch-free, so it vectorises).
+MESHFLOW_AVX2_CLONES void clear_out_of_range(float* row, int cols, float min_depth, float max_depth,
+                                             std::size_t& invalid, std::size_t& out_of_range) {
+  std::size_t unmeasured = 0, outside_count = 0;
+  for (int u = 0; u < cols; ++u) {
+    const bool measured = row[u] > 0.0f;
+    const bool outside = measured & ((row[u] < min_depth) | (row[u] > max_depth));
+    unmeasured += !measured;
+    outside_count += outside;
+    row[u] = outside ? 0.0f : row[u];
+  }
+  invalid += unmeasured;
+  out_of_range += outside_count;
+}
+
+MESHFLOW_AVX2_CLONES std::size_t count_positive(const float* row, int cols) {
+  std::size_t n = 0;
+  for (int u = 0; u < cols; ++u) n += row[u] > 0.0f;
+  return n;
 }
 
 }  // namespace
@@ -77,19 +101,9 @@ cv::Mat filter_depth(const DepthFrame& frame, const DepthFilterConfig& config,
   DepthFilterCounts c;
   cv::Mat d = depth_in_metres(frame);
   c.pixels = static_cast<std::size_t>(d.total());
-  for (int v = 0; v < d.rows; ++v) {  // branch-free, so it vectorises
-    float* row = d.ptr<float>(v);
-    std::size_t invalid = 0, out_of_range = 0;
-    for (int u = 0; u < d.cols; ++u) {
-      const bool measured = row[u] > 0.0f;
-      const bool outside = measured & ((row[u] < config.min_depth) | (row[u] > config.max_depth));
-      invalid += !measured;
-      out_of_range += outside;
-      row[u] = outside ? 0.0f : row[u];
-    }
-    c.invalid += invalid;
-    c.out_of_range += out_of_range;
-  }
+  for (int v = 0; v < d.rows; ++v)
+    clear_out_of_range(d.ptr<float>(v), d.cols, config.min_depth, config.max_depth, c.invalid,
+                       c.out_of_range);
   if (config.median_kernel == 3 || config.median_kernel == 5) {
     cv::Mat smoothed;
     cv::medianBlur(d, smoothed, config.median_kernel);
@@ -109,12 +123,7 @@ cv::Mat filter_depth(const DepthFrame& frame, const DepthFilterConfig& config,
     c.edges = static_cast<std::size_t>(cv::countNonZero(edges));
     d.setTo(0.0f, edges);
   }
-  for (int v = 0; v < d.rows; ++v) {
-    const float* row = d.ptr<float>(v);
-    std::size_t valid = 0;
-    for (int u = 0; u < d.cols; ++u) valid += row[u] > 0.0f;
-    c.valid += valid;
-  }
+  for (int v = 0; v < d.rows; ++v) c.valid += count_positive(d.ptr<float>(v), d.cols);
   if (counts != nullptr) *counts = c;
   return d;
 }

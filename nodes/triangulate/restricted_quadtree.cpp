@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cmath>
 #include <cstdint>
 
 #include "nodes/triangulate/depth_noise.h"
@@ -12,55 +13,14 @@
 namespace meshflow {
 namespace {
 
-enum BlockState : std::uint8_t { kCenter = 1, kSplit = 2, kEmpty = 4 };
-
-// Counts of invalid pixels over rectangles (summed-area table); pixels outside the image count
-// as invalid.
-class InvalidCounts {
- public:
-  explicit InvalidCounts(const PointGrid& g)
-      : w_(g.width), h_(g.height), sum_((g.width + 1) * static_cast<std::size_t>(g.height + 1), 0) {
-    for (int v = 0; v < h_; ++v) {
-      std::uint32_t row = 0;
-      for (int u = 0; u < w_; ++u) {
-        row += g.valid(g.index(u, v)) ? 0u : 1u;
-        at(u + 1, v + 1) = at(u + 1, v) + row;
-      }
-    }
-  }
-  /// Invalid pixels in [x0, x1] x [y0, y1] (inclusive), counting those outside the image.
-  std::int64_t invalid(int x0, int y0, int x1, int y1) const {
-    const std::int64_t area = static_cast<std::int64_t>(x1 - x0 + 1) * (y1 - y0 + 1);
-    const int cx0 = std::max(x0, 0), cy0 = std::max(y0, 0);
-    const int cx1 = std::min(x1, w_ - 1), cy1 = std::min(y1, h_ - 1);
-    if (cx0 > cx1 || cy0 > cy1) return area;
-    const std::int64_t inside = static_cast<std::int64_t>(cx1 - cx0 + 1) * (cy1 - cy0 + 1);
-    const std::int64_t bad = static_cast<std::int64_t>(at(cx1 + 1, cy1 + 1)) - at(cx0, cy1 + 1) -
-                             at(cx1 + 1, cy0) + at(cx0, cy0);
-    return area - inside + bad;
-  }
-
- private:
-  std::uint32_t& at(int u, int v) {
-    return sum_[static_cast<std::size_t>(v) * static_cast<std::size_t>(w_ + 1) +
-                static_cast<std::size_t>(u)];
-  }
-  std::uint32_t at(int u, int v) const {
-    return sum_[static_cast<std::size_t>(v) * static_cast<std::size_t>(w_ + 1) +
-                static_cast<std::size_t>(u)];
-  }
-  int w_, h_;
-  std::vector<std::uint32_t> sum_;
-};
+// kBad: the block holds an invalid pixel or reaches past the image border; kEmpty: it holds
+// no valid pixel. Blocks outside the image are both.
+enum BlockState : std::uint8_t { kCenter = 1, kSplit = 2, kEmpty = 4, kBad = 8 };
 
 class Quadtree {
  public:
   Quadtree(const PointGrid& g, const OcclusionTriangleTest& keep, float threshold_per_depth2)
-      : g_(g),
-        keep_(keep),
-        threshold_per_depth2_(threshold_per_depth2),
-        invalid_(g),
-        mid_(g.points.size(), 0) {
+      : g_(g), keep_(keep), threshold_per_depth2_(threshold_per_depth2), mid_(g.points.size(), 0) {
     root_ = 2;
     while (root_ < g.width - 1 || root_ < g.height - 1) root_ *= 2;
   }
@@ -92,53 +52,85 @@ class Quadtree {
   }
   bool inside(int u, int v) const { return u >= 0 && v >= 0 && u < g_.width && v < g_.height; }
   const Eigen::Vector3f& p(int u, int v) const { return g_.points[g_.index(u, v)]; }
-  // Needed: farther from `approx` than the threshold x depth^2 (compared squared).
-  bool needed(const Eigen::Vector3f& x, const Eigen::Vector3f& approx) const {
-    const float threshold = threshold_per_depth2_ * (x - g_.eye).squaredNorm();
-    return (x - approx).squaredNorm() > threshold * threshold;
-  }
+  // Needed: farther from `approx` than the threshold x depth^2 (compared squared). A value
+  // copied into each pass, so the passes' byte stores cannot make the compiler reload it.
+  struct NeededTest {
+    Eigen::Vector3f eye;
+    float threshold_per_depth2;
+    bool operator()(const Eigen::Vector3f& x, const Eigen::Vector3f& approx) const {
+      const float threshold = threshold_per_depth2 * (x - eye).squaredNorm();
+      return (x - approx).squaredNorm() > threshold * threshold;
+    }
+  };
   // True when the (u0, v0)-(u1, v1) diagonal is the shorter one of block (x0, y0, s).
   bool main_diagonal_shorter(int x0, int y0, int s) const {
     return (p(x0, y0) - p(x0 + s, y0 + s)).squaredNorm() <=
            (p(x0 + s, y0) - p(x0, y0 + s)).squaredNorm();
   }
+  // The size-2 blocks of row `by` (3 x 3 pixels each): invalid pixels per column of the row's
+  // three pixel rows (rows past the border count as invalid), summed over each block's three
+  // columns. A bad block that is not empty is split (triangulated per pixel quad).
+  void pixel_block_states(int by, std::uint8_t* states) const {
+    thread_local std::vector<std::uint8_t> column_storage;
+    const int width = g_.width, y0 = 2 * by;
+    column_storage.assign(static_cast<std::size_t>(width) + 2, 3);  // 2 columns past the border
+    std::uint8_t* column = column_storage.data();
+    for (int y = y0; y < y0 + 3; ++y) {
+      if (y >= g_.height) continue;  // stays 3 per column
+      const Eigen::Vector3f* row = &g_.points[g_.index(0, y)];
+      for (int x = 0; x < width; ++x)
+        column[x] = static_cast<std::uint8_t>(column[x] - (std::isnan(row[x].x()) ? 0 : 1));
+    }
+    for (int bx = 0, nx = blocks_x(2); bx < nx; ++bx) {
+      const int x0 = 2 * bx;
+      const int invalid = column[x0] + column[x0 + 1] + column[x0 + 2];
+      states[bx] = invalid == 9  ? static_cast<std::uint8_t>(kEmpty | kBad)
+                   : invalid > 0 ? static_cast<std::uint8_t>(kBad | kCenter | kSplit)
+                                 : std::uint8_t{0};
+    }
+  }
+
   bool mid_selected(int u, int v) const { return inside(u, v) && mid_[g_.index(u, v)] != 0; }
 
   // Level s in three passes, each parallel over rows with one writer per value: block states
   // (empty / split), then every edge midpoint once, then block centres.
   void select_level(int s) {
     const int n = blocks(s);
-    states_.emplace_back(static_cast<std::size_t>(n) * static_cast<std::size_t>(n), kEmpty);
+    states_.emplace_back(static_cast<std::size_t>(n) * static_cast<std::size_t>(n), kEmpty | kBad);
     const int h = s / 2;
     const int nx = blocks_x(s), ny = blocks_y(s);
+    // States: bad / empty from the pixels at size 2, from the four children above (their
+    // closed squares cover the block's); split when bad or a child has a centre.
     tbb::parallel_for(0, ny, [&](int by) {
-      for (int bx = 0; bx < nx; ++bx) {
-        const int x0 = bx * s, y0 = by * s;
-        const std::int64_t bad = invalid_.invalid(x0, y0, x0 + s, y0 + s);
-        std::uint8_t st = 0;
-        if (bad == static_cast<std::int64_t>(s + 1) * (s + 1)) {
-          st = kEmpty;
-        } else {
-          bool split = bad > 0;  // holds an invalid pixel or crosses the border
-          if (s > 2 && !split)
-            for (int c = 0; c < 4 && !split; ++c)
-              split = (state(h, 2 * bx + (c & 1), 2 * by + (c >> 1)) & kCenter) != 0;
-          if (split) st = kCenter | kSplit;
+      std::uint8_t* states = &state(s, 0, by);
+      if (s == 2) {
+        pixel_block_states(by, states);
+      } else {
+        const std::uint8_t* upper = &state(h, 0, 2 * by);
+        const std::uint8_t* lower = &state(h, 0, 2 * by + 1);
+        for (int bx = 0; bx < nx; ++bx) {
+          const std::uint8_t c[4] = {upper[2 * bx], upper[2 * bx + 1], lower[2 * bx],
+                                     lower[2 * bx + 1]};
+          const std::uint8_t any = c[0] | c[1] | c[2] | c[3];
+          const std::uint8_t all = c[0] & c[1] & c[2] & c[3];
+          std::uint8_t st = static_cast<std::uint8_t>((any & kBad) | (all & kEmpty));
+          if (!(st & kEmpty) && (any & (kBad | kCenter))) st |= kCenter | kSplit;
+          states[bx] = st;
         }
-        state(s, bx, by) = st;
       }
     });
     // Midpoints: of the edge between a block and its neighbour (outside blocks are empty). A
     // refined neighbour uses the midpoint as a corner; otherwise, with a clean block on either
     // side (all its pixels valid, so the edge's are), the midpoint is needed when it lies too
     // far from the edge's chord. Rows of blocks in parallel; every midpoint has one writer.
-    auto decide = [&](std::uint8_t one, std::uint8_t other, const Eigen::Vector3f& m,
-                      const Eigen::Vector3f& a, const Eigen::Vector3f& b) -> std::uint8_t {
+    const NeededTest needed{g_.eye, threshold_per_depth2_};
+    auto decide = [needed](std::uint8_t one, std::uint8_t other, const Eigen::Vector3f& m,
+                           const Eigen::Vector3f& a, const Eigen::Vector3f& b) -> std::uint8_t {
       if ((one | other) & kSplit) return 1;
       const bool clean = !(one & kEmpty) || !(other & kEmpty);
       return clean && needed(m, (a + b) / 2) ? 1 : 0;
     };
-    const std::uint8_t outside = kEmpty;
+    const std::uint8_t outside = kEmpty | kBad;
     tbb::parallel_for(0, ny + 1, [&](int by) {
       const int y0 = by * s;
       const std::uint8_t* upper = by > 0 ? &state(s, 0, by - 1) : nullptr;
@@ -164,7 +156,7 @@ class Quadtree {
     // Centres: needed themselves, or by a needed midpoint of the block's edges. Only blocks
     // that are neither empty nor split get one, and those lie inside the image with every
     // pixel valid, so their rows are read directly.
-    tbb::parallel_for(0, ny, [&](int by) {
+    tbb::parallel_for(0, ny, [&, needed](int by) {
       const int y0 = by * s, y1 = std::min(y0 + s, g_.height - 1), ym = std::min(y0 + h, y1);
       const std::uint8_t* mid_top = &mid_[g_.index(0, y0)];
       const std::uint8_t* mid_middle = &mid_[g_.index(0, ym)];
@@ -258,7 +250,6 @@ class Quadtree {
   const PointGrid& g_;
   const OcclusionTriangleTest& keep_;
   float threshold_per_depth2_;
-  InvalidCounts invalid_;
   std::vector<std::uint8_t> mid_;                  // per pixel: a needed midpoint
   std::vector<std::vector<std::uint8_t>> states_;  // per level (size 2, 4, ...), per block
   int root_ = 2;

@@ -2,14 +2,15 @@
 
 #include <tbb/combinable.h>
 #include <tbb/parallel_for.h>
-#include <tbb/parallel_sort.h>
 
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <limits>
 #include <vector>
 
+#include "runtime/radix_sort.h"
 #include "runtime/vertex_triangles.h"
 
 namespace meshflow {
@@ -48,6 +49,15 @@ struct Candidate {
   double cost = kNoCollapse;
   std::uint32_t from = 0, to = 0;
 };
+
+// Sort key of a finite candidate: its cost as a float's bits (non-negative, so they order
+// like the values), then its vertex.
+std::uint64_t order_key(const Candidate& c) {
+  const float cost = static_cast<float>(c.cost);
+  std::uint32_t bits = 0;
+  std::memcpy(&bits, &cost, sizeof bits);
+  return (std::uint64_t{bits} << 32) | c.from;
+}
 
 // A pass reads the mesh as it was when the pass started (incidence rows, positions, quadrics):
 // every collapse u -> v locks u and its neighbours, so no later collapse of the same pass
@@ -100,21 +110,26 @@ class Decimator {
       tbb::parallel_for(std::size_t{0}, n, [&](std::size_t u) {
         if (dirty[u]) best[u] = best_collapse(static_cast<std::uint32_t>(u), rejected.local());
       });
-      std::vector<Candidate> order;
+      // Cheapest first: keys (cost as float bits, vertex), radix-sorted; non-negative floats
+      // order as their bit patterns, equal costs by vertex. (A comparison sort of the
+      // candidates was 8 % of the decimation.)
+      std::vector<std::uint64_t> order;
       for (const Candidate& c : best)
-        if (c.cost < kNoCollapse) order.push_back(c);
+        if (c.cost < kNoCollapse) order.push_back(order_key(c));
       if (order.empty()) break;
-      tbb::parallel_sort(order.begin(), order.end(), [](const Candidate& a, const Candidate& b) {
-        return a.cost < b.cost || (a.cost == b.cost && a.from < b.from);
-      });
+      radix_sort(order);
+      const auto candidate = [&](std::size_t i) -> const Candidate& {
+        return best[static_cast<std::uint32_t>(order[i])];
+      };
       // Greedy within the pass, but only up to 1.5 x the cost of the collapse that would reach
       // the target if every collapse removed two faces, so cheap collapses elsewhere get their
       // turn in the next pass before expensive ones are taken here.
       const std::size_t goal = std::min(order.size(), (alive - target + 1) / 2);
-      const double limit = 1.5 * order[std::max<std::size_t>(goal, 1) - 1].cost;
+      const double limit = 1.5 * candidate(std::max<std::size_t>(goal, 1) - 1).cost;
       std::fill(locked.begin(), locked.end(), 0);
       std::size_t collapsed = 0;
-      for (const Candidate& c : order) {
+      for (std::size_t i = 0; i < order.size(); ++i) {
+        const Candidate c = candidate(i);
         if (alive <= target || (c.cost > limit && collapsed > 0)) break;
         if (locked[c.from] || locked[c.to]) continue;
         alive -= collapse(c.from, c.to, locked);

@@ -109,10 +109,17 @@ class Decimator {
       // best reads its own faces (changed only around v), its neighbours' quadrics (only v's
       // changed) and, for the link condition of w -> x, the common neighbours of w and x,
       // which change only when w was next to u or is next to v.
-      if (!targets.empty()) std::fill(dirty.begin(), dirty.end(), 0);
-      for (std::uint32_t v : targets)
-        for (const std::uint32_t* f = around_.begin(v); f != around_.end(v); ++f)
-          for (std::uint32_t x : t_[*f]) dirty[x] = 1;
+      // Of those, a vertex w that was not next to any u of the pass (not `locked`) kept its
+      // faces; only costs towards a v grew and link conditions towards vertices next to a u
+      // could fail. So its best collapse w -> y stays the best unless y is locked (next to a
+      // u, or a v), and a w with no valid collapse keeps none: neither is re-evaluated.
+      if (!targets.empty()) {
+        std::fill(dirty.begin(), dirty.end(), 0);
+        for (std::uint32_t v : targets)
+          for (const std::uint32_t* f = around_.begin(v); f != around_.end(v); ++f)
+            for (std::uint32_t x : t_[*f])
+              dirty[x] = locked[x] || (best[x].cost < kNoCollapse && locked[best[x].to]);
+      }
       targets.clear();
       tbb::parallel_for(std::size_t{0}, n, [&](std::size_t u) {
         if (dirty[u]) best[u] = best_collapse(static_cast<std::uint32_t>(u), rejected.local());

@@ -180,6 +180,9 @@ class Decimator {
   // vertex, read by every candidate's checks.
   struct FanFace {
     std::uint32_t a, b;
+    Eigen::Vector3f pa, pb;  ///< positions of a and b
+    Eigen::Vector3f ab;      ///< pb - pa, and its squared length: the edge that stays
+    float ab_squared;
     Eigen::Vector3f before;
     float before_norm;
   };
@@ -192,7 +195,11 @@ class Decimator {
       FanFace face;
       face.a = t[static_cast<std::size_t>((i + 1) % 3)];
       face.b = t[static_cast<std::size_t>((i + 2) % 3)];
-      face.before = (p(face.a) - p(u)).cross(p(face.b) - p(u));
+      face.pa = p(face.a);
+      face.pb = p(face.b);
+      face.ab = face.pb - face.pa;
+      face.ab_squared = face.ab.squaredNorm();
+      face.before = (face.pa - p(u)).cross(face.pb - p(u));
       face.before_norm = face.before.norm();
       fan.push_back(face);
     }
@@ -271,8 +278,9 @@ class Decimator {
     for (std::size_t k = 0; k < fan.size() && !penalise; ++k) {
       const FanFace& face = fan[k];
       if (face.a == v || face.b == v) continue;
-      const Eigen::Vector3f va = p(face.a) - pv, vb = p(face.b) - pv, ab = p(face.b) - p(face.a);
-      const float la = va.squaredNorm(), lb = vb.squaredNorm(), lab = ab.squaredNorm();
+      const Eigen::Vector3f va = face.pa - pv, vb = face.pb - pv;
+      const Eigen::Vector3f& ab = face.ab;
+      const float la = va.squaredNorm(), lb = vb.squaredNorm(), lab = face.ab_squared;
       // angle < min  <=>  cos(angle) > cos(min), compared squared (no trigonometry).
       auto needle = [&](float dot, float l1, float l2) {
         return dot > 0.0f && dot * dot > cos2_min_angle_ * l1 * l2;
@@ -327,9 +335,9 @@ class Decimator {
     const Eigen::Vector3f& pv = p(v);
     for (const FanFace& face : fan) {
       if (face.a == v || face.b == v) continue;
-      const Eigen::Vector3f after = (p(face.a) - pv).cross(p(face.b) - pv);
+      const Eigen::Vector3f after = (face.pa - pv).cross(face.pb - pv);
       if (!(face.before.dot(after) >= cos_turn_ * after.norm() * face.before_norm) ||
-          !has_area(pv, p(face.a), p(face.b))) {
+          !has_area(pv, face.pa, face.pb)) {
         ++rejected.rejected_normal;
         return false;
       }

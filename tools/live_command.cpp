@@ -28,6 +28,7 @@ struct LiveOptions {
   float rqt_error = QuadtreeConfig{}.error_per_depth2;
   float rqt_noise_multiple = QuadtreeConfig{}.noise_multiple;
   float decimate = 0.0f;
+  bool warm_up = false;
 };
 
 using SensorFrame = std::variant<PointCloud, DepthFrame>;
@@ -63,6 +64,14 @@ void run_live(const LiveOptions& o) {
   config.reconstruction.triangulation.quadtree.error_per_depth2 = o.rqt_error;
   config.reconstruction.triangulation.quadtree.noise_multiple = o.rqt_noise_multiple;
   config.reconstruction.triangulation.decimate_to = o.decimate;
+  if (o.warm_up) {  // a throwaway pipeline meshes every frame once: threads and pools start
+    LiveConfig queue = config;
+    queue.policy = LivePolicy::kQueue;
+    queue.max_waiting = frames.size();
+    LivePipeline warm(queue, [](LiveResult&) {});
+    for (const SensorFrame& f : frames) std::visit([&](const auto& frame) { warm.push(frame); }, f);
+    warm.flush();
+  }
   std::size_t triangles = 0;
   LivePipeline live(config, [&](LiveResult& r) {
     triangles += r.mesh.triangles.size();
@@ -128,6 +137,9 @@ void add_live_command(CLI::App& app) {
   cmd->add_option("--decimate", o->decimate,
                   "With --triangulate: QEM-decimate each frame's mesh to this share (e.g. 0.25)")
       ->check(CLI::Range(0.0, 1.0));
+  cmd->add_flag("--warm-up", o->warm_up,
+                "Before the timed replay, mesh every frame once in a throwaway pipeline (worker "
+                "threads and allocator pools start), so the numbers are the steady state");
   cmd->add_option("--loops", o->loops, "Replay the frames this many times")
       ->check(CLI::Range(1, 100000));
   add_pipeline_options(cmd, o->pipeline);

@@ -3,6 +3,7 @@
 // triangulation and compaction into a mesh, as one call.
 
 #include "bench_support.h"
+#include "nodes/triangulate/depth_noise.h"
 #include "nodes/triangulate/depth_triangulation.h"
 #include "runtime/threads.h"
 
@@ -33,6 +34,28 @@ void BM_TriangulateDepth(benchmark::State& state) {
 BENCHMARK(BM_TriangulateDepth)
     ->ArgNames({"threads", "redwood", "method"})
     ->ArgsProduct({{1, 2}, {0, 1}, {0, 1, 2, 3, 4}})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
+
+// The per-frame noise estimate behind the quadtree's threshold. Args: threads, input (1 =
+// Redwood, 0 = synthetic).
+void BM_DepthNoiseEstimate(benchmark::State& state) {
+  const bool redwood = state.range(1) == 1;
+  const auto& frames = depth_frames(redwood);
+  if (frames.empty()) {
+    state.SkipWithError("Redwood frames not found under $MESHFLOW_DATA");
+    return;
+  }
+  const PointGrid grid = grid_from_depth(frames.front(), DepthFilterConfig{});
+  ThreadLimit limit(static_cast<int>(state.range(0)));
+  float noise = 0.0f;
+  for (auto _ : state) benchmark::DoNotOptimize(noise = estimate_noise_per_depth2(grid));
+  state.counters["noise_per_depth2"] = static_cast<double>(noise);
+  state.SetLabel(redwood ? "redwood" : "synthetic");
+}
+BENCHMARK(BM_DepthNoiseEstimate)
+    ->ArgNames({"threads", "redwood"})
+    ->ArgsProduct({{1, 2}, {0, 1}})
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
 

@@ -45,12 +45,15 @@ class Quadtree {
     return states_[level(s)][static_cast<std::size_t>(by) * static_cast<std::size_t>(blocks(s)) +
                              static_cast<std::size_t>(bx)];
   }
+  const std::uint8_t* state_row(int s, int by) const {
+    return states_[level(s)].data() +
+           static_cast<std::size_t>(by) * static_cast<std::size_t>(blocks(s));
+  }
   static std::size_t level(int s) {
     std::size_t l = 0;
     while ((2 << l) < s) ++l;
     return l;
   }
-  bool inside(int u, int v) const { return u >= 0 && v >= 0 && u < g_.width && v < g_.height; }
   const Eigen::Vector3f& p(int u, int v) const { return g_.points[g_.index(u, v)]; }
   // Needed: farther from `approx` than the threshold x depth^2 (compared squared). A value
   // copied into each pass, so the passes' byte stores cannot make the compiler reload it.
@@ -89,8 +92,6 @@ class Quadtree {
                                  : std::uint8_t{0};
     }
   }
-
-  bool mid_selected(int u, int v) const { return inside(u, v) && mid_[g_.index(u, v)] != 0; }
 
   // Level s in three passes, each parallel over rows with one writer per value: block states
   // (empty / split), then every edge midpoint once, then block centres.
@@ -181,10 +182,10 @@ class Quadtree {
     });
   }
 
-  void add(std::vector<Triangle>& out, int u0, int v0, int u1, int v1, int u2, int v2) const {
-    if (!inside(u0, v0) || !inside(u1, v1) || !inside(u2, v2)) return;
+  // Appends triangle (u0, v0), (u1, v1), (u2, v2) unless the occlusion test drops it; its
+  // pixels must be inside the image and valid (corners of a block that is not split).
+  void add_valid(std::vector<Triangle>& out, int u0, int v0, int u1, int v1, int u2, int v2) const {
     const std::size_t a = g_.index(u0, v0), b = g_.index(u1, v1), c = g_.index(u2, v2);
-    if (!g_.valid(a) || !g_.valid(b) || !g_.valid(c)) return;
     if (keep_(g_.points[a], g_.points[b], g_.points[c], g_.eye) != OcclusionTriangleTest::kKeep)
       return;
     out.push_back(Triangle{static_cast<std::uint32_t>(a), static_cast<std::uint32_t>(b),
@@ -201,11 +202,12 @@ class Quadtree {
 
   void emit_row(int s, int by, std::vector<Triangle>& out) const {
     const int nx = blocks_x(s);
+    const std::uint8_t* states = state_row(s, by);
+    const std::uint8_t* parents = s == root_ ? nullptr : state_row(2 * s, by / 2);
     for (int bx = 0; bx < nx; ++bx) {
-      const std::uint8_t st = state(s, bx, by);
+      const std::uint8_t st = states[bx];
       if (st & kEmpty) continue;
-      const bool parent_split = s == root_ || (state(2 * s, bx / 2, by / 2) & kSplit) != 0;
-      if (!parent_split) continue;
+      if (parents != nullptr && !(parents[bx / 2] & kSplit)) continue;  // a leaf above
       const int x0 = bx * s, y0 = by * s, h = s / 2;
       if (st & kSplit) {
         if (s == 2)  // holds an invalid pixel: per pixel quad inside the image, as naive
@@ -214,6 +216,7 @@ class Quadtree {
               append_quad_triangles(g_, u, v, keep_, out, nullptr);
         continue;  // otherwise the children are emitted at the next level
       }
+      // From here the block is neither empty nor split: inside the image, every pixel valid.
       if (st & kCenter) {  // fan around the centre through the needed midpoints
         const int cu = x0 + h, cv = y0 + h;
         const std::array<std::array<int, 2>, 8> ring = {{{x0, y0},
@@ -226,23 +229,24 @@ class Quadtree {
                                                          {x0 + h, y0}}};
         std::array<std::array<int, 2>, 8> used{};
         int k = 0;
-        for (int i = 0; i < 8; ++i)
-          if (i % 2 == 0 || mid_selected(ring[static_cast<std::size_t>(i)][0],
-                                         ring[static_cast<std::size_t>(i)][1]))
-            used[static_cast<std::size_t>(k++)] = ring[static_cast<std::size_t>(i)];
+        for (int i = 0; i < 8; ++i) {
+          const auto& corner = ring[static_cast<std::size_t>(i)];
+          if (i % 2 == 0 || mid_[g_.index(corner[0], corner[1])] != 0)
+            used[static_cast<std::size_t>(k++)] = corner;
+        }
         for (int i = 0; i < k; ++i) {
           const auto& a = used[static_cast<std::size_t>(i)];
           const auto& b = used[static_cast<std::size_t>((i + 1) % k)];
-          add(out, cu, cv, a[0], a[1], b[0], b[1]);
+          add_valid(out, cu, cv, a[0], a[1], b[0], b[1]);
         }
         continue;
       }
       if (main_diagonal_shorter(x0, y0, s)) {
-        add(out, x0, y0, x0, y0 + s, x0 + s, y0 + s);
-        add(out, x0, y0, x0 + s, y0 + s, x0 + s, y0);
+        add_valid(out, x0, y0, x0, y0 + s, x0 + s, y0 + s);
+        add_valid(out, x0, y0, x0 + s, y0 + s, x0 + s, y0);
       } else {
-        add(out, x0, y0, x0, y0 + s, x0 + s, y0);
-        add(out, x0 + s, y0, x0, y0 + s, x0 + s, y0 + s);
+        add_valid(out, x0, y0, x0, y0 + s, x0 + s, y0);
+        add_valid(out, x0 + s, y0, x0, y0 + s, x0 + s, y0 + s);
       }
     }
   }

@@ -171,11 +171,12 @@ class Quadtree {
         const int x0 = bx * s, x1 = x0 + s, xm = x0 + h;
         bool center = mid_top[xm] || mid_bottom[xm] || mid_middle[x0] || mid_middle[x1];
         if (!center) {
-          const bool main = (top[x0] - bottom[x1]).squaredNorm() <=
-                            (top[x1] - bottom[x0]).squaredNorm();  // the shorter diagonal
-          const Eigen::Vector3f diagonal_mid = main ? Eigen::Vector3f((top[x0] + bottom[x1]) / 2)
-                                                    : Eigen::Vector3f((top[x1] + bottom[x0]) / 2);
-          center = needed(middle[xm], diagonal_mid);
+          // The shorter diagonal's ends, picked by index: on noisy frames the choice is a coin
+          // toss, and a branch on it mispredicts half the time.
+          const bool main =
+              (top[x0] - bottom[x1]).squaredNorm() <= (top[x1] - bottom[x0]).squaredNorm();
+          const int top_end = main ? x0 : x1, bottom_end = main ? x1 : x0;
+          center = needed(middle[xm], (top[top_end] + bottom[bottom_end]) / 2);
         }
         if (center) states[bx] |= kCenter;
       }

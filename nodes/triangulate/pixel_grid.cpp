@@ -108,22 +108,6 @@ OcclusionTriangleTest::OcclusionTriangleTest(float max_view_angle_deg, float max
     : min_cos_view_squared_(std::pow(std::cos(max_view_angle_deg * 3.14159265f / 180.0f), 2.0f)),
       max_ratio_squared_(max_edge_ratio * max_edge_ratio) {}
 
-OcclusionTriangleTest::Verdict OcclusionTriangleTest::operator()(const Eigen::Vector3f& p0,
-                                                                 const Eigen::Vector3f& p1,
-                                                                 const Eigen::Vector3f& p2,
-                                                                 const Eigen::Vector3f& eye) const {
-  const Eigen::Vector3f normal = (p1 - p0).cross(p2 - p0);
-  const Eigen::Vector3f ray = (p0 + p1 + p2) / 3.0f - eye;
-  // |n . r| >= cos(max angle) |n| |r|, squared (no square roots).
-  const float dot = normal.dot(ray);
-  if (!(dot * dot >= min_cos_view_squared_ * normal.squaredNorm() * ray.squaredNorm()))
-    return kViewAngle;
-  const float e0 = (p1 - p0).squaredNorm(), e1 = (p2 - p1).squaredNorm(),
-              e2 = (p0 - p2).squaredNorm();
-  if (!(std::max({e0, e1, e2}) <= max_ratio_squared_ * std::min({e0, e1, e2}))) return kShape;
-  return kKeep;
-}
-
 TriangleMesh mesh_from_pixel_triangles(const PointGrid& grid,
                                        const std::vector<Triangle>& pixel_triangles) {
   const std::size_t pixels = grid.points.size();

@@ -4,6 +4,7 @@
 // occlusion test of a triangle, compaction of pixel-index triangles into a mesh).
 
 #include <Eigen/Core>
+#include <algorithm>
 #include <cmath>
 #include <cstddef>
 #include <vector>
@@ -50,6 +51,22 @@ class OcclusionTriangleTest {
  private:
   float min_cos_view_squared_, max_ratio_squared_;
 };
+
+// Inline: called once per candidate triangle of every frame.
+inline OcclusionTriangleTest::Verdict OcclusionTriangleTest::operator()(
+    const Eigen::Vector3f& p0, const Eigen::Vector3f& p1, const Eigen::Vector3f& p2,
+    const Eigen::Vector3f& eye) const {
+  const Eigen::Vector3f normal = (p1 - p0).cross(p2 - p0);
+  const Eigen::Vector3f ray = (p0 + p1 + p2) / 3.0f - eye;
+  // |n . r| >= cos(max angle) |n| |r|, squared (no square roots).
+  const float dot = normal.dot(ray);
+  if (!(dot * dot >= min_cos_view_squared_ * normal.squaredNorm() * ray.squaredNorm()))
+    return kViewAngle;
+  const float e0 = (p1 - p0).squaredNorm(), e1 = (p2 - p1).squaredNorm(),
+              e2 = (p0 - p2).squaredNorm();
+  if (!(std::max({e0, e1, e2}) <= max_ratio_squared_ * std::min({e0, e1, e2}))) return kShape;
+  return kKeep;
+}
 
 /// The mesh of `pixel_triangles` (corners are pixel indices of `grid`): vertices are the used
 /// pixels in row-major order. Parallel over rows; deterministic; O(pixels + triangles).

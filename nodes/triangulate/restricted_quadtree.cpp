@@ -41,10 +41,6 @@ class Quadtree {
     return states_[level(s)][static_cast<std::size_t>(by) * static_cast<std::size_t>(blocks(s)) +
                              static_cast<std::size_t>(bx)];
   }
-  std::uint8_t state(int s, int bx, int by) const {
-    return states_[level(s)][static_cast<std::size_t>(by) * static_cast<std::size_t>(blocks(s)) +
-                             static_cast<std::size_t>(bx)];
-  }
   const std::uint8_t* state_row(int s, int by) const {
     return states_[level(s)].data() +
            static_cast<std::size_t>(by) * static_cast<std::size_t>(blocks(s));

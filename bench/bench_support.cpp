@@ -86,4 +86,11 @@ const std::vector<DepthFrame>& depth_frames(bool redwood) {
   return redwood ? real : synthetic;
 }
 
+const std::vector<DepthFrame>* require_depth_frames(benchmark::State& state, bool redwood) {
+  const std::vector<DepthFrame>& frames = depth_frames(redwood);
+  if (!frames.empty()) return &frames;
+  state.SkipWithError(("Redwood frames not found at " + data_dir() + "/rgbd_redwood").c_str());
+  return nullptr;
+}
+
 }  // namespace meshflow::bench

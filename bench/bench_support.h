@@ -34,6 +34,9 @@ const PointCloud* require(benchmark::State& state, Input input);
 /// the first five of a 40-frame synthetic turn in the demo room. Cached.
 const std::vector<DepthFrame>& depth_frames(bool redwood);
 
+/// depth_frames(redwood), or null after skipping `state` with a message when they are missing.
+const std::vector<DepthFrame>* require_depth_frames(benchmark::State& state, bool redwood);
+
 /// Registers the standard argument grid: threads {1, 2} x inputs {synthetic, kurt3d}.
 void thread_and_input_args(benchmark::internal::Benchmark* b);
 

@@ -11,8 +11,9 @@ namespace {
 
 // Args: threads, voxel in 0.1 mm, input (1 = Redwood, 0 = synthetic).
 void BM_TsdfIntegrate(benchmark::State& state) {
-  const auto& input = depth_frames(state.range(2) == 1);
-  if (input.empty()) return state.SkipWithError("rgbd_redwood not found");
+  const std::vector<DepthFrame>* frames = require_depth_frames(state, state.range(2) == 1);
+  if (frames == nullptr) return;
+  const std::vector<DepthFrame>& input = *frames;
   ThreadLimit limit(static_cast<int>(state.range(0)));
   const float voxel = static_cast<float>(state.range(1)) * 1e-4f;
   std::size_t voxels = 0, blocks = 0;
@@ -39,8 +40,9 @@ BENCHMARK(BM_TsdfIntegrate)
     ->UseRealTime();
 
 void BM_TsdfExtract(benchmark::State& state) {
-  const auto& input = depth_frames(state.range(2) == 1);
-  if (input.empty()) return state.SkipWithError("rgbd_redwood not found");
+  const std::vector<DepthFrame>* frames = require_depth_frames(state, state.range(2) == 1);
+  if (frames == nullptr) return;
+  const std::vector<DepthFrame>& input = *frames;
   TsdfVolume volume(TsdfConfig{static_cast<float>(state.range(1)) * 1e-4f});
   for (const DepthFrame& f : input) volume.integrate(f);
   ThreadLimit limit(static_cast<int>(state.range(0)));

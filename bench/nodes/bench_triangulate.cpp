@@ -14,11 +14,8 @@ namespace {
 // 2 = restricted quadtree then QEM decimation to 25 %).
 void BM_TriangulateDepth(benchmark::State& state) {
   const bool redwood = state.range(1) == 1;
-  const auto& frames = depth_frames(redwood);
-  if (frames.empty()) {
-    state.SkipWithError("Redwood frames not found under $MESHFLOW_DATA");
-    return;
-  }
+  const std::vector<DepthFrame>* frames = require_depth_frames(state, redwood);
+  if (frames == nullptr) return;
   DepthTriangulationConfig config;
   config.method = state.range(2) >= 1 ? DepthTriangulationMethod::kRestrictedQuadtree
                                       : DepthTriangulationMethod::kNaive;
@@ -28,7 +25,7 @@ void BM_TriangulateDepth(benchmark::State& state) {
   state.SetLabel(std::string(redwood ? "redwood " : "synthetic ") + names[state.range(2)]);
   ThreadLimit limit(static_cast<int>(state.range(0)));
   std::size_t triangles = 0;
-  for (auto _ : state) triangles = triangulate_depth(frames.front(), config).triangles.size();
+  for (auto _ : state) triangles = triangulate_depth(frames->front(), config).triangles.size();
   state.counters["triangles"] = static_cast<double>(triangles);
 }
 BENCHMARK(BM_TriangulateDepth)
@@ -41,12 +38,9 @@ BENCHMARK(BM_TriangulateDepth)
 // Redwood, 0 = synthetic).
 void BM_DepthNoiseEstimate(benchmark::State& state) {
   const bool redwood = state.range(1) == 1;
-  const auto& frames = depth_frames(redwood);
-  if (frames.empty()) {
-    state.SkipWithError("Redwood frames not found under $MESHFLOW_DATA");
-    return;
-  }
-  const PointGrid grid = grid_from_depth(frames.front(), DepthFilterConfig{});
+  const std::vector<DepthFrame>* frames = require_depth_frames(state, redwood);
+  if (frames == nullptr) return;
+  const PointGrid grid = grid_from_depth(frames->front(), DepthFilterConfig{});
   ThreadLimit limit(static_cast<int>(state.range(0)));
   float noise = 0.0f;
   for (auto _ : state) benchmark::DoNotOptimize(noise = estimate_noise_per_depth2(grid));

@@ -1,7 +1,7 @@
 #include "nodes/optimize/qem_decimation.h"
 
 #include <tbb/blocked_range.h>
-#include <tbb/combinable.h>
+#include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 
 #include <Eigen/Geometry>
@@ -11,6 +11,7 @@
 #include <limits>
 #include <vector>
 
+#include "nodes/optimize/collapse_fan.h"
 #include "runtime/radix_sort.h"
 #include "runtime/vertex_triangles.h"
 
@@ -35,10 +36,9 @@ struct Quadric {
   void add(const Quadric& o) {
     for (int i = 0; i < 10; ++i) q[i] += o.q[i];
   }
-  // (this + o)(x): x^T (A + B) x for x = (p, 1).
-  double error(const Quadric& o, const Eigen::Vector3f& pf) const {
-    double s[10];
-    for (int i = 0; i < 10; ++i) s[i] = q[i] + o.q[i];
+  // x^T A x for x = (p, 1).
+  double error(const Eigen::Vector3f& pf) const {
+    const double* s = q;
     const double x = pf.x(), y = pf.y(), z = pf.z();
     return s[0] * x * x + 2 * s[1] * x * y + 2 * s[2] * x * z + 2 * s[3] * x + s[4] * y * y +
            2 * s[5] * y * z + 2 * s[6] * y + s[7] * z * z + 2 * s[8] * z + s[9];
@@ -71,12 +71,13 @@ class Decimator {
         t_(mesh.triangles),
         alive_(mesh.triangles.size(), 1),
         q_(mesh.vertices.size()),
+        own_error_(mesh.vertices.size()),
         cost_scale_(mesh.vertices.size(), 1.0),
         cos_turn_(static_cast<float>(std::cos(config.max_normal_turn_deg * kDegrees))),
         cos_border_(static_cast<float>(std::cos(config.max_border_turn_deg * kDegrees))),
         cos_sharp_(static_cast<float>(std::cos(config.sharp_edge_deg * kDegrees))),
-        cos2_min_angle_(
-            static_cast<float>(std::pow(std::cos(config.min_angle_deg * kDegrees), 2))) {
+        cos2_min_angle_(static_cast<float>(std::pow(std::cos(config.min_angle_deg * kDegrees), 2))),
+        scratch_([this] { return Scratch(*this); }) {
     // 1 / depth^2 of every vertex (positions never change), or 1.
     if (config.divide_by_depth2)
       for (std::size_t v = 0; v < mesh.vertices.size(); ++v)
@@ -94,6 +95,7 @@ class Decimator {
       const Quadric k = Quadric::plane(unit, -unit.dot(a), 0.5 * area2);
       for (std::uint32_t v : t) q_[v].add(k);
     }
+    for (std::size_t v = 0; v < mesh.vertices.size(); ++v) own_error_[v] = q_[v].error(p(v));
   }
 
   TriangleMesh run(std::size_t target, QemReport& report) {
@@ -102,7 +104,6 @@ class Decimator {
     std::vector<Candidate> best(n);
     std::vector<std::uint8_t> locked(n), dirty(n, 1);
     std::vector<std::uint32_t> targets;  // the kept vertex of every collapse of the last pass
-    tbb::combinable<QemReport> rejected;
     while (alive > target) {
       compact_faces();
       around_ = vertex_triangles(t_, n);
@@ -124,10 +125,11 @@ class Decimator {
       targets.clear();
       tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n),
                         [&](const tbb::blocked_range<std::size_t>& range) {
-                          QemReport& counts = rejected.local();  // a lookup: once per range
+                          Scratch& scratch = scratch_.local();  // a lookup: once per range
+                          if (scratch.mark.size() != n) scratch.mark.assign(n, 0);
                           for (std::size_t u = range.begin(); u != range.end(); ++u)
                             if (dirty[u])
-                              best[u] = best_collapse(static_cast<std::uint32_t>(u), counts);
+                              best[u] = best_collapse(static_cast<std::uint32_t>(u), scratch);
                         });
       // Cheapest first: keys (cost as float bits, vertex), radix-sorted; non-negative floats
       // order as their bit patterns, equal costs by vertex. (A comparison sort of the
@@ -159,11 +161,11 @@ class Decimator {
       report.collapses += collapsed;
       ++report.passes;
     }
-    rejected.combine_each([&](const QemReport& r) {
-      report.rejected_topology += r.rejected_topology;
-      report.rejected_normal += r.rejected_normal;
-      report.rejected_border += r.rejected_border;
-    });
+    for (const Scratch& scratch : scratch_) {
+      report.rejected_topology += scratch.rejected.rejected_topology;
+      report.rejected_normal += scratch.rejected.rejected_normal;
+      report.rejected_border += scratch.rejected.rejected_border;
+    }
     compact_faces();
     return compact_vertices(in_, t_);
   }
@@ -180,66 +182,64 @@ class Decimator {
     return t;
   }
 
-  // One face (u, a, b) around the vertex being evaluated, counter-clockwise from u, with its
-  // area vector (p(a) - p(u)) x (p(b) - p(u)) and that vector's length: computed once per
-  // vertex, read by every candidate's checks.
-  struct FanFace {
-    std::uint32_t a, b;
-    Eigen::Vector3f pa, pb;  ///< positions of a and b
-    Eigen::Vector3f ab;      ///< pb - pa, and its squared length: the edge that stays
-    float ab_squared;
-    Eigen::Vector3f before;
-    float before_norm;
+  // Per-thread working memory of best_collapse().
+  struct Scratch {
+    explicit Scratch(const Decimator& d) : fan(d.cos_turn_, d.cos2_min_angle_) {}
+    std::vector<std::uint32_t> nu, border;  ///< u's neighbours, and those on a border
+    std::vector<std::pair<double, std::uint32_t>> candidates;  ///< (quadric cost, v)
+    CollapseFan fan;                                           ///< u's faces
+    std::vector<std::uint32_t> mark;  ///< per vertex: a stamp, or a count above a stamp
+    std::uint32_t stamp = 0;          ///< the last stamp used in `mark`
+
+    // `count` stamps above every value in `mark`: the first is returned.
+    std::uint32_t fresh_stamps(std::uint32_t count) {
+      if (stamp > std::numeric_limits<std::uint32_t>::max() - count) {
+        std::fill(mark.begin(), mark.end(), 0);
+        stamp = 0;
+      }
+      const std::uint32_t first = stamp + 1;
+      stamp += count;
+      return first;
+    }
+    QemReport rejected;  ///< refusals counted by this thread
   };
 
-  void build_fan(std::uint32_t u, std::vector<FanFace>& fan) const {
-    fan.clear();
-    for (const std::uint32_t* f = around_.begin(u); f != around_.end(u); ++f) {
+  void build_fan(std::uint32_t u, CollapseFan& fan) const {
+    fan.reset(static_cast<std::size_t>(around_.end(u) - around_.begin(u)), p(u));
+    std::size_t k = 0;
+    for (const std::uint32_t* f = around_.begin(u); f != around_.end(u); ++f, ++k) {
       const Triangle& t = t_[*f];
-      const int i = t[0] == u ? 0 : t[1] == u ? 1 : 2;
-      FanFace face;
-      face.a = t[static_cast<std::size_t>((i + 1) % 3)];
-      face.b = t[static_cast<std::size_t>((i + 2) % 3)];
-      face.pa = p(face.a);
-      face.pb = p(face.b);
-      face.ab = face.pb - face.pa;
-      face.ab_squared = face.ab.squaredNorm();
-      face.before = (face.pa - p(u)).cross(face.pb - p(u));
-      face.before_norm = face.before.norm();
-      fan.push_back(face);
+      const std::size_t i = t[0] == u ? 0 : t[1] == u ? 1 : 2;
+      const std::uint32_t a = t[(i + 1) % 3], b = t[(i + 2) % 3];
+      fan.set(k, a, p(a), b, p(b));
     }
+    fan.finish();
   }
 
   // The cheapest valid collapse u -> v over u's neighbours v (cost kNoCollapse when none).
-  Candidate best_collapse(std::uint32_t u, QemReport& rejected) const {
+  Candidate best_collapse(std::uint32_t u, Scratch& scratch) const {
     Candidate best;
     best.from = u;
     if (around_.begin(u) == around_.end(u)) return best;
-    thread_local std::vector<std::uint32_t> corners, nu, border, times;
-    thread_local std::vector<std::pair<double, std::uint32_t>> candidates;
-    thread_local std::vector<FanFace> fan;
+    auto& [nu, border, candidates, fan, mark, stamp, rejected] = scratch;
     // Neighbours, and the border ones among them (sharing one face with u): each neighbour
-    // appears once per face it shares with u.
-    corners.clear();
-    for (const std::uint32_t* f = around_.begin(u); f != around_.end(u); ++f)
-      for (std::uint32_t x : t_[*f])
-        if (x != u) corners.push_back(x);
-    // Counted by a linear search of the few found so far (cheaper than sorting ~12 ids).
+    // appears once per face it shares with u, counted in `mark` (from base + 1, saturating).
+    const std::uint32_t base = scratch.fresh_stamps(8);
     nu.clear();
     border.clear();
-    times.clear();
-    for (std::uint32_t x : corners) {
-      std::size_t k = 0;
-      while (k < nu.size() && nu[k] != x) ++k;
-      if (k == nu.size()) {
-        nu.push_back(x);
-        times.push_back(1);
-      } else {
-        ++times[k];
+    for (const std::uint32_t* f = around_.begin(u); f != around_.end(u); ++f)
+      for (std::uint32_t x : t_[*f]) {
+        if (x == u) continue;
+        std::uint32_t& count = mark[x];
+        if (count < base) {
+          count = base + 1;
+          nu.push_back(x);
+        } else if (count < base + 7) {
+          ++count;
+        }
       }
-    }
-    for (std::size_t k = 0; k < nu.size(); ++k)
-      if (times[k] == 1) border.push_back(nu[k]);
+    for (std::uint32_t x : nu)
+      if (mark[x] == base + 1) border.push_back(x);
     // A border vertex may only move along its border (see valid()): two candidates at most.
     if (!border.empty() && border.size() != 2) {
       rejected.rejected_border += nu.size();
@@ -254,9 +254,10 @@ class Decimator {
     // alone exceeds the best penalised cost found.
     for (const auto& [quadric, v] : candidates) {
       if (!(quadric < best.cost)) break;
-      const double cost = penalised(fan, v, quadric);
+      const FanVerdict verdict = fan.check(v, p(v));
+      const double cost = penalised(fan, v, verdict, quadric);
       if (!(cost < best.cost)) continue;
-      if (!valid(u, v, fan, nu, border, rejected)) continue;
+      if (!valid(u, v, verdict, scratch)) continue;
       best.cost = cost;
       best.to = v;
     }
@@ -265,58 +266,33 @@ class Decimator {
 
   // (Q_u + Q_v)(v), divided by depth^2 when configured.
   double quadric_cost(std::uint32_t u, std::uint32_t v) const {
-    return std::max(0.0, q_[u].error(q_[v], p(v))) * cost_scale_[v];
+    return std::max(0.0, q_[u].error(p(v)) + own_error_[v]) * cost_scale_[v];
   }
 
   // The quadric cost times the penalty where the edge is sharp (its two faces, around u, differ
   // by more than sharp_edge_deg) or a needle would appear (a face (v, a, b) replacing (u, a, b)
   // with an inner angle below min_angle_deg).
-  double penalised(const std::vector<FanFace>& fan, std::uint32_t v, double cost) const {
-    const FanFace* shared[2] = {nullptr, nullptr};
-    std::size_t shared_count = 0;
-    for (const FanFace& face : fan)
-      if (face.a == v || face.b == v) shared[std::min<std::size_t>(shared_count++, 1)] = &face;
-    bool penalise =
-        shared_count == 2 && shared[0]->before.dot(shared[1]->before) <
-                                 cos_sharp_ * shared[0]->before_norm * shared[1]->before_norm;
-    const Eigen::Vector3f& pv = p(v);
-    for (std::size_t k = 0; k < fan.size() && !penalise; ++k) {
-      const FanFace& face = fan[k];
-      if (face.a == v || face.b == v) continue;
-      const Eigen::Vector3f va = face.pa - pv, vb = face.pb - pv;
-      const Eigen::Vector3f& ab = face.ab;
-      const float la = va.squaredNorm(), lb = vb.squaredNorm(), lab = face.ab_squared;
-      // angle < min  <=>  cos(angle) > cos(min), compared squared (no trigonometry).
-      auto needle = [&](float dot, float l1, float l2) {
-        return dot > 0.0f && dot * dot > cos2_min_angle_ * l1 * l2;
-      };
-      penalise =
-          needle(va.dot(vb), la, lb) || needle(-va.dot(ab), la, lab) || needle(vb.dot(ab), lb, lab);
-    }
-    return penalise ? cost * cfg_.penalty : cost;
+  double penalised(const CollapseFan& fan, std::uint32_t v, const FanVerdict& verdict,
+                   double cost) const {
+    if (verdict.needle) return cost * cfg_.penalty;
+    if (verdict.shared != 2) return cost;
+    std::size_t shared[2] = {0, 0};
+    std::size_t found = 0;
+    for (std::size_t k = 0; k < fan.size() && found < 2; ++k)
+      if (fan.a(k) == v || fan.b(k) == v) shared[found++] = k;
+    const bool sharp =
+        fan.area_vector(shared[0]).dot(fan.area_vector(shared[1])) <
+        cos_sharp_ * fan.area_vector_norm(shared[0]) * fan.area_vector_norm(shared[1]);
+    return sharp ? cost * cfg_.penalty : cost;
   }
 
-  bool valid(std::uint32_t u, std::uint32_t v, const std::vector<FanFace>& fan,
-             const std::vector<std::uint32_t>& nu, const std::vector<std::uint32_t>& border_at_u,
-             QemReport& rejected) const {
-    std::size_t shared_count = 0;
-    for (const FanFace& face : fan) shared_count += face.a == v || face.b == v ? 1 : 0;
+  // Whether u -> v keeps the mesh manifold, borders on themselves and faces unturned (see
+  // QemConfig); `verdict` is the fan's check of v. Counts the reason of a refusal.
+  bool valid(std::uint32_t u, std::uint32_t v, const FanVerdict& verdict, Scratch& scratch) const {
+    const std::vector<std::uint32_t>& border_at_u = scratch.border;
+    QemReport& rejected = scratch.rejected;
+    const std::size_t shared_count = verdict.shared;
     if (shared_count == 0 || shared_count > 2) {
-      ++rejected.rejected_topology;
-      return false;
-    }
-    // Link condition: the common neighbours are exactly the edge's opposite vertices.
-    // (u's few neighbours, each looked up among v's faces: no sorting.)
-    std::size_t common = 0;
-    for (std::uint32_t x : nu) {
-      if (x == v) continue;
-      for (const std::uint32_t* f = around_.begin(v); f != around_.end(v); ++f)
-        if (has(t_[*f], x)) {
-          ++common;
-          break;
-        }
-    }
-    if (common != shared_count) {
       ++rejected.rejected_topology;
       return false;
     }
@@ -337,15 +313,26 @@ class Decimator {
       }
     }
     // Faces that stay: no flip, no degeneration, no turn beyond the limit.
-    const Eigen::Vector3f& pv = p(v);
-    for (const FanFace& face : fan) {
-      if (face.a == v || face.b == v) continue;
-      const Eigen::Vector3f after = (face.pa - pv).cross(face.pb - pv);
-      if (!(face.before.dot(after) >= cos_turn_ * after.norm() * face.before_norm) ||
-          !has_area(pv, face.pa, face.pb)) {
-        ++rejected.rejected_normal;
-        return false;
-      }
+    if (verdict.turned) {
+      ++rejected.rejected_normal;
+      return false;
+    }
+    // Link condition (last: the dearest check): the common neighbours are exactly the edge's
+    // opposite vertices. u's neighbours are marked, then v's faces count the marked ones.
+    std::vector<std::uint32_t>& mark = scratch.mark;
+    const std::uint32_t listed = scratch.fresh_stamps(2), counted = listed + 1;
+    for (std::uint32_t x : scratch.nu)
+      if (x != v) mark[x] = listed;
+    std::size_t common = 0;
+    for (const std::uint32_t* f = around_.begin(v); f != around_.end(v); ++f)
+      for (std::uint32_t x : t_[*f])
+        if (mark[x] == listed) {
+          mark[x] = counted;
+          ++common;
+        }
+    if (common != shared_count) {
+      ++rejected.rejected_topology;
+      return false;
     }
     return true;
   }
@@ -366,6 +353,7 @@ class Decimator {
       }
     }
     q_[v].add(q_[u]);
+    own_error_[v] = q_[v].error(p(v));
     return removed;
   }
 
@@ -383,9 +371,11 @@ class Decimator {
   std::vector<Triangle> t_;
   std::vector<std::uint8_t> alive_;
   std::vector<Quadric> q_;
+  std::vector<double> own_error_;   ///< Q_v(v) of every vertex: (Q_u + Q_v)(v) = Q_u(v) + this
   std::vector<double> cost_scale_;  ///< multiplies a collapse's quadric error (1 / depth^2)
   VertexTriangles around_;
   float cos_turn_, cos_border_, cos_sharp_, cos2_min_angle_;
+  mutable tbb::enumerable_thread_specific<Scratch> scratch_;  ///< best_collapse()'s memory
 };
 
 }  // namespace

@@ -42,14 +42,12 @@ PointGrid grid_from_depth(const DepthFrame& frame, const DepthFilterConfig& filt
     const float* row = depth.ptr<float>(v);
     const Eigen::Vector3f row_ray =
         rotation.col(1) * ((static_cast<float>(v) - k.cy) / k.fy) + rotation.col(2);
+    // Branch-free (invalid pixels are scattered on real frames): an invalid depth becomes NaN,
+    // which makes every coordinate NaN.
     for (int u = 0; u < g.width; ++u) {
-      const float z = row[u];
-      Eigen::Vector3f& p = g.points[g.index(u, v)];
-      if (!(z > 0.0f)) {
-        p = Eigen::Vector3f::Constant(kNaN);
-        continue;
-      }
-      p = g.eye + z * (rotation.col(0) * x_of_column[static_cast<std::size_t>(u)] + row_ray);
+      const float z = row[u] > 0.0f ? row[u] : kNaN;
+      g.points[g.index(u, v)] =
+          g.eye + z * (rotation.col(0) * x_of_column[static_cast<std::size_t>(u)] + row_ray);
     }
   });
   return g;

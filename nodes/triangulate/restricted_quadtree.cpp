@@ -165,16 +165,15 @@ class Quadtree {
       for (int bx = 0; bx < nx; ++bx) {
         if (states[bx] & (kEmpty | kSplit)) continue;
         const int x0 = bx * s, x1 = x0 + s, xm = x0 + h;
-        bool center = mid_top[xm] || mid_bottom[xm] || mid_middle[x0] || mid_middle[x1];
-        if (!center) {
-          // The shorter diagonal's ends, picked by index: on noisy frames the choice is a coin
-          // toss, and a branch on it mispredicts half the time.
-          const bool main =
-              (top[x0] - bottom[x1]).squaredNorm() <= (top[x1] - bottom[x0]).squaredNorm();
-          const int top_end = main ? x0 : x1, bottom_end = main ? x1 : x0;
-          center = needed(middle[xm], (top[top_end] + bottom[bottom_end]) / 2);
-        }
-        if (center) states[bx] |= kCenter;
+        // Branch-free: on noisy frames both the diagonal's choice and the test's outcome are
+        // coin tosses, and branches on them mispredict half the time. The shorter diagonal's
+        // ends are picked by index arithmetic (a select would be compiled to a branch).
+        const int main = static_cast<int>((top[x0] - bottom[x1]).squaredNorm() <=
+                                          (top[x1] - bottom[x0]).squaredNorm());
+        const int top_end = x1 - main * s, bottom_end = x0 + main * s;
+        const bool center = (mid_top[xm] | mid_bottom[xm] | mid_middle[x0] | mid_middle[x1]) |
+                            needed(middle[xm], (top[top_end] + bottom[bottom_end]) / 2);
+        states[bx] = static_cast<std::uint8_t>(states[bx] | (center ? kCenter : 0));
       }
     });
   }
@@ -191,10 +190,17 @@ class Quadtree {
 
   // The leaves of level s, rows in parallel, appended to `out` in row order.
   void emit_level(int s, std::vector<Triangle>& all) {
-    const int ny = blocks_y(s);
-    std::vector<std::vector<Triangle>> rows(static_cast<std::size_t>(ny));
-    tbb::parallel_for(0, ny, [&](int by) { emit_row(s, by, rows[static_cast<std::size_t>(by)]); });
-    for (const auto& row : rows) all.insert(all.end(), row.begin(), row.end());
+    const auto ny = static_cast<std::size_t>(blocks_y(s));
+    if (rows_.size() < ny) rows_.resize(ny);  // kept across levels: no reallocation
+    tbb::parallel_for(std::size_t{0}, ny, [&](std::size_t by) {
+      rows_[by].clear();
+      emit_row(s, static_cast<int>(by), rows_[by]);
+    });
+    std::size_t total = all.size();
+    for (std::size_t by = 0; by < ny; ++by) total += rows_[by].size();
+    all.reserve(total);
+    for (std::size_t by = 0; by < ny; ++by)
+      all.insert(all.end(), rows_[by].begin(), rows_[by].end());
   }
 
   void emit_row(int s, int by, std::vector<Triangle>& out) const {
@@ -233,7 +239,7 @@ class Quadtree {
         }
         for (int i = 0; i < k; ++i) {
           const auto& a = used[static_cast<std::size_t>(i)];
-          const auto& b = used[static_cast<std::size_t>((i + 1) % k)];
+          const auto& b = used[static_cast<std::size_t>(i + 1 < k ? i + 1 : 0)];
           add_valid(out, cu, cv, a[0], a[1], b[0], b[1]);
         }
         continue;
@@ -253,6 +259,7 @@ class Quadtree {
   float threshold_per_depth2_;
   std::vector<std::uint8_t> mid_;                  // per pixel: a needed midpoint
   std::vector<std::vector<std::uint8_t>> states_;  // per level (size 2, 4, ...), per block
+  std::vector<std::vector<Triangle>> rows_;        // emit_level()'s triangles per block row
   int root_ = 2;
 };
 

@@ -204,7 +204,18 @@ class Decimator {
     QemReport rejected;  ///< refusals counted by this thread
   };
 
-  void build_fan(std::uint32_t u, CollapseFan& fan) const {
+  // The cheapest valid collapse u -> v over u's neighbours v (cost kNoCollapse when none).
+  Candidate best_collapse(std::uint32_t u, Scratch& scratch) const {
+    Candidate best;
+    best.from = u;
+    if (around_.begin(u) == around_.end(u)) return best;
+    auto& [nu, border, candidates, fan, mark, stamp, rejected] = scratch;
+    // One walk over u's faces (u, a, b) fills the fan and finds the neighbours, and the border
+    // ones among them (sharing one face with u): each neighbour appears once per face it
+    // shares with u, counted in `mark` (from base + 1, saturating).
+    const std::uint32_t base = scratch.fresh_stamps(8);
+    nu.clear();
+    border.clear();
     fan.reset(static_cast<std::size_t>(around_.end(u) - around_.begin(u)), p(u));
     std::size_t k = 0;
     for (const std::uint32_t* f = around_.begin(u); f != around_.end(u); ++f, ++k) {
@@ -212,24 +223,8 @@ class Decimator {
       const std::size_t i = t[0] == u ? 0 : t[1] == u ? 1 : 2;
       const std::uint32_t a = t[(i + 1) % 3], b = t[(i + 2) % 3];
       fan.set(k, a, p(a), b, p(b));
-    }
-    fan.finish();
-  }
-
-  // The cheapest valid collapse u -> v over u's neighbours v (cost kNoCollapse when none).
-  Candidate best_collapse(std::uint32_t u, Scratch& scratch) const {
-    Candidate best;
-    best.from = u;
-    if (around_.begin(u) == around_.end(u)) return best;
-    auto& [nu, border, candidates, fan, mark, stamp, rejected] = scratch;
-    // Neighbours, and the border ones among them (sharing one face with u): each neighbour
-    // appears once per face it shares with u, counted in `mark` (from base + 1, saturating).
-    const std::uint32_t base = scratch.fresh_stamps(8);
-    nu.clear();
-    border.clear();
-    for (const std::uint32_t* f = around_.begin(u); f != around_.end(u); ++f)
-      for (std::uint32_t x : t_[*f]) {
-        if (x == u) continue;
+      for (std::uint32_t x : {a, b}) {
+        if (x == u) continue;  // a face repeating u
         std::uint32_t& count = mark[x];
         if (count < base) {
           count = base + 1;
@@ -238,6 +233,7 @@ class Decimator {
           ++count;
         }
       }
+    }
     for (std::uint32_t x : nu)
       if (mark[x] == base + 1) border.push_back(x);
     // A border vertex may only move along its border (see valid()): two candidates at most.
@@ -249,7 +245,7 @@ class Decimator {
     for (std::uint32_t v : border.empty() ? nu : border)
       candidates.emplace_back(quadric_cost(u, v), v);
     std::sort(candidates.begin(), candidates.end());
-    build_fan(u, fan);
+    fan.finish();
     // Penalties only multiply the quadric cost, so candidates are tried in its order until it
     // alone exceeds the best penalised cost found.
     for (const auto& [quadric, v] : candidates) {

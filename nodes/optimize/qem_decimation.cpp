@@ -236,9 +236,11 @@ class Decimator {
     }
     for (std::uint32_t x : nu)
       if (mark[x] == base + 1) border.push_back(x);
-    // A border vertex may only move along its border (see valid()): two candidates at most.
-    if (!border.empty() && border.size() != 2) {
-      rejected.rejected_border += nu.size();
+    // A border vertex may only move along its border (see valid()): onto one of its two border
+    // neighbours, and only where the border runs nearly straight through it. Both moves make
+    // the same turn, so a bend rules out both before any cost is computed.
+    if (!border.empty() && (border.size() != 2 || !border_straight(u, border[0], border[1]))) {
+      rejected.rejected_border += border.size() == 2 ? 2 : nu.size();
       return best;
     }
     candidates.clear();
@@ -258,6 +260,13 @@ class Decimator {
       best.to = v;
     }
     return best;
+  }
+
+  // Whether the border w -> u -> v turns by less than max_border_turn_deg at u (the same for
+  // v -> u -> w).
+  bool border_straight(std::uint32_t u, std::uint32_t w, std::uint32_t v) const {
+    const Eigen::Vector3f in = (p(u) - p(w)).normalized(), out = (p(v) - p(u)).normalized();
+    return in.dot(out) >= cos_border_;
   }
 
   // (Q_u + Q_v)(v), divided by depth^2 when configured.
@@ -292,18 +301,12 @@ class Decimator {
       ++rejected.rejected_topology;
       return false;
     }
-    // Borders: u on a border moves only along it, onto the next border vertex, where the
-    // border runs nearly straight.
+    // Borders: u on a border moves only along it, onto the next border vertex (best_collapse()
+    // has checked that the border runs nearly straight there).
     if (!border_at_u.empty()) {
       const bool along = shared_count == 1 && border_at_u.size() == 2 &&
                          (border_at_u[0] == v || border_at_u[1] == v);
       if (!along) {
-        ++rejected.rejected_border;
-        return false;
-      }
-      const std::uint32_t w = border_at_u[0] == v ? border_at_u[1] : border_at_u[0];
-      const Eigen::Vector3f in = (p(u) - p(w)).normalized(), out = (p(v) - p(u)).normalized();
-      if (!(in.dot(out) >= cos_border_)) {
         ++rejected.rejected_border;
         return false;
       }

@@ -255,7 +255,7 @@ class Decimator {
       const FanVerdict verdict = fan.check(v, p(v));
       const double cost = penalised(fan, v, verdict, quadric);
       if (!(cost < best.cost)) continue;
-      if (!valid(u, v, verdict, scratch)) continue;
+      if (!valid(v, verdict, scratch)) continue;
       best.cost = cost;
       best.to = v;
     }
@@ -292,8 +292,9 @@ class Decimator {
   }
 
   // Whether u -> v keeps the mesh manifold, borders on themselves and faces unturned (see
-  // QemConfig); `verdict` is the fan's check of v. Counts the reason of a refusal.
-  bool valid(std::uint32_t u, std::uint32_t v, const FanVerdict& verdict, Scratch& scratch) const {
+  // QemConfig), for the u whose neighbourhood and fan `scratch` holds; `verdict` is the fan's
+  // check of v. Counts the reason of a refusal.
+  bool valid(std::uint32_t v, const FanVerdict& verdict, Scratch& scratch) const {
     const std::vector<std::uint32_t>& border_at_u = scratch.border;
     QemReport& rejected = scratch.rejected;
     const std::size_t shared_count = verdict.shared;

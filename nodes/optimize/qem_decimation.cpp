@@ -253,6 +253,10 @@ class Decimator {
     for (const auto& [quadric, v] : candidates) {
       if (!(quadric < best.cost)) break;
       const FanVerdict verdict = fan.check(v, p(v));
+      if (verdict.turned) {  // invalid whatever the cost: refused before anything else
+        ++rejected.rejected_normal;
+        continue;
+      }
       const double cost = penalised(fan, v, verdict, quadric);
       if (!(cost < best.cost)) continue;
       if (!valid(v, verdict, scratch)) continue;
@@ -291,9 +295,9 @@ class Decimator {
     return sharp ? cost * cfg_.penalty : cost;
   }
 
-  // Whether u -> v keeps the mesh manifold, borders on themselves and faces unturned (see
-  // QemConfig), for the u whose neighbourhood and fan `scratch` holds; `verdict` is the fan's
-  // check of v. Counts the reason of a refusal.
+  // Whether u -> v keeps the mesh manifold and borders on themselves (see QemConfig), for the
+  // u whose neighbourhood and fan `scratch` holds; `verdict` is the fan's check of v (its faces
+  // that stay are unturned: the caller checked). Counts the reason of a refusal.
   bool valid(std::uint32_t v, const FanVerdict& verdict, Scratch& scratch) const {
     const std::vector<std::uint32_t>& border_at_u = scratch.border;
     QemReport& rejected = scratch.rejected;
@@ -312,11 +316,8 @@ class Decimator {
         return false;
       }
     }
-    // Faces that stay: no flip, no degeneration, no turn beyond the limit.
-    if (verdict.turned) {
-      ++rejected.rejected_normal;
-      return false;
-    }
+    // (Faces that stay must not flip, degenerate or turn beyond the limit: `verdict.turned`,
+    // refused by best_collapse() before the cost.)
     // Link condition (last: the dearest check): the common neighbours are exactly the edge's
     // opposite vertices. u's neighbours are marked, then v's faces count the marked ones.
     std::vector<std::uint32_t>& mark = scratch.mark;

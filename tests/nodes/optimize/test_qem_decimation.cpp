@@ -12,6 +12,7 @@
 #include "nodes/eval/surface_eval.h"
 #include "nodes/synthetic/depth_sequence.h"
 #include "nodes/triangulate/depth_triangulation.h"
+#include "runtime/threads.h"
 
 namespace meshflow {
 namespace {
@@ -171,6 +172,25 @@ TEST(QemDecimation, RoomFrameQualityForNaiveAndQuadtreeMeshes) {
     EXPECT_GE(c.kept(), 0.98) << name;
   }
   EXPECT_LE(naive_qem.triangles.size(), naive.triangles.size() / 4 + 1);
+}
+
+TEST(QemDecimation, SameResultWithOneAndTwoThreads) {
+  // A noisy frame of the room through the quadtree: borders, occlusion edges, every check.
+  const PinholeIntrinsics k{320, 240, 262.5f, 262.5f, 159.5f, 119.5f};
+  const DepthFrame frame =
+      synthetic::render_depth(synthetic::demo_room_scene(), k,
+                              synthetic::look_at({-2.5f, -1.5f, 1.4f}, {0.5f, 1.0f, 0.5f}), 0.004f);
+  DepthTriangulationConfig config;
+  config.method = DepthTriangulationMethod::kRestrictedQuadtree;
+  config.decimate_to = 0.25f;
+  std::vector<TriangleMesh> meshes;
+  for (int threads : {1, 2}) {
+    ThreadLimit limit(threads);
+    meshes.push_back(triangulate_depth(frame, config));
+  }
+  ASSERT_GT(meshes[0].triangles.size(), 1000u);
+  EXPECT_EQ(meshes[0].triangles, meshes[1].triangles);
+  EXPECT_EQ(meshes[0].vertices, meshes[1].vertices);
 }
 
 }  // namespace

@@ -2,6 +2,9 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
+
 namespace meshflow {
 namespace {
 
@@ -45,6 +48,63 @@ TEST(DepthFilter, HysteresisKeepsEdgesContinuous) {
   EXPECT_EQ(edges.at<std::uint8_t>(10, 39), 255);
   EXPECT_EQ(edges.at<std::uint8_t>(2, 32), 0) << "weak run not connected to a strong edge";
   EXPECT_EQ(edges.at<std::uint8_t>(16, 5), 0);
+}
+
+// The edge mask by definition: per pixel the largest relative jump to a valid 4-neighbour, then
+// weak pixels join the edges until no weak pixel touches one (8-neighbourhood).
+cv::Mat occlusion_edges_oracle(const cv::Mat& d, float high, float low) {
+  cv::Mat level(d.size(), CV_8U, cv::Scalar(0));
+  for (int v = 0; v < d.rows; ++v)
+    for (int u = 0; u < d.cols; ++u) {
+      const int du[4] = {-1, 1, 0, 0}, dv[4] = {0, 0, -1, 1};
+      for (int k = 0; k < 4; ++k) {
+        const int x = u + du[k], y = v + dv[k];
+        if (x < 0 || y < 0 || x >= d.cols || y >= d.rows) continue;
+        const float c = d.at<float>(v, u), n = d.at<float>(y, x);
+        if (!(c > 0.0f) || !(n > 0.0f)) continue;
+        const float diff = std::abs(c - n), nearer = std::min(c, n);
+        const int l = diff > high * nearer ? 2 : diff > low * nearer ? 1 : 0;
+        level.at<std::uint8_t>(v, u) = std::max<std::uint8_t>(level.at<std::uint8_t>(v, u), l);
+      }
+    }
+  for (bool grew = true; grew;) {
+    grew = false;
+    for (int v = 0; v < d.rows; ++v)
+      for (int u = 0; u < d.cols; ++u) {
+        if (level.at<std::uint8_t>(v, u) != 1) continue;
+        for (int y = std::max(v - 1, 0); y <= std::min(v + 1, d.rows - 1); ++y)
+          for (int x = std::max(u - 1, 0); x <= std::min(u + 1, d.cols - 1); ++x)
+            if (level.at<std::uint8_t>(y, x) == 2 && level.at<std::uint8_t>(v, u) == 1) {
+              level.at<std::uint8_t>(v, u) = 2;
+              grew = true;
+            }
+      }
+  }
+  return level == 2;
+}
+
+TEST(DepthFilter, OcclusionEdgesMatchTheDefinitionOnRandomImages) {
+  cv::RNG rng(7);
+  for (const cv::Size size : {cv::Size(1, 1), cv::Size(2, 3), cv::Size(37, 11), cv::Size(64, 48)})
+    for (int trial = 0; trial < 5; ++trial) {
+      // Smooth depth with random steps (strong, weak, none) and holes, some NaN and negative.
+      cv::Mat d(size, CV_32F);
+      for (int v = 0; v < d.rows; ++v)
+        for (int u = 0; u < d.cols; ++u) {
+          const double r = rng.uniform(0.0, 1.0);
+          float& z = d.at<float>(v, u);
+          z = static_cast<float>(2.0 * (1.0 + 0.08 * rng.uniform(0.0, 1.0)));
+          if (r < 0.08) z = 0.0f;
+          if (r > 0.99) z = r > 0.995 ? std::nanf("") : -1.0f;
+        }
+      const cv::Mat edges = occlusion_edges(d, 0.06f, 0.03f);
+      const cv::Mat expected = occlusion_edges_oracle(d, 0.06f, 0.03f);
+      ASSERT_EQ(cv::countNonZero(edges != expected), 0)
+          << size << " trial " << trial << ": " << cv::countNonZero(expected) << " edge pixels";
+      if (size.area() > 100) {
+        EXPECT_GT(cv::countNonZero(expected), size.area() / 10);
+      }
+    }
 }
 
 TEST(DepthFilter, MedianDoesNotInventDepthAndEdgesCanBeOff) {

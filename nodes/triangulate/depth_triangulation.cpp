@@ -13,11 +13,12 @@ std::vector<Triangle> naive_triangles(const PointGrid& g, const OcclusionTriangl
                                       TriangulationCounts* counts) {
   const std::size_t rows = static_cast<std::size_t>(g.height - 1);
   std::vector<std::vector<Triangle>> per_row(rows);
-  std::vector<QuadRejections> rejected(rows);
+  std::vector<OcclusionRejections> rejected(rows);
   tbb::parallel_for(std::size_t{0}, rows, [&](std::size_t v) {
     per_row[v].reserve(2 * static_cast<std::size_t>(g.width));
     for (int u = 0; u + 1 < g.width; ++u)
-      append_quad_triangles(g, u, static_cast<int>(v), keep, per_row[v], &rejected[v]);
+      append_quad_triangles(g, u, static_cast<int>(v), per_row[v]);
+    keep.filter(g, per_row[v], 0, &rejected[v]);
   });
   std::vector<std::uint32_t> offsets(rows);
   for (std::size_t v = 0; v < rows; ++v) offsets[v] = static_cast<std::uint32_t>(per_row[v].size());
@@ -26,7 +27,7 @@ std::vector<Triangle> naive_triangles(const PointGrid& g, const OcclusionTriangl
     std::copy(per_row[v].begin(), per_row[v].end(), out.begin() + offsets[v]);
   });
   if (counts != nullptr)
-    for (const QuadRejections& r : rejected) {
+    for (const OcclusionRejections& r : rejected) {
       counts->rejected_view += r.view;
       counts->rejected_shape += r.shape;
     }

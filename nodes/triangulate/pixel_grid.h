@@ -39,6 +39,11 @@ PointGrid grid_from_depth(const DepthFrame& frame, const DepthFilterConfig& filt
 PointGrid grid_from_organized(const PointCloud& cloud, const DepthFilterConfig& filter,
                               DepthFilterCounts* counts = nullptr);
 
+/// Triangles an occlusion test dropped, by reason.
+struct OcclusionRejections {
+  std::size_t view = 0, shape = 0;
+};
+
 /// Rejects triangles that span an occlusion: seen more edge-on than `max_view_angle_deg`, or
 /// with a longest edge over `max_edge_ratio` times the shortest.
 class OcclusionTriangleTest {
@@ -47,6 +52,12 @@ class OcclusionTriangleTest {
   enum Verdict { kKeep, kViewAngle, kShape };
   Verdict operator()(const Eigen::Vector3f& p0, const Eigen::Vector3f& p1,
                      const Eigen::Vector3f& p2, const Eigen::Vector3f& eye) const;
+  /// Removes from triangles [first, end) (corners: pixel indices of valid pixels of `grid`) the
+  /// ones operator() rejects, keeping the others in order; adds the rejections to `rejected`
+  /// when given. The same verdicts as operator(), computed in batches without branches (the
+  /// loop vectorises). Thread-safe for distinct vectors; O(end - first).
+  void filter(const PointGrid& grid, std::vector<Triangle>& triangles, std::size_t first,
+              OcclusionRejections* rejected = nullptr) const;
 
  private:
   float min_cos_view_squared_, max_ratio_squared_;

@@ -4,8 +4,7 @@
 
 namespace meshflow {
 
-void append_quad_triangles(const PointGrid& g, int u, int v, const OcclusionTriangleTest& keep,
-                           std::vector<Triangle>& out, QuadRejections* rejected) {
+void append_quad_triangles(const PointGrid& g, int u, int v, std::vector<Triangle>& out) {
   // Corners 0 = (u, v), 1 = (u + 1, v), 2 = (u, v + 1), 3 = (u + 1, v + 1).
   const std::size_t i0 = g.index(u, v), i2 = g.index(u, v + 1);
   const std::array<std::size_t, 4> id = {i0, i0 + 1, i2, i2 + 1};
@@ -46,13 +45,8 @@ void append_quad_triangles(const PointGrid& g, int u, int v, const OcclusionTria
     const std::size_t a = id[static_cast<std::size_t>(t[0])],
                       b = id[static_cast<std::size_t>(t[1])],
                       c = id[static_cast<std::size_t>(t[2])];
-    const auto verdict = keep(g.points[a], g.points[b], g.points[c], g.eye);
-    if (verdict == OcclusionTriangleTest::kKeep) {
-      out.push_back(Triangle{static_cast<std::uint32_t>(a), static_cast<std::uint32_t>(b),
-                             static_cast<std::uint32_t>(c)});
-    } else if (rejected != nullptr) {
-      (verdict == OcclusionTriangleTest::kViewAngle ? rejected->view : rejected->shape) += 1;
-    }
+    out.push_back(Triangle{static_cast<std::uint32_t>(a), static_cast<std::uint32_t>(b),
+                           static_cast<std::uint32_t>(c)});
   }
 }
 

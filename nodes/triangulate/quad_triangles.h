@@ -9,16 +9,11 @@
 
 namespace meshflow {
 
-struct QuadRejections {
-  std::size_t view = 0, shape = 0;  ///< triangles the occlusion test dropped, by reason
-};
-
 /// Appends the triangles (pixel indices, counter-clockwise seen from the camera) of the quad
 /// with corners (u, v) and (u + 1, v + 1): two along the shorter 3D diagonal when all four
-/// pixels are valid, one when three are, none otherwise; `keep` drops occlusion triangles
-/// (counted in `rejected` when given). Requires 0 <= u < width - 1 and 0 <= v < height - 1.
-/// O(1).
-void append_quad_triangles(const PointGrid& grid, int u, int v, const OcclusionTriangleTest& keep,
-                           std::vector<Triangle>& out, QuadRejections* rejected);
+/// pixels are valid, one when three are, none otherwise. Occlusion triangles are not tested
+/// here: callers run OcclusionTriangleTest::filter over what they appended. Requires
+/// 0 <= u < width - 1 and 0 <= v < height - 1. O(1).
+void append_quad_triangles(const PointGrid& grid, int u, int v, std::vector<Triangle>& out);
 
 }  // namespace meshflow

@@ -178,23 +178,23 @@ class Quadtree {
     });
   }
 
-  // Appends triangle (u0, v0), (u1, v1), (u2, v2) unless the occlusion test drops it; its
-  // pixels must be inside the image and valid (corners of a block that is not split).
+  // Appends triangle (u0, v0), (u1, v1), (u2, v2); its pixels must be inside the image and
+  // valid (corners of a block that is not split). The occlusion test runs per row, later.
   void add_valid(std::vector<Triangle>& out, int u0, int v0, int u1, int v1, int u2, int v2) const {
     const std::size_t a = g_.index(u0, v0), b = g_.index(u1, v1), c = g_.index(u2, v2);
-    if (keep_(g_.points[a], g_.points[b], g_.points[c], g_.eye) != OcclusionTriangleTest::kKeep)
-      return;
     out.push_back(Triangle{static_cast<std::uint32_t>(a), static_cast<std::uint32_t>(b),
                            static_cast<std::uint32_t>(c)});
   }
 
-  // The leaves of level s, rows in parallel, appended to `out` in row order.
+  // The leaves of level s that pass the occlusion test, rows in parallel, appended to `out` in
+  // row order.
   void emit_level(int s, std::vector<Triangle>& all) {
     const auto ny = static_cast<std::size_t>(blocks_y(s));
     if (rows_.size() < ny) rows_.resize(ny);  // kept across levels: no reallocation
     tbb::parallel_for(std::size_t{0}, ny, [&](std::size_t by) {
       rows_[by].clear();
       emit_row(s, static_cast<int>(by), rows_[by]);
+      keep_.filter(g_, rows_[by], 0);
     });
     std::size_t total = all.size();
     for (std::size_t by = 0; by < ny; ++by) total += rows_[by].size();
@@ -216,7 +216,7 @@ class Quadtree {
         if (s == 2)  // holds an invalid pixel: per pixel quad inside the image, as naive
           for (int v = y0; v < std::min(y0 + 2, g_.height - 1); ++v)
             for (int u = x0; u < std::min(x0 + 2, g_.width - 1); ++u)
-              append_quad_triangles(g_, u, v, keep_, out, nullptr);
+              append_quad_triangles(g_, u, v, out);
         continue;  // otherwise the children are emitted at the next level
       }
       // From here the block is neither empty nor split: inside the image, every pixel valid.

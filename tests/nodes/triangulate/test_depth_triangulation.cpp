@@ -4,6 +4,7 @@
 
 #include <cstdio>
 #include <numeric>
+#include <random>
 
 #include "nodes/eval/completeness.h"
 #include "nodes/eval/surface_eval.h"
@@ -108,6 +109,47 @@ TEST(DepthTriangulation, BadInputGivesAClearError) {
   PointCloud unorganized;
   unorganized.positions = {{0, 0, 1}, {1, 0, 1}};
   EXPECT_THROW(triangulate_organized(unorganized), Error);
+}
+
+TEST(OcclusionTriangleTest, FilterKeepsWhatTheTestKeepsInOrder) {
+  // Random points around a camera: triangles of every shape, some edge-on, some elongated.
+  PointGrid grid;
+  grid.width = 50;
+  grid.height = 40;
+  grid.eye = Eigen::Vector3f(0.1f, -0.2f, 0.3f);
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<float> coordinate(-2.0f, 2.0f);
+  for (int i = 0; i < grid.width * grid.height; ++i)
+    grid.points.emplace_back(coordinate(rng), coordinate(rng), 3.0f + coordinate(rng));
+  std::uniform_int_distribution<std::uint32_t> pixel(0, 50 * 40 - 1);
+  std::vector<Triangle> triangles;
+  for (int i = 0; i < 1000; ++i) triangles.push_back({pixel(rng), pixel(rng), pixel(rng)});
+  const OcclusionTriangleTest test(75.0f, 3.0f);
+  const std::size_t first = 7;  // the prefix stays untouched
+  std::vector<Triangle> expected(triangles.begin(), triangles.begin() + first);
+  OcclusionRejections expected_rejected;
+  for (std::size_t t = first; t < triangles.size(); ++t) {
+    const auto& p = grid.points;
+    switch (test(p[triangles[t][0]], p[triangles[t][1]], p[triangles[t][2]], grid.eye)) {
+      case OcclusionTriangleTest::kKeep:
+        expected.push_back(triangles[t]);
+        break;
+      case OcclusionTriangleTest::kViewAngle:
+        ++expected_rejected.view;
+        break;
+      case OcclusionTriangleTest::kShape:
+        ++expected_rejected.shape;
+        break;
+    }
+  }
+  OcclusionRejections rejected;
+  test.filter(grid, triangles, first, &rejected);
+  EXPECT_EQ(triangles, expected);
+  EXPECT_EQ(rejected.view, expected_rejected.view);
+  EXPECT_EQ(rejected.shape, expected_rejected.shape);
+  EXPECT_GT(rejected.view, 50u);  // both reasons occur, and many triangles stay
+  EXPECT_GT(rejected.shape, 50u);
+  EXPECT_GT(triangles.size(), 100u);
 }
 
 // Vertices lying inside an edge of another triangle (pixel-grid triangles: every lattice point

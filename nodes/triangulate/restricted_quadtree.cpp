@@ -128,24 +128,27 @@ class Quadtree {
       return clean && needed(m, (a + b) / 2) ? 1 : 0;
     };
     const std::uint8_t outside = kEmpty | kBad;
-    tbb::parallel_for(0, ny + 1, [&](int by) {
+    // Sizes captured by value: the passes' byte stores could alias members and captured
+    // references, which the compiler would otherwise reload after every store.
+    const int width = g_.width, height = g_.height;
+    tbb::parallel_for(0, ny + 1, [&, s, h, nx, ny, width, height](int by) {
       const int y0 = by * s;
       const std::uint8_t* upper = by > 0 ? &state(s, 0, by - 1) : nullptr;
       const std::uint8_t* lower = by < ny ? &state(s, 0, by) : nullptr;
-      if (y0 < g_.height) {  // horizontal edges on top of the blocks of row by
+      if (y0 < height) {  // horizontal edges on top of the blocks of row by
         const Eigen::Vector3f* row = &g_.points[g_.index(0, y0)];
         std::uint8_t* mids = &mid_[g_.index(0, y0)];
-        for (int bx = 0, x0 = 0; bx < nx && x0 + h < g_.width; ++bx, x0 += s)
+        for (int bx = 0, x0 = 0; bx < nx && x0 + h < width; ++bx, x0 += s)
           mids[x0 + h] =
               decide(upper != nullptr ? upper[bx] : outside, lower != nullptr ? lower[bx] : outside,
-                     row[x0 + h], row[x0], row[std::min(x0 + s, g_.width - 1)]);
+                     row[x0 + h], row[x0], row[std::min(x0 + s, width - 1)]);
       }
-      if (lower != nullptr && y0 + h < g_.height) {  // vertical edges left of the blocks
+      if (lower != nullptr && y0 + h < height) {  // vertical edges left of the blocks
         const Eigen::Vector3f* top = &g_.points[g_.index(0, y0)];
         const Eigen::Vector3f* middle = &g_.points[g_.index(0, y0 + h)];
-        const Eigen::Vector3f* bottom = &g_.points[g_.index(0, std::min(y0 + s, g_.height - 1))];
+        const Eigen::Vector3f* bottom = &g_.points[g_.index(0, std::min(y0 + s, height - 1))];
         std::uint8_t* mids = &mid_[g_.index(0, y0 + h)];
-        for (int bx = 0, x0 = 0; bx <= nx && x0 < g_.width; ++bx, x0 += s)
+        for (int bx = 0, x0 = 0; bx <= nx && x0 < width; ++bx, x0 += s)
           mids[x0] = decide(bx > 0 ? lower[bx - 1] : outside, bx < nx ? lower[bx] : outside,
                             middle[x0], top[x0], bottom[x0]);
       }
@@ -153,8 +156,8 @@ class Quadtree {
     // Centres: needed themselves, or by a needed midpoint of the block's edges. Only blocks
     // that are neither empty nor split get one, and those lie inside the image with every
     // pixel valid, so their rows are read directly.
-    tbb::parallel_for(0, ny, [&, needed](int by) {
-      const int y0 = by * s, y1 = std::min(y0 + s, g_.height - 1), ym = std::min(y0 + h, y1);
+    tbb::parallel_for(0, ny, [&, needed, s, h, nx, height](int by) {
+      const int y0 = by * s, y1 = std::min(y0 + s, height - 1), ym = std::min(y0 + h, y1);
       const std::uint8_t* mid_top = &mid_[g_.index(0, y0)];
       const std::uint8_t* mid_middle = &mid_[g_.index(0, ym)];
       const std::uint8_t* mid_bottom = &mid_[g_.index(0, y1)];
@@ -178,12 +181,14 @@ class Quadtree {
     });
   }
 
-  // Appends triangle (u0, v0), (u1, v1), (u2, v2); its pixels must be inside the image and
-  // valid (corners of a block that is not split). The occlusion test runs per row, later.
-  void add_valid(std::vector<Triangle>& out, int u0, int v0, int u1, int v1, int u2, int v2) const {
-    const std::size_t a = g_.index(u0, v0), b = g_.index(u1, v1), c = g_.index(u2, v2);
-    out.push_back(Triangle{static_cast<std::uint32_t>(a), static_cast<std::uint32_t>(b),
-                           static_cast<std::uint32_t>(c)});
+  // Appends triangle (u0, v0), (u1, v1), (u2, v2) of an image `width` pixels wide (a copy: the
+  // stores into `out` could alias the grid's); its pixels must be inside the image and valid
+  // (corners of a block that is not split). The occlusion test runs per row, later.
+  static void add_valid(std::vector<Triangle>& out, int width, int u0, int v0, int u1, int v1,
+                        int u2, int v2) {
+    out.push_back(Triangle{static_cast<std::uint32_t>(v0 * width + u0),
+                           static_cast<std::uint32_t>(v1 * width + u1),
+                           static_cast<std::uint32_t>(v2 * width + u2)});
   }
 
   // The leaves of level s that pass the occlusion test, rows in parallel, appended to `out` in
@@ -204,7 +209,7 @@ class Quadtree {
   }
 
   void emit_row(int s, int by, std::vector<Triangle>& out) const {
-    const int nx = blocks_x(s);
+    const int nx = blocks_x(s), width = g_.width;
     const std::uint8_t* states = state_row(s, by);
     const std::uint8_t* parents = s == root_ ? nullptr : state_row(2 * s, by / 2);
     for (int bx = 0; bx < nx; ++bx) {
@@ -215,7 +220,7 @@ class Quadtree {
       if (st & kSplit) {
         if (s == 2)  // holds an invalid pixel: per pixel quad inside the image, as naive
           for (int v = y0; v < std::min(y0 + 2, g_.height - 1); ++v)
-            for (int u = x0; u < std::min(x0 + 2, g_.width - 1); ++u)
+            for (int u = x0; u < std::min(x0 + 2, width - 1); ++u)
               append_quad_triangles(g_, u, v, out);
         continue;  // otherwise the children are emitted at the next level
       }
@@ -234,22 +239,22 @@ class Quadtree {
         int k = 0;
         for (int i = 0; i < 8; ++i) {
           const auto& corner = ring[static_cast<std::size_t>(i)];
-          if (i % 2 == 0 || mid_[g_.index(corner[0], corner[1])] != 0)
+          if (i % 2 == 0 || mid_[static_cast<std::size_t>(corner[1] * width + corner[0])] != 0)
             used[static_cast<std::size_t>(k++)] = corner;
         }
         for (int i = 0; i < k; ++i) {
           const auto& a = used[static_cast<std::size_t>(i)];
           const auto& b = used[static_cast<std::size_t>(i + 1 < k ? i + 1 : 0)];
-          add_valid(out, cu, cv, a[0], a[1], b[0], b[1]);
+          add_valid(out, width, cu, cv, a[0], a[1], b[0], b[1]);
         }
         continue;
       }
       if (main_diagonal_shorter(x0, y0, s)) {
-        add_valid(out, x0, y0, x0, y0 + s, x0 + s, y0 + s);
-        add_valid(out, x0, y0, x0 + s, y0 + s, x0 + s, y0);
+        add_valid(out, width, x0, y0, x0, y0 + s, x0 + s, y0 + s);
+        add_valid(out, width, x0, y0, x0 + s, y0 + s, x0 + s, y0);
       } else {
-        add_valid(out, x0, y0, x0, y0 + s, x0 + s, y0);
-        add_valid(out, x0 + s, y0, x0, y0 + s, x0 + s, y0 + s);
+        add_valid(out, width, x0, y0, x0, y0 + s, x0 + s, y0);
+        add_valid(out, width, x0 + s, y0, x0, y0 + s, x0 + s, y0 + s);
       }
     }
   }

@@ -175,7 +175,7 @@ void OcclusionTriangleTest::filter(const PointGrid& grid, std::vector<Triangle>&
 }
 
 TriangleMesh mesh_from_pixel_triangles(const PointGrid& grid,
-                                       const std::vector<Triangle>& pixel_triangles) {
+                                       std::vector<Triangle> pixel_triangles) {
   const std::size_t pixels = grid.points.size();
   // Mark used pixels in a byte mask (every writer stores the same 1; a quarter of the memory
   // traffic of marking the ids themselves), then number them in row-major order.
@@ -203,11 +203,11 @@ TriangleMesh mesh_from_pixel_triangles(const PointGrid& grid,
       mesh.vertices[next++] = grid.points[v * w + u];
     }
   });
-  mesh.triangles.resize(pixel_triangles.size());
+  // Renumbered in place: the triangles' memory becomes the mesh's (no allocation per frame).
   tbb::parallel_for(std::size_t{0}, pixel_triangles.size(), [&](std::size_t t) {
-    const Triangle& p = pixel_triangles[t];
-    mesh.triangles[t] = Triangle{vertex_of[p[0]], vertex_of[p[1]], vertex_of[p[2]]};
+    for (std::uint32_t& corner : pixel_triangles[t]) corner = vertex_of[corner];
   });
+  mesh.triangles = std::move(pixel_triangles);
   return mesh;
 }
 

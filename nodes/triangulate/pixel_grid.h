@@ -80,8 +80,9 @@ inline OcclusionTriangleTest::Verdict OcclusionTriangleTest::operator()(
 }
 
 /// The mesh of `pixel_triangles` (corners are pixel indices of `grid`): vertices are the used
-/// pixels in row-major order. Parallel over rows; deterministic; O(pixels + triangles).
+/// pixels in row-major order; the triangles are renumbered in place (pass an rvalue to avoid a
+/// copy). Parallel over rows; deterministic; O(pixels + triangles).
 TriangleMesh mesh_from_pixel_triangles(const PointGrid& grid,
-                                       const std::vector<Triangle>& pixel_triangles);
+                                       std::vector<Triangle> pixel_triangles);
 
 }  // namespace meshflow

@@ -16,7 +16,21 @@
 namespace meshflow {
 namespace {
 constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
+
+// One row of back-projection: point u = eye + z_u (x_u axis + ray), interleaved x, y, z into
+// `out`; a depth <= 0 becomes NaN, which makes every coordinate NaN. Plain floats, without
+// branches, so the loop vectorises (Eigen's 3-vectors would not); the operations and their
+// order are those of the Eigen expression.
+MESHFLOW_AVX2_CLONES void back_project_row(const float* depth, const float* x_of_column, int width,
+                                           const float eye[3], const float axis[3],
+                                           const float ray[3], float* out) {
+  for (int u = 0; u < width; ++u) {
+    const float z = depth[u] > 0.0f ? depth[u] : kNaN, x = x_of_column[u];
+    for (int c = 0; c < 3; ++c) out[3 * u + c] = eye[c] + z * (axis[c] * x + ray[c]);
+  }
 }
+
+}  // namespace
 
 PointGrid grid_from_depth(const DepthFrame& frame, const DepthFilterConfig& filter,
                           DepthFilterCounts* counts) {
@@ -40,17 +54,14 @@ PointGrid grid_from_depth(const DepthFrame& frame, const DepthFilterConfig& filt
   std::vector<float> x_of_column(static_cast<std::size_t>(g.width));
   for (int u = 0; u < g.width; ++u)
     x_of_column[static_cast<std::size_t>(u)] = (static_cast<float>(u) - k.cx) / k.fx;
+  const float eye[3] = {g.eye.x(), g.eye.y(), g.eye.z()};
+  const float axis[3] = {rotation(0, 0), rotation(1, 0), rotation(2, 0)};
   tbb::parallel_for(0, g.height, [&](int v) {
-    const float* row = depth.ptr<float>(v);
     const Eigen::Vector3f row_ray =
         rotation.col(1) * ((static_cast<float>(v) - k.cy) / k.fy) + rotation.col(2);
-    // Branch-free (invalid pixels are scattered on real frames): an invalid depth becomes NaN,
-    // which makes every coordinate NaN.
-    for (int u = 0; u < g.width; ++u) {
-      const float z = row[u] > 0.0f ? row[u] : kNaN;
-      g.points[g.index(u, v)] =
-          g.eye + z * (rotation.col(0) * x_of_column[static_cast<std::size_t>(u)] + row_ray);
-    }
+    const float ray[3] = {row_ray.x(), row_ray.y(), row_ray.z()};
+    back_project_row(depth.ptr<float>(v), x_of_column.data(), g.width, eye, axis, ray,
+                     g.points[g.index(0, v)].data());
   });
   return g;
 }

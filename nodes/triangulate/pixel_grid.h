@@ -52,6 +52,10 @@ class OcclusionTriangleTest {
   enum Verdict { kKeep, kViewAngle, kShape };
   Verdict operator()(const Eigen::Vector3f& p0, const Eigen::Vector3f& p1,
                      const Eigen::Vector3f& p2, const Eigen::Vector3f& eye) const;
+  /// The test itself, on the corners' coordinates (x, y, z of p0, then p1, then p2), without
+  /// branches so that a loop over triangles vectorises (filter()). Thread-safe; O(1).
+  static Verdict verdict(const float corners[9], const float eye[3], float min_cos_view_squared,
+                         float max_ratio_squared);
   /// Removes from triangles [first, end) (corners: pixel indices of valid pixels of `grid`) the
   /// ones operator() rejects, keeping the others in order; adds the rejections to `rejected`
   /// when given. The same verdicts as operator(), computed in batches without branches (the
@@ -63,20 +67,39 @@ class OcclusionTriangleTest {
   float min_cos_view_squared_, max_ratio_squared_;
 };
 
-// Inline: called once per candidate triangle of every frame.
+// Inline: called once per candidate triangle of every frame, in a vectorised loop.
+inline OcclusionTriangleTest::Verdict OcclusionTriangleTest::verdict(const float c[9],
+                                                                     const float eye[3],
+                                                                     float min_cos_view_squared,
+                                                                     float max_ratio_squared) {
+  const float e01x = c[3] - c[0], e01y = c[4] - c[1], e01z = c[5] - c[2];
+  const float e02x = c[6] - c[0], e02y = c[7] - c[1], e02z = c[8] - c[2];
+  const float e12x = c[6] - c[3], e12y = c[7] - c[4], e12z = c[8] - c[5];
+  // Seen edge-on: |n . r| < cos(max angle) |n| |r| for the normal n and the ray r to the
+  // centroid, compared squared (no square roots).
+  const float nx = e01y * e02z - e01z * e02y, ny = e01z * e02x - e01x * e02z,
+              nz = e01x * e02y - e01y * e02x;
+  const float rx = (c[0] + c[3] + c[6]) / 3.0f - eye[0];
+  const float ry = (c[1] + c[4] + c[7]) / 3.0f - eye[1];
+  const float rz = (c[2] + c[5] + c[8]) / 3.0f - eye[2];
+  const float dot = nx * rx + ny * ry + nz * rz;
+  const float n2 = nx * nx + ny * ny + nz * nz, r2 = rx * rx + ry * ry + rz * rz;
+  const int view_ok = dot * dot >= min_cos_view_squared * n2 * r2;
+  // Shape: the longest edge over the ratio times the shortest, compared squared.
+  const float e0 = e01x * e01x + e01y * e01y + e01z * e01z;
+  const float e1 = e12x * e12x + e12y * e12y + e12z * e12z;
+  const float e2 = e02x * e02x + e02y * e02y + e02z * e02z;
+  const float longest = std::max(std::max(e0, e1), e2), shortest = std::min(std::min(e0, e1), e2);
+  const int shape_ok = longest <= max_ratio_squared * shortest;
+  return static_cast<Verdict>((1 - view_ok) * kViewAngle + view_ok * (1 - shape_ok) * kShape);
+}
+
 inline OcclusionTriangleTest::Verdict OcclusionTriangleTest::operator()(
     const Eigen::Vector3f& p0, const Eigen::Vector3f& p1, const Eigen::Vector3f& p2,
     const Eigen::Vector3f& eye) const {
-  const Eigen::Vector3f normal = (p1 - p0).cross(p2 - p0);
-  const Eigen::Vector3f ray = (p0 + p1 + p2) / 3.0f - eye;
-  // |n . r| >= cos(max angle) |n| |r|, squared (no square roots).
-  const float dot = normal.dot(ray);
-  if (!(dot * dot >= min_cos_view_squared_ * normal.squaredNorm() * ray.squaredNorm()))
-    return kViewAngle;
-  const float e0 = (p1 - p0).squaredNorm(), e1 = (p2 - p1).squaredNorm(),
-              e2 = (p0 - p2).squaredNorm();
-  if (!(std::max({e0, e1, e2}) <= max_ratio_squared_ * std::min({e0, e1, e2}))) return kShape;
-  return kKeep;
+  const float corners[9] = {p0.x(), p0.y(), p0.z(), p1.x(), p1.y(), p1.z(), p2.x(), p2.y(), p2.z()};
+  const float at[3] = {eye.x(), eye.y(), eye.z()};
+  return verdict(corners, at, min_cos_view_squared_, max_ratio_squared_);
 }
 
 /// The mesh of `pixel_triangles` (corners are pixel indices of `grid`): vertices are the used

@@ -60,9 +60,12 @@ std::uint64_t order_key(const Candidate& c) {
   return (std::uint64_t{bits} << 32) | c.from;
 }
 
-// A pass reads the mesh as it was when the pass started (incidence rows, positions, quadrics):
-// every collapse u -> v locks u and its neighbours, so no later collapse of the same pass
-// touches a row that changed; the next pass re-evaluates only the vertices next to a change.
+// A pass evaluates every vertex that needs it on the mesh as it was when the pass started
+// (incidence rows, positions, quadrics), in parallel, then applies collapses cheapest first.
+// Each collapse u -> v removes u and grows v (its incidence row is stale from then on): later
+// collapses of the pass may involve neither. Its other neighbours' faces changed: a candidate
+// with an end among them is evaluated again on the mesh as it is now and taken only if it got
+// no dearer. The next pass re-evaluates only the vertices next to a change.
 class Decimator {
  public:
   Decimator(const TriangleMesh& mesh, const QemConfig& config)
@@ -102,7 +105,9 @@ class Decimator {
     std::size_t alive = t_.size();
     const std::size_t n = in_.vertices.size();
     std::vector<Candidate> best(n);
-    std::vector<std::uint8_t> locked(n), dirty(n, 1);
+    // In a pass: `changed` = u and its neighbours for every collapse u -> v (faces or quadric
+    // changed), `fixed` = u and v (removed, or grown beyond its incidence row).
+    std::vector<std::uint8_t> changed(n), fixed(n), dirty(n, 1);
     std::vector<std::uint32_t> targets;  // the kept vertex of every collapse of the last pass
     while (alive > target) {
       compact_faces();
@@ -111,22 +116,21 @@ class Decimator {
       // best reads its own faces (changed only around v), its neighbours' quadrics (only v's
       // changed) and, for the link condition of w -> x, the common neighbours of w and x,
       // which change only when w was next to u or is next to v.
-      // Of those, a vertex w that was not next to any u of the pass (not `locked`) kept its
+      // Of those, a vertex w that was not next to any u of the pass (not `changed`) kept its
       // faces; only costs towards a v grew and link conditions towards vertices next to a u
-      // could fail. So its best collapse w -> y stays the best unless y is locked (next to a
+      // could fail. So its best collapse w -> y stays the best unless y changed (next to a
       // u, or a v), and a w with no valid collapse keeps none: neither is re-evaluated.
       if (!targets.empty()) {
         std::fill(dirty.begin(), dirty.end(), 0);
         for (std::uint32_t v : targets)
           for (const std::uint32_t* f = around_.begin(v); f != around_.end(v); ++f)
             for (std::uint32_t x : t_[*f])
-              dirty[x] = locked[x] || (best[x].cost < kNoCollapse && locked[best[x].to]);
+              dirty[x] = changed[x] || (best[x].cost < kNoCollapse && changed[best[x].to]);
       }
       targets.clear();
       tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n),
                         [&](const tbb::blocked_range<std::size_t>& range) {
-                          Scratch& scratch = scratch_.local();  // a lookup: once per range
-                          if (scratch.mark.size() != n) scratch.mark.assign(n, 0);
+                          Scratch& scratch = local_scratch();  // a lookup: once per range
                           for (std::size_t u = range.begin(); u != range.end(); ++u)
                             if (dirty[u])
                               best[u] = best_collapse(static_cast<std::uint32_t>(u), scratch);
@@ -147,13 +151,23 @@ class Decimator {
       // turn in the next pass before expensive ones are taken here.
       const std::size_t goal = std::min(order.size(), (alive - target + 1) / 2);
       const double limit = 1.5 * candidate(std::max<std::size_t>(goal, 1) - 1).cost;
-      std::fill(locked.begin(), locked.end(), 0);
+      std::fill(changed.begin(), changed.end(), 0);
+      std::fill(fixed.begin(), fixed.end(), 0);
       std::size_t collapsed = 0;
+      Scratch& scratch = local_scratch();
       for (std::size_t i = 0; i < order.size(); ++i) {
-        const Candidate c = candidate(i);
+        Candidate c = candidate(i);
         if (alive <= target || (c.cost > limit && collapsed > 0)) break;
-        if (locked[c.from] || locked[c.to]) continue;
-        alive -= collapse(c.from, c.to, locked);
+        if (fixed[c.from] || fixed[c.to]) continue;
+        if (changed[c.from] || changed[c.to]) {
+          // A neighbour of u or v went since the evaluation: u's best collapse on the mesh as
+          // it is now, if it is no dearer (else u waits for the next pass).
+          const double evaluated = c.cost;
+          c = best_collapse(c.from, scratch);
+          if (!(c.cost <= evaluated) || fixed[c.to]) continue;
+        }
+        alive -= collapse(c.from, c.to, changed);
+        fixed[c.from] = fixed[c.to] = 1;
         targets.push_back(c.to);
         best[c.from].cost = kNoCollapse;  // removed
         ++collapsed;
@@ -204,7 +218,15 @@ class Decimator {
     QemReport rejected;  ///< refusals counted by this thread
   };
 
-  // The cheapest valid collapse u -> v over u's neighbours v (cost kNoCollapse when none).
+  // This thread's Scratch, its marks sized for the mesh.
+  Scratch& local_scratch() {
+    Scratch& scratch = scratch_.local();
+    if (scratch.mark.size() != in_.vertices.size()) scratch.mark.assign(in_.vertices.size(), 0);
+    return scratch;
+  }
+
+  // The cheapest valid collapse u -> v over u's neighbours v (cost kNoCollapse when none), on
+  // u's live faces.
   Candidate best_collapse(std::uint32_t u, Scratch& scratch) const {
     Candidate best;
     best.from = u;
@@ -216,13 +238,17 @@ class Decimator {
     const std::uint32_t base = scratch.fresh_stamps(8);
     nu.clear();
     border.clear();
-    fan.reset(static_cast<std::size_t>(around_.end(u) - around_.begin(u)), p(u));
+    std::size_t faces = 0;
+    for (const std::uint32_t* f = around_.begin(u); f != around_.end(u); ++f) faces += alive_[*f];
+    if (faces == 0) return best;
+    fan.reset(faces, p(u));
     std::size_t k = 0;
-    for (const std::uint32_t* f = around_.begin(u); f != around_.end(u); ++f, ++k) {
+    for (const std::uint32_t* f = around_.begin(u); f != around_.end(u); ++f) {
+      if (!alive_[*f]) continue;
       const Triangle& t = t_[*f];
       const std::size_t i = t[0] == u ? 0 : t[1] == u ? 1 : 2;
       const std::uint32_t a = t[(i + 1) % 3], b = t[(i + 2) % 3];
-      fan.set(k, a, p(a), b, p(b));
+      fan.set(k++, a, p(a), b, p(b));
       for (std::uint32_t x : {a, b}) {
         if (x == u) continue;  // a face repeating u
         std::uint32_t& count = mark[x];
@@ -326,11 +352,12 @@ class Decimator {
       if (x != v) mark[x] = listed;
     std::size_t common = 0;
     for (const std::uint32_t* f = around_.begin(v); f != around_.end(v); ++f)
-      for (std::uint32_t x : t_[*f])
-        if (mark[x] == listed) {
-          mark[x] = counted;
-          ++common;
-        }
+      if (alive_[*f])
+        for (std::uint32_t x : t_[*f])
+          if (mark[x] == listed) {
+            mark[x] = counted;
+            ++common;
+          }
     if (common != shared_count) {
       ++rejected.rejected_topology;
       return false;
@@ -338,14 +365,16 @@ class Decimator {
     return true;
   }
 
-  // Applies u -> v and locks u and its neighbours (v among them): the vertices whose faces or
-  // quadric change. A later collapse of the pass touching none of them reads only rows that
-  // are still current. Returns the faces removed (one on a border edge, two inside).
-  std::size_t collapse(std::uint32_t u, std::uint32_t v, std::vector<std::uint8_t>& locked) {
+  // Applies u -> v and marks u and its neighbours (v among them) in `changed`: the vertices
+  // whose faces or quadric change. Returns the faces removed (one on a border edge, two
+  // inside); they stay in t_, dead, until the next pass compacts it.
+  std::size_t collapse(std::uint32_t u, std::uint32_t v, std::vector<std::uint8_t>& changed) {
     for (const std::uint32_t* f = around_.begin(u); f != around_.end(u); ++f)
-      for (std::uint32_t x : t_[*f]) locked[x] = 1;
+      if (alive_[*f])
+        for (std::uint32_t x : t_[*f]) changed[x] = 1;
     std::size_t removed = 0;
     for (const std::uint32_t* f = around_.begin(u); f != around_.end(u); ++f) {
+      if (!alive_[*f]) continue;
       if (has(t_[*f], v)) {
         alive_[*f] = 0;
         ++removed;

@@ -39,8 +39,9 @@ struct QemReport {
 /// Decimates `mesh` by half-edge collapses u -> v (v keeps its position) in passes: each pass
 /// finds every vertex's cheapest valid collapse, cost (Q_u + Q_v)(v) with the penalties, in
 /// parallel (re-evaluating only vertices next to a change), sorts them and applies them
-/// cheapest first, skipping any whose ends are next to an earlier collapse of the pass and
-/// stopping at 1.5 x the cost of the collapse that would reach the target; passes repeat until
+/// cheapest first, stopping at 1.5 x the cost of the collapse that would reach the target. A
+/// collapse whose ends are next to an earlier one of the pass is evaluated again first and
+/// taken only if it got no dearer; one involving an earlier one's ends waits. Passes repeat until
 /// target_ratio of the triangles remain or no valid collapse is left. Output vertices are a subset
 /// of the input vertices (same positions, same order, normals and colours kept); triangles stay
 /// consistently oriented and manifold where the input was. Deterministic: the same output for any

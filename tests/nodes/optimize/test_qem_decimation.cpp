@@ -7,6 +7,8 @@
 #include <cmath>
 #include <cstdio>
 #include <map>
+#include <random>
+#include <string>
 
 #include "nodes/eval/completeness.h"
 #include "nodes/eval/surface_eval.h"
@@ -191,6 +193,66 @@ TEST(QemDecimation, SameResultWithOneAndTwoThreads) {
   ASSERT_GT(meshes[0].triangles.size(), 1000u);
   EXPECT_EQ(meshes[0].triangles, meshes[1].triangles);
   EXPECT_EQ(meshes[0].vertices, meshes[1].vertices);
+}
+
+// Random height fields with a round hole, noise and random quad diagonals, decimated to
+// several ratios: collapses taken late in a pass, next to earlier ones, must keep the mesh as
+// manifold as the per-pass evaluations would, and the result independent of the thread count.
+TEST(QemDecimation, RandomNoisyMeshesWithHolesStayManifold) {
+  std::mt19937 rng(7);
+  std::normal_distribution<float> gauss(0.0f, 1.0f);
+  for (int trial = 0; trial < 24; ++trial) {
+    const int n = 8 + static_cast<int>(rng() % 33);
+    const float noise = static_cast<float>(rng() % 4) * 0.01f;
+    const float hole = static_cast<float>(rng() % 3) * 0.15f;
+    TriangleMesh in;
+    std::vector<std::int64_t> id(static_cast<std::size_t>(n * n), -1);
+    for (int j = 0; j < n; ++j)
+      for (int i = 0; i < n; ++i) {
+        const float x = static_cast<float>(i) / static_cast<float>(n - 1);
+        const float y = static_cast<float>(j) / static_cast<float>(n - 1);
+        if ((x - 0.5f) * (x - 0.5f) + (y - 0.4f) * (y - 0.4f) < hole * hole) continue;
+        id[static_cast<std::size_t>(j * n + i)] = static_cast<std::int64_t>(in.vertices.size());
+        in.vertices.emplace_back(x, y, 2.0f + 0.1f * std::sin(5.0f * x) + noise * gauss(rng));
+      }
+    const auto add = [&](std::int64_t a, std::int64_t b, std::int64_t c) {
+      if (a >= 0 && b >= 0 && c >= 0)
+        in.triangles.push_back({static_cast<std::uint32_t>(a), static_cast<std::uint32_t>(b),
+                                static_cast<std::uint32_t>(c)});
+    };
+    for (int j = 0; j + 1 < n; ++j)
+      for (int i = 0; i + 1 < n; ++i) {
+        const auto at = [&](int di, int dj) {
+          return id[static_cast<std::size_t>((j + dj) * n + i + di)];
+        };
+        if (rng() % 2 == 0) {
+          add(at(0, 0), at(1, 0), at(1, 1));
+          add(at(0, 0), at(1, 1), at(0, 1));
+        } else {
+          add(at(0, 0), at(1, 0), at(0, 1));
+          add(at(1, 0), at(1, 1), at(0, 1));
+        }
+      }
+    for (float ratio : {0.05f, 0.25f, 0.6f}) {
+      QemConfig config;
+      config.target_ratio = ratio;
+      config.divide_by_depth2 = trial % 2 == 0;
+      config.viewpoint = Eigen::Vector3f(0.5f, 0.5f, -1.0f);
+      std::vector<TriangleMesh> out;
+      for (int threads : {1, 2}) {
+        ThreadLimit limit(threads);
+        out.push_back(qem_decimate(in, config));
+      }
+      const MeshTopology topology = mesh_topology(out[0]);
+      const std::string what =
+          "trial " + std::to_string(trial) + ", ratio " + std::to_string(ratio);
+      EXPECT_LT(out[0].triangles.size(), in.triangles.size()) << what;
+      EXPECT_EQ(topology.edges.non_manifold_edges, 0u) << what;
+      EXPECT_EQ(topology.edges.inconsistent_edges, 0u) << what;
+      EXPECT_EQ(topology.degenerate_faces, 0u) << what;
+      EXPECT_EQ(out[0].triangles, out[1].triangles) << what;
+    }
+  }
 }
 
 }  // namespace

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cstring>
+#include <limits>
 #include <optional>
 
 #include "nodes/io/binary_value.h"
@@ -14,6 +15,9 @@ namespace meshflow::io {
 namespace {
 
 enum class PcdData { kAscii, kBinary, kBinaryCompressed };
+
+constexpr std::size_t kMaxCount = std::size_t{1} << 16;  // values per field (descriptors: hundreds)
+constexpr std::uint64_t kLzfMaxRatio = 88;  // an LZF back-reference: 3 bytes for up to 264
 
 struct PcdField {
   std::string name;
@@ -110,6 +114,8 @@ PcdHeader parse_header(std::istream& in, const std::string& path) {
   if (!counts.empty() && counts.size() != n) {
     throw Error(path, "header", "COUNT must list one entry per field");
   }
+  if (h.height != 0 && h.width > std::numeric_limits<std::uint64_t>::max() / h.height)
+    throw Error(path, "header", "WIDTH x HEIGHT overflows");
   if (!have_points) h.points = h.width * h.height;
   if (h.width * h.height != h.points) {
     throw Error(path, "header",
@@ -125,6 +131,11 @@ PcdHeader parse_header(std::istream& in, const std::string& path) {
     if (f.size == 0 || f.size > 8) {
       throw Error(path, "header",
                   "field '" + f.name + "' has invalid SIZE " + std::to_string(f.size));
+    }
+    if (f.count == 0 || f.count > kMaxCount) {
+      throw Error(path, "header",
+                  "field '" + f.name + "' has invalid COUNT " + std::to_string(f.count) +
+                      " (expected 1 to " + std::to_string(kMaxCount) + ")");
     }
     f.offset = h.row_bytes;
     h.row_bytes += f.size * f.count;
@@ -231,7 +242,24 @@ void read_ascii(std::istream& in, const PcdHeader& h, PointSink& sink) {
   }
 }
 
+// Bytes of the file after the stream's position.
+std::uint64_t bytes_left(std::istream& in, const std::string& path) {
+  const auto at = in.tellg();
+  const std::uint64_t size = file_size(path);
+  return at < 0 || static_cast<std::uint64_t>(at) > size ? 0
+                                                         : size - static_cast<std::uint64_t>(at);
+}
+
 void read_binary(std::istream& in, const PcdHeader& h, PointSink& sink) {
+  // The rows must fit in the file before any is read: a lying header must not make the reader
+  // allocate for it.
+  const std::uint64_t left = bytes_left(in, sink.path);
+  if (h.points > left / h.row_bytes) {
+    throw Error(sink.path, "DATA binary",
+                "file ends early: POINTS declares " + std::to_string(h.points) + " rows of " +
+                    std::to_string(h.row_bytes) + " bytes, " + std::to_string(left) +
+                    " bytes follow the header");
+  }
   constexpr std::uint64_t kChunk = 16384;
   std::vector<unsigned char> buffer;
   for (std::uint64_t i = 0; i < h.points;) {
@@ -266,11 +294,23 @@ void read_compressed(std::istream& in, const PcdHeader& h, PointSink& sink) {
     throw Error(sink.path, "binary_compressed block", "file ends before the block sizes");
   const std::uint32_t compressed = decode_bits32(sizes, false);
   const std::uint32_t uncompressed = decode_bits32(sizes + 4, false);
-  if (uncompressed != h.points * h.row_bytes) {
-    throw Error(
-        sink.path, "binary_compressed block",
-        "uncompressed size " + std::to_string(uncompressed) +
-            " does not match POINTS x row size = " + std::to_string(h.points * h.row_bytes));
+  // Both sizes are checked before anything is allocated for them.
+  const std::uint64_t left = bytes_left(in, sink.path);
+  if (compressed > left) {
+    throw Error(sink.path, "binary_compressed block",
+                "file ends early: the block declares " + std::to_string(compressed) + " bytes, " +
+                    std::to_string(left) + " follow");
+  }
+  if (uncompressed > kLzfMaxRatio * compressed) {
+    throw Error(sink.path, "binary_compressed block",
+                "uncompressed size " + std::to_string(uncompressed) + " cannot come from " +
+                    std::to_string(compressed) + " LZF bytes");
+  }
+  if (h.points > uncompressed / h.row_bytes || uncompressed != h.points * h.row_bytes) {
+    throw Error(sink.path, "binary_compressed block",
+                "uncompressed size " + std::to_string(uncompressed) +
+                    " does not match POINTS x row size = " + std::to_string(h.points) + " x " +
+                    std::to_string(h.row_bytes));
   }
   std::vector<unsigned char> packed(compressed);
   in.read(reinterpret_cast<char*>(packed.data()), compressed);

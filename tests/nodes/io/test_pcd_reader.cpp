@@ -64,22 +64,22 @@ void expect_organized(const PointCloud& c) {
   EXPECT_EQ(c.intensities[2], 2.0f);
 }
 
-TEST(PcdReader, BinaryOrganizedWithNaNAndPackedColour) {
-  const auto rows = organized_rows();
+// A binary PCD of organized_rows(): header and rows.
+std::string binary_pcd() {
   std::string body;
-  for (const Row& r : rows) {
+  for (const Row& r : organized_rows()) {
     body.append(reinterpret_cast<const char*>(&r.x), 12);
     body.append(reinterpret_cast<const char*>(r.pad), 4);
     body.append(reinterpret_cast<const char*>(&r.rgb), 8);
   }
-  const std::string path = test::temp_dir() + "/b.pcd";
-  test::write_file(path, binary_header("binary", 2, 2) + body);
-  expect_organized(read_pcd(path));
+  return binary_header("binary", 2, 2) + body;
 }
 
-TEST(PcdReader, BinaryCompressedFieldMajor) {
+// A binary_compressed PCD of organized_rows(): header, block sizes, LZF block (field-major: all
+// x, all y, all z, all pad, all rgb, all intensity).
+std::string compressed_pcd() {
   const auto rows = organized_rows();
-  std::string raw;  // field-major: all x, all y, all z, all pad, all rgb, all intensity
+  std::string raw;
   for (int f = 0; f < 6; ++f) {
     for (const Row& r : rows) {
       const float* fl[] = {&r.x, &r.y, &r.z, nullptr, &r.rgb, &r.intensity};
@@ -92,13 +92,87 @@ TEST(PcdReader, BinaryCompressedFieldMajor) {
   std::string packed(raw.size() * 2 + 16, '\0');
   const unsigned n = lzf_compress(raw.data(), static_cast<unsigned>(raw.size()), packed.data(),
                                   static_cast<unsigned>(packed.size()));
-  ASSERT_GT(n, 0u);
   const std::uint32_t sizes[2] = {n, static_cast<std::uint32_t>(raw.size())};
-  const std::string path = test::temp_dir() + "/c.pcd";
-  test::write_file(path, binary_header("binary_compressed", 2, 2) +
-                             std::string(reinterpret_cast<const char*>(sizes), 8) +
-                             packed.substr(0, n) + std::string(100, '\0'));
+  return binary_header("binary_compressed", 2, 2) +
+         std::string(reinterpret_cast<const char*>(sizes), 8) + packed.substr(0, n);
+}
+
+TEST(PcdReader, BinaryOrganizedWithNaNAndPackedColour) {
+  const std::string path = test::temp_dir() + "/b.pcd";
+  test::write_file(path, binary_pcd());
   expect_organized(read_pcd(path));
+}
+
+TEST(PcdReader, BinaryCompressedFieldMajor) {
+  const std::string path = test::temp_dir() + "/c.pcd";
+  test::write_file(path, compressed_pcd() + std::string(100, '\0'));
+  expect_organized(read_pcd(path));
+}
+
+// Headers that declare more data than the file holds are refused before the reader allocates
+// for them: a lying header must not exhaust memory (under ASan such an allocation aborts).
+TEST(PcdReader, LyingHeadersAreRefusedBeforeAllocating) {
+  const std::string path = test::temp_dir() + "/lying.pcd";
+  const auto error_of = [&](const std::string& contents) -> std::string {
+    test::write_file(path, contents);
+    try {
+      read_pcd(path);
+    } catch (const Error& e) {
+      return e.what();
+    }
+    return "no error";
+  };
+  const std::string xyz = "VERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\n";
+  const std::string row(12, '\0');
+  EXPECT_NE(error_of(xyz + "COUNT 1 1 1\nWIDTH 4000000000\nHEIGHT 1\nDATA binary\n" + row)
+                .find("file ends early"),
+            std::string::npos);
+  EXPECT_NE(error_of(xyz + "COUNT 1 1 4294967295\nWIDTH 1\nHEIGHT 1\nDATA binary\n" + row)
+                .find("invalid COUNT"),
+            std::string::npos);
+  EXPECT_NE(error_of(xyz + "COUNT 1 1 1\nWIDTH 18446744073709551615\nHEIGHT 2\nDATA binary\n")
+                .find("overflows"),
+            std::string::npos);
+  const auto compressed = [&](std::uint32_t packed, std::uint32_t unpacked) {
+    const std::uint32_t sizes[2] = {packed, unpacked};
+    return error_of(xyz + "COUNT 1 1 1\nWIDTH 1\nHEIGHT 1\nDATA binary_compressed\n" +
+                    std::string(reinterpret_cast<const char*>(sizes), 8) + row);
+  };
+  EXPECT_NE(compressed(4000000000u, 12).find("file ends early"), std::string::npos);
+  EXPECT_NE(compressed(12, 4000000000u).find("cannot come from"), std::string::npos);
+}
+
+// Fuzz-style corruption of binary and binary_compressed files: every truncation, byte flips,
+// and every header number replaced by extreme values either parse or throw meshflow::Error.
+TEST(PcdReader, TruncationsFlipsAndExtremeHeaderNumbersNeverCrash) {
+  const std::string path = test::temp_dir() + "/fuzz.pcd";
+  const auto parse_or_error = [&](const std::string& contents) {
+    test::write_file(path, contents);
+    try {
+      const PointCloud c = read_pcd(path);
+      EXPECT_LE(c.size(), contents.size());
+    } catch (const Error&) {
+    }
+  };
+  for (const std::string& good : {binary_pcd(), compressed_pcd()}) {
+    for (std::size_t len = 0; len < good.size(); ++len) parse_or_error(good.substr(0, len));
+    std::uint32_t state = 4242;
+    for (int trial = 0; trial < 200; ++trial) {
+      std::string bad = good;
+      for (int k = 0; k < 2; ++k) {
+        state = state * 1664525u + 1013904223u;
+        bad[state % bad.size()] = static_cast<char>(state >> 24);
+      }
+      parse_or_error(bad);
+    }
+    const std::size_t header_end = good.find("DATA");
+    for (std::size_t at = good.find_first_of("0123456789"); at < header_end;
+         at = good.find_first_of("0123456789", good.find_first_not_of("0123456789.", at))) {
+      const std::size_t len = good.find_first_not_of("0123456789.", at) - at;
+      for (const char* extreme : {"0", "4294967295", "18446744073709551615", "4000000000"})
+        parse_or_error(good.substr(0, at) + extreme + good.substr(at + len));
+    }
+  }
 }
 
 TEST(PcdReader, BrokenFilesGiveOneClearError) {

@@ -45,6 +45,14 @@ std::string read_file(const std::string& path) {
   return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
 }
 
+std::string flip_bytes(std::string text, int count, std::uint32_t& state) {
+  for (int k = 0; k < count; ++k) {
+    state = state * 1664525u + 1013904223u;
+    text[state % text.size()] = static_cast<char>(state >> 24);
+  }
+  return text;
+}
+
 TriangleMesh grid_mesh(std::uint32_t n) {
   TriangleMesh m;
   for (std::uint32_t j = 0; j < n; ++j)

@@ -1,6 +1,7 @@
 #pragma once
 // Helpers shared by the tests: data locations, temporary files, mesh error statistics.
 
+#include <cstdint>
 #include <functional>
 #include <string>
 
@@ -25,6 +26,10 @@ std::string temp_dir();
 void write_file(const std::string& path, const std::string& content);
 /// The whole file at `path` (binary); empty when it cannot be read.
 std::string read_file(const std::string& path);
+/// `text` (not empty) with `count` bytes set to pseudo-random values at pseudo-random places,
+/// drawn from a linear congruential generator advanced in `state`: corruption for the readers'
+/// fuzz-style tests, the same for the same state.
+std::string flip_bytes(std::string text, int count, std::uint32_t& state);
 
 /// f() run under a limit of `threads` worker threads (for 1-vs-N determinism tests).
 template <typename F>

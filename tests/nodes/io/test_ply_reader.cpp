@@ -114,12 +114,7 @@ TEST(PlyReader, TruncationsAndByteFlipsNeverCrash) {
   }
   std::uint32_t state = 12345;
   for (int trial = 0; trial < 300; ++trial) {
-    std::string bad = good;
-    for (int k = 0; k < 3; ++k) {
-      state = state * 1664525u + 1013904223u;
-      bad[state % bad.size()] = static_cast<char>(state >> 24);
-    }
-    test::write_file(path, bad);
+    test::write_file(path, test::flip_bytes(good, 3, state));
     try {
       read_ply(path);
     } catch (const Error&) {
@@ -149,14 +144,7 @@ TEST(PlyReader, MeshTruncationsAndByteFlipsNeverCrash) {
     };
     for (std::size_t len = 0; len < good.size(); ++len) parse_or_error(good.substr(0, len));
     std::uint32_t state = 777;
-    for (int trial = 0; trial < 300; ++trial) {
-      std::string bad = good;
-      for (int k = 0; k < 2; ++k) {
-        state = state * 1664525u + 1013904223u;
-        bad[state % bad.size()] = static_cast<char>(state >> 24);
-      }
-      parse_or_error(bad);
-    }
+    for (int trial = 0; trial < 300; ++trial) parse_or_error(test::flip_bytes(good, 2, state));
   }
 }
 

@@ -92,6 +92,7 @@ std::string compressed_pcd() {
   std::string packed(raw.size() * 2 + 16, '\0');
   const unsigned n = lzf_compress(raw.data(), static_cast<unsigned>(raw.size()), packed.data(),
                                   static_cast<unsigned>(packed.size()));
+  EXPECT_GT(n, 0u);
   const std::uint32_t sizes[2] = {n, static_cast<std::uint32_t>(raw.size())};
   return binary_header("binary_compressed", 2, 2) +
          std::string(reinterpret_cast<const char*>(sizes), 8) + packed.substr(0, n);

@@ -3,6 +3,7 @@
 #include <cctype>
 #include <charconv>
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 
 #include "runtime/error.h"
@@ -50,6 +51,16 @@ double parse_number(std::string_view token, const std::string& source, std::size
   return parse_number(token, source, "line " + std::to_string(line), field);  // throws
 }
 
+double parse_finite(std::string_view token, const std::string& source, std::size_t line,
+                    std::string_view field) {
+  const double value = parse_number(token, source, line, field);
+  if (!std::isfinite(value))
+    throw Error(source, "line " + std::to_string(line),
+                "field '" + std::string(field) + "': expected a finite number, got '" +
+                    std::string(token) + "'");
+  return value;
+}
+
 std::uint64_t parse_count(std::string_view token, const std::string& source,
                           const std::string& location, std::string_view field) {
   std::uint64_t value = 0;
@@ -78,6 +89,16 @@ void check_coordinates(const Eigen::Vector3d& p, const std::string& source,
 void check_coordinates(const Eigen::Vector3d& p, const std::string& source, std::size_t line) {
   if ((p.array().abs() > kMaxAbsCoordinate).any())
     check_coordinates(p, source, "line " + std::to_string(line));
+}
+
+void check_position(const Eigen::Vector3d& p, const std::string& source,
+                    const std::string& location, std::string_view what) {
+  if (p.allFinite() && (p.array().abs() <= kMaxAbsCoordinate).all()) return;
+  char buf[96];
+  std::snprintf(buf, sizeof buf, "(%g, %g, %g)", p.x(), p.y(), p.z());
+  throw Error(source, location,
+              std::string(what) + " " + buf +
+                  " is not finite or beyond +-1e6 m: corrupt data or wrong units");
 }
 
 std::ifstream open_input(const std::string& path) {

@@ -26,6 +26,10 @@ double parse_number(std::string_view token, const std::string& source, const std
 double parse_number(std::string_view token, const std::string& source, std::size_t line,
                     std::string_view field);
 
+/// As parse_number, but NaN and infinities are errors too (timestamps, pose entries).
+double parse_finite(std::string_view token, const std::string& source, std::size_t line,
+                    std::string_view field);
+
 /// Parses a non-negative integer token; throws meshflow::Error like parse_number.
 std::uint64_t parse_count(std::string_view token, const std::string& source,
                           const std::string& location, std::string_view field);
@@ -37,6 +41,12 @@ void check_coordinates(const Eigen::Vector3d& p, const std::string& source,
 
 /// As above with the location "line N", formatted only when there is an error.
 void check_coordinates(const Eigen::Vector3d& p, const std::string& source, std::size_t line);
+
+/// Throws meshflow::Error naming `source`, `location` and `what` unless every component of `p`
+/// (metres) is finite and within +-kMaxAbsCoordinate: for a pose's translation or a sensor
+/// position, where a non-finite or huge value would silently turn every point into garbage.
+void check_position(const Eigen::Vector3d& p, const std::string& source,
+                    const std::string& location, std::string_view what);
 
 /// Opens `path` for binary reading or throws meshflow::Error("cannot open").
 std::ifstream open_input(const std::string& path);

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
@@ -130,7 +131,7 @@ std::vector<TimedFile> read_timed_list(const std::string& path, const fs::path& 
     if (tok.size() != 2)
       throw Error(path, "line " + std::to_string(n), "expected 'timestamp filename'");
     out.push_back(
-        {parse_number(tok[0], path, n, "timestamp"), (base / std::string(tok[1])).string()});
+        {parse_finite(tok[0], path, n, "timestamp"), (base / std::string(tok[1])).string()});
   }
   return out;
 }
@@ -153,15 +154,16 @@ std::vector<TimedPose> read_tum_groundtruth(const std::string& path) {
       throw Error(path, "line " + std::to_string(n), "expected 'timestamp tx ty tz qx qy qz qw'");
     double v[8];
     for (int k = 0; k < 8; ++k)
-      v[k] = parse_number(tok[static_cast<std::size_t>(k)], path, n, kFields[k]);
+      v[k] = parse_finite(tok[static_cast<std::size_t>(k)], path, n, kFields[k]);
     const Eigen::Quaternionf q(static_cast<float>(v[7]), static_cast<float>(v[4]),
                                static_cast<float>(v[5]), static_cast<float>(v[6]));
     if (!(std::abs(q.norm() - 1.0f) < 1e-2f))
       throw Error(path, "line " + std::to_string(n), "quaternion is not unit length");
+    const Eigen::Vector3d t(v[1], v[2], v[3]);
+    check_position(t, path, "line " + std::to_string(n), "translation");
     Eigen::Isometry3f pose = Eigen::Isometry3f::Identity();
     pose.linear() = q.normalized().toRotationMatrix();
-    pose.translation() = Eigen::Vector3f(static_cast<float>(v[1]), static_cast<float>(v[2]),
-                                         static_cast<float>(v[3]));
+    pose.translation() = t.cast<float>();
     out.push_back({v[0], pose});
   }
   std::sort(out.begin(), out.end(),
@@ -302,6 +304,7 @@ std::vector<Eigen::Isometry3f> read_trajectory_log(const std::string& path) {
                 .norm() > 1e-3) {
       throw Error(path, "line " + std::to_string(n), "matrix is not a rigid transform");
     }
+    check_position(m.block<3, 1>(0, 3), path, "line " + std::to_string(n), "translation");
     Eigen::Isometry3d pose(m);
     poses.push_back(pose.cast<float>());
   }
@@ -322,21 +325,33 @@ PinholeIntrinsics read_intrinsics_json(const std::string& path) {
         path, "",
         "expected {\"width\", \"height\", \"intrinsic_matrix\": [9 numbers, column-major]}");
   }
-  try {
-    const auto& m = j["intrinsic_matrix"];
-    PinholeIntrinsics k;
-    k.width = j["width"].get<int>();
-    k.height = j["height"].get<int>();
-    k.fx = m[0].get<float>();
-    k.fy = m[4].get<float>();
-    k.cx = m[6].get<float>();
-    k.cy = m[7].get<float>();
-    if (k.width <= 0 || k.height <= 0 || !(k.fx > 0.0f) || !(k.fy > 0.0f))
-      throw Error(path, "", "non-positive size or focal length");
-    return k;
-  } catch (const nlohmann::json::exception& e) {
-    throw Error(path, "intrinsic_matrix", std::string("expected numbers: ") + e.what());
-  }
+  // Every value is read as a double and range-checked before it is converted: a huge width or
+  // focal length must be an error, not an undefined conversion or an infinite float.
+  const auto number = [&](const nlohmann::json& value, const char* field, double low, double high) {
+    if (!value.is_number()) throw Error(path, field, "expected a number, got " + value.dump());
+    const double x = value.get<double>();
+    if (!(x >= low && x <= high)) {
+      char range[64];
+      std::snprintf(range, sizeof range, "[%g, %g]", low, high);
+      throw Error(path, field, value.dump() + " is outside " + range);
+    }
+    return x;
+  };
+  const auto size = [&](const char* field) {
+    const double x = number(j[field], field, 1.0, 65535.0);
+    if (x != std::floor(x)) throw Error(path, field, "expected a whole number of pixels");
+    return static_cast<int>(x);
+  };
+  constexpr double kMaxFocal = 1e6, kMaxCentre = 1e6;  // pixels
+  const auto& m = j["intrinsic_matrix"];
+  PinholeIntrinsics k;
+  k.width = size("width");
+  k.height = size("height");
+  k.fx = static_cast<float>(number(m[0], "intrinsic_matrix[0] (fx)", 1e-3, kMaxFocal));
+  k.fy = static_cast<float>(number(m[4], "intrinsic_matrix[4] (fy)", 1e-3, kMaxFocal));
+  k.cx = static_cast<float>(number(m[6], "intrinsic_matrix[6] (cx)", -kMaxCentre, kMaxCentre));
+  k.cy = static_cast<float>(number(m[7], "intrinsic_matrix[7] (cy)", -kMaxCentre, kMaxCentre));
+  return k;
 }
 
 std::unique_ptr<Sequence> open_redwood_directory(const std::string& directory) {

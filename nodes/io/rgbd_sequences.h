@@ -17,10 +17,14 @@ cv::Mat read_depth_image(const std::string& path);
 
 /// Reads a Redwood .log trajectory: blocks of one "i j k" line and four rows of a row-major
 /// camera-to-world 4x4 matrix. Returns one pose per block, in block order. Throws
-/// meshflow::Error naming the file and line on malformed input.
+/// meshflow::Error naming the file and line on malformed input, a matrix that is not rigid or a
+/// translation beyond +-1e6 m.
 std::vector<Eigen::Isometry3f> read_trajectory_log(const std::string& path);
 
 /// Reads Open3D's camera JSON ({"width", "height", "intrinsic_matrix": 9 numbers, column-major}).
+/// Throws meshflow::Error naming the file and the field for invalid JSON, a missing field, a
+/// value that is not a number or out of range (width and height whole numbers in 1..65535,
+/// fx and fy in [0.001, 1e6], cx and cy within +-1e6 pixels).
 PinholeIntrinsics read_intrinsics_json(const std::string& path);
 
 /// A Redwood / Open3D RGB-D directory: depth/*.png (16-bit, mm), optional color/*.jpg|png paired
@@ -33,7 +37,8 @@ std::unique_ptr<Sequence> open_redwood_directory(const std::string& directory);
 /// depth scale 5000, groundtruth.txt ("timestamp tx ty tz qx qy qz qw", world from camera),
 /// associated by nearest timestamp within 20 ms, optional rgb.txt, intrinsics from a camera
 /// JSON in the directory or the ROS defaults (525, 525, 319.5, 239.5). A frame without a pose
-/// within 20 ms fails to load, naming depth.txt and its timestamp.
+/// within 20 ms fails to load, naming depth.txt and its timestamp. Non-finite timestamps or pose
+/// values and translations beyond +-1e6 m are errors naming the file and line.
 std::unique_ptr<Sequence> open_tum_directory(const std::string& directory);
 
 /// A directory of depth images without poses (e.g. a PCL grabber's *_depth.tiff): every image

@@ -60,6 +60,7 @@ Eigen::Isometry3f read_3dtk_pose(const std::string& path) {
   Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
   pose.linear() = c * r * c.transpose();
   pose.translation() = c * t_cm * 0.01;
+  check_position(pose.translation(), path, "line 1", "translation");
   return pose.cast<float>();
 }
 

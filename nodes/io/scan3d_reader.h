@@ -17,7 +17,8 @@ struct Scan3dOptions {
 
 /// Reads a 3DTK pose file: "tx ty tz" in cm, then "rx ry rz" in degrees. Returns the
 /// scan-to-world transform in meshflow's right-handed metric frame (x forward, y left, z up).
-/// Throws meshflow::Error naming the file and line on malformed input.
+/// Throws meshflow::Error naming the file and line on malformed input, a non-finite value or a
+/// translation beyond +-1e6 m.
 Eigen::Isometry3f read_3dtk_pose(const std::string& path);
 
 /// Reads a 3DTK .3d scan and maps it to metres in the world frame. The pose is read from

@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <filesystem>
 #include <opencv2/imgcodecs.hpp>
 
@@ -91,6 +92,104 @@ TEST(RgbdSequences, MalformedTrajectoryAndIntrinsics) {
   EXPECT_THROW(read_intrinsics_json(dir + "/c.json"), Error);
   test::write_file(dir + "/d.json", "{not json");
   EXPECT_THROW(read_intrinsics_json(dir + "/d.json"), Error);
+}
+
+// The message of the meshflow::Error that f() throws (a test failure when it throws none).
+template <typename F>
+std::string error_of(F f) {
+  try {
+    f();
+  } catch (const Error& e) {
+    return e.what();
+  }
+  ADD_FAILURE() << "no meshflow::Error";
+  return "";
+}
+
+// Values that parse as numbers but would make every point garbage (a NaN or infinite pose, a
+// focal length or image size beyond float or int) are errors naming the file, line or field.
+TEST(RgbdSequences, NonFiniteOrHugePosesAndIntrinsicsAreErrors) {
+  const std::string dir = test::temp_dir();
+  test::write_file(dir + "/t.log", "0 0 1\n1 0 0 0\n0 1 0 1e39\n0 0 1 0\n0 0 0 1\n");
+  std::string e = error_of([&] { read_trajectory_log(dir + "/t.log"); });
+  EXPECT_NE(e.find("t.log: line 5"), std::string::npos) << e;
+  EXPECT_NE(e.find("translation"), std::string::npos) << e;
+  for (const char* json :
+       {R"({"width": 1e20, "height": 6, "intrinsic_matrix": [10, 0, 0, 0, 11, 0, 3, 2, 1]})",
+        R"({"width": 8.5, "height": 6, "intrinsic_matrix": [10, 0, 0, 0, 11, 0, 3, 2, 1]})",
+        R"({"width": 8, "height": 6, "intrinsic_matrix": [1e308, 0, 0, 0, 11, 0, 3, 2, 1]})",
+        R"({"width": 8, "height": 6, "intrinsic_matrix": [10, 0, 0, 0, "11", 0, 3, 2, 1]})",
+        R"({"width": 8, "height": 6, "intrinsic_matrix": [10, 0, 0, 0, 11, 0, 3, -1e39, 1]})"}) {
+    test::write_file(dir + "/c.json", json);
+    e = error_of([&] { read_intrinsics_json(dir + "/c.json"); });
+    EXPECT_NE(e.find("c.json"), std::string::npos) << e;
+    const bool names_field = e.find("width") != std::string::npos ||
+                             e.find("fx") != std::string::npos ||
+                             e.find("fy") != std::string::npos || e.find("cy") != std::string::npos;
+    EXPECT_TRUE(names_field) << e;
+  }
+  test::write_file(dir + "/depth.txt", "inf depth/a.png\n");
+  test::write_file(dir + "/groundtruth.txt", "1 0 0 0 0 0 0 1\n");
+  e = error_of([&] { open_tum_directory(dir); });
+  EXPECT_NE(e.find("depth.txt: line 1"), std::string::npos) << e;
+  test::write_file(dir + "/depth.txt", "1 depth/a.png\n");
+  test::write_file(dir + "/groundtruth.txt", "# t tx ty tz qx qy qz qw\n1 0 nan 0 0 0 0 1\n");
+  e = error_of([&] { open_tum_directory(dir); });
+  EXPECT_NE(e.find("groundtruth.txt: line 2"), std::string::npos) << e;
+  test::write_file(dir + "/groundtruth.txt", "1 0 2e6 0 0 0 0 1\n");
+  e = error_of([&] { open_tum_directory(dir); });
+  EXPECT_NE(e.find("translation"), std::string::npos) << e;
+}
+
+// Fuzz-style corruption of the sequence files (truncations and byte flips of a trajectory, a
+// camera JSON, TUM lists): each either reads to finite values or throws meshflow::Error.
+TEST(RgbdSequences, CorruptedSequenceFilesNeverCrashOrGiveNonFiniteValues) {
+  const std::string dir = test::temp_dir();
+  const std::string log =
+      "0 0 1\n1 0 0 0.5\n0 1 0 -2\n0 0 1 3\n0 0 0 1\n"
+      "1 1 2\n0 -1 0 0\n1 0 0 1e2\n0 0 1 0\n0 0 0 1\n";
+  const std::string json =
+      R"({"width": 640, "height": 480, "intrinsic_matrix": [525, 0, 0, 0, 525, 0, 319.5, 239.5, 1]})";
+  const std::string depth_list = "# depth\n1.160407 depth/1.160407.png\n1.194330 depth/1.19.png\n";
+  const std::string groundtruth =
+      "# gt\n1.15 1.3 0.6 1.6 0.65 0.62 -0.29 -0.32\n1.19 1.3 0.6 1.6 0.65 0.62 -0.29 -0.32\n";
+  std::uint32_t state = 2024;
+  const auto corruptions = [&](const std::string& good) {
+    std::vector<std::string> out;
+    for (std::size_t len = 0; len < good.size(); ++len) out.push_back(good.substr(0, len));
+    for (int trial = 0; trial < 300; ++trial) out.push_back(test::flip_bytes(good, 2, state));
+    return out;
+  };
+  for (const std::string& text : corruptions(log)) {
+    test::write_file(dir + "/t.log", text);
+    try {
+      for (const Eigen::Isometry3f& pose : read_trajectory_log(dir + "/t.log"))
+        EXPECT_TRUE(pose.matrix().allFinite()) << text;
+    } catch (const Error&) {
+    }
+  }
+  for (const std::string& text : corruptions(json)) {
+    test::write_file(dir + "/c.json", text);
+    try {
+      const PinholeIntrinsics k = read_intrinsics_json(dir + "/c.json");
+      EXPECT_TRUE(k.width > 0 && k.height > 0 && k.fx > 0.0f && k.fy > 0.0f) << text;
+      EXPECT_TRUE(std::isfinite(k.fx) && std::isfinite(k.fy) && std::isfinite(k.cx) &&
+                  std::isfinite(k.cy))
+          << text;
+    } catch (const Error&) {
+    }
+  }
+  for (int which = 0; which < 2; ++which)
+    for (const std::string& text : corruptions(which == 0 ? depth_list : groundtruth)) {
+      test::write_file(dir + "/depth.txt", which == 0 ? text : depth_list);
+      test::write_file(dir + "/groundtruth.txt", which == 1 ? text : groundtruth);
+      try {
+        const auto seq = open_tum_directory(dir);
+        for (std::size_t i = 0; i < seq->size(); ++i)
+          EXPECT_TRUE(std::isfinite(seq->frame(i).timestamp_s)) << text;
+      } catch (const Error&) {
+      }
+    }
 }
 
 TEST(RgbdSequences, DepthImageDirectoryWithoutPoses) {

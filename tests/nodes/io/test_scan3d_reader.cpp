@@ -40,6 +40,20 @@ TEST(Scan3dReader, TruncatedLineIsAnError) {
   }
 }
 
+TEST(Scan3dReader, NonFiniteOrHugePoseIsAnError) {
+  const std::string dir = test::temp_dir();
+  test::write_file(dir + "/s.3d", "1 2 3\n");
+  for (const char* pose : {"1e308 0 0\n0 0 0\n", "0 nan 0\n0 0 0\n", "0 0 0\n0 inf 0\n"}) {
+    test::write_file(dir + "/s.pose", pose);
+    try {
+      read_3dtk_scan(dir + "/s.3d");
+      ADD_FAILURE() << "no error for the pose " << pose;
+    } catch (const Error& e) {
+      EXPECT_NE(std::string(e.what()).find("s.pose: line"), std::string::npos) << e.what();
+    }
+  }
+}
+
 TEST(Scan3dReader, RealKurt3dScansAndPoses) {
   MESHFLOW_REQUIRE_DATA("kurt3d/scan000.3d");
   const PointCloud s0 = read_3dtk_scan(test::data_path("kurt3d/scan000.3d"));

@@ -20,7 +20,8 @@ constexpr std::uint64_t kKeyAxisMask = (std::uint64_t{1} << kKeyBitsPerAxis) - 1
 
 /// True when every component of the cell index can be packed, with room for one neighbour.
 inline bool cell_index_in_range(const Eigen::Vector3i& c) {
-  return (c.array().abs() <= kMaxCellIndex).all();
+  return (c.array() >= -kMaxCellIndex).all() &&
+         (c.array() <= kMaxCellIndex).all();  // no abs(INT_MIN)
 }
 
 /// Packs a cell index; precondition: cell_index_in_range(c) (or one step beyond it).

@@ -169,7 +169,7 @@ TsdfVolume read_tsdf_map(const std::string& path) {
     try {
       return TsdfVolume(config);
     } catch (const Error& e) {
-      throw Error(path, "header", e.problem());
+      throw Error(path, "header field " + e.location(), e.problem());
     }
   }();
   std::array<TsdfVoxel, kTsdfBlockVoxels> voxels;

@@ -73,7 +73,7 @@ void touched_blocks_of_row(const cv::Mat& depth, int v, const PinholeIntrinsics&
                               floor_to_int(hi.z()) + 1);
     const Eigen::Vector3i blo = block_of_voxel(vlo), bhi = block_of_voxel(vhi);
     if (inside(blo, last_lo, last_hi) && inside(bhi, last_lo, last_hi)) continue;
-    if (!cell_index_in_range(blo) || !cell_index_in_range(bhi)) {
+    if (!tsdf_block_in_range(blo) || !tsdf_block_in_range(bhi)) {
       throw Error("tsdf", "pixel (" + std::to_string(u) + ", " + std::to_string(v) + ")",
                   "maps outside the volume's range (pose or depth far too large)");
     }
@@ -96,14 +96,18 @@ float observation_weight(TsdfWeighting scheme, float depth) {
 
 }  // namespace
 
+// Larger voxels are a unit error; they would also put far vertices beyond float's range.
+constexpr float kMaxVoxelSize = 1000.0f;  // metres
+
 TsdfVolume::TsdfVolume(const TsdfConfig& config) : config_(config) {
-  if (!(config.voxel_size > 0.0f) || !std::isfinite(config.voxel_size)) {
-    throw Error("tsdf", "voxel_size", "must be a positive number of metres");
+  if (!(config.voxel_size > 0.0f && config.voxel_size <= kMaxVoxelSize)) {
+    throw Error("tsdf", "voxel_size", "must be a positive number of metres, at most 1000");
   }
   if (!(config.truncation_voxels > 0.0f) || !std::isfinite(config.truncation_voxels)) {
     throw Error("tsdf", "truncation_voxels", "must be a positive number of voxels");
   }
-  if (!(config.max_weight > 0.0f)) throw Error("tsdf", "max_weight", "must be positive");
+  if (!(config.max_weight > 0.0f) || !std::isfinite(config.max_weight))
+    throw Error("tsdf", "max_weight", "must be a positive finite number");
 }
 
 std::size_t TsdfVolume::memory_bytes() const {
@@ -112,7 +116,7 @@ std::size_t TsdfVolume::memory_bytes() const {
 }
 
 const TsdfBlock* TsdfVolume::find(const Eigen::Vector3i& block_coords) const {
-  if (!cell_index_in_range(block_coords)) return nullptr;
+  if (!tsdf_block_in_range(block_coords)) return nullptr;
   const auto it = index_.find(pack_key(block_coords));
   return it == index_.end() ? nullptr : &blocks_[it->second];
 }
@@ -139,8 +143,9 @@ std::uint32_t TsdfVolume::allocate(const Eigen::Vector3i& coords) {
 
 void TsdfVolume::insert_block(const Eigen::Vector3i& coords,
                               const std::array<TsdfVoxel, kTsdfBlockVoxels>& voxels) {
-  if (!cell_index_in_range(coords)) {
-    throw Error("tsdf", "block coordinates", "outside the packable range");
+  if (!tsdf_block_in_range(coords)) {
+    throw Error("tsdf", "block coordinates",
+                "outside +-" + std::to_string(kMaxTsdfBlockIndex) + " blocks (the volume's range)");
   }
   if (index_.count(pack_key(coords)) != 0) {
     throw Error("tsdf",

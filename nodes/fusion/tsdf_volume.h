@@ -18,6 +18,17 @@ namespace meshflow {
 
 constexpr int kTsdfBlockSide = 8;
 constexpr int kTsdfBlockVoxels = kTsdfBlockSide * kTsdfBlockSide * kTsdfBlockSide;
+/// The largest |block coordinate| of a volume: the mesher packs the global index of every voxel
+/// of a block and of its +1 neighbours into a VoxelKey, so (|b| + 2) x 8 must stay packable
+/// (+-32 765 blocks: +-2.6 km at 1 cm voxels, +-13 km at 5 cm).
+constexpr std::int32_t kMaxTsdfBlockIndex = kMaxCellIndex / kTsdfBlockSide - 2;
+
+/// True when a block with these coordinates can be stored and meshed.
+inline bool tsdf_block_in_range(const Eigen::Vector3i& block_coords) {
+  // Compared from both sides: abs() of INT_MIN (a corrupt map file) would overflow.
+  return (block_coords.array() >= -kMaxTsdfBlockIndex).all() &&
+         (block_coords.array() <= kMaxTsdfBlockIndex).all();
+}
 
 enum class TsdfWeighting {
   kConstant,      ///< every observation weighs 1
@@ -60,7 +71,8 @@ struct IntegrationStats {
 
 class TsdfVolume {
  public:
-  /// Throws meshflow::Error on a non-positive or non-finite voxel size or truncation.
+  /// Throws meshflow::Error on a voxel size outside (0, 1000] metres, or a non-positive or
+  /// non-finite truncation or maximum weight.
   explicit TsdfVolume(const TsdfConfig& config = {});
 
   /// Fuses one depth frame (any depth format of DepthFrame; pixels <= 0 or NaN are ignored)
@@ -86,7 +98,7 @@ class TsdfVolume {
   std::vector<std::uint32_t> blocks_in_key_order() const;
 
   /// Adds a block with the given voxels (used by the map reader). Throws meshflow::Error if the
-  /// block exists already or its coordinates cannot be packed.
+  /// block exists already or its coordinates are out of range (tsdf_block_in_range()).
   void insert_block(const Eigen::Vector3i& coords,
                     const std::array<TsdfVoxel, kTsdfBlockVoxels>& voxels);
 

@@ -5,6 +5,7 @@
 
 #include <cstring>
 #include <fstream>
+#include <limits>
 
 #include "nodes/fusion/tsdf_map_file.h"
 #include "nodes/fusion/tsdf_mesher.h"
@@ -199,7 +200,7 @@ void expect_map_error(const std::string& path, const std::string& fragment) {
   } catch (const Error& e) {
     const std::string what = e.what();
     EXPECT_NE(what.find(path), std::string::npos) << what;
-    EXPECT_NE(what.find(fragment), std::string::npos) << what;
+    EXPECT_NE(what.find(fragment), std::string::npos) << what << " (expected: " << fragment << ")";
   }
 }
 
@@ -229,11 +230,92 @@ TEST(TsdfMapFile, CorruptOrTruncatedFilesFailClearly) {
   expect_map_error(dir + "/missing.tsdf", "cannot open");
 }
 
+// `bytes` with the 4 bytes at `at` replaced by `value` and the trailing FNV-1a checksum made to
+// match again, so the reader gets past the checksum to the field.
+template <typename T>
+std::string patched_map(std::string bytes, std::size_t at, T value) {
+  static_assert(sizeof(T) == 4);
+  std::memcpy(&bytes[at], &value, 4);
+  std::uint64_t h = 14695981039346656037ull;
+  for (std::size_t i = 0; i + 8 < bytes.size(); ++i) {
+    h ^= static_cast<unsigned char>(bytes[i]);
+    h *= 1099511628211ull;
+  }
+  std::memcpy(&bytes[bytes.size() - 8], &h, 8);
+  return bytes;
+}
+
+// Found by a mutation fuzzer that recomputes the checksum: fields with absurd values are errors
+// naming the field, never a crash, an overflow or a mesh with infinite vertices.
+TEST(TsdfMapFile, AbsurdFieldsBehindAValidChecksumFailClearly) {
+  const std::string dir = test::temp_dir();
+  io::write_tsdf_map(dir + "/good.tsdf", fuse(room_frames(1)));
+  const std::string bytes = read_bytes(dir + "/good.tsdf");
+  const std::size_t voxel_size = 16, first_block = 40, first_distance = 52;
+  const auto expect = [&](const std::string& contents, const std::string& fragment) {
+    test::write_file(dir + "/bad.tsdf", contents);
+    expect_map_error(dir + "/bad.tsdf", fragment);
+  };
+  expect(patched_map(bytes, voxel_size, 3e38f), "voxel_size");
+  expect(patched_map(bytes, voxel_size, -0.01f), "voxel_size");
+  expect(patched_map(bytes, first_block, std::numeric_limits<std::int32_t>::min()),
+         "block coordinates");
+  expect(patched_map(bytes, first_block, kMaxTsdfBlockIndex + 1), "block coordinates");
+  expect(patched_map(bytes, first_distance, std::numeric_limits<float>::quiet_NaN()),
+         "voxel distance");
+  // The patch itself is sound: an unchanged value loads.
+  test::write_file(dir + "/same.tsdf", patched_map(bytes, voxel_size, kVoxel));
+  EXPECT_EQ(io::read_tsdf_map(dir + "/same.tsdf").block_count(),
+            io::read_tsdf_map(dir + "/good.tsdf").block_count());
+}
+
 TEST(Tsdf, RejectsBadConfiguration) {
   EXPECT_THROW(TsdfVolume(TsdfConfig{0.0f}), Error);
   TsdfConfig c;
   c.truncation_voxels = -1.0f;
   EXPECT_THROW(TsdfVolume{c}, Error);
+  EXPECT_THROW(TsdfVolume(TsdfConfig{3e38f}), Error);  // a unit error, and inf vertices far out
+  TsdfConfig unbounded;
+  unbounded.max_weight = std::numeric_limits<float>::infinity();
+  EXPECT_THROW(TsdfVolume{unbounded}, Error);
+}
+
+// A block far from the origin meshes exactly like the same block at the origin, shifted; one
+// beyond the volume's range, or a frame that would need one, is an error (the mesher packs
+// global voxel indices, which overflowed the key for blocks beyond +-32 765 before).
+TEST(Tsdf, FarBlocksMeshLikeNearOnesAndBeyondTheRangeAreErrors) {
+  TsdfConfig config;
+  config.voxel_size = 0.01f;
+  std::array<TsdfVoxel, kTsdfBlockVoxels> voxels;
+  for (int i = 0; i < kTsdfBlockVoxels; ++i) {
+    const int x = i % 8, y = (i / 8) % 8, z = i / 64;
+    voxels[static_cast<std::size_t>(i)].distance = (0.3f * x + 0.2f * y + z - 3.5f) * 0.01f;
+    voxels[static_cast<std::size_t>(i)].weight = 1.0f;
+  }
+  const Eigen::Vector3i far(kMaxTsdfBlockIndex, -kMaxTsdfBlockIndex, kMaxTsdfBlockIndex);
+  TsdfVolume near_volume(config), far_volume(config);
+  near_volume.insert_block(Eigen::Vector3i::Zero(), voxels);
+  far_volume.insert_block(far, voxels);
+  const TriangleMesh a = TsdfMesher().extract(near_volume), b = TsdfMesher().extract(far_volume);
+  ASSERT_GT(a.triangles.size(), 50u);
+  EXPECT_EQ(a.triangles, b.triangles);
+  ASSERT_EQ(a.vertices.size(), b.vertices.size());
+  const Eigen::Vector3f shift = (far * kTsdfBlockSide).cast<float>() * config.voxel_size;
+  for (std::size_t i = 0; i < a.vertices.size(); ++i)
+    EXPECT_LT((b.vertices[i] - shift - a.vertices[i]).norm(), 1e-3f) << i;
+
+  EXPECT_THROW(far_volume.insert_block(far + Eigen::Vector3i::UnitX(), voxels), Error);
+  DepthFrame frame;
+  frame.depth = cv::Mat(12, 16, CV_16U, cv::Scalar(1000));
+  frame.intrinsics = PinholeIntrinsics{16, 12, 20.0f, 20.0f, 7.5f, 5.5f};
+  frame.T_world_camera.translation() = Eigen::Vector3f(3000.0f, 0.0f, 0.0f);  // 3 km at 1 cm
+  try {
+    far_volume.integrate(frame);
+    ADD_FAILURE() << "a frame 3 km away integrated into a 1 cm volume";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("outside the volume's range"), std::string::npos)
+        << e.what();
+  }
 }
 
 TEST(Tsdf, RealRedwoodFramesFuseToACoherentMesh) {

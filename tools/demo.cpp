@@ -11,6 +11,7 @@
 #include "nodes/io/mesh_writers.h"
 #include "nodes/synthetic/scan_simulator.h"
 #include "runtime/threads.h"
+#include "tools/cli_checks.h"
 #include "tools/commands.h"
 #include "tools/report.h"
 
@@ -74,11 +75,11 @@ void add_demo_command(CLI::App& app) {
   CLI::App* cmd = app.add_subcommand(
       "demo", "Reconstruct a built-in synthetic scene and report speed and accuracy");
   cmd->add_option("-o,--output", opts->output, "Output mesh (.ply or .obj)");
-  cmd->add_option("--voxel", opts->voxel, "Voxel size in metres")->check(CLI::PositiveNumber);
+  cmd->add_option("--voxel", opts->voxel, "Voxel size in metres")->check(number_in(0, 1000, true));
   cmd->add_option("--noise", opts->noise, "Range noise of the simulated scanner, metres")
-      ->check(CLI::NonNegativeNumber);
+      ->check(number_in(0, 1));
   cmd->add_option("--threads", opts->threads, "Worker threads (default: all cores)")
-      ->check(CLI::NonNegativeNumber);
+      ->check(CLI::Range(0, 1024));
   cmd->callback([opts] { run_demo(*opts); });
 }
 

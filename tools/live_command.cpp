@@ -11,6 +11,7 @@
 
 #include "graph/live_pipeline.h"
 #include "runtime/error.h"
+#include "tools/cli_checks.h"
 #include "tools/commands.h"
 #include "tools/pipeline_options.h"
 
@@ -117,7 +118,7 @@ void add_live_command(CLI::App& app) {
       "live", "Replay a sequence at a fixed rate through the embedding API; report latency");
   add_sequence_options(cmd, o->sequence);
   cmd->add_option("--rate", o->rate_hz, "Frames per second the replay pushes")
-      ->check(CLI::Range(0.1, 10000.0));
+      ->check(number_in(0.1, 10000));
   cmd->add_option("--policy", o->policy,
                   "realtime (drop the oldest waiting frame) or queue (refuse while full)")
       ->check(CLI::IsMember({"realtime", "queue"}));
@@ -129,14 +130,14 @@ void add_live_command(CLI::App& app) {
       ->check(CLI::IsMember({"naive", "rqt"}));
   cmd->add_option("--rqt-error", o->rqt_error,
                   "rqt: allowed deviation per squared depth, 1/m (error <= k depth^2)")
-      ->check(CLI::PositiveNumber);
+      ->check(number_in(0, 1e6, true));
   cmd->add_option("--rqt-noise-multiple", o->rqt_noise_multiple,
                   "rqt: raise that allowance to this many times each frame's estimated depth "
                   "noise per squared depth (0 = off)")
-      ->check(CLI::Range(0.0, 100.0));
+      ->check(number_in(0, 100));
   cmd->add_option("--decimate", o->decimate,
                   "With --triangulate: QEM-decimate each frame's mesh to this share (e.g. 0.25)")
-      ->check(CLI::Range(0.0, 1.0));
+      ->check(number_in(0, 1));
   cmd->add_flag("--warm-up", o->warm_up,
                 "Before the timed replay, mesh every frame once in a throwaway pipeline (worker "
                 "threads and allocator pools start), so the numbers are the steady state");

@@ -3,6 +3,7 @@
 #include "nodes/extract/extract_surface.h"
 #include "nodes/synthetic/depth_sequence.h"
 #include "nodes/synthetic/scan_sequence.h"
+#include "tools/cli_checks.h"
 
 namespace meshflow::cli {
 
@@ -31,35 +32,35 @@ ReconstructionConfig PipelineOptions::config() const {
 
 void add_pipeline_options(CLI::App* cmd, PipelineOptions& o) {
   cmd->add_option("--voxel", o.voxel, "Voxel size in metres (default: 3x the median point spacing)")
-      ->check(CLI::NonNegativeNumber);
+      ->check(number_in(0, 1000));
   cmd->add_option("--kn", o.kn, "Neighbours for normal estimation")->check(CLI::Range(3, 1000));
   cmd->add_option("--ki", o.ki, "Neighbours for normal interpolation (0 = off)")
       ->check(CLI::Range(0, 1000));
   cmd->add_option("--kd", o.kd, "Tangent planes averaged per distance sample")
       ->check(CLI::Range(1, 64));
   cmd->add_option("--threads", o.threads, "Worker threads (default: all cores)")
-      ->check(CLI::NonNegativeNumber);
+      ->check(CLI::Range(0, 1024));
   cmd->add_flag("--adaptive-k", o.adaptive_k, "Grow kn where neighbourhoods are degenerate");
   cmd->add_option("--max-distance", o.max_distance,
                   "Distance samples farther than this many voxels from the data are invalid")
-      ->check(CLI::PositiveNumber);
-  cmd->add_option("--min-component", o.min_component,
-                  "Remove mesh components with fewer triangles");
+      ->check(number_in(0, 1000, true));
+  cmd->add_option("--min-component", o.min_component, "Remove mesh components with fewer triangles")
+      ->check(number_in(0, 1e9));
   cmd->add_option("--filter-voxel", o.filter_voxel,
                   "Voxel-grid downsampling before meshing, metres (0 = off)")
-      ->check(CLI::NonNegativeNumber);
+      ->check(number_in(0, 1000));
   cmd->add_option("--outlier-k", o.outlier_k,
                   "Statistical outlier removal with k neighbours (0 = off)")
-      ->check(CLI::NonNegativeNumber);
+      ->check(CLI::Range(0, 1000));
   cmd->add_option("--min-range", o.min_range, "Drop points closer to the sensor, metres")
-      ->check(CLI::NonNegativeNumber);
+      ->check(number_in(0, 1e6));
   cmd->add_option("--extract", o.extract,
                   "Extraction: mc (marching cubes), mt (marching tetrahedra), emc (extended MC, "
                   "sharp features), pmc (planar MC)")
       ->check(CLI::IsMember({"mc", "mt", "emc", "pmc"}));
   cmd->add_option("--max-range", o.max_range,
                   "Drop points farther from the sensor, metres (0 = off)")
-      ->check(CLI::NonNegativeNumber);
+      ->check(number_in(0, 1e6));
   cmd->add_option("--optimize", o.optimize,
                   "Mesh optimisation: default (clean,holes), none, or a list of clean, holes, "
                   "planes, sharpen, retriangulate, remesh, decimate in the order to run")
@@ -71,19 +72,20 @@ void add_pipeline_options(CLI::App* cmd, PipelineOptions& o) {
           return e.what();
         }
       });
-  cmd->add_option("--max-hole", o.max_hole, "holes step: close border loops up to this many edges");
+  cmd->add_option("--max-hole", o.max_hole, "holes step: close border loops up to this many edges")
+      ->check(number_in(0, 1e9));
   cmd->add_option("--contour-tolerance", o.contour_tolerance,
                   "retriangulate step: Douglas-Peucker tolerance of region contours, metres")
-      ->check(CLI::NonNegativeNumber);
+      ->check(number_in(0, 1000));
   cmd->add_option("--max-projection", o.max_projection,
                   "planes step: vertices farther from their plane stay, metres (0 = no limit)")
-      ->check(CLI::NonNegativeNumber);
+      ->check(number_in(0, 1000));
   cmd->add_option("--remesh-tolerance", o.remesh_tolerance,
                   "remesh step: largest deviation of an edge from the surface, metres "
                   "(0 = a quarter of the median edge)")
-      ->check(CLI::NonNegativeNumber);
+      ->check(number_in(0, 1000));
   cmd->add_option("--decimate-to", o.decimate_to, "decimate step: share of the triangles to keep")
-      ->check(CLI::Range(0.0f, 1.0f));
+      ->check(number_in(0, 1));
 }
 
 void add_sequence_options(CLI::App* cmd, SequenceArgument& a) {
@@ -97,7 +99,8 @@ void add_sequence_options(CLI::App* cmd, SequenceArgument& a) {
   cmd->add_option("--in-flight", a.in_flight, "Frames in the pipeline at once")
       ->check(CLI::Range(1, 64));
   cmd->add_option("--every", a.every, "Take every N-th frame")->check(CLI::Range(1, 1000000));
-  cmd->add_option("--max-frames", a.max_frames, "Stop after N frames (0 = all)");
+  cmd->add_option("--max-frames", a.max_frames, "Stop after N frames (0 = all)")
+      ->check(number_in(0, 1e15));
 }
 
 std::unique_ptr<io::Sequence> open_sequence_argument(const SequenceArgument& a) {

@@ -14,6 +14,7 @@
 #include "nodes/io/mesh_writers.h"
 #include "runtime/error.h"
 #include "runtime/threads.h"
+#include "tools/cli_checks.h"
 #include "tools/commands.h"
 #include "tools/pipeline_options.h"
 
@@ -228,9 +229,10 @@ void add_run_command(CLI::App& app) {
                    ->excludes(merged);
   cmd->add_option("--mesh-every", o->mesh_every,
                   "With --fuse: also write the map's mesh after every N frames")
+      ->check(number_in(0, 1e9))
       ->needs(fuse);
   cmd->add_option("--truncation", o->truncation_voxels, "With --fuse: truncation in voxels")
-      ->check(CLI::PositiveNumber)
+      ->check(number_in(0, 1000, true))
       ->needs(fuse);
   cmd->add_option("--save-map", o->save_map, "With --fuse: write the TSDF map to this file")
       ->needs(fuse);

@@ -11,10 +11,14 @@
 namespace meshflow {
 namespace {
 
+// Repeated corners, zero area, or a corner at a NaN / infinite position (no defined area: the
+// comparison is written so that a NaN area counts as none).
 bool is_degenerate(const TriangleMesh& mesh, const Triangle& t) {
   if (t[0] == t[1] || t[1] == t[2] || t[0] == t[2]) return true;
-  const Eigen::Vector3f& a = mesh.vertices[t[0]];
-  return (mesh.vertices[t[1]] - a).cross(mesh.vertices[t[2]] - a).squaredNorm() == 0.0f;
+  const Eigen::Vector3f &a = mesh.vertices[t[0]], &b = mesh.vertices[t[1]],
+                        &c = mesh.vertices[t[2]];
+  if (!a.allFinite() || !b.allFinite() || !c.allFinite()) return true;
+  return !((b - a).cross(c - a).squaredNorm() > 0.0f);
 }
 
 Triangle sorted_corners(Triangle t) {

@@ -8,7 +8,8 @@
 namespace meshflow {
 
 struct CleanupConfig {
-  bool remove_degenerate = true;  ///< repeated vertex indices, zero area, duplicated faces
+  /// Repeated vertex indices, zero area, a corner at a NaN or infinite position, duplicated faces.
+  bool remove_degenerate = true;
   /// Connected components (by shared vertices) with fewer triangles are removed; 0 = keep all.
   std::size_t min_component_triangles = 20;
   /// Vertices joining several fans of triangles are split, one copy per fan (manifold_repair.h),

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <limits>
 
 #include "mesh_fixtures.h"
 
@@ -30,10 +31,16 @@ TEST(MeshCleanup, RemovesDegenerateDuplicateAndSmallComponents) {
   m.triangles.push_back({2, 0, 1});           // duplicate of triangle 0 (other rotation)
   m.vertices.emplace_back(9, 9, 9);           // unreferenced
   compute_vertex_normals(m);
+  const auto nan_corner = static_cast<std::uint32_t>(m.vertices.size());
+  m.vertices.emplace_back(std::numeric_limits<float>::quiet_NaN(), 0.0f, 0.0f);
+  m.vertices.emplace_back(std::numeric_limits<float>::infinity(), 1.0f, 0.0f);
+  m.normals.resize(m.vertices.size(), Eigen::Vector3f::UnitZ());
+  m.triangles.push_back({0, 2, nan_corner});      // no defined area
+  m.triangles.push_back({0, nan_corner + 1, 2});  // no defined area
 
   CleanupReport report;
   const TriangleMesh out = clean_mesh(m, CleanupConfig{true, 20}, &report);
-  EXPECT_EQ(report.degenerate_triangles, 2u);
+  EXPECT_EQ(report.degenerate_triangles, 4u);
   EXPECT_EQ(report.duplicate_triangles, 1u);
   EXPECT_EQ(report.removed_components, 1u);
   EXPECT_EQ(report.removed_component_triangles, 2u);

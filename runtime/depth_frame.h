@@ -25,7 +25,13 @@ struct DepthFrame {
   double timestamp_s = 0.0;
 };
 
-/// Depth of `frame` in metres as CV_32F; invalid pixels are 0. O(pixels).
+/// Throws meshflow::Error naming the field unless `frame` can be used: a non-empty CV_16U or
+/// CV_32F depth image of the intrinsics' size, a positive finite depth_scale (CV_16U), positive
+/// finite focal lengths, a finite principal point and a finite pose. O(1).
+void check_depth_frame(const DepthFrame& frame);
+
+/// Depth of `frame` in metres as CV_32F; invalid pixels (0, negative, NaN, infinite) are 0.
+/// Checks the frame first (check_depth_frame()). O(pixels).
 cv::Mat depth_in_metres(const DepthFrame& frame);
 
 /// Makes OpenCV run its functions on the calling thread (cv::setNumThreads(0)), once per

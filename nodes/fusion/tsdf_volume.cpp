@@ -160,10 +160,8 @@ void TsdfVolume::insert_block(const Eigen::Vector3i& coords,
 
 IntegrationStats TsdfVolume::integrate(const DepthFrame& frame) {
   IntegrationStats stats;
-  const cv::Mat depth = depth_in_metres(frame);
+  const cv::Mat depth = depth_in_metres(frame);  // checks the frame (intrinsics, pose)
   const PinholeIntrinsics& k = frame.intrinsics;
-  if (!(k.fx > 0.0f) || !(k.fy > 0.0f))
-    throw Error("tsdf", "intrinsics", "focal lengths must be positive");
   const float voxel = config_.voxel_size, truncation = config_.truncation();
   const Eigen::Isometry3f T = frame.T_world_camera;
 

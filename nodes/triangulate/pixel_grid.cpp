@@ -34,14 +34,7 @@ MESHFLOW_AVX2_CLONES void back_project_row(const float* depth, const float* x_of
 
 PointGrid grid_from_depth(const DepthFrame& frame, const DepthFilterConfig& filter,
                           DepthFilterCounts* counts) {
-  if (frame.depth.empty()) throw Error("depth frame", "depth", "empty image");
-  if (frame.depth.cols != frame.intrinsics.width || frame.depth.rows != frame.intrinsics.height)
-    throw Error("depth frame", "intrinsics",
-                "image is " + std::to_string(frame.depth.cols) + "x" +
-                    std::to_string(frame.depth.rows) + ", intrinsics say " +
-                    std::to_string(frame.intrinsics.width) + "x" +
-                    std::to_string(frame.intrinsics.height));
-  const cv::Mat depth = filter_depth(frame, filter, counts);
+  const cv::Mat depth = filter_depth(frame, filter, counts);  // checks the frame
   PointGrid g;
   g.width = depth.cols;
   g.height = depth.rows;

@@ -74,6 +74,10 @@ std::uint64_t voxelize(Frame& f, const ReconstructionConfig& c) {
   if (!(vc.voxel_size > 0.0f)) {
     vc.voxel_size = f.depth ? suggest_voxel_size_for_depth(f.cloud, f.depth->intrinsics.fx)
                             : suggest_voxel_size(f.cloud, *f.index);
+    if (!(vc.voxel_size > 0.0f))
+      throw Error("voxelize", "voxel_size",
+                  "cannot be chosen from the points: their spacing and extent are 0 (do they all "
+                  "coincide?); there is no surface to extract");
   }
   f.voxel_size = vc.voxel_size;
   f.grid = meshflow::voxelize(f.cloud, vc);

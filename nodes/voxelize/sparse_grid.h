@@ -44,7 +44,8 @@ SparseGrid voxelize(const PointCloud& cloud, const VoxelizeConfig& config);
 
 /// A voxel size suited to the sampling: `factor` x the median nearest-neighbour spacing of a
 /// deterministic subset of the points, and at least 1/2000 of the bounding-box diagonal
-/// (which bounds memory). `index` must be built over cloud.positions. Returns metres.
+/// (which bounds memory). `index` must be built over cloud.positions. Returns metres; 0 when
+/// all points coincide.
 class SpatialIndex;
 float suggest_voxel_size(const PointCloud& cloud, const SpatialIndex& index, float factor = 3.0f);
 

@@ -3,7 +3,9 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
-#include <cassert>
+#include <string>
+
+#include "runtime/error.h"
 
 namespace meshflow {
 
@@ -13,7 +15,11 @@ std::size_t DistanceField::valid_count() const {
 
 DistanceField hoppe_distance(const SparseGrid& grid, const PointCloud& cloud,
                              const SpatialIndex& index, const DistanceConfig& config) {
-  assert(cloud.has_normals());
+  if (cloud.normals.size() != cloud.positions.size())
+    throw Error("distance", "normals",
+                "the cloud needs one normal per point (estimate them first), has " +
+                    std::to_string(cloud.normals.size()) + " for " +
+                    std::to_string(cloud.positions.size()) + " points");
   const std::size_t n = grid.corners.size();
   const std::size_t kd = static_cast<std::size_t>(std::clamp(config.kd, 1, 64));
   const float max_d = config.max_distance_voxels * grid.voxel_size;

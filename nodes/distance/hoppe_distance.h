@@ -25,8 +25,9 @@ struct DistanceField {
   std::size_t valid_count() const;
 };
 
-/// d(q) = mean over the kd nearest points p_i of n_i . (q - p_i). Requires cloud normals and an
-/// index over cloud.positions. Parallel over corners, deterministic; O(corners kd log n).
+/// d(q) = mean over the kd nearest points p_i of n_i . (q - p_i). Requires an index over
+/// cloud.positions and one normal per point (else throws meshflow::Error). Parallel over corners,
+/// deterministic; O(corners kd log n).
 DistanceField hoppe_distance(const SparseGrid& grid, const PointCloud& cloud,
                              const SpatialIndex& index, const DistanceConfig& config);
 

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include "nodes/synthetic/shapes.h"
+#include "runtime/error.h"
 
 namespace meshflow {
 namespace {
@@ -24,6 +25,16 @@ TEST(HoppeDistance, ExactOnAPlaneWithExactNormals) {
     ++checked;
   }
   EXPECT_GT(checked, 1000u);
+}
+
+TEST(HoppeDistance, ACloudWithoutOneNormalPerPointIsAnError) {
+  PointCloud c;
+  for (int i = 0; i < 10; ++i) c.positions.emplace_back(0.01f * i, 0.0f, 0.0f);
+  const KdTreeIndex index(c.positions);
+  const SparseGrid grid = voxelize(c, VoxelizeConfig{0.02f, 0.5f});
+  EXPECT_THROW(hoppe_distance(grid, c, index, DistanceConfig{}), Error);
+  c.normals.assign(5, Eigen::Vector3f::UnitZ());
+  EXPECT_THROW(hoppe_distance(grid, c, index, DistanceConfig{}), Error);
 }
 
 TEST(HoppeDistance, NearTheTrueSignedDistanceOfASphereAndInvalidFarAway) {

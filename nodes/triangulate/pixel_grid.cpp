@@ -66,6 +66,9 @@ PointGrid grid_from_organized(const PointCloud& cloud, const DepthFilterConfig& 
                 "an organized cloud (width x height == points, height > 1) is needed; got " +
                     std::to_string(cloud.width) + "x" + std::to_string(cloud.height) + " for " +
                     std::to_string(cloud.size()) + " points");
+  if (cloud.has_sensor_origin && !cloud.sensor_origin.allFinite())
+    throw Error("point cloud", "sensor_origin",
+                "is not finite (every range from it would be NaN, every pixel invalid)");
   DepthFilterCounts c;
   PointGrid g;
   g.width = static_cast<int>(cloud.width);

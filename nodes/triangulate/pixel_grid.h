@@ -35,7 +35,7 @@ PointGrid grid_from_depth(const DepthFrame& frame, const DepthFilterConfig& filt
 
 /// An organized cloud (width x height, NaN = invalid) as a grid seen from its sensor origin (the
 /// origin when unset); the range limits and occlusion edges of `filter` apply to the range from
-/// it. Throws meshflow::Error for an unorganized cloud. O(pixels).
+/// it. Throws meshflow::Error for an unorganized cloud or a non-finite sensor origin. O(pixels).
 PointGrid grid_from_organized(const PointCloud& cloud, const DepthFilterConfig& filter,
                               DepthFilterCounts* counts = nullptr);
 

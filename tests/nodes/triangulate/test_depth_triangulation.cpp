@@ -111,6 +111,17 @@ TEST(DepthTriangulation, BadInputGivesAClearError) {
   PointCloud unorganized;
   unorganized.positions = {{0, 0, 1}, {1, 0, 1}};
   EXPECT_THROW(triangulate_organized(unorganized), Error);
+  PointCloud no_origin;  // organized, but its sensor origin is NaN: not an empty mesh, an error
+  no_origin.positions = {{0, 0, 1}, {0.01f, 0, 1}, {0, 0.01f, 1}, {0.01f, 0.01f, 1}};
+  no_origin.width = no_origin.height = 2;
+  no_origin.sensor_origin = Eigen::Vector3f(std::nanf(""), 0, 0);
+  no_origin.has_sensor_origin = true;
+  try {
+    triangulate_organized(no_origin);
+    ADD_FAILURE() << "expected an error";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.location(), "sensor_origin") << e.what();
+  }
 }
 
 // The occlusion test as its definition reads, with Eigen vectors and angles in double (the

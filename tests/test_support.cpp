@@ -53,6 +53,51 @@ std::string flip_bytes(std::string text, int count, std::uint32_t& state) {
   return text;
 }
 
+namespace {
+std::uint32_t next(std::uint32_t& state) {
+  state = state * 1664525u + 1013904223u;
+  return state >> 8;
+}
+}  // namespace
+
+std::string mutate(std::string text, std::uint32_t& state) {
+  static const char* const kExtremes[] = {"-1",   "0",   "4294967295", "99999999999999999999",
+                                          "1e39", "nan", "inf",        "-2147483648",
+                                          "65536"};
+  const std::uint32_t mutations = 1 + next(state) % 4;
+  for (std::uint32_t m = 0; m < mutations && !text.empty(); ++m) {
+    const std::size_t at = next(state) % text.size();
+    switch (next(state) % 7) {
+      case 0:
+        text.resize(at);
+        break;
+      case 1:
+        text[at] = static_cast<char>(text[at] ^ (1 << (next(state) % 8)));
+        break;
+      case 2:
+        text[at] = static_cast<char>(next(state));
+        break;
+      case 3:
+        text.insert(at, 1 + next(state) % 8, static_cast<char>(next(state)));
+        break;
+      case 4:
+        text.erase(at, 1 + next(state) % 8);
+        break;
+      case 5: {
+        const std::size_t from = text.find_first_of("0123456789", at);
+        if (from == std::string::npos) break;
+        const std::size_t to = text.find_first_not_of("0123456789.e+-", from);
+        text.replace(from, (to == std::string::npos ? text.size() : to) - from,
+                     kExtremes[next(state) % 9]);
+        break;
+      }
+      default:
+        text.insert(next(state) % (text.size() + 1), text.substr(at, 1 + next(state) % 16));
+    }
+  }
+  return text;
+}
+
 TriangleMesh grid_mesh(std::uint32_t n) {
   TriangleMesh m;
   for (std::uint32_t j = 0; j < n; ++j)

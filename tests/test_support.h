@@ -30,6 +30,10 @@ std::string read_file(const std::string& path);
 /// drawn from a linear congruential generator advanced in `state`: corruption for the readers'
 /// fuzz-style tests, the same for the same state.
 std::string flip_bytes(std::string text, int count, std::uint32_t& state);
+/// `text` with 1-4 random mutations of a mutation fuzzer (truncation, bit flip, random byte,
+/// inserted run, erased run, a number replaced by an extreme one such as nan, 1e39 or
+/// 4294967295, a slice repeated), drawn from the generator of flip_bytes() in `state`.
+std::string mutate(std::string text, std::uint32_t& state);
 
 /// f() run under a limit of `threads` worker threads (for 1-vs-N determinism tests).
 template <typename F>

@@ -6,6 +6,7 @@
 #include <atomic>
 #include <chrono>
 #include <future>
+#include <limits>
 #include <map>
 #include <mutex>
 #include <thread>
@@ -169,7 +170,7 @@ TEST(LivePipeline, PushFromOneThreadWhileCallbacksRunOnOthersAndDepthFramesWork)
   }
 }
 
-TEST(LivePipeline, TriangulatesDepthMapsPerFrameAndFailsCloudsClearly) {
+TEST(LivePipeline, TriangulatesDepthMapsPerFrameAndFailsBadFramesClearly) {
   synthetic::DepthSequenceConfig camera;
   camera.frames = 2;
   camera.intrinsics = PinholeIntrinsics{160, 120, 131.25f, 131.25f, 79.5f, 59.5f};
@@ -182,15 +183,26 @@ TEST(LivePipeline, TriangulatesDepthMapsPerFrameAndFailsCloudsClearly) {
   LivePipeline live(config, [&](LiveResult& r) { got.add(r); });
   live.push(seq->frame(0).load_depth());
   live.push(sphere(0));  // not a depth image
+  DepthFrame eight_bit = seq->frame(1).load_depth();
+  eight_bit.depth.convertTo(eight_bit.depth, CV_8U);  // a frame an embedder might get wrong
+  live.push(std::move(eight_bit));
+  DepthFrame lost = seq->frame(1).load_depth();
+  lost.T_world_camera.translation().x() = std::numeric_limits<float>::quiet_NaN();
+  live.push(std::move(lost));
   live.push(seq->frame(1).load_depth());
   live.flush();
-  ASSERT_EQ(got.results.size(), 3u);
+  ASSERT_EQ(got.results.size(), 5u);
   EXPECT_TRUE(got.results[0].ok) << got.results[0].error;
   EXPECT_GT(got.results[0].mesh.triangles.size(), 500u);
   EXPECT_EQ(got.results[0].timings.size(), 2u);  // read, triangulate
   EXPECT_FALSE(got.results[1].ok);
   EXPECT_NE(got.results[1].error.find("depth image"), std::string::npos) << got.results[1].error;
-  EXPECT_TRUE(got.results[2].ok) << got.results[2].error;
+  EXPECT_FALSE(got.results[2].ok);
+  EXPECT_NE(got.results[2].error.find("CV_16U or CV_32F"), std::string::npos)
+      << got.results[2].error;
+  EXPECT_FALSE(got.results[3].ok);
+  EXPECT_NE(got.results[3].error.find("T_world_camera"), std::string::npos) << got.results[3].error;
+  EXPECT_TRUE(got.results[4].ok) << got.results[4].error;
 }
 
 // Stage spans (start, end) of six frames pushed at once, with `threads` arena threads. (How

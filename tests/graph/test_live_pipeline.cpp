@@ -177,6 +177,7 @@ TEST(LivePipeline, TriangulatesDepthMapsPerFrameAndFailsBadFramesClearly) {
   const auto seq = synthetic::make_depth_sequence(synthetic::demo_room_scene(), camera);
   LiveConfig config;
   config.policy = LivePolicy::kQueue;
+  config.max_waiting = 8;  // room for every frame below: none refused however fast they come
   config.triangulate_depth_maps = true;
   config.reconstruction.triangulation.method = DepthTriangulationMethod::kRestrictedQuadtree;
   Received got;

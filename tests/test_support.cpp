@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <atomic>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
@@ -96,6 +97,16 @@ std::string mutate(std::string text, std::uint32_t& state) {
     }
   }
   return text;
+}
+
+std::string resealed_tsdf_map(std::string bytes) {
+  std::uint64_t h = 14695981039346656037ull;  // FNV-1a 64, as nodes/fusion/tsdf_map_file.cpp
+  for (std::size_t i = 0; i + 8 < bytes.size(); ++i) {
+    h ^= static_cast<unsigned char>(bytes[i]);
+    h *= 1099511628211ull;
+  }
+  std::memcpy(&bytes[bytes.size() - 8], &h, 8);
+  return bytes;
 }
 
 TriangleMesh grid_mesh(std::uint32_t n) {

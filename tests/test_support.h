@@ -34,6 +34,9 @@ std::string flip_bytes(std::string text, int count, std::uint32_t& state);
 /// inserted run, erased run, a number replaced by an extreme one such as nan, 1e39 or
 /// 4294967295, a slice repeated), drawn from the generator of flip_bytes() in `state`.
 std::string mutate(std::string text, std::uint32_t& state);
+/// A TSDF map file's bytes (at least 8) with the trailing FNV-1a 64 checksum recomputed over the
+/// rest, so a changed map still passes the checksum and its fields reach the reader.
+std::string resealed_tsdf_map(std::string bytes);
 
 /// f() run under a limit of `threads` worker threads (for 1-vs-N determinism tests).
 template <typename F>

@@ -6,6 +6,7 @@
 #include <cstring>
 #include <fstream>
 #include <limits>
+#include <utility>
 
 #include "nodes/fusion/tsdf_map_file.h"
 #include "nodes/fusion/tsdf_mesher.h"
@@ -230,19 +231,13 @@ TEST(TsdfMapFile, CorruptOrTruncatedFilesFailClearly) {
   expect_map_error(dir + "/missing.tsdf", "cannot open");
 }
 
-// `bytes` with the 4 bytes at `at` replaced by `value` and the trailing FNV-1a checksum made to
-// match again, so the reader gets past the checksum to the field.
+// `bytes` with the 4 bytes at `at` replaced by `value` and the checksum made to match again, so
+// the reader gets past the checksum to the field.
 template <typename T>
 std::string patched_map(std::string bytes, std::size_t at, T value) {
   static_assert(sizeof(T) == 4);
   std::memcpy(&bytes[at], &value, 4);
-  std::uint64_t h = 14695981039346656037ull;
-  for (std::size_t i = 0; i + 8 < bytes.size(); ++i) {
-    h ^= static_cast<unsigned char>(bytes[i]);
-    h *= 1099511628211ull;
-  }
-  std::memcpy(&bytes[bytes.size() - 8], &h, 8);
-  return bytes;
+  return test::resealed_tsdf_map(std::move(bytes));
 }
 
 // Found by a mutation fuzzer that recomputes the checksum: fields with absurd values are errors

@@ -10,10 +10,10 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
-#include <cstring>
 #include <filesystem>
 #include <functional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "nodes/fusion/tsdf_map_file.h"
@@ -187,14 +187,7 @@ TEST(ReaderFuzz, TsdfMapsBehindAValidChecksumOnlyEverThrowMeshflowErrors) {
   std::size_t loaded = 0;
   for (int i = 0; i < kMutationsPerSeed; ++i) {
     std::string text = test::mutate(good, state);
-    if (text.size() >= 16) {  // re-seal: FNV-1a 64 of everything before the last 8 bytes
-      std::uint64_t h = 14695981039346656037ull;
-      for (std::size_t k = 0; k + 8 < text.size(); ++k) {
-        h ^= static_cast<unsigned char>(text[k]);
-        h *= 1099511628211ull;
-      }
-      std::memcpy(&text[text.size() - 8], &h, 8);
-    }
+    if (text.size() >= 16) text = test::resealed_tsdf_map(std::move(text));
     test::write_file(dir + "/case.tsdf", text);
     try {
       const TsdfVolume map = read_tsdf_map(dir + "/case.tsdf");

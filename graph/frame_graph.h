@@ -8,6 +8,8 @@
 #include <algorithm>
 #include <cstdint>
 #include <functional>
+#include <memory>
+#include <vector>
 
 #include "graph/frame.h"
 #include "graph/stages.h"
@@ -31,6 +33,25 @@ class StageNodeBody {
 };
 
 using StageNode = tbb::flow::function_node<FramePtr, FramePtr>;
+
+/// One unlimited node per stage of stages::frame_stages(triangulate_depth_maps) (frames overlap
+/// in every stage), each joined to the next; the caller connects front() and back(). `config`
+/// must outlive the chain.
+class StageChain {
+ public:
+  StageChain(tbb::flow::graph& g, bool triangulate_depth_maps, const ReconstructionConfig& config) {
+    for (const stages::NamedStage& stage : stages::frame_stages(triangulate_depth_maps))
+      nodes_.push_back(std::make_unique<StageNode>(g, tbb::flow::unlimited,
+                                                   StageNodeBody(stage.name, stage.body, config)));
+    for (std::size_t i = 1; i < nodes_.size(); ++i)
+      tbb::flow::make_edge(*nodes_[i - 1], *nodes_[i]);
+  }
+  StageNode& front() { return *nodes_.front(); }
+  StageNode& back() { return *nodes_.back(); }
+
+ private:
+  std::vector<std::unique_ptr<StageNode>> nodes_;
+};
 
 /// source -> limiter(K) ... deliver(sink) --(decrement)--> limiter. The source numbers frames
 /// (Frame::seq) in the order `next` returns them; connect the first stage to entry() and the

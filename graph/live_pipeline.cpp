@@ -54,7 +54,7 @@ struct LivePipeline::Impl {
   std::size_t latency_at = 0;
 
   // The graph: stages -> in-order -> deliver. Built inside the arena so its tasks run there.
-  std::vector<std::unique_ptr<detail::StageNode>> stages;
+  std::unique_ptr<detail::StageChain> stages;
   std::unique_ptr<flow::sequencer_node<FramePtr>> in_order;
   std::unique_ptr<flow::function_node<FramePtr, flow::continue_msg>> deliver;
 
@@ -72,17 +72,8 @@ struct LivePipeline::Impl {
   }
 
   void build_graph() {
-    const auto& chain =
-        config.triangulate_depth_maps
-            ? std::vector<stages::NamedStage>(std::begin(stages::kDepthTriangulationStages),
-                                              std::end(stages::kDepthTriangulationStages))
-            : std::vector<stages::NamedStage>(std::begin(stages::kPointCloudStages),
-                                              std::end(stages::kPointCloudStages));
-    for (const auto& stage : chain)
-      stages.push_back(std::make_unique<detail::StageNode>(
-          *graph, flow::unlimited,
-          detail::StageNodeBody(stage.name, stage.body, config.reconstruction)));
-    for (std::size_t i = 1; i < stages.size(); ++i) flow::make_edge(*stages[i - 1], *stages[i]);
+    stages = std::make_unique<detail::StageChain>(*graph, config.triangulate_depth_maps,
+                                                  config.reconstruction);
     in_order = std::make_unique<flow::sequencer_node<FramePtr>>(
         *graph, [](const FramePtr& f) { return f->seq; });
     deliver = std::make_unique<flow::function_node<FramePtr, flow::continue_msg>>(
@@ -90,7 +81,7 @@ struct LivePipeline::Impl {
           finish(f);
           return flow::continue_msg();
         });
-    flow::make_edge(*stages.back(), *in_order);
+    flow::make_edge(stages->back(), *in_order);
     flow::make_edge(*in_order, *deliver);
   }
 
@@ -103,7 +94,7 @@ struct LivePipeline::Impl {
   // Hands f to the first stage. From a thread outside the arena, try_put submits the node's
   // task into the graph's arena and returns at once (arena.execute would wait for a free slot
   // while the workers are busy, blocking push()).
-  void start(const FramePtr& f) { stages.front()->try_put(f); }
+  void start(const FramePtr& f) { stages->front().try_put(f); }
 
   Push push(const FramePtr& f) {
     f->submitted_s = monotonic_seconds();
@@ -183,7 +174,7 @@ struct LivePipeline::Impl {
       }
       if (in_flight == 0 && waiting.empty()) settled.notify_all();
     }
-    if (next) stages.front()->try_put(next);  // already on a graph thread
+    if (next) stages->front().try_put(next);  // already on a graph thread
   }
 
   void wait_settled() {

@@ -32,8 +32,9 @@ struct LiveConfig {
   std::size_t frames_in_flight = 2;  ///< frames being reconstructed at once (>= 1)
   std::size_t max_waiting = 2;       ///< frames queued behind them (>= 1)
   LivePolicy policy = LivePolicy::kRealtime;
-  /// Depth frames only: triangulate each depth map directly (reconstruction.triangulation:
-  /// naive or restricted quadtree) instead of the volumetric stages.
+  /// Triangulate each depth map, or organized point cloud, directly
+  /// (reconstruction.triangulation: naive or restricted quadtree, optional QEM) instead of the
+  /// volumetric stages; unorganized clouds then fail with a message saying so.
   bool triangulate_depth_maps = false;
 };
 

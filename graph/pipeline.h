@@ -28,8 +28,11 @@ class FramePipeline {
 
 class ReconstructionPipeline : public FramePipeline {
  public:
-  /// `max_in_flight` (>= 1) bounds the frames inside the graph, and so memory.
-  explicit ReconstructionPipeline(ReconstructionConfig config, std::size_t max_in_flight = 2);
+  /// `max_in_flight` (>= 1) bounds the frames inside the graph, and so memory. With
+  /// `triangulate_depth_maps` the graph is source -> read -> triangulate -> sink instead: each
+  /// depth map or organized cloud triangulated per frame (config.triangulation), no voxels.
+  explicit ReconstructionPipeline(ReconstructionConfig config, std::size_t max_in_flight = 2,
+                                  bool triangulate_depth_maps = false);
 
   void run(const std::function<FramePtr()>& next,
            const std::function<void(const FramePtr&)>& sink) override;
@@ -42,6 +45,7 @@ class ReconstructionPipeline : public FramePipeline {
  private:
   ReconstructionConfig config_;
   std::size_t max_in_flight_;
+  bool triangulate_depth_maps_;
 };
 
 }  // namespace meshflow

@@ -1,6 +1,8 @@
 #include "graph/stages.h"
 
 #include <exception>
+#include <iterator>
+#include <string>
 
 #include "nodes/extract/extract_surface.h"
 #include "nodes/normals/organized_normals.h"
@@ -106,9 +108,18 @@ std::uint64_t optimize(Frame& f, const ReconstructionConfig& c) {
 }
 
 std::uint64_t triangulate(Frame& f, const ReconstructionConfig& c) {
-  if (!f.depth) throw Error(f.name, "input", "depth-map triangulation needs a depth image");
-  f.mesh = triangulate_depth(*f.depth, c.triangulation);
-  f.depth.reset();
+  if (f.depth) {
+    f.mesh = triangulate_depth(*f.depth, c.triangulation);
+    f.depth.reset();
+  } else if (f.cloud.is_organized()) {
+    f.mesh = triangulate_organized(f.cloud, c.triangulation);
+    f.cloud = PointCloud{};  // keep frames in flight small
+  } else {
+    throw Error(f.name, "input",
+                "depth-map triangulation needs a depth image or an organized point cloud "
+                "(width x height points); got an unorganized cloud of " +
+                    std::to_string(f.cloud.size()) + " points");
+  }
   return f.mesh.triangles.size();
 }
 
@@ -117,6 +128,12 @@ const NamedStage kDepthTriangulationStages[2] = {{"read", read}, {"triangulate",
 const NamedStage kPointCloudStages[8] = {
     {"read", read},         {"filter", filter},     {"index", index},     {"normals", normals},
     {"voxelize", voxelize}, {"distance", distance}, {"extract", extract}, {"optimize", optimize}};
+
+std::vector<NamedStage> frame_stages(bool triangulate_depth_maps) {
+  if (triangulate_depth_maps)
+    return {std::begin(kDepthTriangulationStages), std::end(kDepthTriangulationStages)};
+  return {std::begin(kPointCloudStages), std::end(kPointCloudStages)};
+}
 
 void run_stage(const char* name, StageFunction body, Frame& f, const ReconstructionConfig& c) {
   run_stage(

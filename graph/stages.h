@@ -4,6 +4,7 @@
 
 #include <cstdint>
 #include <functional>
+#include <vector>
 
 #include "graph/frame.h"
 
@@ -22,8 +23,9 @@ std::uint64_t optimize(Frame& f, const ReconstructionConfig& c);  ///< triangles
 /// Fails frames that are not depth images.
 std::uint64_t filter_depth_image(Frame& f, const ReconstructionConfig& c);  ///< valid pixels
 
-/// Depth-map triangulation of a depth frame straight into `mesh` (c.triangulation; no voxel
-/// grid). Fails frames that are not depth images.
+/// Depth-map triangulation straight into `mesh` (c.triangulation; no voxel grid) of a depth
+/// frame, or of an organized point cloud (width x height points, NaN = invalid, e.g. a Kinect
+/// PCD) seen from its sensor origin. Fails other frames, naming what was expected.
 std::uint64_t triangulate(Frame& f, const ReconstructionConfig& c);  ///< triangles
 
 using StageFunction = std::uint64_t (*)(Frame&, const ReconstructionConfig&);
@@ -37,6 +39,10 @@ struct NamedStage {
 extern const NamedStage kPointCloudStages[8];
 /// The per-frame depth-map path: read, triangulate.
 extern const NamedStage kDepthTriangulationStages[2];
+
+/// The stages a frame pipeline wires, in order: kDepthTriangulationStages when
+/// `triangulate_depth_maps`, else kPointCloudStages.
+std::vector<NamedStage> frame_stages(bool triangulate_depth_maps);
 
 /// Runs `body` on `f` unless the frame already failed, appending a StageRecord; a thrown
 /// exception becomes the frame's error. Thread-safe for distinct frames.

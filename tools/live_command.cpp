@@ -25,10 +25,7 @@ struct LiveOptions {
   std::string policy = "realtime";
   std::size_t waiting = 2;
   std::size_t loops = 1;
-  std::string triangulate;  ///< "", "naive" or "rqt"
-  float rqt_error = QuadtreeConfig{}.error_per_depth2;
-  float rqt_noise_multiple = QuadtreeConfig{}.noise_multiple;
-  float decimate = 0.0f;
+  TriangulationOptions triangulation;
   bool warm_up = false;
 };
 
@@ -58,13 +55,8 @@ void run_live(const LiveOptions& o) {
   config.frames_in_flight = o.sequence.in_flight;
   config.max_waiting = o.waiting;
   config.policy = o.policy == "queue" ? LivePolicy::kQueue : LivePolicy::kRealtime;
-  config.triangulate_depth_maps = !o.triangulate.empty();
-  config.reconstruction.triangulation.method = o.triangulate == "rqt"
-                                                   ? DepthTriangulationMethod::kRestrictedQuadtree
-                                                   : DepthTriangulationMethod::kNaive;
-  config.reconstruction.triangulation.quadtree.error_per_depth2 = o.rqt_error;
-  config.reconstruction.triangulation.quadtree.noise_multiple = o.rqt_noise_multiple;
-  config.reconstruction.triangulation.decimate_to = o.decimate;
+  config.triangulate_depth_maps = o.triangulation.enabled();
+  o.triangulation.apply(config.reconstruction);
   if (o.warm_up) {  // a throwaway pipeline meshes every frame once: threads and pools start
     LiveConfig queue = config;
     queue.policy = LivePolicy::kQueue;
@@ -124,20 +116,7 @@ void add_live_command(CLI::App& app) {
       ->check(CLI::IsMember({"realtime", "queue"}));
   cmd->add_option("--waiting", o->waiting, "Frames that may wait for a slot")
       ->check(CLI::Range(1, 1024));
-  cmd->add_option("--triangulate", o->triangulate,
-                  "Depth frames: triangulate each depth map (naive or rqt) instead of the "
-                  "volumetric stages")
-      ->check(CLI::IsMember({"naive", "rqt"}));
-  cmd->add_option("--rqt-error", o->rqt_error,
-                  "rqt: allowed deviation per squared depth, 1/m (error <= k depth^2)")
-      ->check(number_in(0, 1e6, true));
-  cmd->add_option("--rqt-noise-multiple", o->rqt_noise_multiple,
-                  "rqt: raise that allowance to this many times each frame's estimated depth "
-                  "noise per squared depth (0 = off)")
-      ->check(number_in(0, 100));
-  cmd->add_option("--decimate", o->decimate,
-                  "With --triangulate: QEM-decimate each frame's mesh to this share (e.g. 0.25)")
-      ->check(number_in(0, 1));
+  add_triangulation_options(cmd, o->triangulation);
   cmd->add_flag("--warm-up", o->warm_up,
                 "Before the timed replay, mesh every frame once in a throwaway pipeline (worker "
                 "threads and allocator pools start), so the numbers are the steady state");

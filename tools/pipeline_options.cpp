@@ -88,9 +88,36 @@ void add_pipeline_options(CLI::App* cmd, PipelineOptions& o) {
       ->check(number_in(0, 1));
 }
 
+void TriangulationOptions::apply(ReconstructionConfig& config) const {
+  config.triangulation.method = method == "rqt" ? DepthTriangulationMethod::kRestrictedQuadtree
+                                                : DepthTriangulationMethod::kNaive;
+  config.triangulation.quadtree.error_per_depth2 = rqt_error;
+  config.triangulation.quadtree.noise_multiple = rqt_noise_multiple;
+  config.triangulation.decimate_to = decimate;
+}
+
+void add_triangulation_options(CLI::App* cmd, TriangulationOptions& o) {
+  cmd->add_option("--triangulate", o.method,
+                  "Triangulate each depth map or organized point cloud (naive or rqt) instead of "
+                  "the volumetric stages")
+      ->check(CLI::IsMember({"naive", "rqt"}));
+  cmd->add_option("--rqt-error", o.rqt_error,
+                  "rqt: allowed deviation per squared depth, 1/m (error <= k depth^2)")
+      ->check(number_in(0, 1e6, true));
+  cmd->add_option("--rqt-noise-multiple", o.rqt_noise_multiple,
+                  "rqt: raise that allowance to this many times each frame's estimated depth "
+                  "noise per squared depth (0 = off)")
+      ->check(number_in(0, 100));
+  cmd->add_option("--decimate", o.decimate,
+                  "With --triangulate: QEM-decimate each frame's mesh to this share (e.g. 0.25)")
+      ->check(number_in(0, 1));
+}
+
 void add_sequence_options(CLI::App* cmd, SequenceArgument& a) {
   cmd->add_option("sequence", a.path,
-                  "A directory of 3DTK scans (scanNNN.3d + .pose) or one point cloud file");
+                  "A directory of 3DTK scans (scanNNN.3d + .pose), of point cloud files (.pcd, "
+                  ".ply) or of depth images (Redwood, TUM or bare *depth* images), or one point "
+                  "cloud file");
   auto* scans =
       cmd->add_flag("--synthetic", a.synthetic, "Use the built-in synthetic laser-scan sequence");
   cmd->add_flag("--synthetic-depth", a.synthetic_depth,

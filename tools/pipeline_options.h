@@ -39,6 +39,21 @@ struct PipelineOptions {
 /// `options`.
 void add_pipeline_options(CLI::App* cmd, PipelineOptions& options);
 
+/// Per-frame depth-map triangulation instead of the volumetric stages (run, profile, live).
+struct TriangulationOptions {
+  std::string method;  ///< "" (volumetric stages), "naive" or "rqt"
+  float rqt_error = QuadtreeConfig{}.error_per_depth2;
+  float rqt_noise_multiple = QuadtreeConfig{}.noise_multiple;
+  float decimate = 0.0f;  ///< QEM to this share of each frame's triangles (0 = off)
+
+  bool enabled() const { return !method.empty(); }
+  /// Writes the method, quadtree thresholds and decimation into `config.triangulation`.
+  void apply(ReconstructionConfig& config) const;
+};
+
+/// Registers --triangulate --rqt-error --rqt-noise-multiple --decimate on `cmd`.
+void add_triangulation_options(CLI::App* cmd, TriangulationOptions& options);
+
 /// The SEQUENCE argument of run/profile: a path, or the built-in synthetic sequence.
 struct SequenceArgument {
   std::string path;

@@ -49,6 +49,14 @@ class ProgressLine {
   double last_ = -1e9;
 };
 
+// The stages' configuration from the command line, per-frame triangulation included.
+ReconstructionConfig pipeline_config(const PipelineOptions& pipeline,
+                                     const TriangulationOptions& triangulation) {
+  ReconstructionConfig config = pipeline.config();
+  triangulation.apply(config);
+  return config;
+}
+
 void report_failure(const Frame& f) {
   std::fprintf(stderr, "meshflow: frame %zu (%s) failed in %s: %s\n", f.source_index,
                f.name.c_str(), f.failed_stage.c_str(), f.error.c_str());
@@ -66,6 +74,7 @@ void print_run_summary(const io::Sequence& seq, const SequenceRunStats& stats, i
 
 struct RunOptions {
   PipelineOptions pipeline;
+  TriangulationOptions triangulation;
   SequenceArgument sequence;
   std::string output_dir;
   bool merged = false;
@@ -151,7 +160,8 @@ void run_run(const RunOptions& o) {
   if (o.fuse) return run_fusion(o);
   ThreadLimit limit(o.pipeline.threads);
   const auto sequence = open_output(o);
-  ReconstructionPipeline pipeline(o.pipeline.config(), o.sequence.in_flight);
+  ReconstructionPipeline pipeline(pipeline_config(o.pipeline, o.triangulation),
+                                  o.sequence.in_flight, o.triangulation.enabled());
   ProgressLine progress(selected_frames(*sequence, o.sequence));
   TriangleMesh merged;
   std::size_t done = 0, written = 0;
@@ -178,6 +188,7 @@ void run_run(const RunOptions& o) {
 
 struct ProfileOptions {
   PipelineOptions pipeline;
+  TriangulationOptions triangulation;
   SequenceArgument sequence;
   std::string trace_path;
   std::string csv_path;
@@ -192,7 +203,8 @@ void write_text(const std::string& path, const std::string& text) {
 void run_profile(const ProfileOptions& o) {
   ThreadLimit limit(o.pipeline.threads);
   const auto sequence = open_sequence_argument(o.sequence);
-  ReconstructionPipeline pipeline(o.pipeline.config(), o.sequence.in_flight);
+  ReconstructionPipeline pipeline(pipeline_config(o.pipeline, o.triangulation),
+                                  o.sequence.in_flight, o.triangulation.enabled());
   const SequenceRunOptions run_options{o.sequence.every, o.sequence.max_frames, false};
   const SequenceRunStats stats = run_sequence(pipeline, *sequence, run_options, [](const Frame& f) {
     if (!f.ok()) report_failure(f);
@@ -238,6 +250,8 @@ void add_run_command(CLI::App& app) {
       ->needs(fuse);
   cmd->add_option("--load-map", o->load_map, "With --fuse: start from this TSDF map (resume a run)")
       ->needs(fuse);
+  add_triangulation_options(cmd, o->triangulation);
+  fuse->excludes("--triangulate");
   add_pipeline_options(cmd, o->pipeline);
   cmd->callback([o] { run_run(*o); });
 }
@@ -250,6 +264,7 @@ void add_profile_command(CLI::App& app) {
   cmd->add_option("--trace", o->trace_path,
                   "Write a Chrome trace-event JSON (Perfetto, chrome://tracing)");
   cmd->add_option("--csv", o->csv_path, "Write the stage table as CSV");
+  add_triangulation_options(cmd, o->triangulation);
   add_pipeline_options(cmd, o->pipeline);
   cmd->callback([o] { run_profile(*o); });
 }

@@ -3,7 +3,9 @@
 #include <gtest/gtest.h>
 
 #include "graph/sequence_runner.h"
+#include "nodes/normals/organized_normals.h"
 #include "nodes/synthetic/depth_sequence.h"
+#include "nodes/triangulate/depth_triangulation.h"
 #include "runtime/threads.h"
 #include "test_support.h"
 
@@ -15,6 +17,18 @@ synthetic::DepthSequenceConfig small_camera(int frames) {
   c.frames = frames;
   c.intrinsics = PinholeIntrinsics{160, 120, 131.25f, 131.25f, 79.5f, 59.5f};
   return c;
+}
+
+// A real frame came through: a mesh with between `low` and `high` triangles, finite vertices,
+// every edge manifold and consistently oriented.
+void expect_sound_mesh(const Frame& f, std::size_t low, std::size_t high) {
+  ASSERT_TRUE(f.ok()) << f.error;
+  EXPECT_GT(f.mesh.triangles.size(), low);
+  EXPECT_LT(f.mesh.triangles.size(), high);
+  for (const auto& v : f.mesh.vertices) ASSERT_TRUE(v.allFinite());
+  const EdgeStatistics s = edge_statistics(f.mesh);
+  EXPECT_EQ(s.non_manifold_edges, 0u);
+  EXPECT_EQ(s.inconsistent_edges, 0u);
 }
 
 TEST(DepthPath, SyntheticDepthFramesWithinAQuarterVoxel) {
@@ -82,21 +96,77 @@ TEST(DepthPath, AllInvalidDepthFailsThatFrameOnly) {
   EXPECT_EQ(stats.frames_failed, 1u);
 }
 
+// Per-frame triangulation instead of the volumetric stages: the graph's mesh of every frame is
+// exactly what the kernel makes of it, and the stages are read and triangulate.
+TEST(DepthPath, TriangulatedPerFrameThroughThePipeline) {
+  const auto seq = synthetic::make_depth_sequence(synthetic::demo_room_scene(), small_camera(3));
+  ReconstructionConfig config;
+  config.triangulation.method = DepthTriangulationMethod::kRestrictedQuadtree;
+  config.triangulation.decimate_to = 0.5f;
+  ReconstructionPipeline pipeline(config, 2, /*triangulate_depth_maps=*/true);
+  const SequenceRunStats stats = run_sequence(pipeline, *seq, {}, [&](const Frame& f) {
+    ASSERT_TRUE(f.ok()) << f.error;
+    const TriangleMesh direct =
+        triangulate_depth(seq->frame(f.source_index).load_depth(), config.triangulation);
+    EXPECT_GT(direct.triangles.size(), 1000u);
+    EXPECT_EQ(f.mesh.vertices, direct.vertices);
+    EXPECT_EQ(f.mesh.triangles, direct.triangles);
+    ASSERT_EQ(f.timings.size(), 2u);
+    EXPECT_EQ(f.timings[0].stage, "read");
+    EXPECT_EQ(f.timings[1].stage, "triangulate");
+  });
+  EXPECT_EQ(stats.frames_ok, 3u);
+}
+
+// An organized cloud (a depth frame back-projected, NaN where invalid) is triangulated as its
+// pixel grid; an unorganized cloud fails its frame with a message saying what was expected.
+TEST(DepthPath, OrganizedCloudsTriangulatePerFrameUnorganizedOnesFail) {
+  const auto seq = synthetic::make_depth_sequence(synthetic::demo_room_scene(), small_camera(1));
+  const DepthFrame depth = seq->frame(0).load_depth();
+  const PointCloud organized = back_project(depth, depth_in_metres(depth));
+  ASSERT_TRUE(organized.is_organized());
+  ReconstructionConfig config;
+  config.triangulation.method = DepthTriangulationMethod::kRestrictedQuadtree;
+  ReconstructionPipeline pipeline(config, 1, /*triangulate_depth_maps=*/true);
+  const FramePtr ok = pipeline.reconstruct(organized, "organized");
+  ASSERT_TRUE(ok->ok()) << ok->error;
+  const TriangleMesh direct = triangulate_organized(organized, config.triangulation);
+  EXPECT_GT(direct.triangles.size(), 1000u);
+  EXPECT_EQ(ok->mesh.triangles, direct.triangles);
+  EXPECT_EQ(ok->mesh.vertices, direct.vertices);
+
+  PointCloud unorganized = organized;
+  unorganized.width = static_cast<std::uint32_t>(unorganized.size());
+  unorganized.height = 1;
+  const FramePtr failed = pipeline.reconstruct(unorganized, "scan.ply");
+  EXPECT_FALSE(failed->ok());
+  EXPECT_EQ(failed->failed_stage, "triangulate");
+  EXPECT_NE(failed->error.find("scan.ply"), std::string::npos) << failed->error;
+  EXPECT_NE(failed->error.find("organized point cloud"), std::string::npos) << failed->error;
+}
+
+TEST(DepthPath, RealKinectPcdFramesTriangulatedPerFrame) {
+  MESHFLOW_REQUIRE_DATA("kinect_pcl/grabber_sequences/pcd");
+  const auto seq = io::open_sequence(test::data_path("kinect_pcl/grabber_sequences/pcd"));
+  ReconstructionConfig config;
+  config.triangulation.method = DepthTriangulationMethod::kRestrictedQuadtree;
+  config.triangulation.decimate_to = 0.25f;
+  ReconstructionPipeline pipeline(config, 2, /*triangulate_depth_maps=*/true);
+  const SequenceRunStats stats = run_sequence(pipeline, *seq, {}, [&](const Frame& f) {
+    std::printf("[ kinect ] %s: %zu triangles\n", f.name.c_str(), f.mesh.triangles.size());
+    expect_sound_mesh(f, 5000, 30000);
+  });
+  EXPECT_EQ(stats.frames_ok, 3u);
+}
+
 TEST(DepthPath, RealRedwoodFramesPerFrameAt1cm) {
   MESHFLOW_REQUIRE_DATA("rgbd_redwood/trajectory.log");
   const auto seq = io::open_sequence(test::data_path("rgbd_redwood"));
   ReconstructionConfig config;
   config.voxelize.voxel_size = 0.01f;
   ReconstructionPipeline pipeline(config, 2);
-  const SequenceRunStats stats = run_sequence(pipeline, *seq, {}, [&](const Frame& f) {
-    ASSERT_TRUE(f.ok()) << f.error;
-    EXPECT_GT(f.mesh.triangles.size(), 100000u);
-    EXPECT_LT(f.mesh.triangles.size(), 2000000u);
-    for (const auto& v : f.mesh.vertices) ASSERT_TRUE(v.allFinite());
-    const EdgeStatistics s = edge_statistics(f.mesh);
-    EXPECT_EQ(s.non_manifold_edges, 0u);
-    EXPECT_EQ(s.inconsistent_edges, 0u);
-  });
+  const SequenceRunStats stats = run_sequence(
+      pipeline, *seq, {}, [&](const Frame& f) { expect_sound_mesh(f, 100000, 2000000); });
   EXPECT_EQ(stats.frames_ok, 5u);
 }
 

@@ -155,6 +155,24 @@ TEST(Cli, RunMergedAndUsageErrors) {
   EXPECT_EQ(run_cli("run --synthetic -o " + out + " --merged --per-frame").exit_code, 2);
 }
 
+TEST(Cli, RunTriangulatesDepthFramesPerFrame) {
+  const std::string out = test::temp_dir();
+  CliRun r =
+      run_cli("run --synthetic-depth --max-frames 2 --triangulate rqt --decimate 0.25 -o " + out);
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("2 ok, 0 failed"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("triangulate"), std::string::npos) << r.out;
+  EXPECT_EQ(r.out.find("voxelize"), std::string::npos) << r.out;
+  EXPECT_TRUE(std::filesystem::exists(out + "/frame_000000.ply"));
+  EXPECT_TRUE(std::filesystem::exists(out + "/frame_000001.ply"));
+  // Laser scans are not organized: every frame fails, saying why, and the run fails.
+  r = run_cli("run --synthetic --max-frames 1 --triangulate naive -o " + test::temp_dir());
+  EXPECT_EQ(r.exit_code, 1) << r.err;
+  EXPECT_NE(r.err.find("organized point cloud"), std::string::npos) << r.err;
+  EXPECT_EQ(run_cli("run --synthetic-depth --fuse --triangulate rqt -o " + out).exit_code, 2);
+  EXPECT_EQ(run_cli("run --synthetic-depth --triangulate quads -o " + out).exit_code, 2);
+}
+
 TEST(Cli, ProfileWritesTraceAndCsv) {
   const std::string dir = test::temp_dir();
   const CliRun r = run_cli("profile --synthetic --max-frames 3 --in-flight 2 --voxel 0.1 --trace " +

@@ -16,7 +16,9 @@
 namespace meshflow {
 
 struct FusionConfig {
-  ReconstructionConfig frames;  ///< depth_filter applies to every frame; optimize to the meshes
+  /// depth_filter applies to every frame, optimize to the meshes; organized clouds that fit a
+  /// pinhole camera (Kinect PCDs) are fused as their depth images, whatever organized_as_depth.
+  ReconstructionConfig frames;
   TsdfConfig tsdf;
   /// > 0: after every N-th integrated frame, the frame carries the map's mesh so far (extracted
   /// incrementally) in Frame::mesh.

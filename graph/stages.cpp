@@ -2,20 +2,29 @@
 
 #include <exception>
 #include <iterator>
+#include <optional>
 #include <string>
 
 #include "nodes/extract/extract_surface.h"
+#include "nodes/filter/organized_depth.h"
 #include "nodes/normals/organized_normals.h"
 #include "runtime/error.h"
 
 namespace meshflow::stages {
 
-std::uint64_t read(Frame& f, const ReconstructionConfig&) {
+std::uint64_t read(Frame& f, const ReconstructionConfig& c) {
   if (f.load_depth) {
     f.depth = std::make_shared<DepthFrame>(f.load_depth());
     return f.depth->depth.total();
   }
   if (f.load) f.cloud = f.load();
+  if (c.organized_as_depth && f.cloud.is_organized()) {
+    if (std::optional<DepthFrame> depth = depth_frame_from_organized(f.cloud)) {
+      f.depth = std::make_shared<DepthFrame>(std::move(*depth));
+      f.cloud = PointCloud{};
+      return f.depth->depth.total();
+    }
+  }
   return f.cloud.size();
 }
 
@@ -50,7 +59,12 @@ std::uint64_t filter(Frame& f, const ReconstructionConfig& c) {
 }
 
 std::uint64_t filter_depth_image(Frame& f, const ReconstructionConfig& c) {
-  if (!f.depth) throw Error(f.name, "input", "fusion needs depth images, not point clouds");
+  if (!f.depth)
+    throw Error(f.name, "input",
+                "fusion needs depth images, or organized clouds that are a pinhole camera's "
+                "back-projection; got " +
+                    std::string(f.cloud.is_organized() ? "an organized cloud that is not"
+                                                       : "an unorganized cloud"));
   f.depth->depth = filter_depth(*f.depth, c.depth_filter, &f.depth_counts);
   f.depth->depth_scale = 1.0f;
   if (f.depth_counts.valid == 0) {

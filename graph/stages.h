@@ -10,7 +10,9 @@
 
 namespace meshflow::stages {
 
-std::uint64_t read(Frame& f, const ReconstructionConfig& c);      ///< points read
+/// Loads the frame; an organized cloud that fits a pinhole camera becomes its depth image
+/// (c.organized_as_depth, depth_frame_from_organized()).
+std::uint64_t read(Frame& f, const ReconstructionConfig& c);      ///< points / pixels read
 std::uint64_t filter(Frame& f, const ReconstructionConfig& c);    ///< points kept
 std::uint64_t index(Frame& f, const ReconstructionConfig& c);     ///< points indexed (kd-tree)
 std::uint64_t normals(Frame& f, const ReconstructionConfig& c);   ///< normals estimated

@@ -27,6 +27,7 @@ ReconstructionConfig PipelineOptions::config() const {
   c.optimize.retriangulation.contour_tolerance = contour_tolerance;
   c.optimize.planes.max_projection = max_projection;
   c.optimize.remesh.tolerance = remesh_tolerance;
+  c.organized_as_depth = organized_as_depth;
   return c;
 }
 
@@ -86,6 +87,9 @@ void add_pipeline_options(CLI::App* cmd, PipelineOptions& o) {
       ->check(number_in(0, 1000));
   cmd->add_option("--decimate-to", o.decimate_to, "decimate step: share of the triangles to keep")
       ->check(number_in(0, 1));
+  cmd->add_flag("--organized-as-depth", o.organized_as_depth,
+                "Organized clouds that are a pinhole back-projection (Kinect PCDs): take the "
+                "depth-image path (image normals, projective distance; faster, single view)");
 }
 
 void TriangulationOptions::apply(ReconstructionConfig& config) const {

@@ -29,14 +29,15 @@ struct PipelineOptions {
   float contour_tolerance = 0.02f;
   float max_projection = 0.0f;
   float remesh_tolerance = 0.0f;
+  bool organized_as_depth = false;
 
   ReconstructionConfig config() const;
 };
 
 /// Registers --voxel --kn --ki --kd --threads --adaptive-k --max-distance --min-component
 /// --filter-voxel --outlier-k --min-range --max-range --extract --optimize --max-hole
-/// --contour-tolerance --max-projection --remesh-tolerance --decimate-to on `cmd`, writing into
-/// `options`.
+/// --contour-tolerance --max-projection --remesh-tolerance --decimate-to --organized-as-depth on
+/// `cmd`, writing into `options`.
 void add_pipeline_options(CLI::App* cmd, PipelineOptions& options);
 
 /// Per-frame depth-map triangulation instead of the volumetric stages (run, profile, live).

@@ -235,8 +235,8 @@ void add_run_command(CLI::App& app) {
                      ->excludes(per_frame);
   cmd->add_flag("--strict", o->strict, "Stop at the first bad frame (exit code 1)");
   auto* fuse = cmd->add_flag("--fuse", o->fuse,
-                             "Fuse depth frames into one TSDF map (--voxel, default 0.01 m); "
-                             "writes fused.ply")
+                             "Fuse depth frames (or organized Kinect-type clouds) into one TSDF "
+                             "map (--voxel, default 0.01 m); writes fused.ply")
                    ->excludes(per_frame)
                    ->excludes(merged);
   cmd->add_option("--mesh-every", o->mesh_every,

@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include "graph/fusion_pipeline.h"
 #include "graph/sequence_runner.h"
 #include "nodes/normals/organized_normals.h"
 #include "nodes/synthetic/depth_sequence.h"
@@ -143,6 +144,48 @@ TEST(DepthPath, OrganizedCloudsTriangulatePerFrameUnorganizedOnesFail) {
   EXPECT_EQ(failed->failed_stage, "triangulate");
   EXPECT_NE(failed->error.find("scan.ply"), std::string::npos) << failed->error;
   EXPECT_NE(failed->error.find("organized point cloud"), std::string::npos) << failed->error;
+}
+
+// With organized_as_depth a pinhole cloud takes the depth path (image normals, projective
+// distance) and meshes as accurately as the depth frame it came from; without, the cloud path.
+TEST(DepthPath, OrganizedCloudsTakeTheDepthPathWhenAsked) {
+  const synthetic::Scene scene = synthetic::demo_room_scene();
+  DepthFrame camera = synthetic::make_depth_sequence(scene, small_camera(1))->frame(0).load_depth();
+  const Eigen::Isometry3f T_world_camera = camera.T_world_camera;
+  camera.T_world_camera = Eigen::Isometry3f::Identity();
+  const PointCloud cloud = back_project(camera, depth_in_metres(camera));
+  ReconstructionConfig config;
+  config.voxelize.voxel_size = 0.04f;
+  config.organized_as_depth = true;
+  const FramePtr depth_path = ReconstructionPipeline(config, 1).reconstruct(cloud);
+  ASSERT_TRUE(depth_path->ok()) << depth_path->error;
+  EXPECT_TRUE(depth_path->normals_from_image);
+  TriangleMesh mesh = depth_path->mesh;
+  for (Eigen::Vector3f& v : mesh.vertices) v = T_world_camera * v;
+  const auto err = test::vertex_errors(
+      mesh, [&](const Eigen::Vector3f& p) { return synthetic::surface_distance(scene, p); });
+  EXPECT_GT(mesh.triangles.size(), 1000u);
+  EXPECT_LT(err.mean / 0.04, 0.25);
+
+  config.organized_as_depth = false;
+  const FramePtr cloud_path = ReconstructionPipeline(config, 1).reconstruct(cloud);
+  ASSERT_TRUE(cloud_path->ok()) << cloud_path->error;
+  EXPECT_FALSE(cloud_path->normals_from_image);
+}
+
+TEST(DepthPath, RealKinectPcdFramesFuseIntoOneMap) {
+  MESHFLOW_REQUIRE_DATA("kinect_pcl/grabber_sequences/pcd");
+  const auto seq = io::open_sequence(test::data_path("kinect_pcl/grabber_sequences/pcd"));
+  FusionConfig config;
+  config.tsdf.voxel_size = 0.01f;
+  FusionPipeline pipeline(config, 2);
+  const SequenceRunStats stats =
+      run_sequence(pipeline, *seq, {}, [](const Frame& f) { ASSERT_TRUE(f.ok()) << f.error; });
+  EXPECT_EQ(stats.frames_ok, 3u);
+  const TriangleMesh mesh = pipeline.extract_mesh();
+  std::printf("[ kinect ] 3 PCD frames fused at 1 cm: %zu triangles\n", mesh.triangles.size());
+  EXPECT_GT(mesh.triangles.size(), 20000u);
+  EXPECT_EQ(edge_statistics(mesh).non_manifold_edges, 0u);
 }
 
 TEST(DepthPath, RealKinectPcdFramesTriangulatedPerFrame) {

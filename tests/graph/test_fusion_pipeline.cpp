@@ -5,9 +5,11 @@
 
 #include "graph/fusion_pipeline.h"
 #include "graph/sequence_runner.h"
+#include "nodes/normals/organized_normals.h"
 #include "nodes/synthetic/depth_sequence.h"
 #include "nodes/synthetic/scan_sequence.h"
 #include "runtime/error.h"
+#include "test_support.h"
 
 namespace meshflow {
 namespace {
@@ -65,11 +67,52 @@ TEST(FusionPipeline, PointCloudFramesFailWithAClearErrorAndTheRunGoesOn) {
     ASSERT_FALSE(f.ok());
     EXPECT_EQ(f.failed_stage, "filter");
     EXPECT_NE(f.error.find("depth images"), std::string::npos) << f.error;
+    EXPECT_NE(f.error.find("unorganized cloud"), std::string::npos) << f.error;
     ++failed;
   });
   EXPECT_EQ(failed, scans->size());
   EXPECT_EQ(stats.frames_failed, scans->size());
   EXPECT_EQ(pipeline.map().block_count(), 0u);
+}
+
+// A camera standing still that delivers organized clouds (as Kinect PCD frames are) instead of
+// depth images: each is fused as the depth image it was made from.
+TEST(FusionPipeline, FusesOrganizedCloudsAsTheirDepthImages) {
+  const synthetic::Scene scene = synthetic::demo_room_scene();
+  DepthFrame camera = small_depth_sequence(1)->frame(0).load_depth();
+  const Eigen::Isometry3f T_world_camera = camera.T_world_camera;
+  camera.T_world_camera = Eigen::Isometry3f::Identity();
+  const PointCloud cloud = back_project(camera, depth_in_metres(camera));  // camera frame
+  class StillClouds final : public io::Sequence {
+   public:
+    explicit StillClouds(const PointCloud& c) : cloud_(c) {}
+    std::size_t size() const override { return 2; }
+    io::SequenceFrame frame(std::size_t i) const override {
+      io::SequenceFrame f;
+      f.index = i;
+      f.name = "cloud " + std::to_string(i);
+      f.load = [this] { return cloud_; };
+      return f;
+    }
+    std::string description() const override { return "still organized clouds"; }
+
+   private:
+    const PointCloud& cloud_;
+  } clouds(cloud);
+  FusionConfig config;
+  config.tsdf.voxel_size = 0.04f;
+  FusionPipeline pipeline(config, 2);
+  const SequenceRunStats stats = run_sequence(pipeline, clouds, {}, [](const Frame& f) {
+    ASSERT_TRUE(f.ok()) << f.error;
+    EXPECT_GT(f.integration.voxels_updated, 10000u);
+  });
+  EXPECT_EQ(stats.frames_ok, 2u);
+  TriangleMesh mesh = pipeline.extract_mesh();
+  ASSERT_GT(mesh.triangles.size(), 1000u);
+  for (Eigen::Vector3f& v : mesh.vertices) v = T_world_camera * v;
+  const auto err = test::vertex_errors(
+      mesh, [&](const Eigen::Vector3f& p) { return synthetic::surface_distance(scene, p); });
+  EXPECT_LT(err.mean / config.tsdf.voxel_size, 0.25);
 }
 
 TEST(FusionPipeline, ResumingFromAMapNeedsTheSameVoxelSize) {

@@ -87,8 +87,13 @@ void check_coordinates(const Eigen::Vector3d& p, const std::string& source,
 }
 
 void check_coordinates(const Eigen::Vector3d& p, const std::string& source, std::size_t line) {
+  check_coordinates(p, source, "line", line);
+}
+
+void check_coordinates(const Eigen::Vector3d& p, const std::string& source, std::string_view what,
+                       std::uint64_t index) {
   if ((p.array().abs() > kMaxAbsCoordinate).any())
-    check_coordinates(p, source, "line " + std::to_string(line));
+    check_coordinates(p, source, std::string(what) + " " + std::to_string(index));
 }
 
 void check_position(const Eigen::Vector3d& p, const std::string& source,

@@ -42,6 +42,11 @@ void check_coordinates(const Eigen::Vector3d& p, const std::string& source,
 /// As above with the location "line N", formatted only when there is an error.
 void check_coordinates(const Eigen::Vector3d& p, const std::string& source, std::size_t line);
 
+/// As above with the location "<what> <index>" (e.g. "point 12"), formatted only when there is
+/// an error: the per-point check of the binary readers costs a comparison, not a string.
+void check_coordinates(const Eigen::Vector3d& p, const std::string& source, std::string_view what,
+                       std::uint64_t index);
+
 /// Throws meshflow::Error naming `source`, `location` and `what` unless every component of `p`
 /// (metres) is finite and within +-kMaxAbsCoordinate: for a pose's translation or a sensor
 /// position, where a non-finite or huge value would silently turn every point into garbage.

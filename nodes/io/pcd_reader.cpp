@@ -184,7 +184,7 @@ struct PointSink {
   template <typename Value, typename Bits>
   void add(std::uint64_t index, Value value, Bits bits) {
     const Eigen::Vector3d p(value(layout.x), value(layout.y), value(layout.z));
-    check_coordinates(p, path, "point " + std::to_string(index));
+    check_coordinates(p, path, "point", index);
     cloud.positions.push_back(p.cast<float>());
     if (layout.normals()) {
       cloud.normals.emplace_back(static_cast<float>(value(layout.nx)),
@@ -348,7 +348,11 @@ PointCloud read_pcd(const std::string& path) {
   const PcdLayout layout(header, path);
   PointCloud cloud;
   const std::uint64_t plausible = file_size(path) / 3 + 1;  // lying headers must not exhaust memory
-  cloud.positions.reserve(static_cast<std::size_t>(std::min(header.points, plausible)));
+  const auto reserve = static_cast<std::size_t>(std::min(header.points, plausible));
+  cloud.positions.reserve(reserve);
+  if (layout.normals()) cloud.normals.reserve(reserve);
+  if (layout.rgb >= 0) cloud.colors.reserve(reserve);
+  if (layout.intensity >= 0) cloud.intensities.reserve(reserve);
   PointSink sink{header, layout, cloud, path};
   switch (header.data) {
     case PcdData::kAscii:

@@ -166,7 +166,7 @@ void append_vertex(const std::vector<double>& values, const FieldMap& map, Point
                    const std::string& path, std::uint64_t row) {
   auto value = [&](int slot) { return values[static_cast<std::size_t>(map.prop[slot])]; };
   const Eigen::Vector3d p(value(FieldMap::kX), value(FieldMap::kY), value(FieldMap::kZ));
-  check_coordinates(p, path, "vertex " + std::to_string(row));
+  check_coordinates(p, path, "vertex", row);
   cloud.positions.push_back(p.cast<float>());
   if (map.has_normals()) {
     cloud.normals.emplace_back(static_cast<float>(value(FieldMap::kNx)),
@@ -362,6 +362,9 @@ void read_ply_elements(const std::string& path, PointCloud& cloud,
   const std::uint64_t plausible = file_size(path) / 3 + 1;
   const std::size_t reserve = static_cast<std::size_t>(std::min(vertex_it->count, plausible));
   cloud.positions.reserve(reserve);
+  if (map.has_normals()) cloud.normals.reserve(reserve);
+  if (map.has_colors()) cloud.colors.reserve(reserve);
+  if (map.has_intensity()) cloud.intensities.reserve(reserve);
 
   ElementReader reader(in, path, header.format);
   for (const PlyElement& e : header.elements) {

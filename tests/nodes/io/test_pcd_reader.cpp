@@ -169,6 +169,29 @@ TEST(PcdReader, TruncationsFlipsAndExtremeHeaderNumbersNeverCrash) {
   }
 }
 
+// A coordinate beyond +-1e6 m names the point (binary and compressed: the location is only
+// formatted for the error).
+TEST(PcdReader, HugeCoordinatesNameThePoint) {
+  auto rows = organized_rows();
+  rows[2].y = 3e7f;
+  std::string body;
+  for (const Row& r : rows) {
+    body.append(reinterpret_cast<const char*>(&r.x), 12);
+    body.append(reinterpret_cast<const char*>(r.pad), 4);
+    body.append(reinterpret_cast<const char*>(&r.rgb), 8);
+  }
+  const std::string path = test::temp_dir() + "/huge.pcd";
+  test::write_file(path, binary_header("binary", 2, 2) + body);
+  try {
+    read_pcd(path);
+    FAIL() << "no error";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.source(), path);
+    EXPECT_NE(std::string(e.what()).find("point 2"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("beyond"), std::string::npos) << e.what();
+  }
+}
+
 TEST(PcdReader, BrokenFilesGiveOneClearError) {
   for (const char* name : {"empty.pcd", "truncated.pcd", "inconsistent_header.pcd"}) {
     const std::string path = test::fixture(std::string("bad/") + name);

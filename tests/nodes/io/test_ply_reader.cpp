@@ -98,6 +98,7 @@ TEST(PlyReader, BrokenFilesGiveOneClearError) {
   expect_error("empty.ply", "not a PLY file");
   expect_error("unknown_type.ply", "unknown property type 'float128'");
   expect_error("huge_coordinates.ply", "beyond");
+  expect_error("huge_coordinates.ply", "vertex 1");
   expect_error("not_a_ply.ply", "not a PLY file");
 }
 

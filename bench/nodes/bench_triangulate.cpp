@@ -1,8 +1,13 @@
 // Per-frame depth-map triangulation of a 640 x 480 frame (the first Redwood frame when present,
 // else a synthetic frame of the demo room): depth filter with occlusion edges, back-projection,
-// triangulation and compaction into a mesh, as one call.
+// triangulation and compaction into a mesh, as one call; and the same for an organized Kinect
+// cloud, with the test that recognises such a cloud as a depth image.
+
+#include <fstream>
 
 #include "bench_support.h"
+#include "nodes/filter/organized_depth.h"
+#include "nodes/io/read_point_cloud.h"
 #include "nodes/triangulate/depth_noise.h"
 #include "nodes/triangulate/depth_triangulation.h"
 #include "runtime/threads.h"
@@ -50,6 +55,37 @@ void BM_DepthNoiseEstimate(benchmark::State& state) {
 BENCHMARK(BM_DepthNoiseEstimate)
     ->ArgNames({"threads", "redwood"})
     ->ArgsProduct({{1, 2}, {0, 1}})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
+
+// An organized Kinect PCD frame (kinect_pcl/office1.pcd): recognising it as a pinhole depth
+// image (depth_frame_from_organized, serial), or triangulating it as its pixel grid (RQT, then
+// QEM to 25 %). Args: threads, what (0 = depth image, 1 = rqt, 2 = rqt + qem 25 %).
+void BM_OrganizedCloud(benchmark::State& state) {
+  static const PointCloud* cloud = [] {
+    const std::string path = data_dir() + "/kinect_pcl/office1.pcd";
+    return std::ifstream(path) ? new PointCloud(io::read_point_cloud(path)) : nullptr;
+  }();
+  if (cloud == nullptr) {
+    state.SkipWithError(("kinect_pcl/office1.pcd not found in " + data_dir()).c_str());
+    return;
+  }
+  const char* names[] = {"depth image", "rqt", "rqt+qem25%"};
+  state.SetLabel(names[state.range(1)]);
+  DepthTriangulationConfig config;
+  config.method = DepthTriangulationMethod::kRestrictedQuadtree;
+  if (state.range(1) == 2) config.decimate_to = 0.25f;
+  ThreadLimit limit(static_cast<int>(state.range(0)));
+  for (auto _ : state) {
+    if (state.range(1) == 0)
+      benchmark::DoNotOptimize(depth_frame_from_organized(*cloud).has_value());
+    else
+      benchmark::DoNotOptimize(triangulate_organized(*cloud, config).triangles.size());
+  }
+}
+BENCHMARK(BM_OrganizedCloud)
+    ->ArgNames({"threads", "what"})
+    ->ArgsProduct({{1, 2}, {0, 1, 2}})
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
 

@@ -1,8 +1,10 @@
 #include <cstdio>
 #include <memory>
+#include <optional>
 #include <string>
 
 #include "graph/pipeline.h"
+#include "nodes/filter/organized_depth.h"
 #include "nodes/io/mesh_writers.h"
 #include "nodes/io/parse_util.h"
 #include "nodes/io/read_point_cloud.h"
@@ -107,7 +109,18 @@ void add_info_command(CLI::App& app) {
     std::printf("file        %s\n", path->c_str());
     std::printf("points      %zu (%zu finite, %zu NaN/Inf)\n", cloud.size(), finite,
                 cloud.size() - finite);
-    if (cloud.is_organized()) std::printf("organized   %u x %u\n", cloud.width, cloud.height);
+    if (cloud.is_organized()) {
+      std::printf("organized   %u x %u", cloud.width, cloud.height);
+      if (const std::optional<DepthFrame> depth = depth_frame_from_organized(cloud)) {
+        const PinholeIntrinsics& k = depth->intrinsics;
+        std::printf(
+            ", a pinhole view: fx %.3f fy %.3f cx %.3f cy %.3f px (fuses as a depth "
+            "image; --organized-as-depth)\n",
+            k.fx, k.fy, k.cx, k.cy);
+      } else {
+        std::printf(", not a pinhole view from the sensor origin\n");
+      }
+    }
     std::string fields = "x y z";
     if (cloud.has_normals()) fields += " normals";
     if (cloud.has_colors()) fields += " rgb";

@@ -105,6 +105,23 @@ TEST(Cli, InfoAndDemo) {
   CliRun r = run_cli("info " + test::fixture("good/plane_with_nan_rows.xyz"));
   EXPECT_EQ(r.exit_code, 0);
   EXPECT_NE(r.out.find("1600 (1598 finite, 2 NaN/Inf)"), std::string::npos) << r.out;
+  // An organized 5 x 4 cloud of a pinhole camera (fx 100, fy 80, cx 2, cy 1.5) looking at a
+  // slanted plane: info recognises the camera.
+  std::string pcd =
+      "VERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\nWIDTH 5\nHEIGHT 4\n"
+      "POINTS 20\nDATA ascii\n";
+  for (int v = 0; v < 4; ++v)
+    for (int u = 0; u < 5; ++u) {
+      const double z = 1.0 + 0.1 * u + 0.05 * v;
+      pcd += std::to_string((u - 2.0) * z / 100.0) + " " + std::to_string((v - 1.5) * z / 80.0) +
+             " " + std::to_string(z) + "\n";
+    }
+  const std::string pcd_path = test::temp_dir() + "/pinhole.pcd";
+  test::write_file(pcd_path, pcd);
+  r = run_cli("info " + pcd_path);
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("organized   5 x 4, a pinhole view: fx 100.0"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("cy 1.50"), std::string::npos) << r.out;
   const std::string out = test::temp_dir() + "/demo.ply";
   r = run_cli("demo --voxel 0.1 -o " + out);
   EXPECT_EQ(r.exit_code, 0) << r.err;

@@ -10,6 +10,8 @@
 #include <fstream>
 #include <iterator>
 
+#include "nodes/normals/organized_normals.h"
+
 namespace meshflow::test {
 
 std::string data_dir() {
@@ -121,6 +123,12 @@ TriangleMesh grid_mesh(std::uint32_t n) {
       m.triangles.push_back({a, a + n + 1, a + n});
     }
   return m;
+}
+
+PointCloud camera_frame_cloud(const DepthFrame& frame) {
+  DepthFrame camera = frame;
+  camera.T_world_camera = Eigen::Isometry3f::Identity();
+  return back_project(camera, depth_in_metres(camera));
 }
 
 ErrorStats vertex_errors(const TriangleMesh& mesh,

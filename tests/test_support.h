@@ -5,6 +5,7 @@
 #include <functional>
 #include <string>
 
+#include "runtime/depth_frame.h"
 #include "runtime/point_cloud.h"
 #include "runtime/threads.h"
 #include "runtime/triangle_mesh.h"
@@ -48,6 +49,10 @@ auto with_threads(int threads, F f) {
 /// An n x n vertex grid in the plane z = 0 with unit spacing (vertex j * n + i at (i, j, 0)),
 /// two triangles per cell, counter-clockwise seen from +z.
 TriangleMesh grid_mesh(std::uint32_t n);
+
+/// `frame` as a Kinect driver delivers it: the organized cloud of its metric depth
+/// (back_project) in the camera frame, whatever its pose; NaN where a pixel has no point.
+PointCloud camera_frame_cloud(const DepthFrame& frame);
 
 struct ErrorStats {
   double mean = 0.0, max = 0.0;

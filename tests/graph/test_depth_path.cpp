@@ -150,10 +150,9 @@ TEST(DepthPath, OrganizedCloudsTriangulatePerFrameUnorganizedOnesFail) {
 // distance) and meshes as accurately as the depth frame it came from; without, the cloud path.
 TEST(DepthPath, OrganizedCloudsTakeTheDepthPathWhenAsked) {
   const synthetic::Scene scene = synthetic::demo_room_scene();
-  DepthFrame camera = synthetic::make_depth_sequence(scene, small_camera(1))->frame(0).load_depth();
-  const Eigen::Isometry3f T_world_camera = camera.T_world_camera;
-  camera.T_world_camera = Eigen::Isometry3f::Identity();
-  const PointCloud cloud = back_project(camera, depth_in_metres(camera));
+  const DepthFrame camera =
+      synthetic::make_depth_sequence(scene, small_camera(1))->frame(0).load_depth();
+  const PointCloud cloud = test::camera_frame_cloud(camera);
   ReconstructionConfig config;
   config.voxelize.voxel_size = 0.04f;
   config.organized_as_depth = true;
@@ -161,7 +160,7 @@ TEST(DepthPath, OrganizedCloudsTakeTheDepthPathWhenAsked) {
   ASSERT_TRUE(depth_path->ok()) << depth_path->error;
   EXPECT_TRUE(depth_path->normals_from_image);
   TriangleMesh mesh = depth_path->mesh;
-  for (Eigen::Vector3f& v : mesh.vertices) v = T_world_camera * v;
+  for (Eigen::Vector3f& v : mesh.vertices) v = camera.T_world_camera * v;
   const auto err = test::vertex_errors(
       mesh, [&](const Eigen::Vector3f& p) { return synthetic::surface_distance(scene, p); });
   EXPECT_GT(mesh.triangles.size(), 1000u);

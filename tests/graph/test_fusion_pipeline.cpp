@@ -5,7 +5,6 @@
 
 #include "graph/fusion_pipeline.h"
 #include "graph/sequence_runner.h"
-#include "nodes/normals/organized_normals.h"
 #include "nodes/synthetic/depth_sequence.h"
 #include "nodes/synthetic/scan_sequence.h"
 #include "runtime/error.h"
@@ -79,10 +78,8 @@ TEST(FusionPipeline, PointCloudFramesFailWithAClearErrorAndTheRunGoesOn) {
 // depth images: each is fused as the depth image it was made from.
 TEST(FusionPipeline, FusesOrganizedCloudsAsTheirDepthImages) {
   const synthetic::Scene scene = synthetic::demo_room_scene();
-  DepthFrame camera = small_depth_sequence(1)->frame(0).load_depth();
-  const Eigen::Isometry3f T_world_camera = camera.T_world_camera;
-  camera.T_world_camera = Eigen::Isometry3f::Identity();
-  const PointCloud cloud = back_project(camera, depth_in_metres(camera));  // camera frame
+  const DepthFrame camera = small_depth_sequence(1)->frame(0).load_depth();
+  const PointCloud cloud = test::camera_frame_cloud(camera);
   class StillClouds final : public io::Sequence {
    public:
     explicit StillClouds(const PointCloud& c) : cloud_(c) {}
@@ -109,7 +106,7 @@ TEST(FusionPipeline, FusesOrganizedCloudsAsTheirDepthImages) {
   EXPECT_EQ(stats.frames_ok, 2u);
   TriangleMesh mesh = pipeline.extract_mesh();
   ASSERT_GT(mesh.triangles.size(), 1000u);
-  for (Eigen::Vector3f& v : mesh.vertices) v = T_world_camera * v;
+  for (Eigen::Vector3f& v : mesh.vertices) v = camera.T_world_camera * v;
   const auto err = test::vertex_errors(
       mesh, [&](const Eigen::Vector3f& p) { return synthetic::surface_distance(scene, p); });
   EXPECT_LT(err.mean / config.tsdf.voxel_size, 0.25);

@@ -7,6 +7,7 @@
 
 #include "nodes/normals/organized_normals.h"
 #include "nodes/synthetic/depth_sequence.h"
+#include "test_support.h"
 
 namespace meshflow {
 namespace {
@@ -24,8 +25,7 @@ OrganizedFrame room_frame() {
   c.intrinsics = PinholeIntrinsics{160, 120, 131.25f, 128.5f, 77.25f, 61.5f};
   OrganizedFrame f;
   f.depth = synthetic::make_depth_sequence(synthetic::demo_room_scene(), c)->frame(0).load_depth();
-  f.depth.T_world_camera = Eigen::Isometry3f::Identity();
-  f.cloud = back_project(f.depth, depth_in_metres(f.depth));
+  f.cloud = test::camera_frame_cloud(f.depth);
   return f;
 }
 

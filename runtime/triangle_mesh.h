@@ -51,6 +51,12 @@ struct EdgeStatistics {
 /// Counts edges by incidence. O(T log T) (sorts the 3T directed edges).
 EdgeStatistics edge_statistics(const TriangleMesh& mesh);
 
+/// The key of the undirected edge {a, b}: the smaller vertex in the high half, the larger in the
+/// low half, so both directions give one key and keys sort by their smaller vertex. O(1).
+inline std::uint64_t undirected_edge_key(std::uint32_t a, std::uint32_t b) {
+  return std::uint64_t{a < b ? a : b} << 32 | (a < b ? b : a);
+}
+
 /// An edge used by one triangle only, directed as that triangle traverses it (a -> b).
 struct BorderEdge {
   std::uint32_t a, b, triangle;

@@ -111,6 +111,13 @@ std::string resealed_tsdf_map(std::string bytes) {
   return bytes;
 }
 
+TriangleMesh tetrahedron() {
+  TriangleMesh m;
+  m.vertices = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+  m.triangles = {{0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {1, 2, 3}};
+  return m;
+}
+
 TriangleMesh grid_mesh(std::uint32_t n) {
   TriangleMesh m;
   for (std::uint32_t j = 0; j < n; ++j)

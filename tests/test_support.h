@@ -46,6 +46,10 @@ auto with_threads(int threads, F f) {
   return f();
 }
 
+/// The tetrahedron (0,0,0), (1,0,0), (0,1,0), (0,0,1): closed, faces outward and
+/// counter-clockwise.
+TriangleMesh tetrahedron();
+
 /// An n x n vertex grid in the plane z = 0 with unit spacing (vertex j * n + i at (i, j, 0)),
 /// two triangles per cell, counter-clockwise seen from +z.
 TriangleMesh grid_mesh(std::uint32_t n);

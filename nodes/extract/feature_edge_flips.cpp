@@ -24,10 +24,6 @@ int lone_feature_corner(const Triangle& t, const std::vector<std::uint8_t>& is_f
   return found;
 }
 
-std::uint64_t edge_key(std::uint32_t a, std::uint32_t b) {
-  return (static_cast<std::uint64_t>(std::min(a, b)) << 32) | std::max(a, b);
-}
-
 // Triangle rotated so its lone feature vertex comes last: (a, b, f).
 Triangle feature_last(const Triangle& t, int j) {
   return {t[static_cast<std::size_t>((j + 1) % 3)], t[static_cast<std::size_t>((j + 2) % 3)],
@@ -46,7 +42,7 @@ std::size_t flip_edges_between_features(TriangleMesh& mesh,
   std::vector<std::pair<std::uint64_t, std::uint32_t>> opposite(fans.size());
   tbb::parallel_for(std::size_t{0}, fans.size(), [&](std::size_t i) {
     const Triangle t = feature_last(tris[fans[i]], lone_feature_corner(tris[fans[i]], is_feature));
-    opposite[i] = {edge_key(t[0], t[1]), fans[i]};
+    opposite[i] = {undirected_edge_key(t[0], t[1]), fans[i]};
   });
   tbb::parallel_sort(opposite.begin(), opposite.end());
 
@@ -71,7 +67,8 @@ std::size_t flip_edges_between_features(TriangleMesh& mesh,
     const std::uint32_t a = x[0], b = x[1], f1 = x[2], f2 = y[2];
     if (y[0] != b || y[1] != a || f1 == f2) continue;  // not a consistently oriented pair
     if (valence[a].load(std::memory_order_relaxed) <= 3 ||
-        valence[b].load(std::memory_order_relaxed) <= 3 || joined.count(edge_key(f1, f2)))
+        valence[b].load(std::memory_order_relaxed) <= 3 ||
+        joined.count(undirected_edge_key(f1, f2)))
       continue;
     const Triangle n1{a, f2, f1}, n2{f2, b, f1};
     const Eigen::Vector3f before = face_normal(mesh, x) + face_normal(mesh, y);
@@ -81,7 +78,7 @@ std::size_t flip_edges_between_features(TriangleMesh& mesh,
     tris[t2] = n2;
     flipped.insert(t1);
     flipped.insert(t2);
-    joined.insert(edge_key(f1, f2));
+    joined.insert(undirected_edge_key(f1, f2));
     valence[a].fetch_sub(1, std::memory_order_relaxed);
     valence[b].fetch_sub(1, std::memory_order_relaxed);
     valence[f1].fetch_add(1, std::memory_order_relaxed);

@@ -3,10 +3,10 @@
 #include <Eigen/Eigenvalues>
 #include <cmath>
 
+#include "runtime/angles.h"
+
 namespace meshflow {
 namespace {
-
-constexpr float kDegrees = 3.14159265358979f / 180.0f;
 
 // Minimiser of sum_i (n_i . (x - p_i))^2 keeping the `rank` largest eigen-directions of
 // sum_i n_i n_i^T (the others stay at the centroid).
@@ -54,15 +54,15 @@ FeaturePoint sharp_feature(const Eigen::Vector3f* points, const Eigen::Vector3f*
       }
     }
   }
-  if (!(min_cos < std::cos(config.edge_angle_deg * kDegrees))) return out;
+  if (!(min_cos < std::cos(radians(config.edge_angle_deg)))) return out;
   const Eigen::Vector3f axis = normals[a].cross(normals[b]);
   if (!(axis.norm() > 1e-6f)) return out;  // opposite normals: a thin sheet, not a feature
   const Eigen::Vector3f direction = axis.normalized();
   float out_of_plane = 0.0f;
   for (std::size_t i = 0; i < count; ++i)
     out_of_plane = std::max(out_of_plane, std::abs(normals[i].dot(direction)));
-  out.kind = out_of_plane > std::sin(config.corner_angle_deg * kDegrees) ? FeatureKind::kCorner
-                                                                         : FeatureKind::kEdge;
+  out.kind = out_of_plane > std::sin(radians(config.corner_angle_deg)) ? FeatureKind::kCorner
+                                                                       : FeatureKind::kEdge;
   const Eigen::Vector3f x =
       solve_qef(points, normals, count, out.kind == FeatureKind::kCorner ? 3 : 2);
   const float slack = config.max_outside * cell.sizes().maxCoeff();

@@ -49,7 +49,7 @@ std::optional<ScalarType> pcd_scalar(char type, std::size_t size) {
   return std::nullopt;
 }
 
-PcdHeader parse_header(std::istream& in, const std::string& path) {
+PcdHeader parse_pcd_header(std::istream& in, const std::string& path) {
   PcdHeader h;
   std::string line;
   std::vector<std::string_view> tok;
@@ -344,7 +344,7 @@ void read_compressed(std::istream& in, const PcdHeader& h, PointSink& sink) {
 
 PointCloud read_pcd(const std::string& path) {
   std::ifstream in = open_input(path);
-  const PcdHeader header = parse_header(in, path);
+  const PcdHeader header = parse_pcd_header(in, path);
   const PcdLayout layout(header, path);
   PointCloud cloud;
   const std::uint64_t plausible = file_size(path) / 3 + 1;  // lying headers must not exhaust memory

@@ -57,7 +57,7 @@ std::optional<ScalarType> parse_ply_type(std::string_view s) {
   return std::nullopt;
 }
 
-PlyHeader parse_header(std::istream& in, const std::string& path) {
+PlyHeader parse_ply_header(std::istream& in, const std::string& path) {
   std::string line;
   std::vector<std::string_view> tok;
   if (!read_line(in, line) || line != "ply") {
@@ -337,7 +337,7 @@ namespace {
 void read_ply_elements(const std::string& path, PointCloud& cloud,
                        std::vector<Triangle>* triangles) {
   std::ifstream in = open_input(path);
-  const PlyHeader header = parse_header(in, path);
+  const PlyHeader header = parse_ply_header(in, path);
   const auto vertex_it = std::find_if(header.elements.begin(), header.elements.end(),
                                       [](const PlyElement& e) { return e.name == "vertex"; });
   if (vertex_it == header.elements.end()) throw Error(path, "header", "no 'vertex' element");

@@ -14,10 +14,6 @@
 namespace meshflow {
 namespace {
 
-std::uint64_t edge_key(std::uint32_t a, std::uint32_t b) {
-  return std::uint64_t{std::min(a, b)} << 32 | std::max(a, b);
-}
-
 // The mesh's edges between vertices of `loop` (sorted keys), for "would this diagonal duplicate
 // an edge?". `in_loop` marks the loop's vertices.
 std::vector<std::uint64_t> edges_within(const TriangleMesh& mesh, const VertexTriangles& around,
@@ -27,7 +23,7 @@ std::vector<std::uint64_t> edges_within(const TriangleMesh& mesh, const VertexTr
   for (std::uint32_t v : loop)
     for (const std::uint32_t* t = around.begin(v); t != around.end(v); ++t)
       for (std::uint32_t x : mesh.triangles[*t])
-        if (x != v && in_loop[x]) edges.push_back(edge_key(v, x));
+        if (x != v && in_loop[x]) edges.push_back(undirected_edge_key(v, x));
   std::sort(edges.begin(), edges.end());
   edges.erase(std::unique(edges.begin(), edges.end()), edges.end());
   return edges;
@@ -96,7 +92,7 @@ std::vector<Triangle> triangulate_loop(const std::vector<std::uint32_t>& loop,
   auto at = [n](std::size_t i, std::size_t j) { return i * n + j; };
   auto usable = [&](std::size_t i, std::size_t j) {         // i < j
     if (j == i + 1 || (i == 0 && j == n - 1)) return true;  // a border edge
-    return !std::binary_search(edges.begin(), edges.end(), edge_key(loop[i], loop[j]));
+    return !std::binary_search(edges.begin(), edges.end(), undirected_edge_key(loop[i], loop[j]));
   };
   auto triangle_weight = [&](std::size_t i, std::size_t m, std::size_t j) -> double {
     const Eigen::Vector3d a = positions[loop[i]].cast<double>(),

@@ -12,14 +12,19 @@
 #include <vector>
 
 #include "nodes/optimize/collapse_fan.h"
+#include "runtime/angles.h"
 #include "runtime/radix_sort.h"
 #include "runtime/vertex_triangles.h"
 
 namespace meshflow {
 namespace {
 
-constexpr double kDegrees = 3.14159265358979 / 180.0;
 constexpr double kNoCollapse = std::numeric_limits<double>::infinity();
+// cos(degrees), computed in double and rounded once.
+float cos_degrees(float degrees) {
+  return static_cast<float>(std::cos(radians(static_cast<double>(degrees))));
+}
+
 constexpr std::size_t kLookAhead = 8;  // collapses between a prefetch() and its use
 
 // Symmetric 4x4 quadric, upper triangle: a2 ab ac ad b2 bc bd c2 cd d2.
@@ -77,10 +82,11 @@ class Decimator {
         q_(mesh.vertices.size()),
         own_error_(mesh.vertices.size()),
         cost_scale_(mesh.vertices.size(), 1.0),
-        cos_turn_(static_cast<float>(std::cos(config.max_normal_turn_deg * kDegrees))),
-        cos_border_(static_cast<float>(std::cos(config.max_border_turn_deg * kDegrees))),
-        cos_sharp_(static_cast<float>(std::cos(config.sharp_edge_deg * kDegrees))),
-        cos2_min_angle_(static_cast<float>(std::pow(std::cos(config.min_angle_deg * kDegrees), 2))),
+        cos_turn_(cos_degrees(config.max_normal_turn_deg)),
+        cos_border_(cos_degrees(config.max_border_turn_deg)),
+        cos_sharp_(cos_degrees(config.sharp_edge_deg)),
+        cos2_min_angle_(static_cast<float>(
+            std::pow(std::cos(radians(static_cast<double>(config.min_angle_deg))), 2))),
         scratch_([this] { return Scratch(*this); }) {
     // 1 / depth^2 of every vertex (positions never change), or 1.
     if (config.divide_by_depth2)

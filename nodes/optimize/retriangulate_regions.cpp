@@ -329,10 +329,6 @@ RegionTriangulation triangulate_region(const std::vector<Loop>& loops,
   return out;
 }
 
-std::uint64_t edge_key(std::uint32_t a, std::uint32_t b) {
-  return static_cast<std::uint64_t>(std::min(a, b)) << 32 | std::max(a, b);
-}
-
 // An edge that two new triangulations create both, or one creates while the faces that stay
 // have it too, would join more than two faces. Each region whose triangulation has such an
 // edge fails, with the edge's ends as its fault (it gives up its faces there and tries again).
@@ -346,7 +342,7 @@ void fail_at_shared_new_edges(const TriangleMesh& mesh,
   };
   std::vector<std::uint64_t> keys;
   auto add = [&](const Triangle& t) {
-    for (int k = 0; k < 3; ++k) keys.push_back(edge_key(t[k], t[(k + 1) % 3]));
+    for (int k = 0; k < 3; ++k) keys.push_back(undirected_edge_key(t[k], t[(k + 1) % 3]));
   };
   for (std::uint32_t f = 0; f < mesh.triangles.size(); ++f)
     if (!replaced(region_of_face[f])) add(mesh.triangles[f]);
@@ -363,7 +359,8 @@ void fail_at_shared_new_edges(const TriangleMesh& mesh,
     std::vector<std::uint32_t> faulty;
     for (const Triangle& t : results[i].triangles)
       for (int k = 0; k < 3; ++k)
-        if (std::binary_search(crowded.begin(), crowded.end(), edge_key(t[k], t[(k + 1) % 3])))
+        if (std::binary_search(crowded.begin(), crowded.end(),
+                               undirected_edge_key(t[k], t[(k + 1) % 3])))
           faulty.insert(faulty.end(), {t[k], t[(k + 1) % 3]});
     if (faulty.empty()) continue;
     results[i].triangles.clear();

@@ -54,20 +54,20 @@ bool intersect(const Plane& a, const Plane& b, const Plane& c, Eigen::Vector3f& 
 // A large region near a vertex: how many edges away, and a point of the region's own faces
 // there (the centroid of the face the region was found through), which tells on which side of
 // a crease the region lies.
-struct Candidate {
+struct NearRegion {
   std::int32_t region = kNoRegion;
   int rings = 0;
   Eigen::Vector3f reference = Eigen::Vector3f::Zero();
 };
 
-struct Candidates {
-  std::array<Candidate, kMaxCandidates> items;
+struct NearRegions {
+  std::array<NearRegion, kMaxCandidates> items;
   int count = 0;
   // Keeps the nearest candidates (fewest rings, then lowest region index).
-  void add(const Candidate& c) {
+  void add(const NearRegion& c) {
     for (int i = 0; i < count; ++i)
       if (items[static_cast<std::size_t>(i)].region == c.region) return;
-    auto before = [](const Candidate& x, const Candidate& y) {
+    auto before = [](const NearRegion& x, const NearRegion& y) {
       return x.rings != y.rings ? x.rings < y.rings : x.region < y.region;
     };
     if (count == kMaxCandidates && !before(c, items[kMaxCandidates - 1])) return;
@@ -112,7 +112,7 @@ class CreaseSharpener {
       original_normals_[f] = normal(f);
       parent_[f] = f;
     }
-    const std::vector<Candidates> near = find_candidates();
+    const std::vector<NearRegions> near = find_candidates();
     labels_.assign(h_.vertex_count(), Label{});
     std::vector<Eigen::Vector3f> target(h_.vertex_count());
     tbb::parallel_for(std::size_t{0}, h_.vertex_count(), [&](std::size_t v) {
@@ -226,24 +226,24 @@ class CreaseSharpener {
   }
 
   // Regions on a vertex's faces (0 rings), spread `rings` times to the neighbours.
-  std::vector<Candidates> find_candidates() const {
+  std::vector<NearRegions> find_candidates() const {
     const std::size_t n = h_.vertex_count();
-    std::vector<Candidates> near(n);
+    std::vector<NearRegions> near(n);
     tbb::parallel_for(std::size_t{0}, n, [&](std::size_t vi) {
       for (std::uint32_t e : h_.ring(static_cast<std::uint32_t>(vi))) {
         const std::uint32_t f = HalfEdgeMesh::face(e);
         const std::int32_t r = large_region(f);
         if (r == kNoRegion) continue;
-        near[vi].add(Candidate{r, 0, centroid(f)});
+        near[vi].add(NearRegion{r, 0, centroid(f)});
       }
     });
     for (int step = 1; step <= cfg_.rings; ++step) {
-      const std::vector<Candidates> before = near;
+      const std::vector<NearRegions> before = near;
       tbb::parallel_for(std::size_t{0}, n, [&](std::size_t vi) {
         for (std::uint32_t e : h_.ring(static_cast<std::uint32_t>(vi))) {
-          const Candidates& other = before[h_.to(e)];
+          const NearRegions& other = before[h_.to(e)];
           for (int i = 0; i < other.count; ++i) {
-            Candidate c = other.items[static_cast<std::size_t>(i)];
+            NearRegion c = other.items[static_cast<std::size_t>(i)];
             c.rings = step;
             near[vi].add(c);
           }
@@ -255,15 +255,15 @@ class CreaseSharpener {
 
   // The nearest point of the piecewise planar surface that the vertex's candidate regions form
   // around their creases; kStay when there is no crease or nothing within reach.
-  Label choose_target(const Candidates& near, Eigen::Vector3f& position) const {
+  Label choose_target(const NearRegions& near, Eigen::Vector3f& position) const {
     const int k = near.count;
     bool any_crease = false;
     // side[i][j]: the sign of plane j on region i's side of their crease (0: no crease).
     float side[kMaxCandidates][kMaxCandidates] = {};
     for (int i = 0; i < k; ++i)
       for (int j = 0; j < k; ++j) {
-        const Candidate& a = near.items[static_cast<std::size_t>(i)];
-        const Candidate& b = near.items[static_cast<std::size_t>(j)];
+        const NearRegion& a = near.items[static_cast<std::size_t>(i)];
+        const NearRegion& b = near.items[static_cast<std::size_t>(j)];
         if (i == j || !creased(a.region, b.region)) continue;
         const float s = planes_[static_cast<std::size_t>(b.region)].at(a.reference);
         side[i][j] = s > 0.0f ? 1.0f : -1.0f;

@@ -18,7 +18,7 @@
 namespace meshflow {
 namespace {
 
-LiveConfig sphere_config(LivePolicy policy, std::size_t in_flight, std::size_t waiting) {
+LiveConfig live_sphere_config(LivePolicy policy, std::size_t in_flight, std::size_t waiting) {
   LiveConfig c;
   c.reconstruction.voxelize.voxel_size = 0.1f;
   c.reconstruction.normals.orientation = NormalOrientation::kAwayFromViewpoint;
@@ -45,7 +45,8 @@ struct Received {
 
 TEST(LivePipeline, QueuePolicyDeliversEveryFrameInOrderWithFailuresReported) {
   Received got;
-  LivePipeline live(sphere_config(LivePolicy::kQueue, 2, 16), [&](LiveResult& r) { got.add(r); });
+  LivePipeline live(live_sphere_config(LivePolicy::kQueue, 2, 16),
+                    [&](LiveResult& r) { got.add(r); });
   for (int i = 0; i < 10; ++i) {
     const auto push = live.push(i == 4 ? PointCloud{} : sphere(i));  // frame 4 is empty
     EXPECT_EQ(push.status, LivePipeline::PushStatus::kAccepted);
@@ -78,7 +79,8 @@ TEST(LivePipeline, QueuePolicyDeliversEveryFrameInOrderWithFailuresReported) {
 
 TEST(LivePipeline, QueuePolicyRefusesFramesWhileFullAndLosesNoAcceptedOne) {
   Received got;
-  LivePipeline live(sphere_config(LivePolicy::kQueue, 1, 2), [&](LiveResult& r) { got.add(r); });
+  LivePipeline live(live_sphere_config(LivePolicy::kQueue, 1, 2),
+                    [&](LiveResult& r) { got.add(r); });
   std::vector<PointCloud> clouds;
   for (int i = 0; i < 12; ++i) clouds.push_back(sphere(i));
   std::vector<std::uint64_t> accepted;
@@ -102,7 +104,7 @@ TEST(LivePipeline, RealtimePolicyDropsTheOldestAndBoundsTheFramesAhead) {
   std::map<std::uint64_t, std::uint64_t> delivered_at_push;
   std::uint64_t delivered = 0;
   std::vector<std::uint64_t> order, frames_ahead;
-  LivePipeline live(sphere_config(LivePolicy::kRealtime, 1, 1), [&](LiveResult& r) {
+  LivePipeline live(live_sphere_config(LivePolicy::kRealtime, 1, 1), [&](LiveResult& r) {
     std::lock_guard<std::mutex> lock(mutex);
     order.push_back(r.seq);
     frames_ahead.push_back(delivered - delivered_at_push.at(r.seq));
@@ -132,7 +134,7 @@ TEST(LivePipeline, RealtimePolicyDropsTheOldestAndBoundsTheFramesAhead) {
 TEST(LivePipeline, DestructionWithFramesInFlightMakesNoLaterCallback) {
   std::atomic<int> calls{0};
   {
-    LivePipeline live(sphere_config(LivePolicy::kQueue, 2, 8), [&](LiveResult&) { ++calls; });
+    LivePipeline live(live_sphere_config(LivePolicy::kQueue, 2, 8), [&](LiveResult&) { ++calls; });
     std::vector<PointCloud> clouds;
     for (int i = 0; i < 8; ++i) clouds.push_back(sphere(i));
     for (auto& cloud : clouds) live.push(std::move(cloud));
@@ -210,7 +212,7 @@ TEST(LivePipeline, TriangulatesDepthMapsPerFrameAndFailsBadFramesClearly) {
 // many of several threads actually join is up to oneTBB's scheduler, so only the one-thread
 // case is asserted.)
 std::vector<std::pair<double, double>> stage_spans(int threads) {
-  LiveConfig config = sphere_config(LivePolicy::kQueue, 4, 8);
+  LiveConfig config = live_sphere_config(LivePolicy::kQueue, 4, 8);
   config.threads = threads;
   Received got;
   LivePipeline live(config, [&](LiveResult& r) { got.add(r); });
@@ -233,7 +235,7 @@ std::size_t overlaps(const std::vector<std::pair<double, double>>& spans) {
 TEST(LivePipeline, OneThreadRunsOneStageAtATime) { EXPECT_EQ(overlaps(stage_spans(1)), 0u); }
 
 TEST(LivePipeline, PushReturnsWhileEveryPipelineThreadIsBusy) {
-  LiveConfig config = sphere_config(LivePolicy::kQueue, 2, 8);
+  LiveConfig config = live_sphere_config(LivePolicy::kQueue, 2, 8);
   config.threads = 1;
   std::promise<void> release;
   std::shared_future<void> released = release.get_future().share();

@@ -13,11 +13,11 @@
 namespace meshflow {
 namespace {
 
-constexpr float kVoxel = 0.05f;
+constexpr float kAccuracyVoxel = 0.05f;
 
 ReconstructionConfig closed_shape_config(const Eigen::Vector3f& centre) {
   ReconstructionConfig c;
-  c.voxelize.voxel_size = kVoxel;
+  c.voxelize.voxel_size = kAccuracyVoxel;
   c.normals.orientation = NormalOrientation::kAwayFromViewpoint;
   c.normals.viewpoint = centre;
   return c;
@@ -25,9 +25,9 @@ ReconstructionConfig closed_shape_config(const Eigen::Vector3f& centre) {
 
 // Prints and records the measured error so test logs carry the numbers.
 void report(const char* shape, const test::ErrorStats& err) {
-  std::printf("[ accuracy ] %s: mean %.4f voxel, max %.3f voxel\n", shape, err.mean / kVoxel,
-              err.max / kVoxel);
-  ::testing::Test::RecordProperty("mean_error_voxels", std::to_string(err.mean / kVoxel));
+  std::printf("[ accuracy ] %s: mean %.4f voxel, max %.3f voxel\n", shape,
+              err.mean / kAccuracyVoxel, err.max / kAccuracyVoxel);
+  ::testing::Test::RecordProperty("mean_error_voxels", std::to_string(err.mean / kAccuracyVoxel));
 }
 
 FramePtr reconstruct(const ReconstructionConfig& config, PointCloud cloud) {
@@ -50,13 +50,13 @@ class Accuracy : public ::testing::TestWithParam<Case> {};
 
 TEST_P(Accuracy, Sphere) {
   const synthetic::Sphere sphere{{0.01f, 0.02f, -0.03f}, 1.0f};
-  const auto cloud =
-      synthetic::sample_surface(sphere, kVoxel / 4, GetParam().noise_voxels * kVoxel, 1);
+  const auto cloud = synthetic::sample_surface(sphere, kAccuracyVoxel / 4,
+                                               GetParam().noise_voxels * kAccuracyVoxel, 1);
   const FramePtr f = reconstruct(closed_shape_config(sphere.center), cloud);
   const auto err = test::vertex_errors(
       f->mesh, [&](const Eigen::Vector3f& p) { return synthetic::surface_distance(sphere, p); });
   report("sphere", err);
-  EXPECT_LT(err.mean / kVoxel, GetParam().max_mean_voxels);
+  EXPECT_LT(err.mean / kAccuracyVoxel, GetParam().max_mean_voxels);
   const EdgeStatistics stats = edge_statistics(f->mesh);
   EXPECT_TRUE(stats.closed()) << stats.boundary_edges << " boundary, " << stats.non_manifold_edges
                               << " non-manifold";
@@ -72,22 +72,22 @@ TEST_P(Accuracy, Sphere) {
 
 TEST_P(Accuracy, Box) {
   const synthetic::Box box{{0.02f, -0.01f, 0.03f}, {0.6f, 0.45f, 0.3f}};
-  const auto cloud =
-      synthetic::sample_surface(box, kVoxel / 4, GetParam().noise_voxels * kVoxel, 2);
+  const auto cloud = synthetic::sample_surface(box, kAccuracyVoxel / 4,
+                                               GetParam().noise_voxels * kAccuracyVoxel, 2);
   const FramePtr f = reconstruct(closed_shape_config(box.center), cloud);
   const auto err = test::vertex_errors(
       f->mesh, [&](const Eigen::Vector3f& p) { return synthetic::surface_distance(box, p); });
   report("box", err);
-  EXPECT_LT(err.mean / kVoxel, GetParam().max_mean_voxels);
+  EXPECT_LT(err.mean / kAccuracyVoxel, GetParam().max_mean_voxels);
   EXPECT_EQ(edge_statistics(f->mesh).non_manifold_edges, 0u);
 }
 
 TEST_P(Accuracy, PlaneWithStep) {
   const synthetic::StepPlane step{1.0f, 0.25f};
-  const auto cloud =
-      synthetic::sample_surface(step, kVoxel / 4, GetParam().noise_voxels * kVoxel, 3);
+  const auto cloud = synthetic::sample_surface(step, kAccuracyVoxel / 4,
+                                               GetParam().noise_voxels * kAccuracyVoxel, 3);
   ReconstructionConfig config;
-  config.voxelize.voxel_size = kVoxel;
+  config.voxelize.voxel_size = kAccuracyVoxel;
   config.normals.orientation = NormalOrientation::kTowardViewpoint;
   // The sensor sees the wall from the low side, so all normals agree in orientation.
   config.normals.viewpoint = Eigen::Vector3f(-1.0f, 0.1f, 3.0f);
@@ -95,7 +95,7 @@ TEST_P(Accuracy, PlaneWithStep) {
   const auto err = test::vertex_errors(
       f->mesh, [&](const Eigen::Vector3f& p) { return synthetic::surface_distance(step, p); });
   report("plane with step", err);
-  EXPECT_LT(err.mean / kVoxel, GetParam().max_mean_voxels);
+  EXPECT_LT(err.mean / kAccuracyVoxel, GetParam().max_mean_voxels);
   EXPECT_EQ(edge_statistics(f->mesh).non_manifold_edges, 0u);
 }
 
@@ -108,7 +108,7 @@ INSTANTIATE_TEST_SUITE_P(Reconstruction, Accuracy,
 
 TEST(Reconstruction, SameMeshVertexForVertexWithOneAndTwoThreads) {
   const synthetic::Box box{{0, 0, 0}, {0.5f, 0.4f, 0.3f}};
-  const auto cloud = synthetic::sample_surface(box, kVoxel / 3, 0.2f * kVoxel, 4);
+  const auto cloud = synthetic::sample_surface(box, kAccuracyVoxel / 3, 0.2f * kAccuracyVoxel, 4);
   TriangleMesh one, two;
   {
     ThreadLimit limit(1);

@@ -10,11 +10,11 @@
 namespace meshflow {
 namespace {
 
-constexpr float kVoxel = 0.05f;
+constexpr float kSequenceVoxel = 0.05f;
 
 ReconstructionConfig sequence_config() {
   ReconstructionConfig c;
-  c.voxelize.voxel_size = kVoxel;
+  c.voxelize.voxel_size = kSequenceVoxel;
   return c;
 }
 
@@ -36,8 +36,9 @@ TEST(SequenceRunner, SyntheticSequenceReconstructsInOrderWithinAQuarterVoxel) {
     ASSERT_TRUE(f.ok()) << f.error;
     const auto err = test::vertex_errors(
         f.mesh, [&](const Eigen::Vector3f& p) { return synthetic::surface_distance(scene, p); });
-    std::printf("[ accuracy ] frame %zu: mean %.4f voxel\n", f.source_index, err.mean / kVoxel);
-    EXPECT_LT(err.mean / kVoxel, 0.25);
+    std::printf("[ accuracy ] frame %zu: mean %.4f voxel\n", f.source_index,
+                err.mean / kSequenceVoxel);
+    EXPECT_LT(err.mean / kSequenceVoxel, 0.25);
     EXPECT_GT(f.mesh.triangles.size(), 1000u);
   });
   EXPECT_EQ(order, (std::vector<std::size_t>{0, 1, 2, 3, 4}));

@@ -8,17 +8,10 @@
 namespace meshflow {
 namespace {
 
-TriangleMesh tetrahedron() {
-  TriangleMesh m;
-  m.vertices = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
-  m.triangles = {{0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {1, 2, 3}};
-  return m;
-}
-
 TriangleMesh grid(std::uint32_t n) { return test::grid_mesh(n); }
 
 TEST(HalfEdgeMesh, ClosedTetrahedronHasMutualTwinsAndFullRings) {
-  const HalfEdgeMesh h(tetrahedron());
+  const HalfEdgeMesh h(test::tetrahedron());
   EXPECT_EQ(h.check(), "");
   EXPECT_EQ(h.face_count(), 4u);
   EXPECT_TRUE(h.border_loops().empty());
@@ -28,8 +21,8 @@ TEST(HalfEdgeMesh, ClosedTetrahedronHasMutualTwinsAndFullRings) {
     for (std::uint32_t e : h.ring(v)) EXPECT_EQ(h.from(e), v);
   }
   const TriangleMesh back = h.to_triangle_mesh();
-  EXPECT_EQ(back.triangles, tetrahedron().triangles);
-  EXPECT_EQ(back.vertices, tetrahedron().vertices);
+  EXPECT_EQ(back.triangles, test::tetrahedron().triangles);
+  EXPECT_EQ(back.vertices, test::tetrahedron().vertices);
 }
 
 TEST(HalfEdgeMesh, GridBorderIsOneLoopAndRingsMatchValences) {
@@ -70,7 +63,7 @@ TEST(HalfEdgeMesh, FlipReplacesTheDiagonalAndRefusesInvalidFlips) {
     if (h.is_border(e)) {
       EXPECT_FALSE(h.flip(e));
     }
-  HalfEdgeMesh tet(tetrahedron());
+  HalfEdgeMesh tet(test::tetrahedron());
   for (std::uint32_t e = 0; e < tet.half_edge_count(); ++e) EXPECT_FALSE(tet.flip(e));
   EXPECT_EQ(tet.check(), "");
 }
@@ -125,7 +118,7 @@ TEST(HalfEdgeMesh, CollapseRemovesAVertexAndTheFacesAlongItsEdge) {
 }
 
 TEST(HalfEdgeMesh, CollapseRefusesNonManifoldResults) {
-  HalfEdgeMesh tet(tetrahedron());
+  HalfEdgeMesh tet(test::tetrahedron());
   for (std::uint32_t e = 0; e < tet.half_edge_count(); ++e) EXPECT_FALSE(tet.collapse(e));
   // 3 x 3 grid: the diagonal 3 -> 7 joins two border vertices through the interior.
   HalfEdgeMesh h(grid(3));
@@ -187,7 +180,7 @@ TEST(HalfEdgeMesh, MixedEditsKeepEveryInvariant) {
 }
 
 TEST(HalfEdgeMesh, NonManifoldInputIsReportedNotStored) {
-  TriangleMesh fin = tetrahedron();
+  TriangleMesh fin = test::tetrahedron();
   fin.vertices.emplace_back(1, 1, 1);
   fin.triangles.push_back({0, 1, 4});  // edge 0-1 now in three triangles
   try {
@@ -205,10 +198,10 @@ TEST(HalfEdgeMesh, NonManifoldInputIsReportedNotStored) {
   } catch (const Error& e) {
     EXPECT_NE(std::string(e.what()).find("vertex 0"), std::string::npos) << e.what();
   }
-  TriangleMesh bad_index = tetrahedron();
+  TriangleMesh bad_index = test::tetrahedron();
   bad_index.triangles[2][1] = 9;
   EXPECT_THROW(HalfEdgeMesh{bad_index}, Error);
-  TriangleMesh repeated = tetrahedron();
+  TriangleMesh repeated = test::tetrahedron();
   repeated.triangles[0] = {1, 1, 2};
   EXPECT_THROW(HalfEdgeMesh{repeated}, Error);
 }

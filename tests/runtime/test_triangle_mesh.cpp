@@ -7,26 +7,20 @@
 
 #include "runtime/threads.h"
 #include "runtime/vertex_triangles.h"
+#include "test_support.h"
 
 namespace meshflow {
 namespace {
 
-TriangleMesh tetrahedron() {
-  TriangleMesh m;
-  m.vertices = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
-  m.triangles = {{0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {1, 2, 3}};  // outward, counter-clockwise
-  return m;
-}
-
 TEST(TriangleMesh, TetrahedronIsClosedAndConsistent) {
-  const EdgeStatistics s = edge_statistics(tetrahedron());
+  const EdgeStatistics s = edge_statistics(test::tetrahedron());
   EXPECT_EQ(s.edges, 6u);
   EXPECT_TRUE(s.closed());
   EXPECT_EQ(s.inconsistent_edges, 0u);
 }
 
 TEST(TriangleMesh, DetectsBoundaryNonManifoldAndFlippedFaces) {
-  TriangleMesh m = tetrahedron();
+  TriangleMesh m = test::tetrahedron();
   m.triangles[3] = {1, 3, 2};  // flipped
   EXPECT_EQ(edge_statistics(m).inconsistent_edges, 3u);
   m.triangles.pop_back();
@@ -38,7 +32,7 @@ TEST(TriangleMesh, DetectsBoundaryNonManifoldAndFlippedFaces) {
 }
 
 TEST(TriangleMesh, VertexNormalsPointOutwardOnATetrahedron) {
-  TriangleMesh m = tetrahedron();
+  TriangleMesh m = test::tetrahedron();
   compute_vertex_normals(m);
   const Eigen::Vector3f centroid(0.25f, 0.25f, 0.25f);
   for (std::size_t i = 0; i < m.vertices.size(); ++i) {

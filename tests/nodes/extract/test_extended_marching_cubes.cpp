@@ -15,7 +15,7 @@
 namespace meshflow {
 namespace {
 
-constexpr float kVoxel = 0.05f;
+constexpr float kEmcVoxel = 0.05f;
 
 TriangleMesh emc_of(const test::SampledSolid& s, const ExtendedMcConfig& emc = {}) {
   return extended_marching_cubes(s.grid, s.field, s.solid.samples, *s.index, ExtractConfig{}, emc);
@@ -72,25 +72,26 @@ TEST(DirectedDistance, HitsTheDiskPlaneExactlyAndSkipsDisksFacingTheWrongWay) {
     }
   const KdTreeIndex index(cloud.positions);
   const Eigen::Vector3f lower(0.3f, 0.002f, -0.003f), guess(0.32f, 0.002f, -0.003f);
-  const EdgeHit hit = directed_edge_hit(lower, 0, kVoxel, true, guess, 0.0f, cloud, index, kVoxel);
+  const EdgeHit hit =
+      directed_edge_hit(lower, 0, kEmcVoxel, true, guess, 0.0f, cloud, index, kEmcVoxel);
   EXPECT_TRUE(hit.from_disk);
   EXPECT_NEAR(hit.position.x(), 0.337f, 1e-6f);
   EXPECT_FLOAT_EQ(hit.position.y(), lower.y());
   EXPECT_EQ(hit.normal, Eigen::Vector3f::UnitX());
   // Entering the solid along +x needs normals pointing -x: none qualify, the guess stays.
   const EdgeHit wrong =
-      directed_edge_hit(lower, 0, kVoxel, false, guess, 0.0f, cloud, index, kVoxel);
+      directed_edge_hit(lower, 0, kEmcVoxel, false, guess, 0.0f, cloud, index, kEmcVoxel);
   EXPECT_FALSE(wrong.from_disk);
   EXPECT_EQ(wrong.position, guess);
   // An edge along y is parallel to the disks: no hit.
   EXPECT_FALSE(
-      directed_edge_hit(lower, 1, kVoxel, true, guess, 0.0f, cloud, index, kVoxel).from_disk);
+      directed_edge_hit(lower, 1, kEmcVoxel, true, guess, 0.0f, cloud, index, kEmcVoxel).from_disk);
 }
 
 TEST(ExtendedMarchingCubes, ClosedOrientedAndNearTheSurfaceOnEveryShape) {
-  for (const auto& named : test::test_solids(kVoxel)) {
+  for (const auto& named : test::test_solids(kEmcVoxel)) {
     SCOPED_TRACE(named.name);
-    const auto s = test::sampled_solid(named.solid, kVoxel);
+    const auto s = test::sampled_solid(named.solid, kEmcVoxel);
     const TriangleMesh emc = emc_of(s);
     const TriangleMesh mc = marching_cubes(s.grid, s.field);
     ASSERT_GT(emc.triangles.size(), 100u);
@@ -105,8 +106,8 @@ TEST(ExtendedMarchingCubes, ClosedOrientedAndNearTheSurfaceOnEveryShape) {
     std::sort(keys.begin(), keys.end());
     EXPECT_EQ(std::adjacent_find(keys.begin(), keys.end()), keys.end());
     std::vector<float> emc_error, mc_error;
-    for (const auto& v : emc.vertices) emc_error.push_back(std::abs(s.solid.sdf(v)) / kVoxel);
-    for (const auto& v : mc.vertices) mc_error.push_back(std::abs(s.solid.sdf(v)) / kVoxel);
+    for (const auto& v : emc.vertices) emc_error.push_back(std::abs(s.solid.sdf(v)) / kEmcVoxel);
+    for (const auto& v : mc.vertices) mc_error.push_back(std::abs(s.solid.sdf(v)) / kEmcVoxel);
     const DistanceStats e = distance_stats(emc_error), m = distance_stats(mc_error);
     std::printf(
         "[ emc ] %s: %zu triangles (mc %zu); |sdf| of vertices mean %.4f max %.4f voxel "
@@ -133,13 +134,13 @@ BoxFeatureError box_feature_error(const TriangleMesh& mesh, const Eigen::Vector3
     const Eigen::Vector3f corner = center + sign.cwiseProduct(half);
     float nearest = std::numeric_limits<float>::infinity();
     for (const auto& v : mesh.vertices) nearest = std::min(nearest, (v - corner).norm());
-    corner_error.push_back(nearest / kVoxel);
+    corner_error.push_back(nearest / kEmcVoxel);
     for (int axis = 0; axis < 3; ++axis) {
       if (sign[axis] > 0) continue;  // each edge once, from its lower corner
-      for (float t = 0.0f; t <= 2.0f * half[axis]; t += 0.05f * kVoxel) {
+      for (float t = 0.0f; t <= 2.0f * half[axis]; t += 0.05f * kEmcVoxel) {
         Eigen::Vector3f p = corner;
         p[axis] += t;
-        edge_error.push_back(surface.closest(p).distance / kVoxel);
+        edge_error.push_back(surface.closest(p).distance / kEmcVoxel);
       }
     }
   }
@@ -148,7 +149,7 @@ BoxFeatureError box_feature_error(const TriangleMesh& mesh, const Eigen::Vector3
 
 TEST(ExtendedMarchingCubes, KeepsTheBoxEdgesAndCornersWhereMarchingCubesRoundsThem) {
   const Eigen::Vector3f center(0.013f, -0.021f, 0.007f), half(0.4f, 0.4f, 0.4f);
-  const auto s = test::sampled_solid(test::test_solids(kVoxel)[0].solid, kVoxel);
+  const auto s = test::sampled_solid(test::test_solids(kEmcVoxel)[0].solid, kEmcVoxel);
   const BoxFeatureError emc = box_feature_error(emc_of(s), center, half);
   const BoxFeatureError mc = box_feature_error(marching_cubes(s.grid, s.field), center, half);
   ExtendedMcConfig no_flips;
@@ -169,7 +170,7 @@ TEST(ExtendedMarchingCubes, KeepsTheBoxEdgesAndCornersWhereMarchingCubesRoundsTh
 }
 
 TEST(ExtendedMarchingCubes, SameOutputWithOneAndTwoThreads) {
-  const auto s = test::sampled_solid(test::test_solids(kVoxel)[2].solid, kVoxel);
+  const auto s = test::sampled_solid(test::test_solids(kEmcVoxel)[2].solid, kEmcVoxel);
   const TriangleMesh one = test::with_threads(1, [&] { return emc_of(s); });
   const TriangleMesh two = test::with_threads(2, [&] { return emc_of(s); });
   EXPECT_EQ(one.vertices, two.vertices);

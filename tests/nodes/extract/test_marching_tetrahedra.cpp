@@ -12,12 +12,12 @@
 namespace meshflow {
 namespace {
 
-constexpr float kVoxel = 0.05f;
+constexpr float kTetraVoxel = 0.05f;
 
 TEST(MarchingTetrahedra, ClosedOrientedAndNearTheSurfaceOnEveryShape) {
-  for (const auto& named : test::test_solids(kVoxel)) {
+  for (const auto& named : test::test_solids(kTetraVoxel)) {
     SCOPED_TRACE(named.name);
-    const auto s = test::sampled_solid(named.solid, kVoxel);
+    const auto s = test::sampled_solid(named.solid, kTetraVoxel);
     const TriangleMesh mt = marching_tetrahedra(s.grid, s.field);
     const TriangleMesh mc = marching_cubes(s.grid, s.field);
     ASSERT_GT(mt.triangles.size(), 100u);
@@ -42,16 +42,17 @@ TEST(MarchingTetrahedra, ClosedOrientedAndNearTheSurfaceOnEveryShape) {
     std::printf("[ mt ] %s: %zu triangles (mc %zu, %.2fx), mean |sdf| %.4f voxel\n",
                 named.name.c_str(), mt.triangles.size(), mc.triangles.size(),
                 static_cast<double>(mt.triangles.size()) / static_cast<double>(mc.triangles.size()),
-                mean / kVoxel);
-    EXPECT_LT(mean, 0.2 * kVoxel);
+                mean / kTetraVoxel);
+    EXPECT_LT(mean, 0.2 * kTetraVoxel);
   }
 }
 
 TEST(MarchingTetrahedra, SphereFieldHasSharedVerticesAndNoDegenerateTriangles) {
   const auto s = test::sampled_solid(
-      synthetic::Solid{[](const Eigen::Vector3f& p) { return p.norm() - 0.5f; },
-                       make_solid(synthetic::Cylinder{{0, 0, 0}, 0.3f, 0.2f}, kVoxel / 4).samples},
-      kVoxel);
+      synthetic::Solid{
+          [](const Eigen::Vector3f& p) { return p.norm() - 0.5f; },
+          make_solid(synthetic::Cylinder{{0, 0, 0}, 0.3f, 0.2f}, kTetraVoxel / 4).samples},
+      kTetraVoxel);
   const TriangleMesh mesh = marching_tetrahedra(s.grid, s.field);
   ASSERT_FALSE(mesh.empty());
   // Shared vertices: no two vertices at the same position.
@@ -66,7 +67,7 @@ TEST(MarchingTetrahedra, SphereFieldHasSharedVerticesAndNoDegenerateTriangles) {
 }
 
 TEST(MarchingTetrahedra, SameOutputWithOneAndTwoThreads) {
-  const auto s = test::sampled_solid(test::test_solids(kVoxel)[2].solid, kVoxel);
+  const auto s = test::sampled_solid(test::test_solids(kTetraVoxel)[2].solid, kTetraVoxel);
   TriangleMesh one, two;
   {
     ThreadLimit limit(1);

@@ -11,7 +11,7 @@
 namespace meshflow {
 namespace {
 
-constexpr float kVoxel = 0.05f;
+constexpr float kPlanarVoxel = 0.05f;
 constexpr float kHeight = 0.0123f;  // off the lattice planes
 
 // Distance from (x, y) to the boundary of the axis-aligned rectangle [lo, hi].
@@ -28,7 +28,7 @@ struct HoledPatch {
   PointCloud cloud;
 
   HoledPatch() {
-    const float step = kVoxel / 6;
+    const float step = kPlanarVoxel / 6;
     for (float y = outer_lo.y(); y <= outer_hi.y() + 1e-6f; y += step)
       for (float x = outer_lo.x(); x <= outer_hi.x() + 1e-6f; x += step) {
         const bool in_hole =
@@ -53,7 +53,7 @@ DistanceStats border_error(const TriangleMesh& mesh, const HoledPatch& patch) {
     for (std::uint32_t v : {e.a, e.b})
       if (!seen[v]) {
         seen[v] = 1;
-        errors.push_back(patch.contour_distance(mesh.vertices[v]) / kVoxel);
+        errors.push_back(patch.contour_distance(mesh.vertices[v]) / kPlanarVoxel);
       }
   return distance_stats(errors);
 }
@@ -61,7 +61,7 @@ DistanceStats border_error(const TriangleMesh& mesh, const HoledPatch& patch) {
 TEST(PlanarMarchingCubes, MovesTheBorderOfAHoledRectangleOntoTheDataContour) {
   const HoledPatch patch;
   const KdTreeIndex index(patch.cloud.positions);
-  const SparseGrid grid = voxelize(patch.cloud, VoxelizeConfig{kVoxel, 0.5f});
+  const SparseGrid grid = voxelize(patch.cloud, VoxelizeConfig{kPlanarVoxel, 0.5f});
   const DistanceField field = hoppe_distance(grid, patch.cloud, index, DistanceConfig{});
   const TriangleMesh mc = marching_cubes(grid, field);
   const TriangleMesh pmc = planar_marching_cubes(grid, field, patch.cloud, index);
@@ -74,7 +74,7 @@ TEST(PlanarMarchingCubes, MovesTheBorderOfAHoledRectangleOntoTheDataContour) {
   EXPECT_GT(before.mean, 0.3);
   EXPECT_LT(after.max, 0.2);
   // Heights are kept: every vertex stays on the plane.
-  for (const auto& v : pmc.vertices) EXPECT_NEAR(v.z(), kHeight, 0.02f * kVoxel);
+  for (const auto& v : pmc.vertices) EXPECT_NEAR(v.z(), kHeight, 0.02f * kPlanarVoxel);
   EXPECT_LE(pmc.triangles.size(), mc.triangles.size());
   EXPECT_EQ(mesh_topology(pmc).edges.non_manifold_edges, 0u);
   EXPECT_EQ(mesh_topology(pmc).degenerate_faces, 0u);
@@ -83,7 +83,7 @@ TEST(PlanarMarchingCubes, MovesTheBorderOfAHoledRectangleOntoTheDataContour) {
 TEST(PlanarMarchingCubes, SameOutputWithOneAndTwoThreads) {
   const HoledPatch patch;
   const KdTreeIndex index(patch.cloud.positions);
-  const SparseGrid grid = voxelize(patch.cloud, VoxelizeConfig{kVoxel, 0.5f});
+  const SparseGrid grid = voxelize(patch.cloud, VoxelizeConfig{kPlanarVoxel, 0.5f});
   const DistanceField field = hoppe_distance(grid, patch.cloud, index, DistanceConfig{});
   TriangleMesh one, two;
   {

@@ -19,7 +19,7 @@ struct OrganizedFrame {
   PointCloud cloud;
 };
 
-OrganizedFrame room_frame() {
+OrganizedFrame organized_room_frame() {
   synthetic::DepthSequenceConfig c;
   c.frames = 1;
   c.intrinsics = PinholeIntrinsics{160, 120, 131.25f, 128.5f, 77.25f, 61.5f};
@@ -30,7 +30,7 @@ OrganizedFrame room_frame() {
 }
 
 TEST(OrganizedDepth, RecoversTheIntrinsicsAndTheDepthOfAPinholeCloud) {
-  const OrganizedFrame f = room_frame();
+  const OrganizedFrame f = organized_room_frame();
   ASSERT_TRUE(f.cloud.is_organized());
   const std::optional<DepthFrame> d = depth_frame_from_organized(f.cloud);
   ASSERT_TRUE(d.has_value());
@@ -59,7 +59,7 @@ TEST(OrganizedDepth, RecoversTheIntrinsicsAndTheDepthOfAPinholeCloud) {
 }
 
 TEST(OrganizedDepth, KeepsColoursAndTheSensorOrigin) {
-  OrganizedFrame f = room_frame();
+  OrganizedFrame f = organized_room_frame();
   const Eigen::Vector3f origin(1.0f, -2.0f, 0.5f);
   for (auto& p : f.cloud.positions) p += origin;
   f.cloud.sensor_origin = origin;
@@ -84,7 +84,7 @@ TEST(OrganizedDepth, KeepsColoursAndTheSensorOrigin) {
 }
 
 TEST(OrganizedDepth, RefusesCloudsThatAreNotAPinholeView) {
-  const OrganizedFrame f = room_frame();
+  const OrganizedFrame f = organized_room_frame();
   PointCloud unorganized = f.cloud;
   unorganized.height = 1;
   unorganized.width = static_cast<std::uint32_t>(unorganized.size());

@@ -21,7 +21,7 @@
 namespace meshflow {
 namespace {
 
-constexpr float kVoxel = 0.03f;
+constexpr float kTsdfVoxel = 0.03f;
 
 // A small camera turning in the demo room: 8 frames, 45 degrees apart, overlapping.
 std::vector<DepthFrame> room_frames(int frames = 8, float noise = 0.001f) {
@@ -37,7 +37,7 @@ std::vector<DepthFrame> room_frames(int frames = 8, float noise = 0.001f) {
 
 TsdfVolume fuse(const std::vector<DepthFrame>& frames, std::size_t first = 0,
                 std::size_t count = SIZE_MAX) {
-  TsdfVolume volume(TsdfConfig{kVoxel});
+  TsdfVolume volume(TsdfConfig{kTsdfVoxel});
   for (std::size_t i = first; i < std::min(frames.size(), first + count); ++i)
     volume.integrate(frames[i]);
   return volume;
@@ -67,8 +67,8 @@ TEST(Tsdf, FusedRoomIsWithinHalfAVoxelOfTheTrueSurface) {
       mesh, [&](const Eigen::Vector3f& p) { return synthetic::surface_distance(scene, p); });
   std::printf(
       "[ accuracy ] fused room: mean %.4f voxel, max %.3f voxel, %zu triangles, %zu blocks\n",
-      err.mean / kVoxel, err.max / kVoxel, mesh.triangles.size(), volume.block_count());
-  EXPECT_LT(err.mean / kVoxel, 0.5);
+      err.mean / kTsdfVoxel, err.max / kTsdfVoxel, mesh.triangles.size(), volume.block_count());
+  EXPECT_LT(err.mean / kTsdfVoxel, 0.5);
   const EdgeStatistics edges = edge_statistics(mesh);
   EXPECT_EQ(edges.non_manifold_edges, 0u);
   EXPECT_EQ(edges.inconsistent_edges, 0u);
@@ -100,12 +100,12 @@ TEST(Tsdf, NoHolesWhereFramesOverlap) {
         const int ub = static_cast<int>(std::lround(k.fx * q.x() / q.z() + k.cx));
         const int vb = static_cast<int>(std::lround(k.fy * q.y() / q.z() + k.cy));
         if (ub < 4 || vb < 4 || ub >= db.cols - 4 || vb >= db.rows - 4) continue;
-        if (std::abs(db.at<float>(vb, ub) - q.z()) > 0.5f * kVoxel) continue;  // occluded in b
+        if (std::abs(db.at<float>(vb, ub) - q.z()) > 0.5f * kTsdfVoxel) continue;  // occluded in b
         std::uint32_t nearest;
         float d2;
         index.knn(p, 1, &nearest, &d2);
         ++checked;
-        if (std::sqrt(d2) > kVoxel) ++holes;
+        if (std::sqrt(d2) > kTsdfVoxel) ++holes;
       }
   }
   std::printf("[ coverage ] %zu surface points seen twice, %zu without a vertex within a voxel\n",
@@ -117,14 +117,14 @@ TEST(Tsdf, NoHolesWhereFramesOverlap) {
 TEST(Tsdf, BlocksStayInTheTruncationBand) {
   const synthetic::Scene scene = synthetic::demo_room_scene();
   const TsdfVolume volume = fuse(room_frames(4, 0.0f));
-  const float block = kVoxel * kTsdfBlockSide;
+  const float block = kTsdfVoxel * kTsdfBlockSide;
   // A block is allocated because some voxel of it is within the truncation of a measured point:
   // its centre is within truncation + the half-diagonal (+ one voxel of rounding) of the surface.
-  const float bound = volume.config().truncation() + 0.5f * std::sqrt(3.0f) * block + kVoxel;
+  const float bound = volume.config().truncation() + 0.5f * std::sqrt(3.0f) * block + kTsdfVoxel;
   for (std::size_t i = 0; i < volume.block_count(); ++i) {
     const Eigen::Vector3f centre =
         (volume.block(i).coords.cast<float>() + Eigen::Vector3f::Constant(0.5f)) * block -
-        Eigen::Vector3f::Constant(0.5f * kVoxel);
+        Eigen::Vector3f::Constant(0.5f * kTsdfVoxel);
     ASSERT_LT(synthetic::surface_distance(scene, centre), bound)
         << volume.block(i).coords.transpose();
   }
@@ -149,7 +149,7 @@ TEST(Tsdf, SameMapWithOneAndTwoThreads) {
 
 TEST(Tsdf, IncrementalExtractionEqualsAFreshOne) {
   const std::vector<DepthFrame> frames = room_frames(8);
-  TsdfVolume volume(TsdfConfig{kVoxel});
+  TsdfVolume volume(TsdfConfig{kTsdfVoxel});
   TsdfMesher incremental;
   for (std::size_t i = 0; i < 4; ++i) volume.integrate(frames[i]);
   incremental.extract(volume);
@@ -183,7 +183,7 @@ TEST(TsdfMapFile, SaveLoadExtractGivesTheSameMesh) {
   io::write_tsdf_map(path, volume);
   const TsdfVolume loaded = io::read_tsdf_map(path);
   expect_same_volume(volume, loaded);
-  EXPECT_EQ(loaded.config().voxel_size, kVoxel);
+  EXPECT_EQ(loaded.config().voxel_size, kTsdfVoxel);
   const TriangleMesh a = TsdfMesher().extract(volume), b = TsdfMesher().extract(loaded);
   EXPECT_EQ(a.vertices, b.vertices);
   EXPECT_EQ(a.triangles, b.triangles);
@@ -259,7 +259,7 @@ TEST(TsdfMapFile, AbsurdFieldsBehindAValidChecksumFailClearly) {
   expect(patched_map(bytes, first_distance, std::numeric_limits<float>::quiet_NaN()),
          "voxel distance");
   // The patch itself is sound: an unchanged value loads.
-  test::write_file(dir + "/same.tsdf", patched_map(bytes, voxel_size, kVoxel));
+  test::write_file(dir + "/same.tsdf", patched_map(bytes, voxel_size, kTsdfVoxel));
   EXPECT_EQ(io::read_tsdf_map(dir + "/same.tsdf").block_count(),
             io::read_tsdf_map(dir + "/good.tsdf").block_count());
 }

@@ -55,7 +55,7 @@ void fuzz(const std::string& path, const std::string& seed, std::uint32_t state,
   EXPECT_GT(parsed, 0u) << path << ": no mutation read (is the seed valid?)";
 }
 
-std::string binary_ply() {
+std::string fuzz_seed_ply() {
   std::string h =
       "ply\nformat binary_little_endian 1.0\nelement vertex 4\nproperty float x\n"
       "property float y\nproperty float z\nproperty uchar red\nproperty uchar green\n"
@@ -84,7 +84,7 @@ std::string big_endian_ply() {
   return b;
 }
 
-std::string binary_pcd(bool compressed) {
+std::string fuzz_seed_pcd(bool compressed) {
   const std::string header =
       std::string("VERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\nWIDTH 2\n") +
       "HEIGHT 2\nVIEWPOINT 0 0 0 1 0 0 0\nPOINTS 4\nDATA " +
@@ -113,15 +113,15 @@ TEST(ReaderFuzz, PointCloudAndMeshFilesOnlyEverThrowMeshflowErrors) {
        "property float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n"
        "0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n",
        2, cloud_and_mesh);
-  fuzz(dir + "/b.ply", binary_ply(), 3, cloud_and_mesh);
+  fuzz(dir + "/b.ply", fuzz_seed_ply(), 3, cloud_and_mesh);
   fuzz(dir + "/c.ply", big_endian_ply(), 4, cloud);
   fuzz(dir + "/a.pcd",
        "VERSION 0.7\nFIELDS x y z rgb\nSIZE 4 4 4 4\nTYPE F F F F\nCOUNT 1 1 1 1\nWIDTH 3\n"
        "HEIGHT 1\nVIEWPOINT 0 0 0 1 0 0 0\nPOINTS 3\nDATA ascii\n0 0 0 4.2108e+06\n"
        "1 1 1 4.2108e+06\nnan nan nan 0\n",
        5, cloud);
-  fuzz(dir + "/b.pcd", binary_pcd(false), 6, cloud);
-  fuzz(dir + "/c.pcd", binary_pcd(true), 7, cloud);
+  fuzz(dir + "/b.pcd", fuzz_seed_pcd(false), 6, cloud);
+  fuzz(dir + "/c.pcd", fuzz_seed_pcd(true), 7, cloud);
   test::write_file(dir + "/s.pose", "10 -20 300\n0 90 -45\n");
   fuzz(dir + "/s.3d", "1 2 3\n4 5 6\n7 8 9 100\n-1e3 2 3\n", 8, cloud);
 }

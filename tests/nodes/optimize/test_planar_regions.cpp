@@ -12,7 +12,7 @@
 namespace meshflow {
 namespace {
 
-constexpr float kVoxel = test::kRoomVoxel;
+constexpr float kRegionVoxel = test::kRoomVoxel;
 using test::room_mesh;
 
 TEST(PlanarRegions, RoomSegmentsIntoClassifiedPlanesAndProjectsOntoThem) {
@@ -44,7 +44,7 @@ TEST(PlanarRegions, RoomSegmentsIntoClassifiedPlanesAndProjectsOntoThem) {
       floor = &r;
   ASSERT_NE(floor, nullptr);
   EXPECT_GT(floor->normal.z(), 0.999f);
-  EXPECT_NEAR(floor->offset, 0.0f, 0.1f * kVoxel);
+  EXPECT_NEAR(floor->offset, 0.0f, 0.1f * kRegionVoxel);
   // After projection, the floor's interior vertices lie on the true floor within 0.1 voxel.
   const std::size_t moved = project_onto_planes(h, s);
   EXPECT_GT(moved, 1000u);
@@ -56,7 +56,7 @@ TEST(PlanarRegions, RoomSegmentsIntoClassifiedPlanesAndProjectsOntoThem) {
       for (std::uint32_t e : h.ring(v))
         interior = interior && s.region_of_face[HalfEdgeMesh::face(e)] == s.region_of_face[f];
       if (!interior) continue;
-      EXPECT_NEAR(h.position(v).z(), 0.0f, 0.1f * kVoxel);
+      EXPECT_NEAR(h.position(v).z(), 0.0f, 0.1f * kRegionVoxel);
       ++on_floor;
     }
   EXPECT_GT(on_floor, 1000u);

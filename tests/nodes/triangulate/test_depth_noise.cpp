@@ -14,9 +14,9 @@ namespace {
 
 // A PrimeSense / Kinect v1 camera: disparity = focal x baseline / depth, in 1/8 pixel steps,
 // so a depth step is depth^2 / (8 x focal x baseline) = 0.00317 x depth^2.
-constexpr float kFocal = 525.0f;
+constexpr float kNoiseFocal = 525.0f;
 constexpr float kBaseline = 0.075f;
-constexpr float kQuantisationPerDepth2 = 1.0f / (8.0f * kFocal * kBaseline);
+constexpr float kQuantisationPerDepth2 = 1.0f / (8.0f * kNoiseFocal * kBaseline);
 
 enum class Noise { kNone, kQuantised, kGaussianPerDepth2 };
 
@@ -37,9 +37,9 @@ DepthFrame plane_frame(Noise noise, float sigma_per_depth2 = 0.0f) {
                                 (static_cast<float>(v) - k.cy) / k.fy, 1.0f);
       float z = offset / normal.dot(ray);
       if (noise == Noise::kQuantised) {
-        const float measured = kFocal * kBaseline / z + gaussian(random) / 8.0f;
+        const float measured = kNoiseFocal * kBaseline / z + gaussian(random) / 8.0f;
         const float disparity = std::round(8.0f * measured) / 8.0f;
-        z = kFocal * kBaseline / disparity;
+        z = kNoiseFocal * kBaseline / disparity;
       } else if (noise == Noise::kGaussianPerDepth2) {
         const float range = z * ray.norm();
         z *= (range + sigma_per_depth2 * range * range * gaussian(random)) / range;

@@ -20,12 +20,12 @@ namespace meshflow {
 namespace {
 
 constexpr double kNoCollapse = std::numeric_limits<double>::infinity();
+constexpr std::size_t kLookAhead = 8;  // collapses between a prefetch() and its use
+
 // cos(degrees), computed in double and rounded once.
 float cos_degrees(float degrees) {
   return static_cast<float>(std::cos(radians(static_cast<double>(degrees))));
 }
-
-constexpr std::size_t kLookAhead = 8;  // collapses between a prefetch() and its use
 
 // Symmetric 4x4 quadric, upper triangle: a2 ab ac ad b2 bc bd c2 cd d2.
 struct Quadric {

@@ -68,11 +68,14 @@ MESHFLOW_AVX2_CLONES FanVerdict check_lanes(const Lanes& l, std::uint32_t v, flo
 
 // Per lane, from the positions a and b: the edge e = b - a and its squared length, and the area
 // vector n = (a - u) x (b - u) and its squared length (the same arithmetic as Eigen's).
-MESHFLOW_AVX2_CLONES void derive_lanes(const float* ax, const float* ay, const float* az,
-                                       const float* bx, const float* by, const float* bz, float ux,
-                                       float uy, float uz, std::size_t count, float* ex, float* ey,
-                                       float* ez, float* e2, float* nx, float* ny, float* nz,
-                                       float* n2) {
+MESHFLOW_AVX2_CLONES void derive_lanes(const float* __restrict ax, const float* __restrict ay,
+                                       const float* __restrict az, const float* __restrict bx,
+                                       const float* __restrict by, const float* __restrict bz,
+                                       float ux, float uy, float uz, std::size_t count,
+                                       float* __restrict ex, float* __restrict ey,
+                                       float* __restrict ez, float* __restrict e2,
+                                       float* __restrict nx, float* __restrict ny,
+                                       float* __restrict nz, float* __restrict n2) {
   for (std::size_t k = 0; k < count; ++k) {
     ex[k] = bx[k] - ax[k];
     ey[k] = by[k] - ay[k];
@@ -96,15 +99,16 @@ void CollapseFan::reset(std::size_t faces, const Eigen::Vector3f& pu) {
   pu_ = pu;
   faces_ = faces;
   lanes_ = (faces + kLanes - 1) / kLanes * kLanes;
-  rows_.resize(kRows * lanes_);
-  ends_.resize(2 * lanes_);
-  active_.resize(lanes_);
-  // Padding lanes: inactive, at the origin (finite).
-  for (std::size_t k = faces; k < lanes_; ++k) {
-    for (Row r : {kAx, kAy, kAz, kBx, kBy, kBz}) row(r)[k] = 0.0f;
-    ends_[k] = ends_[lanes_ + k] = 0;
-    active_[k] = 0;
+  // The arrays only grow: a padding lane keeps whatever finite values an earlier fan left
+  // there (or the zeros of the growth); being inactive, it counts in no verdict.
+  if (rows_.size() < kRows * lanes_) {
+    rows_.resize(kRows * lanes_);
+    ends_.resize(2 * lanes_);
+    active_.resize(lanes_);
   }
+  // The last vector's lanes inactive (set() activates the faces among them): one fixed-size
+  // store, not a call per fan.
+  if (lanes_ > 0) std::fill_n(active_.data() + (lanes_ - kLanes), kLanes, 0u);
 }
 
 void CollapseFan::set(std::size_t k, std::uint32_t a, const Eigen::Vector3f& pa, std::uint32_t b,

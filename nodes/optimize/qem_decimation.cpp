@@ -27,7 +27,8 @@ float cos_degrees(float degrees) {
   return static_cast<float>(std::cos(radians(static_cast<double>(degrees))));
 }
 
-// Symmetric 4x4 quadric, upper triangle: a2 ab ac ad b2 bc bd c2 cd d2.
+// Symmetric 4x4 quadric, upper triangle with the off-diagonal terms doubled (as they enter
+// x^T A x): a2 2ab 2ac 2ad b2 2bc 2bd c2 2cd d2.
 struct Quadric {
   double q[10] = {0, 0, 0, 0, 0, 0, 0, 0, 0, 0};
 
@@ -36,7 +37,7 @@ struct Quadric {
     const double p[4] = {n.x(), n.y(), n.z(), d};
     int i = 0;
     for (int r = 0; r < 4; ++r)
-      for (int c = r; c < 4; ++c) k.q[i++] = weight * p[r] * p[c];
+      for (int c = r; c < 4; ++c) k.q[i++] = (c == r ? 1.0 : 2.0) * (weight * p[r] * p[c]);
     return k;
   }
   void add(const Quadric& o) {
@@ -46,8 +47,8 @@ struct Quadric {
   double error(const Eigen::Vector3f& pf) const {
     const double* s = q;
     const double x = pf.x(), y = pf.y(), z = pf.z();
-    return s[0] * x * x + 2 * s[1] * x * y + 2 * s[2] * x * z + 2 * s[3] * x + s[4] * y * y +
-           2 * s[5] * y * z + 2 * s[6] * y + s[7] * z * z + 2 * s[8] * z + s[9];
+    return s[0] * x * x + s[1] * x * y + s[2] * x * z + s[3] * x + s[4] * y * y + s[5] * y * z +
+           s[6] * y + s[7] * z * z + s[8] * z + s[9];
   }
 };
 

@@ -11,11 +11,13 @@ namespace {
 
 constexpr std::size_t kLanes = 8;  // one AVX2 vector of floats
 
-// The lanes' arrays of CollapseFan::check(), by row.
+// The lanes' arrays of CollapseFan::check(): row r of `rows` starts at rows + r * count, a's
+// and b's vertex numbers at ends and ends + count.
 struct Lanes {
-  const float *ax, *ay, *az, *bx, *by, *bz, *ex, *ey, *ez, *e2, *nx, *ny, *nz, *n2;
-  const std::uint32_t *a, *b, *active;
+  const float* rows;
+  const std::uint32_t *ends, *active;
   std::size_t count;
+  const float* row(CollapseFan::Row r) const { return rows + static_cast<std::size_t>(r) * count; }
 };
 
 // Branch-free over every lane (no early exit: a fan has a handful of faces, and a vector of
@@ -31,13 +33,20 @@ MESHFLOW_AVX2_CLONES FanVerdict check_lanes(const Lanes& l, std::uint32_t v, flo
   constexpr float kFlattest = 1e-6f;  // as has_area()
   const float turn_cos2 = max_turn_cos * max_turn_cos;
   const bool acute_limit = max_turn_cos >= 0.0f, obtuse_limit = !acute_limit;
+  using R = CollapseFan::Row;
+  const float *pax = l.row(R::kAx), *pay = l.row(R::kAy), *paz = l.row(R::kAz);
+  const float *pbx = l.row(R::kBx), *pby = l.row(R::kBy), *pbz = l.row(R::kBz);
+  const float *pex = l.row(R::kEdgeX), *pey = l.row(R::kEdgeY), *pez = l.row(R::kEdgeZ);
+  const float *pe2 = l.row(R::kEdge2), *pnx = l.row(R::kNx), *pny = l.row(R::kNy);
+  const float *pnz = l.row(R::kNz), *pn2 = l.row(R::kN2);
+  const std::uint32_t *ends_a = l.ends, *ends_b = l.ends + l.count;
   unsigned needle = 0, turned = 0, shared = 0;
   for (std::size_t k = 0; k < l.count; ++k) {
-    const float ax = l.ax[k] - vx, ay = l.ay[k] - vy, az = l.az[k] - vz;
-    const float bx = l.bx[k] - vx, by = l.by[k] - vy, bz = l.bz[k] - vz;
-    const float ex = l.ex[k], ey = l.ey[k], ez = l.ez[k];
+    const float ax = pax[k] - vx, ay = pay[k] - vy, az = paz[k] - vz;
+    const float bx = pbx[k] - vx, by = pby[k] - vy, bz = pbz[k] - vz;
+    const float ex = pex[k], ey = pey[k], ez = pez[k];
     const float la = ax * ax + ay * ay + az * az, lb = bx * bx + by * by + bz * bz;
-    const float le = l.e2[k];
+    const float le = pe2[k];
     const float at_v = ax * bx + ay * by + az * bz;     // cos at v  ~ va . vb
     const float at_a = -(ax * ex + ay * ey + az * ez);  // cos at a  ~ -va . e
     const float at_b = bx * ex + by * ey + bz * ez;     // cos at b  ~ vb . e
@@ -53,11 +62,11 @@ MESHFLOW_AVX2_CLONES FanVerdict check_lanes(const Lanes& l, std::uint32_t v, flo
     const float longest = std::max(std::max(la, le), lb);
     const bool has_area = (m2 > 0.0f) & (area_a > 0.0f) & (area_b > 0.0f) &
                           (m2 >= kFlattest * kFlattest * longest * longest);
-    const float nm = l.nx[k] * mx + l.ny[k] * my + l.nz[k] * mz;
-    const float bound = turn_cos2 * m2 * l.n2[k];
+    const float nm = pnx[k] * mx + pny[k] * my + pnz[k] * mz;
+    const float bound = turn_cos2 * m2 * pn2[k];
     const bool turn_ok = (acute_limit & (nm >= 0.0f) & (nm * nm >= bound)) |
                          (obtuse_limit & ((nm >= 0.0f) | (nm * nm <= bound)));
-    const unsigned has_v = static_cast<unsigned>((l.a[k] == v) | (l.b[k] == v));
+    const unsigned has_v = static_cast<unsigned>((ends_a[k] == v) | (ends_b[k] == v));
     shared += l.active[k] & has_v;
     const unsigned stays = l.active[k] & (has_v ^ 1u);
     needle |= stays & static_cast<unsigned>(is_needle);
@@ -111,19 +120,6 @@ void CollapseFan::reset(std::size_t faces, const Eigen::Vector3f& pu) {
   if (lanes_ > 0) std::fill_n(active_.data() + (lanes_ - kLanes), kLanes, 0u);
 }
 
-void CollapseFan::set(std::size_t k, std::uint32_t a, const Eigen::Vector3f& pa, std::uint32_t b,
-                      const Eigen::Vector3f& pb) {
-  row(kAx)[k] = pa.x();
-  row(kAy)[k] = pa.y();
-  row(kAz)[k] = pa.z();
-  row(kBx)[k] = pb.x();
-  row(kBy)[k] = pb.y();
-  row(kBz)[k] = pb.z();
-  ends_[k] = a;
-  ends_[lanes_ + k] = b;
-  active_[k] = 1;
-}
-
 void CollapseFan::finish() {
   derive_lanes(row(kAx), row(kAy), row(kAz), row(kBx), row(kBy), row(kBz), pu_.x(), pu_.y(),
                pu_.z(), lanes_, row(kEdgeX), row(kEdgeY), row(kEdgeZ), row(kEdge2), row(kNx),
@@ -137,11 +133,7 @@ Eigen::Vector3f CollapseFan::area_vector(std::size_t k) const {
 float CollapseFan::area_vector_norm(std::size_t k) const { return std::sqrt(row(kN2)[k]); }
 
 FanVerdict CollapseFan::check(std::uint32_t v, const Eigen::Vector3f& pv) const {
-  const Lanes lanes{row(kAx),       row(kAy),    row(kAz),     row(kBx),
-                    row(kBy),       row(kBz),    row(kEdgeX),  row(kEdgeY),
-                    row(kEdgeZ),    row(kEdge2), row(kNx),     row(kNy),
-                    row(kNz),       row(kN2),    ends_.data(), ends_.data() + lanes_,
-                    active_.data(), lanes_};
+  const Lanes lanes{rows_.data(), ends_.data(), active_.data(), lanes_};
   return check_lanes(lanes, v, pv.x(), pv.y(), pv.z(), max_turn_cos_, min_angle_cos2_);
 }
 

@@ -31,7 +31,17 @@ class CollapseFan {
   void reset(std::size_t faces, const Eigen::Vector3f& pu);
   /// Sets face k (< faces) to (u, a, b); every face must be set, then finish() called.
   void set(std::size_t k, std::uint32_t a, const Eigen::Vector3f& pa, std::uint32_t b,
-           const Eigen::Vector3f& pb);
+           const Eigen::Vector3f& pb) {
+    row(kAx)[k] = pa.x();
+    row(kAy)[k] = pa.y();
+    row(kAz)[k] = pa.z();
+    row(kBx)[k] = pb.x();
+    row(kBy)[k] = pb.y();
+    row(kBz)[k] = pb.z();
+    ends_[k] = a;
+    ends_[lanes_ + k] = b;
+    active_[k] = 1;
+  }
 
   std::size_t size() const { return faces_; }
   std::uint32_t a(std::size_t k) const { return ends_[k]; }
@@ -45,10 +55,12 @@ class CollapseFan {
   Eigen::Vector3f area_vector(std::size_t k) const;
   float area_vector_norm(std::size_t k) const;
 
- private:
-  // Rows of `rows_`, each `lanes_` long (faces_ rounded up to the vector width; the extra lanes
-  // are inactive).
+  /// Rows of the lane arrays, each lanes long (faces rounded up to the vector width; the extra
+  /// lanes are inactive): a, b, the edge b - a and its squared length, the area vector and its
+  /// squared length.
   enum Row { kAx, kAy, kAz, kBx, kBy, kBz, kEdgeX, kEdgeY, kEdgeZ, kEdge2, kNx, kNy, kNz, kN2 };
+
+ private:
   static constexpr std::size_t kRows = kN2 + 1;
   float* row(Row r) { return rows_.data() + static_cast<std::size_t>(r) * lanes_; }
   const float* row(Row r) const { return rows_.data() + static_cast<std::size_t>(r) * lanes_; }

@@ -15,47 +15,55 @@ VertexTriangles vertex_triangles(const std::vector<Triangle>& tris, std::size_t 
   VertexTriangles out;
   out.offsets.assign(vertex_count + 1, 0);
   out.triangles.resize(tris.size() * 3);
-  constexpr std::size_t kMinVerticesPerRange = 4096;
+  // Consecutive triangle chunks, one per worker: chunk c counts its corners per vertex in its
+  // own row of `slots` (later: where its next triangle goes in each vertex's row). A vertex's
+  // row lists chunk 0's triangles, then chunk 1's, ..., each in order: ascending for any
+  // chunking.
+  constexpr std::size_t kMinTrianglesPerChunk = 8192, kMaxChunks = 8;
+  const std::size_t chunks = std::clamp<std::size_t>(
+      tris.size() / kMinTrianglesPerChunk, 1,
+      std::min<std::size_t>(kMaxChunks,
+                            static_cast<std::size_t>(tbb::this_task_arena::max_concurrency())));
+  const auto chunk_begin = [&](std::size_t c) { return tris.size() * c / chunks; };
+  std::vector<std::uint32_t> slots(chunks * vertex_count, 0);
+  tbb::parallel_for(std::size_t{0}, chunks, [&](std::size_t c) {
+    std::uint32_t* count = slots.data() + c * vertex_count;
+    for (std::size_t t = chunk_begin(c); t < chunk_begin(c + 1); ++t)
+      for (std::uint32_t v : tris[t]) ++count[v];
+  });
+  // Row starts (a two-level scan over vertex ranges), and every chunk's start within each row.
+  constexpr std::size_t kMinVerticesPerRange = 16384;
   const std::size_t ranges =
       std::clamp<std::size_t>(vertex_count / kMinVerticesPerRange, 1,
                               static_cast<std::size_t>(tbb::this_task_arena::max_concurrency()));
-  auto range_begin = [&](std::size_t r) {
-    return static_cast<std::uint32_t>(vertex_count * r / ranges);
-  };
-  // Row lengths (in offsets[v] for now), and each range's total.
-  std::vector<std::uint32_t> range_totals(ranges, 0);
+  const auto range_begin = [&](std::size_t r) { return vertex_count * r / ranges; };
+  std::vector<std::uint32_t> range_base(ranges + 1, 0);
   tbb::parallel_for(std::size_t{0}, ranges, [&](std::size_t r) {
-    const std::uint32_t lo = range_begin(r), hi = range_begin(r + 1);
-    for (const Triangle& t : tris)
-      for (std::uint32_t v : t)
-        if (v >= lo && v < hi) ++out.offsets[v];
     std::uint32_t sum = 0;
-    for (std::uint32_t v = lo; v < hi; ++v) sum += out.offsets[v];
-    range_totals[r] = sum;
+    for (std::size_t c = 0; c < chunks; ++c) {
+      const std::uint32_t* count = slots.data() + c * vertex_count;
+      for (std::size_t v = range_begin(r); v < range_begin(r + 1); ++v) sum += count[v];
+    }
+    range_base[r + 1] = sum;
   });
-  std::uint32_t base = 0;
-  for (std::size_t r = 0; r < ranges; ++r) {
-    const std::uint32_t total = range_totals[r];
-    range_totals[r] = base;
-    base += total;
-  }
+  for (std::size_t r = 0; r < ranges; ++r) range_base[r + 1] += range_base[r];
   tbb::parallel_for(std::size_t{0}, ranges, [&](std::size_t r) {
-    const std::uint32_t lo = range_begin(r), hi = range_begin(r + 1);
-    // Row length -> row start: the range's base plus the lengths of the rows before it.
-    std::uint32_t at = range_totals[r];
-    for (std::uint32_t v = lo; v < hi; ++v) {
-      const std::uint32_t length = out.offsets[v];
+    std::uint32_t at = range_base[r];
+    for (std::size_t v = range_begin(r); v < range_begin(r + 1); ++v) {
       out.offsets[v] = at;
-      at += length;
+      for (std::size_t c = 0; c < chunks; ++c) {
+        std::uint32_t& slot = slots[c * vertex_count + v];
+        const std::uint32_t length = slot;
+        slot = at;
+        at += length;
+      }
     }
   });
-  out.offsets[vertex_count] = base;
-  tbb::parallel_for(std::size_t{0}, ranges, [&](std::size_t r) {
-    const std::uint32_t lo = range_begin(r), hi = range_begin(r + 1);
-    std::vector<std::uint32_t> cursor(out.offsets.begin() + lo, out.offsets.begin() + hi);
-    for (std::uint32_t t = 0; t < tris.size(); ++t)
-      for (std::uint32_t v : tris[t])
-        if (v >= lo && v < hi) out.triangles[cursor[v - lo]++] = t;
+  out.offsets[vertex_count] = range_base[ranges];
+  tbb::parallel_for(std::size_t{0}, chunks, [&](std::size_t c) {
+    std::uint32_t* next = slots.data() + c * vertex_count;
+    for (std::size_t t = chunk_begin(c); t < chunk_begin(c + 1); ++t)
+      for (std::uint32_t v : tris[t]) out.triangles[next[v]++] = static_cast<std::uint32_t>(t);
   });
   return out;
 }

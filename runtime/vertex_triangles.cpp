@@ -19,11 +19,14 @@ VertexTriangles vertex_triangles(const std::vector<Triangle>& tris, std::size_t 
   // own row of `slots` (later: where its next triangle goes in each vertex's row). A vertex's
   // row lists chunk 0's triangles, then chunk 1's, ..., each in order: ascending for any
   // chunking.
+  // At most 8 chunks, and no more than 3 T / V of them: the rows of `slots` (V each) then take
+  // no more memory than the output's 3 T entries.
   constexpr std::size_t kMinTrianglesPerChunk = 8192, kMaxChunks = 8;
-  const std::size_t chunks = std::clamp<std::size_t>(
-      tris.size() / kMinTrianglesPerChunk, 1,
-      std::min<std::size_t>(kMaxChunks,
-                            static_cast<std::size_t>(tbb::this_task_arena::max_concurrency())));
+  const std::size_t most =
+      std::min({kMaxChunks, 3 * tris.size() / std::max<std::size_t>(vertex_count, 1),
+                static_cast<std::size_t>(tbb::this_task_arena::max_concurrency())});
+  const std::size_t chunks =
+      std::max<std::size_t>(1, std::min(tris.size() / kMinTrianglesPerChunk, most));
   const auto chunk_begin = [&](std::size_t c) { return tris.size() * c / chunks; };
   std::vector<std::uint32_t> slots(chunks * vertex_count, 0);
   tbb::parallel_for(std::size_t{0}, chunks, [&](std::size_t c) {

@@ -19,11 +19,11 @@ struct VertexTriangles {
   const std::uint32_t* end(std::uint32_t v) const { return triangles.data() + offsets[v + 1]; }
 };
 
-/// Builds the incidence in parallel over consecutive triangle chunks (one per worker, at most 8;
-/// each counts, then fills, its own triangles' corners through per-chunk row positions), so no
-/// atomics are needed, every triangle is read twice in all, and the result is the same for any
-/// thread count. Triangles must index existing vertices. O(T + V x chunks) time,
-/// O(T + V x chunks) memory.
+/// Builds the incidence in parallel over consecutive triangle chunks (one per worker, at most
+/// 8 and at most 3 T / V): each chunk counts, then places, its own triangles' corners through
+/// per-chunk row positions, so no atomics are needed, every triangle is read twice in all, and
+/// the result is the same for any thread count. Triangles must index existing vertices.
+/// O(T + V x chunks) time and memory (the chunks' positions take at most the output's size).
 VertexTriangles vertex_triangles(const TriangleMesh& mesh);
 /// The same for bare triangles over `vertex_count` vertices.
 VertexTriangles vertex_triangles(const std::vector<Triangle>& triangles, std::size_t vertex_count);

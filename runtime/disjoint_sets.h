@@ -12,7 +12,11 @@ namespace meshflow {
 /// depend on the order of unite() calls. Not thread-safe; O(n) memory, near-constant time per call.
 class DisjointSets {
  public:
-  explicit DisjointSets(std::size_t n) : parent_(n) {
+  explicit DisjointSets(std::size_t n) { reset(n); }
+
+  /// Starts over with n singletons, keeping the memory already held. O(n).
+  void reset(std::size_t n) {
+    parent_.resize(n);
     std::iota(parent_.begin(), parent_.end(), 0u);
   }
 

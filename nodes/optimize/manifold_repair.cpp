@@ -1,5 +1,6 @@
 #include "nodes/optimize/manifold_repair.h"
 
+#include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
@@ -12,15 +13,23 @@
 namespace meshflow {
 namespace {
 
+// The working memory of fans_around(), reused from vertex to vertex by one task.
+struct FanScratch {
+  DisjointSets sets{0};
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> spokes;  ///< (x, triangle slot)
+  std::vector<std::uint32_t> number;                            ///< fan number of each root
+};
+
 // Writes the fan of each triangle around v to fan[0 .. k) (0 = the fan with the lowest triangle
 // index, then in order of their lowest triangles), given the k triangles around v in ascending
 // order. Returns the fan count.
 std::uint32_t fans_around(const TriangleMesh& mesh, std::uint32_t v, const std::uint32_t* begin,
-                          const std::uint32_t* end, std::uint32_t* fan) {
+                          const std::uint32_t* end, std::uint32_t* fan, FanScratch& scratch) {
   const auto k = static_cast<std::uint32_t>(end - begin);
-  DisjointSets sets(k);
+  auto& [sets, spokes, number] = scratch;
+  sets.reset(k);
   // Triangles sharing an edge v-x are in one fan: sort (x, triangle slot) and join equal x.
-  std::vector<std::pair<std::uint32_t, std::uint32_t>> spokes;
+  spokes.clear();
   for (std::uint32_t i = 0; i < k; ++i)
     for (std::uint32_t x : mesh.triangles[begin[i]])
       if (x != v) spokes.emplace_back(x, i);
@@ -29,7 +38,7 @@ std::uint32_t fans_around(const TriangleMesh& mesh, std::uint32_t v, const std::
     if (spokes[s].first == spokes[s - 1].first) sets.unite(spokes[s].second, spokes[s - 1].second);
   // Roots are the lowest slot of their fan, so numbering roots in slot order numbers fans by
   // their lowest triangle.
-  std::vector<std::uint32_t> number(k, 0);
+  number.assign(k, 0);
   std::uint32_t fans = 0;
   for (std::uint32_t i = 0; i < k; ++i) {
     const std::uint32_t r = sets.find(i);
@@ -46,12 +55,16 @@ std::size_t split_non_manifold_vertices(TriangleMesh& mesh) {
   const VertexTriangles around = vertex_triangles(mesh);
   // All fans first (reading the triangles), then the rewrite.
   std::vector<std::uint32_t> fan(around.triangles.size()), extra(n, 0);
-  tbb::parallel_for(std::size_t{0}, n, [&](std::size_t i) {
-    const auto v = static_cast<std::uint32_t>(i);
-    const std::uint32_t fans =
-        fans_around(mesh, v, around.begin(v), around.end(v), fan.data() + around.offsets[v]);
-    extra[i] = fans > 1 ? fans - 1 : 0;
-  });
+  tbb::parallel_for(
+      tbb::blocked_range<std::size_t>(0, n), [&](const tbb::blocked_range<std::size_t>& range) {
+        FanScratch scratch;
+        for (std::size_t i = range.begin(); i != range.end(); ++i) {
+          const auto v = static_cast<std::uint32_t>(i);
+          const std::uint32_t fans = fans_around(mesh, v, around.begin(v), around.end(v),
+                                                 fan.data() + around.offsets[v], scratch);
+          extra[i] = fans > 1 ? fans - 1 : 0;
+        }
+      });
   // extra[v] -> index of v's first new vertex.
   std::uint32_t next = static_cast<std::uint32_t>(n);
   for (std::size_t i = 0; i < n; ++i) {

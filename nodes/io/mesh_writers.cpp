@@ -1,6 +1,8 @@
 #include "nodes/io/mesh_writers.h"
 
+#include <cstdint>
 #include <cstring>
+#include <vector>
 
 #include "nodes/io/atomic_file.h"
 #include "nodes/io/parse_util.h"
@@ -8,11 +10,12 @@
 
 namespace meshflow::io {
 namespace {
+// Copies v's bytes to `at` and returns the byte after them (the buffer is sized beforehand:
+// no growth check per value).
 template <typename T>
-void put(std::string& buf, const T& v) {
-  char b[sizeof(T)];
-  std::memcpy(b, &v, sizeof(T));
-  buf.append(b, sizeof(T));
+char* put(char* at, const T& v) {
+  std::memcpy(at, &v, sizeof(T));
+  return at + sizeof(T);
 }
 }  // namespace
 
@@ -48,23 +51,23 @@ void write_ply(const std::string& path, const TriangleMesh& mesh, PlyEncoding en
     for (const Triangle& t : mesh.triangles)
       out << "3 " << t[0] << ' ' << t[1] << ' ' << t[2] << '\n';
   } else {
-    std::string buf;
-    buf.reserve(mesh.vertices.size() * 27 + mesh.triangles.size() * 13);
+    const std::size_t vertex_bytes = 12 + (normals ? 12 : 0) + (colors ? 3 : 0);
+    std::vector<char> buf(mesh.vertices.size() * vertex_bytes + mesh.triangles.size() * 13);
+    char* at = buf.data();
     for (std::size_t i = 0; i < mesh.vertices.size(); ++i) {
-      for (int k = 0; k < 3; ++k) put(buf, mesh.vertices[i][k]);
+      for (int k = 0; k < 3; ++k) at = put(at, mesh.vertices[i][k]);
       if (normals)
-        for (int k = 0; k < 3; ++k) put(buf, mesh.normals[i][k]);
+        for (int k = 0; k < 3; ++k) at = put(at, mesh.normals[i][k]);
       if (colors) {
-        buf.push_back(static_cast<char>(mesh.colors[i].r));
-        buf.push_back(static_cast<char>(mesh.colors[i].g));
-        buf.push_back(static_cast<char>(mesh.colors[i].b));
+        const Rgb8& c = mesh.colors[i];
+        for (std::uint8_t channel : {c.r, c.g, c.b}) at = put(at, channel);
       }
     }
     for (const Triangle& t : mesh.triangles) {
-      buf.push_back(3);
-      for (std::uint32_t v : t) put(buf, v);
+      at = put(at, std::uint8_t{3});
+      for (std::uint32_t v : t) at = put(at, v);
     }
-    out.write(buf.data(), static_cast<std::streamsize>(buf.size()));
+    out.write(buf.data(), static_cast<std::streamsize>(at - buf.data()));
   }
   file.commit();
 }

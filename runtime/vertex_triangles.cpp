@@ -18,9 +18,8 @@ VertexTriangles vertex_triangles(const std::vector<Triangle>& tris, std::size_t 
   // Consecutive triangle chunks, one per worker: chunk c counts its corners per vertex in its
   // own row of `slots` (later: where its next triangle goes in each vertex's row). A vertex's
   // row lists chunk 0's triangles, then chunk 1's, ..., each in order: ascending for any
-  // chunking.
-  // At most 8 chunks, and no more than 3 T / V of them: the rows of `slots` (V each) then take
-  // no more memory than the output's 3 T entries.
+  // chunking. At most 8 chunks, and no more than 3 T / V of them, so that the rows of `slots`
+  // (V each) take no more memory than the output's 3 T entries.
   constexpr std::size_t kMinTrianglesPerChunk = 8192, kMaxChunks = 8;
   const std::size_t most =
       std::min({kMaxChunks, 3 * tris.size() / std::max<std::size_t>(vertex_count, 1),

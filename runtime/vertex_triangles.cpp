@@ -31,7 +31,8 @@ VertexTriangles vertex_triangles(const std::vector<Triangle>& tris, std::size_t 
   tbb::parallel_for(std::size_t{0}, chunks, [&](std::size_t c) {
     std::uint32_t* count = slots.data() + c * vertex_count;
     for (std::size_t t = chunk_begin(c); t < chunk_begin(c + 1); ++t)
-      for (std::uint32_t v : tris[t]) ++count[v];
+      for (std::uint32_t v : tris[t])
+        if (v < vertex_count) ++count[v];  // (an index past the vertices is not listed)
   });
   // Row starts (a two-level scan over vertex ranges), and every chunk's start within each row.
   constexpr std::size_t kMinVerticesPerRange = 16384;
@@ -65,8 +66,10 @@ VertexTriangles vertex_triangles(const std::vector<Triangle>& tris, std::size_t 
   tbb::parallel_for(std::size_t{0}, chunks, [&](std::size_t c) {
     std::uint32_t* next = slots.data() + c * vertex_count;
     for (std::size_t t = chunk_begin(c); t < chunk_begin(c + 1); ++t)
-      for (std::uint32_t v : tris[t]) out.triangles[next[v]++] = static_cast<std::uint32_t>(t);
+      for (std::uint32_t v : tris[t])
+        if (v < vertex_count) out.triangles[next[v]++] = static_cast<std::uint32_t>(t);
   });
+  out.triangles.resize(out.offsets[vertex_count]);
   return out;
 }
 

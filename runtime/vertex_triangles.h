@@ -22,7 +22,8 @@ struct VertexTriangles {
 /// Builds the incidence in parallel over consecutive triangle chunks (one per worker, at most
 /// 8 and at most 3 T / V): each chunk counts, then places, its own triangles' corners through
 /// per-chunk row positions, so no atomics are needed, every triangle is read twice in all, and
-/// the result is the same for any thread count. Triangles must index existing vertices.
+/// the result is the same for any thread count. Corners indexing no vertex (>= the vertex
+/// count) are left out.
 /// O(T + V x chunks) time and memory (the chunks' positions take at most the output's size).
 VertexTriangles vertex_triangles(const TriangleMesh& mesh);
 /// The same for bare triangles over `vertex_count` vertices.

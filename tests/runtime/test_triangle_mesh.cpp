@@ -84,6 +84,18 @@ TEST(VertexTriangles, MatchesABruteForceIncidenceForAnyWorkerCount) {
   eight.execute([&] { expect_oracle(vertex_triangles(m)); });
 }
 
+TEST(VertexTriangles, CornersPastTheVerticesAreLeftOut) {
+  // Triangle 1 names vertex 7 of 4: its other corners are listed, that one nowhere.
+  const std::vector<Triangle> tris{{0, 1, 2}, {1, 7, 3}, {2, 1, 3}};
+  const VertexTriangles around = vertex_triangles(tris, 4);
+  ASSERT_EQ(around.offsets.size(), 5u);
+  EXPECT_EQ(around.triangles.size(), 8u);
+  EXPECT_EQ(std::vector<std::uint32_t>(around.begin(1), around.end(1)),
+            (std::vector<std::uint32_t>{0, 1, 2}));
+  EXPECT_EQ(std::vector<std::uint32_t>(around.begin(3), around.end(3)),
+            (std::vector<std::uint32_t>{1, 2}));
+}
+
 TEST(TriangleMesh, BorderEdgesOfAGridAreItsOutlineDirectedAsTheirTriangles) {
   const std::uint32_t n = 150;
   const TriangleMesh m = wavy_grid(n);

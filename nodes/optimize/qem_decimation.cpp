@@ -210,7 +210,8 @@ class Decimator {
   // Per-thread working memory of best_collapse().
   struct Scratch {
     explicit Scratch(const Decimator& d) : fan(d.cos_turn_, d.cos2_min_angle_) {}
-    std::vector<std::uint32_t> nu, border;  ///< u's neighbours, and those on a border
+    std::vector<std::uint32_t> nu, border;              ///< u's neighbours, and those on a border
+    std::size_t neighbour_count = 0, border_count = 0;  ///< the entries of nu and border in use
     std::vector<std::pair<double, std::uint32_t>> candidates;  ///< (quadric cost, v)
     CollapseFan fan;                                           ///< u's faces
     std::vector<std::uint32_t> mark;  ///< per vertex: a stamp, or a count above a stamp
@@ -241,18 +242,23 @@ class Decimator {
   Candidate best_collapse(std::uint32_t u, Scratch& scratch) const {
     Candidate best;
     best.from = u;
-    if (around_.begin(u) == around_.end(u)) return best;
-    auto& [nu, border, candidates, fan, mark, stamp, rejected] = scratch;
+    const std::size_t row = static_cast<std::size_t>(around_.end(u) - around_.begin(u));
+    if (row == 0) return best;
+    auto& [nu, border, neighbour_total, border_total, candidates, fan, mark, stamp, rejected] =
+        scratch;
     // One walk over u's faces (u, a, b) fills the fan and finds the neighbours, and the border
     // ones among them (sharing one face with u): each neighbour appears once per face it
-    // shares with u, counted in `mark` (from base + 1, saturating).
+    // shares with u, counted in `mark` (from base + 1, saturating). The lists are written by
+    // index into room for every end of every face (no growth checks per entry).
     const std::uint32_t base = scratch.fresh_stamps(8);
-    nu.clear();
-    border.clear();
-    std::size_t faces = 0;
-    for (const std::uint32_t* f = around_.begin(u); f != around_.end(u); ++f) faces += alive_[*f];
-    if (faces == 0) return best;
-    fan.reset(faces, p(u));
+    if (nu.size() < 2 * row) {
+      nu.resize(2 * row);
+      border.resize(2 * row);
+      candidates.resize(2 * row);
+    }
+    std::uint32_t* const neighbours = nu.data();
+    std::size_t neighbour_count = 0;
+    fan.reset(row, p(u));
     std::size_t k = 0;
     for (const std::uint32_t* f = around_.begin(u); f != around_.end(u); ++f) {
       if (!alive_[*f]) continue;
@@ -265,29 +271,39 @@ class Decimator {
         std::uint32_t& count = mark[x];
         if (count < base) {
           count = base + 1;
-          nu.push_back(x);
+          neighbours[neighbour_count++] = x;
         } else if (count < base + 7) {
           ++count;
         }
       }
     }
-    for (std::uint32_t x : nu)
-      if (mark[x] == base + 1) border.push_back(x);
+    if (k == 0) return best;
+    neighbour_total = neighbour_count;
+    std::size_t border_count = 0;
+    for (std::size_t j = 0; j < neighbour_count; ++j)
+      if (mark[neighbours[j]] == base + 1) border[border_count++] = neighbours[j];
+    border_total = border_count;
     // A border vertex may only move along its border (see valid()): onto one of its two border
     // neighbours, and only where the border runs nearly straight through it. Both moves make
     // the same turn, so a bend rules out both before any cost is computed.
-    if (!border.empty() && (border.size() != 2 || !border_straight(u, border[0], border[1]))) {
-      rejected.rejected_border += border.size() == 2 ? 2 : nu.size();
+    if (border_count != 0 && (border_count != 2 || !border_straight(u, border[0], border[1]))) {
+      rejected.rejected_border += border_count == 2 ? 2 : neighbour_count;
       return best;
     }
-    candidates.clear();
-    for (std::uint32_t v : border.empty() ? nu : border)
-      candidates.emplace_back(quadric_cost(u, v), v);
-    std::sort(candidates.begin(), candidates.end());
-    fan.finish();
-    // Penalties only multiply the quadric cost, so candidates are tried in its order until it
-    // alone exceeds the best penalised cost found.
-    for (const auto& [quadric, v] : candidates) {
+    const std::uint32_t* targets = border_count != 0 ? border.data() : neighbours;
+    std::size_t left = border_count != 0 ? border_count : neighbour_count;
+    std::pair<double, std::uint32_t>* const queue = candidates.data();
+    for (std::size_t j = 0; j < left; ++j) queue[j] = {quadric_cost(u, targets[j]), targets[j]};
+    fan.finish(k);
+    // Penalties only multiply the quadric cost, so candidates are tried in its order (cost,
+    // then vertex; picked one by one: a vertex tries ~2 of its ~4) until it alone exceeds the
+    // best penalised cost found.
+    while (left > 0) {
+      std::size_t cheapest = 0;
+      for (std::size_t j = 1; j < left; ++j)
+        if (queue[j] < queue[cheapest]) cheapest = j;
+      const auto [quadric, v] = queue[cheapest];
+      queue[cheapest] = queue[--left];
       if (!(quadric < best.cost)) break;
       const FanVerdict verdict = fan.check(v, p(v));
       if (verdict.turned) {  // invalid whatever the cost: refused before anything else
@@ -349,7 +365,8 @@ class Decimator {
   // u whose neighbourhood and fan `scratch` holds; `verdict` is the fan's check of v (its faces
   // that stay are unturned: the caller checked). Counts the reason of a refusal.
   bool valid(std::uint32_t v, const FanVerdict& verdict, Scratch& scratch) const {
-    const std::vector<std::uint32_t>& border_at_u = scratch.border;
+    const std::uint32_t* border_at_u = scratch.border.data();
+    const std::size_t border_count = scratch.border_count;
     QemReport& rejected = scratch.rejected;
     const std::size_t shared_count = verdict.shared;
     if (shared_count == 0 || shared_count > 2) {
@@ -358,9 +375,9 @@ class Decimator {
     }
     // Borders: u on a border moves only along it, onto the next border vertex (best_collapse()
     // has checked that the border runs nearly straight there).
-    if (!border_at_u.empty()) {
-      const bool along = shared_count == 1 && border_at_u.size() == 2 &&
-                         (border_at_u[0] == v || border_at_u[1] == v);
+    if (border_count != 0) {
+      const bool along =
+          shared_count == 1 && border_count == 2 && (border_at_u[0] == v || border_at_u[1] == v);
       if (!along) {
         ++rejected.rejected_border;
         return false;
@@ -372,8 +389,8 @@ class Decimator {
     // opposite vertices. u's neighbours are marked, then v's faces count the marked ones.
     std::vector<std::uint32_t>& mark = scratch.mark;
     const std::uint32_t listed = scratch.fresh_stamps(2), counted = listed + 1;
-    for (std::uint32_t x : scratch.nu)
-      if (x != v) mark[x] = listed;
+    for (std::size_t j = 0; j < scratch.neighbour_count; ++j)
+      if (scratch.nu[j] != v) mark[scratch.nu[j]] = listed;
     std::size_t common = 0;
     for (const std::uint32_t* f = around_.begin(v); f != around_.end(v); ++f)
       if (alive_[*f])

@@ -1,6 +1,7 @@
 // CollapseFan's vectorised checks against a direct oracle: angles by acos, turns by the angle
 // between normals, degeneracy by has_area(), on random fans of every size around the vector
-// width (padding lanes must never count, whatever an earlier fan left in them).
+// width (padding lanes must never count, whatever an earlier fan left in them, nor lanes reserved
+// by reset() and left unset).
 
 #include "nodes/optimize/collapse_fan.h"
 
@@ -79,10 +80,21 @@ TEST(CollapseFan, MatchesTheOracleOnRandomFans) {
         std::vector<Face> faces;
         for (std::size_t k = 0; k < size; ++k)
           faces.push_back({static_cast<std::uint32_t>(k + 1), static_cast<std::uint32_t>(k + 2)});
-        fan.reset(faces.size(), points[0]);
+        // Room for up to two more faces than are set, as for a vertex with removed faces.
+        fan.reset(faces.size() + static_cast<std::size_t>(trial % 3), points[0]);
         for (std::size_t k = 0; k < faces.size(); ++k)
           fan.set(k, faces[k].a, points[faces[k].a], faces[k].b, points[faces[k].b]);
-        fan.finish();
+        fan.finish(faces.size());
+        ASSERT_EQ(fan.size(), faces.size());
+        for (std::size_t k = 0; k < faces.size(); ++k) {
+          const Eigen::Vector3f& pa = points[faces[k].a];
+          const Eigen::Vector3f& pb = points[faces[k].b];
+          const Eigen::Vector3f area = (pa - points[0]).cross(pb - points[0]);
+          EXPECT_EQ(fan.a(k), faces[k].a);
+          EXPECT_EQ(fan.b(k), faces[k].b);
+          EXPECT_NEAR((fan.area_vector(k) - area).norm(), 0.0f, 1e-5f * area.norm());
+          EXPECT_NEAR(fan.area_vector_norm(k), area.norm(), 1e-5f * area.norm());
+        }
         for (std::uint32_t v = 1; v < points.size(); ++v) {
           const FanVerdict got = fan.check(v, points[v]);
           const FanVerdict want = oracle(points, 0, faces, v, max_turn, min_angle);
@@ -111,7 +123,7 @@ TEST(CollapseFan, DegenerateNewFacesAreTurned) {
   CollapseFan fan(0.5f, 0.0f);
   fan.reset(1, points[0]);
   fan.set(0, 1, points[1], 2, points[2]);
-  fan.finish();
+  fan.finish(1);
   const FanVerdict verdict = fan.check(3, points[3]);
   EXPECT_TRUE(verdict.turned);
   EXPECT_EQ(verdict.shared, 0u);

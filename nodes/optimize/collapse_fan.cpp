@@ -65,24 +65,25 @@ MESHFLOW_AVX2_CLONES FanVerdict check_blocks(const float* lanes, const std::uint
   const Ints8 acute = Ints8{} + (max_turn_cos >= 0.0f ? -1 : 0);
   const auto target = static_cast<std::int32_t>(v);
   Ints8 flags{}, shared{};  // needle in bit 0, turned in bit 1; -1 per face with v
-  for (std::size_t j = 0; j < blocks; ++j, lanes += kRows * kBlock, ends += kEndRows * kBlock) {
+  const auto check_block = [&](const float* block, const std::uint32_t* block_ends)
+      __attribute__((always_inline)) {
     Floats8 ax, ay, az, bx, by, bz, ex, ey, ez, le, nx, ny, nz, n2;
-    load8(ax, lanes + R::kAx * kBlock);
-    load8(ay, lanes + R::kAy * kBlock);
-    load8(az, lanes + R::kAz * kBlock);
-    load8(bx, lanes + R::kBx * kBlock);
-    load8(by, lanes + R::kBy * kBlock);
-    load8(bz, lanes + R::kBz * kBlock);
+    load8(ax, block + R::kAx * kBlock);
+    load8(ay, block + R::kAy * kBlock);
+    load8(az, block + R::kAz * kBlock);
+    load8(bx, block + R::kBx * kBlock);
+    load8(by, block + R::kBy * kBlock);
+    load8(bz, block + R::kBz * kBlock);
     ax -= vx;
     ay -= vy;
     az -= vz;
     bx -= vx;
     by -= vy;
     bz -= vz;
-    load8(ex, lanes + R::kEdgeX * kBlock);
-    load8(ey, lanes + R::kEdgeY * kBlock);
-    load8(ez, lanes + R::kEdgeZ * kBlock);
-    load8(le, lanes + R::kEdge2 * kBlock);
+    load8(ex, block + R::kEdgeX * kBlock);
+    load8(ey, block + R::kEdgeY * kBlock);
+    load8(ez, block + R::kEdgeZ * kBlock);
+    load8(le, block + R::kEdge2 * kBlock);
     const Floats8 la = ax * ax + ay * ay + az * az, lb = bx * bx + by * by + bz * bz;
     const Floats8 at_v = ax * bx + ay * by + az * bz;     // cos at v  ~ va . vb
     const Floats8 at_a = -(ax * ex + ay * ey + az * ez);  // cos at a  ~ -va . e
@@ -100,23 +101,29 @@ MESHFLOW_AVX2_CLONES FanVerdict check_blocks(const float* lanes, const std::uint
     const Floats8 longest = la_le > lb ? la_le : lb;
     const Ints8 has_area =
         (m2 > 0.0f) & (area_a > 0.0f) & (area_b > 0.0f) & (m2 >= flattest2 * longest * longest);
-    load8(nx, lanes + R::kNx * kBlock);
-    load8(ny, lanes + R::kNy * kBlock);
-    load8(nz, lanes + R::kNz * kBlock);
-    load8(n2, lanes + R::kN2 * kBlock);
+    load8(nx, block + R::kNx * kBlock);
+    load8(ny, block + R::kNy * kBlock);
+    load8(nz, block + R::kNz * kBlock);
+    load8(n2, block + R::kN2 * kBlock);
     const Floats8 nm = nx * mx + ny * my + nz * mz;
     const Floats8 bound = turn_cos2 * m2 * n2;
     const Ints8 turn_ok = (acute & (nm >= 0.0f) & (nm * nm >= bound)) |
                           (~acute & ((nm >= 0.0f) | (nm * nm <= bound)));
     Ints8 end_a, end_b, active;
-    load8(end_a, ends + CollapseFan::kA * kBlock);
-    load8(end_b, ends + CollapseFan::kB * kBlock);
-    load8(active, ends + CollapseFan::kActive * kBlock);
+    load8(end_a, block_ends + CollapseFan::kA * kBlock);
+    load8(end_b, block_ends + CollapseFan::kB * kBlock);
+    load8(active, block_ends + CollapseFan::kActive * kBlock);
     active = active != 0;
     const Ints8 has_v = (end_a == target) | (end_b == target);
     shared += active & has_v;
     flags |= active & ~has_v & ((is_needle & 1) | (~(turn_ok & has_area) & 2));
-  }
+  };
+  // Most fans are one block: that case without a loop (no constants spilled across iterations).
+  if (blocks == 1)
+    check_block(lanes, ends);
+  else
+    for (std::size_t j = 0; j < blocks; ++j)
+      check_block(lanes + j * kRows * kBlock, ends + j * kEndRows * kBlock);
   const std::int32_t any = lane_or(flags);
   return FanVerdict{(any & 1) != 0, (any & 2) != 0, static_cast<unsigned>(-lane_sum(shared))};
 }
@@ -173,6 +180,19 @@ void CollapseFan::finish(std::size_t count) {
     for (std::size_t i = 0; i < kBlock; ++i)
       ends_[(j * kEndRows + kActive) * kBlock + i] = j * kBlock + i < faces_ ? 1u : 0u;
   derive_blocks(lanes_.data(), blocks_, pu_.x(), pu_.y(), pu_.z());
+}
+
+bool CollapseFan::bent_at(std::uint32_t v, float min_cos) const {
+  std::size_t with_v[2] = {0, 0}, found = 0;
+  for (std::size_t j = 0; j < blocks_ && found < 2; ++j) {
+    const std::uint32_t* ends = ends_.data() + j * kEndRows * kBlock;
+    for (std::size_t i = 0; i < kBlock && found < 2; ++i)
+      if (ends[kActive * kBlock + i] != 0 &&
+          (ends[kA * kBlock + i] == v || ends[kB * kBlock + i] == v))
+        with_v[found++] = j * kBlock + i;
+  }
+  return found == 2 && area_vector(with_v[0]).dot(area_vector(with_v[1])) <
+                           min_cos * area_vector_norm(with_v[0]) * area_vector_norm(with_v[1]);
 }
 
 Eigen::Vector3f CollapseFan::area_vector(std::size_t k) const {

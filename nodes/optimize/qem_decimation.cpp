@@ -291,19 +291,20 @@ class Decimator {
       return best;
     }
     const std::uint32_t* targets = border_count != 0 ? border.data() : neighbours;
-    std::size_t left = border_count != 0 ? border_count : neighbour_count;
+    const std::size_t count = border_count != 0 ? border_count : neighbour_count;
     std::pair<double, std::uint32_t>* const queue = candidates.data();
-    for (std::size_t j = 0; j < left; ++j) queue[j] = {quadric_cost(u, targets[j]), targets[j]};
+    // In order of (quadric cost, vertex), by insertion: a vertex has a handful of candidates.
+    for (std::size_t j = 0; j < count; ++j) {
+      const std::pair<double, std::uint32_t> entry{quadric_cost(u, targets[j]), targets[j]};
+      std::size_t at = j;
+      for (; at > 0 && entry < queue[at - 1]; --at) queue[at] = queue[at - 1];
+      queue[at] = entry;
+    }
     fan.finish(k);
-    // Penalties only multiply the quadric cost, so candidates are tried in its order (cost,
-    // then vertex; picked one by one: a vertex tries ~2 of its ~4) until it alone exceeds the
-    // best penalised cost found.
-    while (left > 0) {
-      std::size_t cheapest = 0;
-      for (std::size_t j = 1; j < left; ++j)
-        if (queue[j] < queue[cheapest]) cheapest = j;
-      const auto [quadric, v] = queue[cheapest];
-      queue[cheapest] = queue[--left];
+    // Penalties only multiply the quadric cost, so candidates are tried in its order until it
+    // alone exceeds the best penalised cost found.
+    for (std::size_t j = 0; j < count; ++j) {
+      const auto [quadric, v] = queue[j];
       if (!(quadric < best.cost)) break;
       const FanVerdict verdict = fan.check(v, p(v));
       if (verdict.turned) {  // invalid whatever the cost: refused before anything else
@@ -351,14 +352,7 @@ class Decimator {
                    double cost) const {
     if (verdict.needle) return cost * cfg_.penalty;
     if (verdict.shared != 2) return cost;
-    std::size_t shared[2] = {0, 0};
-    std::size_t found = 0;
-    for (std::size_t k = 0; k < fan.size() && found < 2; ++k)
-      if (fan.a(k) == v || fan.b(k) == v) shared[found++] = k;
-    const bool sharp =
-        fan.area_vector(shared[0]).dot(fan.area_vector(shared[1])) <
-        cos_sharp_ * fan.area_vector_norm(shared[0]) * fan.area_vector_norm(shared[1]);
-    return sharp ? cost * cfg_.penalty : cost;
+    return fan.bent_at(v, cos_sharp_) ? cost * cfg_.penalty : cost;
   }
 
   // Whether u -> v keeps the mesh manifold and borders on themselves (see QemConfig), for the

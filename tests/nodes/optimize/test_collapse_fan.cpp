@@ -59,7 +59,7 @@ TEST(CollapseFan, MatchesTheOracleOnRandomFans) {
   std::mt19937 rng(7);
   std::uniform_real_distribution<float> jitter(-0.6f, 0.6f);
   const double min_angle = 13.0;
-  std::size_t needles = 0, turns = 0, checks = 0;
+  std::size_t needles = 0, turns = 0, bends = 0, checks = 0;
   for (double max_turn : {60.0, 120.0}) {
     const float max_turn_cos = static_cast<float>(std::cos(max_turn * kDegrees));
     const auto min_cos2 = static_cast<float>(std::pow(std::cos(min_angle * kDegrees), 2));
@@ -103,6 +103,17 @@ TEST(CollapseFan, MatchesTheOracleOnRandomFans) {
           EXPECT_EQ(got.shared, want.shared);
           EXPECT_EQ(got.needle, want.needle);
           EXPECT_EQ(got.turned, want.turned);
+          // The edge u-v is bent where its two faces' normals differ by more than 40 degrees.
+          std::vector<Eigen::Vector3d> normals;
+          for (const Face& f : faces)
+            if (f.a == v || f.b == v)
+              normals.push_back(
+                  (points[f.a] - points[0]).cross(points[f.b] - points[0]).cast<double>());
+          const bool bent =
+              normals.size() >= 2 &&
+              normals[0].normalized().dot(normals[1].normalized()) < std::cos(40.0 * kDegrees);
+          EXPECT_EQ(fan.bent_at(v, static_cast<float>(std::cos(40.0 * kDegrees))), bent);
+          bends += bent ? 1 : 0;
           needles += want.needle ? 1 : 0;
           turns += want.turned ? 1 : 0;
           ++checks;
@@ -115,6 +126,7 @@ TEST(CollapseFan, MatchesTheOracleOnRandomFans) {
   EXPECT_LT(needles, checks * 9 / 10);
   EXPECT_GT(turns, checks / 10);
   EXPECT_LT(turns, checks * 9 / 10);
+  EXPECT_GT(bends, checks / 20);
 }
 
 TEST(CollapseFan, DegenerateNewFacesAreTurned) {

@@ -26,6 +26,12 @@ template <typename V, typename T>
 MESHFLOW_INLINE void load8(V& lanes, const T* from) {
   std::memcpy(&lanes, from, sizeof lanes);
 }
+// Consecutive rows of a block, from row `first` on, one into each of `rows`.
+template <typename... V>
+MESHFLOW_INLINE void load_rows(const float* block, CollapseFan::Row first, V&... rows) {
+  std::size_t row = first;
+  (load8(rows, block + (row++) * kBlock), ...);
+}
 template <typename V, typename T>
 MESHFLOW_INLINE void store8(T* to, const V& lanes) {
   std::memcpy(to, &lanes, sizeof lanes);
@@ -68,22 +74,14 @@ MESHFLOW_AVX2_CLONES FanVerdict check_blocks(const float* lanes, const std::uint
   const auto check_block = [&](const float* block, const std::uint32_t* block_ends)
       __attribute__((always_inline)) {
     Floats8 ax, ay, az, bx, by, bz, ex, ey, ez, le, nx, ny, nz, n2;
-    load8(ax, block + R::kAx * kBlock);
-    load8(ay, block + R::kAy * kBlock);
-    load8(az, block + R::kAz * kBlock);
-    load8(bx, block + R::kBx * kBlock);
-    load8(by, block + R::kBy * kBlock);
-    load8(bz, block + R::kBz * kBlock);
+    load_rows(block, R::kAx, ax, ay, az, bx, by, bz);
     ax -= vx;
     ay -= vy;
     az -= vz;
     bx -= vx;
     by -= vy;
     bz -= vz;
-    load8(ex, block + R::kEdgeX * kBlock);
-    load8(ey, block + R::kEdgeY * kBlock);
-    load8(ez, block + R::kEdgeZ * kBlock);
-    load8(le, block + R::kEdge2 * kBlock);
+    load_rows(block, R::kEdgeX, ex, ey, ez, le);
     const Floats8 la = ax * ax + ay * ay + az * az, lb = bx * bx + by * by + bz * bz;
     const Floats8 at_v = ax * bx + ay * by + az * bz;     // cos at v  ~ va . vb
     const Floats8 at_a = -(ax * ex + ay * ey + az * ez);  // cos at a  ~ -va . e
@@ -101,10 +99,7 @@ MESHFLOW_AVX2_CLONES FanVerdict check_blocks(const float* lanes, const std::uint
     const Floats8 longest = la_le > lb ? la_le : lb;
     const Ints8 has_area =
         (m2 > 0.0f) & (area_a > 0.0f) & (area_b > 0.0f) & (m2 >= flattest2 * longest * longest);
-    load8(nx, block + R::kNx * kBlock);
-    load8(ny, block + R::kNy * kBlock);
-    load8(nz, block + R::kNz * kBlock);
-    load8(n2, block + R::kN2 * kBlock);
+    load_rows(block, R::kNx, nx, ny, nz, n2);
     const Floats8 nm = nx * mx + ny * my + nz * mz;
     const Floats8 bound = turn_cos2 * m2 * n2;
     const Ints8 turn_ok = (acute & (nm >= 0.0f) & (nm * nm >= bound)) |
@@ -135,12 +130,7 @@ MESHFLOW_AVX2_CLONES void derive_blocks(float* lanes, std::size_t blocks, float 
   using R = CollapseFan::Row;
   for (std::size_t j = 0; j < blocks; ++j, lanes += kRows * kBlock) {
     Floats8 ax, ay, az, bx, by, bz;
-    load8(ax, lanes + R::kAx * kBlock);
-    load8(ay, lanes + R::kAy * kBlock);
-    load8(az, lanes + R::kAz * kBlock);
-    load8(bx, lanes + R::kBx * kBlock);
-    load8(by, lanes + R::kBy * kBlock);
-    load8(bz, lanes + R::kBz * kBlock);
+    load_rows(lanes, R::kAx, ax, ay, az, bx, by, bz);
     const Floats8 ex = bx - ax, ey = by - ay, ez = bz - az;
     const Floats8 px = ax - ux, py = ay - uy, pz = az - uz;
     const Floats8 qx = bx - ux, qy = by - uy, qz = bz - uz;

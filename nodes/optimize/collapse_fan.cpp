@@ -197,3 +197,5 @@ FanVerdict CollapseFan::check(std::uint32_t v, const Eigen::Vector3f& pv) const 
 }
 
 }  // namespace meshflow
+
+#undef MESHFLOW_INLINE  // (unity builds: not into the next file)

@@ -255,5 +255,65 @@ TEST(QemDecimation, RandomNoisyMeshesWithHolesStayManifold) {
   }
 }
 
+// Hubs of 12 to 40 faces (fans of two to five blocks of eight in the vectorised checks), rings
+// around them, and faces that repeat a vertex or repeat a face: decimated without a crash to a
+// mesh whose corners are input vertices at their measured positions, as manifold as the
+// well-formed part, the same with one and two threads.
+TEST(QemDecimation, HubsAndRepeatedCornersAreHandled) {
+  for (int spokes : {12, 17, 24, 40}) {
+    TriangleMesh in;
+    in.vertices.emplace_back(0.0f, 0.0f, 2.0f);  // the hub
+    for (int ring = 1; ring <= 3; ++ring)
+      for (int k = 0; k < spokes; ++k) {
+        const double angle = 2.0 * 3.14159265358979 * (k + 0.5 * (ring % 2)) / spokes;
+        const float r = 0.1f * static_cast<float>(ring);
+        in.vertices.emplace_back(r * static_cast<float>(std::cos(angle)),
+                                 r * static_cast<float>(std::sin(angle)),
+                                 2.0f + 0.002f * static_cast<float>((k * 7 + ring) % 5));
+      }
+    const auto at = [spokes](int ring, int k) {
+      return static_cast<std::uint32_t>(1 + (ring - 1) * spokes + (k % spokes + spokes) % spokes);
+    };
+    for (int k = 0; k < spokes; ++k) in.triangles.push_back({0, at(1, k), at(1, k + 1)});
+    for (int ring = 1; ring < 3; ++ring)
+      for (int k = 0; k < spokes; ++k) {
+        // Rings alternate their half-step offset: inner k, k + 1 against outer k or k + 1.
+        const int shift = ring % 2 == 1 ? 1 : 0;
+        in.triangles.push_back({at(ring, k), at(ring + 1, k + shift), at(ring, k + 1)});
+        in.triangles.push_back(
+            {at(ring, k + 1), at(ring + 1, k + shift), at(ring + 1, k + shift + 1)});
+      }
+    const std::size_t well_formed = in.triangles.size();
+    in.triangles.push_back({0, 0, at(1, 0)});                // a face repeating the hub
+    in.triangles.push_back({at(2, 3), at(2, 4), at(2, 3)});  // and one repeating a ring vertex
+    in.triangles.push_back(in.triangles[well_formed / 2]);   // a face given twice
+    QemConfig config = plain_config();
+    config.target_ratio = 0.3f;
+    std::vector<TriangleMesh> out;
+    for (int threads : {1, 2}) {
+      ThreadLimit limit(threads);
+      out.push_back(qem_decimate(in, config));
+    }
+    const std::string what = std::to_string(spokes) + " spokes";
+    EXPECT_LT(out[0].triangles.size(), well_formed) << what;
+    EXPECT_GT(out[0].triangles.size(), 0u) << what;
+    EXPECT_EQ(out[0].triangles, out[1].triangles) << what;
+    for (const Eigen::Vector3f& v : out[0].vertices)
+      EXPECT_TRUE(std::find(in.vertices.begin(), in.vertices.end(), v) != in.vertices.end())
+          << what;
+    // The disc faces up; no collapse may turn a face by more than 60 degrees, so none of the
+    // faces with an area points down.
+    std::size_t up = 0;
+    for (const Triangle& t : out[0].triangles) {
+      for (std::uint32_t c : t) ASSERT_LT(c, out[0].vertices.size()) << what;
+      const Eigen::Vector3f& a = out[0].vertices[t[0]];
+      const Eigen::Vector3f n = (out[0].vertices[t[1]] - a).cross(out[0].vertices[t[2]] - a);
+      EXPECT_GE(n.z(), 0.0f) << what;
+      up += n.z() > 0.0f ? 1 : 0;
+    }
+    EXPECT_GE(up + 3, out[0].triangles.size()) << what;  // all but the repeated-corner faces
+  }
+}
+
 }  // namespace
 }  // namespace meshflow

@@ -45,14 +45,14 @@ class CollapseFan {
   /// finish(count) called.
   void set(std::size_t k, std::uint32_t a, const Eigen::Vector3f& pa, std::uint32_t b,
            const Eigen::Vector3f& pb) {
-    float* lane = lanes_.data() + (k / kBlock) * kRows * kBlock + k % kBlock;
+    float* lane = lanes_.data() + lane_index(kRows, kAx, k);
     lane[kAx * kBlock] = pa.x();
     lane[kAy * kBlock] = pa.y();
     lane[kAz * kBlock] = pa.z();
     lane[kBx * kBlock] = pb.x();
     lane[kBy * kBlock] = pb.y();
     lane[kBz * kBlock] = pb.z();
-    std::uint32_t* ends = ends_.data() + (k / kBlock) * kEndRows * kBlock + k % kBlock;
+    std::uint32_t* ends = ends_.data() + lane_index(kEndRows, kA, k);
     ends[kA * kBlock] = a;
     ends[kB * kBlock] = b;
   }
@@ -75,12 +75,12 @@ class CollapseFan {
   float area_vector_norm(std::size_t k) const;
 
  private:
-  std::uint32_t end(EndRow r, std::size_t k) const {
-    return ends_[(k / kBlock * kEndRows + r) * kBlock + k % kBlock];
+  // Where face k's entry of row `row` is in an array of blocks of `rows` rows.
+  static constexpr std::size_t lane_index(std::size_t rows, std::size_t row, std::size_t k) {
+    return (k / kBlock * rows + row) * kBlock + k % kBlock;
   }
-  float lane(Row r, std::size_t k) const {
-    return lanes_[(k / kBlock * kRows + r) * kBlock + k % kBlock];
-  }
+  std::uint32_t end(EndRow r, std::size_t k) const { return ends_[lane_index(kEndRows, r, k)]; }
+  float lane(Row r, std::size_t k) const { return lanes_[lane_index(kRows, r, k)]; }
 
   float max_turn_cos_, min_angle_cos2_;
   Eigen::Vector3f pu_ = Eigen::Vector3f::Zero();

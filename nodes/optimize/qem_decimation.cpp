@@ -69,10 +69,10 @@ std::uint64_t order_key(const Candidate& c) {
 
 // A pass evaluates every vertex that needs it on the mesh as it was when the pass started
 // (incidence rows, positions, quadrics), in parallel, then applies collapses cheapest first.
-// Each collapse u -> v removes u and grows v (its incidence row is stale from then on): later
-// collapses of the pass may involve neither. Its other neighbours' faces changed: a candidate
-// with an end among them is evaluated again on the mesh as it is now and taken only if it got
-// no dearer. The next pass re-evaluates only the vertices next to a change.
+// Each collapse u -> v removes u; v takes over u's faces (u's row joins the rows v is read
+// from until the pass ends), and v's quadric and u's neighbours' faces change: a candidate with
+// an end among them is evaluated again on the mesh as it is now and taken while its cost stays
+// within the pass's limit. The next pass re-evaluates only the vertices next to a change.
 class Decimator {
  public:
   Decimator(const TriangleMesh& mesh, const QemConfig& config)
@@ -113,13 +113,16 @@ class Decimator {
     std::size_t alive = t_.size();
     const std::size_t n = in_.vertices.size();
     std::vector<Candidate> best(n);
-    // In a pass: `changed` = u and its neighbours for every collapse u -> v (faces or quadric
-    // changed), `fixed` = u and v (removed, or grown beyond its incidence row).
-    std::vector<std::uint8_t> changed(n), fixed(n), dirty(n, 1);
+    // In a pass: `changed` = u and its neighbours (v among them) for every collapse u -> v
+    // (faces or quadric changed), `removed` = u.
+    std::vector<std::uint8_t> changed(n), removed(n), dirty(n, 1);
     std::vector<std::uint32_t> targets;  // the kept vertex of every collapse of the last pass
     while (alive > target) {
       compact_faces();
       around_ = vertex_triangles(t_, n);
+      merged_head_.assign(n, kNone);
+      merged_tail_.assign(n, kNone);
+      merged_next_.assign(n, kNone);
       // After u -> v, exactly the vertices of v's faces need a new best collapse: a vertex w's
       // best reads its own faces (changed only around v), its neighbours' quadrics (only v's
       // changed) and, for the link condition of w -> x, the common neighbours of w and x,
@@ -160,7 +163,7 @@ class Decimator {
       const std::size_t goal = std::min(order.size(), (alive - target + 1) / 2);
       const double limit = 1.5 * candidate(std::max<std::size_t>(goal, 1) - 1).cost;
       std::fill(changed.begin(), changed.end(), 0);
-      std::fill(fixed.begin(), fixed.end(), 0);
+      std::fill(removed.begin(), removed.end(), 0);
       std::size_t collapsed = 0;
       Scratch& scratch = local_scratch();
       for (std::size_t i = 0; i < order.size(); ++i) {
@@ -169,16 +172,16 @@ class Decimator {
         if (i + kLookAhead < order.size()) prefetch(candidate(i + kLookAhead));
         Candidate c = candidate(i);
         if (alive <= target || (c.cost > limit && collapsed > 0)) break;
-        if (fixed[c.from] || fixed[c.to]) continue;
+        if (removed[c.from]) continue;
         if (changed[c.from] || changed[c.to]) {
-          // A neighbour of u or v went since the evaluation: u's best collapse on the mesh as
-          // it is now, if it is no dearer (else u waits for the next pass).
-          const double evaluated = c.cost;
+          // u or v took part in a collapse, or lost a neighbour, since the evaluation: u's best
+          // collapse on the mesh as it is now, if it stays within the limit (else u waits for
+          // the next pass).
           c = best_collapse(c.from, scratch);
-          if (!(c.cost <= evaluated) || fixed[c.to]) continue;
+          if (!(c.cost <= limit)) continue;
         }
         alive -= collapse(c.from, c.to, changed);
-        fixed[c.from] = fixed[c.to] = 1;
+        removed[c.from] = 1;
         targets.push_back(c.to);
         best[c.from].cost = kNoCollapse;  // removed
         ++collapsed;
@@ -197,6 +200,32 @@ class Decimator {
 
  private:
   const Eigen::Vector3f& p(std::uint32_t v) const { return in_.vertices[v]; }
+
+  // Calls fn(f) for every live face f of w: those of its incidence row and of the rows of the
+  // vertices merged into w in this pass (which hold w now).
+  template <typename Fn>
+  void for_each_face(std::uint32_t w, Fn&& fn) const {
+    for (std::uint32_t x = w; x != kNone; x = x == w ? merged_head_[w] : merged_next_[x])
+      for (const std::uint32_t* f = around_.begin(x); f != around_.end(x); ++f)
+        if (alive_[*f]) fn(*f);
+  }
+
+  // The number of faces for_each_face(w) walks, dead ones included: room for w's fan.
+  std::size_t face_room(std::uint32_t w) const {
+    std::size_t room = 0;
+    for (std::uint32_t x = w; x != kNone; x = x == w ? merged_head_[w] : merged_next_[x])
+      room += static_cast<std::size_t>(around_.end(x) - around_.begin(x));
+    return room;
+  }
+
+  // After u -> v: v's merged list becomes u, u's merged list, then v's (O(1)).
+  void merge_rows(std::uint32_t u, std::uint32_t v) {
+    const std::uint32_t last = merged_tail_[u] != kNone ? merged_tail_[u] : u;
+    merged_next_[u] = merged_head_[u];
+    merged_next_[last] = merged_head_[v];
+    if (merged_tail_[v] == kNone) merged_tail_[v] = last;
+    merged_head_[v] = u;
+  }
 
   static bool has(const Triangle& t, std::uint32_t v) {
     return t[0] == v || t[1] == v || t[2] == v;
@@ -242,7 +271,7 @@ class Decimator {
   Candidate best_collapse(std::uint32_t u, Scratch& scratch) const {
     Candidate best;
     best.from = u;
-    const std::size_t row = static_cast<std::size_t>(around_.end(u) - around_.begin(u));
+    const std::size_t row = face_room(u);
     if (row == 0) return best;
     auto& [nu, border, neighbour_total, border_total, candidates, fan, mark, stamp, rejected] =
         scratch;
@@ -260,9 +289,8 @@ class Decimator {
     std::size_t neighbour_count = 0;
     fan.reset(row, p(u));
     std::size_t k = 0;
-    for (const std::uint32_t* f = around_.begin(u); f != around_.end(u); ++f) {
-      if (!alive_[*f]) continue;
-      const Triangle& t = t_[*f];
+    for_each_face(u, [&](std::uint32_t face) {
+      const Triangle& t = t_[face];
       const std::size_t i = t[0] == u ? 0 : t[1] == u ? 1 : 2;
       const std::uint32_t a = t[(i + 1) % 3], b = t[(i + 2) % 3];
       fan.set(k++, a, p(a), b, p(b));
@@ -276,7 +304,7 @@ class Decimator {
           ++count;
         }
       }
-    }
+    });
     if (k == 0) return best;
     neighbour_total = neighbour_count;
     std::size_t border_count = 0;
@@ -386,13 +414,13 @@ class Decimator {
     for (std::size_t j = 0; j < scratch.neighbour_count; ++j)
       if (scratch.nu[j] != v) mark[scratch.nu[j]] = listed;
     std::size_t common = 0;
-    for (const std::uint32_t* f = around_.begin(v); f != around_.end(v); ++f)
-      if (alive_[*f])
-        for (std::uint32_t x : t_[*f])
-          if (mark[x] == listed) {
-            mark[x] = counted;
-            ++common;
-          }
+    for_each_face(v, [&](std::uint32_t face) {
+      for (std::uint32_t x : t_[face])
+        if (mark[x] == listed) {
+          mark[x] = counted;
+          ++common;
+        }
+    });
     if (common != shared_count) {
       ++rejected.rejected_topology;
       return false;
@@ -401,22 +429,22 @@ class Decimator {
   }
 
   // Applies u -> v and marks u and its neighbours (v among them) in `changed`: the vertices
-  // whose faces or quadric change. Returns the faces removed (one on a border edge, two
-  // inside); they stay in t_, dead, until the next pass compacts it.
+  // whose faces or quadric change. u's faces become v's (merge_rows). Returns the faces removed
+  // (one on a border edge, two inside); they stay in t_, dead, until the next pass compacts it.
   std::size_t collapse(std::uint32_t u, std::uint32_t v, std::vector<std::uint8_t>& changed) {
-    for (const std::uint32_t* f = around_.begin(u); f != around_.end(u); ++f)
-      if (alive_[*f])
-        for (std::uint32_t x : t_[*f]) changed[x] = 1;
+    for_each_face(u, [&](std::uint32_t f) {
+      for (std::uint32_t x : t_[f]) changed[x] = 1;
+    });
     std::size_t removed = 0;
-    for (const std::uint32_t* f = around_.begin(u); f != around_.end(u); ++f) {
-      if (!alive_[*f]) continue;
-      if (has(t_[*f], v)) {
-        alive_[*f] = 0;
+    for_each_face(u, [&](std::uint32_t f) {
+      if (has(t_[f], v)) {
+        alive_[f] = 0;
         ++removed;
       } else {
-        t_[*f] = replaced(t_[*f], u, v);
+        t_[f] = replaced(t_[f], u, v);
       }
-    }
+    });
+    merge_rows(u, v);
     q_[v].add(q_[u]);
     own_error_[v] = q_[v].error(p(v));
     return removed;
@@ -438,7 +466,11 @@ class Decimator {
   std::vector<Quadric> q_;
   std::vector<double> own_error_;   ///< Q_v(v) of every vertex: (Q_u + Q_v)(v) = Q_u(v) + this
   std::vector<double> cost_scale_;  ///< multiplies a collapse's quadric error (1 / depth^2)
-  VertexTriangles around_;
+  VertexTriangles around_;          ///< incidence rows, rebuilt at the start of every pass
+  // The vertices merged into a vertex in this pass, whose rows it is read from too: a list per
+  // vertex (head, tail) linked through merged_next_; kNone ends it.
+  static constexpr std::uint32_t kNone = std::numeric_limits<std::uint32_t>::max();
+  std::vector<std::uint32_t> merged_head_, merged_tail_, merged_next_;
   float cos_turn_, cos_border_, cos_sharp_, cos2_min_angle_;
   mutable tbb::enumerable_thread_specific<Scratch> scratch_;  ///< best_collapse()'s memory
 };

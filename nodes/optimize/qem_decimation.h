@@ -40,12 +40,12 @@ struct QemReport {
 /// finds every vertex's cheapest valid collapse, cost (Q_u + Q_v)(v) with the penalties, in
 /// parallel (re-evaluating only vertices next to a change), sorts them and applies them
 /// cheapest first, stopping at 1.5 x the cost of the collapse that would reach the target. A
-/// collapse whose ends are next to an earlier one of the pass is evaluated again first and
-/// taken only if it got no dearer; one involving an earlier one's ends waits. Passes repeat until
-/// target_ratio of the triangles remain or no valid collapse is left. Output vertices are a subset
-/// of the input vertices (same positions, same order, normals and colours kept); triangles stay
-/// consistently oriented and manifold where the input was. Deterministic: the same output for any
-/// thread count. About O(T x valence^2) per pass, a handful of passes.
+/// collapse whose ends took part in an earlier one of the pass, or lost a neighbour to it, is
+/// evaluated again on the mesh as it is then and taken if it stays within that limit. Passes repeat
+/// until target_ratio of the triangles remain or no valid collapse is left. Output vertices are a
+/// subset of the input vertices (same positions, same order, normals and colours kept); triangles
+/// stay consistently oriented and manifold where the input was. Deterministic: the same output for
+/// any thread count. About O(T x valence^2) per pass, a handful of passes.
 TriangleMesh qem_decimate(const TriangleMesh& mesh, const QemConfig& config = {},
                           QemReport* report = nullptr);
 

@@ -195,6 +195,27 @@ TEST(QemDecimation, SameResultWithOneAndTwoThreads) {
   EXPECT_EQ(meshes[0].vertices, meshes[1].vertices);
 }
 
+// On a plane every collapse costs nothing, so every collapse a pass re-evaluates stays within
+// its limit: vertices that took a collapse (reading the faces they took over) and their
+// neighbours collapse again in the same pass, and one pass reaches the target.
+TEST(QemDecimation, GrownVerticesCollapseAgainInTheSamePass) {
+  const TriangleMesh in = height_field(60, [](float, float) { return 0.0f; });
+  QemReport report;
+  const TriangleMesh out = qem_decimate(in, plain_config(), &report);
+  EXPECT_EQ(report.passes, 1u);
+  EXPECT_LE(out.triangles.size(), in.triangles.size() / 4 + 1);
+  const MeshTopology topology = mesh_topology(out);
+  EXPECT_EQ(topology.edges.non_manifold_edges, 0u);
+  EXPECT_EQ(topology.edges.inconsistent_edges, 0u);
+  EXPECT_EQ(topology.degenerate_faces, 0u);
+  EXPECT_EQ(topology.boundary_loops, 1u);
+  for (const Triangle& t : out.triangles) {  // every face still faces up
+    const Eigen::Vector3f n =
+        (out.vertices[t[1]] - out.vertices[t[0]]).cross(out.vertices[t[2]] - out.vertices[t[0]]);
+    EXPECT_GT(n.z(), 0.0f);
+  }
+}
+
 // Random height fields with a round hole, noise and random quad diagonals, decimated to
 // several ratios: collapses taken late in a pass, next to earlier ones, must keep the mesh as
 // manifold as the per-pass evaluations would, and the result independent of the thread count.

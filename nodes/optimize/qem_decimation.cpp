@@ -21,6 +21,10 @@ namespace {
 
 constexpr double kNoCollapse = std::numeric_limits<double>::infinity();
 constexpr std::size_t kLookAhead = 8;  // collapses between a prefetch() and its use
+// Candidates per chunk of a pass's walk, whose re-evaluations run in parallel at the chunk's
+// start; fewer chunks mean fewer waits, more mean fewer re-evaluations made stale by earlier
+// collapses of the chunk (256: 4 % more evaluations than one at a time on a Redwood frame).
+constexpr std::size_t kWalkChunk = 256;
 
 // cos(degrees), computed in double and rounded once.
 float cos_degrees(float degrees) {
@@ -72,7 +76,9 @@ std::uint64_t order_key(const Candidate& c) {
 // Each collapse u -> v removes u; v takes over u's faces (u's row joins the rows v is read
 // from until the pass ends), and v's quadric and u's neighbours' faces change: a candidate with
 // an end among them is evaluated again on the mesh as it is now and taken while its cost stays
-// within the pass's limit. The next pass re-evaluates only the vertices next to a change.
+// within the pass's limit. The walk goes in chunks: the re-evaluations a chunk needs run in
+// parallel at its start, and again, serially, only where a collapse earlier in the chunk changed
+// the ends once more. The next pass re-evaluates only the vertices next to a change.
 class Decimator {
  public:
   Decimator(const TriangleMesh& mesh, const QemConfig& config)
@@ -113,9 +119,10 @@ class Decimator {
     std::size_t alive = t_.size();
     const std::size_t n = in_.vertices.size();
     std::vector<Candidate> best(n);
-    // In a pass: `changed` = u and its neighbours (v among them) for every collapse u -> v
-    // (faces or quadric changed), `removed` = u.
-    std::vector<std::uint8_t> changed(n), removed(n), dirty(n, 1);
+    // In a pass: `changed` = for u and its neighbours (v among them) the number of the last
+    // collapse u -> v of the pass that changed their faces or quadric (0 = none), `removed` = u.
+    std::vector<std::uint32_t> changed(n);
+    std::vector<std::uint8_t> removed(n), dirty(n, 1);
     std::vector<std::uint32_t> targets;  // the kept vertex of every collapse of the last pass
     while (alive > target) {
       compact_faces();
@@ -165,29 +172,62 @@ class Decimator {
       std::fill(changed.begin(), changed.end(), 0);
       std::fill(removed.begin(), removed.end(), 0);
       std::size_t collapsed = 0;
+      std::uint32_t clock = 0;  // collapses so far in the pass; `changed` holds their numbers
       Scratch& scratch = local_scratch();
-      for (std::size_t i = 0; i < order.size(); ++i) {
-        // The walk goes in cost order, all over the mesh: the rows of a collapse a few steps
-        // ahead are requested now (2-9 % of the decimation on a noisy depth frame).
-        if (i + kLookAhead < order.size()) prefetch(candidate(i + kLookAhead));
-        Candidate c = candidate(i);
-        if (alive <= target || (c.cost > limit && collapsed > 0)) break;
-        if (removed[c.from]) continue;
-        if (changed[c.from] || changed[c.to]) {
-          // u or v took part in a collapse, or lost a neighbour, since the evaluation: u's best
-          // collapse on the mesh as it is now, if it stays within the limit (else u waits for
-          // the next pass).
-          c = best_collapse(c.from, scratch);
+      std::vector<Candidate> ahead(kWalkChunk);
+      std::vector<std::uint8_t> has_ahead(kWalkChunk);
+      bool stop = false;
+      for (std::size_t first = 0; first < order.size() && !stop; first += kWalkChunk) {
+        const std::size_t last = std::min(order.size(), first + kWalkChunk);
+        // The chunk's candidates whose ends changed since the pass's evaluation, evaluated again
+        // in parallel on the mesh as it is now (nothing changes it meanwhile).
+        const std::uint32_t chunk_start = clock;
+        std::fill(has_ahead.begin(), has_ahead.end(), 0);
+        if (chunk_start > 0)
+          tbb::parallel_for(
+              tbb::blocked_range<std::size_t>(first, last, 16),
+              [&](const tbb::blocked_range<std::size_t>& range) {
+                Scratch& local = local_scratch();
+                for (std::size_t i = range.begin(); i != range.end(); ++i) {
+                  const Candidate& c = candidate(i);
+                  if (c.cost > limit || removed[c.from] || (!changed[c.from] && !changed[c.to]))
+                    continue;
+                  has_ahead[i - first] = 1;
+                  ahead[i - first] = best_collapse(c.from, local);
+                }
+              });
+        for (std::size_t i = first; i < last; ++i) {
+          // The walk goes in cost order, all over the mesh: the rows of a collapse a few steps
+          // ahead are requested now (2-9 % of the decimation on a noisy depth frame).
+          if (i + kLookAhead < order.size()) prefetch(candidate(i + kLookAhead));
+          Candidate c = candidate(i);
+          if (alive <= target || (c.cost > limit && collapsed > 0)) {
+            stop = true;
+            break;
+          }
+          if (removed[c.from]) continue;
+          std::uint32_t evaluated_at = 0;  // the pass's evaluation
+          if (has_ahead[i - first]) {
+            c = ahead[i - first];
+            evaluated_at = chunk_start;
+          }
+          // u or its target took part in a collapse, or lost a neighbour, since that evaluation:
+          // u's best collapse on the mesh as it is now. Taken if it stays within the limit (else
+          // u waits for the next pass).
+          if (changed[c.from] > evaluated_at ||
+              (c.cost < kNoCollapse && changed[c.to] > evaluated_at))
+            c = best_collapse(c.from, scratch);
           if (!(c.cost <= limit)) continue;
+          alive -= collapse(c.from, c.to, ++clock, changed);
+          removed[c.from] = 1;
+          targets.push_back(c.to);
+          best[c.from].cost = kNoCollapse;  // removed
+          ++collapsed;
         }
-        alive -= collapse(c.from, c.to, changed);
-        removed[c.from] = 1;
-        targets.push_back(c.to);
-        best[c.from].cost = kNoCollapse;  // removed
-        ++collapsed;
       }
       report.collapses += collapsed;
       ++report.passes;
+      if (collapsed == 0) break;  // (cannot happen: the pass's first candidate is taken)
     }
     for (const Scratch& scratch : scratch_) {
       report.rejected_topology += scratch.rejected.rejected_topology;
@@ -428,12 +468,14 @@ class Decimator {
     return true;
   }
 
-  // Applies u -> v and marks u and its neighbours (v among them) in `changed`: the vertices
-  // whose faces or quadric change. u's faces become v's (merge_rows). Returns the faces removed
-  // (one on a border edge, two inside); they stay in t_, dead, until the next pass compacts it.
-  std::size_t collapse(std::uint32_t u, std::uint32_t v, std::vector<std::uint8_t>& changed) {
+  // Applies u -> v, the pass's collapse `number`, and writes that number into `changed` for u
+  // and its neighbours (v among them): the vertices whose faces or quadric change. u's faces become
+  // v's (merge_rows). Returns the faces removed (one on a border edge, two inside); they stay in
+  // t_, dead, until the next pass compacts it.
+  std::size_t collapse(std::uint32_t u, std::uint32_t v, std::uint32_t number,
+                       std::vector<std::uint32_t>& changed) {
     for_each_face(u, [&](std::uint32_t f) {
-      for (std::uint32_t x : t_[f]) changed[x] = 1;
+      for (std::uint32_t x : t_[f]) changed[x] = number;
     });
     std::size_t removed = 0;
     for_each_face(u, [&](std::uint32_t f) {

@@ -41,10 +41,11 @@ struct QemReport {
 /// parallel (re-evaluating only vertices next to a change), sorts them and applies them
 /// cheapest first, stopping at 1.5 x the cost of the collapse that would reach the target. A
 /// collapse whose ends took part in an earlier one of the pass, or lost a neighbour to it, is
-/// evaluated again on the mesh as it is then and taken if it stays within that limit. Passes repeat
-/// until target_ratio of the triangles remain or no valid collapse is left. Output vertices are a
-/// subset of the input vertices (same positions, same order, normals and colours kept); triangles
-/// stay consistently oriented and manifold where the input was. Deterministic: the same output for
+/// evaluated again on the mesh as it is then and taken if it stays within that limit (such
+/// re-evaluations run in parallel, for chunks of candidates). Passes repeat until target_ratio
+/// of the triangles remain or no valid collapse is left. Output vertices are a subset of the
+/// input vertices (same positions, same order, normals and colours kept); triangles stay
+/// consistently oriented and manifold where the input was. Deterministic: the same output for
 /// any thread count. About O(T x valence^2) per pass, a handful of passes.
 TriangleMesh qem_decimate(const TriangleMesh& mesh, const QemConfig& config = {},
                           QemReport* report = nullptr);

@@ -21,10 +21,6 @@ namespace {
 
 constexpr double kNoCollapse = std::numeric_limits<double>::infinity();
 constexpr std::size_t kLookAhead = 8;  // collapses between a prefetch() and its use
-// Candidates per chunk of a pass's walk, whose re-evaluations run in parallel at the chunk's
-// start; fewer chunks mean fewer waits, more mean fewer re-evaluations made stale by earlier
-// collapses of the chunk (256: 4 % more evaluations than one at a time on a Redwood frame).
-constexpr std::size_t kWalkChunk = 256;
 
 // cos(degrees), computed in double and rounded once.
 float cos_degrees(float degrees) {
@@ -174,16 +170,19 @@ class Decimator {
       std::size_t collapsed = 0;
       std::uint32_t clock = 0;  // collapses so far in the pass; `changed` holds their numbers
       Scratch& scratch = local_scratch();
-      std::vector<Candidate> ahead(kWalkChunk);
-      std::vector<std::uint8_t> has_ahead(kWalkChunk);
+      // Chunks of walk_chunk candidates (0: the whole walk, re-evaluating serially).
+      const bool ahead_in_parallel = cfg_.walk_chunk != 0;
+      const std::size_t chunk = ahead_in_parallel ? cfg_.walk_chunk : order.size();
+      std::vector<Candidate> ahead(ahead_in_parallel ? chunk : 0);
+      std::vector<std::uint8_t> has_ahead(ahead.size());
       bool stop = false;
-      for (std::size_t first = 0; first < order.size() && !stop; first += kWalkChunk) {
-        const std::size_t last = std::min(order.size(), first + kWalkChunk);
+      for (std::size_t first = 0; first < order.size() && !stop; first += chunk) {
+        const std::size_t last = std::min(order.size(), first + chunk);
         // The chunk's candidates whose ends changed since the pass's evaluation, evaluated again
         // in parallel on the mesh as it is now (nothing changes it meanwhile).
         const std::uint32_t chunk_start = clock;
         std::fill(has_ahead.begin(), has_ahead.end(), 0);
-        if (chunk_start > 0)
+        if (ahead_in_parallel && chunk_start > 0)
           tbb::parallel_for(
               tbb::blocked_range<std::size_t>(first, last, 16),
               [&](const tbb::blocked_range<std::size_t>& range) {
@@ -207,7 +206,7 @@ class Decimator {
           }
           if (removed[c.from]) continue;
           std::uint32_t evaluated_at = 0;  // the pass's evaluation
-          if (has_ahead[i - first]) {
+          if (ahead_in_parallel && has_ahead[i - first]) {
             c = ahead[i - first];
             evaluated_at = chunk_start;
           }

@@ -25,6 +25,12 @@ struct QemConfig {
   float sharp_edge_deg = 60.0f;  ///< collapsing an edge whose two faces differ more is penalised
   float min_angle_deg = 13.0f;   ///< a collapse leaving a smaller inner angle is penalised
   float penalty = 10.0f;         ///< the factor of both penalties
+  /// A pass's walk re-evaluates collapses next to earlier ones in chunks of this many
+  /// candidates, in parallel at each chunk's start (again serially only where the chunk's
+  /// earlier collapses changed them): a single mesh scales with threads. 0 = one at a time,
+  /// serially: ~4 % fewer evaluations and no waits, for callers that keep every core busy with
+  /// other work (frames in flight). The output depends on it, never on the thread count.
+  std::size_t walk_chunk = 256;
 };
 
 struct QemReport {
@@ -42,9 +48,9 @@ struct QemReport {
 /// cheapest first, stopping at 1.5 x the cost of the collapse that would reach the target. A
 /// collapse whose ends took part in an earlier one of the pass, or lost a neighbour to it, is
 /// evaluated again on the mesh as it is then and taken if it stays within that limit (such
-/// re-evaluations run in parallel, for chunks of candidates). Passes repeat until target_ratio
-/// of the triangles remain or no valid collapse is left. Output vertices are a subset of the
-/// input vertices (same positions, same order, normals and colours kept); triangles stay
+/// re-evaluations run in parallel, for chunks of candidates: walk_chunk). Passes repeat until
+/// target_ratio of the triangles remain or no valid collapse is left. Output vertices are a subset
+/// of the input vertices (same positions, same order, normals and colours kept); triangles stay
 /// consistently oriented and manifold where the input was. Deterministic: the same output for
 /// any thread count. About O(T x valence^2) per pass, a handful of passes.
 TriangleMesh qem_decimate(const TriangleMesh& mesh, const QemConfig& config = {},

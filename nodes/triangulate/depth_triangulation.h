@@ -29,7 +29,14 @@ struct DepthTriangulationConfig {
   /// When in (0, 1): QEM decimation (qem_decimate, depth from the camera) down to this share
   /// of the triangles after triangulation; 0 = off.
   float decimate_to = 0.0f;
-  QemConfig decimation;  ///< its other settings (target_ratio and viewpoint are set per frame)
+  /// Its other settings (target_ratio and viewpoint are set per frame). Per-frame meshes are
+  /// made with frames in flight (the embedding API, sequences), which keep the cores busy: the
+  /// walk's re-evaluations stay serial (walk_chunk = 0, the fewest evaluations).
+  QemConfig decimation = [] {
+    QemConfig q;
+    q.walk_chunk = 0;
+    return q;
+  }();
 };
 
 struct TriangulationCounts {

@@ -197,22 +197,27 @@ TEST(QemDecimation, SameResultWithOneAndTwoThreads) {
 
 // On a plane every collapse costs nothing, so every collapse a pass re-evaluates stays within
 // its limit: vertices that took a collapse (reading the faces they took over) and their
-// neighbours collapse again in the same pass, and one pass reaches the target.
+// neighbours collapse again in the same pass, and one pass reaches the target (re-evaluating
+// serially or in parallel chunks).
 TEST(QemDecimation, GrownVerticesCollapseAgainInTheSamePass) {
   const TriangleMesh in = height_field(60, [](float, float) { return 0.0f; });
-  QemReport report;
-  const TriangleMesh out = qem_decimate(in, plain_config(), &report);
-  EXPECT_EQ(report.passes, 1u);
-  EXPECT_LE(out.triangles.size(), in.triangles.size() / 4 + 1);
-  const MeshTopology topology = mesh_topology(out);
-  EXPECT_EQ(topology.edges.non_manifold_edges, 0u);
-  EXPECT_EQ(topology.edges.inconsistent_edges, 0u);
-  EXPECT_EQ(topology.degenerate_faces, 0u);
-  EXPECT_EQ(topology.boundary_loops, 1u);
-  for (const Triangle& t : out.triangles) {  // every face still faces up
-    const Eigen::Vector3f n =
-        (out.vertices[t[1]] - out.vertices[t[0]]).cross(out.vertices[t[2]] - out.vertices[t[0]]);
-    EXPECT_GT(n.z(), 0.0f);
+  for (std::size_t walk_chunk : {std::size_t{0}, std::size_t{64}}) {
+    QemConfig config = plain_config();
+    config.walk_chunk = walk_chunk;
+    QemReport report;
+    const TriangleMesh out = qem_decimate(in, config, &report);
+    EXPECT_EQ(report.passes, 1u) << walk_chunk;
+    EXPECT_LE(out.triangles.size(), in.triangles.size() / 4 + 1);
+    const MeshTopology topology = mesh_topology(out);
+    EXPECT_EQ(topology.edges.non_manifold_edges, 0u);
+    EXPECT_EQ(topology.edges.inconsistent_edges, 0u);
+    EXPECT_EQ(topology.degenerate_faces, 0u);
+    EXPECT_EQ(topology.boundary_loops, 1u);
+    for (const Triangle& t : out.triangles) {  // every face still faces up
+      const Eigen::Vector3f n =
+          (out.vertices[t[1]] - out.vertices[t[0]]).cross(out.vertices[t[2]] - out.vertices[t[0]]);
+      EXPECT_GT(n.z(), 0.0f);
+    }
   }
 }
 
@@ -257,6 +262,8 @@ TEST(QemDecimation, RandomNoisyMeshesWithHolesStayManifold) {
     for (float ratio : {0.05f, 0.25f, 0.6f}) {
       QemConfig config;
       config.target_ratio = ratio;
+      // The walk's re-evaluations serial, in parallel chunks of 7 (many chunks) or of 256.
+      config.walk_chunk = static_cast<std::size_t>(trial % 3 == 0 ? 0 : trial % 3 == 1 ? 7 : 256);
       config.divide_by_depth2 = trial % 2 == 0;
       config.viewpoint = Eigen::Vector3f(0.5f, 0.5f, -1.0f);
       std::vector<TriangleMesh> out;
@@ -265,8 +272,9 @@ TEST(QemDecimation, RandomNoisyMeshesWithHolesStayManifold) {
         out.push_back(qem_decimate(in, config));
       }
       const MeshTopology topology = mesh_topology(out[0]);
-      const std::string what =
-          "trial " + std::to_string(trial) + ", ratio " + std::to_string(ratio);
+      const std::string what = "trial " + std::to_string(trial) + ", ratio " +
+                               std::to_string(ratio) + ", chunk " +
+                               std::to_string(config.walk_chunk);
       EXPECT_LT(out[0].triangles.size(), in.triangles.size()) << what;
       EXPECT_EQ(topology.edges.non_manifold_edges, 0u) << what;
       EXPECT_EQ(topology.edges.inconsistent_edges, 0u) << what;

@@ -52,6 +52,18 @@ QemConfig plain_config() {
   return c;
 }
 
+// A height field decimated to a quarter: at most a quarter of its triangles left, manifold,
+// consistently oriented, no degenerate face, one border loop.
+void expect_quarter_with_one_border(const TriangleMesh& in, const TriangleMesh& out,
+                                    const std::string& what) {
+  EXPECT_LE(out.triangles.size(), in.triangles.size() / 4 + 1) << what;
+  const MeshTopology topology = mesh_topology(out);
+  EXPECT_EQ(topology.edges.non_manifold_edges, 0u) << what;
+  EXPECT_EQ(topology.edges.inconsistent_edges, 0u) << what;
+  EXPECT_EQ(topology.degenerate_faces, 0u) << what;
+  EXPECT_EQ(topology.boundary_loops, 1u) << what;
+}
+
 TEST(QemDecimation, KeepsMeasuredVerticesTopologyBorderAndNormals) {
   const TriangleMesh in = height_field(80, wave);
   QemReport report;
@@ -61,12 +73,7 @@ TEST(QemDecimation, KeepsMeasuredVerticesTopologyBorderAndNormals) {
       "%zu border; Hausdorff %.5f\n",
       in.triangles.size(), out.triangles.size(), report.collapses, report.rejected_topology,
       report.rejected_normal, report.rejected_border, hausdorff_distance(out, in));
-  EXPECT_LE(out.triangles.size(), in.triangles.size() / 4 + 1);
-  const MeshTopology topology = mesh_topology(out);
-  EXPECT_EQ(topology.edges.non_manifold_edges, 0u);
-  EXPECT_EQ(topology.edges.inconsistent_edges, 0u);
-  EXPECT_EQ(topology.degenerate_faces, 0u);
-  EXPECT_EQ(topology.boundary_loops, 1u);
+  expect_quarter_with_one_border(in, out, "wave");
   // Vertices stay where they were measured.
   std::map<std::array<float, 3>, bool> measured;
   for (const auto& v : in.vertices) measured[{v.x(), v.y(), v.z()}] = true;
@@ -206,17 +213,13 @@ TEST(QemDecimation, GrownVerticesCollapseAgainInTheSamePass) {
     config.walk_chunk = walk_chunk;
     QemReport report;
     const TriangleMesh out = qem_decimate(in, config, &report);
-    EXPECT_EQ(report.passes, 1u) << walk_chunk;
-    EXPECT_LE(out.triangles.size(), in.triangles.size() / 4 + 1);
-    const MeshTopology topology = mesh_topology(out);
-    EXPECT_EQ(topology.edges.non_manifold_edges, 0u);
-    EXPECT_EQ(topology.edges.inconsistent_edges, 0u);
-    EXPECT_EQ(topology.degenerate_faces, 0u);
-    EXPECT_EQ(topology.boundary_loops, 1u);
+    const std::string what = "chunk " + std::to_string(walk_chunk);
+    EXPECT_EQ(report.passes, 1u) << what;
+    expect_quarter_with_one_border(in, out, what);
     for (const Triangle& t : out.triangles) {  // every face still faces up
       const Eigen::Vector3f n =
           (out.vertices[t[1]] - out.vertices[t[0]]).cross(out.vertices[t[2]] - out.vertices[t[0]]);
-      EXPECT_GT(n.z(), 0.0f);
+      EXPECT_GT(n.z(), 0.0f) << what;
     }
   }
 }

@@ -240,20 +240,29 @@ class Decimator {
  private:
   const Eigen::Vector3f& p(std::uint32_t v) const { return in_.vertices[v]; }
 
-  // Calls fn(f) for every live face f of w: those of its incidence row and of the rows of the
-  // vertices merged into w in this pass (which hold w now).
+  // Calls fn(x) for w and for every vertex merged into w in this pass: the vertices whose
+  // incidence rows hold w's faces now.
+  template <typename Fn>
+  void for_each_row_owner(std::uint32_t w, Fn&& fn) const {
+    fn(w);
+    for (std::uint32_t x = merged_head_[w]; x != kNone; x = merged_next_[x]) fn(x);
+  }
+
+  // Calls fn(f) for every live face f of w (the rows of for_each_row_owner).
   template <typename Fn>
   void for_each_face(std::uint32_t w, Fn&& fn) const {
-    for (std::uint32_t x = w; x != kNone; x = x == w ? merged_head_[w] : merged_next_[x])
+    for_each_row_owner(w, [&](std::uint32_t x) {
       for (const std::uint32_t* f = around_.begin(x); f != around_.end(x); ++f)
         if (alive_[*f]) fn(*f);
+    });
   }
 
   // The number of faces for_each_face(w) walks, dead ones included: room for w's fan.
   std::size_t face_room(std::uint32_t w) const {
     std::size_t room = 0;
-    for (std::uint32_t x = w; x != kNone; x = x == w ? merged_head_[w] : merged_next_[x])
+    for_each_row_owner(w, [&](std::uint32_t x) {
       room += static_cast<std::size_t>(around_.end(x) - around_.begin(x));
+    });
     return room;
   }
 

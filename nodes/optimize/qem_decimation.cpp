@@ -118,6 +118,9 @@ class Decimator {
     // In a pass: `changed` = for u and its neighbours (v among them) the number of the last
     // collapse u -> v of the pass that changed their faces or quadric (0 = none), `removed` = u.
     std::vector<std::uint32_t> changed(n);
+    // For a vertex the walk evaluated again and left (over the pass's limit): the number of
+    // collapses before that evaluation, which its `best` now holds (0 = best is the pass's own).
+    std::vector<std::uint32_t> walk_evaluated_at(n);
     std::vector<std::uint8_t> removed(n), dirty(n, 1);
     std::vector<std::uint32_t> targets;  // the kept vertex of every collapse of the last pass
     while (alive > target) {
@@ -134,12 +137,15 @@ class Decimator {
       // faces; only costs towards a v grew and link conditions towards vertices next to a u
       // could fail. So its best collapse w -> y stays the best unless y changed (next to a
       // u, or a v), and a w with no valid collapse keeps none: neither is re-evaluated.
+      // "Changed" counts from w's last evaluation: for a w the walk evaluated again, only the
+      // collapses after that one (the same output as evaluating it again, for less work).
       if (!targets.empty()) {
         std::fill(dirty.begin(), dirty.end(), 0);
         for (std::uint32_t v : targets)
           for (const std::uint32_t* f = around_.begin(v); f != around_.end(v); ++f)
             for (std::uint32_t x : t_[*f])
-              dirty[x] = changed[x] || (best[x].cost < kNoCollapse && changed[best[x].to]);
+              dirty[x] = changed[x] > walk_evaluated_at[x] ||
+                         (best[x].cost < kNoCollapse && changed[best[x].to] > walk_evaluated_at[x]);
       }
       targets.clear();
       tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n),
@@ -166,6 +172,7 @@ class Decimator {
       const std::size_t goal = std::min(order.size(), (alive - target + 1) / 2);
       const double limit = 1.5 * candidate(std::max<std::size_t>(goal, 1) - 1).cost;
       std::fill(changed.begin(), changed.end(), 0);
+      std::fill(walk_evaluated_at.begin(), walk_evaluated_at.end(), 0);
       std::fill(removed.begin(), removed.end(), 0);
       std::size_t collapsed = 0;
       std::uint32_t clock = 0;  // collapses so far in the pass; `changed` holds their numbers
@@ -214,9 +221,17 @@ class Decimator {
           // u's best collapse on the mesh as it is now. Taken if it stays within the limit (else
           // u waits for the next pass).
           if (changed[c.from] > evaluated_at ||
-              (c.cost < kNoCollapse && changed[c.to] > evaluated_at))
+              (c.cost < kNoCollapse && changed[c.to] > evaluated_at)) {
             c = best_collapse(c.from, scratch);
-          if (!(c.cost <= limit)) continue;
+            evaluated_at = clock;
+          }
+          if (!(c.cost <= limit)) {
+            if (evaluated_at != 0) {  // kept: the next pass re-evaluates it only if it changes
+              best[c.from] = c;
+              walk_evaluated_at[c.from] = evaluated_at;
+            }
+            continue;
+          }
           alive -= collapse(c.from, c.to, ++clock, changed);
           removed[c.from] = 1;
           targets.push_back(c.to);

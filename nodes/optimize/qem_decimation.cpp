@@ -203,9 +203,19 @@ class Decimator {
                 }
               });
         for (std::size_t i = first; i < last; ++i) {
-          // The walk goes in cost order, all over the mesh: the rows of a collapse a few steps
-          // ahead are requested now (2-9 % of the decimation on a noisy depth frame).
-          if (i + kLookAhead < order.size()) prefetch(candidate(i + kLookAhead));
+          // The walk goes in cost order, all over the mesh: what a collapse a few steps ahead
+          // reads is requested now (2-9 % of the decimation on a noisy depth frame). A serial
+          // walk also evaluates most of its candidates again, reading u's whole neighbourhood:
+          // that is requested in three stages, each from addresses the previous one brought in
+          // (another 10 % on a Redwood frame; with chunks, evaluated ahead in parallel, it was
+          // slower).
+          if (ahead_in_parallel) {
+            if (i + kLookAhead < order.size()) prefetch(candidate(i + kLookAhead), false);
+          } else {
+            if (i + 2 * kLookAhead < order.size()) prefetch_rows(candidate(i + 2 * kLookAhead));
+            if (i + kLookAhead < order.size()) prefetch(candidate(i + kLookAhead), true);
+            if (i + kLookAhead / 2 < order.size()) prefetch_corners(candidate(i + kLookAhead / 2));
+          }
           Candidate c = candidate(i);
           if (alive <= target || (c.cost > limit && collapsed > 0)) {
             stop = true;
@@ -412,16 +422,37 @@ class Decimator {
   }
 
   // Requests the memory that evaluating and applying c reads: the quadrics of its ends, v's
-  // position, and their incidence rows and u's first face.
-  void prefetch(const Candidate& c) const {
+  // position, and u's faces: with `rows_in_cache` (prefetch_rows() ran earlier) every face of
+  // u's own row and its alive flag, else the two rows and u's first face.
+  void prefetch(const Candidate& c, bool rows_in_cache) const {
     for (std::uint32_t x : {c.from, c.to}) {
       __builtin_prefetch(&q_[x].q[0]);
       __builtin_prefetch(&q_[x].q[8]);  // a quadric spans two cache lines
-      __builtin_prefetch(around_.begin(x));
     }
     __builtin_prefetch(&in_.vertices[c.to]);
+    if (rows_in_cache) {
+      for (const std::uint32_t* f = around_.begin(c.from); f != around_.end(c.from); ++f) {
+        __builtin_prefetch(&t_[*f]);
+        __builtin_prefetch(&alive_[*f]);
+      }
+      return;
+    }
+    prefetch_rows(c);
     if (around_.begin(c.from) != around_.end(c.from))
       __builtin_prefetch(&t_[*around_.begin(c.from)]);
+  }
+
+  // Requests the incidence rows of c's ends.
+  void prefetch_rows(const Candidate& c) const {
+    __builtin_prefetch(around_.begin(c.from));
+    __builtin_prefetch(around_.begin(c.to));
+  }
+
+  // Requests the positions of the corners of u's faces (its own row; prefetch(c, true) ran
+  // earlier, so the faces are in cache).
+  void prefetch_corners(const Candidate& c) const {
+    for (const std::uint32_t* f = around_.begin(c.from); f != around_.end(c.from); ++f)
+      for (std::uint32_t x : t_[*f]) __builtin_prefetch(&in_.vertices[x]);
   }
 
   // Whether the border w -> u -> v turns by less than max_border_turn_deg at u (the same for

@@ -53,9 +53,18 @@ class StageChain {
   std::vector<std::unique_ptr<StageNode>> nodes_;
 };
 
+/// A serial node that takes frames one at a time in the order its predecessor, a buffering node
+/// (a sequencer), hands them out. A serial node that queues (tbb::flow::queueing) keeps no
+/// order across threads: a message put from another thread just as it finishes one can run
+/// before the ones waiting in its queue. One that rejects while busy pulls the next message from
+/// its predecessor when it is free, so a sequencer in front decides the order alone.
+template <typename Output>
+using InOrderNode = tbb::flow::function_node<FramePtr, Output, tbb::flow::rejecting>;
+
 /// source -> limiter(K) ... deliver(sink) --(decrement)--> limiter. The source numbers frames
-/// (Frame::seq) in the order `next` returns them; connect the first stage to entry() and the
-/// in-order end of the stages to exit(). `next` and `sink` must outlive run().
+/// (Frame::seq) in the order `next` returns them; connect the first stage to entry() and a
+/// sequencer on Frame::seq at the end of the stages to exit() (which delivers in its order: see
+/// InOrderNode). `next` and `sink` must outlive run().
 class FrameGraphEnds {
  public:
   FrameGraphEnds(tbb::flow::graph& g, std::size_t max_in_flight,
@@ -81,7 +90,7 @@ class FrameGraphEnds {
   }
 
   tbb::flow::limiter_node<FramePtr>& entry() { return limiter_; }
-  tbb::flow::function_node<FramePtr, tbb::flow::continue_msg>& exit() { return deliver_; }
+  InOrderNode<tbb::flow::continue_msg>& exit() { return deliver_; }
 
   /// Starts the source and waits until every frame has been delivered.
   void run(tbb::flow::graph& g) {
@@ -93,7 +102,7 @@ class FrameGraphEnds {
   std::uint64_t seq_ = 0;
   tbb::flow::input_node<FramePtr> source_;
   tbb::flow::limiter_node<FramePtr> limiter_;
-  tbb::flow::function_node<FramePtr, tbb::flow::continue_msg> deliver_;
+  InOrderNode<tbb::flow::continue_msg> deliver_;
 };
 
 }  // namespace meshflow::detail

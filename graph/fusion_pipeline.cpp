@@ -41,8 +41,10 @@ void FusionPipeline::run(const std::function<FramePtr()>& next,
   detail::FrameGraphEnds ends(g, max_in_flight_, next, sink);
   StageNode read(g, flow::unlimited, StageNodeBody("read", stages::read, c));
   StageNode filter(g, flow::unlimited, StageNodeBody("filter", stages::filter_depth_image, c));
-  flow::sequencer_node<FramePtr> in_order(g, [](const FramePtr& f) { return f->seq; });
-  StageNode integrate(g, flow::serial, [&](const FramePtr& f) {
+  // Integration and delivery each take the frames in input order from a sequencer.
+  const auto by_seq = [](const FramePtr& f) { return f->seq; };
+  flow::sequencer_node<FramePtr> in_order(g, by_seq), integrated_in_order(g, by_seq);
+  detail::InOrderNode<FramePtr> integrate(g, flow::serial, [&](const FramePtr& f) {
     stages::run_stage(
         "integrate", [this](Frame& frame) { return this->integrate(frame); }, *f);
     if (f->ok() && config_.mesh_every > 0 && integrated_ % config_.mesh_every == 0) {
@@ -60,7 +62,8 @@ void FusionPipeline::run(const std::function<FramePtr()>& next,
   flow::make_edge(read, filter);
   flow::make_edge(filter, in_order);
   flow::make_edge(in_order, integrate);
-  flow::make_edge(integrate, ends.exit());
+  flow::make_edge(integrate, integrated_in_order);
+  flow::make_edge(integrated_in_order, ends.exit());
   ends.run(g);
 }
 

@@ -56,7 +56,7 @@ struct LivePipeline::Impl {
   // The graph: stages -> in-order -> deliver. Built inside the arena so its tasks run there.
   std::unique_ptr<detail::StageChain> stages;
   std::unique_ptr<flow::sequencer_node<FramePtr>> in_order;
-  std::unique_ptr<flow::function_node<FramePtr, flow::continue_msg>> deliver;
+  std::unique_ptr<detail::InOrderNode<flow::continue_msg>> deliver;
 
   Impl(LiveConfig c, Callback cb)
       : config(std::move(c)),
@@ -76,7 +76,7 @@ struct LivePipeline::Impl {
                                                   config.reconstruction);
     in_order = std::make_unique<flow::sequencer_node<FramePtr>>(
         *graph, [](const FramePtr& f) { return f->seq; });
-    deliver = std::make_unique<flow::function_node<FramePtr, flow::continue_msg>>(
+    deliver = std::make_unique<detail::InOrderNode<flow::continue_msg>>(
         *graph, flow::serial, [this](const FramePtr& f) {
           finish(f);
           return flow::continue_msg();

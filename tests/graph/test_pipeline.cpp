@@ -60,6 +60,32 @@ TEST(Pipeline, ManyFramesInFlightArriveInOrderAndFailuresFlowThrough) {
   }
 }
 
+// Many quick frames (every other one failing at once) with many in flight, again and again:
+// they reach the sink in input order every time (see detail::InOrderNode).
+TEST(Pipeline, ManyQuickFramesArriveInInputOrderEveryRun) {
+  ReconstructionPipeline pipeline(sphere_config(), 8);
+  const std::size_t frames = 96;
+  for (int run = 0; run < 10; ++run) {
+    std::size_t produced = 0;
+    std::vector<std::size_t> order;
+    pipeline.run(
+        [&]() -> FramePtr {
+          if (produced == frames) return nullptr;
+          auto f = std::make_shared<Frame>();
+          f->source_index = produced++;
+          const bool fails = f->source_index % 2 == 1;
+          f->load = [fails] {
+            if (fails) throw Error("quick.ply", "line 1", "unreadable");
+            return synthetic::sample_surface(synthetic::Sphere{{0, 0, 0}, 1.0f}, 0.3f, 0.0f, 1);
+          };
+          return f;
+        },
+        [&](const FramePtr& f) { order.push_back(f->source_index); });
+    ASSERT_EQ(order.size(), frames);
+    for (std::size_t i = 0; i < frames; ++i) ASSERT_EQ(order[i], i) << "run " << run;
+  }
+}
+
 TEST(Pipeline, EmptyOrAllNaNCloudFailsInTheFilterStage) {
   ReconstructionPipeline pipeline(sphere_config());
   PointCloud nan_cloud;

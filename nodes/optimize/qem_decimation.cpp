@@ -207,7 +207,7 @@ class Decimator {
           // reads is requested now (2-9 % of the decimation on a noisy depth frame). A serial
           // walk also evaluates most of its candidates again, reading u's whole neighbourhood:
           // that is requested in three stages, each from addresses the previous one brought in
-          // (another 10 % on a Redwood frame; with chunks, evaluated ahead in parallel, it was
+          // (another ~8 % on a Redwood frame; with chunks, evaluated ahead in parallel, it was
           // slower).
           if (ahead_in_parallel) {
             if (i + kLookAhead < order.size()) prefetch(candidate(i + kLookAhead), false);

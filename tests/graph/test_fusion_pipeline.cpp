@@ -13,10 +13,12 @@
 namespace meshflow {
 namespace {
 
-std::unique_ptr<io::Sequence> small_depth_sequence(int frames) {
+std::unique_ptr<io::Sequence> small_depth_sequence(int frames,
+                                                   PinholeIntrinsics intrinsics = {
+                                                       160, 120, 131.25f, 131.25f, 79.5f, 59.5f}) {
   synthetic::DepthSequenceConfig c;
   c.frames = frames;
-  c.intrinsics = PinholeIntrinsics{160, 120, 131.25f, 131.25f, 79.5f, 59.5f};
+  c.intrinsics = intrinsics;
   return synthetic::make_depth_sequence(synthetic::demo_room_scene(), c);
 }
 
@@ -72,10 +74,9 @@ TEST(FusionPipeline, MatchesSequentialIntegrationAndMeshesEveryNFrames) {
 // ran a message put later from another thread before the queued ones, in ~5 % of these runs
 // under load; integration and delivery now pull from sequencers: detail::InOrderNode.)
 TEST(FusionPipeline, ManyTinyFramesArriveInInputOrderEveryRun) {
-  synthetic::DepthSequenceConfig c;
-  c.frames = 48;
-  c.intrinsics = PinholeIntrinsics{32, 24, 26.25f, 26.25f, 15.5f, 11.5f};
-  const auto seq = synthetic::make_depth_sequence(synthetic::demo_room_scene(), c);
+  const std::size_t frames = 48;
+  const auto seq = small_depth_sequence(static_cast<int>(frames),
+                                        PinholeIntrinsics{32, 24, 26.25f, 26.25f, 15.5f, 11.5f});
   FusionConfig config;
   config.tsdf.voxel_size = 0.1f;
   config.mesh_every = 0;
@@ -84,7 +85,7 @@ TEST(FusionPipeline, ManyTinyFramesArriveInInputOrderEveryRun) {
     FusionPipeline pipeline(config, 8);
     std::vector<std::size_t> order;
     run_sequence(pipeline, *seq, {}, [&](const Frame& f) { order.push_back(f.source_index); });
-    ASSERT_EQ(order.size(), static_cast<std::size_t>(c.frames));
+    ASSERT_EQ(order.size(), frames);
     for (std::size_t i = 0; i < order.size(); ++i) ASSERT_EQ(order[i], i) << "run " << run;
     expect_same_map(expected, pipeline.map());
   }

@@ -1,5 +1,8 @@
 #include "runtime/triangle_mesh.h"
 
+#include <tbb/blocked_range.h>
+#include <tbb/enumerable_thread_specific.h>
+#include <tbb/parallel_for.h>
 #include <tbb/parallel_sort.h>
 
 #include <algorithm>
@@ -58,26 +61,65 @@ EdgeStatistics edge_statistics(const TriangleMesh& mesh) {
 }
 
 std::vector<BorderEdge> border_edges(const TriangleMesh& mesh) {
-  const VertexTriangles around = vertex_triangles(mesh);
+  return border_edges(mesh, vertex_triangles(mesh));
+}
+
+std::vector<BorderEdge> border_edges(const TriangleMesh& mesh, const VertexTriangles& around) {
   const auto& tris = mesh.triangles;
+  const auto vertex_count = static_cast<std::uint32_t>(around.offsets.size() - 1);
   // Edge i of triangle t (t[i] -> t[i + 1]) is a border edge when no other triangle around
-  // t[i] also has t[i + 1] as a corner.
-  auto is_border = [&](std::size_t t, int i) {
-    const std::uint32_t a = tris[t][static_cast<std::size_t>(i)];
-    const std::uint32_t b = tris[t][static_cast<std::size_t>((i + 1) % 3)];
-    for (const std::uint32_t* s = around.begin(a); s != around.end(a); ++s) {
-      if (*s == t) continue;
-      const Triangle& other = tris[*s];
-      if (other[0] == b || other[1] == b || other[2] == b) return false;
-    }
-    return true;
+  // t[i] also has t[i + 1] as a corner. Decided per vertex a for the edges leaving it: a's
+  // triangles count, per corner x, how many of them hold x (a per-thread array stamped with a,
+  // so nothing is cleared between vertices); only a's task writes the flags of the corners
+  // holding a (no races).
+  struct Count {
+    std::uint32_t vertex = UINT32_MAX;  ///< the a the count belongs to
+    std::uint32_t triangles = 0;        ///< a's triangles holding x
   };
-  const std::vector<std::uint32_t> corners = parallel_select_indices(
-      tris.size() * 3, [&](std::size_t c) { return is_border(c / 3, static_cast<int>(c % 3)); });
-  std::vector<BorderEdge> border(corners.size());
-  tbb::parallel_for(std::size_t{0}, corners.size(), [&](std::size_t k) {
-    const std::uint32_t t = corners[k] / 3;
-    const std::size_t i = corners[k] % 3;
+  tbb::enumerable_thread_specific<std::vector<Count>> counts_per_thread(
+      [&] { return std::vector<Count>(vertex_count); });
+  std::vector<std::uint8_t> leaves_border(tris.size() * 3, 0);
+  tbb::parallel_for(tbb::blocked_range<std::uint32_t>(0, vertex_count, 1024),
+                    [&](const tbb::blocked_range<std::uint32_t>& range) {
+                      std::vector<Count>& counts = counts_per_thread.local();
+                      for (std::uint32_t a = range.begin(); a != range.end(); ++a) {
+                        const std::uint32_t *first = around.begin(a), *last = around.end(a);
+                        std::uint32_t distinct =
+                            0;  // a's triangles (one listed per repetition of a)
+                        for (const std::uint32_t* s = first; s != last; ++s) {
+                          if (s != first && *s == s[-1]) continue;
+                          ++distinct;
+                          const Triangle& t = tris[*s];
+                          for (std::size_t i = 0; i < 3; ++i) {
+                            const std::uint32_t x = t[i];
+                            if (x >= vertex_count || (i > 0 && x == t[0]) || (i > 1 && x == t[1]))
+                              continue;
+                            Count& c = counts[x];
+                            c.triangles = c.vertex == a ? c.triangles + 1 : 1;
+                            c.vertex = a;
+                          }
+                        }
+                        for (const std::uint32_t* s = first; s != last; ++s) {
+                          if (s != first && *s == s[-1]) continue;
+                          const Triangle& t = tris[*s];
+                          for (std::size_t i = 0; i < 3; ++i) {
+                            if (t[i] != a) continue;
+                            const std::uint32_t b = t[(i + 1) % 3];
+                            // Only this triangle holds b (every one of a's holds b = a).
+                            const std::uint32_t holding = b == a             ? distinct
+                                                          : b < vertex_count ? counts[b].triangles
+                                                                             : 1;
+                            leaves_border[std::size_t{*s} * 3 + i] = holding == 1 ? 1 : 0;
+                          }
+                        }
+                      }
+                    });
+  const std::vector<std::uint32_t> selected = parallel_select_indices(
+      tris.size() * 3, [&](std::size_t c) { return leaves_border[c] != 0; });
+  std::vector<BorderEdge> border(selected.size());
+  tbb::parallel_for(std::size_t{0}, selected.size(), [&](std::size_t k) {
+    const std::uint32_t t = selected[k] / 3;
+    const std::size_t i = selected[k] % 3;
     border[k] = BorderEdge{tris[t][i], tris[t][(i + 1) % 3], t};
   });
   return border;

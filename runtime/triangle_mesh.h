@@ -10,6 +10,8 @@
 
 namespace meshflow {
 
+struct VertexTriangles;  // runtime/vertex_triangles.h
+
 using Triangle = std::array<std::uint32_t, 3>;
 
 /// Indexed triangles; counter-clockwise winding seen from outside (the normal side).
@@ -63,8 +65,10 @@ struct BorderEdge {
 };
 
 /// The border edges of a mesh, in triangle order (then edge order within the triangle).
-/// Parallel over vertex_triangles(); deterministic. O(V + T x workers + T x valence).
+/// Parallel over vertices; deterministic. O(V + T) time, plus O(V) memory per worker thread.
 std::vector<BorderEdge> border_edges(const TriangleMesh& mesh);
+/// The same with the mesh's incidence already built (vertex_triangles(mesh)).
+std::vector<BorderEdge> border_edges(const TriangleMesh& mesh, const VertexTriangles& around);
 
 /// The median length of the triangles' edges (each interior edge counted twice), metres;
 /// 0 for no triangles. O(T).

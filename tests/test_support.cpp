@@ -9,6 +9,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <random>
 
 #include "nodes/normals/organized_normals.h"
 
@@ -129,6 +130,35 @@ TriangleMesh grid_mesh(std::uint32_t n) {
       m.triangles.push_back({a, a + 1, a + n + 1});
       m.triangles.push_back({a, a + n + 1, a + n});
     }
+  return m;
+}
+
+TriangleMesh messy_mesh(std::uint32_t n, std::uint32_t seed) {
+  TriangleMesh m = grid_mesh(n);
+  std::mt19937 rng(seed);
+  const auto random_below = [&](std::size_t bound) {
+    return static_cast<std::uint32_t>(
+        std::uniform_int_distribution<std::size_t>(0, bound - 1)(rng));
+  };
+  const std::size_t grid_triangles = m.triangles.size(), junk = grid_triangles / 4;
+  for (std::size_t k = 0; k < junk; ++k) {
+    const Triangle t = m.triangles[random_below(grid_triangles)];
+    switch (random_below(4)) {
+      case 0:  // a copy, rotated
+        m.triangles.push_back({t[1], t[2], t[0]});
+        break;
+      case 1:  // a copy, reversed
+        m.triangles.push_back({t[0], t[2], t[1]});
+        break;
+      case 2:  // a corner repeated
+        m.triangles.push_back({t[0], t[0], t[2]});
+        break;
+      default: {  // one corner of t with two random vertices
+        const auto count = static_cast<std::uint32_t>(m.vertices.size());
+        m.triangles.push_back({t[random_below(3)], random_below(count), random_below(count)});
+      }
+    }
+  }
   return m;
 }
 

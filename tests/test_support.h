@@ -54,6 +54,11 @@ TriangleMesh tetrahedron();
 /// two triangles per cell, counter-clockwise seen from +z.
 TriangleMesh grid_mesh(std::uint32_t n);
 
+/// grid_mesh(n) with the junk a clean-up meets, drawn from `seed` (deterministic): copies of
+/// triangles (corners rotated or reversed), triangles repeating a corner, and triangles joining
+/// random vertices (edges with three or more faces, vertices joining several fans).
+TriangleMesh messy_mesh(std::uint32_t n, std::uint32_t seed);
+
 /// `frame` as a Kinect driver delivers it: the organized cloud of its metric depth
 /// (back_project) in the camera frame, whatever its pose; NaN where a pixel has no point.
 PointCloud camera_frame_cloud(const DepthFrame& frame);

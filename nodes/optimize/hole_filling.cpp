@@ -33,9 +33,10 @@ std::vector<std::uint64_t> edges_within(const TriangleMesh& mesh, const VertexTr
 // order of their first border edge. A loop through a vertex with two border edges leaving it
 // (a non-manifold vertex) is ambiguous and is not returned; `ambiguous` counts such loops.
 std::vector<std::vector<std::uint32_t>> border_loops(const TriangleMesh& mesh,
+                                                     const VertexTriangles& around,
                                                      std::size_t& ambiguous) {
   constexpr std::uint32_t kNoEdge = UINT32_MAX, kTwoEdges = UINT32_MAX - 1;
-  const std::vector<BorderEdge> border = border_edges(mesh);
+  const std::vector<BorderEdge> border = border_edges(mesh, around);
   std::vector<std::uint32_t> leaving(mesh.vertices.size(), kNoEdge);
   for (std::uint32_t e = 0; e < border.size(); ++e) {
     std::uint32_t& slot = leaving[border[e].a];
@@ -140,7 +141,8 @@ TriangleMesh fill_holes(const TriangleMesh& mesh, const HoleFillingConfig& confi
                         HoleFillingReport* report) {
   HoleFillingReport r;
   std::size_t ambiguous = 0;
-  const std::vector<std::vector<std::uint32_t>> loops = border_loops(mesh, ambiguous);
+  const VertexTriangles around = vertex_triangles(mesh);
+  const std::vector<std::vector<std::uint32_t>> loops = border_loops(mesh, around, ambiguous);
   r.loops = loops.size() + ambiguous;
   r.not_fillable = ambiguous;
 
@@ -174,7 +176,6 @@ TriangleMesh fill_holes(const TriangleMesh& mesh, const HoleFillingConfig& confi
 
   // Loops share no vertex (each border vertex has one border edge leaving it), so each hole's
   // marks and triangulation are its own.
-  const VertexTriangles around = vertex_triangles(mesh);
   std::vector<std::uint8_t> in_hole(mesh.vertices.size(), 0);
   for (const auto* hole : holes)
     for (std::uint32_t v : *hole) in_hole[v] = 1;

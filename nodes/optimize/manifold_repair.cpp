@@ -1,49 +1,60 @@
 #include "nodes/optimize/manifold_repair.h"
 
 #include <tbb/blocked_range.h>
+#include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <numeric>
 #include <utility>
 #include <vector>
 
-#include "runtime/disjoint_sets.h"
 #include "runtime/vertex_triangles.h"
 
 namespace meshflow {
 namespace {
 
-// The working memory of fans_around(), reused from vertex to vertex by one task.
+// The working memory of fans_around(), reused from vertex to vertex by one thread.
 struct FanScratch {
-  DisjointSets sets{0};
-  std::vector<std::pair<std::uint32_t, std::uint32_t>> spokes;  ///< (x, triangle slot)
-  std::vector<std::uint32_t> number;                            ///< fan number of each root
+  /// Per vertex x: the vertex v whose fans were last looked at with x as a spoke, and the slot of
+  /// the latest of v's triangles holding x (stamped with v: nothing is cleared between vertices).
+  struct Spoke {
+    std::uint32_t vertex = UINT32_MAX, slot = 0;
+  };
+  std::vector<Spoke> spokes;
+  std::vector<std::uint32_t> parent;  ///< union-find over the slots of v's triangles
 };
 
 // Writes the fan of each triangle around v to fan[0 .. k) (0 = the fan with the lowest triangle
 // index, then in order of their lowest triangles), given the k triangles around v in ascending
-// order. Returns the fan count.
+// order. Triangles sharing an edge v-x (a corner x other than v) are in one fan: each spoke x
+// joins the triangle holding it to the previous one that did. Returns the fan count. O(k).
 std::uint32_t fans_around(const TriangleMesh& mesh, std::uint32_t v, const std::uint32_t* begin,
                           const std::uint32_t* end, std::uint32_t* fan, FanScratch& scratch) {
   const auto k = static_cast<std::uint32_t>(end - begin);
-  auto& [sets, spokes, number] = scratch;
-  sets.reset(k);
-  // Triangles sharing an edge v-x are in one fan: sort (x, triangle slot) and join equal x.
-  spokes.clear();
+  auto& [spokes, parent] = scratch;
+  parent.resize(k);
+  std::iota(parent.begin(), parent.end(), 0u);
+  // Union-find with path halving whose roots are the lowest slot of their set.
+  const auto find = [&parent](std::uint32_t x) {
+    while (parent[x] != x) x = parent[x] = parent[parent[x]];
+    return x;
+  };
   for (std::uint32_t i = 0; i < k; ++i)
-    for (std::uint32_t x : mesh.triangles[begin[i]])
-      if (x != v) spokes.emplace_back(x, i);
-  std::sort(spokes.begin(), spokes.end());
-  for (std::size_t s = 1; s < spokes.size(); ++s)
-    if (spokes[s].first == spokes[s - 1].first) sets.unite(spokes[s].second, spokes[s - 1].second);
-  // Roots are the lowest slot of their fan, so numbering roots in slot order numbers fans by
-  // their lowest triangle.
-  number.assign(k, 0);
+    for (std::uint32_t x : mesh.triangles[begin[i]]) {
+      if (x == v || x >= spokes.size()) continue;  // (an index past the vertices: no spoke)
+      FanScratch::Spoke& spoke = spokes[x];
+      if (spoke.vertex == v) {  // joined with the previous of v's triangles holding x
+        const std::uint32_t a = find(i), b = find(spoke.slot);
+        parent[std::max(a, b)] = std::min(a, b);
+      }
+      spoke = {v, i};
+    }
+  // A root is its fan's lowest slot, so slots in order meet each root before its other members.
   std::uint32_t fans = 0;
   for (std::uint32_t i = 0; i < k; ++i) {
-    const std::uint32_t r = sets.find(i);
-    if (r == i) number[i] = fans++;
-    fan[i] = number[r];
+    const std::uint32_t r = find(i);
+    fan[i] = r == i ? fans++ : fan[r];
   }
   return fans;
 }
@@ -55,9 +66,14 @@ std::size_t split_non_manifold_vertices(TriangleMesh& mesh) {
   const VertexTriangles around = vertex_triangles(mesh);
   // All fans first (reading the triangles), then the rewrite.
   std::vector<std::uint32_t> fan(around.triangles.size()), extra(n, 0);
+  tbb::enumerable_thread_specific<FanScratch> scratch_per_thread([n] {
+    FanScratch scratch;
+    scratch.spokes.resize(n);
+    return scratch;
+  });
   tbb::parallel_for(
       tbb::blocked_range<std::size_t>(0, n), [&](const tbb::blocked_range<std::size_t>& range) {
-        FanScratch scratch;
+        FanScratch& scratch = scratch_per_thread.local();
         for (std::size_t i = range.begin(); i != range.end(); ++i) {
           const auto v = static_cast<std::uint32_t>(i);
           const std::uint32_t fans = fans_around(mesh, v, around.begin(v), around.end(v),

@@ -14,7 +14,7 @@ namespace meshflow {
 /// through shared edges) into k vertices: the fan with the lowest triangle index keeps the
 /// vertex, the others get new vertices appended in vertex order (position, normal and colour
 /// copied). Returns the number of vertices added. Parallel per vertex; deterministic.
-/// O(V + T x valence log valence).
+/// O(V + T) time, plus O(V) memory per worker thread.
 std::size_t split_non_manifold_vertices(TriangleMesh& mesh);
 
 }  // namespace meshflow

@@ -1,12 +1,12 @@
 #include "nodes/optimize/mesh_cleanup.h"
 
+#include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
 
 #include "nodes/optimize/manifold_repair.h"
 #include "runtime/disjoint_sets.h"
-#include "runtime/radix_sort.h"
 
 namespace meshflow {
 namespace {
@@ -27,33 +27,35 @@ Triangle sorted_corners(Triangle t) {
 }
 
 // Marks the second and later copies (by index) of a face with the same vertex set. Copies share
-// their lowest vertex, so faces are grouped by it with a radix sort of (lowest vertex, index)
-// and only the few faces of a group are compared. O(n) plus O(g log g) per group of g faces.
-std::vector<bool> duplicate_faces(const std::vector<Triangle>& tris) {
-  std::vector<std::uint64_t> by_lowest(tris.size());
-  tbb::parallel_for(std::size_t{0}, tris.size(), [&](std::size_t i) {
-    const Triangle& t = tris[i];
-    by_lowest[i] = (std::uint64_t{std::min({t[0], t[1], t[2]})} << 32) | i;
-  });
-  radix_sort(by_lowest);
-  std::vector<bool> dup(tris.size(), false);
-  std::vector<std::pair<Triangle, std::uint32_t>> group;
-  for (std::size_t begin = 0; begin < by_lowest.size();) {
-    std::size_t end = begin + 1;
-    while (end < by_lowest.size() && (by_lowest[end] >> 32) == (by_lowest[begin] >> 32)) ++end;
-    if (end - begin > 1) {
-      group.clear();
-      for (std::size_t i = begin; i < end; ++i) {
-        const auto index = static_cast<std::uint32_t>(by_lowest[i] & 0xffffffffu);
-        group.emplace_back(sorted_corners(tris[index]), index);
-      }
-      std::sort(group.begin(), group.end());  // equal faces together, lowest index first
-      for (std::size_t i = 1; i < group.size(); ++i) {
-        if (group[i].first == group[i - 1].first) dup[group[i].second] = true;
-      }
-    }
-    begin = end;
+// their lowest vertex, so faces are grouped by it (a counting sort, which keeps each group in
+// index order) and only the few faces of a group are compared, pairwise. O(V + T) plus O(g^2)
+// per group of g faces.
+std::vector<std::uint8_t> duplicate_faces(const std::vector<Triangle>& tris,
+                                          std::size_t vertex_count) {
+  std::vector<std::uint32_t> start(vertex_count + 1, 0);
+  const auto lowest = [&](const Triangle& t) { return std::min({t[0], t[1], t[2]}); };
+  for (const Triangle& t : tris)
+    if (lowest(t) < vertex_count) ++start[lowest(t) + 1];
+  for (std::size_t v = 0; v < vertex_count; ++v) start[v + 1] += start[v];
+  std::vector<std::uint32_t> grouped(start.back());
+  {
+    std::vector<std::uint32_t> next(start.begin(), start.end() - 1);
+    for (std::uint32_t i = 0; i < tris.size(); ++i)
+      if (lowest(tris[i]) < vertex_count) grouped[next[lowest(tris[i])]++] = i;
   }
+  std::vector<std::uint8_t> dup(tris.size(), 0);
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, vertex_count, 4096),
+                    [&](const tbb::blocked_range<std::size_t>& range) {
+                      for (std::size_t v = range.begin(); v != range.end(); ++v)
+                        for (std::uint32_t j = start[v] + 1; j < start[v + 1]; ++j) {
+                          const Triangle tj = sorted_corners(tris[grouped[j]]);
+                          for (std::uint32_t i = start[v]; i < j; ++i)
+                            if (sorted_corners(tris[grouped[i]]) == tj) {
+                              dup[grouped[j]] = 1;
+                              break;
+                            }
+                        }
+                    });
   return dup;
 }
 
@@ -65,9 +67,13 @@ TriangleMesh clean_mesh(const TriangleMesh& mesh, const CleanupConfig& config,
   std::vector<Triangle> kept;
   kept.reserve(mesh.triangles.size());
   if (config.remove_degenerate) {
-    const std::vector<bool> dup = duplicate_faces(mesh.triangles);
+    std::vector<std::uint8_t> degenerate(mesh.triangles.size());
+    tbb::parallel_for(std::size_t{0}, mesh.triangles.size(), [&](std::size_t i) {
+      degenerate[i] = is_degenerate(mesh, mesh.triangles[i]) ? 1 : 0;
+    });
+    const std::vector<std::uint8_t> dup = duplicate_faces(mesh.triangles, mesh.vertices.size());
     for (std::size_t i = 0; i < mesh.triangles.size(); ++i) {
-      if (is_degenerate(mesh, mesh.triangles[i])) {
+      if (degenerate[i]) {
         ++r.degenerate_triangles;
       } else if (dup[i]) {
         ++r.duplicate_triangles;

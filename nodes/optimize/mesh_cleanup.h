@@ -30,7 +30,7 @@ struct CleanupReport {
 /// Returns a cleaned copy of `mesh`: triangles kept in their order, unreferenced vertices
 /// dropped and the rest renumbered in their order (normals and colours follow), then copies of
 /// non-manifold vertices appended.
-/// Deterministic. O(V + T log T).
+/// Parallel; deterministic. O(V + T).
 TriangleMesh clean_mesh(const TriangleMesh& mesh, const CleanupConfig& config,
                         CleanupReport* report = nullptr);
 

@@ -123,6 +123,41 @@ TEST(TriangleMesh, BorderEdgesOfAGridAreItsOutlineDirectedAsTheirTriangles) {
   }
 }
 
+// The definition, brute force: edge i of triangle t (a = t[i] -> b = t[i + 1]) is a border edge
+// when no other triangle has both a and b as corners. O(T^2).
+std::vector<BorderEdge> border_edges_oracle(const TriangleMesh& m) {
+  const auto holds = [](const Triangle& t, std::uint32_t x) {
+    return t[0] == x || t[1] == x || t[2] == x;
+  };
+  std::vector<BorderEdge> border;
+  for (std::uint32_t t = 0; t < m.triangles.size(); ++t)
+    for (std::size_t i = 0; i < 3; ++i) {
+      const std::uint32_t a = m.triangles[t][i], b = m.triangles[t][(i + 1) % 3];
+      bool alone = true;
+      for (std::uint32_t s = 0; s < m.triangles.size() && alone; ++s)
+        alone = s == t || !(holds(m.triangles[s], a) && holds(m.triangles[s], b));
+      if (alone) border.push_back({a, b, t});
+    }
+  return border;
+}
+
+TEST(TriangleMesh, BorderEdgesMatchTheDefinitionOnMessyMeshes) {
+  for (std::uint32_t seed : {1u, 2u, 3u}) {
+    const TriangleMesh m = test::messy_mesh(14, seed);  // copies, repeated corners, bow ties
+    const std::vector<BorderEdge> expected = border_edges_oracle(m);
+    for (int threads : {1, 2}) {
+      const std::vector<BorderEdge> border =
+          test::with_threads(threads, [&] { return border_edges(m); });
+      ASSERT_EQ(border.size(), expected.size()) << "seed " << seed << ", threads " << threads;
+      for (std::size_t k = 0; k < border.size(); ++k) {
+        EXPECT_EQ(border[k].a, expected[k].a);
+        EXPECT_EQ(border[k].b, expected[k].b);
+        EXPECT_EQ(border[k].triangle, expected[k].triangle);
+      }
+    }
+  }
+}
+
 TEST(TriangleMesh, HasAreaRefusesPointsLinesAndSlivers) {
   const Eigen::Vector3f a(0, 0, 0), b(1, 0, 0), c(0, 1, 0);
   EXPECT_TRUE(has_area(a, b, c));

@@ -4,8 +4,11 @@
 
 #include <algorithm>
 #include <limits>
+#include <numeric>
 
 #include "mesh_fixtures.h"
+#include "nodes/optimize/manifold_repair.h"
+#include "test_support.h"
 
 namespace meshflow {
 namespace {
@@ -86,6 +89,97 @@ TEST(MeshCleanup, SplitsVerticesWhereTwoSheetsTouch) {
   EXPECT_EQ(test::half_edge_problem(out), "");
   config.split_non_manifold_vertices = false;
   EXPECT_EQ(clean_mesh(m, config).vertices.size(), m.vertices.size());
+}
+
+// The definitions, brute force. A later copy of a face (same corners in any order) is a
+// duplicate of the first.
+std::vector<bool> duplicates_oracle(const std::vector<Triangle>& tris) {
+  std::vector<bool> dup(tris.size(), false);
+  for (std::size_t j = 0; j < tris.size(); ++j) {
+    Triangle b = tris[j];
+    std::sort(b.begin(), b.end());
+    for (std::size_t i = 0; i < j && !dup[j]; ++i) {
+      Triangle a = tris[i];
+      std::sort(a.begin(), a.end());
+      dup[j] = a == b;
+    }
+  }
+  return dup;
+}
+
+// The triangles around v fall into fans, joined where they share a corner other than v; every
+// fan but the one holding v's lowest triangle gets a copy of v, appended in vertex order and then
+// in order of the fans' lowest triangles.
+TriangleMesh split_oracle(const TriangleMesh& m) {
+  TriangleMesh out = m;
+  for (std::uint32_t v = 0; v < m.vertices.size(); ++v) {
+    std::vector<std::uint32_t> around;
+    for (std::uint32_t t = 0; t < m.triangles.size(); ++t)
+      for (std::uint32_t x : m.triangles[t])
+        if (x == v) around.push_back(t);  // once per repetition, as vertex_triangles
+    std::vector<std::uint32_t> fan(around.size());
+    std::iota(fan.begin(), fan.end(), 0u);
+    for (bool joined = true; joined;) {  // smallest slot of each fan, by relaxation
+      joined = false;
+      for (std::size_t i = 0; i < around.size(); ++i)
+        for (std::size_t j = 0; j < around.size(); ++j) {
+          bool shared = false;
+          for (std::uint32_t x : m.triangles[around[i]])
+            for (std::uint32_t y : m.triangles[around[j]]) shared |= x != v && x == y;
+          if (shared && fan[j] < fan[i]) {
+            fan[i] = fan[j];
+            joined = true;
+          }
+        }
+    }
+    std::vector<std::uint32_t> copy_of_slot(around.size(), v);
+    for (std::size_t i = 0; i < around.size(); ++i) {
+      if (fan[i] != i || fan[i] == fan[0]) continue;  // not a fan's first slot, or v's own fan
+      copy_of_slot[i] = static_cast<std::uint32_t>(out.vertices.size());
+      out.vertices.push_back(m.vertices[v]);
+    }
+    for (std::size_t i = 0; i < around.size(); ++i)
+      for (std::uint32_t& corner : out.triangles[around[i]])
+        if (corner == v) corner = copy_of_slot[fan[i]];
+  }
+  return out;
+}
+
+TEST(MeshCleanup, DuplicatesAndNonManifoldSplitsMatchTheDefinitionsOnMessyMeshes) {
+  for (std::uint32_t seed : {1u, 2u, 3u}) {
+    const TriangleMesh m = test::messy_mesh(12, seed);
+    CleanupConfig config;
+    config.min_component_triangles = 0;
+    config.split_non_manifold_vertices = false;
+    const std::vector<bool> dup = duplicates_oracle(m.triangles);
+    for (int threads : {1, 2}) {
+      CleanupReport report;
+      const TriangleMesh out =
+          test::with_threads(threads, [&] { return clean_mesh(m, config, &report); });
+      std::vector<Triangle> kept;  // no triangle of the grid is degenerate; junk may be
+      std::size_t duplicates = 0;
+      for (std::size_t t = 0; t < m.triangles.size(); ++t) {
+        const Triangle& tri = m.triangles[t];
+        const bool degenerate = tri[0] == tri[1] || tri[1] == tri[2] || tri[0] == tri[2] ||
+                                !((m.vertices[tri[1]] - m.vertices[tri[0]])
+                                      .cross(m.vertices[tri[2]] - m.vertices[tri[0]])
+                                      .squaredNorm() > 0.0f);
+        if (!degenerate && dup[t]) ++duplicates;
+        if (!degenerate && !dup[t]) kept.push_back(tri);
+      }
+      EXPECT_EQ(report.duplicate_triangles, duplicates) << "seed " << seed;
+      EXPECT_EQ(out.triangles, compact_vertices(m, kept).triangles) << "seed " << seed;
+
+      TriangleMesh split = m;
+      const std::size_t added =
+          test::with_threads(threads, [&] { return split_non_manifold_vertices(split); });
+      const TriangleMesh expected = split_oracle(m);
+      EXPECT_EQ(added, expected.vertices.size() - m.vertices.size()) << "seed " << seed;
+      EXPECT_GT(added, 0u) << "seed " << seed;  // the junk made some
+      EXPECT_EQ(split.vertices, expected.vertices) << "seed " << seed;
+      EXPECT_EQ(split.triangles, expected.triangles) << "seed " << seed;
+    }
+  }
 }
 
 }  // namespace

@@ -12,9 +12,9 @@
 #include <vector>
 
 #include "nodes/optimize/collapse_fan.h"
+#include "nodes/optimize/vertex_rings.h"
 #include "runtime/angles.h"
 #include "runtime/radix_sort.h"
-#include "runtime/vertex_triangles.h"
 
 namespace meshflow {
 namespace {
@@ -68,20 +68,19 @@ std::uint64_t order_key(const Candidate& c) {
 }
 
 // A pass evaluates every vertex that needs it on the mesh as it was when the pass started
-// (incidence rows, positions, quadrics), in parallel, then applies collapses cheapest first.
-// Each collapse u -> v removes u; v takes over u's faces (u's row joins the rows v is read
-// from until the pass ends), and v's quadric and u's neighbours' faces change: a candidate with
-// an end among them is evaluated again on the mesh as it is now and taken while its cost stays
-// within the pass's limit. The walk goes in chunks: the re-evaluations a chunk needs run in
-// parallel at its start, and again, serially, only where a collapse earlier in the chunk changed
-// the ends once more. The next pass re-evaluates only the vertices next to a change.
+// (neighbour rings, positions, quadrics), in parallel, then applies collapses cheapest first.
+// Each collapse u -> v removes u; v takes over u's faces (VertexRings::collapse), and v's
+// quadric and u's neighbours' faces change: a candidate with an end among them is evaluated
+// again on the mesh as it is now and taken while its cost stays within the pass's limit. The walk
+// goes in chunks: the re-evaluations a chunk needs run in parallel at its start, and again,
+// serially, only where a collapse earlier in the chunk changed the ends once more. The next pass
+// re-evaluates only the vertices next to a change.
 class Decimator {
  public:
   Decimator(const TriangleMesh& mesh, const QemConfig& config)
       : in_(mesh),
         cfg_(config),
-        t_(mesh.triangles),
-        alive_(mesh.triangles.size(), 1),
+        rings_(mesh.triangles, mesh.vertices.size()),
         q_(mesh.vertices.size()),
         own_error_(mesh.vertices.size()),
         cost_scale_(mesh.vertices.size(), 1.0),
@@ -99,7 +98,7 @@ class Decimator {
                                      (mesh.vertices[v] - config.viewpoint).squaredNorm()));
     // Area-weighted plane quadric of every face, summed at its corners (serial: the sums must
     // not depend on the thread count).
-    for (const Triangle& t : t_) {
+    for (const Triangle& t : mesh.triangles) {
       const Eigen::Vector3d a = p(t[0]).cast<double>();
       const Eigen::Vector3d n = (p(t[1]).cast<double>() - a).cross(p(t[2]).cast<double>() - a);
       const double area2 = n.norm();
@@ -112,7 +111,7 @@ class Decimator {
   }
 
   TriangleMesh run(std::size_t target, QemReport& report) {
-    std::size_t alive = t_.size();
+    std::size_t alive = in_.triangles.size();
     const std::size_t n = in_.vertices.size();
     std::vector<Candidate> best(n);
     // In a pass: `changed` = for u and its neighbours (v among them) the number of the last
@@ -124,11 +123,6 @@ class Decimator {
     std::vector<std::uint8_t> removed(n), dirty(n, 1);
     std::vector<std::uint32_t> targets;  // the kept vertex of every collapse of the last pass
     while (alive > target) {
-      compact_faces();
-      around_ = vertex_triangles(t_, n);
-      merged_head_.assign(n, kNone);
-      merged_tail_.assign(n, kNone);
-      merged_next_.assign(n, kNone);
       // After u -> v, exactly the vertices of v's faces need a new best collapse: a vertex w's
       // best reads its own faces (changed only around v), its neighbours' quadrics (only v's
       // changed) and, for the link condition of w -> x, the common neighbours of w and x,
@@ -141,11 +135,16 @@ class Decimator {
       // collapses after that one (the same output as evaluating it again, for less work).
       if (!targets.empty()) {
         std::fill(dirty.begin(), dirty.end(), 0);
-        for (std::uint32_t v : targets)
-          for (const std::uint32_t* f = around_.begin(v); f != around_.end(v); ++f)
-            for (std::uint32_t x : t_[*f])
-              dirty[x] = changed[x] > walk_evaluated_at[x] ||
-                         (best[x].cost < kNoCollapse && changed[best[x].to] > walk_evaluated_at[x]);
+        const auto mark_dirty = [&](std::uint32_t x) {
+          dirty[x] = changed[x] > walk_evaluated_at[x] ||
+                     (best[x].cost < kNoCollapse && changed[best[x].to] > walk_evaluated_at[x]);
+        };
+        for (std::uint32_t v : targets) {
+          if (rings_.face_count(v) == 0) continue;  // collapsed later in the pass
+          mark_dirty(v);
+          for (const std::uint32_t* x = rings_.begin(v); x != rings_.end(v); ++x)
+            if (*x != VertexRings::kSeparator) mark_dirty(*x);
+        }
       }
       targets.clear();
       tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n),
@@ -212,7 +211,7 @@ class Decimator {
           if (ahead_in_parallel) {
             if (i + kLookAhead < order.size()) prefetch(candidate(i + kLookAhead), false);
           } else {
-            if (i + 2 * kLookAhead < order.size()) prefetch_rows(candidate(i + 2 * kLookAhead));
+            if (i + 2 * kLookAhead < order.size()) prefetch_slots(candidate(i + 2 * kLookAhead));
             if (i + kLookAhead < order.size()) prefetch(candidate(i + kLookAhead), true);
             if (i + kLookAhead / 2 < order.size()) prefetch_corners(candidate(i + kLookAhead / 2));
           }
@@ -258,62 +257,22 @@ class Decimator {
       report.rejected_normal += scratch.rejected.rejected_normal;
       report.rejected_border += scratch.rejected.rejected_border;
     }
-    compact_faces();
-    return compact_vertices(in_, t_);
+    // Faces come out of the rings rotated and reordered (VertexRings::triangles()); when
+    // nothing collapsed, the input's faces are returned as given.
+    if (report.collapses == 0) return compact_vertices(in_, in_.triangles);
+    return compact_vertices(in_, rings_.triangles());
   }
 
  private:
   const Eigen::Vector3f& p(std::uint32_t v) const { return in_.vertices[v]; }
 
-  // Calls fn(x) for w and for every vertex merged into w in this pass: the vertices whose
-  // incidence rows hold w's faces now.
-  template <typename Fn>
-  void for_each_row_owner(std::uint32_t w, Fn&& fn) const {
-    fn(w);
-    for (std::uint32_t x = merged_head_[w]; x != kNone; x = merged_next_[x]) fn(x);
-  }
-
-  // Calls fn(f) for every live face f of w (the rows of for_each_row_owner).
-  template <typename Fn>
-  void for_each_face(std::uint32_t w, Fn&& fn) const {
-    for_each_row_owner(w, [&](std::uint32_t x) {
-      for (const std::uint32_t* f = around_.begin(x); f != around_.end(x); ++f)
-        if (alive_[*f]) fn(*f);
-    });
-  }
-
-  // The number of faces for_each_face(w) walks, dead ones included: room for w's fan.
-  std::size_t face_room(std::uint32_t w) const {
-    std::size_t room = 0;
-    for_each_row_owner(w, [&](std::uint32_t x) {
-      room += static_cast<std::size_t>(around_.end(x) - around_.begin(x));
-    });
-    return room;
-  }
-
-  // After u -> v: v's merged list becomes u, u's merged list, then v's (O(1)).
-  void merge_rows(std::uint32_t u, std::uint32_t v) {
-    const std::uint32_t last = merged_tail_[u] != kNone ? merged_tail_[u] : u;
-    merged_next_[u] = merged_head_[u];
-    merged_next_[last] = merged_head_[v];
-    if (merged_tail_[v] == kNone) merged_tail_[v] = last;
-    merged_head_[v] = u;
-  }
-
-  static bool has(const Triangle& t, std::uint32_t v) {
-    return t[0] == v || t[1] == v || t[2] == v;
-  }
-  static Triangle replaced(Triangle t, std::uint32_t u, std::uint32_t v) {
-    for (auto& x : t)
-      if (x == u) x = v;
-    return t;
-  }
-
   // Per-thread working memory of best_collapse().
   struct Scratch {
     explicit Scratch(const Decimator& d) : fan(d.cos_turn_, d.cos2_min_angle_) {}
-    std::vector<std::uint32_t> nu, border;              ///< u's neighbours, and those on a border
-    std::size_t neighbour_count = 0, border_count = 0;  ///< the entries of nu and border in use
+    const std::uint32_t* neighbours = nullptr;  ///< u's ring
+    std::size_t neighbour_count = 0;
+    std::uint32_t border[2] = {0, 0};  ///< u's neighbours along its border, if it is on one
+    std::size_t border_count = 0;      ///< 2 on a border, else 0
     std::vector<std::pair<double, std::uint32_t>> candidates;  ///< (quadric cost, v)
     CollapseFan fan;                                           ///< u's faces
     std::vector<std::uint32_t> mark;  ///< per vertex: a stamp, or a count above a stamp
@@ -340,60 +299,45 @@ class Decimator {
   }
 
   // The cheapest valid collapse u -> v over u's neighbours v (cost kNoCollapse when none), on
-  // u's live faces.
+  // u's faces as they are now.
   Candidate best_collapse(std::uint32_t u, Scratch& scratch) const {
     Candidate best;
     best.from = u;
-    const std::size_t row = face_room(u);
-    if (row == 0) return best;
-    auto& [nu, border, neighbour_total, border_total, candidates, fan, mark, stamp, rejected] =
-        scratch;
-    // One walk over u's faces (u, a, b) fills the fan and finds the neighbours, and the border
-    // ones among them (sharing one face with u): each neighbour appears once per face it
-    // shares with u, counted in `mark` (from base + 1, saturating). The lists are written by
-    // index into room for every end of every face (no growth checks per entry).
-    const std::uint32_t base = scratch.fresh_stamps(8);
-    if (nu.size() < 2 * row) {
-      nu.resize(2 * row);
-      border.resize(2 * row);
-      candidates.resize(2 * row);
+    const std::size_t faces = rings_.face_count(u);
+    if (faces == 0 || rings_.locked(u)) return best;
+    const std::uint32_t* const ring = rings_.begin(u);
+    const std::size_t n = rings_.size(u);
+    scratch.neighbours = ring;
+    scratch.neighbour_count = n;
+    if (scratch.candidates.size() < n) scratch.candidates.resize(2 * n);
+    // u's faces (u, r[k], r[k + 1]), each neighbour's position read once.
+    CollapseFan& fan = scratch.fan;
+    fan.reset(faces, p(u));
+    const Eigen::Vector3f* pa = &p(ring[0]);
+    for (std::size_t k = 0; k < faces; ++k) {
+      const std::uint32_t b = ring[k + 1 == n ? 0 : k + 1];
+      const Eigen::Vector3f* pb = &p(b);
+      fan.set(k, ring[k], *pa, b, *pb);
+      pa = pb;
     }
-    std::uint32_t* const neighbours = nu.data();
-    std::size_t neighbour_count = 0;
-    fan.reset(row, p(u));
-    std::size_t k = 0;
-    for_each_face(u, [&](std::uint32_t face) {
-      const Triangle& t = t_[face];
-      const std::size_t i = t[0] == u ? 0 : t[1] == u ? 1 : 2;
-      const std::uint32_t a = t[(i + 1) % 3], b = t[(i + 2) % 3];
-      fan.set(k++, a, p(a), b, p(b));
-      for (std::uint32_t x : {a, b}) {
-        if (x == u) continue;  // a face repeating u
-        std::uint32_t& count = mark[x];
-        if (count < base) {
-          count = base + 1;
-          neighbours[neighbour_count++] = x;
-        } else if (count < base + 7) {
-          ++count;
-        }
-      }
-    });
-    if (k == 0) return best;
-    neighbour_total = neighbour_count;
-    std::size_t border_count = 0;
-    for (std::size_t j = 0; j < neighbour_count; ++j)
-      if (mark[neighbours[j]] == base + 1) border[border_count++] = neighbours[j];
-    border_total = border_count;
     // A border vertex may only move along its border (see valid()): onto one of its two border
     // neighbours, and only where the border runs nearly straight through it. Both moves make
     // the same turn, so a bend rules out both before any cost is computed.
-    if (border_count != 0 && (border_count != 2 || !border_straight(u, border[0], border[1]))) {
-      rejected.rejected_border += border_count == 2 ? 2 : neighbour_count;
-      return best;
+    std::size_t border_count = 0;
+    if (rings_.kind(u) == VertexRings::Kind::kOpen) {
+      scratch.border[0] = ring[0];
+      scratch.border[1] = ring[n - 1];
+      border_count = 2;
+      if (!border_straight(u, ring[0], ring[n - 1])) {
+        scratch.rejected.rejected_border += 2;
+        scratch.border_count = border_count;
+        return best;
+      }
     }
-    const std::uint32_t* targets = border_count != 0 ? border.data() : neighbours;
-    const std::size_t count = border_count != 0 ? border_count : neighbour_count;
-    std::pair<double, std::uint32_t>* const queue = candidates.data();
+    scratch.border_count = border_count;
+    const std::uint32_t* targets = border_count != 0 ? scratch.border : ring;
+    const std::size_t count = border_count != 0 ? border_count : n;
+    std::pair<double, std::uint32_t>* const queue = scratch.candidates.data();
     // In order of (quadric cost, vertex), by insertion: a vertex has a handful of candidates.
     for (std::size_t j = 0; j < count; ++j) {
       const std::pair<double, std::uint32_t> entry{quadric_cost(u, targets[j]), targets[j]};
@@ -401,7 +345,7 @@ class Decimator {
       for (; at > 0 && entry < queue[at - 1]; --at) queue[at] = queue[at - 1];
       queue[at] = entry;
     }
-    fan.finish(k);
+    fan.finish(faces);
     // Penalties only multiply the quadric cost, so candidates are tried in its order until it
     // alone exceeds the best penalised cost found.
     for (std::size_t j = 0; j < count; ++j) {
@@ -409,7 +353,7 @@ class Decimator {
       if (!(quadric < best.cost)) break;
       const FanVerdict verdict = fan.check(v, p(v));
       if (verdict.turned) {  // invalid whatever the cost: refused before anything else
-        ++rejected.rejected_normal;
+        ++scratch.rejected.rejected_normal;
         continue;
       }
       const double cost = penalised(fan, v, verdict, quadric);
@@ -422,37 +366,30 @@ class Decimator {
   }
 
   // Requests the memory that evaluating and applying c reads: the quadrics of its ends, v's
-  // position, and u's faces: with `rows_in_cache` (prefetch_rows() ran earlier) every face of
-  // u's own row and its alive flag, else the two rows and u's first face.
-  void prefetch(const Candidate& c, bool rows_in_cache) const {
+  // position, and their rings: with `slots_in_cache` (prefetch_slots() ran earlier) directly,
+  // else after their slots.
+  void prefetch(const Candidate& c, bool slots_in_cache) const {
     for (std::uint32_t x : {c.from, c.to}) {
       __builtin_prefetch(&q_[x].q[0]);
       __builtin_prefetch(&q_[x].q[8]);  // a quadric spans two cache lines
     }
     __builtin_prefetch(&in_.vertices[c.to]);
-    if (rows_in_cache) {
-      for (const std::uint32_t* f = around_.begin(c.from); f != around_.end(c.from); ++f) {
-        __builtin_prefetch(&t_[*f]);
-        __builtin_prefetch(&alive_[*f]);
-      }
-      return;
-    }
-    prefetch_rows(c);
-    if (around_.begin(c.from) != around_.end(c.from))
-      __builtin_prefetch(&t_[*around_.begin(c.from)]);
+    if (!slots_in_cache) prefetch_slots(c);
+    rings_.prefetch_ring(c.from);
+    rings_.prefetch_ring(c.to);
   }
 
-  // Requests the incidence rows of c's ends.
-  void prefetch_rows(const Candidate& c) const {
-    __builtin_prefetch(around_.begin(c.from));
-    __builtin_prefetch(around_.begin(c.to));
+  // Requests the ring slots (offset, size) of c's ends.
+  void prefetch_slots(const Candidate& c) const {
+    rings_.prefetch_slot(c.from);
+    rings_.prefetch_slot(c.to);
   }
 
-  // Requests the positions of the corners of u's faces (its own row; prefetch(c, true) ran
-  // earlier, so the faces are in cache).
+  // Requests the positions of u's neighbours (prefetch(c, true) ran earlier, so u's ring is in
+  // cache).
   void prefetch_corners(const Candidate& c) const {
-    for (const std::uint32_t* f = around_.begin(c.from); f != around_.end(c.from); ++f)
-      for (std::uint32_t x : t_[*f]) __builtin_prefetch(&in_.vertices[x]);
+    for (const std::uint32_t* x = rings_.begin(c.from); x != rings_.end(c.from); ++x)
+      __builtin_prefetch(&in_.vertices[*x]);
   }
 
   // Whether the border w -> u -> v turns by less than max_border_turn_deg at u (the same for
@@ -481,7 +418,7 @@ class Decimator {
   // u whose neighbourhood and fan `scratch` holds; `verdict` is the fan's check of v (its faces
   // that stay are unturned: the caller checked). Counts the reason of a refusal.
   bool valid(std::uint32_t v, const FanVerdict& verdict, Scratch& scratch) const {
-    const std::uint32_t* border_at_u = scratch.border.data();
+    const std::uint32_t* border_at_u = scratch.border;
     const std::size_t border_count = scratch.border_count;
     QemReport& rejected = scratch.rejected;
     const std::size_t shared_count = verdict.shared;
@@ -506,15 +443,13 @@ class Decimator {
     std::vector<std::uint32_t>& mark = scratch.mark;
     const std::uint32_t listed = scratch.fresh_stamps(2), counted = listed + 1;
     for (std::size_t j = 0; j < scratch.neighbour_count; ++j)
-      if (scratch.nu[j] != v) mark[scratch.nu[j]] = listed;
+      if (scratch.neighbours[j] != v) mark[scratch.neighbours[j]] = listed;
     std::size_t common = 0;
-    for_each_face(v, [&](std::uint32_t face) {
-      for (std::uint32_t x : t_[face])
-        if (mark[x] == listed) {
-          mark[x] = counted;
-          ++common;
-        }
-    });
+    for (const std::uint32_t* x = rings_.begin(v); x != rings_.end(v); ++x)
+      if (*x != VertexRings::kSeparator && mark[*x] == listed) {
+        mark[*x] = counted;
+        ++common;
+      }
     if (common != shared_count) {
       ++rejected.rejected_topology;
       return false;
@@ -523,50 +458,24 @@ class Decimator {
   }
 
   // Applies u -> v, the pass's collapse `number`, and writes that number into `changed` for u
-  // and its neighbours (v among them): the vertices whose faces or quadric change. u's faces become
-  // v's (merge_rows). Returns the faces removed (one on a border edge, two inside); they stay in
-  // t_, dead, until the next pass compacts it.
+  // and its neighbours (v among them): the vertices whose faces or quadric change. Returns the
+  // faces removed (one on a border edge, two inside).
   std::size_t collapse(std::uint32_t u, std::uint32_t v, std::uint32_t number,
                        std::vector<std::uint32_t>& changed) {
-    for_each_face(u, [&](std::uint32_t f) {
-      for (std::uint32_t x : t_[f]) changed[x] = number;
-    });
-    std::size_t removed = 0;
-    for_each_face(u, [&](std::uint32_t f) {
-      if (has(t_[f], v)) {
-        alive_[f] = 0;
-        ++removed;
-      } else {
-        t_[f] = replaced(t_[f], u, v);
-      }
-    });
-    merge_rows(u, v);
+    changed[u] = number;
+    for (const std::uint32_t* x = rings_.begin(u); x != rings_.end(u); ++x) changed[*x] = number;
+    const std::size_t removed = rings_.collapse(u, v);
     q_[v].add(q_[u]);
     own_error_[v] = q_[v].error(p(v));
     return removed;
   }
 
-  // Drops removed faces from t_ (keeping the order of the rest).
-  void compact_faces() {
-    std::size_t kept = 0;
-    for (std::size_t f = 0; f < t_.size(); ++f)
-      if (alive_[f]) t_[kept++] = t_[f];
-    t_.resize(kept);
-    alive_.assign(kept, 1);
-  }
-
   const TriangleMesh& in_;
   const QemConfig& cfg_;
-  std::vector<Triangle> t_;
-  std::vector<std::uint8_t> alive_;
+  VertexRings rings_;  ///< the mesh as it is now
   std::vector<Quadric> q_;
   std::vector<double> own_error_;   ///< Q_v(v) of every vertex: (Q_u + Q_v)(v) = Q_u(v) + this
   std::vector<double> cost_scale_;  ///< multiplies a collapse's quadric error (1 / depth^2)
-  VertexTriangles around_;          ///< incidence rows, rebuilt at the start of every pass
-  // The vertices merged into a vertex in this pass, whose rows it is read from too: a list per
-  // vertex (head, tail) linked through merged_next_; kNone ends it.
-  static constexpr std::uint32_t kNone = std::numeric_limits<std::uint32_t>::max();
-  std::vector<std::uint32_t> merged_head_, merged_tail_, merged_next_;
   float cos_turn_, cos_border_, cos_sharp_, cos2_min_angle_;
   mutable tbb::enumerable_thread_specific<Scratch> scratch_;  ///< best_collapse()'s memory
 };

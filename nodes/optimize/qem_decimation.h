@@ -49,10 +49,13 @@ struct QemReport {
 /// collapse whose ends took part in an earlier one of the pass, or lost a neighbour to it, is
 /// evaluated again on the mesh as it is then and taken if it stays within that limit (such
 /// re-evaluations run in parallel, for chunks of candidates: walk_chunk). Passes repeat until
-/// target_ratio of the triangles remain or no valid collapse is left. Output vertices are a subset
-/// of the input vertices (same positions, same order, normals and colours kept); triangles stay
-/// consistently oriented and manifold where the input was. Deterministic: the same output for
-/// any thread count. About O(T x valence^2) per pass, a handful of passes.
+/// target_ratio of the triangles remain or no valid collapse is left. Vertices whose faces do not
+/// form one fan or several border fans (a non-manifold edge, a face repeating a corner), and
+/// their neighbours, are never removed. Output vertices are a subset of the input vertices (same
+/// positions, same order, normals and colours kept); triangles stay consistently oriented and
+/// manifold where the input was, listed from their smallest vertex's neighbour ring (the input's
+/// as given when nothing collapsed). Deterministic: the same output for any thread count. About
+/// O(T x valence^2) per pass, a handful of passes.
 TriangleMesh qem_decimate(const TriangleMesh& mesh, const QemConfig& config = {},
                           QemReport* report = nullptr);
 

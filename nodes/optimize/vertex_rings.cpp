@@ -1,0 +1,235 @@
+#include "nodes/optimize/vertex_rings.h"
+
+#include <tbb/blocked_range.h>
+#include <tbb/enumerable_thread_specific.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <utility>
+
+#include "runtime/vertex_triangles.h"
+
+namespace meshflow {
+namespace {
+
+// Room left in every ring beyond its first size: a collapse onto a vertex usually grows its
+// ring by a few entries, and a ring that outgrows its room moves to the end of the storage.
+constexpr std::uint32_t kSlack = 6;
+
+using Pair = std::pair<std::uint32_t, std::uint32_t>;  // (a, b) of a face (u, a, b)
+
+// Per-thread lookups over the faces (u, a, b) of one vertex at a time: which face has a given
+// a, and whether a vertex is some face's b. Stamped per vertex, so nothing is cleared between
+// vertices: O(faces) per vertex, O(V) memory per thread.
+struct FanIndex {
+  std::vector<std::uint32_t> a_stamp, a_face, b_stamp;
+  std::uint32_t stamp = 0;
+  std::vector<Pair> pairs;
+  std::vector<std::uint32_t> starts, entries;
+
+  explicit FanIndex(std::size_t vertex_count)
+      : a_stamp(vertex_count, 0), a_face(vertex_count, 0), b_stamp(vertex_count, 0) {}
+  // Indexes `pairs`; false when two faces share an a or a b.
+  bool index() {
+    if (++stamp == 0) {  // wrapped around: start the stamps again
+      std::fill(a_stamp.begin(), a_stamp.end(), 0);
+      std::fill(b_stamp.begin(), b_stamp.end(), 0);
+      stamp = 1;
+    }
+    for (std::uint32_t i = 0; i < pairs.size(); ++i) {
+      const auto [a, b] = pairs[i];
+      if (a_stamp[a] == stamp || b_stamp[b] == stamp) return false;
+      a_stamp[a] = stamp;
+      a_face[a] = i;
+      b_stamp[b] = stamp;
+    }
+    return true;
+  }
+  // The face with this a, or none.
+  const Pair* next(std::uint32_t a) const {
+    return a_stamp[a] == stamp ? &pairs[a_face[a]] : nullptr;
+  }
+  bool is_some_b(std::uint32_t x) const { return b_stamp[x] == stamp; }
+};
+
+// Orders the faces (u, a, b) of one vertex, fan.pairs, into its ring: fan.entries gets the a's
+// in fan order, for an open fan followed by its last face's b, fans separated by kSeparator;
+// `fans` their number. Complex when a face repeats a corner, two faces share an a or a b (a
+// non-manifold edge or a face given twice), or a closed fan is not the only one.
+VertexRings::Kind order_fan(std::uint32_t u, FanIndex& fan, std::size_t& fans) {
+  using Kind = VertexRings::Kind;
+  std::vector<std::uint32_t>& entries = fan.entries;
+  entries.clear();
+  fans = 1;
+  const std::size_t k = fan.pairs.size();
+  if (k == 0) return Kind::kClosed;
+  for (const auto& [a, b] : fan.pairs)
+    if (a == u || b == u || a == b) return Kind::kComplex;
+  if (!fan.index()) return Kind::kComplex;
+  // a -> b is one-to-one, so the faces form chains from each a that is no face's b (open fans,
+  // in the order of their first a) and cycles.
+  fan.starts.clear();
+  for (const Pair& pair : fan.pairs)
+    if (!fan.is_some_b(pair.first)) fan.starts.push_back(pair.first);
+  const std::size_t open = fan.starts.size();
+  if (open != 0) {
+    if (open > 1) std::sort(fan.starts.begin(), fan.starts.end());
+    std::size_t used = 0;
+    for (std::size_t f = 0; f < open; ++f) {
+      if (f != 0) entries.push_back(VertexRings::kSeparator);
+      std::uint32_t a = fan.starts[f];
+      for (const Pair* face = fan.next(a); face != nullptr; face = fan.next(a)) {
+        entries.push_back(a);
+        a = face->second;
+        ++used;
+      }
+      entries.push_back(a);
+    }
+    if (used != k) return Kind::kComplex;  // a closed fan beside open ones
+    fans = open;
+    return open == 1 ? Kind::kOpen : Kind::kFans;
+  }
+  // One closed fan through every face, from the first face given.
+  if (k < 3) return Kind::kComplex;
+  const std::uint32_t first = fan.pairs.front().first;
+  std::uint32_t a = first;
+  for (std::size_t step = 0; step < k; ++step) {
+    if (step != 0 && a == first) return Kind::kComplex;  // a closed fan of fewer faces
+    entries.push_back(a);
+    a = fan.next(a)->second;  // (every a has a face: no fan is open)
+  }
+  return a == first ? Kind::kClosed : Kind::kComplex;
+}
+
+}  // namespace
+
+VertexRings::VertexRings(const std::vector<Triangle>& triangles, std::size_t vertex_count)
+    : slots_(vertex_count), locked_(vertex_count, 0) {
+  const VertexTriangles around = vertex_triangles(triangles, vertex_count);
+  std::uint32_t total = 0;
+  for (std::size_t v = 0; v < vertex_count; ++v) {
+    const std::uint32_t faces = around.offsets[v + 1] - around.offsets[v];
+    slots_[v].offset = total;
+    slots_[v].capacity = faces + 1 + kSlack;
+    total += slots_[v].capacity;
+  }
+  data_.resize(total);
+  tbb::enumerable_thread_specific<FanIndex> work([vertex_count] { return FanIndex(vertex_count); });
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, vertex_count),
+                    [&](const tbb::blocked_range<std::size_t>& range) {
+                      FanIndex& w = work.local();
+                      for (std::size_t v = range.begin(); v != range.end(); ++v) {
+                        const auto u = static_cast<std::uint32_t>(v);
+                        w.pairs.clear();
+                        for (const std::uint32_t* f = around.begin(u); f != around.end(u); ++f) {
+                          const Triangle& t = triangles[*f];
+                          const int i = t[0] == u ? 0 : t[1] == u ? 1 : 2;
+                          w.pairs.emplace_back(t[(i + 1) % 3], t[(i + 2) % 3]);
+                        }
+                        Slot& slot = slots_[v];
+                        std::size_t fans = 1;
+                        slot.kind = order_fan(u, w, fans);
+                        if (w.entries.size() > slot.capacity || fans > 0xFFFF)
+                          slot.kind = Kind::kComplex;  // (many fans: room for separators)
+                        if (slot.kind == Kind::kComplex) continue;
+                        slot.fans = static_cast<std::uint16_t>(fans);
+                        std::copy(w.entries.begin(), w.entries.end(), data_.begin() + slot.offset);
+                        slot.size = static_cast<std::uint32_t>(w.entries.size());
+                      }
+                    });
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, vertex_count),
+                    [&](const tbb::blocked_range<std::size_t>& range) {
+                      for (std::size_t v = range.begin(); v != range.end(); ++v) {
+                        const auto u = static_cast<std::uint32_t>(v);
+                        bool locked = kind(u) == Kind::kComplex || kind(u) == Kind::kFans;
+                        for (const std::uint32_t* w = begin(u); w != end(u) && !locked; ++w)
+                          locked = *w != kSeparator && kind(*w) == Kind::kComplex;
+                        locked_[v] = locked ? 1 : 0;
+                      }
+                    });
+  for (const Triangle& t : triangles)
+    if (kind(t[0]) == Kind::kComplex && kind(t[1]) == Kind::kComplex &&
+        kind(t[2]) == Kind::kComplex)
+      complex_only_.push_back(t);
+}
+
+void VertexRings::assign(std::uint32_t v, const std::uint32_t* entries, std::size_t count) {
+  Slot& slot = slots_[v];
+  if (count > slot.capacity) {
+    slot.offset = static_cast<std::uint32_t>(data_.size());
+    slot.capacity = static_cast<std::uint32_t>(count + count / 2 + kSlack);
+    data_.resize(data_.size() + slot.capacity);
+  }
+  std::copy(entries, entries + count, data_.begin() + slot.offset);
+  slot.size = static_cast<std::uint32_t>(count);
+}
+
+void VertexRings::erase_or_replace(std::uint32_t w, std::uint32_t u, std::uint32_t v, bool erase) {
+  Slot& slot = slots_[w];
+  std::uint32_t* ring = data_.data() + slot.offset;
+  std::uint32_t* at = std::find(ring, ring + slot.size, u);
+  if (at == ring + slot.size) return;  // (cannot happen: u is w's neighbour)
+  if (!erase) {
+    *at = v;
+    return;
+  }
+  std::copy(at + 1, ring + slot.size, at);
+  --slot.size;
+}
+
+std::size_t VertexRings::collapse(std::uint32_t u, std::uint32_t v) {
+  moved_.assign(begin(u), end(u));
+  const std::size_t n = moved_.size();
+  const std::size_t j =
+      static_cast<std::size_t>(std::find(moved_.begin(), moved_.end(), v) - moved_.begin());
+  // The wings (opposite corners of the faces that vanish) and the run of u's ring between them,
+  // [run_begin, run_begin + run_length) cyclically, that takes u's place in v's ring.
+  std::uint32_t wing_a = 0, wing_b = 0;
+  std::size_t run_begin = 0, run_length = 0, removed = 0;
+  if (kind(u) == Kind::kClosed) {
+    wing_a = moved_[(j + 1) % n];
+    wing_b = moved_[(j + n - 1) % n];
+    run_begin = (j + 2) % n;
+    run_length = n - 3;
+    removed = 2;
+  } else {  // open: v is the first or the last border neighbour
+    wing_a = wing_b = j == 0 ? moved_[1] : moved_[n - 2];
+    run_begin = j == 0 ? 2 : 0;
+    run_length = n - 2;
+    removed = 1;
+  }
+  // v's ring with u replaced by the run (storage is not moved before assign()).
+  const std::uint32_t* ring = begin(v);
+  const std::size_t ring_size = size(v);
+  const std::size_t at = static_cast<std::size_t>(std::find(ring, ring + ring_size, u) - ring);
+  spliced_.assign(ring, ring + at);
+  for (std::size_t i = 0; i < run_length; ++i) spliced_.push_back(moved_[(run_begin + i) % n]);
+  if (at < ring_size) spliced_.insert(spliced_.end(), ring + at + 1, ring + ring_size);
+  assign(v, spliced_.data(), spliced_.size());
+  for (std::uint32_t w : moved_)
+    if (w != v) erase_or_replace(w, u, v, w == wing_a || w == wing_b);
+  slots_[u].size = 0;
+  return removed;
+}
+
+std::vector<Triangle> VertexRings::triangles() const {
+  std::vector<Triangle> out;
+  const auto owner_or_later = [this](std::uint32_t corner, std::uint32_t owner) {
+    return corner > owner || kind(corner) == Kind::kComplex;
+  };
+  for (std::uint32_t m = 0; m < slots_.size(); ++m) {
+    const std::size_t n = size(m);
+    const std::uint32_t* ring = begin(m);
+    // Faces (m, r[i], r[i + 1]), wrapping around for a closed ring, none across a separator.
+    const std::size_t pairs = kind(m) == Kind::kClosed ? n : (n == 0 ? 0 : n - 1);
+    for (std::size_t i = 0; i < pairs; ++i) {
+      const std::uint32_t b = ring[i], c = ring[i + 1 == n ? 0 : i + 1];
+      if (b == kSeparator || c == kSeparator) continue;
+      if (owner_or_later(b, m) && owner_or_later(c, m)) out.push_back({m, b, c});
+    }
+  }
+  out.insert(out.end(), complex_only_.begin(), complex_only_.end());
+  return out;
+}
+
+}  // namespace meshflow

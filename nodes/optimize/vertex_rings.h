@@ -1,0 +1,91 @@
+#pragma once
+// The neighbours of every vertex of a triangle mesh in fan order (a "ring"), kept current under
+// half-edge collapses: what the QEM decimator reads for every candidate collapse, one short
+// contiguous list per vertex instead of a walk over incidence rows and face corners. Used by
+// qem_decimation.cpp.
+
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+#include "runtime/triangle_mesh.h"
+
+namespace meshflow {
+
+class VertexRings {
+ public:
+  enum class Kind : std::uint8_t {
+    /// An inner vertex (or one without faces): faces (v, r[i], r[(i + 1) mod n]).
+    kClosed,
+    /// A border vertex: faces (v, r[i], r[i + 1]) for i < n - 1; r[0] and r[n - 1] are its
+    /// neighbours along the border.
+    kOpen,
+    /// Several border fans meeting at v (a "bow tie", common where depth maps lose pixels):
+    /// their rings one after another, each as for kOpen, kSeparator between two.
+    kFans,
+    /// Faces that do not form consistently oriented open fans or one closed fan (a non-manifold
+    /// edge, a face repeating a corner or given twice, a closed fan beside others): no ring.
+    kComplex,
+  };
+
+  /// Rings of the `vertex_count` vertices of `triangles` (corners < vertex_count), oriented as
+  /// the faces are. In parallel over vertices; the same for any thread count. O(V + T) time,
+  /// about 4 x (valence + 7) bytes per vertex.
+  VertexRings(const std::vector<Triangle>& triangles, std::size_t vertex_count);
+
+  /// Between two fans of a kFans ring: skip it wherever ring entries are read as vertices.
+  static constexpr std::uint32_t kSeparator = 0xFFFFFFFFu;
+
+  Kind kind(std::uint32_t v) const { return slots_[v].kind; }
+  /// Whether v is kFans or kComplex, or next to a complex vertex: v must never be collapsed
+  /// (a vertex of several fans has more than two border neighbours, so the decimator's border
+  /// rule refuses it; a complex one's neighbours could not be updated). Fixed at construction:
+  /// collapses of other vertices only ever give a vertex neighbours that are not complex.
+  bool locked(std::uint32_t v) const { return locked_[v] != 0; }
+  const std::uint32_t* begin(std::uint32_t v) const { return data_.data() + slots_[v].offset; }
+  const std::uint32_t* end(std::uint32_t v) const { return begin(v) + slots_[v].size; }
+  std::size_t size(std::uint32_t v) const { return slots_[v].size; }
+  /// The faces around v: size for a closed ring, size - 1 for an open one, one less per fan
+  /// and separator for several, 0 for a complex vertex or one removed by a collapse.
+  std::size_t face_count(std::uint32_t v) const {
+    const Slot& s = slots_[v];
+    if (s.size == 0 || s.kind == Kind::kClosed) return s.size;
+    return s.size + 1 - 2 * std::size_t{s.fans};
+  }
+
+  /// Applies the half-edge collapse u -> v: u's faces not containing v get v in u's place, the
+  /// one or two containing v vanish, and u's ring is emptied. Returns the faces removed.
+  /// Preconditions (the caller's checks): u is not locked; v is in u's ring; v is one of the two
+  /// border neighbours if u is open; the link condition holds (the common neighbours of u and v
+  /// are exactly the opposite corners of the removed faces). O(valence of u and v), amortised.
+  /// Not thread-safe (rings of u, v and u's neighbours change; storage may move).
+  std::size_t collapse(std::uint32_t u, std::uint32_t v);
+
+  /// The faces of the mesh as it is now: every face with a non-complex corner, from the ring of
+  /// the smallest such corner (in vertex order, then ring order), then the faces of only
+  /// complex corners, as in the input (collapses never change them). O(V + T).
+  std::vector<Triangle> triangles() const;
+
+  /// Requests v's slot (offset and size), then, in a later call, its ring.
+  void prefetch_slot(std::uint32_t v) const { __builtin_prefetch(&slots_[v]); }
+  void prefetch_ring(std::uint32_t v) const { __builtin_prefetch(begin(v)); }
+
+ private:
+  struct Slot {
+    std::uint32_t offset = 0, size = 0, capacity = 0;
+    Kind kind = Kind::kClosed;
+    std::uint16_t fans = 1;  ///< of a kOpen or kFans ring (collapses never change it)
+  };
+  // Writes `count` entries as v's ring, moving it to the end of data_ when it does not fit.
+  void assign(std::uint32_t v, const std::uint32_t* entries, std::size_t count);
+  // In w's ring: u removed (`erase`) or replaced by v.
+  void erase_or_replace(std::uint32_t w, std::uint32_t u, std::uint32_t v, bool erase);
+
+  std::vector<Slot> slots_;
+  std::vector<std::uint32_t> data_;
+  std::vector<std::uint8_t> locked_;
+  std::vector<Triangle> complex_only_;          ///< faces whose corners are all complex
+  std::vector<std::uint32_t> moved_, spliced_;  ///< collapse()'s working memory
+};
+
+}  // namespace meshflow

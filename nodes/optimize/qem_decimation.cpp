@@ -214,6 +214,8 @@ class Decimator {
             if (i + 2 * kLookAhead < order.size()) prefetch_slots(candidate(i + 2 * kLookAhead));
             if (i + kLookAhead < order.size()) prefetch(candidate(i + kLookAhead), true);
             if (i + kLookAhead / 2 < order.size()) prefetch_corners(candidate(i + kLookAhead / 2));
+            if (i + kLookAhead / 4 < order.size())
+              prefetch_neighbour_rings(candidate(i + kLookAhead / 4));
           }
           Candidate c = candidate(i);
           if (alive <= target || (c.cost > limit && collapsed > 0)) {
@@ -310,16 +312,6 @@ class Decimator {
     scratch.neighbours = ring;
     scratch.neighbour_count = n;
     if (scratch.candidates.size() < n) scratch.candidates.resize(2 * n);
-    // u's faces (u, r[k], r[k + 1]), each neighbour's position read once.
-    CollapseFan& fan = scratch.fan;
-    fan.reset(faces, p(u));
-    const Eigen::Vector3f* pa = &p(ring[0]);
-    for (std::size_t k = 0; k < faces; ++k) {
-      const std::uint32_t b = ring[k + 1 == n ? 0 : k + 1];
-      const Eigen::Vector3f* pb = &p(b);
-      fan.set(k, ring[k], *pa, b, *pb);
-      pa = pb;
-    }
     // A border vertex may only move along its border (see valid()): onto one of its two border
     // neighbours, and only where the border runs nearly straight through it. Both moves make
     // the same turn, so a bend rules out both before any cost is computed.
@@ -344,6 +336,17 @@ class Decimator {
       std::size_t at = j;
       for (; at > 0 && entry < queue[at - 1]; --at) queue[at] = queue[at - 1];
       queue[at] = entry;
+    }
+    // u's faces (u, r[k], r[k + 1]), each neighbour's position read once (after the border
+    // test: a bent border needs no fan).
+    CollapseFan& fan = scratch.fan;
+    fan.reset(faces, p(u));
+    const Eigen::Vector3f* pa = &p(ring[0]);
+    for (std::size_t k = 0; k < faces; ++k) {
+      const std::uint32_t b = ring[k + 1 == n ? 0 : k + 1];
+      const Eigen::Vector3f* pb = &p(b);
+      fan.set(k, ring[k], *pa, b, *pb);
+      pa = pb;
     }
     fan.finish(faces);
     // Penalties only multiply the quadric cost, so candidates are tried in its order until it
@@ -385,11 +388,20 @@ class Decimator {
     rings_.prefetch_slot(c.to);
   }
 
-  // Requests the positions of u's neighbours (prefetch(c, true) ran earlier, so u's ring is in
-  // cache).
+  // Requests the positions and ring slots of u's neighbours (prefetch(c, true) ran earlier, so
+  // u's ring is in cache).
   void prefetch_corners(const Candidate& c) const {
-    for (const std::uint32_t* x = rings_.begin(c.from); x != rings_.end(c.from); ++x)
+    for (const std::uint32_t* x = rings_.begin(c.from); x != rings_.end(c.from); ++x) {
       __builtin_prefetch(&in_.vertices[*x]);
+      rings_.prefetch_slot(*x);
+    }
+  }
+
+  // Requests the rings of u's neighbours, which a collapse of u rewrites (prefetch_corners()
+  // ran earlier, so their slots are in cache).
+  void prefetch_neighbour_rings(const Candidate& c) const {
+    for (const std::uint32_t* x = rings_.begin(c.from); x != rings_.end(c.from); ++x)
+      rings_.prefetch_ring(*x);
   }
 
   // Whether the border w -> u -> v turns by less than max_border_turn_deg at u (the same for

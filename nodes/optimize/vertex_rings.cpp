@@ -115,28 +115,45 @@ VertexRings::VertexRings(const std::vector<Triangle>& triangles, std::size_t ver
   }
   data_.resize(total);
   tbb::enumerable_thread_specific<FanIndex> work([vertex_count] { return FanIndex(vertex_count); });
+  // Orders v's fan into fan.entries and sets v's kind and fan count.
+  const auto order = [&](std::uint32_t v, FanIndex& fan) {
+    fan.pairs.clear();
+    for (const std::uint32_t* f = around.begin(v); f != around.end(v); ++f) {
+      const Triangle& t = triangles[*f];
+      const int i = t[0] == v ? 0 : t[1] == v ? 1 : 2;
+      fan.pairs.emplace_back(t[(i + 1) % 3], t[(i + 2) % 3]);
+    }
+    std::size_t fans = 1;
+    Slot& slot = slots_[v];
+    slot.kind = order_fan(v, fan, fans);
+    if (fans > 0xFFFF) slot.kind = Kind::kComplex;
+    slot.fans = static_cast<std::uint16_t>(fans);
+  };
+  // In parallel into the room of every ring; a vertex of several fans whose separators do not
+  // fit (more than kSlack / 2 + 1 fans) is left for a serial pass that moves it to the end.
+  std::vector<std::uint8_t> too_big(vertex_count, 0);
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, vertex_count),
                     [&](const tbb::blocked_range<std::size_t>& range) {
-                      FanIndex& w = work.local();
+                      FanIndex& fan = work.local();
                       for (std::size_t v = range.begin(); v != range.end(); ++v) {
-                        const auto u = static_cast<std::uint32_t>(v);
-                        w.pairs.clear();
-                        for (const std::uint32_t* f = around.begin(u); f != around.end(u); ++f) {
-                          const Triangle& t = triangles[*f];
-                          const int i = t[0] == u ? 0 : t[1] == u ? 1 : 2;
-                          w.pairs.emplace_back(t[(i + 1) % 3], t[(i + 2) % 3]);
-                        }
+                        order(static_cast<std::uint32_t>(v), fan);
                         Slot& slot = slots_[v];
-                        std::size_t fans = 1;
-                        slot.kind = order_fan(u, w, fans);
-                        if (w.entries.size() > slot.capacity || fans > 0xFFFF)
-                          slot.kind = Kind::kComplex;  // (many fans: room for separators)
                         if (slot.kind == Kind::kComplex) continue;
-                        slot.fans = static_cast<std::uint16_t>(fans);
-                        std::copy(w.entries.begin(), w.entries.end(), data_.begin() + slot.offset);
-                        slot.size = static_cast<std::uint32_t>(w.entries.size());
+                        if (fan.entries.size() > slot.capacity) {
+                          too_big[v] = 1;
+                          continue;
+                        }
+                        std::copy(fan.entries.begin(), fan.entries.end(),
+                                  data_.begin() + slot.offset);
+                        slot.size = static_cast<std::uint32_t>(fan.entries.size());
                       }
                     });
+  for (std::uint32_t v = 0; v < vertex_count; ++v)
+    if (too_big[v]) {
+      FanIndex& fan = work.local();
+      order(v, fan);
+      assign(v, fan.entries.data(), fan.entries.size());
+    }
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, vertex_count),
                     [&](const tbb::blocked_range<std::size_t>& range) {
                       for (std::size_t v = range.begin(); v != range.end(); ++v) {

@@ -94,6 +94,20 @@ TEST(VertexRings, BowTiesNonManifoldEdgesAndRepeatedCorners) {
   EXPECT_FALSE(a.locked(1));  // next to a bow tie only
   EXPECT_EQ(canonical_sorted(a.triangles()), canonical_sorted(bow_tie));
 
+  // Six triangles meeting at vertex 0 (more fans than a ring's first room holds) and a hub of
+  // forty faces.
+  std::vector<Triangle> many;
+  for (std::uint32_t k = 0; k < 6; ++k) many.push_back({0, 1 + 2 * k, 2 + 2 * k});
+  for (std::uint32_t k = 0; k < 40; ++k) many.push_back({13, 14 + k, 14 + (k + 1) % 40});
+  const VertexRings d(many, 54);
+  EXPECT_EQ(d.kind(0), Kind::kFans);
+  EXPECT_EQ(d.face_count(0), 6u);
+  EXPECT_EQ(d.size(0), 17u);
+  EXPECT_EQ(d.kind(13), Kind::kClosed);
+  EXPECT_EQ(d.face_count(13), 40u);
+  EXPECT_EQ(d.kind(14), Kind::kOpen);
+  EXPECT_EQ(canonical_sorted(d.triangles()), canonical_sorted(many));
+
   // Three faces on the edge 0-1: both ends complex, their neighbours locked, every face kept.
   const std::vector<Triangle> fin = {{0, 1, 2}, {1, 0, 3}, {0, 1, 4}, {2, 1, 5}};
   const VertexRings b(fin, 6);

@@ -139,7 +139,12 @@ class Decimator {
           dirty[x] = changed[x] > walk_evaluated_at[x] ||
                      (best[x].cost < kNoCollapse && changed[best[x].to] > walk_evaluated_at[x]);
         };
-        for (std::uint32_t v : targets) {
+        for (std::size_t j = 0; j < targets.size(); ++j) {
+          // (Targets lie all over the mesh: their rings are requested ahead.)
+          if (j + 2 * kLookAhead < targets.size())
+            rings_.prefetch_slot(targets[j + 2 * kLookAhead]);
+          if (j + kLookAhead < targets.size()) rings_.prefetch_ring(targets[j + kLookAhead]);
+          const std::uint32_t v = targets[j];
           if (rings_.face_count(v) == 0) continue;  // collapsed later in the pass
           mark_dirty(v);
           for (const std::uint32_t* x = rings_.begin(v); x != rings_.end(v); ++x)
@@ -211,6 +216,8 @@ class Decimator {
           if (ahead_in_parallel) {
             if (i + kLookAhead < order.size()) prefetch(candidate(i + kLookAhead), false);
           } else {
+            if (i + 3 * kLookAhead < order.size())
+              __builtin_prefetch(&best[static_cast<std::uint32_t>(order[i + 3 * kLookAhead])]);
             if (i + 2 * kLookAhead < order.size()) prefetch_slots(candidate(i + 2 * kLookAhead));
             if (i + kLookAhead < order.size()) prefetch(candidate(i + kLookAhead), true);
             if (i + kLookAhead / 2 < order.size()) prefetch_corners(candidate(i + kLookAhead / 2));

@@ -24,26 +24,37 @@ using Pair = std::pair<std::uint32_t, std::uint32_t>;  // (a, b) of a face (u, a
 struct FanIndex {
   std::vector<std::uint32_t> a_stamp, a_face, b_stamp;
   std::uint32_t stamp = 0;
-  std::vector<Pair> pairs;
+  std::vector<Pair> pairs;  ///< the first `count` are u's faces
+  std::size_t count = 0;
   std::vector<std::uint32_t> starts, entries;
 
   explicit FanIndex(std::size_t vertex_count)
       : a_stamp(vertex_count, 0), a_face(vertex_count, 0), b_stamp(vertex_count, 0) {}
-  // Indexes `pairs`; false when two faces share an a or a b.
-  bool index() {
+
+  // Reads u's faces, the triangles listed in [first, last), as pairs (a, b) and indexes them;
+  // false when a face repeats a corner or two faces share an a or a b (a non-manifold edge, a
+  // face given twice).
+  bool gather(std::uint32_t u, const std::uint32_t* first, const std::uint32_t* last,
+              const std::vector<Triangle>& triangles) {
     if (++stamp == 0) {  // wrapped around: start the stamps again
       std::fill(a_stamp.begin(), a_stamp.end(), 0);
       std::fill(b_stamp.begin(), b_stamp.end(), 0);
       stamp = 1;
     }
-    for (std::uint32_t i = 0; i < pairs.size(); ++i) {
-      const auto [a, b] = pairs[i];
-      if (a_stamp[a] == stamp || b_stamp[b] == stamp) return false;
+    count = static_cast<std::size_t>(last - first);
+    if (pairs.size() < count) pairs.resize(2 * count);
+    bool manifold = true;
+    for (std::uint32_t j = 0; j < count; ++j) {
+      const Triangle& t = triangles[first[j]];
+      const int i = t[0] == u ? 0 : t[1] == u ? 1 : 2;
+      const std::uint32_t a = t[i == 2 ? 0 : i + 1], b = t[i == 0 ? 2 : i - 1];
+      manifold &= (a != u) & (b != u) & (a != b) & (a_stamp[a] != stamp) & (b_stamp[b] != stamp);
       a_stamp[a] = stamp;
-      a_face[a] = i;
+      a_face[a] = j;
       b_stamp[b] = stamp;
+      pairs[j] = {a, b};
     }
-    return true;
+    return manifold;
   }
   // The face with this a, or none.
   const Pair* next(std::uint32_t a) const {
@@ -52,25 +63,22 @@ struct FanIndex {
   bool is_some_b(std::uint32_t x) const { return b_stamp[x] == stamp; }
 };
 
-// Orders the faces (u, a, b) of one vertex, fan.pairs, into its ring: fan.entries gets the a's
-// in fan order, for an open fan followed by its last face's b, fans separated by kSeparator;
-// `fans` their number. Complex when a face repeats a corner, two faces share an a or a b (a
-// non-manifold edge or a face given twice), or a closed fan is not the only one.
-VertexRings::Kind order_fan(std::uint32_t u, FanIndex& fan, std::size_t& fans) {
+// Orders u's faces, gathered into `fan`, into its ring: fan.entries gets the a's in fan order,
+// for an open fan followed by its last face's b, fans separated by kSeparator; `fans` their
+// number. Complex when gather() refused the faces or a closed fan is not the only one.
+VertexRings::Kind order_fan(bool gathered, FanIndex& fan, std::size_t& fans) {
   using Kind = VertexRings::Kind;
   std::vector<std::uint32_t>& entries = fan.entries;
   entries.clear();
   fans = 1;
-  const std::size_t k = fan.pairs.size();
+  const std::size_t k = fan.count;
   if (k == 0) return Kind::kClosed;
-  for (const auto& [a, b] : fan.pairs)
-    if (a == u || b == u || a == b) return Kind::kComplex;
-  if (!fan.index()) return Kind::kComplex;
+  if (!gathered) return Kind::kComplex;
   // a -> b is one-to-one, so the faces form chains from each a that is no face's b (open fans,
   // in the order of their first a) and cycles.
   fan.starts.clear();
-  for (const Pair& pair : fan.pairs)
-    if (!fan.is_some_b(pair.first)) fan.starts.push_back(pair.first);
+  for (std::size_t j = 0; j < k; ++j)
+    if (!fan.is_some_b(fan.pairs[j].first)) fan.starts.push_back(fan.pairs[j].first);
   const std::size_t open = fan.starts.size();
   if (open != 0) {
     if (open > 1) std::sort(fan.starts.begin(), fan.starts.end());
@@ -117,15 +125,10 @@ VertexRings::VertexRings(const std::vector<Triangle>& triangles, std::size_t ver
   tbb::enumerable_thread_specific<FanIndex> work([vertex_count] { return FanIndex(vertex_count); });
   // Orders v's fan into fan.entries and sets v's kind and fan count.
   const auto order = [&](std::uint32_t v, FanIndex& fan) {
-    fan.pairs.clear();
-    for (const std::uint32_t* f = around.begin(v); f != around.end(v); ++f) {
-      const Triangle& t = triangles[*f];
-      const int i = t[0] == v ? 0 : t[1] == v ? 1 : 2;
-      fan.pairs.emplace_back(t[(i + 1) % 3], t[(i + 2) % 3]);
-    }
+    const bool gathered = fan.gather(v, around.begin(v), around.end(v), triangles);
     std::size_t fans = 1;
     Slot& slot = slots_[v];
-    slot.kind = order_fan(v, fan, fans);
+    slot.kind = order_fan(gathered, fan, fans);
     if (fans > 0xFFFF) slot.kind = Kind::kComplex;
     slot.fans = static_cast<std::uint16_t>(fans);
   };

@@ -22,13 +22,9 @@ HalfEdgeMesh::HalfEdgeMesh(const TriangleMesh& mesh)
       alive_(mesh.triangles.size(), 1),
       live_faces_(mesh.triangles.size()) {
   const std::size_t v_count = positions_.size();
+  require_corners_in_range(mesh.triangles, v_count, "half-edge mesh");
   for (std::uint32_t f = 0; f < mesh.triangles.size(); ++f) {
     const Triangle& t = mesh.triangles[f];
-    for (std::uint32_t v : t)
-      if (v >= v_count)
-        throw Error("half-edge mesh", "face " + std::to_string(f),
-                    "vertex index " + std::to_string(v) + " out of range (" +
-                        std::to_string(v_count) + " vertices)");
     if (t[0] == t[1] || t[1] == t[2] || t[0] == t[2])
       throw Error("half-edge mesh", "face " + std::to_string(f), "repeats a vertex");
     to_[3 * f] = t[1];

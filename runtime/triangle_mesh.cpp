@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <cstdint>
 
+#include "runtime/error.h"
 #include "runtime/parallel.h"
 #include "runtime/vertex_triangles.h"
 
@@ -156,6 +157,16 @@ TriangleMesh compact_vertices(const TriangleMesh& source, const std::vector<Tria
   for (const Triangle& t : triangles)
     out.triangles.push_back(Triangle{id[t[0]], id[t[1]], id[t[2]]});
   return out;
+}
+
+void require_corners_in_range(const std::vector<Triangle>& triangles, std::size_t vertex_count,
+                              const std::string& source) {
+  for (std::size_t f = 0; f < triangles.size(); ++f)
+    for (std::uint32_t v : triangles[f])
+      if (v >= vertex_count)
+        throw Error(source, "face " + std::to_string(f),
+                    "vertex index " + std::to_string(v) + " out of range (" +
+                        std::to_string(vertex_count) + " vertices)");
 }
 
 }  // namespace meshflow

@@ -4,6 +4,7 @@
 #include <Eigen/Core>
 #include <array>
 #include <cstdint>
+#include <string>
 #include <vector>
 
 #include "runtime/point_cloud.h"
@@ -73,6 +74,11 @@ std::vector<BorderEdge> border_edges(const TriangleMesh& mesh, const VertexTrian
 /// The median length of the triangles' edges (each interior edge counted twice), metres;
 /// 0 for no triangles. O(T).
 float median_edge_length(const TriangleMesh& mesh);
+
+/// Throws Error(source, "face F", "vertex index I out of range (N vertices)") for the first
+/// corner of `triangles` that is not below `vertex_count`. O(T).
+void require_corners_in_range(const std::vector<Triangle>& triangles, std::size_t vertex_count,
+                              const std::string& source);
 
 /// A mesh of `triangles` (indices into source.vertices) that keeps only the referenced vertices,
 /// in their original order, with their normals and colours; triangles are renumbered, their

@@ -502,6 +502,7 @@ class Decimator {
 }  // namespace
 
 TriangleMesh qem_decimate(const TriangleMesh& mesh, const QemConfig& config, QemReport* report) {
+  require_corners_in_range(mesh.triangles, mesh.vertices.size(), "QEM decimation");
   QemReport r;
   const auto target = static_cast<std::size_t>(std::ceil(
       static_cast<double>(mesh.triangles.size()) * static_cast<double>(config.target_ratio)));

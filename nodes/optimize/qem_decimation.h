@@ -55,7 +55,8 @@ struct QemReport {
 /// positions, same order, normals and colours kept); triangles stay consistently oriented and
 /// manifold where the input was, listed from their smallest vertex's neighbour ring (the input's
 /// as given when nothing collapsed). Deterministic: the same output for any thread count. About
-/// O(T x valence^2) per pass, a handful of passes.
+/// O(T x valence^2) per pass, a handful of passes. Throws Error for a corner that indexes no
+/// vertex.
 TriangleMesh qem_decimate(const TriangleMesh& mesh, const QemConfig& config = {},
                           QemReport* report = nullptr);
 

@@ -14,6 +14,7 @@
 #include "nodes/eval/surface_eval.h"
 #include "nodes/synthetic/depth_sequence.h"
 #include "nodes/triangulate/depth_triangulation.h"
+#include "runtime/error.h"
 #include "runtime/threads.h"
 
 namespace meshflow {
@@ -344,6 +345,21 @@ TEST(QemDecimation, HubsAndRepeatedCornersAreHandled) {
       up += n.z() > 0.0f ? 1 : 0;
     }
     EXPECT_GE(up + 3, out[0].triangles.size()) << what;  // all but the repeated-corner faces
+  }
+}
+
+// A face naming a vertex the mesh does not have is an error that names the face, not a read
+// out of bounds.
+TEST(QemDecimation, CornerOutOfRangeFailsNamingTheFace) {
+  TriangleMesh m = height_field(4, [](float, float) { return 0.0f; });
+  m.triangles[5][1] = static_cast<std::uint32_t>(m.vertices.size());
+  try {
+    qem_decimate(m);
+    FAIL() << "no error";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.location(), "face 5");
+    EXPECT_NE(std::string(e.what()).find("out of range (16 vertices)"), std::string::npos)
+        << e.what();
   }
 }
 

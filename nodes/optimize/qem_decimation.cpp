@@ -21,6 +21,10 @@ namespace {
 
 constexpr double kNoCollapse = std::numeric_limits<double>::infinity();
 constexpr std::size_t kLookAhead = 8;  // collapses between a prefetch() and its use
+// A pass walks its candidates up to this many times the bound of the candidate that would reach
+// the target (Redwood frames: 1.5 took 6 passes, 2.5 takes 4 for the same deviation from the
+// input; 3 and 4 deviate 1 and 2 % more).
+constexpr double kPassLimit = 2.5;
 
 // cos(degrees), computed in double and rounded once.
 float cos_degrees(float degrees) {
@@ -67,14 +71,14 @@ std::uint64_t order_key(const Candidate& c) {
   return (std::uint64_t{bits} << 32) | c.from;
 }
 
-// A pass evaluates every vertex that needs it on the mesh as it was when the pass started
-// (neighbour rings, positions, quadrics), in parallel, then applies collapses cheapest first.
-// Each collapse u -> v removes u; v takes over u's faces (VertexRings::collapse), and v's
-// quadric and u's neighbours' faces change: a candidate with an end among them is evaluated
-// again on the mesh as it is now and taken while its cost stays within the pass's limit. The walk
-// goes in chunks: the re-evaluations a chunk needs run in parallel at its start, and again,
-// serially, only where a collapse earlier in the chunk changed the ends once more. The next pass
-// re-evaluates only the vertices next to a change.
+// A pass bounds the cost of every vertex that needs it on the mesh as it was when the pass
+// started (neighbour rings, positions, quadrics), in parallel, then walks the bounds cheapest
+// first, evaluating each candidate fully before it is applied. Each collapse u -> v removes u; v
+// takes over u's faces (VertexRings::collapse), and v's quadric and u's neighbours' faces change:
+// a candidate with an end among them is evaluated again on the mesh as it is now and taken while
+// its cost stays within the pass's limit. The walk goes in chunks: the evaluations a chunk needs
+// run in parallel at its start, and again, serially, only where a collapse earlier in the chunk
+// changed the ends once more. The next pass bounds again only the vertices next to a change.
 class Decimator {
  public:
   Decimator(const TriangleMesh& mesh, const QemConfig& config)
@@ -120,7 +124,9 @@ class Decimator {
     // For a vertex the walk evaluated again and left (over the pass's limit): the number of
     // collapses before that evaluation, which its `best` now holds (0 = best is the pass's own).
     std::vector<std::uint32_t> walk_evaluated_at(n);
-    std::vector<std::uint8_t> removed(n), dirty(n, 1);
+    // `validated`: best[u] is u's best collapse, fully evaluated (else a lower bound of its cost).
+    std::vector<std::uint8_t> removed(n), dirty(n, 1), validated(n, 0);
+    bool stalled = false;                // the last pass collapsed nothing
     std::vector<std::uint32_t> targets;  // the kept vertex of every collapse of the last pass
     while (alive > target) {
       // After u -> v, exactly the vertices of v's faces need a new best collapse: a vertex w's
@@ -156,8 +162,10 @@ class Decimator {
                         [&](const tbb::blocked_range<std::size_t>& range) {
                           Scratch& scratch = local_scratch();  // a lookup: once per range
                           for (std::size_t u = range.begin(); u != range.end(); ++u)
-                            if (dirty[u])
-                              best[u] = best_collapse(static_cast<std::uint32_t>(u), scratch);
+                            if (dirty[u]) {
+                              best[u] = lower_bound(static_cast<std::uint32_t>(u), scratch);
+                              validated[u] = 0;
+                            }
                         });
       // Cheapest first: keys (cost as float bits, vertex), radix-sorted; non-negative floats
       // order as their bit patterns, equal costs by vertex. (A comparison sort of the
@@ -170,11 +178,11 @@ class Decimator {
       const auto candidate = [&](std::size_t i) -> const Candidate& {
         return best[static_cast<std::uint32_t>(order[i])];
       };
-      // Greedy within the pass, but only up to 1.5 x the cost of the collapse that would reach
-      // the target if every collapse removed two faces, so cheap collapses elsewhere get their
-      // turn in the next pass before expensive ones are taken here.
+      // Greedy within the pass, but only up to kPassLimit x the bound of the collapse that would
+      // reach the target if every collapse removed two faces, so cheap collapses elsewhere get
+      // their turn in the next pass before expensive ones are taken here.
       const std::size_t goal = std::min(order.size(), (alive - target + 1) / 2);
-      const double limit = 1.5 * candidate(std::max<std::size_t>(goal, 1) - 1).cost;
+      const double limit = kPassLimit * candidate(std::max<std::size_t>(goal, 1) - 1).cost;
       std::fill(changed.begin(), changed.end(), 0);
       std::fill(walk_evaluated_at.begin(), walk_evaluated_at.end(), 0);
       std::fill(removed.begin(), removed.end(), 0);
@@ -189,23 +197,23 @@ class Decimator {
       bool stop = false;
       for (std::size_t first = 0; first < order.size() && !stop; first += chunk) {
         const std::size_t last = std::min(order.size(), first + chunk);
-        // The chunk's candidates whose ends changed since the pass's evaluation, evaluated again
-        // in parallel on the mesh as it is now (nothing changes it meanwhile).
+        // The chunk's candidates that hold a bound or whose ends changed since their evaluation,
+        // evaluated in parallel on the mesh as it is now (nothing changes it meanwhile).
         const std::uint32_t chunk_start = clock;
         std::fill(has_ahead.begin(), has_ahead.end(), 0);
-        if (ahead_in_parallel && chunk_start > 0)
-          tbb::parallel_for(
-              tbb::blocked_range<std::size_t>(first, last, 16),
-              [&](const tbb::blocked_range<std::size_t>& range) {
-                Scratch& local = local_scratch();
-                for (std::size_t i = range.begin(); i != range.end(); ++i) {
-                  const Candidate& c = candidate(i);
-                  if (c.cost > limit || removed[c.from] || (!changed[c.from] && !changed[c.to]))
-                    continue;
-                  has_ahead[i - first] = 1;
-                  ahead[i - first] = best_collapse(c.from, local);
-                }
-              });
+        if (ahead_in_parallel)
+          tbb::parallel_for(tbb::blocked_range<std::size_t>(first, last, 16),
+                            [&](const tbb::blocked_range<std::size_t>& range) {
+                              Scratch& local = local_scratch();
+                              for (std::size_t i = range.begin(); i != range.end(); ++i) {
+                                const Candidate& c = candidate(i);
+                                if (c.cost > limit || removed[c.from] ||
+                                    (validated[c.from] && !changed[c.from] && !changed[c.to]))
+                                  continue;
+                                has_ahead[i - first] = 1;
+                                ahead[i - first] = best_collapse(c.from, local);
+                              }
+                            });
         for (std::size_t i = first; i < last; ++i) {
           // The walk goes in cost order, all over the mesh: what a collapse a few steps ahead
           // reads is requested now (2-9 % of the decimation on a noisy depth frame). A serial
@@ -234,20 +242,20 @@ class Decimator {
           if (ahead_in_parallel && has_ahead[i - first]) {
             c = ahead[i - first];
             evaluated_at = chunk_start;
+            validated[c.from] = 1;
           }
-          // u or its target took part in a collapse, or lost a neighbour, since that evaluation:
-          // u's best collapse on the mesh as it is now. Taken if it stays within the limit (else
-          // u waits for the next pass).
-          if (changed[c.from] > evaluated_at ||
+          // A bound, or u or its target took part in a collapse, or lost a neighbour, since the
+          // evaluation: u's best collapse on the mesh as it is now, with every check. Taken if it
+          // stays within the limit (else u waits for the next pass).
+          if (!validated[c.from] || changed[c.from] > evaluated_at ||
               (c.cost < kNoCollapse && changed[c.to] > evaluated_at)) {
             c = best_collapse(c.from, scratch);
             evaluated_at = clock;
+            validated[c.from] = 1;
           }
-          if (!(c.cost <= limit)) {
-            if (evaluated_at != 0) {  // kept: the next pass re-evaluates it only if it changes
-              best[c.from] = c;
-              walk_evaluated_at[c.from] = evaluated_at;
-            }
+          if (!(c.cost <= limit)) {  // kept: the next pass re-evaluates it only if it changes
+            best[c.from] = c;
+            walk_evaluated_at[c.from] = evaluated_at;
             continue;
           }
           alive -= collapse(c.from, c.to, ++clock, changed);
@@ -259,7 +267,16 @@ class Decimator {
       }
       report.collapses += collapsed;
       ++report.passes;
-      if (collapsed == 0) break;  // (cannot happen: the pass's first candidate is taken)
+      // A pass may collapse nothing when every candidate it walked cost more, evaluated, than its
+      // bound let the limit reach; all of them are evaluated now, so the next pass, evaluating
+      // nothing, takes the cheapest. A second pass without a collapse: none is valid.
+      if (collapsed == 0) {
+        if (stalled) break;
+        stalled = true;
+        std::fill(dirty.begin(), dirty.end(), 0);
+      } else {
+        stalled = false;
+      }
     }
     for (const Scratch& scratch : scratch_) {
       report.rejected_topology += scratch.rejected.rejected_topology;
@@ -305,6 +322,38 @@ class Decimator {
     Scratch& scratch = scratch_.local();
     if (scratch.mark.size() != in_.vertices.size()) scratch.mark.assign(in_.vertices.size(), 0);
     return scratch;
+  }
+
+  // A lower bound of best_collapse(u): the cheapest quadric cost over the neighbours u may move
+  // to (along a straight border only, see best_collapse()), without the fan's checks, the link
+  // condition and the penalties (which only raise costs). kNoCollapse when u may not move.
+  Candidate lower_bound(std::uint32_t u, Scratch& scratch) const {
+    Candidate bound;
+    bound.from = u;
+    const std::size_t faces = rings_.face_count(u);
+    if (faces == 0 || rings_.locked(u)) return bound;
+    const std::uint32_t* const ring = rings_.begin(u);
+    const std::size_t n = rings_.size(u);
+    const std::uint32_t* targets = ring;
+    std::size_t count = n;
+    if (rings_.kind(u) == VertexRings::Kind::kOpen) {
+      if (!border_straight(u, ring[0], ring[n - 1])) {
+        scratch.rejected.rejected_border += 2;
+        return bound;
+      }
+      scratch.border[0] = ring[0];
+      scratch.border[1] = ring[n - 1];
+      targets = scratch.border;
+      count = 2;
+    }
+    for (std::size_t j = 0; j < count; ++j) {
+      const double cost = quadric_cost(u, targets[j]);
+      if (cost < bound.cost || (cost == bound.cost && targets[j] < bound.to)) {
+        bound.cost = cost;
+        bound.to = targets[j];
+      }
+    }
+    return bound;
   }
 
   // The cheapest valid collapse u -> v over u's neighbours v (cost kNoCollapse when none), on

@@ -25,10 +25,10 @@ struct QemConfig {
   float sharp_edge_deg = 60.0f;  ///< collapsing an edge whose two faces differ more is penalised
   float min_angle_deg = 13.0f;   ///< a collapse leaving a smaller inner angle is penalised
   float penalty = 10.0f;         ///< the factor of both penalties
-  /// A pass's walk re-evaluates collapses next to earlier ones in chunks of this many
-  /// candidates, in parallel at each chunk's start (again serially only where the chunk's
-  /// earlier collapses changed them): a single mesh scales with threads. 0 = one at a time,
-  /// serially: ~4 % fewer evaluations and no waits, for callers that keep every core busy with
+  /// A pass's walk evaluates its candidates (and again those next to earlier collapses) in
+  /// chunks of this many, in parallel at each chunk's start (again serially only where the
+  /// chunk's earlier collapses changed them): a single mesh scales with threads. 0 = one at a
+  /// time, serially: fewer evaluations and no waits, for callers that keep every core busy with
   /// other work (frames in flight). The output depends on it, never on the thread count.
   std::size_t walk_chunk = 256;
 };
@@ -43,12 +43,12 @@ struct QemReport {
 };
 
 /// Decimates `mesh` by half-edge collapses u -> v (v keeps its position) in passes: each pass
-/// finds every vertex's cheapest valid collapse, cost (Q_u + Q_v)(v) with the penalties, in
-/// parallel (re-evaluating only vertices next to a change), sorts them and applies them
-/// cheapest first, stopping at 1.5 x the cost of the collapse that would reach the target. A
-/// collapse whose ends took part in an earlier one of the pass, or lost a neighbour to it, is
-/// evaluated again on the mesh as it is then and taken if it stays within that limit (such
-/// re-evaluations run in parallel, for chunks of candidates: walk_chunk). Passes repeat until
+/// bounds every vertex's cheapest collapse from below by its plain quadric cost (Q_u + Q_v)(v),
+/// in parallel and only for vertices next to a change, sorts the bounds and walks them cheapest
+/// first up to 2.5 x the bound of the collapse that would reach the target. The walk evaluates
+/// each candidate fully (the checks above, the penalties, the link condition) on the mesh as it
+/// is then, unless an evaluation is still current, and takes it if it stays within that limit
+/// (such evaluations run in parallel, for chunks of candidates: walk_chunk). Passes repeat until
 /// target_ratio of the triangles remain or no valid collapse is left. Vertices whose faces do not
 /// form one fan or several border fans (a non-manifold edge, a face repeating a corner), and
 /// their neighbours, are never removed. Output vertices are a subset of the input vertices (same

@@ -324,28 +324,42 @@ class Decimator {
     return scratch;
   }
 
-  // A lower bound of best_collapse(u): the cheapest quadric cost over the neighbours u may move
-  // to (along a straight border only, see best_collapse()), without the fan's checks, the link
-  // condition and the penalties (which only raise costs). kNoCollapse when u may not move.
+  // The vertices u may move onto: its neighbours (scratch.neighbours, the ring), or on a
+  // border only its two border neighbours (scratch.border): a border vertex may only move along
+  // its border (see valid()), and only where the border runs nearly straight through it; both
+  // moves make the same turn, so a bend rules out both before any cost is computed (counted as
+  // refused). Returns their number and sets `targets`; 0 when u has no faces, is locked or sits
+  // on a bend.
+  std::size_t movable_targets(std::uint32_t u, Scratch& scratch,
+                              const std::uint32_t*& targets) const {
+    scratch.neighbour_count = 0;
+    scratch.border_count = 0;
+    if (rings_.face_count(u) == 0 || rings_.locked(u)) return 0;
+    const std::uint32_t* const ring = rings_.begin(u);
+    const std::size_t n = rings_.size(u);
+    scratch.neighbours = ring;
+    scratch.neighbour_count = n;
+    targets = ring;
+    if (rings_.kind(u) != VertexRings::Kind::kOpen) return n;
+    scratch.border[0] = ring[0];
+    scratch.border[1] = ring[n - 1];
+    scratch.border_count = 2;
+    if (!border_straight(u, ring[0], ring[n - 1])) {
+      scratch.rejected.rejected_border += 2;
+      return 0;
+    }
+    targets = scratch.border;
+    return 2;
+  }
+
+  // A lower bound of best_collapse(u): the cheapest quadric cost over the vertices u may move
+  // onto, without the fan's checks, the link condition and the penalties (which only raise
+  // costs). kNoCollapse when u may not move.
   Candidate lower_bound(std::uint32_t u, Scratch& scratch) const {
     Candidate bound;
     bound.from = u;
-    const std::size_t faces = rings_.face_count(u);
-    if (faces == 0 || rings_.locked(u)) return bound;
-    const std::uint32_t* const ring = rings_.begin(u);
-    const std::size_t n = rings_.size(u);
-    const std::uint32_t* targets = ring;
-    std::size_t count = n;
-    if (rings_.kind(u) == VertexRings::Kind::kOpen) {
-      if (!border_straight(u, ring[0], ring[n - 1])) {
-        scratch.rejected.rejected_border += 2;
-        return bound;
-      }
-      scratch.border[0] = ring[0];
-      scratch.border[1] = ring[n - 1];
-      targets = scratch.border;
-      count = 2;
-    }
+    const std::uint32_t* targets = nullptr;
+    const std::size_t count = movable_targets(u, scratch, targets);
     for (std::size_t j = 0; j < count; ++j) {
       const double cost = quadric_cost(u, targets[j]);
       if (cost < bound.cost || (cost == bound.cost && targets[j] < bound.to)) {
@@ -361,30 +375,12 @@ class Decimator {
   Candidate best_collapse(std::uint32_t u, Scratch& scratch) const {
     Candidate best;
     best.from = u;
-    const std::size_t faces = rings_.face_count(u);
-    if (faces == 0 || rings_.locked(u)) return best;
+    const std::uint32_t* targets = nullptr;
+    const std::size_t count = movable_targets(u, scratch, targets);
+    if (count == 0) return best;
     const std::uint32_t* const ring = rings_.begin(u);
-    const std::size_t n = rings_.size(u);
-    scratch.neighbours = ring;
-    scratch.neighbour_count = n;
+    const std::size_t n = rings_.size(u), faces = rings_.face_count(u);
     if (scratch.candidates.size() < n) scratch.candidates.resize(2 * n);
-    // A border vertex may only move along its border (see valid()): onto one of its two border
-    // neighbours, and only where the border runs nearly straight through it. Both moves make
-    // the same turn, so a bend rules out both before any cost is computed.
-    std::size_t border_count = 0;
-    if (rings_.kind(u) == VertexRings::Kind::kOpen) {
-      scratch.border[0] = ring[0];
-      scratch.border[1] = ring[n - 1];
-      border_count = 2;
-      if (!border_straight(u, ring[0], ring[n - 1])) {
-        scratch.rejected.rejected_border += 2;
-        scratch.border_count = border_count;
-        return best;
-      }
-    }
-    scratch.border_count = border_count;
-    const std::uint32_t* targets = border_count != 0 ? scratch.border : ring;
-    const std::size_t count = border_count != 0 ? border_count : n;
     std::pair<double, std::uint32_t>* const queue = scratch.candidates.data();
     // In order of (quadric cost, vertex), by insertion: a vertex has a handful of candidates.
     for (std::size_t j = 0; j < count; ++j) {

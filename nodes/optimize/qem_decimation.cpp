@@ -518,6 +518,19 @@ class Decimator {
       ++rejected.rejected_topology;
       return false;
     }
+    // The link's edges: only an inner u of three faces can share one with v, the edge between
+    // its other two neighbours; if that edge has a face with v, the four faces close a
+    // tetrahedron and the collapse would fold u's last face onto that one.
+    if (shared_count == 2 && scratch.neighbour_count == 3) {
+      std::uint32_t others[2] = {0, 0};
+      std::size_t k = 0;
+      for (std::size_t j = 0; j < 3; ++j)
+        if (scratch.neighbours[j] != v) others[k++ & 1] = scratch.neighbours[j];
+      if (rings_.share_face(v, others[0], others[1])) {
+        ++rejected.rejected_topology;
+        return false;
+      }
+    }
     return true;
   }
 

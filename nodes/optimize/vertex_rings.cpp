@@ -232,22 +232,23 @@ std::size_t VertexRings::collapse(std::uint32_t u, std::uint32_t v) {
   return removed;
 }
 
+bool VertexRings::share_face(std::uint32_t v, std::uint32_t x, std::uint32_t y) const {
+  bool shared = false;
+  for_each_face(v, [&](std::uint32_t a, std::uint32_t b) {
+    shared = shared || (a == x && b == y) || (a == y && b == x);
+  });
+  return shared;
+}
+
 std::vector<Triangle> VertexRings::triangles() const {
   std::vector<Triangle> out;
   const auto owner_or_later = [this](std::uint32_t corner, std::uint32_t owner) {
     return corner > owner || kind(corner) == Kind::kComplex;
   };
-  for (std::uint32_t m = 0; m < slots_.size(); ++m) {
-    const std::size_t n = size(m);
-    const std::uint32_t* ring = begin(m);
-    // Faces (m, r[i], r[i + 1]), wrapping around for a closed ring, none across a separator.
-    const std::size_t pairs = kind(m) == Kind::kClosed ? n : (n == 0 ? 0 : n - 1);
-    for (std::size_t i = 0; i < pairs; ++i) {
-      const std::uint32_t b = ring[i], c = ring[i + 1 == n ? 0 : i + 1];
-      if (b == kSeparator || c == kSeparator) continue;
+  for (std::uint32_t m = 0; m < slots_.size(); ++m)
+    for_each_face(m, [&](std::uint32_t b, std::uint32_t c) {
       if (owner_or_later(b, m) && owner_or_later(c, m)) out.push_back({m, b, c});
-    }
-  }
+    });
   out.insert(out.end(), complex_only_.begin(), complex_only_.end());
   return out;
 }

@@ -53,6 +53,10 @@ class VertexRings {
     return s.size + 1 - 2 * std::size_t{s.fans};
   }
 
+  /// Whether v has a face with x and y (they are consecutive in v's ring, in either order).
+  /// O(valence).
+  bool share_face(std::uint32_t v, std::uint32_t x, std::uint32_t y) const;
+
   /// Applies the half-edge collapse u -> v: u's faces not containing v get v in u's place, the
   /// one or two containing v vanish, and u's ring is emptied. Returns the faces removed.
   /// Preconditions (the caller's checks): u is not locked; v is in u's ring; v is one of the two
@@ -76,6 +80,18 @@ class VertexRings {
     Kind kind = Kind::kClosed;
     std::uint16_t fans = 1;  ///< of a kOpen or kFans ring (collapses never change it)
   };
+  // Calls fn(a, b) for every face (v, a, b) of v's ring: consecutive entries, around for a closed
+  // ring, none across a separator.
+  template <typename Fn>
+  void for_each_face(std::uint32_t v, Fn&& fn) const {
+    const std::uint32_t* ring = begin(v);
+    const std::size_t n = size(v);
+    const std::size_t pairs = kind(v) == Kind::kClosed ? n : (n == 0 ? 0 : n - 1);
+    for (std::size_t i = 0; i < pairs; ++i) {
+      const std::uint32_t a = ring[i], b = ring[i + 1 == n ? 0 : i + 1];
+      if (a != kSeparator && b != kSeparator) fn(a, b);
+    }
+  }
   // Writes `count` entries as v's ring, moving it to the end of data_ when it does not fit.
   void assign(std::uint32_t v, const std::uint32_t* entries, std::size_t count);
   // In w's ring: u removed (`erase`) or replaced by v.

@@ -348,6 +348,24 @@ TEST(QemDecimation, HubsAndRepeatedCornersAreHandled) {
   }
 }
 
+// A closed tetrahedron has no valid collapse (each would fold a face onto another), though
+// every vertex has a finite cost bound: the pass that finds none and the one after it end the
+// decimation, the mesh unchanged.
+TEST(QemDecimation, NoValidCollapseEndsWithTheMeshUnchanged) {
+  TriangleMesh m;
+  m.vertices = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+  m.triangles = {{0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {1, 2, 3}};
+  for (std::size_t walk_chunk : {std::size_t{0}, std::size_t{256}}) {
+    QemConfig config = plain_config();
+    config.walk_chunk = walk_chunk;
+    QemReport report;
+    const TriangleMesh out = qem_decimate(m, config, &report);
+    EXPECT_EQ(out.triangles, m.triangles) << "chunk " << walk_chunk;
+    EXPECT_EQ(report.collapses, 0u);
+    EXPECT_GT(report.rejected_normal + report.rejected_topology, 0u);
+  }
+}
+
 // A face naming a vertex the mesh does not have is an error that names the face, not a read
 // out of bounds.
 TEST(QemDecimation, CornerOutOfRangeFailsNamingTheFace) {

@@ -80,6 +80,10 @@ TEST(VertexRings, GridRingsAreFansInFaceOrientation) {
     }
   }
   EXPECT_EQ(canonical_sorted(rings.triangles()), expected);
+  const std::uint32_t* r = rings.begin(inner);
+  EXPECT_TRUE(rings.share_face(inner, r[1], r[0]));
+  EXPECT_TRUE(rings.share_face(inner, r[5], r[0]));  // around the closed ring
+  EXPECT_FALSE(rings.share_face(inner, r[0], r[3]));
 }
 
 TEST(VertexRings, BowTiesNonManifoldEdgesAndRepeatedCorners) {
@@ -93,6 +97,8 @@ TEST(VertexRings, BowTiesNonManifoldEdgesAndRepeatedCorners) {
   EXPECT_TRUE(a.locked(0));
   EXPECT_FALSE(a.locked(1));  // next to a bow tie only
   EXPECT_EQ(canonical_sorted(a.triangles()), canonical_sorted(bow_tie));
+  EXPECT_TRUE(a.share_face(0, 1, 2));
+  EXPECT_FALSE(a.share_face(0, 2, 3));  // consecutive entries, but across the separator
 
   // Six triangles meeting at vertex 0 (more fans than a ring's first room holds) and a hub of
   // forty faces.

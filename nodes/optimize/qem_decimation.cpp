@@ -86,8 +86,7 @@ class Decimator {
         cfg_(config),
         rings_(mesh.triangles, mesh.vertices.size()),
         q_(mesh.vertices.size()),
-        own_error_(mesh.vertices.size()),
-        cost_scale_(mesh.vertices.size(), 1.0),
+        as_target_(mesh.vertices.size()),
         cos_turn_(cos_degrees(config.max_normal_turn_deg)),
         cos_border_(cos_degrees(config.max_border_turn_deg)),
         cos_sharp_(cos_degrees(config.sharp_edge_deg)),
@@ -97,7 +96,7 @@ class Decimator {
     // 1 / depth^2 of every vertex (positions never change), or 1.
     if (config.divide_by_depth2)
       for (std::size_t v = 0; v < mesh.vertices.size(); ++v)
-        cost_scale_[v] =
+        as_target_[v].scale =
             1.0 / std::max(1e-6, static_cast<double>(
                                      (mesh.vertices[v] - config.viewpoint).squaredNorm()));
     // Area-weighted plane quadric of every face, summed at its corners (serial: the sums must
@@ -111,7 +110,8 @@ class Decimator {
       const Quadric k = Quadric::plane(unit, -unit.dot(a), 0.5 * area2);
       for (std::uint32_t v : t) q_[v].add(k);
     }
-    for (std::size_t v = 0; v < mesh.vertices.size(); ++v) own_error_[v] = q_[v].error(p(v));
+    for (std::size_t v = 0; v < mesh.vertices.size(); ++v)
+      as_target_[v].own_error = q_[v].error(p(v));
   }
 
   TriangleMesh run(std::size_t target, QemReport& report) {
@@ -440,11 +440,12 @@ class Decimator {
     rings_.prefetch_slot(c.to);
   }
 
-  // Requests the positions and ring slots of u's neighbours (prefetch(c, true) ran earlier, so
-  // u's ring is in cache).
+  // Requests the positions, target terms and ring slots of u's neighbours (prefetch(c, true) ran
+  // earlier, so u's ring is in cache).
   void prefetch_corners(const Candidate& c) const {
     for (const std::uint32_t* x = rings_.begin(c.from); x != rings_.end(c.from); ++x) {
       __builtin_prefetch(&in_.vertices[*x]);
+      __builtin_prefetch(&as_target_[*x]);
       rings_.prefetch_slot(*x);
     }
   }
@@ -465,7 +466,8 @@ class Decimator {
 
   // (Q_u + Q_v)(v), divided by depth^2 when configured.
   double quadric_cost(std::uint32_t u, std::uint32_t v) const {
-    return std::max(0.0, q_[u].error(p(v)) + own_error_[v]) * cost_scale_[v];
+    const TargetTerms& target = as_target_[v];
+    return std::max(0.0, q_[u].error(p(v)) + target.own_error) * target.scale;
   }
 
   // The quadric cost times the penalty where the edge is sharp (its two faces, around u, differ
@@ -543,7 +545,7 @@ class Decimator {
     for (const std::uint32_t* x = rings_.begin(u); x != rings_.end(u); ++x) changed[*x] = number;
     const std::size_t removed = rings_.collapse(u, v);
     q_[v].add(q_[u]);
-    own_error_[v] = q_[v].error(p(v));
+    as_target_[v].own_error = q_[v].error(p(v));
     return removed;
   }
 
@@ -551,8 +553,12 @@ class Decimator {
   const QemConfig& cfg_;
   VertexRings rings_;  ///< the mesh as it is now
   std::vector<Quadric> q_;
-  std::vector<double> own_error_;   ///< Q_v(v) of every vertex: (Q_u + Q_v)(v) = Q_u(v) + this
-  std::vector<double> cost_scale_;  ///< multiplies a collapse's quadric error (1 / depth^2)
+  // What a collapse onto v reads of v besides its position, together (one cache line).
+  struct TargetTerms {
+    double own_error = 0.0;  ///< Q_v(v): (Q_u + Q_v)(v) = Q_u(v) + this
+    double scale = 1.0;      ///< multiplies the quadric error (1 / depth^2, or 1)
+  };
+  std::vector<TargetTerms> as_target_;
   float cos_turn_, cos_border_, cos_sharp_, cos2_min_angle_;
   mutable tbb::enumerable_thread_specific<Scratch> scratch_;  ///< best_collapse()'s memory
 };

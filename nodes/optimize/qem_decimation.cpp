@@ -163,7 +163,7 @@ class Decimator {
                           Scratch& scratch = local_scratch();  // a lookup: once per range
                           for (std::size_t u = range.begin(); u != range.end(); ++u)
                             if (dirty[u]) {
-                              best[u] = lower_bound(static_cast<std::uint32_t>(u), scratch);
+                              best[u] = cost_bound(static_cast<std::uint32_t>(u), scratch);
                               validated[u] = 0;
                             }
                         });
@@ -355,7 +355,7 @@ class Decimator {
   // A lower bound of best_collapse(u): the cheapest quadric cost over the vertices u may move
   // onto, without the fan's checks, the link condition and the penalties (which only raise
   // costs). kNoCollapse when u may not move.
-  Candidate lower_bound(std::uint32_t u, Scratch& scratch) const {
+  Candidate cost_bound(std::uint32_t u, Scratch& scratch) const {
     Candidate bound;
     bound.from = u;
     const std::uint32_t* targets = nullptr;

@@ -121,6 +121,7 @@ VertexRings::VertexRings(const std::vector<Triangle>& triangles, std::size_t ver
     slots_[v].capacity = faces + 1 + kSlack;
     total += slots_[v].capacity;
   }
+  data_.reserve(total + total / 4);  // room for rings that move (a few dozen per depth frame)
   data_.resize(total);
   tbb::enumerable_thread_specific<FanIndex> work([vertex_count] { return FanIndex(vertex_count); });
   // Orders v's fan into fan.entries and sets v's kind and fan count.

@@ -12,6 +12,8 @@
 
 namespace meshflow {
 
+/// Reading (kind, ring, face counts, triangles()) is safe from any number of threads while
+/// nothing collapses; collapse() must run alone.
 class VertexRings {
  public:
   enum class Kind : std::uint8_t {

@@ -144,8 +144,8 @@ TEST(VertexRings, CollapsesMatchAFaceListOracle) {
     const int n = 5 + trial % 6;
     const std::size_t vertex_count = static_cast<std::size_t>(n * n);
     std::vector<Triangle> faces = grid_faces(n, trial % 2 == 0 ? 1.0 : 0.8, rng);
+    const ThreadLimit threads(1 + trial % 2);  // rings built on one or two threads
     VertexRings rings(faces, vertex_count);
-    ThreadLimit one(1 + trial % 2);
     std::size_t collapses = 0;
     for (int attempt = 0; attempt < 400 && faces.size() > 4; ++attempt) {
       const auto u = static_cast<std::uint32_t>(rng() % vertex_count);

@@ -199,36 +199,59 @@ void VertexRings::erase_or_replace(std::uint32_t w, std::uint32_t u, std::uint32
 }
 
 std::size_t VertexRings::collapse(std::uint32_t u, std::uint32_t v) {
-  moved_.assign(begin(u), end(u));
-  const std::size_t n = moved_.size();
-  const std::size_t j =
-      static_cast<std::size_t>(std::find(moved_.begin(), moved_.end(), v) - moved_.begin());
+  const std::size_t n = slots_[u].size;
+  const std::uint32_t* ring_u = begin(u);
+  const std::size_t j = static_cast<std::size_t>(std::find(ring_u, ring_u + n, v) - ring_u);
   // The wings (opposite corners of the faces that vanish) and the run of u's ring between them,
   // [run_begin, run_begin + run_length) cyclically, that takes u's place in v's ring.
   std::uint32_t wing_a = 0, wing_b = 0;
   std::size_t run_begin = 0, run_length = 0, removed = 0;
   if (kind(u) == Kind::kClosed) {
-    wing_a = moved_[(j + 1) % n];
-    wing_b = moved_[(j + n - 1) % n];
+    wing_a = ring_u[(j + 1) % n];
+    wing_b = ring_u[(j + n - 1) % n];
     run_begin = (j + 2) % n;
     run_length = n - 3;
     removed = 2;
   } else {  // open: v is the first or the last border neighbour
-    wing_a = wing_b = j == 0 ? moved_[1] : moved_[n - 2];
+    wing_a = wing_b = j == 0 ? ring_u[1] : ring_u[n - 2];
     run_begin = j == 0 ? 2 : 0;
     run_length = n - 2;
     removed = 1;
   }
-  // v's ring with u replaced by the run (storage is not moved before assign()).
-  const std::uint32_t* ring = begin(v);
-  const std::size_t ring_size = size(v);
-  const std::size_t at = static_cast<std::size_t>(std::find(ring, ring + ring_size, u) - ring);
-  spliced_.assign(ring, ring + at);
-  for (std::size_t i = 0; i < run_length; ++i) spliced_.push_back(moved_[(run_begin + i) % n]);
-  if (at < ring_size) spliced_.insert(spliced_.end(), ring + at + 1, ring + ring_size);
-  assign(v, spliced_.data(), spliced_.size());
-  for (std::uint32_t w : moved_)
+  // v's ring with u replaced by the run: in place when it fits, else rebuilt at the end of the
+  // storage (which may move it all: pointers are taken after).
+  Slot& slot_v = slots_[v];
+  const std::size_t old_size = slot_v.size;
+  const std::size_t at = static_cast<std::size_t>(std::find(begin(v), end(v), u) - begin(v));
+  const std::size_t tail = at < old_size ? old_size - at - 1 : 0;  // entries after u
+  const std::size_t new_size = at + run_length + tail;
+  std::uint32_t* to = nullptr;
+  if (new_size > slot_v.capacity) {
+    const auto offset = static_cast<std::uint32_t>(data_.size());
+    const auto capacity = static_cast<std::uint32_t>(new_size + new_size / 2 + kSlack);
+    data_.resize(data_.size() + capacity);
+    const std::uint32_t* from = data_.data() + slot_v.offset;
+    to = data_.data() + offset;
+    std::copy(from, from + at, to);
+    std::copy(from + at + 1, from + at + 1 + tail, to + at + run_length);
+    slot_v.offset = offset;
+    slot_v.capacity = capacity;
+  } else {
+    to = data_.data() + slot_v.offset;
+    std::uint32_t* const after = to + at + 1;
+    if (run_length > 1)
+      std::copy_backward(after, after + tail, to + new_size);
+    else if (run_length == 0)
+      std::copy(after, after + tail, to + at);
+  }
+  slot_v.size = static_cast<std::uint32_t>(new_size);
+  ring_u = begin(u);
+  for (std::size_t i = 0, k = run_begin; i < run_length; ++i, k = k + 1 == n ? 0 : k + 1)
+    to[at + i] = ring_u[k];
+  for (std::size_t i = 0; i < n; ++i) {
+    const std::uint32_t w = ring_u[i];
     if (w != v) erase_or_replace(w, u, v, w == wing_a || w == wing_b);
+  }
   slots_[u].size = 0;
   return removed;
 }

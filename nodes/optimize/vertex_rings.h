@@ -102,8 +102,7 @@ class VertexRings {
   std::vector<Slot> slots_;
   std::vector<std::uint32_t> data_;
   std::vector<std::uint8_t> locked_;
-  std::vector<Triangle> complex_only_;          ///< faces whose corners are all complex
-  std::vector<std::uint32_t> moved_, spliced_;  ///< collapse()'s working memory
+  std::vector<Triangle> complex_only_;  ///< faces whose corners are all complex
 };
 
 }  // namespace meshflow

@@ -174,13 +174,17 @@ VertexRings::VertexRings(const std::vector<Triangle>& triangles, std::size_t ver
       complex_only_.push_back(t);
 }
 
+std::uint32_t VertexRings::move_to_end(Slot& slot, std::size_t count) {
+  const std::uint32_t old_offset = slot.offset;
+  slot.offset = static_cast<std::uint32_t>(data_.size());
+  slot.capacity = static_cast<std::uint32_t>(count + count / 2 + kSlack);
+  data_.resize(data_.size() + slot.capacity);
+  return old_offset;
+}
+
 void VertexRings::assign(std::uint32_t v, const std::uint32_t* entries, std::size_t count) {
   Slot& slot = slots_[v];
-  if (count > slot.capacity) {
-    slot.offset = static_cast<std::uint32_t>(data_.size());
-    slot.capacity = static_cast<std::uint32_t>(count + count / 2 + kSlack);
-    data_.resize(data_.size() + slot.capacity);
-  }
+  if (count > slot.capacity) move_to_end(slot, count);
   std::copy(entries, entries + count, data_.begin() + slot.offset);
   slot.size = static_cast<std::uint32_t>(count);
 }
@@ -227,15 +231,11 @@ std::size_t VertexRings::collapse(std::uint32_t u, std::uint32_t v) {
   const std::size_t new_size = at + run_length + tail;
   std::uint32_t* to = nullptr;
   if (new_size > slot_v.capacity) {
-    const auto offset = static_cast<std::uint32_t>(data_.size());
-    const auto capacity = static_cast<std::uint32_t>(new_size + new_size / 2 + kSlack);
-    data_.resize(data_.size() + capacity);
-    const std::uint32_t* from = data_.data() + slot_v.offset;
-    to = data_.data() + offset;
+    const std::uint32_t old_offset = move_to_end(slot_v, new_size);
+    const std::uint32_t* from = data_.data() + old_offset;
+    to = data_.data() + slot_v.offset;
     std::copy(from, from + at, to);
     std::copy(from + at + 1, from + at + 1 + tail, to + at + run_length);
-    slot_v.offset = offset;
-    slot_v.capacity = capacity;
   } else {
     to = data_.data() + slot_v.offset;
     std::uint32_t* const after = to + at + 1;

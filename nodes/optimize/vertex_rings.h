@@ -94,6 +94,10 @@ class VertexRings {
       if (a != kSeparator && b != kSeparator) fn(a, b);
     }
   }
+  // Gives the slot fresh room for `count` entries (plus growth slack) at the end of data_ and
+  // returns its old offset; the old entries stay where they were (the caller copies them).
+  // May reallocate data_: pointers into it are invalid afterwards.
+  std::uint32_t move_to_end(Slot& slot, std::size_t count);
   // Writes `count` entries as v's ring, moving it to the end of data_ when it does not fit.
   void assign(std::uint32_t v, const std::uint32_t* entries, std::size_t count);
   // In w's ring: u removed (`erase`) or replaced by v.

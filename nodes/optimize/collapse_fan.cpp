@@ -59,7 +59,7 @@ MESHFLOW_INLINE std::int32_t lane_sum(const Ints8& lanes) {
 //   squared (no trigonometry);
 // - turned: the new area vector va x vb makes more than the largest turn with the old one n,
 //   i.e. not (n . m >= cos |n| |m|), compared squared (no square roots), or the new face is
-//   degenerate: the lane form of has_area(v, a, b) in runtime/triangle_mesh.cpp.
+//   degenerate: has_area(v, a, b) of runtime/triangle_mesh.cpp, its areas at a and b implied.
 MESHFLOW_AVX2_CLONES FanVerdict check_blocks(const float* lanes, const std::uint32_t* ends,
                                              std::size_t blocks, std::uint32_t v, float vx,
                                              float vy, float vz, float max_turn_cos,
@@ -89,16 +89,14 @@ MESHFLOW_AVX2_CLONES FanVerdict check_blocks(const float* lanes, const std::uint
     const Ints8 is_needle = ((at_v > 0.0f) & (at_v * at_v > min_angle_cos2 * la * lb)) |
                             ((at_a > 0.0f) & (at_a * at_a > min_angle_cos2 * la * le)) |
                             ((at_b > 0.0f) & (at_b * at_b > min_angle_cos2 * lb * le));
-    // m = va x vb, and the squared areas at the corners a and b (e x va, vb x e).
+    // m = va x vb. has_area() also asks the areas at a and b (e x va, vb x e) to be positive:
+    // the flatness bound implies it, as computed they differ from |m| by at most ~10 float
+    // epsilons (6e-7) x longest, below the bound's 1e-6 x longest.
     const Floats8 mx = ay * bz - az * by, my = az * bx - ax * bz, mz = ax * by - ay * bx;
     const Floats8 m2 = mx * mx + my * my + mz * mz;
-    const Floats8 cx = ey * az - ez * ay, cy = ez * ax - ex * az, cz = ex * ay - ey * ax;
-    const Floats8 dx = by * ez - bz * ey, dy = bz * ex - bx * ez, dz = bx * ey - by * ex;
-    const Floats8 area_a = cx * cx + cy * cy + cz * cz, area_b = dx * dx + dy * dy + dz * dz;
     const Floats8 la_le = la > le ? la : le;
     const Floats8 longest = la_le > lb ? la_le : lb;
-    const Ints8 has_area =
-        (m2 > 0.0f) & (area_a > 0.0f) & (area_b > 0.0f) & (m2 >= flattest2 * longest * longest);
+    const Ints8 has_area = (m2 > 0.0f) & (m2 >= flattest2 * longest * longest);
     load_rows(block, R::kNx, nx, ny, nz, n2);
     const Floats8 nm = nx * mx + ny * my + nz * mz;
     const Floats8 bound = turn_cos2 * m2 * n2;
@@ -172,17 +170,9 @@ void CollapseFan::finish(std::size_t count) {
   derive_blocks(lanes_.data(), blocks_, pu_.x(), pu_.y(), pu_.z());
 }
 
-bool CollapseFan::bent_at(std::uint32_t v, float min_cos) const {
-  std::size_t with_v[2] = {0, 0}, found = 0;
-  for (std::size_t j = 0; j < blocks_ && found < 2; ++j) {
-    const std::uint32_t* ends = ends_.data() + j * kEndRows * kBlock;
-    for (std::size_t i = 0; i < kBlock && found < 2; ++i)
-      if (ends[kActive * kBlock + i] != 0 &&
-          (ends[kA * kBlock + i] == v || ends[kB * kBlock + i] == v))
-        with_v[found++] = j * kBlock + i;
-  }
-  return found == 2 && area_vector(with_v[0]).dot(area_vector(with_v[1])) <
-                           min_cos * area_vector_norm(with_v[0]) * area_vector_norm(with_v[1]);
+bool CollapseFan::bent_between(std::size_t first, std::size_t second, float min_cos) const {
+  return area_vector(first).dot(area_vector(second)) <
+         min_cos * area_vector_norm(first) * area_vector_norm(second);
 }
 
 Eigen::Vector3f CollapseFan::area_vector(std::size_t k) const {

@@ -66,10 +66,9 @@ class CollapseFan {
 
   /// The faces not containing v, with v in u's place. O(faces), vectorised.
   FanVerdict check(std::uint32_t v, const Eigen::Vector3f& pv) const;
-  /// Whether the first two faces containing v (an edge's two faces around u) differ by more than
-  /// the angle whose cosine is `min_cos`: the cosine between their area vectors is below it.
-  /// False when fewer than two faces contain v. O(faces).
-  bool bent_at(std::uint32_t v, float min_cos) const;
+  /// Whether faces `first` < `second` (an edge's two faces around u) differ by more than the
+  /// angle whose cosine is `min_cos`: the cosine between their area vectors is below it. O(1).
+  bool bent_between(std::size_t first, std::size_t second, float min_cos) const;
   /// Face k's area vector (a - u) x (b - u) (twice its area, along its normal) and its length.
   Eigen::Vector3f area_vector(std::size_t k) const;
   float area_vector_norm(std::size_t k) const;

@@ -56,6 +56,14 @@ struct Quadric {
   }
 };
 
+// One vertex u may move onto, in best_collapse(): its quadric cost, itself, and its entry in u's
+// ring (the targets are u's ring, or its border neighbours).
+struct Target {
+  double cost;
+  std::uint32_t v, at;
+  bool before(const Target& o) const { return cost < o.cost || (cost == o.cost && v < o.v); }
+};
+
 // The best collapse of one vertex, found at the start of a pass.
 struct Candidate {
   double cost = kNoCollapse;
@@ -93,12 +101,14 @@ class Decimator {
         cos2_min_angle_(static_cast<float>(
             std::pow(std::cos(radians(static_cast<double>(config.min_angle_deg))), 2))),
         scratch_([this] { return Scratch(*this); }) {
-    // 1 / depth^2 of every vertex (positions never change), or 1.
-    if (config.divide_by_depth2)
-      for (std::size_t v = 0; v < mesh.vertices.size(); ++v)
+    // Positions (they never change) and 1 / depth^2 of every vertex, or 1.
+    for (std::size_t v = 0; v < mesh.vertices.size(); ++v) {
+      as_target_[v].position = mesh.vertices[v];
+      if (config.divide_by_depth2)
         as_target_[v].scale =
             1.0 / std::max(1e-6, static_cast<double>(
                                      (mesh.vertices[v] - config.viewpoint).squaredNorm()));
+    }
     // Area-weighted plane quadric of every face, summed at its corners (serial: the sums must
     // not depend on the thread count).
     for (const Triangle& t : mesh.triangles) {
@@ -290,7 +300,7 @@ class Decimator {
   }
 
  private:
-  const Eigen::Vector3f& p(std::uint32_t v) const { return in_.vertices[v]; }
+  const Eigen::Vector3f& p(std::uint32_t v) const { return as_target_[v].position; }
 
   // Per-thread working memory of best_collapse().
   struct Scratch {
@@ -299,10 +309,10 @@ class Decimator {
     std::size_t neighbour_count = 0;
     std::uint32_t border[2] = {0, 0};  ///< u's neighbours along its border, if it is on one
     std::size_t border_count = 0;      ///< 2 on a border, else 0
-    std::vector<std::pair<double, std::uint32_t>> candidates;  ///< (quadric cost, v)
-    CollapseFan fan;                                           ///< u's faces
-    std::vector<std::uint32_t> mark;  ///< per vertex: a stamp, or a count above a stamp
-    std::uint32_t stamp = 0;          ///< the last stamp used in `mark`
+    std::vector<Target> candidates;    ///< u's targets by quadric cost
+    CollapseFan fan;                   ///< u's faces
+    std::vector<std::uint32_t> mark;   ///< per vertex: a stamp, or a count above a stamp
+    std::uint32_t stamp = 0;           ///< the last stamp used in `mark`
 
     // `count` stamps above every value in `mark`: the first is returned.
     std::uint32_t fresh_stamps(std::uint32_t count) {
@@ -381,12 +391,12 @@ class Decimator {
     const std::uint32_t* const ring = rings_.begin(u);
     const std::size_t n = rings_.size(u), faces = rings_.face_count(u);
     if (scratch.candidates.size() < n) scratch.candidates.resize(2 * n);
-    std::pair<double, std::uint32_t>* const queue = scratch.candidates.data();
+    Target* const queue = scratch.candidates.data();
     // In order of (quadric cost, vertex), by insertion: a vertex has a handful of candidates.
     for (std::size_t j = 0; j < count; ++j) {
-      const std::pair<double, std::uint32_t> entry{quadric_cost(u, targets[j]), targets[j]};
+      const Target entry{quadric_cost(u, targets[j]), targets[j], static_cast<std::uint32_t>(j)};
       std::size_t at = j;
-      for (; at > 0 && entry < queue[at - 1]; --at) queue[at] = queue[at - 1];
+      for (; at > 0 && entry.before(queue[at - 1]); --at) queue[at] = queue[at - 1];
       queue[at] = entry;
     }
     // u's faces (u, r[k], r[k + 1]), each neighbour's position read once (after the border
@@ -404,14 +414,14 @@ class Decimator {
     // Penalties only multiply the quadric cost, so candidates are tried in its order until it
     // alone exceeds the best penalised cost found.
     for (std::size_t j = 0; j < count; ++j) {
-      const auto [quadric, v] = queue[j];
+      const auto [quadric, v, at] = queue[j];
       if (!(quadric < best.cost)) break;
       const FanVerdict verdict = fan.check(v, p(v));
       if (verdict.turned) {  // invalid whatever the cost: refused before anything else
         ++scratch.rejected.rejected_normal;
         continue;
       }
-      const double cost = penalised(fan, v, verdict, quadric);
+      const double cost = penalised(fan, n, at, verdict, quadric);
       if (!(cost < best.cost)) continue;
       if (!valid(v, verdict, scratch)) continue;
       best.cost = cost;
@@ -428,7 +438,7 @@ class Decimator {
       __builtin_prefetch(&q_[x].q[0]);
       __builtin_prefetch(&q_[x].q[8]);  // a quadric spans two cache lines
     }
-    __builtin_prefetch(&in_.vertices[c.to]);
+    __builtin_prefetch(&as_target_[c.to]);
     if (!slots_in_cache) prefetch_slots(c);
     rings_.prefetch_ring(c.from);
     rings_.prefetch_ring(c.to);
@@ -444,7 +454,6 @@ class Decimator {
   // earlier, so u's ring is in cache).
   void prefetch_corners(const Candidate& c) const {
     for (const std::uint32_t* x = rings_.begin(c.from); x != rings_.end(c.from); ++x) {
-      __builtin_prefetch(&in_.vertices[*x]);
       __builtin_prefetch(&as_target_[*x]);
       rings_.prefetch_slot(*x);
     }
@@ -472,12 +481,16 @@ class Decimator {
 
   // The quadric cost times the penalty where the edge is sharp (its two faces, around u, differ
   // by more than sharp_edge_deg) or a needle would appear (a face (v, a, b) replacing (u, a, b)
-  // with an inner angle below min_angle_deg).
-  double penalised(const CollapseFan& fan, std::uint32_t v, const FanVerdict& verdict,
+  // with an inner angle below min_angle_deg). v is u's target `at`: an edge with two faces
+  // belongs to a closed ring of `n` (a border vertex moves only onto its border neighbours, which
+  // share one face with it), whose targets are the ring, so faces at - 1 and at (around) hold v.
+  double penalised(const CollapseFan& fan, std::size_t n, std::size_t at, const FanVerdict& verdict,
                    double cost) const {
     if (verdict.needle) return cost * cfg_.penalty;
     if (verdict.shared != 2) return cost;
-    return fan.bent_at(v, cos_sharp_) ? cost * cfg_.penalty : cost;
+    const std::size_t before = at == 0 ? n - 1 : at - 1;
+    const bool bent = fan.bent_between(std::min(before, at), std::max(before, at), cos_sharp_);
+    return bent ? cost * cfg_.penalty : cost;
   }
 
   // Whether u -> v keeps the mesh manifold and borders on themselves (see QemConfig), for the
@@ -553,8 +566,10 @@ class Decimator {
   const QemConfig& cfg_;
   VertexRings rings_;  ///< the mesh as it is now
   std::vector<Quadric> q_;
-  // What a collapse onto v reads of v besides its position, together (one cache line).
-  struct TargetTerms {
+  // What an evaluation reads of each neighbour of u (its position for u's fan and, as a
+  // target, the rest), together: half a cache line.
+  struct alignas(32) TargetTerms {
+    Eigen::Vector3f position;
     double own_error = 0.0;  ///< Q_v(v): (Q_u + Q_v)(v) = Q_u(v) + this
     double scale = 1.0;      ///< multiplies the quadric error (1 / depth^2, or 1)
   };

@@ -105,15 +105,22 @@ TEST(CollapseFan, MatchesTheOracleOnRandomFans) {
           EXPECT_EQ(got.turned, want.turned);
           // The edge u-v is bent where its two faces' normals differ by more than 40 degrees.
           std::vector<Eigen::Vector3d> normals;
-          for (const Face& f : faces)
-            if (f.a == v || f.b == v)
-              normals.push_back(
-                  (points[f.a] - points[0]).cross(points[f.b] - points[0]).cast<double>());
-          const bool bent =
-              normals.size() >= 2 &&
-              normals[0].normalized().dot(normals[1].normalized()) < std::cos(40.0 * kDegrees);
-          EXPECT_EQ(fan.bent_at(v, static_cast<float>(std::cos(40.0 * kDegrees))), bent);
-          bends += bent ? 1 : 0;
+          std::vector<std::size_t> with_v;
+          for (std::size_t k = 0; k < faces.size(); ++k)
+            if (faces[k].a == v || faces[k].b == v) {
+              normals.push_back((points[faces[k].a] - points[0])
+                                    .cross(points[faces[k].b] - points[0])
+                                    .cast<double>());
+              with_v.push_back(k);
+            }
+          if (normals.size() >= 2) {
+            const bool bent =
+                normals[0].normalized().dot(normals[1].normalized()) < std::cos(40.0 * kDegrees);
+            EXPECT_EQ(fan.bent_between(with_v[0], with_v[1],
+                                       static_cast<float>(std::cos(40.0 * kDegrees))),
+                      bent);
+            bends += bent ? 1 : 0;
+          }
           needles += want.needle ? 1 : 0;
           turns += want.turned ? 1 : 0;
           ++checks;

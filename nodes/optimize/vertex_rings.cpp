@@ -158,16 +158,16 @@ VertexRings::VertexRings(const std::vector<Triangle>& triangles, std::size_t ver
       order(v, fan);
       assign(v, fan.entries.data(), fan.entries.size());
     }
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, vertex_count),
-                    [&](const tbb::blocked_range<std::size_t>& range) {
-                      for (std::size_t v = range.begin(); v != range.end(); ++v) {
-                        const auto u = static_cast<std::uint32_t>(v);
-                        bool locked = kind(u) == Kind::kComplex || kind(u) == Kind::kFans;
-                        for (const std::uint32_t* w = begin(u); w != end(u) && !locked; ++w)
-                          locked = *w != kSeparator && kind(*w) == Kind::kComplex;
-                        locked_[v] = locked ? 1 : 0;
-                      }
-                    });
+  // Locked: v of several fans or complex, or a corner of a complex vertex's faces (its
+  // neighbours; a complex vertex has no ring to list them). Complex vertices are few: their
+  // faces are visited, not every vertex's ring.
+  for (std::uint32_t v = 0; v < vertex_count; ++v) {
+    if (kind(v) == Kind::kFans) locked_[v] = 1;
+    if (kind(v) != Kind::kComplex) continue;
+    locked_[v] = 1;
+    for (const std::uint32_t* t = around.begin(v); t != around.end(v); ++t)
+      for (const std::uint32_t corner : triangles[*t]) locked_[corner] = 1;
+  }
   for (const Triangle& t : triangles)
     if (kind(t[0]) == Kind::kComplex && kind(t[1]) == Kind::kComplex &&
         kind(t[2]) == Kind::kComplex)

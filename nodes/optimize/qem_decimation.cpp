@@ -138,6 +138,7 @@ class Decimator {
     std::vector<std::uint8_t> removed(n), dirty(n, 1), validated(n, 0);
     bool stalled = false;                // the last pass collapsed nothing
     std::vector<std::uint32_t> targets;  // the kept vertex of every collapse of the last pass
+    std::vector<std::uint64_t> order;    // a pass's candidates, cheapest first (see below)
     while (alive > target) {
       // After u -> v, exactly the vertices of v's faces need a new best collapse: a vertex w's
       // best reads its own faces (changed only around v), its neighbours' quadrics (only v's
@@ -180,7 +181,7 @@ class Decimator {
       // Cheapest first: keys (cost as float bits, vertex), radix-sorted; non-negative floats
       // order as their bit patterns, equal costs by vertex. (A comparison sort of the
       // candidates was 8 % of the decimation.)
-      std::vector<std::uint64_t> order;
+      order.clear();
       for (const Candidate& c : best)
         if (c.cost < kNoCollapse) order.push_back(order_key(c));
       if (order.empty()) break;

@@ -64,6 +64,16 @@ struct Target {
   bool before(const Target& o) const { return cost < o.cost || (cost == o.cost && v < o.v); }
 };
 
+// A vertex's numbers in a pass (collapses are numbered from 1 in each).
+struct PassNumbers {
+  /// The last collapse u -> v that changed the vertex's faces or quadric (it is u or one of u's
+  /// neighbours, v among them); 0 = none.
+  std::uint32_t changed = 0;
+  /// For a vertex the walk evaluated again and left (over the pass's limit): the collapses
+  /// before that evaluation, which its best collapse now holds (0 = it holds the pass's own).
+  std::uint32_t evaluated = 0;
+};
+
 // The best collapse of one vertex, found at the start of a pass.
 struct Candidate {
   double cost = kNoCollapse;
@@ -71,12 +81,20 @@ struct Candidate {
 };
 
 // Sort key of a finite candidate: its cost as a float's bits (non-negative, so they order
-// like the values), then its vertex.
-std::uint64_t order_key(const Candidate& c) {
+// like the values), then its vertex in the low `vertex_bits` bits (as few as the vertex count
+// needs: the radix sort skips the digits no key uses, one pass in six on a depth frame).
+std::uint64_t order_key(const Candidate& c, int vertex_bits) {
   const float cost = static_cast<float>(c.cost);
   std::uint32_t bits = 0;
   std::memcpy(&bits, &cost, sizeof bits);
-  return (std::uint64_t{bits} << 32) | c.from;
+  return (std::uint64_t{bits} << vertex_bits) | c.from;
+}
+
+// Bits that hold every vertex number below `count`.
+int bits_for(std::size_t count) {
+  int bits = 1;
+  while (bits < 32 && (std::size_t{1} << bits) < count) ++bits;
+  return bits;
 }
 
 // A pass bounds the cost of every vertex that needs it on the mesh as it was when the pass
@@ -128,17 +146,16 @@ class Decimator {
     std::size_t alive = in_.triangles.size();
     const std::size_t n = in_.vertices.size();
     std::vector<Candidate> best(n);
-    // In a pass: `changed` = for u and its neighbours (v among them) the number of the last
-    // collapse u -> v of the pass that changed their faces or quadric (0 = none), `removed` = u.
-    std::vector<std::uint32_t> changed(n);
-    // For a vertex the walk evaluated again and left (over the pass's limit): the number of
-    // collapses before that evaluation, which its `best` now holds (0 = best is the pass's own).
-    std::vector<std::uint32_t> walk_evaluated_at(n);
+    // Per vertex, in a pass (read together, so side by side).
+    std::vector<PassNumbers> pass(n);
     // `validated`: best[u] is u's best collapse, fully evaluated (else a lower bound of its cost).
-    std::vector<std::uint8_t> removed(n), dirty(n, 1), validated(n, 0);
+    // (A vertex is listed once per pass, so a removed one is never met again in it.)
+    std::vector<std::uint8_t> dirty(n, 1), validated(n, 0);
     bool stalled = false;                // the last pass collapsed nothing
     std::vector<std::uint32_t> targets;  // the kept vertex of every collapse of the last pass
     std::vector<std::uint64_t> order;    // a pass's candidates, cheapest first (see below)
+    const int vertex_bits = bits_for(n);
+    const std::uint64_t vertex_mask = (std::uint64_t{1} << vertex_bits) - 1;
     while (alive > target) {
       // After u -> v, exactly the vertices of v's faces need a new best collapse: a vertex w's
       // best reads its own faces (changed only around v), its neighbours' quadrics (only v's
@@ -153,8 +170,8 @@ class Decimator {
       if (!targets.empty()) {
         std::fill(dirty.begin(), dirty.end(), 0);
         const auto mark_dirty = [&](std::uint32_t x) {
-          dirty[x] = changed[x] > walk_evaluated_at[x] ||
-                     (best[x].cost < kNoCollapse && changed[best[x].to] > walk_evaluated_at[x]);
+          dirty[x] = pass[x].changed > pass[x].evaluated ||
+                     (best[x].cost < kNoCollapse && pass[best[x].to].changed > pass[x].evaluated);
         };
         for (std::size_t j = 0; j < targets.size(); ++j) {
           // (Targets lie all over the mesh: their rings are requested ahead.)
@@ -183,22 +200,20 @@ class Decimator {
       // candidates was 8 % of the decimation.)
       order.clear();
       for (const Candidate& c : best)
-        if (c.cost < kNoCollapse) order.push_back(order_key(c));
+        if (c.cost < kNoCollapse) order.push_back(order_key(c, vertex_bits));
       if (order.empty()) break;
       radix_sort(order);
       const auto candidate = [&](std::size_t i) -> const Candidate& {
-        return best[static_cast<std::uint32_t>(order[i])];
+        return best[order[i] & vertex_mask];
       };
       // Greedy within the pass, but only up to kPassLimit x the bound of the collapse that would
       // reach the target if every collapse removed two faces, so cheap collapses elsewhere get
       // their turn in the next pass before expensive ones are taken here.
       const std::size_t goal = std::min(order.size(), (alive - target + 1) / 2);
       const double limit = kPassLimit * candidate(std::max<std::size_t>(goal, 1) - 1).cost;
-      std::fill(changed.begin(), changed.end(), 0);
-      std::fill(walk_evaluated_at.begin(), walk_evaluated_at.end(), 0);
-      std::fill(removed.begin(), removed.end(), 0);
+      std::fill(pass.begin(), pass.end(), PassNumbers{});
       std::size_t collapsed = 0;
-      std::uint32_t clock = 0;  // collapses so far in the pass; `changed` holds their numbers
+      std::uint32_t clock = 0;  // collapses so far in the pass, numbering them
       Scratch& scratch = local_scratch();
       // Chunks of walk_chunk candidates (0: the whole walk, re-evaluating serially).
       const bool ahead_in_parallel = cfg_.walk_chunk != 0;
@@ -218,8 +233,8 @@ class Decimator {
                               Scratch& local = local_scratch();
                               for (std::size_t i = range.begin(); i != range.end(); ++i) {
                                 const Candidate& c = candidate(i);
-                                if (c.cost > limit || removed[c.from] ||
-                                    (validated[c.from] && !changed[c.from] && !changed[c.to]))
+                                if (c.cost > limit || (validated[c.from] && !pass[c.from].changed &&
+                                                       !pass[c.to].changed))
                                   continue;
                                 has_ahead[i - first] = 1;
                                 ahead[i - first] = best_collapse(c.from, local);
@@ -236,7 +251,7 @@ class Decimator {
             if (i + kLookAhead < order.size()) prefetch(candidate(i + kLookAhead), false);
           } else {
             if (i + 3 * kLookAhead < order.size())
-              __builtin_prefetch(&best[static_cast<std::uint32_t>(order[i + 3 * kLookAhead])]);
+              __builtin_prefetch(&best[order[i + 3 * kLookAhead] & vertex_mask]);
             if (i + 2 * kLookAhead < order.size()) prefetch_slots(candidate(i + 2 * kLookAhead));
             if (i + kLookAhead < order.size()) prefetch(candidate(i + kLookAhead), true);
             if (i + kLookAhead / 2 < order.size()) prefetch_corners(candidate(i + kLookAhead / 2));
@@ -248,7 +263,6 @@ class Decimator {
             stop = true;
             break;
           }
-          if (removed[c.from]) continue;
           std::uint32_t evaluated_at = 0;  // the pass's evaluation
           if (ahead_in_parallel && has_ahead[i - first]) {
             c = ahead[i - first];
@@ -258,19 +272,18 @@ class Decimator {
           // A bound, or u or its target took part in a collapse, or lost a neighbour, since the
           // evaluation: u's best collapse on the mesh as it is now, with every check. Taken if it
           // stays within the limit (else u waits for the next pass).
-          if (!validated[c.from] || changed[c.from] > evaluated_at ||
-              (c.cost < kNoCollapse && changed[c.to] > evaluated_at)) {
+          if (!validated[c.from] || pass[c.from].changed > evaluated_at ||
+              (c.cost < kNoCollapse && pass[c.to].changed > evaluated_at)) {
             c = best_collapse(c.from, scratch);
             evaluated_at = clock;
             validated[c.from] = 1;
           }
           if (!(c.cost <= limit)) {  // kept: the next pass re-evaluates it only if it changes
             best[c.from] = c;
-            walk_evaluated_at[c.from] = evaluated_at;
+            pass[c.from].evaluated = evaluated_at;
             continue;
           }
-          alive -= collapse(c.from, c.to, ++clock, changed);
-          removed[c.from] = 1;
+          alive -= collapse(c.from, c.to, ++clock, pass);
           targets.push_back(c.to);
           best[c.from].cost = kNoCollapse;  // removed
           ++collapsed;
@@ -550,13 +563,14 @@ class Decimator {
     return true;
   }
 
-  // Applies u -> v, the pass's collapse `number`, and writes that number into `changed` for u
+  // Applies u -> v, the pass's collapse `number`, and writes that number as `changed` for u
   // and its neighbours (v among them): the vertices whose faces or quadric change. Returns the
   // faces removed (one on a border edge, two inside).
   std::size_t collapse(std::uint32_t u, std::uint32_t v, std::uint32_t number,
-                       std::vector<std::uint32_t>& changed) {
-    changed[u] = number;
-    for (const std::uint32_t* x = rings_.begin(u); x != rings_.end(u); ++x) changed[*x] = number;
+                       std::vector<PassNumbers>& pass) {
+    pass[u].changed = number;
+    for (const std::uint32_t* x = rings_.begin(u); x != rings_.end(u); ++x)
+      pass[*x].changed = number;
     const std::size_t removed = rings_.collapse(u, v);
     q_[v].add(q_[u]);
     as_target_[v].own_error = q_[v].error(p(v));

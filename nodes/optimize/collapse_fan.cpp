@@ -162,11 +162,18 @@ void CollapseFan::reset(std::size_t faces, const Eigen::Vector3f& pu) {
 }
 
 void CollapseFan::finish(std::size_t count) {
+  // The active row of a block with `n` faces: n ones, then zeros.
+  static constexpr std::uint32_t kActiveLanes[kBlock + 1][kBlock] = {
+      {0, 0, 0, 0, 0, 0, 0, 0}, {1, 0, 0, 0, 0, 0, 0, 0}, {1, 1, 0, 0, 0, 0, 0, 0},
+      {1, 1, 1, 0, 0, 0, 0, 0}, {1, 1, 1, 1, 0, 0, 0, 0}, {1, 1, 1, 1, 1, 0, 0, 0},
+      {1, 1, 1, 1, 1, 1, 0, 0}, {1, 1, 1, 1, 1, 1, 1, 0}, {1, 1, 1, 1, 1, 1, 1, 1}};
   faces_ = std::min(count, faces_);
   blocks_ = (faces_ + kBlock - 1) / kBlock;
-  for (std::size_t j = 0; j < blocks_; ++j)
-    for (std::size_t i = 0; i < kBlock; ++i)
-      ends_[(j * kEndRows + kActive) * kBlock + i] = j * kBlock + i < faces_ ? 1u : 0u;
+  for (std::size_t j = 0; j < blocks_; ++j) {
+    const std::size_t active = std::min(kBlock, faces_ - j * kBlock);
+    std::memcpy(&ends_[(j * kEndRows + kActive) * kBlock], kActiveLanes[active],
+                sizeof kActiveLanes[active]);
+  }
   derive_blocks(lanes_.data(), blocks_, pu_.x(), pu_.y(), pu_.z());
 }
 

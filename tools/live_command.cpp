@@ -31,24 +31,37 @@ struct LiveOptions {
 
 using SensorFrame = std::variant<PointCloud, DepthFrame>;
 
-// The frames the "sensor" will deliver, loaded up front so the loop only pushes.
-std::vector<SensorFrame> load_frames(const io::Sequence& sequence, const SequenceArgument& a) {
+// The frames the "sensor" will deliver, loaded up front so the loop only pushes. A frame that
+// cannot be read is reported on stderr (its number, file and the reader's message) and left
+// out, as `meshflow run` does; `unreadable` counts them.
+std::vector<SensorFrame> load_frames(const io::Sequence& sequence, const SequenceArgument& a,
+                                     std::size_t& unreadable) {
   std::vector<SensorFrame> frames;
+  unreadable = 0;
   for (std::size_t i = 0; i < sequence.size(); i += a.every) {
-    if (a.max_frames > 0 && frames.size() == a.max_frames) break;
+    if (a.max_frames > 0 && frames.size() + unreadable == a.max_frames) break;
     const io::SequenceFrame f = sequence.frame(i);
-    if (f.load_depth)
-      frames.emplace_back(f.load_depth());
-    else
-      frames.emplace_back(f.load());
+    try {
+      if (f.load_depth)
+        frames.emplace_back(f.load_depth());
+      else
+        frames.emplace_back(f.load());
+    } catch (const Error& e) {
+      std::fprintf(stderr, "meshflow: frame %zu (%s) skipped: %s\n", i, f.name.c_str(), e.what());
+      ++unreadable;
+    }
   }
   return frames;
 }
 
 void run_live(const LiveOptions& o) {
   const auto sequence = open_sequence_argument(o.sequence);
-  const std::vector<SensorFrame> frames = load_frames(*sequence, o.sequence);
-  if (frames.empty()) throw Error(sequence->description(), "frames", "none selected");
+  std::size_t unreadable = 0;
+  const std::vector<SensorFrame> frames = load_frames(*sequence, o.sequence, unreadable);
+  if (frames.empty())
+    throw Error(sequence->description(), "frames",
+                unreadable > 0 ? "none readable (" + std::to_string(unreadable) + " skipped)"
+                               : std::string("none selected"));
   LiveConfig config;
   config.reconstruction = o.pipeline.config();
   config.threads = o.pipeline.threads;
@@ -72,9 +85,11 @@ void run_live(const LiveOptions& o) {
       std::fprintf(stderr, "meshflow: frame %llu failed in %s: %s\n",
                    static_cast<unsigned long long>(r.seq), r.failed_stage.c_str(), r.error.c_str());
   });
-  std::printf("live       %s: %zu frames x %zu at %.1f Hz, policy %s, %zu in flight, %zu waiting\n",
-              sequence->description().c_str(), frames.size(), o.loops, o.rate_hz, o.policy.c_str(),
-              config.frames_in_flight, config.max_waiting);
+  std::printf(
+      "live       %s: %zu frames%s x %zu at %.1f Hz, policy %s, %zu in flight, %zu waiting\n",
+      sequence->description().c_str(), frames.size(),
+      unreadable > 0 ? (" (" + std::to_string(unreadable) + " unreadable, skipped)").c_str() : "",
+      o.loops, o.rate_hz, o.policy.c_str(), config.frames_in_flight, config.max_waiting);
   using Clock = std::chrono::steady_clock;
   const auto period = std::chrono::duration<double>(1.0 / o.rate_hz);
   const auto start = Clock::now();

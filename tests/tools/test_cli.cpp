@@ -163,6 +163,23 @@ TEST(Cli, RunReportsABadFrameAndContinuesStrictStops) {
   EXPECT_FALSE(std::filesystem::exists(strict_out + "/frame_000002.ply"));
 }
 
+TEST(Cli, LiveSkipsAnUnreadableFrameAndReplaysTheOthers) {
+  const std::string seq = scan_directory_with_a_bad_frame();
+  CliRun r = run_cli("live " + seq + " --voxel 0.05 --rate 1000 --policy queue --waiting 8");
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.err.find("frame 1 ("), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("scan001.3d: line 2"), std::string::npos) << r.err;
+  EXPECT_NE(r.out.find("2 frames (1 unreadable, skipped)"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("2 pushed, 2 delivered (0 failed)"), std::string::npos) << r.out;
+  // A sequence of nothing but the bad frame: nothing to replay, and the message says why.
+  const std::string bad_only = test::temp_dir();
+  test::write_file(bad_only + "/scan000.3d", "100 0 50\n120 10\n");
+  test::write_file(bad_only + "/scan000.pose", "0 0 0\n0 0 0\n");
+  r = run_cli("live " + bad_only + " --voxel 0.05");
+  EXPECT_EQ(r.exit_code, 1) << r.err;
+  EXPECT_NE(r.err.find("none readable (1 skipped)"), std::string::npos) << r.err;
+}
+
 TEST(Cli, RunMergedAndUsageErrors) {
   const std::string out = test::temp_dir();
   CliRun r = run_cli("run --synthetic --max-frames 2 --merged -o " + out + " --voxel 0.1");

@@ -129,6 +129,15 @@ TEST(Cli, InfoAndDemo) {
   EXPECT_TRUE(std::filesystem::exists(out));
 }
 
+// A 3DTK scan whose second line ends after two numbers.
+constexpr const char* kTruncatedScan = "100 0 50\n120 10\n";
+
+// Writes dir/name.3d with `points` and an identity pose beside it.
+void write_scan(const std::string& dir, const std::string& name, const std::string& points) {
+  test::write_file(dir + "/" + name + ".3d", points);
+  test::write_file(dir + "/" + name + ".pose", "0 0 0\n0 0 0\n");
+}
+
 // A 3DTK directory with a good scan, a truncated one and another good one.
 std::string scan_directory_with_a_bad_frame() {
   const std::string dir = test::temp_dir();
@@ -136,11 +145,8 @@ std::string scan_directory_with_a_bad_frame() {
   for (int i = 0; i < 40; ++i)
     for (int j = 0; j < 40; ++j)
       scan += std::to_string(2 * i - 40) + " " + std::to_string(2 * j - 40) + " 300\n";
-  for (const char* name : {"scan000", "scan001", "scan002"}) {
-    test::write_file(dir + "/" + name + ".3d",
-                     std::string(name) == "scan001" ? "100 0 50\n120 10\n" : scan);
-    test::write_file(dir + "/" + name + ".pose", "0 0 0\n0 0 0\n");
-  }
+  for (const char* name : {"scan000", "scan001", "scan002"})
+    write_scan(dir, name, std::string(name) == "scan001" ? kTruncatedScan : scan);
   return dir;
 }
 
@@ -173,8 +179,7 @@ TEST(Cli, LiveSkipsAnUnreadableFrameAndReplaysTheOthers) {
   EXPECT_NE(r.out.find("2 pushed, 2 delivered (0 failed)"), std::string::npos) << r.out;
   // A sequence of nothing but the bad frame: nothing to replay, and the message says why.
   const std::string bad_only = test::temp_dir();
-  test::write_file(bad_only + "/scan000.3d", "100 0 50\n120 10\n");
-  test::write_file(bad_only + "/scan000.pose", "0 0 0\n0 0 0\n");
+  write_scan(bad_only, "scan000", kTruncatedScan);
   r = run_cli("live " + bad_only + " --voxel 0.05");
   EXPECT_EQ(r.exit_code, 1) << r.err;
   EXPECT_NE(r.err.find("none readable (1 skipped)"), std::string::npos) << r.err;

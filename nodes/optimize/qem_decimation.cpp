@@ -112,7 +112,7 @@ class Decimator {
         cfg_(config),
         rings_(mesh.triangles, mesh.vertices.size()),
         q_(mesh.vertices.size()),
-        as_target_(mesh.vertices.size()),
+        terms_(mesh.vertices.size()),
         cos_turn_(cos_degrees(config.max_normal_turn_deg)),
         cos_border_(cos_degrees(config.max_border_turn_deg)),
         cos_sharp_(cos_degrees(config.sharp_edge_deg)),
@@ -121,9 +121,9 @@ class Decimator {
         scratch_([this] { return Scratch(*this); }) {
     // Positions (they never change) and 1 / depth^2 of every vertex, or 1.
     for (std::size_t v = 0; v < mesh.vertices.size(); ++v) {
-      as_target_[v].position = mesh.vertices[v];
+      terms_[v].position = mesh.vertices[v];
       if (config.divide_by_depth2)
-        as_target_[v].scale =
+        terms_[v].scale =
             1.0 / std::max(1e-6, static_cast<double>(
                                      (mesh.vertices[v] - config.viewpoint).squaredNorm()));
     }
@@ -138,8 +138,7 @@ class Decimator {
       const Quadric k = Quadric::plane(unit, -unit.dot(a), 0.5 * area2);
       for (std::uint32_t v : t) q_[v].add(k);
     }
-    for (std::size_t v = 0; v < mesh.vertices.size(); ++v)
-      as_target_[v].own_error = q_[v].error(p(v));
+    for (std::size_t v = 0; v < mesh.vertices.size(); ++v) terms_[v].own_error = q_[v].error(p(v));
   }
 
   TriangleMesh run(std::size_t target, QemReport& report) {
@@ -314,7 +313,7 @@ class Decimator {
   }
 
  private:
-  const Eigen::Vector3f& p(std::uint32_t v) const { return as_target_[v].position; }
+  const Eigen::Vector3f& p(std::uint32_t v) const { return terms_[v].position; }
 
   // Per-thread working memory of best_collapse().
   struct Scratch {
@@ -452,7 +451,7 @@ class Decimator {
       __builtin_prefetch(&q_[x].q[0]);
       __builtin_prefetch(&q_[x].q[8]);  // a quadric spans two cache lines
     }
-    __builtin_prefetch(&as_target_[c.to]);
+    __builtin_prefetch(&terms_[c.to]);
     if (!slots_in_cache) prefetch_slots(c);
     rings_.prefetch_ring(c.from);
     rings_.prefetch_ring(c.to);
@@ -464,11 +463,11 @@ class Decimator {
     rings_.prefetch_slot(c.to);
   }
 
-  // Requests the positions, target terms and ring slots of u's neighbours (prefetch(c, true) ran
-  // earlier, so u's ring is in cache).
+  // Requests the terms (position, target terms) and ring slots of u's neighbours
+  // (prefetch(c, true) ran earlier, so u's ring is in cache).
   void prefetch_corners(const Candidate& c) const {
     for (const std::uint32_t* x = rings_.begin(c.from); x != rings_.end(c.from); ++x) {
-      __builtin_prefetch(&as_target_[*x]);
+      __builtin_prefetch(&terms_[*x]);
       rings_.prefetch_slot(*x);
     }
   }
@@ -489,7 +488,7 @@ class Decimator {
 
   // (Q_u + Q_v)(v), divided by depth^2 when configured.
   double quadric_cost(std::uint32_t u, std::uint32_t v) const {
-    const TargetTerms& target = as_target_[v];
+    const VertexTerms& target = terms_[v];
     return std::max(0.0, q_[u].error(p(v)) + target.own_error) * target.scale;
   }
 
@@ -573,7 +572,7 @@ class Decimator {
       pass[*x].changed = number;
     const std::size_t removed = rings_.collapse(u, v);
     q_[v].add(q_[u]);
-    as_target_[v].own_error = q_[v].error(p(v));
+    terms_[v].own_error = q_[v].error(p(v));
     return removed;
   }
 
@@ -583,12 +582,12 @@ class Decimator {
   std::vector<Quadric> q_;
   // What an evaluation reads of each neighbour of u (its position for u's fan and, as a
   // target, the rest), together: half a cache line.
-  struct alignas(32) TargetTerms {
+  struct alignas(32) VertexTerms {
     Eigen::Vector3f position;
     double own_error = 0.0;  ///< Q_v(v): (Q_u + Q_v)(v) = Q_u(v) + this
     double scale = 1.0;      ///< multiplies the quadric error (1 / depth^2, or 1)
   };
-  std::vector<TargetTerms> as_target_;
+  std::vector<VertexTerms> terms_;
   float cos_turn_, cos_border_, cos_sharp_, cos2_min_angle_;
   mutable tbb::enumerable_thread_specific<Scratch> scratch_;  ///< best_collapse()'s memory
 };

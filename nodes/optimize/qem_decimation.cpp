@@ -56,8 +56,8 @@ struct Quadric {
   }
 };
 
-// One vertex u may move onto, in best_collapse(): its quadric cost, itself, and its entry in u's
-// ring (the targets are u's ring, or its border neighbours).
+// One vertex u may move onto, in best_collapse(): its quadric cost, itself, and its index among
+// u's targets (u's ring, where that index is its ring entry, or its two border neighbours).
 struct Target {
   double cost;
   std::uint32_t v, at;
@@ -160,7 +160,7 @@ class Decimator {
       // best reads its own faces (changed only around v), its neighbours' quadrics (only v's
       // changed) and, for the link condition of w -> x, the common neighbours of w and x,
       // which change only when w was next to u or is next to v.
-      // Of those, a vertex w that was not next to any u of the pass (not `changed`) kept its
+      // Of those, a vertex w that was not next to any u of the pass (no `changed` number) kept its
       // faces; only costs towards a v grew and link conditions towards vertices next to a u
       // could fail. So its best collapse w -> y stays the best unless y changed (next to a
       // u, or a v), and a w with no valid collapse keeps none: neither is re-evaluated.

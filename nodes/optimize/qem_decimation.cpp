@@ -365,8 +365,6 @@ class Decimator {
     std::vector<Target> candidates;    ///< u's targets by quadric cost
     std::vector<double> costs;         ///< quadric_costs() of u's targets
     CollapseFan fan;                   ///< u's faces
-    std::vector<std::uint32_t> mark;   ///< per vertex: a stamp, or a count above a stamp
-    std::uint32_t stamp = 0;           ///< the last stamp used in `mark`
 
     // The quadric costs of moving u onto each of its `count` targets (see quadric_costs()).
     const double* quadric_costs(const Decimator& d, std::uint32_t u, const std::uint32_t* targets,
@@ -376,25 +374,11 @@ class Decimator {
       return costs.data();
     }
 
-    // `count` stamps above every value in `mark`: the first is returned.
-    std::uint32_t fresh_stamps(std::uint32_t count) {
-      if (stamp > std::numeric_limits<std::uint32_t>::max() - count) {
-        std::fill(mark.begin(), mark.end(), 0);
-        stamp = 0;
-      }
-      const std::uint32_t first = stamp + 1;
-      stamp += count;
-      return first;
-    }
     QemReport rejected;  ///< refusals counted by this thread
   };
 
-  // This thread's Scratch, its marks sized for the mesh.
-  Scratch& local_scratch() {
-    Scratch& scratch = scratch_.local();
-    if (scratch.mark.size() != in_.vertices.size()) scratch.mark.assign(in_.vertices.size(), 0);
-    return scratch;
-  }
+  // This thread's Scratch.
+  Scratch& local_scratch() { return scratch_.local(); }
 
   // The vertices u may move onto: its neighbours (scratch.neighbours, the ring), or on a
   // border only its two border neighbours (scratch.border): a border vertex may only move along
@@ -576,17 +560,9 @@ class Decimator {
     // (Faces that stay must not flip, degenerate or turn beyond the limit: `verdict.turned`,
     // refused by best_collapse() before the cost.)
     // Link condition (last: the dearest check): the common neighbours are exactly the edge's
-    // opposite vertices. u's neighbours are marked, then v's faces count the marked ones.
-    std::vector<std::uint32_t>& mark = scratch.mark;
-    const std::uint32_t listed = scratch.fresh_stamps(2), counted = listed + 1;
-    for (std::size_t j = 0; j < scratch.neighbour_count; ++j)
-      if (scratch.neighbours[j] != v) mark[scratch.neighbours[j]] = listed;
-    std::size_t common = 0;
-    for (const std::uint32_t* x = rings_.begin(v); x != rings_.end(v); ++x)
-      if (*x != VertexRings::kSeparator && mark[*x] == listed) {
-        mark[*x] = counted;
-        ++common;
-      }
+    // opposite vertices (u's ring lists distinct vertices, v among them).
+    const std::size_t common =
+        rings_.neighbours_among(v, scratch.neighbours, scratch.neighbour_count);
     if (common != shared_count) {
       ++rejected.rejected_topology;
       return false;

@@ -5,6 +5,7 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <cstring>
 #include <utility>
 
 #include "runtime/vertex_triangles.h"
@@ -254,6 +255,30 @@ std::size_t VertexRings::collapse(std::uint32_t u, std::uint32_t v) {
   }
   slots_[u].size = 0;
   return removed;
+}
+
+std::size_t VertexRings::neighbours_among(std::uint32_t v, const std::uint32_t* list,
+                                          std::size_t count) const {
+  // Four vertex numbers as one value (GCC / Clang vector extensions: an SSE register); a
+  // scalar operand applies to every lane.
+  using Lanes = std::uint32_t __attribute__((vector_size(16)));
+  std::size_t found = 0;
+  for (std::size_t first = 0; first < count; first += 8) {
+    std::uint32_t chunk[8];  // padded with v, which is not in its own ring
+    for (std::size_t k = 0; k < 8; ++k) chunk[k] = first + k < count ? list[first + k] : v;
+    Lanes low, high;
+    std::memcpy(&low, chunk, sizeof low);
+    std::memcpy(&high, chunk + 4, sizeof high);
+    Lanes hit_low = {0, 0, 0, 0}, hit_high = {0, 0, 0, 0};  // all ones where found
+    for (const std::uint32_t* x = begin(v); x != end(v); ++x) {
+      const std::uint32_t w = *x;
+      hit_low |= reinterpret_cast<Lanes>(low == w);
+      hit_high |= reinterpret_cast<Lanes>(high == w);
+    }
+    const Lanes hits = (hit_low & 1u) + (hit_high & 1u);
+    found += hits[0] + hits[1] + hits[2] + hits[3];
+  }
+  return found;
 }
 
 bool VertexRings::share_face(std::uint32_t v, std::uint32_t x, std::uint32_t y) const {

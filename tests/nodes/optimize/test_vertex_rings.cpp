@@ -134,6 +134,36 @@ TEST(VertexRings, BowTiesNonManifoldEdgesAndRepeatedCorners) {
   EXPECT_EQ(canonical_sorted(c.triangles()), canonical_sorted(repeated));
 }
 
+// neighbours_among() against set intersection: every vertex's ring (v listed too, which never
+// counts) and random lists of up to twenty distinct vertices (more than one block of eight), on
+// grids with holes and bow ties, and around a hub of forty faces.
+TEST(VertexRings, NeighboursAmongMatchesSetIntersection) {
+  std::mt19937 rng(3);
+  std::vector<Triangle> hub;
+  for (std::uint32_t k = 0; k < 40; ++k) hub.push_back({0, 1 + k, 1 + (k + 1) % 40});
+  for (int trial = 0; trial < 6; ++trial) {
+    const int n = 6 + trial;
+    const auto vertex_count = static_cast<std::uint32_t>(trial == 0 ? 41 : n * n);
+    const std::vector<Triangle> faces = trial == 0 ? hub : grid_faces(n, 0.85, rng);
+    const VertexRings rings(faces, vertex_count);
+    for (std::uint32_t v = 0; v < vertex_count; ++v) {
+      const std::set<std::uint32_t> around = neighbours(faces, v);
+      std::vector<std::uint32_t> list(around.begin(), around.end());
+      list.push_back(v);
+      EXPECT_EQ(rings.neighbours_among(v, list.data(), list.size()), around.size())
+          << "trial " << trial << ", vertex " << v;
+      std::vector<std::uint32_t> all(vertex_count);
+      for (std::uint32_t x = 0; x < vertex_count; ++x) all[x] = x;
+      std::shuffle(all.begin(), all.end(), rng);
+      all.resize(std::min<std::size_t>(all.size(), rng() % 21));
+      const auto expected = static_cast<std::size_t>(
+          std::count_if(all.begin(), all.end(), [&](std::uint32_t x) { return around.count(x); }));
+      EXPECT_EQ(rings.neighbours_among(v, all.data(), all.size()), expected)
+          << "trial " << trial << ", vertex " << v << ", " << all.size() << " listed";
+    }
+  }
+}
+
 // Random collapses that meet collapse()'s preconditions, checked against the same collapses
 // applied to a plain face list (faces with both ends vanish, the others get v for u), on grids
 // with holes and bow ties, after every collapse; the rings must also be what a fresh build

@@ -101,7 +101,8 @@ MESHFLOW_AVX2_CLONES void quadric_costs(const Quadric& q_u, const VertexTerms* t
 struct Target {
   double cost;
   std::uint32_t v, at;
-  bool before(const Target& o) const { return cost < o.cost || (cost == o.cost && v < o.v); }
+  // (cost, vertex) order; branch-free.
+  bool before(const Target& o) const { return (cost < o.cost) | ((cost == o.cost) & (v < o.v)); }
 };
 
 // A vertex's numbers in a pass (collapses are numbered from 1 in each).
@@ -439,13 +440,16 @@ class Decimator {
     const std::size_t n = rings_.size(u), faces = rings_.face_count(u);
     if (scratch.candidates.size() < n) scratch.candidates.resize(2 * n);
     Target* const queue = scratch.candidates.data();
-    // In order of (quadric cost, vertex), by insertion: a vertex has a handful of candidates.
+    // In order of (quadric cost, vertex): each target goes to its rank, the number of targets
+    // before it, counted branch-free (a handful of targets; an insertion sort's branches on
+    // these costs are coin tosses, and mispredicted cost more than the extra comparisons).
     const double* const costs = scratch.quadric_costs(*this, u, targets, count);
     for (std::size_t j = 0; j < count; ++j) {
       const Target entry{costs[j], targets[j], static_cast<std::uint32_t>(j)};
-      std::size_t at = j;
-      for (; at > 0 && entry.before(queue[at - 1]); --at) queue[at] = queue[at - 1];
-      queue[at] = entry;
+      std::size_t rank = 0;
+      for (std::size_t k = 0; k < count; ++k)
+        rank += static_cast<std::size_t>(Target{costs[k], targets[k], 0}.before(entry));
+      queue[rank] = entry;
     }
     // u's faces (u, r[k], r[k + 1]), each neighbour's position read once (after the border
     // test: a bent border needs no fan).

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <type_traits>
 
 #include "runtime/simd.h"
 
@@ -67,11 +68,11 @@ MESHFLOW_AVX2_CLONES FanVerdict check_blocks(const float* lanes, const std::uint
   using R = CollapseFan::Row;
   constexpr float kFlattest = 1e-6f;  // as has_area()
   const float turn_cos2 = max_turn_cos * max_turn_cos, flattest2 = kFlattest * kFlattest;
-  // The turn test for a limit below 90 degrees (acute) or above (obtuse), as a lane mask.
-  const Ints8 acute = Ints8{} + (max_turn_cos >= 0.0f ? -1 : 0);
   const auto target = static_cast<std::int32_t>(v);
   Ints8 flags{}, shared{};  // needle in bit 0, turned in bit 1; -1 per face with v
-  const auto check_block = [&](const float* block, const std::uint32_t* block_ends)
+  // The turn test differs for a limit below 90 degrees (acute) and above (obtuse): compiled
+  // for each (`acute` a std::bool_constant), so that neither carries the other's lanes.
+  const auto check_block = [&](const float* block, const std::uint32_t* block_ends, auto acute)
       __attribute__((always_inline)) {
     Floats8 ax, ay, az, bx, by, bz, ex, ey, ez, le, nx, ny, nz, n2;
     load_rows(block, R::kAx, ax, ay, az, bx, by, bz);
@@ -100,8 +101,11 @@ MESHFLOW_AVX2_CLONES FanVerdict check_blocks(const float* lanes, const std::uint
     load_rows(block, R::kNx, nx, ny, nz, n2);
     const Floats8 nm = nx * mx + ny * my + nz * mz;
     const Floats8 bound = turn_cos2 * m2 * n2;
-    const Ints8 turn_ok = (acute & (nm >= 0.0f) & (nm * nm >= bound)) |
-                          (~acute & ((nm >= 0.0f) | (nm * nm <= bound)));
+    Ints8 turn_ok;
+    if constexpr (decltype(acute)::value)
+      turn_ok = (nm >= 0.0f) & (nm * nm >= bound);
+    else
+      turn_ok = (nm >= 0.0f) | (nm * nm <= bound);
     Ints8 end_a, end_b, active;
     load8(end_a, block_ends + CollapseFan::kA * kBlock);
     load8(end_b, block_ends + CollapseFan::kB * kBlock);
@@ -111,12 +115,19 @@ MESHFLOW_AVX2_CLONES FanVerdict check_blocks(const float* lanes, const std::uint
     shared += active & has_v;
     flags |= active & ~has_v & ((is_needle & 1) | (~(turn_ok & has_area) & 2));
   };
-  // Most fans are one block: that case without a loop (no constants spilled across iterations).
-  if (blocks == 1)
-    check_block(lanes, ends);
+  const auto all_blocks = [&](auto acute) __attribute__((always_inline)) {
+    // Most fans are one block: that case without a loop (no constants spilled across
+    // iterations).
+    if (blocks == 1)
+      check_block(lanes, ends, acute);
+    else
+      for (std::size_t j = 0; j < blocks; ++j)
+        check_block(lanes + j * kRows * kBlock, ends + j * kEndRows * kBlock, acute);
+  };
+  if (max_turn_cos >= 0.0f)
+    all_blocks(std::true_type{});
   else
-    for (std::size_t j = 0; j < blocks; ++j)
-      check_block(lanes + j * kRows * kBlock, ends + j * kEndRows * kBlock);
+    all_blocks(std::false_type{});
   const std::int32_t any = lane_or(flags);
   return FanVerdict{(any & 1) != 0, (any & 2) != 0, static_cast<unsigned>(-lane_sum(shared))};
 }

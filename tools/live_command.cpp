@@ -1,6 +1,7 @@
 // meshflow live: replays a sequence at a fixed rate through the embedding API (LivePipeline), as
 // a sensor loop would, and reports latency percentiles and drops.
 
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <memory>
@@ -30,6 +31,11 @@ struct LiveOptions {
 };
 
 using SensorFrame = std::variant<PointCloud, DepthFrame>;
+
+// Frames the warm-up meshes at least (the sequence's frames over again if it has fewer): the
+// allocator's pools keep growing, with page faults, for the first 11-15 Redwood frames of a
+// process (bench/RESULTS.md, sessions 24-25); fewer left them to the timed replay.
+constexpr std::size_t kWarmUpFrames = 32;
 
 // The frames the "sensor" will deliver, loaded up front so the loop only pushes. A frame that
 // cannot be read is reported on stderr (its number, file and the reader's message) and left
@@ -70,13 +76,19 @@ void run_live(const LiveOptions& o) {
   config.policy = o.policy == "queue" ? LivePolicy::kQueue : LivePolicy::kRealtime;
   config.triangulate_depth_maps = o.triangulation.enabled();
   o.triangulation.apply(config.reconstruction);
-  if (o.warm_up) {  // a throwaway pipeline meshes every frame once: threads and pools start
+  if (o.warm_up) {  // a throwaway pipeline meshes the frames first: threads and pools start
     LiveConfig queue = config;
     queue.policy = LivePolicy::kQueue;
-    queue.max_waiting = frames.size();
+    const std::size_t warm_frames = std::max(frames.size(), kWarmUpFrames);
+    queue.max_waiting = warm_frames;
+    const auto warm_start = std::chrono::steady_clock::now();
     LivePipeline warm(queue, [](LiveResult&) {});
-    for (const SensorFrame& f : frames) std::visit([&](const auto& frame) { warm.push(frame); }, f);
+    for (std::size_t i = 0; i < warm_frames; ++i)
+      std::visit([&](const auto& frame) { warm.push(frame); }, frames[i % frames.size()]);
     warm.flush();
+    std::printf(
+        "warm-up    %zu frames meshed in %.2f s (not timed)\n", warm_frames,
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - warm_start).count());
   }
   std::size_t triangles = 0;
   LivePipeline live(config, [&](LiveResult& r) {
@@ -133,8 +145,9 @@ void add_live_command(CLI::App& app) {
       ->check(CLI::Range(1, 1024));
   add_triangulation_options(cmd, o->triangulation);
   cmd->add_flag("--warm-up", o->warm_up,
-                "Before the timed replay, mesh every frame once in a throwaway pipeline (worker "
-                "threads and allocator pools start), so the numbers are the steady state");
+                "Before the timed replay, mesh every frame once, and at least 32 frames, in a "
+                "throwaway pipeline (worker threads and allocator pools start), so the numbers "
+                "are the steady state");
   cmd->add_option("--loops", o->loops, "Replay the frames this many times")
       ->check(CLI::Range(1, 100000));
   add_pipeline_options(cmd, o->pipeline);

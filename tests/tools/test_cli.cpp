@@ -185,6 +185,17 @@ TEST(Cli, LiveSkipsAnUnreadableFrameAndReplaysTheOthers) {
   EXPECT_NE(r.err.find("none readable (1 skipped)"), std::string::npos) << r.err;
 }
 
+// --warm-up meshes at least 32 frames before the timed replay (the allocator's pools are still
+// growing over a short sequence's frames), cycling through them; the replay itself is unchanged.
+TEST(Cli, LiveWarmUpCyclesAShortSequence) {
+  const CliRun r = run_cli(
+      "live --synthetic-depth --max-frames 3 --triangulate rqt --rate 1000 --warm-up "
+      "--policy queue --waiting 8");
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("warm-up    32 frames meshed"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("3 pushed, 3 delivered (0 failed)"), std::string::npos) << r.out;
+}
+
 TEST(Cli, RunMergedAndUsageErrors) {
   const std::string out = test::temp_dir();
   CliRun r = run_cli("run --synthetic --max-frames 2 --merged -o " + out + " --voxel 0.1");

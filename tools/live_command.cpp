@@ -32,10 +32,12 @@ struct LiveOptions {
 
 using SensorFrame = std::variant<PointCloud, DepthFrame>;
 
-// Frames the warm-up meshes at least (the sequence's frames over again if it has fewer): the
-// allocator's pools keep growing, with page faults, for the first 11-15 Redwood frames of a
-// process (bench/RESULTS.md, sessions 24-25); fewer left them to the timed replay.
+// The warm-up meshes every frame once, then the frames over again until it has meshed this many
+// or spent this long: the allocator's pools keep growing, with page faults, for the first 11-15
+// Redwood frames of a process (bench/RESULTS.md, sessions 24-25), and a five-frame warm-up left
+// that to the timed replay; the time bound keeps a slow volumetric sequence's warm-up short.
 constexpr std::size_t kWarmUpFrames = 32;
+constexpr double kWarmUpSeconds = 1.0;
 
 // The frames the "sensor" will deliver, loaded up front so the loop only pushes. A frame that
 // cannot be read is reported on stderr (its number, file and the reader's message) and left
@@ -79,16 +81,21 @@ void run_live(const LiveOptions& o) {
   if (o.warm_up) {  // a throwaway pipeline meshes the frames first: threads and pools start
     LiveConfig queue = config;
     queue.policy = LivePolicy::kQueue;
-    const std::size_t warm_frames = std::max(frames.size(), kWarmUpFrames);
-    queue.max_waiting = warm_frames;
-    const auto warm_start = std::chrono::steady_clock::now();
+    queue.max_waiting = frames.size();
+    using Clock = std::chrono::steady_clock;
+    const auto warm_start = Clock::now();
+    const auto seconds = [&] { return std::chrono::duration<double>(Clock::now() - warm_start); };
     LivePipeline warm(queue, [](LiveResult&) {});
-    for (std::size_t i = 0; i < warm_frames; ++i)
-      std::visit([&](const auto& frame) { warm.push(frame); }, frames[i % frames.size()]);
-    warm.flush();
-    std::printf(
-        "warm-up    %zu frames meshed in %.2f s (not timed)\n", warm_frames,
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - warm_start).count());
+    std::size_t warmed = 0;
+    do {  // the whole sequence, then rounds of it cut at kWarmUpFrames in all
+      const std::size_t round =
+          warmed == 0 ? frames.size() : std::min(frames.size(), kWarmUpFrames - warmed);
+      for (std::size_t i = 0; i < round; ++i)
+        std::visit([&](const auto& frame) { warm.push(frame); }, frames[i]);
+      warm.flush();
+      warmed += round;
+    } while (warmed < kWarmUpFrames && seconds().count() < kWarmUpSeconds);
+    std::printf("warm-up    %zu frames meshed in %.2f s (not timed)\n", warmed, seconds().count());
   }
   std::size_t triangles = 0;
   LivePipeline live(config, [&](LiveResult& r) {
@@ -145,9 +152,9 @@ void add_live_command(CLI::App& app) {
       ->check(CLI::Range(1, 1024));
   add_triangulation_options(cmd, o->triangulation);
   cmd->add_flag("--warm-up", o->warm_up,
-                "Before the timed replay, mesh every frame once, and at least 32 frames, in a "
-                "throwaway pipeline (worker threads and allocator pools start), so the numbers "
-                "are the steady state");
+                "Before the timed replay, mesh every frame once, then again up to 32 frames or "
+                "1 s, in a throwaway pipeline (worker threads and allocator pools start), so the "
+                "numbers are the steady state");
   cmd->add_option("--loops", o->loops, "Replay the frames this many times")
       ->check(CLI::Range(1, 100000));
   add_pipeline_options(cmd, o->pipeline);

@@ -442,7 +442,9 @@ class Decimator {
     Target* const queue = scratch.candidates.data();
     // In order of (quadric cost, vertex): each target goes to its rank, the number of targets
     // before it, counted branch-free (a handful of targets; an insertion sort's branches on
-    // these costs are coin tosses, and mispredicted cost more than the extra comparisons).
+    // these costs are coin tosses, and mispredicted cost more than the extra comparisons). The
+    // targets are distinct and no cost is NaN (quadric_costs() maps NaN to 0): the ranks are a
+    // permutation.
     const double* const costs = scratch.quadric_costs(*this, u, targets, count);
     for (std::size_t j = 0; j < count; ++j) {
       const Target entry{costs[j], targets[j], static_cast<std::uint32_t>(j)};

@@ -192,9 +192,10 @@ TEST(Cli, LiveWarmUpCyclesAShortSequence) {
       "live --synthetic-depth --max-frames 3 --triangulate rqt --rate 1000 --warm-up "
       "--policy queue --waiting 8");
   EXPECT_EQ(r.exit_code, 0) << r.err;
-  const std::size_t at = r.out.find("warm-up    ");
+  const std::string label = "warm-up    ";  // then the number of frames meshed
+  const std::size_t at = r.out.find(label);
   ASSERT_NE(at, std::string::npos) << r.out;
-  const int warmed = std::stoi(r.out.substr(at + 11));
+  const int warmed = std::stoi(r.out.substr(at + label.size()));
   EXPECT_GT(warmed, 3) << r.out;  // more than one round (a round takes well under the second)
   EXPECT_LE(warmed, 32) << r.out;
   EXPECT_NE(r.out.find("3 pushed, 3 delivered (0 failed)"), std::string::npos) << r.out;

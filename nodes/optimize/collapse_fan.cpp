@@ -14,12 +14,9 @@ constexpr std::size_t kBlock = CollapseFan::kBlock;
 constexpr std::size_t kRows = CollapseFan::kRows;
 constexpr std::size_t kEndRows = CollapseFan::kEndRows;
 
-// A block's eight lanes as one value (GCC / Clang vector extensions): one AVX2 register where the
-// CPU has it, two SSE registers otherwise; a scalar operand applies to every lane. Values of
-// these types stay inside functions (passed by reference), so that no call depends on the
-// vector ABI of the clone.
-using Floats8 = float __attribute__((vector_size(32)));
-using Ints8 = std::int32_t __attribute__((vector_size(32)));
+// A block's eight lanes as one value (runtime/simd.h).
+using simd::Floats8;
+using simd::Ints8;
 
 #define MESHFLOW_INLINE inline __attribute__((always_inline))  // also at -O0: no vector ABI
 

@@ -65,9 +65,7 @@ struct alignas(32) VertexTerms {
   double scale = 1.0;      ///< multiplies the quadric error (1 / depth^2, or 1)
 };
 
-// Four doubles as one value (GCC / Clang vector extensions): one AVX2 register where the CPU has
-// it, two SSE registers otherwise.
-using Doubles4 = double __attribute__((vector_size(32)));
+using simd::Doubles4;
 
 // The quadric cost of moving u onto each of `count` targets: costs[j] = max(0, (Q_u + Q_v)(v)) x
 // scale_v for v = targets[j], with (Q_u + Q_v)(v) = Q_u(v) + own_error_v and `q_u` Q_u's ten
@@ -368,10 +366,10 @@ class Decimator {
     CollapseFan fan;                   ///< u's faces
 
     // The quadric costs of moving u onto each of its `count` targets (see quadric_costs()).
-    const double* quadric_costs(const Decimator& d, std::uint32_t u, const std::uint32_t* targets,
-                                std::size_t count) {
+    const double* target_costs(const Decimator& d, std::uint32_t u, const std::uint32_t* targets,
+                               std::size_t count) {
       if (costs.size() < count) costs.resize(2 * count);
-      meshflow::quadric_costs(d.q_[u], d.terms_.data(), targets, count, costs.data());
+      quadric_costs(d.q_[u], d.terms_.data(), targets, count, costs.data());
       return costs.data();
     }
 
@@ -417,7 +415,7 @@ class Decimator {
     bound.from = u;
     const std::uint32_t* targets = nullptr;
     const std::size_t count = movable_targets(u, scratch, targets);
-    const double* const costs = scratch.quadric_costs(*this, u, targets, count);
+    const double* const costs = scratch.target_costs(*this, u, targets, count);
     for (std::size_t j = 0; j < count; ++j) {
       const double cost = costs[j];
       if (cost < bound.cost || (cost == bound.cost && targets[j] < bound.to)) {
@@ -445,7 +443,7 @@ class Decimator {
     // these costs are coin tosses, and mispredicted cost more than the extra comparisons). The
     // targets are distinct and no cost is NaN (quadric_costs() maps NaN to 0): the ranks are a
     // permutation.
-    const double* const costs = scratch.quadric_costs(*this, u, targets, count);
+    const double* const costs = scratch.target_costs(*this, u, targets, count);
     for (std::size_t j = 0; j < count; ++j) {
       const Target entry{costs[j], targets[j], static_cast<std::uint32_t>(j)};
       std::size_t rank = 0;

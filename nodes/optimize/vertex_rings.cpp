@@ -8,6 +8,7 @@
 #include <cstring>
 #include <utility>
 
+#include "runtime/simd.h"
 #include "runtime/vertex_triangles.h"
 
 namespace meshflow {
@@ -259,9 +260,7 @@ std::size_t VertexRings::collapse(std::uint32_t u, std::uint32_t v) {
 
 std::size_t VertexRings::neighbours_among(std::uint32_t v, const std::uint32_t* list,
                                           std::size_t count) const {
-  // Four vertex numbers as one value (GCC / Clang vector extensions: an SSE register); a
-  // scalar operand applies to every lane.
-  using Lanes = std::uint32_t __attribute__((vector_size(16)));
+  using Lanes = simd::Uints4;  // four vertex numbers
   std::size_t found = 0;
   for (std::size_t first = 0; first < count; first += 8) {
     std::uint32_t chunk[8];  // padded with v, which is not in its own ring

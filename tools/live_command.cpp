@@ -62,6 +62,31 @@ std::vector<SensorFrame> load_frames(const io::Sequence& sequence, const Sequenc
   return frames;
 }
 
+using Clock = std::chrono::steady_clock;
+
+// Meshes `frames` in a throwaway pipeline of `config` (queue policy: nothing dropped) so that
+// worker threads and allocator pools start before the timed replay: every frame once, then the
+// frames over again, flushed after each round, up to kWarmUpFrames in all or kWarmUpSeconds.
+// Prints how many frames it meshed.
+void warm_up(const LiveConfig& config, const std::vector<SensorFrame>& frames) {
+  LiveConfig queue = config;
+  queue.policy = LivePolicy::kQueue;
+  queue.max_waiting = frames.size();
+  const auto start = Clock::now();
+  const auto seconds = [&] { return std::chrono::duration<double>(Clock::now() - start).count(); };
+  LivePipeline warm(queue, [](LiveResult&) {});
+  std::size_t warmed = 0;
+  do {
+    const std::size_t round =
+        warmed == 0 ? frames.size() : std::min(frames.size(), kWarmUpFrames - warmed);
+    for (std::size_t i = 0; i < round; ++i)
+      std::visit([&](const auto& frame) { warm.push(frame); }, frames[i]);
+    warm.flush();
+    warmed += round;
+  } while (warmed < kWarmUpFrames && seconds() < kWarmUpSeconds);
+  std::printf("warm-up    %zu frames meshed in %.2f s (not timed)\n", warmed, seconds());
+}
+
 void run_live(const LiveOptions& o) {
   const auto sequence = open_sequence_argument(o.sequence);
   std::size_t unreadable = 0;
@@ -78,25 +103,7 @@ void run_live(const LiveOptions& o) {
   config.policy = o.policy == "queue" ? LivePolicy::kQueue : LivePolicy::kRealtime;
   config.triangulate_depth_maps = o.triangulation.enabled();
   o.triangulation.apply(config.reconstruction);
-  if (o.warm_up) {  // a throwaway pipeline meshes the frames first: threads and pools start
-    LiveConfig queue = config;
-    queue.policy = LivePolicy::kQueue;
-    queue.max_waiting = frames.size();
-    using Clock = std::chrono::steady_clock;
-    const auto warm_start = Clock::now();
-    const auto seconds = [&] { return std::chrono::duration<double>(Clock::now() - warm_start); };
-    LivePipeline warm(queue, [](LiveResult&) {});
-    std::size_t warmed = 0;
-    do {  // the whole sequence, then rounds of it cut at kWarmUpFrames in all
-      const std::size_t round =
-          warmed == 0 ? frames.size() : std::min(frames.size(), kWarmUpFrames - warmed);
-      for (std::size_t i = 0; i < round; ++i)
-        std::visit([&](const auto& frame) { warm.push(frame); }, frames[i]);
-      warm.flush();
-      warmed += round;
-    } while (warmed < kWarmUpFrames && seconds().count() < kWarmUpSeconds);
-    std::printf("warm-up    %zu frames meshed in %.2f s (not timed)\n", warmed, seconds().count());
-  }
+  if (o.warm_up) warm_up(config, frames);
   std::size_t triangles = 0;
   LivePipeline live(config, [&](LiveResult& r) {
     triangles += r.mesh.triangles.size();
@@ -109,7 +116,6 @@ void run_live(const LiveOptions& o) {
       sequence->description().c_str(), frames.size(),
       unreadable > 0 ? (" (" + std::to_string(unreadable) + " unreadable, skipped)").c_str() : "",
       o.loops, o.rate_hz, o.policy.c_str(), config.frames_in_flight, config.max_waiting);
-  using Clock = std::chrono::steady_clock;
   const auto period = std::chrono::duration<double>(1.0 / o.rate_hz);
   const auto start = Clock::now();
   double worst_push_s = 0.0;
@@ -152,9 +158,11 @@ void add_live_command(CLI::App& app) {
       ->check(CLI::Range(1, 1024));
   add_triangulation_options(cmd, o->triangulation);
   cmd->add_flag("--warm-up", o->warm_up,
-                "Before the timed replay, mesh every frame once, then again up to 32 frames or "
-                "1 s, in a throwaway pipeline (worker threads and allocator pools start), so the "
-                "numbers are the steady state");
+                "Before the timed replay, mesh every frame once, then again up to " +
+                    std::to_string(kWarmUpFrames) + " frames or " +
+                    std::to_string(static_cast<int>(kWarmUpSeconds)) +
+                    " s, in a throwaway pipeline (worker threads and allocator pools start), so "
+                    "the numbers are the steady state");
   cmd->add_option("--loops", o->loops, "Replay the frames this many times")
       ->check(CLI::Range(1, 100000));
   add_pipeline_options(cmd, o->pipeline);

@@ -61,6 +61,7 @@ struct Frame {
   std::shared_ptr<DepthFrame> depth;
   DepthFilterCounts depth_counts;
   bool normals_from_image = false;  ///< normals came from image neighbours (depth input)
+  NormalsReport normals;            ///< where the cloud's normals came from (cloud path)
 
   PointCloud cloud;  ///< after read: raw; after filter: filtered, with normals
   FilterCounts filter_counts;

@@ -81,8 +81,10 @@ std::uint64_t index(Frame& f, const ReconstructionConfig&) {
 
 std::uint64_t normals(Frame& f, const ReconstructionConfig& c) {
   if (f.normals_from_image) return 0;  // already estimated from image neighbours
-  f.cloud.normals = estimate_normals(f.cloud, *f.index, c.normals);
-  return f.cloud.size();
+  ComputedNormals computed = compute_normals(f.cloud, *f.index, c.normals);
+  f.cloud.normals = std::move(computed.normals);
+  f.normals = computed.report;
+  return computed.report.estimated;
 }
 
 std::uint64_t voxelize(Frame& f, const ReconstructionConfig& c) {

@@ -62,6 +62,14 @@ void radix_sort(std::vector<std::uint64_t>& keys) {
   if (src != &keys) keys.swap(buffer);
 }
 
+void stable_sort_by_digit(std::vector<std::uint64_t>& keys, int shift) {
+  static_assert(kRadixDigitValues == kBuckets, "one digit of the radix sort");
+  if (keys.size() < 2) return;
+  std::vector<std::uint64_t> sorted(keys.size());
+  radix_pass(keys, sorted, shift);
+  keys.swap(sorted);
+}
+
 void radix_sort_unique(std::vector<std::uint64_t>& keys) {
   radix_sort(keys);
   keys.erase(std::unique(keys.begin(), keys.end()), keys.end());

@@ -39,6 +39,27 @@ std::size_t write_textured(const std::string& output, const Frame& frame,
   return textured.textures.size();
 }
 
+// What `reconstruct` does for normals with the defaults (--normals auto --orient auto).
+void print_normals_plan(const PointCloud& cloud) {
+  if (cloud.has_normals()) {
+    std::size_t missing = 0;
+    for (const Eigen::Vector3f& n : cloud.normals)
+      missing += n.allFinite() && n.squaredNorm() > 1e-12f ? 0 : 1;
+    if (missing == 0)
+      std::printf("normals     from the file, used as they are (--normals auto)\n");
+    else
+      std::printf("normals     from the file; %zu zero or NaN, estimated from their neighbours\n",
+                  missing);
+    return;
+  }
+  const NormalOrientation o = resolve_orientation(cloud);
+  std::printf(
+      "normals     none in the file: estimated, --orient auto = %s (%s)\n", orientation_name(o),
+      o == NormalOrientation::kPropagate ? "no sensor position: consistent over neighbours, outward"
+      : cloud.has_sensor_origin          ? "towards the sensor position"
+                                         : "organized: towards the sensor at the origin");
+}
+
 void run_reconstruct(const ReconstructOptions& o) {
   ThreadLimit limit(o.pipeline.threads);
   const ReconstructionConfig config = o.pipeline.config();
@@ -137,6 +158,7 @@ void add_info_command(CLI::App& app) {
       std::printf("sensor      %.4f %.4f %.4f m\n", cloud.sensor_origin.x(),
                   cloud.sensor_origin.y(), cloud.sensor_origin.z());
     }
+    print_normals_plan(cloud);
   });
 }
 

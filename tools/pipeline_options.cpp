@@ -1,5 +1,7 @@
 #include "tools/pipeline_options.h"
 
+#include <cstdio>
+
 #include "nodes/extract/extract_surface.h"
 #include "nodes/synthetic/depth_sequence.h"
 #include "nodes/synthetic/scan_sequence.h"
@@ -28,7 +30,43 @@ ReconstructionConfig PipelineOptions::config() const {
   c.optimize.planes.max_projection = max_projection;
   c.optimize.remesh.tolerance = remesh_tolerance;
   c.organized_as_depth = organized_as_depth;
+  c.normals.source = normals == "input"      ? NormalSource::kInput
+                     : normals == "estimate" ? NormalSource::kEstimate
+                                             : NormalSource::kAuto;
+  parse_orientation(orient, c.normals);
   return c;
+}
+
+void parse_orientation(const std::string& text, NormalsConfig& normals) {
+  static const std::pair<const char*, NormalOrientation> kNamed[] = {
+      {"auto", NormalOrientation::kAuto},
+      {"sensor", NormalOrientation::kTowardSensor},
+      {"propagate", NormalOrientation::kPropagate},
+      {"input", NormalOrientation::kInput}};
+  for (const auto& [name, orientation] : kNamed) {
+    if (text == name) {
+      normals.orientation = orientation;
+      return;
+    }
+  }
+  const std::size_t eq = text.find('=');
+  const std::string kind = text.substr(0, eq);
+  if (eq != std::string::npos && (kind == "viewpoint" || kind == "away")) {
+    Eigen::Vector3f point;
+    char tail = 0;
+    if (std::sscanf(text.c_str() + eq + 1, "%f,%f,%f%c", &point.x(), &point.y(), &point.z(),
+                    &tail) == 3 &&
+        point.allFinite()) {
+      normals.orientation = kind == "viewpoint" ? NormalOrientation::kTowardViewpoint
+                                                : NormalOrientation::kAwayFromViewpoint;
+      normals.viewpoint = point;
+      return;
+    }
+  }
+  throw CLI::ValidationError("--orient",
+                             "expected auto, sensor, propagate, input, "
+                             "viewpoint=X,Y,Z or away=X,Y,Z; got '" +
+                                 text + "'");
 }
 
 void add_pipeline_options(CLI::App* cmd, PipelineOptions& o) {
@@ -87,6 +125,24 @@ void add_pipeline_options(CLI::App* cmd, PipelineOptions& o) {
       ->check(number_in(0, 1000));
   cmd->add_option("--decimate-to", o.decimate_to, "decimate step: share of the triangles to keep")
       ->check(number_in(0, 1));
+  cmd->add_option("--normals", o.normals,
+                  "Point normals: auto (the input's when it has them, else estimated), input, "
+                  "estimate")
+      ->check(CLI::IsMember({"auto", "input", "estimate"}));
+  cmd->add_option("--orient", o.orient,
+                  "Orientation of estimated normals: auto (the input normals' signs, else the "
+                  "sensor where the data has one, else propagate), sensor, propagate "
+                  "(consistent over neighbours, for objects without a sensor), input, "
+                  "viewpoint=X,Y,Z, away=X,Y,Z")
+      ->check([](const std::string& text) -> std::string {
+        try {
+          NormalsConfig probe;
+          parse_orientation(text, probe);
+          return "";
+        } catch (const CLI::ValidationError& e) {
+          return e.what();
+        }
+      });
   cmd->add_flag("--organized-as-depth", o.organized_as_depth,
                 "Organized clouds that are a pinhole back-projection (Kinect PCDs): take the "
                 "depth-image path (image normals, projective distance; faster, single view)");

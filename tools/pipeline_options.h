@@ -30,15 +30,23 @@ struct PipelineOptions {
   float max_projection = 0.0f;
   float remesh_tolerance = 0.0f;
   bool organized_as_depth = false;
+  std::string normals = "auto";  ///< auto | input | estimate
+  std::string orient = "auto";   ///< auto | sensor | propagate | input | viewpoint=X,Y,Z | ...
 
+  /// The stages' configuration; throws CLI::ValidationError for a malformed --orient.
   ReconstructionConfig config() const;
 };
 
 /// Registers --voxel --kn --ki --kd --threads --adaptive-k --max-distance --min-component
 /// --filter-voxel --outlier-k --min-range --max-range --extract --optimize --max-hole
-/// --contour-tolerance --max-projection --remesh-tolerance --decimate-to --organized-as-depth on
-/// `cmd`, writing into `options`.
+/// --contour-tolerance --max-projection --remesh-tolerance --decimate-to --organized-as-depth
+/// --normals --orient on `cmd`, writing into `options`.
 void add_pipeline_options(CLI::App* cmd, PipelineOptions& options);
+
+/// Parses --orient: "auto", "sensor", "propagate", "input", "viewpoint=X,Y,Z" (towards a
+/// point, metres) or "away=X,Y,Z" (away from a point, e.g. a closed object's centre) into
+/// `normals`. Throws CLI::ValidationError naming what was expected.
+void parse_orientation(const std::string& text, NormalsConfig& normals);
 
 /// Per-frame depth-map triangulation instead of the volumetric stages (run, profile, live).
 struct TriangulationOptions {

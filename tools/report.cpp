@@ -2,8 +2,34 @@
 
 #include <cstdio>
 #include <stdexcept>
+#include <string>
 
 namespace meshflow::cli {
+
+std::string describe_normals(const NormalsReport& r) {
+  if (r.source == NormalSource::kInput) {
+    if (r.estimated == 0) return "from the input";
+    return "from the input, " + std::to_string(r.estimated) +
+           " missing (zero or NaN) estimated and oriented by their neighbours";
+  }
+  std::string text = "estimated, oriented ";
+  switch (r.orientation) {
+    case NormalOrientation::kTowardSensor:
+      return text + "towards the sensor";
+    case NormalOrientation::kTowardViewpoint:
+      return text + "towards the viewpoint";
+    case NormalOrientation::kAwayFromViewpoint:
+      return text + "away from the viewpoint";
+    case NormalOrientation::kInput:
+      return text + "as the input normals";
+    case NormalOrientation::kAuto:
+    case NormalOrientation::kPropagate:
+      break;
+  }
+  return text + "by propagation (" + std::to_string(r.components) + " component" +
+         (r.components == 1 ? "" : "s") + ", " + std::to_string(r.flipped_by_vote) +
+         " turned by the vote)";
+}
 
 void print_frame_report(const Frame& f, double wall_s, int threads) {
   const FilterCounts& c = f.filter_counts;
@@ -13,6 +39,7 @@ void print_frame_report(const Frame& f, double wall_s, int threads) {
     std::printf("filter     cropped %zu, merged %zu, outliers %zu\n", c.cropped, c.merged,
                 c.outliers);
   }
+  if (!f.normals_from_image) std::printf("normals    %s\n", describe_normals(f.normals).c_str());
   std::printf("grid       voxel %.4g m, %zu cells, %zu corners (%zu valid)\n", f.voxel_size,
               f.grid.cells.size(), f.grid.corners.size(), f.distance.valid_count());
   std::printf("mesh       %zu vertices, %zu triangles\n", f.mesh.vertices.size(),

@@ -10,6 +10,10 @@ namespace meshflow::cli {
 /// Prints what the pipeline did to one frame (counts, voxel size, stage table) to stdout.
 void print_frame_report(const Frame& frame, double wall_s, int threads);
 
+/// One line on where a cloud's normals came from: "from the input", "from the input, 12
+/// estimated", or "estimated, oriented by propagation (1 component, 3 turned by the vote)".
+std::string describe_normals(const NormalsReport& report);
+
 /// Throws meshflow::Error carrying the frame's error if it failed.
 void throw_if_failed(const Frame& frame);
 

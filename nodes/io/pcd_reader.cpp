@@ -35,6 +35,7 @@ struct PcdHeader {
   std::size_t row_bytes = 0;
   std::size_t values_per_row = 0;
   int lines = 0;
+  Eigen::Vector3d viewpoint = Eigen::Vector3d::Zero();  // VIEWPOINT's translation, metres
 };
 
 std::optional<ScalarType> pcd_scalar(char type, std::size_t size) {
@@ -63,7 +64,16 @@ PcdHeader parse_pcd_header(std::istream& in, const std::string& path) {
     split_whitespace(line, tok);
     if (tok.empty() || tok[0].front() == '#') continue;
     const std::string_view key = tok[0];
-    if (key == "VERSION" || key == "VIEWPOINT") continue;
+    if (key == "VERSION") continue;
+    if (key == "VIEWPOINT") {  // tx ty tz qw qx qy qz: the sensor's position and rotation
+      if (tok.size() != 8)
+        throw Error(path, where, "VIEWPOINT needs 7 numbers (tx ty tz qw qx qy qz)");
+      for (int axis = 0; axis < 3; ++axis)
+        h.viewpoint[axis] = parse_finite(tok[static_cast<std::size_t>(axis) + 1], path,
+                                         static_cast<std::size_t>(h.lines), "VIEWPOINT");
+      check_position(h.viewpoint, path, where, "VIEWPOINT");
+      continue;
+    }
     if (key == "FIELDS" || key == "COLUMNS") {
       for (std::size_t i = 1; i < tok.size(); ++i) {
         PcdField f;
@@ -167,6 +177,11 @@ struct PcdLayout {
       *slot = static_cast<int>(i);
     }
     if (x < 0 || y < 0 || z < 0) throw Error(path, "header", "fields x, y and z are required");
+    const int normal_fields = (nx >= 0) + (ny >= 0) + (nz >= 0);
+    if (normal_fields != 0 && normal_fields != 3)
+      throw Error(path, "header",
+                  "only some of the fields normal_x, normal_y, normal_z (" +
+                      std::to_string(normal_fields) + " of 3); a normal needs all three");
     if (rgb >= 0 && h.fields[static_cast<std::size_t>(rgb)].size != 4) {
       throw Error(path, "header", "field 'rgb' must have SIZE 4");
     }
@@ -364,6 +379,11 @@ PointCloud read_pcd(const std::string& path) {
     case PcdData::kBinaryCompressed:
       read_compressed(in, header, sink);
       break;
+  }
+  // PCL writes VIEWPOINT 0 0 0 ... when it knows no sensor: only a non-zero position is one.
+  if (!header.viewpoint.isZero()) {
+    cloud.sensor_origin = header.viewpoint.cast<float>();
+    cloud.has_sensor_origin = true;
   }
   if (header.height > 1) {
     cloud.width = static_cast<std::uint32_t>(header.width);

@@ -153,6 +153,15 @@ struct FieldMap {
     }
   }
   bool has_normals() const { return prop[kNx] >= 0 && prop[kNy] >= 0 && prop[kNz] >= 0; }
+  /// Throws when some but not all of nx, ny, nz are present: half a normal is no normal, and
+  /// dropping it silently would hide that the file is not what its writer meant.
+  void check_normals(const std::string& path) const {
+    const int present = (prop[kNx] >= 0) + (prop[kNy] >= 0) + (prop[kNz] >= 0);
+    if (present != 0 && present != 3)
+      throw Error(path, "header",
+                  "element 'vertex' has only some of the normal properties nx, ny, nz (" +
+                      std::to_string(present) + " of 3); a normal needs all three");
+  }
   bool has_colors() const { return prop[kR] >= 0 && prop[kG] >= 0 && prop[kB] >= 0; }
   bool has_intensity() const { return prop[kI] >= 0; }
 };
@@ -342,6 +351,7 @@ void read_ply_elements(const std::string& path, PointCloud& cloud,
                                       [](const PlyElement& e) { return e.name == "vertex"; });
   if (vertex_it == header.elements.end()) throw Error(path, "header", "no 'vertex' element");
   const FieldMap map(*vertex_it);
+  map.check_normals(path);
   for (int s : {FieldMap::kX, FieldMap::kY, FieldMap::kZ}) {
     if (map.prop[static_cast<std::size_t>(s)] < 0) {
       throw Error(path, "header", std::string("vertex element lacks property '") + "xyz"[s] + "'");

@@ -5,6 +5,10 @@
 #include <Eigen/Eigenvalues>
 #include <algorithm>
 
+#include "nodes/normals/neighbour_table.h"
+#include "runtime/error.h"
+#include "runtime/parallel.h"
+
 namespace meshflow {
 namespace {
 
@@ -43,77 +47,220 @@ bool box_well_shaped(const std::vector<Eigen::Vector3f>& pts, std::size_t n, con
   return extent.x() >= ratio * extent.y();
 }
 
+// 1 where the cloud's own normal is usable (finite, not zero).
+std::vector<std::uint8_t> usable_input_normals(const PointCloud& cloud) {
+  std::vector<std::uint8_t> usable(cloud.size(), 0);
+  if (!cloud.has_normals()) return usable;
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, cloud.size(), 8192),
+                    [&](const tbb::blocked_range<std::size_t>& r) {
+                      for (std::size_t i = r.begin(); i != r.end(); ++i) {
+                        const Eigen::Vector3f& n = cloud.normals[i];
+                        usable[i] = n.allFinite() && n.squaredNorm() > 1e-12f ? 1 : 0;
+                      }
+                    });
+  return usable;
+}
+
+// Unoriented plane-fit normals of the points with wanted[i] (all when `wanted` is empty),
+// from the table's first kn neighbours (more under the adaptive criterion); zero where fewer
+// than 3 neighbours exist.
+std::vector<Eigen::Vector3f> plane_fit_normals(const PointCloud& cloud, const SpatialIndex& index,
+                                               const NeighbourTable& table,
+                                               const std::vector<std::uint8_t>& wanted,
+                                               const NormalsConfig& config) {
+  const std::size_t kn = static_cast<std::size_t>(std::max(config.kn, 3));
+  const std::size_t max_k =
+      std::max<std::size_t>(static_cast<std::size_t>(std::max(config.adaptive_max_k, 3)), kn);
+  std::vector<Eigen::Vector3f> normals(cloud.size(), Eigen::Vector3f::Zero());
+  tbb::parallel_for(
+      tbb::blocked_range<std::size_t>(0, cloud.size(), 512),
+      [&](const tbb::blocked_range<std::size_t>& r) {
+        std::vector<std::uint32_t> idx(max_k);
+        std::vector<float> d2(max_k);
+        std::vector<Eigen::Vector3f> pts(max_k);
+        for (std::size_t i = r.begin(); i != r.end(); ++i) {
+          if (!wanted.empty() && !wanted[i]) continue;
+          std::size_t k = std::min<std::size_t>(kn, table.counts[i]);
+          if (k < 3) continue;
+          for (std::size_t j = 0; j < k; ++j) pts[j] = cloud.positions[table.row(i)[j]];
+          LocalFrame frame = principal_frame(pts, k);
+          while (config.adaptive_k && !box_well_shaped(pts, k, frame, config.adaptive_ratio) &&
+                 k < max_k && k < index.size()) {
+            k = index.knn(cloud.positions[i], std::min(2 * k, max_k), idx.data(), d2.data());
+            for (std::size_t j = 0; j < k; ++j) pts[j] = cloud.positions[idx[j]];
+            frame = principal_frame(pts, k);
+          }
+          normals[i] = frame.axes.col(0).normalized().cast<float>();
+        }
+      });
+  return normals;
+}
+
+// Turns each normal towards (sign +1) or away from (-1) `viewpoint`; zero normals become the
+// direction to it.
+void orient_to_viewpoint(const PointCloud& cloud, const Eigen::Vector3f& viewpoint, float sign,
+                         std::vector<Eigen::Vector3f>& normals) {
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, normals.size(), 8192),
+                    [&](const tbb::blocked_range<std::size_t>& r) {
+                      for (std::size_t i = r.begin(); i != r.end(); ++i) {
+                        const Eigen::Vector3f to_view = viewpoint - cloud.positions[i];
+                        Eigen::Vector3f& n = normals[i];
+                        if (n.isZero()) n = sign * to_view.normalized();
+                        if (sign * n.dot(to_view) < 0.0f) n = -n;
+                      }
+                    });
+}
+
+// Normal interpolation (thesis ki): each point with `smooth[i]` (all when empty) takes the
+// normalised sum of its ki nearest neighbours' oriented normals.
+std::vector<Eigen::Vector3f> interpolate(const std::vector<Eigen::Vector3f>& normals,
+                                         const NeighbourTable& table, std::size_t ki,
+                                         const std::vector<std::uint8_t>& smooth) {
+  std::vector<Eigen::Vector3f> smoothed(normals.size());
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, normals.size(), 1024),
+                    [&](const tbb::blocked_range<std::size_t>& r) {
+                      for (std::size_t i = r.begin(); i != r.end(); ++i) {
+                        if (!smooth.empty() && !smooth[i]) {
+                          smoothed[i] = normals[i];
+                          continue;
+                        }
+                        Eigen::Vector3f sum = Eigen::Vector3f::Zero();
+                        const std::size_t k = std::min<std::size_t>(ki, table.counts[i]);
+                        for (std::size_t j = 0; j < k; ++j) sum += normals[table.row(i)[j]];
+                        const float len = sum.norm();
+                        smoothed[i] = len > 0.0f ? Eigen::Vector3f(sum / len) : normals[i];
+                      }
+                    });
+  return smoothed;
+}
+
+NormalSource resolve_source(const PointCloud& cloud, const std::vector<std::uint8_t>& usable,
+                            NormalSource wanted) {
+  const bool any_usable = std::find(usable.begin(), usable.end(), 1) != usable.end();
+  if (wanted == NormalSource::kInput && !any_usable)
+    throw Error("normals", "input",
+                cloud.has_normals() ? "every input normal is zero or not finite"
+                                    : "the cloud carries no normals (estimate them instead)");
+  if (wanted == NormalSource::kAuto)
+    return any_usable ? NormalSource::kInput : NormalSource::kEstimate;
+  return wanted;
+}
+
 }  // namespace
+
+NormalOrientation resolve_orientation(const PointCloud& cloud) {
+  if (cloud.has_normals()) return NormalOrientation::kInput;
+  if (cloud.has_sensor_origin || cloud.is_organized()) return NormalOrientation::kTowardSensor;
+  return NormalOrientation::kPropagate;
+}
+
+const char* orientation_name(NormalOrientation orientation) {
+  switch (orientation) {
+    case NormalOrientation::kAuto:
+      return "auto";
+    case NormalOrientation::kTowardSensor:
+      return "sensor";
+    case NormalOrientation::kTowardViewpoint:
+      return "viewpoint";
+    case NormalOrientation::kAwayFromViewpoint:
+      return "away-from-viewpoint";
+    case NormalOrientation::kPropagate:
+      return "propagate";
+    case NormalOrientation::kInput:
+      return "input";
+  }
+  return "?";
+}
 
 Eigen::Vector3f fit_plane_normal(const std::vector<Eigen::Vector3f>& points) {
   if (points.size() < 3) return Eigen::Vector3f::Zero();
   return principal_frame(points, points.size()).axes.col(0).normalized().cast<float>();
 }
 
-std::vector<Eigen::Vector3f> estimate_normals(const PointCloud& cloud, const SpatialIndex& index,
-                                              const NormalsConfig& config) {
+ComputedNormals compute_normals(const PointCloud& cloud, const SpatialIndex& index,
+                                const NormalsConfig& config) {
   const std::size_t n = cloud.size();
+  const std::vector<std::uint8_t> usable = usable_input_normals(cloud);
+  ComputedNormals out;
+  NormalsReport& report = out.report;
+  report.source = resolve_source(cloud, usable, config.source);
+
+  // Which points get a plane fit: all, or only those without a usable input normal.
+  std::vector<std::uint8_t> estimate;  // empty = all
+  if (report.source == NormalSource::kInput) {
+    estimate.resize(n);
+    for (std::size_t i = 0; i < n; ++i) estimate[i] = usable[i] ? 0 : 1;
+    report.estimated = static_cast<std::size_t>(std::count(estimate.begin(), estimate.end(), 1));
+    out.normals.resize(n);
+    tbb::parallel_for(std::size_t{0}, n, [&](std::size_t i) {
+      out.normals[i] = usable[i] ? cloud.normals[i].normalized() : Eigen::Vector3f::Zero();
+    });
+    if (report.estimated == 0) return out;
+  } else {
+    report.estimated = n;
+  }
+
+  NormalOrientation orientation = config.orientation;
+  if (orientation == NormalOrientation::kAuto) orientation = resolve_orientation(cloud);
+  if (orientation == NormalOrientation::kInput && report.source == NormalSource::kEstimate &&
+      std::find(usable.begin(), usable.end(), 1) == usable.end())
+    orientation = cloud.has_sensor_origin || cloud.is_organized() ? NormalOrientation::kTowardSensor
+                                                                  : NormalOrientation::kPropagate;
+  // Points estimated among input normals always take their neighbours' orientation.
+  if (report.source == NormalSource::kInput) orientation = NormalOrientation::kInput;
+  report.orientation = orientation;
+
   const std::size_t kn = static_cast<std::size_t>(std::max(config.kn, 3));
   const std::size_t ki = static_cast<std::size_t>(std::max(config.ki, 1));
-  const std::size_t table_k = std::max(kn, ki);
-  const Eigen::Vector3f viewpoint =
-      config.orientation == NormalOrientation::kTowardSensor && cloud.has_sensor_origin
-          ? cloud.sensor_origin
-          : config.viewpoint;
-  const float sign = config.orientation == NormalOrientation::kAwayFromViewpoint ? -1.0f : 1.0f;
+  const NeighbourTable table = build_neighbour_table(cloud.positions, index, std::max(kn, ki));
+  std::vector<Eigen::Vector3f> fitted = plane_fit_normals(cloud, index, table, estimate, config);
 
-  // Pass 1: neighbour table (reused by interpolation) and oriented plane normals.
-  std::vector<std::uint32_t> table(n * table_k);
-  std::vector<std::uint32_t> found_count(n);
-  std::vector<Eigen::Vector3f> normals(n);
-  tbb::parallel_for(
-      tbb::blocked_range<std::size_t>(0, n, 512), [&](const tbb::blocked_range<std::size_t>& r) {
-        std::vector<std::uint32_t> idx(static_cast<std::size_t>(
-            std::max<int>(config.adaptive_max_k, static_cast<int>(table_k))));
-        std::vector<float> d2(idx.size());
-        std::vector<Eigen::Vector3f> pts(idx.size());
-        for (std::size_t i = r.begin(); i != r.end(); ++i) {
-          const Eigen::Vector3f& p = cloud.positions[i];
-          std::size_t found = index.knn(p, table_k, idx.data(), d2.data());
-          std::copy(idx.begin(), idx.begin() + static_cast<std::ptrdiff_t>(found),
-                    table.begin() + static_cast<std::ptrdiff_t>(i * table_k));
-          found_count[i] = static_cast<std::uint32_t>(found);
-          std::size_t k = std::min(kn, found);
-          for (std::size_t j = 0; j < k; ++j) pts[j] = cloud.positions[idx[j]];
-          Eigen::Vector3f normal = Eigen::Vector3f::Zero();
-          if (k >= 3) {
-            LocalFrame frame = principal_frame(pts, k);
-            while (config.adaptive_k && !box_well_shaped(pts, k, frame, config.adaptive_ratio) &&
-                   k < static_cast<std::size_t>(config.adaptive_max_k) && k < index.size()) {
-              const std::size_t want =
-                  std::min<std::size_t>(2 * k, static_cast<std::size_t>(config.adaptive_max_k));
-              k = index.knn(p, want, idx.data(), d2.data());
-              for (std::size_t j = 0; j < k; ++j) pts[j] = cloud.positions[idx[j]];
-              frame = principal_frame(pts, k);
-            }
-            normal = frame.axes.col(0).normalized().cast<float>();
-          }
-          const Eigen::Vector3f to_view = viewpoint - p;
-          if (normal.isZero()) normal = to_view.normalized();
-          if (sign * normal.dot(to_view) < 0.0f) normal = -normal;
-          normals[i] = normal;
+  switch (orientation) {
+    case NormalOrientation::kAuto:  // resolved above
+    case NormalOrientation::kTowardSensor:
+      orient_to_viewpoint(cloud, cloud.has_sensor_origin ? cloud.sensor_origin : config.viewpoint,
+                          1.0f, fitted);
+      break;
+    case NormalOrientation::kTowardViewpoint:
+      orient_to_viewpoint(cloud, config.viewpoint, 1.0f, fitted);
+      break;
+    case NormalOrientation::kAwayFromViewpoint:
+      orient_to_viewpoint(cloud, config.viewpoint, -1.0f, fitted);
+      break;
+    case NormalOrientation::kPropagate:
+    case NormalOrientation::kInput: {
+      // Fixed points: those with a usable input normal. Estimated ones take its sign; when the
+      // source is the input, the input normal itself.
+      std::vector<std::uint8_t> fixed;
+      if (orientation == NormalOrientation::kInput) {
+        fixed = usable;
+        for (std::size_t i = 0; i < n; ++i) {
+          if (!usable[i]) continue;
+          if (report.source == NormalSource::kInput)
+            fitted[i] = out.normals[i];
+          else if (fitted[i].dot(cloud.normals[i]) < 0.0f)
+            fitted[i] = -fitted[i];
         }
-      });
-  if (ki <= 1) return normals;
+      }
+      for (Eigen::Vector3f& v : fitted)
+        if (v.isZero()) v = Eigen::Vector3f::UnitX();  // fewer than 3 neighbours
+      OrientedNormals oriented =
+          orient_by_propagation(cloud.positions, fitted, table, fixed, config.propagation);
+      report.components = oriented.components;
+      report.flipped_by_vote = oriented.flipped_by_vote;
+      fitted = std::move(oriented.normals);
+      break;
+    }
+  }
+  out.normals = ki <= 1 ? std::move(fitted) : interpolate(fitted, table, ki, estimate);
+  return out;
+}
 
-  // Pass 2: interpolation over the ki nearest neighbours' oriented normals.
-  std::vector<Eigen::Vector3f> smoothed(n);
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 1024),
-                    [&](const tbb::blocked_range<std::size_t>& r) {
-                      for (std::size_t i = r.begin(); i != r.end(); ++i) {
-                        Eigen::Vector3f sum = Eigen::Vector3f::Zero();
-                        const std::size_t k = std::min<std::size_t>(ki, found_count[i]);
-                        for (std::size_t j = 0; j < k; ++j) sum += normals[table[i * table_k + j]];
-                        const float len = sum.norm();
-                        smoothed[i] = len > 0.0f ? Eigen::Vector3f(sum / len) : normals[i];
-                      }
-                    });
-  return smoothed;
+std::vector<Eigen::Vector3f> estimate_normals(const PointCloud& cloud, const SpatialIndex& index,
+                                              const NormalsConfig& config) {
+  NormalsConfig c = config;
+  c.source = NormalSource::kEstimate;
+  return compute_normals(cloud, index, c).normals;
 }
 
 }  // namespace meshflow

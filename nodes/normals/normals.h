@@ -1,22 +1,42 @@
 #pragma once
-// Normal estimation by k-nearest-neighbour PCA plane fits (Hoppe et al. 1992), oriented towards
-// the sensor and smoothed by interpolation over neighbours (Wiemann 2013, LVR).
+// Point normals for the Hoppe distance: taken from the input where it has them, otherwise
+// estimated by k-nearest-neighbour PCA plane fits (Hoppe et al. 1992), oriented (towards the
+// sensor, or consistently by propagation where there is none) and smoothed by interpolation
+// over neighbours (Wiemann 2013, LVR).
 
 #include <Eigen/Core>
 #include <vector>
 
+#include "nodes/normals/orient_normals.h"
 #include "nodes/normals/spatial_index.h"
 #include "runtime/point_cloud.h"
 
 namespace meshflow {
 
+/// How estimated normals are turned (the sign of a plane fit is arbitrary).
 enum class NormalOrientation {
-  kTowardSensor,      ///< towards cloud.sensor_origin (falls back to `viewpoint` without one)
-  kTowardViewpoint,   ///< towards NormalsConfig::viewpoint
-  kAwayFromViewpoint  ///< away from `viewpoint` (e.g. the centre of a closed object)
+  /// The signs of the cloud's own normals where it has them (kInput); else towards the sensor
+  /// where the cloud carries one (a scan pose, a PCD VIEWPOINT, an organized depth-camera
+  /// cloud: kTowardSensor); else consistent propagation (kPropagate).
+  kAuto,
+  kTowardSensor,       ///< towards cloud.sensor_origin (the origin when it has none)
+  kTowardViewpoint,    ///< towards NormalsConfig::viewpoint
+  kAwayFromViewpoint,  ///< away from `viewpoint` (e.g. the centre of a closed object)
+  kPropagate,          ///< orient_by_propagation(): no sensor needed (objects, CAD samples)
+  /// Each estimated normal takes the sign of the cloud's normal at that point; points whose
+  /// normal is missing (zero, NaN) are reached by propagation from the others.
+  kInput
+};
+
+/// Where normals come from.
+enum class NormalSource {
+  kAuto,     ///< the cloud's own normals when it has any (kInput), else kEstimate
+  kInput,    ///< the cloud's normals, normalised; missing ones (zero, NaN) estimated
+  kEstimate  ///< plane fits for every point, whatever the cloud carries
 };
 
 struct NormalsConfig {
+  NormalSource source = NormalSource::kAuto;
   int kn = 10;  ///< neighbours of the plane fit (thesis default kn = 10)
   int ki = 10;  ///< neighbours averaged in normal interpolation; 0 or 1 = off (thesis ki = 10)
   /// Thesis bounding-box criterion: when the kn neighbours' bounding box (taken in their
@@ -26,15 +46,47 @@ struct NormalsConfig {
   bool adaptive_k = false;
   float adaptive_ratio = 0.2f;
   int adaptive_max_k = 80;
-  NormalOrientation orientation = NormalOrientation::kTowardSensor;
+  NormalOrientation orientation = NormalOrientation::kAuto;
   Eigen::Vector3f viewpoint = Eigen::Vector3f::Zero();  ///< metres, world frame
+  PropagationConfig propagation;                        ///< kPropagate / kInput
 };
 
-/// Unit normals for every point of `cloud` (finite positions required). `index` must be built
-/// over cloud.positions. Output independent of the thread count. Parallel over points;
-/// O(n (kn + ki) log n). Points with fewer than 3 neighbours get the direction to the viewpoint.
+/// What compute_normals() did.
+struct NormalsReport {
+  NormalSource source = NormalSource::kEstimate;  ///< resolved: kInput or kEstimate
+  /// Resolved orientation of the estimated normals (kAuto when none was estimated).
+  NormalOrientation orientation = NormalOrientation::kAuto;
+  std::size_t estimated = 0;        ///< points whose normal was estimated (0: all from the input)
+  std::size_t components = 0;       ///< propagation: components of the neighbour graph
+  std::size_t flipped_by_vote = 0;  ///< propagation: normals turned by the final vote
+};
+
+struct ComputedNormals {
+  std::vector<Eigen::Vector3f> normals;  ///< one unit normal per point
+  NormalsReport report;
+};
+
+/// Unit normals for every point of `cloud` (finite positions required) as `config` says (see
+/// NormalSource and NormalOrientation; kAuto resolves from the cloud: its normals, its sensor).
+/// `index` must be built over cloud.positions. Input normals are used as they are (normalised);
+/// a point whose input normal is zero or not finite gets an estimated one, turned to agree with
+/// its neighbours'. Output independent of the thread count; parallel over points;
+/// O(n (kn + ki) log n), plus O(n k log n) for propagation.
+ComputedNormals compute_normals(const PointCloud& cloud, const SpatialIndex& index,
+                                const NormalsConfig& config);
+
+/// compute_normals() with plane fits for every point (NormalSource::kEstimate), normals only.
+/// Points with fewer than 3 neighbours get the direction to the viewpoint (sensor orientations)
+/// or an arbitrary axis before propagation.
 std::vector<Eigen::Vector3f> estimate_normals(const PointCloud& cloud, const SpatialIndex& index,
                                               const NormalsConfig& config);
+
+/// The orientation kAuto resolves to for `cloud` (never kAuto): kInput when it has normals,
+/// kTowardSensor when it carries a sensor or is organized, else kPropagate. O(1).
+NormalOrientation resolve_orientation(const PointCloud& cloud);
+
+/// "auto", "sensor", "viewpoint", "away-from-viewpoint", "propagate" or "input".
+const char* orientation_name(NormalOrientation orientation);
 
 /// Normal of the least-squares plane through `points` (smallest-eigenvalue eigenvector of the
 /// covariance), unit length, arbitrary sign; zero vector for fewer than 3 points.

@@ -4,6 +4,7 @@
 
 #include <Eigen/Geometry>
 #include <algorithm>
+#include <cmath>
 #include <limits>
 #include <numeric>
 #include <vector>
@@ -135,6 +136,27 @@ std::vector<Triangle> triangulate_loop(const std::vector<std::uint32_t>& loop,
   return triangles;
 }
 
+// Area of each component (indexed by its label, as vertex_components() gives per vertex), m^2.
+std::vector<double> component_areas(const TriangleMesh& mesh,
+                                    const std::vector<std::uint32_t>& component) {
+  std::vector<double> area(mesh.vertices.size(), 0.0);
+  for (const Triangle& t : mesh.triangles) {
+    const Eigen::Vector3f& a = mesh.vertices[t[0]];
+    area[component[t[0]]] +=
+        0.5 * static_cast<double>((mesh.vertices[t[1]] - a).cross(mesh.vertices[t[2]] - a).norm());
+  }
+  return area;
+}
+
+// Whether a loop of `length` metres can be the outline of a surface of `area` m^2. A disk's
+// outline satisfies length^2 = 4 pi area, and the outline of any scanned sheet is longer still
+// (its border is ragged); a loop far shorter than that cannot bound the component, which is then
+// a closed surface with a hole (e.g. a closed object's mesh with a gap at a sharp edge).
+bool could_be_outline(double length, double area) {
+  constexpr double kShortestOutline = 0.05;  // of the disk's length^2 / area
+  return length * length >= kShortestOutline * 4.0 * M_PI * area;
+}
+
 }  // namespace
 
 TriangleMesh fill_holes(const TriangleMesh& mesh, const HoleFillingConfig& config,
@@ -160,8 +182,11 @@ TriangleMesh fill_holes(const TriangleMesh& mesh, const HoleFillingConfig& confi
       std::size_t& best = longest[component[loops[l].front()]];
       if (best == SIZE_MAX || lengths[l] > lengths[best]) best = l;
     }
-    for (std::size_t best : longest)
-      if (best != SIZE_MAX) outer[best] = 1;
+    const std::vector<double> area = component_areas(mesh, component);
+    for (std::size_t c = 0; c < longest.size(); ++c) {
+      const std::size_t best = longest[c];
+      if (best != SIZE_MAX && could_be_outline(lengths[best], area[c])) outer[best] = 1;
+    }
   }
 
   std::vector<const std::vector<std::uint32_t>*> holes;

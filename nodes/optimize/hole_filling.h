@@ -1,7 +1,8 @@
 #pragma once
 // Hole filling (the reconstruction thesis's optimisation stage): border loops of up to a given
 // number of edges are closed by a minimum-weight triangulation of the loop; the outer border of
-// every connected component (its longest loop) always stays open, so a scan keeps its outline.
+// every connected component (its longest loop) stays open, so a scan keeps its outline, unless
+// the loop is far too short to bound the component (a closed object's surface with a hole).
 
 #include <cstddef>
 
@@ -13,8 +14,10 @@ struct HoleFillingConfig {
   /// Loops with more border edges stay open (at 5 cm voxels, 30 edges is a hole of about 0.5 m
   /// across: a gap between scan lines, an occluded patch behind a small object).
   std::size_t max_edges = 30;
-  /// The longest loop of each connected component is its outer border and is never closed. Off:
-  /// every loop up to max_edges is a hole (closed objects with several holes).
+  /// The longest loop of each connected component is its outer border and is never closed,
+  /// unless its squared length is below 5 % of 4 pi x the component's area (a disk's outline
+  /// has 100 %): then the component is a closed surface and the loop a hole. Off: every loop up
+  /// to max_edges is a hole.
   bool keep_outer_border = true;
 };
 

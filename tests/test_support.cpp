@@ -12,6 +12,7 @@
 #include <random>
 
 #include "nodes/normals/organized_normals.h"
+#include "nodes/synthetic/closed_objects.h"
 
 namespace meshflow::test {
 
@@ -178,6 +179,12 @@ ErrorStats vertex_errors(const TriangleMesh& mesh,
   }
   if (!mesh.vertices.empty()) s.mean /= static_cast<double>(mesh.vertices.size());
   return s;
+}
+
+std::string closed_object_test_name(int index) {
+  std::string name = synthetic::closed_test_objects()[static_cast<std::size_t>(index)].name;
+  std::replace(name.begin(), name.end(), '-', '_');
+  return name;
 }
 
 }  // namespace meshflow::test

@@ -63,6 +63,9 @@ TriangleMesh messy_mesh(std::uint32_t n, std::uint32_t seed);
 /// (back_project) in the camera frame, whatever its pose; NaN where a pixel has no point.
 PointCloud camera_frame_cloud(const DepthFrame& frame);
 
+/// The name of synthetic::closed_test_objects()[index] as a test name ("l_shape").
+std::string closed_object_test_name(int index);
+
 struct ErrorStats {
   double mean = 0.0, max = 0.0;
 };

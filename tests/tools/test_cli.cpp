@@ -40,7 +40,7 @@ TEST(Cli, BrokenInputsFailWithOneLineNamingTheFileAndNoOutput) {
        {"truncated_binary.ply", "count_too_large.ply", "count_too_small.ply", "non_numeric.ply",
         "empty.ply", "unknown_type.ply", "huge_coordinates.ply", "nan_rows.xyz", "overflow.xyz",
         "bad_columns.xyz", "empty.pcd", "truncated.pcd", "inconsistent_header.pcd", "truncated.3d",
-        "not_a_ply.ply"}) {
+        "not_a_ply.ply", "partial_normals.ply", "partial_normals.pcd"}) {
     const std::string input = test::fixture(std::string("bad/") + name);
     const std::string output = out_dir + "/" + name + ".ply";
     const CliRun r = run_cli("reconstruct " + input + " -o " + output);

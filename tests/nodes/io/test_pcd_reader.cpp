@@ -110,6 +110,54 @@ TEST(PcdReader, BinaryCompressedFieldMajor) {
   expect_organized(read_pcd(path));
 }
 
+TEST(PcdReader, NormalsInEveryEncodingAndNaNNormalsKept) {
+  // Two points with normal_x normal_y normal_z; the second normal NaN (the normals stage
+  // estimates it).
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  const float values[2][6] = {{1, 2, 3, 0, 0, 1}, {4, 5, 6, nan, nan, nan}};
+  const std::string header =
+      "VERSION 0.7\nFIELDS x y z normal_x normal_y normal_z\nSIZE 4 4 4 4 4 4\n"
+      "TYPE F F F F F F\nCOUNT 1 1 1 1 1 1\nWIDTH 2\nHEIGHT 1\nPOINTS 2\nDATA ";
+  std::string rows, columns;
+  for (const auto& row : values) rows.append(reinterpret_cast<const char*>(row), 24);
+  for (int f = 0; f < 6; ++f)
+    for (const auto& row : values) columns.append(reinterpret_cast<const char*>(&row[f]), 4);
+  std::string packed(columns.size() * 2 + 16, '\0');
+  const unsigned n = lzf_compress(columns.data(), static_cast<unsigned>(columns.size()),
+                                  packed.data(), static_cast<unsigned>(packed.size()));
+  ASSERT_GT(n, 0u);
+  const std::uint32_t sizes[2] = {n, static_cast<std::uint32_t>(columns.size())};
+  const std::string files[] = {
+      header + "ascii\n1 2 3 0 0 1\n4 5 6 nan nan nan\n", header + "binary\n" + rows,
+      header + "binary_compressed\n" + std::string(reinterpret_cast<const char*>(sizes), 8) +
+          packed.substr(0, n)};
+  for (const std::string& file : files) {
+    const std::string path = test::temp_dir() + "/n.pcd";
+    test::write_file(path, file);
+    const PointCloud c = read_pcd(path);
+    ASSERT_EQ(c.normals.size(), 2u);
+    EXPECT_EQ(c.normals[0], Eigen::Vector3f(0, 0, 1));
+    EXPECT_TRUE(std::isnan(c.normals[1].x()));
+  }
+}
+
+TEST(PcdReader, ANonZeroViewpointIsTheSensorPosition) {
+  const std::string path = test::temp_dir() + "/v.pcd";
+  auto with_viewpoint = [&](const std::string& viewpoint) {
+    test::write_file(path,
+                     "VERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\n"
+                     "WIDTH 1\nHEIGHT 1\nVIEWPOINT " +
+                         viewpoint + "\nPOINTS 1\nDATA ascii\n1 2 3\n");
+    return read_pcd(path);
+  };
+  const PointCloud seen = with_viewpoint("0.5 -1 2 1 0 0 0");
+  EXPECT_TRUE(seen.has_sensor_origin);
+  EXPECT_EQ(seen.sensor_origin, Eigen::Vector3f(0.5f, -1.0f, 2.0f));
+  EXPECT_FALSE(with_viewpoint("0 0 0 0 1 0 0").has_sensor_origin);  // PCL's "none"
+  EXPECT_THROW(with_viewpoint("0 0 nan 1 0 0 0"), Error);
+  EXPECT_THROW(with_viewpoint("0 0 0"), Error);
+}
+
 // Headers that declare more data than the file holds are refused before the reader allocates
 // for them: a lying header must not exhaust memory (under ASan such an allocation aborts).
 TEST(PcdReader, LyingHeadersAreRefusedBeforeAllocating) {

@@ -6,6 +6,7 @@
 #include <random>
 
 #include "nodes/synthetic/shapes.h"
+#include "runtime/error.h"
 #include "runtime/threads.h"
 
 namespace meshflow {
@@ -85,6 +86,70 @@ TEST(Normals, SameResultWithOneAndTwoThreads) {
     two = estimate_normals(c, index, NormalsConfig{});
   }
   EXPECT_EQ(one, two);
+}
+
+TEST(Normals, InputNormalsAreUsedAndMissingOnesEstimatedFromTheirNeighbours) {
+  PointCloud c = synthetic::sample_surface(synthetic::Sphere{}, 0.05f, 0.0f, 4);
+  c.normals.resize(c.size());
+  std::size_t missing = 0;
+  for (std::size_t i = 0; i < c.size(); ++i) {
+    const Eigen::Vector3f truth = c.positions[i].normalized();
+    if (i % 7 == 0) {  // missing: NaN, zero
+      c.normals[i] = i % 2 ? Eigen::Vector3f::Constant(NAN) : Eigen::Vector3f::Zero();
+      ++missing;
+    } else {
+      c.normals[i] = 3.0f * truth;  // not unit length: normalised
+    }
+  }
+  const KdTreeIndex index(c.positions);
+  const ComputedNormals computed = compute_normals(c, index, NormalsConfig{});
+  EXPECT_EQ(computed.report.source, NormalSource::kInput);
+  EXPECT_EQ(computed.report.estimated, missing);
+  for (std::size_t i = 0; i < c.size(); ++i) {
+    const Eigen::Vector3f truth = c.positions[i].normalized();
+    ASSERT_NEAR(computed.normals[i].norm(), 1.0f, 1e-5f);
+    if (i % 7 == 0)
+      EXPECT_GT(computed.normals[i].dot(truth), 0.95f) << "estimated point " << i;
+    else
+      EXPECT_NEAR(computed.normals[i].dot(truth), 1.0f, 1e-5f) << "input point " << i;
+  }
+}
+
+TEST(Normals, SourceAndOrientationChoices) {
+  PointCloud c = synthetic::sample_surface(synthetic::Sphere{}, 0.1f, 0.0f, 5);
+  const KdTreeIndex index(c.positions);
+  NormalsConfig input_only;
+  input_only.source = NormalSource::kInput;
+  EXPECT_THROW(compute_normals(c, index, input_only), Error);  // the cloud has none
+  EXPECT_EQ(resolve_orientation(c), NormalOrientation::kPropagate);
+  c.has_sensor_origin = true;
+  EXPECT_EQ(resolve_orientation(c), NormalOrientation::kTowardSensor);
+  c.has_sensor_origin = false;
+  c.normals.assign(c.size(), Eigen::Vector3f::Constant(NAN));
+  EXPECT_THROW(compute_normals(c, index, input_only), Error);  // none usable
+  // Estimation with the input's signs: every input normal NaN, so propagation decides.
+  NormalsConfig estimate;
+  estimate.source = NormalSource::kEstimate;
+  const ComputedNormals computed = compute_normals(c, index, estimate);
+  EXPECT_EQ(computed.report.orientation, NormalOrientation::kPropagate);
+  for (std::size_t i = 0; i < c.size(); ++i)
+    EXPECT_GT(computed.normals[i].dot(c.positions[i]), 0.0f);
+}
+
+TEST(Normals, CollinearPointsGetFiniteUnitNormals) {
+  // No plane is defined; any direction perpendicular to the line is a documented fallback.
+  PointCloud c;
+  for (int i = 0; i < 50; ++i) c.positions.emplace_back(0.01f * i, 0.0f, 0.0f);
+  const KdTreeIndex index(c.positions);
+  for (NormalOrientation o : {NormalOrientation::kPropagate, NormalOrientation::kTowardSensor}) {
+    NormalsConfig config;
+    config.orientation = o;
+    for (const Eigen::Vector3f& n : compute_normals(c, index, config).normals) {
+      ASSERT_TRUE(n.allFinite());
+      EXPECT_NEAR(n.norm(), 1.0f, 1e-4f);
+      EXPECT_NEAR(n.x(), 0.0f, 1e-3f);
+    }
+  }
 }
 
 }  // namespace

@@ -7,6 +7,7 @@
 
 #include "nodes/extract/extract_surface.h"
 #include "nodes/filter/organized_depth.h"
+#include "nodes/filter/spatial_order.h"
 #include "nodes/normals/organized_normals.h"
 #include "runtime/error.h"
 
@@ -75,6 +76,8 @@ std::uint64_t filter_depth_image(Frame& f, const ReconstructionConfig& c) {
 
 std::uint64_t index(Frame& f, const ReconstructionConfig&) {
   if (f.depth) return 0;  // depth frames need no search: image normals, projective distance
+  // Neighbours in space become neighbours in memory for every pass that follows.
+  if (!f.cloud.is_organized()) f.cloud = in_morton_order(f.cloud);
   f.index = std::make_shared<KdTreeIndex>(f.cloud.positions);
   return f.cloud.size();
 }

@@ -12,8 +12,9 @@ namespace meshflow::stages {
 
 /// Loads the frame; an organized cloud that fits a pinhole camera becomes its depth image
 /// (c.organized_as_depth, depth_frame_from_organized()).
-std::uint64_t read(Frame& f, const ReconstructionConfig& c);      ///< points / pixels read
-std::uint64_t filter(Frame& f, const ReconstructionConfig& c);    ///< points kept
+std::uint64_t read(Frame& f, const ReconstructionConfig& c);    ///< points / pixels read
+std::uint64_t filter(Frame& f, const ReconstructionConfig& c);  ///< points kept
+/// Puts an unorganized cloud in Morton order (in_morton_order()) and builds the kd-tree.
 std::uint64_t index(Frame& f, const ReconstructionConfig& c);     ///< points indexed (kd-tree)
 std::uint64_t normals(Frame& f, const ReconstructionConfig& c);   ///< normals estimated
 std::uint64_t voxelize(Frame& f, const ReconstructionConfig& c);  ///< cells

@@ -2,171 +2,243 @@
 
 #include <tbb/parallel_for.h>
 
-#include <Eigen/Eigenvalues>
-
 #include <algorithm>
 #include <cassert>
 #include <cmath>
 #include <limits>
+#include <numeric>
 
-#include "runtime/disjoint_sets.h"
 #include "runtime/parallel.h"
 #include "runtime/radix_sort.h"
 
 namespace meshflow {
 namespace {
 
-// A directed edge of the neighbour graph is named by its place in the table, code = i * k + slot
-// (point i's slot-th neighbour). Its agreement n_i . n_j is computed once, with the unoriented
-// normals; once signs s_i are chosen, the oriented agreement is s_i s_j times it.
+// Signs (+1, -1) chosen for the unoriented normals.
 using Signs = std::vector<std::int8_t>;
 
 // Each normal replaced by the principal axis of its neighbours' normals' outer products (a
-// sign-free average over the table row), turned towards the original. Noisy plane fits
-// disagree by tens of degrees between neighbours, and a tree built on them sends wrong signs
-// across whole regions (measured: 6 % of normals wrong on a noisy box with a hole, 0.2 % after
-// this); the averaged axes vary smoothly. Parallel over points; O(n k).
+// sign-free average over the table row), found by two power iterations from the normal itself,
+// which is close to that axis. Noisy plane fits disagree by tens of degrees between neighbours,
+// and a tree built on them sends wrong signs across whole regions (measured: 6 % of normals
+// wrong on a noisy box with a hole, 0.2 % after this); the averaged axes vary smoothly.
+// Parallel over points; O(n k).
 std::vector<Eigen::Vector3f> tensor_smoothed(const std::vector<Eigen::Vector3f>& n,
                                              const NeighbourTable& t) {
   std::vector<Eigen::Vector3f> out(n.size());
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n.size(), 1024),
                     [&](const tbb::blocked_range<std::size_t>& r) {
-                      Eigen::SelfAdjointEigenSolver<Eigen::Matrix3f> solver;
                       for (std::size_t i = r.begin(); i != r.end(); ++i) {
                         Eigen::Matrix3f tensor = Eigen::Matrix3f::Zero();
                         for (std::uint32_t j = 0; j < t.counts[i]; ++j) {
                           const Eigen::Vector3f& v = n[t.row(i)[j]];
                           tensor.noalias() += v * v.transpose();
                         }
-                        solver.computeDirect(tensor);
-                        const Eigen::Vector3f axis = solver.eigenvectors().col(2);
-                        out[i] = axis.dot(n[i]) < 0.0f ? Eigen::Vector3f(-axis) : axis;
+                        Eigen::Vector3f axis = n[i];
+                        for (int iteration = 0; iteration < 2; ++iteration) {
+                          const Eigen::Vector3f next = tensor * axis;
+                          const float length = next.norm();
+                          if (!(length > 0.0f)) break;
+                          axis = next / length;
+                        }
+                        out[i] = axis;  // T n_i . n_i >= 0: still on n_i's side
                       }
                     });
   return out;
 }
 
-// The raw agreement of every table entry; NaN for a point's entry of itself and unused slots.
-std::vector<float> raw_agreements(const std::vector<Eigen::Vector3f>& n, const NeighbourTable& t) {
-  std::vector<float> value(t.indices.size(), std::numeric_limits<float>::quiet_NaN());
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, t.size(), 2048),
-                    [&](const tbb::blocked_range<std::size_t>& r) {
-                      for (std::size_t i = r.begin(); i != r.end(); ++i) {
-                        const std::uint32_t* row = t.row(i);
-                        float* out = value.data() + i * t.k;
-                        const std::uint32_t found = t.counts[i];
-                        for (std::uint32_t j = 0; j < found; ++j)
-                          if (row[j] != i) out[j] = n[i].dot(n[row[j]]);
-                      }
-                    });
-  return value;
-}
-
-// Sort keys: the edge's weight 1 - |agreement| quantised to one radix digit above its code, so
-// that a single stable counting pass orders the edges by weight, ties by code. Entries without
-// an edge get the top digit value and sort last. Both directions of an edge are listed; Kruskal
-// skips the second as it skips any edge inside a tree.
-constexpr int kWeightShift = 53;  // codes below 2^53; the digit takes bits 53..63
-constexpr std::uint64_t kCodeMask = (std::uint64_t{1} << kWeightShift) - 1;
+// Sort keys of the neighbour graph's edges, one per table entry (i, slot), in table order:
+//   bits 53..63  the edge's weight 1 - |m_i . m_j| quantised to one radix digit, so that a
+//                single stable counting pass orders the edges by weight, ties by table order;
+//   bit 52       set when m_i . m_j < 0 (the ends' normals point opposite ways);
+//   bits 0..51   the entry's code (i << slot_bits(k)) | slot: its point without a division.
+// An entry that is no edge (the point itself, an unused slot, or the second listing of an edge
+// that both ends list, so that each edge is offered to the spanning forest once) gets the top
+// digit value and sorts last.
+constexpr int kWeightShift = 53;
+constexpr std::uint64_t kOppositeBit = std::uint64_t{1} << 52;
+constexpr std::uint64_t kCodeMask = kOppositeBit - 1;
 constexpr std::uint64_t kNoEdge = kRadixDigitValues - 1;
 
-std::vector<std::uint64_t> edge_keys(const std::vector<float>& agreement) {
-  std::vector<std::uint64_t> keys(agreement.size());
+// Bits of the slot in an entry's code.
+int slot_bits(const NeighbourTable& t) {
+  int bits = 0;
+  while ((std::size_t{1} << bits) < t.k) ++bits;
+  return bits;
+}
+
+std::vector<std::uint64_t> edge_keys(const std::vector<Eigen::Vector3f>& m,
+                                     const NeighbourTable& t) {
+  const int shift = slot_bits(t);
+  std::vector<std::uint64_t> keys(t.indices.size());
   constexpr float kLevels = static_cast<float>(kNoEdge - 1);
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, keys.size(), 8192),
-                    [&](const tbb::blocked_range<std::size_t>& r) {
-                      for (std::size_t e = r.begin(); e != r.end(); ++e) {
-                        const float c = agreement[e];
-                        const std::uint64_t level =
-                            std::isnan(c)
-                                ? kNoEdge
-                                : static_cast<std::uint64_t>(
-                                      std::clamp(1.0f - std::abs(c), 0.0f, 1.0f) * kLevels + 0.5f);
-                        keys[e] = (level << kWeightShift) | e;
-                      }
-                    });
+  // Whether `of` lists `wanted`; branch-free over the whole row so that it vectorises.
+  auto lists = [&t](std::uint32_t of, std::uint32_t wanted) {
+    const std::uint32_t* row = t.row(of);
+    const std::uint32_t count = t.counts[of];
+    bool hit = false;
+    for (std::uint32_t j = 0; j < t.k; ++j) hit |= (row[j] == wanted) & (j < count);
+    return hit;
+  };
+  tbb::parallel_for(
+      tbb::blocked_range<std::size_t>(0, t.size(), 2048),
+      [&](const tbb::blocked_range<std::size_t>& r) {
+        for (std::size_t i = r.begin(); i != r.end(); ++i) {
+          const auto self = static_cast<std::uint32_t>(i);
+          const std::uint32_t* row = t.row(i);
+          for (std::uint32_t j = 0; j < t.k; ++j) {
+            const std::uint64_t entry = i * t.k + j;
+            const std::uint64_t code = i << shift | j;
+            const std::uint32_t other = row[j];
+            if (j >= t.counts[i] || other == self || (other < self && lists(other, self))) {
+              keys[entry] = kNoEdge << kWeightShift | code;
+              continue;
+            }
+            const float c = m[i].dot(m[other]);
+            const auto level = static_cast<std::uint32_t>(
+                std::clamp(1.0f - std::abs(c), 0.0f, 1.0f) * kLevels + 0.5f);
+            keys[entry] =
+                std::uint64_t{level} << kWeightShift | (c < 0.0f ? kOppositeBit : 0) | code;
+          }
+        }
+      });
   return keys;
 }
 
-// The minimum spanning forest as adjacency lists (CSR) of (neighbour, edge code): Kruskal over
-// the sorted keys.
-struct Forest {
-  std::vector<std::uint64_t> offsets;  // n + 1
-  std::vector<std::pair<std::uint32_t, std::uint64_t>> adjacent;
-  std::vector<std::uint32_t> component;  // lowest point index of each point's component
+// Union-find whose elements carry their parity (1 = opposite sign) relative to their set's
+// root, so that the spanning forest and the propagation of signs along it are one pass: an edge
+// joining two sets fixes the parity between their roots. The root of every set is its lowest
+// index (deterministic). Not thread-safe; near-constant time per call.
+class SignedSets {
+ public:
+  explicit SignedSets(std::size_t n) : parent_(n), parity_(n, 0) {
+    std::iota(parent_.begin(), parent_.end(), 0u);
+  }
+
+  // The root of x's set; `parity` receives x's parity to it. Compresses the path.
+  std::uint32_t find(std::uint32_t x, std::uint8_t& parity) {
+    std::uint32_t root = x;
+    std::uint8_t to_root = 0;
+    while (parent_[root] != root) {
+      to_root ^= parity_[root];
+      root = parent_[root];
+    }
+    parity = to_root;
+    for (std::uint32_t y = x; parent_[y] != root && y != root;) {
+      const std::uint32_t next = parent_[y];
+      const std::uint8_t step = parity_[y];
+      parent_[y] = root;
+      parity_[y] = to_root;
+      to_root ^= step;
+      y = next;
+    }
+    return root;
+  }
+
+  // Joins the sets of roots ra and rb (distinct) so that parity(a) ^ parity(b) == opposite,
+  // given a's parity pa to ra and b's parity pb to rb.
+  void unite(std::uint32_t ra, std::uint8_t pa, std::uint32_t rb, std::uint8_t pb,
+             std::uint8_t opposite) {
+    const std::uint32_t root = std::min(ra, rb), child = std::max(ra, rb);
+    parent_[child] = root;
+    parity_[child] = static_cast<std::uint8_t>(pa ^ pb ^ opposite);
+  }
+
+  // Every element's root and parity to it, without changing the sets. Parallel, read-only.
+  void roots(std::vector<std::uint32_t>& root, std::vector<std::uint8_t>& parity) const {
+    root.resize(parent_.size());
+    parity.resize(parent_.size());
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, parent_.size(), 8192),
+                      [&](const tbb::blocked_range<std::size_t>& r) {
+                        for (std::size_t i = r.begin(); i != r.end(); ++i) {
+                          auto x = static_cast<std::uint32_t>(i);
+                          std::uint8_t p = 0;
+                          while (parent_[x] != x) {
+                            p ^= parity_[x];
+                            x = parent_[x];
+                          }
+                          root[i] = x;
+                          parity[i] = p;
+                        }
+                      });
+  }
+
+ private:
+  std::vector<std::uint32_t> parent_;
+  std::vector<std::uint8_t> parity_;
 };
 
-Forest spanning_forest(const NeighbourTable& t, const std::vector<std::uint64_t>& sorted_keys) {
+// Kruskal over the sorted keys (most confident edges first): each edge that joins two trees
+// joins them so that its ends agree. Serial; O(edges) near-constant-time finds.
+SignedSets spanning_forest(const NeighbourTable& t, const std::vector<std::uint64_t>& sorted_keys) {
   const std::size_t n = t.size();
-  DisjointSets sets(n);
-  std::vector<std::uint64_t> tree;  // edge codes
-  tree.reserve(n);
+  SignedSets sets(n);
+  const int shift = slot_bits(t);
+  const std::uint64_t slot_mask = (std::uint64_t{1} << shift) - 1;
+  std::size_t joined = 0;
   for (std::uint64_t key : sorted_keys) {
-    if ((key >> kWeightShift) == kNoEdge || tree.size() + 1 >= n) break;
+    if ((key >> kWeightShift) == kNoEdge || joined + 1 >= n) break;
     const std::uint64_t code = key & kCodeMask;
-    const std::uint32_t ra = sets.find(static_cast<std::uint32_t>(code / t.k));
-    const std::uint32_t rb = sets.find(t.indices[code]);
+    const std::uint64_t point = code >> shift;
+    std::uint8_t pa = 0, pb = 0;
+    const std::uint32_t ra = sets.find(static_cast<std::uint32_t>(point), pa);
+    const std::uint32_t rb = sets.find(t.indices[point * t.k + (code & slot_mask)], pb);
     if (ra == rb) continue;
-    sets.unite(ra, rb);
-    tree.push_back(code);
+    sets.unite(ra, pa, rb, pb, (key & kOppositeBit) != 0 ? 1 : 0);
+    ++joined;
   }
-  Forest f;
-  f.offsets.assign(n + 1, 0);
-  for (std::uint64_t code : tree) {
-    ++f.offsets[code / t.k + 1];
-    ++f.offsets[t.indices[code] + 1];
-  }
-  for (std::size_t i = 0; i < n; ++i) f.offsets[i + 1] += f.offsets[i];
-  f.adjacent.resize(2 * tree.size());
-  std::vector<std::uint64_t> at(f.offsets.begin(), f.offsets.end() - 1);
-  for (std::uint64_t code : tree) {
-    const auto a = static_cast<std::uint32_t>(code / t.k);
-    const std::uint32_t b = t.indices[code];
-    f.adjacent[at[a]++] = {b, code};
-    f.adjacent[at[b]++] = {a, code};
-  }
-  f.component = sets.labels();
-  return f;
+  return sets;
 }
 
-// Breadth-first from the fixed points, then from each component's lowest index: each child's
-// sign makes it agree with its parent.
-Signs propagate(const Forest& f, const std::vector<float>& agreement,
-                const std::vector<std::uint8_t>& fixed) {
-  const std::size_t count = f.component.size();
-  Signs sign(count, 0);  // 0 = not reached yet
-  std::vector<std::uint32_t> queue;
-  queue.reserve(count);
-  auto drain = [&](std::size_t head) {
-    for (; head < queue.size(); ++head) {
-      const std::uint32_t u = queue[head];
-      for (std::uint64_t a = f.offsets[u]; a < f.offsets[u + 1]; ++a) {
-        const auto [v, code] = f.adjacent[a];
-        if (sign[v] != 0) continue;
-        sign[v] = agreement[code] < 0.0f ? static_cast<std::int8_t>(-sign[u]) : sign[u];
-        queue.push_back(v);
-      }
-    }
-    return head;
-  };
+// The components of the forest: each point's component number (0, 1, ... in the order of
+// their lowest point) and the count.
+struct Components {
+  std::vector<std::uint32_t> of;  // per point
+  std::size_t count = 0;
+};
+
+Components number_components(const std::vector<std::uint32_t>& root) {
+  const std::vector<std::uint32_t> roots =
+      parallel_select_indices(root.size(), [&](std::size_t i) { return root[i] == i; });
+  std::vector<std::uint32_t> number_of_root(root.size(), 0);
+  for (std::size_t c = 0; c < roots.size(); ++c)
+    number_of_root[roots[c]] = static_cast<std::uint32_t>(c);
+  Components out;
+  out.count = roots.size();
+  out.of.resize(root.size());
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, root.size(), 8192),
+                    [&](const tbb::blocked_range<std::size_t>& r) {
+                      for (std::size_t i = r.begin(); i != r.end(); ++i)
+                        out.of[i] = number_of_root[root[i]];
+                    });
+  return out;
+}
+
+// Signs from the parities: within a component all relative to its root; the root's own sign
+// is +1, or, where the component holds fixed points, the one that makes its lowest fixed point
+// +1. Fixed points are +1 whatever their parity (their sign is given).
+Signs signs_from_parity(const std::vector<std::uint8_t>& parity, const Components& comps,
+                        const std::vector<std::uint8_t>& fixed) {
+  std::vector<std::uint8_t> root_parity(comps.count, 0), decided(comps.count, 0);
   for (std::size_t i = 0; i < fixed.size(); ++i) {
-    if (!fixed[i]) continue;
-    sign[i] = 1;
-    queue.push_back(static_cast<std::uint32_t>(i));
+    if (!fixed[i] || decided[comps.of[i]]) continue;
+    decided[comps.of[i]] = 1;
+    root_parity[comps.of[i]] = parity[i];
   }
-  std::size_t head = drain(0);
-  for (std::size_t i = 0; i < count; ++i) {
-    if (sign[i] != 0) continue;
-    sign[i] = 1;
-    queue.push_back(static_cast<std::uint32_t>(i));
-    head = drain(head);
-  }
+  Signs sign(parity.size());
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, parity.size(), 8192),
+                    [&](const tbb::blocked_range<std::size_t>& r) {
+                      for (std::size_t i = r.begin(); i != r.end(); ++i) {
+                        const bool flipped = (parity[i] ^ root_parity[comps.of[i]]) != 0;
+                        sign[i] = (!fixed.empty() && fixed[i]) || !flipped ? 1 : -1;
+                      }
+                    });
   return sign;
 }
 
 // One Jacobi vote: a free point whose signed agreement with its neighbours sums below zero
 // turns over. Returns the number turned.
-std::size_t vote(const NeighbourTable& t, const std::vector<float>& agreement,
+std::size_t vote(const NeighbourTable& t, const std::vector<Eigen::Vector3f>& smooth,
                  const std::vector<std::uint8_t>& fixed, Signs& sign) {
   const std::size_t count = t.size();
   const std::size_t blocks = (count + kParallelBlock - 1) / kParallelBlock;
@@ -178,11 +250,10 @@ std::size_t vote(const NeighbourTable& t, const std::vector<float>& agreement,
       next[i] = sign[i];
       if (!fixed.empty() && fixed[i]) continue;
       const std::uint32_t* row = t.row(i);
-      const float* c = agreement.data() + i * t.k;
-      float sum = 0.0f;
+      Eigen::Vector3f sum = Eigen::Vector3f::Zero();
       for (std::uint32_t j = 0; j < t.counts[i]; ++j)
-        if (row[j] != i) sum += static_cast<float>(sign[row[j]]) * c[j];
-      if (static_cast<float>(sign[i]) * sum < 0.0f) {
+        if (row[j] != i) sum += static_cast<float>(sign[row[j]]) * smooth[row[j]];
+      if (static_cast<float>(sign[i]) * smooth[i].dot(sum) < 0.0f) {
         next[i] = static_cast<std::int8_t>(-sign[i]);
         ++turned[b];
       }
@@ -194,50 +265,84 @@ std::size_t vote(const NeighbourTable& t, const std::vector<float>& agreement,
   return total;
 }
 
-// Turns every component without a fixed point outward (see the header): flips the signs of
-// its points. Serial, O(n).
+// Per-component sums for the outward rule.
+struct ComponentSums {
+  Eigen::Vector3d position_sum = Eigen::Vector3d::Zero();
+  double points = 0.0, signed_sum = 0.0, absolute_sum = 0.0;
+  std::uint32_t extreme = std::numeric_limits<std::uint32_t>::max();  // point of largest x
+  bool has_fixed = false;
+};
+
+// `add(sums, i)` over every point into per-component sums: per fixed block of points in
+// parallel when there are few components, joined in block order (deterministic), else serial.
+template <typename Add, typename Join>
+std::vector<ComponentSums> accumulate(const Components& comps, std::vector<ComponentSums> sums,
+                                      Add add, Join join) {
+  const std::size_t n = comps.of.size();
+  const std::size_t blocks = (n + kParallelBlock - 1) / kParallelBlock;
+  if (comps.count > 64) {
+    for (std::size_t i = 0; i < n; ++i) add(sums[comps.of[i]], i);
+    return sums;
+  }
+  std::vector<std::vector<ComponentSums>> partial(blocks, sums);
+  tbb::parallel_for(std::size_t{0}, blocks, [&](std::size_t b) {
+    const std::size_t end = std::min(n, (b + 1) * kParallelBlock);
+    for (std::size_t i = b * kParallelBlock; i < end; ++i) add(partial[b][comps.of[i]], i);
+  });
+  for (const auto& block : partial)
+    for (std::size_t c = 0; c < sums.size(); ++c) join(sums[c], block[c]);
+  return sums;
+}
+
+// Turns every component without a fixed point outward (see the header).
 void turn_components_outward(const std::vector<Eigen::Vector3f>& p,
-                             const std::vector<Eigen::Vector3f>& n, const Forest& f,
+                             const std::vector<Eigen::Vector3f>& n, const Components& comps,
                              const std::vector<std::uint8_t>& fixed, Signs& sign) {
-  const std::size_t count = p.size();
-  struct Sums {
-    Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
-    double points = 0.0, signed_sum = 0.0, absolute_sum = 0.0;
-    std::uint32_t extreme = 0;  // point of largest x
-    bool has_fixed = false;
+  auto larger_x = [&p](std::uint32_t a, std::uint32_t b) {  // b beats a (ties: lower index)
+    const std::uint32_t none = std::numeric_limits<std::uint32_t>::max();
+    return a == none || (b != none && (p[b].x() > p[a].x() || (p[b].x() == p[a].x() && b < a)));
   };
-  // Components numbered 0, 1, ... in the order of their lowest point.
-  std::vector<std::uint32_t> id(count);
-  std::vector<Sums> sums;
-  for (std::size_t i = 0; i < count; ++i) {
-    if (f.component[i] == i) {
-      id[i] = static_cast<std::uint32_t>(sums.size());
-      sums.emplace_back();
-    } else {
-      id[i] = id[f.component[i]];
-    }
-    Sums& s = sums[id[i]];
-    s.centroid += p[i].cast<double>();
-    s.points += 1.0;
-    if (s.points == 1.0 || p[i].x() > p[s.extreme].x()) s.extreme = static_cast<std::uint32_t>(i);
-    if (!fixed.empty() && fixed[i]) s.has_fixed = true;
-  }
-  for (Sums& s : sums) s.centroid /= s.points;
-  for (std::size_t i = 0; i < count; ++i) {
-    Sums& s = sums[id[i]];
-    const double d = sign[i] * n[i].cast<double>().dot(p[i].cast<double>() - s.centroid);
-    s.signed_sum += d;
-    s.absolute_sum += std::abs(d);
-  }
-  std::vector<std::uint8_t> flip(sums.size(), 0);
-  for (std::size_t c = 0; c < sums.size(); ++c) {
-    const Sums& s = sums[c];
+  std::vector<ComponentSums> sums = accumulate(
+      comps, std::vector<ComponentSums>(comps.count),
+      [&](ComponentSums& s, std::size_t i) {
+        s.position_sum += p[i].cast<double>();
+        s.points += 1.0;
+        if (larger_x(s.extreme, static_cast<std::uint32_t>(i)))
+          s.extreme = static_cast<std::uint32_t>(i);
+        if (!fixed.empty() && fixed[i]) s.has_fixed = true;
+      },
+      [&](ComponentSums& into, const ComponentSums& from) {
+        into.position_sum += from.position_sum;
+        into.points += from.points;
+        if (larger_x(into.extreme, from.extreme)) into.extreme = from.extreme;
+        into.has_fixed = into.has_fixed || from.has_fixed;
+      });
+  std::vector<Eigen::Vector3d> centroid(comps.count);
+  for (std::size_t c = 0; c < comps.count; ++c) centroid[c] = sums[c].position_sum / sums[c].points;
+  sums = accumulate(
+      comps, std::move(sums),
+      [&](ComponentSums& s, std::size_t i) {
+        const double d =
+            sign[i] * n[i].cast<double>().dot(p[i].cast<double>() - centroid[comps.of[i]]);
+        s.signed_sum += d;
+        s.absolute_sum += std::abs(d);
+      },
+      [&](ComponentSums& into, const ComponentSums& from) {
+        into.signed_sum += from.signed_sum;
+        into.absolute_sum += from.absolute_sum;
+      });
+  std::vector<std::uint8_t> flip(comps.count, 0);
+  for (std::size_t c = 0; c < comps.count; ++c) {
+    const ComponentSums& s = sums[c];
     if (s.has_fixed) continue;
     const bool decisive = std::abs(s.signed_sum) > 0.05 * s.absolute_sum;
     flip[c] = decisive ? s.signed_sum < 0.0 : sign[s.extreme] * n[s.extreme].x() < 0.0f;
   }
-  for (std::size_t i = 0; i < count; ++i)
-    if (flip[id[i]]) sign[i] = static_cast<std::int8_t>(-sign[i]);
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, p.size(), 8192),
+                    [&](const tbb::blocked_range<std::size_t>& r) {
+                      for (std::size_t i = r.begin(); i != r.end(); ++i)
+                        if (flip[comps.of[i]]) sign[i] = static_cast<std::int8_t>(-sign[i]);
+                    });
 }
 
 }  // namespace
@@ -252,20 +357,22 @@ OrientedNormals orient_by_propagation(const std::vector<Eigen::Vector3f>& positi
   OrientedNormals out;
   if (positions.empty()) return out;
   const std::vector<Eigen::Vector3f> smooth = tensor_smoothed(normals, neighbours);
-  const std::vector<float> agreement = raw_agreements(smooth, neighbours);
-  std::vector<std::uint64_t> keys = edge_keys(agreement);
+  std::vector<std::uint64_t> keys = edge_keys(smooth, neighbours);
   stable_sort_by_digit(keys, kWeightShift);
-  const Forest forest = spanning_forest(neighbours, keys);
+  const SignedSets forest = spanning_forest(neighbours, keys);
   keys = {};
-  for (std::size_t i = 0; i < positions.size(); ++i)
-    out.components += forest.component[i] == i ? 1 : 0;
-  Signs sign = propagate(forest, agreement, fixed);
+  std::vector<std::uint32_t> root;
+  std::vector<std::uint8_t> parity;
+  forest.roots(root, parity);
+  const Components comps = number_components(root);
+  out.components = comps.count;
+  Signs sign = signs_from_parity(parity, comps, fixed);
   for (int pass = 0; pass < config.vote_passes; ++pass) {
-    const std::size_t turned = vote(neighbours, agreement, fixed, sign);
+    const std::size_t turned = vote(neighbours, smooth, fixed, sign);
     out.flipped_by_vote += turned;
     if (turned == 0) break;
   }
-  turn_components_outward(positions, normals, forest, fixed, sign);
+  turn_components_outward(positions, normals, comps, fixed, sign);
   out.normals.resize(positions.size());
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, positions.size(), 8192),
                     [&](const tbb::blocked_range<std::size_t>& r) {

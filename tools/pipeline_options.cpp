@@ -17,6 +17,8 @@ ReconstructionConfig PipelineOptions::config() const {
   c.normals.adaptive_k = adaptive_k;
   c.distance.kd = kd;
   c.distance.max_distance_voxels = max_distance;
+  c.distance.max_disagreement_voxels = max_disagreement;
+  c.distance.max_extrapolation_voxels = max_extrapolation;
   c.optimize.cleanup.min_component_triangles = min_component;
   c.filter.voxel_size = filter_voxel;
   c.filter.outlier_k = outlier_k;
@@ -83,6 +85,14 @@ void add_pipeline_options(CLI::App* cmd, PipelineOptions& o) {
   cmd->add_option("--max-distance", o.max_distance,
                   "Distance samples farther than this many voxels from the data are invalid")
       ->check(number_in(0, 1000, true));
+  cmd->add_option("--max-disagreement", o.max_disagreement,
+                  "Distance samples that one tangent plane puts this many voxels outside and "
+                  "another as far inside are invalid (phantom sheets; 0 = off)")
+      ->check(number_in(0, 1000));
+  cmd->add_option("--max-extrapolation", o.max_extrapolation,
+                  "Distance samples whose foot lies this many voxels beyond their nearest "
+                  "points' extent are invalid (surface past a scan's border; 0 = off)")
+      ->check(number_in(0, 1000));
   cmd->add_option("--min-component", o.min_component, "Remove mesh components with fewer triangles")
       ->check(number_in(0, 1e9));
   cmd->add_option("--filter-voxel", o.filter_voxel,

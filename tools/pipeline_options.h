@@ -18,6 +18,8 @@ struct PipelineOptions {
   int threads = 0;
   bool adaptive_k = false;
   float max_distance = 2.0f;
+  float max_disagreement = DistanceConfig{}.max_disagreement_voxels;
+  float max_extrapolation = DistanceConfig{}.max_extrapolation_voxels;
   std::size_t min_component = 20;
   float filter_voxel = 0.0f;
   int outlier_k = 0;
@@ -37,7 +39,8 @@ struct PipelineOptions {
   ReconstructionConfig config() const;
 };
 
-/// Registers --voxel --kn --ki --kd --threads --adaptive-k --max-distance --min-component
+/// Registers --voxel --kn --ki --kd --threads --adaptive-k --max-distance --max-disagreement
+/// --max-extrapolation --min-component
 /// --filter-voxel --outlier-k --min-range --max-range --extract --optimize --max-hole
 /// --contour-tolerance --max-projection --remesh-tolerance --decimate-to --organized-as-depth
 /// --normals --orient on `cmd`, writing into `options`.

@@ -40,8 +40,12 @@ void print_frame_report(const Frame& f, double wall_s, int threads) {
                 c.outliers);
   }
   if (!f.normals_from_image) std::printf("normals    %s\n", describe_normals(f.normals).c_str());
-  std::printf("grid       voxel %.4g m, %zu cells, %zu corners (%zu valid)\n", f.voxel_size,
+  std::printf("grid       voxel %.4g m, %zu cells, %zu corners (%zu valid", f.voxel_size,
               f.grid.cells.size(), f.grid.corners.size(), f.distance.valid_count());
+  if (f.distance.disagreeing + f.distance.extrapolated > 0)
+    std::printf("; invalid: %zu where tangent planes disagree, %zu past the data's border",
+                f.distance.disagreeing, f.distance.extrapolated);
+  std::printf(")\n");
   std::printf("mesh       %zu vertices, %zu triangles\n", f.mesh.vertices.size(),
               f.mesh.triangles.size());
   if (!f.optimize.steps.empty())

@@ -43,7 +43,18 @@ struct ReconstructionConfig {
   /// angles drop out). Off: the cloud path (kNN normals, Hoppe distance). Fusion always reads
   /// such clouds as depth images.
   bool organized_as_depth = false;
+  /// The planes, sharpen and retriangulate steps take a region as planar only when the 95th
+  /// percentile of its vertices' distances to its plane is within this many voxels
+  /// (PlanarRegionConfig::max_deviation, set per frame from its voxel size unless given).
+  /// 0 = no check.
+  float plane_tolerance_voxels = 0.25f;
+  /// The retriangulate step's Douglas-Peucker tolerance in voxels (0.4: 2 cm at 5 cm voxels);
+  /// 0 = use optimize.retriangulation.contour_tolerance (metres) as it is.
+  float contour_tolerance_voxels = 0.4f;
 };
+
+/// c.optimize with the settings that depend on the frame's voxel size (metres) filled in.
+OptimizeConfig optimize_config_for_voxel(const ReconstructionConfig& c, float voxel_size);
 
 /// One input (a point cloud) and everything the stages made of it. A frame that fails a stage
 /// keeps flowing with `error` set, so ordering and accounting stay exact.

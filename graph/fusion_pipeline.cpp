@@ -68,7 +68,8 @@ void FusionPipeline::run(const std::function<FramePtr()>& next,
 }
 
 TriangleMesh FusionPipeline::extract_mesh() {
-  return optimize_mesh(mesher_.extract(map_), config_.frames.optimize);
+  return optimize_mesh(mesher_.extract(map_),
+                       optimize_config_for_voxel(config_.frames, config_.tsdf.voxel_size));
 }
 
 }  // namespace meshflow

@@ -11,6 +11,19 @@
 #include "nodes/normals/organized_normals.h"
 #include "runtime/error.h"
 
+namespace meshflow {
+
+OptimizeConfig optimize_config_for_voxel(const ReconstructionConfig& c, float voxel_size) {
+  OptimizeConfig oc = c.optimize;
+  if (oc.planes.max_deviation == 0.0f)
+    oc.planes.max_deviation = c.plane_tolerance_voxels * voxel_size;
+  if (c.contour_tolerance_voxels > 0.0f)
+    oc.retriangulation.contour_tolerance = c.contour_tolerance_voxels * voxel_size;
+  return oc;
+}
+
+}  // namespace meshflow
+
 namespace meshflow::stages {
 
 std::uint64_t read(Frame& f, const ReconstructionConfig& c) {
@@ -122,7 +135,7 @@ std::uint64_t extract(Frame& f, const ReconstructionConfig& c) {
 }
 
 std::uint64_t optimize(Frame& f, const ReconstructionConfig& c) {
-  f.mesh = optimize_mesh(f.mesh, c.optimize, &f.optimize);
+  f.mesh = optimize_mesh(f.mesh, optimize_config_for_voxel(c, f.voxel_size), &f.optimize);
   return f.mesh.triangles.size();
 }
 

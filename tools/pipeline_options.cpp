@@ -28,8 +28,12 @@ ReconstructionConfig PipelineOptions::config() const {
   c.optimize.steps = parse_optimize_steps(optimize);
   c.optimize.holes.max_edges = max_hole;
   c.optimize.decimate.target_ratio = decimate_to;
-  c.optimize.retriangulation.contour_tolerance = contour_tolerance;
+  if (contour_tolerance >= 0.0f) {  // given in metres
+    c.optimize.retriangulation.contour_tolerance = contour_tolerance;
+    c.contour_tolerance_voxels = 0.0f;
+  }
   c.optimize.planes.max_projection = max_projection;
+  c.plane_tolerance_voxels = plane_tolerance;
   c.optimize.remesh.tolerance = remesh_tolerance;
   c.organized_as_depth = organized_as_depth;
   c.normals.source = normals == "input"      ? NormalSource::kInput
@@ -124,10 +128,15 @@ void add_pipeline_options(CLI::App* cmd, PipelineOptions& o) {
   cmd->add_option("--max-hole", o.max_hole, "holes step: close border loops up to this many edges")
       ->check(number_in(0, 1e9));
   cmd->add_option("--contour-tolerance", o.contour_tolerance,
-                  "retriangulate step: Douglas-Peucker tolerance of region contours, metres")
+                  "retriangulate step: Douglas-Peucker tolerance of region contours, metres "
+                  "(default: 0.4 voxel)")
       ->check(number_in(0, 1000));
   cmd->add_option("--max-projection", o.max_projection,
                   "planes step: vertices farther from their plane stay, metres (0 = no limit)")
+      ->check(number_in(0, 1000));
+  cmd->add_option("--plane-tolerance", o.plane_tolerance,
+                  "planes/sharpen/retriangulate: a region is planar only when 95 % of its "
+                  "vertices lie within this many voxels of its plane (0 = no check)")
       ->check(number_in(0, 1000));
   cmd->add_option("--remesh-tolerance", o.remesh_tolerance,
                   "remesh step: largest deviation of an edge from the surface, metres "

@@ -28,8 +28,9 @@ struct PipelineOptions {
   std::string optimize = "default";
   std::size_t max_hole = 30;
   float decimate_to = 0.25f;
-  float contour_tolerance = 0.02f;
+  float contour_tolerance = -1.0f;  ///< metres; negative: 0.4 voxel
   float max_projection = 0.0f;
+  float plane_tolerance = ReconstructionConfig{}.plane_tolerance_voxels;
   float remesh_tolerance = 0.0f;
   bool organized_as_depth = false;
   std::string normals = "auto";  ///< auto | input | estimate
@@ -42,7 +43,7 @@ struct PipelineOptions {
 /// Registers --voxel --kn --ki --kd --threads --adaptive-k --max-distance --max-disagreement
 /// --max-extrapolation --min-component
 /// --filter-voxel --outlier-k --min-range --max-range --extract --optimize --max-hole
-/// --contour-tolerance --max-projection --remesh-tolerance --decimate-to --organized-as-depth
+/// --contour-tolerance --max-projection --plane-tolerance --remesh-tolerance --decimate-to --organized-as-depth
 /// --normals --orient on `cmd`, writing into `options`.
 void add_pipeline_options(CLI::App* cmd, PipelineOptions& options);
 

@@ -23,6 +23,15 @@ std::string format(const char* pattern, std::size_t a, std::size_t b = 0, std::s
   return text;
 }
 
+// ", 3 regions not planar within 0.012 m left alone", or nothing when none was.
+std::string not_planar_note(const PlanarSegmentation& s) {
+  if (s.curved == 0) return "";
+  char text[120];
+  std::snprintf(text, sizeof text, ", %zu regions not planar within %.3g m left alone", s.curved,
+                static_cast<double>(s.tolerance));
+  return text;
+}
+
 TriangleMesh clean_step(const TriangleMesh& mesh, const OptimizeConfig& config,
                         OptimizeReport& report, OptimizeStepReport& step) {
   TriangleMesh out = clean_mesh(mesh, config.cleanup, &report.cleanup);
@@ -54,6 +63,7 @@ TriangleMesh planes_step(const TriangleMesh& mesh, const OptimizeConfig& config,
   step.detail = format("%zu planar regions (%zu floor, %zu ceiling, %zu wall)", s.regions.size(),
                        counts[0], counts[1], counts[2]) +
                 format(", %zu vertices projected", moved);
+  step.detail += not_planar_note(s);
   TriangleMesh out = mesh;  // same topology: only positions change
   for (std::uint32_t v = 0; v < out.vertices.size(); ++v) out.vertices[v] = h.position(v);
   return out;
@@ -77,6 +87,7 @@ TriangleMesh retriangulate_step(const TriangleMesh& mesh, const OptimizeConfig& 
   TriangleMesh out = retriangulate_regions(mesh, s, config.retriangulation, &r);
   step.detail = format("%zu of %zu regions retriangulated (-%zu +%zu triangles)", r.retriangulated,
                        r.regions, r.removed_faces, r.added_faces) +
+                not_planar_note(s) +
                 format(", %zu of %zu contour vertices dropped", r.dropped_contour_vertices,
                        r.contour_vertices);
   char deviation[64];

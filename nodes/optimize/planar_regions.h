@@ -23,6 +23,17 @@ struct PlanarRegionConfig {
   /// they are: clutter that joined a region within the normal threshold is not flattened.
   /// 0: no limit (the thesis).
   float max_projection = 0.0f;
+  /// A grown region is planar only as far as its fitted plane explains it: it shrinks to its
+  /// largest connected part of faces whose corners lie within the tolerance of the plane,
+  /// refitted (up to three rounds), and is dropped when that part is smaller than
+  /// min_region_faces or its 95th-percentile deviation still exceeds the tolerance. A curved
+  /// surface (a cylinder, a fillet, a sphere) grows regions within the normal threshold too,
+  /// and flattening them would cut chords through it; a cluttered wall keeps its wall. The
+  /// tolerance is `max_deviation` (metres), or 3 x the mesh's roughness inside the regions where
+  /// that is larger (a noisy scan's walls are flat only to within its noise; curvature does not
+  /// count as roughness). 0: no check (the thesis). The reconstruction pipeline sets it from the
+  /// voxel (ReconstructionConfig::plane_tolerance_voxels).
+  float max_deviation = 0.0f;
 };
 
 enum class RegionClass { kFloor, kCeiling, kWall, kOther };
@@ -33,19 +44,23 @@ struct PlanarRegion {
   Eigen::Vector3f normal = Eigen::Vector3f::UnitZ();  ///< unit, the faces' side
   float offset = 0.0f;                                ///< the plane is normal . x = offset (metres)
   RegionClass kind = RegionClass::kOther;
+  float deviation = 0.0f;  ///< 95th percentile of the vertices' distances to the plane, metres
 };
 
 struct PlanarSegmentation {
   std::vector<std::int32_t> region_of_face;  ///< per face slot; -1 = in no region
   std::vector<PlanarRegion> regions;         ///< by first face
+  std::size_t curved = 0;  ///< grown regions dropped because their plane did not explain them
+  float tolerance = 0.0f;  ///< the deviation allowed (metres; 0 = no check)
 };
 
 /// Grows regions from seeds in face order (breadth-first across edges to faces within the
 /// normal threshold of the seed), keeps those with at least min_region_faces faces, fits each a
 /// plane through its vertices (least squares: the centroid and the smallest principal axis,
-/// oriented like the faces) and classifies it: floor / ceiling when the normal is within about
-/// 25 degrees of up / down, wall when within about 12 degrees of horizontal. Serial growth,
-/// plane fits parallel per region; deterministic. O(F log F).
+/// oriented like the faces), shrinks it to the part the plane explains or drops it
+/// (max_deviation; faces shed belong to no region), and classifies the rest: floor / ceiling
+/// when the normal is within about 25 degrees of up / down, wall when within about 12 degrees
+/// of horizontal. Serial growth, plane fits parallel per region; deterministic. O(F log F).
 PlanarSegmentation grow_planar_regions(const HalfEdgeMesh& mesh,
                                        const PlanarRegionConfig& config = {});
 

@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <functional>
 
 #include "mesh_fixtures.h"
 #include "room_fixture.h"
@@ -95,6 +96,58 @@ TEST(PlanarRegions, ProjectionLeavesVerticesBeyondTheLimitWhereTheyAre) {
       EXPECT_GT(moved, 0u);     // the interior vertices near the plane still moved
     }
   }
+}
+
+// A height field z = f(x, y) on an n x n grid with 1 cm spacing.
+TriangleMesh height_field(std::uint32_t n, const std::function<float(float, float)>& f) {
+  TriangleMesh m = test::grid_mesh(n);
+  for (Eigen::Vector3f& v : m.vertices) {
+    v.x() *= 0.01f;
+    v.y() *= 0.01f;
+    v.z() = f(v.x(), v.y());
+  }
+  return m;
+}
+
+TEST(PlanarRegions, ACurvedSurfaceIsNotTakenForAPlane) {
+  // A cylinder of radius 0.3 m seen from above over 0.4 m: its normals stay within 42 degrees,
+  // so it grows regions, but no plane explains them within 2 mm.
+  const TriangleMesh bowl =
+      height_field(41, [](float x, float) { return std::sqrt(0.09f - (x - 0.2f) * (x - 0.2f)); });
+  PlanarRegionConfig config;
+  EXPECT_FALSE(grow_planar_regions(HalfEdgeMesh(bowl), config).regions.empty())
+      << "without the check the curved surface is segmented into planes";
+  config.max_deviation = 0.002f;
+  HalfEdgeMesh h(bowl);
+  const PlanarSegmentation s = grow_planar_regions(h, config);
+  for (const PlanarRegion& r : s.regions) EXPECT_LE(r.deviation, config.max_deviation);
+  const std::vector<Eigen::Vector3f> before = bowl.vertices;
+  project_onto_planes(h, s);
+  for (std::uint32_t v = 0; v < before.size(); ++v)
+    EXPECT_LE((h.position(v) - before[v]).norm(), config.max_deviation * 1.001f);
+}
+
+TEST(PlanarRegions, AClutteredWallKeepsTheWallAndLeavesTheClutter) {
+  // A flat 0.6 m square with a smooth 2 cm bump (something on the wall, slopes within 15
+  // degrees, so the whole square grows as one region): the region shrinks to the flat part and
+  // the bump keeps its shape.
+  const TriangleMesh wall = height_field(61, [](float x, float y) {
+    const float r2 = (x - 0.45f) * (x - 0.45f) + (y - 0.45f) * (y - 0.45f);
+    return 0.02f * std::exp(-r2 / (2.0f * 0.04f * 0.04f));
+  });
+  PlanarRegionConfig config;
+  ASSERT_EQ(grow_planar_regions(HalfEdgeMesh(wall), config).regions.size(), 1u);
+  config.max_deviation = 0.002f;
+  HalfEdgeMesh h(wall);
+  const PlanarSegmentation s = grow_planar_regions(h, config);
+  ASSERT_EQ(s.regions.size(), 1u);
+  EXPECT_GT(s.regions[0].faces.size(), wall.triangles.size() * 3 / 4);
+  EXPECT_LT(s.regions[0].faces.size(), wall.triangles.size());
+  for (std::uint32_t f : s.regions[0].faces)
+    for (int k = 0; k < 3; ++k) EXPECT_LT(wall.vertices[wall.triangles[f][k]].z(), 0.0025f);
+  project_onto_planes(h, s);
+  const std::uint32_t peak = 45 * 61 + 45;
+  EXPECT_NEAR(h.position(peak).z(), 0.02f, 1e-6f) << "the bump was flattened";
 }
 
 }  // namespace

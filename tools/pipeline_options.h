@@ -43,7 +43,8 @@ struct PipelineOptions {
 /// Registers --voxel --kn --ki --kd --threads --adaptive-k --max-distance --max-disagreement
 /// --max-extrapolation --min-component
 /// --filter-voxel --outlier-k --min-range --max-range --extract --optimize --max-hole
-/// --contour-tolerance --max-projection --plane-tolerance --remesh-tolerance --decimate-to --organized-as-depth
+/// --contour-tolerance --max-projection --plane-tolerance --remesh-tolerance --decimate-to
+/// --organized-as-depth
 /// --normals --orient on `cmd`, writing into `options`.
 void add_pipeline_options(CLI::App* cmd, PipelineOptions& options);
 

@@ -18,6 +18,13 @@ void radix_sort(std::vector<std::uint64_t>& keys);
 /// fixed blocks, deterministic; O(n).
 void stable_sort_by_digit(std::vector<std::uint64_t>& keys, int shift);
 
+/// The indices 0 .. key.size() - 1 ordered by key[i] (values below `buckets`), ties in index
+/// order: a counting sort with per-block histograms joined in block order, parallel and
+/// deterministic. Keys of `buckets` or more are left out (a sentinel for "no item").
+/// O(n + buckets x blocks); indices must fit in Index.
+template <typename Index>
+std::vector<Index> stable_order_by_key(const std::vector<std::uint16_t>& key, std::size_t buckets);
+
 /// The number of buckets of stable_sort_by_digit()'s digit.
 constexpr std::uint64_t kRadixDigitValues = 2048;
 

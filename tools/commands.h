@@ -4,6 +4,9 @@
 
 #include <CLI/CLI.hpp>
 
+#include <string>
+#include <vector>
+
 namespace meshflow::cli {
 
 void add_reconstruct_command(CLI::App& app);
@@ -13,5 +16,9 @@ void add_run_command(CLI::App& app);
 void add_profile_command(CLI::App& app);
 void add_eval_command(CLI::App& app);
 void add_live_command(CLI::App& app);
+void add_sample_command(CLI::App& app);
+
+/// Names of the built-in closed objects (`meshflow sample`, `meshflow eval --object`).
+std::vector<std::string> closed_object_names();
 
 }  // namespace meshflow::cli

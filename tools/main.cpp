@@ -18,6 +18,7 @@ int main(int argc, char** argv) {
   meshflow::cli::add_profile_command(app);
   meshflow::cli::add_eval_command(app);
   meshflow::cli::add_live_command(app);
+  meshflow::cli::add_sample_command(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {

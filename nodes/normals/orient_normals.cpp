@@ -47,31 +47,20 @@ std::vector<Eigen::Vector3f> tensor_smoothed(const std::vector<Eigen::Vector3f>&
   return out;
 }
 
-// Sort keys of the neighbour graph's edges, one per table entry (i, slot), in table order:
-//   bits 53..63  the edge's weight 1 - |m_i . m_j| quantised to one radix digit, so that a
-//                single stable counting pass orders the edges by weight, ties by table order;
-//   bit 52       set when m_i . m_j < 0 (the ends' normals point opposite ways);
-//   bits 0..51   the entry's code (i << slot_bits(k)) | slot: its point without a division.
-// An entry that is no edge (the point itself, an unused slot, or the second listing of an edge
-// that both ends list, so that each edge is offered to the spanning forest once) gets the top
-// digit value and sorts last.
-constexpr int kWeightShift = 53;
-constexpr std::uint64_t kOppositeBit = std::uint64_t{1} << 52;
-constexpr std::uint64_t kCodeMask = kOppositeBit - 1;
-constexpr std::uint64_t kNoEdge = kRadixDigitValues - 1;
+// The neighbour graph's edges, one per table entry e = i * k + slot (point i's slot-th
+// neighbour), as 16-bit codes: the edge's weight 1 - |m_i . m_j| quantised to kLevels levels,
+// plus kOppositeBit when m_i . m_j < 0 (the ends' normals point opposite ways). An entry that is
+// no edge (the point itself, an unused slot, or the second listing of an edge that both ends
+// list, so that each edge is offered to the spanning forest once) is kNoEdge. Two bytes per
+// entry: on a fresh process every page touched costs a fault, and this is the largest array.
+constexpr std::uint16_t kLevels = 2048;
+constexpr std::uint16_t kOppositeBit = 0x4000;
+constexpr std::uint16_t kLevelMask = kLevels - 1;
+constexpr std::uint16_t kNoEdge = 0xffff;
 
-// Bits of the slot in an entry's code.
-int slot_bits(const NeighbourTable& t) {
-  int bits = 0;
-  while ((std::size_t{1} << bits) < t.k) ++bits;
-  return bits;
-}
-
-std::vector<std::uint64_t> edge_keys(const std::vector<Eigen::Vector3f>& m,
-                                     const NeighbourTable& t) {
-  const int shift = slot_bits(t);
-  std::vector<std::uint64_t> keys(t.indices.size());
-  constexpr float kLevels = static_cast<float>(kNoEdge - 1);
+std::vector<std::uint16_t> edge_codes(const std::vector<Eigen::Vector3f>& m,
+                                      const NeighbourTable& t) {
+  std::vector<std::uint16_t> codes(t.indices.size());
   // Whether `of` lists `wanted`; branch-free over the whole row so that it vectorises.
   auto lists = [&t](std::uint32_t of, std::uint32_t wanted) {
     const std::uint32_t* row = t.row(of);
@@ -86,23 +75,34 @@ std::vector<std::uint64_t> edge_keys(const std::vector<Eigen::Vector3f>& m,
         for (std::size_t i = r.begin(); i != r.end(); ++i) {
           const auto self = static_cast<std::uint32_t>(i);
           const std::uint32_t* row = t.row(i);
+          std::uint16_t* out = codes.data() + i * t.k;
           for (std::uint32_t j = 0; j < t.k; ++j) {
-            const std::uint64_t entry = i * t.k + j;
-            const std::uint64_t code = i << shift | j;
             const std::uint32_t other = row[j];
             if (j >= t.counts[i] || other == self || (other < self && lists(other, self))) {
-              keys[entry] = kNoEdge << kWeightShift | code;
+              out[j] = kNoEdge;
               continue;
             }
             const float c = m[i].dot(m[other]);
-            const auto level = static_cast<std::uint32_t>(
-                std::clamp(1.0f - std::abs(c), 0.0f, 1.0f) * kLevels + 0.5f);
-            keys[entry] =
-                std::uint64_t{level} << kWeightShift | (c < 0.0f ? kOppositeBit : 0) | code;
+            const auto level = static_cast<std::uint16_t>(
+                std::clamp(1.0f - std::abs(c), 0.0f, 1.0f) * (kLevels - 1) + 0.5f);
+            out[j] = static_cast<std::uint16_t>(level | (c < 0.0f ? kOppositeBit : 0));
           }
         }
       });
-  return keys;
+  return codes;
+}
+
+// The edges' entries in Kruskal's order: by weight level, ties in table order. The sign bit is
+// masked out of the sort key.
+template <typename Entry>
+std::vector<Entry> edges_by_weight(const std::vector<std::uint16_t>& codes) {
+  std::vector<std::uint16_t> level(codes.size());
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, codes.size(), 16384),
+                    [&](const tbb::blocked_range<std::size_t>& r) {
+                      for (std::size_t e = r.begin(); e != r.end(); ++e)
+                        level[e] = codes[e] == kNoEdge ? kNoEdge : codes[e] & kLevelMask;
+                    });
+  return stable_order_by_key<Entry>(level, kLevels);
 }
 
 // Union-find whose elements carry their parity (1 = opposite sign) relative to their set's
@@ -168,26 +168,32 @@ class SignedSets {
   std::vector<std::uint8_t> parity_;
 };
 
-// Kruskal over the sorted keys (most confident edges first): each edge that joins two trees
-// joins them so that its ends agree. Serial; O(edges) near-constant-time finds.
-SignedSets spanning_forest(const NeighbourTable& t, const std::vector<std::uint64_t>& sorted_keys) {
+// Kruskal over the edges in weight order (most confident first): each edge that joins two
+// trees joins them so that its ends agree. Serial; near-constant-time finds per edge.
+template <typename Entry>
+SignedSets spanning_forest(const NeighbourTable& t, const std::vector<std::uint16_t>& codes,
+                           const std::vector<Entry>& order) {
   const std::size_t n = t.size();
   SignedSets sets(n);
-  const int shift = slot_bits(t);
-  const std::uint64_t slot_mask = (std::uint64_t{1} << shift) - 1;
   std::size_t joined = 0;
-  for (std::uint64_t key : sorted_keys) {
-    if ((key >> kWeightShift) == kNoEdge || joined + 1 >= n) break;
-    const std::uint64_t code = key & kCodeMask;
-    const std::uint64_t point = code >> shift;
+  for (const Entry e : order) {
+    if (joined + 1 >= n) break;
     std::uint8_t pa = 0, pb = 0;
-    const std::uint32_t ra = sets.find(static_cast<std::uint32_t>(point), pa);
-    const std::uint32_t rb = sets.find(t.indices[point * t.k + (code & slot_mask)], pb);
+    const std::uint32_t ra = sets.find(static_cast<std::uint32_t>(e / t.k), pa);
+    const std::uint32_t rb = sets.find(t.indices[e], pb);
     if (ra == rb) continue;
-    sets.unite(ra, pa, rb, pb, (key & kOppositeBit) != 0 ? 1 : 0);
+    sets.unite(ra, pa, rb, pb, (codes[e] & kOppositeBit) != 0 ? 1 : 0);
     ++joined;
   }
   return sets;
+}
+
+// The signed spanning forest of the graph with 32-bit entry numbers where they suffice.
+SignedSets signed_forest(const std::vector<Eigen::Vector3f>& smooth, const NeighbourTable& t) {
+  const std::vector<std::uint16_t> codes = edge_codes(smooth, t);
+  if (codes.size() <= std::numeric_limits<std::uint32_t>::max())
+    return spanning_forest(t, codes, edges_by_weight<std::uint32_t>(codes));
+  return spanning_forest(t, codes, edges_by_weight<std::uint64_t>(codes));
 }
 
 // The components of the forest: each point's component number (0, 1, ... in the order of
@@ -357,10 +363,7 @@ OrientedNormals orient_by_propagation(const std::vector<Eigen::Vector3f>& positi
   OrientedNormals out;
   if (positions.empty()) return out;
   const std::vector<Eigen::Vector3f> smooth = tensor_smoothed(normals, neighbours);
-  std::vector<std::uint64_t> keys = edge_keys(smooth, neighbours);
-  stable_sort_by_digit(keys, kWeightShift);
-  const SignedSets forest = spanning_forest(neighbours, keys);
-  keys = {};
+  const SignedSets forest = signed_forest(smooth, neighbours);
   std::vector<std::uint32_t> root;
   std::vector<std::uint8_t> parity;
   forest.roots(root, parity);

@@ -278,4 +278,10 @@ std::vector<ClosedObject> closed_test_objects() {
           box_with_hole_object()};
 }
 
+std::optional<ClosedObject> closed_test_object(const std::string& name) {
+  for (ClosedObject& o : closed_test_objects())
+    if (o.name == name) return std::move(o);
+  return std::nullopt;
+}
+
 }  // namespace meshflow::synthetic

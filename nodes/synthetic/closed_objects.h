@@ -8,6 +8,7 @@
 #include <Eigen/Geometry>
 #include <cstdint>
 #include <functional>
+#include <optional>
 #include <random>
 #include <string>
 #include <vector>
@@ -51,5 +52,9 @@ ClosedObject box_with_hole_object();   ///< 0.8 x 0.8 x 0.4 m box, a 0.15 m-radi
 
 /// The five objects above, in that order.
 std::vector<ClosedObject> closed_test_objects();
+
+/// The object of closed_test_objects() called `name` ("sphere", "torus", "l-shape",
+/// "chamfered-cube", "box-with-hole"), or nullopt.
+std::optional<ClosedObject> closed_test_object(const std::string& name);
 
 }  // namespace meshflow::synthetic

@@ -62,14 +62,6 @@ void radix_sort(std::vector<std::uint64_t>& keys) {
   if (src != &keys) keys.swap(buffer);
 }
 
-void stable_sort_by_digit(std::vector<std::uint64_t>& keys, int shift) {
-  static_assert(kRadixDigitValues == kBuckets, "one digit of the radix sort");
-  if (keys.size() < 2) return;
-  std::vector<std::uint64_t> sorted(keys.size());
-  radix_pass(keys, sorted, shift);
-  keys.swap(sorted);
-}
-
 template <typename Index>
 std::vector<Index> stable_order_by_key(const std::vector<std::uint16_t>& key, std::size_t buckets) {
   const std::size_t n = key.size();

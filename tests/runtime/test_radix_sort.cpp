@@ -26,5 +26,20 @@ TEST(RadixSort, MatchesStdSortOnWideAndNarrowKeys) {
   EXPECT_TRUE(empty.empty());
 }
 
+TEST(RadixSort, StableOrderByASmallKeyMatchesStdStableSortAndSkipsSentinels) {
+  std::mt19937 rng(3);
+  std::vector<std::uint16_t> key(200000);  // several parallel blocks
+  for (auto& k : key) k = static_cast<std::uint16_t>(rng() % 40 == 0 ? 0xffff : rng() % 2048);
+  std::vector<std::uint32_t> expected;
+  for (std::uint32_t i = 0; i < key.size(); ++i)
+    if (key[i] < 2048) expected.push_back(i);
+  std::stable_sort(expected.begin(), expected.end(),
+                   [&](std::uint32_t a, std::uint32_t b) { return key[a] < key[b]; });
+  EXPECT_EQ(stable_order_by_key<std::uint32_t>(key, 2048), expected);
+  const std::vector<std::uint64_t> wide = stable_order_by_key<std::uint64_t>(key, 2048);
+  EXPECT_TRUE(std::equal(wide.begin(), wide.end(), expected.begin(), expected.end()));
+  EXPECT_TRUE(stable_order_by_key<std::uint32_t>({}, 2048).empty());
+}
+
 }  // namespace
 }  // namespace meshflow

@@ -129,6 +129,53 @@ TEST(Cli, InfoAndDemo) {
   EXPECT_TRUE(std::filesystem::exists(out));
 }
 
+TEST(Cli, AnObjectWithoutASensorIsMeshedWatertightAndMeasuredAgainstItsTruth) {
+  const std::string dir = test::temp_dir();
+  CliRun r = run_cli("sample torus --points 30000 -o " + dir + "/torus.ply");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  r = run_cli("info " + dir + "/torus.ply");
+  EXPECT_NE(r.out.find("--orient auto = propagate"), std::string::npos) << r.out;
+  r = run_cli("reconstruct " + dir + "/torus.ply -o " + dir + "/mesh.ply --voxel 0.02");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("normals    estimated, oriented by propagation (1 component"),
+            std::string::npos)
+      << r.out;
+  r = run_cli("eval " + dir + "/mesh.ply --object torus");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("(watertight)"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("surface -> truth"), std::string::npos) << r.out;
+
+  // With exact normals in the file they are used as they are; --normals estimate re-estimates.
+  r = run_cli("sample chamfered-cube --points 30000 --normals -o " + dir + "/cube.ply");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  r = run_cli("reconstruct " + dir + "/cube.ply -o " + dir + "/cube_mesh.ply --voxel 0.02");
+  EXPECT_NE(r.out.find("normals    from the input"), std::string::npos) << r.out;
+  r = run_cli("reconstruct " + dir + "/cube.ply -o " + dir +
+              "/cube_mesh.ply --voxel 0.02 --normals estimate --orient input");
+  EXPECT_NE(r.out.find("normals    estimated, oriented as the input normals"), std::string::npos)
+      << r.out;
+  r = run_cli("reconstruct " + dir + "/cube.ply -o " + dir +
+              "/cube_mesh.ply --voxel 0.02 --normals estimate --orient away=0,0,0");
+  EXPECT_NE(r.out.find("normals    estimated, oriented away from the viewpoint"), std::string::npos)
+      << r.out;
+}
+
+TEST(Cli, OrientationAndObjectUsageErrors) {
+  EXPECT_EQ(run_cli("reconstruct a.ply -o b.ply --orient sideways").exit_code, 2);
+  EXPECT_EQ(run_cli("reconstruct a.ply -o b.ply --orient viewpoint=1,2").exit_code, 2);
+  EXPECT_EQ(run_cli("reconstruct a.ply -o b.ply --orient viewpoint=1,2,nan").exit_code, 2);
+  EXPECT_EQ(run_cli("reconstruct a.ply -o b.ply --normals guess").exit_code, 2);
+  EXPECT_EQ(run_cli("sample teapot -o x.ply").exit_code, 2);
+  EXPECT_EQ(run_cli("eval m.ply --object teapot").exit_code, 2);
+  EXPECT_EQ(run_cli("eval m.ply --object torus --reference r.ply").exit_code, 2);
+  // A file without normals cannot be meshed with --normals input: one line naming why.
+  const std::string dir = test::temp_dir();
+  ASSERT_EQ(run_cli("sample sphere --points 2000 -o " + dir + "/s.ply").exit_code, 0);
+  const CliRun r = run_cli("reconstruct " + dir + "/s.ply -o " + dir + "/m.ply --normals input");
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.err.find("carries no normals"), std::string::npos) << r.err;
+}
+
 // A 3DTK scan whose second line ends after two numbers.
 constexpr const char* kTruncatedScan = "100 0 50\n120 10\n";
 

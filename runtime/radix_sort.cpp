@@ -62,40 +62,6 @@ void radix_sort(std::vector<std::uint64_t>& keys) {
   if (src != &keys) keys.swap(buffer);
 }
 
-template <typename Index>
-std::vector<Index> stable_order_by_key(const std::vector<std::uint16_t>& key, std::size_t buckets) {
-  const std::size_t n = key.size();
-  const std::size_t blocks = (n + kBlock - 1) / kBlock;
-  std::vector<std::size_t> offsets(blocks * buckets, 0);  // [block][bucket]
-  tbb::parallel_for(std::size_t{0}, blocks, [&](std::size_t b) {
-    std::size_t* h = offsets.data() + b * buckets;
-    const std::size_t end = std::min(n, (b + 1) * kBlock);
-    for (std::size_t i = b * kBlock; i < end; ++i)
-      if (key[i] < buckets) ++h[key[i]];
-  });
-  std::size_t sum = 0;
-  for (std::size_t d = 0; d < buckets; ++d) {
-    for (std::size_t b = 0; b < blocks; ++b) {
-      const std::size_t c = offsets[b * buckets + d];
-      offsets[b * buckets + d] = sum;
-      sum += c;
-    }
-  }
-  std::vector<Index> order(sum);
-  tbb::parallel_for(std::size_t{0}, blocks, [&](std::size_t b) {
-    std::size_t* at = offsets.data() + b * buckets;
-    const std::size_t end = std::min(n, (b + 1) * kBlock);
-    for (std::size_t i = b * kBlock; i < end; ++i)
-      if (key[i] < buckets) order[at[key[i]]++] = static_cast<Index>(i);
-  });
-  return order;
-}
-
-template std::vector<std::uint32_t> stable_order_by_key<std::uint32_t>(
-    const std::vector<std::uint16_t>&, std::size_t);
-template std::vector<std::uint64_t> stable_order_by_key<std::uint64_t>(
-    const std::vector<std::uint16_t>&, std::size_t);
-
 void radix_sort_unique(std::vector<std::uint64_t>& keys) {
   radix_sort(keys);
   keys.erase(std::unique(keys.begin(), keys.end()), keys.end());

@@ -2,6 +2,9 @@
 // Radix sort for 64-bit keys (voxel keys, edge keys): linear time, deterministic, several times
 // faster than a comparison sort for the millions of keys a sparse grid produces.
 
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
 #include <cstdint>
 #include <vector>
 
@@ -12,12 +15,43 @@ namespace meshflow {
 /// blocks of keys; the result is the same for any thread count. O(n) time, O(n) extra memory.
 void radix_sort(std::vector<std::uint64_t>& keys);
 
-/// The indices 0 .. key.size() - 1 ordered by key[i] (values below `buckets`), ties in index
-/// order: a counting sort with per-block histograms joined in block order, parallel and
-/// deterministic. Keys of `buckets` or more are left out (a sentinel for "no item").
-/// O(n + buckets x blocks); indices must fit in Index.
-template <typename Index>
-std::vector<Index> stable_order_by_key(const std::vector<std::uint16_t>& key, std::size_t buckets);
+/// A stable counting sort of the items 0 .. n - 1 by key_of(i) (values below `buckets`; items
+/// whose key is `buckets` or more are left out): returns value_of(i) of the kept items ordered
+/// by key, ties in index order. Per-block histograms joined in block order: parallel and
+/// deterministic. key_of and value_of must be thread-safe. O(n + buckets x blocks).
+template <typename Value, typename KeyOf, typename ValueOf>
+std::vector<Value> counting_sort(std::size_t n, std::size_t buckets, KeyOf key_of,
+                                 ValueOf value_of) {
+  constexpr std::size_t kBlock = std::size_t{1} << 16;
+  const std::size_t blocks = (n + kBlock - 1) / kBlock;
+  std::vector<std::size_t> offsets(blocks * buckets, 0);  // [block][bucket]
+  tbb::parallel_for(std::size_t{0}, blocks, [&](std::size_t b) {
+    std::size_t* h = offsets.data() + b * buckets;
+    const std::size_t end = std::min(n, (b + 1) * kBlock);
+    for (std::size_t i = b * kBlock; i < end; ++i) {
+      const std::size_t k = key_of(i);
+      if (k < buckets) ++h[k];
+    }
+  });
+  std::size_t sum = 0;
+  for (std::size_t d = 0; d < buckets; ++d) {
+    for (std::size_t b = 0; b < blocks; ++b) {
+      const std::size_t c = offsets[b * buckets + d];
+      offsets[b * buckets + d] = sum;
+      sum += c;
+    }
+  }
+  std::vector<Value> sorted(sum);
+  tbb::parallel_for(std::size_t{0}, blocks, [&](std::size_t b) {
+    std::size_t* at = offsets.data() + b * buckets;
+    const std::size_t end = std::min(n, (b + 1) * kBlock);
+    for (std::size_t i = b * kBlock; i < end; ++i) {
+      const std::size_t k = key_of(i);
+      if (k < buckets) sorted[at[k]++] = value_of(i);
+    }
+  });
+  return sorted;
+}
 
 /// radix_sort() followed by removal of duplicates.
 void radix_sort_unique(std::vector<std::uint64_t>& keys);

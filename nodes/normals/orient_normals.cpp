@@ -7,6 +7,7 @@
 #include <cmath>
 #include <limits>
 #include <numeric>
+#include <type_traits>
 
 #include "runtime/parallel.h"
 #include "runtime/radix_sort.h"
@@ -92,18 +93,41 @@ std::vector<std::uint16_t> edge_codes(const std::vector<Eigen::Vector3f>& m,
   return codes;
 }
 
-// The edges' entries in Kruskal's order: by weight level, ties in table order. The sign bit is
-// masked out of the sort key.
+// The edges' entries in Kruskal's order: by weight level, ties in table order, each with its
+// kOppositeBit moved to the entry's top bit (read here in parallel rather than in the serial
+// loop). Entries must leave the top bit free.
+template <typename Entry>
+constexpr Entry kEntryOpposite = Entry{1} << (8 * sizeof(Entry) - 1);
+
 template <typename Entry>
 std::vector<Entry> edges_by_weight(const std::vector<std::uint16_t>& codes) {
-  std::vector<std::uint16_t> level(codes.size());
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, codes.size(), 16384),
-                    [&](const tbb::blocked_range<std::size_t>& r) {
-                      for (std::size_t e = r.begin(); e != r.end(); ++e)
-                        level[e] = codes[e] == kNoEdge ? kNoEdge : codes[e] & kLevelMask;
-                    });
-  return stable_order_by_key<Entry>(level, kLevels);
+  return counting_sort<Entry>(
+      codes.size(), kLevels,
+      [&codes](std::size_t e) {
+        return codes[e] == kNoEdge ? std::size_t{kLevels}
+                                   : static_cast<std::size_t>(codes[e] & kLevelMask);
+      },
+      [&codes](std::size_t e) {
+        const auto entry = static_cast<Entry>(e);
+        return (codes[e] & kOppositeBit) != 0 ? entry | kEntryOpposite<Entry> : entry;
+      });
 }
+
+// Exact e / k for e < 2^31 and 1 <= k < 2^16 by a multiply and a shift: with s = 32 +
+// ceil(log2 k) and m = ceil(2^s / k), e m / 2^s exceeds e / k by less than 1 / (2k), so the
+// floor is the quotient. Keeps a division out of the serial loop.
+struct SmallDivisor {
+  std::uint64_t multiplier;
+  int shift;
+  explicit SmallDivisor(std::uint64_t k) {
+    assert(k >= 1 && k < (1u << 16));
+    int log = 0;
+    while ((std::uint64_t{1} << log) < k) ++log;
+    shift = 32 + log;
+    multiplier = ((std::uint64_t{1} << shift) + k - 1) / k;
+  }
+  std::uint64_t divide(std::uint32_t e) const { return (e * multiplier) >> shift; }
+};
 
 // Union-find whose elements carry their parity (1 = opposite sign) relative to their set's
 // root, so that the spanning forest and the propagation of signs along it are one pass: an edge
@@ -111,28 +135,24 @@ std::vector<Entry> edges_by_weight(const std::vector<std::uint16_t>& codes) {
 // index (deterministic). Not thread-safe; near-constant time per call.
 class SignedSets {
  public:
-  explicit SignedSets(std::size_t n) : parent_(n), parity_(n, 0) {
-    std::iota(parent_.begin(), parent_.end(), 0u);
+  // Elements up to 2^31 (the link's top bit holds the parity).
+  explicit SignedSets(std::size_t n) : link_(n) {
+    assert(n < kParityBit);
+    std::iota(link_.begin(), link_.end(), 0u);
   }
 
-  // The root of x's set; `parity` receives x's parity to it. Compresses the path.
+  // The root of x's set; `parity` receives x's parity to it. Path halving: each element passed
+  // is linked to its grandparent, with the parity of the two steps combined.
   std::uint32_t find(std::uint32_t x, std::uint8_t& parity) {
-    std::uint32_t root = x;
-    std::uint8_t to_root = 0;
-    while (parent_[root] != root) {
-      to_root ^= parity_[root];
-      root = parent_[root];
+    std::uint32_t to_root = 0;
+    while (parent(x) != x) {
+      const std::uint32_t up = link_[parent(x)];
+      link_[x] = (up & kParentMask) | ((link_[x] ^ up) & kParityBit);
+      to_root ^= link_[x];
+      x = link_[x] & kParentMask;
     }
-    parity = to_root;
-    for (std::uint32_t y = x; parent_[y] != root && y != root;) {
-      const std::uint32_t next = parent_[y];
-      const std::uint8_t step = parity_[y];
-      parent_[y] = root;
-      parity_[y] = to_root;
-      to_root ^= step;
-      y = next;
-    }
-    return root;
+    parity = static_cast<std::uint8_t>(to_root >> 31);
+    return x;
   }
 
   // Joins the sets of roots ra and rb (distinct) so that parity(a) ^ parity(b) == opposite,
@@ -140,49 +160,54 @@ class SignedSets {
   void unite(std::uint32_t ra, std::uint8_t pa, std::uint32_t rb, std::uint8_t pb,
              std::uint8_t opposite) {
     const std::uint32_t root = std::min(ra, rb), child = std::max(ra, rb);
-    parent_[child] = root;
-    parity_[child] = static_cast<std::uint8_t>(pa ^ pb ^ opposite);
+    link_[child] = root | (static_cast<std::uint32_t>(pa ^ pb ^ opposite) << 31);
   }
 
   // Every element's root and parity to it, without changing the sets. Parallel, read-only.
   void roots(std::vector<std::uint32_t>& root, std::vector<std::uint8_t>& parity) const {
-    root.resize(parent_.size());
-    parity.resize(parent_.size());
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, parent_.size(), 8192),
+    root.resize(link_.size());
+    parity.resize(link_.size());
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, link_.size(), 8192),
                       [&](const tbb::blocked_range<std::size_t>& r) {
                         for (std::size_t i = r.begin(); i != r.end(); ++i) {
                           auto x = static_cast<std::uint32_t>(i);
-                          std::uint8_t p = 0;
-                          while (parent_[x] != x) {
-                            p ^= parity_[x];
-                            x = parent_[x];
+                          std::uint32_t p = 0;
+                          while (parent(x) != x) {
+                            p ^= link_[x];
+                            x = parent(x);
                           }
                           root[i] = x;
-                          parity[i] = p;
+                          parity[i] = static_cast<std::uint8_t>(p >> 31);
                         }
                       });
   }
 
  private:
-  std::vector<std::uint32_t> parent_;
-  std::vector<std::uint8_t> parity_;
+  static constexpr std::uint32_t kParityBit = 0x80000000u;
+  static constexpr std::uint32_t kParentMask = kParityBit - 1;
+  std::uint32_t parent(std::uint32_t x) const { return link_[x] & kParentMask; }
+
+  std::vector<std::uint32_t> link_;  // parent index | parity to the parent << 31
 };
 
 // Kruskal over the edges in weight order (most confident first): each edge that joins two
 // trees joins them so that its ends agree. Serial; near-constant-time finds per edge.
 template <typename Entry>
-SignedSets spanning_forest(const NeighbourTable& t, const std::vector<std::uint16_t>& codes,
-                           const std::vector<Entry>& order) {
+SignedSets spanning_forest(const NeighbourTable& t, const std::vector<Entry>& order) {
   const std::size_t n = t.size();
   SignedSets sets(n);
+  const SmallDivisor row_of(std::is_same_v<Entry, std::uint32_t> ? t.k : 1);
   std::size_t joined = 0;
-  for (const Entry e : order) {
+  for (const Entry tagged : order) {
     if (joined + 1 >= n) break;
+    const Entry e = tagged & ~kEntryOpposite<Entry>;
+    const auto point = static_cast<std::uint32_t>(
+        std::is_same_v<Entry, std::uint32_t> ? row_of.divide(e) : e / t.k);
     std::uint8_t pa = 0, pb = 0;
-    const std::uint32_t ra = sets.find(static_cast<std::uint32_t>(e / t.k), pa);
+    const std::uint32_t ra = sets.find(point, pa);
     const std::uint32_t rb = sets.find(t.indices[e], pb);
     if (ra == rb) continue;
-    sets.unite(ra, pa, rb, pb, (codes[e] & kOppositeBit) != 0 ? 1 : 0);
+    sets.unite(ra, pa, rb, pb, (tagged & kEntryOpposite<Entry>) != 0 ? 1 : 0);
     ++joined;
   }
   return sets;
@@ -191,9 +216,9 @@ SignedSets spanning_forest(const NeighbourTable& t, const std::vector<std::uint1
 // The signed spanning forest of the graph with 32-bit entry numbers where they suffice.
 SignedSets signed_forest(const std::vector<Eigen::Vector3f>& smooth, const NeighbourTable& t) {
   const std::vector<std::uint16_t> codes = edge_codes(smooth, t);
-  if (codes.size() <= std::numeric_limits<std::uint32_t>::max())
-    return spanning_forest(t, codes, edges_by_weight<std::uint32_t>(codes));
-  return spanning_forest(t, codes, edges_by_weight<std::uint64_t>(codes));
+  if (codes.size() < (std::size_t{1} << 31) && t.k < (1u << 16))
+    return spanning_forest(t, edges_by_weight<std::uint32_t>(codes));
+  return spanning_forest(t, edges_by_weight<std::uint64_t>(codes));
 }
 
 // The components of the forest: each point's component number (0, 1, ... in the order of

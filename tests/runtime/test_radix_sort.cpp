@@ -26,7 +26,7 @@ TEST(RadixSort, MatchesStdSortOnWideAndNarrowKeys) {
   EXPECT_TRUE(empty.empty());
 }
 
-TEST(RadixSort, StableOrderByASmallKeyMatchesStdStableSortAndSkipsSentinels) {
+TEST(RadixSort, CountingSortMatchesStdStableSortAndSkipsSentinels) {
   std::mt19937 rng(3);
   std::vector<std::uint16_t> key(200000);  // several parallel blocks
   for (auto& k : key) k = static_cast<std::uint16_t>(rng() % 40 == 0 ? 0xffff : rng() % 2048);
@@ -35,10 +35,16 @@ TEST(RadixSort, StableOrderByASmallKeyMatchesStdStableSortAndSkipsSentinels) {
     if (key[i] < 2048) expected.push_back(i);
   std::stable_sort(expected.begin(), expected.end(),
                    [&](std::uint32_t a, std::uint32_t b) { return key[a] < key[b]; });
-  EXPECT_EQ(stable_order_by_key<std::uint32_t>(key, 2048), expected);
-  const std::vector<std::uint64_t> wide = stable_order_by_key<std::uint64_t>(key, 2048);
-  EXPECT_TRUE(std::equal(wide.begin(), wide.end(), expected.begin(), expected.end()));
-  EXPECT_TRUE(stable_order_by_key<std::uint32_t>({}, 2048).empty());
+  auto key_of = [&](std::size_t i) { return std::size_t{key[i]}; };
+  auto index = [](std::size_t i) { return static_cast<std::uint32_t>(i); };
+  EXPECT_EQ(counting_sort<std::uint32_t>(key.size(), 2048, key_of, index), expected);
+  // The stored values are value_of(i), here i with a tag in the top bit.
+  const std::vector<std::uint64_t> tagged = counting_sort<std::uint64_t>(
+      key.size(), 2048, key_of, [](std::size_t i) { return (std::uint64_t{1} << 63) | i; });
+  ASSERT_EQ(tagged.size(), expected.size());
+  for (std::size_t i = 0; i < tagged.size(); ++i)
+    ASSERT_EQ(tagged[i], (std::uint64_t{1} << 63) | expected[i]);
+  EXPECT_TRUE(counting_sort<std::uint32_t>(0, 2048, key_of, index).empty());
 }
 
 }  // namespace

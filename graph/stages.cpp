@@ -97,7 +97,9 @@ std::uint64_t index(Frame& f, const ReconstructionConfig&) {
 
 std::uint64_t normals(Frame& f, const ReconstructionConfig& c) {
   if (f.normals_from_image) return 0;  // already estimated from image neighbours
-  ComputedNormals computed = compute_normals(f.cloud, *f.index, c.normals);
+  NormalsConfig config = c.normals;
+  if (c.extract.method == ExtractMethod::kExtendedMarchingCubes) config.sharp_features = true;
+  ComputedNormals computed = compute_normals(f.cloud, *f.index, config);
   f.cloud.normals = std::move(computed.normals);
   f.normals = computed.report;
   return computed.report.estimated;

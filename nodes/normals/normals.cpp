@@ -14,11 +14,12 @@ namespace {
 
 struct LocalFrame {
   Eigen::Vector3d mean;
-  Eigen::Matrix3d axes;  // columns: principal axes, smallest variance first
+  Eigen::Matrix3d axes;    // columns: principal axes, smallest variance first
+  Eigen::Vector3d values;  // the covariance's eigenvalues, ascending
 };
 
 LocalFrame principal_frame(const std::vector<Eigen::Vector3f>& pts, std::size_t n) {
-  LocalFrame f{Eigen::Vector3d::Zero(), Eigen::Matrix3d::Identity()};
+  LocalFrame f{Eigen::Vector3d::Zero(), Eigen::Matrix3d::Identity(), Eigen::Vector3d::Zero()};
   for (std::size_t i = 0; i < n; ++i) f.mean += pts[i].cast<double>();
   f.mean /= static_cast<double>(n);
   Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
@@ -29,6 +30,7 @@ LocalFrame principal_frame(const std::vector<Eigen::Vector3f>& pts, std::size_t 
   Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> solver;
   solver.computeDirect(cov);
   f.axes = solver.eigenvectors();
+  f.values = solver.eigenvalues();
   return f;
 }
 
@@ -61,17 +63,25 @@ std::vector<std::uint8_t> usable_input_normals(const PointCloud& cloud) {
   return usable;
 }
 
-// Unoriented plane-fit normals of the points with wanted[i] (all when `wanted` is empty),
-// from the table's first kn neighbours (more under the adaptive criterion); zero where fewer
-// than 3 neighbours exist.
-std::vector<Eigen::Vector3f> plane_fit_normals(const PointCloud& cloud, const SpatialIndex& index,
-                                               const NeighbourTable& table,
-                                               const std::vector<std::uint8_t>& wanted,
-                                               const NormalsConfig& config) {
+// The least-squares plane of a point's neighbourhood.
+struct PlaneFit {
+  Eigen::Vector3f normal = Eigen::Vector3f::Zero();  // unit, either sign; zero: < 3 neighbours
+  Eigen::Vector3f centroid = Eigen::Vector3f::Zero();
+  float variation = 1.0f;  // smallest eigenvalue / their sum: 0 on a plane, 1/3 at most
+  float thickness = 0.0f;  // RMS distance of the neighbours to the plane
+  float spread = 0.0f;     // RMS distance of the neighbours to their centroid
+};
+
+// Plane fits of the points with wanted[i] (all when `wanted` is empty), from the table's first
+// kn neighbours (more under the adaptive criterion).
+std::vector<PlaneFit> plane_fits(const PointCloud& cloud, const SpatialIndex& index,
+                                 const NeighbourTable& table,
+                                 const std::vector<std::uint8_t>& wanted,
+                                 const NormalsConfig& config) {
   const std::size_t kn = static_cast<std::size_t>(std::max(config.kn, 3));
   const std::size_t max_k =
       std::max<std::size_t>(static_cast<std::size_t>(std::max(config.adaptive_max_k, 3)), kn);
-  std::vector<Eigen::Vector3f> normals(cloud.size(), Eigen::Vector3f::Zero());
+  std::vector<PlaneFit> fits(cloud.size());
   tbb::parallel_for(
       tbb::blocked_range<std::size_t>(0, cloud.size(), 512),
       [&](const tbb::blocked_range<std::size_t>& r) {
@@ -90,9 +100,56 @@ std::vector<Eigen::Vector3f> plane_fit_normals(const PointCloud& cloud, const Sp
             for (std::size_t j = 0; j < k; ++j) pts[j] = cloud.positions[idx[j]];
             frame = principal_frame(pts, k);
           }
-          normals[i] = frame.axes.col(0).normalized().cast<float>();
+          PlaneFit& f = fits[i];
+          f.normal = frame.axes.col(0).normalized().cast<float>();
+          f.centroid = frame.mean.cast<float>();
+          const double total = frame.values.sum();
+          f.variation = total > 0.0 ? static_cast<float>(frame.values[0] / total) : 1.0f;
+          f.thickness = static_cast<float>(std::sqrt(std::max(0.0, frame.values[0]) / k));
+          f.spread = static_cast<float>(std::sqrt(std::max(0.0, total) / k));
         }
       });
+  return fits;
+}
+
+std::vector<Eigen::Vector3f> normals_of(const std::vector<PlaneFit>& fits) {
+  std::vector<Eigen::Vector3f> normals(fits.size());
+  for (std::size_t i = 0; i < fits.size(); ++i) normals[i] = fits[i].normal;
+  return normals;
+}
+
+// Neighbourhood shifting for sharp features: each point takes the plane of the flattest
+// neighbourhood (least variation) among its own and those of its neighbours and their
+// neighbours (two rings of the table) that passes through it, i.e. within twice that plane's
+// thickness (plus 0.1 % of its spread) of the point. Near a sharp edge every neighbourhood
+// around a point straddles the edge, but some a little farther along the point's own face do
+// not, and their plane is that face's (measured on a box: normals more than 5 degrees off 5 800
+// -> 83 of 100 000). Parallel over points; O(n k^2).
+std::vector<Eigen::Vector3f> flattest_plane_normals(const std::vector<PlaneFit>& fits,
+                                                    const PointCloud& cloud,
+                                                    const NeighbourTable& table,
+                                                    const std::vector<std::uint8_t>& wanted) {
+  std::vector<Eigen::Vector3f> normals = normals_of(fits);
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, cloud.size(), 512),
+                    [&](const tbb::blocked_range<std::size_t>& r) {
+                      for (std::size_t i = r.begin(); i != r.end(); ++i) {
+                        if (!wanted.empty() && !wanted[i]) continue;
+                        float best = fits[i].variation;
+                        auto consider = [&](std::uint32_t j) {
+                          const PlaneFit& f = fits[j];
+                          if (f.variation >= best || f.normal.isZero()) return;
+                          const float d = std::abs(f.normal.dot(cloud.positions[i] - f.centroid));
+                          if (d > 2.0f * f.thickness + 1e-3f * f.spread) return;
+                          best = f.variation;
+                          normals[i] = f.normal;
+                        };
+                        for (std::uint32_t a = 0; a < table.counts[i]; ++a) {
+                          const std::uint32_t j = table.row(i)[a];
+                          for (std::uint32_t b = 0; b < table.counts[j]; ++b)
+                            consider(table.row(j)[b]);
+                        }
+                      }
+                    });
   return normals;
 }
 
@@ -112,10 +169,12 @@ void orient_to_viewpoint(const PointCloud& cloud, const Eigen::Vector3f& viewpoi
 }
 
 // Normal interpolation (thesis ki): each point with `smooth[i]` (all when empty) takes the
-// normalised sum of its ki nearest neighbours' oriented normals.
+// normalised sum of its ki nearest neighbours' oriented normals, leaving out those whose dot
+// product with its own is below `min_agreement` (-1: none left out).
 std::vector<Eigen::Vector3f> interpolate(const std::vector<Eigen::Vector3f>& normals,
                                          const NeighbourTable& table, std::size_t ki,
-                                         const std::vector<std::uint8_t>& smooth) {
+                                         const std::vector<std::uint8_t>& smooth,
+                                         float min_agreement) {
   std::vector<Eigen::Vector3f> smoothed(normals.size());
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, normals.size(), 1024),
                     [&](const tbb::blocked_range<std::size_t>& r) {
@@ -126,7 +185,10 @@ std::vector<Eigen::Vector3f> interpolate(const std::vector<Eigen::Vector3f>& nor
                         }
                         Eigen::Vector3f sum = Eigen::Vector3f::Zero();
                         const std::size_t k = std::min<std::size_t>(ki, table.counts[i]);
-                        for (std::size_t j = 0; j < k; ++j) sum += normals[table.row(i)[j]];
+                        for (std::size_t j = 0; j < k; ++j) {
+                          const Eigen::Vector3f& n = normals[table.row(i)[j]];
+                          if (n.dot(normals[i]) >= min_agreement) sum += n;
+                        }
                         const float len = sum.norm();
                         smoothed[i] = len > 0.0f ? Eigen::Vector3f(sum / len) : normals[i];
                       }
@@ -213,7 +275,10 @@ ComputedNormals compute_normals(const PointCloud& cloud, const SpatialIndex& ind
   const std::size_t kn = static_cast<std::size_t>(std::max(config.kn, 3));
   const std::size_t ki = static_cast<std::size_t>(std::max(config.ki, 1));
   const NeighbourTable table = build_neighbour_table(cloud.positions, index, std::max(kn, ki));
-  std::vector<Eigen::Vector3f> fitted = plane_fit_normals(cloud, index, table, estimate, config);
+  const std::vector<PlaneFit> fits = plane_fits(cloud, index, table, estimate, config);
+  std::vector<Eigen::Vector3f> fitted = config.sharp_features
+                                            ? flattest_plane_normals(fits, cloud, table, estimate)
+                                            : normals_of(fits);
 
   switch (orientation) {
     case NormalOrientation::kAuto:  // resolved above
@@ -252,7 +317,10 @@ ComputedNormals compute_normals(const PointCloud& cloud, const SpatialIndex& ind
       break;
     }
   }
-  out.normals = ki <= 1 ? std::move(fitted) : interpolate(fitted, table, ki, estimate);
+  // With sharp features, neighbours across an edge (more than 25 degrees off) are not averaged.
+  const float min_agreement = config.sharp_features ? 0.9f : -1.0f;
+  out.normals =
+      ki <= 1 ? std::move(fitted) : interpolate(fitted, table, ki, estimate, min_agreement);
   return out;
 }
 

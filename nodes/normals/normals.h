@@ -49,6 +49,14 @@ struct NormalsConfig {
   NormalOrientation orientation = NormalOrientation::kAuto;
   Eigen::Vector3f viewpoint = Eigen::Vector3f::Zero();  ///< metres, world frame
   PropagationConfig propagation;                        ///< kPropagate / kInput
+  /// Normals for sharp features (extended marching cubes): each point takes the plane of the
+  /// flattest neighbourhood within two rings of neighbours that passes through it
+  /// (neighbourhood shifting), and interpolation skips neighbours more than 25 degrees off, so
+  /// points beside a box edge get their face's normal instead of a blend of two faces. For
+  /// exact or lightly noisy samples of CAD-like parts; on noisy scans it keeps the noise (at 0.2
+  /// voxel of noise the mean error rises from 0.11 to 0.14 voxel). The reconstruction pipeline
+  /// turns it on with `--extract emc`.
+  bool sharp_features = false;
 };
 
 /// What compute_normals() did.

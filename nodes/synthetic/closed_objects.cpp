@@ -77,12 +77,28 @@ std::vector<Eigen::Vector3f> polytope_face(const std::vector<Eigen::Vector3f>& n
   return poly;
 }
 
+// Every edge of a convex polytope's face is a sharp edge (shared with the face whose plane
+// clipped it) and every vertex a corner; each edge is listed by both of its faces, so only
+// once here (from the face where it runs in increasing order of its endpoints).
 ClosedObject convex_polytope_object(std::string name, std::vector<Eigen::Vector3f> normals,
                                     std::vector<float> offsets, float half_size) {
   ClosedObject o;
   o.name = std::move(name);
-  for (std::size_t f = 0; f < normals.size(); ++f)
-    add_convex_polygon(o.patches, polytope_face(normals, offsets, f, half_size));
+  auto before = [](const Eigen::Vector3f& a, const Eigen::Vector3f& b) {
+    return std::lexicographical_compare(a.data(), a.data() + 3, b.data(), b.data() + 3);
+  };
+  for (std::size_t f = 0; f < normals.size(); ++f) {
+    const std::vector<Eigen::Vector3f> face = polytope_face(normals, offsets, f, half_size);
+    add_convex_polygon(o.patches, face);
+    for (std::size_t k = 0; k < face.size(); ++k) {
+      const Eigen::Vector3f& a = face[k];
+      const Eigen::Vector3f& b = face[(k + 1) % face.size()];
+      if (before(a, b)) o.feature_edges.emplace_back(a, b);
+      const bool known = std::any_of(o.corners.begin(), o.corners.end(),
+                                     [&](const auto& c) { return (c - a).norm() < 1e-5f; });
+      if (!known) o.corners.push_back(a);
+    }
+  }
   return o;
 }
 
@@ -199,6 +215,15 @@ ClosedObject l_shape_object() {
     add_convex_polygon(o.patches,
                        {at(lo, 0), at({lo.x(), hi.y()}, 0), at(hi, 0), at({hi.x(), lo.y()}, 0)});
   }
+  for (std::size_t k = 0; k < outline.size(); ++k) {  // outline at both heights, verticals
+    const Eigen::Vector2f& a = outline[k];
+    const Eigen::Vector2f& b = outline[(k + 1) % outline.size()];
+    o.feature_edges.emplace_back(at(a, 0), at(b, 0));
+    o.feature_edges.emplace_back(at(a, height), at(b, height));
+    o.feature_edges.emplace_back(at(a, 0), at(a, height));
+    o.corners.push_back(at(a, 0));
+    o.corners.push_back(at(a, height));
+  }
   return finish(o, Eigen::Vector3f(0, 0, 0) + shift - kOffset,
                 Eigen::Vector3f(length, length, height) + shift - kOffset);
 }
@@ -273,9 +298,24 @@ ClosedObject box_with_hole_object() {
   return finish(o, Eigen::Vector3f(-a, -b, -h), Eigen::Vector3f(a, b, h));
 }
 
+ClosedObject box_object() {
+  const Eigen::Vector3f h(0.4f, 0.3f, 0.25f);
+  std::vector<Eigen::Vector3f> normals;
+  std::vector<float> offsets;
+  for (int axis = 0; axis < 3; ++axis)
+    for (float sign : {-1.0f, 1.0f}) {
+      Eigen::Vector3f n = Eigen::Vector3f::Zero();
+      n[axis] = sign;
+      normals.push_back(n);
+      offsets.push_back(n.dot(kOffset) + h[axis]);
+    }
+  ClosedObject o = convex_polytope_object("box", normals, offsets, 4.0f * h.maxCoeff());
+  return finish(o, -h, h);
+}
+
 std::vector<ClosedObject> closed_test_objects() {
-  return {sphere_object(), torus_object(), l_shape_object(), chamfered_cube_object(),
-          box_with_hole_object()};
+  return {sphere_object(),         torus_object(),         l_shape_object(),
+          chamfered_cube_object(), box_with_hole_object(), box_object()};
 }
 
 std::optional<ClosedObject> closed_test_object(const std::string& name) {

@@ -31,6 +31,10 @@ struct ClosedObject {
   std::string name;
   std::vector<SurfacePatch> patches;
   Eigen::AlignedBox3f bounds;  ///< axis-aligned bounding box of the surface
+  /// Sharp edges (segments where faces meet at an angle) and corners of polyhedral objects,
+  /// for measuring how well extraction keeps features; empty for smooth ones.
+  std::vector<std::pair<Eigen::Vector3f, Eigen::Vector3f>> feature_edges;
+  std::vector<Eigen::Vector3f> corners;
 
   /// Exact distance from p to the surface (minimum over the patches), metres. O(patches).
   float distance(const Eigen::Vector3f& p) const;
@@ -49,12 +53,13 @@ ClosedObject torus_object();           ///< radii 0.4 m and 0.15 m, axis z
 ClosedObject l_shape_object();         ///< L-shaped prism 0.8 x 0.8 x 0.3 m, arms 0.3 m wide
 ClosedObject chamfered_cube_object();  ///< 0.6 m cube, one edge cut 0.15 m deep at 45 degrees
 ClosedObject box_with_hole_object();   ///< 0.8 x 0.8 x 0.4 m box, a 0.15 m-radius hole along z
+ClosedObject box_object();             ///< 0.8 x 0.6 x 0.5 m box
 
-/// The five objects above, in that order.
+/// The six objects above, in that order.
 std::vector<ClosedObject> closed_test_objects();
 
 /// The object of closed_test_objects() called `name` ("sphere", "torus", "l-shape",
-/// "chamfered-cube", "box-with-hole"), or nullopt.
+/// "chamfered-cube", "box-with-hole", "box"), or nullopt.
 std::optional<ClosedObject> closed_test_object(const std::string& name);
 
 }  // namespace meshflow::synthetic

@@ -3,8 +3,10 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 #include <random>
 
+#include "nodes/synthetic/closed_objects.h"
 #include "nodes/synthetic/shapes.h"
 #include "runtime/error.h"
 #include "runtime/threads.h"
@@ -134,6 +136,30 @@ TEST(Normals, SourceAndOrientationChoices) {
   EXPECT_EQ(computed.report.orientation, NormalOrientation::kPropagate);
   for (std::size_t i = 0; i < c.size(); ++i)
     EXPECT_GT(computed.normals[i].dot(c.positions[i]), 0.0f);
+}
+
+TEST(Normals, SharpFeatureNormalsKeepEachFaceNormalUpToTheEdge) {
+  // A box sampled uniformly: plane fits beside an edge blend the two faces; with sharp_features
+  // nearly every point gets its own face's normal.
+  const synthetic::ClosedObject box = synthetic::box_object();
+  PointCloud c = box.sample(40000, 0.0f, 8);
+  const std::vector<Eigen::Vector3f> truth = c.normals;
+  c.normals.clear();
+  const KdTreeIndex index(c.positions);
+  auto off_by_more_than_5_degrees = [&](const NormalsConfig& config) {
+    const std::vector<Eigen::Vector3f> n = compute_normals(c, index, config).normals;
+    std::size_t off = 0;
+    for (std::size_t i = 0; i < c.size(); ++i) off += std::abs(n[i].dot(truth[i])) < 0.9962f;
+    return off;
+  };
+  NormalsConfig config;
+  const std::size_t blended = off_by_more_than_5_degrees(config);
+  config.sharp_features = true;
+  const std::size_t sharp = off_by_more_than_5_degrees(config);
+  std::printf("[ normals ] box, more than 5 degrees off: %zu plain, %zu sharp of %zu\n", blended,
+              sharp, c.size());
+  EXPECT_GT(blended, c.size() / 50);
+  EXPECT_LT(sharp, c.size() / 500);
 }
 
 TEST(Normals, CollinearPointsGetFiniteUnitNormals) {

@@ -56,7 +56,7 @@ TEST_P(ClosedSolid, NoisySamplesStillPointOutward) {
   EXPECT_GE(agreeing(propagated(samples).normals, samples.normals), 0.99) << solid.name;
 }
 
-INSTANTIATE_TEST_SUITE_P(Objects, ClosedSolid, ::testing::Range(0, 5),
+INSTANTIATE_TEST_SUITE_P(Objects, ClosedSolid, ::testing::Range(0, 6),
                          [](const ::testing::TestParamInfo<int>& param) {
                            return test::closed_object_test_name(param.param);
                          });

@@ -21,15 +21,15 @@
 namespace meshflow {
 namespace {
 
-struct Errors {
+struct ObjectErrors {
   double mean = 0.0, p95 = 0.0;
 };
 
-Errors vertex_errors(const TriangleMesh& mesh, const synthetic::ClosedObject& object) {
+ObjectErrors object_vertex_errors(const TriangleMesh& mesh, const synthetic::ClosedObject& object) {
   std::vector<float> e;
   e.reserve(mesh.vertices.size());
   for (const Eigen::Vector3f& v : mesh.vertices) e.push_back(object.distance(v));
-  Errors out;
+  ObjectErrors out;
   for (float x : e) out.mean += x;
   out.mean /= static_cast<double>(e.size());
   std::nth_element(e.begin(), e.begin() + static_cast<std::ptrdiff_t>(e.size() * 95 / 100),
@@ -39,7 +39,7 @@ Errors vertex_errors(const TriangleMesh& mesh, const synthetic::ClosedObject& ob
 }
 
 // Six times the enclosed volume: positive when the faces wind outward.
-double signed_volume_6(const TriangleMesh& m) {
+double six_times_volume(const TriangleMesh& m) {
   double v = 0.0;
   for (const Triangle& t : m.triangles)
     v += static_cast<double>(m.vertices[t[0]].dot(m.vertices[t[1]].cross(m.vertices[t[2]])));
@@ -52,13 +52,13 @@ ReconstructionConfig object_config(const synthetic::ClosedObject& object) {
   return c;
 }
 
-FramePtr reconstruct(const ReconstructionConfig& config, PointCloud cloud) {
+FramePtr reconstruct_object(const ReconstructionConfig& config, PointCloud cloud) {
   FramePtr f = ReconstructionPipeline(config).reconstruct(std::move(cloud));
   EXPECT_TRUE(f->ok()) << f->error;
   return f;
 }
 
-PointCloud without_normals(PointCloud cloud) {
+PointCloud points_only(PointCloud cloud) {
   cloud.normals.clear();
   return cloud;
 }
@@ -74,14 +74,14 @@ TEST_P(ClosedObjectReconstruction, WatertightOutwardAndOnTheSurface) {
   const synthetic::ClosedObject object = this->object();
   const ReconstructionConfig config = object_config(object);
   const float voxel = config.voxelize.voxel_size;
-  const FramePtr f = reconstruct(config, without_normals(object.sample(100000, 0.0f, 21)));
+  const FramePtr f = reconstruct_object(config, points_only(object.sample(100000, 0.0f, 21)));
   EXPECT_EQ(f->normals.orientation, NormalOrientation::kPropagate);
   const EdgeStatistics stats = edge_statistics(f->mesh);
   EXPECT_TRUE(stats.closed()) << stats.boundary_edges << " boundary, " << stats.non_manifold_edges
                               << " non-manifold edges";
   EXPECT_EQ(stats.inconsistent_edges, 0u);
-  EXPECT_GT(signed_volume_6(f->mesh), 0.0) << "faces wind inward";
-  const Errors err = vertex_errors(f->mesh, object);
+  EXPECT_GT(six_times_volume(f->mesh), 0.0) << "faces wind inward";
+  const ObjectErrors err = object_vertex_errors(f->mesh, object);
   std::printf("[ accuracy ] %s: mean %.2e, p95 %.2e of the diagonal (%.4f, %.3f voxel)\n",
               object.name.c_str(), err.mean / object.diagonal(), err.p95 / object.diagonal(),
               err.mean / voxel, err.p95 / voxel);
@@ -95,10 +95,11 @@ TEST_P(ClosedObjectReconstruction, NoisySamples) {
   ReconstructionConfig config = object_config(object);
   config.normals.kn = 20;
   const float voxel = config.voxelize.voxel_size;
-  const FramePtr f = reconstruct(config, without_normals(object.sample(100000, 0.2f * voxel, 22)));
+  const FramePtr f =
+      reconstruct_object(config, points_only(object.sample(100000, 0.2f * voxel, 22)));
   EXPECT_TRUE(edge_statistics(f->mesh).closed());
-  EXPECT_GT(signed_volume_6(f->mesh), 0.0);
-  const Errors err = vertex_errors(f->mesh, object);
+  EXPECT_GT(six_times_volume(f->mesh), 0.0);
+  const ObjectErrors err = object_vertex_errors(f->mesh, object);
   std::printf("[ accuracy ] %s, noise 0.2 voxel: mean %.4f voxel\n", object.name.c_str(),
               err.mean / voxel);
   EXPECT_LE(err.mean, 0.1 * voxel);
@@ -111,10 +112,10 @@ INSTANTIATE_TEST_SUITE_P(Objects, ClosedObjectReconstruction, ::testing::Range(0
 
 TEST(ObjectReconstruction, SameMeshWithOneAndTwoThreads) {
   const synthetic::ClosedObject object = synthetic::l_shape_object();
-  const PointCloud cloud = without_normals(object.sample(40000, 0.001f, 23));
+  const PointCloud cloud = points_only(object.sample(40000, 0.001f, 23));
   auto mesh = [&](int threads) {
-    return test::with_threads(threads,
-                              [&] { return reconstruct(object_config(object), cloud)->mesh; });
+    return test::with_threads(
+        threads, [&] { return reconstruct_object(object_config(object), cloud)->mesh; });
   };
   const TriangleMesh one = mesh(1), two = mesh(2);
   EXPECT_EQ(one.vertices, two.vertices);
@@ -133,7 +134,7 @@ TEST(ObjectReconstruction, AFileWithNormalsIsMeshedWithoutEstimation) {
   const PointCloud cloud = io::read_point_cloud(path);
   ASSERT_TRUE(cloud.has_normals());
   const ReconstructionConfig automatic = object_config(object);
-  const FramePtr f = reconstruct(automatic, cloud);
+  const FramePtr f = reconstruct_object(automatic, cloud);
   EXPECT_EQ(f->normals.source, NormalSource::kInput);
   EXPECT_EQ(f->normals.estimated, 0u);
   const auto stage = std::find_if(f->timings.begin(), f->timings.end(),
@@ -143,11 +144,11 @@ TEST(ObjectReconstruction, AFileWithNormalsIsMeshedWithoutEstimation) {
 
   ReconstructionConfig input = automatic;
   input.normals.source = NormalSource::kInput;
-  const FramePtr g = reconstruct(input, cloud);
+  const FramePtr g = reconstruct_object(input, cloud);
   EXPECT_EQ(f->mesh.vertices, g->mesh.vertices);
   EXPECT_EQ(f->mesh.triangles, g->mesh.triangles);
   EXPECT_TRUE(edge_statistics(f->mesh).closed());
-  EXPECT_LE(vertex_errors(f->mesh, object).mean, 0.02 * automatic.voxelize.voxel_size);
+  EXPECT_LE(object_vertex_errors(f->mesh, object).mean, 0.02 * automatic.voxelize.voxel_size);
 }
 
 TEST(ObjectReconstruction, InwardInputNormalsGiveAnInwardMeshAndEstimationFollowsThem) {
@@ -157,11 +158,11 @@ TEST(ObjectReconstruction, InwardInputNormalsGiveAnInwardMeshAndEstimationFollow
   PointCloud cloud = object.sample(30000, 0.0f, 25);
   for (Eigen::Vector3f& n : cloud.normals) n = -n;
   ReconstructionConfig config = object_config(object);
-  EXPECT_LT(signed_volume_6(reconstruct(config, cloud)->mesh), 0.0);
+  EXPECT_LT(six_times_volume(reconstruct_object(config, cloud)->mesh), 0.0);
   config.normals.source = NormalSource::kEstimate;
-  const FramePtr f = reconstruct(config, cloud);
+  const FramePtr f = reconstruct_object(config, cloud);
   EXPECT_EQ(f->normals.orientation, NormalOrientation::kInput);
-  EXPECT_LT(signed_volume_6(f->mesh), 0.0);
+  EXPECT_LT(six_times_volume(f->mesh), 0.0);
 }
 
 TEST(ObjectReconstruction, PlanarStepsFlattenFacesButNotCurvedSurfaces) {
@@ -171,14 +172,14 @@ TEST(ObjectReconstruction, PlanarStepsFlattenFacesButNotCurvedSurfaces) {
   for (const synthetic::ClosedObject& object :
        {synthetic::torus_object(), synthetic::chamfered_cube_object()}) {
     SCOPED_TRACE(object.name);
-    const PointCloud cloud = without_normals(object.sample(60000, 0.0f, 26));
+    const PointCloud cloud = points_only(object.sample(60000, 0.0f, 26));
     ReconstructionConfig config = object_config(object);
-    const FramePtr raw = reconstruct(config, cloud);
+    const FramePtr raw = reconstruct_object(config, cloud);
     config.optimize.steps = parse_optimize_steps("clean,holes,planes,retriangulate");
-    const FramePtr planar = reconstruct(config, cloud);
+    const FramePtr planar = reconstruct_object(config, cloud);
     EXPECT_TRUE(edge_statistics(planar->mesh).closed());
-    const double raw_error = vertex_errors(raw->mesh, object).mean;
-    const double planar_error = vertex_errors(planar->mesh, object).mean;
+    const double raw_error = object_vertex_errors(raw->mesh, object).mean;
+    const double planar_error = object_vertex_errors(planar->mesh, object).mean;
     std::printf("[ planes ] %s: %zu -> %zu triangles, mean error %.2e -> %.2e m\n",
                 object.name.c_str(), raw->mesh.triangles.size(), planar->mesh.triangles.size(),
                 raw_error, planar_error);
@@ -193,12 +194,12 @@ TEST(ObjectReconstruction, PlanarStepsFlattenFacesButNotCurvedSurfaces) {
 
 // Distances (voxels) from points every 0.05 voxel along the object's sharp edges to the mesh
 // surface, and from its corners to the nearest mesh vertex.
-struct FeatureErrors {
+struct ObjectFeatureErrors {
   DistanceStats edges, corners;
 };
 
-FeatureErrors feature_errors(const TriangleMesh& mesh, const synthetic::ClosedObject& object,
-                             float voxel) {
+ObjectFeatureErrors object_feature_errors(const TriangleMesh& mesh,
+                                          const synthetic::ClosedObject& object, float voxel) {
   const MeshDistanceIndex surface(mesh);
   std::vector<float> edges, corners;
   for (const auto& [a, b] : object.feature_edges) {
@@ -221,17 +222,17 @@ TEST(ObjectReconstruction, ExtendedMarchingCubesKeepsEdgesAndCornersWithoutGiven
   for (const synthetic::ClosedObject& object :
        {synthetic::box_object(), synthetic::l_shape_object(), synthetic::chamfered_cube_object()}) {
     SCOPED_TRACE(object.name);
-    const PointCloud cloud = without_normals(object.sample(100000, 0.0f, 27));
+    const PointCloud cloud = points_only(object.sample(100000, 0.0f, 27));
     ReconstructionConfig config = object_config(object);
     const float voxel = config.voxelize.voxel_size;
-    const FramePtr mc = reconstruct(config, cloud);
+    const FramePtr mc = reconstruct_object(config, cloud);
     config.extract.method = ExtractMethod::kExtendedMarchingCubes;
-    const FramePtr emc = reconstruct(config, cloud);
+    const FramePtr emc = reconstruct_object(config, cloud);
     EXPECT_TRUE(edge_statistics(emc->mesh).closed());
-    const FeatureErrors mc_features = feature_errors(mc->mesh, object, voxel);
-    const FeatureErrors emc_features = feature_errors(emc->mesh, object, voxel);
-    const Errors mc_error = vertex_errors(mc->mesh, object);
-    const Errors emc_error = vertex_errors(emc->mesh, object);
+    const ObjectFeatureErrors mc_features = object_feature_errors(mc->mesh, object, voxel);
+    const ObjectFeatureErrors emc_features = object_feature_errors(emc->mesh, object, voxel);
+    const ObjectErrors mc_error = object_vertex_errors(mc->mesh, object);
+    const ObjectErrors emc_error = object_vertex_errors(emc->mesh, object);
     std::printf(
         "[ emc ] %s: edges p95 %.3f voxel (mc %.3f), corners mean %.3f max %.3f (mc %.3f), "
         "vertex p95 %.4f voxel (mc %.4f)\n",
@@ -249,7 +250,7 @@ TEST(ObjectReconstruction, ExtendedMarchingCubesKeepsEdgesAndCornersWithoutGiven
 TEST(ObjectReconstruction, BunnyNormalsAreConsistentAndFaceTheScanner) {
   MESHFLOW_REQUIRE_DATA("objects/bunny.pcd");
   const PointCloud cloud = io::read_point_cloud(test::data_path("objects/bunny.pcd"));
-  const FramePtr f = reconstruct(ReconstructionConfig{}, cloud);
+  const FramePtr f = reconstruct_object(ReconstructionConfig{}, cloud);
   EXPECT_EQ(f->normals.orientation, NormalOrientation::kPropagate);
   // One view of the bunny, scanned from +z: the normals face that side...
   Eigen::Vector3f mean = Eigen::Vector3f::Zero();

@@ -14,15 +14,15 @@ namespace meshflow {
 namespace {
 
 // Share of `normals` within 90 degrees of `truth`.
-double agreeing(const std::vector<Eigen::Vector3f>& normals,
-                const std::vector<Eigen::Vector3f>& truth) {
+double share_agreeing(const std::vector<Eigen::Vector3f>& normals,
+                      const std::vector<Eigen::Vector3f>& truth) {
   std::size_t agree = 0;
   for (std::size_t i = 0; i < truth.size(); ++i) agree += normals[i].dot(truth[i]) > 0.0f ? 1 : 0;
   return static_cast<double>(agree) / static_cast<double>(truth.size());
 }
 
 // Unit normals of `cloud` estimated and oriented by propagation (cloud.normals ignored).
-ComputedNormals propagated(PointCloud cloud) {
+ComputedNormals propagated_normals(PointCloud cloud) {
   cloud.normals.clear();
   const KdTreeIndex index(cloud.positions);
   NormalsConfig config;
@@ -40,8 +40,8 @@ class ClosedSolid : public ::testing::TestWithParam<int> {
 TEST_P(ClosedSolid, PropagatedNormalsPointOutward) {
   const synthetic::ClosedObject solid = object();
   const PointCloud samples = solid.sample(30000, 0.0f, 11);
-  const ComputedNormals computed = propagated(samples);
-  EXPECT_GE(agreeing(computed.normals, samples.normals), 0.999) << solid.name;
+  const ComputedNormals computed = propagated_normals(samples);
+  EXPECT_GE(share_agreeing(computed.normals, samples.normals), 0.999) << solid.name;
   EXPECT_EQ(computed.report.orientation, NormalOrientation::kPropagate);
   EXPECT_EQ(computed.report.components, 1u) << solid.name;
   EXPECT_EQ(computed.report.estimated, samples.size());
@@ -53,7 +53,8 @@ TEST_P(ClosedSolid, NoisySamplesStillPointOutward) {
   const PointCloud samples = solid.sample(100000, 0.002f * solid.diagonal(), 12);
   // Plane fits on noisy points can be off by more than 90 degrees whatever the orientation;
   // the bound is on orientation mistakes, which would flip whole regions.
-  EXPECT_GE(agreeing(propagated(samples).normals, samples.normals), 0.99) << solid.name;
+  EXPECT_GE(share_agreeing(propagated_normals(samples).normals, samples.normals), 0.99)
+      << solid.name;
 }
 
 INSTANTIATE_TEST_SUITE_P(Objects, ClosedSolid, ::testing::Range(0, 6),
@@ -66,11 +67,11 @@ TEST(OrientNormals, SameSignsWithOneAndTwoThreads) {
   std::vector<Eigen::Vector3f> one, two;
   {
     ThreadLimit limit(1);
-    one = propagated(cloud).normals;
+    one = propagated_normals(cloud).normals;
   }
   {
     ThreadLimit limit(2);
-    two = propagated(cloud).normals;
+    two = propagated_normals(cloud).normals;
   }
   EXPECT_EQ(one, two);
 }
@@ -81,9 +82,9 @@ TEST(OrientNormals, TwoSeparateObjectsAreEachTurnedOutward) {
   for (Eigen::Vector3f& p : b.positions) p.x() += 3.0f;
   a.positions.insert(a.positions.end(), b.positions.begin(), b.positions.end());
   a.normals.insert(a.normals.end(), b.normals.begin(), b.normals.end());
-  const ComputedNormals computed = propagated(a);
+  const ComputedNormals computed = propagated_normals(a);
   EXPECT_EQ(computed.report.components, 2u);
-  EXPECT_GE(agreeing(computed.normals, a.normals), 0.999);
+  EXPECT_GE(share_agreeing(computed.normals, a.normals), 0.999);
 }
 
 TEST(OrientNormals, FixedPointsKeepTheirSignAndTheRestFollow) {
@@ -113,7 +114,7 @@ TEST(OrientNormals, AnOpenSheetIsConsistent) {
       const float x = 0.01f * static_cast<float>(i), y = 0.01f * static_cast<float>(j);
       sheet.positions.emplace_back(x, y, 0.1f * std::sin(6.0f * x) * std::cos(4.0f * y));
     }
-  const ComputedNormals computed = propagated(sheet);
+  const ComputedNormals computed = propagated_normals(sheet);
   std::size_t up = 0;
   for (const Eigen::Vector3f& n : computed.normals) up += n.z() > 0.0f ? 1 : 0;
   EXPECT_TRUE(up == 0 || up == sheet.size()) << up << " of " << sheet.size() << " face up";
@@ -124,7 +125,7 @@ TEST(OrientNormals, EmptyAndTinyInputs) {
   EXPECT_TRUE(orient_by_propagation({}, {}, empty_table, {}, PropagationConfig{}).normals.empty());
   PointCloud three;
   three.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
-  const ComputedNormals computed = propagated(three);
+  const ComputedNormals computed = propagated_normals(three);
   ASSERT_EQ(computed.normals.size(), 3u);
   for (const Eigen::Vector3f& n : computed.normals) EXPECT_NEAR(std::abs(n.z()), 1.0f, 1e-5f);
 }

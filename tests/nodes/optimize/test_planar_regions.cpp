@@ -99,7 +99,7 @@ TEST(PlanarRegions, ProjectionLeavesVerticesBeyondTheLimitWhereTheyAre) {
 }
 
 // A height field z = f(x, y) on an n x n grid with 1 cm spacing.
-TriangleMesh height_field(std::uint32_t n, const std::function<float(float, float)>& f) {
+TriangleMesh sampled_height_field(std::uint32_t n, const std::function<float(float, float)>& f) {
   TriangleMesh m = test::grid_mesh(n);
   for (Eigen::Vector3f& v : m.vertices) {
     v.x() *= 0.01f;
@@ -112,8 +112,8 @@ TriangleMesh height_field(std::uint32_t n, const std::function<float(float, floa
 TEST(PlanarRegions, ACurvedSurfaceIsNotTakenForAPlane) {
   // A cylinder of radius 0.3 m seen from above over 0.4 m: its normals stay within 42 degrees,
   // so it grows regions, but no plane explains them within 2 mm.
-  const TriangleMesh bowl =
-      height_field(41, [](float x, float) { return std::sqrt(0.09f - (x - 0.2f) * (x - 0.2f)); });
+  const TriangleMesh bowl = sampled_height_field(
+      41, [](float x, float) { return std::sqrt(0.09f - (x - 0.2f) * (x - 0.2f)); });
   PlanarRegionConfig config;
   EXPECT_FALSE(grow_planar_regions(HalfEdgeMesh(bowl), config).regions.empty())
       << "without the check the curved surface is segmented into planes";
@@ -131,7 +131,7 @@ TEST(PlanarRegions, AClutteredWallKeepsTheWallAndLeavesTheClutter) {
   // A flat 0.6 m square with a smooth 2 cm bump (something on the wall, slopes within 15
   // degrees, so the whole square grows as one region): the region shrinks to the flat part and
   // the bump keeps its shape.
-  const TriangleMesh wall = height_field(61, [](float x, float y) {
+  const TriangleMesh wall = sampled_height_field(61, [](float x, float y) {
     const float r2 = (x - 0.45f) * (x - 0.45f) + (y - 0.45f) * (y - 0.45f);
     return 0.02f * std::exp(-r2 / (2.0f * 0.04f * 0.04f));
   });

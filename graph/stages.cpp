@@ -69,6 +69,18 @@ std::uint64_t filter(Frame& f, const ReconstructionConfig& c) {
                     std::to_string(f.filter_counts.input) + " (" +
                     std::to_string(f.filter_counts.non_finite) + " NaN/Inf); need at least 3");
   }
+  if (!f.depth) {  // a point or a line has no surface: say so instead of meshing a ribbon
+    const Eigen::Vector3d extents = principal_extents(f.cloud);
+    if (!(extents[2] > 0.0))
+      throw Error(f.name, "points",
+                  "all " + std::to_string(f.cloud.size()) +
+                      " points coincide; there is no surface to extract");
+    if (extents[1] <= 1e-4 * extents[2])
+      throw Error(f.name, "points",
+                  "all " + std::to_string(f.cloud.size()) + " points lie on a line (spread " +
+                      std::to_string(extents[2]) + " m along it, " + std::to_string(extents[1]) +
+                      " m across); a surface needs points spread in two directions");
+  }
   return f.cloud.size();
 }
 

@@ -5,6 +5,8 @@
 
 #include <cmath>
 
+#include <Eigen/Eigenvalues>
+
 #include "nodes/normals/spatial_index.h"
 #include "runtime/error.h"
 #include "runtime/parallel.h"
@@ -35,6 +37,40 @@ std::vector<std::uint32_t> crop_indices(const PointCloud& cloud, const FilterCon
     }
     return true;
   });
+}
+
+Eigen::Vector3d principal_extents(const PointCloud& cloud) {
+  struct Moments {
+    double count = 0.0;
+    Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+    Eigen::Matrix3d products = Eigen::Matrix3d::Zero();
+  };
+  const std::size_t n = cloud.size();
+  const std::size_t blocks = (n + kParallelBlock - 1) / kParallelBlock;
+  std::vector<Moments> partial(blocks);
+  tbb::parallel_for(std::size_t{0}, blocks, [&](std::size_t b) {
+    Moments& m = partial[b];
+    const std::size_t end = std::min(n, (b + 1) * kParallelBlock);
+    for (std::size_t i = b * kParallelBlock; i < end; ++i) {
+      if (!cloud.positions[i].allFinite()) continue;
+      const Eigen::Vector3d p = cloud.positions[i].cast<double>();
+      m.count += 1.0;
+      m.sum += p;
+      m.products.noalias() += p * p.transpose();
+    }
+  });
+  Moments all;
+  for (const Moments& m : partial) {
+    all.count += m.count;
+    all.sum += m.sum;
+    all.products += m.products;
+  }
+  if (all.count < 1.0) return Eigen::Vector3d::Zero();
+  const Eigen::Vector3d mean = all.sum / all.count;
+  const Eigen::Matrix3d covariance = all.products / all.count - mean * mean.transpose();
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> solver;
+  solver.computeDirect(covariance);
+  return solver.eigenvalues().cwiseMax(0.0).cwiseSqrt();
 }
 
 PointCloud voxel_grid_downsample(const PointCloud& cloud, float voxel_size) {

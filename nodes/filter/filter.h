@@ -59,6 +59,11 @@ std::vector<std::uint32_t> statistical_inlier_indices(const PointCloud& cloud, i
 
 /// Applies, in order: non-finite removal, crop/range, voxel grid, outlier removal.
 /// `counts` (optional) receives what each step removed.
+/// Standard deviations (metres) of the finite points along their three principal axes,
+/// ascending: (0, 0, s) for points on a line, (0, s1, s2) on a plane. Parallel reduction in
+/// fixed blocks, deterministic; O(n).
+Eigen::Vector3d principal_extents(const PointCloud& cloud);
+
 PointCloud filter_cloud(const PointCloud& cloud, const FilterConfig& config,
                         FilterCounts* counts = nullptr);
 

@@ -247,6 +247,15 @@ TEST(ObjectReconstruction, ExtendedMarchingCubesKeepsEdgesAndCornersWithoutGiven
   }
 }
 
+TEST(ObjectReconstruction, PointsOnALineAreAClearErrorNotARibbon) {
+  PointCloud line;
+  for (int i = 0; i < 300; ++i) line.positions.emplace_back(0.01f * i, 0.5f * 0.01f * i, 0.0f);
+  const FramePtr f = ReconstructionPipeline(ReconstructionConfig{}).reconstruct(line, "line");
+  ASSERT_FALSE(f->ok());
+  EXPECT_NE(f->error.find("lie on a line"), std::string::npos) << f->error;
+  EXPECT_EQ(f->failed_stage, "filter");
+}
+
 TEST(ObjectReconstruction, BunnyNormalsAreConsistentAndFaceTheScanner) {
   MESHFLOW_REQUIRE_DATA("objects/bunny.pcd");
   const PointCloud cloud = io::read_point_cloud(test::data_path("objects/bunny.pcd"));

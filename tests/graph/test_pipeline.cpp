@@ -97,16 +97,18 @@ TEST(Pipeline, EmptyOrAllNaNCloudFailsInTheFilterStage) {
   EXPECT_FALSE(pipeline.reconstruct(PointCloud{}, "empty")->ok());
 }
 
-TEST(Pipeline, CoincidentPointsFailWithAReasonWhenTheVoxelSizeIsAutomatic) {
-  ReconstructionConfig config;
-  config.voxelize.voxel_size = 0.0f;  // chosen from the points
-  ReconstructionPipeline pipeline(config);
-  PointCloud same;
-  same.positions.assign(100, Eigen::Vector3f(0.5f, 0.5f, 0.5f));
-  const FramePtr f = pipeline.reconstruct(same, "same.xyz");
-  EXPECT_FALSE(f->ok());
-  EXPECT_EQ(f->failed_stage, "voxelize");
-  EXPECT_NE(f->error.find("coincide"), std::string::npos) << f->error;
+TEST(Pipeline, CoincidentPointsFailWithAReasonWhateverTheVoxelSize) {
+  for (float voxel : {0.0f, 0.05f}) {  // 0: chosen from the points
+    ReconstructionConfig config;
+    config.voxelize.voxel_size = voxel;
+    ReconstructionPipeline pipeline(config);
+    PointCloud same;
+    same.positions.assign(100, Eigen::Vector3f(0.5f, 0.5f, 0.5f));
+    const FramePtr f = pipeline.reconstruct(same, "same.xyz");
+    EXPECT_FALSE(f->ok());
+    EXPECT_EQ(f->failed_stage, "filter");
+    EXPECT_NE(f->error.find("coincide"), std::string::npos) << f->error;
+  }
 }
 
 TEST(Pipeline, StagesRecordTimingsAndItems) {

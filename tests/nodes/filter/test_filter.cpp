@@ -96,5 +96,19 @@ TEST(Filter, SameResultWithOneAndTwoThreads) {
   EXPECT_EQ(one.positions, two.positions);
 }
 
+TEST(Filter, PrincipalExtentsTellLinesFromPlanes) {
+  PointCloud c;
+  for (int i = 0; i < 100; ++i) c.positions.emplace_back(0.1f * i, 0.2f * i, 1.0f);
+  c.positions.emplace_back(NAN, 0.0f, 0.0f);  // ignored
+  Eigen::Vector3d e = principal_extents(c);
+  EXPECT_LT(e[1], 1e-5);
+  EXPECT_GT(e[2], 1.0);
+  for (int i = 0; i < 100; ++i) c.positions.emplace_back(0.1f * i, 0.0f, 1.0f);
+  e = principal_extents(c);
+  EXPECT_LT(e[0], 1e-5);
+  EXPECT_GT(e[1], 0.1);
+  EXPECT_EQ(principal_extents(PointCloud{}), Eigen::Vector3d::Zero());
+}
+
 }  // namespace
 }  // namespace meshflow

@@ -12,7 +12,10 @@ std::string describe_normals(const NormalsReport& r) {
     return "from the input, " + std::to_string(r.estimated) +
            " missing (zero or NaN) estimated and oriented by their neighbours";
   }
-  std::string text = "estimated, oriented ";
+  char fits[96];
+  std::snprintf(fits, sizeof fits, "estimated (kn %d, median plane-fit variation %.3f), oriented ",
+                r.kn, static_cast<double>(r.median_variation));
+  const std::string text = fits;
   switch (r.orientation) {
     case NormalOrientation::kTowardSensor:
       return text + "towards the sensor";

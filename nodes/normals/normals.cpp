@@ -112,6 +112,18 @@ std::vector<PlaneFit> plane_fits(const PointCloud& cloud, const SpatialIndex& in
   return fits;
 }
 
+// The median variation of the fits of the points with wanted[i] (all when empty); 0 for none.
+float median_variation(const std::vector<PlaneFit>& fits, const std::vector<std::uint8_t>& wanted) {
+  std::vector<float> v;
+  v.reserve(fits.size());
+  for (std::size_t i = 0; i < fits.size(); ++i)
+    if ((wanted.empty() || wanted[i]) && !fits[i].normal.isZero()) v.push_back(fits[i].variation);
+  if (v.empty()) return 0.0f;
+  const auto middle = v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2);
+  std::nth_element(v.begin(), middle, v.end());
+  return *middle;
+}
+
 std::vector<Eigen::Vector3f> normals_of(const std::vector<PlaneFit>& fits) {
   std::vector<Eigen::Vector3f> normals(fits.size());
   for (std::size_t i = 0; i < fits.size(); ++i) normals[i] = fits[i].normal;
@@ -272,10 +284,20 @@ ComputedNormals compute_normals(const PointCloud& cloud, const SpatialIndex& ind
   if (report.source == NormalSource::kInput) orientation = NormalOrientation::kInput;
   report.orientation = orientation;
 
-  const std::size_t kn = static_cast<std::size_t>(std::max(config.kn, 3));
+  NormalsConfig fit_config = config;
+  fit_config.kn = std::max(config.kn, 3);
   const std::size_t ki = static_cast<std::size_t>(std::max(config.ki, 1));
-  const NeighbourTable table = build_neighbour_table(cloud.positions, index, std::max(kn, ki));
-  const std::vector<PlaneFit> fits = plane_fits(cloud, index, table, estimate, config);
+  NeighbourTable table = build_neighbour_table(
+      cloud.positions, index, std::max(static_cast<std::size_t>(fit_config.kn), ki));
+  std::vector<PlaneFit> fits = plane_fits(cloud, index, table, estimate, fit_config);
+  report.median_variation = median_variation(fits, estimate);
+  if (config.noisy_variation > 0.0f && report.median_variation > config.noisy_variation) {
+    fit_config.kn *= 2;  // noisy points: fit planes over twice the neighbours
+    table = build_neighbour_table(cloud.positions, index,
+                                  std::max(static_cast<std::size_t>(fit_config.kn), ki));
+    fits = plane_fits(cloud, index, table, estimate, fit_config);
+  }
+  report.kn = fit_config.kn;
   std::vector<Eigen::Vector3f> fitted = config.sharp_features
                                             ? flattest_plane_normals(fits, cloud, table, estimate)
                                             : normals_of(fits);

@@ -57,6 +57,12 @@ struct NormalsConfig {
   /// voxel of noise the mean error rises from 0.11 to 0.14 voxel). The reconstruction pipeline
   /// turns it on with `--extract emc`.
   bool sharp_features = false;
+  /// Noisy points: when the median plane-fit variation (smallest eigenvalue over their sum)
+  /// exceeds this, the planes are fitted again over 2 kn neighbours. Measured at kn = 10: exact
+  /// samples 0.0000-0.0001, kurt3d 0.015, the bunny 0.014, samples with Gaussian noise of 0.1 /
+  /// 0.2 voxel (at 1 % of the diagonal, 100 000 points) 0.026-0.045 / 0.075-0.10, where kn = 20
+  /// brings the mesh's mean error from 0.11-0.12 to 0.08-0.09 voxel. 0 = off.
+  float noisy_variation = 0.04f;
 };
 
 /// What compute_normals() did.
@@ -65,6 +71,8 @@ struct NormalsReport {
   /// Resolved orientation of the estimated normals (kAuto when none was estimated).
   NormalOrientation orientation = NormalOrientation::kAuto;
   std::size_t estimated = 0;        ///< points whose normal was estimated (0: all from the input)
+  int kn = 0;                       ///< neighbours of the plane fits (2 kn for noisy points)
+  float median_variation = 0.0f;    ///< of the first fits (see NormalsConfig::noisy_variation)
   std::size_t components = 0;       ///< propagation: components of the neighbour graph
   std::size_t flipped_by_vote = 0;  ///< propagation: normals turned by the final vote
 };

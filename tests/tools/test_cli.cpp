@@ -137,9 +137,7 @@ TEST(Cli, AnObjectWithoutASensorIsMeshedWatertightAndMeasuredAgainstItsTruth) {
   EXPECT_NE(r.out.find("--orient auto = propagate"), std::string::npos) << r.out;
   r = run_cli("reconstruct " + dir + "/torus.ply -o " + dir + "/mesh.ply --voxel 0.02");
   ASSERT_EQ(r.exit_code, 0) << r.err;
-  EXPECT_NE(r.out.find("normals    estimated, oriented by propagation (1 component"),
-            std::string::npos)
-      << r.out;
+  EXPECT_NE(r.out.find("oriented by propagation (1 component"), std::string::npos) << r.out;
   r = run_cli("eval " + dir + "/mesh.ply --object torus");
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_NE(r.out.find("(watertight)"), std::string::npos) << r.out;
@@ -152,12 +150,10 @@ TEST(Cli, AnObjectWithoutASensorIsMeshedWatertightAndMeasuredAgainstItsTruth) {
   EXPECT_NE(r.out.find("normals    from the input"), std::string::npos) << r.out;
   r = run_cli("reconstruct " + dir + "/cube.ply -o " + dir +
               "/cube_mesh.ply --voxel 0.02 --normals estimate --orient input");
-  EXPECT_NE(r.out.find("normals    estimated, oriented as the input normals"), std::string::npos)
-      << r.out;
+  EXPECT_NE(r.out.find("), oriented as the input normals"), std::string::npos) << r.out;
   r = run_cli("reconstruct " + dir + "/cube.ply -o " + dir +
               "/cube_mesh.ply --voxel 0.02 --normals estimate --orient away=0,0,0");
-  EXPECT_NE(r.out.find("normals    estimated, oriented away from the viewpoint"), std::string::npos)
-      << r.out;
+  EXPECT_NE(r.out.find("), oriented away from the viewpoint"), std::string::npos) << r.out;
 }
 
 TEST(Cli, OrientationAndObjectUsageErrors) {

@@ -13,11 +13,12 @@ PointCloud read_point_cloud(const std::string& path) {
   const std::string ext = lower_extension(path);
   if (ext == ".ply") return read_ply(path);
   if (ext == ".pcd") return read_pcd(path);
-  if (ext == ".xyz" || ext == ".txt" || ext == ".pts" || ext == ".asc") return read_xyz(path);
+  if (ext == ".xyz" || ext == ".txt" || ext == ".pts" || ext == ".asc" || ext == ".csv")
+    return read_xyz(path);
   if (ext == ".3d") return read_3dtk_scan(path);
   throw Error(path, "",
               "unknown point cloud format '" + ext +
-                  "' (expected .ply, .pcd, .xyz, .txt, .pts, .asc or .3d)");
+                  "' (expected .ply, .pcd, .xyz, .txt, .pts, .asc, .csv or .3d)");
 }
 
 }  // namespace meshflow::io

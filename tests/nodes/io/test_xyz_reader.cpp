@@ -27,6 +27,41 @@ TEST(XyzReader, ColumnLayouts) {
   EXPECT_EQ(c7.colors[1], (Rgb8{1, 2, 3}));
 }
 
+TEST(XyzReader, NormalsHeadersAndSeparators) {
+  const std::string dir = test::temp_dir();
+  // Six columns whose last three are unit vectors: normals, not colours.
+  test::write_file(dir + "/n.xyz", "0 0 0 0 0.6 0.8\n1 0 0 -0.6 0 -0.8\n");
+  const PointCloud n = read_xyz(dir + "/n.xyz");
+  ASSERT_EQ(n.normals.size(), 2u);
+  EXPECT_FALSE(n.has_colors());
+  EXPECT_EQ(n.normals[1], Eigen::Vector3f(-0.6f, 0.0f, -0.8f));
+  // Integers 0 0 1 are a colour.
+  test::write_file(dir + "/c.xyz", "0 0 0 0 0 1\n");
+  EXPECT_TRUE(read_xyz(dir + "/c.xyz").has_colors());
+  // Nine columns in either order.
+  test::write_file(dir + "/9.txt", "0 0 0 255 0 10 0 0.6 0.8\n");
+  const PointCloud nine = read_xyz(dir + "/9.txt");
+  EXPECT_EQ(nine.colors[0], (Rgb8{255, 0, 10}));
+  EXPECT_EQ(nine.normals[0], Eigen::Vector3f(0.0f, 0.6f, 0.8f));
+  // A CSV with a header line naming the columns in its own order, extra columns skipped.
+  test::write_file(
+      dir + "/h.csv",
+      "label,Z,Y,X,Nx,Ny,Nz,Red,Green,Blue\n7,3,2,1,0,0,1,1,2,3\n8,6,5,4,1,0,0,4,5,6\n");
+  const PointCloud h = read_xyz(dir + "/h.csv");
+  ASSERT_EQ(h.size(), 2u);
+  EXPECT_EQ(h.positions[0], Eigen::Vector3f(1, 2, 3));
+  EXPECT_EQ(h.normals[1], Eigen::Vector3f(1, 0, 0));
+  EXPECT_EQ(h.colors[1], (Rgb8{4, 5, 6}));
+  // CloudCompare's '//X Y Z ...' header.
+  test::write_file(dir + "/cc.asc", "//X Y Z Intensity\n1 2 3 0.5\n");
+  EXPECT_EQ(read_xyz(dir + "/cc.asc").intensities[0], 0.5f);
+  // A header without z, or with half a normal: one clear error.
+  test::write_file(dir + "/noz.csv", "x,y,value\n1,2,3\n");
+  EXPECT_THROW(read_xyz(dir + "/noz.csv"), Error);
+  test::write_file(dir + "/half.csv", "x,y,z,nx\n1,2,3,1\n");
+  EXPECT_THROW(read_xyz(dir + "/half.csv"), Error);
+}
+
 TEST(XyzReader, ErrorsNameFileAndLine) {
   const std::string dir = test::temp_dir();
   test::write_file(dir + "/count.pts", "5\n1 2 3\n");

@@ -2,6 +2,8 @@
 
 #include <tbb/parallel_for.h>
 
+#include <Eigen/Geometry>
+
 #include <algorithm>
 #include <cassert>
 #include <cmath>
@@ -325,10 +327,73 @@ std::vector<ComponentSums> accumulate(const Components& comps, std::vector<Compo
   return sums;
 }
 
-// Turns every component without a fixed point outward (see the header).
+// A component inside an odd number of larger ones (the wall of a cavity, the inner shell of a
+// hollow ball) bounds the solid from within: its normals must face its own centroid. Counted
+// with the generalized winding number (Jacobson et al. 2013) of each larger component, facing
+// outward, at the smaller one's centroid: sum over its points of a_i n_i . (p_i - q) /
+// (4 pi |p_i - q|^3), 1 inside a closed surface and 0 outside, with a_i the area a point stands
+// for (pi d_k^2 / k from its k-th neighbour's distance d_k). Components without a fixed point
+// only; up to 64 components (O(n x components)), beyond that every one faces outward.
+void turn_nested_components_inward(const std::vector<Eigen::Vector3f>& p,
+                                   const std::vector<Eigen::Vector3f>& n, const NeighbourTable& t,
+                                   const Components& comps,
+                                   const std::vector<Eigen::Vector3d>& centroid,
+                                   const std::vector<ComponentSums>& sums, Signs& sign) {
+  const std::size_t count = comps.count;
+  if (count < 2 || count > 64) return;
+  // Sizes: the bounding-box diagonal of each component's points.
+  std::vector<Eigen::AlignedBox3f> box(count);
+  for (std::size_t i = 0; i < p.size(); ++i) box[comps.of[i]].extend(p[i]);
+  std::vector<float> size(count);
+  for (std::size_t c = 0; c < count; ++c) size[c] = box[c].sizes().norm();
+  auto larger = [&size](std::size_t d, std::size_t c) {
+    return size[d] > size[c] || (size[d] == size[c] && d < c);
+  };
+  // winding[c * count + d]: component d's winding number at c's centroid, in fixed blocks.
+  const std::size_t blocks = (p.size() + kParallelBlock - 1) / kParallelBlock;
+  std::vector<std::vector<double>> partial(blocks, std::vector<double>(count * count, 0.0));
+  tbb::parallel_for(std::size_t{0}, blocks, [&](std::size_t b) {
+    std::vector<double>& w = partial[b];
+    const std::size_t end = std::min(p.size(), (b + 1) * kParallelBlock);
+    for (std::size_t i = b * kParallelBlock; i < end; ++i) {
+      if (t.counts[i] < 2) continue;
+      const std::size_t d = comps.of[i];
+      const Eigen::Vector3d pi = p[i].cast<double>();
+      const double reach2 = (p[t.row(i)[t.counts[i] - 1]].cast<double>() - pi).squaredNorm();
+      const double area = M_PI * reach2 / static_cast<double>(t.counts[i]);
+      const Eigen::Vector3d ni = sign[i] * n[i].cast<double>();
+      for (std::size_t c = 0; c < count; ++c) {
+        if (!larger(d, c)) continue;
+        const Eigen::Vector3d r = pi - centroid[c];
+        const double len = r.norm();
+        if (len > 0.0) w[c * count + d] += area * ni.dot(r) / (4.0 * M_PI * len * len * len);
+      }
+    }
+  });
+  std::vector<std::uint8_t> inward(count, 0);
+  for (std::size_t c = 0; c < count; ++c) {
+    if (sums[c].has_fixed) continue;
+    long depth = 0;
+    for (std::size_t d = 0; d < count; ++d) {
+      double w = 0.0;
+      for (const auto& block : partial) w += block[c * count + d];
+      depth += std::lround(w);
+    }
+    inward[c] = (depth & 1) != 0 ? 1 : 0;
+  }
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, p.size(), 8192),
+                    [&](const tbb::blocked_range<std::size_t>& r) {
+                      for (std::size_t i = r.begin(); i != r.end(); ++i)
+                        if (inward[comps.of[i]]) sign[i] = static_cast<std::int8_t>(-sign[i]);
+                    });
+}
+
+// Turns every component without a fixed point outward (see the header), then the walls of
+// cavities inward.
 void turn_components_outward(const std::vector<Eigen::Vector3f>& p,
-                             const std::vector<Eigen::Vector3f>& n, const Components& comps,
-                             const std::vector<std::uint8_t>& fixed, Signs& sign) {
+                             const std::vector<Eigen::Vector3f>& n, const NeighbourTable& t,
+                             const Components& comps, const std::vector<std::uint8_t>& fixed,
+                             Signs& sign) {
   auto larger_x = [&p](std::uint32_t a, std::uint32_t b) {  // b beats a (ties: lower index)
     const std::uint32_t none = std::numeric_limits<std::uint32_t>::max();
     return a == none || (b != none && (p[b].x() > p[a].x() || (p[b].x() == p[a].x() && b < a)));
@@ -374,6 +439,7 @@ void turn_components_outward(const std::vector<Eigen::Vector3f>& p,
                       for (std::size_t i = r.begin(); i != r.end(); ++i)
                         if (flip[comps.of[i]]) sign[i] = static_cast<std::int8_t>(-sign[i]);
                     });
+  turn_nested_components_inward(p, n, t, comps, centroid, sums, sign);
 }
 
 }  // namespace
@@ -400,7 +466,7 @@ OrientedNormals orient_by_propagation(const std::vector<Eigen::Vector3f>& positi
     out.flipped_by_vote += turned;
     if (turned == 0) break;
   }
-  turn_components_outward(positions, normals, comps, fixed, sign);
+  turn_components_outward(positions, normals, neighbours, comps, fixed, sign);
   out.normals.resize(positions.size());
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, positions.size(), 8192),
                     [&](const tbb::blocked_range<std::size_t>& r) {

@@ -46,7 +46,10 @@ struct OrientedNormals {
 ///    a component without such a point is turned outward, i.e. so that the sum of
 ///    n_i . (p_i - centroid) over its points is positive (for a closed surface that sum is a
 ///    multiple of the enclosed volume); where that sum is indecisive (an open, flat piece), so
-///    that the normal of its point of largest x has a non-negative x.
+///    that the normal of its point of largest x has a non-negative x; a component inside an odd
+///    number of larger ones (a cavity's wall, a hollow ball's inner shell: the generalized
+///    winding number of each larger one at its centroid) then faces inward, towards the
+///    cavity (up to 64 components).
 /// Output identical for any thread count. Parallel agreements, sort and vote; the spanning
 /// forest and traversal are serial. O(n k) memory and time (plus union-find's near-constant
 /// factor).

@@ -5,6 +5,8 @@
 
 #include <gtest/gtest.h>
 
+#include <random>
+
 #include "nodes/normals/normals.h"
 #include "nodes/synthetic/closed_objects.h"
 #include "runtime/threads.h"
@@ -85,6 +87,26 @@ TEST(OrientNormals, TwoSeparateObjectsAreEachTurnedOutward) {
   const ComputedNormals computed = propagated_normals(a);
   EXPECT_EQ(computed.report.components, 2u);
   EXPECT_GE(share_agreeing(computed.normals, a.normals), 0.999);
+}
+
+TEST(OrientNormals, TheWallOfACavityFacesIntoIt) {
+  // A hollow ball: the outer sphere (radius 0.5) faces out, the cavity's wall (radius 0.45, a
+  // separate component) faces into the cavity, towards its own centroid.
+  synthetic::ClosedObject hollow = synthetic::sphere_object();
+  synthetic::SurfacePatch cavity = hollow.patches[0];
+  const Eigen::Vector3f centre = hollow.bounds.center();
+  cavity.area *= 0.45 * 0.45 / 0.25;
+  cavity.draw = [outer = hollow.patches[0].draw, centre](std::mt19937_64& rng, Eigen::Vector3f& p,
+                                                         Eigen::Vector3f& n) {
+    outer(rng, p, n);
+    p = centre + 0.9f * (p - centre);
+    n = -n;
+  };
+  hollow.patches.push_back(cavity);
+  const PointCloud samples = hollow.sample(40000, 0.0f, 9);
+  const ComputedNormals computed = propagated_normals(samples);
+  EXPECT_EQ(computed.report.components, 2u);
+  EXPECT_GE(share_agreeing(computed.normals, samples.normals), 0.999);
 }
 
 TEST(OrientNormals, FixedPointsKeepTheirSignAndTheRestFollow) {

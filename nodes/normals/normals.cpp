@@ -165,6 +165,17 @@ std::vector<Eigen::Vector3f> flattest_plane_normals(const std::vector<PlaneFit>&
   return normals;
 }
 
+// `normals`, each turned to agree with the oriented normal of its point in `oriented`.
+std::vector<Eigen::Vector3f> signed_like(std::vector<Eigen::Vector3f> normals,
+                                         const std::vector<Eigen::Vector3f>& oriented) {
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, normals.size(), 8192),
+                    [&](const tbb::blocked_range<std::size_t>& r) {
+                      for (std::size_t i = r.begin(); i != r.end(); ++i)
+                        if (normals[i].dot(oriented[i]) < 0.0f) normals[i] = -normals[i];
+                    });
+  return normals;
+}
+
 // Turns each normal towards (sign +1) or away from (-1) `viewpoint`; zero normals become the
 // direction to it.
 void orient_to_viewpoint(const PointCloud& cloud, const Eigen::Vector3f& viewpoint, float sign,
@@ -298,9 +309,10 @@ ComputedNormals compute_normals(const PointCloud& cloud, const SpatialIndex& ind
     fits = plane_fits(cloud, index, table, estimate, fit_config);
   }
   report.kn = fit_config.kn;
-  std::vector<Eigen::Vector3f> fitted = config.sharp_features
-                                            ? flattest_plane_normals(fits, cloud, table, estimate)
-                                            : normals_of(fits);
+  // Orientation works on the plane fits as they are: across a sharp edge sharp normals are
+  // perpendicular and give the spanning tree no sign to pass on, while the fits there blend the
+  // two faces and carry it. Sharp normals then take the signs of their points' oriented fits.
+  std::vector<Eigen::Vector3f> fitted = normals_of(fits);
 
   switch (orientation) {
     case NormalOrientation::kAuto:  // resolved above
@@ -339,6 +351,8 @@ ComputedNormals compute_normals(const PointCloud& cloud, const SpatialIndex& ind
       break;
     }
   }
+  if (config.sharp_features)
+    fitted = signed_like(flattest_plane_normals(fits, cloud, table, estimate), fitted);
   // With sharp features, neighbours across an edge (more than 25 degrees off) are not averaged.
   const float min_agreement = config.sharp_features ? 0.9f : -1.0f;
   out.normals =

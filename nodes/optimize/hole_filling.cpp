@@ -136,6 +136,35 @@ std::vector<Triangle> triangulate_loop(const std::vector<std::uint32_t>& loop,
   return triangles;
 }
 
+// The loop closed by a fan around a vertex added at its centroid (normal and colour averaged
+// over the loop, when the mesh has them): its edges are all new, so it is always possible.
+// Each triangle runs its loop edge in the loop's direction, against the face beyond that edge,
+// so the fan is oriented like the faces around the hole.
+std::vector<Triangle> fan_from_centre(const std::vector<std::uint32_t>& loop, TriangleMesh& mesh) {
+  Eigen::Vector3f centre = Eigen::Vector3f::Zero(), normal = Eigen::Vector3f::Zero();
+  Eigen::Vector3f colour = Eigen::Vector3f::Zero();
+  for (std::uint32_t v : loop) {
+    centre += mesh.vertices[v];
+    if (!mesh.normals.empty()) normal += mesh.normals[v];
+    if (!mesh.colors.empty())
+      colour += Eigen::Vector3f(mesh.colors[v].r, mesh.colors[v].g, mesh.colors[v].b);
+  }
+  const float count = static_cast<float>(loop.size());
+  const auto c = static_cast<std::uint32_t>(mesh.vertices.size());
+  mesh.vertices.push_back(centre / count);
+  if (!mesh.normals.empty()) mesh.normals.push_back(normal.normalized());
+  if (!mesh.colors.empty()) {
+    const Eigen::Vector3f rgb = colour / count;
+    mesh.colors.push_back(Rgb8{static_cast<std::uint8_t>(std::lround(rgb.x())),
+                               static_cast<std::uint8_t>(std::lround(rgb.y())),
+                               static_cast<std::uint8_t>(std::lround(rgb.z()))});
+  }
+  std::vector<Triangle> fan;
+  for (std::size_t k = 0; k < loop.size(); ++k)
+    fan.push_back(Triangle{loop[k], c, loop[(k + 1) % loop.size()]});
+  return fan;
+}
+
 // Area of each component (indexed by its label, as vertex_components() gives per vertex), m^2.
 std::vector<double> component_areas(const TriangleMesh& mesh,
                                     const std::vector<std::uint32_t>& component) {
@@ -211,14 +240,14 @@ TriangleMesh fill_holes(const TriangleMesh& mesh, const HoleFillingConfig& confi
   });
 
   TriangleMesh out = mesh;
-  for (const std::vector<Triangle>& fill : fills) {
-    if (fill.empty()) {
-      ++r.not_fillable;
-      continue;
+  for (std::size_t i = 0; i < fills.size(); ++i) {
+    if (fills[i].empty()) {  // every triangulation repeats an edge: fan from a new centre
+      fills[i] = fan_from_centre(*holes[i], out);
+      ++r.centre_vertices;
     }
     ++r.filled;
-    r.added_triangles += fill.size();
-    out.triangles.insert(out.triangles.end(), fill.begin(), fill.end());
+    r.added_triangles += fills[i].size();
+    out.triangles.insert(out.triangles.end(), fills[i].begin(), fills[i].end());
   }
   if (report != nullptr) *report = r;
   return out;

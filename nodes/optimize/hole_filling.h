@@ -22,11 +22,12 @@ struct HoleFillingConfig {
 };
 
 struct HoleFillingReport {
-  std::size_t loops = 0;          ///< border loops found
-  std::size_t outer_borders = 0;  ///< kept as the outline of their component
-  std::size_t too_large = 0;      ///< more than max_edges edges
-  std::size_t filled = 0;         ///< closed
-  std::size_t not_fillable = 0;   ///< every triangulation would duplicate an existing edge
+  std::size_t loops = 0;            ///< border loops found
+  std::size_t outer_borders = 0;    ///< kept as the outline of their component
+  std::size_t too_large = 0;        ///< more than max_edges edges
+  std::size_t filled = 0;           ///< closed
+  std::size_t not_fillable = 0;     ///< ambiguous loops (through a non-manifold vertex), left open
+  std::size_t centre_vertices = 0;  ///< holes fanned from an added centre vertex (see below)
   std::size_t added_triangles = 0;
 };
 
@@ -37,9 +38,11 @@ struct HoleFillingReport {
 /// of area + 0.1 x squared edge lengths (the second term prefers short diagonals where areas
 /// tie, as in a flat hole) among the triangulations that add no edge already in the mesh and
 /// no triangle without area (its area below 1e-4 of its squared edge lengths), oriented like
-/// the faces around it; no vertices are added, so edges elsewhere are untouched. Vertices,
-/// normals and colours are kept as they are; new triangles follow the old ones, holes in the
-/// order of their first border edge. Loops are triangulated in parallel; the output does not
+/// the faces around it; no vertices are added, so edges elsewhere are untouched. A hole that
+/// every such triangulation would close with an edge the mesh already has (a pinched loop,
+/// whose diagonals exist on the other side) is fanned from a vertex added at its centroid.
+/// Vertices, normals and colours are kept as they are; new triangles follow the old ones, holes in
+/// the order of their first border edge. Loops are triangulated in parallel; the output does not
 /// depend on the thread count. O(T + sum of n^3 over holes).
 TriangleMesh fill_holes(const TriangleMesh& mesh, const HoleFillingConfig& config = {},
                         HoleFillingReport* report = nullptr);

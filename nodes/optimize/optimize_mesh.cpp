@@ -50,6 +50,8 @@ TriangleMesh holes_step(const TriangleMesh& mesh, const OptimizeConfig& config,
   step.detail = format("%zu holes filled (+%zu triangles), %zu larger than allowed, %zu outlines",
                        r.filled, r.added_triangles, r.too_large, r.outer_borders);
   if (r.not_fillable > 0) step.detail += format(", %zu not fillable", r.not_fillable);
+  if (r.centre_vertices > 0)
+    step.detail += format(", %zu fanned from a new centre vertex", r.centre_vertices);
   return out;
 }
 

@@ -80,6 +80,7 @@ struct Frame {
   float voxel_size = 0.0f;
   SparseGrid grid;
   DistanceField distance;
+  ExtractMethod extract_method = ExtractMethod::kAuto;  ///< the method "extract" used
   TriangleMesh mesh;  ///< after extract: raw; after optimize: optimised (fusion: the map so far)
   OptimizeReport optimize;       ///< what each optimisation step did
   IntegrationStats integration;  ///< fusion: what integrating this frame did

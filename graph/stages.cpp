@@ -110,7 +110,10 @@ std::uint64_t index(Frame& f, const ReconstructionConfig&) {
 std::uint64_t normals(Frame& f, const ReconstructionConfig& c) {
   if (f.normals_from_image) return 0;  // already estimated from image neighbours
   NormalsConfig config = c.normals;
-  if (c.extract.method == ExtractMethod::kExtendedMarchingCubes) config.sharp_features = true;
+  if (c.extract.method == ExtractMethod::kExtendedMarchingCubes)
+    config.sharp = NormalsConfig::Sharp::kOn;
+  else if (c.extract.method == ExtractMethod::kAuto && config.sharp == NormalsConfig::Sharp::kOff)
+    config.sharp = NormalsConfig::Sharp::kWhenClean;
   ComputedNormals computed = compute_normals(f.cloud, *f.index, config);
   f.cloud.normals = std::move(computed.normals);
   f.normals = computed.report;
@@ -144,7 +147,12 @@ std::uint64_t distance(Frame& f, const ReconstructionConfig& c) {
 }
 
 std::uint64_t extract(Frame& f, const ReconstructionConfig& c) {
-  f.mesh = extract_surface(f.grid, f.distance, f.cloud, f.index.get(), c.extract);
+  ExtractConfig config = c.extract;
+  if (config.method == ExtractMethod::kAuto)  // sharp normals were estimated for clean samples
+    config.method =
+        f.normals.sharp ? ExtractMethod::kExtendedMarchingCubes : ExtractMethod::kMarchingCubes;
+  f.extract_method = config.method;
+  f.mesh = extract_surface(f.grid, f.distance, f.cloud, f.index.get(), config);
   return f.mesh.triangles.size();
 }
 

@@ -108,9 +108,10 @@ void add_pipeline_options(CLI::App* cmd, PipelineOptions& o) {
   cmd->add_option("--min-range", o.min_range, "Drop points closer to the sensor, metres")
       ->check(number_in(0, 1e6));
   cmd->add_option("--extract", o.extract,
-                  "Extraction: mc (marching cubes), mt (marching tetrahedra), emc (extended MC, "
-                  "sharp features), pmc (planar MC)")
-      ->check(CLI::IsMember({"mc", "mt", "emc", "pmc"}));
+                  "Extraction: auto (emc for clean samples without a sensor, else mc), mc "
+                  "(marching cubes), mt (marching tetrahedra), emc (extended MC, sharp features), "
+                  "pmc (planar MC)")
+      ->check(CLI::IsMember({"auto", "mc", "mt", "emc", "pmc"}));
   cmd->add_option("--max-range", o.max_range,
                   "Drop points farther from the sensor, metres (0 = off)")
       ->check(number_in(0, 1e6));

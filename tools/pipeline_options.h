@@ -24,7 +24,7 @@ struct PipelineOptions {
   float filter_voxel = 0.0f;
   int outlier_k = 0;
   float min_range = 0.0f, max_range = 0.0f;
-  std::string extract = "mc";
+  std::string extract = "auto";
   std::string optimize = "default";
   std::size_t max_hole = 30;
   float decimate_to = 0.25f;

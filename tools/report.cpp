@@ -34,6 +34,23 @@ std::string describe_normals(const NormalsReport& r) {
          " turned by the vote)";
 }
 
+// "marching cubes", "extended marching cubes (clean samples without a sensor)", ...
+const char* extraction_name(ExtractMethod method, bool sharp_normals) {
+  switch (method) {
+    case ExtractMethod::kExtendedMarchingCubes:
+      return sharp_normals ? "extended marching cubes, sharp-feature normals"
+                           : "extended marching cubes";
+    case ExtractMethod::kMarchingTetrahedra:
+      return "marching tetrahedra";
+    case ExtractMethod::kPlanarMarchingCubes:
+      return "planar marching cubes";
+    case ExtractMethod::kAuto:
+    case ExtractMethod::kMarchingCubes:
+      break;
+  }
+  return "marching cubes";
+}
+
 void print_frame_report(const Frame& f, double wall_s, int threads) {
   const FilterCounts& c = f.filter_counts;
   std::printf("input      %s: %zu points\n", f.name.c_str(), c.input);
@@ -49,8 +66,8 @@ void print_frame_report(const Frame& f, double wall_s, int threads) {
     std::printf("; invalid: %zu where tangent planes disagree, %zu past the data's border",
                 f.distance.disagreeing, f.distance.extrapolated);
   std::printf(")\n");
-  std::printf("mesh       %zu vertices, %zu triangles\n", f.mesh.vertices.size(),
-              f.mesh.triangles.size());
+  std::printf("mesh       %zu vertices, %zu triangles (%s)\n", f.mesh.vertices.size(),
+              f.mesh.triangles.size(), extraction_name(f.extract_method, f.normals.sharp));
   if (!f.optimize.steps.empty())
     std::printf("optimize\n%s", format_optimize_report(f.optimize).c_str());
   std::printf("time       %.1f ms on %d thread%s\n", 1e3 * wall_s, threads,

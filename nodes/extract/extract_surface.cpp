@@ -23,6 +23,7 @@ TriangleMesh extract_surface(const SparseGrid& grid, const DistanceField& field,
       if (index == nullptr)
         throw Error("extract", "method emc", "needs a point index (point-cloud input)");
       return extended_marching_cubes(grid, field, cloud, *index, config);
+    case ExtractMethod::kAuto:
     case ExtractMethod::kMarchingCubes:
       break;
   }
@@ -30,11 +31,12 @@ TriangleMesh extract_surface(const SparseGrid& grid, const DistanceField& field,
 }
 
 ExtractMethod parse_extract_method(const std::string& name) {
+  if (name == "auto") return ExtractMethod::kAuto;
   if (name == "mc") return ExtractMethod::kMarchingCubes;
   if (name == "mt") return ExtractMethod::kMarchingTetrahedra;
   if (name == "pmc") return ExtractMethod::kPlanarMarchingCubes;
   if (name == "emc") return ExtractMethod::kExtendedMarchingCubes;
-  throw Error("extract", "method '" + name + "'", "expected mc, mt, emc or pmc");
+  throw Error("extract", "method '" + name + "'", "expected auto, mc, mt, emc or pmc");
 }
 
 const char* extract_method_name(ExtractMethod method) {
@@ -45,6 +47,8 @@ const char* extract_method_name(ExtractMethod method) {
       return "pmc";
     case ExtractMethod::kExtendedMarchingCubes:
       return "emc";
+    case ExtractMethod::kAuto:
+      return "auto";
     case ExtractMethod::kMarchingCubes:
       break;
   }

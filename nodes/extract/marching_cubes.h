@@ -9,6 +9,10 @@ namespace meshflow {
 
 /// Extraction methods of the `extract` stage (thesis, Wiemann 2013, compares them on one grid).
 enum class ExtractMethod {
+  /// The pipeline's extract stage picks kExtendedMarchingCubes for clean samples without a
+  /// sensor (when the normals stage estimated sharp-feature normals: NormalsConfig::Sharp)
+  /// and kMarchingCubes otherwise; extract_surface() alone treats it as kMarchingCubes.
+  kAuto,
   kMarchingCubes,         ///< marching_cubes
   kMarchingTetrahedra,    ///< marching_tetrahedra: six tetrahedra per cell, no ambiguities
   kPlanarMarchingCubes,   ///< planar_marching_cubes: border moved onto the data contour
@@ -18,7 +22,7 @@ enum class ExtractMethod {
 struct ExtractConfig {
   float iso = 0.0f;            ///< iso-value of the surface (metres of signed distance)
   bool vertex_normals = true;  ///< compute area-weighted vertex normals
-  ExtractMethod method = ExtractMethod::kMarchingCubes;  ///< used by extract_surface
+  ExtractMethod method = ExtractMethod::kAuto;  ///< used by extract_surface
 };
 
 /// Extracts the iso-surface of `field` over every cell of `grid` whose 8 corners are valid.

@@ -351,10 +351,15 @@ ComputedNormals compute_normals(const PointCloud& cloud, const SpatialIndex& ind
       break;
     }
   }
-  if (config.sharp_features)
+  report.sharp =
+      config.sharp == NormalsConfig::Sharp::kOn ||
+      (config.sharp == NormalsConfig::Sharp::kWhenClean &&
+       orientation == NormalOrientation::kPropagate && report.source == NormalSource::kEstimate &&
+       report.median_variation < config.clean_variation);
+  if (report.sharp)
     fitted = signed_like(flattest_plane_normals(fits, cloud, table, estimate), fitted);
   // With sharp features, neighbours across an edge (more than 25 degrees off) are not averaged.
-  const float min_agreement = config.sharp_features ? 0.9f : -1.0f;
+  const float min_agreement = report.sharp ? 0.9f : -1.0f;
   out.normals =
       ki <= 1 ? std::move(fitted) : interpolate(fitted, table, ki, estimate, min_agreement);
   return out;

@@ -138,6 +138,9 @@ TEST(Cli, AnObjectWithoutASensorIsMeshedWatertightAndMeasuredAgainstItsTruth) {
   r = run_cli("reconstruct " + dir + "/torus.ply -o " + dir + "/mesh.ply --voxel 0.02");
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_NE(r.out.find("oriented by propagation (1 component"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("(extended marching cubes, sharp-feature normals)"), std::string::npos)
+      << "clean samples without a sensor: extended marching cubes by default\n"
+      << r.out;
   r = run_cli("eval " + dir + "/mesh.ply --object torus");
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_NE(r.out.find("(watertight)"), std::string::npos) << r.out;

@@ -139,7 +139,7 @@ TEST(Normals, SourceAndOrientationChoices) {
 }
 
 TEST(Normals, SharpFeatureNormalsKeepEachFaceNormalUpToTheEdge) {
-  // A box sampled uniformly: plane fits beside an edge blend the two faces; with sharp_features
+  // A box sampled uniformly: plane fits beside an edge blend the two faces; with sharp normals
   // nearly every point gets its own face's normal.
   const synthetic::ClosedObject box = synthetic::box_object();
   PointCloud c = box.sample(40000, 0.0f, 8);
@@ -154,7 +154,7 @@ TEST(Normals, SharpFeatureNormalsKeepEachFaceNormalUpToTheEdge) {
   };
   NormalsConfig config;
   const std::size_t blended = off_by_more_than_5_degrees(config);
-  config.sharp_features = true;
+  config.sharp = NormalsConfig::Sharp::kOn;
   const std::size_t sharp = off_by_more_than_5_degrees(config);
   std::printf("[ normals ] box, more than 5 degrees off: %zu plain, %zu sharp of %zu\n", blended,
               sharp, c.size());

@@ -6,9 +6,9 @@
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
-#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "nodes/io/image_io.h"
 #include "nodes/io/parse_util.h"
 #include "runtime/error.h"
 
@@ -38,12 +38,8 @@ std::string first_json(const fs::path& dir) {
 }
 
 cv::Mat read_color_image(const std::string& path) {
-  run_opencv_on_calling_thread();
-  cv::Mat bgr = cv::imread(path, cv::IMREAD_COLOR);
-  if (bgr.empty()) throw Error(path, "", "cannot read colour image (missing or corrupt)");
-  cv::Mat rgb;
-  cv::cvtColor(bgr, rgb, cv::COLOR_BGR2RGB);
-  return rgb;
+  if (!fs::exists(path)) throw Error(path, "", "colour image missing");
+  return read_color_image_file(path);
 }
 
 // Checks the depth image against the intrinsics and attaches colour when its size matches.
@@ -264,13 +260,8 @@ std::unique_ptr<Sequence> open_depth_image_directory(const std::string& director
 }
 
 cv::Mat read_depth_image(const std::string& path) {
-  run_opencv_on_calling_thread();
   if (!fs::exists(path)) throw Error(path, "", "depth image missing");
-  cv::Mat depth = cv::imread(path, cv::IMREAD_ANYDEPTH);
-  if (depth.empty())
-    throw Error(path, "", "cannot decode depth image (corrupt or unsupported format)");
-  if (depth.type() != CV_16U) throw Error(path, "", "expected a 16-bit single-channel depth image");
-  return depth;
+  return read_depth_image_file(path);
 }
 
 std::vector<Eigen::Isometry3f> read_trajectory_log(const std::string& path) {

@@ -1,29 +1,15 @@
 #include "nodes/io/textured_obj.h"
 
-#include <opencv2/imgcodecs.hpp>
-
 #include <algorithm>
 #include <cstdio>
 #include <filesystem>
 #include <vector>
 
 #include "nodes/io/atomic_file.h"
+#include "nodes/io/image_io.h"
 #include "runtime/error.h"
 
 namespace meshflow::io {
-namespace {
-
-void write_png(const std::string& path, const cv::Mat& image) {
-  std::vector<unsigned char> png;
-  if (!cv::imencode(".png", image, png)) throw Error(path, "", "PNG encoding failed");
-  AtomicOutputFile file(path);
-  file.stream().write(reinterpret_cast<const char*>(png.data()),
-                      static_cast<std::streamsize>(png.size()));
-  file.commit();
-}
-
-}  // namespace
-
 void write_textured_obj(const std::string& path, const TexturedMesh& textured) {
   const TriangleMesh& mesh = textured.mesh;
   const std::filesystem::path obj(path);

@@ -89,7 +89,7 @@ TexturedMesh texture_planar_regions(const TriangleMesh& mesh,
         const float u = f.u0 + (static_cast<float>(column) + 0.5f) * f.texel;
         float d2 = 0.0f;
         const Rgb8 c = nearest(f.origin + u * f.axis_u + v * f.axis_v, &d2);
-        pixel[column] = d2 <= max_distance2 ? cv::Vec3b(c.b, c.g, c.r) : cv::Vec3b(128, 128, 128);
+        pixel[column] = d2 <= max_distance2 ? cv::Vec3b(c.r, c.g, c.b) : cv::Vec3b(128, 128, 128);
       }
     });
     const auto id = static_cast<std::int32_t>(out.textures.size());

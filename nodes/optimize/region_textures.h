@@ -26,7 +26,7 @@ struct TextureConfig {
 };
 
 struct RegionTexture {
-  cv::Mat image;                     ///< CV_8UC3, OpenCV's BGR order, row 0 at the top
+  cv::Mat image;                     ///< CV_8UC3, RGB order, row 0 at the top
   std::vector<std::uint32_t> faces;  ///< the region's faces, ascending
 };
 

@@ -4,8 +4,8 @@
 
 #include <cmath>
 #include <filesystem>
-#include <opencv2/imgcodecs.hpp>
 
+#include "nodes/io/image_io.h"
 #include "runtime/error.h"
 #include "test_support.h"
 
@@ -13,7 +13,7 @@ namespace meshflow::io {
 namespace {
 
 void write_depth_png(const std::string& path, std::uint16_t value, int w = 8, int h = 6) {
-  ASSERT_TRUE(cv::imwrite(path, cv::Mat(h, w, CV_16U, cv::Scalar(value))));
+  write_png(path, cv::Mat(h, w, CV_16U, cv::Scalar(value)));
 }
 
 const char* kCameraJson =
@@ -196,10 +196,8 @@ TEST(RgbdSequences, DepthImageDirectoryWithoutPoses) {
   const std::string dir = test::temp_dir();
   write_depth_png(dir + "/a_depth.png", 1200);
   write_depth_png(dir + "/b_depth.png", 1300);
-  ASSERT_TRUE(
-      cv::imwrite(dir + "/a_rgb.png", cv::Mat(6, 8, CV_8UC3, cv::Scalar(255, 0, 0))));  // BGR blue
-  ASSERT_TRUE(
-      cv::imwrite(dir + "/b_rgb.png", cv::Mat(6, 8, CV_8UC3, cv::Scalar(0, 0, 255))));  // BGR red
+  write_png(dir + "/a_rgb.png", cv::Mat(6, 8, CV_8UC3, cv::Scalar(255, 0, 0)));  // RGB red
+  write_png(dir + "/b_rgb.png", cv::Mat(6, 8, CV_8UC3, cv::Scalar(0, 0, 255)));  // RGB blue
   test::write_file(dir + "/camera.json", kCameraJson);
   const auto seq = open_sequence(dir);
   ASSERT_EQ(seq->size(), 2u);
@@ -207,7 +205,7 @@ TEST(RgbdSequences, DepthImageDirectoryWithoutPoses) {
   const DepthFrame f = seq->frame(1).load_depth();
   EXPECT_EQ(f.depth.at<std::uint16_t>(2, 2), 1300);
   EXPECT_TRUE(f.T_world_camera.matrix().isIdentity());
-  EXPECT_EQ(f.color.at<cv::Vec3b>(0, 0), cv::Vec3b(255, 0, 0)) << "colour is stored RGB";
+  EXPECT_EQ(f.color.at<cv::Vec3b>(0, 0), cv::Vec3b(0, 0, 255)) << "colour is stored RGB";
 }
 
 TEST(RgbdSequences, RealKinectGrabberFrames) {

@@ -2,11 +2,10 @@
 
 #include <gtest/gtest.h>
 
-#include <opencv2/imgcodecs.hpp>
-
 #include <algorithm>
 #include <sstream>
 
+#include "nodes/io/image_io.h"
 #include "nodes/io/textured_obj.h"
 #include "runtime/error.h"
 #include "runtime/half_edge_mesh.h"
@@ -65,8 +64,8 @@ TEST(RegionTextures, TexelsTakeTheColourOfThePointsUnderThem) {
     const Eigen::Vector2f q = origin + x * (x_end - origin) + y * (y_end - origin);
     return texel(image, q.x(), q.y());
   };
-  EXPECT_EQ(at(0.25f, 0.5f), cv::Vec3b(kRed.b, kRed.g, kRed.r));  // BGR
-  EXPECT_EQ(at(0.7f, 0.3f), cv::Vec3b(kBlue.b, kBlue.g, kBlue.r));
+  EXPECT_EQ(at(0.25f, 0.5f), cv::Vec3b(kRed.r, kRed.g, kRed.b));  // RGB
+  EXPECT_EQ(at(0.7f, 0.3f), cv::Vec3b(kBlue.r, kBlue.g, kBlue.b));
   EXPECT_EQ(at(0.97f, 0.5f), cv::Vec3b(128, 128, 128));  // 12 cm from the nearest point
   // Vertex colours for the untextured fall-back.
   EXPECT_EQ(t.mesh.colors[0], kRed);
@@ -106,7 +105,7 @@ TEST(RegionTextures, ObjMtlAndPngReferToEachOther) {
   }
   EXPECT_EQ(faces, sheet.mesh.triangles.size());
   EXPECT_EQ(vt, 3 * faces);
-  const cv::Mat png = cv::imread(dir + "/sheet_region0.png", cv::IMREAD_COLOR);
+  const cv::Mat png = io::read_color_image_file(dir + "/sheet_region0.png");
   ASSERT_FALSE(png.empty());
   EXPECT_EQ(cv::norm(png, t.textures[0].image, cv::NORM_INF), 0.0);  // lossless
 }

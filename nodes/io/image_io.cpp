@@ -1,0 +1,284 @@
+#include "nodes/io/image_io.h"
+
+#include <jpeglib.h>
+#include <spng.h>
+#include <tiffio.h>
+
+#include <csetjmp>
+#include <cstdio>
+#include <cstring>
+#include <fstream>
+#include <memory>
+
+#include "nodes/io/atomic_file.h"
+#include "nodes/io/parse_util.h"
+#include "runtime/error.h"
+
+namespace meshflow::io {
+namespace {
+
+constexpr std::uint64_t kMaxPixels = std::uint64_t{1} << 28;  // 16 k x 16 k
+
+enum class Kind { kPng, kJpeg, kTiff, kOther };
+
+std::vector<std::uint8_t> file_bytes(const std::string& path) {
+  std::ifstream in = open_input(path);
+  std::vector<std::uint8_t> bytes((std::istreambuf_iterator<char>(in)),
+                                  std::istreambuf_iterator<char>());
+  return bytes;
+}
+
+Kind kind_of(const std::vector<std::uint8_t>& b) {
+  if (b.size() >= 8 && std::memcmp(b.data(), "\x89PNG\r\n\x1a\n", 8) == 0) return Kind::kPng;
+  if (b.size() >= 3 && b[0] == 0xff && b[1] == 0xd8 && b[2] == 0xff) return Kind::kJpeg;
+  if (b.size() >= 4 &&
+      (std::memcmp(b.data(), "II*\0", 4) == 0 || std::memcmp(b.data(), "MM\0*", 4) == 0))
+    return Kind::kTiff;
+  return Kind::kOther;
+}
+
+void check_size(std::uint64_t width, std::uint64_t height, const std::string& path) {
+  if (width == 0 || height == 0 || width * height > kMaxPixels)
+    throw Error(path, "",
+                "image size " + std::to_string(width) + "x" + std::to_string(height) +
+                    " is empty or over " + std::to_string(kMaxPixels) + " pixels");
+}
+
+// ---- PNG (libspng) -------------------------------------------------------------------------
+
+using SpngContext = std::unique_ptr<spng_ctx, decltype(&spng_ctx_free)>;
+
+SpngContext png_decoder(const std::vector<std::uint8_t>& bytes, const std::string& path,
+                        spng_ihdr& ihdr) {
+  SpngContext ctx(spng_ctx_new(0), spng_ctx_free);
+  if (!ctx) throw Error(path, "", "cannot create a PNG decoder");
+  spng_set_crc_action(ctx.get(), SPNG_CRC_USE, SPNG_CRC_USE);
+  spng_set_image_limits(ctx.get(), 1u << 16, 1u << 16);
+  int err = spng_set_png_buffer(ctx.get(), bytes.data(), bytes.size());
+  if (err == 0) err = spng_get_ihdr(ctx.get(), &ihdr);
+  if (err != 0) throw Error(path, "PNG header", spng_strerror(err));
+  check_size(ihdr.width, ihdr.height, path);
+  return ctx;
+}
+
+cv::Mat decode_png(const std::vector<std::uint8_t>& bytes, const std::string& path, bool depth) {
+  spng_ihdr ihdr{};
+  SpngContext ctx = png_decoder(bytes, path, ihdr);
+  const int rows = static_cast<int>(ihdr.height), cols = static_cast<int>(ihdr.width);
+  if (depth) {
+    if (ihdr.color_type != SPNG_COLOR_TYPE_GRAYSCALE || ihdr.bit_depth != 16)
+      throw Error(path, "", "expected a 16-bit single-channel depth image");
+    cv::Mat image(rows, cols, CV_16UC1);
+    const int err = spng_decode_image(ctx.get(), image.data, image.total() * image.elemSize(),
+                                      SPNG_FMT_PNG, 0);  // host-endian 16-bit samples
+    if (err != 0) throw Error(path, "PNG data", spng_strerror(err));
+    return image;
+  }
+  cv::Mat image(rows, cols, CV_8UC3);
+  const int err = spng_decode_image(ctx.get(), image.data, image.total() * 3, SPNG_FMT_RGB8, 0);
+  if (err != 0) throw Error(path, "PNG data", spng_strerror(err));
+  return image;
+}
+
+// ---- JPEG (libjpeg-turbo) ------------------------------------------------------------------
+
+struct JpegError {
+  jpeg_error_mgr manager;
+  std::jmp_buf jump;
+  char message[JMSG_LENGTH_MAX];
+};
+
+void jpeg_fail(j_common_ptr info) {
+  auto* e = reinterpret_cast<JpegError*>(info->err);
+  (*info->err->format_message)(info, e->message);
+  std::longjmp(e->jump, 1);
+}
+
+void jpeg_silent(j_common_ptr, int) {}
+
+// Decodes into `out` (allocated here once the size is known); returns false with `message`
+// set on failure. No C++ objects with destructors live across the setjmp.
+bool decode_jpeg_into(const std::vector<std::uint8_t>& bytes, cv::Mat& out, char* message,
+                      const std::string& path) {
+  jpeg_decompress_struct info;
+  JpegError error;
+  info.err = jpeg_std_error(&error.manager);
+  error.manager.error_exit = jpeg_fail;
+  error.manager.emit_message = jpeg_silent;
+  if (setjmp(error.jump)) {
+    std::strcpy(message, error.message);
+    jpeg_destroy_decompress(&info);
+    return false;
+  }
+  jpeg_create_decompress(&info);
+  jpeg_mem_src(&info, bytes.data(), static_cast<unsigned long>(bytes.size()));
+  jpeg_read_header(&info, TRUE);
+  info.out_color_space = JCS_RGB;
+  jpeg_start_decompress(&info);
+  if (info.output_width == 0 || info.output_height == 0 ||
+      std::uint64_t{info.output_width} * info.output_height > kMaxPixels) {
+    std::snprintf(message, JMSG_LENGTH_MAX, "image size %ux%u is empty or too large",
+                  info.output_width, info.output_height);
+    jpeg_destroy_decompress(&info);
+    return false;
+  }
+  (void)path;
+  out.create(static_cast<int>(info.output_height), static_cast<int>(info.output_width), CV_8UC3);
+  while (info.output_scanline < info.output_height) {
+    JSAMPROW row = out.ptr<JSAMPLE>(static_cast<int>(info.output_scanline));
+    jpeg_read_scanlines(&info, &row, 1);
+  }
+  jpeg_finish_decompress(&info);
+  jpeg_destroy_decompress(&info);
+  return true;
+}
+
+cv::Mat decode_jpeg(const std::vector<std::uint8_t>& bytes, const std::string& path) {
+  cv::Mat image;
+  char message[JMSG_LENGTH_MAX] = {0};
+  if (!decode_jpeg_into(bytes, image, message, path))
+    throw Error(path, "JPEG", message[0] != '\0' ? message : "cannot decode");
+  return image;
+}
+
+// ---- TIFF (libtiff) ------------------------------------------------------------------------
+
+thread_local std::string tiff_message;
+
+void tiff_error(const char*, const char* format, va_list args) {
+  char text[512];
+  std::vsnprintf(text, sizeof text, format, args);
+  tiff_message = text;
+}
+
+void tiff_warning(const char*, const char*, va_list) {}
+
+// libtiff reports through process-wide handlers: installed once, they keep the message of the
+// calling thread instead of printing it.
+void install_tiff_handlers() {
+  static const bool installed = [] {
+    TIFFSetErrorHandler(tiff_error);
+    TIFFSetWarningHandler(tiff_warning);
+    return true;
+  }();
+  (void)installed;
+}
+
+using Tiff = std::unique_ptr<TIFF, decltype(&TIFFClose)>;
+
+cv::Mat decode_tiff(const std::string& path, bool depth) {
+  install_tiff_handlers();
+  tiff_message.clear();
+  Tiff tiff(TIFFOpen(path.c_str(), "r"), TIFFClose);
+  if (!tiff) throw Error(path, "TIFF", tiff_message.empty() ? "cannot open" : tiff_message);
+  std::uint32_t width = 0, height = 0;
+  std::uint16_t bits = 0, samples = 1;
+  TIFFGetField(tiff.get(), TIFFTAG_IMAGEWIDTH, &width);
+  TIFFGetField(tiff.get(), TIFFTAG_IMAGELENGTH, &height);
+  TIFFGetFieldDefaulted(tiff.get(), TIFFTAG_BITSPERSAMPLE, &bits);
+  TIFFGetFieldDefaulted(tiff.get(), TIFFTAG_SAMPLESPERPIXEL, &samples);
+  check_size(width, height, path);
+  const int rows = static_cast<int>(height), cols = static_cast<int>(width);
+  if (depth) {
+    if (bits != 16 || samples != 1 || TIFFIsTiled(tiff.get()))
+      throw Error(path, "", "expected a 16-bit single-channel depth image (in strips)");
+    cv::Mat image(rows, cols, CV_16UC1);
+    if (static_cast<std::size_t>(TIFFScanlineSize(tiff.get())) != image.step[0])
+      throw Error(path, "TIFF", "unexpected scanline size");
+    for (int r = 0; r < rows; ++r)
+      if (TIFFReadScanline(tiff.get(), image.ptr(r), static_cast<std::uint32_t>(r), 0) < 0)
+        throw Error(path, "TIFF row " + std::to_string(r),
+                    tiff_message.empty() ? "cannot decode" : tiff_message);
+    return image;
+  }
+  // Any colour layout through libtiff's RGBA conversion (rows bottom-up, ABGR words).
+  std::vector<std::uint32_t> rgba(static_cast<std::size_t>(width) * height);
+  if (!TIFFReadRGBAImageOriented(tiff.get(), width, height, rgba.data(), ORIENTATION_TOPLEFT, 0))
+    throw Error(path, "TIFF", tiff_message.empty() ? "cannot decode" : tiff_message);
+  cv::Mat image(rows, cols, CV_8UC3);
+  for (int r = 0; r < rows; ++r) {
+    auto* out = image.ptr<std::uint8_t>(r);
+    for (int c = 0; c < cols; ++c) {
+      const std::uint32_t p =
+          rgba[static_cast<std::size_t>(r) * width + static_cast<std::size_t>(c)];
+      out[3 * c] = static_cast<std::uint8_t>(TIFFGetR(p));
+      out[3 * c + 1] = static_cast<std::uint8_t>(TIFFGetG(p));
+      out[3 * c + 2] = static_cast<std::uint8_t>(TIFFGetB(p));
+    }
+  }
+  return image;
+}
+
+cv::Mat read_image(const std::string& path, bool depth) {
+  const std::vector<std::uint8_t> bytes = file_bytes(path);
+  switch (kind_of(bytes)) {
+    case Kind::kPng:
+      return decode_png(bytes, path, depth);
+    case Kind::kJpeg:
+      if (depth) throw Error(path, "", "expected a 16-bit single-channel depth image, got JPEG");
+      return decode_jpeg(bytes, path);
+    case Kind::kTiff:
+      return decode_tiff(path, depth);
+    case Kind::kOther:
+      break;
+  }
+  throw Error(path, "",
+              bytes.empty() ? "empty file" : "not a PNG, JPEG or TIFF image (unknown signature)");
+}
+
+}  // namespace
+
+cv::Mat read_depth_image_file(const std::string& path) { return read_image(path, true); }
+
+cv::Mat read_color_image_file(const std::string& path) { return read_image(path, false); }
+
+std::vector<std::uint8_t> encode_png(const cv::Mat& image) {
+  spng_ihdr ihdr{};
+  ihdr.width = static_cast<std::uint32_t>(image.cols);
+  ihdr.height = static_cast<std::uint32_t>(image.rows);
+  switch (image.type()) {
+    case CV_8UC3:
+      ihdr.bit_depth = 8;
+      ihdr.color_type = SPNG_COLOR_TYPE_TRUECOLOR;
+      break;
+    case CV_8UC1:
+      ihdr.bit_depth = 8;
+      ihdr.color_type = SPNG_COLOR_TYPE_GRAYSCALE;
+      break;
+    case CV_16UC1:
+      ihdr.bit_depth = 16;
+      ihdr.color_type = SPNG_COLOR_TYPE_GRAYSCALE;
+      break;
+    default:
+      throw Error("PNG", "image type", "expected 8-bit RGB or grey, or 16-bit grey");
+  }
+  // Rows contiguous, 16-bit samples big-endian as PNG stores them.
+  cv::Mat rows = image.isContinuous() ? image : image.clone();
+  std::vector<std::uint8_t> raw(rows.total() * rows.elemSize());
+  std::memcpy(raw.data(), rows.data, raw.size());
+  if (ihdr.bit_depth == 16)
+    for (std::size_t i = 0; i + 1 < raw.size(); i += 2) std::swap(raw[i], raw[i + 1]);
+  SpngContext ctx(spng_ctx_new(SPNG_CTX_ENCODER), spng_ctx_free);
+  if (!ctx) throw Error("PNG", "", "cannot create an encoder");
+  spng_set_option(ctx.get(), SPNG_ENCODE_TO_BUFFER, 1);
+  int err = spng_set_ihdr(ctx.get(), &ihdr);
+  if (err == 0)
+    err = spng_encode_image(ctx.get(), raw.data(), raw.size(), SPNG_FMT_RAW, SPNG_ENCODE_FINALIZE);
+  std::size_t length = 0;
+  void* png = err == 0 ? spng_get_png_buffer(ctx.get(), &length, &err) : nullptr;
+  if (err != 0 || png == nullptr) throw Error("PNG", "encoding", spng_strerror(err));
+  std::vector<std::uint8_t> bytes(static_cast<std::uint8_t*>(png),
+                                  static_cast<std::uint8_t*>(png) + length);
+  std::free(png);
+  return bytes;
+}
+
+void write_png(const std::string& path, const cv::Mat& image) {
+  const std::vector<std::uint8_t> bytes = encode_png(image);
+  AtomicOutputFile file(path);
+  file.stream().write(reinterpret_cast<const char*>(bytes.data()),
+                      static_cast<std::streamsize>(bytes.size()));
+  file.commit();
+}
+
+}  // namespace meshflow::io

@@ -1,0 +1,132 @@
+#include "nodes/io/image_io.h"
+
+#include <gtest/gtest.h>
+#include <jpeglib.h>
+#include <tiffio.h>
+
+#include <cstdio>
+
+#include "runtime/error.h"
+#include "test_support.h"
+
+namespace meshflow::io {
+namespace {
+
+cv::Mat gradient16(int rows, int cols) {
+  cv::Mat m(rows, cols, CV_16UC1);
+  for (int r = 0; r < rows; ++r)
+    for (int c = 0; c < cols; ++c)
+      m.at<std::uint16_t>(r, c) = static_cast<std::uint16_t>(r * 1000 + c * 7 + 300);
+  return m;
+}
+
+cv::Mat colours(int rows, int cols) {
+  cv::Mat m(rows, cols, CV_8UC3);
+  for (int r = 0; r < rows; ++r)
+    for (int c = 0; c < cols; ++c)
+      m.at<cv::Vec3b>(r, c) =
+          cv::Vec3b(static_cast<std::uint8_t>(10 * r), static_cast<std::uint8_t>(20 * c), 200);
+  return m;
+}
+
+// Writes `image` (CV_16UC1 or CV_8UC3 RGB) as an uncompressed TIFF in strips.
+void write_tiff(const std::string& path, const cv::Mat& image) {
+  TIFF* tiff = TIFFOpen(path.c_str(), "w");
+  ASSERT_NE(tiff, nullptr);
+  const bool colour = image.type() == CV_8UC3;
+  TIFFSetField(tiff, TIFFTAG_IMAGEWIDTH, image.cols);
+  TIFFSetField(tiff, TIFFTAG_IMAGELENGTH, image.rows);
+  TIFFSetField(tiff, TIFFTAG_BITSPERSAMPLE, colour ? 8 : 16);
+  TIFFSetField(tiff, TIFFTAG_SAMPLESPERPIXEL, colour ? 3 : 1);
+  TIFFSetField(tiff, TIFFTAG_PHOTOMETRIC, colour ? PHOTOMETRIC_RGB : PHOTOMETRIC_MINISBLACK);
+  TIFFSetField(tiff, TIFFTAG_PLANARCONFIG, PLANARCONFIG_CONTIG);
+  TIFFSetField(tiff, TIFFTAG_COMPRESSION, COMPRESSION_PACKBITS);
+  TIFFSetField(tiff, TIFFTAG_ROWSPERSTRIP, 2);
+  for (int r = 0; r < image.rows; ++r)
+    ASSERT_GE(TIFFWriteScanline(tiff, const_cast<std::uint8_t*>(image.ptr(r)),
+                                static_cast<std::uint32_t>(r), 0),
+              0);
+  TIFFClose(tiff);
+}
+
+// Writes `image` (CV_8UC3 RGB) as a JPEG of quality 100.
+void write_jpeg(const std::string& path, const cv::Mat& image) {
+  jpeg_compress_struct info;
+  jpeg_error_mgr error;
+  info.err = jpeg_std_error(&error);
+  jpeg_create_compress(&info);
+  std::FILE* file = std::fopen(path.c_str(), "wb");
+  ASSERT_NE(file, nullptr);
+  jpeg_stdio_dest(&info, file);
+  info.image_width = static_cast<JDIMENSION>(image.cols);
+  info.image_height = static_cast<JDIMENSION>(image.rows);
+  info.input_components = 3;
+  info.in_color_space = JCS_RGB;
+  jpeg_set_defaults(&info);
+  jpeg_set_quality(&info, 100, TRUE);
+  jpeg_start_compress(&info, TRUE);
+  while (info.next_scanline < info.image_height) {
+    JSAMPROW row = const_cast<JSAMPLE*>(image.ptr<JSAMPLE>(static_cast<int>(info.next_scanline)));
+    jpeg_write_scanlines(&info, &row, 1);
+  }
+  jpeg_finish_compress(&info);
+  jpeg_destroy_compress(&info);
+  std::fclose(file);
+}
+
+TEST(ImageIo, PngRoundTripsDepthAndColourExactly) {
+  const std::string dir = test::temp_dir();
+  const cv::Mat depth = gradient16(7, 9), rgb = colours(5, 6);
+  write_png(dir + "/d.png", depth);
+  write_png(dir + "/c.png", rgb);
+  EXPECT_EQ(cv::norm(read_depth_image_file(dir + "/d.png"), depth, cv::NORM_INF), 0.0);
+  EXPECT_EQ(cv::norm(read_color_image_file(dir + "/c.png"), rgb, cv::NORM_INF), 0.0);
+  // A grey 16-bit PNG read as colour: scaled to 8 bits and replicated.
+  const cv::Mat as_colour = read_color_image_file(dir + "/d.png");
+  EXPECT_EQ(as_colour.type(), CV_8UC3);
+  EXPECT_THROW(read_depth_image_file(dir + "/c.png"), Error) << "colour is no depth image";
+}
+
+TEST(ImageIo, TiffAndJpegAreRead) {
+  const std::string dir = test::temp_dir();
+  const cv::Mat depth = gradient16(6, 8), rgb = colours(6, 8);
+  write_tiff(dir + "/d.tiff", depth);
+  write_tiff(dir + "/c.tiff", rgb);
+  write_jpeg(dir + "/c.jpg", rgb);
+  EXPECT_EQ(cv::norm(read_depth_image_file(dir + "/d.tiff"), depth, cv::NORM_INF), 0.0);
+  EXPECT_EQ(cv::norm(read_color_image_file(dir + "/c.tiff"), rgb, cv::NORM_INF), 0.0);
+  const cv::Mat jpeg = read_color_image_file(dir + "/c.jpg");
+  ASSERT_EQ(jpeg.size(), rgb.size());
+  EXPECT_LE(cv::norm(jpeg, rgb, cv::NORM_INF), 16.0) << "quality 100, subsampled chroma";
+  EXPECT_THROW(read_depth_image_file(dir + "/c.jpg"), Error);
+}
+
+TEST(ImageIo, BrokenFilesAreOneClearErrorNamingTheFile) {
+  const std::string dir = test::temp_dir();
+  write_png(dir + "/d.png", gradient16(16, 16));
+  const std::string good = test::read_file(dir + "/d.png");
+  std::uint32_t state = 5;
+  const std::vector<std::pair<std::string, std::string>> files = {
+      {"empty.png", ""},
+      {"text.png", "not an image"},
+      {"truncated.png", good.substr(0, good.size() / 2)},
+      {"flipped.png", test::flip_bytes(good, 6, state)},
+      {"truncated.jpg", std::string("\xff\xd8\xff\xe0", 4) + std::string(20, 'x')},
+      {"truncated.tiff", std::string("II*\0", 4) + std::string(4, '\xff')}};
+  for (const auto& [name, bytes] : files) {
+    const std::string path = dir + "/" + name;
+    test::write_file(path, bytes);
+    for (bool depth : {true, false}) {
+      try {
+        depth ? read_depth_image_file(path) : read_color_image_file(path);
+        // A flip that happens to keep the file valid decodes; that is fine.
+      } catch (const Error& e) {
+        EXPECT_NE(std::string(e.what()).find(path), std::string::npos) << e.what();
+      }
+    }
+  }
+  EXPECT_THROW(read_depth_image_file(dir + "/missing.png"), Error);
+}
+
+}  // namespace
+}  // namespace meshflow::io

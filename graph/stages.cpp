@@ -6,6 +6,7 @@
 #include <string>
 
 #include "nodes/extract/extract_surface.h"
+#include "nodes/extract/vertex_colors.h"
 #include "nodes/filter/organized_depth.h"
 #include "nodes/filter/spatial_order.h"
 #include "nodes/normals/organized_normals.h"
@@ -153,6 +154,8 @@ std::uint64_t extract(Frame& f, const ReconstructionConfig& c) {
         f.normals.sharp ? ExtractMethod::kExtendedMarchingCubes : ExtractMethod::kMarchingCubes;
   f.extract_method = config.method;
   f.mesh = extract_surface(f.grid, f.distance, f.cloud, f.index.get(), config);
+  if (f.cloud.has_colors() && f.index)  // a coloured cloud gives a coloured mesh
+    f.mesh.colors = vertex_colors(f.mesh.vertices, f.cloud, *f.index);
   return f.mesh.triangles.size();
 }
 

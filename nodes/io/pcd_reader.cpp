@@ -388,6 +388,10 @@ PointCloud read_pcd(const std::string& path) {
   if (header.height > 1) {
     cloud.width = static_cast<std::uint32_t>(header.width);
     cloud.height = static_cast<std::uint32_t>(header.height);
+    // An organized cloud is a depth camera's image, in the camera's frame unless VIEWPOINT says
+    // otherwise: its sensor is at the origin. Recorded so that it survives the filter, which
+    // drops the invalid pixels and with them the grid.
+    cloud.has_sensor_origin = true;
   }
   return cloud;
 }

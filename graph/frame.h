@@ -31,7 +31,9 @@ struct ReconstructionConfig {
   DepthFilterConfig depth_filter;  ///< depth-image inputs only
   FilterConfig filter;
   NormalsConfig normals;
-  VoxelizeConfig voxelize;
+  /// Voxel size 0 (the default, as in the CLI): chosen per frame, 3x the median point spacing
+  /// of a cloud (suggest_voxel_size) or from the depth and focal length of a depth frame.
+  VoxelizeConfig voxelize = VoxelizeConfig{0.0f};
   DistanceConfig distance;              ///< clouds (Hoppe)
   ProjectiveDistanceConfig projective;  ///< depth frames
   ExtractConfig extract;
@@ -88,6 +90,9 @@ struct Frame {
   std::string error;  ///< empty while the frame is healthy
   std::string failed_stage;
   std::vector<StageRecord> timings;  ///< one record per stage that ran
+  /// Called (from the graph thread running it) as each stage begins, with the stage's name and,
+  /// inside "optimize", each step's name (else nullptr): for progress lines. Optional.
+  std::function<void(const char* stage, const char* step)> on_stage;
 
   bool ok() const { return error.empty(); }
 };

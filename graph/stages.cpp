@@ -54,9 +54,8 @@ std::uint64_t filter(Frame& f, const ReconstructionConfig& c) {
     }
     f.cloud = back_project_valid(*f.depth, depth_m);  // finite points with normals only
     f.normals_from_image = true;
-    f.depth->depth = depth_m;  // keep only the filtered metric depth for the distance stage
-    f.depth->depth_scale = 1.0f;
-    f.depth->color.release();
+    f.depth->depth = depth_m;     // keep only the filtered metric depth for the distance stage
+    f.depth->depth_scale = 1.0f;  // the colour stays for the mesh's vertex colours
   }
   if (f.depth && c.filter.keeps_every_finite_point()) {  // nothing left to filter: no copy
     f.filter_counts = FilterCounts{};
@@ -140,7 +139,7 @@ std::uint64_t distance(Frame& f, const ReconstructionConfig& c) {
   if (f.depth) {
     f.distance = projective_distance(f.grid, f.depth->depth, f.depth->intrinsics,
                                      f.depth->T_world_camera, c.projective);
-    f.depth.reset();  // keep frames in flight small
+    f.depth->depth.release();  // keep frames in flight small; the colour waits for "extract"
     return f.grid.corners.size();
   }
   f.distance = hoppe_distance(f.grid, f.cloud, *f.index, c.distance);
@@ -154,19 +153,27 @@ std::uint64_t extract(Frame& f, const ReconstructionConfig& c) {
         f.normals.sharp ? ExtractMethod::kExtendedMarchingCubes : ExtractMethod::kMarchingCubes;
   f.extract_method = config.method;
   f.mesh = extract_surface(f.grid, f.distance, f.cloud, f.index.get(), config);
-  if (f.cloud.has_colors() && f.index)  // a coloured cloud gives a coloured mesh
+  if (f.depth) {  // a depth frame with a colour image gives a coloured mesh
+    f.mesh.colors = vertex_colors_from_image(f.mesh.vertices, *f.depth);
+    f.depth.reset();
+  } else if (f.cloud.has_colors() && f.index)  // so does a coloured cloud
     f.mesh.colors = vertex_colors(f.mesh.vertices, f.cloud, *f.index);
   return f.mesh.triangles.size();
 }
 
 std::uint64_t optimize(Frame& f, const ReconstructionConfig& c) {
-  f.mesh = optimize_mesh(f.mesh, optimize_config_for_voxel(c, f.voxel_size), &f.optimize);
+  OptimizeConfig config = optimize_config_for_voxel(c, f.voxel_size);
+  if (f.on_stage)
+    config.on_step = [&f](OptimizeStep step) { f.on_stage("optimize", optimize_step_name(step)); };
+  f.mesh = optimize_mesh(f.mesh, config, &f.optimize);
   return f.mesh.triangles.size();
 }
 
 std::uint64_t triangulate(Frame& f, const ReconstructionConfig& c) {
   if (f.depth) {
     f.mesh = triangulate_depth(*f.depth, c.triangulation);
+    f.mesh.colors = vertex_colors_from_image(f.mesh.vertices, *f.depth);
+    if (f.mesh.normals.empty()) compute_vertex_normals(f.mesh);
     f.depth.reset();
   } else if (f.cloud.is_organized()) {
     f.mesh = triangulate_organized(f.cloud, c.triangulation);
@@ -199,6 +206,7 @@ void run_stage(const char* name, StageFunction body, Frame& f, const Reconstruct
 
 void run_stage(const char* name, const std::function<std::uint64_t(Frame&)>& body, Frame& f) {
   if (!f.ok()) return;
+  if (f.on_stage) f.on_stage(name, nullptr);
   StageRecord record{name, monotonic_seconds(), 0.0, current_thread_index(), 0, f.seq};
   try {
     record.items = body(f);

@@ -4,6 +4,7 @@
 #include <string>
 
 #include "graph/pipeline.h"
+#include "nodes/extract/extract_surface.h"
 #include "nodes/filter/organized_depth.h"
 #include "nodes/io/mesh_writers.h"
 #include "nodes/io/parse_util.h"
@@ -13,7 +14,10 @@
 #include "runtime/half_edge_mesh.h"
 #include "runtime/threads.h"
 #include "tools/commands.h"
+#include "tools/console.h"
+#include "tools/json_report.h"
 #include "tools/pipeline_options.h"
+#include "tools/progress.h"
 #include "tools/report.h"
 
 namespace meshflow::cli {
@@ -24,7 +28,6 @@ struct ReconstructOptions {
   std::string input;
   std::string output;
   PipelineOptions pipeline;
-  bool quiet = false;
   bool texture = false;
 };
 
@@ -39,43 +42,56 @@ std::size_t write_textured(const std::string& output, const Frame& frame,
   return textured.textures.size();
 }
 
-// What `reconstruct` does for normals with the defaults (--normals auto --orient auto).
-void print_normals_plan(const PointCloud& cloud) {
+// What `reconstruct` does for normals with the defaults (--normals auto --orient auto): the
+// report line, and the same as JSON.
+std::string normals_plan(const PointCloud& cloud, nlohmann::json& plan) {
   if (cloud.has_normals()) {
     std::size_t missing = 0;
     for (const Eigen::Vector3f& n : cloud.normals)
       missing += n.allFinite() && n.squaredNorm() > 1e-12f ? 0 : 1;
-    if (missing == 0)
-      std::printf("normals     from the file, used as they are (--normals auto)\n");
-    else
-      std::printf("normals     from the file; %zu zero or NaN, estimated from their neighbours\n",
-                  missing);
-    return;
+    plan = {{"source", "input"}, {"missing", missing}};
+    if (missing == 0) return "from the file, used as they are (--normals auto)";
+    return "from the file; " + std::to_string(missing) +
+           " zero or NaN, estimated from their neighbours";
   }
   const NormalOrientation o = resolve_orientation(cloud);
-  std::printf(
-      "normals     none in the file: estimated, --orient auto = %s (%s)\n", orientation_name(o),
-      o == NormalOrientation::kPropagate ? "no sensor position: consistent over neighbours, outward"
-      : cloud.has_sensor_origin          ? "towards the sensor position"
-                                         : "organized: towards the sensor at the origin");
+  plan = {{"source", "estimate"}, {"orientation", orientation_name(o)}};
+  return std::string("none in the file: estimated, --orient auto = ") + orientation_name(o) + " (" +
+         (o == NormalOrientation::kPropagate
+              ? "no sensor position: consistent over neighbours, outward"
+          : cloud.has_sensor_origin ? "towards the sensor position"
+                                    : "organized: towards the sensor at the origin") +
+         ")";
+}
+
+// -v: the settings that decide the mesh, as the stages will use them.
+void print_settings(const ReconstructionConfig& c) {
+  detail("settings   voxel %s, kn %d, ki %d, kd %d, extract %s, optimize",
+         c.voxelize.voxel_size > 0.0f ? (std::to_string(c.voxelize.voxel_size) + " m").c_str()
+                                      : "auto (3x the median point spacing)",
+         c.normals.kn, c.normals.ki, c.distance.kd, extract_method_name(c.extract.method));
+  for (OptimizeStep step : c.optimize.steps) detail(" %s", optimize_step_name(step));
+  detail("%s\n", c.optimize.steps.empty() ? " none" : "");
 }
 
 void run_reconstruct(const ReconstructOptions& o) {
   ThreadLimit limit(o.pipeline.threads);
   const ReconstructionConfig config = o.pipeline.config();
   // Fail on an unwritable output before spending time on reconstruction.
-  const std::string ext = io::lower_extension(o.output);
-  if (ext != ".ply" && ext != ".obj") {
-    throw Error(o.output, "", "unknown mesh format '" + ext + "' (expected .ply or .obj)");
-  }
-  if (o.texture && ext != ".obj")
+  io::check_mesh_output_format(o.output);
+  if (o.texture && io::lower_extension(o.output) != ".obj")
     throw Error(o.output, "", "--texture writes OBJ + MTL + PNG: give an .obj output");
+  print_settings(config);
 
   ReconstructionPipeline pipeline(config, 1);
   auto frame = std::make_shared<Frame>();
   frame->name = o.input;
   const std::string path = o.input;
   frame->load = [path] { return io::read_point_cloud(path); };
+  auto progress = std::make_unique<StepProgress>();
+  frame->on_stage = [&progress](const char* stage, const char* step) {
+    progress->begin(stage, step);
+  };
   const double t0 = monotonic_seconds();
   bool given = false;
   pipeline.run([&]() -> FramePtr { return given ? nullptr : (given = true, frame); },
@@ -89,20 +105,96 @@ void run_reconstruct(const ReconstructOptions& o) {
   if (o.texture && !frame->cloud.has_colors())
     throw Error(o.input, "", "--texture needs coloured points (the input has no colours)");
   std::size_t textures = 0;
-  if (o.texture)
+  progress->begin("write");
+  if (o.texture) {
+    progress->begin("texture");
     textures = write_textured(o.output, *frame, config);
-  else
+  } else {
     io::write_mesh(o.output, frame->mesh);
+  }
+  progress.reset();  // clears the progress line before the report
   const double wall = monotonic_seconds() - t0;
-  if (frame->filter_counts.non_finite > 0) {
+  if (frame->filter_counts.non_finite > 0 && !console().quiet) {
     std::fprintf(stderr, "meshflow: note: %s: dropped %zu non-finite (NaN/Inf) points\n",
                  o.input.c_str(), frame->filter_counts.non_finite);
   }
-  if (!o.quiet) {
-    print_frame_report(*frame, wall, limit.threads());
-    if (o.texture) std::printf("textures   %zu planar regions textured\n", textures);
-    std::printf("output     %s\n", o.output.c_str());
+  if (console().json) {
+    nlohmann::json doc = frame_json(*frame, wall, limit.threads());
+    doc["output"] = o.output;
+    if (o.texture) doc["textures"] = textures;
+    return print_json(doc);
   }
+  print_frame_report(*frame, wall, limit.threads());
+  if (o.texture) report("textures   %zu planar regions textured\n", textures);
+  report("output     %s\n", o.output.c_str());
+}
+
+void print_info(const std::string& path, const PointCloud& cloud) {
+  const std::size_t finite = count_finite_points(cloud);
+  report("file        %s\n", path.c_str());
+  report("points      %zu (%zu finite, %zu NaN/Inf)\n", cloud.size(), finite,
+         cloud.size() - finite);
+  if (cloud.is_organized()) {
+    report("organized   %u x %u", cloud.width, cloud.height);
+    if (const std::optional<DepthFrame> depth = depth_frame_from_organized(cloud)) {
+      const PinholeIntrinsics& k = depth->intrinsics;
+      report(
+          ", a pinhole view: fx %.3f fy %.3f cx %.3f cy %.3f px (fuses as a depth "
+          "image; --organized-as-depth)\n",
+          k.fx, k.fy, k.cx, k.cy);
+    } else {
+      report(", not a pinhole view from the sensor origin\n");
+    }
+  }
+  std::string fields = "x y z";
+  if (cloud.has_normals()) fields += " normals";
+  if (cloud.has_colors()) fields += " rgb";
+  if (cloud.has_intensities()) fields += " intensity";
+  report("fields      %s\n", fields.c_str());
+  const Eigen::AlignedBox3f box = finite_bounds(cloud);
+  if (!box.isEmpty()) {
+    report("bounds min  %.4f %.4f %.4f m\n", box.min().x(), box.min().y(), box.min().z());
+    report("bounds max  %.4f %.4f %.4f m\n", box.max().x(), box.max().y(), box.max().z());
+    report("extent      %.4f x %.4f x %.4f m\n", box.sizes().x(), box.sizes().y(), box.sizes().z());
+  }
+  if (cloud.has_sensor_origin) {
+    report("sensor      %.4f %.4f %.4f m\n", cloud.sensor_origin.x(), cloud.sensor_origin.y(),
+           cloud.sensor_origin.z());
+  }
+  nlohmann::json plan;
+  report("normals     %s\n", normals_plan(cloud, plan).c_str());
+}
+
+nlohmann::json info_json(const std::string& path, const PointCloud& cloud) {
+  const auto vec = [](const Eigen::Vector3f& v) { return nlohmann::json{v.x(), v.y(), v.z()}; };
+  const std::size_t finite = count_finite_points(cloud);
+  nlohmann::json doc = {{"file", path},
+                        {"points", cloud.size()},
+                        {"finite_points", finite},
+                        {"fields",
+                         {{"normals", cloud.has_normals()},
+                          {"colors", cloud.has_colors()},
+                          {"intensities", cloud.has_intensities()}}}};
+  if (cloud.is_organized()) {
+    doc["organized"] = {{"width", cloud.width}, {"height", cloud.height}};
+    if (const std::optional<DepthFrame> depth = depth_frame_from_organized(cloud)) {
+      const PinholeIntrinsics& k = depth->intrinsics;
+      doc["organized"]["pinhole"] = {{"fx", k.fx}, {"fy", k.fy}, {"cx", k.cx}, {"cy", k.cy}};
+    }
+  }
+  const Eigen::AlignedBox3f box = finite_bounds(cloud);
+  if (!box.isEmpty()) doc["bounds"] = {{"min", vec(box.min())}, {"max", vec(box.max())}};
+  if (cloud.has_sensor_origin) doc["sensor"] = vec(cloud.sensor_origin);
+  nlohmann::json plan;
+  normals_plan(cloud, plan);
+  doc["normals"] = plan;
+  return doc;
+}
+
+void run_info(const std::string& path) {
+  const PointCloud cloud = io::read_point_cloud(path);
+  if (console().json) return print_json(info_json(path, cloud));
+  print_info(path, cloud);
 }
 
 }  // namespace
@@ -112,9 +204,9 @@ void add_reconstruct_command(CLI::App& app) {
   CLI::App* cmd = app.add_subcommand("reconstruct", "Reconstruct a mesh from one point cloud");
   cmd->add_option("input", opts->input, "Point cloud: .ply .pcd .xyz .txt .pts .asc .3d")
       ->required();
-  cmd->add_option("-o,--output", opts->output, "Output mesh (.ply or .obj)")->required();
+  cmd->add_option("-o,--output", opts->output, "Output mesh: .ply .obj .stl .off .glb")->required();
   add_pipeline_options(cmd, opts->pipeline);
-  cmd->add_flag("-q,--quiet", opts->quiet, "Print nothing on success");
+  add_console_flags(cmd, true);
   cmd->add_flag("--texture", opts->texture,
                 "Texture planar regions from the points' colours (OBJ + MTL + PNG output)");
   cmd->callback([opts] { run_reconstruct(*opts); });
@@ -124,42 +216,8 @@ void add_info_command(CLI::App& app) {
   auto path = std::make_shared<std::string>();
   CLI::App* cmd = app.add_subcommand("info", "Print counts, bounds and fields of a point cloud");
   cmd->add_option("file", *path, "Point cloud file")->required();
-  cmd->callback([path] {
-    const PointCloud cloud = io::read_point_cloud(*path);
-    const std::size_t finite = count_finite_points(cloud);
-    std::printf("file        %s\n", path->c_str());
-    std::printf("points      %zu (%zu finite, %zu NaN/Inf)\n", cloud.size(), finite,
-                cloud.size() - finite);
-    if (cloud.is_organized()) {
-      std::printf("organized   %u x %u", cloud.width, cloud.height);
-      if (const std::optional<DepthFrame> depth = depth_frame_from_organized(cloud)) {
-        const PinholeIntrinsics& k = depth->intrinsics;
-        std::printf(
-            ", a pinhole view: fx %.3f fy %.3f cx %.3f cy %.3f px (fuses as a depth "
-            "image; --organized-as-depth)\n",
-            k.fx, k.fy, k.cx, k.cy);
-      } else {
-        std::printf(", not a pinhole view from the sensor origin\n");
-      }
-    }
-    std::string fields = "x y z";
-    if (cloud.has_normals()) fields += " normals";
-    if (cloud.has_colors()) fields += " rgb";
-    if (cloud.has_intensities()) fields += " intensity";
-    std::printf("fields      %s\n", fields.c_str());
-    const Eigen::AlignedBox3f box = finite_bounds(cloud);
-    if (!box.isEmpty()) {
-      std::printf("bounds min  %.4f %.4f %.4f m\n", box.min().x(), box.min().y(), box.min().z());
-      std::printf("bounds max  %.4f %.4f %.4f m\n", box.max().x(), box.max().y(), box.max().z());
-      std::printf("extent      %.4f x %.4f x %.4f m\n", box.sizes().x(), box.sizes().y(),
-                  box.sizes().z());
-    }
-    if (cloud.has_sensor_origin) {
-      std::printf("sensor      %.4f %.4f %.4f m\n", cloud.sensor_origin.x(),
-                  cloud.sensor_origin.y(), cloud.sensor_origin.z());
-    }
-    print_normals_plan(cloud);
-  });
+  add_console_flags(cmd, true);
+  cmd->callback([path] { run_info(*path); });
 }
 
 }  // namespace meshflow::cli

@@ -17,6 +17,7 @@ void add_profile_command(CLI::App& app);
 void add_eval_command(CLI::App& app);
 void add_live_command(CLI::App& app);
 void add_sample_command(CLI::App& app);
+void add_optimize_command(CLI::App& app);
 
 /// Names of the built-in closed objects (`meshflow sample`, `meshflow eval --object`).
 std::vector<std::string> closed_object_names();

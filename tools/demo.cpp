@@ -13,6 +13,7 @@
 #include "runtime/threads.h"
 #include "tools/cli_checks.h"
 #include "tools/commands.h"
+#include "tools/console.h"
 #include "tools/report.h"
 
 namespace meshflow::cli {
@@ -30,12 +31,12 @@ void run_demo(const DemoOptions& o) {
   const synthetic::Scene scene = synthetic::demo_room_scene();
   synthetic::ScanConfig scan;
   scan.noise_sigma = o.noise;
-  std::printf(
+  report(
       "demo       simulated laser scan of an 8 x 6 x 3 m room with a block, a cabinet and a "
       "ball\n");
-  std::printf("           %d x %d rays from (%.1f, %.1f, %.1f) m, range noise %.1f mm\n",
-              scan.azimuth_steps, scan.elevation_steps, scan.origin.x(), scan.origin.y(),
-              scan.origin.z(), 1e3 * o.noise);
+  report("           %d x %d rays from (%.1f, %.1f, %.1f) m, range noise %.1f mm\n",
+         scan.azimuth_steps, scan.elevation_steps, scan.origin.x(), scan.origin.y(),
+         scan.origin.z(), 1e3 * o.noise);
   PointCloud cloud = synthetic::simulate_scan(scene, scan);
 
   ReconstructionConfig config;
@@ -58,14 +59,14 @@ void run_demo(const DemoOptions& o) {
   if (!errors.empty()) {
     const double mean = sum / static_cast<double>(errors.size());
     const float p95 = errors[errors.size() * 95 / 100];
-    std::printf(
+    report(
         "accuracy   vertex-to-true-surface distance: mean %.2f mm (%.3f voxel), p95 %.2f mm, max "
         "%.2f mm\n",
         1e3 * mean, mean / o.voxel, 1e3 * p95, 1e3 * errors.back());
   }
-  std::printf("throughput %.2f M points/s\n",
-              static_cast<double>(frame->filter_counts.input) / wall * 1e-6);
-  std::printf("output     %s\n", o.output.c_str());
+  report("throughput %.2f M points/s\n",
+         static_cast<double>(frame->filter_counts.input) / wall * 1e-6);
+  report("output     %s\n", o.output.c_str());
 }
 
 }  // namespace
@@ -80,6 +81,7 @@ void add_demo_command(CLI::App& app) {
       ->check(number_in(0, 1));
   cmd->add_option("--threads", opts->threads, "Worker threads (default: all cores)")
       ->check(CLI::Range(0, 1024));
+  add_console_flags(cmd, false);
   cmd->callback([opts] { run_demo(*opts); });
 }
 

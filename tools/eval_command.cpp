@@ -1,29 +1,28 @@
-// meshflow eval MESH --reference CLOUD_OR_MESH: distances both ways, normals, topology; or
-// --object NAME: distances to a built-in object's exact surface.
+// meshflow eval MESH --reference CLOUD_OR_MESH: distances both ways, normals, orientation,
+// topology; or --object NAME: distances to a built-in object's exact surface.
 
+#include <cmath>
 #include <cstdio>
 #include <memory>
 #include <string>
 
 #include "nodes/eval/surface_eval.h"
 #include "nodes/eval/truth_eval.h"
-#include "nodes/io/ply_reader.h"
+#include "nodes/io/mesh_readers.h"
 #include "nodes/io/read_point_cloud.h"
 #include "nodes/synthetic/closed_objects.h"
 #include "runtime/error.h"
 #include "tools/commands.h"
+#include "tools/console.h"
+#include "tools/json_report.h"
 
 namespace meshflow::cli {
 namespace {
 
-bool has_ply_extension(const std::string& path) {
-  return path.size() >= 4 && (path.compare(path.size() - 4, 4, ".ply") == 0 ||
-                              path.compare(path.size() - 4, 4, ".PLY") == 0);
-}
-
-// A PLY file with faces is a mesh; any other point-cloud file is a point set.
+// A mesh file (.ply .obj .off .stl) is read as a mesh (a PLY without faces is a point set); any
+// other point-cloud file is a point set.
 TriangleMesh read_reference(const std::string& path) {
-  if (has_ply_extension(path)) return io::read_ply_mesh(path);
+  if (io::is_mesh_file(path)) return io::read_mesh(path);
   PointCloud cloud = io::read_point_cloud(path);
   TriangleMesh points;
   for (std::size_t i = 0; i < cloud.size(); ++i) {
@@ -35,32 +34,105 @@ TriangleMesh read_reference(const std::string& path) {
 }
 
 void print_distances(const char* label, const DistanceStats& s) {
-  std::printf("%-18s mean %.6f  rms %.6f  median %.6f  p95 %.6f  max %.6f m  (%zu samples)\n",
-              label, s.mean, s.rms, s.median, s.p95, s.max, s.samples);
+  report("%-18s mean %.6f  rms %.6f  median %.6f  p95 %.6f  max %.6f m  (%zu samples)\n", label,
+         s.mean, s.rms, s.median, s.p95, s.max, s.samples);
 }
 
-// Distances to the exact surface of a built-in object, also relative to its diagonal.
-void print_truth_evaluation(const std::string& path, const TriangleMesh& mesh,
-                            const synthetic::ClosedObject& object) {
-  const TruthEvaluation e = evaluate_against_truth(
-      mesh, [&object](const Eigen::Vector3f& p) { return object.distance(p); });
-  const double diagonal = object.diagonal();
-  std::printf("mesh               %s: %zu vertices, %zu triangles\n", path.c_str(),
-              mesh.vertices.size(), mesh.triangles.size());
-  std::printf("reference          the exact surface of '%s' (diagonal %.4f m)\n",
-              object.name.c_str(), diagonal);
-  print_distances("vertices -> truth", e.vertices);
-  print_distances("surface -> truth", e.area);
-  std::printf("of the diagonal    surface mean %.2e  p95 %.2e  (vertices mean %.2e  p95 %.2e)\n",
-              e.area.mean / diagonal, e.area.p95 / diagonal, e.vertices.mean / diagonal,
-              e.vertices.p95 / diagonal);
-  const MeshTopology& t = e.topology;
-  std::printf(
+void print_topology(const MeshTopology& t) {
+  report(
       "topology           %zu edges, %zu boundary, %zu non-manifold, %zu inconsistent; "
       "%zu boundary loops, %zu degenerate faces%s\n",
       t.edges.edges, t.edges.boundary_edges, t.edges.non_manifold_edges, t.edges.inconsistent_edges,
       t.boundary_loops, t.degenerate_faces,
       t.edges.closed() && t.edges.inconsistent_edges == 0 ? " (watertight)" : "");
+}
+
+// A watertight mesh's orientation from its enclosed volume: "outward" or "inside out".
+const char* closed_orientation(const MeshTopology& t, double volume) {
+  if (!t.edges.closed() || t.edges.inconsistent_edges > 0) return nullptr;
+  return volume >= 0.0 ? "outward" : "inside out";
+}
+
+// Distances to the exact surface of a built-in object, also relative to its diagonal.
+void evaluate_object(const std::string& path, const TriangleMesh& mesh,
+                     const synthetic::ClosedObject& object) {
+  const TruthEvaluation e = evaluate_against_truth(
+      mesh, [&object](const Eigen::Vector3f& p) { return object.distance(p); });
+  const double diagonal = object.diagonal();
+  const char* orientation = closed_orientation(e.topology, signed_volume(mesh));
+  if (console().json) {
+    nlohmann::json doc = {{"mesh", path},
+                          {"vertices", mesh.vertices.size()},
+                          {"triangles", mesh.triangles.size()},
+                          {"reference", {{"object", object.name}, {"diagonal", diagonal}}},
+                          {"vertices_to_truth", distance_json(e.vertices)},
+                          {"surface_to_truth", distance_json(e.area)},
+                          {"relative_to_diagonal",
+                           {{"surface_mean", e.area.mean / diagonal},
+                            {"surface_p95", e.area.p95 / diagonal},
+                            {"vertices_mean", e.vertices.mean / diagonal},
+                            {"vertices_p95", e.vertices.p95 / diagonal}}},
+                          {"topology", topology_json(e.topology)}};
+    doc["orientation"] = orientation != nullptr ? nlohmann::json(orientation) : nlohmann::json();
+    return print_json(doc);
+  }
+  report("mesh               %s: %zu vertices, %zu triangles\n", path.c_str(), mesh.vertices.size(),
+         mesh.triangles.size());
+  report("reference          the exact surface of '%s' (diagonal %.4f m)\n", object.name.c_str(),
+         diagonal);
+  print_distances("vertices -> truth", e.vertices);
+  print_distances("surface -> truth", e.area);
+  report("of the diagonal    surface mean %.2e  p95 %.2e  (vertices mean %.2e  p95 %.2e)\n",
+         e.area.mean / diagonal, e.area.p95 / diagonal, e.vertices.mean / diagonal,
+         e.vertices.p95 / diagonal);
+  print_topology(e.topology);
+  if (orientation != nullptr) report("orientation        %s (enclosed volume)\n", orientation);
+}
+
+void evaluate_reference(const std::string& mesh_path, const TriangleMesh& mesh,
+                        const std::string& reference_path) {
+  const TriangleMesh reference = read_reference(reference_path);
+  const SurfaceEvaluation e = evaluate_surface(mesh, reference);
+  const char* orientation = closed_orientation(e.topology, signed_volume(mesh));
+  const bool normals = e.normal_samples > 0;
+  if (console().json) {
+    nlohmann::json doc = {{"mesh", mesh_path},
+                          {"vertices", e.vertices},
+                          {"triangles", e.triangles},
+                          {"reference",
+                           {{"file", reference_path},
+                            {"points", reference.vertices.size()},
+                            {"triangles", reference.triangles.size()}}},
+                          {"mesh_to_reference", distance_json(e.mesh_to_reference)},
+                          {"reference_to_mesh", distance_json(e.reference_to_mesh)},
+                          {"topology", topology_json(e.topology)}};
+    doc["normal_deviation_deg"] =
+        normals ? nlohmann::json{{"mean", e.normal_mean_deg}, {"p95", e.normal_p95_deg}}
+                : nlohmann::json();
+    doc["inside_out_area_share"] = std::isnan(e.inside_out_area_share)
+                                       ? nlohmann::json()
+                                       : nlohmann::json(e.inside_out_area_share);
+    doc["orientation"] = orientation != nullptr ? nlohmann::json(orientation) : nlohmann::json();
+    return print_json(doc);
+  }
+  report("mesh               %s: %zu vertices, %zu triangles\n", mesh_path.c_str(), e.vertices,
+         e.triangles);
+  report("reference          %s: %zu points%s\n", reference_path.c_str(), reference.vertices.size(),
+         reference.triangles.empty()
+             ? ""
+             : (", " + std::to_string(reference.triangles.size()) + " triangles").c_str());
+  print_distances("mesh -> reference", e.mesh_to_reference);
+  print_distances("reference -> mesh", e.reference_to_mesh);
+  if (normals) {
+    report("normal deviation   mean %.2f  p95 %.2f degrees (orientation ignored)\n",
+           e.normal_mean_deg, e.normal_p95_deg);
+    report("inside out         %.1f %% of the area faces against the reference's normals\n",
+           100.0 * e.inside_out_area_share);
+  } else {
+    report("normal deviation   n/a (the reference has no normals)\n");
+  }
+  print_topology(e.topology);
+  if (orientation != nullptr) report("orientation        %s (enclosed volume)\n", orientation);
 }
 
 }  // namespace
@@ -70,47 +142,25 @@ void add_eval_command(CLI::App& app) {
   auto reference_path = std::make_shared<std::string>();
   CLI::App* cmd = app.add_subcommand(
       "eval", "Compare a mesh with a reference point cloud or mesh (distances, normals, topology)");
-  cmd->add_option("mesh", *mesh_path, "Mesh to evaluate (PLY with faces)")->required();
+  cmd->add_option("mesh", *mesh_path, "Mesh to evaluate: .ply .obj .off .stl")->required();
   auto object_name = std::make_shared<std::string>();
-  auto* reference_option = cmd->add_option(
-      "--reference", *reference_path, "Reference: a PLY mesh, or any point cloud meshflow reads");
+  auto* reference_option =
+      cmd->add_option("--reference", *reference_path,
+                      "Reference: a mesh (.ply .obj .off .stl), or any point cloud meshflow reads");
   auto* object_option =
       cmd->add_option("--object", *object_name,
                       "Or the exact surface of a built-in object (meshflow sample)")
           ->check(CLI::IsMember(closed_object_names()));
   reference_option->excludes(object_option);
+  add_console_flags(cmd, true);
   cmd->callback([mesh_path, reference_path, object_name] {
-    const TriangleMesh mesh = io::read_ply_mesh(*mesh_path);
+    const TriangleMesh mesh = io::read_mesh(*mesh_path);
     if (mesh.triangles.empty()) throw Error(*mesh_path, "face", "the file has no triangles");
-    if (!object_name->empty()) {
-      print_truth_evaluation(*mesh_path, mesh, *synthetic::closed_test_object(*object_name));
-      return;
-    }
+    if (!object_name->empty())
+      return evaluate_object(*mesh_path, mesh, *synthetic::closed_test_object(*object_name));
     if (reference_path->empty())
       throw CLI::ValidationError("eval", "give --reference FILE or --object NAME");
-    const TriangleMesh reference = read_reference(*reference_path);
-    const SurfaceEvaluation e = evaluate_surface(mesh, reference);
-    std::printf("mesh               %s: %zu vertices, %zu triangles\n", mesh_path->c_str(),
-                e.vertices, e.triangles);
-    std::printf("reference          %s: %zu points%s\n", reference_path->c_str(),
-                reference.vertices.size(),
-                reference.triangles.empty()
-                    ? ""
-                    : (", " + std::to_string(reference.triangles.size()) + " triangles").c_str());
-    print_distances("mesh -> reference", e.mesh_to_reference);
-    print_distances("reference -> mesh", e.reference_to_mesh);
-    if (e.normal_samples > 0) {
-      std::printf("normal deviation   mean %.2f  p95 %.2f degrees (orientation ignored)\n",
-                  e.normal_mean_deg, e.normal_p95_deg);
-    } else {
-      std::printf("normal deviation   n/a (the reference has no normals)\n");
-    }
-    const MeshTopology& t = e.topology;
-    std::printf(
-        "topology           %zu edges, %zu boundary, %zu non-manifold, %zu inconsistent; "
-        "%zu boundary loops, %zu degenerate faces\n",
-        t.edges.edges, t.edges.boundary_edges, t.edges.non_manifold_edges,
-        t.edges.inconsistent_edges, t.boundary_loops, t.degenerate_faces);
+    evaluate_reference(*mesh_path, mesh, *reference_path);
   });
 }
 

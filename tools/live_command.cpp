@@ -14,6 +14,7 @@
 #include "runtime/error.h"
 #include "tools/cli_checks.h"
 #include "tools/commands.h"
+#include "tools/console.h"
 #include "tools/pipeline_options.h"
 
 namespace meshflow::cli {
@@ -84,7 +85,7 @@ void warm_up(const LiveConfig& config, const std::vector<SensorFrame>& frames) {
     warm.flush();
     warmed += round;
   } while (warmed < kWarmUpFrames && seconds() < kWarmUpSeconds);
-  std::printf("warm-up    %zu frames meshed in %.2f s (not timed)\n", warmed, seconds());
+  report("warm-up    %zu frames meshed in %.2f s (not timed)\n", warmed, seconds());
 }
 
 void run_live(const LiveOptions& o) {
@@ -111,7 +112,7 @@ void run_live(const LiveOptions& o) {
       std::fprintf(stderr, "meshflow: frame %llu failed in %s: %s\n",
                    static_cast<unsigned long long>(r.seq), r.failed_stage.c_str(), r.error.c_str());
   });
-  std::printf(
+  report(
       "live       %s: %zu frames%s x %zu at %.1f Hz, policy %s, %zu in flight, %zu waiting\n",
       sequence->description().c_str(), frames.size(),
       unreadable > 0 ? (" (" + std::to_string(unreadable) + " unreadable, skipped)").c_str() : "",
@@ -131,15 +132,14 @@ void run_live(const LiveOptions& o) {
   live.flush();
   const double wall_s = std::chrono::duration<double>(Clock::now() - start).count();
   const LiveStats s = live.stats();
-  std::printf("frames     %llu pushed, %llu delivered (%llu failed), %llu dropped, %llu rejected\n",
-              static_cast<unsigned long long>(s.pushed),
-              static_cast<unsigned long long>(s.delivered),
-              static_cast<unsigned long long>(s.failed), static_cast<unsigned long long>(s.dropped),
-              static_cast<unsigned long long>(s.rejected));
-  std::printf("latency    p50 %.1f ms, p95 %.1f ms, p99 %.1f ms (push to callback)\n",
-              1e3 * s.latency_p50_s, 1e3 * s.latency_p95_s, 1e3 * s.latency_p99_s);
-  std::printf("loop       longest push() %.3f ms; %.1f meshes/s over %.2f s; %zu triangles\n",
-              1e3 * worst_push_s, static_cast<double>(s.delivered) / wall_s, wall_s, triangles);
+  report("frames     %llu pushed, %llu delivered (%llu failed), %llu dropped, %llu rejected\n",
+         static_cast<unsigned long long>(s.pushed), static_cast<unsigned long long>(s.delivered),
+         static_cast<unsigned long long>(s.failed), static_cast<unsigned long long>(s.dropped),
+         static_cast<unsigned long long>(s.rejected));
+  report("latency    p50 %.1f ms, p95 %.1f ms, p99 %.1f ms (push to callback)\n",
+         1e3 * s.latency_p50_s, 1e3 * s.latency_p95_s, 1e3 * s.latency_p99_s);
+  report("loop       longest push() %.3f ms; %.1f meshes/s over %.2f s; %zu triangles\n",
+         1e3 * worst_push_s, static_cast<double>(s.delivered) / wall_s, wall_s, triangles);
 }
 
 }  // namespace
@@ -166,6 +166,7 @@ void add_live_command(CLI::App& app) {
   cmd->add_option("--loops", o->loops, "Replay the frames this many times")
       ->check(CLI::Range(1, 100000));
   add_pipeline_options(cmd, o->pipeline);
+  add_console_flags(cmd, false);
   cmd->callback([o] { run_live(*o); });
 }
 

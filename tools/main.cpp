@@ -11,6 +11,8 @@
 int main(int argc, char** argv) {
   CLI::App app{"meshflow: fast surface reconstruction from 3D sensor data"};
   app.require_subcommand(1);
+  app.set_version_flag("--version", "meshflow " MESHFLOW_VERSION);
+  app.option_defaults()->always_capture_default();  // --help shows every option's default
   meshflow::cli::add_reconstruct_command(app);
   meshflow::cli::add_info_command(app);
   meshflow::cli::add_demo_command(app);
@@ -19,11 +21,14 @@ int main(int argc, char** argv) {
   meshflow::cli::add_eval_command(app);
   meshflow::cli::add_live_command(app);
   meshflow::cli::add_sample_command(app);
+  meshflow::cli::add_optimize_command(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {
     return app.exit(e);
   } catch (const CLI::CallForAllHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::CallForVersion& e) {
     return app.exit(e);
   } catch (const CLI::ParseError& e) {
     app.exit(e);

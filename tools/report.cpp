@@ -4,6 +4,8 @@
 #include <stdexcept>
 #include <string>
 
+#include "tools/console.h"
+
 namespace meshflow::cli {
 
 std::string describe_normals(const NormalsReport& r) {
@@ -53,26 +55,23 @@ const char* extraction_name(ExtractMethod method, bool sharp_normals) {
 
 void print_frame_report(const Frame& f, double wall_s, int threads) {
   const FilterCounts& c = f.filter_counts;
-  std::printf("input      %s: %zu points\n", f.name.c_str(), c.input);
-  if (c.non_finite > 0) std::printf("filter     dropped %zu NaN/Inf points\n", c.non_finite);
+  report("input      %s: %zu points\n", f.name.c_str(), c.input);
+  if (c.non_finite > 0) report("filter     dropped %zu NaN/Inf points\n", c.non_finite);
   if (c.cropped + c.merged + c.outliers > 0) {
-    std::printf("filter     cropped %zu, merged %zu, outliers %zu\n", c.cropped, c.merged,
-                c.outliers);
+    report("filter     cropped %zu, merged %zu, outliers %zu\n", c.cropped, c.merged, c.outliers);
   }
-  if (!f.normals_from_image) std::printf("normals    %s\n", describe_normals(f.normals).c_str());
-  std::printf("grid       voxel %.4g m, %zu cells, %zu corners (%zu valid", f.voxel_size,
-              f.grid.cells.size(), f.grid.corners.size(), f.distance.valid_count());
+  if (!f.normals_from_image) report("normals    %s\n", describe_normals(f.normals).c_str());
+  report("grid       voxel %.4g m, %zu cells, %zu corners (%zu valid", f.voxel_size,
+         f.grid.cells.size(), f.grid.corners.size(), f.distance.valid_count());
   if (f.distance.disagreeing + f.distance.extrapolated > 0)
-    std::printf("; invalid: %zu where tangent planes disagree, %zu past the data's border",
-                f.distance.disagreeing, f.distance.extrapolated);
-  std::printf(")\n");
-  std::printf("mesh       %zu vertices, %zu triangles (%s)\n", f.mesh.vertices.size(),
-              f.mesh.triangles.size(), extraction_name(f.extract_method, f.normals.sharp));
-  if (!f.optimize.steps.empty())
-    std::printf("optimize\n%s", format_optimize_report(f.optimize).c_str());
-  std::printf("time       %.1f ms on %d thread%s\n", 1e3 * wall_s, threads,
-              threads == 1 ? "" : "s");
-  std::printf("%s", format_stage_table(summarize_stages(f.timings), wall_s).c_str());
+    report("; invalid: %zu where tangent planes disagree, %zu past the data's border",
+           f.distance.disagreeing, f.distance.extrapolated);
+  report(")\n");
+  report("mesh       %zu vertices, %zu triangles (%s)\n", f.mesh.vertices.size(),
+         f.mesh.triangles.size(), extraction_name(f.extract_method, f.normals.sharp));
+  if (!f.optimize.steps.empty()) report("optimize\n%s", format_optimize_report(f.optimize).c_str());
+  report("time       %.1f ms on %d thread%s\n", 1e3 * wall_s, threads, threads == 1 ? "" : "s");
+  report("%s", format_stage_table(summarize_stages(f.timings), wall_s).c_str());
 }
 
 void throw_if_failed(const Frame& f) {

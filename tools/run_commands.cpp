@@ -1,7 +1,5 @@
 // `meshflow run` (mesh a recorded sequence) and `meshflow profile` (where the time goes).
 
-#include <unistd.h>
-
 #include <cstdio>
 #include <filesystem>
 #include <memory>
@@ -16,7 +14,10 @@
 #include "runtime/threads.h"
 #include "tools/cli_checks.h"
 #include "tools/commands.h"
+#include "tools/console.h"
+#include "tools/json_report.h"
 #include "tools/pipeline_options.h"
+#include "tools/progress.h"
 
 namespace meshflow::cli {
 namespace {
@@ -26,29 +27,6 @@ std::size_t selected_frames(const io::Sequence& seq, const SequenceArgument& a) 
   return a.max_frames > 0 ? std::min(n, a.max_frames) : n;
 }
 
-// Progress on stderr: rewritten in place on a terminal, a line every few seconds otherwise.
-class ProgressLine {
- public:
-  explicit ProgressLine(std::size_t total) : total_(total), tty_(::isatty(::fileno(stderr)) != 0) {}
-  void update(std::size_t done) {
-    const double now = monotonic_seconds();
-    if (done < total_ && now - last_ < (tty_ ? 0.25 : 5.0)) return;
-    last_ = now;
-    const double elapsed = now - start_;
-    const double rate = elapsed > 0.0 ? static_cast<double>(done) / elapsed : 0.0;
-    const double eta = rate > 0.0 ? static_cast<double>(total_ - done) / rate : 0.0;
-    std::fprintf(stderr, "%s%zu/%zu frames  %.2f frames/s  ETA %.0f s%s", tty_ ? "\r" : "", done,
-                 total_, rate, eta, tty_ ? "" : "\n");
-    if (tty_ && done == total_) std::fputc('\n', stderr);
-  }
-
- private:
-  std::size_t total_;
-  bool tty_;
-  double start_ = monotonic_seconds();
-  double last_ = -1e9;
-};
-
 // The stages' configuration from the command line, per-frame triangulation included.
 ReconstructionConfig pipeline_config(const PipelineOptions& pipeline,
                                      const TriangulationOptions& triangulation) {
@@ -57,19 +35,35 @@ ReconstructionConfig pipeline_config(const PipelineOptions& pipeline,
   return config;
 }
 
+// -v: one line per finished frame.
+void print_frame_line(const Frame& f) {
+  if (!f.ok()) return;
+  double busy = 0.0;
+  for (const StageRecord& r : f.timings) busy += r.end_s - r.start_s;
+  detail("frame %zu   %s: %zu points -> %zu vertices, %zu triangles, %.1f ms in stages\n",
+         f.source_index, f.name.c_str(), f.filter_counts.input, f.mesh.vertices.size(),
+         f.mesh.triangles.size(), 1e3 * busy);
+}
+
 void report_failure(const Frame& f) {
   std::fprintf(stderr, "meshflow: frame %zu (%s) failed in %s: %s\n", f.source_index,
                f.name.c_str(), f.failed_stage.c_str(), f.error.c_str());
 }
 
+// The human report of a run, or with --json the document (with `extra` fields merged in).
 void print_run_summary(const io::Sequence& seq, const SequenceRunStats& stats, int threads,
-                       std::size_t in_flight) {
-  std::printf("sequence   %s\n", seq.description().c_str());
-  std::printf(
+                       std::size_t in_flight, const nlohmann::json& extra = {}) {
+  if (console().json) {
+    nlohmann::json doc = run_json(seq.description(), stats, threads, in_flight);
+    if (extra.is_object()) doc.update(extra);
+    return print_json(doc);
+  }
+  report("sequence   %s\n", seq.description().c_str());
+  report(
       "frames     %zu ok, %zu failed%s; %.3f s wall, %.2f frames/s on %d thread%s, %zu in flight\n",
       stats.frames_ok, stats.frames_failed, stats.stopped_early ? " (stopped: --strict)" : "",
       stats.wall_s, stats.frames_per_second(), threads, threads == 1 ? "" : "s", in_flight);
-  std::printf("%s", format_stage_table(summarize_stages(stats.records), stats.wall_s).c_str());
+  report("%s", format_stage_table(summarize_stages(stats.records), stats.wall_s).c_str());
 }
 
 struct RunOptions {
@@ -90,7 +84,9 @@ std::unique_ptr<io::Sequence> open_output(const RunOptions& o) {
   std::error_code ec;
   std::filesystem::create_directories(o.output_dir, ec);
   if (ec || !std::filesystem::is_directory(o.output_dir)) {
-    throw Error(o.output_dir, "", "cannot create output directory");
+    throw Error(o.output_dir, "",
+                "cannot create output directory: " +
+                    (ec ? ec.message() : std::string("a file of that name exists")));
   }
   return sequence;
 }
@@ -114,7 +110,7 @@ void run_fusion(const RunOptions& o) {
                             ? std::make_unique<FusionPipeline>(config, o.sequence.in_flight)
                             : std::make_unique<FusionPipeline>(config, o.sequence.in_flight,
                                                                io::read_tsdf_map(o.load_map));
-  ProgressLine progress(selected_frames(*sequence, o.sequence));
+  FrameProgress progress(selected_frames(*sequence, o.sequence));
   std::size_t done = 0, written = 0;
   const std::filesystem::path dir(o.output_dir);
   const SequenceRunOptions run_options{o.sequence.every, o.sequence.max_frames, o.strict};
@@ -136,15 +132,24 @@ void run_fusion(const RunOptions& o) {
     ++written;
   }
   if (!o.save_map.empty()) io::write_tsdf_map(o.save_map, pipeline->map());
-  print_run_summary(*sequence, stats, limit.threads(), o.sequence.in_flight);
   const TsdfVolume& map = pipeline->map();
-  std::printf("map        %zu blocks of 8^3 voxels at %.4f m, %.1f MB%s%s\n", map.block_count(),
-              map.config().voxel_size, static_cast<double>(map.memory_bytes()) / 1e6,
-              o.save_map.empty() ? "" : ", saved to ", o.save_map.c_str());
-  std::printf("mesh       %zu vertices, %zu triangles, extracted in %.1f ms\n",
-              mesh.vertices.size(), mesh.triangles.size(), extract_s * 1e3);
-  std::printf("output     %zu mesh file%s in %s\n", written, written == 1 ? "" : "s",
-              o.output_dir.c_str());
+  print_run_summary(
+      *sequence, stats, limit.threads(), o.sequence.in_flight,
+      {{"map",
+        {{"blocks", map.block_count()},
+         {"voxel", map.config().voxel_size},
+         {"bytes", map.memory_bytes()}}},
+       {"mesh", {{"vertices", mesh.vertices.size()}, {"triangles", mesh.triangles.size()}}},
+       {"extract_ms", extract_s * 1e3},
+       {"files_written", written},
+       {"output", o.output_dir}});
+  report("map        %zu blocks of 8^3 voxels at %.4f m, %.1f MB%s%s\n", map.block_count(),
+         map.config().voxel_size, static_cast<double>(map.memory_bytes()) / 1e6,
+         o.save_map.empty() ? "" : ", saved to ", o.save_map.c_str());
+  report("mesh       %zu vertices, %zu triangles, extracted in %.1f ms\n", mesh.vertices.size(),
+         mesh.triangles.size(), extract_s * 1e3);
+  report("output     %zu mesh file%s in %s\n", written, written == 1 ? "" : "s",
+         o.output_dir.c_str());
   finish_run(stats);
 }
 
@@ -162,7 +167,7 @@ void run_run(const RunOptions& o) {
   const auto sequence = open_output(o);
   ReconstructionPipeline pipeline(pipeline_config(o.pipeline, o.triangulation),
                                   o.sequence.in_flight, o.triangulation.enabled());
-  ProgressLine progress(selected_frames(*sequence, o.sequence));
+  FrameProgress progress(selected_frames(*sequence, o.sequence));
   TriangleMesh merged;
   std::size_t done = 0, written = 0;
   const SequenceRunOptions run_options{o.sequence.every, o.sequence.max_frames, o.strict};
@@ -170,6 +175,7 @@ void run_run(const RunOptions& o) {
       run_sequence(pipeline, *sequence, run_options, [&](const Frame& f) {
         progress.update(++done);
         if (!f.ok()) return report_failure(f);
+        print_frame_line(f);
         if (o.merged) return append_mesh(merged, f.mesh);
         char name[64];
         std::snprintf(name, sizeof name, "frame_%06zu.ply", f.source_index);
@@ -180,9 +186,10 @@ void run_run(const RunOptions& o) {
     io::write_ply((std::filesystem::path(o.output_dir) / "merged.ply").string(), merged);
     written = 1;
   }
-  print_run_summary(*sequence, stats, limit.threads(), o.sequence.in_flight);
-  std::printf("output     %zu mesh file%s in %s\n", written, written == 1 ? "" : "s",
-              o.output_dir.c_str());
+  print_run_summary(*sequence, stats, limit.threads(), o.sequence.in_flight,
+                    {{"files_written", written}, {"output", o.output_dir}});
+  report("output     %zu mesh file%s in %s\n", written, written == 1 ? "" : "s",
+         o.output_dir.c_str());
   finish_run(stats);
 }
 
@@ -207,18 +214,22 @@ void run_profile(const ProfileOptions& o) {
                                   o.sequence.in_flight, o.triangulation.enabled());
   const SequenceRunOptions run_options{o.sequence.every, o.sequence.max_frames, false};
   const SequenceRunStats stats = run_sequence(pipeline, *sequence, run_options, [](const Frame& f) {
-    if (!f.ok()) report_failure(f);
+    if (!f.ok()) return report_failure(f);
+    print_frame_line(f);
   });
-  print_run_summary(*sequence, stats, limit.threads(), o.sequence.in_flight);
+  nlohmann::json files = nlohmann::json::object();
+  if (!o.trace_path.empty()) files["trace"] = o.trace_path;
+  if (!o.csv_path.empty()) files["csv"] = o.csv_path;
+  print_run_summary(*sequence, stats, limit.threads(), o.sequence.in_flight, files);
   const auto summaries = summarize_stages(stats.records);
   if (!o.trace_path.empty()) {
     write_text(o.trace_path, chrome_trace_json(stats.records));
-    std::printf("trace      %s (open in https://ui.perfetto.dev or chrome://tracing)\n",
-                o.trace_path.c_str());
+    report("trace      %s (open in https://ui.perfetto.dev or chrome://tracing)\n",
+           o.trace_path.c_str());
   }
   if (!o.csv_path.empty()) {
     write_text(o.csv_path, format_stage_csv(summaries, stats.wall_s));
-    std::printf("csv        %s\n", o.csv_path.c_str());
+    report("csv        %s\n", o.csv_path.c_str());
   }
 }
 
@@ -253,6 +264,7 @@ void add_run_command(CLI::App& app) {
   add_triangulation_options(cmd, o->triangulation);
   fuse->excludes("--triangulate");
   add_pipeline_options(cmd, o->pipeline);
+  add_console_flags(cmd, true);
   cmd->callback([o] { run_run(*o); });
 }
 
@@ -266,6 +278,7 @@ void add_profile_command(CLI::App& app) {
   cmd->add_option("--csv", o->csv_path, "Write the stage table as CSV");
   add_triangulation_options(cmd, o->triangulation);
   add_pipeline_options(cmd, o->pipeline);
+  add_console_flags(cmd, true);
   cmd->callback([o] { run_profile(*o); });
 }
 

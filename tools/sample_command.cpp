@@ -11,6 +11,7 @@
 #include "runtime/error.h"
 #include "tools/cli_checks.h"
 #include "tools/commands.h"
+#include "tools/console.h"
 
 namespace meshflow::cli {
 namespace {
@@ -32,12 +33,12 @@ void run_sample(const SampleOptions& o) {
   if (o.normals) points.normals = cloud.normals;
   io::write_ply(o.output, points);
   const Eigen::Vector3f size = object.bounds.sizes();
-  std::printf("object     %s: %.3f x %.3f x %.3f m, diagonal %.4f m, area %.4f m^2\n",
-              object.name.c_str(), size.x(), size.y(), size.z(), object.diagonal(), object.area());
-  std::printf("points     %zu%s, noise %.3g m; 1 %% of the diagonal is %.4f m\n", cloud.size(),
-              o.normals ? " with exact normals" : "", o.noise * object.diagonal(),
-              0.01 * object.diagonal());
-  std::printf("output     %s\n", o.output.c_str());
+  report("object     %s: %.3f x %.3f x %.3f m, diagonal %.4f m, area %.4f m^2\n",
+         object.name.c_str(), size.x(), size.y(), size.z(), object.diagonal(), object.area());
+  report("points     %zu%s, noise %.3g m; 1 %% of the diagonal is %.4f m\n", cloud.size(),
+         o.normals ? " with exact normals" : "", o.noise * object.diagonal(),
+         0.01 * object.diagonal());
+  report("output     %s\n", o.output.c_str());
 }
 
 }  // namespace
@@ -62,6 +63,7 @@ void add_sample_command(CLI::App& app) {
       ->check(number_in(0, 1));
   cmd->add_flag("--normals", opts->normals, "Write the exact outward normals too");
   cmd->add_option("--seed", opts->seed, "Random seed")->check(number_in(0, 4294967295.0));
+  add_console_flags(cmd, false);
   cmd->callback([opts] { run_sample(*opts); });
 }
 

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numeric>
 
 #include "nodes/eval/mesh_distance_index.h"
@@ -23,7 +24,26 @@ float unoriented_angle_deg(const Eigen::Vector3f& a, const Eigen::Vector3f& b) {
   return std::acos(c) * 57.2957795f;
 }
 
+// The triangle's area when its winding normal points against `reference_normal`, else 0.
+double facing_against_area(const TriangleMesh& mesh, const Triangle& f,
+                           const Eigen::Vector3f& reference_normal) {
+  const Eigen::Vector3f cross =
+      (mesh.vertices[f[1]] - mesh.vertices[f[0]]).cross(mesh.vertices[f[2]] - mesh.vertices[f[0]]);
+  return cross.dot(reference_normal) < 0.0f ? 0.5 * static_cast<double>(cross.norm()) : 0.0;
+}
+
 }  // namespace
+
+double signed_volume(const TriangleMesh& mesh) {
+  double volume = 0.0;
+  for (const Triangle& t : mesh.triangles) {
+    const Eigen::Vector3d a = mesh.vertices[t[0]].cast<double>();
+    const Eigen::Vector3d b = mesh.vertices[t[1]].cast<double>();
+    const Eigen::Vector3d c = mesh.vertices[t[2]].cast<double>();
+    volume += a.dot(b.cross(c));
+  }
+  return volume / 6.0;
+}
 
 DistanceStats distance_stats(std::vector<float> d) {
   DistanceStats s;
@@ -90,6 +110,7 @@ SurfaceEvaluation evaluate_surface(const TriangleMesh& mesh, const TriangleMesh&
   const MeshDistanceIndex mesh_index(*m);
 
   std::vector<float> forward(m->vertices.size()), angles(m->vertices.size(), -1.0f);
+  std::vector<double> against_area(m->triangles.size(), 0.0);  // area facing against
   const bool point_reference = reference.triangles.empty();
   const bool reference_normals =
       point_reference ? reference.normals.size() == reference.vertices.size() : true;
@@ -103,6 +124,16 @@ SurfaceEvaluation evaluate_surface(const TriangleMesh& mesh, const TriangleMesh&
       if (reference_normals)
         angles[i] = unoriented_angle_deg(m->normals[i], reference.normals[idx]);
     });
+    if (reference_normals) {
+      tbb::parallel_for(std::size_t{0}, m->triangles.size(), [&](std::size_t t) {
+        const Triangle& f = m->triangles[t];
+        const Eigen::Vector3f c = (m->vertices[f[0]] + m->vertices[f[1]] + m->vertices[f[2]]) / 3;
+        std::uint32_t idx = 0;
+        float d2 = 0.0f;
+        kd.knn(c, 1, &idx, &d2);
+        against_area[t] = facing_against_area(*m, f, reference.normals[idx]);
+      });
+    }
   } else {
     const MeshDistanceIndex reference_index(reference);
     tbb::parallel_for(std::size_t{0}, m->vertices.size(), [&](std::size_t i) {
@@ -111,6 +142,28 @@ SurfaceEvaluation evaluate_surface(const TriangleMesh& mesh, const TriangleMesh&
       angles[i] = unoriented_angle_deg(m->normals[i],
                                        face_normal(reference, reference.triangles[hit.triangle]));
     });
+    tbb::parallel_for(std::size_t{0}, m->triangles.size(), [&](std::size_t t) {
+      const Triangle& f = m->triangles[t];
+      const Eigen::Vector3f c = (m->vertices[f[0]] + m->vertices[f[1]] + m->vertices[f[2]]) / 3;
+      const auto hit = reference_index.closest(c);
+      against_area[t] =
+          facing_against_area(*m, f, face_normal(reference, reference.triangles[hit.triangle]));
+    });
+  }
+  if (reference_normals) {
+    double total = 0.0, against = 0.0;  // summed in triangle order: deterministic
+    for (std::size_t t = 0; t < m->triangles.size(); ++t) {
+      const Triangle& f = m->triangles[t];
+      const double area =
+          0.5 * static_cast<double>((m->vertices[f[1]] - m->vertices[f[0]])
+                                        .cross(m->vertices[f[2]] - m->vertices[f[0]])
+                                        .norm());
+      total += area;
+      against += against_area[t];
+    }
+    e.inside_out_area_share = total > 0.0 ? against / total : 0.0;
+  } else {
+    e.inside_out_area_share = std::numeric_limits<double>::quiet_NaN();
   }
   std::vector<float> backward(reference.vertices.size());
   tbb::parallel_for(std::size_t{0}, reference.vertices.size(), [&](std::size_t i) {

@@ -35,9 +35,19 @@ struct SurfaceEvaluation {
   /// reference point (or face), ignoring orientation (normals of scans may face either way).
   double normal_mean_deg = 0.0, normal_p95_deg = 0.0;
   std::size_t normal_samples = 0;  ///< 0 when the reference has no normals
+  /// Share of the mesh's area (0..1) whose faces, by their winding, point against the
+  /// reference's normal at the nearest reference point or face: an inside-out mesh gives ~1.
+  /// Meaningful when the reference's normals are oriented (a mesh's faces, outward normals);
+  /// NaN when the reference has no normals.
+  double inside_out_area_share = 0.0;
   std::size_t vertices = 0, triangles = 0;
   MeshTopology topology;
 };
+
+/// The volume a mesh encloses, by the divergence theorem over its faces (cubic metres):
+/// positive when a closed mesh's faces wind counter-clockwise seen from outside, negative when
+/// it is inside out; meaningless for an open mesh. O(T).
+double signed_volume(const TriangleMesh& mesh);
 
 /// Evaluates `mesh` against `reference`. A reference without triangles is a point set:
 /// mesh -> reference distances go to the nearest point (kd-tree) and normals come from the

@@ -41,4 +41,53 @@ std::vector<Rgb8> vertex_colors(const std::vector<Eigen::Vector3f>& vertices,
   return colors;
 }
 
+namespace {
+
+// The colour at (u, v) (pixels, inside the image), bilinear between the 4 pixels around it.
+Rgb8 bilinear_rgb(const cv::Mat& image, float u, float v) {
+  const int u0 = std::min(static_cast<int>(u), std::max(image.cols - 2, 0));
+  const int v0 = std::min(static_cast<int>(v), std::max(image.rows - 2, 0));
+  const int u1 = std::min(u0 + 1, image.cols - 1), v1 = std::min(v0 + 1, image.rows - 1);
+  const float a = u - static_cast<float>(u0), b = v - static_cast<float>(v0);
+  const cv::Vec3b& c00 = image.at<cv::Vec3b>(v0, u0);
+  const cv::Vec3b& c10 = image.at<cv::Vec3b>(v0, u1);
+  const cv::Vec3b& c01 = image.at<cv::Vec3b>(v1, u0);
+  const cv::Vec3b& c11 = image.at<cv::Vec3b>(v1, u1);
+  std::uint8_t out[3];
+  for (int ch = 0; ch < 3; ++ch) {
+    const float value = (1 - a) * (1 - b) * c00[ch] + a * (1 - b) * c10[ch] +
+                        (1 - a) * b * c01[ch] + a * b * c11[ch];
+    out[ch] = static_cast<std::uint8_t>(std::lround(std::clamp(value, 0.0f, 255.0f)));
+  }
+  return Rgb8{out[0], out[1], out[2]};
+}
+
+}  // namespace
+
+std::vector<Rgb8> vertex_colors_from_image(const std::vector<Eigen::Vector3f>& vertices,
+                                           const DepthFrame& frame) {
+  const cv::Mat& image = frame.color;
+  const PinholeIntrinsics& k = frame.intrinsics;
+  if (image.empty() || image.type() != CV_8UC3 || image.cols != k.width || image.rows != k.height)
+    return {};
+  const Eigen::Isometry3f camera_from_world = frame.T_world_camera.inverse();
+  const float max_u = static_cast<float>(image.cols - 1);
+  const float max_v = static_cast<float>(image.rows - 1);
+  std::vector<Rgb8> colors(vertices.size());
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, vertices.size(), 4096),
+                    [&](const tbb::blocked_range<std::size_t>& r) {
+                      for (std::size_t i = r.begin(); i != r.end(); ++i) {
+                        const Eigen::Vector3f p = camera_from_world * vertices[i];
+                        float u = k.cx, v = k.cy;  // behind the camera: the centre
+                        if (p.z() > 1e-6f) {
+                          u = k.fx * p.x() / p.z() + k.cx;
+                          v = k.fy * p.y() / p.z() + k.cy;
+                        }
+                        colors[i] = bilinear_rgb(image, std::clamp(u, 0.0f, max_u),
+                                                 std::clamp(v, 0.0f, max_v));
+                      }
+                    });
+  return colors;
+}
+
 }  // namespace meshflow

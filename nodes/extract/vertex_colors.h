@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "nodes/normals/spatial_index.h"
+#include "runtime/depth_frame.h"
 #include "runtime/point_cloud.h"
 
 namespace meshflow {
@@ -17,5 +18,14 @@ namespace meshflow {
 /// spacing. Parallel over vertices, deterministic; O(V k log n).
 std::vector<Rgb8> vertex_colors(const std::vector<Eigen::Vector3f>& vertices,
                                 const PointCloud& cloud, const SpatialIndex& index, int k = 4);
+
+/// The colour of each of `vertices` (metres, world frame) from `frame`'s colour image (CV_8UC3,
+/// RGB, the depth image's size): the vertex projected through the frame's pose and intrinsics,
+/// bilinear between the 4 nearest pixels, clamped to the image (a vertex projecting outside it
+/// takes the border's colour, one behind the camera the centre's). Empty when the frame has no
+/// colour image of the intrinsics' size.
+/// Parallel over vertices, deterministic; O(V).
+std::vector<Rgb8> vertex_colors_from_image(const std::vector<Eigen::Vector3f>& vertices,
+                                           const DepthFrame& frame);
 
 }  // namespace meshflow

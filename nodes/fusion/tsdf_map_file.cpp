@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "nodes/io/atomic_file.h"
+#include "nodes/io/parse_util.h"
 #include "runtime/error.h"
 
 namespace meshflow::io {
@@ -123,8 +124,7 @@ void write_tsdf_map(const std::string& path, const TsdfVolume& volume) {
 }
 
 TsdfVolume read_tsdf_map(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw Error(path, "", "cannot open the map file");
+  std::ifstream in = open_input(path);
   const std::vector<unsigned char> data((std::istreambuf_iterator<char>(in)),
                                         std::istreambuf_iterator<char>());
   Reader r(path, data);

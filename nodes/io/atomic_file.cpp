@@ -1,16 +1,19 @@
 #include "nodes/io/atomic_file.h"
 
+#include <cerrno>
 #include <cstdio>
 #include <filesystem>
 
+#include "nodes/io/parse_util.h"
 #include "runtime/error.h"
 
 namespace meshflow::io {
 
 AtomicOutputFile::AtomicOutputFile(std::string path)
     : path_(std::move(path)), temp_path_(path_ + ".tmp") {
+  errno = 0;
   out_.open(temp_path_, std::ios::binary | std::ios::trunc);
-  if (!out_) throw Error(path_, "", "cannot create output file");
+  if (!out_) throw Error(path_, "", "cannot create output file: " + errno_text());
 }
 
 AtomicOutputFile::~AtomicOutputFile() {
@@ -22,8 +25,9 @@ AtomicOutputFile::~AtomicOutputFile() {
 }
 
 void AtomicOutputFile::commit() {
+  errno = 0;
   out_.flush();
-  if (!out_) throw Error(path_, "", "write failed (disk full or I/O error)");
+  if (!out_) throw Error(path_, "", "write failed: " + errno_text());
   out_.close();
   std::error_code ec;
   std::filesystem::rename(temp_path_, path_, ec);

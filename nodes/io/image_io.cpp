@@ -1,6 +1,7 @@
 #include "nodes/io/image_io.h"
 
 #include <jpeglib.h>
+#include <lzf.h>
 #include <spng.h>
 #include <tiffio.h>
 
@@ -19,7 +20,7 @@ namespace {
 
 constexpr std::uint64_t kMaxPixels = std::uint64_t{1} << 28;  // 16 k x 16 k
 
-enum class Kind { kPng, kJpeg, kTiff, kOther };
+enum class Kind { kPng, kJpeg, kTiff, kPclzf, kOther };
 
 std::vector<std::uint8_t> file_bytes(const std::string& path) {
   std::ifstream in = open_input(path);
@@ -34,6 +35,7 @@ Kind kind_of(const std::vector<std::uint8_t>& b) {
   if (b.size() >= 4 &&
       (std::memcmp(b.data(), "II*\0", 4) == 0 || std::memcmp(b.data(), "MM\0*", 4) == 0))
     return Kind::kTiff;
+  if (b.size() >= 5 && std::memcmp(b.data(), "PCLZF", 5) == 0) return Kind::kPclzf;
   return Kind::kOther;
 }
 
@@ -209,6 +211,56 @@ cv::Mat decode_tiff(const std::string& path, bool depth) {
   return image;
 }
 
+// ---- PCLZF (PCL's LZF image grabber, liblzf) ------------------------------------------------
+
+// Header (37 bytes, little-endian): "PCLZF", uint32 width, uint32 height, a 16-character
+// space-padded type ("depth16" or "rgb24"), uint32 compressed size, uint32 uncompressed size;
+// an LZF stream follows. depth16 is row-major uint16 millimetres; rgb24 is planar (all R, then
+// all G, then all B).
+cv::Mat decode_pclzf(const std::vector<std::uint8_t>& bytes, const std::string& path, bool depth) {
+  constexpr std::size_t kHeader = 37;
+  if (bytes.size() < kHeader)
+    throw Error(path, "PCLZF header", "the file is shorter than its header");
+  std::uint32_t width = 0, height = 0, compressed = 0, uncompressed = 0;
+  std::memcpy(&width, bytes.data() + 5, 4);
+  std::memcpy(&height, bytes.data() + 9, 4);
+  std::string type(reinterpret_cast<const char*>(bytes.data() + 13), 16);
+  type.erase(type.find_last_not_of(" \0") + 1);
+  std::memcpy(&compressed, bytes.data() + 29, 4);
+  std::memcpy(&uncompressed, bytes.data() + 33, 4);
+  check_size(width, height, path);
+  const bool is_depth = type == "depth16";
+  if (!is_depth && type != "rgb24")
+    throw Error(path, "PCLZF header", "image type '" + type + "': expected depth16 or rgb24");
+  if (is_depth != depth)
+    throw Error(path, "PCLZF header",
+                std::string("expected a ") + (depth ? "depth16" : "rgb24") + " image, got " + type);
+  const std::uint64_t expected = std::uint64_t{width} * height * (is_depth ? 2 : 3);
+  if (uncompressed != expected)
+    throw Error(path, "PCLZF header",
+                "uncompressed size " + std::to_string(uncompressed) + " does not match " +
+                    std::to_string(width) + "x" + std::to_string(height) + " " + type + " (" +
+                    std::to_string(expected) + " bytes)");
+  if (compressed != bytes.size() - kHeader)
+    throw Error(path, "PCLZF header",
+                "compressed size " + std::to_string(compressed) + " but the file holds " +
+                    std::to_string(bytes.size() - kHeader) + " bytes after the header");
+  std::vector<std::uint8_t> raw(uncompressed);
+  if (lzf_decompress(bytes.data() + kHeader, compressed, raw.data(), uncompressed) != uncompressed)
+    throw Error(path, "PCLZF data", "the LZF stream is corrupt");
+  const int rows = static_cast<int>(height), cols = static_cast<int>(width);
+  if (is_depth) {
+    cv::Mat image(rows, cols, CV_16UC1);
+    std::memcpy(image.data, raw.data(), raw.size());
+    return image;
+  }
+  cv::Mat image(rows, cols, CV_8UC3);
+  const std::size_t plane = std::size_t{width} * height;
+  for (std::size_t i = 0; i < plane; ++i)
+    for (std::size_t c = 0; c < 3; ++c) image.data[3 * i + c] = raw[c * plane + i];
+  return image;
+}
+
 cv::Mat read_image(const std::string& path, bool depth) {
   const std::vector<std::uint8_t> bytes = file_bytes(path);
   switch (kind_of(bytes)) {
@@ -219,11 +271,14 @@ cv::Mat read_image(const std::string& path, bool depth) {
       return decode_jpeg(bytes, path);
     case Kind::kTiff:
       return decode_tiff(path, depth);
+    case Kind::kPclzf:
+      return decode_pclzf(bytes, path, depth);
     case Kind::kOther:
       break;
   }
-  throw Error(path, "",
-              bytes.empty() ? "empty file" : "not a PNG, JPEG or TIFF image (unknown signature)");
+  throw Error(
+      path, "",
+      bytes.empty() ? "empty file" : "not a PNG, JPEG, TIFF or PCLZF image (unknown signature)");
 }
 
 }  // namespace

@@ -11,15 +11,16 @@
 
 namespace meshflow::io {
 
-/// The 16-bit single-channel image in a PNG or TIFF file (recognised by its signature), as
+/// The 16-bit single-channel image in a PNG, TIFF or PCLZF (PCL grabber, depth16) file
+/// (recognised by its signature), as
 /// CV_16UC1. Throws meshflow::Error naming the file when it is missing, corrupt, of another
 /// kind (e.g. 8-bit or colour: "expected a 16-bit single-channel depth image") or larger than
 /// 2^28 pixels. O(pixels).
 cv::Mat read_depth_image_file(const std::string& path);
 
-/// The colour image in a PNG, JPEG or TIFF file as CV_8UC3 in RGB order (grey images are
-/// replicated, alpha dropped, 16-bit samples scaled to 8 bits). Throws meshflow::Error naming
-/// the file on failure. O(pixels).
+/// The colour image in a PNG, JPEG, TIFF or PCLZF (rgb24, planar) file as CV_8UC3 in RGB order
+/// (grey images are replicated, alpha dropped, 16-bit samples scaled to 8 bits). Throws
+/// meshflow::Error naming the file on failure. O(pixels).
 cv::Mat read_color_image_file(const std::string& path);
 
 /// The PNG encoding of `image`: CV_8UC3 (RGB order), CV_8UC1 or CV_16UC1 (16-bit grey).

@@ -5,6 +5,7 @@
 #include <vector>
 
 #include "nodes/io/atomic_file.h"
+#include "nodes/io/glb_writer.h"
 #include "nodes/io/parse_util.h"
 #include "runtime/error.h"
 
@@ -76,10 +77,18 @@ void write_obj(const std::string& path, const TriangleMesh& mesh) {
   AtomicOutputFile file(path);
   std::ofstream& out = file.stream();
   const bool normals = mesh.normals.size() == mesh.vertices.size() && !mesh.normals.empty();
+  const bool colors = mesh.colors.size() == mesh.vertices.size() && !mesh.colors.empty();
   out << "# written by meshflow\n";
-  char line[128];
-  for (const auto& v : mesh.vertices) {
-    std::snprintf(line, sizeof line, "v %.9g %.9g %.9g\n", v.x(), v.y(), v.z());
+  char line[160];
+  for (std::size_t i = 0; i < mesh.vertices.size(); ++i) {
+    const Eigen::Vector3f& v = mesh.vertices[i];
+    if (colors) {
+      const Rgb8& c = mesh.colors[i];
+      std::snprintf(line, sizeof line, "v %.9g %.9g %.9g %.4g %.4g %.4g\n", v.x(), v.y(), v.z(),
+                    c.r / 255.0, c.g / 255.0, c.b / 255.0);
+    } else {
+      std::snprintf(line, sizeof line, "v %.9g %.9g %.9g\n", v.x(), v.y(), v.z());
+    }
     out << line;
   }
   if (normals) {
@@ -100,11 +109,66 @@ void write_obj(const std::string& path, const TriangleMesh& mesh) {
   file.commit();
 }
 
+void write_stl(const std::string& path, const TriangleMesh& mesh) {
+  AtomicOutputFile file(path);
+  if (mesh.triangles.size() > 0xFFFFFFFFull)
+    throw Error(path, "", "STL holds at most 2^32 - 1 triangles");
+  std::vector<char> buf(84 + 50 * mesh.triangles.size(), 0);
+  const char header[] = "binary STL written by meshflow";
+  std::memcpy(buf.data(), header, sizeof header - 1);
+  char* at = put(buf.data() + 80, static_cast<std::uint32_t>(mesh.triangles.size()));
+  for (const Triangle& t : mesh.triangles) {
+    const Eigen::Vector3f n = face_normal(mesh, t);
+    for (int k = 0; k < 3; ++k) at = put(at, n[k]);
+    for (std::uint32_t v : t)
+      for (int k = 0; k < 3; ++k) at = put(at, mesh.vertices[v][k]);
+    at = put(at, std::uint16_t{0});  // attribute byte count
+  }
+  file.stream().write(buf.data(), static_cast<std::streamsize>(buf.size()));
+  file.commit();
+}
+
+void write_off(const std::string& path, const TriangleMesh& mesh) {
+  AtomicOutputFile file(path);
+  std::ofstream& out = file.stream();
+  const bool colors = mesh.colors.size() == mesh.vertices.size() && !mesh.colors.empty();
+  out << (colors ? "COFF" : "OFF") << "\n# written by meshflow\n"
+      << mesh.vertices.size() << ' ' << mesh.triangles.size() << " 0\n";
+  char line[128];
+  for (std::size_t i = 0; i < mesh.vertices.size(); ++i) {
+    const Eigen::Vector3f& v = mesh.vertices[i];
+    int n = std::snprintf(line, sizeof line, "%.9g %.9g %.9g", v.x(), v.y(), v.z());
+    if (colors) {
+      const Rgb8& c = mesh.colors[i];
+      std::snprintf(line + n, sizeof line - static_cast<std::size_t>(n), " %d %d %d 255", c.r, c.g,
+                    c.b);
+    }
+    out << line << '\n';
+  }
+  for (const Triangle& t : mesh.triangles)
+    out << "3 " << t[0] << ' ' << t[1] << ' ' << t[2] << '\n';
+  file.commit();
+}
+
+namespace {
+constexpr const char* kMeshOutputFormats = "expected .ply .obj .stl .off or .glb";
+}
+
+void check_mesh_output_format(const std::string& path) {
+  const std::string ext = lower_extension(path);
+  for (const char* known : {".ply", ".obj", ".stl", ".off", ".glb"})
+    if (ext == known) return;
+  throw Error(path, "", "unknown mesh format '" + ext + "' (" + kMeshOutputFormats + ")");
+}
+
 void write_mesh(const std::string& path, const TriangleMesh& mesh) {
   const std::string ext = lower_extension(path);
   if (ext == ".ply") return write_ply(path, mesh);
   if (ext == ".obj") return write_obj(path, mesh);
-  throw Error(path, "", "unknown mesh format '" + ext + "' (expected .ply or .obj)");
+  if (ext == ".stl") return write_stl(path, mesh);
+  if (ext == ".off") return write_off(path, mesh);
+  if (ext == ".glb") return write_glb(path, mesh);
+  check_mesh_output_format(path);  // throws
 }
 
 }  // namespace meshflow::io

@@ -1,5 +1,6 @@
 #pragma once
-// Mesh writers: PLY (binary little-endian or ascii) and Wavefront OBJ.
+// Mesh writers: PLY (binary little-endian or ascii), Wavefront OBJ, binary STL, OFF; glTF 2.0
+// binary (.glb) is in nodes/io/glb_writer.h. write_mesh() picks one by extension.
 
 #include <string>
 
@@ -15,10 +16,25 @@ enum class PlyEncoding { kBinary, kAscii };
 void write_ply(const std::string& path, const TriangleMesh& mesh,
                PlyEncoding encoding = PlyEncoding::kBinary);
 
-/// Writes v / vn / f lines (1-based indices, "f a//a b//b c//c" when normals exist). Atomic.
+/// Writes v / vn / f lines (1-based indices, "f a//a b//b c//c" when normals exist); colours as
+/// the common extension "v x y z r g b" (0..1). Atomic.
 void write_obj(const std::string& path, const TriangleMesh& mesh);
 
-/// Chooses the writer by extension (.ply binary, .obj); throws meshflow::Error otherwise.
+/// Binary STL: an 80-byte header, the triangle count, per triangle its unit face normal and
+/// three corners (float32, little-endian). STL has no shared vertices, normals or colours: the
+/// readers of other tools weld corners again. Atomic. O(T).
+void write_stl(const std::string& path, const TriangleMesh& mesh);
+
+/// ASCII OFF ("OFF", or "COFF" with r g b a integer colours per vertex), faces "3 a b c". Atomic.
+/// O(V + T).
+void write_off(const std::string& path, const TriangleMesh& mesh);
+
+/// Chooses the writer by extension: .ply (binary), .obj, .stl, .off, .glb. Throws
+/// meshflow::Error naming the formats otherwise.
 void write_mesh(const std::string& path, const TriangleMesh& mesh);
+
+/// Throws meshflow::Error unless write_mesh() knows the extension of `path` (checked before a
+/// long reconstruction, so a typo does not cost it).
+void check_mesh_output_format(const std::string& path);
 
 }  // namespace meshflow::io

@@ -1,9 +1,11 @@
 #include "nodes/io/parse_util.h"
 
 #include <cctype>
+#include <cerrno>
 #include <charconv>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 
 #include "runtime/error.h"
@@ -108,9 +110,15 @@ void check_position(const Eigen::Vector3d& p, const std::string& source,
 
 std::ifstream open_input(const std::string& path) {
   if (std::filesystem::is_directory(path)) throw Error(path, "", "is a directory, not a file");
+  errno = 0;
   std::ifstream in(path, std::ios::binary);
-  if (!in) throw Error(path, "", "cannot open file for reading");
+  if (!in) throw Error(path, "", "cannot open file for reading: " + errno_text());
   return in;
+}
+
+std::string errno_text() {
+  if (errno == 0) return "unknown reason";
+  return std::strerror(errno);
 }
 
 std::uint64_t file_size(const std::string& path) {

@@ -56,6 +56,10 @@ void check_position(const Eigen::Vector3d& p, const std::string& source,
 /// Opens `path` for binary reading or throws meshflow::Error("cannot open").
 std::ifstream open_input(const std::string& path);
 
+/// strerror(errno) ("No such file or directory", "Permission denied"), or "unknown reason"
+/// when errno is 0: the why of a failed open, for the error message.
+std::string errno_text();
+
 /// Size of the file in bytes (0 if unknown).
 std::uint64_t file_size(const std::string& path);
 

@@ -10,6 +10,7 @@
 
 #include "nodes/io/image_io.h"
 #include "nodes/io/parse_util.h"
+#include "nodes/io/text_chunks.h"
 #include "runtime/error.h"
 
 namespace meshflow::io {
@@ -71,6 +72,7 @@ struct DepthImageList {
   std::vector<std::string> depth, color;
   PinholeIntrinsics intrinsics;
   double frame_period_s = 1.0;  // timestamps are index x period
+  float depth_scale = 1000.0f;  // depth units per metre
   std::string trajectory;       // empty: identity poses
   std::vector<Eigen::Isometry3f> poses;
 };
@@ -92,13 +94,14 @@ class DepthImageListSequence final : public Sequence {
         posed && has_pose ? list_.poses[i] : Eigen::Isometry3f::Identity();
     const std::string trajectory = list_.trajectory;
     const PinholeIntrinsics k = list_.intrinsics;
+    const float scale = list_.depth_scale;
     const double t = f.timestamp_s;
     f.load_depth = [=] {
       if (!has_pose) {
         throw Error(trajectory, "",
                     "pose missing for frame " + std::to_string(i) + " (" + depth + ")");
       }
-      return make_frame(depth, color, 1000.0f, k, pose, t);
+      return make_frame(depth, color, scale, k, pose, t);
     };
     return f;
   }
@@ -238,20 +241,67 @@ std::vector<std::string> files_containing(const std::vector<std::string>& files,
   return out;
 }
 
+// The number between <tag> and </tag> inside `section`; NaN when the tag is missing.
+double xml_number(const std::string& section, const std::string& tag, const std::string& path) {
+  const std::size_t open = section.find("<" + tag + ">");
+  if (open == std::string::npos) return std::nan("");
+  const std::size_t from = open + tag.size() + 2;
+  const std::size_t close = section.find("</" + tag + ">", from);
+  if (close == std::string::npos) throw Error(path, tag, "the element is not closed");
+  std::string token = section.substr(from, close - from);
+  token.erase(0, token.find_first_not_of(" \t\r\n"));
+  token.erase(token.find_last_not_of(" \t\r\n") + 1);
+  return parse_number(token, path, tag, tag);
+}
+
+// The depth camera of a PCL image grabber's XML (<depth> focal_length_x/y, principal_point_x/y,
+// z_multiplication_factor in metres per unit); missing values keep `k`'s and the scale's.
+void read_grabber_xml(const std::string& path, PinholeIntrinsics& k, float& depth_scale) {
+  const std::string text = read_whole_file(path);
+  const std::size_t start = text.find("<depth>");
+  const std::size_t end = text.find("</depth>");
+  if (start == std::string::npos || end == std::string::npos || end < start)
+    throw Error(path, "depth", "expected a <depth> element with the depth camera's intrinsics");
+  const std::string section = text.substr(start, end - start);
+  const auto take = [&](const char* tag, float& into, double low, double high) {
+    const double v = xml_number(section, tag, path);
+    if (std::isnan(v)) return;
+    if (!(v > low && v <= high))
+      throw Error(path, tag,
+                  "expected a value in (" + std::to_string(low) + ", " + std::to_string(high) +
+                      "], got " + std::to_string(v));
+    into = static_cast<float>(v);
+  };
+  take("focal_length_x", k.fx, 0.0, 1e6);
+  take("focal_length_y", k.fy, 0.0, 1e6);
+  take("principal_point_x", k.cx, -1e6, 1e6);
+  take("principal_point_y", k.cy, -1e6, 1e6);
+  float metres_per_unit = 1.0f / depth_scale;
+  take("z_multiplication_factor", metres_per_unit, 0.0, 1e3);
+  depth_scale = 1.0f / metres_per_unit;
+}
+
 }  // namespace
 
 std::unique_ptr<Sequence> open_depth_image_directory(const std::string& directory) {
-  const auto images = sorted_files(directory, {".png", ".tif", ".tiff", ".jpg", ".jpeg"});
+  const auto images = sorted_files(directory, {".png", ".tif", ".tiff", ".jpg", ".jpeg", ".pclzf"});
   auto depth = files_containing(images, {"depth"});
-  if (depth.empty()) throw Error(directory, "", "no depth images (*depth*.png / .tif / .tiff)");
+  if (depth.empty())
+    throw Error(directory, "", "no depth images (*depth*.png / .tif / .tiff / .pclzf)");
   auto color = files_containing(images, {"rgb", "color"});
   if (color.size() != depth.size()) color.clear();
   const std::string json = first_json(directory);
   PinholeIntrinsics k;
   k.cx = 320.0f;  // PCL's Kinect grabber convention
   k.cy = 240.0f;
-  if (!json.empty()) k = read_intrinsics_json(json);
+  float depth_scale = 1000.0f;
+  if (!json.empty()) {
+    k = read_intrinsics_json(json);
+  } else if (const auto xml = sorted_files(directory, {".xml"}); !xml.empty()) {
+    read_grabber_xml(xml.front(), k, depth_scale);  // PCL's grabber: one per frame, all alike
+  }
   DepthImageList list;
+  list.depth_scale = depth_scale;
   list.description = "depth images in " + directory;
   list.depth = std::move(depth);
   list.color = std::move(color);

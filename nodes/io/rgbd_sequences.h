@@ -41,11 +41,12 @@ std::unique_ptr<Sequence> open_redwood_directory(const std::string& directory);
 /// values and translations beyond +-1e6 m are errors naming the file and line.
 std::unique_ptr<Sequence> open_tum_directory(const std::string& directory);
 
-/// A directory of depth images without poses (e.g. a PCL grabber's *_depth.tiff): every image
-/// whose name contains "depth" (.png, .tif, .tiff; 16-bit, millimetres), in name order, paired
-/// with the *rgb* / *color* images when their counts agree. Intrinsics from a camera JSON in the
-/// directory or Kinect defaults (525, 525, 320, 240). Frames are in the camera frame (identity
-/// pose): meshed per frame, not fused.
+/// A directory of depth images without poses (e.g. a PCL grabber's *_depth.tiff or
+/// *_depth.pclzf): every image whose name contains "depth" (.png, .tif, .tiff, .pclzf; 16-bit,
+/// millimetres), in name order, paired with the *rgb* / *color* images when their counts agree.
+/// Intrinsics from a camera JSON in the directory, else from a PCL grabber XML (<depth> focal
+/// lengths, principal point, z_multiplication_factor), else Kinect defaults (525, 525, 320, 240).
+/// Frames are in the camera frame (identity pose): meshed per frame, not fused.
 std::unique_ptr<Sequence> open_depth_image_directory(const std::string& directory);
 
 }  // namespace meshflow::io

@@ -126,7 +126,7 @@ std::unique_ptr<Sequence> open_sequence(const std::string& path) {
       auto clouds = files_with_extension(path, ext);
       if (!clouds.empty()) return std::make_unique<CloudFileSequence>(path, std::move(clouds));
     }
-    for (const char* ext : {".tiff", ".tif", ".png"}) {
+    for (const char* ext : {".tiff", ".tif", ".png", ".pclzf"}) {
       for (const auto& f : files_with_extension(path, ext)) {
         if (fs::path(f).filename().string().find("depth") != std::string::npos)
           return open_depth_image_directory(path);

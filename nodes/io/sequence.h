@@ -37,8 +37,8 @@ class Sequence {
 
 /// Opens `path` as a sequence: a Redwood / Open3D RGB-D directory (depth/, trajectory.log), a
 /// TUM RGB-D directory (depth.txt, groundtruth.txt), a directory of cloud files (.pcd, .ply;
-/// e.g. organized Kinect frames), a directory of depth images (*depth*.tiff/.png, no poses), a
-/// directory of 3DTK scans (scanNNN.3d with scanNNN.pose), or a single point-cloud file. Throws
+/// e.g. organized Kinect frames), a directory of depth images (*depth*.tiff/.png/.pclzf, no poses),
+/// a directory of 3DTK scans (scanNNN.3d with scanNNN.pose), or a single point-cloud file. Throws
 /// meshflow::Error when the path holds none of these.
 std::unique_ptr<Sequence> open_sequence(const std::string& path);
 

@@ -61,6 +61,37 @@ std::vector<std::uint8_t> duplicate_faces(const std::vector<Triangle>& tris,
 
 }  // namespace
 
+namespace {
+
+// Drops the triangles of components (by shared vertices) with fewer than `min_triangles`
+// triangles, keeping the others in order; counts components and removals into `r`. O(V + T).
+void remove_small_components(std::vector<Triangle>& triangles, std::size_t vertex_count,
+                             std::size_t min_triangles, CleanupReport& r) {
+  DisjointSets sets(vertex_count);
+  for (const Triangle& t : triangles) {
+    sets.unite(t[0], t[1]);
+    sets.unite(t[1], t[2]);
+  }
+  std::vector<std::uint32_t> component_size(vertex_count, 0);
+  for (const Triangle& t : triangles) ++component_size[sets.find(t[0])];
+  for (std::uint32_t s : component_size) {
+    if (s == 0) continue;
+    ++r.components;
+    if (s < min_triangles) {
+      ++r.removed_components;
+      r.removed_component_triangles += s;
+    }
+  }
+  if (min_triangles == 0) return;
+  triangles.erase(std::remove_if(triangles.begin(), triangles.end(),
+                                 [&](const Triangle& t) {
+                                   return component_size[sets.find(t[0])] < min_triangles;
+                                 }),
+                  triangles.end());
+}
+
+}  // namespace
+
 TriangleMesh clean_mesh(const TriangleMesh& mesh, const CleanupConfig& config,
                         CleanupReport* report) {
   CleanupReport r;
@@ -85,34 +116,27 @@ TriangleMesh clean_mesh(const TriangleMesh& mesh, const CleanupConfig& config,
     kept = mesh.triangles;
   }
 
-  // Components by shared vertices; drop the small ones.
-  DisjointSets sets(mesh.vertices.size());
-  for (const Triangle& t : kept) {
-    sets.unite(t[0], t[1]);
-    sets.unite(t[1], t[2]);
-  }
-  std::vector<std::uint32_t> component_size(mesh.vertices.size(), 0);
-  for (const Triangle& t : kept) ++component_size[sets.find(t[0])];
-  for (std::uint32_t s : component_size) {
-    if (s == 0) continue;
-    ++r.components;
-    if (s < config.min_component_triangles) {
-      ++r.removed_components;
-      r.removed_component_triangles += s;
-    }
-  }
-  if (config.min_component_triangles > 0) {
-    kept.erase(std::remove_if(kept.begin(), kept.end(),
-                              [&](const Triangle& t) {
-                                return component_size[sets.find(t[0])] <
-                                       config.min_component_triangles;
-                              }),
-               kept.end());
-  }
-
+  remove_small_components(kept, mesh.vertices.size(), config.min_component_triangles, r);
   TriangleMesh out = compact_vertices(mesh, kept);
   r.removed_vertices = mesh.vertices.size() - out.vertices.size();
-  if (config.split_non_manifold_vertices) r.split_vertices = split_non_manifold_vertices(out);
+  if (config.split_non_manifold_vertices) {
+    r.split_vertices = split_non_manifold_vertices(out);
+    // Splitting separates the fans that met at a vertex: pieces that hung on the rest of the
+    // mesh by one vertex become components of their own and get the same size rule.
+    if (r.split_vertices > 0 && config.min_component_triangles > 0) {
+      CleanupReport after_split;
+      std::vector<Triangle> split = out.triangles;
+      remove_small_components(split, out.vertices.size(), config.min_component_triangles,
+                              after_split);
+      if (after_split.removed_components > 0) {
+        r.removed_components += after_split.removed_components;
+        r.removed_component_triangles += after_split.removed_component_triangles;
+        const std::size_t before = out.vertices.size();
+        out = compact_vertices(out, split);
+        r.removed_vertices += before - out.vertices.size();
+      }
+    }
+  }
   if (report != nullptr) *report = r;
   return out;
 }

@@ -29,7 +29,8 @@ struct CleanupReport {
 
 /// Returns a cleaned copy of `mesh`: triangles kept in their order, unreferenced vertices
 /// dropped and the rest renumbered in their order (normals and colours follow), then copies of
-/// non-manifold vertices appended.
+/// non-manifold vertices appended; components the split separated that are smaller than
+/// min_component_triangles are removed too (no small piece survives the step).
 /// Parallel; deterministic. O(V + T).
 TriangleMesh clean_mesh(const TriangleMesh& mesh, const CleanupConfig& config,
                         CleanupReport* report = nullptr);

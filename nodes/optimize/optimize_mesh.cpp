@@ -174,6 +174,7 @@ TriangleMesh optimize_mesh(const TriangleMesh& mesh, const OptimizeConfig& confi
     OptimizeStepReport step;
     step.step = s;
     step.triangles_in = current.triangles.size();
+    if (config.on_step) config.on_step(s);
     const double start = monotonic_seconds();
     try {
       switch (s) {

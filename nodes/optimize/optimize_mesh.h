@@ -6,6 +6,7 @@
 // triangulated anew from their simplified contours), remesh (curvature-aware: large triangles
 // where the surface is flat, small ones where it bends), decimate (constrained QEM).
 
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -43,6 +44,8 @@ struct OptimizeConfig {
     q.divide_by_depth2 = false;
     return q;
   }();
+  /// Called before each step runs (from the calling thread): for progress lines. Optional.
+  std::function<void(OptimizeStep)> on_step;
 };
 
 /// What one step did.

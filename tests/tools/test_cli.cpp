@@ -1,7 +1,6 @@
 // Runs the meshflow executable: exit codes, error messages and no partial output.
 
 #include <gtest/gtest.h>
-#include <sys/wait.h>
 
 #include <cstdlib>
 #include <filesystem>
@@ -11,28 +10,13 @@
 #include <sstream>
 
 #include "test_support.h"
+#include "tools/cli_runner.h"
 
 namespace meshflow {
 namespace {
 
-struct CliRun {
-  int exit_code;
-  std::string out, err;
-};
-
-CliRun run_cli(const std::string& args) {
-  const std::string dir = test::temp_dir();
-  const std::string cmd =
-      std::string(MESHFLOW_CLI) + " " + args + " >" + dir + "/out 2>" + dir + "/err";
-  const int status = std::system(cmd.c_str());
-  auto slurp = [](const std::string& p) {
-    std::ifstream in(p);
-    std::stringstream s;
-    s << in.rdbuf();
-    return s.str();
-  };
-  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, slurp(dir + "/out"), slurp(dir + "/err")};
-}
+using test::CliRun;
+using test::run_cli;
 
 TEST(Cli, BrokenInputsFailWithOneLineNamingTheFileAndNoOutput) {
   const std::string out_dir = test::temp_dir();

@@ -1,5 +1,7 @@
 #include <gtest/gtest.h>
 
+#include <cmath>
+
 #include <random>
 
 #include "nodes/eval/closest_point.h"
@@ -127,6 +129,26 @@ TEST(SurfaceEval, PatchAgainstItselfAndAgainstAShiftedCopy) {
   EXPECT_NEAR(evaluate_surface(shifted, points).mesh_to_reference.max, 0.01, 1e-6);
   EXPECT_THROW(evaluate_surface(TriangleMesh{}, patch), Error);
   EXPECT_THROW(evaluate_surface(patch, TriangleMesh{}), Error);
+}
+
+TEST(SurfaceEval, AnInsideOutMeshIsToldByItsFacesAndItsVolume) {
+  const TriangleMesh tet = test::tetrahedron();
+  EXPECT_NEAR(signed_volume(tet), 1.0 / 6.0, 1e-9);
+  TriangleMesh flipped = tet;
+  for (Triangle& t : flipped.triangles) std::swap(t[1], t[2]);
+  EXPECT_NEAR(signed_volume(flipped), -1.0 / 6.0, 1e-9);
+  // Against the mesh itself (face normals) and a point set with outward normals.
+  EXPECT_NEAR(evaluate_surface(tet, tet).inside_out_area_share, 0.0, 1e-9);
+  EXPECT_NEAR(evaluate_surface(flipped, tet).inside_out_area_share, 1.0, 1e-9);
+  TriangleMesh points;
+  for (const Triangle& t : tet.triangles) {
+    points.vertices.push_back((tet.vertices[t[0]] + tet.vertices[t[1]] + tet.vertices[t[2]]) / 3);
+    points.normals.push_back(face_normal(tet, t));
+  }
+  EXPECT_NEAR(evaluate_surface(tet, points).inside_out_area_share, 0.0, 1e-9);
+  EXPECT_NEAR(evaluate_surface(flipped, points).inside_out_area_share, 1.0, 1e-9);
+  points.normals.clear();
+  EXPECT_TRUE(std::isnan(evaluate_surface(tet, points).inside_out_area_share));
 }
 
 TEST(PlyMeshReader, RoundTripsWrittenMeshesAndRejectsBadFaces) {

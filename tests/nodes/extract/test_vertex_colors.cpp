@@ -27,6 +27,30 @@ TEST(VertexColors, NearestPointsColourTheVertices) {
   EXPECT_EQ(colors[2], (Rgb8{255, 0, 0}));
 }
 
+TEST(VertexColors, VerticesTakeTheColourOfTheirPixel) {
+  // A camera at (0, 0, -1) looking along +z; red grows with u, green with v.
+  DepthFrame frame;
+  frame.intrinsics = PinholeIntrinsics{64, 48, 50.0f, 50.0f, 32.0f, 24.0f};
+  frame.depth = cv::Mat(48, 64, CV_16UC1, cv::Scalar(1000));
+  frame.color = cv::Mat(48, 64, CV_8UC3);
+  for (int v = 0; v < 48; ++v)
+    for (int u = 0; u < 64; ++u)
+      frame.color.at<cv::Vec3b>(v, u) =
+          cv::Vec3b(static_cast<std::uint8_t>(3 * u), static_cast<std::uint8_t>(5 * v), 7);
+  frame.T_world_camera.translation() = Eigen::Vector3f(0, 0, -1);
+  // Pixel (10, 20) at depth 2 (world z = 1); a point between pixels; one far outside the image.
+  const Eigen::Vector3f at_pixel((10 - 32) * 2.0f / 50, (20 - 24) * 2.0f / 50, 1.0f);
+  const Eigen::Vector3f between((10.5f - 32) * 1.0f / 50, (20 - 24) * 1.0f / 50, 0.0f);
+  const std::vector<Rgb8> c =
+      vertex_colors_from_image({at_pixel, between, {100.0f, 0.0f, 1.0f}}, frame);
+  ASSERT_EQ(c.size(), 3u);
+  EXPECT_EQ(c[0], (Rgb8{30, 100, 7}));
+  EXPECT_EQ(c[1].r, 32);      // halfway between 30 and 33, rounded
+  EXPECT_EQ(c[2].r, 3 * 63);  // clamped to the border column
+  frame.color.release();
+  EXPECT_TRUE(vertex_colors_from_image({at_pixel}, frame).empty());
+}
+
 TEST(VertexColors, AColouredCloudGivesAColouredMesh) {
   // The torus painted by height: the mesh's vertices carry the colour of the points near them.
   PointCloud c = synthetic::torus_object().sample(30000, 0.0f, 2);

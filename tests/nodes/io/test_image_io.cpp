@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 #include <jpeglib.h>
+#include <lzf.h>
 #include <tiffio.h>
 
 #include <cstdio>
@@ -99,6 +100,73 @@ TEST(ImageIo, TiffAndJpegAreRead) {
   ASSERT_EQ(jpeg.size(), rgb.size());
   EXPECT_LE(cv::norm(jpeg, rgb, cv::NORM_INF), 16.0) << "quality 100, subsampled chroma";
   EXPECT_THROW(read_depth_image_file(dir + "/c.jpg"), Error);
+}
+
+// A PCLZF file as PCL's image grabber writes it: the 37-byte header, then the LZF stream of the
+// raw bytes (depth16 row-major, rgb24 planar).
+std::string pclzf(const std::string& type, std::uint32_t width, std::uint32_t height,
+                  const std::vector<std::uint8_t>& raw) {
+  std::vector<std::uint8_t> packed(raw.size() + raw.size() / 16 + 64);
+  const unsigned n = lzf_compress(raw.data(), static_cast<unsigned>(raw.size()), packed.data(),
+                                  static_cast<unsigned>(packed.size()));
+  std::string out = "PCLZF";
+  const auto put = [&out](std::uint32_t v) { out.append(reinterpret_cast<const char*>(&v), 4); };
+  put(width);
+  put(height);
+  out += type + std::string(16 - type.size(), ' ');
+  put(n);
+  put(static_cast<std::uint32_t>(raw.size()));
+  out.append(reinterpret_cast<const char*>(packed.data()), n);
+  return out;
+}
+
+TEST(ImageIo, PclzfDepthAndPlanarColourAreRead) {
+  const std::string dir = test::temp_dir();
+  const cv::Mat depth = gradient16(12, 20);
+  std::vector<std::uint8_t> raw(depth.data, depth.data + depth.total() * 2);
+  test::write_file(dir + "/d.pclzf", pclzf("depth16", 20, 12, raw));
+  EXPECT_EQ(cv::norm(read_depth_image_file(dir + "/d.pclzf"), depth, cv::NORM_INF), 0.0);
+  const cv::Mat rgb = colours(12, 20);
+  std::vector<std::uint8_t> planar(rgb.total() * 3);
+  for (std::size_t i = 0; i < rgb.total(); ++i)
+    for (std::size_t c = 0; c < 3; ++c) planar[c * rgb.total() + i] = rgb.data[3 * i + c];
+  test::write_file(dir + "/c.pclzf", pclzf("rgb24", 20, 12, planar));
+  EXPECT_EQ(cv::norm(read_color_image_file(dir + "/c.pclzf"), rgb, cv::NORM_INF), 0.0);
+  EXPECT_THROW(read_depth_image_file(dir + "/c.pclzf"), Error) << "rgb24 is not depth";
+  // Hostile headers: sizes that do not match, a type it does not know, a giant image.
+  const std::string good = pclzf("depth16", 20, 12, raw);
+  std::string wrong_size = good;
+  wrong_size[33] = 1;  // uncompressed size
+  std::string giant = pclzf("depth16", 1u << 20, 1u << 20, raw);
+  const std::pair<std::string, std::string> bad[] = {
+      {"wrong_size.pclzf", wrong_size},
+      {"short.pclzf", good.substr(0, 30)},
+      {"truncated.pclzf", good.substr(0, good.size() - 5)},
+      {"bayer.pclzf", pclzf("bayer8", 20, 12, raw)},
+      {"giant.pclzf", giant}};
+  for (const auto& [name, bytes] : bad) {
+    test::write_file(dir + "/" + name, bytes);
+    try {
+      read_depth_image_file(dir + "/" + name);
+      ADD_FAILURE() << name;
+    } catch (const Error& e) {
+      EXPECT_NE(std::string(e.what()).find(name), std::string::npos) << e.what();
+    }
+  }
+}
+
+// The shared Kinect grabber frames: PCLZF and TIFF hold the same pixels.
+TEST(ImageIo, SharedGrabberPclzfEqualsItsTiff) {
+  const std::string base = "kinect_pcl/grabber_sequences/";
+  if (!test::has_data(base + "pclzf")) GTEST_SKIP() << "shared data not found (MESHFLOW_DATA)";
+  const std::string frame = "frame_20121214T142256.068683";
+  const cv::Mat a =
+      read_depth_image_file(test::data_path(base + "pclzf/" + frame + "_depth.pclzf"));
+  const cv::Mat b = read_depth_image_file(test::data_path(base + "tiff/" + frame + "_depth.tiff"));
+  EXPECT_EQ(cv::norm(a, b, cv::NORM_INF), 0.0);
+  const cv::Mat c = read_color_image_file(test::data_path(base + "pclzf/" + frame + "_rgb.pclzf"));
+  const cv::Mat d = read_color_image_file(test::data_path(base + "tiff/" + frame + "_rgb.tiff"));
+  EXPECT_EQ(cv::norm(c, d, cv::NORM_INF), 0.0);
 }
 
 TEST(ImageIo, BrokenFilesAreOneClearErrorNamingTheFile) {

@@ -49,7 +49,13 @@ TEST(MeshWriters, ObjHasOneBasedFaces) {
 
 TEST(MeshWriters, UnwritableOrUnknownOutputIsAnError) {
   EXPECT_THROW(write_mesh("/nonexistent-dir/m.ply", sample_mesh()), Error);
-  EXPECT_THROW(write_mesh(test::temp_dir() + "/m.stl", sample_mesh()), Error);
+  EXPECT_THROW(write_mesh(test::temp_dir() + "/m.vrml", sample_mesh()), Error);
+  try {
+    write_mesh("/nonexistent-dir/m.ply", sample_mesh());
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("No such file or directory"), std::string::npos)
+        << e.what();
+  }
 }
 
 }  // namespace

@@ -91,6 +91,25 @@ TEST(MeshCleanup, SplitsVerticesWhereTwoSheetsTouch) {
   EXPECT_EQ(clean_mesh(m, config).vertices.size(), m.vertices.size());
 }
 
+TEST(MeshCleanup, PiecesTheSplitSeparatesAreRemovedWhenSmall) {
+  // A 6 x 6 grid (50 triangles) and one triangle hanging on its corner vertex 0: one component
+  // by shared vertices until the split gives the triangle a vertex of its own.
+  TriangleMesh m = test::grid_mesh(6);
+  const auto b = static_cast<std::uint32_t>(m.vertices.size());
+  m.vertices.insert(m.vertices.end(), {{-1, 0, 0.5f}, {0, -1, 0.5f}});
+  m.triangles.push_back({0, b, b + 1});
+  CleanupConfig config;
+  config.min_component_triangles = 20;
+  CleanupReport report;
+  const TriangleMesh out = clean_mesh(m, config, &report);
+  EXPECT_EQ(report.split_vertices, 1u);
+  EXPECT_EQ(report.removed_components, 1u);
+  EXPECT_EQ(report.removed_component_triangles, 1u);
+  EXPECT_EQ(out.triangles.size(), 50u);
+  EXPECT_EQ(out.vertices.size(), 36u) << "the split copy and the hanging corners are gone";
+  EXPECT_EQ(test::half_edge_problem(out), "");
+}
+
 // The definitions, brute force. A later copy of a face (same corners in any order) is a
 // duplicate of the first.
 std::vector<bool> duplicates_oracle(const std::vector<Triangle>& tris) {

@@ -1,0 +1,160 @@
+// The CLI as scripts use it: --version, -q / -v, --json documents, every mesh format, optimize
+// on meshes from other tools, shared Kinect data with colours.
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <nlohmann/json.hpp>
+
+#include "nodes/io/mesh_readers.h"
+#include "test_support.h"
+#include "tools/cli_runner.h"
+
+namespace meshflow {
+namespace {
+
+using test::CliRun;
+using test::run_cli;
+
+nlohmann::json parse_json(const CliRun& r) {
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  try {
+    return nlohmann::json::parse(r.out);
+  } catch (const nlohmann::json::exception& e) {
+    ADD_FAILURE() << e.what() << "\n" << r.out;
+    return {};
+  }
+}
+
+// A 20 000-point torus sample, written once per test.
+std::string torus_cloud(const std::string& dir) {
+  const std::string path = dir + "/torus.ply";
+  const CliRun r = run_cli("sample torus --points 20000 -q -o " + path);
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(r.out, "") << "-q prints nothing";
+  return path;
+}
+
+TEST(CliScripting, VersionAndDefaultsInHelp) {
+  CliRun r = run_cli("--version");
+  EXPECT_EQ(r.exit_code, 0);
+  EXPECT_EQ(r.out.rfind("meshflow ", 0), 0u) << r.out;
+  r = run_cli("reconstruct --help");
+  EXPECT_EQ(r.exit_code, 0);
+  EXPECT_NE(r.out.find("=10"), std::string::npos) << "--kn shows its default\n" << r.out;
+  EXPECT_NE(r.out.find("=auto"), std::string::npos) << "--extract shows its default";
+  EXPECT_EQ(run_cli("reconstruct a.ply -o b.ply -q -v").exit_code, 2) << "-q excludes -v";
+}
+
+TEST(CliScripting, JsonDocumentsOfInfoReconstructAndEval) {
+  const std::string dir = test::temp_dir();
+  const std::string cloud = torus_cloud(dir);
+  nlohmann::json doc = parse_json(run_cli("info --json " + cloud));
+  EXPECT_EQ(doc["points"], 20000);
+  EXPECT_EQ(doc["normals"]["orientation"], "propagate");
+  EXPECT_EQ(doc["bounds"]["min"].size(), 3u);
+
+  doc = parse_json(run_cli("reconstruct " + cloud + " -o " + dir + "/m.glb --voxel 0.02 --json"));
+  EXPECT_EQ(doc["points"], 20000);
+  EXPECT_EQ(doc["normals"]["source"], "estimate");
+  EXPECT_GT(doc["mesh"]["triangles"].get<int>(), 1000);
+  EXPECT_EQ(doc["output"], dir + "/m.glb");
+  EXPECT_FALSE(doc["stages"].empty());
+  EXPECT_EQ(doc["optimize"][0]["step"], "clean");
+  EXPECT_TRUE(std::filesystem::exists(dir + "/m.glb"));
+
+  ASSERT_EQ(run_cli("reconstruct " + cloud + " -o " + dir + "/m.stl --voxel 0.02 -q").exit_code, 0);
+  doc = parse_json(run_cli("eval " + dir + "/m.stl --object torus --json"));
+  EXPECT_TRUE(doc["topology"]["watertight"].get<bool>());
+  EXPECT_EQ(doc["orientation"], "outward");
+  EXPECT_LT(doc["relative_to_diagonal"]["surface_mean"].get<double>(), 2e-4);
+
+  // An inside-out copy: eval says so, against the exact object and against the outward mesh.
+  TriangleMesh mesh = io::read_mesh(dir + "/m.stl");
+  ASSERT_EQ(run_cli("reconstruct " + cloud + " -o " + dir + "/m.off --voxel 0.02 -q").exit_code, 0);
+  std::string off = test::read_file(dir + "/m.off");
+  test::write_file(dir + "/flipped.obj", [&] {
+    std::string obj;
+    for (const Eigen::Vector3f& v : mesh.vertices)
+      obj += "v " + std::to_string(v.x()) + " " + std::to_string(v.y()) + " " +
+             std::to_string(v.z()) + "\n";
+    for (const Triangle& t : mesh.triangles)
+      obj += "f " + std::to_string(t[0] + 1) + " " + std::to_string(t[2] + 1) + " " +
+             std::to_string(t[1] + 1) + "\n";
+    return obj;
+  }());
+  doc = parse_json(run_cli("eval " + dir + "/flipped.obj --object torus --json"));
+  EXPECT_EQ(doc["orientation"], "inside out");
+  doc = parse_json(run_cli("eval " + dir + "/flipped.obj --reference " + dir + "/m.off --json"));
+  EXPECT_GT(doc["inside_out_area_share"].get<double>(), 0.99);
+  doc = parse_json(run_cli("eval " + dir + "/m.stl --reference " + dir + "/m.off --json"));
+  EXPECT_LT(doc["inside_out_area_share"].get<double>(), 0.01);
+  EXPECT_LT(doc["mesh_to_reference"]["max"].get<double>(), 1e-6) << "the same mesh";
+}
+
+TEST(CliScripting, JsonOfRunAndProfileAndVerboseFrameLines) {
+  const std::string dir = test::temp_dir();
+  nlohmann::json doc =
+      parse_json(run_cli("run --synthetic --max-frames 2 --voxel 0.1 --json -o " + dir + "/run"));
+  EXPECT_EQ(doc["frames_ok"], 2);
+  EXPECT_EQ(doc["frames_failed"], 0);
+  EXPECT_EQ(doc["files_written"], 2);
+  EXPECT_GT(doc["frames_per_second"].get<double>(), 0.0);
+  doc = parse_json(
+      run_cli("profile --synthetic --max-frames 2 --voxel 0.1 --json --csv " + dir + "/s.csv"));
+  EXPECT_EQ(doc["csv"], dir + "/s.csv");
+  EXPECT_FALSE(doc["stages"].empty());
+  const CliRun r = run_cli("run --synthetic --max-frames 2 --voxel 0.1 -v -o " + dir + "/v");
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("frame 1 "), std::string::npos) << r.out;
+  const CliRun q = run_cli("run --synthetic --max-frames 2 --voxel 0.1 -q -o " + dir + "/q");
+  EXPECT_EQ(q.exit_code, 0);
+  EXPECT_EQ(q.out, "");
+  EXPECT_EQ(q.err, "") << "no progress lines without a terminal";
+  const CliRun p =
+      run_cli("run --synthetic --max-frames 2 --voxel 0.1 -q --progress -o " + dir + "/p");
+  EXPECT_NE(p.err.find("2/2 frames"), std::string::npos) << p.err;
+}
+
+TEST(CliScripting, OptimizeAMeshFromAnotherTool) {
+  const std::string dir = test::temp_dir();
+  const std::string cloud = torus_cloud(dir);
+  ASSERT_EQ(run_cli("reconstruct " + cloud + " -o " + dir + "/m.obj --voxel 0.02 -q").exit_code, 0);
+  const nlohmann::json doc = parse_json(
+      run_cli("optimize " + dir + "/m.obj " + dir + "/d.ply --optimize decimate --json"));
+  EXPECT_EQ(doc["optimize"][0]["step"], "decimate");
+  const auto in = doc["triangles_in"].get<double>(), out = doc["triangles"].get<double>();
+  EXPECT_NEAR(out / in, 0.25, 0.02);
+  EXPECT_EQ(io::read_mesh(dir + "/d.ply").triangles.size(), static_cast<std::size_t>(out));
+  EXPECT_EQ(run_cli("optimize " + dir + "/m.obj " + dir + "/d.vrml").exit_code, 1);
+  EXPECT_EQ(run_cli("optimize " + dir + "/m.obj " + dir + "/d.ply --kn 5").exit_code, 2)
+      << "only the optimize settings are options here";
+}
+
+TEST(CliScripting, ErrorsSayWhy) {
+  const CliRun r = run_cli("reconstruct /nonexistent/cloud.ply -o x.ply");
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.err.find("No such file or directory"), std::string::npos) << r.err;
+  const std::string dir = test::temp_dir();
+  const std::string cloud = torus_cloud(dir);
+  const CliRun w = run_cli("reconstruct " + cloud + " -o /nonexistent/m.ply --voxel 0.05");
+  EXPECT_EQ(w.exit_code, 1);
+  EXPECT_NE(w.err.find("cannot create output file: No such file or directory"), std::string::npos)
+      << w.err;
+}
+
+// The shared Kinect grabber frames as PCLZF: read through the depth-image path, with colours.
+TEST(CliScripting, SharedPclzfFramesMeshWithColours) {
+  const std::string base = "kinect_pcl/grabber_sequences/pclzf";
+  if (!test::has_data(base)) GTEST_SKIP() << "shared data not found (MESHFLOW_DATA)";
+  const std::string dir = test::temp_dir();
+  const nlohmann::json doc =
+      parse_json(run_cli("run " + test::data_path(base) + " --voxel 0.01 --json -o " + dir));
+  EXPECT_EQ(doc["frames_ok"], 3);
+  const TriangleMesh m = io::read_mesh(dir + "/frame_000000.ply");
+  EXPECT_GT(m.triangles.size(), 10000u);
+  ASSERT_EQ(m.colors.size(), m.vertices.size());
+}
+
+}  // namespace
+}  // namespace meshflow

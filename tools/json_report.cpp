@@ -1,0 +1,113 @@
+#include "tools/json_report.h"
+
+#include <cmath>
+
+#include "nodes/extract/extract_surface.h"
+#include "nodes/normals/normals.h"
+
+namespace meshflow::cli {
+
+nlohmann::json distance_json(const DistanceStats& s) {
+  return {{"mean", s.mean}, {"rms", s.rms}, {"median", s.median},
+          {"p95", s.p95},   {"max", s.max}, {"samples", s.samples}};
+}
+
+nlohmann::json topology_json(const MeshTopology& t) {
+  return {{"edges", t.edges.edges},
+          {"boundary_edges", t.edges.boundary_edges},
+          {"non_manifold_edges", t.edges.non_manifold_edges},
+          {"inconsistent_edges", t.edges.inconsistent_edges},
+          {"boundary_loops", t.boundary_loops},
+          {"degenerate_faces", t.degenerate_faces},
+          {"watertight", t.edges.closed() && t.edges.inconsistent_edges == 0}};
+}
+
+nlohmann::json stages_json(const std::vector<StageSummary>& summaries) {
+  nlohmann::json stages = nlohmann::json::array();
+  for (const StageSummary& s : summaries) {
+    stages.push_back({{"stage", s.stage},
+                      {"calls", s.calls},
+                      {"total_ms", 1e3 * s.total_s},
+                      {"mean_ms", 1e3 * s.mean_s},
+                      {"p50_ms", 1e3 * s.p50_s},
+                      {"p95_ms", 1e3 * s.p95_s},
+                      {"max_ms", 1e3 * s.max_s},
+                      {"items", s.items}});
+  }
+  return stages;
+}
+
+namespace {
+
+nlohmann::json normals_json(const Frame& f) {
+  if (f.normals_from_image) return {{"source", "image"}};
+  const NormalsReport& r = f.normals;
+  nlohmann::json n = {{"source", r.source == NormalSource::kInput ? "input" : "estimate"},
+                      {"estimated", r.estimated}};
+  if (r.estimated > 0) {
+    n["orientation"] = orientation_name(r.orientation);
+    n["kn"] = r.kn;
+    n["median_variation"] = r.median_variation;
+    n["sharp"] = r.sharp;
+    if (r.orientation == NormalOrientation::kPropagate) {
+      n["components"] = r.components;
+      n["flipped_by_vote"] = r.flipped_by_vote;
+    }
+  }
+  return n;
+}
+
+}  // namespace
+
+nlohmann::json frame_json(const Frame& f, double wall_s, int threads) {
+  const FilterCounts& c = f.filter_counts;
+  nlohmann::json optimize = nlohmann::json::array();
+  for (const OptimizeStepReport& s : f.optimize.steps) {
+    optimize.push_back({{"step", optimize_step_name(s.step)},
+                        {"triangles_in", s.triangles_in},
+                        {"triangles_out", s.triangles_out},
+                        {"ms", 1e3 * s.seconds},
+                        {"skipped", s.skipped},
+                        {"detail", s.detail}});
+  }
+  return {{"input", f.name},
+          {"points", c.input},
+          {"filter",
+           {{"non_finite", c.non_finite},
+            {"cropped", c.cropped},
+            {"merged", c.merged},
+            {"outliers", c.outliers},
+            {"output", c.output}}},
+          {"normals", normals_json(f)},
+          {"voxel", f.voxel_size},
+          {"grid",
+           {{"cells", f.grid.cells.size()},
+            {"corners", f.grid.corners.size()},
+            {"valid_corners", f.distance.valid_count()},
+            {"disagreeing", f.distance.disagreeing},
+            {"extrapolated", f.distance.extrapolated}}},
+          {"mesh",
+           {{"vertices", f.mesh.vertices.size()},
+            {"triangles", f.mesh.triangles.size()},
+            {"extract", extract_method_name(f.extract_method)},
+            {"colors", !f.mesh.colors.empty()}}},
+          {"optimize", optimize},
+          {"time_ms", 1e3 * wall_s},
+          {"threads", threads},
+          {"stages", stages_json(summarize_stages(f.timings))}};
+}
+
+nlohmann::json run_json(const std::string& sequence, const SequenceRunStats& stats, int threads,
+                        std::size_t in_flight) {
+  return {{"sequence", sequence},
+          {"frames_ok", stats.frames_ok},
+          {"frames_failed", stats.frames_failed},
+          {"stopped_early", stats.stopped_early},
+          {"wall_s", stats.wall_s},
+          {"frames_per_second", stats.frames_per_second()},
+          {"threads", threads},
+          {"in_flight", in_flight},
+          {"stages", stages_json(summarize_stages(stats.records))}};
+}
+
+}  // namespace meshflow::cli

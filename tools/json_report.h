@@ -1,0 +1,39 @@
+#pragma once
+// The --json documents of the subcommands, built with nlohmann-json. Field names are
+// snake_case, lengths in metres, times in milliseconds unless the name says otherwise
+// (README "Machine-readable output" lists them).
+
+#include <nlohmann/json.hpp>
+
+#include <string>
+#include <vector>
+
+#include "graph/frame.h"
+#include "graph/sequence_runner.h"
+#include "nodes/eval/surface_eval.h"
+#include "runtime/tracing.h"
+
+namespace meshflow::cli {
+
+/// {"mean", "rms", "median", "p95", "max", "samples"} in metres.
+nlohmann::json distance_json(const DistanceStats& s);
+
+/// {"edges", "boundary_edges", "non_manifold_edges", "inconsistent_edges", "boundary_loops",
+/// "degenerate_faces", "watertight"}.
+nlohmann::json topology_json(const MeshTopology& t);
+
+/// One object per stage: {"stage", "calls", "total_ms", "mean_ms", "p50_ms", "p95_ms",
+/// "max_ms", "items"}.
+nlohmann::json stages_json(const std::vector<StageSummary>& summaries);
+
+/// What the pipeline did to one frame: "input", "points", "filter", "normals", "voxel",
+/// "grid", "mesh" {"vertices", "triangles", "extract"}, "optimize" (steps), "time_ms",
+/// "threads", "stages".
+nlohmann::json frame_json(const Frame& frame, double wall_s, int threads);
+
+/// A sequence run: "sequence", "frames_ok", "frames_failed", "stopped_early", "wall_s",
+/// "frames_per_second", "threads", "in_flight", "stages".
+nlohmann::json run_json(const std::string& sequence, const SequenceRunStats& stats, int threads,
+                        std::size_t in_flight);
+
+}  // namespace meshflow::cli

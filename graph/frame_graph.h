@@ -39,8 +39,12 @@ using StageNode = tbb::flow::function_node<FramePtr, FramePtr>;
 /// must outlive the chain.
 class StageChain {
  public:
-  StageChain(tbb::flow::graph& g, bool triangulate_depth_maps, const ReconstructionConfig& config) {
-    for (const stages::NamedStage& stage : stages::frame_stages(triangulate_depth_maps))
+  StageChain(tbb::flow::graph& g, bool triangulate_depth_maps, const ReconstructionConfig& config)
+      : StageChain(g, stages::frame_stages(triangulate_depth_maps), config) {}
+  /// The same over any non-empty list of stages.
+  StageChain(tbb::flow::graph& g, const std::vector<stages::NamedStage>& stage_list,
+             const ReconstructionConfig& config) {
+    for (const stages::NamedStage& stage : stage_list)
       nodes_.push_back(std::make_unique<StageNode>(g, tbb::flow::unlimited,
                                                    StageNodeBody(stage.name, stage.body, config)));
     for (std::size_t i = 1; i < nodes_.size(); ++i)

@@ -202,7 +202,7 @@ void run_info(const std::string& path) {
 void add_reconstruct_command(CLI::App& app) {
   auto opts = std::make_shared<ReconstructOptions>();
   CLI::App* cmd = app.add_subcommand("reconstruct", "Reconstruct a mesh from one point cloud");
-  cmd->add_option("input", opts->input, "Point cloud: .ply .pcd .xyz .txt .pts .asc .3d")
+  cmd->add_option("input", opts->input, "Point cloud: .ply .pcd .las .xyz .txt .pts .asc .csv .3d")
       ->required();
   cmd->add_option("-o,--output", opts->output, "Output mesh: .ply .obj .stl .off .glb")->required();
   add_pipeline_options(cmd, opts->pipeline);

@@ -6,12 +6,14 @@
 #include <memory>
 #include <string>
 
+#include "nodes/eval/double_walls.h"
 #include "nodes/eval/surface_eval.h"
 #include "nodes/eval/truth_eval.h"
 #include "nodes/io/mesh_readers.h"
 #include "nodes/io/read_point_cloud.h"
 #include "nodes/synthetic/closed_objects.h"
 #include "runtime/error.h"
+#include "tools/cli_checks.h"
 #include "tools/commands.h"
 #include "tools/console.h"
 #include "tools/json_report.h"
@@ -47,6 +49,25 @@ void print_topology(const MeshTopology& t) {
       t.edges.closed() && t.edges.inconsistent_edges == 0 ? " (watertight)" : "");
 }
 
+// Double walls within `radius` metres (0: the median edge length), for the report and JSON.
+struct DoubleWalls {
+  float radius;
+  double share;
+};
+DoubleWalls double_walls(const TriangleMesh& mesh, float radius) {
+  const float r = radius > 0.0f ? radius : median_edge_length(mesh);
+  return {r, double_wall_area_share(mesh, r)};
+}
+
+void print_double_walls(const DoubleWalls& w) {
+  report("double walls       %.2f %% of the area within %.4g m of another sheet\n", 100.0 * w.share,
+         w.radius);
+}
+
+nlohmann::json double_walls_json(const DoubleWalls& w) {
+  return {{"radius", w.radius}, {"area_share", w.share}};
+}
+
 // A watertight mesh's orientation from its enclosed volume: "outward" or "inside out".
 const char* closed_orientation(const MeshTopology& t, double volume) {
   if (!t.edges.closed() || t.edges.inconsistent_edges > 0) return nullptr;
@@ -55,7 +76,8 @@ const char* closed_orientation(const MeshTopology& t, double volume) {
 
 // Distances to the exact surface of a built-in object, also relative to its diagonal.
 void evaluate_object(const std::string& path, const TriangleMesh& mesh,
-                     const synthetic::ClosedObject& object) {
+                     const synthetic::ClosedObject& object, float wall_radius) {
+  const DoubleWalls walls = double_walls(mesh, wall_radius);
   const TruthEvaluation e = evaluate_against_truth(
       mesh, [&object](const Eigen::Vector3f& p) { return object.distance(p); });
   const double diagonal = object.diagonal();
@@ -74,6 +96,7 @@ void evaluate_object(const std::string& path, const TriangleMesh& mesh,
                             {"vertices_p95", e.vertices.p95 / diagonal}}},
                           {"topology", topology_json(e.topology)}};
     doc["orientation"] = orientation != nullptr ? nlohmann::json(orientation) : nlohmann::json();
+    doc["double_walls"] = double_walls_json(walls);
     return print_json(doc);
   }
   report("mesh               %s: %zu vertices, %zu triangles\n", path.c_str(), mesh.vertices.size(),
@@ -87,10 +110,12 @@ void evaluate_object(const std::string& path, const TriangleMesh& mesh,
          e.vertices.p95 / diagonal);
   print_topology(e.topology);
   if (orientation != nullptr) report("orientation        %s (enclosed volume)\n", orientation);
+  print_double_walls(walls);
 }
 
 void evaluate_reference(const std::string& mesh_path, const TriangleMesh& mesh,
-                        const std::string& reference_path) {
+                        const std::string& reference_path, float wall_radius) {
+  const DoubleWalls walls = double_walls(mesh, wall_radius);
   const TriangleMesh reference = read_reference(reference_path);
   const SurfaceEvaluation e = evaluate_surface(mesh, reference);
   const char* orientation = closed_orientation(e.topology, signed_volume(mesh));
@@ -113,6 +138,7 @@ void evaluate_reference(const std::string& mesh_path, const TriangleMesh& mesh,
                                        ? nlohmann::json()
                                        : nlohmann::json(e.inside_out_area_share);
     doc["orientation"] = orientation != nullptr ? nlohmann::json(orientation) : nlohmann::json();
+    doc["double_walls"] = double_walls_json(walls);
     return print_json(doc);
   }
   report("mesh               %s: %zu vertices, %zu triangles\n", mesh_path.c_str(), e.vertices,
@@ -133,6 +159,7 @@ void evaluate_reference(const std::string& mesh_path, const TriangleMesh& mesh,
   }
   print_topology(e.topology);
   if (orientation != nullptr) report("orientation        %s (enclosed volume)\n", orientation);
+  print_double_walls(walls);
 }
 
 }  // namespace
@@ -152,15 +179,21 @@ void add_eval_command(CLI::App& app) {
                       "Or the exact surface of a built-in object (meshflow sample)")
           ->check(CLI::IsMember(closed_object_names()));
   reference_option->excludes(object_option);
+  auto wall_radius = std::make_shared<float>(0.0f);
+  cmd->add_option("--wall-radius", *wall_radius,
+                  "Double walls: parts of the mesh closer than this (metres) that are 3x as far "
+                  "apart along the mesh (0 = the median edge length)")
+      ->check(number_in(0, 1e6));
   add_console_flags(cmd, true);
-  cmd->callback([mesh_path, reference_path, object_name] {
+  cmd->callback([mesh_path, reference_path, object_name, wall_radius] {
     const TriangleMesh mesh = io::read_mesh(*mesh_path);
     if (mesh.triangles.empty()) throw Error(*mesh_path, "face", "the file has no triangles");
     if (!object_name->empty())
-      return evaluate_object(*mesh_path, mesh, *synthetic::closed_test_object(*object_name));
+      return evaluate_object(*mesh_path, mesh, *synthetic::closed_test_object(*object_name),
+                             *wall_radius);
     if (reference_path->empty())
       throw CLI::ValidationError("eval", "give --reference FILE or --object NAME");
-    evaluate_reference(*mesh_path, mesh, *reference_path);
+    evaluate_reference(*mesh_path, mesh, *reference_path, *wall_radius);
   });
 }
 

@@ -6,6 +6,7 @@
 #include <string>
 
 #include "graph/fusion_pipeline.h"
+#include "graph/merged_scans.h"
 #include "graph/sequence_runner.h"
 #include "nodes/fusion/tsdf_map_file.h"
 #include "nodes/io/atomic_file.h"
@@ -18,6 +19,7 @@
 #include "tools/json_report.h"
 #include "tools/pipeline_options.h"
 #include "tools/progress.h"
+#include "tools/report.h"
 
 namespace meshflow::cli {
 namespace {
@@ -71,7 +73,8 @@ struct RunOptions {
   TriangulationOptions triangulation;
   SequenceArgument sequence;
   std::string output_dir;
-  bool merged = false;
+  bool merged = false;       ///< one surface from all frames
+  bool concatenate = false;  ///< the per-frame meshes in one file
   bool strict = false;
   bool fuse = false;
   std::size_t mesh_every = 0;
@@ -161,8 +164,54 @@ void append_mesh(TriangleMesh& into, const TriangleMesh& mesh) {
     into.triangles.push_back({t[0] + offset, t[1] + offset, t[2] + offset});
 }
 
+// `meshflow run --merged`: every frame prepared (read, filter, normals towards its own sensor)
+// in a flow graph, the clouds joined in the world frame, one reconstruction of the whole.
+void run_merged(const RunOptions& o) {
+  ThreadLimit limit(o.pipeline.threads);
+  const auto sequence = open_output(o);
+  const ReconstructionConfig config = o.pipeline.config();
+  ScanPreparationPipeline preparation(config, o.sequence.in_flight);
+  FrameProgress progress(selected_frames(*sequence, o.sequence));
+  PointCloud joined;
+  std::size_t done = 0;
+  const SequenceRunOptions run_options{o.sequence.every, o.sequence.max_frames, o.strict};
+  const SequenceRunStats stats =
+      run_sequence(preparation, *sequence, run_options, [&](const Frame& f) {
+        progress.update(++done);
+        if (!f.ok()) return report_failure(f);
+        detail("frame %zu   %s: %zu points, normals %s\n", f.source_index, f.name.c_str(),
+               f.cloud.size(),
+               f.normals_from_image ? "from the image" : describe_normals(f.normals).c_str());
+        append_scan(joined, f.cloud);
+      });
+  finish_run(stats);
+  StepProgress steps;
+  auto frame = std::make_shared<Frame>();
+  frame->name = "merged";
+  frame->cloud = std::move(joined);
+  frame->on_stage = [&steps](const char* stage, const char* step) { steps.begin(stage, step); };
+  ReconstructionPipeline pipeline(merged_pass_config(config), 1);
+  const double t0 = monotonic_seconds();
+  bool given = false;
+  pipeline.run([&]() -> FramePtr { return given ? nullptr : (given = true, frame); },
+               [](const FramePtr&) {});
+  throw_if_failed(*frame);
+  const std::string output = (std::filesystem::path(o.output_dir) / "merged.ply").string();
+  io::write_ply(output, frame->mesh);
+  const double wall = monotonic_seconds() - t0;
+  print_run_summary(*sequence, stats, limit.threads(), o.sequence.in_flight,
+                    {{"merged", frame_json(*frame, wall, limit.threads())},
+                     {"files_written", 1},
+                     {"output", output}});
+  report("merged     %zu points of %zu frames -> %zu vertices, %zu triangles in %.1f ms\n",
+         frame->filter_counts.input, stats.frames_ok, frame->mesh.vertices.size(),
+         frame->mesh.triangles.size(), 1e3 * wall);
+  report("output     %s\n", output.c_str());
+}
+
 void run_run(const RunOptions& o) {
   if (o.fuse) return run_fusion(o);
+  if (o.merged) return run_merged(o);
   ThreadLimit limit(o.pipeline.threads);
   const auto sequence = open_output(o);
   ReconstructionPipeline pipeline(pipeline_config(o.pipeline, o.triangulation),
@@ -176,14 +225,14 @@ void run_run(const RunOptions& o) {
         progress.update(++done);
         if (!f.ok()) return report_failure(f);
         print_frame_line(f);
-        if (o.merged) return append_mesh(merged, f.mesh);
+        if (o.concatenate) return append_mesh(merged, f.mesh);
         char name[64];
         std::snprintf(name, sizeof name, "frame_%06zu.ply", f.source_index);
         io::write_ply((std::filesystem::path(o.output_dir) / name).string(), f.mesh);
         ++written;
       });
-  if (o.merged && !merged.empty()) {
-    io::write_ply((std::filesystem::path(o.output_dir) / "merged.ply").string(), merged);
+  if (o.concatenate && !merged.empty()) {
+    io::write_ply((std::filesystem::path(o.output_dir) / "concatenated.ply").string(), merged);
     written = 1;
   }
   print_run_summary(*sequence, stats, limit.threads(), o.sequence.in_flight,
@@ -242,14 +291,23 @@ void add_run_command(CLI::App& app) {
   add_sequence_options(cmd, o->sequence);
   cmd->add_option("-o,--output", o->output_dir, "Output directory")->required();
   auto* per_frame = cmd->add_flag("--per-frame", "One mesh per frame, frame_NNNNNN.ply (default)");
-  auto* merged = cmd->add_flag("--merged", o->merged, "One mesh of all frames, merged.ply")
+  auto* merged = cmd->add_flag("--merged", o->merged,
+                               "One surface of all frames (registered scans, posed depth frames): "
+                               "each frame's normals towards its own sensor, then one "
+                               "reconstruction in the world frame; merged.ply")
                      ->excludes(per_frame);
+  auto* concatenate =
+      cmd->add_flag("--concatenate", o->concatenate,
+                    "The per-frame meshes side by side in one file, concatenated.ply")
+          ->excludes(per_frame)
+          ->excludes(merged);
   cmd->add_flag("--strict", o->strict, "Stop at the first bad frame (exit code 1)");
   auto* fuse = cmd->add_flag("--fuse", o->fuse,
                              "Fuse depth frames (or organized Kinect-type clouds) into one TSDF "
                              "map (--voxel, default 0.01 m); writes fused.ply")
                    ->excludes(per_frame)
-                   ->excludes(merged);
+                   ->excludes(merged)
+                   ->excludes(concatenate);
   cmd->add_option("--mesh-every", o->mesh_every,
                   "With --fuse: also write the map's mesh after every N frames")
       ->check(number_in(0, 1e9))
@@ -263,6 +321,7 @@ void add_run_command(CLI::App& app) {
       ->needs(fuse);
   add_triangulation_options(cmd, o->triangulation);
   fuse->excludes("--triangulate");
+  merged->excludes("--triangulate");
   add_pipeline_options(cmd, o->pipeline);
   add_console_flags(cmd, true);
   cmd->callback([o] { run_run(*o); });

@@ -1,5 +1,6 @@
 #include "nodes/io/read_point_cloud.h"
 
+#include "nodes/io/las_reader.h"
 #include "nodes/io/parse_util.h"
 #include "nodes/io/pcd_reader.h"
 #include "nodes/io/ply_reader.h"
@@ -16,9 +17,14 @@ PointCloud read_point_cloud(const std::string& path) {
   if (ext == ".xyz" || ext == ".txt" || ext == ".pts" || ext == ".asc" || ext == ".csv")
     return read_xyz(path);
   if (ext == ".3d") return read_3dtk_scan(path);
+  if (ext == ".las") return read_las(path);
+  if (ext == ".laz")
+    throw Error(path, "",
+                "LAZ (compressed LAS) is not read; decompress it first (laszip -i " + path +
+                    " -o out.las, or pdal translate)");
   throw Error(path, "",
               "unknown point cloud format '" + ext +
-                  "' (expected .ply, .pcd, .xyz, .txt, .pts, .asc, .csv or .3d)");
+                  "' (expected .ply, .pcd, .xyz, .txt, .pts, .asc, .csv, .3d or .las)");
 }
 
 }  // namespace meshflow::io

@@ -7,8 +7,9 @@
 
 namespace meshflow::io {
 
-/// Reads PLY (.ply), PCD (.pcd), text (.xyz, .txt, .pts, .asc) or 3DTK (.3d, with its .pose)
-/// by extension. Throws meshflow::Error for unknown extensions and malformed files.
+/// Reads PLY (.ply), PCD (.pcd), text (.xyz, .txt, .pts, .asc, .csv), 3DTK (.3d, with its
+/// .pose) or LAS (.las) by extension. Throws meshflow::Error for unknown extensions (LAZ: a
+/// message saying to decompress it) and malformed files.
 PointCloud read_point_cloud(const std::string& path);
 
 }  // namespace meshflow::io

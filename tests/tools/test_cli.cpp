@@ -70,7 +70,7 @@ TEST(Cli, MissingFileAndUnknownFormat) {
   CliRun r = run_cli("reconstruct /nonexistent/cloud.ply -o " + out);
   EXPECT_EQ(r.exit_code, 1);
   EXPECT_NE(r.err.find("cannot open"), std::string::npos) << r.err;
-  r = run_cli("reconstruct cloud.las -o " + out);
+  r = run_cli("reconstruct cloud.e57 -o " + out);
   EXPECT_EQ(r.exit_code, 1);
   EXPECT_NE(r.err.find("unknown point cloud format"), std::string::npos) << r.err;
 }
@@ -236,8 +236,15 @@ TEST(Cli, RunMergedAndUsageErrors) {
   CliRun r = run_cli("run --synthetic --max-frames 2 --merged -o " + out + " --voxel 0.1");
   EXPECT_EQ(r.exit_code, 0) << r.err;
   EXPECT_TRUE(std::filesystem::exists(out + "/merged.ply"));
+  EXPECT_NE(r.out.find("merged     "), std::string::npos) << r.out;
+  r = run_cli("run --synthetic --max-frames 2 --concatenate -o " + out + " --voxel 0.1");
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_TRUE(std::filesystem::exists(out + "/concatenated.ply"));
   EXPECT_EQ(run_cli("run -o " + out).exit_code, 2) << "neither SEQUENCE nor --synthetic";
   EXPECT_EQ(run_cli("run --synthetic -o " + out + " --merged --per-frame").exit_code, 2);
+  EXPECT_EQ(run_cli("run --synthetic -o " + out + " --merged --concatenate").exit_code, 2);
+  EXPECT_EQ(run_cli("run --synthetic-depth -o " + out + " --merged --triangulate rqt").exit_code,
+            2);
 }
 
 TEST(Cli, RunTriangulatesDepthFramesPerFrame) {

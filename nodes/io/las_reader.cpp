@@ -1,0 +1,164 @@
+#include "nodes/io/las_reader.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <cstring>
+#include <vector>
+
+#include "nodes/io/parse_util.h"
+#include "runtime/error.h"
+
+namespace meshflow::io {
+namespace {
+
+template <typename T>
+T field(const unsigned char* at) {
+  T value;
+  std::memcpy(&value, at, sizeof(T));
+  return value;
+}
+
+struct LasHeader {
+  int version_minor = 0;
+  std::uint32_t point_offset = 0;
+  int format = 0;
+  std::uint16_t record_length = 0;
+  std::uint64_t points = 0;
+  double scale[3] = {1, 1, 1}, offset[3] = {0, 0, 0};
+};
+
+struct LasLayout {
+  std::uint16_t min_length;
+  int rgb_at;  // byte offset of R G B (uint16 each), -1: none
+};
+
+LasLayout layout_of(int format) {
+  switch (format) {
+    case 0:
+      return {20, -1};
+    case 1:
+      return {28, -1};
+    case 2:
+      return {26, 20};
+    case 3:
+      return {34, 28};
+    case 6:
+      return {30, -1};
+    case 7:
+      return {36, 30};
+    default:  // 8
+      return {38, 30};
+  }
+}
+
+LasHeader read_header(std::ifstream& in, const std::string& path, std::uint64_t size) {
+  unsigned char h[375] = {};
+  in.read(reinterpret_cast<char*>(h), 227);
+  if (in.gcount() != 227 || std::memcmp(h, "LASF", 4) != 0)
+    throw Error(path, "header", "not a LAS file (no 'LASF' signature in a 227-byte header)");
+  LasHeader header;
+  const int major = h[24];
+  header.version_minor = h[25];
+  if (major != 1 || header.version_minor > 4)
+    throw Error(path, "header",
+                "LAS version " + std::to_string(major) + "." +
+                    std::to_string(header.version_minor) + ": expected 1.0-1.4");
+  const auto header_size = field<std::uint16_t>(h + 94);
+  header.point_offset = field<std::uint32_t>(h + 96);
+  const int raw_format = h[104];
+  header.record_length = field<std::uint16_t>(h + 105);
+  if (raw_format & 0xC0)
+    throw Error(path, "point data format",
+                "LAZ (compressed LAS) is not read; decompress it first (e.g. laszip -i " + path +
+                    " -o out.las, or pdal translate)");
+  header.format = raw_format;
+  if (!(header.format <= 3 || (header.format >= 6 && header.format <= 8)))
+    throw Error(path, "point data format",
+                "format " + std::to_string(header.format) + ": expected 0-3 or 6-8");
+  header.points = field<std::uint32_t>(h + 107);
+  for (int k = 0; k < 3; ++k) {
+    header.scale[k] = field<double>(h + 131 + 8 * k);
+    header.offset[k] = field<double>(h + 155 + 8 * k);
+    if (!(std::isfinite(header.scale[k]) && header.scale[k] != 0.0 &&
+          std::isfinite(header.offset[k])))
+      throw Error(path, std::string("header ") + "xyz"[k] + " scale/offset",
+                  "expected a finite non-zero scale and a finite offset");
+  }
+  if (header.version_minor >= 4 && header_size >= 375) {
+    in.read(reinterpret_cast<char*>(h + 227), 375 - 227);
+    if (in.gcount() != 375 - 227) throw Error(path, "header", "the 1.4 header is truncated");
+    const auto points64 = field<std::uint64_t>(h + 247);
+    if (points64 > 0) header.points = points64;
+  }
+  const LasLayout layout = layout_of(header.format);
+  if (header.record_length < layout.min_length)
+    throw Error(path, "point data record length",
+                std::to_string(header.record_length) + " bytes is shorter than format " +
+                    std::to_string(header.format) + "'s " + std::to_string(layout.min_length));
+  if (header.point_offset < header_size || header.point_offset > size ||
+      header.points > (size - header.point_offset) / header.record_length)
+    throw Error(path, "header",
+                "the header claims " + std::to_string(header.points) + " points of " +
+                    std::to_string(header.record_length) + " bytes from byte " +
+                    std::to_string(header.point_offset) + ", more than the file's " +
+                    std::to_string(size) + " bytes hold");
+  return header;
+}
+
+}  // namespace
+
+PointCloud read_las(const std::string& path) {
+  std::ifstream in = open_input(path);
+  const std::uint64_t size = file_size(path);
+  const LasHeader header = read_header(in, path, size);
+  const LasLayout layout = layout_of(header.format);
+  PointCloud cloud;
+  cloud.positions.resize(header.points);
+  cloud.intensities.resize(header.points);
+  std::vector<std::uint16_t> rgb16(layout.rgb_at >= 0 ? 3 * header.points : 0);
+  in.seekg(header.point_offset);
+  constexpr std::uint64_t kChunk = 1 << 16;
+  std::vector<unsigned char> buffer(kChunk * header.record_length);
+  for (std::uint64_t first = 0; first < header.points; first += kChunk) {
+    const std::uint64_t count = std::min(kChunk, header.points - first);
+    in.read(reinterpret_cast<char*>(buffer.data()),
+            static_cast<std::streamsize>(count * header.record_length));
+    if (static_cast<std::uint64_t>(in.gcount()) != count * header.record_length)
+      throw Error(path, "point " + std::to_string(first), "the point data is truncated");
+    for (std::uint64_t i = 0; i < count; ++i) {
+      const unsigned char* record = buffer.data() + i * header.record_length;
+      Eigen::Vector3d p;
+      for (int k = 0; k < 3; ++k)
+        p[k] = field<std::int32_t>(record + 4 * k) * header.scale[k] + header.offset[k];
+      if ((p.array().abs() > kMaxAbsCoordinate).any()) {
+        char offsets[96];
+        std::snprintf(offsets, sizeof offsets, "%.3f %.3f %.3f", header.offset[0], header.offset[1],
+                      header.offset[2]);
+        throw Error(path, "point " + std::to_string(first + i),
+                    "coordinates beyond +-1e6 m, georeferenced data: meshflow meshes in a local "
+                    "frame; subtract an origin near the data first (the header's offset is " +
+                        std::string(offsets) + ")");
+      }
+      cloud.positions[first + i] = p.cast<float>();
+      cloud.intensities[first + i] = field<std::uint16_t>(record + 12);
+      if (layout.rgb_at >= 0)
+        for (int c = 0; c < 3; ++c)
+          rgb16[3 * (first + i) + c] = field<std::uint16_t>(record + layout.rgb_at + 2 * c);
+    }
+  }
+  if (!rgb16.empty()) {
+    const bool sixteen_bit =
+        std::any_of(rgb16.begin(), rgb16.end(), [](std::uint16_t v) { return v > 255; });
+    const int shift = sixteen_bit ? 8 : 0;
+    cloud.colors.resize(header.points);
+    for (std::uint64_t i = 0; i < header.points; ++i)
+      cloud.colors[i] = Rgb8{static_cast<std::uint8_t>(rgb16[3 * i] >> shift),
+                             static_cast<std::uint8_t>(rgb16[3 * i + 1] >> shift),
+                             static_cast<std::uint8_t>(rgb16[3 * i + 2] >> shift)};
+  }
+  return cloud;
+}
+
+}  // namespace meshflow::io

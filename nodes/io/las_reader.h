@@ -1,0 +1,23 @@
+#pragma once
+// LAS (ASPRS LiDAR exchange format) reader, versions 1.0-1.4, uncompressed point data formats
+// 0-3 and 6-8. No Debian library reads LAS; the format is small and documented (ASPRS LAS 1.4
+// R15, "Public Header Block" and "Point Data Records").
+
+#include <string>
+
+#include "runtime/point_cloud.h"
+
+namespace meshflow::io {
+
+/// Reads the points of a LAS file: x y z (the records' integers times the header's scale plus
+/// its offset, metres as stored), intensity, and RGB for formats 2, 3, 7 and 8 (16-bit
+/// channels; scaled to 8 bits unless every value is already below 256). The point count is the
+/// 64-bit one of LAS 1.4 headers, else the legacy 32-bit one; records may be longer than their
+/// format's minimum (extra bytes are skipped). Throws meshflow::Error naming the file and
+/// field for: a missing "LASF" signature, LAZ (compressed) point data ("decompress it first"),
+/// another point format, a record length below the format's, a header or point count the file
+/// cannot hold (checked before any allocation), and coordinates beyond +-1e6 m (georeferenced
+/// data: the message gives the header's offset to subtract). O(file size), streamed in chunks.
+PointCloud read_las(const std::string& path);
+
+}  // namespace meshflow::io

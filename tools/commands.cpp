@@ -26,6 +26,7 @@ namespace {
 
 struct ReconstructOptions {
   std::string input;
+  std::string columns;
   std::string output;
   PipelineOptions pipeline;
   bool texture = false;
@@ -86,8 +87,8 @@ void run_reconstruct(const ReconstructOptions& o) {
   ReconstructionPipeline pipeline(config, 1);
   auto frame = std::make_shared<Frame>();
   frame->name = o.input;
-  const std::string path = o.input;
-  frame->load = [path] { return io::read_point_cloud(path); };
+  const std::string path = o.input, columns = o.columns;
+  frame->load = [path, columns] { return io::read_point_cloud(path, columns); };
   auto progress = std::make_unique<StepProgress>();
   frame->on_stage = [&progress](const char* stage, const char* step) {
     progress->begin(stage, step);
@@ -191,10 +192,16 @@ nlohmann::json info_json(const std::string& path, const PointCloud& cloud) {
   return doc;
 }
 
-void run_info(const std::string& path) {
-  const PointCloud cloud = io::read_point_cloud(path);
+void run_info(const std::string& path, const std::string& columns) {
+  const PointCloud cloud = io::read_point_cloud(path, columns);
   if (console().json) return print_json(info_json(path, cloud));
   print_info(path, cloud);
+}
+
+void add_columns_option(CLI::App* cmd, std::string& columns) {
+  cmd->add_option("--columns", columns,
+                  "Text clouds: the columns' meaning, e.g. x,y,z,nx,ny,nz,r,g,b or x,y,z,skip,"
+                  "intensity (default: from a header line, else detected)");
 }
 
 }  // namespace
@@ -205,6 +212,7 @@ void add_reconstruct_command(CLI::App& app) {
   cmd->add_option("input", opts->input, "Point cloud: .ply .pcd .las .xyz .txt .pts .asc .csv .3d")
       ->required();
   cmd->add_option("-o,--output", opts->output, "Output mesh: .ply .obj .stl .off .glb")->required();
+  add_columns_option(cmd, opts->columns);
   add_pipeline_options(cmd, opts->pipeline);
   add_console_flags(cmd, true);
   cmd->add_flag("--texture", opts->texture,
@@ -216,8 +224,10 @@ void add_info_command(CLI::App& app) {
   auto path = std::make_shared<std::string>();
   CLI::App* cmd = app.add_subcommand("info", "Print counts, bounds and fields of a point cloud");
   cmd->add_option("file", *path, "Point cloud file")->required();
+  auto columns = std::make_shared<std::string>();
+  add_columns_option(cmd, *columns);
   add_console_flags(cmd, true);
-  cmd->callback([path] { run_info(*path); });
+  cmd->callback([path, columns] { run_info(*path, *columns); });
 }
 
 }  // namespace meshflow::cli

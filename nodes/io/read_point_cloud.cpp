@@ -10,12 +10,24 @@
 
 namespace meshflow::io {
 
+namespace {
+bool is_text_cloud(const std::string& ext) {
+  return ext == ".xyz" || ext == ".txt" || ext == ".pts" || ext == ".asc" || ext == ".csv";
+}
+}  // namespace
+
+PointCloud read_point_cloud(const std::string& path, const std::string& columns) {
+  if (columns.empty()) return read_point_cloud(path);
+  if (!is_text_cloud(lower_extension(path)))
+    throw Error("--columns", path, "only text clouds (.xyz .txt .pts .asc .csv) have columns");
+  return read_xyz(path, columns);
+}
+
 PointCloud read_point_cloud(const std::string& path) {
   const std::string ext = lower_extension(path);
   if (ext == ".ply") return read_ply(path);
   if (ext == ".pcd") return read_pcd(path);
-  if (ext == ".xyz" || ext == ".txt" || ext == ".pts" || ext == ".asc" || ext == ".csv")
-    return read_xyz(path);
+  if (is_text_cloud(ext)) return read_xyz(path);
   if (ext == ".3d") return read_3dtk_scan(path);
   if (ext == ".las") return read_las(path);
   if (ext == ".laz")

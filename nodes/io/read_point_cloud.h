@@ -12,4 +12,8 @@ namespace meshflow::io {
 /// message saying to decompress it) and malformed files.
 PointCloud read_point_cloud(const std::string& path);
 
+/// The same with the columns of a text cloud given (see read_xyz); `columns` must be empty
+/// for the other formats (a meshflow::Error naming --columns otherwise).
+PointCloud read_point_cloud(const std::string& path, const std::string& columns);
+
 }  // namespace meshflow::io

@@ -177,14 +177,33 @@ void check_roles(const std::vector<Role>& roles, const std::string& path, const 
   }
 }
 
+// The roles of --columns.
+std::vector<Role> parse_column_spec(const std::string& columns) {
+  std::vector<std::string_view> names;
+  split_fields(columns, names);
+  std::vector<Role> roles;
+  for (std::string_view name : names) {
+    const Role role = role_of_name(name);
+    if (role == Role::kSkip && name != "skip" && name != "_")
+      throw Error("--columns", "'" + std::string(name) + "'",
+                  "unknown column: expected x y z nx ny nz r g b intensity (or the names "
+                  "normal_x.., red green blue) or skip");
+    roles.push_back(role);
+  }
+  check_roles(roles, "--columns", columns);
+  return roles;
+}
+
 }  // namespace
 
-PointCloud read_xyz(const std::string& path) {
+PointCloud read_xyz(const std::string& path, const std::string& columns) {
   std::ifstream in = open_input(path);
   PointCloud cloud;
   std::string line;
   std::vector<std::string_view> tok;
-  std::vector<Role> roles;  // empty until the layout is known
+  // Empty until the layout is known (a header line, the first data line), unless given.
+  std::vector<Role> roles = columns.empty() ? std::vector<Role>{} : parse_column_spec(columns);
+  const bool given = !roles.empty();
   std::optional<std::uint64_t> declared;
   for (int line_no = 1; read_line(in, line); ++line_no) {
     std::string_view text(line);
@@ -193,6 +212,7 @@ PointCloud read_xyz(const std::string& path) {
     split_fields(text, tok);
     if (tok.empty() || tok[0].front() == '#') continue;
     const std::string loc = "line " + std::to_string(line_no);
+    if (given && cloud.empty() && !is_number(tok[0])) continue;  // a header --columns replaces
     if (roles.empty() && cloud.empty() && !is_number(tok[0])) {  // a header line of names
       roles.resize(tok.size());
       std::transform(tok.begin(), tok.end(), roles.begin(), role_of_name);
@@ -200,15 +220,16 @@ PointCloud read_xyz(const std::string& path) {
       continue;
     }
     if (slashes) continue;  // a comment
-    if (roles.empty() && cloud.empty() && !declared && tok.size() == 1) {
+    if (cloud.empty() && !declared && tok.size() == 1 && (roles.empty() || roles.size() > 1)) {
       declared = parse_count(tok[0], path, loc, "point count");
       continue;
     }
     if (roles.empty()) roles = roles_by_count(tok, path, loc);
     if (tok.size() != roles.size()) {
       throw Error(path, loc,
-                  "expected " + std::to_string(roles.size()) +
-                      " columns like the first line, found " + std::to_string(tok.size()));
+                  "expected " + std::to_string(roles.size()) + " columns like " +
+                      (given ? "--columns" : "the first line") + ", found " +
+                      std::to_string(tok.size()));
     }
     append_point(tok, roles, path, loc, cloud);
   }

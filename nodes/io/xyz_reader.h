@@ -17,8 +17,11 @@ namespace meshflow::io {
 /// order (the unit vector decides); 10 or more = x y z intensity r g b nx ny nz. Colours are
 /// 0..255. Lines starting with '#' or '//' (other than a header) and empty lines are skipped;
 /// a first line holding a single integer (the .pts point count) is checked against the number
-/// of points read. Throws meshflow::Error naming the file, line and column on malformed input.
+/// of points read. `columns` (e.g. "x,y,z,nx,ny,nz,r,g,b" or "x y z skip intensity"; the
+/// header names above, and "skip" or "_" for a column to ignore) replaces the header and the
+/// detection; a header line is then skipped. Throws meshflow::Error naming the file, line and
+/// column on malformed input, or naming --columns for an unknown name or an incomplete triple.
 /// O(file size).
-PointCloud read_xyz(const std::string& path);
+PointCloud read_xyz(const std::string& path, const std::string& columns = "");
 
 }  // namespace meshflow::io

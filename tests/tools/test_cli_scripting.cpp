@@ -131,6 +131,17 @@ TEST(CliScripting, OptimizeAMeshFromAnotherTool) {
       << "only the optimize settings are options here";
 }
 
+TEST(CliScripting, ColumnsOfATextCloud) {
+  const std::string path = test::temp_dir() + "/n.txt";
+  test::write_file(path, "1 2 3 0 0 1\n4 5 6 0 1 0\n7 8 9 1 0 0\n");
+  nlohmann::json doc = parse_json(run_cli("info --json " + path));
+  EXPECT_TRUE(doc["fields"]["colors"].get<bool>()) << "integers: detected as colours";
+  doc = parse_json(run_cli("info --json --columns x,y,z,nx,ny,nz " + path));
+  EXPECT_TRUE(doc["fields"]["normals"].get<bool>());
+  EXPECT_FALSE(doc["fields"]["colors"].get<bool>());
+  EXPECT_EQ(run_cli("info --columns x,y,q " + path).exit_code, 1);
+}
+
 TEST(CliScripting, ErrorsSayWhy) {
   const CliRun r = run_cli("reconstruct /nonexistent/cloud.ply -o x.ply");
   EXPECT_EQ(r.exit_code, 1);

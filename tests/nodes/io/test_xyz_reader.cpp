@@ -62,6 +62,30 @@ TEST(XyzReader, NormalsHeadersAndSeparators) {
   EXPECT_THROW(read_xyz(dir + "/half.csv"), Error);
 }
 
+TEST(XyzReader, ExplicitColumnsReplaceHeaderAndDetection) {
+  const std::string dir = test::temp_dir();
+  // Six columns that detection would take for colours (integers), and a header it would read.
+  test::write_file(dir + "/n.txt", "a b c d e f g\n1 2 3 0 0 1 7\n4 5 6 0 1 0 8\n");
+  const PointCloud c = read_xyz(dir + "/n.txt", "x,y,z,nx,ny,nz,intensity");
+  ASSERT_EQ(c.size(), 2u);
+  EXPECT_EQ(c.normals[1], Eigen::Vector3f(0, 1, 0));
+  EXPECT_EQ(c.intensities[0], 7.0f);
+  EXPECT_FALSE(c.has_colors());
+  const PointCloud skipped = read_xyz(dir + "/n.txt", "x y z skip _ skip intensity");
+  EXPECT_FALSE(skipped.has_normals());
+  EXPECT_EQ(read_xyz(dir + "/n.txt", "skip,skip,skip,x,y,z,skip").positions[1],
+            Eigen::Vector3f(0, 1, 0));
+  EXPECT_THROW(read_xyz(dir + "/n.txt", "x,y,z"), Error) << "3 columns given, 7 in the file";
+  for (const char* bad : {"x,y,z,colour", "x,y,nx", "x,y,z,nx,ny", "x y z skip _ skip r"}) {
+    try {
+      read_xyz(dir + "/n.txt", bad);
+      ADD_FAILURE() << bad;
+    } catch (const Error& e) {
+      EXPECT_NE(std::string(e.what()).find("--columns"), std::string::npos) << e.what();
+    }
+  }
+}
+
 TEST(XyzReader, ErrorsNameFileAndLine) {
   const std::string dir = test::temp_dir();
   test::write_file(dir + "/count.pts", "5\n1 2 3\n");

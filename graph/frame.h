@@ -50,6 +50,9 @@ struct ReconstructionConfig {
   /// (PlanarRegionConfig::max_deviation, set per frame from its voxel size unless given).
   /// 0 = no check.
   float plane_tolerance_voxels = 0.25f;
+  /// Clouds: border triangles farther than this many voxels from the nearest point are peeled
+  /// off after extraction (trim_rim), so an open scan's rim stays within it of the data. 0 = off.
+  float max_rim_voxels = 1.0f;
   /// The retriangulate step's Douglas-Peucker tolerance in voxels (0.4: 2 cm at 5 cm voxels);
   /// 0 = use optimize.retriangulation.contour_tolerance (metres) as it is.
   float contour_tolerance_voxels = 0.4f;
@@ -83,6 +86,7 @@ struct Frame {
   SparseGrid grid;
   DistanceField distance;
   ExtractMethod extract_method = ExtractMethod::kAuto;  ///< the method "extract" used
+  std::size_t rim_trimmed = 0;  ///< triangles "extract" peeled off the rim (max_rim_voxels)
   TriangleMesh mesh;  ///< after extract: raw; after optimize: optimised (fusion: the map so far)
   OptimizeReport optimize;       ///< what each optimisation step did
   IntegrationStats integration;  ///< fusion: what integrating this frame did

@@ -6,6 +6,7 @@
 #include <string>
 
 #include "nodes/extract/extract_surface.h"
+#include "nodes/extract/rim_trim.h"
 #include "nodes/extract/vertex_colors.h"
 #include "nodes/filter/organized_depth.h"
 #include "nodes/filter/spatial_order.h"
@@ -153,6 +154,9 @@ std::uint64_t extract(Frame& f, const ReconstructionConfig& c) {
         f.normals.sharp ? ExtractMethod::kExtendedMarchingCubes : ExtractMethod::kMarchingCubes;
   f.extract_method = config.method;
   f.mesh = extract_surface(f.grid, f.distance, f.cloud, f.index.get(), config);
+  if (f.index && c.max_rim_voxels > 0.0f)
+    f.mesh = trim_rim(f.mesh, f.cloud.positions, *f.index, c.max_rim_voxels * f.voxel_size,
+                      &f.rim_trimmed);
   if (f.depth) {  // a depth frame with a colour image gives a coloured mesh
     f.mesh.colors = vertex_colors_from_image(f.mesh.vertices, *f.depth);
     f.depth.reset();

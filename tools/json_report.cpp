@@ -90,6 +90,7 @@ nlohmann::json frame_json(const Frame& f, double wall_s, int threads) {
            {{"vertices", f.mesh.vertices.size()},
             {"triangles", f.mesh.triangles.size()},
             {"extract", extract_method_name(f.extract_method)},
+            {"rim_trimmed", f.rim_trimmed},
             {"colors", !f.mesh.colors.empty()}}},
           {"optimize", optimize},
           {"time_ms", 1e3 * wall_s},

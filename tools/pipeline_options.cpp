@@ -34,6 +34,7 @@ ReconstructionConfig PipelineOptions::config() const {
   }
   c.optimize.planes.max_projection = max_projection;
   c.plane_tolerance_voxels = plane_tolerance;
+  c.max_rim_voxels = max_rim;
   c.optimize.remesh.tolerance = remesh_tolerance;
   c.organized_as_depth = organized_as_depth;
   c.normals.source = normals == "input"      ? NormalSource::kInput
@@ -96,6 +97,10 @@ void add_pipeline_options(CLI::App* cmd, PipelineOptions& o) {
   cmd->add_option("--max-extrapolation", o.max_extrapolation,
                   "Distance samples whose foot lies this many voxels beyond their nearest "
                   "points' extent are invalid (surface past a scan's border; 0 = off)")
+      ->check(number_in(0, 1000));
+  cmd->add_option("--max-rim", o.max_rim,
+                  "Border triangles farther than this many voxels from the data are peeled off "
+                  "(an open scan's rim; 0 = off)")
       ->check(number_in(0, 1000));
   cmd->add_option("--min-component", o.min_component, "Remove mesh components with fewer triangles")
       ->check(number_in(0, 1e9));

@@ -31,6 +31,7 @@ struct PipelineOptions {
   float contour_tolerance = -1.0f;  ///< metres; negative: 0.4 voxel
   float max_projection = 0.0f;
   float plane_tolerance = ReconstructionConfig{}.plane_tolerance_voxels;
+  float max_rim = ReconstructionConfig{}.max_rim_voxels;
   float remesh_tolerance = 0.0f;
   bool organized_as_depth = false;
   std::string normals = "auto";  ///< auto | input | estimate
@@ -41,7 +42,7 @@ struct PipelineOptions {
 };
 
 /// Registers --voxel --kn --ki --kd --threads --adaptive-k --max-distance --max-disagreement
-/// --max-extrapolation --min-component
+/// --max-extrapolation --max-rim --min-component
 /// --filter-voxel --outlier-k --min-range --max-range --extract --optimize --max-hole
 /// --contour-tolerance --max-projection --plane-tolerance --remesh-tolerance --decimate-to
 /// --organized-as-depth

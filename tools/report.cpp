@@ -67,6 +67,9 @@ void print_frame_report(const Frame& f, double wall_s, int threads) {
     report("; invalid: %zu where tangent planes disagree, %zu past the data's border",
            f.distance.disagreeing, f.distance.extrapolated);
   report(")\n");
+  if (f.rim_trimmed > 0)
+    report("rim        %zu border triangles more than --max-rim voxels from the data peeled off\n",
+           f.rim_trimmed);
   report("mesh       %zu vertices, %zu triangles (%s)\n", f.mesh.vertices.size(),
          f.mesh.triangles.size(), extraction_name(f.extract_method, f.normals.sharp));
   if (!f.optimize.steps.empty()) report("optimize\n%s", format_optimize_report(f.optimize).c_str());

@@ -325,6 +325,18 @@ RegionTriangulation triangulate_region(const std::vector<Loop>& loops,
       if (face->info() % 2 != 0) continue;
       for (const Cdt::Vertex_handle& v : handles) out.faulty.push_back(v->info().index);
     }
+    // A loop that turns back on itself (a hairpin: the edges before and after a vertex
+    // overlap) bounds no area there but adds triangles: its vertex is the fault.
+    for (const std::vector<Cdt::Vertex_handle>& handles : loop_handles) {
+      const std::size_t n = handles.size();
+      for (std::size_t i = 0; i < n; ++i) {
+        const Kernel::Point_2& a = handles[(i + n - 1) % n]->point();
+        const Kernel::Point_2& b = handles[i]->point();
+        const Kernel::Point_2& c = handles[(i + 1) % n]->point();
+        if (CGAL::orientation(a, b, c) == CGAL::COLLINEAR && CGAL::angle(a, b, c) == CGAL::ACUTE)
+          out.faulty.push_back(handles[i]->info().index);
+      }
+    }
   }
   return out;
 }

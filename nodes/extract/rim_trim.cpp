@@ -1,0 +1,109 @@
+#include "nodes/extract/rim_trim.h"
+
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <vector>
+
+#include "runtime/vertex_triangles.h"
+
+namespace meshflow {
+
+namespace {
+
+// Whether vertex v lies farther from the data than allowed: `limit` metres, or twice the
+// spacing of the nearest point where the data are sparser than that (far parts of a scan).
+bool beyond_data(const Eigen::Vector3f& v, const std::vector<Eigen::Vector3f>& positions,
+                 const SpatialIndex& points, float limit) {
+  std::uint32_t nearest = 0;
+  float d2 = 0.0f;
+  if (points.knn(v, 1, &nearest, &d2) != 1) return false;
+  if (d2 <= limit * limit) return false;
+  std::uint32_t pair[2];
+  float pair_d2[2];
+  if (points.knn(positions[nearest], 2, pair, pair_d2) < 2) return true;
+  return d2 > 4.0f * pair_d2[1];
+}
+
+}  // namespace
+
+TriangleMesh trim_rim(const TriangleMesh& mesh, const std::vector<Eigen::Vector3f>& positions,
+                      const SpatialIndex& points, float max_distance, std::size_t* removed) {
+  constexpr int kMaxRounds = 16;
+  const VertexTriangles around = vertex_triangles(mesh);
+  std::vector<std::uint8_t> alive(mesh.triangles.size(), 1);
+  // Whether {a, b} is an edge of exactly one live triangle.
+  const auto border_edge = [&](std::uint32_t a, std::uint32_t b) {
+    int faces = 0;
+    for (const std::uint32_t* t = around.begin(a); t != around.end(a); ++t) {
+      const Triangle& tri = mesh.triangles[*t];
+      if (alive[*t] && (tri[0] == b || tri[1] == b || tri[2] == b)) ++faces;
+    }
+    return faces == 1;
+  };
+  std::vector<std::int8_t> far(mesh.vertices.size(), -1);  // -1: not yet measured
+  // The border triangles: a scan of each triangle's edges over the incidence (no per-thread
+  // vertex arrays, which cost more in page faults than the scan itself).
+  std::vector<std::uint8_t> on_border(mesh.triangles.size(), 0);
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, mesh.triangles.size(), 4096),
+                    [&](const tbb::blocked_range<std::size_t>& r) {
+                      for (std::size_t t = r.begin(); t != r.end(); ++t) {
+                        const Triangle& tri = mesh.triangles[t];
+                        for (int k = 0; k < 3 && !on_border[t]; ++k)
+                          on_border[t] = border_edge(tri[k], tri[(k + 1) % 3]) ? 1 : 0;
+                      }
+                    });
+  std::vector<std::uint32_t> candidates;
+  for (std::size_t t = 0; t < on_border.size(); ++t)
+    if (on_border[t]) candidates.push_back(static_cast<std::uint32_t>(t));
+  std::size_t total = 0;
+  for (int round = 0; round < kMaxRounds && !candidates.empty(); ++round) {
+    // Each candidate's corners on its border edges (bit k: corner k), then their distances.
+    std::vector<std::uint8_t> rim_corners(candidates.size(), 0);
+    tbb::parallel_for(std::size_t{0}, candidates.size(), [&](std::size_t i) {
+      const Triangle& t = mesh.triangles[candidates[i]];
+      for (int k = 0; k < 3; ++k)
+        if (border_edge(t[k], t[(k + 1) % 3])) rim_corners[i] |= (1 << k) | (1 << (k + 1) % 3);
+    });
+    std::vector<std::uint32_t> unmeasured;
+    for (std::size_t i = 0; i < candidates.size(); ++i)
+      for (int k = 0; k < 3; ++k)
+        if ((rim_corners[i] >> k & 1) && far[mesh.triangles[candidates[i]][k]] < 0)
+          unmeasured.push_back(mesh.triangles[candidates[i]][k]);
+    std::sort(unmeasured.begin(), unmeasured.end());
+    unmeasured.erase(std::unique(unmeasured.begin(), unmeasured.end()), unmeasured.end());
+    tbb::parallel_for(std::size_t{0}, unmeasured.size(), [&](std::size_t i) {
+      far[unmeasured[i]] =
+          beyond_data(mesh.vertices[unmeasured[i]], positions, points, max_distance) ? 1 : 0;
+    });
+    std::vector<std::uint32_t> dropped;
+    for (std::size_t i = 0; i < candidates.size(); ++i) {
+      const Triangle& t = mesh.triangles[candidates[i]];
+      for (int k = 0; k < 3; ++k) {
+        if ((rim_corners[i] >> k & 1) && far[t[k]] == 1) {
+          dropped.push_back(candidates[i]);
+          break;
+        }
+      }
+    }
+    for (std::uint32_t t : dropped) alive[t] = 0;
+    total += dropped.size();
+    // Next round: the live triangles next to the ones just removed.
+    candidates.clear();
+    for (std::uint32_t t : dropped)
+      for (std::uint32_t v : mesh.triangles[t])
+        for (const std::uint32_t* n = around.begin(v); n != around.end(v); ++n)
+          if (alive[*n]) candidates.push_back(*n);
+    std::sort(candidates.begin(), candidates.end());
+    candidates.erase(std::unique(candidates.begin(), candidates.end()), candidates.end());
+  }
+  if (removed != nullptr) *removed = total;
+  if (total == 0) return mesh;
+  std::vector<Triangle> kept;
+  kept.reserve(mesh.triangles.size() - total);
+  for (std::size_t t = 0; t < mesh.triangles.size(); ++t)
+    if (alive[t]) kept.push_back(mesh.triangles[t]);
+  return compact_vertices(mesh, kept);
+}
+
+}  // namespace meshflow

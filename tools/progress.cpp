@@ -5,7 +5,7 @@
 #include <chrono>
 #include <cstdio>
 
-#include "runtime/threads.h"
+#include "runtime/tracing.h"
 #include "tools/console.h"
 
 namespace meshflow::cli {

@@ -109,4 +109,21 @@ class FrameGraphEnds {
   InOrderNode<tbb::flow::continue_msg> deliver_;
 };
 
+/// The stateless frame pipeline: source -> limiter(K) -> `stage_list` -> sequencer -> sink,
+/// frames delivered in input order. Blocks until every frame is delivered (FramePipeline::run).
+inline void run_stage_chain(std::size_t max_in_flight,
+                            const std::vector<stages::NamedStage>& stage_list,
+                            const ReconstructionConfig& config,
+                            const std::function<FramePtr()>& next,
+                            const std::function<void(const FramePtr&)>& sink) {
+  tbb::flow::graph g;
+  FrameGraphEnds ends(g, max_in_flight, next, sink);
+  StageChain chain(g, stage_list, config);
+  tbb::flow::sequencer_node<FramePtr> in_order(g, [](const FramePtr& f) { return f->seq; });
+  tbb::flow::make_edge(ends.entry(), chain.front());
+  tbb::flow::make_edge(chain.back(), in_order);
+  tbb::flow::make_edge(in_order, ends.exit());
+  ends.run(g);
+}
+
 }  // namespace meshflow::detail

@@ -1,15 +1,11 @@
 #include "graph/merged_scans.h"
 
-#include <oneapi/tbb/flow_graph.h>
-
 #include <algorithm>
 #include <vector>
 
 #include "graph/frame_graph.h"
 
 namespace meshflow {
-
-namespace flow = tbb::flow;
 
 ScanPreparationPipeline::ScanPreparationPipeline(ReconstructionConfig config,
                                                  std::size_t max_in_flight)
@@ -19,14 +15,7 @@ void ScanPreparationPipeline::run(const std::function<FramePtr()>& next,
                                   const std::function<void(const FramePtr&)>& sink) {
   const std::vector<stages::NamedStage> preparation(std::begin(stages::kPointCloudStages),
                                                     std::begin(stages::kPointCloudStages) + 4);
-  flow::graph g;
-  detail::FrameGraphEnds ends(g, max_in_flight_, next, sink);
-  detail::StageChain chain(g, preparation, config_);
-  flow::sequencer_node<FramePtr> in_order(g, [](const FramePtr& f) { return f->seq; });
-  flow::make_edge(ends.entry(), chain.front());
-  flow::make_edge(chain.back(), in_order);
-  flow::make_edge(in_order, ends.exit());
-  ends.run(g);
+  detail::run_stage_chain(max_in_flight_, preparation, config_, next, sink);
 }
 
 void append_scan(PointCloud& into, const PointCloud& scan) {

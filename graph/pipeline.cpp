@@ -1,14 +1,10 @@
 #include "graph/pipeline.h"
 
-#include <oneapi/tbb/flow_graph.h>
-
 #include <algorithm>
 
 #include "graph/frame_graph.h"
 
 namespace meshflow {
-namespace flow = tbb::flow;
-
 ReconstructionPipeline::ReconstructionPipeline(ReconstructionConfig config,
                                                std::size_t max_in_flight,
                                                bool triangulate_depth_maps)
@@ -18,31 +14,22 @@ ReconstructionPipeline::ReconstructionPipeline(ReconstructionConfig config,
 
 void ReconstructionPipeline::run(const std::function<FramePtr()>& next,
                                  const std::function<void(const FramePtr&)>& sink) {
-  flow::graph g;
-  detail::FrameGraphEnds ends(g, max_in_flight_, next, sink);
-  detail::StageChain chain(g, triangulate_depth_maps_, config_);
-  flow::sequencer_node<FramePtr> in_order(g, [](const FramePtr& f) { return f->seq; });
+  detail::run_stage_chain(max_in_flight_, stages::frame_stages(triangulate_depth_maps_), config_,
+                          next, sink);
+}
 
-  flow::make_edge(ends.entry(), chain.front());
-  flow::make_edge(chain.back(), in_order);
-  flow::make_edge(in_order, ends.exit());
-  ends.run(g);
+FramePtr ReconstructionPipeline::run_frame(FramePtr frame) {
+  bool given = false;
+  run([&]() -> FramePtr { return given ? nullptr : (given = true, frame); },
+      [](const FramePtr&) {});
+  return frame;
 }
 
 FramePtr ReconstructionPipeline::reconstruct(PointCloud cloud, std::string name) {
   auto frame = std::make_shared<Frame>();
   frame->name = std::move(name);
   frame->cloud = std::move(cloud);
-  bool given = false;
-  FramePtr result;
-  run(
-      [&]() -> FramePtr {
-        if (given) return nullptr;
-        given = true;
-        return frame;
-      },
-      [&](const FramePtr& f) { result = f; });
-  return result;
+  return run_frame(std::move(frame));
 }
 
 }  // namespace meshflow

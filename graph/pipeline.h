@@ -37,6 +37,10 @@ class ReconstructionPipeline : public FramePipeline {
   void run(const std::function<FramePtr()>& next,
            const std::function<void(const FramePtr&)>& sink) override;
 
+  /// Runs one frame (its `load` or `cloud` set, `on_stage` optional) through run() and returns
+  /// it, failed or not.
+  FramePtr run_frame(FramePtr frame);
+
   /// Reconstructs one in-memory cloud (convenience over run()).
   FramePtr reconstruct(PointCloud cloud, std::string name = "cloud");
 

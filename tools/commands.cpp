@@ -94,9 +94,7 @@ void run_reconstruct(const ReconstructOptions& o) {
     progress->begin(stage, step);
   };
   const double t0 = monotonic_seconds();
-  bool given = false;
-  pipeline.run([&]() -> FramePtr { return given ? nullptr : (given = true, frame); },
-               [](const FramePtr&) {});
+  pipeline.run_frame(frame);
   throw_if_failed(*frame);
   if (frame->mesh.empty()) {
     throw Error(o.input, "",

@@ -59,17 +59,21 @@ nlohmann::json normals_json(const Frame& f) {
 
 }  // namespace
 
+nlohmann::json optimize_json(const OptimizeReport& report) {
+  nlohmann::json steps = nlohmann::json::array();
+  for (const OptimizeStepReport& s : report.steps) {
+    steps.push_back({{"step", optimize_step_name(s.step)},
+                     {"triangles_in", s.triangles_in},
+                     {"triangles_out", s.triangles_out},
+                     {"ms", 1e3 * s.seconds},
+                     {"skipped", s.skipped},
+                     {"detail", s.detail}});
+  }
+  return steps;
+}
+
 nlohmann::json frame_json(const Frame& f, double wall_s, int threads) {
   const FilterCounts& c = f.filter_counts;
-  nlohmann::json optimize = nlohmann::json::array();
-  for (const OptimizeStepReport& s : f.optimize.steps) {
-    optimize.push_back({{"step", optimize_step_name(s.step)},
-                        {"triangles_in", s.triangles_in},
-                        {"triangles_out", s.triangles_out},
-                        {"ms", 1e3 * s.seconds},
-                        {"skipped", s.skipped},
-                        {"detail", s.detail}});
-  }
   return {{"input", f.name},
           {"points", c.input},
           {"filter",
@@ -92,7 +96,7 @@ nlohmann::json frame_json(const Frame& f, double wall_s, int threads) {
             {"extract", extract_method_name(f.extract_method)},
             {"rim_trimmed", f.rim_trimmed},
             {"colors", !f.mesh.colors.empty()}}},
-          {"optimize", optimize},
+          {"optimize", optimize_json(f.optimize)},
           {"time_ms", 1e3 * wall_s},
           {"threads", threads},
           {"stages", stages_json(summarize_stages(f.timings))}};

@@ -26,6 +26,10 @@ nlohmann::json topology_json(const MeshTopology& t);
 /// "max_ms", "items"}.
 nlohmann::json stages_json(const std::vector<StageSummary>& summaries);
 
+/// One object per optimize step: {"step", "triangles_in", "triangles_out", "ms", "skipped",
+/// "detail"}.
+nlohmann::json optimize_json(const OptimizeReport& report);
+
 /// What the pipeline did to one frame: "input", "points", "filter", "normals", "voxel",
 /// "grid", "mesh" {"vertices", "triangles", "extract"}, "optimize" (steps), "time_ms",
 /// "threads", "stages".

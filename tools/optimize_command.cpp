@@ -42,21 +42,13 @@ void run_optimize(const OptimizeOptions& o) {
   io::write_mesh(o.output, out);
   const double wall = monotonic_seconds() - t0;
   if (console().json) {
-    nlohmann::json list = nlohmann::json::array();
-    for (const OptimizeStepReport& s : steps.steps)
-      list.push_back({{"step", optimize_step_name(s.step)},
-                      {"triangles_in", s.triangles_in},
-                      {"triangles_out", s.triangles_out},
-                      {"ms", 1e3 * s.seconds},
-                      {"skipped", s.skipped},
-                      {"detail", s.detail}});
     return print_json({{"input", o.input},
                        {"output", o.output},
                        {"scale", scale},
                        {"triangles_in", mesh.triangles.size()},
                        {"vertices", out.vertices.size()},
                        {"triangles", out.triangles.size()},
-                       {"optimize", list},
+                       {"optimize", optimize_json(steps)},
                        {"time_ms", 1e3 * wall}});
   }
   report("input      %s: %zu vertices, %zu triangles\n", o.input.c_str(), mesh.vertices.size(),

@@ -192,9 +192,7 @@ void run_merged(const RunOptions& o) {
   frame->on_stage = [&steps](const char* stage, const char* step) { steps.begin(stage, step); };
   ReconstructionPipeline pipeline(merged_pass_config(config), 1);
   const double t0 = monotonic_seconds();
-  bool given = false;
-  pipeline.run([&]() -> FramePtr { return given ? nullptr : (given = true, frame); },
-               [](const FramePtr&) {});
+  pipeline.run_frame(frame);
   throw_if_failed(*frame);
   const std::string output = (std::filesystem::path(o.output_dir) / "merged.ply").string();
   io::write_ply(output, frame->mesh);

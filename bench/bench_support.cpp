@@ -8,6 +8,7 @@
 #include "graph/stages.h"
 #include "nodes/io/scan3d_reader.h"
 #include "nodes/io/sequence.h"
+#include "nodes/optimize/cleanup/mesh_cleanup.h"
 #include "nodes/synthetic/depth_sequence.h"
 #include "nodes/synthetic/scan_simulator.h"
 
@@ -57,6 +58,27 @@ const PointCloud* require(benchmark::State& state, Input input) {
   const PointCloud* cloud = input_cloud(input);
   if (cloud == nullptr) state.SkipWithError(("kurt3d data not found at " + kurt3d_path()).c_str());
   return cloud;
+}
+
+const TriangleMesh* extracted_mesh(benchmark::State& state) {
+  if (require(state, static_cast<Input>(state.range(1))) == nullptr) return nullptr;
+  return &prepared_frame(static_cast<Input>(state.range(1)), "optimize")->mesh;
+}
+
+const TriangleMesh* cleaned_mesh(benchmark::State& state) {
+  static std::map<std::int64_t, TriangleMesh> cache;
+  const TriangleMesh* raw = extracted_mesh(state);
+  if (raw == nullptr) return nullptr;
+  auto it = cache.find(state.range(1));
+  if (it == cache.end()) it = cache.emplace(state.range(1), clean_mesh(*raw, {})).first;
+  return &it->second;
+}
+
+void count_triangles(benchmark::State& state, const TriangleMesh& in, std::size_t out) {
+  state.counters["triangles/s"] = benchmark::Counter(static_cast<double>(in.triangles.size()),
+                                                     benchmark::Counter::kIsIterationInvariantRate);
+  state.counters["in"] = static_cast<double>(in.triangles.size());
+  state.counters["out"] = static_cast<double>(out);
 }
 
 void thread_and_input_args(benchmark::internal::Benchmark* b) {

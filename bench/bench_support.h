@@ -9,6 +9,7 @@
 
 #include "graph/frame.h"
 #include "runtime/point_cloud.h"
+#include "runtime/triangle_mesh.h"
 
 namespace meshflow::bench {
 
@@ -36,6 +37,16 @@ const std::vector<DepthFrame>& depth_frames(bool redwood);
 
 /// depth_frames(redwood), or null after skipping `state` with a message when they are missing.
 const std::vector<DepthFrame>* require_depth_frames(benchmark::State& state, bool redwood);
+
+/// The mesh the extract stage makes of input state.range(1) at 5 cm, or null after skipping
+/// `state` when the input is missing. Cached.
+const TriangleMesh* extracted_mesh(benchmark::State& state);
+
+/// extracted_mesh() after the clean step (manifold, so every optimize step runs). Cached.
+const TriangleMesh* cleaned_mesh(benchmark::State& state);
+
+/// Counters of a mesh-to-mesh step: triangles/s over the input, input and output triangles.
+void count_triangles(benchmark::State& state, const TriangleMesh& in, std::size_t out);
 
 /// Registers the standard argument grid: threads {1, 2} x inputs {synthetic, kurt3d}.
 void thread_and_input_args(benchmark::internal::Benchmark* b);

@@ -7,17 +7,17 @@
 #include <string>
 #include <vector>
 
+#include "nodes/depth/depth_filter.h"
 #include "nodes/distance/hoppe_distance.h"
 #include "nodes/distance/projective_distance.h"
 #include "nodes/extract/marching_cubes.h"
-#include "nodes/filter/depth_filter.h"
 #include "nodes/filter/filter.h"
 #include "nodes/fusion/tsdf_volume.h"
 #include "nodes/normals/normals.h"
-#include "nodes/normals/spatial_index.h"
 #include "nodes/optimize/optimize_mesh.h"
+#include "nodes/search/spatial_index.h"
 #include "nodes/triangulate/depth_triangulation.h"
-#include "nodes/voxelize/sparse_grid.h"
+#include "nodes/voxelize/voxelize.h"
 #include "runtime/depth_frame.h"
 #include "runtime/point_cloud.h"
 #include "runtime/tracing.h"

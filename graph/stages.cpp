@@ -5,10 +5,10 @@
 #include <optional>
 #include <string>
 
+#include "nodes/depth/organized_depth.h"
 #include "nodes/extract/extract_surface.h"
 #include "nodes/extract/rim_trim.h"
 #include "nodes/extract/vertex_colors.h"
-#include "nodes/filter/organized_depth.h"
 #include "nodes/filter/spatial_order.h"
 #include "nodes/normals/organized_normals.h"
 #include "runtime/error.h"

@@ -4,12 +4,13 @@
 #include <string>
 
 #include "graph/pipeline.h"
+#include "nodes/depth/organized_depth.h"
 #include "nodes/extract/extract_surface.h"
-#include "nodes/filter/organized_depth.h"
 #include "nodes/io/mesh_writers.h"
 #include "nodes/io/parse_util.h"
 #include "nodes/io/read_point_cloud.h"
 #include "nodes/io/textured_obj.h"
+#include "nodes/texture/region_textures.h"
 #include "runtime/error.h"
 #include "runtime/half_edge_mesh.h"
 #include "runtime/threads.h"

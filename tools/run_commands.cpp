@@ -112,7 +112,7 @@ void run_fusion(const RunOptions& o) {
   const auto pipeline = o.load_map.empty()
                             ? std::make_unique<FusionPipeline>(config, o.sequence.in_flight)
                             : std::make_unique<FusionPipeline>(config, o.sequence.in_flight,
-                                                               io::read_tsdf_map(o.load_map));
+                                                               read_tsdf_map(o.load_map));
   FrameProgress progress(selected_frames(*sequence, o.sequence));
   std::size_t done = 0, written = 0;
   const std::filesystem::path dir(o.output_dir);
@@ -134,7 +134,7 @@ void run_fusion(const RunOptions& o) {
     io::write_ply((dir / "fused.ply").string(), mesh);
     ++written;
   }
-  if (!o.save_map.empty()) io::write_tsdf_map(o.save_map, pipeline->map());
+  if (!o.save_map.empty()) write_tsdf_map(o.save_map, pipeline->map());
   const TsdfVolume& map = pipeline->map();
   print_run_summary(
       *sequence, stats, limit.threads(), o.sequence.in_flight,

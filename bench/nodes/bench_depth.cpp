@@ -1,11 +1,11 @@
 // The depth-frame kernels on one synthetic 640 x 480 frame of the demo room, 1 cm voxels.
 
 #include "bench_support.h"
+#include "nodes/depth/depth_filter.h"
 #include "nodes/distance/projective_distance.h"
-#include "nodes/filter/depth_filter.h"
 #include "nodes/normals/organized_normals.h"
 #include "nodes/synthetic/depth_sequence.h"
-#include "nodes/voxelize/sparse_grid.h"
+#include "nodes/voxelize/voxelize.h"
 #include "runtime/threads.h"
 
 namespace meshflow::bench {

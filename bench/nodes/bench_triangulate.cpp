@@ -6,8 +6,8 @@
 #include <fstream>
 
 #include "bench_support.h"
+#include "nodes/depth/organized_depth.h"
 #include "nodes/eval/completeness.h"
-#include "nodes/filter/organized_depth.h"
 #include "nodes/io/read_point_cloud.h"
 #include "nodes/triangulate/depth_noise.h"
 #include "nodes/triangulate/depth_triangulation.h"

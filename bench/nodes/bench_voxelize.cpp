@@ -1,5 +1,5 @@
 #include "bench_support.h"
-#include "nodes/voxelize/sparse_grid.h"
+#include "nodes/voxelize/voxelize.h"
 #include "runtime/threads.h"
 
 namespace meshflow::bench {

@@ -5,9 +5,10 @@
 #include <cstdint>
 #include <vector>
 
-#include "nodes/normals/spatial_index.h"
-#include "nodes/voxelize/sparse_grid.h"
+#include "nodes/search/spatial_index.h"
+#include "runtime/distance_field.h"
 #include "runtime/point_cloud.h"
+#include "runtime/sparse_grid.h"
 
 namespace meshflow {
 
@@ -30,15 +31,6 @@ struct DistanceConfig {
   /// rim of a cylinder at 1 voxel). Measured at 1 voxel: the demo room's mean error 1.00 -> 0.81
   /// mm with 1 % fewer triangles; kurt3d scan000 6 % fewer vertices.
   float max_extrapolation_voxels = 0.0f;
-};
-
-/// Signed distances (metres) per grid corner: positive on the side the normals point to.
-struct DistanceField {
-  std::vector<float> values;        ///< one per grid corner
-  std::vector<std::uint8_t> valid;  ///< 1 where values[i] is meaningful
-  std::size_t disagreeing = 0;      ///< corners invalid by DistanceConfig::max_disagreement_voxels
-  std::size_t extrapolated = 0;     ///< corners invalid by max_extrapolation_voxels
-  std::size_t valid_count() const;
 };
 
 /// d(q) = mean over the kd nearest points p_i of n_i . (q - p_i); invalid where the nearest

@@ -5,9 +5,9 @@
 
 #include <opencv2/core.hpp>
 
-#include "nodes/distance/hoppe_distance.h"
-#include "nodes/voxelize/sparse_grid.h"
 #include "runtime/depth_frame.h"
+#include "runtime/distance_field.h"
+#include "runtime/sparse_grid.h"
 
 namespace meshflow {
 

@@ -7,7 +7,7 @@
 #include <array>
 #include <cmath>
 
-#include "nodes/eval/mesh_distance_index.h"
+#include "nodes/search/mesh_distance_index.h"
 #include "runtime/error.h"
 
 namespace meshflow {

@@ -7,7 +7,7 @@
 #include <utility>
 #include <vector>
 
-#include "nodes/normals/spatial_index.h"
+#include "nodes/search/spatial_index.h"
 #include "runtime/vertex_triangles.h"
 
 namespace meshflow {

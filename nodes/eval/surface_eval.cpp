@@ -7,8 +7,8 @@
 #include <limits>
 #include <numeric>
 
-#include "nodes/eval/mesh_distance_index.h"
-#include "nodes/normals/spatial_index.h"
+#include "nodes/search/mesh_distance_index.h"
+#include "nodes/search/spatial_index.h"
 #include "runtime/error.h"
 
 namespace meshflow {

@@ -2,8 +2,8 @@
 // The crossed cube edges of a sparse grid's active cells, one shared vertex each: the first
 // half of every marching-cubes-style extraction (mc, pmc, emc).
 
+#include "nodes/cube/cube_table.h"
 #include "nodes/extract/cell_patterns.h"
-#include "nodes/extract/cube_table.h"
 #include "nodes/extract/edge_vertices.h"
 
 namespace meshflow {

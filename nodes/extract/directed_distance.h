@@ -6,7 +6,7 @@
 
 #include <Eigen/Core>
 
-#include "nodes/normals/spatial_index.h"
+#include "nodes/search/spatial_index.h"
 #include "runtime/point_cloud.h"
 
 namespace meshflow {

@@ -7,8 +7,8 @@
 #include <memory>
 #include <vector>
 
-#include "nodes/distance/hoppe_distance.h"
-#include "nodes/voxelize/sparse_grid.h"
+#include "runtime/distance_field.h"
+#include "runtime/sparse_grid.h"
 
 namespace meshflow {
 

@@ -8,7 +8,7 @@
 #include "nodes/extract/directed_distance.h"
 #include "nodes/extract/marching_cubes.h"
 #include "nodes/extract/sharp_feature.h"
-#include "nodes/normals/spatial_index.h"
+#include "nodes/search/spatial_index.h"
 #include "runtime/point_cloud.h"
 
 namespace meshflow {

@@ -4,7 +4,7 @@
 #include <string>
 
 #include "nodes/extract/marching_cubes.h"
-#include "nodes/normals/spatial_index.h"
+#include "nodes/search/spatial_index.h"
 #include "runtime/point_cloud.h"
 
 namespace meshflow {

@@ -1,8 +1,8 @@
 #pragma once
 // Marching cubes over a sparse grid with shared vertices (one per crossed grid edge).
 
-#include "nodes/distance/hoppe_distance.h"
-#include "nodes/voxelize/sparse_grid.h"
+#include "runtime/distance_field.h"
+#include "runtime/sparse_grid.h"
 #include "runtime/triangle_mesh.h"
 
 namespace meshflow {

@@ -5,7 +5,7 @@
 // two beyond (or short of) it.
 
 #include "nodes/extract/marching_cubes.h"
-#include "nodes/normals/spatial_index.h"
+#include "nodes/search/spatial_index.h"
 #include "runtime/point_cloud.h"
 
 namespace meshflow {

@@ -6,7 +6,7 @@
 
 #include <vector>
 
-#include "nodes/normals/spatial_index.h"
+#include "nodes/search/spatial_index.h"
 #include "runtime/triangle_mesh.h"
 
 namespace meshflow {

@@ -5,7 +5,7 @@
 #include <Eigen/Core>
 #include <vector>
 
-#include "nodes/normals/spatial_index.h"
+#include "nodes/search/spatial_index.h"
 #include "runtime/depth_frame.h"
 #include "runtime/point_cloud.h"
 

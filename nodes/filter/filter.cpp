@@ -7,7 +7,7 @@
 
 #include <Eigen/Eigenvalues>
 
-#include "nodes/normals/spatial_index.h"
+#include "nodes/search/spatial_index.h"
 #include "runtime/error.h"
 #include "runtime/parallel.h"
 #include "runtime/voxel_key.h"

@@ -10,7 +10,7 @@
 #include "nodes/io/parse_util.h"
 #include "runtime/error.h"
 
-namespace meshflow::io {
+namespace meshflow {
 namespace {
 
 constexpr char kMagic[8] = {'M', 'F', 'T', 'S', 'D', 'F', '\r', '\n'};
@@ -117,14 +117,14 @@ void write_tsdf_map(const std::string& path, const TsdfVolume& volume) {
     }
   }
   w.u64(fnv1a(w.out.data(), w.out.size()));
-  AtomicOutputFile file(path);
+  io::AtomicOutputFile file(path);
   file.stream().write(reinterpret_cast<const char*>(w.out.data()),
                       static_cast<std::streamsize>(w.out.size()));
   file.commit();
 }
 
 TsdfVolume read_tsdf_map(const std::string& path) {
-  std::ifstream in = open_input(path);
+  std::ifstream in = io::open_input(path);
   const std::vector<unsigned char> data((std::istreambuf_iterator<char>(in)),
                                         std::istreambuf_iterator<char>());
   Reader r(path, data);
@@ -194,4 +194,4 @@ TsdfVolume read_tsdf_map(const std::string& path) {
   return volume;
 }
 
-}  // namespace meshflow::io
+}  // namespace meshflow

@@ -20,7 +20,7 @@
 
 #include "nodes/fusion/tsdf_volume.h"
 
-namespace meshflow::io {
+namespace meshflow {
 
 /// Writes `volume` to `path` atomically (complete file or none). Throws meshflow::Error.
 void write_tsdf_map(const std::string& path, const TsdfVolume& volume);
@@ -30,4 +30,4 @@ void write_tsdf_map(const std::string& path, const TsdfVolume& volume);
 /// padded file), a checksum mismatch, non-finite values, negative weights or a block stored twice.
 TsdfVolume read_tsdf_map(const std::string& path);
 
-}  // namespace meshflow::io
+}  // namespace meshflow

@@ -4,7 +4,7 @@
 
 #include <algorithm>
 
-#include "nodes/extract/cube_table.h"
+#include "nodes/cube/cube_table.h"
 #include "runtime/parallel.h"
 #include "runtime/radix_sort.h"
 

@@ -4,7 +4,7 @@
 
 #include <string>
 
-#include "nodes/optimize/region_textures.h"
+#include "runtime/textured_mesh.h"
 
 namespace meshflow::io {
 

@@ -5,7 +5,7 @@
 #include <Eigen/Eigenvalues>
 #include <algorithm>
 
-#include "nodes/normals/neighbour_table.h"
+#include "nodes/search/neighbour_table.h"
 #include "runtime/error.h"
 #include "runtime/parallel.h"
 

@@ -8,7 +8,7 @@
 #include <vector>
 
 #include "nodes/normals/orient_normals.h"
-#include "nodes/normals/spatial_index.h"
+#include "nodes/search/spatial_index.h"
 #include "runtime/point_cloud.h"
 
 namespace meshflow {

@@ -15,7 +15,7 @@
 #include <cstdint>
 #include <vector>
 
-#include "nodes/normals/neighbour_table.h"
+#include "nodes/search/neighbour_table.h"
 
 namespace meshflow {
 

@@ -10,13 +10,13 @@
 #include <string>
 #include <vector>
 
-#include "nodes/optimize/adaptive_remesh.h"
-#include "nodes/optimize/hole_filling.h"
-#include "nodes/optimize/mesh_cleanup.h"
-#include "nodes/optimize/planar_regions.h"
-#include "nodes/optimize/qem_decimation.h"
-#include "nodes/optimize/retriangulate_regions.h"
-#include "nodes/optimize/sharp_edges.h"
+#include "nodes/decimate/qem_decimation.h"
+#include "nodes/optimize/cleanup/hole_filling.h"
+#include "nodes/optimize/cleanup/mesh_cleanup.h"
+#include "nodes/optimize/planar/planar_regions.h"
+#include "nodes/optimize/planar/retriangulate_regions.h"
+#include "nodes/optimize/planar/sharp_edges.h"
+#include "nodes/optimize/remesh/adaptive_remesh.h"
 #include "runtime/triangle_mesh.h"
 
 namespace meshflow {

@@ -4,7 +4,7 @@
 #include <cmath>
 #include <limits>
 
-#include "nodes/eval/closest_point.h"
+#include "nodes/search/closest_point.h"
 
 namespace meshflow::synthetic {
 namespace {

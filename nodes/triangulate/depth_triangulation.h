@@ -8,7 +8,7 @@
 
 #include <cstddef>
 
-#include "nodes/optimize/qem_decimation.h"
+#include "nodes/decimate/qem_decimation.h"
 #include "nodes/triangulate/pixel_grid.h"
 #include "nodes/triangulate/restricted_quadtree.h"
 

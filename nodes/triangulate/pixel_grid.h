@@ -9,7 +9,7 @@
 #include <cstddef>
 #include <vector>
 
-#include "nodes/filter/depth_filter.h"
+#include "nodes/depth/depth_filter.h"
 #include "runtime/depth_frame.h"
 #include "runtime/point_cloud.h"
 #include "runtime/triangle_mesh.h"

@@ -9,12 +9,12 @@
 #include <limits>
 
 #include "graph/pipeline.h"
-#include "nodes/eval/mesh_distance_index.h"
 #include "nodes/eval/surface_eval.h"
 #include "nodes/eval/truth_eval.h"
 #include "nodes/extract/marching_cubes.h"
 #include "nodes/io/mesh_writers.h"
 #include "nodes/io/read_point_cloud.h"
+#include "nodes/search/mesh_distance_index.h"
 #include "nodes/synthetic/closed_objects.h"
 #include "runtime/threads.h"
 #include "test_support.h"

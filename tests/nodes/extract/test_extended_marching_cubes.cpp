@@ -6,10 +6,10 @@
 #include <array>
 #include <cstdio>
 
-#include "nodes/eval/mesh_distance_index.h"
+#include "fixtures/solid_fixture.h"
 #include "nodes/eval/surface_eval.h"
+#include "nodes/search/mesh_distance_index.h"
 #include "runtime/threads.h"
-#include "solid_fixture.h"
 #include "test_support.h"
 
 namespace meshflow {

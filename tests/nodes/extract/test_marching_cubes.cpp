@@ -6,7 +6,7 @@
 #include <random>
 #include <set>
 
-#include "nodes/extract/cube_table.h"
+#include "nodes/cube/cube_table.h"
 #include "runtime/threads.h"
 
 namespace meshflow {

@@ -5,9 +5,9 @@
 #include <cstdio>
 #include <string>
 
+#include "fixtures/solid_fixture.h"
 #include "nodes/synthetic/shapes.h"
 #include "runtime/threads.h"
-#include "solid_fixture.h"
 
 namespace meshflow {
 namespace {

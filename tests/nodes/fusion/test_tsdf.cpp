@@ -12,7 +12,7 @@
 #include "nodes/fusion/tsdf_mesher.h"
 #include "nodes/fusion/tsdf_volume.h"
 #include "nodes/io/sequence.h"
-#include "nodes/normals/spatial_index.h"
+#include "nodes/search/spatial_index.h"
 #include "nodes/synthetic/depth_sequence.h"
 #include "runtime/error.h"
 #include "runtime/threads.h"
@@ -180,8 +180,8 @@ TEST(Tsdf, ColourIsFusedIntoTheVoxels) {
 TEST(TsdfMapFile, SaveLoadExtractGivesTheSameMesh) {
   const TsdfVolume volume = fuse(room_frames(2));
   const std::string path = test::temp_dir() + "/room.tsdf";
-  io::write_tsdf_map(path, volume);
-  const TsdfVolume loaded = io::read_tsdf_map(path);
+  write_tsdf_map(path, volume);
+  const TsdfVolume loaded = read_tsdf_map(path);
   expect_same_volume(volume, loaded);
   EXPECT_EQ(loaded.config().voxel_size, kTsdfVoxel);
   const TriangleMesh a = TsdfMesher().extract(volume), b = TsdfMesher().extract(loaded);
@@ -196,7 +196,7 @@ std::string read_bytes(const std::string& path) {
 
 void expect_map_error(const std::string& path, const std::string& fragment) {
   try {
-    io::read_tsdf_map(path);
+    read_tsdf_map(path);
     ADD_FAILURE() << "no error for " << path;
   } catch (const Error& e) {
     const std::string what = e.what();
@@ -208,7 +208,7 @@ void expect_map_error(const std::string& path, const std::string& fragment) {
 TEST(TsdfMapFile, CorruptOrTruncatedFilesFailClearly) {
   const std::string dir = test::temp_dir();
   const std::string good = dir + "/good.tsdf";
-  io::write_tsdf_map(good, fuse(room_frames(1)));
+  write_tsdf_map(good, fuse(room_frames(1)));
   const std::string bytes = read_bytes(good);
   ASSERT_GT(bytes.size(), 10000u);
 
@@ -244,7 +244,7 @@ std::string patched_map(std::string bytes, std::size_t at, T value) {
 // naming the field, never a crash, an overflow or a mesh with infinite vertices.
 TEST(TsdfMapFile, AbsurdFieldsBehindAValidChecksumFailClearly) {
   const std::string dir = test::temp_dir();
-  io::write_tsdf_map(dir + "/good.tsdf", fuse(room_frames(1)));
+  write_tsdf_map(dir + "/good.tsdf", fuse(room_frames(1)));
   const std::string bytes = read_bytes(dir + "/good.tsdf");
   const std::size_t voxel_size = 16, first_block = 40, first_distance = 52;
   const auto expect = [&](const std::string& contents, const std::string& fragment) {
@@ -260,8 +260,8 @@ TEST(TsdfMapFile, AbsurdFieldsBehindAValidChecksumFailClearly) {
          "voxel distance");
   // The patch itself is sound: an unchanged value loads.
   test::write_file(dir + "/same.tsdf", patched_map(bytes, voxel_size, kTsdfVoxel));
-  EXPECT_EQ(io::read_tsdf_map(dir + "/same.tsdf").block_count(),
-            io::read_tsdf_map(dir + "/good.tsdf").block_count());
+  EXPECT_EQ(read_tsdf_map(dir + "/same.tsdf").block_count(),
+            read_tsdf_map(dir + "/good.tsdf").block_count());
 }
 
 TEST(Tsdf, RejectsBadConfiguration) {

@@ -4,6 +4,7 @@
 
 #include <cstring>
 
+#include "fixtures/mesh_fixtures.h"
 #include "nodes/io/mesh_writers.h"
 #include "runtime/error.h"
 #include "test_support.h"
@@ -147,6 +148,35 @@ TEST(PlyReader, MeshTruncationsAndByteFlipsNeverCrash) {
     std::uint32_t state = 777;
     for (int trial = 0; trial < 300; ++trial) parse_or_error(test::flip_bytes(good, 2, state));
   }
+}
+
+TEST(PlyMeshReader, RoundTripsWrittenMeshesAndRejectsBadFaces) {
+  const std::string dir = test::temp_dir();
+  TriangleMesh mesh = test::grid_patch(3, true);
+  compute_vertex_normals(mesh);
+  for (auto enc : {PlyEncoding::kBinary, PlyEncoding::kAscii}) {
+    write_ply(dir + "/m.ply", mesh, enc);
+    const TriangleMesh back = read_ply_mesh(dir + "/m.ply");
+    EXPECT_EQ(back.vertices, mesh.vertices);
+    EXPECT_EQ(back.triangles, mesh.triangles);
+    EXPECT_EQ(back.normals.size(), mesh.normals.size());
+  }
+  test::write_file(dir + "/bad.ply",
+                   "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+                   "property float z\nelement face 1\nproperty list uchar int vertex_indices\n"
+                   "end_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 7\n");
+  try {
+    read_ply_mesh(dir + "/bad.ply");
+    FAIL() << "expected an error";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("face 0"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("vertex index"), std::string::npos) << e.what();
+  }
+  // Point clouds (no face element) read as meshes without triangles.
+  test::write_file(dir + "/pts.ply",
+                   "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\n"
+                   "property float z\nend_header\n1 2 3\n");
+  EXPECT_TRUE(read_ply_mesh(dir + "/pts.ply").triangles.empty());
 }
 
 }  // namespace

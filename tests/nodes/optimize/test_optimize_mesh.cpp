@@ -5,9 +5,9 @@
 #include <algorithm>
 #include <cstdio>
 
-#include "mesh_fixtures.h"
+#include "fixtures/mesh_fixtures.h"
+#include "fixtures/room_fixture.h"
 #include "nodes/eval/completeness.h"
-#include "room_fixture.h"
 #include "runtime/error.h"
 #include "runtime/half_edge_mesh.h"
 #include "test_support.h"

@@ -1,0 +1,625 @@
+#include "nodes/decimate/qem_decimation.h"
+
+#include <tbb/blocked_range.h>
+#include <tbb/enumerable_thread_specific.h>
+#include <tbb/parallel_for.h>
+
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <limits>
+#include <vector>
+
+#include "nodes/decimate/collapse_fan.h"
+#include "nodes/decimate/vertex_rings.h"
+#include "runtime/angles.h"
+#include "runtime/radix_sort.h"
+#include "runtime/simd.h"
+
+namespace meshflow {
+namespace {
+
+constexpr double kNoCollapse = std::numeric_limits<double>::infinity();
+constexpr std::size_t kLookAhead = 8;  // collapses between a prefetch() and its use
+// A pass walks its candidates up to this many times the bound of the candidate that would reach
+// the target (Redwood frames: 1.5 took 6 passes, 2.5 takes 4 for the same deviation from the
+// input; 3 and 4 deviate 1 and 2 % more).
+constexpr double kPassLimit = 2.5;
+
+// cos(degrees), computed in double and rounded once.
+float cos_degrees(float degrees) {
+  return static_cast<float>(std::cos(radians(static_cast<double>(degrees))));
+}
+
+// Symmetric 4x4 quadric, upper triangle with the off-diagonal terms doubled (as they enter
+// x^T A x): a2 2ab 2ac 2ad b2 2bc 2bd c2 2cd d2.
+struct Quadric {
+  double q[10] = {0, 0, 0, 0, 0, 0, 0, 0, 0, 0};
+
+  static Quadric plane(const Eigen::Vector3d& n, double d, double weight) {
+    Quadric k;
+    const double p[4] = {n.x(), n.y(), n.z(), d};
+    int i = 0;
+    for (int r = 0; r < 4; ++r)
+      for (int c = r; c < 4; ++c) k.q[i++] = (c == r ? 1.0 : 2.0) * (weight * p[r] * p[c]);
+    return k;
+  }
+  void add(const Quadric& o) {
+    for (int i = 0; i < 10; ++i) q[i] += o.q[i];
+  }
+  // x^T A x for x = (p, 1).
+  double error(const Eigen::Vector3f& pf) const {
+    const double* s = q;
+    const double x = pf.x(), y = pf.y(), z = pf.z();
+    return s[0] * x * x + s[1] * x * y + s[2] * x * z + s[3] * x + s[4] * y * y + s[5] * y * z +
+           s[6] * y + s[7] * z * z + s[8] * z + s[9];
+  }
+};
+
+// What an evaluation reads of each neighbour of u (its position for u's fan and, as a target,
+// the rest), together: half a cache line.
+struct alignas(32) VertexTerms {
+  Eigen::Vector3f position;
+  double own_error = 0.0;  ///< Q_v(v): (Q_u + Q_v)(v) = Q_u(v) + this
+  double scale = 1.0;      ///< multiplies the quadric error (1 / depth^2, or 1)
+};
+
+using simd::Doubles4;
+
+// The quadric cost of moving u onto each of `count` targets: costs[j] = max(0, (Q_u + Q_v)(v)) x
+// scale_v for v = targets[j], with (Q_u + Q_v)(v) = Q_u(v) + own_error_v and `q_u` Q_u's ten
+// terms. Four targets per vector, each lane Quadric::error()'s arithmetic in its order (neither
+// fuses multiply-adds): the same values as one target at a time, in fewer instructions and with
+// the four targets' loads in flight together.
+MESHFLOW_AVX2_CLONES void quadric_costs(const Quadric& q_u, const VertexTerms* terms,
+                                        const std::uint32_t* targets, std::size_t count,
+                                        double* costs) {
+  const double* s = q_u.q;
+  for (std::size_t j = 0; j < count; j += 4) {
+    const VertexTerms* t[4];  // a short last group repeats its first target
+    for (std::size_t k = 0; k < 4; ++k) t[k] = &terms[targets[j + k < count ? j + k : j]];
+    const Doubles4 x = {t[0]->position.x(), t[1]->position.x(), t[2]->position.x(),
+                        t[3]->position.x()};
+    const Doubles4 y = {t[0]->position.y(), t[1]->position.y(), t[2]->position.y(),
+                        t[3]->position.y()};
+    const Doubles4 z = {t[0]->position.z(), t[1]->position.z(), t[2]->position.z(),
+                        t[3]->position.z()};
+    const Doubles4 own = {t[0]->own_error, t[1]->own_error, t[2]->own_error, t[3]->own_error};
+    const Doubles4 scale = {t[0]->scale, t[1]->scale, t[2]->scale, t[3]->scale};
+    const Doubles4 sum = s[0] * x * x + s[1] * x * y + s[2] * x * z + s[3] * x + s[4] * y * y +
+                         s[5] * y * z + s[6] * y + s[7] * z * z + s[8] * z + s[9] + own;
+    const Doubles4 cost = (sum > 0.0 ? sum : Doubles4{}) * scale;  // as std::max(0.0, sum)
+    for (std::size_t k = 0; k < 4 && j + k < count; ++k) costs[j + k] = cost[k];
+  }
+}
+
+// One vertex u may move onto, in best_collapse(): its quadric cost, itself, and its index among
+// u's targets (u's ring, where that index is its ring entry, or its two border neighbours).
+struct Target {
+  double cost;
+  std::uint32_t v, at;
+  // (cost, vertex) order; branch-free.
+  bool before(const Target& o) const { return (cost < o.cost) | ((cost == o.cost) & (v < o.v)); }
+};
+
+// A vertex's numbers in a pass (collapses are numbered from 1 in each).
+struct PassNumbers {
+  /// The last collapse u -> v that changed the vertex's faces or quadric (it is u or one of u's
+  /// neighbours, v among them); 0 = none.
+  std::uint32_t changed = 0;
+  /// For a vertex the walk evaluated again and left (over the pass's limit): the collapses
+  /// before that evaluation, which its best collapse now holds (0 = it holds the pass's own).
+  std::uint32_t evaluated = 0;
+};
+
+// The best collapse of one vertex, found at the start of a pass.
+struct Candidate {
+  double cost = kNoCollapse;
+  std::uint32_t from = 0, to = 0;
+};
+
+// Sort key of a finite candidate: its cost as a float's bits (non-negative, so they order
+// like the values), then its vertex in the low `vertex_bits` bits (as few as the vertex count
+// needs: the radix sort skips the digits no key uses, one pass in six on a depth frame).
+std::uint64_t order_key(const Candidate& c, int vertex_bits) {
+  const float cost = static_cast<float>(c.cost);
+  std::uint32_t bits = 0;
+  std::memcpy(&bits, &cost, sizeof bits);
+  return (std::uint64_t{bits} << vertex_bits) | c.from;
+}
+
+// Bits that hold every vertex number below `count`.
+int bits_for(std::size_t count) {
+  int bits = 1;
+  while (bits < 32 && (std::size_t{1} << bits) < count) ++bits;
+  return bits;
+}
+
+// A pass bounds the cost of every vertex that needs it on the mesh as it was when the pass
+// started (neighbour rings, positions, quadrics), in parallel, then walks the bounds cheapest
+// first, evaluating each candidate fully before it is applied. Each collapse u -> v removes u; v
+// takes over u's faces (VertexRings::collapse), and v's quadric and u's neighbours' faces change:
+// a candidate with an end among them is evaluated again on the mesh as it is now and taken while
+// its cost stays within the pass's limit. The walk goes in chunks: the evaluations a chunk needs
+// run in parallel at its start, and again, serially, only where a collapse earlier in the chunk
+// changed the ends once more. The next pass bounds again only the vertices next to a change.
+class Decimator {
+ public:
+  Decimator(const TriangleMesh& mesh, const QemConfig& config)
+      : in_(mesh),
+        cfg_(config),
+        rings_(mesh.triangles, mesh.vertices.size()),
+        q_(mesh.vertices.size()),
+        terms_(mesh.vertices.size()),
+        cos_turn_(cos_degrees(config.max_normal_turn_deg)),
+        cos_border_(cos_degrees(config.max_border_turn_deg)),
+        cos_sharp_(cos_degrees(config.sharp_edge_deg)),
+        cos2_min_angle_(static_cast<float>(
+            std::pow(std::cos(radians(static_cast<double>(config.min_angle_deg))), 2))),
+        scratch_([this] { return Scratch(*this); }) {
+    // Positions (they never change) and 1 / depth^2 of every vertex, or 1.
+    for (std::size_t v = 0; v < mesh.vertices.size(); ++v) {
+      terms_[v].position = mesh.vertices[v];
+      if (config.divide_by_depth2)
+        terms_[v].scale =
+            1.0 / std::max(1e-6, static_cast<double>(
+                                     (mesh.vertices[v] - config.viewpoint).squaredNorm()));
+    }
+    // Area-weighted plane quadric of every face, summed at its corners (serial: the sums must
+    // not depend on the thread count).
+    for (const Triangle& t : mesh.triangles) {
+      const Eigen::Vector3d a = p(t[0]).cast<double>();
+      const Eigen::Vector3d n = (p(t[1]).cast<double>() - a).cross(p(t[2]).cast<double>() - a);
+      const double area2 = n.norm();
+      if (!(area2 > 0.0)) continue;
+      const Eigen::Vector3d unit = n / area2;
+      const Quadric k = Quadric::plane(unit, -unit.dot(a), 0.5 * area2);
+      for (std::uint32_t v : t) q_[v].add(k);
+    }
+    for (std::size_t v = 0; v < mesh.vertices.size(); ++v) terms_[v].own_error = q_[v].error(p(v));
+  }
+
+  TriangleMesh run(std::size_t target, QemReport& report) {
+    std::size_t alive = in_.triangles.size();
+    const std::size_t n = in_.vertices.size();
+    std::vector<Candidate> best(n);
+    // Per vertex, in a pass (read together, so side by side).
+    std::vector<PassNumbers> pass(n);
+    // `validated`: best[u] is u's best collapse, fully evaluated (else a lower bound of its cost).
+    // (A vertex is listed once per pass, so a removed one is never met again in it.)
+    std::vector<std::uint8_t> dirty(n, 1), validated(n, 0);
+    bool stalled = false;                // the last pass collapsed nothing
+    std::vector<std::uint32_t> targets;  // the kept vertex of every collapse of the last pass
+    std::vector<std::uint64_t> order;    // a pass's candidates, cheapest first (see below)
+    const int vertex_bits = bits_for(n);
+    const std::uint64_t vertex_mask = (std::uint64_t{1} << vertex_bits) - 1;
+    while (alive > target) {
+      // After u -> v, exactly the vertices of v's faces need a new best collapse: a vertex w's
+      // best reads its own faces (changed only around v), its neighbours' quadrics (only v's
+      // changed) and, for the link condition of w -> x, the common neighbours of w and x,
+      // which change only when w was next to u or is next to v.
+      // Of those, a vertex w that was not next to any u of the pass (no `changed` number) kept its
+      // faces; only costs towards a v grew and link conditions towards vertices next to a u
+      // could fail. So its best collapse w -> y stays the best unless y changed (next to a
+      // u, or a v), and a w with no valid collapse keeps none: neither is re-evaluated.
+      // "Changed" counts from w's last evaluation: for a w the walk evaluated again, only the
+      // collapses after that one (the same output as evaluating it again, for less work).
+      if (!targets.empty()) {
+        std::fill(dirty.begin(), dirty.end(), 0);
+        const auto mark_dirty = [&](std::uint32_t x) {
+          dirty[x] = pass[x].changed > pass[x].evaluated ||
+                     (best[x].cost < kNoCollapse && pass[best[x].to].changed > pass[x].evaluated);
+        };
+        for (std::size_t j = 0; j < targets.size(); ++j) {
+          // (Targets lie all over the mesh: their rings are requested ahead.)
+          if (j + 2 * kLookAhead < targets.size())
+            rings_.prefetch_slot(targets[j + 2 * kLookAhead]);
+          if (j + kLookAhead < targets.size()) rings_.prefetch_ring(targets[j + kLookAhead]);
+          const std::uint32_t v = targets[j];
+          if (rings_.face_count(v) == 0) continue;  // collapsed later in the pass
+          mark_dirty(v);
+          for (const std::uint32_t* x = rings_.begin(v); x != rings_.end(v); ++x)
+            if (*x != VertexRings::kSeparator) mark_dirty(*x);
+        }
+      }
+      targets.clear();
+      tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n),
+                        [&](const tbb::blocked_range<std::size_t>& range) {
+                          Scratch& scratch = local_scratch();  // a lookup: once per range
+                          for (std::size_t u = range.begin(); u != range.end(); ++u)
+                            if (dirty[u]) {
+                              best[u] = cost_bound(static_cast<std::uint32_t>(u), scratch);
+                              validated[u] = 0;
+                            }
+                        });
+      // Cheapest first: keys (cost as float bits, vertex), radix-sorted; non-negative floats
+      // order as their bit patterns, equal costs by vertex. (A comparison sort of the
+      // candidates was 8 % of the decimation.)
+      order.clear();
+      for (const Candidate& c : best)
+        if (c.cost < kNoCollapse) order.push_back(order_key(c, vertex_bits));
+      if (order.empty()) break;
+      radix_sort(order);
+      const auto candidate = [&](std::size_t i) -> const Candidate& {
+        return best[order[i] & vertex_mask];
+      };
+      // Greedy within the pass, but only up to kPassLimit x the bound of the collapse that would
+      // reach the target if every collapse removed two faces, so cheap collapses elsewhere get
+      // their turn in the next pass before expensive ones are taken here.
+      const std::size_t goal = std::min(order.size(), (alive - target + 1) / 2);
+      const double limit = kPassLimit * candidate(std::max<std::size_t>(goal, 1) - 1).cost;
+      std::fill(pass.begin(), pass.end(), PassNumbers{});
+      std::size_t collapsed = 0;
+      std::uint32_t clock = 0;  // collapses so far in the pass, numbering them
+      Scratch& scratch = local_scratch();
+      // Chunks of walk_chunk candidates (0: the whole walk, re-evaluating serially).
+      const bool ahead_in_parallel = cfg_.walk_chunk != 0;
+      const std::size_t chunk = ahead_in_parallel ? cfg_.walk_chunk : order.size();
+      std::vector<Candidate> ahead(ahead_in_parallel ? chunk : 0);
+      std::vector<std::uint8_t> has_ahead(ahead.size());
+      bool stop = false;
+      for (std::size_t first = 0; first < order.size() && !stop; first += chunk) {
+        const std::size_t last = std::min(order.size(), first + chunk);
+        // The chunk's candidates that hold a bound or whose ends changed since their evaluation,
+        // evaluated in parallel on the mesh as it is now (nothing changes it meanwhile).
+        const std::uint32_t chunk_start = clock;
+        std::fill(has_ahead.begin(), has_ahead.end(), 0);
+        if (ahead_in_parallel)
+          tbb::parallel_for(tbb::blocked_range<std::size_t>(first, last, 16),
+                            [&](const tbb::blocked_range<std::size_t>& range) {
+                              Scratch& local = local_scratch();
+                              for (std::size_t i = range.begin(); i != range.end(); ++i) {
+                                const Candidate& c = candidate(i);
+                                if (c.cost > limit || (validated[c.from] && !pass[c.from].changed &&
+                                                       !pass[c.to].changed))
+                                  continue;
+                                has_ahead[i - first] = 1;
+                                ahead[i - first] = best_collapse(c.from, local);
+                              }
+                            });
+        for (std::size_t i = first; i < last; ++i) {
+          // The walk goes in cost order, all over the mesh: what a collapse a few steps ahead
+          // reads is requested now (2-9 % of the decimation on a noisy depth frame). A serial
+          // walk also evaluates most of its candidates again, reading u's whole neighbourhood:
+          // that is requested in three stages, each from addresses the previous one brought in
+          // (another ~8 % on a Redwood frame; with chunks, evaluated ahead in parallel, it was
+          // slower).
+          if (ahead_in_parallel) {
+            if (i + kLookAhead < order.size()) prefetch(candidate(i + kLookAhead), false);
+          } else {
+            if (i + 3 * kLookAhead < order.size())
+              __builtin_prefetch(&best[order[i + 3 * kLookAhead] & vertex_mask]);
+            if (i + 2 * kLookAhead < order.size()) prefetch_slots(candidate(i + 2 * kLookAhead));
+            if (i + kLookAhead < order.size()) prefetch(candidate(i + kLookAhead), true);
+            if (i + kLookAhead / 2 < order.size()) prefetch_corners(candidate(i + kLookAhead / 2));
+            if (i + kLookAhead / 4 < order.size())
+              prefetch_neighbour_rings(candidate(i + kLookAhead / 4));
+          }
+          Candidate c = candidate(i);
+          if (alive <= target || (c.cost > limit && collapsed > 0)) {
+            stop = true;
+            break;
+          }
+          std::uint32_t evaluated_at = 0;  // the pass's evaluation
+          if (ahead_in_parallel && has_ahead[i - first]) {
+            c = ahead[i - first];
+            evaluated_at = chunk_start;
+            validated[c.from] = 1;
+          }
+          // A bound, or u or its target took part in a collapse, or lost a neighbour, since the
+          // evaluation: u's best collapse on the mesh as it is now, with every check. Taken if it
+          // stays within the limit (else u waits for the next pass).
+          if (!validated[c.from] || pass[c.from].changed > evaluated_at ||
+              (c.cost < kNoCollapse && pass[c.to].changed > evaluated_at)) {
+            c = best_collapse(c.from, scratch);
+            evaluated_at = clock;
+            validated[c.from] = 1;
+          }
+          if (!(c.cost <= limit)) {  // kept: the next pass re-evaluates it only if it changes
+            best[c.from] = c;
+            pass[c.from].evaluated = evaluated_at;
+            continue;
+          }
+          alive -= collapse(c.from, c.to, ++clock, pass);
+          targets.push_back(c.to);
+          best[c.from].cost = kNoCollapse;  // removed
+          ++collapsed;
+        }
+      }
+      report.collapses += collapsed;
+      ++report.passes;
+      // A pass may collapse nothing when every candidate it walked cost more, evaluated, than its
+      // bound let the limit reach; all of them are evaluated now, so the next pass, evaluating
+      // nothing, takes the cheapest. A second pass without a collapse: none is valid.
+      if (collapsed == 0) {
+        if (stalled) break;
+        stalled = true;
+        std::fill(dirty.begin(), dirty.end(), 0);
+      } else {
+        stalled = false;
+      }
+    }
+    for (const Scratch& scratch : scratch_) {
+      report.rejected_topology += scratch.rejected.rejected_topology;
+      report.rejected_normal += scratch.rejected.rejected_normal;
+      report.rejected_border += scratch.rejected.rejected_border;
+    }
+    // Faces come out of the rings rotated and reordered (VertexRings::triangles()); when
+    // nothing collapsed, the input's faces are returned as given.
+    if (report.collapses == 0) return compact_vertices(in_, in_.triangles);
+    return compact_vertices(in_, rings_.triangles());
+  }
+
+ private:
+  const Eigen::Vector3f& p(std::uint32_t v) const { return terms_[v].position; }
+
+  // Per-thread working memory of best_collapse().
+  struct Scratch {
+    explicit Scratch(const Decimator& d) : fan(d.cos_turn_, d.cos2_min_angle_) {}
+    const std::uint32_t* neighbours = nullptr;  ///< u's ring
+    std::size_t neighbour_count = 0;
+    std::uint32_t border[2] = {0, 0};  ///< u's neighbours along its border, if it is on one
+    std::size_t border_count = 0;      ///< 2 on a border, else 0
+    std::vector<Target> candidates;    ///< u's targets by quadric cost
+    std::vector<double> costs;         ///< quadric_costs() of u's targets
+    CollapseFan fan;                   ///< u's faces
+
+    // The quadric costs of moving u onto each of its `count` targets (see quadric_costs()).
+    const double* target_costs(const Decimator& d, std::uint32_t u, const std::uint32_t* targets,
+                               std::size_t count) {
+      if (costs.size() < count) costs.resize(2 * count);
+      quadric_costs(d.q_[u], d.terms_.data(), targets, count, costs.data());
+      return costs.data();
+    }
+
+    QemReport rejected;  ///< refusals counted by this thread
+  };
+
+  // This thread's Scratch.
+  Scratch& local_scratch() { return scratch_.local(); }
+
+  // The vertices u may move onto: its neighbours (scratch.neighbours, the ring), or on a
+  // border only its two border neighbours (scratch.border): a border vertex may only move along
+  // its border (see valid()), and only where the border runs nearly straight through it; both
+  // moves make the same turn, so a bend rules out both before any cost is computed (counted as
+  // refused). Returns their number and sets `targets`; 0 when u has no faces, is locked or sits
+  // on a bend.
+  std::size_t movable_targets(std::uint32_t u, Scratch& scratch,
+                              const std::uint32_t*& targets) const {
+    scratch.neighbour_count = 0;
+    scratch.border_count = 0;
+    if (rings_.face_count(u) == 0 || rings_.locked(u)) return 0;
+    const std::uint32_t* const ring = rings_.begin(u);
+    const std::size_t n = rings_.size(u);
+    scratch.neighbours = ring;
+    scratch.neighbour_count = n;
+    targets = ring;
+    if (rings_.kind(u) != VertexRings::Kind::kOpen) return n;
+    scratch.border[0] = ring[0];
+    scratch.border[1] = ring[n - 1];
+    scratch.border_count = 2;
+    if (!border_straight(u, ring[0], ring[n - 1])) {
+      scratch.rejected.rejected_border += 2;
+      return 0;
+    }
+    targets = scratch.border;
+    return 2;
+  }
+
+  // A lower bound of best_collapse(u): the cheapest quadric cost over the vertices u may move
+  // onto, without the fan's checks, the link condition and the penalties (which only raise
+  // costs). kNoCollapse when u may not move.
+  Candidate cost_bound(std::uint32_t u, Scratch& scratch) const {
+    Candidate bound;
+    bound.from = u;
+    const std::uint32_t* targets = nullptr;
+    const std::size_t count = movable_targets(u, scratch, targets);
+    const double* const costs = scratch.target_costs(*this, u, targets, count);
+    for (std::size_t j = 0; j < count; ++j) {
+      const double cost = costs[j];
+      if (cost < bound.cost || (cost == bound.cost && targets[j] < bound.to)) {
+        bound.cost = cost;
+        bound.to = targets[j];
+      }
+    }
+    return bound;
+  }
+
+  // The cheapest valid collapse u -> v over u's neighbours v (cost kNoCollapse when none), on
+  // u's faces as they are now.
+  Candidate best_collapse(std::uint32_t u, Scratch& scratch) const {
+    Candidate best;
+    best.from = u;
+    const std::uint32_t* targets = nullptr;
+    const std::size_t count = movable_targets(u, scratch, targets);
+    if (count == 0) return best;
+    const std::uint32_t* const ring = rings_.begin(u);
+    const std::size_t n = rings_.size(u), faces = rings_.face_count(u);
+    if (scratch.candidates.size() < n) scratch.candidates.resize(2 * n);
+    Target* const queue = scratch.candidates.data();
+    // In order of (quadric cost, vertex): each target goes to its rank, the number of targets
+    // before it, counted branch-free (a handful of targets; an insertion sort's branches on
+    // these costs are coin tosses, and mispredicted cost more than the extra comparisons). The
+    // targets are distinct and no cost is NaN (quadric_costs() maps NaN to 0): the ranks are a
+    // permutation.
+    const double* const costs = scratch.target_costs(*this, u, targets, count);
+    for (std::size_t j = 0; j < count; ++j) {
+      const Target entry{costs[j], targets[j], static_cast<std::uint32_t>(j)};
+      std::size_t rank = 0;
+      for (std::size_t k = 0; k < count; ++k)
+        rank += static_cast<std::size_t>(Target{costs[k], targets[k], 0}.before(entry));
+      queue[rank] = entry;
+    }
+    // u's faces (u, r[k], r[k + 1]), each neighbour's position read once (after the border
+    // test: a bent border needs no fan).
+    CollapseFan& fan = scratch.fan;
+    fan.reset(faces, p(u));
+    const Eigen::Vector3f* pa = &p(ring[0]);
+    for (std::size_t k = 0; k < faces; ++k) {
+      const std::uint32_t b = ring[k + 1 == n ? 0 : k + 1];
+      const Eigen::Vector3f* pb = &p(b);
+      fan.set(k, ring[k], *pa, b, *pb);
+      pa = pb;
+    }
+    fan.finish(faces);
+    // Penalties only multiply the quadric cost, so candidates are tried in its order until it
+    // alone exceeds the best penalised cost found.
+    for (std::size_t j = 0; j < count; ++j) {
+      const auto [quadric, v, at] = queue[j];
+      if (!(quadric < best.cost)) break;
+      const FanVerdict verdict = fan.check(v, p(v));
+      if (verdict.turned) {  // invalid whatever the cost: refused before anything else
+        ++scratch.rejected.rejected_normal;
+        continue;
+      }
+      const double cost = penalised(fan, n, at, verdict, quadric);
+      if (!(cost < best.cost)) continue;
+      if (!valid(v, verdict, scratch)) continue;
+      best.cost = cost;
+      best.to = v;
+    }
+    return best;
+  }
+
+  // Requests the memory that evaluating and applying c reads: the quadrics of its ends, v's
+  // position, and their rings: with `slots_in_cache` (prefetch_slots() ran earlier) directly,
+  // else after their slots.
+  void prefetch(const Candidate& c, bool slots_in_cache) const {
+    for (std::uint32_t x : {c.from, c.to}) {
+      __builtin_prefetch(&q_[x].q[0]);
+      __builtin_prefetch(&q_[x].q[8]);  // a quadric spans two cache lines
+    }
+    __builtin_prefetch(&terms_[c.to]);
+    if (!slots_in_cache) prefetch_slots(c);
+    rings_.prefetch_ring(c.from);
+    rings_.prefetch_ring(c.to);
+  }
+
+  // Requests the ring slots (offset, size) of c's ends.
+  void prefetch_slots(const Candidate& c) const {
+    rings_.prefetch_slot(c.from);
+    rings_.prefetch_slot(c.to);
+  }
+
+  // Requests the terms (position, target terms) and ring slots of u's neighbours
+  // (prefetch(c, true) ran earlier, so u's ring is in cache).
+  void prefetch_corners(const Candidate& c) const {
+    for (const std::uint32_t* x = rings_.begin(c.from); x != rings_.end(c.from); ++x) {
+      __builtin_prefetch(&terms_[*x]);
+      rings_.prefetch_slot(*x);
+    }
+  }
+
+  // Requests the rings of u's neighbours, which a collapse of u rewrites (prefetch_corners()
+  // ran earlier, so their slots are in cache).
+  void prefetch_neighbour_rings(const Candidate& c) const {
+    for (const std::uint32_t* x = rings_.begin(c.from); x != rings_.end(c.from); ++x)
+      rings_.prefetch_ring(*x);
+  }
+
+  // Whether the border w -> u -> v turns by less than max_border_turn_deg at u (the same for
+  // v -> u -> w).
+  bool border_straight(std::uint32_t u, std::uint32_t w, std::uint32_t v) const {
+    const Eigen::Vector3f in = (p(u) - p(w)).normalized(), out = (p(v) - p(u)).normalized();
+    return in.dot(out) >= cos_border_;
+  }
+
+  // The quadric cost times the penalty where the edge is sharp (its two faces, around u, differ
+  // by more than sharp_edge_deg) or a needle would appear (a face (v, a, b) replacing (u, a, b)
+  // with an inner angle below min_angle_deg). v is u's target `at`: an edge with two faces
+  // belongs to a closed ring of `n` (a border vertex moves only onto its border neighbours, which
+  // share one face with it), whose targets are the ring, so faces at - 1 and at (around) hold v.
+  double penalised(const CollapseFan& fan, std::size_t n, std::size_t at, const FanVerdict& verdict,
+                   double cost) const {
+    if (verdict.needle) return cost * cfg_.penalty;
+    if (verdict.shared != 2) return cost;
+    const std::size_t before = at == 0 ? n - 1 : at - 1;
+    const bool bent = fan.bent_between(std::min(before, at), std::max(before, at), cos_sharp_);
+    return bent ? cost * cfg_.penalty : cost;
+  }
+
+  // Whether u -> v keeps the mesh manifold and borders on themselves (see QemConfig), for the
+  // u whose neighbourhood and fan `scratch` holds; `verdict` is the fan's check of v (its faces
+  // that stay are unturned: the caller checked). Counts the reason of a refusal.
+  bool valid(std::uint32_t v, const FanVerdict& verdict, Scratch& scratch) const {
+    const std::uint32_t* border_at_u = scratch.border;
+    const std::size_t border_count = scratch.border_count;
+    QemReport& rejected = scratch.rejected;
+    const std::size_t shared_count = verdict.shared;
+    if (shared_count == 0 || shared_count > 2) {
+      ++rejected.rejected_topology;
+      return false;
+    }
+    // Borders: u on a border moves only along it, onto the next border vertex (best_collapse()
+    // has checked that the border runs nearly straight there).
+    if (border_count != 0) {
+      const bool along =
+          shared_count == 1 && border_count == 2 && (border_at_u[0] == v || border_at_u[1] == v);
+      if (!along) {
+        ++rejected.rejected_border;
+        return false;
+      }
+    }
+    // (Faces that stay must not flip, degenerate or turn beyond the limit: `verdict.turned`,
+    // refused by best_collapse() before the cost.)
+    // Link condition (last: the dearest check): the common neighbours are exactly the edge's
+    // opposite vertices (u's ring lists distinct vertices, v among them).
+    const std::size_t common =
+        rings_.neighbours_among(v, scratch.neighbours, scratch.neighbour_count);
+    if (common != shared_count) {
+      ++rejected.rejected_topology;
+      return false;
+    }
+    // The link's edges: only an inner u of three faces can share one with v, the edge between
+    // its other two neighbours; if that edge has a face with v, the four faces close a
+    // tetrahedron and the collapse would fold u's last face onto that one.
+    if (shared_count == 2 && scratch.neighbour_count == 3) {
+      std::uint32_t others[2] = {0, 0};
+      std::size_t k = 0;
+      for (std::size_t j = 0; j < 3; ++j)
+        if (scratch.neighbours[j] != v) others[k++ & 1] = scratch.neighbours[j];
+      if (rings_.share_face(v, others[0], others[1])) {
+        ++rejected.rejected_topology;
+        return false;
+      }
+    }
+    return true;
+  }
+
+  // Applies u -> v, the pass's collapse `number`, and writes that number as `changed` for u
+  // and its neighbours (v among them): the vertices whose faces or quadric change. Returns the
+  // faces removed (one on a border edge, two inside).
+  std::size_t collapse(std::uint32_t u, std::uint32_t v, std::uint32_t number,
+                       std::vector<PassNumbers>& pass) {
+    pass[u].changed = number;
+    for (const std::uint32_t* x = rings_.begin(u); x != rings_.end(u); ++x)
+      pass[*x].changed = number;
+    const std::size_t removed = rings_.collapse(u, v);
+    q_[v].add(q_[u]);
+    terms_[v].own_error = q_[v].error(p(v));
+    return removed;
+  }
+
+  const TriangleMesh& in_;
+  const QemConfig& cfg_;
+  VertexRings rings_;  ///< the mesh as it is now
+  std::vector<Quadric> q_;
+  std::vector<VertexTerms> terms_;
+  float cos_turn_, cos_border_, cos_sharp_, cos2_min_angle_;
+  mutable tbb::enumerable_thread_specific<Scratch> scratch_;  ///< best_collapse()'s memory
+};
+
+}  // namespace
+
+TriangleMesh qem_decimate(const TriangleMesh& mesh, const QemConfig& config, QemReport* report) {
+  require_corners_in_range(mesh.triangles, mesh.vertices.size(), "QEM decimation");
+  QemReport r;
+  const auto target = static_cast<std::size_t>(std::ceil(
+      static_cast<double>(mesh.triangles.size()) * static_cast<double>(config.target_ratio)));
+  TriangleMesh out = Decimator(mesh, config).run(target, r);
+  if (report != nullptr) *report = r;
+  return out;
+}
+
+}  // namespace meshflow

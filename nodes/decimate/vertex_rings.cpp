@@ -1,0 +1,304 @@
+#include "nodes/decimate/vertex_rings.h"
+
+#include <tbb/blocked_range.h>
+#include <tbb/enumerable_thread_specific.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <cstring>
+#include <utility>
+
+#include "runtime/simd.h"
+#include "runtime/vertex_triangles.h"
+
+namespace meshflow {
+namespace {
+
+// Room left in every ring beyond its first size: a collapse onto a vertex usually grows its
+// ring by a few entries, and a ring that outgrows its room moves to the end of the storage.
+constexpr std::uint32_t kSlack = 6;
+
+using Pair = std::pair<std::uint32_t, std::uint32_t>;  // (a, b) of a face (u, a, b)
+
+// Per-thread lookups over the faces (u, a, b) of one vertex at a time: which face has a given
+// a, and whether a vertex is some face's b. Stamped per vertex, so nothing is cleared between
+// vertices: O(faces) per vertex, O(V) memory per thread.
+struct FanIndex {
+  std::vector<std::uint32_t> a_stamp, a_face, b_stamp;
+  std::uint32_t stamp = 0;
+  std::vector<Pair> pairs;  ///< the first `count` are u's faces
+  std::size_t count = 0;
+  std::vector<std::uint32_t> starts, entries;
+
+  explicit FanIndex(std::size_t vertex_count)
+      : a_stamp(vertex_count, 0), a_face(vertex_count, 0), b_stamp(vertex_count, 0) {}
+
+  // Reads u's faces, the triangles listed in [first, last), as pairs (a, b) and indexes them;
+  // false when a face repeats a corner or two faces share an a or a b (a non-manifold edge, a
+  // face given twice).
+  bool gather(std::uint32_t u, const std::uint32_t* first, const std::uint32_t* last,
+              const std::vector<Triangle>& triangles) {
+    if (++stamp == 0) {  // wrapped around: start the stamps again
+      std::fill(a_stamp.begin(), a_stamp.end(), 0);
+      std::fill(b_stamp.begin(), b_stamp.end(), 0);
+      stamp = 1;
+    }
+    count = static_cast<std::size_t>(last - first);
+    if (pairs.size() < count) pairs.resize(2 * count);
+    bool manifold = true;
+    for (std::uint32_t j = 0; j < count; ++j) {
+      const Triangle& t = triangles[first[j]];
+      const int i = t[0] == u ? 0 : t[1] == u ? 1 : 2;
+      const std::uint32_t a = t[i == 2 ? 0 : i + 1], b = t[i == 0 ? 2 : i - 1];
+      manifold &= (a != u) & (b != u) & (a != b) & (a_stamp[a] != stamp) & (b_stamp[b] != stamp);
+      a_stamp[a] = stamp;
+      a_face[a] = j;
+      b_stamp[b] = stamp;
+      pairs[j] = {a, b};
+    }
+    return manifold;
+  }
+  // The face with this a, or none.
+  const Pair* next(std::uint32_t a) const {
+    return a_stamp[a] == stamp ? &pairs[a_face[a]] : nullptr;
+  }
+  bool is_some_b(std::uint32_t x) const { return b_stamp[x] == stamp; }
+};
+
+// Orders u's faces, gathered into `fan`, into its ring: fan.entries gets the a's in fan order,
+// for an open fan followed by its last face's b, fans separated by kSeparator; `fans` their
+// number. Complex when gather() refused the faces or a closed fan is not the only one.
+VertexRings::Kind order_fan(bool gathered, FanIndex& fan, std::size_t& fans) {
+  using Kind = VertexRings::Kind;
+  std::vector<std::uint32_t>& entries = fan.entries;
+  entries.clear();
+  fans = 1;
+  const std::size_t k = fan.count;
+  if (k == 0) return Kind::kClosed;
+  if (!gathered) return Kind::kComplex;
+  // a -> b is one-to-one, so the faces form chains from each a that is no face's b (open fans,
+  // in the order of their first a) and cycles.
+  fan.starts.clear();
+  for (std::size_t j = 0; j < k; ++j)
+    if (!fan.is_some_b(fan.pairs[j].first)) fan.starts.push_back(fan.pairs[j].first);
+  const std::size_t open = fan.starts.size();
+  if (open != 0) {
+    if (open > 1) std::sort(fan.starts.begin(), fan.starts.end());
+    std::size_t used = 0;
+    for (std::size_t f = 0; f < open; ++f) {
+      if (f != 0) entries.push_back(VertexRings::kSeparator);
+      std::uint32_t a = fan.starts[f];
+      for (const Pair* face = fan.next(a); face != nullptr; face = fan.next(a)) {
+        entries.push_back(a);
+        a = face->second;
+        ++used;
+      }
+      entries.push_back(a);
+    }
+    if (used != k) return Kind::kComplex;  // a closed fan beside open ones
+    fans = open;
+    return open == 1 ? Kind::kOpen : Kind::kFans;
+  }
+  // One closed fan through every face, from the first face given.
+  if (k < 3) return Kind::kComplex;
+  const std::uint32_t first = fan.pairs.front().first;
+  std::uint32_t a = first;
+  for (std::size_t step = 0; step < k; ++step) {
+    if (step != 0 && a == first) return Kind::kComplex;  // a closed fan of fewer faces
+    entries.push_back(a);
+    a = fan.next(a)->second;  // (every a has a face: no fan is open)
+  }
+  return a == first ? Kind::kClosed : Kind::kComplex;
+}
+
+}  // namespace
+
+VertexRings::VertexRings(const std::vector<Triangle>& triangles, std::size_t vertex_count)
+    : slots_(vertex_count), locked_(vertex_count, 0) {
+  const VertexTriangles around = vertex_triangles(triangles, vertex_count);
+  std::uint32_t total = 0;
+  for (std::size_t v = 0; v < vertex_count; ++v) {
+    const std::uint32_t faces = around.offsets[v + 1] - around.offsets[v];
+    slots_[v].offset = total;
+    slots_[v].capacity = faces + 1 + kSlack;
+    total += slots_[v].capacity;
+  }
+  data_.reserve(total + total / 4);  // room for rings that move (a few dozen per depth frame)
+  data_.resize(total);
+  tbb::enumerable_thread_specific<FanIndex> work([vertex_count] { return FanIndex(vertex_count); });
+  // Orders v's fan into fan.entries and sets v's kind and fan count.
+  const auto order = [&](std::uint32_t v, FanIndex& fan) {
+    const bool gathered = fan.gather(v, around.begin(v), around.end(v), triangles);
+    std::size_t fans = 1;
+    Slot& slot = slots_[v];
+    slot.kind = order_fan(gathered, fan, fans);
+    if (fans > 0xFFFF) slot.kind = Kind::kComplex;
+    slot.fans = static_cast<std::uint16_t>(fans);
+  };
+  // In parallel into the room of every ring; a vertex of several fans whose separators do not
+  // fit (more than kSlack / 2 + 1 fans) is left for a serial pass that moves it to the end.
+  std::vector<std::uint8_t> too_big(vertex_count, 0);
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, vertex_count),
+                    [&](const tbb::blocked_range<std::size_t>& range) {
+                      FanIndex& fan = work.local();
+                      for (std::size_t v = range.begin(); v != range.end(); ++v) {
+                        order(static_cast<std::uint32_t>(v), fan);
+                        Slot& slot = slots_[v];
+                        if (slot.kind == Kind::kComplex) continue;
+                        if (fan.entries.size() > slot.capacity) {
+                          too_big[v] = 1;
+                          continue;
+                        }
+                        std::copy(fan.entries.begin(), fan.entries.end(),
+                                  data_.begin() + slot.offset);
+                        slot.size = static_cast<std::uint32_t>(fan.entries.size());
+                      }
+                    });
+  for (std::uint32_t v = 0; v < vertex_count; ++v)
+    if (too_big[v]) {
+      FanIndex& fan = work.local();
+      order(v, fan);
+      assign(v, fan.entries.data(), fan.entries.size());
+    }
+  // Locked: v of several fans or complex, or a corner of a complex vertex's faces (its
+  // neighbours; a complex vertex has no ring to list them). Complex vertices are few: their
+  // faces are visited, not every vertex's ring.
+  for (std::uint32_t v = 0; v < vertex_count; ++v) {
+    if (kind(v) == Kind::kFans) locked_[v] = 1;
+    if (kind(v) != Kind::kComplex) continue;
+    locked_[v] = 1;
+    for (const std::uint32_t* t = around.begin(v); t != around.end(v); ++t)
+      for (const std::uint32_t corner : triangles[*t]) locked_[corner] = 1;
+  }
+  for (const Triangle& t : triangles)
+    if (kind(t[0]) == Kind::kComplex && kind(t[1]) == Kind::kComplex &&
+        kind(t[2]) == Kind::kComplex)
+      complex_only_.push_back(t);
+}
+
+std::uint32_t VertexRings::move_to_end(Slot& slot, std::size_t count) {
+  const std::uint32_t old_offset = slot.offset;
+  slot.offset = static_cast<std::uint32_t>(data_.size());
+  slot.capacity = static_cast<std::uint32_t>(count + count / 2 + kSlack);
+  data_.resize(data_.size() + slot.capacity);
+  return old_offset;
+}
+
+void VertexRings::assign(std::uint32_t v, const std::uint32_t* entries, std::size_t count) {
+  Slot& slot = slots_[v];
+  if (count > slot.capacity) move_to_end(slot, count);
+  std::copy(entries, entries + count, data_.begin() + slot.offset);
+  slot.size = static_cast<std::uint32_t>(count);
+}
+
+void VertexRings::erase_or_replace(std::uint32_t w, std::uint32_t u, std::uint32_t v, bool erase) {
+  Slot& slot = slots_[w];
+  std::uint32_t* ring = data_.data() + slot.offset;
+  std::uint32_t* at = std::find(ring, ring + slot.size, u);
+  if (at == ring + slot.size) return;  // (cannot happen: u is w's neighbour)
+  if (!erase) {
+    *at = v;
+    return;
+  }
+  std::copy(at + 1, ring + slot.size, at);
+  --slot.size;
+}
+
+std::size_t VertexRings::collapse(std::uint32_t u, std::uint32_t v) {
+  const std::size_t n = slots_[u].size;
+  const std::uint32_t* ring_u = begin(u);
+  const std::size_t j = static_cast<std::size_t>(std::find(ring_u, ring_u + n, v) - ring_u);
+  // The wings (opposite corners of the faces that vanish) and the run of u's ring between them,
+  // [run_begin, run_begin + run_length) cyclically, that takes u's place in v's ring.
+  std::uint32_t wing_a = 0, wing_b = 0;
+  std::size_t run_begin = 0, run_length = 0, removed = 0;
+  if (kind(u) == Kind::kClosed) {
+    wing_a = ring_u[(j + 1) % n];
+    wing_b = ring_u[(j + n - 1) % n];
+    run_begin = (j + 2) % n;
+    run_length = n - 3;
+    removed = 2;
+  } else {  // open: v is the first or the last border neighbour
+    wing_a = wing_b = j == 0 ? ring_u[1] : ring_u[n - 2];
+    run_begin = j == 0 ? 2 : 0;
+    run_length = n - 2;
+    removed = 1;
+  }
+  // v's ring with u replaced by the run: in place when it fits, else rebuilt at the end of the
+  // storage (which may move it all: pointers are taken after).
+  Slot& slot_v = slots_[v];
+  const std::size_t old_size = slot_v.size;
+  const std::size_t at = static_cast<std::size_t>(std::find(begin(v), end(v), u) - begin(v));
+  const std::size_t tail = at < old_size ? old_size - at - 1 : 0;  // entries after u
+  const std::size_t new_size = at + run_length + tail;
+  std::uint32_t* to = nullptr;
+  if (new_size > slot_v.capacity) {
+    const std::uint32_t old_offset = move_to_end(slot_v, new_size);
+    const std::uint32_t* from = data_.data() + old_offset;
+    to = data_.data() + slot_v.offset;
+    std::copy(from, from + at, to);
+    std::copy(from + at + 1, from + at + 1 + tail, to + at + run_length);
+  } else {
+    to = data_.data() + slot_v.offset;
+    std::uint32_t* const after = to + at + 1;
+    if (run_length > 1)
+      std::copy_backward(after, after + tail, to + new_size);
+    else if (run_length == 0)
+      std::copy(after, after + tail, to + at);
+  }
+  slot_v.size = static_cast<std::uint32_t>(new_size);
+  ring_u = begin(u);
+  for (std::size_t i = 0, k = run_begin; i < run_length; ++i, k = k + 1 == n ? 0 : k + 1)
+    to[at + i] = ring_u[k];
+  for (std::size_t i = 0; i < n; ++i) {
+    const std::uint32_t w = ring_u[i];
+    if (w != v) erase_or_replace(w, u, v, w == wing_a || w == wing_b);
+  }
+  slots_[u].size = 0;
+  return removed;
+}
+
+std::size_t VertexRings::neighbours_among(std::uint32_t v, const std::uint32_t* list,
+                                          std::size_t count) const {
+  using Lanes = simd::Uints4;  // four vertex numbers
+  std::size_t found = 0;
+  for (std::size_t first = 0; first < count; first += 8) {
+    std::uint32_t chunk[8];  // padded with v, which is not in its own ring
+    for (std::size_t k = 0; k < 8; ++k) chunk[k] = first + k < count ? list[first + k] : v;
+    Lanes low, high;
+    std::memcpy(&low, chunk, sizeof low);
+    std::memcpy(&high, chunk + 4, sizeof high);
+    Lanes hit_low = {0, 0, 0, 0}, hit_high = {0, 0, 0, 0};  // all ones where found
+    for (const std::uint32_t* x = begin(v); x != end(v); ++x) {
+      const std::uint32_t w = *x;
+      hit_low |= reinterpret_cast<Lanes>(low == w);
+      hit_high |= reinterpret_cast<Lanes>(high == w);
+    }
+    const Lanes hits = (hit_low & 1u) + (hit_high & 1u);
+    found += hits[0] + hits[1] + hits[2] + hits[3];
+  }
+  return found;
+}
+
+bool VertexRings::share_face(std::uint32_t v, std::uint32_t x, std::uint32_t y) const {
+  bool shared = false;
+  for_each_face(v, [&](std::uint32_t a, std::uint32_t b) {
+    shared = shared || (a == x && b == y) || (a == y && b == x);
+  });
+  return shared;
+}
+
+std::vector<Triangle> VertexRings::triangles() const {
+  std::vector<Triangle> out;
+  const auto owner_or_later = [this](std::uint32_t corner, std::uint32_t owner) {
+    return corner > owner || kind(corner) == Kind::kComplex;
+  };
+  for (std::uint32_t m = 0; m < slots_.size(); ++m)
+    for_each_face(m, [&](std::uint32_t b, std::uint32_t c) {
+      if (owner_or_later(b, m) && owner_or_later(c, m)) out.push_back({m, b, c});
+    });
+  out.insert(out.end(), complex_only_.begin(), complex_only_.end());
+  return out;
+}
+
+}  // namespace meshflow

@@ -1,0 +1,50 @@
+#pragma once
+// Contours and retriangulation of planar regions (the reconstruction thesis's optimisation
+// stage): each region's outer and inner contours are simplified with Douglas-Peucker and the
+// region is triangulated anew from its contour vertices alone (constrained Delaunay
+// triangulation of a polygon with holes, CGAL), so a flat wall of thousands of marching-cubes
+// triangles becomes a handful while staying joined to everything around it.
+
+#include <cstddef>
+
+#include "nodes/optimize/planar/planar_regions.h"
+#include "runtime/triangle_mesh.h"
+
+namespace meshflow {
+
+struct RetriangulationConfig {
+  /// Douglas-Peucker tolerance, metres: a contour vertex is dropped only when it lies within
+  /// this distance of the simplified contour (0: only vertices exactly on a straight run).
+  float contour_tolerance = 0.02f;
+};
+
+struct RetriangulationReport {
+  std::size_t regions = 0;
+  std::size_t retriangulated = 0;            ///< regions replaced by a new triangulation
+  std::size_t kept = 0;                      ///< regions left as they were (see the function)
+  std::size_t contour_vertices = 0;          ///< on the contours of retriangulated regions, before
+  std::size_t dropped_contour_vertices = 0;  ///< removed by Douglas-Peucker
+  std::size_t removed_faces = 0, added_faces = 0;
+  /// The largest distance of a dropped contour vertex from its simplified contour (metres).
+  double max_contour_deviation = 0.0;
+};
+
+/// Replaces the faces of every region of `segmentation` by a triangulation of its contours.
+/// Contours are split into chains at fixed vertices (those touching a face outside every
+/// region, three or more regions, or the mesh border and two regions); each chain, shared by
+/// the two regions on its sides or lying on the mesh border, is simplified once with
+/// Douglas-Peucker, so neighbours keep sharing their boundary and the mesh stays connected.
+/// Where a region touches itself at a vertex, its faces around that vertex are left out of it
+/// (they stay as they are) until every contour vertex lies on one loop. Regions are
+/// triangulated in their plane (vertices keep their 3D positions); a region whose projection
+/// folds or whose simplified contour would cross itself is kept as it was, with its contours
+/// unsimplified. Vertices no longer used (region
+/// interiors, dropped contour vertices) are removed; normals and colours follow the rest.
+/// Regions are processed in parallel; deterministic. O(F + sum over regions of c log c).
+/// `segmentation` must come from grow_planar_regions on HalfEdgeMesh(mesh) (face f of the
+/// half-edge mesh is mesh.triangles[f]). Throws meshflow::Error for non-manifold input.
+TriangleMesh retriangulate_regions(const TriangleMesh& mesh, const PlanarSegmentation& segmentation,
+                                   const RetriangulationConfig& config = {},
+                                   RetriangulationReport* report = nullptr);
+
+}  // namespace meshflow

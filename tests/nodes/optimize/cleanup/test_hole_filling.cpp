@@ -1,0 +1,124 @@
+#include "nodes/optimize/cleanup/hole_filling.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <set>
+
+#include "fixtures/mesh_fixtures.h"
+#include "runtime/half_edge_mesh.h"
+#include "test_support.h"
+
+namespace meshflow {
+namespace {
+
+constexpr std::uint32_t kGrid = 20;
+
+// The 20 x 20 grid with three holes: the star of vertex (5, 14) (6 edges), the 2 x 2 cells at
+// (12..14, 12..14) (8 edges) and the 5 x 5 cells at (3..8, 3..8) (20 edges).
+TriangleMesh holed_grid() {
+  const std::uint32_t star = 14 * kGrid + 5;
+  const TriangleMesh full = test::grid_mesh(kGrid);
+  TriangleMesh m = test::without_faces(full, [](const Eigen::Vector3f& c) {
+    auto in_block = [&](float lo, float hi) {
+      return c.x() > lo && c.x() < hi && c.y() > lo && c.y() < hi;
+    };
+    return in_block(12, 14) || in_block(3, 8);
+  });
+  m.triangles.erase(
+      std::remove_if(m.triangles.begin(), m.triangles.end(),
+                     [&](const Triangle& t) { return std::count(t.begin(), t.end(), star) > 0; }),
+      m.triangles.end());
+  return m;
+}
+
+double area(const TriangleMesh& m, const Triangle& t) {
+  return 0.5 * static_cast<double>((m.vertices[t[1]] - m.vertices[t[0]])
+                                       .cross(m.vertices[t[2]] - m.vertices[t[0]])
+                                       .norm());
+}
+
+TEST(HoleFilling, ClosesSmallHolesOfAFlatScanAndKeepsItsOutlineAndLargeHoles) {
+  const TriangleMesh in = holed_grid();
+  HoleFillingConfig config;
+  config.max_edges = 10;
+  HoleFillingReport report;
+  const TriangleMesh out = fill_holes(in, config, &report);
+  EXPECT_EQ(report.loops, 4u);
+  EXPECT_EQ(report.outer_borders, 1u);
+  EXPECT_EQ(report.too_large, 1u);
+  EXPECT_EQ(report.filled, 2u);
+  EXPECT_EQ(report.not_fillable, 0u);
+  EXPECT_EQ(report.added_triangles, 4u + 6u);  // a hexagon and an octagon
+  EXPECT_EQ(out.vertices, in.vertices);
+  ASSERT_EQ(out.triangles.size(), in.triangles.size() + report.added_triangles);
+  EXPECT_TRUE(std::equal(in.triangles.begin(), in.triangles.end(), out.triangles.begin()));
+
+  ASSERT_EQ(test::half_edge_problem(out), "");
+  const HalfEdgeMesh h(out);
+  const auto loops = h.border_loops();
+  ASSERT_EQ(loops.size(), 2u);  // the outline and the 20-edge hole
+  std::set<std::size_t> sizes{loops[0].size(), loops[1].size()};
+  EXPECT_EQ(sizes, (std::set<std::size_t>{20u, 4u * (kGrid - 1)}));
+  // New triangles face +z like the grid, have area, and tile the holes exactly.
+  double added = 0.0;
+  for (std::size_t t = in.triangles.size(); t < out.triangles.size(); ++t) {
+    EXPECT_GT(face_normal(out, out.triangles[t]).z(), 0.999f);
+    EXPECT_GT(area(out, out.triangles[t]), 0.1);
+    added += area(out, out.triangles[t]);
+  }
+  EXPECT_NEAR(added, 3.0 + 4.0, 1e-4);  // the star covered 6 half cells, the block 4 cells
+  const EdgeStatistics edges = edge_statistics(out);
+  EXPECT_EQ(edges.non_manifold_edges, 0u);
+  EXPECT_EQ(edges.inconsistent_edges, 0u);
+}
+
+TEST(HoleFilling, TheOnlyLoopOfAComponentIsItsOutlineUnlessToldOtherwise) {
+  // An octahedron without its last face: one loop of three edges.
+  TriangleMesh m;
+  m.vertices = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
+  m.triangles = {{0, 2, 4}, {2, 1, 4}, {1, 3, 4}, {3, 0, 4},
+                 {2, 0, 5}, {1, 2, 5}, {3, 1, 5}};  // {0, 3, 5} missing
+  HoleFillingReport report;
+  EXPECT_EQ(fill_holes(m, {}, &report).triangles.size(), m.triangles.size());
+  EXPECT_EQ(report.outer_borders, 1u);
+  EXPECT_EQ(report.filled, 0u);
+
+  HoleFillingConfig closed;
+  closed.keep_outer_border = false;
+  const TriangleMesh out = fill_holes(m, closed, &report);
+  EXPECT_EQ(report.filled, 1u);
+  ASSERT_EQ(out.triangles.size(), 8u);
+  EXPECT_EQ(edge_statistics(out).boundary_edges, 0u);  // closed again
+  EXPECT_EQ(HalfEdgeMesh(out).check(), "");
+  const Eigen::Vector3f n = face_normal(out, out.triangles.back());
+  EXPECT_GT(n.dot(Eigen::Vector3f(1, -1, -1).normalized()), 0.999f);  // faces outwards
+}
+
+TEST(HoleFilling, StraightBordersGetNoTrianglesWithoutArea) {
+  // A 2 x 3 cell hole: its border has three collinear vertices on each long side.
+  const TriangleMesh m = test::without_faces(test::grid_mesh(8), [](const Eigen::Vector3f& c) {
+    return c.x() > 2 && c.x() < 4 && c.y() > 2 && c.y() < 5;
+  });
+  HoleFillingReport report;
+  const TriangleMesh out = fill_holes(m, {}, &report);
+  EXPECT_EQ(report.filled, 1u);
+  EXPECT_EQ(report.added_triangles, 8u);
+  double added = 0.0;
+  for (std::size_t t = m.triangles.size(); t < out.triangles.size(); ++t) {
+    EXPECT_GT(area(out, out.triangles[t]), 0.1);
+    added += area(out, out.triangles[t]);
+  }
+  EXPECT_NEAR(added, 6.0, 1e-4);
+  EXPECT_EQ(HalfEdgeMesh(out).check(), "");
+}
+
+TEST(HoleFilling, SameTrianglesWithOneAndTwoThreads) {
+  const TriangleMesh in = holed_grid();
+  const auto one = test::with_threads(1, [&] { return fill_holes(in).triangles; });
+  const auto two = test::with_threads(2, [&] { return fill_holes(in).triangles; });
+  EXPECT_EQ(one, two);
+}
+
+}  // namespace
+}  // namespace meshflow

@@ -180,153 +180,18 @@ class Decimator {
     for (std::size_t v = 0; v < mesh.vertices.size(); ++v) terms_[v].own_error = q_[v].error(p(v));
   }
 
+  // Decimates to at most `target` faces, or until no collapse is valid, in passes (see the
+  // class comment): mark the vertices a pass changed, bound their costs, sort, walk. Returns the
+  // mesh that remains, vertices compacted.
   TriangleMesh run(std::size_t target, QemReport& report) {
-    std::size_t alive = in_.triangles.size();
-    const std::size_t n = in_.vertices.size();
-    std::vector<Candidate> best(n);
-    // Per vertex, in a pass (read together, so side by side).
-    std::vector<PassNumbers> pass(n);
-    // `validated`: best[u] is u's best collapse, fully evaluated (else a lower bound of its cost).
-    // (A vertex is listed once per pass, so a removed one is never met again in it.)
-    std::vector<std::uint8_t> dirty(n, 1), validated(n, 0);
-    bool stalled = false;                // the last pass collapsed nothing
-    std::vector<std::uint32_t> targets;  // the kept vertex of every collapse of the last pass
-    std::vector<std::uint64_t> order;    // a pass's candidates, cheapest first (see below)
-    const int vertex_bits = bits_for(n);
-    const std::uint64_t vertex_mask = (std::uint64_t{1} << vertex_bits) - 1;
-    while (alive > target) {
-      // After u -> v, exactly the vertices of v's faces need a new best collapse: a vertex w's
-      // best reads its own faces (changed only around v), its neighbours' quadrics (only v's
-      // changed) and, for the link condition of w -> x, the common neighbours of w and x,
-      // which change only when w was next to u or is next to v.
-      // Of those, a vertex w that was not next to any u of the pass (no `changed` number) kept its
-      // faces; only costs towards a v grew and link conditions towards vertices next to a u
-      // could fail. So its best collapse w -> y stays the best unless y changed (next to a
-      // u, or a v), and a w with no valid collapse keeps none: neither is re-evaluated.
-      // "Changed" counts from w's last evaluation: for a w the walk evaluated again, only the
-      // collapses after that one (the same output as evaluating it again, for less work).
-      if (!targets.empty()) {
-        std::fill(dirty.begin(), dirty.end(), 0);
-        const auto mark_dirty = [&](std::uint32_t x) {
-          dirty[x] = pass[x].changed > pass[x].evaluated ||
-                     (best[x].cost < kNoCollapse && pass[best[x].to].changed > pass[x].evaluated);
-        };
-        for (std::size_t j = 0; j < targets.size(); ++j) {
-          // (Targets lie all over the mesh: their rings are requested ahead.)
-          if (j + 2 * kLookAhead < targets.size())
-            rings_.prefetch_slot(targets[j + 2 * kLookAhead]);
-          if (j + kLookAhead < targets.size()) rings_.prefetch_ring(targets[j + kLookAhead]);
-          const std::uint32_t v = targets[j];
-          if (rings_.face_count(v) == 0) continue;  // collapsed later in the pass
-          mark_dirty(v);
-          for (const std::uint32_t* x = rings_.begin(v); x != rings_.end(v); ++x)
-            if (*x != VertexRings::kSeparator) mark_dirty(*x);
-        }
-      }
-      targets.clear();
-      tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n),
-                        [&](const tbb::blocked_range<std::size_t>& range) {
-                          Scratch& scratch = local_scratch();  // a lookup: once per range
-                          for (std::size_t u = range.begin(); u != range.end(); ++u)
-                            if (dirty[u]) {
-                              best[u] = cost_bound(static_cast<std::uint32_t>(u), scratch);
-                              validated[u] = 0;
-                            }
-                        });
-      // Cheapest first: keys (cost as float bits, vertex), radix-sorted; non-negative floats
-      // order as their bit patterns, equal costs by vertex. (A comparison sort of the
-      // candidates was 8 % of the decimation.)
-      order.clear();
-      for (const Candidate& c : best)
-        if (c.cost < kNoCollapse) order.push_back(order_key(c, vertex_bits));
-      if (order.empty()) break;
-      radix_sort(order);
-      const auto candidate = [&](std::size_t i) -> const Candidate& {
-        return best[order[i] & vertex_mask];
-      };
-      // Greedy within the pass, but only up to kPassLimit x the bound of the collapse that would
-      // reach the target if every collapse removed two faces, so cheap collapses elsewhere get
-      // their turn in the next pass before expensive ones are taken here.
-      const std::size_t goal = std::min(order.size(), (alive - target + 1) / 2);
-      const double limit = kPassLimit * candidate(std::max<std::size_t>(goal, 1) - 1).cost;
-      std::fill(pass.begin(), pass.end(), PassNumbers{});
-      std::size_t collapsed = 0;
-      std::uint32_t clock = 0;  // collapses so far in the pass, numbering them
-      Scratch& scratch = local_scratch();
-      // Chunks of walk_chunk candidates (0: the whole walk, re-evaluating serially).
-      const bool ahead_in_parallel = cfg_.walk_chunk != 0;
-      const std::size_t chunk = ahead_in_parallel ? cfg_.walk_chunk : order.size();
-      std::vector<Candidate> ahead(ahead_in_parallel ? chunk : 0);
-      std::vector<std::uint8_t> has_ahead(ahead.size());
-      bool stop = false;
-      for (std::size_t first = 0; first < order.size() && !stop; first += chunk) {
-        const std::size_t last = std::min(order.size(), first + chunk);
-        // The chunk's candidates that hold a bound or whose ends changed since their evaluation,
-        // evaluated in parallel on the mesh as it is now (nothing changes it meanwhile).
-        const std::uint32_t chunk_start = clock;
-        std::fill(has_ahead.begin(), has_ahead.end(), 0);
-        if (ahead_in_parallel)
-          tbb::parallel_for(tbb::blocked_range<std::size_t>(first, last, 16),
-                            [&](const tbb::blocked_range<std::size_t>& range) {
-                              Scratch& local = local_scratch();
-                              for (std::size_t i = range.begin(); i != range.end(); ++i) {
-                                const Candidate& c = candidate(i);
-                                if (c.cost > limit || (validated[c.from] && !pass[c.from].changed &&
-                                                       !pass[c.to].changed))
-                                  continue;
-                                has_ahead[i - first] = 1;
-                                ahead[i - first] = best_collapse(c.from, local);
-                              }
-                            });
-        for (std::size_t i = first; i < last; ++i) {
-          // The walk goes in cost order, all over the mesh: what a collapse a few steps ahead
-          // reads is requested now (2-9 % of the decimation on a noisy depth frame). A serial
-          // walk also evaluates most of its candidates again, reading u's whole neighbourhood:
-          // that is requested in three stages, each from addresses the previous one brought in
-          // (another ~8 % on a Redwood frame; with chunks, evaluated ahead in parallel, it was
-          // slower).
-          if (ahead_in_parallel) {
-            if (i + kLookAhead < order.size()) prefetch(candidate(i + kLookAhead), false);
-          } else {
-            if (i + 3 * kLookAhead < order.size())
-              __builtin_prefetch(&best[order[i + 3 * kLookAhead] & vertex_mask]);
-            if (i + 2 * kLookAhead < order.size()) prefetch_slots(candidate(i + 2 * kLookAhead));
-            if (i + kLookAhead < order.size()) prefetch(candidate(i + kLookAhead), true);
-            if (i + kLookAhead / 2 < order.size()) prefetch_corners(candidate(i + kLookAhead / 2));
-            if (i + kLookAhead / 4 < order.size())
-              prefetch_neighbour_rings(candidate(i + kLookAhead / 4));
-          }
-          Candidate c = candidate(i);
-          if (alive <= target || (c.cost > limit && collapsed > 0)) {
-            stop = true;
-            break;
-          }
-          std::uint32_t evaluated_at = 0;  // the pass's evaluation
-          if (ahead_in_parallel && has_ahead[i - first]) {
-            c = ahead[i - first];
-            evaluated_at = chunk_start;
-            validated[c.from] = 1;
-          }
-          // A bound, or u or its target took part in a collapse, or lost a neighbour, since the
-          // evaluation: u's best collapse on the mesh as it is now, with every check. Taken if it
-          // stays within the limit (else u waits for the next pass).
-          if (!validated[c.from] || pass[c.from].changed > evaluated_at ||
-              (c.cost < kNoCollapse && pass[c.to].changed > evaluated_at)) {
-            c = best_collapse(c.from, scratch);
-            evaluated_at = clock;
-            validated[c.from] = 1;
-          }
-          if (!(c.cost <= limit)) {  // kept: the next pass re-evaluates it only if it changes
-            best[c.from] = c;
-            pass[c.from].evaluated = evaluated_at;
-            continue;
-          }
-          alive -= collapse(c.from, c.to, ++clock, pass);
-          targets.push_back(c.to);
-          best[c.from].cost = kNoCollapse;  // removed
-          ++collapsed;
-        }
-      }
+    start(target);
+    bool stalled = false;  // the last pass collapsed nothing
+    while (alive_ > target_) {
+      if (!targets_.empty()) mark_changed_vertices();
+      targets_.clear();
+      bound_marked_costs();
+      if (!sort_candidates()) break;
+      const std::size_t collapsed = walk_pass();
       report.collapses += collapsed;
       ++report.passes;
       // A pass may collapse nothing when every candidate it walked cost more, evaluated, than its
@@ -335,16 +200,12 @@ class Decimator {
       if (collapsed == 0) {
         if (stalled) break;
         stalled = true;
-        std::fill(dirty.begin(), dirty.end(), 0);
+        std::fill(dirty_.begin(), dirty_.end(), 0);
       } else {
         stalled = false;
       }
     }
-    for (const Scratch& scratch : scratch_) {
-      report.rejected_topology += scratch.rejected.rejected_topology;
-      report.rejected_normal += scratch.rejected.rejected_normal;
-      report.rejected_border += scratch.rejected.rejected_border;
-    }
+    add_refusals(report);
     // Faces come out of the rings rotated and reordered (VertexRings::triangles()); when
     // nothing collapsed, the input's faces are returned as given.
     if (report.collapses == 0) return compact_vertices(in_, in_.triangles);
@@ -352,6 +213,195 @@ class Decimator {
   }
 
  private:
+  // Phase 0: the run's state, every vertex marked for a bound.
+  void start(std::size_t target) {
+    const std::size_t n = in_.vertices.size();
+    target_ = target;
+    alive_ = in_.triangles.size();
+    best_.assign(n, Candidate{});
+    pass_.assign(n, PassNumbers{});
+    dirty_.assign(n, 1);
+    validated_.assign(n, 0);
+    targets_.clear();
+    order_.clear();
+    vertex_bits_ = bits_for(n);
+    vertex_mask_ = (std::uint64_t{1} << vertex_bits_) - 1;
+  }
+
+  // Phase 1: marks the vertices whose best collapse the last pass may have changed.
+  // After u -> v, exactly the vertices of v's faces need a new best collapse: a vertex w's
+  // best reads its own faces (changed only around v), its neighbours' quadrics (only v's
+  // changed) and, for the link condition of w -> x, the common neighbours of w and x,
+  // which change only when w was next to u or is next to v.
+  // Of those, a vertex w that was not next to any u of the pass (no `changed` number) kept its
+  // faces; only costs towards a v grew and link conditions towards vertices next to a u
+  // could fail. So its best collapse w -> y stays the best unless y changed (next to a
+  // u, or a v), and a w with no valid collapse keeps none: neither is re-evaluated.
+  // "Changed" counts from w's last evaluation: for a w the walk evaluated again, only the
+  // collapses after that one (the same output as evaluating it again, for less work).
+  void mark_changed_vertices() {
+    std::fill(dirty_.begin(), dirty_.end(), 0);
+    const auto mark_dirty = [&](std::uint32_t x) {
+      dirty_[x] = pass_[x].changed > pass_[x].evaluated ||
+                  (best_[x].cost < kNoCollapse && pass_[best_[x].to].changed > pass_[x].evaluated);
+    };
+    for (std::size_t j = 0; j < targets_.size(); ++j) {
+      // (Targets lie all over the mesh: their rings are requested ahead.)
+      if (j + 2 * kLookAhead < targets_.size()) rings_.prefetch_slot(targets_[j + 2 * kLookAhead]);
+      if (j + kLookAhead < targets_.size()) rings_.prefetch_ring(targets_[j + kLookAhead]);
+      const std::uint32_t v = targets_[j];
+      if (rings_.face_count(v) == 0) continue;  // collapsed later in the pass
+      mark_dirty(v);
+      for (const std::uint32_t* x = rings_.begin(v); x != rings_.end(v); ++x)
+        if (*x != VertexRings::kSeparator) mark_dirty(*x);
+    }
+  }
+
+  // Phase 2: a lower bound of the best collapse of every marked vertex, in parallel on the mesh
+  // as the pass starts.
+  void bound_marked_costs() {
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, best_.size()),
+                      [&](const tbb::blocked_range<std::size_t>& range) {
+                        Scratch& scratch = local_scratch();  // a lookup: once per range
+                        for (std::size_t u = range.begin(); u != range.end(); ++u)
+                          if (dirty_[u]) {
+                            best_[u] = cost_bound(static_cast<std::uint32_t>(u), scratch);
+                            validated_[u] = 0;
+                          }
+                      });
+  }
+
+  // Phase 3: the candidates cheapest first, as keys (cost as float bits, vertex), radix-sorted;
+  // non-negative floats order as their bit patterns, equal costs by vertex. (A comparison sort of
+  // the candidates was 8 % of the decimation.) False when no vertex has a collapse.
+  bool sort_candidates() {
+    order_.clear();
+    for (const Candidate& c : best_)
+      if (c.cost < kNoCollapse) order_.push_back(order_key(c, vertex_bits_));
+    if (order_.empty()) return false;
+    radix_sort(order_);
+    return true;
+  }
+
+  // The i-th candidate of the pass's order.
+  const Candidate& candidate(std::size_t i) const { return best_[order_[i] & vertex_mask_]; }
+
+  // Phase 4: the walk. Greedy within the pass, but only up to kPassLimit x the bound of the
+  // collapse that would reach the target if every collapse removed two faces, so cheap collapses
+  // elsewhere get their turn in the next pass before expensive ones are taken here. In chunks of
+  // walk_chunk candidates (0: the whole walk, re-evaluating serially). Returns the collapses.
+  std::size_t walk_pass() {
+    const std::size_t goal = std::min(order_.size(), (alive_ - target_ + 1) / 2);
+    Walk walk;
+    walk.limit = kPassLimit * candidate(std::max<std::size_t>(goal, 1) - 1).cost;
+    std::fill(pass_.begin(), pass_.end(), PassNumbers{});
+    const bool ahead_in_parallel = cfg_.walk_chunk != 0;
+    const std::size_t chunk = ahead_in_parallel ? cfg_.walk_chunk : order_.size();
+    ahead_.resize(ahead_in_parallel ? chunk : 0);
+    has_ahead_.resize(ahead_.size());
+    for (std::size_t first = 0; first < order_.size() && !walk.stop; first += chunk) {
+      const std::size_t last = std::min(order_.size(), first + chunk);
+      walk.chunk_start = walk.clock;
+      std::fill(has_ahead_.begin(), has_ahead_.end(), 0);
+      if (ahead_in_parallel) evaluate_ahead(first, last, walk);
+      walk_chunk(first, last, ahead_in_parallel, walk);
+    }
+    return walk.collapsed;
+  }
+
+  // A walk's running numbers.
+  struct Walk {
+    double limit = 0.0;             ///< the pass's cost limit
+    std::size_t collapsed = 0;      ///< collapses in the pass
+    std::uint32_t clock = 0;        ///< collapses so far in the pass, numbering them
+    std::uint32_t chunk_start = 0;  ///< `clock` when the chunk started
+    bool stop = false;              ///< the target or the limit is reached
+  };
+
+  // The chunk's candidates that hold a bound or whose ends changed since their evaluation,
+  // evaluated in parallel on the mesh as it is now (nothing changes it meanwhile).
+  void evaluate_ahead(std::size_t first, std::size_t last, const Walk& walk) {
+    tbb::parallel_for(
+        tbb::blocked_range<std::size_t>(first, last, 16),
+        [&](const tbb::blocked_range<std::size_t>& range) {
+          Scratch& local = local_scratch();
+          for (std::size_t i = range.begin(); i != range.end(); ++i) {
+            const Candidate& c = candidate(i);
+            if (c.cost > walk.limit ||
+                (validated_[c.from] && !pass_[c.from].changed && !pass_[c.to].changed))
+              continue;
+            has_ahead_[i - first] = 1;
+            ahead_[i - first] = best_collapse(c.from, local);
+          }
+        });
+  }
+
+  // The walk goes in cost order, all over the mesh: what a collapse a few steps ahead of
+  // candidate i reads is requested now (2-9 % of the decimation on a noisy depth frame). A serial
+  // walk also evaluates most of its candidates again, reading u's whole neighbourhood: that is
+  // requested in three stages, each from addresses the previous one brought in (another ~8 % on
+  // a Redwood frame; with chunks, evaluated ahead in parallel, it was slower).
+  void prefetch_walk(std::size_t i, bool ahead_in_parallel) const {
+    const std::size_t n = order_.size();
+    if (ahead_in_parallel) {
+      if (i + kLookAhead < n) prefetch(candidate(i + kLookAhead), false);
+      return;
+    }
+    if (i + 3 * kLookAhead < n)
+      __builtin_prefetch(&best_[order_[i + 3 * kLookAhead] & vertex_mask_]);
+    if (i + 2 * kLookAhead < n) prefetch_slots(candidate(i + 2 * kLookAhead));
+    if (i + kLookAhead < n) prefetch(candidate(i + kLookAhead), true);
+    if (i + kLookAhead / 2 < n) prefetch_corners(candidate(i + kLookAhead / 2));
+    if (i + kLookAhead / 4 < n) prefetch_neighbour_rings(candidate(i + kLookAhead / 4));
+  }
+
+  // Walks candidates [first, last): each is taken, if it is still valid and within the limit
+  // on the mesh as it is now, or kept for the next pass.
+  void walk_chunk(std::size_t first, std::size_t last, bool ahead_in_parallel, Walk& walk) {
+    Scratch& scratch = local_scratch();
+    for (std::size_t i = first; i < last; ++i) {
+      prefetch_walk(i, ahead_in_parallel);
+      Candidate c = candidate(i);
+      if (alive_ <= target_ || (c.cost > walk.limit && walk.collapsed > 0)) {
+        walk.stop = true;
+        return;
+      }
+      std::uint32_t evaluated_at = 0;  // the pass's evaluation
+      if (ahead_in_parallel && has_ahead_[i - first]) {
+        c = ahead_[i - first];
+        evaluated_at = walk.chunk_start;
+        validated_[c.from] = 1;
+      }
+      // A bound, or u or its target took part in a collapse, or lost a neighbour, since the
+      // evaluation: u's best collapse on the mesh as it is now, with every check. Taken if it
+      // stays within the limit (else u waits for the next pass).
+      if (!validated_[c.from] || pass_[c.from].changed > evaluated_at ||
+          (c.cost < kNoCollapse && pass_[c.to].changed > evaluated_at)) {
+        c = best_collapse(c.from, scratch);
+        evaluated_at = walk.clock;
+        validated_[c.from] = 1;
+      }
+      if (!(c.cost <= walk.limit)) {  // kept: the next pass re-evaluates it only if it changes
+        best_[c.from] = c;
+        pass_[c.from].evaluated = evaluated_at;
+        continue;
+      }
+      alive_ -= collapse(c.from, c.to, ++walk.clock, pass_);
+      targets_.push_back(c.to);
+      best_[c.from].cost = kNoCollapse;  // removed
+      ++walk.collapsed;
+    }
+  }
+
+  // Phase 5: the refusals every thread counted.
+  void add_refusals(QemReport& report) const {
+    for (const Scratch& scratch : scratch_) {
+      report.rejected_topology += scratch.rejected.rejected_topology;
+      report.rejected_normal += scratch.rejected.rejected_normal;
+      report.rejected_border += scratch.rejected.rejected_border;
+    }
+  }
+
   const Eigen::Vector3f& p(std::uint32_t v) const { return terms_[v].position; }
 
   // Per-thread working memory of best_collapse().
@@ -608,6 +658,21 @@ class Decimator {
   std::vector<VertexTerms> terms_;
   float cos_turn_, cos_border_, cos_sharp_, cos2_min_angle_;
   mutable tbb::enumerable_thread_specific<Scratch> scratch_;  ///< best_collapse()'s memory
+
+  // A run's state (start()).
+  std::size_t target_ = 0, alive_ = 0;  ///< faces wanted, faces left
+  std::vector<Candidate> best_;         ///< per vertex: its best collapse, or a bound of it
+  std::vector<PassNumbers> pass_;       ///< per vertex, in a pass (read together: side by side)
+  /// dirty_: the vertex needs a new bound; validated_: best_[u] is u's best collapse, fully
+  /// evaluated (else a lower bound of its cost). (A vertex is listed once per pass, so a
+  /// removed one is never met again in it.)
+  std::vector<std::uint8_t> dirty_, validated_;
+  std::vector<std::uint32_t> targets_;  ///< the kept vertex of every collapse of the last pass
+  std::vector<std::uint64_t> order_;    ///< a pass's candidates, cheapest first (order_key())
+  int vertex_bits_ = 0;
+  std::uint64_t vertex_mask_ = 0;
+  std::vector<Candidate> ahead_;         ///< a chunk's candidates evaluated in parallel
+  std::vector<std::uint8_t> has_ahead_;  ///< 1 where ahead_ holds one
 };
 
 }  // namespace

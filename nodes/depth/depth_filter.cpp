@@ -3,6 +3,7 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <cassert>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
@@ -99,7 +100,7 @@ MESHFLOW_AVX2_CLONES std::size_t clear_edges(float* row, const std::uint8_t* mas
 }  // namespace
 
 cv::Mat occlusion_edges(const cv::Mat& depth_m, float high, float low) {
-  CV_Assert(depth_m.type() == CV_32F);
+  assert(depth_m.type() == CV_32F && "depth_m must be CV_32F metres");
   // 2 = strong edge, 1 = weak candidate, 0 = not an edge.
   cv::Mat level(depth_m.size(), CV_8U);  // every pixel written below
   tbb::parallel_for(0, depth_m.rows, [&](int v) {

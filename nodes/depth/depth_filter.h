@@ -35,7 +35,8 @@ cv::Mat filter_depth(const DepthFrame& frame, const DepthFilterConfig& config,
                      DepthFilterCounts* counts = nullptr);
 
 /// Occlusion-edge mask (CV_8U, 255 = edge) of a metric depth image (0 = invalid), with
-/// hysteresis between `low` and `high` relative jumps. O(pixels).
+/// hysteresis between `low` and `high` relative jumps. `depth_m` must be CV_32F (asserted).
+/// O(pixels).
 cv::Mat occlusion_edges(const cv::Mat& depth_m, float high, float low);
 
 }  // namespace meshflow

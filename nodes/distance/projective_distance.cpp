@@ -3,6 +3,7 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <cassert>
 #include <cmath>
 
 namespace meshflow {
@@ -31,7 +32,7 @@ DistanceField projective_distance(const SparseGrid& grid, const cv::Mat& depth_m
                                   const PinholeIntrinsics& k,
                                   const Eigen::Isometry3f& T_world_camera,
                                   const ProjectiveDistanceConfig& config) {
-  CV_Assert(depth_m.type() == CV_32F);
+  assert(depth_m.type() == CV_32F && "depth_m must be CV_32F metres");
   const std::size_t n = grid.corners.size();
   const Eigen::Isometry3f T_camera_world = T_world_camera.inverse();
   const float truncation = config.truncation_voxels * grid.voxel_size;

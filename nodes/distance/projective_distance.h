@@ -21,7 +21,8 @@ struct ProjectiveDistanceConfig {
 /// `depth_m`: filtered depth in metres (CV_32F, 0 = invalid) with `intrinsics`, seen from
 /// `T_world_camera`. Depth is interpolated bilinearly when the 4 surrounding pixels are valid
 /// and within 5 % of each other, else taken from the nearest pixel. Corners projecting outside
-/// the image or onto invalid pixels are invalid. Parallel over corners; O(corners).
+/// the image or onto invalid pixels are invalid. `depth_m` must be CV_32F (asserted). Parallel
+/// over corners; O(corners).
 DistanceField projective_distance(const SparseGrid& grid, const cv::Mat& depth_m,
                                   const PinholeIntrinsics& intrinsics,
                                   const Eigen::Isometry3f& T_world_camera,

@@ -19,6 +19,115 @@ struct CellFeatures {
   std::array<FeaturePoint, kMaxLoops> loop;
 };
 
+// The active cells of a grid and their crossed edges, which every phase reads.
+struct ActiveCells {
+  const SparseGrid& grid;
+  const CellPatterns& cells;
+  const EdgeVertexTable& edges;
+
+  // The vertex on local cube edge e of active cell a.
+  std::uint32_t vertex(std::size_t a, int e) const {
+    return edges.vertex(cube_edge_segment(edges, grid.cell_corners[cells.active[a]], e));
+  }
+};
+
+// Moves every edge vertex onto the data along its grid edge (directed distance); returns the
+// data's normal at each.
+std::vector<Eigen::Vector3f> move_onto_data(std::vector<Eigen::Vector3f>& vertices,
+                                            const ActiveCells& at, const DistanceField& field,
+                                            const PointCloud& cloud, const SpatialIndex& index,
+                                            float iso, const DirectedDistanceConfig& directed) {
+  const SparseGrid& grid = at.grid;
+  std::vector<Eigen::Vector3f> normals(vertices.size());
+  tbb::parallel_for(std::size_t{0}, vertices.size(), [&](std::size_t v) {
+    const std::size_t s = at.edges.segment_of_vertex(static_cast<std::uint32_t>(v));
+    const std::uint32_t lower = at.edges.lower(s);
+    const EdgeHit hit = directed_edge_hit(
+        grid.corner_position(lower), static_cast<int>(at.edges.direction(s)), grid.voxel_size,
+        field.values[lower] < iso, vertices[v], iso, cloud, index, grid.voxel_size, directed);
+    vertices[v] = hit.position;
+    normals[v] = hit.normal;
+  });
+  return normals;
+}
+
+// The feature vertex of every loop of every active cell, and where each cell's feature vertices
+// and triangles start in the output (exclusive sums).
+struct CellLayout {
+  std::vector<CellFeatures> features;
+  std::vector<std::uint32_t> vertex_offsets, triangle_offsets;
+  std::uint32_t feature_vertices = 0, triangles = 0;
+};
+
+CellLayout detect_features(const ActiveCells& at, const std::vector<Eigen::Vector3f>& vertices,
+                           const std::vector<Eigen::Vector3f>& normals,
+                           const SharpFeatureConfig& feature) {
+  const auto& cases = cube_cases();
+  const std::size_t count = at.cells.active.size();
+  CellLayout layout;
+  layout.features.resize(count);
+  layout.vertex_offsets.resize(count);
+  layout.triangle_offsets.resize(count);
+  tbb::parallel_for(std::size_t{0}, count, [&](std::size_t a) {
+    const auto& corners = at.grid.cell_corners[at.cells.active[a]];
+    const Eigen::AlignedBox3f box(at.grid.corner_position(corners[0]),
+                                  at.grid.corner_position(corners[7]));
+    const CubeCase& cube = cases[at.cells.pattern[at.cells.active[a]]];
+    std::uint32_t feature_count = 0, tri_count = 0;
+    for (std::size_t l = 0; l < cube.loops.size(); ++l) {
+      const auto& loop = cube.loops[l];
+      std::array<Eigen::Vector3f, 12> points, loop_normals;
+      for (std::size_t k = 0; k < loop.size(); ++k) {
+        const std::uint32_t v = at.vertex(a, loop[k]);
+        points[k] = vertices[v];
+        loop_normals[k] = normals[v];
+      }
+      FeaturePoint& f = layout.features[a].loop[l];
+      f = sharp_feature(points.data(), loop_normals.data(), loop.size(), box, feature);
+      const bool fan = f.kind != FeatureKind::kNone;
+      feature_count += fan ? 1u : 0u;
+      tri_count += static_cast<std::uint32_t>(fan ? loop.size() : loop.size() - 2);
+    }
+    layout.vertex_offsets[a] = feature_count;
+    layout.triangle_offsets[a] = tri_count;
+  });
+  layout.feature_vertices = exclusive_scan_in_place(layout.vertex_offsets);
+  layout.triangles = exclusive_scan_in_place(layout.triangle_offsets);
+  return layout;
+}
+
+// Fans around feature vertices, marching cubes' triangles elsewhere, in cell and loop order;
+// feature vertices numbered from `first_feature`.
+void emit_triangles(const ActiveCells& at, const CellLayout& layout, std::uint32_t first_feature,
+                    TriangleMesh& mesh) {
+  const auto& cases = cube_cases();
+  tbb::parallel_for(std::size_t{0}, at.cells.active.size(), [&](std::size_t a) {
+    const CubeCase& cube = cases[at.cells.pattern[at.cells.active[a]]];
+    std::uint32_t next_feature = first_feature + layout.vertex_offsets[a];
+    std::uint32_t out = layout.triangle_offsets[a];
+    std::size_t table_tri = 0;  // the loop's first triangle in cube.triangles
+    for (std::size_t l = 0; l < cube.loops.size(); ++l) {
+      const auto& loop = cube.loops[l];
+      const std::size_t n = loop.size();
+      const FeaturePoint& feature = layout.features[a].loop[l];
+      if (feature.kind != FeatureKind::kNone) {
+        const std::uint32_t f = next_feature++;
+        mesh.vertices[f] = feature.position;
+        for (std::size_t k = 0; k < n; ++k)
+          mesh.triangles[out++] =
+              Triangle{f, at.vertex(a, loop[(k + 1) % n]), at.vertex(a, loop[k])};
+      } else {
+        for (std::size_t k = 0; k + 2 < n; ++k) {
+          const auto& tri = cube.triangles[table_tri + k];
+          mesh.triangles[out++] =
+              Triangle{at.vertex(a, tri[0]), at.vertex(a, tri[1]), at.vertex(a, tri[2])};
+        }
+      }
+      table_tri += n - 2;
+    }
+  });
+}
+
 }  // namespace
 
 TriangleMesh extended_marching_cubes(const SparseGrid& grid, const DistanceField& field,
@@ -26,84 +135,18 @@ TriangleMesh extended_marching_cubes(const SparseGrid& grid, const DistanceField
                                      const ExtractConfig& config, const ExtendedMcConfig& emc) {
   if (cloud.normals.size() != cloud.positions.size())
     throw Error("extract", "method emc", "needs point normals");
-  const auto& cases = cube_cases();
   const CellPatterns cells = cell_patterns(grid, field, config.iso);
-  const auto& active = cells.active;
   EdgeVertexTable edges = mark_crossed_cube_edges(grid, cells);
   TriangleMesh mesh;
   mesh.vertices = edges.place_vertices(grid, field, config.iso);
-
-  // Directed distances: each crossing moves onto the data along its grid edge.
-  const std::size_t edge_vertices = mesh.vertices.size();
-  std::vector<Eigen::Vector3f> hit_normals(edge_vertices);
-  tbb::parallel_for(std::size_t{0}, edge_vertices, [&](std::size_t v) {
-    const std::size_t s = edges.segment_of_vertex(static_cast<std::uint32_t>(v));
-    const std::uint32_t lower = edges.lower(s);
-    const EdgeHit hit =
-        directed_edge_hit(grid.corner_position(lower), static_cast<int>(edges.direction(s)),
-                          grid.voxel_size, field.values[lower] < config.iso, mesh.vertices[v],
-                          config.iso, cloud, index, grid.voxel_size, emc.directed);
-    mesh.vertices[v] = hit.position;
-    hit_normals[v] = hit.normal;
-  });
-
-  // Feature detection per loop; counts of feature vertices and triangles per cell.
-  std::vector<CellFeatures> features(active.size());
-  std::vector<std::uint32_t> vertex_offsets(active.size()), tri_offsets(active.size());
-  tbb::parallel_for(std::size_t{0}, active.size(), [&](std::size_t a) {
-    const auto& corners = grid.cell_corners[active[a]];
-    const Eigen::AlignedBox3f box(grid.corner_position(corners[0]),
-                                  grid.corner_position(corners[7]));
-    const CubeCase& cube = cases[cells.pattern[active[a]]];
-    std::uint32_t feature_count = 0, tri_count = 0;
-    for (std::size_t l = 0; l < cube.loops.size(); ++l) {
-      const auto& loop = cube.loops[l];
-      std::array<Eigen::Vector3f, 12> points, normals;
-      for (std::size_t k = 0; k < loop.size(); ++k) {
-        const std::uint32_t v = edges.vertex(cube_edge_segment(edges, corners, loop[k]));
-        points[k] = mesh.vertices[v];
-        normals[k] = hit_normals[v];
-      }
-      features[a].loop[l] =
-          sharp_feature(points.data(), normals.data(), loop.size(), box, emc.feature);
-      const bool fan = features[a].loop[l].kind != FeatureKind::kNone;
-      feature_count += fan ? 1u : 0u;
-      tri_count += static_cast<std::uint32_t>(fan ? loop.size() : loop.size() - 2);
-    }
-    vertex_offsets[a] = feature_count;
-    tri_offsets[a] = tri_count;
-  });
-  const std::uint32_t feature_total = exclusive_scan_in_place(vertex_offsets);
-  mesh.vertices.resize(edge_vertices + feature_total);
-  mesh.triangles.resize(exclusive_scan_in_place(tri_offsets));
-
-  // Fans around feature vertices, marching cubes' triangles elsewhere, in cell and loop order.
-  tbb::parallel_for(std::size_t{0}, active.size(), [&](std::size_t a) {
-    const auto& corners = grid.cell_corners[active[a]];
-    auto vertex_of = [&](int e) { return edges.vertex(cube_edge_segment(edges, corners, e)); };
-    const CubeCase& cube = cases[cells.pattern[active[a]]];
-    std::uint32_t next_feature = static_cast<std::uint32_t>(edge_vertices) + vertex_offsets[a];
-    std::uint32_t at = tri_offsets[a];
-    std::size_t table_tri = 0;  // the loop's first triangle in cube.triangles
-    for (std::size_t l = 0; l < cube.loops.size(); ++l) {
-      const auto& loop = cube.loops[l];
-      const std::size_t n = loop.size();
-      const FeaturePoint& feature = features[a].loop[l];
-      if (feature.kind != FeatureKind::kNone) {
-        const std::uint32_t f = next_feature++;
-        mesh.vertices[f] = feature.position;
-        for (std::size_t k = 0; k < n; ++k)
-          mesh.triangles[at++] = Triangle{f, vertex_of(loop[(k + 1) % n]), vertex_of(loop[k])};
-      } else {
-        for (std::size_t k = 0; k + 2 < n; ++k) {
-          const auto& tri = cube.triangles[table_tri + k];
-          mesh.triangles[at++] = Triangle{vertex_of(tri[0]), vertex_of(tri[1]), vertex_of(tri[2])};
-        }
-      }
-      table_tri += n - 2;
-    }
-  });
-
+  const ActiveCells active{grid, cells, edges};
+  const auto edge_vertices = static_cast<std::uint32_t>(mesh.vertices.size());
+  const std::vector<Eigen::Vector3f> normals =
+      move_onto_data(mesh.vertices, active, field, cloud, index, config.iso, emc.directed);
+  const CellLayout layout = detect_features(active, mesh.vertices, normals, emc.feature);
+  mesh.vertices.resize(edge_vertices + layout.feature_vertices);
+  mesh.triangles.resize(layout.triangles);
+  emit_triangles(active, layout, edge_vertices, mesh);
   if (emc.flip_edges) {
     std::vector<std::uint8_t> is_feature(mesh.vertices.size(), 0);
     std::fill(is_feature.begin() + static_cast<std::ptrdiff_t>(edge_vertices), is_feature.end(),

@@ -94,50 +94,19 @@ TsdfMesher::BlockMesh mesh_block(const TsdfVolume& volume, const TsdfBlock& bloc
   return out;
 }
 
-}  // namespace
-
-TriangleMesh TsdfMesher::extract(const TsdfVolume& volume, TsdfExtractStats* stats) {
-  if (volume_ != &volume) {  // another volume: nothing cached applies
-    cache_.clear();
-    meshed_generation_ = 0;
-    volume_ = &volume;
-  }
-  // 1. Dirty blocks: changed since the last call, or reading a changed neighbour's voxels.
-  const std::vector<std::uint32_t> order = volume.blocks_in_key_order();
-  std::vector<std::uint8_t> dirty(order.size(), 0);
-  tbb::parallel_for(std::size_t{0}, order.size(), [&](std::size_t i) {
-    const TsdfBlock& b = volume.block(order[i]);
-    bool changed = cache_.count(pack_key(b.coords)) == 0;
-    for (int o = 0; o < 8 && !changed; ++o) {
-      const TsdfBlock* n = volume.find(b.coords + Eigen::Vector3i(o & 1, (o >> 1) & 1, o >> 2));
-      changed = n != nullptr && n->modified > meshed_generation_;
-    }
-    dirty[i] = changed ? 1 : 0;
-  });
-  // 2. Re-mesh them in parallel (cache entries made first, serially, so the map never rehashes
-  // while tasks write into it).
-  std::vector<BlockMesh*> slots(order.size(), nullptr);
-  TsdfExtractStats s;
-  for (std::size_t i = 0; i < order.size(); ++i) {
-    slots[i] = &cache_[pack_key(volume.block(order[i]).coords)];
-    (dirty[i] ? s.blocks_meshed : s.blocks_cached) += 1;
-  }
-  tbb::parallel_for(std::size_t{0}, order.size(), [&](std::size_t i) {
-    if (dirty[i]) *slots[i] = mesh_block(volume, volume.block(order[i]));
-  });
-  meshed_generation_ = volume.generation();
-
-  // 3. Assemble in block-key order, welding vertices with equal edge keys.
-  std::vector<std::size_t> vertex_offsets(order.size()), triangle_offsets(order.size());
-  for (std::size_t i = 0; i < order.size(); ++i) {
-    vertex_offsets[i] = slots[i]->vertices.size();
-    triangle_offsets[i] = slots[i]->triangles.size();
+// The blocks' meshes joined in the given order, vertices with equal edge keys welded into one
+// (numbered in key order). Parallel over blocks; O(vertex copies log).
+TriangleMesh weld_block_meshes(const std::vector<const TsdfMesher::BlockMesh*>& blocks) {
+  std::vector<std::size_t> vertex_offsets(blocks.size()), triangle_offsets(blocks.size());
+  for (std::size_t i = 0; i < blocks.size(); ++i) {
+    vertex_offsets[i] = blocks[i]->vertices.size();
+    triangle_offsets[i] = blocks[i]->triangles.size();
   }
   const std::size_t copies = exclusive_scan_in_place(vertex_offsets);
   const std::size_t triangles = exclusive_scan_in_place(triangle_offsets);
   std::vector<std::uint64_t> keys(copies);
-  tbb::parallel_for(std::size_t{0}, order.size(), [&](std::size_t i) {
-    std::copy(slots[i]->edge_keys.begin(), slots[i]->edge_keys.end(),
+  tbb::parallel_for(std::size_t{0}, blocks.size(), [&](std::size_t i) {
+    std::copy(blocks[i]->edge_keys.begin(), blocks[i]->edge_keys.end(),
               keys.begin() + static_cast<std::ptrdiff_t>(vertex_offsets[i]));
   });
   std::vector<std::uint64_t> unique_keys = keys;
@@ -159,24 +128,71 @@ TriangleMesh TsdfMesher::extract(const TsdfVolume& volume, TsdfExtractStats* sta
     first[c] = written[ids[c]] == 0 ? 1 : 0;
     written[ids[c]] = 1;
   }
-  tbb::parallel_for(std::size_t{0}, order.size(), [&](std::size_t i) {
-    const BlockMesh& b = *slots[i];
+  tbb::parallel_for(std::size_t{0}, blocks.size(), [&](std::size_t i) {
+    const TsdfMesher::BlockMesh& b = *blocks[i];
+    const std::size_t base = vertex_offsets[i];
     for (std::size_t v = 0; v < b.vertices.size(); ++v) {
-      const std::size_t c = vertex_offsets[i] + v;
-      if (!first[c]) continue;
-      mesh.vertices[ids[c]] = b.vertices[v];
-      mesh.colors[ids[c]] = b.colors[v];
+      if (!first[base + v]) continue;
+      mesh.vertices[ids[base + v]] = b.vertices[v];
+      mesh.colors[ids[base + v]] = b.colors[v];
     }
     for (std::size_t t = 0; t < b.triangles.size(); ++t) {
       const Triangle& tri = b.triangles[t];
-      const std::size_t base = vertex_offsets[i];
       mesh.triangles[triangle_offsets[i] + t] =
           Triangle{ids[base + tri[0]], ids[base + tri[1]], ids[base + tri[2]]};
     }
   });
+  return mesh;
+}
+
+}  // namespace
+
+TriangleMesh TsdfMesher::extract(const TsdfVolume& volume, TsdfExtractStats* stats) {
+  if (volume_ != &volume) {  // another volume: nothing cached applies
+    cache_.clear();
+    meshed_generation_ = 0;
+    volume_ = &volume;
+  }
+  const std::vector<std::uint32_t> order = volume.blocks_in_key_order();
+  const std::vector<std::uint8_t> dirty = dirty_blocks(volume, order);
+  TsdfExtractStats s;
+  const std::vector<const BlockMesh*> meshes = remesh(volume, order, dirty, s);
+  meshed_generation_ = volume.generation();
+  TriangleMesh mesh = weld_block_meshes(meshes);
   compute_vertex_normals(mesh);
   if (stats != nullptr) *stats = s;
   return mesh;
+}
+
+std::vector<std::uint8_t> TsdfMesher::dirty_blocks(const TsdfVolume& volume,
+                                                   const std::vector<std::uint32_t>& order) const {
+  // Changed since the last call, or reading a changed neighbour's voxels.
+  std::vector<std::uint8_t> dirty(order.size(), 0);
+  tbb::parallel_for(std::size_t{0}, order.size(), [&](std::size_t i) {
+    const TsdfBlock& b = volume.block(order[i]);
+    bool changed = cache_.count(pack_key(b.coords)) == 0;
+    for (int o = 0; o < 8 && !changed; ++o) {
+      const TsdfBlock* n = volume.find(b.coords + Eigen::Vector3i(o & 1, (o >> 1) & 1, o >> 2));
+      changed = n != nullptr && n->modified > meshed_generation_;
+    }
+    dirty[i] = changed ? 1 : 0;
+  });
+  return dirty;
+}
+
+std::vector<const TsdfMesher::BlockMesh*> TsdfMesher::remesh(
+    const TsdfVolume& volume, const std::vector<std::uint32_t>& order,
+    const std::vector<std::uint8_t>& dirty, TsdfExtractStats& stats) {
+  // Cache entries are made first, serially, so the map never rehashes while tasks write into it.
+  std::vector<BlockMesh*> slots(order.size(), nullptr);
+  for (std::size_t i = 0; i < order.size(); ++i) {
+    slots[i] = &cache_[pack_key(volume.block(order[i]).coords)];
+    (dirty[i] ? stats.blocks_meshed : stats.blocks_cached) += 1;
+  }
+  tbb::parallel_for(std::size_t{0}, order.size(), [&](std::size_t i) {
+    if (dirty[i]) *slots[i] = mesh_block(volume, volume.block(order[i]));
+  });
+  return {slots.begin(), slots.end()};
 }
 
 }  // namespace meshflow

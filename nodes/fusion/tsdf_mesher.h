@@ -37,6 +37,15 @@ class TsdfMesher {
   };
 
  private:
+  // extract()'s phases: which blocks to mesh again, then their meshes (cached ones reused), in
+  // the volume's key order.
+  std::vector<std::uint8_t> dirty_blocks(const TsdfVolume& volume,
+                                         const std::vector<std::uint32_t>& order) const;
+  std::vector<const BlockMesh*> remesh(const TsdfVolume& volume,
+                                       const std::vector<std::uint32_t>& order,
+                                       const std::vector<std::uint8_t>& dirty,
+                                       TsdfExtractStats& stats);
+
   std::unordered_map<VoxelKey, BlockMesh> cache_;  // by pack_key(block coords)
   std::uint64_t meshed_generation_ = 0;            // volume generation at the last call
   const TsdfVolume* volume_ = nullptr;             // the volume the cache belongs to

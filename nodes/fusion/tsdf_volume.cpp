@@ -45,14 +45,14 @@ class RecentKeys {
 // Keys inside the previous pixel's box or emitted recently are skipped; the caller sorts and
 // dedupes the rest. The ray is advanced incrementally along the row (in voxel units).
 void touched_blocks_of_row(const cv::Mat& depth, int v, const PinholeIntrinsics& k,
-                           const Eigen::Isometry3f& T, float voxel, float truncation,
+                           const Eigen::Isometry3f& T_world_camera, float voxel, float truncation,
                            std::vector<VoxelKey>& out, std::size_t& pixels) {
   const float* row = depth.ptr<float>(v);
   RecentKeys recent;
   Eigen::Vector3i last_lo(1, 1, 1), last_hi(0, 0, 0);  // an empty box
   const float inv_voxel = 1.0f / voxel;
-  const Eigen::Matrix3f R = T.linear() * inv_voxel;
-  const Eigen::Vector3f origin = T.translation() * inv_voxel;
+  const Eigen::Matrix3f R = T_world_camera.linear() * inv_voxel;
+  const Eigen::Vector3f origin = T_world_camera.translation() * inv_voxel;
   const float ry = (static_cast<float>(v) - k.cy) / k.fy;
   const Eigen::Vector3f ray_step = R.col(0) / k.fx;                   // per pixel along u
   Eigen::Vector3f ray = R * Eigen::Vector3f(-k.cx / k.fx, ry, 1.0f);  // world ray at u = 0
@@ -92,6 +92,100 @@ void touched_blocks_of_row(const cv::Mat& depth, int v, const PinholeIntrinsics&
 
 float observation_weight(TsdfWeighting scheme, float depth) {
   return scheme == TsdfWeighting::kInverseDepth ? 1.0f / (depth * depth) : 1.0f;
+}
+
+// What the blocks a frame touches depend on besides its pose.
+struct BandGeometry {
+  const PinholeIntrinsics& intrinsics;
+  float voxel, truncation;  ///< metres
+};
+
+// Keys of the blocks within the truncation band of the frame's valid pixels, sorted and unique:
+// per row (local buffers, in parallel), then joined in row order. Adds the valid pixels to
+// `pixels_used`.
+std::vector<VoxelKey> touched_block_keys(const cv::Mat& depth, const BandGeometry& band,
+                                         const Eigen::Isometry3f& T_world_camera,
+                                         std::size_t& pixels_used) {
+  const auto rows = static_cast<std::size_t>(depth.rows);
+  std::vector<std::vector<VoxelKey>> row_keys(rows);
+  std::vector<std::size_t> row_pixels(rows, 0);
+  tbb::parallel_for(0, depth.rows, [&](int v) {
+    const auto r = static_cast<std::size_t>(v);
+    touched_blocks_of_row(depth, v, band.intrinsics, T_world_camera, band.voxel, band.truncation,
+                          row_keys[r], row_pixels[r]);
+  });
+  std::vector<std::size_t> offsets(rows);
+  for (std::size_t r = 0; r < rows; ++r) {
+    offsets[r] = row_keys[r].size();
+    pixels_used += row_pixels[r];
+  }
+  std::vector<VoxelKey> keys(exclusive_scan_in_place(offsets));
+  tbb::parallel_for(std::size_t{0}, rows, [&](std::size_t r) {
+    std::copy(row_keys[r].begin(), row_keys[r].end(),
+              keys.begin() + static_cast<std::ptrdiff_t>(offsets[r]));
+  });
+  radix_sort_unique(keys);
+  return keys;
+}
+
+// One frame's view of the map's voxels.
+struct BlockUpdate {
+  const cv::Mat& depth;  ///< CV_32F metres
+  const cv::Mat* color;  ///< CV_8UC3 of the depth's size, or null: no colour fused
+  const PinholeIntrinsics& intrinsics;
+  Eigen::Isometry3f T_camera_world;
+  const TsdfConfig& config;
+};
+
+// Projects every voxel of the block into the frame and blends the truncated distance (and
+// colour) of the pixel it lands on into it; voxels outside the image, behind an invalid pixel or
+// more than the truncation behind the surface keep their state. Returns the voxels updated.
+std::size_t update_block(TsdfBlock& block, const BlockUpdate& frame) {
+  const PinholeIntrinsics& k = frame.intrinsics;
+  const cv::Mat& depth = frame.depth;
+  const float voxel = frame.config.voxel_size, truncation = frame.config.truncation();
+  const Eigen::Matrix3f R = frame.T_camera_world.linear();
+  const Eigen::Vector3i origin = block.coords * kTsdfBlockSide;
+  std::size_t count = 0;
+  for (int z = 0; z < kTsdfBlockSide; ++z)
+    for (int y = 0; y < kTsdfBlockSide; ++y) {
+      const Eigen::Vector3f row_start = (origin + Eigen::Vector3i(0, y, z)).cast<float>() * voxel;
+      Eigen::Vector3f pc = frame.T_camera_world * row_start;
+      const Eigen::Vector3f step = R.col(0) * voxel;
+      for (int x = 0; x < kTsdfBlockSide; ++x, pc += step) {
+        if (!(pc.z() > 0.0f)) continue;
+        const float inv_z = 1.0f / pc.z();
+        const float uf = k.fx * pc.x() * inv_z + k.cx, vf = k.fy * pc.y() * inv_z + k.cy;
+        if (!(uf > -0.5f && vf > -0.5f && uf < static_cast<float>(depth.cols) - 0.5f &&
+              vf < static_cast<float>(depth.rows) - 0.5f)) {
+          continue;  // outside the image (or NaN)
+        }
+        const int u = static_cast<int>(uf + 0.5f), v = static_cast<int>(vf + 0.5f);
+        const float d = depth.at<float>(v, u);
+        if (!(d > 0.0f) || !std::isfinite(d)) continue;
+        const float sdf = d - pc.z();
+        if (sdf < -truncation) continue;  // hidden behind the surface: unknown
+        TsdfVoxel& vox =
+            block.voxels[static_cast<std::size_t>(x + kTsdfBlockSide * (y + kTsdfBlockSide * z))];
+        const float w = observation_weight(frame.config.weighting, d);
+        const float total = vox.weight + w;
+        const float inv_total = 1.0f / total;
+        vox.distance = (vox.distance * vox.weight + std::min(sdf, truncation) * w) * inv_total;
+        if (frame.color != nullptr) {
+          const cv::Vec3b c = frame.color->at<cv::Vec3b>(v, u);
+          auto blend = [&](std::uint8_t old, std::uint8_t now) {
+            return static_cast<std::uint8_t>(
+                (static_cast<float>(old) * vox.weight + static_cast<float>(now) * w) * inv_total +
+                0.5f);  // round to nearest: the value is >= 0
+          };
+          vox.color =
+              Rgb8{blend(vox.color.r, c[0]), blend(vox.color.g, c[1]), blend(vox.color.b, c[2])};
+        }
+        vox.weight = std::min(total, frame.config.max_weight);
+        ++count;
+      }
+    }
+  return count;
 }
 
 }  // namespace
@@ -161,99 +255,49 @@ void TsdfVolume::insert_block(const Eigen::Vector3i& coords,
 IntegrationStats TsdfVolume::integrate(const DepthFrame& frame) {
   IntegrationStats stats;
   const cv::Mat depth = depth_in_metres(frame);  // checks the frame (intrinsics, pose)
-  const PinholeIntrinsics& k = frame.intrinsics;
-  const float voxel = config_.voxel_size, truncation = config_.truncation();
-  const Eigen::Isometry3f T = frame.T_world_camera;
+  const BandGeometry band{frame.intrinsics, config_.voxel_size, config_.truncation()};
+  const std::vector<VoxelKey> keys =
+      touched_block_keys(depth, band, frame.T_world_camera, stats.pixels_used);
+  const std::vector<std::uint32_t> touched = find_or_allocate(keys, stats.blocks_allocated);
+  stats.blocks_touched = touched.size();
+  stats.voxels_updated = update_blocks(touched, depth, frame);
+  return stats;
+}
 
-  // 1. Touched blocks: per row (local buffers), then sorted and unique.
-  const int rows = depth.rows;
-  std::vector<std::vector<VoxelKey>> row_keys(static_cast<std::size_t>(rows));
-  std::vector<std::size_t> row_pixels(static_cast<std::size_t>(rows), 0);
-  tbb::parallel_for(0, rows, [&](int v) {
-    touched_blocks_of_row(depth, v, k, T, voxel, truncation, row_keys[static_cast<std::size_t>(v)],
-                          row_pixels[static_cast<std::size_t>(v)]);
-  });
-  std::vector<std::size_t> offsets(static_cast<std::size_t>(rows));
-  for (int v = 0; v < rows; ++v) {
-    offsets[static_cast<std::size_t>(v)] = row_keys[static_cast<std::size_t>(v)].size();
-    stats.pixels_used += row_pixels[static_cast<std::size_t>(v)];
-  }
-  std::vector<VoxelKey> keys(exclusive_scan_in_place(offsets));
-  tbb::parallel_for(0, rows, [&](int v) {
-    const auto& r = row_keys[static_cast<std::size_t>(v)];
-    std::copy(r.begin(), r.end(),
-              keys.begin() + static_cast<std::ptrdiff_t>(offsets[static_cast<std::size_t>(v)]));
-  });
-  radix_sort_unique(keys);
-
-  // 2. Allocation, serial and in key order (deterministic block numbering).
-  std::vector<std::uint32_t> touched(keys.size());
+std::vector<std::uint32_t> TsdfVolume::find_or_allocate(const std::vector<VoxelKey>& keys,
+                                                        std::size_t& allocated) {
+  // Serial and in key order: deterministic block numbering.
+  std::vector<std::uint32_t> blocks(keys.size());
   for (std::size_t i = 0; i < keys.size(); ++i) {
     const auto it = index_.find(keys[i]);
     if (it != index_.end()) {
-      touched[i] = it->second;
+      blocks[i] = it->second;
     } else {
-      touched[i] = allocate(unpack_key(keys[i]));
-      ++stats.blocks_allocated;
+      blocks[i] = allocate(unpack_key(keys[i]));
+      ++allocated;
     }
   }
-  stats.blocks_touched = touched.size();
+  return blocks;
+}
 
-  // 3. Update, one task per block; a voxel's new state depends only on its old state and the
-  // frame, so the order of blocks does not matter.
+std::size_t TsdfVolume::update_blocks(const std::vector<std::uint32_t>& touched,
+                                      const cv::Mat& depth, const DepthFrame& frame) {
+  // One task per block; a voxel's new state depends only on its old state and the frame, so the
+  // order of blocks does not matter.
   ++generation_;
-  const Eigen::Isometry3f T_cw = T.inverse();
-  const Eigen::Matrix3f R = T_cw.linear();
   const bool color = config_.fuse_color && !frame.color.empty() &&
                      frame.color.size() == depth.size() && frame.color.type() == CV_8UC3;
+  const BlockUpdate update{depth, color ? &frame.color : nullptr, frame.intrinsics,
+                           frame.T_world_camera.inverse(), config_};
   std::vector<std::size_t> updated(touched.size(), 0);
   tbb::parallel_for(std::size_t{0}, touched.size(), [&](std::size_t t) {
     TsdfBlock& block = blocks_[touched[t]];
-    const Eigen::Vector3i origin = block.coords * kTsdfBlockSide;
-    std::size_t count = 0;
-    for (int z = 0; z < kTsdfBlockSide; ++z)
-      for (int y = 0; y < kTsdfBlockSide; ++y) {
-        const Eigen::Vector3f row_start = (origin + Eigen::Vector3i(0, y, z)).cast<float>() * voxel;
-        Eigen::Vector3f pc = T_cw * row_start;
-        const Eigen::Vector3f step = R.col(0) * voxel;
-        for (int x = 0; x < kTsdfBlockSide; ++x, pc += step) {
-          if (!(pc.z() > 0.0f)) continue;
-          const float inv_z = 1.0f / pc.z();
-          const float uf = k.fx * pc.x() * inv_z + k.cx, vf = k.fy * pc.y() * inv_z + k.cy;
-          if (!(uf > -0.5f && vf > -0.5f && uf < static_cast<float>(depth.cols) - 0.5f &&
-                vf < static_cast<float>(depth.rows) - 0.5f)) {
-            continue;  // outside the image (or NaN)
-          }
-          const int u = static_cast<int>(uf + 0.5f), v = static_cast<int>(vf + 0.5f);
-          const float d = depth.at<float>(v, u);
-          if (!(d > 0.0f) || !std::isfinite(d)) continue;
-          const float sdf = d - pc.z();
-          if (sdf < -truncation) continue;  // hidden behind the surface: unknown
-          TsdfVoxel& vox =
-              block.voxels[static_cast<std::size_t>(x + kTsdfBlockSide * (y + kTsdfBlockSide * z))];
-          const float w = observation_weight(config_.weighting, d);
-          const float total = vox.weight + w;
-          const float inv_total = 1.0f / total;
-          vox.distance = (vox.distance * vox.weight + std::min(sdf, truncation) * w) * inv_total;
-          if (color) {
-            const cv::Vec3b c = frame.color.at<cv::Vec3b>(v, u);
-            auto blend = [&](std::uint8_t old, std::uint8_t now) {
-              return static_cast<std::uint8_t>(
-                  (static_cast<float>(old) * vox.weight + static_cast<float>(now) * w) * inv_total +
-                  0.5f);  // round to nearest: the value is >= 0
-            };
-            vox.color =
-                Rgb8{blend(vox.color.r, c[0]), blend(vox.color.g, c[1]), blend(vox.color.b, c[2])};
-          }
-          vox.weight = std::min(total, config_.max_weight);
-          ++count;
-        }
-      }
-    if (count > 0) block.modified = generation_;
-    updated[t] = count;
+    updated[t] = update_block(block, update);
+    if (updated[t] > 0) block.modified = generation_;
   });
-  for (std::size_t c : updated) stats.voxels_updated += c;
-  return stats;
+  std::size_t total = 0;
+  for (std::size_t c : updated) total += c;
+  return total;
 }
 
 }  // namespace meshflow

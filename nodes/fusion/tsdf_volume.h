@@ -104,6 +104,13 @@ class TsdfVolume {
 
  private:
   std::uint32_t allocate(const Eigen::Vector3i& coords);
+  // integrate()'s phases after the touched blocks' keys: their block numbers (allocating the
+  // new ones, counted in `allocated`), then the update of their voxels (returns the voxels
+  // updated).
+  std::vector<std::uint32_t> find_or_allocate(const std::vector<VoxelKey>& keys,
+                                              std::size_t& allocated);
+  std::size_t update_blocks(const std::vector<std::uint32_t>& touched, const cv::Mat& depth,
+                            const DepthFrame& frame);
 
   TsdfConfig config_;
   std::deque<TsdfBlock> blocks_;                       // stable addresses while growing

@@ -50,107 +50,127 @@ std::optional<ScalarType> pcd_scalar(char type, std::size_t size) {
   return std::nullopt;
 }
 
-PcdHeader parse_pcd_header(std::istream& in, const std::string& path) {
-  PcdHeader h;
-  std::string line;
-  std::vector<std::string_view> tok;
+// SIZE, TYPE and COUNT as listed, before they are checked against FIELDS.
+struct PcdFieldLists {
   std::vector<std::size_t> sizes, counts;
   std::vector<char> types;
-  bool have_points = false, have_data = false;
-  while (!have_data) {
+  bool have_points = false;  // a POINTS line was read
+};
+
+// VIEWPOINT tx ty tz qw qx qy qz: the sensor's position (the rotation is not used).
+Eigen::Vector3d parse_viewpoint(const std::vector<std::string_view>& tok, const std::string& path,
+                                int line, const std::string& where) {
+  if (tok.size() != 8) throw Error(path, where, "VIEWPOINT needs 7 numbers (tx ty tz qw qx qy qz)");
+  Eigen::Vector3d viewpoint;
+  for (int axis = 0; axis < 3; ++axis)
+    viewpoint[axis] = parse_finite(tok[static_cast<std::size_t>(axis) + 1], path,
+                                   static_cast<std::size_t>(line), "VIEWPOINT");
+  check_position(viewpoint, path, where, "VIEWPOINT");
+  return viewpoint;
+}
+
+PcdData parse_data_kind(std::string_view kind, const std::string& path, const std::string& where) {
+  if (kind == "ascii") return PcdData::kAscii;
+  if (kind == "binary") return PcdData::kBinary;
+  if (kind == "binary_compressed") return PcdData::kBinaryCompressed;
+  throw Error(path, where, "unknown DATA type '" + std::string(kind) + "'");
+}
+
+// Reads one header entry (tok[0] its keyword) into `h` and `lists`. Returns true at the DATA
+// line, the header's last.
+bool parse_header_entry(const std::vector<std::string_view>& tok, const std::string& path,
+                        const std::string& where, PcdHeader& h, PcdFieldLists& lists) {
+  const std::string_view key = tok[0];
+  if (key == "VERSION") return false;
+  if (key == "VIEWPOINT") {
+    h.viewpoint = parse_viewpoint(tok, path, h.lines, where);
+  } else if (key == "FIELDS" || key == "COLUMNS") {
+    for (std::size_t i = 1; i < tok.size(); ++i) {
+      PcdField f;
+      f.name = std::string(tok[i]);
+      h.fields.push_back(f);
+    }
+  } else if (key == "SIZE") {
+    for (std::size_t i = 1; i < tok.size(); ++i)
+      lists.sizes.push_back(parse_count(tok[i], path, where, "SIZE"));
+  } else if (key == "TYPE") {
+    for (std::size_t i = 1; i < tok.size(); ++i) {
+      if (tok[i].size() != 1 || std::string_view("FIU").find(tok[i][0]) == std::string_view::npos)
+        throw Error(path, where, "unknown TYPE '" + std::string(tok[i]) + "' (expected F, I or U)");
+      lists.types.push_back(tok[i][0]);
+    }
+  } else if (key == "COUNT") {
+    for (std::size_t i = 1; i < tok.size(); ++i)
+      lists.counts.push_back(parse_count(tok[i], path, where, "COUNT"));
+  } else if (key == "WIDTH" && tok.size() == 2) {
+    h.width = parse_count(tok[1], path, where, "WIDTH");
+  } else if (key == "HEIGHT" && tok.size() == 2) {
+    h.height = parse_count(tok[1], path, where, "HEIGHT");
+  } else if (key == "POINTS" && tok.size() == 2) {
+    h.points = parse_count(tok[1], path, where, "POINTS");
+    lists.have_points = true;
+  } else if (key == "DATA" && tok.size() == 2) {
+    h.data = parse_data_kind(tok[1], path, where);
+    return true;
+  } else {
+    throw Error(path, where, "unknown or malformed header entry '" + std::string(key) + "'");
+  }
+  return false;
+}
+
+// FIELDS, SIZE, TYPE and COUNT agree in length; WIDTH x HEIGHT = POINTS (POINTS defaults to it).
+void check_header_counts(PcdHeader& h, const PcdFieldLists& lists, const std::string& path) {
+  const std::size_t n = h.fields.size();
+  if (n == 0) throw Error(path, "header", "no FIELDS line");
+  if (lists.sizes.size() != n || lists.types.size() != n)
+    throw Error(path, "header", "FIELDS, SIZE and TYPE must list the same number of entries");
+  if (!lists.counts.empty() && lists.counts.size() != n)
+    throw Error(path, "header", "COUNT must list one entry per field");
+  if (h.height != 0 && h.width > std::numeric_limits<std::uint64_t>::max() / h.height)
+    throw Error(path, "header", "WIDTH x HEIGHT overflows");
+  if (!lists.have_points) h.points = h.width * h.height;
+  if (h.width * h.height != h.points)
+    throw Error(path, "header",
+                "WIDTH x HEIGHT = " + std::to_string(h.width * h.height) +
+                    " but POINTS = " + std::to_string(h.points));
+}
+
+// Each field's size, type, count and offset in a binary row; the row's size and value count.
+void lay_out_fields(PcdHeader& h, const PcdFieldLists& lists, const std::string& path) {
+  for (std::size_t i = 0; i < h.fields.size(); ++i) {
+    PcdField& f = h.fields[i];
+    f.size = lists.sizes[i];
+    f.type = lists.types[i];
+    f.count = lists.counts.empty() ? 1 : lists.counts[i];
+    f.scalar = pcd_scalar(f.type, f.size);
+    if (f.size == 0 || f.size > 8)
+      throw Error(path, "header",
+                  "field '" + f.name + "' has invalid SIZE " + std::to_string(f.size));
+    if (f.count == 0 || f.count > kMaxCount)
+      throw Error(path, "header",
+                  "field '" + f.name + "' has invalid COUNT " + std::to_string(f.count) +
+                      " (expected 1 to " + std::to_string(kMaxCount) + ")");
+    f.offset = h.row_bytes;
+    h.row_bytes += f.size * f.count;
+    h.values_per_row += f.count;
+  }
+}
+
+PcdHeader parse_pcd_header(std::istream& in, const std::string& path) {
+  PcdHeader h;
+  PcdFieldLists lists;
+  std::string line;
+  std::vector<std::string_view> tok;
+  for (bool have_data = false; !have_data;) {
     const std::string where = "header line " + std::to_string(h.lines + 1);
     if (!read_line(in, line)) throw Error(path, where, "file ends before the DATA line");
     ++h.lines;
     split_whitespace(line, tok);
     if (tok.empty() || tok[0].front() == '#') continue;
-    const std::string_view key = tok[0];
-    if (key == "VERSION") continue;
-    if (key == "VIEWPOINT") {  // tx ty tz qw qx qy qz: the sensor's position and rotation
-      if (tok.size() != 8)
-        throw Error(path, where, "VIEWPOINT needs 7 numbers (tx ty tz qw qx qy qz)");
-      for (int axis = 0; axis < 3; ++axis)
-        h.viewpoint[axis] = parse_finite(tok[static_cast<std::size_t>(axis) + 1], path,
-                                         static_cast<std::size_t>(h.lines), "VIEWPOINT");
-      check_position(h.viewpoint, path, where, "VIEWPOINT");
-      continue;
-    }
-    if (key == "FIELDS" || key == "COLUMNS") {
-      for (std::size_t i = 1; i < tok.size(); ++i) {
-        PcdField f;
-        f.name = std::string(tok[i]);
-        h.fields.push_back(f);
-      }
-    } else if (key == "SIZE") {
-      for (std::size_t i = 1; i < tok.size(); ++i)
-        sizes.push_back(parse_count(tok[i], path, where, "SIZE"));
-    } else if (key == "TYPE") {
-      for (std::size_t i = 1; i < tok.size(); ++i) {
-        if (tok[i].size() != 1 ||
-            std::string_view("FIU").find(tok[i][0]) == std::string_view::npos) {
-          throw Error(path, where,
-                      "unknown TYPE '" + std::string(tok[i]) + "' (expected F, I or U)");
-        }
-        types.push_back(tok[i][0]);
-      }
-    } else if (key == "COUNT") {
-      for (std::size_t i = 1; i < tok.size(); ++i)
-        counts.push_back(parse_count(tok[i], path, where, "COUNT"));
-    } else if (key == "WIDTH" && tok.size() == 2) {
-      h.width = parse_count(tok[1], path, where, "WIDTH");
-    } else if (key == "HEIGHT" && tok.size() == 2) {
-      h.height = parse_count(tok[1], path, where, "HEIGHT");
-    } else if (key == "POINTS" && tok.size() == 2) {
-      h.points = parse_count(tok[1], path, where, "POINTS");
-      have_points = true;
-    } else if (key == "DATA" && tok.size() == 2) {
-      if (tok[1] == "ascii")
-        h.data = PcdData::kAscii;
-      else if (tok[1] == "binary")
-        h.data = PcdData::kBinary;
-      else if (tok[1] == "binary_compressed")
-        h.data = PcdData::kBinaryCompressed;
-      else
-        throw Error(path, where, "unknown DATA type '" + std::string(tok[1]) + "'");
-      have_data = true;
-    } else {
-      throw Error(path, where, "unknown or malformed header entry '" + std::string(key) + "'");
-    }
+    have_data = parse_header_entry(tok, path, where, h, lists);
   }
-  const std::size_t n = h.fields.size();
-  if (n == 0) throw Error(path, "header", "no FIELDS line");
-  if (sizes.size() != n || types.size() != n) {
-    throw Error(path, "header", "FIELDS, SIZE and TYPE must list the same number of entries");
-  }
-  if (!counts.empty() && counts.size() != n) {
-    throw Error(path, "header", "COUNT must list one entry per field");
-  }
-  if (h.height != 0 && h.width > std::numeric_limits<std::uint64_t>::max() / h.height)
-    throw Error(path, "header", "WIDTH x HEIGHT overflows");
-  if (!have_points) h.points = h.width * h.height;
-  if (h.width * h.height != h.points) {
-    throw Error(path, "header",
-                "WIDTH x HEIGHT = " + std::to_string(h.width * h.height) +
-                    " but POINTS = " + std::to_string(h.points));
-  }
-  for (std::size_t i = 0; i < n; ++i) {
-    PcdField& f = h.fields[i];
-    f.size = sizes[i];
-    f.type = types[i];
-    f.count = counts.empty() ? 1 : counts[i];
-    f.scalar = pcd_scalar(f.type, f.size);
-    if (f.size == 0 || f.size > 8) {
-      throw Error(path, "header",
-                  "field '" + f.name + "' has invalid SIZE " + std::to_string(f.size));
-    }
-    if (f.count == 0 || f.count > kMaxCount) {
-      throw Error(path, "header",
-                  "field '" + f.name + "' has invalid COUNT " + std::to_string(f.count) +
-                      " (expected 1 to " + std::to_string(kMaxCount) + ")");
-    }
-    f.offset = h.row_bytes;
-    h.row_bytes += f.size * f.count;
-    h.values_per_row += f.count;
-  }
+  check_header_counts(h, lists, path);
+  lay_out_fields(h, lists, path);
   return h;
 }
 

@@ -45,7 +45,8 @@ cv::Mat read_color_image(const std::string& path) {
 
 // Checks the depth image against the intrinsics and attaches colour when its size matches.
 DepthFrame make_frame(const std::string& depth_path, const std::string& color_path, float scale,
-                      const PinholeIntrinsics& k, const Eigen::Isometry3f& pose, double timestamp) {
+                      const PinholeIntrinsics& k, const Eigen::Isometry3f& T_world_camera,
+                      double timestamp) {
   DepthFrame f;
   f.depth = read_depth_image(depth_path);
   if (f.depth.cols != k.width || f.depth.rows != k.height) {
@@ -56,7 +57,7 @@ DepthFrame make_frame(const std::string& depth_path, const std::string& color_pa
   }
   f.depth_scale = scale;
   f.intrinsics = k;
-  f.T_world_camera = pose;
+  f.T_world_camera = T_world_camera;
   f.timestamp_s = timestamp;
   if (!color_path.empty()) {
     cv::Mat color = read_color_image(color_path);
@@ -90,7 +91,7 @@ class DepthImageListSequence final : public Sequence {
     const std::string color = i < list_.color.size() ? list_.color[i] : std::string();
     const bool posed = !list_.trajectory.empty();
     const bool has_pose = !posed || i < list_.poses.size();
-    const Eigen::Isometry3f pose =
+    const Eigen::Isometry3f T_world_camera =
         posed && has_pose ? list_.poses[i] : Eigen::Isometry3f::Identity();
     const std::string trajectory = list_.trajectory;
     const PinholeIntrinsics k = list_.intrinsics;
@@ -101,7 +102,7 @@ class DepthImageListSequence final : public Sequence {
         throw Error(trajectory, "",
                     "pose missing for frame " + std::to_string(i) + " (" + depth + ")");
       }
-      return make_frame(depth, color, scale, k, pose, t);
+      return make_frame(depth, color, scale, k, T_world_camera, t);
     };
     return f;
   }
@@ -137,7 +138,7 @@ std::vector<TimedFile> read_timed_list(const std::string& path, const fs::path& 
 
 struct TimedPose {
   double t;
-  Eigen::Isometry3f pose;
+  Eigen::Isometry3f T_world_camera;
 };
 
 std::vector<TimedPose> read_tum_groundtruth(const std::string& path) {
@@ -160,10 +161,10 @@ std::vector<TimedPose> read_tum_groundtruth(const std::string& path) {
       throw Error(path, "line " + std::to_string(n), "quaternion is not unit length");
     const Eigen::Vector3d t(v[1], v[2], v[3]);
     check_position(t, path, "line " + std::to_string(n), "translation");
-    Eigen::Isometry3f pose = Eigen::Isometry3f::Identity();
-    pose.linear() = q.normalized().toRotationMatrix();
-    pose.translation() = t.cast<float>();
-    out.push_back({v[0], pose});
+    Eigen::Isometry3f T_world_camera = Eigen::Isometry3f::Identity();
+    T_world_camera.linear() = q.normalized().toRotationMatrix();
+    T_world_camera.translation() = t.cast<float>();
+    out.push_back({v[0], T_world_camera});
   }
   std::sort(out.begin(), out.end(),
             [](const TimedPose& a, const TimedPose& b) { return a.t < b.t; });
@@ -186,13 +187,14 @@ class TumSequence final : public Sequence {
     f.index = i;
     f.timestamp_s = depth_[i].t;
     f.name = depth_[i].file;
-    const TimedPose* pose = nearest(poses_, depth_[i].t, kMaxGap);
+    const TimedPose* timed = nearest(poses_, depth_[i].t, kMaxGap);
     const TimedFile* rgb = nearest(rgb_, depth_[i].t, kMaxGap);
     const std::string depth = depth_[i].file, color = rgb ? rgb->file : std::string();
     const double t = depth_[i].t;
     const std::string list = (fs::path(dir_) / "depth.txt").string();
-    const bool has_pose = pose != nullptr;
-    const Eigen::Isometry3f T = has_pose ? pose->pose : Eigen::Isometry3f::Identity();
+    const bool has_pose = timed != nullptr;
+    const Eigen::Isometry3f T_world_camera =
+        has_pose ? timed->T_world_camera : Eigen::Isometry3f::Identity();
     const PinholeIntrinsics k = k_;
     f.load_depth = [=] {
       if (!has_pose) {
@@ -200,7 +202,7 @@ class TumSequence final : public Sequence {
         std::snprintf(when, sizeof when, "%.6f", t);
         throw Error(list, std::string("timestamp ") + when, "no ground-truth pose within 20 ms");
       }
-      return make_frame(depth, color, 5000.0f, k, T, t);
+      return make_frame(depth, color, 5000.0f, k, T_world_camera, t);
     };
     return f;
   }

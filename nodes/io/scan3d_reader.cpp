@@ -57,11 +57,11 @@ Eigen::Isometry3f read_3dtk_pose(const std::string& path) {
                              Eigen::AngleAxisd(rad.z(), Eigen::Vector3d::UnitZ()))
                                 .toRotationMatrix();
   const Eigen::Matrix3d c = tdtk_to_meshflow();
-  Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
-  pose.linear() = c * r * c.transpose();
-  pose.translation() = c * t_cm * 0.01;
-  check_position(pose.translation(), path, "line 1", "translation");
-  return pose.cast<float>();
+  Eigen::Isometry3d T_world_scan = Eigen::Isometry3d::Identity();
+  T_world_scan.linear() = c * r * c.transpose();
+  T_world_scan.translation() = c * t_cm * 0.01;
+  check_position(T_world_scan.translation(), path, "line 1", "translation");
+  return T_world_scan.cast<float>();
 }
 
 PointCloud read_3dtk_scan(const std::string& path, const Scan3dOptions& options,
@@ -72,7 +72,7 @@ PointCloud read_3dtk_scan(const std::string& path, const Scan3dOptions& options,
     resolved_pose = std::filesystem::path(path).replace_extension(".pose").string();
     if (!std::filesystem::exists(resolved_pose)) resolved_pose.clear();
   }
-  const Eigen::Isometry3f pose =
+  const Eigen::Isometry3f T_world_scan =
       resolved_pose.empty() ? Eigen::Isometry3f::Identity() : read_3dtk_pose(resolved_pose);
   const Eigen::Matrix3d c = tdtk_to_meshflow();
   const double min2 = options.min_range_cm * options.min_range_cm;
@@ -103,7 +103,7 @@ PointCloud read_3dtk_scan(const std::string& path, const Scan3dOptions& options,
           check_coordinates(p_cm * 0.01, path, line_no);
           const double r2 = p_cm.squaredNorm();
           if (r2 < min2 || r2 >= max2) continue;
-          out.push_back(pose * (c * p_cm * 0.01).cast<float>());
+          out.push_back(T_world_scan * (c * p_cm * 0.01).cast<float>());
         }
       });
   PointCloud cloud;
@@ -111,7 +111,7 @@ PointCloud read_3dtk_scan(const std::string& path, const Scan3dOptions& options,
   for (const Points& p : parts) total += p.size();
   cloud.positions.reserve(total);
   for (const Points& p : parts) cloud.positions.insert(cloud.positions.end(), p.begin(), p.end());
-  cloud.sensor_origin = pose.translation();
+  cloud.sensor_origin = T_world_scan.translation();
   cloud.has_sensor_origin = true;
   return cloud;
 }

@@ -17,7 +17,7 @@ class PixelSurface {
  public:
   PixelSurface(const DepthFrame& frame, const cv::Mat& depth_m)
       : depth_(depth_m),
-        T_(frame.T_world_camera),
+        T_world_camera_(frame.T_world_camera),
         rotation_(frame.T_world_camera.linear()),
         ray_x_(static_cast<std::size_t>(depth_m.cols)),
         ray_y_(static_cast<std::size_t>(depth_m.rows)) {
@@ -51,7 +51,7 @@ class PixelSurface {
     if (!(len > 0.0f)) return false;
     n /= len;
     if (n.dot(-c) < 0.0f) n = -n;  // towards the camera at the origin
-    position = T_ * c;
+    position = T_world_camera_ * c;
     normal = rotation_ * n;
     return true;
   }
@@ -66,7 +66,7 @@ class PixelSurface {
   }
 
   const cv::Mat& depth_;
-  Eigen::Isometry3f T_;
+  Eigen::Isometry3f T_world_camera_;
   Eigen::Matrix3f rotation_;
   std::vector<float> ray_x_, ray_y_;  // (u - cx) / fx per column, (v - cy) / fy per row
 };

@@ -22,15 +22,15 @@ class DepthSequence final : public io::Sequence {
     const Eigen::Vector3f target =
         eye + Eigen::Vector3f(static_cast<float>(std::cos(angle)),
                               static_cast<float>(std::sin(angle)), -0.35f);
-    const Eigen::Isometry3f pose = look_at(eye, target);
+    const Eigen::Isometry3f T_world_camera = look_at(eye, target);
     const Scene* scene = &scene_;
     const DepthSequenceConfig config = config_;
     io::SequenceFrame f;
     f.index = i;
     f.timestamp_s = static_cast<double>(i) / 30.0;
     f.name = "synthetic depth frame " + std::to_string(i);
-    f.load_depth = [scene, config, pose, i] {
-      DepthFrame d = render_depth(*scene, config.intrinsics, pose, config.noise_sigma,
+    f.load_depth = [scene, config, T_world_camera, i] {
+      DepthFrame d = render_depth(*scene, config.intrinsics, T_world_camera, config.noise_sigma,
                                   static_cast<std::uint32_t>(i + 1));
       d.timestamp_s = static_cast<double>(i) / 30.0;
       return d;
@@ -57,12 +57,12 @@ Eigen::Isometry3f look_at(const Eigen::Vector3f& eye, const Eigen::Vector3f& tar
       std::abs(forward.z()) > 0.999f ? Eigen::Vector3f::UnitY() : Eigen::Vector3f::UnitZ();
   const Eigen::Vector3f right = forward.cross(up).normalized();
   const Eigen::Vector3f down = forward.cross(right);
-  Eigen::Isometry3f pose = Eigen::Isometry3f::Identity();
-  pose.linear().col(0) = right;
-  pose.linear().col(1) = down;
-  pose.linear().col(2) = forward;
-  pose.translation() = eye;
-  return pose;
+  Eigen::Isometry3f T_world_camera = Eigen::Isometry3f::Identity();
+  T_world_camera.linear().col(0) = right;
+  T_world_camera.linear().col(1) = down;
+  T_world_camera.linear().col(2) = forward;
+  T_world_camera.translation() = eye;
+  return T_world_camera;
 }
 
 DepthFrame render_depth(const Scene& scene, const PinholeIntrinsics& k,

@@ -94,10 +94,15 @@ class Quadtree {
   void select_level(int s) {
     const int n = blocks(s);
     states_.emplace_back(static_cast<std::size_t>(n) * static_cast<std::size_t>(n), kEmpty | kBad);
-    const int h = s / 2;
-    const int nx = blocks_x(s), ny = blocks_y(s);
-    // States: bad / empty from the pixels at size 2, from the four children above (their
-    // closed squares cover the block's); split when bad or a child has a centre.
+    block_states(s);
+    edge_midpoints(s);
+    block_centres(s);
+  }
+
+  // States of level s: bad / empty from the pixels at size 2, from the four children above
+  // (their closed squares cover the block's); split when bad or a child has a centre.
+  void block_states(int s) {
+    const int h = s / 2, nx = blocks_x(s), ny = blocks_y(s);
     tbb::parallel_for(0, ny, [&](int by) {
       std::uint8_t* states = &state(s, 0, by);
       if (s == 2) {
@@ -116,10 +121,14 @@ class Quadtree {
         }
       }
     });
-    // Midpoints: of the edge between a block and its neighbour (outside blocks are empty). A
-    // refined neighbour uses the midpoint as a corner; otherwise, with a clean block on either
-    // side (all its pixels valid, so the edge's are), the midpoint is needed when it lies too
-    // far from the edge's chord. Rows of blocks in parallel; every midpoint has one writer.
+  }
+
+  // Midpoints of level s: of the edge between a block and its neighbour (outside blocks are
+  // empty). A refined neighbour uses the midpoint as a corner; otherwise, with a clean block on
+  // either side (all its pixels valid, so the edge's are), the midpoint is needed when it lies
+  // too far from the edge's chord. Rows of blocks in parallel; every midpoint has one writer.
+  void edge_midpoints(int s) {
+    const int h = s / 2, nx = blocks_x(s), ny = blocks_y(s);
     const NeededTest needed{g_.eye, threshold_per_depth2_};
     auto decide = [needed](std::uint8_t one, std::uint8_t other, const Eigen::Vector3f& m,
                            const Eigen::Vector3f& a, const Eigen::Vector3f& b) -> std::uint8_t {
@@ -153,9 +162,15 @@ class Quadtree {
                             middle[x0], top[x0], bottom[x0]);
       }
     });
-    // Centres: needed themselves, or by a needed midpoint of the block's edges. Only blocks
-    // that are neither empty nor split get one, and those lie inside the image with every
-    // pixel valid, so their rows are read directly.
+  }
+
+  // Centres of level s: needed themselves, or by a needed midpoint of the block's edges. Only
+  // blocks that are neither empty nor split get one, and those lie inside the image with every
+  // pixel valid, so their rows are read directly.
+  void block_centres(int s) {
+    const int h = s / 2, nx = blocks_x(s), ny = blocks_y(s);
+    const NeededTest needed{g_.eye, threshold_per_depth2_};
+    const int height = g_.height;
     tbb::parallel_for(0, ny, [&, needed, s, h, nx, height](int by) {
       const int y0 = by * s, y1 = std::min(y0 + s, height - 1), ym = std::min(y0 + h, y1);
       const std::uint8_t* mid_top = &mid_[g_.index(0, y0)];

@@ -222,61 +222,71 @@ struct RegionTriangulation {
   std::vector<std::uint32_t> faulty;
 };
 
-// Triangulates the polygon with holes formed by the kept vertices of `loops` in the region's
-// plane. Fails when it cannot be done faithfully: fewer than three vertices in a loop, two
-// vertices on one point of the plane, crossing edges, or a folded projection.
-RegionTriangulation triangulate_region(const std::vector<Loop>& loops,
-                                       const std::vector<std::uint8_t>& keep,
-                                       const std::vector<Eigen::Vector3f>& p,
-                                       const Eigen::Vector3f& normal) {
+// What inserting a region's loops into the triangulation found.
+struct InsertedLoops {
+  std::vector<std::vector<Cdt::Vertex_handle>> handles;  ///< per loop, its kept vertices
+  std::size_t vertices = 0, outer_loops = 0;
+  double signed_area = 0.0;  ///< outlines counter-clockwise (positive), holes clockwise
+  bool too_short = false;    ///< a loop kept fewer than three vertices
+};
+
+// Inserts the kept vertices of every loop, projected onto the plane (axis_u, axis_v), and the
+// loop's edges as constraints. Two vertices on one point of the plane are a fault: every such
+// pair goes to `faulty` (and no constraint is inserted after the first).
+InsertedLoops insert_loops(Cdt& cdt, const std::vector<Loop>& loops,
+                           const std::vector<std::uint8_t>& keep,
+                           const std::vector<Eigen::Vector3f>& p, const Eigen::Vector3f& normal,
+                           std::vector<std::uint32_t>& faulty) {
   const Eigen::Vector3f axis_u = normal.unitOrthogonal(), axis_v = normal.cross(axis_u);
   auto plane_point = [&](std::uint32_t v) {
     return Kernel::Point_2(axis_u.dot(p[v]), axis_v.dot(p[v]));
   };
-  RegionTriangulation out;
-  Cdt cdt;
-  std::size_t vertices = 0, outer_loops = 0;
-  double loop_area = 0.0;
-  std::vector<std::vector<Cdt::Vertex_handle>> loop_handles;
+  InsertedLoops in;
   for (const Loop& loop : loops) {
     double area = 0.0;
-    std::vector<Cdt::Vertex_handle>& handles = loop_handles.emplace_back();
+    std::vector<Cdt::Vertex_handle>& handles = in.handles.emplace_back();
     for (std::uint32_t v : loop) {
       if (!keep[v]) continue;
       Cdt::Vertex_handle handle = cdt.insert(plane_point(v));
-      if (cdt.number_of_vertices() == vertices) {  // on the point of another vertex
-        out.faulty.insert(out.faulty.end(), {handle->info().index, v});
+      if (cdt.number_of_vertices() == in.vertices) {  // on the point of another vertex
+        faulty.insert(faulty.end(), {handle->info().index, v});
         continue;
       }
-      ++vertices;
+      ++in.vertices;
       handle->info().index = v;
       handles.push_back(handle);
     }
-    if (!out.faulty.empty()) continue;  // collecting every coincidence, then failing
-    if (handles.size() < 3) return out;
+    if (!faulty.empty()) continue;  // collecting every coincidence, then failing
+    if (handles.size() < 3) {
+      in.too_short = true;
+      return in;
+    }
     for (std::size_t i = 0; i < handles.size(); ++i) {
       const Cdt::Vertex_handle a = handles[i], b = handles[(i + 1) % handles.size()];
       cdt.insert_constraint(a, b);
       area += 0.5 * (a->point().x() * b->point().y() - b->point().x() * a->point().y());
     }
-    loop_area += area;
-    outer_loops += area > 0.0 ? 1 : 0;  // counter-clockwise: an outline, not a hole
+    in.signed_area += area;
+    in.outer_loops += area > 0.0 ? 1 : 0;  // counter-clockwise: an outline, not a hole
   }
-  if (!out.faulty.empty()) return out;
-  if (cdt.number_of_vertices() != vertices) {
-    // Crossing constraints were split at new points: blame the mesh vertices next to them.
-    for (auto v = cdt.finite_vertices_begin(); v != cdt.finite_vertices_end(); ++v) {
-      if (v->info().index != HalfEdgeMesh::kNone) continue;
-      auto around = cdt.incident_vertices(v), first = around;
-      do {
-        if (!cdt.is_infinite(around) && around->info().index != HalfEdgeMesh::kNone)
-          out.faulty.push_back(around->info().index);
-      } while (++around != first);
-    }
-    return out;
+  return in;
+}
+
+// Crossing constraints were split at new points: the mesh vertices next to them.
+void blame_crossings(const Cdt& cdt, std::vector<std::uint32_t>& faulty) {
+  for (auto v = cdt.finite_vertices_begin(); v != cdt.finite_vertices_end(); ++v) {
+    if (v->info().index != HalfEdgeMesh::kNone) continue;
+    auto around = cdt.incident_vertices(v), first = around;
+    do {
+      if (!cdt.is_infinite(around) && around->info().index != HalfEdgeMesh::kNone)
+        faulty.push_back(around->info().index);
+    } while (++around != first);
   }
-  std::vector<Triangle>& triangles = out.triangles;
-  // Nesting depth by flooding from the outside, one more across every constrained edge.
+}
+
+// Each face's nesting depth (face info) by flooding from the outside, one more across every
+// constrained edge: odd depths lie inside the polygon.
+void mark_nesting_depth(Cdt& cdt) {
   for (auto f = cdt.all_faces_begin(); f != cdt.all_faces_end(); ++f) f->info() = -1;
   std::vector<std::pair<Cdt::Face_handle, int>> seeds{{cdt.infinite_face(), 0}};
   while (!seeds.empty()) {
@@ -300,43 +310,73 @@ RegionTriangulation triangulate_region(const std::vector<Loop>& loops,
       }
     }
   }
-  double inside_area = 0.0;
+}
+
+// The faces inside the polygon (odd depth) as mesh triangles; returns their area.
+double inside_triangles(const Cdt& cdt, std::vector<Triangle>& triangles) {
+  double area = 0.0;
   for (auto f = cdt.finite_faces_begin(); f != cdt.finite_faces_end(); ++f) {
     if (f->info() % 2 == 0) continue;
     triangles.push_back(Triangle{f->vertex(0)->info().index, f->vertex(1)->info().index,
                                  f->vertex(2)->info().index});
-    inside_area +=
+    area +=
         std::abs(CGAL::area(f->vertex(0)->point(), f->vertex(1)->point(), f->vertex(2)->point()));
   }
+  return area;
+}
+
+// Why a triangulation came out unfaithful: a loop with the outside on its left is folded over
+// in the plane (a sliver of the region turned over, as cutting creases can leave): its vertices
+// are the fault. A loop that turns back on itself (a hairpin: the edges before and after a
+// vertex overlap) bounds no area there but adds triangles: its vertex is the fault.
+void blame_folds_and_hairpins(const Cdt& cdt, const InsertedLoops& in,
+                              std::vector<std::uint32_t>& faulty) {
+  for (const std::vector<Cdt::Vertex_handle>& handles : in.handles) {
+    Cdt::Face_handle face;
+    int i = 0;
+    if (!cdt.is_edge(handles[0], handles[1], face, i)) continue;
+    if (face->vertex(Cdt::ccw(i)) != handles[0]) face = face->neighbor(i);  // the left side
+    if (face->info() % 2 != 0) continue;
+    for (const Cdt::Vertex_handle& v : handles) faulty.push_back(v->info().index);
+  }
+  for (const std::vector<Cdt::Vertex_handle>& handles : in.handles) {
+    const std::size_t n = handles.size();
+    for (std::size_t i = 0; i < n; ++i) {
+      const Kernel::Point_2& a = handles[(i + n - 1) % n]->point();
+      const Kernel::Point_2& b = handles[i]->point();
+      const Kernel::Point_2& c = handles[(i + 1) % n]->point();
+      if (CGAL::orientation(a, b, c) == CGAL::COLLINEAR && CGAL::angle(a, b, c) == CGAL::ACUTE)
+        faulty.push_back(handles[i]->info().index);
+    }
+  }
+}
+
+// Triangulates the polygon with holes formed by the kept vertices of `loops` in the region's
+// plane. Fails when it cannot be done faithfully: fewer than three vertices in a loop, two
+// vertices on one point of the plane, crossing edges, or a folded projection.
+RegionTriangulation triangulate_region(const std::vector<Loop>& loops,
+                                       const std::vector<std::uint8_t>& keep,
+                                       const std::vector<Eigen::Vector3f>& p,
+                                       const Eigen::Vector3f& normal) {
+  RegionTriangulation out;
+  Cdt cdt;
+  const InsertedLoops in = insert_loops(cdt, loops, keep, p, normal, out.faulty);
+  if (in.too_short || !out.faulty.empty()) return out;
+  if (cdt.number_of_vertices() != in.vertices) {
+    blame_crossings(cdt, out.faulty);
+    return out;
+  }
+  mark_nesting_depth(cdt);
+  const double inside_area = inside_triangles(cdt, out.triangles);
   // Faithful polygons with holes: n + 2 (holes) - 2 (polygons) triangles, and the loops' signed
   // areas (outlines counter-clockwise, holes clockwise) add up to the area triangulated.
-  const std::size_t holes = loops.size() - outer_loops;
-  if (vertices + 2 * holes < 2 * outer_loops + 1) return {};  // (faulty stays empty)
-  const std::size_t expected = vertices + 2 * holes - 2 * outer_loops;
-  if (triangles.size() != expected || std::abs(loop_area - inside_area) > 1e-4 * inside_area) {
-    triangles.clear();
-    // A loop with the outside on its left is folded over in the plane (a sliver of the
-    // region turned over, as cutting creases can leave): its vertices are the fault.
-    for (const std::vector<Cdt::Vertex_handle>& handles : loop_handles) {
-      Cdt::Face_handle face;
-      int i = 0;
-      if (!cdt.is_edge(handles[0], handles[1], face, i)) continue;
-      if (face->vertex(Cdt::ccw(i)) != handles[0]) face = face->neighbor(i);  // the left side
-      if (face->info() % 2 != 0) continue;
-      for (const Cdt::Vertex_handle& v : handles) out.faulty.push_back(v->info().index);
-    }
-    // A loop that turns back on itself (a hairpin: the edges before and after a vertex
-    // overlap) bounds no area there but adds triangles: its vertex is the fault.
-    for (const std::vector<Cdt::Vertex_handle>& handles : loop_handles) {
-      const std::size_t n = handles.size();
-      for (std::size_t i = 0; i < n; ++i) {
-        const Kernel::Point_2& a = handles[(i + n - 1) % n]->point();
-        const Kernel::Point_2& b = handles[i]->point();
-        const Kernel::Point_2& c = handles[(i + 1) % n]->point();
-        if (CGAL::orientation(a, b, c) == CGAL::COLLINEAR && CGAL::angle(a, b, c) == CGAL::ACUTE)
-          out.faulty.push_back(handles[i]->info().index);
-      }
-    }
+  const std::size_t holes = loops.size() - in.outer_loops;
+  if (in.vertices + 2 * holes < 2 * in.outer_loops + 1) return {};  // (faulty stays empty)
+  const std::size_t expected = in.vertices + 2 * holes - 2 * in.outer_loops;
+  if (out.triangles.size() != expected ||
+      std::abs(in.signed_area - inside_area) > 1e-4 * inside_area) {
+    out.triangles.clear();
+    blame_folds_and_hairpins(cdt, in, out.faulty);
   }
   return out;
 }
@@ -380,94 +420,124 @@ void fail_at_shared_new_edges(const TriangleMesh& mesh,
   }
 }
 
+// Every region's faces, contours, state and (once triangulated) result; region_of_face as the
+// regions give up faces.
+struct RegionWork {
+  std::vector<std::int32_t> region_of_face;
+  std::vector<std::vector<std::uint32_t>> faces;
+  std::vector<std::vector<Loop>> contours;
+  std::vector<std::uint8_t> state;  ///< RegionState
+  std::vector<RegionTriangulation> results;
+  std::vector<std::uint8_t> keep;  ///< per vertex: kept by the contour simplification
+};
+
+// Every region's contours, region by region (serial: giving up faces at pinches edits
+// region_of_face); a region without faces is kept.
+RegionWork start_regions(const HalfEdgeMesh& h, const PlanarSegmentation& segmentation) {
+  const std::size_t regions = segmentation.regions.size();
+  RegionWork work;
+  work.region_of_face = segmentation.region_of_face;
+  work.faces.resize(regions);
+  work.contours.resize(regions);
+  work.state.assign(regions, kSimplified);
+  work.results.resize(regions);
+  for (std::size_t i = 0; i < regions; ++i) {
+    work.faces[i] = segmentation.regions[i].faces;
+    region_contours(h, work.region_of_face, work.faces[i], static_cast<std::int32_t>(i),
+                    work.contours[i]);
+    if (work.faces[i].empty()) work.state[i] = kKept;
+  }
+  return work;
+}
+
+// A region that fails at a known place (two vertices on one point of its plane, crossing
+// edges) gives up its faces there and is tried again, a bounded number of rounds; otherwise
+// (or then) it is tried again with its full contours, which also fixes them for its
+// neighbours, and one that still fails is kept as it was. Repeat until nothing fails.
+void triangulate_with_repairs(const TriangleMesh& mesh, const HalfEdgeMesh& h,
+                              const PlanarSegmentation& segmentation,
+                              const RetriangulationConfig& config, RegionWork& work,
+                              RetriangulationReport& r) {
+  constexpr int kRepairRounds = 8;
+  const std::size_t regions = work.state.size();
+  for (int round = 0, changed = 1; changed; ++round) {
+    const std::vector<std::uint8_t> fixed = fixed_vertices(h, work.region_of_face, work.state);
+    work.keep.assign(mesh.vertices.size(), 1);
+    r.max_contour_deviation = 0.0;
+    for (std::size_t i = 0; i < regions; ++i)
+      if (work.state[i] == kSimplified)
+        r.max_contour_deviation =
+            std::max(r.max_contour_deviation,
+                     simplify_contours(work.contours[i], mesh.vertices, fixed,
+                                       static_cast<double>(config.contour_tolerance), work.keep));
+    tbb::parallel_for(std::size_t{0}, regions, [&](std::size_t i) {
+      work.results[i] = work.state[i] != kKept
+                            ? triangulate_region(work.contours[i], work.keep, mesh.vertices,
+                                                 segmentation.regions[i].normal)
+                            : RegionTriangulation{};
+    });
+    fail_at_shared_new_edges(mesh, work.region_of_face, work.state, work.results);
+    changed = 0;
+    for (std::size_t i = 0; i < regions; ++i) {
+      if (work.state[i] == kKept || !work.results[i].triangles.empty()) continue;
+      changed = 1;
+      std::vector<std::uint32_t>& faulty = work.results[i].faulty;
+      faulty.erase(std::remove(faulty.begin(), faulty.end(), HalfEdgeMesh::kNone), faulty.end());
+      if (!faulty.empty() && round < kRepairRounds) {
+        const auto id = static_cast<std::int32_t>(i);
+        give_up_faces(h, faulty, id, work.region_of_face, work.faces[i]);
+        region_contours(h, work.region_of_face, work.faces[i], id, work.contours[i]);
+        if (work.faces[i].empty()) work.state[i] = kKept;
+      } else {
+        ++work.state[i];
+      }
+    }
+  }
+}
+
+// The mesh's faces outside the retriangulated regions, then each such region's new triangles,
+// vertices compacted; counts go to the report.
+TriangleMesh replace_regions(const TriangleMesh& mesh, const RegionWork& work,
+                             RetriangulationReport& r) {
+  const std::size_t regions = work.state.size();
+  std::vector<Triangle> triangles;
+  for (std::uint32_t f = 0; f < mesh.triangles.size(); ++f) {
+    const std::int32_t region = work.region_of_face[f];
+    if (region < 0 || work.state[static_cast<std::size_t>(region)] == kKept)
+      triangles.push_back(mesh.triangles[f]);
+    else
+      ++r.removed_faces;
+  }
+  for (std::size_t i = 0; i < regions; ++i) {
+    if (work.state[i] == kKept) {
+      ++r.kept;
+      continue;
+    }
+    const std::vector<Triangle>& fill = work.results[i].triangles;
+    ++r.retriangulated;
+    r.added_faces += fill.size();
+    for (const Loop& loop : work.contours[i]) {
+      r.contour_vertices += loop.size();
+      for (std::uint32_t v : loop) r.dropped_contour_vertices += work.keep[v] ? 0 : 1;
+    }
+    triangles.insert(triangles.end(), fill.begin(), fill.end());
+  }
+  return compact_vertices(mesh, triangles);
+}
+
 }  // namespace
 
 TriangleMesh retriangulate_regions(const TriangleMesh& mesh, const PlanarSegmentation& segmentation,
                                    const RetriangulationConfig& config,
                                    RetriangulationReport* report) {
   RetriangulationReport r;
+  r.regions = segmentation.regions.size();
   const HalfEdgeMesh h(mesh);
-  std::vector<std::int32_t> region_of_face = segmentation.region_of_face;
-  const std::size_t regions = segmentation.regions.size();
-  r.regions = regions;
-
-  // Contours, region by region (serial: giving up faces at pinches edits region_of_face).
-  std::vector<std::vector<Loop>> contours(regions);
-  std::vector<std::vector<std::uint32_t>> faces(regions);
-  std::vector<std::uint8_t> state(regions, kSimplified);
-  for (std::size_t i = 0; i < regions; ++i) {
-    faces[i] = segmentation.regions[i].faces;
-    region_contours(h, region_of_face, faces[i], static_cast<std::int32_t>(i), contours[i]);
-    if (faces[i].empty()) state[i] = kKept;
-  }
-
-  // A region that fails at a known place (two vertices on one point of its plane, crossing
-  // edges) gives up its faces there and is tried again, a bounded number of rounds; otherwise
-  // (or then) it is tried again with its full contours, which also fixes them for its
-  // neighbours, and one that still fails is kept as it was. Repeat until nothing fails.
-  constexpr int kRepairRounds = 8;
-  std::vector<std::vector<Triangle>> fills(regions);
-  std::vector<RegionTriangulation> results(regions);
-  std::vector<std::uint8_t> keep;
-  for (int round = 0, changed = 1; changed; ++round) {
-    const std::vector<std::uint8_t> fixed = fixed_vertices(h, region_of_face, state);
-    keep.assign(mesh.vertices.size(), 1);
-    r.max_contour_deviation = 0.0;
-    for (std::size_t i = 0; i < regions; ++i)
-      if (state[i] == kSimplified)
-        r.max_contour_deviation =
-            std::max(r.max_contour_deviation,
-                     simplify_contours(contours[i], mesh.vertices, fixed,
-                                       static_cast<double>(config.contour_tolerance), keep));
-    tbb::parallel_for(std::size_t{0}, regions, [&](std::size_t i) {
-      results[i] = state[i] != kKept ? triangulate_region(contours[i], keep, mesh.vertices,
-                                                          segmentation.regions[i].normal)
-                                     : RegionTriangulation{};
-    });
-    fail_at_shared_new_edges(mesh, region_of_face, state, results);
-    changed = 0;
-    for (std::size_t i = 0; i < regions; ++i) {
-      if (state[i] == kKept || !results[i].triangles.empty()) continue;
-      changed = 1;
-      std::vector<std::uint32_t>& faulty = results[i].faulty;
-      faulty.erase(std::remove(faulty.begin(), faulty.end(), HalfEdgeMesh::kNone), faulty.end());
-      if (!faulty.empty() && round < kRepairRounds) {
-        const auto id = static_cast<std::int32_t>(i);
-        give_up_faces(h, faulty, id, region_of_face, faces[i]);
-        region_contours(h, region_of_face, faces[i], id, contours[i]);
-        if (faces[i].empty()) state[i] = kKept;
-      } else {
-        ++state[i];
-      }
-    }
-  }
-  for (std::size_t i = 0; i < regions; ++i) fills[i] = std::move(results[i].triangles);
-  std::vector<std::uint8_t> kept(regions);
-  for (std::size_t i = 0; i < regions; ++i) kept[i] = state[i] == kKept ? 1 : 0;
-
-  std::vector<Triangle> triangles;
-  for (std::uint32_t f = 0; f < mesh.triangles.size(); ++f) {
-    const std::int32_t region = region_of_face[f];
-    if (region < 0 || kept[static_cast<std::size_t>(region)])
-      triangles.push_back(mesh.triangles[f]);
-    else
-      ++r.removed_faces;
-  }
-  for (std::size_t i = 0; i < regions; ++i) {
-    if (kept[i]) {
-      ++r.kept;
-      continue;
-    }
-    ++r.retriangulated;
-    r.added_faces += fills[i].size();
-    for (const Loop& loop : contours[i]) {
-      r.contour_vertices += loop.size();
-      for (std::uint32_t v : loop) r.dropped_contour_vertices += keep[v] ? 0 : 1;
-    }
-    triangles.insert(triangles.end(), fills[i].begin(), fills[i].end());
-  }
+  RegionWork work = start_regions(h, segmentation);
+  triangulate_with_repairs(mesh, h, segmentation, config, work, r);
+  TriangleMesh out = replace_regions(mesh, work, r);
   if (report != nullptr) *report = r;
-  return compact_vertices(mesh, triangles);
+  return out;
 }
 
 }  // namespace meshflow

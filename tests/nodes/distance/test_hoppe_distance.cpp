@@ -5,6 +5,7 @@
 #include <algorithm>
 
 #include "nodes/synthetic/shapes.h"
+#include "nodes/voxelize/voxelize.h"
 #include "runtime/error.h"
 
 namespace meshflow {

@@ -7,6 +7,7 @@
 #include <set>
 
 #include "nodes/cube/cube_table.h"
+#include "nodes/voxelize/voxelize.h"
 #include "runtime/threads.h"
 
 namespace meshflow {

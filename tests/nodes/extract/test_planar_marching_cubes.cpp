@@ -6,6 +6,7 @@
 
 #include "nodes/distance/hoppe_distance.h"
 #include "nodes/eval/surface_eval.h"
+#include "nodes/voxelize/voxelize.h"
 #include "runtime/threads.h"
 
 namespace meshflow {

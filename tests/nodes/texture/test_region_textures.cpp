@@ -7,6 +7,7 @@
 
 #include "nodes/io/image_io.h"
 #include "nodes/io/textured_obj.h"
+#include "nodes/optimize/planar/planar_regions.h"
 #include "runtime/error.h"
 #include "runtime/half_edge_mesh.h"
 #include "test_support.h"

@@ -7,6 +7,7 @@
 #include "fixtures/mesh_fixtures.h"
 #include "fixtures/room_fixture.h"
 #include "nodes/eval/completeness.h"
+#include "nodes/optimize/planar/planar_regions.h"
 #include "nodes/optimize/planar/sharp_edges.h"
 #include "runtime/half_edge_mesh.h"
 #include "test_support.h"

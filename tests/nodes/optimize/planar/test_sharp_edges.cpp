@@ -8,6 +8,7 @@
 #include "fixtures/mesh_fixtures.h"
 #include "fixtures/room_fixture.h"
 #include "nodes/eval/surface_eval.h"
+#include "nodes/optimize/planar/planar_regions.h"
 #include "nodes/search/mesh_distance_index.h"
 #include "runtime/half_edge_mesh.h"
 #include "runtime/voxel_key.h"

@@ -4,11 +4,13 @@
     ./build/bench/meshflow_bench --benchmark_repetitions=3 \
         --benchmark_report_aggregates_only=true \
         --benchmark_out=bench.json --benchmark_out_format=json
-    scripts/bench_tables.py bench.json [FILTER_REGEX]
+    scripts/bench_tables.py bench.json [more.json ...] [--filter REGEX]
 
 One row per benchmark and argument set: the median real time on 1 and on 2 threads (the
 `threads:` argument), the speed-up, the label and the counters of the 2-thread run. Benchmarks
-without a `threads:` argument get one time column.
+without a `threads:` argument get one time column. Given several files (runs of the same
+build at different hours), each time is the lowest of their medians: on a shared VM a run is
+only ever slowed by its neighbours.
 """
 import json
 import re
@@ -33,15 +35,21 @@ def fmt_counter(v):
 
 SKIP = {"name", "run_name", "run_type", "repetitions", "repetition_index", "threads",
         "aggregate_name", "aggregate_unit", "iterations", "real_time", "cpu_time", "time_unit",
-        "family_index", "per_family_instance_index", "label", "error_occurred", "error_message"}
+        "family_index", "per_family_instance_index", "label", "error_occurred", "error_message",
+        "ms/frame"}  # frames/s says the same (and the counter was wrong before 2026-12-05)
 TO_MS = {"ns": 1e-6, "us": 1e-3, "ms": 1.0, "s": 1e3}
 
 
 def main():
-    data = json.load(open(sys.argv[1]))
-    pattern = re.compile(sys.argv[2]) if len(sys.argv) > 2 else None
+    args = sys.argv[1:]
+    pattern = None
+    if "--filter" in args:
+        i = args.index("--filter")
+        pattern = re.compile(args[i + 1])
+        del args[i:i + 2]
+    benchmarks = [b for path in args for b in json.load(open(path))["benchmarks"]]
     rows = OrderedDict()
-    for b in data["benchmarks"]:
+    for b in benchmarks:
         if b.get("aggregate_name", "median") != "median" or b.get("error_occurred"):
             continue
         name = b["run_name"].replace("/real_time", "")
@@ -51,7 +59,10 @@ def main():
         key = re.sub(r"/threads:\d+", "", name)
         row = rows.setdefault(key, {"label": b.get("label", ""), "times": {}, "counters": {}})
         t = int(threads.group(1)) if threads else 0
-        row["times"][t] = b["real_time"] * TO_MS[b["time_unit"]]
+        ms = b["real_time"] * TO_MS[b["time_unit"]]
+        if t in row["times"] and row["times"][t] <= ms:
+            continue
+        row["times"][t] = ms
         if t in (0, 2) or not row["counters"]:
             row["counters"] = {k: v for k, v in b.items()
                                if k not in SKIP and isinstance(v, (int, float))}

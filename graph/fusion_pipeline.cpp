@@ -10,7 +10,7 @@
 namespace meshflow {
 namespace flow = tbb::flow;
 
-FusionPipeline::FusionPipeline(FusionConfig config, std::size_t max_in_flight)
+FusionPipeline::FusionPipeline(const FusionConfig& config, std::size_t max_in_flight)
     : FusionPipeline(config, max_in_flight, TsdfVolume(config.tsdf)) {}
 
 FusionPipeline::FusionPipeline(FusionConfig config, std::size_t max_in_flight, TsdfVolume map)

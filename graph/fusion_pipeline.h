@@ -28,7 +28,7 @@ struct FusionConfig {
 class FusionPipeline : public FramePipeline {
  public:
   /// A pipeline fusing into a new empty map.
-  FusionPipeline(FusionConfig config, std::size_t max_in_flight = 2);
+  FusionPipeline(const FusionConfig& config, std::size_t max_in_flight = 2);
   /// A pipeline that goes on fusing into `map` (e.g. read from a map file to resume a run).
   /// Throws meshflow::Error when the map's voxel size differs from config.tsdf's.
   FusionPipeline(FusionConfig config, std::size_t max_in_flight, TsdfVolume map);

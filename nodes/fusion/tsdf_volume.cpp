@@ -51,11 +51,11 @@ void touched_blocks_of_row(const cv::Mat& depth, int v, const PinholeIntrinsics&
   RecentKeys recent;
   Eigen::Vector3i last_lo(1, 1, 1), last_hi(0, 0, 0);  // an empty box
   const float inv_voxel = 1.0f / voxel;
-  const Eigen::Matrix3f R = T_world_camera.linear() * inv_voxel;
+  const Eigen::Matrix3f rotation = T_world_camera.linear() * inv_voxel;
   const Eigen::Vector3f origin = T_world_camera.translation() * inv_voxel;
   const float ry = (static_cast<float>(v) - k.cy) / k.fy;
-  const Eigen::Vector3f ray_step = R.col(0) / k.fx;                   // per pixel along u
-  Eigen::Vector3f ray = R * Eigen::Vector3f(-k.cx / k.fx, ry, 1.0f);  // world ray at u = 0
+  const Eigen::Vector3f ray_step = rotation.col(0) / k.fx;                   // per pixel along u
+  Eigen::Vector3f ray = rotation * Eigen::Vector3f(-k.cx / k.fx, ry, 1.0f);  // world ray at u = 0
   auto inside = [](const Eigen::Vector3i& p, const Eigen::Vector3i& lo, const Eigen::Vector3i& hi) {
     return p.x() >= lo.x() && p.y() >= lo.y() && p.z() >= lo.z() && p.x() <= hi.x() &&
            p.y() <= hi.y() && p.z() <= hi.z();
@@ -144,14 +144,14 @@ std::size_t update_block(TsdfBlock& block, const BlockUpdate& frame) {
   const PinholeIntrinsics& k = frame.intrinsics;
   const cv::Mat& depth = frame.depth;
   const float voxel = frame.config.voxel_size, truncation = frame.config.truncation();
-  const Eigen::Matrix3f R = frame.T_camera_world.linear();
+  const Eigen::Matrix3f rotation = frame.T_camera_world.linear();
   const Eigen::Vector3i origin = block.coords * kTsdfBlockSide;
   std::size_t count = 0;
   for (int z = 0; z < kTsdfBlockSide; ++z)
     for (int y = 0; y < kTsdfBlockSide; ++y) {
       const Eigen::Vector3f row_start = (origin + Eigen::Vector3i(0, y, z)).cast<float>() * voxel;
       Eigen::Vector3f pc = frame.T_camera_world * row_start;
-      const Eigen::Vector3f step = R.col(0) * voxel;
+      const Eigen::Vector3f step = rotation.col(0) * voxel;
       for (int x = 0; x < kTsdfBlockSide; ++x, pc += step) {
         if (!(pc.z() > 0.0f)) continue;
         const float inv_z = 1.0f / pc.z();

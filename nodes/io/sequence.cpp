@@ -113,6 +113,7 @@ std::unique_ptr<Sequence> open_3dtk_directory(const std::string& directory) {
   if (scans.empty()) throw Error(directory, "", "no scanNNN.3d files (3DTK format) found");
   std::sort(scans.begin(), scans.end());
   std::vector<std::string> paths;
+  paths.reserve(scans.size());
   for (auto& s : scans) paths.push_back(std::move(s.second));
   return std::make_unique<ScanDirectorySequence>(directory, std::move(paths));
 }

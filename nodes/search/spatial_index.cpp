@@ -117,6 +117,7 @@ std::vector<std::uint32_t> BruteForceIndex::radius_search(const Eigen::Vector3f&
   }
   std::sort(hits.begin(), hits.end());
   std::vector<std::uint32_t> out;
+  out.reserve(hits.size());
   for (const auto& h : hits) out.push_back(h.second);
   return out;
 }

@@ -52,7 +52,7 @@ void add_convex_polygon(std::vector<SurfacePatch>& patches,
 std::vector<Eigen::Vector3f> polytope_face(const std::vector<Eigen::Vector3f>& normals,
                                            const std::vector<float>& offsets, std::size_t face,
                                            float half_size) {
-  const Eigen::Vector3f n = normals[face];
+  const Eigen::Vector3f& n = normals[face];
   const Eigen::Vector3f helper =
       std::abs(n.x()) < 0.9f ? Eigen::Vector3f::UnitX() : Eigen::Vector3f::UnitY();
   const Eigen::Vector3f u = n.cross(helper).normalized(), v = n.cross(u);
@@ -80,8 +80,8 @@ std::vector<Eigen::Vector3f> polytope_face(const std::vector<Eigen::Vector3f>& n
 // Every edge of a convex polytope's face is a sharp edge (shared with the face whose plane
 // clipped it) and every vertex a corner; each edge is listed by both of its faces, so only
 // once here (from the face where it runs in increasing order of its endpoints).
-ClosedObject convex_polytope_object(std::string name, std::vector<Eigen::Vector3f> normals,
-                                    std::vector<float> offsets, float half_size) {
+ClosedObject convex_polytope_object(std::string name, const std::vector<Eigen::Vector3f>& normals,
+                                    const std::vector<float>& offsets, float half_size) {
   ClosedObject o;
   o.name = std::move(name);
   auto before = [](const Eigen::Vector3f& a, const Eigen::Vector3f& b) {

@@ -32,7 +32,8 @@ struct FanScratch {
 std::uint32_t fans_around(const TriangleMesh& mesh, std::uint32_t v, const std::uint32_t* begin,
                           const std::uint32_t* end, std::uint32_t* fan, FanScratch& scratch) {
   const auto k = static_cast<std::uint32_t>(end - begin);
-  auto& [spokes, parent] = scratch;
+  auto& spokes = scratch.spokes;
+  auto& parent = scratch.parent;  // (a reference, not a structured binding: lambdas capture it)
   parent.resize(k);
   std::iota(parent.begin(), parent.end(), 0u);
   // Union-find with path halving whose roots are the lowest slot of their set.

@@ -20,18 +20,5 @@ void BM_Normals(benchmark::State& state) {
 }
 BENCHMARK(BM_Normals)->Apply(thread_and_input_args);
 
-void BM_KdTreeBuild(benchmark::State& state) {
-  const PointCloud* cloud = require(state, static_cast<Input>(state.range(1)));
-  if (cloud == nullptr) return;
-  for (auto _ : state) benchmark::DoNotOptimize(KdTreeIndex(cloud->positions).size());
-  state.counters["points/s"] = benchmark::Counter(static_cast<double>(cloud->size()),
-                                                  benchmark::Counter::kIsIterationInvariantRate);
-}
-BENCHMARK(BM_KdTreeBuild)
-    ->Args({1, kSynthetic})
-    ->Args({1, kKurt3d})
-    ->Unit(benchmark::kMillisecond)
-    ->UseRealTime();
-
 }  // namespace
 }  // namespace meshflow::bench

@@ -1,0 +1,56 @@
+#!/usr/bin/env bash
+# Builds the libFuzzer targets (fuzz/) with clang, AddressSanitizer and UndefinedBehaviorSanitizer
+# into build-fuzz/ and runs each for SECONDS (default 60), seeded from the test fixtures and,
+# when present, the small files of $MESHFLOW_DATA. A finding stops the run with libFuzzer's
+# report and its input saved as build-fuzz/findings/<target>/crash-*; a reproduced finding
+# belongs in tests/data/bad with a test that expects its one-line error.
+#   scripts/fuzz.sh [SECONDS] [TARGET ...]      e.g. scripts/fuzz.sh 20 ply pcd
+# Needs clang and libclang-rt-14-dev (libFuzzer).
+set -euo pipefail
+cd "$(dirname "$0")/.."
+seconds=${1:-60}
+shift || true
+targets=("$@")
+[ ${#targets[@]} -gt 0 ] || targets=(ply pcd xyz 3dtk las mesh rgbd image tsdf_map)
+data=${MESHFLOW_DATA:-../shared/data}
+build=build-fuzz
+
+CC=clang CXX=clang++ cmake -S . -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \
+  -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -g1" -DMESHFLOW_BUILD_FUZZERS=ON \
+  -DMESHFLOW_SANITIZE=address,undefined -DMESHFLOW_SANITIZE_SKIP=vptr \
+  -DMESHFLOW_BUILD_TESTS=OFF -DMESHFLOW_BUILD_BENCHMARKS=OFF -DMESHFLOW_BUILD_TOOLS=OFF \
+  -DMESHFLOW_SCALABLE_MALLOC=OFF > /dev/null
+cmake --build "$build" --target $(printf 'fuzz_%s ' "${targets[@]}")
+
+# Seeds: files whose extension the target reads, at most 256 kB each.
+seed_patterns() {
+  case $1 in
+    ply) echo '*.ply' ;; pcd) echo '*.pcd' ;; xyz) echo '*.xyz *.pts *.txt *.csv' ;;
+    3dtk) echo '*.3d *.pose' ;; las) echo '*.las' ;; mesh) echo '*.obj *.off *.stl' ;;
+    rgbd) echo '*.log *.json' ;; image) echo '*.png *.tiff *.tif *.pclzf *.jpg' ;;
+    tsdf_map) echo '*.tsdf' ;;
+  esac
+}
+status=0
+for t in "${targets[@]}"; do
+  corpus="$build/corpus/$t"
+  findings="$build/findings/$t"
+  mkdir -p "$corpus" "$findings"
+  for pattern in $(seed_patterns "$t"); do
+    find tests/data "$data" -name "$pattern" -size -256k -type f 2>/dev/null |
+      head -n 50 | while read -r f; do cp "$f" "$corpus/seed_$(basename "$f")"; done
+  done
+  echo "== fuzz_$t: $seconds s, $(ls "$corpus" | wc -l) corpus files"
+  if ! ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=halt_on_error=1:print_stacktrace=1 \
+      "$build/fuzz/fuzz_$t" "$corpus" -max_total_time="$seconds" -max_len=65536 \
+      -rss_limit_mb=2048 -malloc_limit_mb=1024 -artifact_prefix="$findings/" \
+      -print_final_stats=1 2>"$build/fuzz_$t.log"; then
+    tail -n 40 "$build/fuzz_$t.log"
+    echo "fuzz: fuzz_$t found a problem; inputs in $findings" >&2
+    status=1
+  else
+    grep -E "stat::number_of_executed_units|stat::peak_rss_mb" "$build/fuzz_$t.log" | tr '\n' ' '
+    echo
+  fi
+done
+exit $status

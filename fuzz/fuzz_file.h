@@ -20,8 +20,9 @@ namespace meshflow::fuzz {
 /// Writes data[0, size) to this process's file with extension `ext` (".ply") and returns its
 /// path; the same path for every input of a run.
 inline std::string write_input(const std::uint8_t* data, std::size_t size, const std::string& ext) {
-  static const std::string dir =
-      std::filesystem::is_directory("/dev/shm") ? "/dev/shm" : std::filesystem::temp_directory_path().string();
+  static const std::string dir = std::filesystem::is_directory("/dev/shm")
+                                     ? "/dev/shm"
+                                     : std::filesystem::temp_directory_path().string();
   const std::string path = dir + "/meshflow_fuzz_" + std::to_string(::getpid()) + ext;
   std::FILE* f = std::fopen(path.c_str(), "wb");
   if (f == nullptr) __builtin_trap();  // the harness itself failed

@@ -3,6 +3,7 @@
 #include "nodes/io/las_reader.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
-  meshflow::fuzz::read_as(data, size, ".las", [](const std::string& p) { meshflow::io::read_las(p); });
+  meshflow::fuzz::read_as(data, size, ".las",
+                          [](const std::string& p) { meshflow::io::read_las(p); });
   return 0;
 }

@@ -4,6 +4,7 @@
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   for (const char* ext : {".obj", ".off", ".stl"})
-    meshflow::fuzz::read_as(data, size, ext, [](const std::string& p) { meshflow::io::read_mesh(p); });
+    meshflow::fuzz::read_as(data, size, ext,
+                            [](const std::string& p) { meshflow::io::read_mesh(p); });
   return 0;
 }

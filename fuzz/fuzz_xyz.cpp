@@ -3,7 +3,8 @@
 #include "nodes/io/xyz_reader.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
-  meshflow::fuzz::read_as(data, size, ".xyz", [](const std::string& p) { meshflow::io::read_xyz(p); });
+  meshflow::fuzz::read_as(data, size, ".xyz",
+                          [](const std::string& p) { meshflow::io::read_xyz(p); });
   meshflow::fuzz::read_as(data, size, ".xyz", [](const std::string& p) {
     meshflow::io::read_xyz(p, "x,y,z,nx,ny,nz,r,g,b");
   });

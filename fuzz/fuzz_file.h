@@ -17,13 +17,18 @@
 
 namespace meshflow::fuzz {
 
+/// This process's scratch path with `suffix` appended (in /dev/shm when it exists).
+inline std::string scratch_path(const std::string& suffix) {
+  static const std::string dir = std::filesystem::is_directory("/dev/shm")
+                                     ? std::string("/dev/shm")
+                                     : std::filesystem::temp_directory_path().string();
+  return dir + "/meshflow_fuzz_" + std::to_string(::getpid()) + suffix;
+}
+
 /// Writes data[0, size) to this process's file with extension `ext` (".ply") and returns its
 /// path; the same path for every input of a run.
 inline std::string write_input(const std::uint8_t* data, std::size_t size, const std::string& ext) {
-  static const std::string dir = std::filesystem::is_directory("/dev/shm")
-                                     ? "/dev/shm"
-                                     : std::filesystem::temp_directory_path().string();
-  const std::string path = dir + "/meshflow_fuzz_" + std::to_string(::getpid()) + ext;
+  const std::string path = scratch_path(ext);
   std::FILE* f = std::fopen(path.c_str(), "wb");
   if (f == nullptr) __builtin_trap();  // the harness itself failed
   if (size > 0 && std::fwrite(data, 1, size, f) != size) __builtin_trap();

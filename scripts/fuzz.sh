@@ -2,8 +2,8 @@
 # Builds the libFuzzer targets (fuzz/) with clang, AddressSanitizer and UndefinedBehaviorSanitizer
 # into build-fuzz/ and runs each for SECONDS (default 60), seeded from the test fixtures and,
 # when present, the small files of $MESHFLOW_DATA. A finding stops the run with libFuzzer's
-# report and its input saved as build-fuzz/findings/<target>/crash-*; a reproduced finding
-# belongs in tests/data/bad with a test that expects its one-line error.
+# report and its input saved as build-fuzz/findings/<target>/crash-* (or oom-*, leak-*); a
+# fixed finding goes to fuzz/regressions/<target>/ (a seed of later runs) with a test.
 #   scripts/fuzz.sh [SECONDS] [TARGET ...]      e.g. scripts/fuzz.sh 20 ply pcd
 # Needs clang and libclang-rt-14-dev (libFuzzer).
 set -euo pipefail
@@ -11,7 +11,7 @@ cd "$(dirname "$0")/.."
 seconds=${1:-60}
 shift || true
 targets=("$@")
-[ ${#targets[@]} -gt 0 ] || targets=(ply pcd xyz 3dtk las mesh rgbd image tsdf_map)
+[ ${#targets[@]} -gt 0 ] || targets=(ply pcd xyz 3dtk las mesh rgbd tum image tsdf_map)
 data=${MESHFLOW_DATA:-../shared/data}
 build=build-fuzz
 
@@ -27,7 +27,7 @@ seed_patterns() {
   case $1 in
     ply) echo '*.ply' ;; pcd) echo '*.pcd' ;; xyz) echo '*.xyz *.pts *.txt *.csv' ;;
     3dtk) echo '*.3d *.pose' ;; las) echo '*.las' ;; mesh) echo '*.obj *.off *.stl' ;;
-    rgbd) echo '*.log *.json' ;; image) echo '*.png *.tiff *.tif *.pclzf *.jpg' ;;
+    rgbd) echo '*.log *.json' ;; tum) echo '*.txt' ;; image) echo '*.png *.tiff *.tif *.pclzf *.jpg' ;;
     tsdf_map) echo '*.tsdf' ;;
   esac
 }
@@ -36,6 +36,8 @@ for t in "${targets[@]}"; do
   corpus="$build/corpus/$t"
   findings="$build/findings/$t"
   mkdir -p "$corpus" "$findings"
+  # Earlier findings first (fuzz/regressions/<target>/, each fixed and covered by a test).
+  if [ -d "fuzz/regressions/$t" ]; then cp fuzz/regressions/"$t"/* "$corpus"/; fi
   for pattern in $(seed_patterns "$t"); do
     find tests/data "$data" -name "$pattern" -size -256k -type f 2>/dev/null |
       head -n 50 | while read -r f; do cp "$f" "$corpus/seed_$(basename "$f")"; done

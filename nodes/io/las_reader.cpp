@@ -119,10 +119,14 @@ PointCloud read_las(const std::string& path) {
   cloud.intensities.resize(header.points);
   std::vector<std::uint16_t> rgb16(layout.rgb_at >= 0 ? 3 * header.points : 0);
   in.seekg(header.point_offset);
-  constexpr std::uint64_t kChunk = 1 << 16;
-  std::vector<unsigned char> buffer(kChunk * header.record_length);
-  for (std::uint64_t first = 0; first < header.points; first += kChunk) {
-    const std::uint64_t count = std::min(kChunk, header.points - first);
+  // Records per read: about 4 MiB of them, never more than the file holds (a record may be up
+  // to 64 KiB long; a fixed count of records could ask for gigabytes).
+  constexpr std::uint64_t kChunkBytes = std::uint64_t{4} << 20;
+  const std::uint64_t per_chunk = std::max<std::uint64_t>(
+      1, std::min<std::uint64_t>(header.points, kChunkBytes / header.record_length));
+  std::vector<unsigned char> buffer(per_chunk * header.record_length);
+  for (std::uint64_t first = 0; first < header.points; first += per_chunk) {
+    const std::uint64_t count = std::min(per_chunk, header.points - first);
     in.read(reinterpret_cast<char*>(buffer.data()),
             static_cast<std::streamsize>(count * header.record_length));
     if (static_cast<std::uint64_t>(in.gcount()) != count * header.record_length)

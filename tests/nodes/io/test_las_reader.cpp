@@ -112,6 +112,23 @@ TEST(LasReader, BadFilesAreClearErrorsBeforeAnyAllocation) {
   EXPECT_THROW(read_point_cloud(dir + "/x.laz"), Error);
 }
 
+// Found by fuzz/fuzz_las.cpp (fuzz/regressions/las/): records of up to 64 KiB were read 65 536
+// at a time, a 4 GiB buffer for a 317-byte file. Chunks are now ~4 MiB and never more than the
+// file holds.
+TEST(LasReader, LongRecordsAreReadInChunksTheFileCanHold) {
+  const std::string dir = test::temp_dir();
+  test::write_file(dir + "/long.las", las_file(2, 0, 65535, 70));
+  const PointCloud cloud = read_las(dir + "/long.las");
+  ASSERT_EQ(cloud.size(), 70u);
+  EXPECT_FLOAT_EQ(cloud.positions[69].y(), 10.0f + 0.138f);
+  test::write_file(dir + "/empty.las", las_file(2, 0, 65535, 0));
+  EXPECT_EQ(read_las(dir + "/empty.las").size(), 0u);
+  EXPECT_EQ(
+      read_las(std::string(MESHFLOW_SOURCE_DIR) + "/fuzz/regressions/las/oom_long_records.las")
+          .size(),
+      0u);
+}
+
 TEST(LasReader, MutatedFilesNeverCrash) {
   const std::string good = las_file(4, 7, 36, 40);
   const std::string path = test::temp_dir() + "/m.las";

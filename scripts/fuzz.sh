@@ -2,8 +2,9 @@
 # Builds the libFuzzer targets (fuzz/) with clang, AddressSanitizer and UndefinedBehaviorSanitizer
 # into build-fuzz/ and runs each for SECONDS (default 60), seeded from the test fixtures and,
 # when present, the small files of $MESHFLOW_DATA. A finding stops the run with libFuzzer's
-# report and its input saved as build-fuzz/findings/<target>/crash-* (or oom-*, leak-*); a
-# fixed finding goes to fuzz/regressions/<target>/ (a seed of later runs) with a test.
+# report and its input saved as build-fuzz/findings/<target>/crash-* (or oom-*, leak-*,
+# timeout-*: one input over 10 s); a fixed finding goes to fuzz/regressions/<target>/ (a seed
+# of later runs) with a test.
 #   scripts/fuzz.sh [SECONDS] [TARGET ...]      e.g. scripts/fuzz.sh 20 ply pcd
 # Needs clang and libclang-rt-14-dev (libFuzzer).
 set -euo pipefail
@@ -45,7 +46,7 @@ for t in "${targets[@]}"; do
   echo "== fuzz_$t: $seconds s, $(ls "$corpus" | wc -l) corpus files"
   if ! ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=halt_on_error=1:print_stacktrace=1 \
       "$build/fuzz/fuzz_$t" "$corpus" -max_total_time="$seconds" -max_len=65536 \
-      -rss_limit_mb=2048 -malloc_limit_mb=1024 -artifact_prefix="$findings/" \
+      -rss_limit_mb=2048 -malloc_limit_mb=1024 -timeout=10 -artifact_prefix="$findings/" \
       -print_final_stats=1 2>"$build/fuzz_$t.log"; then
     tail -n 40 "$build/fuzz_$t.log"
     echo "fuzz: fuzz_$t found a problem; inputs in $findings" >&2

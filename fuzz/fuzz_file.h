@@ -25,14 +25,19 @@ inline std::string scratch_path(const std::string& suffix) {
   return dir + "/meshflow_fuzz_" + std::to_string(::getpid()) + suffix;
 }
 
-/// Writes data[0, size) to this process's file with extension `ext` (".ply") and returns its
-/// path; the same path for every input of a run.
-inline std::string write_input(const std::uint8_t* data, std::size_t size, const std::string& ext) {
-  const std::string path = scratch_path(ext);
+/// Writes data[0, size) to `path` (replacing it).
+inline void write_file(const std::string& path, const std::uint8_t* data, std::size_t size) {
   std::FILE* f = std::fopen(path.c_str(), "wb");
   if (f == nullptr) __builtin_trap();  // the harness itself failed
   if (size > 0 && std::fwrite(data, 1, size, f) != size) __builtin_trap();
   std::fclose(f);
+}
+
+/// Writes data[0, size) to this process's file with extension `ext` (".ply") and returns its
+/// path; the same path for every input of a run.
+inline std::string write_input(const std::uint8_t* data, std::size_t size, const std::string& ext) {
+  const std::string path = scratch_path(ext);
+  write_file(path, data, size);
   return path;
 }
 

@@ -3,19 +3,9 @@
 // is opened and every frame's record built (no images are read).
 #include <algorithm>
 #include <filesystem>
-#include <fstream>
 
 #include "fuzz_file.h"
 #include "nodes/io/rgbd_sequences.h"
-
-namespace {
-
-void write(const std::filesystem::path& path, const std::uint8_t* data, std::size_t size) {
-  std::ofstream(path, std::ios::binary)
-      .write(reinterpret_cast<const char*>(data), static_cast<std::streamsize>(size));
-}
-
-}  // namespace
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   static const std::filesystem::path dir = [] {
@@ -25,12 +15,15 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   }();
   const std::uint8_t* zero = std::find(data, data + size, std::uint8_t{0});
   const bool split = zero != data + size;
-  write(dir / "depth.txt", data, static_cast<std::size_t>(zero - data));
-  write(dir / "rgb.txt", data, static_cast<std::size_t>(zero - data));
+  meshflow::fuzz::write_file((dir / "depth.txt").string(), data,
+                             static_cast<std::size_t>(zero - data));
+  meshflow::fuzz::write_file((dir / "rgb.txt").string(), data,
+                             static_cast<std::size_t>(zero - data));
   if (split)
-    write(dir / "groundtruth.txt", zero + 1, static_cast<std::size_t>(data + size - zero - 1));
+    meshflow::fuzz::write_file((dir / "groundtruth.txt").string(), zero + 1,
+                               static_cast<std::size_t>(data + size - zero - 1));
   else
-    write(dir / "groundtruth.txt", data, size);
+    meshflow::fuzz::write_file((dir / "groundtruth.txt").string(), data, size);
   try {
     const auto sequence = meshflow::io::open_tum_directory(dir.string());
     for (std::size_t i = 0; i < sequence->size(); ++i) sequence->frame(i);

@@ -72,7 +72,7 @@ struct Frame {
   std::function<PointCloud()> load;  ///< produces a cloud input; called by the "read" stage
   std::function<DepthFrame()> load_depth;  ///< or a depth-image input (set one of the two)
 
-  /// The depth input; after "filter" its image is the filtered depth in metres (CV_32F), kept
+  /// The depth input; after "filter" its image is the filtered depth in metres (F32), kept
   /// for the projective distance and released by "distance".
   std::shared_ptr<DepthFrame> depth;
   DepthFilterCounts depth_counts;

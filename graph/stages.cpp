@@ -31,14 +31,14 @@ namespace meshflow::stages {
 std::uint64_t read(Frame& f, const ReconstructionConfig& c) {
   if (f.load_depth) {
     f.depth = std::make_shared<DepthFrame>(f.load_depth());
-    return f.depth->depth.total();
+    return f.depth->depth.pixels();
   }
   if (f.load) f.cloud = f.load();
   if (c.organized_as_depth && f.cloud.is_organized()) {
     if (std::optional<DepthFrame> depth = depth_frame_from_organized(f.cloud)) {
       f.depth = std::make_shared<DepthFrame>(std::move(*depth));
       f.cloud = PointCloud{};
-      return f.depth->depth.total();
+      return f.depth->depth.pixels();
     }
   }
   return f.cloud.size();
@@ -46,7 +46,7 @@ std::uint64_t read(Frame& f, const ReconstructionConfig& c) {
 
 std::uint64_t filter(Frame& f, const ReconstructionConfig& c) {
   if (f.depth) {  // depth image -> filtered depth -> organized cloud with image normals
-    const cv::Mat depth_m = filter_depth(*f.depth, c.depth_filter, &f.depth_counts);
+    const Image depth_m = filter_depth(*f.depth, c.depth_filter, &f.depth_counts);
     if (f.depth_counts.valid == 0) {
       throw Error(f.name, "depth",
                   "no valid depth pixel (" + std::to_string(f.depth_counts.invalid) +
@@ -140,7 +140,7 @@ std::uint64_t distance(Frame& f, const ReconstructionConfig& c) {
   if (f.depth) {
     f.distance = projective_distance(f.grid, f.depth->depth, f.depth->intrinsics,
                                      f.depth->T_world_camera, c.projective);
-    f.depth->depth.release();  // keep frames in flight small; the colour waits for "extract"
+    f.depth->depth = Image();  // keep frames in flight small; the colour waits for "extract"
     return f.grid.corners.size();
   }
   f.distance = hoppe_distance(f.grid, f.cloud, *f.index, c.distance);

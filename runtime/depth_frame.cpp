@@ -1,32 +1,26 @@
 #include "runtime/depth_frame.h"
 
 #include <cmath>
-#include <mutex>
 #include <string>
 
 #include "runtime/error.h"
 
 namespace meshflow {
 
-void run_opencv_on_calling_thread() {
-  static std::once_flag once;
-  std::call_once(once, [] { cv::setNumThreads(0); });
-}
-
 void check_depth_frame(const DepthFrame& frame) {
   const auto fail = [](const std::string& field, const std::string& problem) {
     throw Error("depth frame", field, problem);
   };
-  const cv::Mat& d = frame.depth;
+  const Image& d = frame.depth;
   if (d.empty()) fail("depth", "empty image");
-  if (d.type() != CV_16U && d.type() != CV_32F)
-    fail("depth", "expected a single-channel CV_16U or CV_32F image, got OpenCV type " +
-                      std::to_string(d.type()));
-  if (d.type() == CV_16U && !(std::isfinite(frame.depth_scale) && frame.depth_scale > 0.0f))
+  if (d.format() != PixelFormat::U16 && d.format() != PixelFormat::F32)
+    fail("depth", std::string("expected a U16 or F32 image, got ") + pixel_format_name(d.format()));
+  if (d.format() == PixelFormat::U16 &&
+      !(std::isfinite(frame.depth_scale) && frame.depth_scale > 0.0f))
     fail("depth_scale", "must be a positive number of raw units per metre");
   const PinholeIntrinsics& k = frame.intrinsics;
-  if (d.cols != k.width || d.rows != k.height)
-    fail("intrinsics", "image is " + std::to_string(d.cols) + "x" + std::to_string(d.rows) +
+  if (d.cols() != k.width || d.rows() != k.height)
+    fail("intrinsics", "image is " + std::to_string(d.cols()) + "x" + std::to_string(d.rows()) +
                            ", intrinsics say " + std::to_string(k.width) + "x" +
                            std::to_string(k.height));
   if (!(std::isfinite(k.fx) && k.fx > 0.0f && std::isfinite(k.fy) && k.fy > 0.0f))
@@ -37,17 +31,25 @@ void check_depth_frame(const DepthFrame& frame) {
     fail("T_world_camera", "pose has NaN or infinite entries");
 }
 
-cv::Mat depth_in_metres(const DepthFrame& frame) {
+Image depth_in_metres(const DepthFrame& frame) {
   check_depth_frame(frame);
-  run_opencv_on_calling_thread();
-  cv::Mat out;
-  if (frame.depth.type() == CV_16U) {
-    frame.depth.convertTo(out, CV_32F, 1.0 / frame.depth_scale);
+  const Image& in = frame.depth;
+  Image out(in.rows(), in.cols(), PixelFormat::F32);
+  const int cols = in.cols();
+  if (in.format() == PixelFormat::U16) {
+    const float metres_per_unit = static_cast<float>(1.0 / frame.depth_scale);
+    for (int v = 0; v < in.rows(); ++v) {
+      const std::uint16_t* raw = in.ptr<std::uint16_t>(v);
+      float* metres = out.ptr<float>(v);
+      for (int u = 0; u < cols; ++u) metres[u] = static_cast<float>(raw[u]) * metres_per_unit;
+    }
   } else {
-    out = frame.depth.clone();
-    out.forEach<float>([](float& d, const int*) {
-      if (!std::isfinite(d) || d < 0.0f) d = 0.0f;
-    });
+    for (int v = 0; v < in.rows(); ++v) {
+      const float* raw = in.ptr<float>(v);
+      float* metres = out.ptr<float>(v);
+      for (int u = 0; u < cols; ++u)
+        metres[u] = std::isfinite(raw[u]) && raw[u] > 0.0f ? raw[u] : 0.0f;
+    }
   }
   return out;
 }

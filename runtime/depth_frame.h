@@ -3,7 +3,8 @@
 
 #include <Eigen/Geometry>
 #include <cstdint>
-#include <opencv2/core.hpp>
+
+#include "runtime/image.h"
 
 namespace meshflow {
 
@@ -14,30 +15,24 @@ struct PinholeIntrinsics {
   float fx = 525.0f, fy = 525.0f, cx = 319.5f, cy = 239.5f;
 };
 
-/// A depth image: CV_16U in units of 1/depth_scale metres (0 = no measurement), or CV_32F in
-/// metres (0 or NaN = no measurement); optional colour (CV_8UC3, RGB order, same size).
+/// A depth image: U16 in units of 1/depth_scale metres (0 = no measurement), or F32 in metres
+/// (0 or NaN = no measurement); optional colour (RGB8, same size).
 struct DepthFrame {
-  cv::Mat depth;
-  float depth_scale = 1000.0f;  ///< raw units per metre for CV_16U (1000 = mm, 5000 = TUM)
-  cv::Mat color;
+  Image depth;
+  float depth_scale = 1000.0f;  ///< raw units per metre for U16 (1000 = mm, 5000 = TUM)
+  Image color;
   PinholeIntrinsics intrinsics;
   Eigen::Isometry3f T_world_camera = Eigen::Isometry3f::Identity();
   double timestamp_s = 0.0;
 };
 
-/// Throws meshflow::Error naming the field unless `frame` can be used: a non-empty CV_16U or
-/// CV_32F depth image of the intrinsics' size, a positive finite depth_scale (CV_16U), positive
+/// Throws meshflow::Error naming the field unless `frame` can be used: a non-empty U16 or F32
+/// depth image of the intrinsics' size, a positive finite depth_scale (U16), positive
 /// finite focal lengths, a finite principal point and a finite pose. O(1).
 void check_depth_frame(const DepthFrame& frame);
 
-/// Depth of `frame` in metres as CV_32F; invalid pixels (0, negative, NaN, infinite) are 0.
-/// Checks the frame first (check_depth_frame()). O(pixels).
-cv::Mat depth_in_metres(const DepthFrame& frame);
-
-/// Makes OpenCV run its functions on the calling thread (cv::setNumThreads(0)), once per
-/// process. meshflow parallelizes across frames and pixels with oneTBB under one thread limit;
-/// OpenCV's own parallel backend would oversubscribe the cores and escape that limit.
-/// Called by every meshflow function that uses OpenCV. Thread-safe.
-void run_opencv_on_calling_thread();
+/// Depth of `frame` in metres as a new F32 image; invalid pixels (0, negative, NaN, infinite)
+/// are 0. Checks the frame first (check_depth_frame()). O(pixels).
+Image depth_in_metres(const DepthFrame& frame);
 
 }  // namespace meshflow

@@ -6,20 +6,9 @@
 #include <cstdint>
 #include <vector>
 
+#include "runtime/rgb8.h"
+
 namespace meshflow {
-
-struct Rgb8 {
-  std::uint8_t r = 0, g = 0, b = 0;
-  bool operator==(const Rgb8& o) const { return r == o.r && g == o.g && b == o.b; }
-};
-
-/// The colour halfway between a and b (each channel rounded half up), e.g. for a vertex that
-/// splits an edge. O(1).
-inline Rgb8 midpoint_color(const Rgb8& a, const Rgb8& b) {
-  return Rgb8{static_cast<std::uint8_t>((a.r + b.r + 1) / 2),
-              static_cast<std::uint8_t>((a.g + b.g + 1) / 2),
-              static_cast<std::uint8_t>((a.b + b.b + 1) / 2)};
-}
 
 /// A point cloud as parallel arrays. `positions` is always present; `normals`, `colors` and
 /// `intensities` are either empty or exactly as long as `positions`.

@@ -2,18 +2,17 @@
 // A mesh with one texture image per large planar region (the texture step's output, written as
 // OBJ + MTL + PNG by io::write_textured_obj).
 
-#include <opencv2/core/mat.hpp>
-
 #include <Eigen/Core>
 #include <cstdint>
 #include <vector>
 
+#include "runtime/image.h"
 #include "runtime/triangle_mesh.h"
 
 namespace meshflow {
 
 struct RegionTexture {
-  cv::Mat image;                     ///< CV_8UC3, RGB order, row 0 at the top
+  Image image;                       ///< RGB8, row 0 at the top
   std::vector<std::uint32_t> faces;  ///< the region's faces, ascending
 };
 

@@ -8,6 +8,6 @@ $SUDO apt-get update
 $SUDO apt-get install -y --no-install-recommends \
   g++ cmake ninja-build pkg-config \
   libtbb-dev libeigen3-dev libflann-dev liblz4-dev liblzf-dev \
-  libopencv-core-dev libopencv-imgproc-dev libspng-dev libjpeg-dev libtiff-dev \
+  libspng-dev libjpeg-dev libtiff-dev \
   libcli11-dev libgtest-dev libgmock-dev libbenchmark-dev nlohmann-json3-dev \
   libcgal-dev libmeshoptimizer-dev

@@ -1,8 +1,8 @@
 #!/usr/bin/env bash
 # Whole-process timings of the meshflow CLI with hyperfine (Debian package `hyperfine`): start-up
-# (--help, against an empty C++ program and one that links only OpenCV core + imgproc, the
-# floor meshflow cannot go below while it links OpenCV) and file-to-mesh runs on a built-in
-# object and, when the shared data are there, kurt3d scan000 at 5 cm.
+# (--help, against an empty C++ program and an empty one linked with the same shared libraries
+# as meshflow, the floor the dynamic loader sets) and file-to-mesh runs on a built-in object
+# and, when the shared data are there, kurt3d scan000 at 5 cm.
 # Usage: scripts/startup_time.sh [path/to/meshflow]   (default build/meshflow)
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -16,9 +16,11 @@ WORK=$(mktemp -d)
 trap 'rm -rf "$WORK"' EXIT
 echo 'int main() { return 0; }' > "$WORK/empty.cpp"
 c++ -O2 "$WORK/empty.cpp" -o "$WORK/empty"
-c++ -O2 "$WORK/empty.cpp" -o "$WORK/opencv_only" -Wl,--no-as-needed -lopencv_imgproc -lopencv_core
+# The shared libraries meshflow loads (ldd), linked into the empty program.
+mapfile -t libs < <(ldd "$MESHFLOW" | awk '$3 ~ /^\// {print $3}')
+c++ -O2 "$WORK/empty.cpp" -o "$WORK/same_libraries" -Wl,--no-as-needed "${libs[@]}"
 "$MESHFLOW" sample torus -q -o "$WORK/torus.ply"
-runs=(-N -w 3 -r 30 "$WORK/empty" "$WORK/opencv_only" "$MESHFLOW --help")
+runs=(-N -w 3 -r 30 "$WORK/empty" "$WORK/same_libraries" "$MESHFLOW --help")
 hyperfine "${runs[@]}" --export-markdown "$WORK/startup.md" > /dev/null
 cat "$WORK/startup.md"
 echo

@@ -4,11 +4,13 @@
 
 #include <algorithm>
 #include <atomic>
+#include <cmath>
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <limits>
 #include <random>
 
 #include "nodes/normals/organized_normals.h"
@@ -185,6 +187,34 @@ std::string closed_object_test_name(int index) {
   std::string name = synthetic::closed_test_objects()[static_cast<std::size_t>(index)].name;
   std::replace(name.begin(), name.end(), '-', '_');
   return name;
+}
+
+double max_abs_difference(const Image& a, const Image& b) {
+  if (!a.same_size(b) || a.format() != b.format()) return std::numeric_limits<double>::infinity();
+  double worst = 0.0;
+  const auto channel_difference = [&worst](double x, double y) {
+    worst = std::max(worst, std::abs(x - y));
+  };
+  for (int r = 0; r < a.rows(); ++r)
+    for (int c = 0; c < a.cols(); ++c) switch (a.format()) {
+        case PixelFormat::U8:
+          channel_difference(a.at<std::uint8_t>(r, c), b.at<std::uint8_t>(r, c));
+          break;
+        case PixelFormat::U16:
+          channel_difference(a.at<std::uint16_t>(r, c), b.at<std::uint16_t>(r, c));
+          break;
+        case PixelFormat::F32:
+          channel_difference(a.at<float>(r, c), b.at<float>(r, c));
+          break;
+        case PixelFormat::RGB8: {
+          const Rgb8 x = a.at<Rgb8>(r, c), y = b.at<Rgb8>(r, c);
+          channel_difference(x.r, y.r);
+          channel_difference(x.g, y.g);
+          channel_difference(x.b, y.b);
+          break;
+        }
+      }
+  return worst;
 }
 
 }  // namespace meshflow::test

@@ -6,6 +6,7 @@
 #include <string>
 
 #include "runtime/depth_frame.h"
+#include "runtime/image.h"
 #include "runtime/point_cloud.h"
 #include "runtime/threads.h"
 #include "runtime/triangle_mesh.h"
@@ -62,6 +63,10 @@ TriangleMesh messy_mesh(std::uint32_t n, std::uint32_t seed);
 /// `frame` as a Kinect driver delivers it: the organized cloud of its metric depth
 /// (back_project) in the camera frame, whatever its pose; NaN where a pixel has no point.
 PointCloud camera_frame_cloud(const DepthFrame& frame);
+
+/// The largest absolute difference between corresponding channel values of two images of the
+/// same size and format (0 = identical); infinity when size or format differ.
+double max_abs_difference(const Image& a, const Image& b);
 
 /// The name of synthetic::closed_test_objects()[index] as a test name ("l_shape").
 std::string closed_object_test_name(int index);

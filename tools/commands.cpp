@@ -205,9 +205,8 @@ void add_columns_option(CLI::App* cmd, std::string& columns) {
 
 }  // namespace
 
-void add_reconstruct_command(CLI::App& app) {
+void add_reconstruct_options(CLI::App* cmd) {
   auto opts = std::make_shared<ReconstructOptions>();
-  CLI::App* cmd = app.add_subcommand("reconstruct", "Reconstruct a mesh from one point cloud");
   cmd->add_option("input", opts->input, "Point cloud: .ply .pcd .las .xyz .txt .pts .asc .csv .3d")
       ->required();
   cmd->add_option("-o,--output", opts->output, "Output mesh: .ply .obj .stl .off .glb")->required();
@@ -219,9 +218,8 @@ void add_reconstruct_command(CLI::App& app) {
   cmd->callback([opts] { run_reconstruct(*opts); });
 }
 
-void add_info_command(CLI::App& app) {
+void add_info_options(CLI::App* cmd) {
   auto path = std::make_shared<std::string>();
-  CLI::App* cmd = app.add_subcommand("info", "Print counts, bounds and fields of a point cloud");
   cmd->add_option("file", *path, "Point cloud file")->required();
   auto columns = std::make_shared<std::string>();
   add_columns_option(cmd, *columns);

@@ -1,6 +1,8 @@
 #pragma once
-// Subcommands of the meshflow CLI. Each registers its options on `app` and runs when chosen;
-// failures throw (meshflow::Error for bad input) and main() maps them to exit codes.
+// Subcommands of the meshflow CLI. Each add_*_options registers a subcommand's options and its
+// callback on `cmd` (created by main() with the command's name and description); the callback
+// runs when the command is chosen. Failures throw (meshflow::Error for bad input) and main()
+// maps them to exit codes.
 
 #include <CLI/CLI.hpp>
 
@@ -9,15 +11,24 @@
 
 namespace meshflow::cli {
 
-void add_reconstruct_command(CLI::App& app);
-void add_info_command(CLI::App& app);
-void add_demo_command(CLI::App& app);
-void add_run_command(CLI::App& app);
-void add_profile_command(CLI::App& app);
-void add_eval_command(CLI::App& app);
-void add_live_command(CLI::App& app);
-void add_sample_command(CLI::App& app);
-void add_optimize_command(CLI::App& app);
+void add_reconstruct_options(CLI::App* cmd);
+void add_info_options(CLI::App* cmd);
+void add_demo_options(CLI::App* cmd);
+void add_run_options(CLI::App* cmd);
+void add_profile_options(CLI::App* cmd);
+void add_eval_options(CLI::App* cmd);
+void add_live_options(CLI::App* cmd);
+void add_sample_options(CLI::App* cmd);
+void add_optimize_options(CLI::App* cmd);
+
+struct Command {
+  const char* name;
+  const char* description;
+  void (*add_options)(CLI::App* cmd);
+};
+
+/// Every subcommand, in the order `meshflow --help` lists them.
+const std::vector<Command>& commands();
 
 /// Names of the built-in closed objects (`meshflow sample`, `meshflow eval --object`).
 std::vector<std::string> closed_object_names();

@@ -71,10 +71,8 @@ void run_demo(const DemoOptions& o) {
 
 }  // namespace
 
-void add_demo_command(CLI::App& app) {
+void add_demo_options(CLI::App* cmd) {
   auto opts = std::make_shared<DemoOptions>();
-  CLI::App* cmd = app.add_subcommand(
-      "demo", "Reconstruct a built-in synthetic scene and report speed and accuracy");
   cmd->add_option("-o,--output", opts->output, "Output mesh (.ply or .obj)");
   cmd->add_option("--voxel", opts->voxel, "Voxel size in metres")->check(number_in(0, 1000, true));
   cmd->add_option("--noise", opts->noise, "Range noise of the simulated scanner, metres")

@@ -164,11 +164,9 @@ void evaluate_reference(const std::string& mesh_path, const TriangleMesh& mesh,
 
 }  // namespace
 
-void add_eval_command(CLI::App& app) {
+void add_eval_options(CLI::App* cmd) {
   auto mesh_path = std::make_shared<std::string>();
   auto reference_path = std::make_shared<std::string>();
-  CLI::App* cmd = app.add_subcommand(
-      "eval", "Compare a mesh with a reference point cloud or mesh (distances, normals, topology)");
   cmd->add_option("mesh", *mesh_path, "Mesh to evaluate: .ply .obj .off .stl")->required();
   auto object_name = std::make_shared<std::string>();
   auto* reference_option =

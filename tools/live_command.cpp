@@ -144,10 +144,8 @@ void run_live(const LiveOptions& o) {
 
 }  // namespace
 
-void add_live_command(CLI::App& app) {
+void add_live_options(CLI::App* cmd) {
   auto o = std::make_shared<LiveOptions>();
-  CLI::App* cmd = app.add_subcommand(
-      "live", "Replay a sequence at a fixed rate through the embedding API; report latency");
   add_sequence_options(cmd, o->sequence);
   cmd->add_option("--rate", o->rate_hz, "Frames per second the replay pushes")
       ->check(number_in(0.1, 10000));

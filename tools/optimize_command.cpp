@@ -63,10 +63,8 @@ void run_optimize(const OptimizeOptions& o) {
 
 }  // namespace
 
-void add_optimize_command(CLI::App& app) {
+void add_optimize_options(CLI::App* cmd) {
   auto o = std::make_shared<OptimizeOptions>();
-  CLI::App* cmd = app.add_subcommand(
-      "optimize", "Run the optimisation steps on a mesh (.ply .obj .off .stl) from any tool");
   cmd->add_option("input", o->input, "Mesh to optimise: .ply .obj .off .stl")->required();
   cmd->add_option("output", o->output, "Output mesh: .ply .obj .stl .off .glb")->required();
   add_pipeline_options(cmd, o->pipeline);

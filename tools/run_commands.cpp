@@ -282,10 +282,8 @@ void run_profile(const ProfileOptions& o) {
 
 }  // namespace
 
-void add_run_command(CLI::App& app) {
+void add_run_options(CLI::App* cmd) {
   auto o = std::make_shared<RunOptions>();
-  CLI::App* cmd = app.add_subcommand(
-      "run", "Mesh every frame of a recorded sequence through the pipelined graph");
   add_sequence_options(cmd, o->sequence);
   cmd->add_option("-o,--output", o->output_dir, "Output directory")->required();
   auto* per_frame = cmd->add_flag("--per-frame", "One mesh per frame, frame_NNNNNN.ply (default)");
@@ -325,10 +323,8 @@ void add_run_command(CLI::App& app) {
   cmd->callback([o] { run_run(*o); });
 }
 
-void add_profile_command(CLI::App& app) {
+void add_profile_options(CLI::App* cmd) {
   auto o = std::make_shared<ProfileOptions>();
-  CLI::App* cmd =
-      app.add_subcommand("profile", "Per-stage timings of a sequence run, with a Chrome trace");
   add_sequence_options(cmd, o->sequence);
   cmd->add_option("--trace", o->trace_path,
                   "Write a Chrome trace-event JSON (Perfetto, chrome://tracing)");

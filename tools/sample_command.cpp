@@ -49,10 +49,8 @@ std::vector<std::string> closed_object_names() {
   return names;
 }
 
-void add_sample_command(CLI::App& app) {
+void add_sample_options(CLI::App* cmd) {
   auto opts = std::make_shared<SampleOptions>();
-  CLI::App* cmd = app.add_subcommand(
-      "sample", "Write points sampled uniformly over a built-in closed object (no sensor)");
   cmd->add_option("object", opts->object, "sphere, torus, l-shape, chamfered-cube, box-with-hole")
       ->required()
       ->check(CLI::IsMember(closed_object_names()));

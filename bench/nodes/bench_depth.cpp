@@ -2,6 +2,7 @@
 
 #include "bench_support.h"
 #include "nodes/depth/depth_filter.h"
+#include "nodes/depth/depth_smoothing.h"
 #include "nodes/distance/projective_distance.h"
 #include "nodes/normals/organized_normals.h"
 #include "nodes/synthetic/depth_sequence.h"
@@ -39,7 +40,7 @@ const PointCloud& room_cloud() {
 void BM_DepthFilter(benchmark::State& state) {
   ThreadLimit limit(static_cast<int>(state.range(0)));
   for (auto _ : state)
-    benchmark::DoNotOptimize(filter_depth(room_frame(), DepthFilterConfig{}).data);
+    benchmark::DoNotOptimize(filter_depth(room_frame(), DepthFilterConfig{}).data());
   state.counters["pixels/s"] =
       benchmark::Counter(640.0 * 480.0, benchmark::Counter::kIsIterationInvariantRate);
 }
@@ -50,8 +51,28 @@ BENCHMARK(BM_DepthFilter)
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
 
+// The optional smoothing filters (DepthFilterConfig::median_kernel, bilateral_sigma_depth) on
+// the frame in metres; args: filter (0 = median 5x5, 1 = bilateral, sigma 1 cm), threads.
+void BM_DepthSmoothing(benchmark::State& state) {
+  const Image depth = depth_in_metres(room_frame());
+  const bool median = state.range(0) == 0;
+  ThreadLimit limit(static_cast<int>(state.range(1)));
+  for (auto _ : state) {
+    const Image out = median ? median_filter_depth(depth, 5) : bilateral_filter_depth(depth, 0.01f);
+    benchmark::DoNotOptimize(out.data());
+  }
+  state.SetLabel(median ? "median 5x5" : "bilateral 5x5");
+  state.counters["pixels/s"] =
+      benchmark::Counter(640.0 * 480.0, benchmark::Counter::kIsIterationInvariantRate);
+}
+BENCHMARK(BM_DepthSmoothing)
+    ->ArgNames({"filter", "threads"})
+    ->ArgsProduct({{0, 1}, {1, 2}})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
+
 void BM_BackProject(benchmark::State& state) {
-  const cv::Mat depth = filter_depth(room_frame(), DepthFilterConfig{});
+  const Image depth = filter_depth(room_frame(), DepthFilterConfig{});
   ThreadLimit limit(static_cast<int>(state.range(0)));
   for (auto _ : state) benchmark::DoNotOptimize(back_project(room_frame(), depth).size());
   state.counters["pixels/s"] =
@@ -65,7 +86,7 @@ BENCHMARK(BM_BackProject)
     ->UseRealTime();
 
 void BM_BackProjectValid(benchmark::State& state) {
-  const cv::Mat depth = filter_depth(room_frame(), DepthFilterConfig{});
+  const Image depth = filter_depth(room_frame(), DepthFilterConfig{});
   ThreadLimit limit(static_cast<int>(state.range(0)));
   for (auto _ : state) benchmark::DoNotOptimize(back_project_valid(room_frame(), depth).size());
   state.counters["pixels/s"] =
@@ -94,7 +115,7 @@ BENCHMARK(BM_VoxelizeDepthFrame)
     ->UseRealTime();
 
 void BM_ProjectiveDistance(benchmark::State& state) {
-  const cv::Mat depth = filter_depth(room_frame(), DepthFilterConfig{});
+  const Image depth = filter_depth(room_frame(), DepthFilterConfig{});
   const SparseGrid grid = voxelize(room_cloud(), VoxelizeConfig{0.01f, 0.5f});
   ThreadLimit limit(static_cast<int>(state.range(0)));
   const DepthFrame& f = room_frame();

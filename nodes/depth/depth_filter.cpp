@@ -7,9 +7,9 @@
 #include <cmath>
 #include <cstdint>
 #include <cstring>
-#include <opencv2/imgproc.hpp>
 #include <vector>
 
+#include "nodes/depth/depth_smoothing.h"
 #include "runtime/simd.h"
 
 namespace meshflow {
@@ -99,67 +99,58 @@ MESHFLOW_AVX2_CLONES std::size_t clear_edges(float* row, const std::uint8_t* mas
 
 }  // namespace
 
-cv::Mat occlusion_edges(const cv::Mat& depth_m, float high, float low) {
-  assert(depth_m.type() == CV_32F && "depth_m must be CV_32F metres");
+Image occlusion_edges(const Image& depth_m, float high, float low) {
+  assert(depth_m.format() == PixelFormat::F32 && "depth_m must be F32 metres");
+  const int rows = depth_m.rows(), cols = depth_m.cols();
   // 2 = strong edge, 1 = weak candidate, 0 = not an edge.
-  cv::Mat level(depth_m.size(), CV_8U);  // every pixel written below
-  tbb::parallel_for(0, depth_m.rows, [&](int v) {
+  Image level(rows, cols, PixelFormat::U8);
+  tbb::parallel_for(0, rows, [&](int v) {
     thread_local std::vector<float> pairs;
-    pairs.resize(static_cast<std::size_t>(depth_m.cols) + 1);
+    pairs.resize(static_cast<std::size_t>(cols) + 1);
     const float* above = v > 0 ? depth_m.ptr<float>(v - 1) : nullptr;
-    const float* below = v + 1 < depth_m.rows ? depth_m.ptr<float>(v + 1) : nullptr;
-    jump_levels(above, depth_m.ptr<float>(v), below, depth_m.cols, high, low, pairs.data(),
+    const float* below = v + 1 < rows ? depth_m.ptr<float>(v + 1) : nullptr;
+    jump_levels(above, depth_m.ptr<float>(v), below, cols, high, low, pairs.data(),
                 level.ptr<std::uint8_t>(v));
   });
   // Hysteresis: strong pixels (2) seed a breadth-first growth into 8-connected weak ones (1),
   // which become strong; serial, over the strong pixels only.
   std::vector<int> queue;
-  for (int v = 0; v < level.rows; ++v)
-    append_strong(level.ptr<std::uint8_t>(v), level.cols, v * level.cols, queue);
-  std::uint8_t* levels = level.ptr<std::uint8_t>(0);  // continuous: made above
+  for (int v = 0; v < rows; ++v) append_strong(level.ptr<std::uint8_t>(v), cols, v * cols, queue);
+  std::uint8_t* levels = level.data();  // rows are contiguous
   for (std::size_t head = 0; head < queue.size(); ++head) {
-    const int x = queue[head] % level.cols, y = queue[head] / level.cols;
-    for (int ny = std::max(y - 1, 0); ny <= std::min(y + 1, level.rows - 1); ++ny)
-      for (int nx = std::max(x - 1, 0); nx <= std::min(x + 1, level.cols - 1); ++nx) {
-        const int n = ny * level.cols + nx;
+    const int x = queue[head] % cols, y = queue[head] / cols;
+    for (int ny = std::max(y - 1, 0); ny <= std::min(y + 1, rows - 1); ++ny)
+      for (int nx = std::max(x - 1, 0); nx <= std::min(x + 1, cols - 1); ++nx) {
+        const int n = ny * cols + nx;
         if (levels[n] != 1) continue;
         levels[n] = 2;
         queue.push_back(n);
       }
   }
-  for (int v = 0; v < level.rows; ++v) strong_to_mask(level.ptr<std::uint8_t>(v), level.cols);
+  for (int v = 0; v < rows; ++v) strong_to_mask(level.ptr<std::uint8_t>(v), cols);
   return level;
 }
 
-cv::Mat filter_depth(const DepthFrame& frame, const DepthFilterConfig& config,
-                     DepthFilterCounts* counts) {
-  run_opencv_on_calling_thread();
+Image filter_depth(const DepthFrame& frame, const DepthFilterConfig& config,
+                   DepthFilterCounts* counts) {
   DepthFilterCounts c;
-  cv::Mat d = depth_in_metres(frame);
-  c.pixels = static_cast<std::size_t>(d.total());
-  for (int v = 0; v < d.rows; ++v)
-    clear_out_of_range(d.ptr<float>(v), d.cols, config.min_depth, config.max_depth, c.invalid,
+  Image d = depth_in_metres(frame);
+  const int rows = d.rows(), cols = d.cols();
+  c.pixels = d.pixels();
+  for (int v = 0; v < rows; ++v)
+    clear_out_of_range(d.ptr<float>(v), cols, config.min_depth, config.max_depth, c.invalid,
                        c.out_of_range);
-  if (config.median_kernel == 3 || config.median_kernel == 5) {
-    cv::Mat smoothed;
-    cv::medianBlur(d, smoothed, config.median_kernel);
-    // Smoothing must not invent depth where there was none.
-    smoothed.setTo(0.0f, d <= 0.0f);
-    d = smoothed;
-  }
-  if (config.bilateral_sigma_depth > 0.0f) {
-    cv::Mat smoothed;
-    cv::bilateralFilter(d, smoothed, 5, config.bilateral_sigma_depth, 2.0);
-    smoothed.setTo(0.0f, d <= 0.0f);
-    d = smoothed;
-  }
+  if (config.median_kernel == 3 || config.median_kernel == 5)
+    d = median_filter_depth(d, config.median_kernel);
+  if (config.bilateral_sigma_depth > 0.0f)
+    d = bilateral_filter_depth(d, config.bilateral_sigma_depth);
   if (config.edge_high > 0.0f) {
-    const cv::Mat edges =
+    const Image edges =
         occlusion_edges(d, config.edge_high, std::min(config.edge_low, config.edge_high));
-    for (int v = 0; v < d.rows; ++v)
-      c.edges += clear_edges(d.ptr<float>(v), edges.ptr<std::uint8_t>(v), d.cols);
+    for (int v = 0; v < rows; ++v)
+      c.edges += clear_edges(d.ptr<float>(v), edges.ptr<std::uint8_t>(v), cols);
   }
-  for (int v = 0; v < d.rows; ++v) c.valid += count_positive(d.ptr<float>(v), d.cols);
+  for (int v = 0; v < rows; ++v) c.valid += count_positive(d.ptr<float>(v), cols);
   if (counts != nullptr) *counts = c;
   return d;
 }

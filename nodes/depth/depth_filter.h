@@ -1,20 +1,20 @@
 #pragma once
 // Depth-image filtering: range limits, optional median / bilateral smoothing, and removal of
 // occlusion edges (depth discontinuities) with hysteresis, as in the depth-map triangulation
-// work the method builds on. Output is depth in metres (CV_32F, 0 = invalid).
+// work the method builds on. Output is depth in metres (F32, 0 = invalid).
 
 #include <cstddef>
-#include <opencv2/core.hpp>
 
 #include "runtime/depth_frame.h"
+#include "runtime/image.h"
 
 namespace meshflow {
 
 struct DepthFilterConfig {
   float min_depth = 0.1f;              ///< metres; nearer pixels are invalid
   float max_depth = 10.0f;             ///< metres; farther pixels are invalid
-  int median_kernel = 0;               ///< 3 or 5 = median filter of that size; 0 = off
-  float bilateral_sigma_depth = 0.0f;  ///< metres; > 0 enables a 5x5 bilateral filter
+  int median_kernel = 0;               ///< 3 or 5 = median_filter_depth() of that size; 0 = off
+  float bilateral_sigma_depth = 0.0f;  ///< metres; > 0 enables bilateral_filter_depth()
   /// Relative depth jump |d - d_n| / min(d, d_n) to a 4-neighbour that marks an occlusion edge:
   /// pixels above `edge_high` are edges, pixels above `edge_low` are edges when connected
   /// (8-neighbourhood) to one, so edges are continuous. 0 disables edge removal.
@@ -31,12 +31,12 @@ struct DepthFilterCounts {
 };
 
 /// Filters `frame`'s depth. Deterministic; O(pixels).
-cv::Mat filter_depth(const DepthFrame& frame, const DepthFilterConfig& config,
-                     DepthFilterCounts* counts = nullptr);
+Image filter_depth(const DepthFrame& frame, const DepthFilterConfig& config,
+                   DepthFilterCounts* counts = nullptr);
 
-/// Occlusion-edge mask (CV_8U, 255 = edge) of a metric depth image (0 = invalid), with
-/// hysteresis between `low` and `high` relative jumps. `depth_m` must be CV_32F (asserted).
+/// Occlusion-edge mask (U8, 255 = edge) of a metric depth image (0 = invalid), with
+/// hysteresis between `low` and `high` relative jumps. `depth_m` must be F32 (asserted).
 /// O(pixels).
-cv::Mat occlusion_edges(const cv::Mat& depth_m, float high, float low);
+Image occlusion_edges(const Image& depth_m, float high, float low);
 
 }  // namespace meshflow

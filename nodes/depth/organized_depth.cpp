@@ -80,10 +80,10 @@ std::optional<DepthFrame> depth_frame_from_organized(const PointCloud& cloud,
   frame.intrinsics =
       PinholeIntrinsics{static_cast<int>(w),    static_cast<int>(h),    static_cast<float>(fx),
                         static_cast<float>(fy), static_cast<float>(cx), static_cast<float>(cy)};
-  frame.depth = cv::Mat(static_cast<int>(h), static_cast<int>(w), CV_32F, cv::Scalar(0.0f));
+  frame.depth = Image(static_cast<int>(h), static_cast<int>(w), PixelFormat::F32);
   frame.depth_scale = 1.0f;
   const bool colored = cloud.colors.size() == cloud.positions.size();
-  if (colored) frame.color = cv::Mat(static_cast<int>(h), static_cast<int>(w), CV_8UC3);
+  if (colored) frame.color = Image(static_cast<int>(h), static_cast<int>(w), PixelFormat::RGB8);
   for (std::size_t v = 0; v < h; ++v)
     for (std::size_t u = 0; u < w; ++u) {
       const std::size_t i = v * w + u;
@@ -91,9 +91,7 @@ std::optional<DepthFrame> depth_frame_from_organized(const PointCloud& cloud,
       if (p.allFinite())
         frame.depth.at<float>(static_cast<int>(v), static_cast<int>(u)) = p.z() - origin.z();
       if (colored) {
-        const Rgb8& c = cloud.colors[i];
-        frame.color.at<cv::Vec3b>(static_cast<int>(v), static_cast<int>(u)) =
-            cv::Vec3b(c.r, c.g, c.b);
+        frame.color.at<Rgb8>(static_cast<int>(v), static_cast<int>(u)) = cloud.colors[i];
       }
     }
   frame.T_world_camera.translation() = origin;

@@ -16,7 +16,7 @@ namespace meshflow {
 /// points (finite, z > 0 after subtracting the sensor origin) are a pinhole projection seen from
 /// the sensor origin looking along +z: fx, cx and fy, cy are fitted by least squares to
 /// u = fx x/z + cx and v = fy y/z + cy, and every valid point must reproject within
-/// `max_residual_px` of its pixel. The frame: CV_32F depth z in metres (0 = invalid), the fitted
+/// `max_residual_px` of its pixel. The frame: F32 depth z in metres (0 = invalid), the fitted
 /// intrinsics, colour (RGB) when the cloud has colours, pose = translation to the sensor origin.
 /// nullopt when the cloud is not organized, has fewer than 16 valid points, has a valid point
 /// behind the sensor or does not fit (e.g. a cloud already moved into a world frame). Serial,

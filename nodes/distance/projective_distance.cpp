@@ -10,9 +10,9 @@ namespace meshflow {
 namespace {
 
 // Depth at continuous pixel coordinates (x, y); 0 if there is no usable measurement.
-float sample_depth(const cv::Mat& d, float x, float y) {
+float sample_depth(const Image& d, float x, float y) {
   const int x0 = static_cast<int>(std::floor(x)), y0 = static_cast<int>(std::floor(y));
-  if (x0 >= 0 && y0 >= 0 && x0 + 1 < d.cols && y0 + 1 < d.rows) {
+  if (x0 >= 0 && y0 >= 0 && x0 + 1 < d.cols() && y0 + 1 < d.rows()) {
     const float a = d.at<float>(y0, x0), b = d.at<float>(y0, x0 + 1);
     const float c = d.at<float>(y0 + 1, x0), e = d.at<float>(y0 + 1, x0 + 1);
     const float lo = std::min({a, b, c, e}), hi = std::max({a, b, c, e});
@@ -22,17 +22,17 @@ float sample_depth(const cv::Mat& d, float x, float y) {
     }
   }
   const int u = static_cast<int>(std::lround(x)), v = static_cast<int>(std::lround(y));
-  if (u < 0 || v < 0 || u >= d.cols || v >= d.rows) return 0.0f;
+  if (u < 0 || v < 0 || u >= d.cols() || v >= d.rows()) return 0.0f;
   return d.at<float>(v, u);
 }
 
 }  // namespace
 
-DistanceField projective_distance(const SparseGrid& grid, const cv::Mat& depth_m,
+DistanceField projective_distance(const SparseGrid& grid, const Image& depth_m,
                                   const PinholeIntrinsics& k,
                                   const Eigen::Isometry3f& T_world_camera,
                                   const ProjectiveDistanceConfig& config) {
-  assert(depth_m.type() == CV_32F && "depth_m must be CV_32F metres");
+  assert(depth_m.format() == PixelFormat::F32 && "depth_m must be PixelFormat::F32 metres");
   const std::size_t n = grid.corners.size();
   const Eigen::Isometry3f T_camera_world = T_world_camera.inverse();
   const float truncation = config.truncation_voxels * grid.voxel_size;

@@ -3,7 +3,7 @@
 // along its pixel ray minus the corner's own depth (as in KinectFusion-style mapping). No
 // nearest-neighbour search; the zero level is exactly where the corners' rays meet the surface.
 
-#include <opencv2/core.hpp>
+#include "runtime/image.h"
 
 #include "runtime/depth_frame.h"
 #include "runtime/distance_field.h"
@@ -18,12 +18,12 @@ struct ProjectiveDistanceConfig {
 };
 
 /// Signed distances (metres, positive between camera and surface) at the corners of `grid`.
-/// `depth_m`: filtered depth in metres (CV_32F, 0 = invalid) with `intrinsics`, seen from
+/// `depth_m`: filtered depth in metres (F32, 0 = invalid) with `intrinsics`, seen from
 /// `T_world_camera`. Depth is interpolated bilinearly when the 4 surrounding pixels are valid
 /// and within 5 % of each other, else taken from the nearest pixel. Corners projecting outside
-/// the image or onto invalid pixels are invalid. `depth_m` must be CV_32F (asserted). Parallel
+/// the image or onto invalid pixels are invalid. `depth_m` must be F32 (asserted). Parallel
 /// over corners; O(corners).
-DistanceField projective_distance(const SparseGrid& grid, const cv::Mat& depth_m,
+DistanceField projective_distance(const SparseGrid& grid, const Image& depth_m,
                                   const PinholeIntrinsics& intrinsics,
                                   const Eigen::Isometry3f& T_world_camera,
                                   const ProjectiveDistanceConfig& config = {});

@@ -44,35 +44,36 @@ std::vector<Rgb8> vertex_colors(const std::vector<Eigen::Vector3f>& vertices,
 namespace {
 
 // The colour at (u, v) (pixels, inside the image), bilinear between the 4 pixels around it.
-Rgb8 bilinear_rgb(const cv::Mat& image, float u, float v) {
-  const int u0 = std::min(static_cast<int>(u), std::max(image.cols - 2, 0));
-  const int v0 = std::min(static_cast<int>(v), std::max(image.rows - 2, 0));
-  const int u1 = std::min(u0 + 1, image.cols - 1), v1 = std::min(v0 + 1, image.rows - 1);
+Rgb8 bilinear_rgb(const Image& image, float u, float v) {
+  const int u0 = std::min(static_cast<int>(u), std::max(image.cols() - 2, 0));
+  const int v0 = std::min(static_cast<int>(v), std::max(image.rows() - 2, 0));
+  const int u1 = std::min(u0 + 1, image.cols() - 1), v1 = std::min(v0 + 1, image.rows() - 1);
   const float a = u - static_cast<float>(u0), b = v - static_cast<float>(v0);
-  const cv::Vec3b& c00 = image.at<cv::Vec3b>(v0, u0);
-  const cv::Vec3b& c10 = image.at<cv::Vec3b>(v0, u1);
-  const cv::Vec3b& c01 = image.at<cv::Vec3b>(v1, u0);
-  const cv::Vec3b& c11 = image.at<cv::Vec3b>(v1, u1);
-  std::uint8_t out[3];
-  for (int ch = 0; ch < 3; ++ch) {
-    const float value = (1 - a) * (1 - b) * c00[ch] + a * (1 - b) * c10[ch] +
-                        (1 - a) * b * c01[ch] + a * b * c11[ch];
-    out[ch] = static_cast<std::uint8_t>(std::lround(std::clamp(value, 0.0f, 255.0f)));
-  }
-  return Rgb8{out[0], out[1], out[2]};
+  const Rgb8& c00 = image.at<Rgb8>(v0, u0);
+  const Rgb8& c10 = image.at<Rgb8>(v0, u1);
+  const Rgb8& c01 = image.at<Rgb8>(v1, u0);
+  const Rgb8& c11 = image.at<Rgb8>(v1, u1);
+  const auto mix = [&](std::uint8_t x00, std::uint8_t x10, std::uint8_t x01, std::uint8_t x11) {
+    const float value =
+        (1 - a) * (1 - b) * x00 + a * (1 - b) * x10 + (1 - a) * b * x01 + a * b * x11;
+    return static_cast<std::uint8_t>(std::lround(std::clamp(value, 0.0f, 255.0f)));
+  };
+  return Rgb8{mix(c00.r, c10.r, c01.r, c11.r), mix(c00.g, c10.g, c01.g, c11.g),
+              mix(c00.b, c10.b, c01.b, c11.b)};
 }
 
 }  // namespace
 
 std::vector<Rgb8> vertex_colors_from_image(const std::vector<Eigen::Vector3f>& vertices,
                                            const DepthFrame& frame) {
-  const cv::Mat& image = frame.color;
+  const Image& image = frame.color;
   const PinholeIntrinsics& k = frame.intrinsics;
-  if (image.empty() || image.type() != CV_8UC3 || image.cols != k.width || image.rows != k.height)
+  if (image.empty() || image.format() != PixelFormat::RGB8 || image.cols() != k.width ||
+      image.rows() != k.height)
     return {};
   const Eigen::Isometry3f camera_from_world = frame.T_world_camera.inverse();
-  const float max_u = static_cast<float>(image.cols - 1);
-  const float max_v = static_cast<float>(image.rows - 1);
+  const float max_u = static_cast<float>(image.cols() - 1);
+  const float max_v = static_cast<float>(image.rows() - 1);
   std::vector<Rgb8> colors(vertices.size());
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, vertices.size(), 4096),
                     [&](const tbb::blocked_range<std::size_t>& r) {

@@ -19,7 +19,7 @@ namespace meshflow {
 std::vector<Rgb8> vertex_colors(const std::vector<Eigen::Vector3f>& vertices,
                                 const PointCloud& cloud, const SpatialIndex& index, int k = 4);
 
-/// The colour of each of `vertices` (metres, world frame) from `frame`'s colour image (CV_8UC3,
+/// The colour of each of `vertices` (metres, world frame) from `frame`'s colour image (RGB8,
 /// RGB, the depth image's size): the vertex projected through the frame's pose and intrinsics,
 /// bilinear between the 4 nearest pixels, clamped to the image (a vertex projecting outside it
 /// takes the border's colour, one behind the camera the centre's). Empty when the frame has no

@@ -44,7 +44,7 @@ class RecentKeys {
 // each pixel, every block overlapping the box around the ray segment depth +- truncation.
 // Keys inside the previous pixel's box or emitted recently are skipped; the caller sorts and
 // dedupes the rest. The ray is advanced incrementally along the row (in voxel units).
-void touched_blocks_of_row(const cv::Mat& depth, int v, const PinholeIntrinsics& k,
+void touched_blocks_of_row(const Image& depth, int v, const PinholeIntrinsics& k,
                            const Eigen::Isometry3f& T_world_camera, float voxel, float truncation,
                            std::vector<VoxelKey>& out, std::size_t& pixels) {
   const float* row = depth.ptr<float>(v);
@@ -60,7 +60,7 @@ void touched_blocks_of_row(const cv::Mat& depth, int v, const PinholeIntrinsics&
     return p.x() >= lo.x() && p.y() >= lo.y() && p.z() >= lo.z() && p.x() <= hi.x() &&
            p.y() <= hi.y() && p.z() <= hi.z();
   };
-  for (int u = 0; u < depth.cols; ++u, ray += ray_step) {
+  for (int u = 0; u < depth.cols(); ++u, ray += ray_step) {
     const float d = row[u];
     if (!(d > 0.0f) || !std::isfinite(d)) continue;
     ++pixels;
@@ -103,13 +103,13 @@ struct BandGeometry {
 // Keys of the blocks within the truncation band of the frame's valid pixels, sorted and unique:
 // per row (local buffers, in parallel), then joined in row order. Adds the valid pixels to
 // `pixels_used`.
-std::vector<VoxelKey> touched_block_keys(const cv::Mat& depth, const BandGeometry& band,
+std::vector<VoxelKey> touched_block_keys(const Image& depth, const BandGeometry& band,
                                          const Eigen::Isometry3f& T_world_camera,
                                          std::size_t& pixels_used) {
-  const auto rows = static_cast<std::size_t>(depth.rows);
+  const auto rows = static_cast<std::size_t>(depth.rows());
   std::vector<std::vector<VoxelKey>> row_keys(rows);
   std::vector<std::size_t> row_pixels(rows, 0);
-  tbb::parallel_for(0, depth.rows, [&](int v) {
+  tbb::parallel_for(0, depth.rows(), [&](int v) {
     const auto r = static_cast<std::size_t>(v);
     touched_blocks_of_row(depth, v, band.intrinsics, T_world_camera, band.voxel, band.truncation,
                           row_keys[r], row_pixels[r]);
@@ -130,8 +130,8 @@ std::vector<VoxelKey> touched_block_keys(const cv::Mat& depth, const BandGeometr
 
 // One frame's view of the map's voxels.
 struct BlockUpdate {
-  const cv::Mat& depth;  ///< CV_32F metres
-  const cv::Mat* color;  ///< CV_8UC3 of the depth's size, or null: no colour fused
+  const Image& depth;  ///< F32 metres
+  const Image* color;  ///< RGB8 of the depth's size, or null: no colour fused
   const PinholeIntrinsics& intrinsics;
   Eigen::Isometry3f T_camera_world;
   const TsdfConfig& config;
@@ -142,7 +142,7 @@ struct BlockUpdate {
 // more than the truncation behind the surface keep their state. Returns the voxels updated.
 std::size_t update_block(TsdfBlock& block, const BlockUpdate& frame) {
   const PinholeIntrinsics& k = frame.intrinsics;
-  const cv::Mat& depth = frame.depth;
+  const Image& depth = frame.depth;
   const float voxel = frame.config.voxel_size, truncation = frame.config.truncation();
   const Eigen::Matrix3f rotation = frame.T_camera_world.linear();
   const Eigen::Vector3i origin = block.coords * kTsdfBlockSide;
@@ -156,8 +156,8 @@ std::size_t update_block(TsdfBlock& block, const BlockUpdate& frame) {
         if (!(pc.z() > 0.0f)) continue;
         const float inv_z = 1.0f / pc.z();
         const float uf = k.fx * pc.x() * inv_z + k.cx, vf = k.fy * pc.y() * inv_z + k.cy;
-        if (!(uf > -0.5f && vf > -0.5f && uf < static_cast<float>(depth.cols) - 0.5f &&
-              vf < static_cast<float>(depth.rows) - 0.5f)) {
+        if (!(uf > -0.5f && vf > -0.5f && uf < static_cast<float>(depth.cols()) - 0.5f &&
+              vf < static_cast<float>(depth.rows()) - 0.5f)) {
           continue;  // outside the image (or NaN)
         }
         const int u = static_cast<int>(uf + 0.5f), v = static_cast<int>(vf + 0.5f);
@@ -172,14 +172,14 @@ std::size_t update_block(TsdfBlock& block, const BlockUpdate& frame) {
         const float inv_total = 1.0f / total;
         vox.distance = (vox.distance * vox.weight + std::min(sdf, truncation) * w) * inv_total;
         if (frame.color != nullptr) {
-          const cv::Vec3b c = frame.color->at<cv::Vec3b>(v, u);
+          const Rgb8 c = frame.color->at<Rgb8>(v, u);
           auto blend = [&](std::uint8_t old, std::uint8_t now) {
             return static_cast<std::uint8_t>(
                 (static_cast<float>(old) * vox.weight + static_cast<float>(now) * w) * inv_total +
                 0.5f);  // round to nearest: the value is >= 0
           };
           vox.color =
-              Rgb8{blend(vox.color.r, c[0]), blend(vox.color.g, c[1]), blend(vox.color.b, c[2])};
+              Rgb8{blend(vox.color.r, c.r), blend(vox.color.g, c.g), blend(vox.color.b, c.b)};
         }
         vox.weight = std::min(total, frame.config.max_weight);
         ++count;
@@ -254,7 +254,7 @@ void TsdfVolume::insert_block(const Eigen::Vector3i& coords,
 
 IntegrationStats TsdfVolume::integrate(const DepthFrame& frame) {
   IntegrationStats stats;
-  const cv::Mat depth = depth_in_metres(frame);  // checks the frame (intrinsics, pose)
+  const Image depth = depth_in_metres(frame);  // checks the frame (intrinsics, pose)
   const BandGeometry band{frame.intrinsics, config_.voxel_size, config_.truncation()};
   const std::vector<VoxelKey> keys =
       touched_block_keys(depth, band, frame.T_world_camera, stats.pixels_used);
@@ -280,13 +280,13 @@ std::vector<std::uint32_t> TsdfVolume::find_or_allocate(const std::vector<VoxelK
   return blocks;
 }
 
-std::size_t TsdfVolume::update_blocks(const std::vector<std::uint32_t>& touched,
-                                      const cv::Mat& depth, const DepthFrame& frame) {
+std::size_t TsdfVolume::update_blocks(const std::vector<std::uint32_t>& touched, const Image& depth,
+                                      const DepthFrame& frame) {
   // One task per block; a voxel's new state depends only on its old state and the frame, so the
   // order of blocks does not matter.
   ++generation_;
-  const bool color = config_.fuse_color && !frame.color.empty() &&
-                     frame.color.size() == depth.size() && frame.color.type() == CV_8UC3;
+  const bool color = config_.fuse_color && !frame.color.empty() && frame.color.same_size(depth) &&
+                     frame.color.format() == PixelFormat::RGB8;
   const BlockUpdate update{depth, color ? &frame.color : nullptr, frame.intrinsics,
                            frame.T_world_camera.inverse(), config_};
   std::vector<std::size_t> updated(touched.size(), 0);

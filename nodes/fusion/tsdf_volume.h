@@ -109,7 +109,7 @@ class TsdfVolume {
   // updated).
   std::vector<std::uint32_t> find_or_allocate(const std::vector<VoxelKey>& keys,
                                               std::size_t& allocated);
-  std::size_t update_blocks(const std::vector<std::uint32_t>& touched, const cv::Mat& depth,
+  std::size_t update_blocks(const std::vector<std::uint32_t>& touched, const Image& depth,
                             const DepthFrame& frame);
 
   TsdfConfig config_;

@@ -8,6 +8,7 @@
 #include <csetjmp>
 #include <cstdio>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
 #include <memory>
 
@@ -39,11 +40,23 @@ Kind kind_of(const std::vector<std::uint8_t>& b) {
   return Kind::kOther;
 }
 
-void check_size(std::uint64_t width, std::uint64_t height, const std::string& path) {
+// The most pixels one byte of a file can decode to: deflate (PNG, TIFF) expands at most 1032:1
+// and a pixel takes at least one bit; JPEG, LZW and LZF expand less.
+constexpr std::uint64_t kMaxPixelsPerFileByte = 8 * 1032;
+
+// Throws unless a width x height image is non-empty, at most kMaxPixels, and could be held in a
+// file of `file_bytes`: a header claiming more lies, and must not make the reader allocate it.
+void check_size(std::uint64_t width, std::uint64_t height, std::uint64_t file_bytes,
+                const std::string& path) {
+  const std::string size = std::to_string(width) + "x" + std::to_string(height);
   if (width == 0 || height == 0 || width * height > kMaxPixels)
+    throw Error(
+        path, "",
+        "image size " + size + " is empty or over " + std::to_string(kMaxPixels) + " pixels");
+  if (width * height > kMaxPixelsPerFileByte * file_bytes)
     throw Error(path, "",
-                "image size " + std::to_string(width) + "x" + std::to_string(height) +
-                    " is empty or over " + std::to_string(kMaxPixels) + " pixels");
+                "image size " + size + " cannot be held in a file of " +
+                    std::to_string(file_bytes) + " bytes (the header is corrupt)");
 }
 
 // ---- PNG (libspng) -------------------------------------------------------------------------
@@ -59,25 +72,25 @@ SpngContext png_decoder(const std::vector<std::uint8_t>& bytes, const std::strin
   int err = spng_set_png_buffer(ctx.get(), bytes.data(), bytes.size());
   if (err == 0) err = spng_get_ihdr(ctx.get(), &ihdr);
   if (err != 0) throw Error(path, "PNG header", spng_strerror(err));
-  check_size(ihdr.width, ihdr.height, path);
+  check_size(ihdr.width, ihdr.height, bytes.size(), path);
   return ctx;
 }
 
-cv::Mat decode_png(const std::vector<std::uint8_t>& bytes, const std::string& path, bool depth) {
+Image decode_png(const std::vector<std::uint8_t>& bytes, const std::string& path, bool depth) {
   spng_ihdr ihdr{};
   SpngContext ctx = png_decoder(bytes, path, ihdr);
   const int rows = static_cast<int>(ihdr.height), cols = static_cast<int>(ihdr.width);
   if (depth) {
     if (ihdr.color_type != SPNG_COLOR_TYPE_GRAYSCALE || ihdr.bit_depth != 16)
       throw Error(path, "", "expected a 16-bit single-channel depth image");
-    cv::Mat image(rows, cols, CV_16UC1);
-    const int err = spng_decode_image(ctx.get(), image.data, image.total() * image.elemSize(),
-                                      SPNG_FMT_PNG, 0);  // host-endian 16-bit samples
+    Image image(rows, cols, PixelFormat::U16);
+    const int err = spng_decode_image(ctx.get(), image.data(), image.pixels() * 2, SPNG_FMT_PNG,
+                                      0);  // host-endian 16-bit samples
     if (err != 0) throw Error(path, "PNG data", spng_strerror(err));
     return image;
   }
-  cv::Mat image(rows, cols, CV_8UC3);
-  const int err = spng_decode_image(ctx.get(), image.data, image.total() * 3, SPNG_FMT_RGB8, 0);
+  Image image(rows, cols, PixelFormat::RGB8);
+  const int err = spng_decode_image(ctx.get(), image.data(), image.pixels() * 3, SPNG_FMT_RGB8, 0);
   if (err != 0) throw Error(path, "PNG data", spng_strerror(err));
   return image;
 }
@@ -100,7 +113,7 @@ void jpeg_silent(j_common_ptr, int) {}
 
 // Decodes into `out` (allocated here once the size is known); returns false with `message`
 // set on failure. No C++ objects with destructors live across the setjmp.
-bool decode_jpeg_into(const std::vector<std::uint8_t>& bytes, cv::Mat& out, char* message,
+bool decode_jpeg_into(const std::vector<std::uint8_t>& bytes, Image& out, char* message,
                       const std::string& path) {
   jpeg_decompress_struct info;
   JpegError error;
@@ -115,19 +128,22 @@ bool decode_jpeg_into(const std::vector<std::uint8_t>& bytes, cv::Mat& out, char
   jpeg_create_decompress(&info);
   jpeg_mem_src(&info, bytes.data(), static_cast<unsigned long>(bytes.size()));
   jpeg_read_header(&info, TRUE);
-  info.out_color_space = JCS_RGB;
-  jpeg_start_decompress(&info);
-  if (info.output_width == 0 || info.output_height == 0 ||
-      std::uint64_t{info.output_width} * info.output_height > kMaxPixels) {
-    std::snprintf(message, JMSG_LENGTH_MAX, "image size %ux%u is empty or too large",
-                  info.output_width, info.output_height);
+  // Checked before jpeg_start_decompress(), which allocates whole-image buffers (progressive).
+  const std::uint64_t pixels = std::uint64_t{info.image_width} * info.image_height;
+  if (pixels == 0 || pixels > kMaxPixels || pixels > kMaxPixelsPerFileByte * bytes.size()) {
+    std::snprintf(message, JMSG_LENGTH_MAX,
+                  "image size %ux%u is empty, too large or more than %zu bytes can hold",
+                  info.image_width, info.image_height, bytes.size());
     jpeg_destroy_decompress(&info);
     return false;
   }
+  info.out_color_space = JCS_RGB;
+  jpeg_start_decompress(&info);
   (void)path;
-  out.create(static_cast<int>(info.output_height), static_cast<int>(info.output_width), CV_8UC3);
+  out = Image(static_cast<int>(info.output_height), static_cast<int>(info.output_width),
+              PixelFormat::RGB8);
   while (info.output_scanline < info.output_height) {
-    JSAMPROW row = out.ptr<JSAMPLE>(static_cast<int>(info.output_scanline));
+    JSAMPROW row = out.data() + std::size_t{info.output_scanline} * out.row_bytes();
     jpeg_read_scanlines(&info, &row, 1);
   }
   jpeg_finish_decompress(&info);
@@ -135,8 +151,8 @@ bool decode_jpeg_into(const std::vector<std::uint8_t>& bytes, cv::Mat& out, char
   return true;
 }
 
-cv::Mat decode_jpeg(const std::vector<std::uint8_t>& bytes, const std::string& path) {
-  cv::Mat image;
+Image decode_jpeg(const std::vector<std::uint8_t>& bytes, const std::string& path) {
+  Image image;
   char message[JMSG_LENGTH_MAX] = {0};
   if (!decode_jpeg_into(bytes, image, message, path))
     throw Error(path, "JPEG", message[0] != '\0' ? message : "cannot decode");
@@ -168,7 +184,7 @@ void install_tiff_handlers() {
 
 using Tiff = std::unique_ptr<TIFF, decltype(&TIFFClose)>;
 
-cv::Mat decode_tiff(const std::string& path, bool depth) {
+Image decode_tiff(const std::string& path, bool depth) {
   install_tiff_handlers();
   tiff_message.clear();
   Tiff tiff(TIFFOpen(path.c_str(), "r"), TIFFClose);
@@ -179,16 +195,19 @@ cv::Mat decode_tiff(const std::string& path, bool depth) {
   TIFFGetField(tiff.get(), TIFFTAG_IMAGELENGTH, &height);
   TIFFGetFieldDefaulted(tiff.get(), TIFFTAG_BITSPERSAMPLE, &bits);
   TIFFGetFieldDefaulted(tiff.get(), TIFFTAG_SAMPLESPERPIXEL, &samples);
-  check_size(width, height, path);
+  std::error_code size_error;
+  const std::uintmax_t file_size = std::filesystem::file_size(path, size_error);
+  check_size(width, height, size_error ? 0 : file_size, path);
   const int rows = static_cast<int>(height), cols = static_cast<int>(width);
   if (depth) {
     if (bits != 16 || samples != 1 || TIFFIsTiled(tiff.get()))
       throw Error(path, "", "expected a 16-bit single-channel depth image (in strips)");
-    cv::Mat image(rows, cols, CV_16UC1);
-    if (static_cast<std::size_t>(TIFFScanlineSize(tiff.get())) != image.step[0])
+    Image image(rows, cols, PixelFormat::U16);
+    if (static_cast<std::size_t>(TIFFScanlineSize(tiff.get())) != image.row_bytes())
       throw Error(path, "TIFF", "unexpected scanline size");
     for (int r = 0; r < rows; ++r)
-      if (TIFFReadScanline(tiff.get(), image.ptr(r), static_cast<std::uint32_t>(r), 0) < 0)
+      if (TIFFReadScanline(tiff.get(), image.ptr<std::uint16_t>(r), static_cast<std::uint32_t>(r),
+                           0) < 0)
         throw Error(path, "TIFF row " + std::to_string(r),
                     tiff_message.empty() ? "cannot decode" : tiff_message);
     return image;
@@ -197,15 +216,14 @@ cv::Mat decode_tiff(const std::string& path, bool depth) {
   std::vector<std::uint32_t> rgba(static_cast<std::size_t>(width) * height);
   if (!TIFFReadRGBAImageOriented(tiff.get(), width, height, rgba.data(), ORIENTATION_TOPLEFT, 0))
     throw Error(path, "TIFF", tiff_message.empty() ? "cannot decode" : tiff_message);
-  cv::Mat image(rows, cols, CV_8UC3);
+  Image image(rows, cols, PixelFormat::RGB8);
   for (int r = 0; r < rows; ++r) {
-    auto* out = image.ptr<std::uint8_t>(r);
+    Rgb8* out = image.ptr<Rgb8>(r);
     for (int c = 0; c < cols; ++c) {
       const std::uint32_t p =
           rgba[static_cast<std::size_t>(r) * width + static_cast<std::size_t>(c)];
-      out[3 * c] = static_cast<std::uint8_t>(TIFFGetR(p));
-      out[3 * c + 1] = static_cast<std::uint8_t>(TIFFGetG(p));
-      out[3 * c + 2] = static_cast<std::uint8_t>(TIFFGetB(p));
+      out[c] = Rgb8{static_cast<std::uint8_t>(TIFFGetR(p)), static_cast<std::uint8_t>(TIFFGetG(p)),
+                    static_cast<std::uint8_t>(TIFFGetB(p))};
     }
   }
   return image;
@@ -217,7 +235,7 @@ cv::Mat decode_tiff(const std::string& path, bool depth) {
 // space-padded type ("depth16" or "rgb24"), uint32 compressed size, uint32 uncompressed size;
 // an LZF stream follows. depth16 is row-major uint16 millimetres; rgb24 is planar (all R, then
 // all G, then all B).
-cv::Mat decode_pclzf(const std::vector<std::uint8_t>& bytes, const std::string& path, bool depth) {
+Image decode_pclzf(const std::vector<std::uint8_t>& bytes, const std::string& path, bool depth) {
   constexpr std::size_t kHeader = 37;
   if (bytes.size() < kHeader)
     throw Error(path, "PCLZF header", "the file is shorter than its header");
@@ -228,7 +246,7 @@ cv::Mat decode_pclzf(const std::vector<std::uint8_t>& bytes, const std::string& 
   type.erase(type.find_last_not_of(" \0") + 1);
   std::memcpy(&compressed, bytes.data() + 29, 4);
   std::memcpy(&uncompressed, bytes.data() + 33, 4);
-  check_size(width, height, path);
+  check_size(width, height, bytes.size(), path);
   const bool is_depth = type == "depth16";
   if (!is_depth && type != "rgb24")
     throw Error(path, "PCLZF header", "image type '" + type + "': expected depth16 or rgb24");
@@ -250,18 +268,18 @@ cv::Mat decode_pclzf(const std::vector<std::uint8_t>& bytes, const std::string& 
     throw Error(path, "PCLZF data", "the LZF stream is corrupt");
   const int rows = static_cast<int>(height), cols = static_cast<int>(width);
   if (is_depth) {
-    cv::Mat image(rows, cols, CV_16UC1);
-    std::memcpy(image.data, raw.data(), raw.size());
+    Image image(rows, cols, PixelFormat::U16);
+    std::memcpy(image.data(), raw.data(), raw.size());
     return image;
   }
-  cv::Mat image(rows, cols, CV_8UC3);
+  Image image(rows, cols, PixelFormat::RGB8);
   const std::size_t plane = std::size_t{width} * height;
   for (std::size_t i = 0; i < plane; ++i)
-    for (std::size_t c = 0; c < 3; ++c) image.data[3 * i + c] = raw[c * plane + i];
+    for (std::size_t c = 0; c < 3; ++c) image.data()[3 * i + c] = raw[c * plane + i];
   return image;
 }
 
-cv::Mat read_image(const std::string& path, bool depth) {
+Image read_image(const std::string& path, bool depth) {
   const std::vector<std::uint8_t> bytes = file_bytes(path);
   switch (kind_of(bytes)) {
     case Kind::kPng:
@@ -283,34 +301,33 @@ cv::Mat read_image(const std::string& path, bool depth) {
 
 }  // namespace
 
-cv::Mat read_depth_image_file(const std::string& path) { return read_image(path, true); }
+Image read_depth_image_file(const std::string& path) { return read_image(path, true); }
 
-cv::Mat read_color_image_file(const std::string& path) { return read_image(path, false); }
+Image read_color_image_file(const std::string& path) { return read_image(path, false); }
 
-std::vector<std::uint8_t> encode_png(const cv::Mat& image) {
+std::vector<std::uint8_t> encode_png(const Image& image) {
   spng_ihdr ihdr{};
-  ihdr.width = static_cast<std::uint32_t>(image.cols);
-  ihdr.height = static_cast<std::uint32_t>(image.rows);
-  switch (image.type()) {
-    case CV_8UC3:
+  ihdr.width = static_cast<std::uint32_t>(image.cols());
+  ihdr.height = static_cast<std::uint32_t>(image.rows());
+  switch (image.format()) {
+    case PixelFormat::RGB8:
       ihdr.bit_depth = 8;
       ihdr.color_type = SPNG_COLOR_TYPE_TRUECOLOR;
       break;
-    case CV_8UC1:
+    case PixelFormat::U8:
       ihdr.bit_depth = 8;
       ihdr.color_type = SPNG_COLOR_TYPE_GRAYSCALE;
       break;
-    case CV_16UC1:
+    case PixelFormat::U16:
       ihdr.bit_depth = 16;
       ihdr.color_type = SPNG_COLOR_TYPE_GRAYSCALE;
       break;
-    default:
-      throw Error("PNG", "image type", "expected 8-bit RGB or grey, or 16-bit grey");
+    case PixelFormat::F32:
+      throw Error("PNG", "image type", "expected 8-bit RGB or grey, or 16-bit grey, got F32");
   }
-  // Rows contiguous, 16-bit samples big-endian as PNG stores them.
-  cv::Mat rows = image.isContinuous() ? image : image.clone();
-  std::vector<std::uint8_t> raw(rows.total() * rows.elemSize());
-  std::memcpy(raw.data(), rows.data, raw.size());
+  // 16-bit samples big-endian as PNG stores them.
+  std::vector<std::uint8_t> raw(image.data(),
+                                image.data() + image.pixels() * bytes_per_pixel(image.format()));
   if (ihdr.bit_depth == 16)
     for (std::size_t i = 0; i + 1 < raw.size(); i += 2) std::swap(raw[i], raw[i + 1]);
   SpngContext ctx(spng_ctx_new(SPNG_CTX_ENCODER), spng_ctx_free);
@@ -328,7 +345,7 @@ std::vector<std::uint8_t> encode_png(const cv::Mat& image) {
   return bytes;
 }
 
-void write_png(const std::string& path, const cv::Mat& image) {
+void write_png(const std::string& path, const Image& image) {
   const std::vector<std::uint8_t> bytes = encode_png(image);
   AtomicOutputFile file(path);
   file.stream().write(reinterpret_cast<const char*>(bytes.data()),

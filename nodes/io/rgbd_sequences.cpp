@@ -6,7 +6,7 @@
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
-#include <opencv2/imgproc.hpp>
+#include "runtime/image.h"
 
 #include "nodes/io/image_io.h"
 #include "nodes/io/parse_util.h"
@@ -38,7 +38,7 @@ std::string first_json(const fs::path& dir) {
   return files.empty() ? std::string() : files.front();
 }
 
-cv::Mat read_color_image(const std::string& path) {
+Image read_color_image(const std::string& path) {
   if (!fs::exists(path)) throw Error(path, "", "colour image missing");
   return read_color_image_file(path);
 }
@@ -49,19 +49,19 @@ DepthFrame make_frame(const std::string& depth_path, const std::string& color_pa
                       double timestamp) {
   DepthFrame f;
   f.depth = read_depth_image(depth_path);
-  if (f.depth.cols != k.width || f.depth.rows != k.height) {
+  if (f.depth.cols() != k.width || f.depth.rows() != k.height) {
     throw Error(depth_path, "",
-                "image is " + std::to_string(f.depth.cols) + "x" + std::to_string(f.depth.rows) +
-                    " but the intrinsics are for " + std::to_string(k.width) + "x" +
-                    std::to_string(k.height));
+                "image is " + std::to_string(f.depth.cols()) + "x" +
+                    std::to_string(f.depth.rows()) + " but the intrinsics are for " +
+                    std::to_string(k.width) + "x" + std::to_string(k.height));
   }
   f.depth_scale = scale;
   f.intrinsics = k;
   f.T_world_camera = T_world_camera;
   f.timestamp_s = timestamp;
   if (!color_path.empty()) {
-    cv::Mat color = read_color_image(color_path);
-    if (color.size() == f.depth.size()) f.color = color;
+    Image color = read_color_image(color_path);
+    if (color.same_size(f.depth)) f.color = color;
   }
   return f;
 }
@@ -311,7 +311,7 @@ std::unique_ptr<Sequence> open_depth_image_directory(const std::string& director
   return std::make_unique<DepthImageListSequence>(std::move(list));
 }
 
-cv::Mat read_depth_image(const std::string& path) {
+Image read_depth_image(const std::string& path) {
   if (!fs::exists(path)) throw Error(path, "", "depth image missing");
   return read_depth_image_file(path);
 }

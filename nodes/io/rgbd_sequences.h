@@ -11,9 +11,9 @@
 
 namespace meshflow::io {
 
-/// Reads a 16-bit single-channel depth image (PNG, TIFF) into frame.depth (CV_16U).
+/// Reads a 16-bit single-channel depth image (PNG, TIFF) into frame.depth (U16).
 /// Throws meshflow::Error naming the file when it is missing, corrupt or of another type.
-cv::Mat read_depth_image(const std::string& path);
+Image read_depth_image(const std::string& path);
 
 /// Reads a Redwood .log trajectory: blocks of one "i j k" line and four rows of a row-major
 /// camera-to-world 4x4 matrix. Returns one pose per block, in block order. Throws

@@ -15,16 +15,16 @@ namespace {
 // a point is three multiplications, cheaper than the memory traffic of storing it).
 class PixelSurface {
  public:
-  PixelSurface(const DepthFrame& frame, const cv::Mat& depth_m)
+  PixelSurface(const DepthFrame& frame, const Image& depth_m)
       : depth_(depth_m),
         T_world_camera_(frame.T_world_camera),
         rotation_(frame.T_world_camera.linear()),
-        ray_x_(static_cast<std::size_t>(depth_m.cols)),
-        ray_y_(static_cast<std::size_t>(depth_m.rows)) {
+        ray_x_(static_cast<std::size_t>(depth_m.cols())),
+        ray_y_(static_cast<std::size_t>(depth_m.rows())) {
     const PinholeIntrinsics& k = frame.intrinsics;
-    for (int u = 0; u < depth_m.cols; ++u)
+    for (int u = 0; u < depth_m.cols(); ++u)
       ray_x_[static_cast<std::size_t>(u)] = (static_cast<float>(u) - k.cx) / k.fx;
-    for (int v = 0; v < depth_m.rows; ++v)
+    for (int v = 0; v < depth_m.rows(); ++v)
       ray_y_[static_cast<std::size_t>(v)] = (static_cast<float>(v) - k.cy) / k.fy;
   }
 
@@ -33,12 +33,12 @@ class PixelSurface {
   inline bool at(int u, int v, Eigen::Vector3f& position, Eigen::Vector3f& normal) const {
     const float* row = depth_.ptr<float>(v);
     const float* above = v > 0 ? depth_.ptr<float>(v - 1) : nullptr;
-    const float* below = v + 1 < depth_.rows ? depth_.ptr<float>(v + 1) : nullptr;
+    const float* below = v + 1 < depth_.rows() ? depth_.ptr<float>(v + 1) : nullptr;
     const float ry = ray_y_[static_cast<std::size_t>(v)];
     Eigen::Vector3f c, l, r, up, dn;
     if (!point(row, u, ry, c)) return false;
     const bool has_l = u > 0 && point(row, u - 1, ry, l);
-    const bool has_r = u + 1 < depth_.cols && point(row, u + 1, ry, r);
+    const bool has_r = u + 1 < depth_.cols() && point(row, u + 1, ry, r);
     const bool has_up =
         above != nullptr && point(above, u, ray_y_[static_cast<std::size_t>(v - 1)], up);
     const bool has_dn =
@@ -65,21 +65,18 @@ class PixelSurface {
     return true;
   }
 
-  const cv::Mat& depth_;
+  const Image& depth_;
   Eigen::Isometry3f T_world_camera_;
   Eigen::Matrix3f rotation_;
   std::vector<float> ray_x_, ray_y_;  // (u - cx) / fx per column, (v - cy) / fy per row
 };
 
-bool has_matching_color(const DepthFrame& frame, const cv::Mat& depth_m) {
-  return !frame.color.empty() && frame.color.size() == depth_m.size() &&
-         frame.color.type() == CV_8UC3;
+bool has_matching_color(const DepthFrame& frame, const Image& depth_m) {
+  return !frame.color.empty() && frame.color.same_size(depth_m) &&
+         frame.color.format() == PixelFormat::RGB8;
 }
 
-Rgb8 color_at(const DepthFrame& frame, int u, int v) {
-  const cv::Vec3b rgb = frame.color.at<cv::Vec3b>(v, u);
-  return Rgb8{rgb[0], rgb[1], rgb[2]};
-}
+Rgb8 color_at(const DepthFrame& frame, int u, int v) { return frame.color.at<Rgb8>(v, u); }
 
 void set_sensor_origin(const DepthFrame& frame, PointCloud& cloud) {
   cloud.sensor_origin = frame.T_world_camera.translation();
@@ -88,8 +85,8 @@ void set_sensor_origin(const DepthFrame& frame, PointCloud& cloud) {
 
 }  // namespace
 
-PointCloud back_project(const DepthFrame& frame, const cv::Mat& depth_m) {
-  const int w = depth_m.cols, h = depth_m.rows;
+PointCloud back_project(const DepthFrame& frame, const Image& depth_m) {
+  const int w = depth_m.cols(), h = depth_m.rows();
   const std::size_t n = static_cast<std::size_t>(w) * static_cast<std::size_t>(h);
   const Eigen::Vector3f kNaN = Eigen::Vector3f::Constant(std::numeric_limits<float>::quiet_NaN());
   PointCloud cloud;
@@ -116,8 +113,8 @@ PointCloud back_project(const DepthFrame& frame, const cv::Mat& depth_m) {
   return cloud;
 }
 
-PointCloud back_project_valid(const DepthFrame& frame, const cv::Mat& depth_m) {
-  const int w = depth_m.cols, h = depth_m.rows;
+PointCloud back_project_valid(const DepthFrame& frame, const Image& depth_m) {
+  const int w = depth_m.cols(), h = depth_m.rows();
   const bool color = has_matching_color(frame, depth_m);
   const PixelSurface surface(frame, depth_m);
   // Pass 1 counts each row's valid pixels, pass 2 writes them at the row's offset (recomputing

@@ -72,7 +72,7 @@ DepthFrame render_depth(const Scene& scene, const PinholeIntrinsics& k,
   frame.intrinsics = k;
   frame.T_world_camera = T_world_camera;
   frame.depth_scale = 1000.0f;
-  frame.depth = cv::Mat(k.height, k.width, CV_16U, cv::Scalar(0));
+  frame.depth = Image(k.height, k.width, PixelFormat::U16);
   const Eigen::Matrix3f rotation = T_world_camera.linear();
   const Eigen::Vector3f eye = T_world_camera.translation();
   tbb::parallel_for(0, k.height, [&](int v) {

@@ -14,7 +14,7 @@ namespace meshflow::synthetic {
 /// up or down), in meshflow's camera convention (x right, y down, z forward).
 Eigen::Isometry3f look_at(const Eigen::Vector3f& eye, const Eigen::Vector3f& target);
 
-/// Ray-casts `scene` through every pixel: CV_16U depth in millimetres (depth_scale 1000, 0 where
+/// Ray-casts `scene` through every pixel: U16 depth in millimetres (depth_scale 1000, 0 where
 /// nothing is hit), plus Gaussian range noise of `noise_sigma` metres (hash of seed and pixel, so
 /// deterministic for any thread count). Parallel over rows.
 DepthFrame render_depth(const Scene& scene, const PinholeIntrinsics& intrinsics,

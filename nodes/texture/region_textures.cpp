@@ -81,15 +81,15 @@ TexturedMesh texture_planar_regions(const TriangleMesh& mesh,
     const PlaneFrame f = frame_of(mesh, region, config);
     RegionTexture texture;
     texture.faces = region.faces;
-    texture.image.create(f.height, f.width, CV_8UC3);
+    texture.image = Image(f.height, f.width, PixelFormat::RGB8);
     tbb::parallel_for(0, f.height, [&](int row) {
       const float v = f.v0 + (static_cast<float>(f.height - 1 - row) + 0.5f) * f.texel;
-      auto* pixel = texture.image.ptr<cv::Vec3b>(row);
+      auto* pixel = texture.image.ptr<Rgb8>(row);
       for (int column = 0; column < f.width; ++column) {
         const float u = f.u0 + (static_cast<float>(column) + 0.5f) * f.texel;
         float d2 = 0.0f;
         const Rgb8 c = nearest(f.origin + u * f.axis_u + v * f.axis_v, &d2);
-        pixel[column] = d2 <= max_distance2 ? cv::Vec3b(c.r, c.g, c.b) : cv::Vec3b(128, 128, 128);
+        pixel[column] = d2 <= max_distance2 ? c : Rgb8{128, 128, 128};
       }
     });
     const auto id = static_cast<std::int32_t>(out.textures.size());

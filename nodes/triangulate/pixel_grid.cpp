@@ -34,10 +34,10 @@ MESHFLOW_AVX2_CLONES void back_project_row(const float* depth, const float* x_of
 
 PointGrid grid_from_depth(const DepthFrame& frame, const DepthFilterConfig& filter,
                           DepthFilterCounts* counts) {
-  const cv::Mat depth = filter_depth(frame, filter, counts);  // checks the frame
+  const Image depth = filter_depth(frame, filter, counts);  // checks the frame
   PointGrid g;
-  g.width = depth.cols;
-  g.height = depth.rows;
+  g.width = depth.cols();
+  g.height = depth.rows();
   g.points.resize(static_cast<std::size_t>(g.width) * static_cast<std::size_t>(g.height));
   g.eye = frame.T_world_camera.translation();
   const PinholeIntrinsics& k = frame.intrinsics;
@@ -76,7 +76,7 @@ PointGrid grid_from_organized(const PointCloud& cloud, const DepthFilterConfig& 
   g.eye = cloud.has_sensor_origin ? cloud.sensor_origin : Eigen::Vector3f::Zero();
   g.points = cloud.positions;
   // Range image for the limits and the occlusion edges (0 = invalid).
-  cv::Mat range(g.height, g.width, CV_32F);
+  Image range(g.height, g.width, PixelFormat::F32);
   c.pixels = g.points.size();
   for (int v = 0; v < g.height; ++v)
     for (int u = 0; u < g.width; ++u) {
@@ -95,10 +95,12 @@ PointGrid grid_from_organized(const PointCloud& cloud, const DepthFilterConfig& 
       r = d;
     }
   if (filter.edge_high > 0.0f) {
-    const cv::Mat edges =
+    const Image edges =
         occlusion_edges(range, filter.edge_high, std::min(filter.edge_low, filter.edge_high));
-    c.edges = static_cast<std::size_t>(cv::countNonZero(edges));
-    range.setTo(0.0f, edges);
+    c.edges = count_nonzero(edges);
+    for (int v = 0; v < g.height; ++v)
+      for (int u = 0; u < g.width; ++u)
+        if (edges.at<std::uint8_t>(v, u) != 0) range.at<float>(v, u) = 0.0f;
   }
   for (int v = 0; v < g.height; ++v)
     for (int u = 0; u < g.width; ++u) {

@@ -81,7 +81,7 @@ TEST(DepthPath, AllInvalidDepthFailsThatFrameOnly) {
       f.name = "blank.png";
       f.load_depth = [] {
         DepthFrame d;
-        d.depth = cv::Mat(48, 64, CV_16U, cv::Scalar(0));
+        d.depth = Image::filled<std::uint16_t>(48, 64, 0);
         d.intrinsics = PinholeIntrinsics{64, 48, 50, 50, 31.5f, 23.5f};
         return d;
       };

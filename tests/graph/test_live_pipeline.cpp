@@ -187,7 +187,8 @@ TEST(LivePipeline, TriangulatesDepthMapsPerFrameAndFailsBadFramesClearly) {
   live.push(seq->frame(0).load_depth());
   live.push(sphere(0));  // not a depth image
   DepthFrame eight_bit = seq->frame(1).load_depth();
-  eight_bit.depth.convertTo(eight_bit.depth, CV_8U);  // a frame an embedder might get wrong
+  eight_bit.depth = Image(eight_bit.depth.rows(), eight_bit.depth.cols(),
+                          PixelFormat::U8);  // a frame an embedder might get wrong
   live.push(std::move(eight_bit));
   DepthFrame lost = seq->frame(1).load_depth();
   lost.T_world_camera.translation().x() = std::numeric_limits<float>::quiet_NaN();
@@ -201,7 +202,7 @@ TEST(LivePipeline, TriangulatesDepthMapsPerFrameAndFailsBadFramesClearly) {
   EXPECT_FALSE(got.results[1].ok);
   EXPECT_NE(got.results[1].error.find("depth image"), std::string::npos) << got.results[1].error;
   EXPECT_FALSE(got.results[2].ok);
-  EXPECT_NE(got.results[2].error.find("CV_16U or CV_32F"), std::string::npos)
+  EXPECT_NE(got.results[2].error.find("expected a U16 or F32 image, got U8"), std::string::npos)
       << got.results[2].error;
   EXPECT_FALSE(got.results[3].ok);
   EXPECT_NE(got.results[3].error.find("T_world_camera"), std::string::npos) << got.results[3].error;

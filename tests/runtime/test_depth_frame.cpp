@@ -17,7 +17,7 @@ namespace {
 
 DepthFrame good_frame() {
   DepthFrame f;
-  f.depth = cv::Mat(6, 8, CV_16U, cv::Scalar(1500));
+  f.depth = Image::filled<std::uint16_t>(6, 8, 1500);
   f.intrinsics = PinholeIntrinsics{8, 6, 10.0f, 10.0f, 3.5f, 2.5f};
   return f;
 }
@@ -25,11 +25,11 @@ DepthFrame good_frame() {
 TEST(DepthFrame, ConvertsToMetresAndClearsInvalidPixels) {
   DepthFrame f = good_frame();
   EXPECT_FLOAT_EQ(depth_in_metres(f).at<float>(2, 3), 1.5f);
-  f.depth = cv::Mat(6, 8, CV_32F, cv::Scalar(2.0f));
+  f.depth = Image::filled<float>(6, 8, 2.0f);
   f.depth.at<float>(0, 0) = std::numeric_limits<float>::quiet_NaN();
   f.depth.at<float>(0, 1) = std::numeric_limits<float>::infinity();
   f.depth.at<float>(0, 2) = -1.0f;
-  const cv::Mat m = depth_in_metres(f);
+  const Image m = depth_in_metres(f);
   EXPECT_EQ(m.at<float>(0, 0), 0.0f);
   EXPECT_EQ(m.at<float>(0, 1), 0.0f);
   EXPECT_EQ(m.at<float>(0, 2), 0.0f);
@@ -41,10 +41,12 @@ TEST(DepthFrame, ConvertsToMetresAndClearsInvalidPixels) {
 TEST(DepthFrame, UnusableFramesAreErrorsNamingTheField) {
   const float nan = std::numeric_limits<float>::quiet_NaN();
   const std::pair<const char*, std::function<void(DepthFrame&)>> faults[] = {
-      {"depth", [](DepthFrame& f) { f.depth = cv::Mat(); }},
-      {"depth", [](DepthFrame& f) { f.depth = cv::Mat(6, 8, CV_8U, cv::Scalar(7)); }},
-      {"depth", [](DepthFrame& f) { f.depth = cv::Mat(6, 8, CV_64F, cv::Scalar(1.0)); }},
-      {"depth", [](DepthFrame& f) { f.depth = cv::Mat(6, 8, CV_32FC3, cv::Scalar(1.0)); }},
+      {"depth", [](DepthFrame& f) { f.depth = Image(); }},
+      {"depth", [](DepthFrame& f) { f.depth = Image::filled<std::uint8_t>(6, 8, 7); }},
+      {"depth",
+       [](DepthFrame& f) {
+         f.depth = Image::filled<Rgb8>(6, 8, Rgb8{1, 1, 1});
+       }},
       {"depth_scale", [](DepthFrame& f) { f.depth_scale = 0.0f; }},
       {"depth_scale", [nan](DepthFrame& f) { f.depth_scale = nan; }},
       {"intrinsics", [](DepthFrame& f) { f.intrinsics.width = 9; }},

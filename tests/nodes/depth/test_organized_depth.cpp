@@ -42,8 +42,8 @@ TEST(OrganizedDepth, RecoversTheIntrinsicsAndTheDepthOfAPinholeCloud) {
   EXPECT_NEAR(k.cx, 77.25f, 1e-2f);
   EXPECT_NEAR(k.cy, 61.5f, 1e-2f);
   EXPECT_TRUE(d->T_world_camera.isApprox(Eigen::Isometry3f::Identity()));
-  ASSERT_EQ(d->depth.type(), CV_32F);
-  const cv::Mat truth = depth_in_metres(f.depth);
+  ASSERT_EQ(d->depth.format(), PixelFormat::F32);
+  const Image truth = depth_in_metres(f.depth);
   std::size_t valid = 0;
   for (int v = 0; v < 120; ++v)
     for (int u = 0; u < 160; ++u) {
@@ -69,9 +69,9 @@ TEST(OrganizedDepth, KeepsColoursAndTheSensorOrigin) {
   const std::optional<DepthFrame> d = depth_frame_from_organized(f.cloud);
   ASSERT_TRUE(d.has_value());
   EXPECT_TRUE(d->T_world_camera.translation().isApprox(origin));
-  ASSERT_EQ(d->color.type(), CV_8UC3);
-  EXPECT_EQ(d->color.at<cv::Vec3b>(60, 80), cv::Vec3b(200, 100, 50));
-  EXPECT_EQ(d->color.at<cv::Vec3b>(0, 0), cv::Vec3b(10, 20, 30));
+  ASSERT_EQ(d->color.format(), PixelFormat::RGB8);
+  EXPECT_EQ(d->color.at<Rgb8>(60, 80), (Rgb8{200, 100, 50}));
+  EXPECT_EQ(d->color.at<Rgb8>(0, 0), (Rgb8{10, 20, 30}));
   // Back-projecting the recovered frame gives the cloud's points (world frame) again.
   const PointCloud again = back_project(*d, depth_in_metres(*d));
   std::size_t compared = 0;

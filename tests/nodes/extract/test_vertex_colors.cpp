@@ -31,12 +31,12 @@ TEST(VertexColors, VerticesTakeTheColourOfTheirPixel) {
   // A camera at (0, 0, -1) looking along +z; red grows with u, green with v.
   DepthFrame frame;
   frame.intrinsics = PinholeIntrinsics{64, 48, 50.0f, 50.0f, 32.0f, 24.0f};
-  frame.depth = cv::Mat(48, 64, CV_16UC1, cv::Scalar(1000));
-  frame.color = cv::Mat(48, 64, CV_8UC3);
+  frame.depth = Image::filled<std::uint16_t>(48, 64, 1000);
+  frame.color = Image(48, 64, PixelFormat::RGB8);
   for (int v = 0; v < 48; ++v)
     for (int u = 0; u < 64; ++u)
-      frame.color.at<cv::Vec3b>(v, u) =
-          cv::Vec3b(static_cast<std::uint8_t>(3 * u), static_cast<std::uint8_t>(5 * v), 7);
+      frame.color.at<Rgb8>(v, u) =
+          Rgb8{static_cast<std::uint8_t>(3 * u), static_cast<std::uint8_t>(5 * v), 7};
   frame.T_world_camera.translation() = Eigen::Vector3f(0, 0, -1);
   // Pixel (10, 20) at depth 2 (world z = 1); a point between pixels; one far outside the image.
   const Eigen::Vector3f at_pixel((10 - 32) * 2.0f / 50, (20 - 24) * 2.0f / 50, 1.0f);
@@ -47,7 +47,7 @@ TEST(VertexColors, VerticesTakeTheColourOfTheirPixel) {
   EXPECT_EQ(c[0], (Rgb8{30, 100, 7}));
   EXPECT_EQ(c[1].r, 32);      // halfway between 30 and 33, rounded
   EXPECT_EQ(c[2].r, 3 * 63);  // clamped to the border column
-  frame.color.release();
+  frame.color = Image();
   EXPECT_TRUE(vertex_colors_from_image({at_pixel}, frame).empty());
 }
 

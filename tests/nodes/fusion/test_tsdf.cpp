@@ -86,11 +86,11 @@ TEST(Tsdf, NoHolesWhereFramesOverlap) {
   for (std::size_t f = 0; f < frames.size(); ++f) {
     const DepthFrame& a = frames[f];
     const DepthFrame& b = frames[(f + 1) % frames.size()];
-    const cv::Mat da = depth_in_metres(a), db = depth_in_metres(b);
+    const Image da = depth_in_metres(a), db = depth_in_metres(b);
     const PinholeIntrinsics& k = a.intrinsics;
     const Eigen::Isometry3f b_from_world = b.T_world_camera.inverse();
-    for (int v = 4; v < da.rows - 4; v += 4)
-      for (int u = 4; u < da.cols - 4; u += 4) {
+    for (int v = 4; v < da.rows() - 4; v += 4)
+      for (int u = 4; u < da.cols() - 4; u += 4) {
         const float d = da.at<float>(v, u);
         if (!(d > 0.0f)) continue;
         const Eigen::Vector3f p =
@@ -99,7 +99,7 @@ TEST(Tsdf, NoHolesWhereFramesOverlap) {
         if (q.z() <= 0.0f) continue;
         const int ub = static_cast<int>(std::lround(k.fx * q.x() / q.z() + k.cx));
         const int vb = static_cast<int>(std::lround(k.fy * q.y() / q.z() + k.cy));
-        if (ub < 4 || vb < 4 || ub >= db.cols - 4 || vb >= db.rows - 4) continue;
+        if (ub < 4 || vb < 4 || ub >= db.cols() - 4 || vb >= db.rows() - 4) continue;
         if (std::abs(db.at<float>(vb, ub) - q.z()) > 0.5f * kTsdfVoxel) continue;  // occluded in b
         std::uint32_t nearest;
         float d2;
@@ -169,7 +169,8 @@ TEST(Tsdf, IncrementalExtractionEqualsAFreshOne) {
 
 TEST(Tsdf, ColourIsFusedIntoTheVoxels) {
   std::vector<DepthFrame> frames = room_frames(1, 0.0f);
-  frames[0].color = cv::Mat(frames[0].depth.size(), CV_8UC3, cv::Scalar(200, 100, 50));
+  frames[0].color =
+      Image::filled<Rgb8>(frames[0].depth.rows(), frames[0].depth.cols(), Rgb8{200, 100, 50});
   const TsdfVolume volume = fuse(frames);
   const TriangleMesh mesh = TsdfMesher().extract(volume);
   ASSERT_EQ(mesh.colors.size(), mesh.vertices.size());
@@ -301,7 +302,7 @@ TEST(Tsdf, FarBlocksMeshLikeNearOnesAndBeyondTheRangeAreErrors) {
 
   EXPECT_THROW(far_volume.insert_block(far + Eigen::Vector3i::UnitX(), voxels), Error);
   DepthFrame frame;
-  frame.depth = cv::Mat(12, 16, CV_16U, cv::Scalar(1000));
+  frame.depth = Image::filled<std::uint16_t>(12, 16, 1000);
   frame.intrinsics = PinholeIntrinsics{16, 12, 20.0f, 20.0f, 7.5f, 5.5f};
   frame.T_world_camera.translation() = Eigen::Vector3f(3000.0f, 0.0f, 0.0f);  // 3 km at 1 cm
   try {

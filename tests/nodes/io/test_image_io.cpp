@@ -13,45 +13,47 @@
 namespace meshflow::io {
 namespace {
 
-cv::Mat gradient16(int rows, int cols) {
-  cv::Mat m(rows, cols, CV_16UC1);
+Image gradient16(int rows, int cols) {
+  Image m(rows, cols, PixelFormat::U16);
   for (int r = 0; r < rows; ++r)
     for (int c = 0; c < cols; ++c)
       m.at<std::uint16_t>(r, c) = static_cast<std::uint16_t>(r * 1000 + c * 7 + 300);
   return m;
 }
 
-cv::Mat colours(int rows, int cols) {
-  cv::Mat m(rows, cols, CV_8UC3);
+Image colours(int rows, int cols) {
+  Image m(rows, cols, PixelFormat::RGB8);
   for (int r = 0; r < rows; ++r)
     for (int c = 0; c < cols; ++c)
-      m.at<cv::Vec3b>(r, c) =
-          cv::Vec3b(static_cast<std::uint8_t>(10 * r), static_cast<std::uint8_t>(20 * c), 200);
+      m.at<Rgb8>(r, c) =
+          Rgb8{static_cast<std::uint8_t>(10 * r), static_cast<std::uint8_t>(20 * c), 200};
   return m;
 }
 
-// Writes `image` (CV_16UC1 or CV_8UC3 RGB) as an uncompressed TIFF in strips.
-void write_tiff(const std::string& path, const cv::Mat& image) {
+// Writes `image` (U16 or RGB8 RGB) as an uncompressed TIFF in strips.
+void write_tiff(const std::string& path, const Image& image) {
   TIFF* tiff = TIFFOpen(path.c_str(), "w");
   ASSERT_NE(tiff, nullptr);
-  const bool colour = image.type() == CV_8UC3;
-  TIFFSetField(tiff, TIFFTAG_IMAGEWIDTH, image.cols);
-  TIFFSetField(tiff, TIFFTAG_IMAGELENGTH, image.rows);
+  const bool colour = image.format() == PixelFormat::RGB8;
+  TIFFSetField(tiff, TIFFTAG_IMAGEWIDTH, image.cols());
+  TIFFSetField(tiff, TIFFTAG_IMAGELENGTH, image.rows());
   TIFFSetField(tiff, TIFFTAG_BITSPERSAMPLE, colour ? 8 : 16);
   TIFFSetField(tiff, TIFFTAG_SAMPLESPERPIXEL, colour ? 3 : 1);
   TIFFSetField(tiff, TIFFTAG_PHOTOMETRIC, colour ? PHOTOMETRIC_RGB : PHOTOMETRIC_MINISBLACK);
   TIFFSetField(tiff, TIFFTAG_PLANARCONFIG, PLANARCONFIG_CONTIG);
   TIFFSetField(tiff, TIFFTAG_COMPRESSION, COMPRESSION_PACKBITS);
   TIFFSetField(tiff, TIFFTAG_ROWSPERSTRIP, 2);
-  for (int r = 0; r < image.rows; ++r)
-    ASSERT_GE(TIFFWriteScanline(tiff, const_cast<std::uint8_t*>(image.ptr(r)),
+  for (int r = 0; r < image.rows(); ++r)
+    ASSERT_GE(TIFFWriteScanline(tiff,
+                                const_cast<std::uint8_t*>(
+                                    image.data() + static_cast<std::size_t>(r) * image.row_bytes()),
                                 static_cast<std::uint32_t>(r), 0),
               0);
   TIFFClose(tiff);
 }
 
-// Writes `image` (CV_8UC3 RGB) as a JPEG of quality 100.
-void write_jpeg(const std::string& path, const cv::Mat& image) {
+// Writes `image` (RGB8 RGB) as a JPEG of quality 100.
+void write_jpeg(const std::string& path, const Image& image) {
   jpeg_compress_struct info;
   jpeg_error_mgr error;
   info.err = jpeg_std_error(&error);
@@ -59,8 +61,8 @@ void write_jpeg(const std::string& path, const cv::Mat& image) {
   std::FILE* file = std::fopen(path.c_str(), "wb");
   ASSERT_NE(file, nullptr);
   jpeg_stdio_dest(&info, file);
-  info.image_width = static_cast<JDIMENSION>(image.cols);
-  info.image_height = static_cast<JDIMENSION>(image.rows);
+  info.image_width = static_cast<JDIMENSION>(image.cols());
+  info.image_height = static_cast<JDIMENSION>(image.rows());
   info.input_components = 3;
   info.in_color_space = JCS_RGB;
   jpeg_set_defaults(&info);
@@ -77,28 +79,28 @@ void write_jpeg(const std::string& path, const cv::Mat& image) {
 
 TEST(ImageIo, PngRoundTripsDepthAndColourExactly) {
   const std::string dir = test::temp_dir();
-  const cv::Mat depth = gradient16(7, 9), rgb = colours(5, 6);
+  const Image depth = gradient16(7, 9), rgb = colours(5, 6);
   write_png(dir + "/d.png", depth);
   write_png(dir + "/c.png", rgb);
-  EXPECT_EQ(cv::norm(read_depth_image_file(dir + "/d.png"), depth, cv::NORM_INF), 0.0);
-  EXPECT_EQ(cv::norm(read_color_image_file(dir + "/c.png"), rgb, cv::NORM_INF), 0.0);
+  EXPECT_EQ(test::max_abs_difference(read_depth_image_file(dir + "/d.png"), depth), 0.0);
+  EXPECT_EQ(test::max_abs_difference(read_color_image_file(dir + "/c.png"), rgb), 0.0);
   // A grey 16-bit PNG read as colour: scaled to 8 bits and replicated.
-  const cv::Mat as_colour = read_color_image_file(dir + "/d.png");
-  EXPECT_EQ(as_colour.type(), CV_8UC3);
+  const Image as_colour = read_color_image_file(dir + "/d.png");
+  EXPECT_EQ(as_colour.format(), PixelFormat::RGB8);
   EXPECT_THROW(read_depth_image_file(dir + "/c.png"), Error) << "colour is no depth image";
 }
 
 TEST(ImageIo, TiffAndJpegAreRead) {
   const std::string dir = test::temp_dir();
-  const cv::Mat depth = gradient16(6, 8), rgb = colours(6, 8);
+  const Image depth = gradient16(6, 8), rgb = colours(6, 8);
   write_tiff(dir + "/d.tiff", depth);
   write_tiff(dir + "/c.tiff", rgb);
   write_jpeg(dir + "/c.jpg", rgb);
-  EXPECT_EQ(cv::norm(read_depth_image_file(dir + "/d.tiff"), depth, cv::NORM_INF), 0.0);
-  EXPECT_EQ(cv::norm(read_color_image_file(dir + "/c.tiff"), rgb, cv::NORM_INF), 0.0);
-  const cv::Mat jpeg = read_color_image_file(dir + "/c.jpg");
-  ASSERT_EQ(jpeg.size(), rgb.size());
-  EXPECT_LE(cv::norm(jpeg, rgb, cv::NORM_INF), 16.0) << "quality 100, subsampled chroma";
+  EXPECT_EQ(test::max_abs_difference(read_depth_image_file(dir + "/d.tiff"), depth), 0.0);
+  EXPECT_EQ(test::max_abs_difference(read_color_image_file(dir + "/c.tiff"), rgb), 0.0);
+  const Image jpeg = read_color_image_file(dir + "/c.jpg");
+  ASSERT_TRUE(jpeg.same_size(rgb));
+  EXPECT_LE(test::max_abs_difference(jpeg, rgb), 16.0) << "quality 100, subsampled chroma";
   EXPECT_THROW(read_depth_image_file(dir + "/c.jpg"), Error);
 }
 
@@ -122,16 +124,16 @@ std::string pclzf(const std::string& type, std::uint32_t width, std::uint32_t he
 
 TEST(ImageIo, PclzfDepthAndPlanarColourAreRead) {
   const std::string dir = test::temp_dir();
-  const cv::Mat depth = gradient16(12, 20);
-  std::vector<std::uint8_t> raw(depth.data, depth.data + depth.total() * 2);
+  const Image depth = gradient16(12, 20);
+  std::vector<std::uint8_t> raw(depth.data(), depth.data() + depth.pixels() * 2);
   test::write_file(dir + "/d.pclzf", pclzf("depth16", 20, 12, raw));
-  EXPECT_EQ(cv::norm(read_depth_image_file(dir + "/d.pclzf"), depth, cv::NORM_INF), 0.0);
-  const cv::Mat rgb = colours(12, 20);
-  std::vector<std::uint8_t> planar(rgb.total() * 3);
-  for (std::size_t i = 0; i < rgb.total(); ++i)
-    for (std::size_t c = 0; c < 3; ++c) planar[c * rgb.total() + i] = rgb.data[3 * i + c];
+  EXPECT_EQ(test::max_abs_difference(read_depth_image_file(dir + "/d.pclzf"), depth), 0.0);
+  const Image rgb = colours(12, 20);
+  std::vector<std::uint8_t> planar(rgb.pixels() * 3);
+  for (std::size_t i = 0; i < rgb.pixels(); ++i)
+    for (std::size_t c = 0; c < 3; ++c) planar[c * rgb.pixels() + i] = rgb.data()[3 * i + c];
   test::write_file(dir + "/c.pclzf", pclzf("rgb24", 20, 12, planar));
-  EXPECT_EQ(cv::norm(read_color_image_file(dir + "/c.pclzf"), rgb, cv::NORM_INF), 0.0);
+  EXPECT_EQ(test::max_abs_difference(read_color_image_file(dir + "/c.pclzf"), rgb), 0.0);
   EXPECT_THROW(read_depth_image_file(dir + "/c.pclzf"), Error) << "rgb24 is not depth";
   // Hostile headers: sizes that do not match, a type it does not know, a giant image.
   const std::string good = pclzf("depth16", 20, 12, raw);
@@ -160,13 +162,12 @@ TEST(ImageIo, SharedGrabberPclzfEqualsItsTiff) {
   const std::string base = "kinect_pcl/grabber_sequences/";
   if (!test::has_data(base + "pclzf")) GTEST_SKIP() << "shared data not found (MESHFLOW_DATA)";
   const std::string frame = "frame_20121214T142256.068683";
-  const cv::Mat a =
-      read_depth_image_file(test::data_path(base + "pclzf/" + frame + "_depth.pclzf"));
-  const cv::Mat b = read_depth_image_file(test::data_path(base + "tiff/" + frame + "_depth.tiff"));
-  EXPECT_EQ(cv::norm(a, b, cv::NORM_INF), 0.0);
-  const cv::Mat c = read_color_image_file(test::data_path(base + "pclzf/" + frame + "_rgb.pclzf"));
-  const cv::Mat d = read_color_image_file(test::data_path(base + "tiff/" + frame + "_rgb.tiff"));
-  EXPECT_EQ(cv::norm(c, d, cv::NORM_INF), 0.0);
+  const Image a = read_depth_image_file(test::data_path(base + "pclzf/" + frame + "_depth.pclzf"));
+  const Image b = read_depth_image_file(test::data_path(base + "tiff/" + frame + "_depth.tiff"));
+  EXPECT_EQ(test::max_abs_difference(a, b), 0.0);
+  const Image c = read_color_image_file(test::data_path(base + "pclzf/" + frame + "_rgb.pclzf"));
+  const Image d = read_color_image_file(test::data_path(base + "tiff/" + frame + "_rgb.tiff"));
+  EXPECT_EQ(test::max_abs_difference(c, d), 0.0);
 }
 
 TEST(ImageIo, BrokenFilesAreOneClearErrorNamingTheFile) {

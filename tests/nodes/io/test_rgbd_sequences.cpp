@@ -13,7 +13,7 @@ namespace meshflow::io {
 namespace {
 
 void write_depth_png(const std::string& path, std::uint16_t value, int w = 8, int h = 6) {
-  write_png(path, cv::Mat(h, w, CV_16U, cv::Scalar(value)));
+  write_png(path, Image::filled<std::uint16_t>(h, w, value));
 }
 
 const char* kCameraJson =
@@ -196,8 +196,8 @@ TEST(RgbdSequences, DepthImageDirectoryWithoutPoses) {
   const std::string dir = test::temp_dir();
   write_depth_png(dir + "/a_depth.png", 1200);
   write_depth_png(dir + "/b_depth.png", 1300);
-  write_png(dir + "/a_rgb.png", cv::Mat(6, 8, CV_8UC3, cv::Scalar(255, 0, 0)));  // RGB red
-  write_png(dir + "/b_rgb.png", cv::Mat(6, 8, CV_8UC3, cv::Scalar(0, 0, 255)));  // RGB blue
+  write_png(dir + "/a_rgb.png", Image::filled<Rgb8>(6, 8, Rgb8{255, 0, 0}));  // RGB red
+  write_png(dir + "/b_rgb.png", Image::filled<Rgb8>(6, 8, Rgb8{0, 0, 255}));  // RGB blue
   test::write_file(dir + "/camera.json", kCameraJson);
   const auto seq = open_sequence(dir);
   ASSERT_EQ(seq->size(), 2u);
@@ -205,7 +205,7 @@ TEST(RgbdSequences, DepthImageDirectoryWithoutPoses) {
   const DepthFrame f = seq->frame(1).load_depth();
   EXPECT_EQ(f.depth.at<std::uint16_t>(2, 2), 1300);
   EXPECT_TRUE(f.T_world_camera.matrix().isIdentity());
-  EXPECT_EQ(f.color.at<cv::Vec3b>(0, 0), cv::Vec3b(0, 0, 255)) << "colour is stored RGB";
+  EXPECT_EQ(f.color.at<Rgb8>(0, 0), (Rgb8{0, 0, 255})) << "colour is stored RGB";
 }
 
 TEST(RgbdSequences, RealKinectGrabberFrames) {
@@ -213,8 +213,8 @@ TEST(RgbdSequences, RealKinectGrabberFrames) {
   const auto tiff = open_sequence(test::data_path("kinect_pcl/grabber_sequences/tiff"));
   ASSERT_EQ(tiff->size(), 3u);
   const DepthFrame f = tiff->frame(0).load_depth();
-  EXPECT_EQ(f.depth.cols, 640);
-  const int invalid = static_cast<int>(f.depth.total()) - cv::countNonZero(f.depth);
+  EXPECT_EQ(f.depth.cols(), 640);
+  const int invalid = static_cast<int>(f.depth.pixels() - count_nonzero(f.depth));
   EXPECT_GT(invalid, 35000);  // 35.6k-35.9k pixels without depth
   EXPECT_LT(invalid, 36500);
   const auto pcd = open_sequence(test::data_path("kinect_pcl/grabber_sequences/pcd"));
@@ -230,14 +230,15 @@ TEST(RgbdSequences, RealRedwoodFrames) {
   const auto seq = open_sequence(test::data_path("rgbd_redwood"));
   ASSERT_EQ(seq->size(), 5u);
   const DepthFrame f = seq->frame(0).load_depth();
-  EXPECT_EQ(f.depth.cols, 640);
+  EXPECT_EQ(f.depth.cols(), 640);
   EXPECT_EQ(f.intrinsics.fx, 525.0f);
   EXPECT_EQ(f.intrinsics.cx, 319.5f);
   EXPECT_TRUE(
       f.T_world_camera.translation().isApprox(Eigen::Vector3f(-0.311f, 0.573f, 2.126f), 2e-3f))
       << f.T_world_camera.translation().transpose();
-  EXPECT_EQ(f.color.type(), CV_8UC3);
-  const double valid = cv::countNonZero(f.depth) / static_cast<double>(f.depth.total());
+  EXPECT_EQ(f.color.format(), PixelFormat::RGB8);
+  const double valid =
+      static_cast<double>(count_nonzero(f.depth)) / static_cast<double>(f.depth.pixels());
   EXPECT_GT(valid, 0.8);  // 12-13 % of pixels have no depth
 }
 

@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include <random>
+
 #include "nodes/synthetic/depth_sequence.h"
 
 namespace meshflow {
@@ -10,7 +12,7 @@ namespace {
 TEST(OrganizedNormals, FrontoParallelPlaneInTheWorldFrame) {
   DepthFrame f;
   f.intrinsics = PinholeIntrinsics{40, 30, 50.0f, 50.0f, 19.5f, 14.5f};
-  f.depth = cv::Mat(30, 40, CV_32F, cv::Scalar(2.0f));
+  f.depth = Image::filled<float>(30, 40, 2.0f);
   f.depth.at<float>(3, 3) = 0.0f;
   f.T_world_camera = synthetic::look_at({1, 2, 3}, {1, 2, 0});  // looking straight down
   const PointCloud c = back_project(f, f.depth);
@@ -35,11 +37,18 @@ TEST(OrganizedNormals, ValidOnlyBackProjectionKeepsTheFinitePixelsInOrder) {
   PinholeIntrinsics k{64, 48, 52.5f, 52.5f, 31.5f, 23.5f};
   DepthFrame f = synthetic::render_depth(
       scene, k, synthetic::look_at(eye, eye + Eigen::Vector3f(1, 0.3f, -0.35f)), 0.0f);
-  cv::Mat depth = depth_in_metres(f);
+  Image depth = depth_in_metres(f);
   depth.at<float>(10, 10) = 0.0f;  // holes: isolated pixels lose their normals too
   depth.at<float>(11, 12) = 0.0f;
-  f.color = cv::Mat(48, 64, CV_8UC3);
-  cv::randu(f.color, cv::Scalar::all(0), cv::Scalar::all(255));
+  f.color = Image(48, 64, PixelFormat::RGB8);
+  std::mt19937 rng(3);
+  for (int v = 0; v < f.color.rows(); ++v)
+    for (int u = 0; u < f.color.cols(); ++u) {
+      const std::uint32_t bits = rng();
+      f.color.at<Rgb8>(v, u) =
+          Rgb8{static_cast<std::uint8_t>(bits), static_cast<std::uint8_t>(bits >> 8),
+               static_cast<std::uint8_t>(bits >> 16)};
+    }
   const PointCloud organized = back_project(f, depth);
   const PointCloud valid = back_project_valid(f, depth);
   EXPECT_FALSE(valid.is_organized());

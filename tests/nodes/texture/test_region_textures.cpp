@@ -34,10 +34,11 @@ struct ColouredSheet {
   }
 };
 
-cv::Vec3b texel(const cv::Mat& image, float u, float v) {
-  const int column = std::min(image.cols - 1, static_cast<int>(u * static_cast<float>(image.cols)));
-  const int row = std::min(image.rows - 1, static_cast<int>((1.0f - v) * image.rows));
-  return image.at<cv::Vec3b>(row, column);
+Rgb8 texel(const Image& image, float u, float v) {
+  const int column =
+      std::min(image.cols() - 1, static_cast<int>(u * static_cast<float>(image.cols())));
+  const int row = std::min(image.rows() - 1, static_cast<int>((1.0f - v) * image.rows()));
+  return image.at<Rgb8>(row, column);
 }
 
 TEST(RegionTextures, TexelsTakeTheColourOfThePointsUnderThem) {
@@ -46,9 +47,9 @@ TEST(RegionTextures, TexelsTakeTheColourOfThePointsUnderThem) {
   ASSERT_EQ(s.regions.size(), 1u);
   const TexturedMesh t = texture_planar_regions(sheet.mesh, s, sheet.points);
   ASSERT_EQ(t.textures.size(), 1u);
-  const cv::Mat& image = t.textures[0].image;
-  EXPECT_EQ(image.cols, 100);  // 1 m at 1 cm per texel
-  EXPECT_EQ(image.rows, 100);
+  const Image& image = t.textures[0].image;
+  EXPECT_EQ(image.cols(), 100);  // 1 m at 1 cm per texel
+  EXPECT_EQ(image.rows(), 100);
   for (std::int32_t id : t.texture_of_face) EXPECT_EQ(id, 0);
   // Texture coordinates follow the plane: find u for x and v for y from two vertices.
   const auto& uv = t.uv;
@@ -65,9 +66,9 @@ TEST(RegionTextures, TexelsTakeTheColourOfThePointsUnderThem) {
     const Eigen::Vector2f q = origin + x * (x_end - origin) + y * (y_end - origin);
     return texel(image, q.x(), q.y());
   };
-  EXPECT_EQ(at(0.25f, 0.5f), cv::Vec3b(kRed.r, kRed.g, kRed.b));  // RGB
-  EXPECT_EQ(at(0.7f, 0.3f), cv::Vec3b(kBlue.r, kBlue.g, kBlue.b));
-  EXPECT_EQ(at(0.97f, 0.5f), cv::Vec3b(128, 128, 128));  // 12 cm from the nearest point
+  EXPECT_EQ(at(0.25f, 0.5f), (Rgb8{kRed.r, kRed.g, kRed.b}));  // RGB
+  EXPECT_EQ(at(0.7f, 0.3f), (Rgb8{kBlue.r, kBlue.g, kBlue.b}));
+  EXPECT_EQ(at(0.97f, 0.5f), (Rgb8{128, 128, 128}));  // 12 cm from the nearest point
   // Vertex colours for the untextured fall-back.
   EXPECT_EQ(t.mesh.colors[0], kRed);
   EXPECT_EQ(t.mesh.colors[14], kBlue);  // x = 0.7
@@ -106,9 +107,9 @@ TEST(RegionTextures, ObjMtlAndPngReferToEachOther) {
   }
   EXPECT_EQ(faces, sheet.mesh.triangles.size());
   EXPECT_EQ(vt, 3 * faces);
-  const cv::Mat png = io::read_color_image_file(dir + "/sheet_region0.png");
+  const Image png = io::read_color_image_file(dir + "/sheet_region0.png");
   ASSERT_FALSE(png.empty());
-  EXPECT_EQ(cv::norm(png, t.textures[0].image, cv::NORM_INF), 0.0);  // lossless
+  EXPECT_EQ(test::max_abs_difference(png, t.textures[0].image), 0.0);  // lossless
 }
 
 }  // namespace

@@ -20,13 +20,13 @@ constexpr float kQuantisationPerDepth2 = 1.0f / (8.0f * kNoiseFocal * kBaseline)
 
 enum class Noise { kNone, kQuantised, kGaussianPerDepth2 };
 
-// A 640 x 480 CV_32F frame of the plane through (0, 0, 2) m with normal (0.3, 0.1, -1) in the
+// A 640 x 480 F32 frame of the plane through (0, 0, 2) m with normal (0.3, 0.1, -1) in the
 // camera frame (a wall seen at an angle, 1.6-2.6 m away), with the given noise: kQuantised as a
 // structured-light sensor, Gaussian disparity noise of 1/8 pixel, then rounded to 1/8 pixel.
 DepthFrame plane_frame(Noise noise, float sigma_per_depth2 = 0.0f) {
   DepthFrame frame;
   const PinholeIntrinsics& k = frame.intrinsics;
-  frame.depth = cv::Mat(k.height, k.width, CV_32F);
+  frame.depth = Image(k.height, k.width, PixelFormat::F32);
   const Eigen::Vector3f normal(0.3f, 0.1f, -1.0f);
   const float offset = normal.dot(Eigen::Vector3f(0, 0, 2));
   std::mt19937 random(7);
@@ -92,8 +92,9 @@ TEST(DepthNoise, SameEstimateWithOneAndTwoThreads) {
 
 TEST(DepthNoise, TooFewPixelsGiveNoEstimate) {
   DepthFrame frame = plane_frame(Noise::kGaussianPerDepth2, 0.002f);
-  frame.depth.setTo(0.0f);
-  frame.depth.row(100).setTo(2.0f);  // one row of 640 pixels: 160 samples (every 2nd, row 100)
+  frame.depth.fill(0.0f);
+  // One row of 640 pixels: 160 samples (every 2nd, row 100).
+  for (int u = 0; u < frame.depth.cols(); ++u) frame.depth.at<float>(100, u) = 2.0f;
   EXPECT_EQ(estimate_noise_per_depth2(grid_from_depth(frame, {})), 0.0f);
 }
 

@@ -91,7 +91,7 @@ TEST(DepthTriangulation, SharedVerticesOnlyUsedPixelsAndSameResultWithOneAndTwoT
   // A flat wall seen head-on: exactly two triangles per quad, all kept.
   DepthFrame wall;
   wall.intrinsics = PinholeIntrinsics{8, 6, 10.0f, 10.0f, 3.5f, 2.5f};
-  wall.depth = cv::Mat(6, 8, CV_16U, cv::Scalar(2000));
+  wall.depth = Image::filled<std::uint16_t>(6, 8, 2000);
   const TriangleMesh flat = triangulate_depth(wall);
   EXPECT_EQ(flat.vertices.size(), 48u);
   EXPECT_EQ(flat.triangles.size(), 2u * 7u * 5u);
@@ -101,7 +101,7 @@ TEST(DepthTriangulation, SharedVerticesOnlyUsedPixelsAndSameResultWithOneAndTwoT
 TEST(DepthTriangulation, BadInputGivesAClearError) {
   EXPECT_THROW(triangulate_depth(DepthFrame{}), Error);
   DepthFrame wrong;
-  wrong.depth = cv::Mat(10, 10, CV_16U, cv::Scalar(1000));  // intrinsics say 640 x 480
+  wrong.depth = Image::filled<std::uint16_t>(10, 10, 1000);  // intrinsics say 640 x 480
   try {
     triangulate_depth(wrong);
     FAIL() << "expected an error";
@@ -270,7 +270,7 @@ TEST(RestrictedQuadtree, FlatWallIsFewTrianglesAndTheBorderRefines) {
   // refine down to pixel quads, the rest stays coarse.
   DepthFrame wall;
   wall.intrinsics = PinholeIntrinsics{33, 17, 20.0f, 20.0f, 16.0f, 8.0f};
-  wall.depth = cv::Mat(17, 33, CV_16U, cv::Scalar(2000));
+  wall.depth = Image::filled<std::uint16_t>(17, 33, 2000);
   const PointGrid grid = grid_from_depth(wall, DepthFilterConfig{});
   const std::vector<Triangle> t = triangulate_grid(grid, quadtree_config());
   EXPECT_EQ(t_junctions(grid, t), 0u);

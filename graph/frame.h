@@ -56,7 +56,17 @@ struct ReconstructionConfig {
   /// The retriangulate step's Douglas-Peucker tolerance in voxels (0.4: 2 cm at 5 cm voxels);
   /// 0 = use optimize.retriangulation.contour_tolerance (metres) as it is.
   float contour_tolerance_voxels = 0.4f;
+  /// The voxelize stage fails the frame when its points, grid and the distance field to come
+  /// would hold more than this many bytes (0 = no limit): a voxel far too small for the input
+  /// gives an error naming the input and the limit before the distance and extract stages
+  /// allocate, not an out-of-memory kill. See frame_memory_estimate().
+  std::size_t max_memory_bytes = 0;
 };
+
+/// Bytes a cloud frame holds once its grid and distance field exist: the points with their
+/// normals, colours and intensities, the grid's cell and corner keys, the cells' corner indices
+/// and one distance and validity flag per corner. O(1).
+std::size_t frame_memory_estimate(const PointCloud& cloud, const SparseGrid& grid);
 
 /// c.optimize with the settings that depend on the frame's voxel size (metres) filled in.
 OptimizeConfig optimize_config_for_voxel(const ReconstructionConfig& c, float voxel_size);

@@ -24,6 +24,15 @@ OptimizeConfig optimize_config_for_voxel(const ReconstructionConfig& c, float vo
   return oc;
 }
 
+std::size_t frame_memory_estimate(const PointCloud& cloud, const SparseGrid& grid) {
+  const std::size_t per_point = sizeof(Eigen::Vector3f) * (1 + (cloud.has_normals() ? 1 : 0)) +
+                                (cloud.colors.empty() ? 0 : sizeof(Rgb8)) +
+                                (cloud.intensities.empty() ? 0 : sizeof(float));
+  const std::size_t per_cell = sizeof(VoxelKey) + sizeof(std::array<std::uint32_t, 8>);
+  const std::size_t per_corner = sizeof(VoxelKey) + sizeof(float) + sizeof(std::uint8_t);
+  return cloud.size() * per_point + grid.cells.size() * per_cell + grid.corners.size() * per_corner;
+}
+
 }  // namespace meshflow
 
 namespace meshflow::stages {
@@ -133,6 +142,17 @@ std::uint64_t voxelize(Frame& f, const ReconstructionConfig& c) {
   }
   f.voxel_size = vc.voxel_size;
   f.grid = meshflow::voxelize(f.cloud, vc);
+  const std::size_t bytes = frame_memory_estimate(f.cloud, f.grid);
+  if (c.max_memory_bytes > 0 && bytes > c.max_memory_bytes) {
+    const auto mib = [](std::size_t b) { return std::to_string(b >> 20) + " MiB"; };
+    const std::string grid =
+        std::to_string(f.grid.cells.size()) + " cells of " + std::to_string(vc.voxel_size) + " m";
+    f.grid = SparseGrid{};
+    throw Error(f.name, "memory",
+                std::to_string(f.cloud.size()) + " points in " + grid + " need about " +
+                    mib(bytes) + " with their distances, past the limit of " +
+                    mib(c.max_memory_bytes) + " (--max-memory); use a larger --voxel");
+  }
   return f.grid.cells.size();
 }
 

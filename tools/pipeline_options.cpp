@@ -41,6 +41,8 @@ ReconstructionConfig PipelineOptions::config() const {
                      : normals == "estimate" ? NormalSource::kEstimate
                                              : NormalSource::kAuto;
   parse_orientation(orient, c.normals);
+  c.max_memory_bytes =
+      max_memory.empty() ? default_memory_limit() : parse_byte_size(max_memory, "--max-memory");
   return c;
 }
 
@@ -86,6 +88,10 @@ void add_pipeline_options(CLI::App* cmd, PipelineOptions& o) {
       ->check(CLI::Range(1, 64));
   cmd->add_option("--threads", o.threads, "Worker threads (default: all cores)")
       ->check(CLI::Range(0, 1024));
+  cmd->add_option("--max-memory", o.max_memory,
+                  "Refuse a frame whose points, grid and distances (or a fused map) would take "
+                  "more memory: 512M, 4G, ...; 0 = no limit (default: 80 % of physical memory)")
+      ->check(byte_size());
   cmd->add_flag("--adaptive-k", o.adaptive_k, "Grow kn where neighbourhoods are degenerate");
   cmd->add_option("--max-distance", o.max_distance,
                   "Distance samples farther than this many voxels from the data are invalid")

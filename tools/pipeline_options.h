@@ -36,6 +36,7 @@ struct PipelineOptions {
   bool organized_as_depth = false;
   std::string normals = "auto";  ///< auto | input | estimate
   std::string orient = "auto";   ///< auto | sensor | propagate | input | viewpoint=X,Y,Z | ...
+  std::string max_memory;        ///< --max-memory as given; empty: default_memory_limit()
 
   /// The stages' configuration; throws CLI::ValidationError for a malformed --orient.
   ReconstructionConfig config() const;

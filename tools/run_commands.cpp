@@ -108,6 +108,7 @@ void run_fusion(const RunOptions& o) {
   config.frames = o.pipeline.config();
   config.tsdf.voxel_size = o.pipeline.voxel > 0.0f ? o.pipeline.voxel : 0.01f;
   config.tsdf.truncation_voxels = o.truncation_voxels;
+  config.tsdf.max_memory_bytes = config.frames.max_memory_bytes;
   config.mesh_every = o.mesh_every;
   const auto pipeline = o.load_map.empty()
                             ? std::make_unique<FusionPipeline>(config, o.sequence.in_flight)

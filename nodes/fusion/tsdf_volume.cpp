@@ -204,10 +204,7 @@ TsdfVolume::TsdfVolume(const TsdfConfig& config) : config_(config) {
     throw Error("tsdf", "max_weight", "must be a positive finite number");
 }
 
-std::size_t TsdfVolume::memory_bytes() const {
-  return blocks_.size() * sizeof(TsdfBlock) +
-         index_.size() * (sizeof(VoxelKey) + sizeof(std::uint32_t) + 2 * sizeof(void*));
-}
+std::size_t TsdfVolume::memory_bytes() const { return blocks_.size() * kBytesPerBlock; }
 
 const TsdfBlock* TsdfVolume::find(const Eigen::Vector3i& block_coords) const {
   if (!tsdf_block_in_range(block_coords)) return nullptr;
@@ -266,6 +263,19 @@ IntegrationStats TsdfVolume::integrate(const DepthFrame& frame) {
 
 std::vector<std::uint32_t> TsdfVolume::find_or_allocate(const std::vector<VoxelKey>& keys,
                                                         std::size_t& allocated) {
+  if (config_.max_memory_bytes > 0) {
+    std::size_t new_blocks = 0;
+    for (const VoxelKey key : keys) new_blocks += index_.count(key) == 0 ? 1 : 0;
+    const std::size_t after = memory_bytes() + new_blocks * kBytesPerBlock;
+    if (after > config_.max_memory_bytes) {
+      const auto mib = [](std::size_t bytes) { return std::to_string(bytes >> 20) + " MiB"; };
+      throw Error("tsdf map", "memory",
+                  "this frame's " + std::to_string(new_blocks) +
+                      " new blocks would grow the map to " + mib(after) + ", past the limit of " +
+                      mib(config_.max_memory_bytes) + " (--max-memory); the map keeps its " +
+                      std::to_string(blocks_.size()) + " blocks");
+    }
+  }
   // Serial and in key order: deterministic block numbering.
   std::vector<std::uint32_t> blocks(keys.size());
   for (std::size_t i = 0; i < keys.size(); ++i) {

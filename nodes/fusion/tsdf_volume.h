@@ -41,6 +41,9 @@ struct TsdfConfig {
   TsdfWeighting weighting = TsdfWeighting::kConstant;
   float max_weight = 256.0f;  ///< accumulated weight is capped here (a slowly moving average)
   bool fuse_color = true;     ///< average the frame's colour into the voxels when it has one
+  /// integrate() refuses a frame whose new blocks would take memory_bytes() past this (bytes;
+  /// 0 = no limit): the map stays as it was and the frame's error names the limit.
+  std::size_t max_memory_bytes = 0;
 
   float truncation() const { return truncation_voxels * voxel_size; }
 };
@@ -77,16 +80,23 @@ class TsdfVolume {
 
   /// Fuses one depth frame (any depth format of DepthFrame; pixels <= 0 or NaN are ignored)
   /// seen from frame.T_world_camera: allocates the blocks its truncation band touches (serial,
-  /// in key order), then updates those blocks in parallel, one task per block. Voxels behind the
+  /// in key order), then updates those blocks in parallel, one task per block. Throws
+  /// meshflow::Error, leaving the map unchanged, when the new blocks would take it past
+  /// config().max_memory_bytes. Voxels behind the
   /// measured depth by more than the truncation are left alone. The result does not depend on
   /// the number of threads. Not thread-safe against other calls on the same volume.
   /// O(pixels + touched blocks x 512).
   IntegrationStats integrate(const DepthFrame& frame);
 
   const TsdfConfig& config() const { return config_; }
+  /// Sets config().max_memory_bytes (e.g. for a map read from a file). O(1).
+  void set_max_memory_bytes(std::size_t bytes) { config_.max_memory_bytes = bytes; }
   std::size_t block_count() const { return blocks_.size(); }
   /// Bytes held by the blocks and their index.
   std::size_t memory_bytes() const;
+  /// Bytes one more block adds to memory_bytes().
+  static constexpr std::size_t kBytesPerBlock =
+      sizeof(TsdfBlock) + sizeof(VoxelKey) + sizeof(std::uint32_t) + 2 * sizeof(void*);
   /// Incremented by every integrate(); blocks record it when they change.
   std::uint64_t generation() const { return generation_; }
 

@@ -180,6 +180,27 @@ std::string scan_directory_with_a_bad_frame() {
   return dir;
 }
 
+// --max-memory: a voxel far too small for the input is an error naming the input and the
+// limit, not an out-of-memory kill; sizes take K/M/G suffixes; malformed sizes are usage errors.
+TEST(Cli, MaxMemoryRefusesAGridThatWouldNotFit) {
+  const std::string dir = test::temp_dir();
+  CliRun r = run_cli("sample torus -o " + dir + "/torus.ply -q");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  r = run_cli("reconstruct " + dir + "/torus.ply -o " + dir + "/mesh.ply --voxel 0.002 " +
+              "--max-memory 4M");
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.err.find(dir + "/torus.ply: memory:"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("past the limit of 4 MiB (--max-memory)"), std::string::npos) << r.err;
+  EXPECT_FALSE(std::filesystem::exists(dir + "/mesh.ply"));
+  r = run_cli("reconstruct " + dir + "/torus.ply -o " + dir + "/mesh.ply --max-memory 1G -q");
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  for (const char* bad : {"4X", "-1M", "nan", "G"}) {
+    r = run_cli("reconstruct " + dir + "/torus.ply -o " + dir + "/x.ply --max-memory " + bad);
+    EXPECT_EQ(r.exit_code, 2) << bad;
+    EXPECT_NE(r.err.find("expected a size such as 512M"), std::string::npos) << r.err;
+  }
+}
+
 TEST(Cli, RunReportsABadFrameAndContinuesStrictStops) {
   const std::string seq = scan_directory_with_a_bad_frame();
   const std::string out = test::temp_dir();

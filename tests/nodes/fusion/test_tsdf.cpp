@@ -147,6 +147,30 @@ TEST(Tsdf, SameMapWithOneAndTwoThreads) {
   EXPECT_EQ(m1.triangles, m2.triangles);
 }
 
+// A frame whose new blocks would pass the memory limit is refused whole: the map keeps what it
+// had (same blocks, same voxels) and the error names the limit; frames that fit still fuse.
+TEST(Tsdf, AFramePastTheMemoryLimitIsRefusedAndTheMapIsUnchanged) {
+  const std::vector<DepthFrame> frames = room_frames(3);
+  const TsdfVolume reference = fuse(frames, 0, 1);
+  TsdfConfig config{kTsdfVoxel};
+  config.max_memory_bytes = reference.memory_bytes() + TsdfVolume::kBytesPerBlock;
+  TsdfVolume limited(config);
+  limited.integrate(frames[0]);  // fits
+  expect_same_volume(limited, reference);
+  try {
+    limited.integrate(frames[2]);  // 90 degrees on: many new blocks
+    FAIL() << "expected the memory limit to refuse the frame";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("past the limit of"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("--max-memory"), std::string::npos) << e.what();
+  }
+  expect_same_volume(limited, reference);
+  EXPECT_LE(limited.memory_bytes(), config.max_memory_bytes);
+  limited.set_max_memory_bytes(0);  // no limit
+  limited.integrate(frames[2]);
+  EXPECT_GT(limited.block_count(), reference.block_count());
+}
+
 TEST(Tsdf, IncrementalExtractionEqualsAFreshOne) {
   const std::vector<DepthFrame> frames = room_frames(8);
   TsdfVolume volume(TsdfConfig{kTsdfVoxel});

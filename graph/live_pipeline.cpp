@@ -65,6 +65,7 @@ struct LivePipeline::Impl {
         arena(arena_threads(config), 0) {
     config.frames_in_flight = std::max<std::size_t>(1, config.frames_in_flight);
     config.max_waiting = std::max<std::size_t>(1, config.max_waiting);
+    latencies.reserve(kLatencyWindow);  // no allocation per frame once running
     arena.execute([&] {
       graph = std::make_unique<flow::graph>();
       build_graph();

@@ -32,7 +32,9 @@ SequenceRunStats run_sequence(FramePipeline& pipeline, const io::Sequence& seque
       },
       [&](const FramePtr& f) {
         if (stats.stopped_early) return;  // strict: drop what was in flight behind the failure
-        stats.records.insert(stats.records.end(), f->timings.begin(), f->timings.end());
+        for (const StageRecord& r : f->timings) stats.stages.add(r);
+        if (options.keep_records)
+          stats.records.insert(stats.records.end(), f->timings.begin(), f->timings.end());
         if (f->ok()) {
           ++stats.frames_ok;
         } else {

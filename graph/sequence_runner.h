@@ -16,6 +16,9 @@ struct SequenceRunOptions {
   std::size_t every = 1;       ///< take every N-th frame of the sequence
   std::size_t max_frames = 0;  ///< stop after this many frames (0 = all)
   bool strict = false;         ///< stop feeding frames after the first failed one
+  /// Keep every stage record of every frame in SequenceRunStats::records (for a Chrome trace);
+  /// memory then grows with the frames. Off: only the bounded SequenceRunStats::stages.
+  bool keep_records = false;
 };
 
 struct SequenceRunStats {
@@ -23,7 +26,8 @@ struct SequenceRunStats {
   std::size_t frames_failed = 0;
   bool stopped_early = false;        ///< strict mode hit a failed frame
   double wall_s = 0.0;               ///< from the first frame requested to the last delivered
-  std::vector<StageRecord> records;  ///< every stage of every frame, in delivery order
+  StageStatistics stages;            ///< per-stage timings of every frame (bounded memory)
+  std::vector<StageRecord> records;  ///< with keep_records: every stage of every frame, in order
   double frames_per_second() const {
     return wall_s > 0.0 ? static_cast<double>(frames_ok + frames_failed) / wall_s : 0.0;
   }

@@ -30,19 +30,19 @@ template <class T>
 struct PixelFormatOf;
 template <>
 struct PixelFormatOf<std::uint8_t> {
-  static constexpr PixelFormat value = PixelFormat::U8;
+  static constexpr PixelFormat kFormat = PixelFormat::U8;
 };
 template <>
 struct PixelFormatOf<std::uint16_t> {
-  static constexpr PixelFormat value = PixelFormat::U16;
+  static constexpr PixelFormat kFormat = PixelFormat::U16;
 };
 template <>
 struct PixelFormatOf<float> {
-  static constexpr PixelFormat value = PixelFormat::F32;
+  static constexpr PixelFormat kFormat = PixelFormat::F32;
 };
 template <>
 struct PixelFormatOf<Rgb8> {
-  static constexpr PixelFormat value = PixelFormat::RGB8;
+  static constexpr PixelFormat kFormat = PixelFormat::RGB8;
 };
 
 /// A rows x cols image. Copies share the pixels (like a shared_ptr: cheap to pass through the
@@ -63,7 +63,7 @@ class Image {
   /// Image::filled<std::uint16_t>(480, 640, 1000) for a flat wall 1 m away. O(rows cols).
   template <class T>
   static Image filled(int rows, int cols, const T& value) {
-    Image image(rows, cols, PixelFormatOf<T>::value);
+    Image image(rows, cols, PixelFormatOf<T>::kFormat);
     image.fill(value);
     return image;
   }
@@ -125,7 +125,7 @@ class Image {
   template <class T>
   void check_access(int row) const {
     static_assert(sizeof(T) == sizeof(typename std::remove_cv<T>::type), "plain pixel type");
-    assert(PixelFormatOf<typename std::remove_cv<T>::type>::value == format_ &&
+    assert(PixelFormatOf<typename std::remove_cv<T>::type>::kFormat == format_ &&
            "pixel type does not match the image's format");
     assert(row >= 0 && row < rows_);
     (void)row;

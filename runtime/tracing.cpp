@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <atomic>
+#include <cmath>
 #include <cstdio>
 
 namespace meshflow {
@@ -42,6 +43,68 @@ std::vector<StageSummary> summarize_stages(const std::vector<StageRecord>& recor
     s.p95_s =
         d[std::min(d.size() - 1, static_cast<std::size_t>(0.95 * static_cast<double>(d.size())))];
     s.max_s = d.back();
+  }
+  return out;
+}
+
+namespace {
+
+// Duration bins of StageStatistics: bin b holds durations in [kFirstBin * kBinRatio^(b-1),
+// kFirstBin * kBinRatio^b); bin 0 everything shorter, the last everything longer.
+constexpr double kFirstBin = 1e-6, kBinRatio = 1.01;
+constexpr std::size_t kBins = 2000;  // the last starts at 1.01^1998 x 1 us = 7.2 min
+
+std::size_t bin_of(double seconds) {
+  if (!(seconds > kFirstBin)) return 0;
+  const double b = std::ceil(std::log(seconds / kFirstBin) / std::log(kBinRatio));
+  return std::min(kBins - 1, static_cast<std::size_t>(b));
+}
+
+// The geometric middle of bin b's range (its upper edge for bin 0).
+double bin_value(std::size_t b) {
+  if (b == 0) return kFirstBin;
+  return kFirstBin * std::pow(kBinRatio, static_cast<double>(b) - 0.5);
+}
+
+// The duration below which `share` of the histogram's calls lie, clamped to [min, max].
+double histogram_quantile(const std::vector<std::uint32_t>& histogram, std::size_t calls,
+                          double share, double max_s) {
+  const auto rank =
+      std::min(calls - 1, static_cast<std::size_t>(share * static_cast<double>(calls)));
+  std::size_t seen = 0;
+  for (std::size_t b = 0; b < histogram.size(); ++b) {
+    seen += histogram[b];
+    if (seen > rank) return std::min(bin_value(b), max_s);
+  }
+  return max_s;
+}
+
+}  // namespace
+
+void StageStatistics::add(const StageRecord& record) {
+  auto it = std::find_if(stages_.begin(), stages_.end(),
+                         [&](const Stage& s) { return s.summary.stage == record.stage; });
+  if (it == stages_.end()) {
+    stages_.push_back(Stage{StageSummary{record.stage}, std::vector<std::uint32_t>(kBins, 0)});
+    it = stages_.end() - 1;
+  }
+  const double d = record.duration_s();
+  StageSummary& s = it->summary;
+  ++s.calls;
+  s.total_s += d;
+  s.max_s = s.calls == 1 ? d : std::max(s.max_s, d);
+  s.items += record.items;
+  ++it->histogram[bin_of(d)];
+}
+
+std::vector<StageSummary> StageStatistics::summaries() const {
+  std::vector<StageSummary> out;
+  for (const Stage& stage : stages_) {
+    StageSummary s = stage.summary;
+    s.mean_s = s.total_s / static_cast<double>(s.calls);
+    s.p50_s = histogram_quantile(stage.histogram, s.calls, 0.5, s.max_s);
+    s.p95_s = histogram_quantile(stage.histogram, s.calls, 0.95, s.max_s);
+    out.push_back(s);
   }
   return out;
 }

@@ -112,7 +112,7 @@ nlohmann::json run_json(const std::string& sequence, const SequenceRunStats& sta
           {"frames_per_second", stats.frames_per_second()},
           {"threads", threads},
           {"in_flight", in_flight},
-          {"stages", stages_json(summarize_stages(stats.records))}};
+          {"stages", stages_json(stats.stages.summaries())}};
 }
 
 }  // namespace meshflow::cli

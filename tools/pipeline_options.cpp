@@ -214,6 +214,20 @@ void add_sequence_options(CLI::App* cmd, SequenceArgument& a) {
   cmd->add_flag("--synthetic-depth", a.synthetic_depth,
                 "Use the built-in synthetic depth-camera sequence (640x480)")
       ->excludes(scans);
+  cmd->add_option("--synthetic-frames", a.synthetic_frames,
+                  "Frames of the built-in sequence (a full turn of the camera or scanner)")
+      ->check(CLI::Range(1, 1000000));
+  cmd->add_option("--synthetic-size", a.synthetic_size,
+                  "Image size of the built-in depth camera, WxH (default 640x480; the focal "
+                  "length scales with the width)")
+      ->check([](const std::string& text) -> std::string {
+        int w = 0, h = 0;
+        char end = 0;
+        return std::sscanf(text.c_str(), "%dx%d%c", &w, &h, &end) == 2 && w >= 16 && h >= 16 &&
+                       w <= 8192 && h <= 8192
+                   ? ""
+                   : "expected WxH between 16x16 and 8192x8192, got '" + text + "'";
+      });
   cmd->add_option("--in-flight", a.in_flight, "Frames in the pipeline at once")
       ->check(CLI::Range(1, 64));
   cmd->add_option("--every", a.every, "Take every N-th frame")->check(CLI::Range(1, 1000000));
@@ -222,8 +236,23 @@ void add_sequence_options(CLI::App* cmd, SequenceArgument& a) {
 }
 
 std::unique_ptr<io::Sequence> open_sequence_argument(const SequenceArgument& a) {
-  if (a.synthetic) return synthetic::make_scan_sequence(synthetic::demo_room_scene());
-  if (a.synthetic_depth) return synthetic::make_depth_sequence(synthetic::demo_room_scene());
+  if (a.synthetic) {
+    synthetic::ScanSequenceConfig c;
+    c.frames = a.synthetic_frames;
+    return synthetic::make_scan_sequence(synthetic::demo_room_scene(), c);
+  }
+  if (a.synthetic_depth) {
+    synthetic::DepthSequenceConfig c;
+    c.frames = a.synthetic_frames;
+    if (!a.synthetic_size.empty()) {
+      std::sscanf(a.synthetic_size.c_str(), "%dx%d", &c.intrinsics.width, &c.intrinsics.height);
+      const float scale = static_cast<float>(c.intrinsics.width) / 640.0f;
+      c.intrinsics.fx = c.intrinsics.fy = 525.0f * scale;
+      c.intrinsics.cx = 0.5f * static_cast<float>(c.intrinsics.width) - 0.5f;
+      c.intrinsics.cy = 0.5f * static_cast<float>(c.intrinsics.height) - 0.5f;
+    }
+    return synthetic::make_depth_sequence(synthetic::demo_room_scene(), c);
+  }
   if (a.path.empty())
     throw CLI::ValidationError("sequence",
                                "give a SEQUENCE path, --synthetic or --synthetic-depth");

@@ -75,13 +75,15 @@ struct SequenceArgument {
   std::string path;
   bool synthetic = false;        ///< built-in laser-scan sequence
   bool synthetic_depth = false;  ///< built-in depth-camera sequence
+  int synthetic_frames = 8;      ///< frames of either built-in sequence
+  std::string synthetic_size;    ///< depth camera WxH; empty: 640x480
   std::size_t in_flight = 2;
   std::size_t every = 1;
   std::size_t max_frames = 0;
 };
 
-/// Registers SEQUENCE, --synthetic, --synthetic-depth, --in-flight, --every and --max-frames on
-/// `cmd`.
+/// Registers SEQUENCE, --synthetic, --synthetic-depth, --synthetic-frames, --synthetic-size,
+/// --in-flight, --every and --max-frames on `cmd`.
 void add_sequence_options(CLI::App* cmd, SequenceArgument& argument);
 
 /// Opens the sequence the user named; throws meshflow::Error (or CLI::ValidationError when

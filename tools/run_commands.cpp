@@ -65,7 +65,7 @@ void print_run_summary(const io::Sequence& seq, const SequenceRunStats& stats, i
       "frames     %zu ok, %zu failed%s; %.3f s wall, %.2f frames/s on %d thread%s, %zu in flight\n",
       stats.frames_ok, stats.frames_failed, stats.stopped_early ? " (stopped: --strict)" : "",
       stats.wall_s, stats.frames_per_second(), threads, threads == 1 ? "" : "s", in_flight);
-  report("%s", format_stage_table(summarize_stages(stats.records), stats.wall_s).c_str());
+  report("%s", format_stage_table(stats.stages.summaries(), stats.wall_s).c_str());
 }
 
 struct RunOptions {
@@ -91,6 +91,7 @@ std::unique_ptr<io::Sequence> open_output(const RunOptions& o) {
                 "cannot create output directory: " +
                     (ec ? ec.message() : std::string("a file of that name exists")));
   }
+  io::check_output_writable((std::filesystem::path(o.output_dir) / "meshflow_probe").string());
   return sequence;
 }
 
@@ -104,6 +105,7 @@ void finish_run(const SequenceRunStats& stats) {
 void run_fusion(const RunOptions& o) {
   ThreadLimit limit(o.pipeline.threads);
   const auto sequence = open_output(o);
+  if (!o.save_map.empty()) io::check_output_writable(o.save_map);
   FusionConfig config;
   config.frames = o.pipeline.config();
   config.tsdf.voxel_size = o.pipeline.voxel > 0.0f ? o.pipeline.voxel : 0.01f;
@@ -260,7 +262,8 @@ void run_profile(const ProfileOptions& o) {
   const auto sequence = open_sequence_argument(o.sequence);
   ReconstructionPipeline pipeline(pipeline_config(o.pipeline, o.triangulation),
                                   o.sequence.in_flight, o.triangulation.enabled());
-  const SequenceRunOptions run_options{o.sequence.every, o.sequence.max_frames, false};
+  const SequenceRunOptions run_options{o.sequence.every, o.sequence.max_frames, false,
+                                       !o.trace_path.empty()};
   const SequenceRunStats stats = run_sequence(pipeline, *sequence, run_options, [](const Frame& f) {
     if (!f.ok()) return report_failure(f);
     print_frame_line(f);
@@ -269,7 +272,7 @@ void run_profile(const ProfileOptions& o) {
   if (!o.trace_path.empty()) files["trace"] = o.trace_path;
   if (!o.csv_path.empty()) files["csv"] = o.csv_path;
   print_run_summary(*sequence, stats, limit.threads(), o.sequence.in_flight, files);
-  const auto summaries = summarize_stages(stats.records);
+  const auto summaries = stats.stages.summaries();
   if (!o.trace_path.empty()) {
     write_text(o.trace_path, chrome_trace_json(stats.records));
     report("trace      %s (open in https://ui.perfetto.dev or chrome://tracing)\n",

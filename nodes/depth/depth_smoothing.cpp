@@ -29,19 +29,19 @@ struct MedianNetwork {
 };
 
 constexpr MedianNetwork median_of_25_network() {
-  constexpr int n = 32, values = 25, median = 12;
+  constexpr int kWires = 32, kValues = 25, kMedian = 12;
   std::array<Comparator, 240> all{};
   int count = 0;
-  for (int p = 1; p < n; p <<= 1)
+  for (int p = 1; p < kWires; p <<= 1)
     for (int k = p; k >= 1; k >>= 1)
-      for (int j = k % p; j + k < n; j += 2 * k)
-        for (int i = 0; i < k && i + j + k < n; ++i)
+      for (int j = k % p; j + k < kWires; j += 2 * k)
+        for (int i = 0; i < k && i + j + k < kWires; ++i)
           if ((i + j) / (2 * p) == (i + j + k) / (2 * p))
             all[static_cast<std::size_t>(count++)] = {static_cast<std::uint8_t>(i + j),
                                                       static_cast<std::uint8_t>(i + j + k)};
   // Forward: drop comparators whose upper wire is known to hold +infinity.
-  std::array<bool, n> infinite{};
-  for (int w = values; w < n; ++w) infinite[static_cast<std::size_t>(w)] = true;
+  std::array<bool, kWires> infinite{};
+  for (int w = kValues; w < kWires; ++w) infinite[static_cast<std::size_t>(w)] = true;
   std::array<bool, 240> keep{};
   for (int c = 0; c < count; ++c) {
     const Comparator x = all[static_cast<std::size_t>(c)];
@@ -52,9 +52,9 @@ constexpr MedianNetwork median_of_25_network() {
       infinite[x.hi] = true;
     }
   }
-  // Backward: keep only what output `median` depends on.
-  std::array<bool, n> needed{};
-  needed[median] = true;
+  // Backward: keep only what output `kMedian` depends on.
+  std::array<bool, kWires> needed{};
+  needed[kMedian] = true;
   for (int c = count - 1; c >= 0; --c) {
     const Comparator x = all[static_cast<std::size_t>(c)];
     if (!keep[static_cast<std::size_t>(c)] || !(needed[x.lo] || needed[x.hi])) {

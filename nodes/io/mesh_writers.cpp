@@ -22,7 +22,7 @@ char* put(char* at, const T& v) {
 
 void write_ply(const std::string& path, const TriangleMesh& mesh, PlyEncoding encoding) {
   AtomicOutputFile file(path);
-  std::ofstream& out = file.stream();
+  std::ostream& out = file.stream();
   const bool normals = mesh.normals.size() == mesh.vertices.size() && !mesh.normals.empty();
   const bool colors = mesh.colors.size() == mesh.vertices.size() && !mesh.colors.empty();
   out << "ply\nformat " << (encoding == PlyEncoding::kBinary ? "binary_little_endian" : "ascii")
@@ -75,7 +75,7 @@ void write_ply(const std::string& path, const TriangleMesh& mesh, PlyEncoding en
 
 void write_obj(const std::string& path, const TriangleMesh& mesh) {
   AtomicOutputFile file(path);
-  std::ofstream& out = file.stream();
+  std::ostream& out = file.stream();
   const bool normals = mesh.normals.size() == mesh.vertices.size() && !mesh.normals.empty();
   const bool colors = mesh.colors.size() == mesh.vertices.size() && !mesh.colors.empty();
   out << "# written by meshflow\n";
@@ -130,7 +130,7 @@ void write_stl(const std::string& path, const TriangleMesh& mesh) {
 
 void write_off(const std::string& path, const TriangleMesh& mesh) {
   AtomicOutputFile file(path);
-  std::ofstream& out = file.stream();
+  std::ostream& out = file.stream();
   const bool colors = mesh.colors.size() == mesh.vertices.size() && !mesh.colors.empty();
   out << (colors ? "COFF" : "OFF") << "\n# written by meshflow\n"
       << mesh.vertices.size() << ' ' << mesh.triangles.size() << " 0\n";
@@ -156,9 +156,11 @@ constexpr const char* kMeshOutputFormats = "expected .ply .obj .stl .off or .glb
 
 void check_mesh_output_format(const std::string& path) {
   const std::string ext = lower_extension(path);
-  for (const char* known : {".ply", ".obj", ".stl", ".off", ".glb"})
-    if (ext == known) return;
-  throw Error(path, "", "unknown mesh format '" + ext + "' (" + kMeshOutputFormats + ")");
+  bool known_format = false;
+  for (const char* known : {".ply", ".obj", ".stl", ".off", ".glb"}) known_format |= ext == known;
+  if (!known_format)
+    throw Error(path, "", "unknown mesh format '" + ext + "' (" + kMeshOutputFormats + ")");
+  check_output_writable(path);
 }
 
 void write_mesh(const std::string& path, const TriangleMesh& mesh) {

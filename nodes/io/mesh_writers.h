@@ -33,8 +33,9 @@ void write_off(const std::string& path, const TriangleMesh& mesh);
 /// meshflow::Error naming the formats otherwise.
 void write_mesh(const std::string& path, const TriangleMesh& mesh);
 
-/// Throws meshflow::Error unless write_mesh() knows the extension of `path` (checked before a
-/// long reconstruction, so a typo does not cost it).
+/// Throws meshflow::Error unless write_mesh() knows the extension of `path` and the file can
+/// be created (check_output_writable(): not a directory, a writable directory; checked before a
+/// long reconstruction, so a typo or a read-only directory does not cost it).
 void check_mesh_output_format(const std::string& path);
 
 }  // namespace meshflow::io

@@ -109,7 +109,16 @@ void check_position(const Eigen::Vector3d& p, const std::string& source,
 }
 
 std::ifstream open_input(const std::string& path) {
-  if (std::filesystem::is_directory(path)) throw Error(path, "", "is a directory, not a file");
+  std::error_code ec;
+  const std::filesystem::file_status status = std::filesystem::status(path, ec);
+  if (std::filesystem::is_directory(status)) throw Error(path, "", "is a directory, not a file");
+  // A FIFO would block the reader until something writes to it; devices and sockets have no
+  // size. meshflow reads files whose size it knows.
+  if (std::filesystem::is_fifo(status))
+    throw Error(path, "", "is a FIFO (named pipe), not a regular file");
+  if (std::filesystem::is_socket(status) || std::filesystem::is_block_file(status) ||
+      std::filesystem::is_character_file(status))
+    throw Error(path, "", "is a socket or device, not a regular file");
   errno = 0;
   std::ifstream in(path, std::ios::binary);
   if (!in) throw Error(path, "", "cannot open file for reading: " + errno_text());

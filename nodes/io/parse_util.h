@@ -53,7 +53,8 @@ void check_coordinates(const Eigen::Vector3d& p, const std::string& source, std:
 void check_position(const Eigen::Vector3d& p, const std::string& source,
                     const std::string& location, std::string_view what);
 
-/// Opens `path` for binary reading or throws meshflow::Error("cannot open").
+/// Opens the regular file `path` for binary reading; throws meshflow::Error naming it when it is
+/// missing or unreadable (with the errno text), a directory, a FIFO, a socket or a device.
 std::ifstream open_input(const std::string& path);
 
 /// strerror(errno) ("No such file or directory", "Permission denied"), or "unknown reason"

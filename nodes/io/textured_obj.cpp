@@ -31,7 +31,7 @@ void write_textured_obj(const std::string& path, const TexturedMesh& textured) {
   materials.commit();
 
   AtomicOutputFile file(path);
-  std::ofstream& out = file.stream();
+  std::ostream& out = file.stream();
   out << "# written by meshflow\nmtllib " << library << "\n";
   const bool colors = mesh.colors.size() == mesh.vertices.size();
   char line[160];

@@ -2,6 +2,9 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <vector>
+
 namespace meshflow {
 namespace {
 
@@ -22,6 +25,31 @@ TEST(Tracing, SummarizesStagesInFirstSeenOrder) {
   EXPECT_NE(csv.find("\nb,2,600.0000,300.0000,400.0000,400.0000,400.0000,0.85714,20,"),
             std::string::npos)
       << csv;
+}
+
+// The bounded accumulator against the exact summary: counts, totals, maxima and items equal,
+// p50 / p95 within 1 %, on 100 000 records of two stages with spread-out durations.
+TEST(Tracing, StageStatisticsAgreeWithTheExactSummaryInBoundedMemory) {
+  std::vector<StageRecord> records;
+  std::uint32_t state = 7;
+  for (int i = 0; i < 100000; ++i) {
+    state = state * 1664525u + 1013904223u;
+    const double d = 1e-4 * std::exp(8.0 * (state >> 8) / 16777216.0);  // 0.1 ms .. 0.3 s
+    records.push_back({i % 3 == 0 ? "read" : "mesh", 0.0, d, 0, 10});
+  }
+  StageStatistics running;
+  for (const StageRecord& r : records) running.add(r);
+  const auto exact = summarize_stages(records), bounded = running.summaries();
+  ASSERT_EQ(bounded.size(), exact.size());
+  for (std::size_t i = 0; i < exact.size(); ++i) {
+    EXPECT_EQ(bounded[i].stage, exact[i].stage);
+    EXPECT_EQ(bounded[i].calls, exact[i].calls);
+    EXPECT_EQ(bounded[i].items, exact[i].items);
+    EXPECT_NEAR(bounded[i].total_s, exact[i].total_s, 1e-9 * exact[i].total_s);
+    EXPECT_EQ(bounded[i].max_s, exact[i].max_s);
+    EXPECT_NEAR(bounded[i].p50_s, exact[i].p50_s, 0.01 * exact[i].p50_s);
+    EXPECT_NEAR(bounded[i].p95_s, exact[i].p95_s, 0.01 * exact[i].p95_s);
+  }
 }
 
 TEST(Tracing, ChromeTraceHasOneCompleteEventPerRecord) {

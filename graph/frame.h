@@ -90,6 +90,9 @@ struct Frame {
   NormalsReport normals;            ///< where the cloud's normals came from (cloud path)
 
   PointCloud cloud;  ///< after read: raw; after filter: filtered, with normals
+  /// The input's PointCloud::origin (set by "read"): the mesh is in the same local frame;
+  /// writers add it back (io::write_mesh).
+  Eigen::Vector3d origin = Eigen::Vector3d::Zero();
   FilterCounts filter_counts;
   std::shared_ptr<const SpatialIndex> index;  ///< over cloud.positions, built by "index"
   float voxel_size = 0.0f;

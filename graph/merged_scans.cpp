@@ -20,7 +20,13 @@ void ScanPreparationPipeline::run(const std::function<FramePtr()>& next,
 
 void append_scan(PointCloud& into, const PointCloud& scan) {
   const bool colors = scan.has_colors() && (into.positions.empty() || into.has_colors());
+  if (into.positions.empty()) into.origin = scan.origin;
+  // Georeferenced scans may each have their own local origin: moved into `into`'s.
+  const Eigen::Vector3f shift = (scan.origin - into.origin).cast<float>();
+  const std::size_t first = into.positions.size();
   into.positions.insert(into.positions.end(), scan.positions.begin(), scan.positions.end());
+  if (!shift.isZero())
+    for (std::size_t i = first; i < into.positions.size(); ++i) into.positions[i] += shift;
   into.normals.insert(into.normals.end(), scan.normals.begin(), scan.normals.end());
   if (colors)
     into.colors.insert(into.colors.end(), scan.colors.begin(), scan.colors.end());

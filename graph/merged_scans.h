@@ -31,7 +31,9 @@ class ScanPreparationPipeline final : public FramePipeline {
 };
 
 /// Appends `scan`'s points, normals and (when both have them, or `into` is empty) colours to
-/// `into`; colours are dropped from the result as soon as one scan has none. O(n).
+/// `into`; colours are dropped from the result as soon as one scan has none. The first scan's
+/// origin (PointCloud::origin) becomes `into`'s; later scans' points are moved from their own
+/// origin to it. O(n).
 void append_scan(PointCloud& into, const PointCloud& scan);
 
 /// The configuration of the joined cloud's pass: `config` with the per-scan filters (range

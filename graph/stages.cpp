@@ -43,6 +43,7 @@ std::uint64_t read(Frame& f, const ReconstructionConfig& c) {
     return f.depth->depth.pixels();
   }
   if (f.load) f.cloud = f.load();
+  f.origin = f.cloud.origin;
   if (c.organized_as_depth && f.cloud.is_organized()) {
     if (std::optional<DepthFrame> depth = depth_frame_from_organized(f.cloud)) {
       f.depth = std::make_shared<DepthFrame>(std::move(*depth));

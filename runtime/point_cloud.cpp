@@ -23,6 +23,7 @@ PointCloud select_points(const PointCloud& cloud, const std::vector<std::uint32_
   gather(cloud.colors, indices, out.colors);
   gather(cloud.intensities, indices, out.intensities);
   out.sensor_origin = cloud.sensor_origin;
+  out.origin = cloud.origin;
   out.has_sensor_origin = cloud.has_sensor_origin;
   return out;
 }

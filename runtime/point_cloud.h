@@ -22,6 +22,10 @@ struct PointCloud {
   std::uint32_t width = 0;                 ///< organized grid width (0 if unorganized)
   std::uint32_t height = 0;                ///< organized grid height (0 if unorganized)
   Eigen::Vector3f sensor_origin = Eigen::Vector3f::Zero();  ///< where the sensor stood
+  /// Georeferenced inputs (e.g. LAS in UTM, millions of metres, which floats hold only to
+  /// decimetres): the world coordinates of the local frame `positions` (and sensor_origin, and
+  /// every mesh made of them) are relative to. Zero for everything else.
+  Eigen::Vector3d origin = Eigen::Vector3d::Zero();
   bool has_sensor_origin = false;
 
   std::size_t size() const { return positions.size(); }

@@ -110,7 +110,7 @@ void run_reconstruct(const ReconstructOptions& o) {
     progress->begin("texture");
     textures = write_textured(o.output, *frame, config);
   } else {
-    io::write_mesh(o.output, frame->mesh);
+    io::write_mesh(o.output, frame->mesh, frame->origin);
   }
   progress.reset();  // clears the progress line before the report
   const double wall = monotonic_seconds() - t0;

@@ -75,6 +75,7 @@ nlohmann::json optimize_json(const OptimizeReport& report) {
 nlohmann::json frame_json(const Frame& f, double wall_s, int threads) {
   const FilterCounts& c = f.filter_counts;
   return {{"input", f.name},
+          {"origin", {f.origin.x(), f.origin.y(), f.origin.z()}},
           {"points", c.input},
           {"filter",
            {{"non_finite", c.non_finite},

@@ -56,6 +56,11 @@ const char* extraction_name(ExtractMethod method, bool sharp_normals) {
 void print_frame_report(const Frame& f, double wall_s, int threads) {
   const FilterCounts& c = f.filter_counts;
   report("input      %s: %zu points\n", f.name.c_str(), c.input);
+  if (!f.origin.isZero())
+    report(
+        "origin     %.3f %.3f %.3f (georeferenced: meshed in a local frame; PLY/OBJ/OFF get "
+        "world coordinates, STL/glTF the local ones with this origin)\n",
+        f.origin.x(), f.origin.y(), f.origin.z());
   if (c.non_finite > 0) report("filter     dropped %zu NaN/Inf points\n", c.non_finite);
   if (c.cropped + c.merged + c.outliers > 0) {
     report("filter     cropped %zu, merged %zu, outliers %zu\n", c.cropped, c.merged, c.outliers);

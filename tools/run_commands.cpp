@@ -198,7 +198,7 @@ void run_merged(const RunOptions& o) {
   pipeline.run_frame(frame);
   throw_if_failed(*frame);
   const std::string output = (std::filesystem::path(o.output_dir) / "merged.ply").string();
-  io::write_ply(output, frame->mesh);
+  io::write_ply(output, frame->mesh, io::PlyEncoding::kBinary, frame->origin);
   const double wall = monotonic_seconds() - t0;
   print_run_summary(*sequence, stats, limit.threads(), o.sequence.in_flight,
                     {{"merged", frame_json(*frame, wall, limit.threads())},
@@ -229,7 +229,8 @@ void run_run(const RunOptions& o) {
         if (o.concatenate) return append_mesh(merged, f.mesh);
         char name[64];
         std::snprintf(name, sizeof name, "frame_%06zu.ply", f.source_index);
-        io::write_ply((std::filesystem::path(o.output_dir) / name).string(), f.mesh);
+        io::write_ply((std::filesystem::path(o.output_dir) / name).string(), f.mesh,
+                      io::PlyEncoding::kBinary, f.origin);
         ++written;
       });
   if (o.concatenate && !merged.empty()) {

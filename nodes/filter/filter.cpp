@@ -96,6 +96,7 @@ PointCloud voxel_grid_downsample(const PointCloud& cloud, float voxel_size) {
 
   PointCloud out;
   out.sensor_origin = cloud.sensor_origin;
+  out.origin = cloud.origin;
   out.has_sensor_origin = cloud.has_sensor_origin;
   out.positions.resize(cells);
   if (cloud.has_normals()) out.normals.resize(cells);

@@ -63,7 +63,7 @@ void append_chunk(std::vector<std::uint8_t>& out, std::uint32_t type,
 
 }  // namespace
 
-std::vector<std::uint8_t> encode_glb(const TriangleMesh& mesh) {
+std::vector<std::uint8_t> encode_glb(const TriangleMesh& mesh, const Eigen::Vector3d& origin) {
   if (mesh.triangles.empty()) throw Error("glTF", "", "a mesh without triangles cannot be written");
   const std::size_t n = mesh.vertices.size();
   GltfBuffers buffers;
@@ -104,7 +104,10 @@ std::vector<std::uint8_t> encode_glb(const TriangleMesh& mesh) {
       {"asset", {{"version", "2.0"}, {"generator", "meshflow"}}},
       {"scene", 0},
       {"scenes", {{{"nodes", {0}}}}},
-      {"nodes", {{{"mesh", 0}}}},
+      {"nodes",
+       {origin.isZero()
+            ? nlohmann::json{{"mesh", 0}}
+            : nlohmann::json{{"mesh", 0}, {"translation", {origin.x(), origin.y(), origin.z()}}}}},
       {"meshes",
        {{{"primitives", {{{"attributes", attributes}, {"indices", indices}, {"mode", 4}}}}}}},
       {"buffers", {{{"byteLength", buffers.bin().size()}}}},
@@ -122,10 +125,10 @@ std::vector<std::uint8_t> encode_glb(const TriangleMesh& mesh) {
   return out;
 }
 
-void write_glb(const std::string& path, const TriangleMesh& mesh) {
+void write_glb(const std::string& path, const TriangleMesh& mesh, const Eigen::Vector3d& origin) {
   std::vector<std::uint8_t> bytes;
   try {
-    bytes = encode_glb(mesh);
+    bytes = encode_glb(mesh, origin);
   } catch (const Error& e) {
     throw Error(path, "", e.problem());
   }

@@ -107,6 +107,16 @@ LasHeader read_header(std::ifstream& in, const std::string& path, std::uint64_t 
   return header;
 }
 
+// The local origin for a cloud whose first point is `p`: zero when the point is within
+// kGeoreferencedBeyond of the world origin (floats hold such coordinates to under a
+// millimetre), else `p` rounded to whole kilometres, so nearby tiles share round origins.
+Eigen::Vector3d local_origin_near(const Eigen::Vector3d& p) {
+  constexpr double kGeoreferencedBeyond = 1e4;  // metres; float ulp there: 1 mm
+  if (!p.allFinite() || (p.array().abs() <= kGeoreferencedBeyond).all())
+    return Eigen::Vector3d::Zero();
+  return ((p / 1000.0).array().round() * 1000.0 + 0.0).matrix();  // + 0.0: no "-0" origin
+}
+
 }  // namespace
 
 PointCloud read_las(const std::string& path) {
@@ -136,16 +146,18 @@ PointCloud read_las(const std::string& path) {
       Eigen::Vector3d p;
       for (int k = 0; k < 3; ++k)
         p[k] = field<std::int32_t>(record + 4 * k) * header.scale[k] + header.offset[k];
-      if ((p.array().abs() > kMaxAbsCoordinate).any()) {
-        char offsets[96];
-        std::snprintf(offsets, sizeof offsets, "%.3f %.3f %.3f", header.offset[0], header.offset[1],
-                      header.offset[2]);
+      if (first + i == 0) cloud.origin = local_origin_near(p);
+      const Eigen::Vector3d local = p - cloud.origin;
+      if (!local.allFinite() || (local.array().abs() > kMaxAbsCoordinate).any()) {
+        char where[128];
+        std::snprintf(where, sizeof where,
+                      "(%.3f, %.3f, %.3f) lies more than 1e6 m from the "
+                      "first point",
+                      p.x(), p.y(), p.z());
         throw Error(path, "point " + std::to_string(first + i),
-                    "coordinates beyond +-1e6 m, georeferenced data: meshflow meshes in a local "
-                    "frame; subtract an origin near the data first (the header's offset is " +
-                        std::string(offsets) + ")");
+                    std::string(where) + ": corrupt data or a cloud too large for one local frame");
       }
-      cloud.positions[first + i] = p.cast<float>();
+      cloud.positions[first + i] = local.cast<float>();
       cloud.intensities[first + i] = field<std::uint16_t>(record + 12);
       if (layout.rgb_at >= 0)
         for (int c = 0; c < 3; ++c)

@@ -16,8 +16,11 @@ namespace meshflow::io {
 /// format's minimum (extra bytes are skipped). Throws meshflow::Error naming the file and
 /// field for: a missing "LASF" signature, LAZ (compressed) point data ("decompress it first"),
 /// another point format, a record length below the format's, a header or point count the file
-/// cannot hold (checked before any allocation), and coordinates beyond +-1e6 m (georeferenced
-/// data: the message gives the header's offset to subtract). O(file size), streamed in chunks.
+/// cannot hold (checked before any allocation), and a point more than 1e6 m from the first.
+/// Georeferenced files (the first point beyond 10 km of the world origin, e.g. UTM) are read
+/// in a local frame: PointCloud::origin is the first point rounded to whole kilometres and the
+/// positions are relative to it, exact to the file's resolution (floats near the world origin
+/// instead of millions of metres). O(file size), streamed in chunks.
 PointCloud read_las(const std::string& path);
 
 }  // namespace meshflow::io

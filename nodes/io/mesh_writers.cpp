@@ -18,16 +18,35 @@ char* put(char* at, const T& v) {
   std::memcpy(at, &v, sizeof(T));
   return at + sizeof(T);
 }
+
+// "PREFIXx y z" of a vertex in world coordinates: as the float it is (9 digits) without an
+// origin, else vertex + origin in double precision (12 digits: millimetres at 1e8 m).
+std::string world_position_text(const char* prefix, const Eigen::Vector3f& v,
+                                const Eigen::Vector3d& origin) {
+  char text[128];
+  if (origin.isZero()) {
+    std::snprintf(text, sizeof text, "%s%.9g %.9g %.9g", prefix, v.x(), v.y(), v.z());
+  } else {
+    const Eigen::Vector3d w = v.cast<double>() + origin;
+    std::snprintf(text, sizeof text, "%s%.12g %.12g %.12g", prefix, w.x(), w.y(), w.z());
+  }
+  return text;
+}
 }  // namespace
 
-void write_ply(const std::string& path, const TriangleMesh& mesh, PlyEncoding encoding) {
+void write_ply(const std::string& path, const TriangleMesh& mesh, PlyEncoding encoding,
+               const Eigen::Vector3d& origin) {
   AtomicOutputFile file(path);
   std::ostream& out = file.stream();
   const bool normals = mesh.normals.size() == mesh.vertices.size() && !mesh.normals.empty();
   const bool colors = mesh.colors.size() == mesh.vertices.size() && !mesh.colors.empty();
   out << "ply\nformat " << (encoding == PlyEncoding::kBinary ? "binary_little_endian" : "ascii")
-      << " 1.0\ncomment written by meshflow\nelement vertex " << mesh.vertices.size()
-      << "\nproperty float x\nproperty float y\nproperty float z\n";
+      << " 1.0\ncomment written by meshflow\nelement vertex " << mesh.vertices.size() << '\n';
+  // Georeferenced meshes: world coordinates, in doubles (floats hold millions of metres only to
+  // decimetres).
+  const bool world = !origin.isZero();
+  out << (world ? "property double x\nproperty double y\nproperty double z\n"
+                : "property float x\nproperty float y\nproperty float z\n");
   if (normals) out << "property float nx\nproperty float ny\nproperty float nz\n";
   if (colors) out << "property uchar red\nproperty uchar green\nproperty uchar blue\n";
   out << "element face " << mesh.triangles.size()
@@ -35,8 +54,9 @@ void write_ply(const std::string& path, const TriangleMesh& mesh, PlyEncoding en
   if (encoding == PlyEncoding::kAscii) {
     char line[256];
     for (std::size_t i = 0; i < mesh.vertices.size(); ++i) {
-      const auto& v = mesh.vertices[i];
-      int n = std::snprintf(line, sizeof line, "%.9g %.9g %.9g", v.x(), v.y(), v.z());
+      const Eigen::Vector3d v = mesh.vertices[i].cast<double>() + origin;
+      int n = std::snprintf(line, sizeof line, world ? "%.12g %.12g %.12g" : "%.9g %.9g %.9g",
+                            v.x(), v.y(), v.z());
       if (normals) {
         const auto& nv = mesh.normals[i];
         n += std::snprintf(line + n, sizeof line - static_cast<std::size_t>(n), " %.7g %.7g %.7g",
@@ -52,11 +72,13 @@ void write_ply(const std::string& path, const TriangleMesh& mesh, PlyEncoding en
     for (const Triangle& t : mesh.triangles)
       out << "3 " << t[0] << ' ' << t[1] << ' ' << t[2] << '\n';
   } else {
-    const std::size_t vertex_bytes = 12 + (normals ? 12 : 0) + (colors ? 3 : 0);
+    const std::size_t vertex_bytes = (world ? 24 : 12) + (normals ? 12 : 0) + (colors ? 3 : 0);
     std::vector<char> buf(mesh.vertices.size() * vertex_bytes + mesh.triangles.size() * 13);
     char* at = buf.data();
     for (std::size_t i = 0; i < mesh.vertices.size(); ++i) {
-      for (int k = 0; k < 3; ++k) at = put(at, mesh.vertices[i][k]);
+      for (int k = 0; k < 3; ++k)
+        at = world ? put(at, static_cast<double>(mesh.vertices[i][k]) + origin[k])
+                   : put(at, mesh.vertices[i][k]);
       if (normals)
         for (int k = 0; k < 3; ++k) at = put(at, mesh.normals[i][k]);
       if (colors) {
@@ -73,7 +95,7 @@ void write_ply(const std::string& path, const TriangleMesh& mesh, PlyEncoding en
   file.commit();
 }
 
-void write_obj(const std::string& path, const TriangleMesh& mesh) {
+void write_obj(const std::string& path, const TriangleMesh& mesh, const Eigen::Vector3d& origin) {
   AtomicOutputFile file(path);
   std::ostream& out = file.stream();
   const bool normals = mesh.normals.size() == mesh.vertices.size() && !mesh.normals.empty();
@@ -81,15 +103,13 @@ void write_obj(const std::string& path, const TriangleMesh& mesh) {
   out << "# written by meshflow\n";
   char line[160];
   for (std::size_t i = 0; i < mesh.vertices.size(); ++i) {
-    const Eigen::Vector3f& v = mesh.vertices[i];
+    out << world_position_text("v ", mesh.vertices[i], origin);
     if (colors) {
       const Rgb8& c = mesh.colors[i];
-      std::snprintf(line, sizeof line, "v %.9g %.9g %.9g %.4g %.4g %.4g\n", v.x(), v.y(), v.z(),
-                    c.r / 255.0, c.g / 255.0, c.b / 255.0);
-    } else {
-      std::snprintf(line, sizeof line, "v %.9g %.9g %.9g\n", v.x(), v.y(), v.z());
+      std::snprintf(line, sizeof line, " %.4g %.4g %.4g", c.r / 255.0, c.g / 255.0, c.b / 255.0);
+      out << line;
     }
-    out << line;
+    out << '\n';
   }
   if (normals) {
     for (const auto& n : mesh.normals) {
@@ -109,13 +129,18 @@ void write_obj(const std::string& path, const TriangleMesh& mesh) {
   file.commit();
 }
 
-void write_stl(const std::string& path, const TriangleMesh& mesh) {
+void write_stl(const std::string& path, const TriangleMesh& mesh, const Eigen::Vector3d& origin) {
   AtomicOutputFile file(path);
   if (mesh.triangles.size() > 0xFFFFFFFFull)
     throw Error(path, "", "STL holds at most 2^32 - 1 triangles");
   std::vector<char> buf(84 + 50 * mesh.triangles.size(), 0);
-  const char header[] = "binary STL written by meshflow";
-  std::memcpy(buf.data(), header, sizeof header - 1);
+  char header[81];
+  if (origin.isZero())
+    std::snprintf(header, sizeof header, "binary STL written by meshflow");
+  else  // float32 corners: local coordinates, the origin in the header's text
+    std::snprintf(header, sizeof header, "meshflow; local frame, origin %.3f %.3f %.3f", origin.x(),
+                  origin.y(), origin.z());
+  std::memcpy(buf.data(), header, std::strlen(header));
   char* at = put(buf.data() + 80, static_cast<std::uint32_t>(mesh.triangles.size()));
   for (const Triangle& t : mesh.triangles) {
     const Eigen::Vector3f n = face_normal(mesh, t);
@@ -128,7 +153,7 @@ void write_stl(const std::string& path, const TriangleMesh& mesh) {
   file.commit();
 }
 
-void write_off(const std::string& path, const TriangleMesh& mesh) {
+void write_off(const std::string& path, const TriangleMesh& mesh, const Eigen::Vector3d& origin) {
   AtomicOutputFile file(path);
   std::ostream& out = file.stream();
   const bool colors = mesh.colors.size() == mesh.vertices.size() && !mesh.colors.empty();
@@ -136,14 +161,13 @@ void write_off(const std::string& path, const TriangleMesh& mesh) {
       << mesh.vertices.size() << ' ' << mesh.triangles.size() << " 0\n";
   char line[128];
   for (std::size_t i = 0; i < mesh.vertices.size(); ++i) {
-    const Eigen::Vector3f& v = mesh.vertices[i];
-    int n = std::snprintf(line, sizeof line, "%.9g %.9g %.9g", v.x(), v.y(), v.z());
+    out << world_position_text("", mesh.vertices[i], origin);
     if (colors) {
       const Rgb8& c = mesh.colors[i];
-      std::snprintf(line + n, sizeof line - static_cast<std::size_t>(n), " %d %d %d 255", c.r, c.g,
-                    c.b);
+      std::snprintf(line, sizeof line, " %d %d %d 255", c.r, c.g, c.b);
+      out << line;
     }
-    out << line << '\n';
+    out << '\n';
   }
   for (const Triangle& t : mesh.triangles)
     out << "3 " << t[0] << ' ' << t[1] << ' ' << t[2] << '\n';
@@ -163,13 +187,13 @@ void check_mesh_output_format(const std::string& path) {
   check_output_writable(path);
 }
 
-void write_mesh(const std::string& path, const TriangleMesh& mesh) {
+void write_mesh(const std::string& path, const TriangleMesh& mesh, const Eigen::Vector3d& origin) {
   const std::string ext = lower_extension(path);
-  if (ext == ".ply") return write_ply(path, mesh);
-  if (ext == ".obj") return write_obj(path, mesh);
-  if (ext == ".stl") return write_stl(path, mesh);
-  if (ext == ".off") return write_off(path, mesh);
-  if (ext == ".glb") return write_glb(path, mesh);
+  if (ext == ".ply") return write_ply(path, mesh, PlyEncoding::kBinary, origin);
+  if (ext == ".obj") return write_obj(path, mesh, origin);
+  if (ext == ".stl") return write_stl(path, mesh, origin);
+  if (ext == ".off") return write_off(path, mesh, origin);
+  if (ext == ".glb") return write_glb(path, mesh, origin);
   check_mesh_output_format(path);  // throws
 }
 

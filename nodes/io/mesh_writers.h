@@ -2,6 +2,7 @@
 // Mesh writers: PLY (binary little-endian or ascii), Wavefront OBJ, binary STL, OFF; glTF 2.0
 // binary (.glb) is in nodes/io/glb_writer.h. write_mesh() picks one by extension.
 
+#include <Eigen/Core>
 #include <string>
 
 #include "runtime/triangle_mesh.h"
@@ -10,28 +11,39 @@ namespace meshflow::io {
 
 enum class PlyEncoding { kBinary, kAscii };
 
-/// Writes vertices (float x y z), normals (nx ny nz) and colours (uchar red green blue) when
-/// present, and faces (uchar count, uint vertex_indices). Atomic: the file appears complete
-/// or not at all. Throws meshflow::Error on I/O failure. O(V + T).
+// Every writer takes the mesh's `origin` (Frame::origin, PointCloud::origin: non-zero for
+// georeferenced inputs), the world position of the frame its vertices are in. PLY, OBJ and OFF
+// then write world coordinates in double precision; STL and glTF, whose vertices are float32,
+// keep the local coordinates and record the origin (the STL header's text, the glTF node's
+// translation, which viewers apply).
+
+/// Writes vertices (float x y z; double with a non-zero origin), normals (nx ny nz) and colours
+/// (uchar red green blue) when present, and faces (uchar count, uint vertex_indices). Atomic:
+/// the file appears complete or not at all. Throws meshflow::Error on I/O failure. O(V + T).
 void write_ply(const std::string& path, const TriangleMesh& mesh,
-               PlyEncoding encoding = PlyEncoding::kBinary);
+               PlyEncoding encoding = PlyEncoding::kBinary,
+               const Eigen::Vector3d& origin = Eigen::Vector3d::Zero());
 
 /// Writes v / vn / f lines (1-based indices, "f a//a b//b c//c" when normals exist); colours as
 /// the common extension "v x y z r g b" (0..1). Atomic.
-void write_obj(const std::string& path, const TriangleMesh& mesh);
+void write_obj(const std::string& path, const TriangleMesh& mesh,
+               const Eigen::Vector3d& origin = Eigen::Vector3d::Zero());
 
 /// Binary STL: an 80-byte header, the triangle count, per triangle its unit face normal and
 /// three corners (float32, little-endian). STL has no shared vertices, normals or colours: the
 /// readers of other tools weld corners again. Atomic. O(T).
-void write_stl(const std::string& path, const TriangleMesh& mesh);
+void write_stl(const std::string& path, const TriangleMesh& mesh,
+               const Eigen::Vector3d& origin = Eigen::Vector3d::Zero());
 
 /// ASCII OFF ("OFF", or "COFF" with r g b a integer colours per vertex), faces "3 a b c". Atomic.
 /// O(V + T).
-void write_off(const std::string& path, const TriangleMesh& mesh);
+void write_off(const std::string& path, const TriangleMesh& mesh,
+               const Eigen::Vector3d& origin = Eigen::Vector3d::Zero());
 
 /// Chooses the writer by extension: .ply (binary), .obj, .stl, .off, .glb. Throws
 /// meshflow::Error naming the formats otherwise.
-void write_mesh(const std::string& path, const TriangleMesh& mesh);
+void write_mesh(const std::string& path, const TriangleMesh& mesh,
+                const Eigen::Vector3d& origin = Eigen::Vector3d::Zero());
 
 /// Throws meshflow::Error unless write_mesh() knows the extension of `path` and the file can
 /// be created (check_output_writable(): not a directory, a writable directory; checked before a

@@ -2,13 +2,17 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <set>
 #include <sstream>
 
+#include "nodes/io/mesh_readers.h"
+#include "nodes/io/read_point_cloud.h"
 #include "test_support.h"
 #include "tools/cli_runner.h"
 
@@ -178,6 +182,63 @@ std::string scan_directory_with_a_bad_frame() {
   for (const char* name : {"scan000", "scan001", "scan002"})
     write_scan(dir, name, std::string(name) == "scan001" ? kTruncatedScan : scan);
   return dir;
+}
+
+// A LAS 1.2 file (point format 0, 0.1 mm resolution) of `cloud`'s points moved by `offset`.
+std::string las_of(const PointCloud& cloud, const Eigen::Vector3d& offset) {
+  std::string h(227, '\0');
+  const auto put = [&h](std::size_t at, const auto& v) { std::memcpy(&h[at], &v, sizeof v); };
+  std::memcpy(&h[0], "LASF", 4);
+  h[24] = 1;
+  h[25] = 2;
+  put(94, std::uint16_t{227});
+  put(96, std::uint32_t{227});
+  put(105, std::uint16_t{20});
+  put(107, static_cast<std::uint32_t>(cloud.size()));
+  for (int k = 0; k < 3; ++k) {
+    put(131 + 8 * k, 1e-4);
+    put(155 + 8 * k, offset[k]);
+  }
+  for (const Eigen::Vector3f& p : cloud.positions) {
+    std::string r(20, '\0');
+    for (int k = 0; k < 3; ++k) {
+      const auto v = static_cast<std::int32_t>(std::lround(p[k] / 1e-4));
+      std::memcpy(&r[4 * static_cast<std::size_t>(k)], &v, 4);
+    }
+    h += r;
+  }
+  return h;
+}
+
+// A georeferenced LAS (UTM-like, 4 800 km) is meshed in a local frame: the same triangles as
+// the same points near the world origin, the PLY's vertices in world coordinates (doubles), the
+// origin in the report.
+TEST(Cli, GeoreferencedLasIsMeshedInALocalFrameAndWrittenInTheWorld) {
+  const std::string dir = test::temp_dir();
+  ASSERT_EQ(run_cli("sample sphere --points 20000 -o " + dir + "/s.ply -q").exit_code, 0);
+  const PointCloud sphere = io::read_point_cloud(dir + "/s.ply");
+  const Eigen::Vector3d utm(512000.0, 4812000.0, 0.0);  // the origin the reader picks
+  test::write_file(dir + "/utm.las", las_of(sphere, utm));
+  test::write_file(dir + "/local.las", las_of(sphere, Eigen::Vector3d::Zero()));
+  CliRun r = run_cli("reconstruct " + dir + "/utm.las -o " + dir + "/utm.ply --json");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const auto world = nlohmann::json::parse(r.out);
+  EXPECT_EQ(world["origin"], (nlohmann::json{512000.0, 4812000.0, 0.0}));
+  r = run_cli("reconstruct " + dir + "/local.las -o " + dir + "/local.ply --json");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const auto local = nlohmann::json::parse(r.out);
+  EXPECT_EQ(world["mesh"]["triangles"], local["mesh"]["triangles"]);
+  EXPECT_EQ(world["mesh"]["vertices"], local["mesh"]["vertices"]);
+  // The first vertex: the local run's plus the UTM offset, in doubles, to a millimetre.
+  const TriangleMesh local_mesh = io::read_mesh(dir + "/local.ply");
+  const std::string ply = test::read_file(dir + "/utm.ply");
+  EXPECT_NE(ply.find("property double x"), std::string::npos);
+  double first[3];
+  std::memcpy(first, ply.data() + ply.find("end_header\n") + 11, sizeof first);
+  const Eigen::Vector3d expected = local_mesh.vertices[0].cast<double>() + utm;
+  EXPECT_LT((Eigen::Vector3d(first[0], first[1], first[2]) - expected).norm(), 1e-3);
+  r = run_cli("reconstruct " + dir + "/utm.las -o " + dir + "/utm2.ply");
+  EXPECT_NE(r.out.find("origin     512000.000 4812000.000 0.000"), std::string::npos) << r.out;
 }
 
 // --max-memory: a voxel far too small for the input is an error naming the input and the

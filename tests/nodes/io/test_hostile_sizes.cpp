@@ -38,6 +38,7 @@
 namespace meshflow {
 namespace {
 
+#ifndef MESHFLOW_SANITIZED
 // Bytes of address space the process maps now (VmSize of /proc/self/status).
 std::uint64_t mapped_bytes() {
   std::ifstream status("/proc/self/status");
@@ -52,6 +53,7 @@ std::uint64_t mapped_bytes() {
   }
   return 0;
 }
+#endif
 
 // In the child: limits the address space, runs `read`, exits 0 when it throws meshflow::Error
 // (printing the message for the parent's regex), 3 on std::bad_alloc, 4 when it succeeds.

@@ -3,6 +3,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cstdlib>
 #include <cstring>
 #include <nlohmann/json.hpp>
 
@@ -163,6 +164,45 @@ T read_at(const std::vector<std::uint8_t>& bytes, std::size_t at) {
 
 // The .glb container and its JSON as the glTF 2.0 specification lays them out; positions,
 // colours and indices read back from the binary chunk.
+// Georeferenced meshes (a local frame plus its world origin): PLY, OBJ and OFF carry world
+// coordinates in double precision; STL and glTF keep float32 local vertices and the origin.
+TEST(MeshFormats, WritersPutGeoreferencedMeshesBackInTheWorld) {
+  const TriangleMesh m = coloured_tetrahedron();
+  const Eigen::Vector3d origin(5000000.25, 4000000.0, 100.0);
+  const Eigen::Vector3d first = m.vertices[0].cast<double>() + origin;
+  const std::string dir = test::temp_dir();
+  write_mesh(dir + "/m.ply", m, origin);
+  const std::string ply = test::read_file(dir + "/m.ply");
+  EXPECT_NE(ply.find("property double x\nproperty double y\nproperty double z\n"),
+            std::string::npos);
+  double xyz[3];
+  std::memcpy(xyz, ply.data() + ply.find("end_header\n") + 11, sizeof xyz);
+  EXPECT_EQ(Eigen::Vector3d(xyz[0], xyz[1], xyz[2]), first);
+  for (const char* ext : {".obj", ".off"}) {
+    write_mesh(dir + "/m" + ext, m, origin);
+    const std::string text = test::read_file(dir + "/m" + ext);
+    const std::size_t at =
+        std::string(ext) == ".obj" ? text.find("\nv ") + 3 : text.find("\n", text.find(" 0\n")) + 1;
+    const char* p = text.c_str() + at;
+    char* end = nullptr;
+    Eigen::Vector3d w;
+    for (int k = 0; k < 3; ++k) {
+      w[k] = std::strtod(p, &end);
+      p = end;
+    }
+    EXPECT_LT((w - first).norm(), 1e-4) << ext << ": " << text.substr(at, 60);
+  }
+  write_mesh(dir + "/m.stl", m, origin);
+  EXPECT_LT(test::read_file(dir + "/m.stl").find("origin 5000000.250 4000000.000 100.000"), 80u)
+      << "in the 80-byte header";
+  expect_same_geometry(m, read_mesh(dir + "/m.stl"));  // the local vertices
+  const std::vector<std::uint8_t> glb = encode_glb(m, origin);
+  const auto json_length = read_at<std::uint32_t>(glb, 12);
+  const nlohmann::json doc =
+      nlohmann::json::parse(glb.begin() + 20, glb.begin() + 20 + json_length);
+  EXPECT_EQ(doc["nodes"][0]["translation"], (nlohmann::json{5000000.25, 4000000.0, 100.0}));
+}
+
 TEST(MeshFormats, GlbFollowsTheGltf2Layout) {
   const TriangleMesh m = coloured_tetrahedron();
   const std::vector<std::uint8_t> glb = encode_glb(m);

@@ -57,7 +57,7 @@ class Image {
   Image(int rows, int cols, PixelFormat format);
   /// A rows x cols image of `format` copied from `pixels`, whose rows start `row_stride_bytes`
   /// apart (>= cols * bytes_per_pixel(format)); for embedders handing meshflow their own
-  /// buffers (an OpenCV Image's data and step, a camera driver's frame). O(rows cols).
+  /// buffers (an OpenCV cv::Mat's data and step, a camera driver's frame). O(rows cols).
   Image(int rows, int cols, PixelFormat format, const void* pixels, std::size_t row_stride_bytes);
   /// A rows x cols image of T's format with every pixel `value`, e.g.
   /// Image::filled<std::uint16_t>(480, 640, 1000) for a flat wall 1 m away. O(rows cols).

@@ -69,7 +69,7 @@ void write_jpeg(const std::string& path, const Image& image) {
   jpeg_set_quality(&info, 100, TRUE);
   jpeg_start_compress(&info, TRUE);
   while (info.next_scanline < info.image_height) {
-    JSAMPROW row = const_cast<JSAMPLE*>(image.ptr<JSAMPLE>(static_cast<int>(info.next_scanline)));
+    JSAMPROW row = const_cast<JSAMPLE*>(image.data() + info.next_scanline * image.row_bytes());
     jpeg_write_scanlines(&info, &row, 1);
   }
   jpeg_finish_compress(&info);

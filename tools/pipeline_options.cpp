@@ -244,13 +244,9 @@ std::unique_ptr<io::Sequence> open_sequence_argument(const SequenceArgument& a) 
   if (a.synthetic_depth) {
     synthetic::DepthSequenceConfig c;
     c.frames = a.synthetic_frames;
-    if (!a.synthetic_size.empty()) {
-      std::sscanf(a.synthetic_size.c_str(), "%dx%d", &c.intrinsics.width, &c.intrinsics.height);
-      const float scale = static_cast<float>(c.intrinsics.width) / 640.0f;
-      c.intrinsics.fx = c.intrinsics.fy = 525.0f * scale;
-      c.intrinsics.cx = 0.5f * static_cast<float>(c.intrinsics.width) - 0.5f;
-      c.intrinsics.cy = 0.5f * static_cast<float>(c.intrinsics.height) - 0.5f;
-    }
+    int width = 0, height = 0;
+    if (std::sscanf(a.synthetic_size.c_str(), "%dx%d", &width, &height) == 2)
+      c.intrinsics = synthetic::scaled_default_camera(width, height);
     return synthetic::make_depth_sequence(synthetic::demo_room_scene(), c);
   }
   if (a.path.empty())

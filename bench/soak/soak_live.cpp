@@ -225,13 +225,7 @@ int main(int argc, char** argv) {
   const Options o = parse(argc, argv);
   meshflow::synthetic::DepthSequenceConfig c;
   c.frames = 32;
-  const float f = 525.0f * static_cast<float>(o.width) / 640.0f;
-  c.intrinsics = meshflow::PinholeIntrinsics{o.width,
-                                             o.height,
-                                             f,
-                                             f,
-                                             0.5f * static_cast<float>(o.width) - 0.5f,
-                                             0.5f * static_cast<float>(o.height) - 0.5f};
+  c.intrinsics = meshflow::synthetic::scaled_default_camera(o.width, o.height);
   const auto sequence =
       meshflow::synthetic::make_depth_sequence(meshflow::synthetic::demo_room_scene(), c);
   std::vector<DepthFrame> views;

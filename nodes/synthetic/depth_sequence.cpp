@@ -94,6 +94,17 @@ DepthFrame render_depth(const Scene& scene, const PinholeIntrinsics& k,
   return frame;
 }
 
+PinholeIntrinsics scaled_default_camera(int width, int height) {
+  const PinholeIntrinsics standard;
+  const float f = standard.fx * static_cast<float>(width) / static_cast<float>(standard.width);
+  return PinholeIntrinsics{width,
+                           height,
+                           f,
+                           f,
+                           0.5f * static_cast<float>(width) - 0.5f,
+                           0.5f * static_cast<float>(height) - 0.5f};
+}
+
 std::unique_ptr<io::Sequence> make_depth_sequence(const Scene& scene,
                                                   const DepthSequenceConfig& config) {
   return std::make_unique<DepthSequence>(scene, config);

@@ -21,6 +21,10 @@ DepthFrame render_depth(const Scene& scene, const PinholeIntrinsics& intrinsics,
                         const Eigen::Isometry3f& T_world_camera, float noise_sigma = 0.0f,
                         std::uint32_t seed = 1);
 
+/// The default camera (640 x 480, f = 525) at another image size: the focal length scales with
+/// the width (same field of view), the principal point is the image centre. O(1).
+PinholeIntrinsics scaled_default_camera(int width, int height);
+
 struct DepthSequenceConfig {
   int frames = 8;
   PinholeIntrinsics intrinsics;  ///< 640 x 480, f = 525 by default

@@ -22,13 +22,13 @@ void radix_sort(std::vector<std::uint64_t>& keys);
 template <typename Value, typename KeyOf, typename ValueOf>
 std::vector<Value> counting_sort(std::size_t n, std::size_t buckets, KeyOf key_of,
                                  ValueOf value_of) {
-  constexpr std::size_t kBlock = std::size_t{1} << 16;
-  const std::size_t blocks = (n + kBlock - 1) / kBlock;
+  constexpr std::size_t kItemsPerBlock = std::size_t{1} << 16;
+  const std::size_t blocks = (n + kItemsPerBlock - 1) / kItemsPerBlock;
   std::vector<std::size_t> offsets(blocks * buckets, 0);  // [block][bucket]
   tbb::parallel_for(std::size_t{0}, blocks, [&](std::size_t b) {
     std::size_t* h = offsets.data() + b * buckets;
-    const std::size_t end = std::min(n, (b + 1) * kBlock);
-    for (std::size_t i = b * kBlock; i < end; ++i) {
+    const std::size_t end = std::min(n, (b + 1) * kItemsPerBlock);
+    for (std::size_t i = b * kItemsPerBlock; i < end; ++i) {
       const std::size_t k = key_of(i);
       if (k < buckets) ++h[k];
     }
@@ -44,8 +44,8 @@ std::vector<Value> counting_sort(std::size_t n, std::size_t buckets, KeyOf key_o
   std::vector<Value> sorted(sum);
   tbb::parallel_for(std::size_t{0}, blocks, [&](std::size_t b) {
     std::size_t* at = offsets.data() + b * buckets;
-    const std::size_t end = std::min(n, (b + 1) * kBlock);
-    for (std::size_t i = b * kBlock; i < end; ++i) {
+    const std::size_t end = std::min(n, (b + 1) * kItemsPerBlock);
+    for (std::size_t i = b * kItemsPerBlock; i < end; ++i) {
       const std::size_t k = key_of(i);
       if (k < buckets) sorted[at[k]++] = value_of(i);
     }

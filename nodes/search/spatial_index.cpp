@@ -1,47 +1,61 @@
 #include "nodes/search/spatial_index.h"
 
-#include <flann/flann.hpp>
+#include <nanoflann.hpp>
 
 #include <algorithm>
+#include <cstring>
 #include <limits>
-#include <numeric>
+#include <stdexcept>
+#include <utility>
 
 namespace meshflow {
 
-struct KdTreeIndex::Impl {
-  flann::KDTreeSingleIndex<flann::L2_Simple<float>> tree;
-  explicit Impl(const flann::Matrix<float>& data)
-      : tree(data, flann::KDTreeSingleIndexParams(/*leaf_max_size=*/10, /*reorder=*/true)) {}
-};
-
-KdTreeIndex::KdTreeIndex(const std::vector<Eigen::Vector3f>& points) : size_(points.size()) {
-  if (points.empty()) return;
-  static_assert(sizeof(Eigen::Vector3f) == 3 * sizeof(float), "points must be packed xyz");
-  // FLANN takes a non-const pointer but only reads it (the tree reorders its own copy).
-  const flann::Matrix<float> data(const_cast<float*>(points.front().data()), points.size(), 3);
-  impl_ = std::make_unique<Impl>(data);
-  impl_->tree.buildIndex();
-}
-
-KdTreeIndex::~KdTreeIndex() = default;
-
 namespace {
 
-// k-nearest result set writing straight into the caller's arrays: no heap allocation per
-// query (FLANN's own result sets allocate), ties broken by the smaller index.
-class CallerKnnResult final : public flann::ResultSet<float> {
- public:
-  CallerKnnResult(std::size_t k, std::uint32_t* indices, float* dists)
-      : k_(k), indices_(indices), dists_(dists) {}
-  bool full() const override { return count_ == k_; }
-  float worstDist() const override {
-    return count_ == k_ ? dists_[k_ - 1] : std::numeric_limits<float>::max();
+// nanoflann reads the points through this adaptor: packed xyz floats, not copied.
+struct PackedPoints {
+  const Eigen::Vector3f* points = nullptr;
+  std::size_t count = 0;
+  std::size_t kdtree_get_point_count() const { return count; }
+  float kdtree_get_pt(std::uint32_t i, std::size_t dim) const { return points[i].data()[dim]; }
+  template <class Box>
+  bool kdtree_get_bbox(Box& /*box*/) const {
+    return false;  // the tree computes the bounds
   }
-  void addPoint(float dist, std::size_t index) override {
-    const auto idx = static_cast<std::uint32_t>(index);
+};
+
+using Metric = nanoflann::L2_Simple_Adaptor<float, PackedPoints, float, std::uint32_t>;
+using Tree = nanoflann::KDTreeSingleIndexAdaptor<Metric, PackedPoints, 3, std::uint32_t>;
+
+// The next float above x >= 0 (x itself for infinity): std::nextafter without libm's call, which
+// cost 3 % of a reconstruction when made on every improvement of a k-nearest result.
+float next_float_up(float x) {
+  if (!(x < std::numeric_limits<float>::max())) return x;
+  std::uint32_t bits = 0;
+  std::memcpy(&bits, &x, sizeof bits);
+  bits += 1;  // non-negative floats order like their bit patterns
+  std::memcpy(&x, &bits, sizeof bits);
+  return x;
+}
+
+// The k smallest (squared distance, index) pairs, written straight into the caller's arrays (no
+// heap allocation per query). Ties break by the smaller index whatever order the tree visits
+// points in: the bound handed to the tree is the next float above the k-th distance, so a point
+// at exactly that distance still reaches add_point, which compares indices. The result is
+// therefore the brute-force answer, independent of the tree's shape.
+class KnnResult {
+ public:
+  KnnResult(std::size_t k, std::uint32_t* indices, float* dists)
+      : k_(k), indices_(indices), dists_(dists) {}
+
+  // nanoflann's result-set interface (its names).
+  float worstDist() const {  // NOLINT(readability-identifier-naming)
+    return bound_;
+  }
+  bool addPoint(float dist, std::uint32_t idx) {  // NOLINT(readability-identifier-naming)
     if (count_ == k_ &&
         !(dist < dists_[k_ - 1] || (dist == dists_[k_ - 1] && idx < indices_[k_ - 1]))) {
-      return;
+      return true;
     }
     std::size_t i = count_ < k_ ? count_++ : k_ - 1;
     for (; i > 0 && (dists_[i - 1] > dist || (dists_[i - 1] == dist && indices_[i - 1] > idx));
@@ -51,45 +65,81 @@ class CallerKnnResult final : public flann::ResultSet<float> {
     }
     dists_[i] = dist;
     indices_[i] = idx;
+    if (count_ == k_) bound_ = next_float_up(dists_[k_ - 1]);
+    return true;  // keep searching: a closer point may remain
   }
+  bool full() const { return count_ == k_; }
   std::size_t size() const { return count_; }
 
  private:
   std::size_t k_;
   std::uint32_t* indices_;
   float* dists_;
+  float bound_ = std::numeric_limits<float>::infinity();
   std::size_t count_ = 0;
 };
 
+// Every point within `radius` (squared distance <= radius^2, as the brute-force oracle), in the
+// order the tree finds them.
+class RadiusResult {
+ public:
+  RadiusResult(float squared_radius, std::vector<std::pair<std::uint32_t, float>>& hits)
+      : squared_radius_(squared_radius), bound_(next_float_up(squared_radius)), hits_(hits) {}
+  // nanoflann's result-set interface (its names).
+  float worstDist() const {  // NOLINT(readability-identifier-naming)
+    return bound_;
+  }
+  bool addPoint(float dist, std::uint32_t idx) {  // NOLINT(readability-identifier-naming)
+    if (dist <= squared_radius_) hits_.emplace_back(idx, dist);
+    return true;
+  }
+  bool full() const { return true; }
+
+ private:
+  float squared_radius_;
+  float bound_;
+  std::vector<std::pair<std::uint32_t, float>>& hits_;
+};
+
 }  // namespace
+
+struct KdTreeIndex::Impl {
+  PackedPoints points;
+  Tree tree;
+  explicit Impl(const std::vector<Eigen::Vector3f>& cloud)
+      : points{cloud.data(), cloud.size()},
+        tree(3, points, nanoflann::KDTreeSingleIndexAdaptorParams(/*leaf_max_size=*/10)) {}
+};
+
+KdTreeIndex::KdTreeIndex(const std::vector<Eigen::Vector3f>& points) : size_(points.size()) {
+  if (points.size() >= std::numeric_limits<std::uint32_t>::max())
+    throw std::length_error("KdTreeIndex: more than 2^32 - 1 points");
+  if (points.empty()) return;
+  impl_ = std::make_unique<Impl>(points);  // builds the tree
+}
+
+KdTreeIndex::~KdTreeIndex() = default;
 
 std::size_t KdTreeIndex::knn(const Eigen::Vector3f& q, std::size_t k, std::uint32_t* indices,
                              float* squared_distances) const {
   k = std::min(k, size_);
   if (k == 0) return 0;
-  CallerKnnResult result(k, indices, squared_distances);
-  impl_->tree.findNeighbors(result, q.data(),
-                            flann::SearchParams(flann::FLANN_CHECKS_UNLIMITED, 0.0f, false));
+  KnnResult result(k, indices, squared_distances);
+  impl_->tree.findNeighbors(result, q.data(), nanoflann::SearchParams(0, 0.0f, false));
   return result.size();
 }
 
 std::vector<std::uint32_t> KdTreeIndex::radius_search(const Eigen::Vector3f& q,
                                                       float radius) const {
   if (size_ == 0) return {};
-  flann::RadiusResultSet<float> result(radius * radius);
-  impl_->tree.findNeighbors(result, q.data(),
-                            flann::SearchParams(flann::FLANN_CHECKS_UNLIMITED, 0.0f, true));
-  const std::size_t n = result.size();
-  std::vector<std::size_t> idx(n);
-  std::vector<float> d2(n);
-  if (n > 0) result.copy(idx.data(), d2.data(), n, true);
-  std::vector<std::uint32_t> order(n);
-  std::iota(order.begin(), order.end(), 0u);
-  std::sort(order.begin(), order.end(), [&](std::uint32_t a, std::uint32_t b) {
-    return d2[a] < d2[b] || (d2[a] == d2[b] && idx[a] < idx[b]);
+  std::vector<std::pair<std::uint32_t, float>> hits;
+  RadiusResult result(radius * radius, hits);
+  impl_->tree.findNeighbors(result, q.data(), nanoflann::SearchParams(0, 0.0f, false));
+  std::sort(hits.begin(), hits.end(), [](const auto& a, const auto& b) {
+    return a.second < b.second || (a.second == b.second && a.first < b.first);
   });
-  std::vector<std::uint32_t> out(n);
-  for (std::size_t i = 0; i < n; ++i) out[i] = static_cast<std::uint32_t>(idx[order[i]]);
+  std::vector<std::uint32_t> out(hits.size());
+  for (std::size_t i = 0; i < hits.size(); ++i) out[i] = hits[i].first;
   return out;
 }
 

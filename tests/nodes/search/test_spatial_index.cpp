@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <random>
 
 namespace meshflow {
@@ -26,6 +27,36 @@ TEST(SpatialIndex, KdTreeMatchesBruteForce) {
     }
     EXPECT_EQ(tree.radius_search(query, 0.8f), brute.radius_search(query, 0.8f));
   }
+}
+
+// Points on an integer lattice, queried at lattice points and cell centres: many neighbours tie
+// in distance. The kd-tree must return exactly the brute-force answer (ties by smaller index),
+// whatever order its traversal meets them in.
+TEST(SpatialIndex, TiesBreakBySmallerIndexLikeBruteForce) {
+  std::vector<Eigen::Vector3f> pts;
+  for (int z = 0; z < 8; ++z)
+    for (int y = 0; y < 8; ++y)
+      for (int x = 0; x < 8; ++x) pts.emplace_back(float(x), float(y), float(z));
+  std::mt19937 rng(3);
+  std::shuffle(pts.begin(), pts.end(), rng);  // indices unrelated to positions
+  const KdTreeIndex tree(pts);
+  const BruteForceIndex brute(pts);
+  std::uint32_t ia[20], ib[20];
+  float da[20], db[20];
+  for (int z = 0; z < 8; ++z)
+    for (int y = 0; y < 8; ++y)
+      for (int x = 0; x < 8; ++x)
+        for (const float offset : {0.0f, 0.5f}) {
+          const Eigen::Vector3f q(float(x) + offset, float(y) + offset, float(z) + offset);
+          for (const std::size_t k : {std::size_t{1}, std::size_t{7}, std::size_t{20}}) {
+            ASSERT_EQ(brute.knn(q, k, ib, db), k);
+            ASSERT_EQ(tree.knn(q, k, ia, da), k);
+            for (std::size_t j = 0; j < k; ++j) {
+              EXPECT_EQ(ia[j], ib[j]) << "k " << k << " rank " << j;
+              EXPECT_EQ(da[j], db[j]);
+            }
+          }
+        }
 }
 
 TEST(SpatialIndex, FewerPointsThanK) {

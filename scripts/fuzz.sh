@@ -1,26 +1,37 @@
 #!/usr/bin/env bash
 # Builds the libFuzzer targets (fuzz/) with clang, AddressSanitizer and UndefinedBehaviorSanitizer
-# into build-fuzz/ and runs each for SECONDS (default 60), seeded from the test fixtures and,
-# when present, the small files of $MESHFLOW_DATA. A finding stops the run with libFuzzer's
-# report and its input saved as build-fuzz/findings/<target>/crash-* (or oom-*, leak-*,
-# timeout-*: one input over 10 s); a fixed finding goes to fuzz/regressions/<target>/ (a seed
-# of later runs) with a test.
-#   scripts/fuzz.sh [SECONDS] [TARGET ...]      e.g. scripts/fuzz.sh 20 ply pcd
-# Needs clang and libclang-rt-14-dev (libFuzzer).
+# and runs each for SECONDS (default 60), seeded from the test fixtures and, when present, the
+# small files of $MESHFLOW_DATA. A finding stops the run with libFuzzer's report and its input
+# saved as BUILD/findings/<target>/crash-* (or oom-*, leak-*, timeout-*: one input over 10 s); a
+# fixed finding goes to fuzz/regressions/<target>/ (a seed of later runs) with a test.
+#   scripts/fuzz.sh [--build-dir DIR] [SECONDS] [TARGET ...]   e.g. scripts/fuzz.sh 20 ply pcd
+# Without --build-dir it configures build-fuzz/ (readers only); with it, DIR is a clang build
+# configured with -DMESHFLOW_BUILD_FUZZERS=ON and sanitizers (.ci/run's ASan + UBSan build) and
+# only the fuzz targets are built there. Needs clang and libclang-rt-14-dev (libFuzzer).
 set -euo pipefail
 cd "$(dirname "$0")/.."
+build=""
+if [ "${1:-}" = "--build-dir" ]; then
+  build=$2
+  shift 2
+fi
 seconds=${1:-60}
 shift || true
 targets=("$@")
 [ ${#targets[@]} -gt 0 ] || targets=(ply pcd xyz 3dtk las mesh rgbd tum image tsdf_map)
 data=${MESHFLOW_DATA:-../shared/data}
-build=build-fuzz
 
-CC=clang CXX=clang++ cmake -S . -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \
-  -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -g1" -DMESHFLOW_BUILD_FUZZERS=ON \
-  -DMESHFLOW_SANITIZE=address,undefined -DMESHFLOW_SANITIZE_SKIP=vptr \
-  -DMESHFLOW_BUILD_TESTS=OFF -DMESHFLOW_BUILD_BENCHMARKS=OFF -DMESHFLOW_BUILD_TOOLS=OFF \
-  -DMESHFLOW_SCALABLE_MALLOC=OFF > /dev/null
+if [ -z "$build" ]; then
+  build=build-fuzz
+  CC=clang CXX=clang++ cmake -S . -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \
+    -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -g1" -DMESHFLOW_BUILD_FUZZERS=ON \
+    -DMESHFLOW_SANITIZE=address,undefined -DMESHFLOW_SANITIZE_SKIP=vptr \
+    -DMESHFLOW_BUILD_TESTS=OFF -DMESHFLOW_BUILD_BENCHMARKS=OFF -DMESHFLOW_BUILD_TOOLS=OFF \
+    -DMESHFLOW_SCALABLE_MALLOC=OFF > /dev/null
+elif ! grep -qs "^MESHFLOW_BUILD_FUZZERS:BOOL=ON" "$build/CMakeCache.txt"; then
+  echo "fuzz: $build is not configured with -DMESHFLOW_BUILD_FUZZERS=ON" >&2
+  exit 2
+fi
 cmake --build "$build" --target $(printf 'fuzz_%s ' "${targets[@]}")
 
 # Seeds: files whose extension the target reads, at most 256 kB each.
@@ -31,6 +42,18 @@ seed_patterns() {
     rgbd) echo '*.log *.json' ;; tum) echo '*.txt' ;; image) echo '*.png *.tiff *.tif *.pclzf *.jpg' ;;
     tsdf_map) echo '*.tsdf' ;;
   esac
+}
+# A small TSDF map (8 blocks of 0.6 m voxels, 49 kB) from meshflow's own synthetic depth camera,
+# when a meshflow executable is at hand: no map files are committed.
+map_seed() {
+  local tool
+  for tool in "$build/meshflow" build/meshflow; do
+    if [ -x "$tool" ]; then
+      "$tool" run --synthetic-depth --synthetic-frames 1 --synthetic-size 32x24 --fuse \
+        --voxel 0.6 --save-map "$1/seed_synthetic.tsdf" -o "$build/map_seed" -q && return
+    fi
+  done
+  echo "fuzz: no meshflow executable to make a map seed; fuzz_tsdf_map starts from nothing" >&2
 }
 status=0
 for t in "${targets[@]}"; do
@@ -43,6 +66,7 @@ for t in "${targets[@]}"; do
     find tests/data "$data" -name "$pattern" -size -256k -type f 2>/dev/null |
       head -n 50 | while read -r f; do cp "$f" "$corpus/seed_$(basename "$f")"; done
   done
+  if [ "$t" = tsdf_map ]; then map_seed "$corpus"; fi
   echo "== fuzz_$t: $seconds s, $(ls "$corpus" | wc -l) corpus files"
   if ! ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=halt_on_error=1:print_stacktrace=1 \
       "$build/fuzz/fuzz_$t" "$corpus" -max_total_time="$seconds" -max_len=65536 \

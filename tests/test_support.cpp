@@ -13,6 +13,7 @@
 #include <limits>
 #include <random>
 
+#include "nodes/fusion/tsdf_map_file.h"
 #include "nodes/normals/organized_normals.h"
 #include "nodes/synthetic/closed_objects.h"
 
@@ -106,12 +107,7 @@ std::string mutate(std::string text, std::uint32_t& state) {
 }
 
 std::string resealed_tsdf_map(std::string bytes) {
-  std::uint64_t h = 14695981039346656037ull;  // FNV-1a 64, as nodes/fusion/tsdf_map_file.cpp
-  for (std::size_t i = 0; i + 8 < bytes.size(); ++i) {
-    h ^= static_cast<unsigned char>(bytes[i]);
-    h *= 1099511628211ull;
-  }
-  std::memcpy(&bytes[bytes.size() - 8], &h, 8);
+  reseal_tsdf_map(reinterpret_cast<std::uint8_t*>(bytes.data()), bytes.size());
   return bytes;
 }
 

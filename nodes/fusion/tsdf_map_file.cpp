@@ -123,6 +123,12 @@ void write_tsdf_map(const std::string& path, const TsdfVolume& volume) {
   file.commit();
 }
 
+void reseal_tsdf_map(std::uint8_t* bytes, std::size_t size) {
+  if (size < 8) return;
+  const std::uint64_t hash = fnv1a(bytes, size - 8);
+  std::memcpy(bytes + size - 8, &hash, 8);
+}
+
 TsdfVolume read_tsdf_map(const std::string& path) {
   std::ifstream in = io::open_input(path);
   const std::vector<unsigned char> data((std::istreambuf_iterator<char>(in)),

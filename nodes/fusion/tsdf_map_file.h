@@ -16,6 +16,8 @@
 //
 // Blocks are written in key order (z, y, x), so equal volumes give equal files.
 
+#include <cstddef>
+#include <cstdint>
 #include <string>
 
 #include "nodes/fusion/tsdf_volume.h"
@@ -29,5 +31,10 @@ void write_tsdf_map(const std::string& path, const TsdfVolume& volume);
 /// field on a wrong magic or version, a size that does not match the block count (truncated or
 /// padded file), a checksum mismatch, non-finite values, negative weights or a block stored twice.
 TsdfVolume read_tsdf_map(const std::string& path);
+
+/// Rewrites the checksum of a map file's image in memory (its last 8 bytes) to match the bytes
+/// before it, for programs that edit maps on purpose (the fuzzers and the reader tests, so that
+/// their mutations reach the fields behind the checksum). No effect below 8 bytes. O(size).
+void reseal_tsdf_map(std::uint8_t* bytes, std::size_t size);
 
 }  // namespace meshflow

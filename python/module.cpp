@@ -1,0 +1,316 @@
+// meshflow's Python module (pybind11): read a cloud, reconstruct a mesh, write it, with NumPy
+// arrays in and out. The reconstruction settings are the CLI's options under the same names
+// and defaults (tools/pipeline_options: the same code builds the stages' configuration), so
+// meshflow.reconstruct(meshflow.read_cloud(path)) gives the triangles `meshflow reconstruct`
+// writes for that file.
+//
+// Arrays handed out (Cloud.points, Mesh.vertices, ...) are views of the C++ vectors, not copies:
+// their `base` is the Cloud or Mesh, which they keep alive. Arrays handed in are copied once
+// into meshflow's structure of arrays (any dtype NumPy can cast to float32 / uint8, any strides).
+
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
+
+#include <cmath>
+#include <cstring>
+#include <memory>
+#include <string>
+#include <type_traits>
+#include <vector>
+
+#include "graph/pipeline.h"
+#include "nodes/io/mesh_readers.h"
+#include "nodes/io/mesh_writers.h"
+#include "nodes/io/read_point_cloud.h"
+#include "runtime/error.h"
+#include "runtime/threads.h"
+#include "tools/pipeline_options.h"
+
+namespace py = pybind11;
+
+namespace meshflow::python {
+namespace {
+
+/// A cloud shared between Python and the reconstruction (which copies it when it starts).
+struct Cloud {
+  std::shared_ptr<PointCloud> data = std::make_shared<PointCloud>();
+};
+
+/// A reconstructed mesh; `origin` is the world position of its local frame (georeferenced
+/// inputs), which write() puts back.
+struct Mesh {
+  std::shared_ptr<TriangleMesh> data = std::make_shared<TriangleMesh>();
+  Eigen::Vector3d origin = Eigen::Vector3d::Zero();
+};
+
+// An (n, columns) array over `values` (n items of `columns` Scalars each, packed), owned by
+// `owner`: no copy. None when the vector is empty and `none_if_empty`.
+template <typename Scalar, typename Item>
+py::object view(const std::vector<Item>& values, py::ssize_t columns, py::handle owner,
+                bool none_if_empty) {
+  static_assert(sizeof(Item) % sizeof(Scalar) == 0, "items are packed scalars");
+  if (values.empty() && none_if_empty) return py::none();
+  const auto n = static_cast<py::ssize_t>(values.size());
+  return py::array_t<Scalar>(
+      {n, columns},
+      {static_cast<py::ssize_t>(sizeof(Item)), static_cast<py::ssize_t>(sizeof(Scalar))},
+      reinterpret_cast<const Scalar*>(values.data()), owner);
+}
+
+// `array` as n x 3 values of type Scalar (cast by NumPy, any strides), or a ValueError naming
+// `what` for another shape or a non-finite value.
+template <typename Scalar>
+py::array_t<Scalar, py::array::c_style | py::array::forcecast> rows_of_three(
+    const py::handle& array, const char* what) {
+  py::array_t<Scalar, py::array::c_style | py::array::forcecast> a;
+  try {
+    a = py::array_t<Scalar, py::array::c_style | py::array::forcecast>::ensure(array);
+  } catch (const py::error_already_set&) {
+    a = {};
+  }
+  if (!a) throw py::value_error(std::string(what) + ": expected an array of numbers");
+  if (a.ndim() != 2 || a.shape(1) != 3) {
+    std::string shape = "(";
+    for (py::ssize_t d = 0; d < a.ndim(); ++d)
+      shape += (d ? ", " : "") + std::to_string(a.shape(d));
+    throw py::value_error(std::string(what) + ": expected shape (n, 3), got " + shape +
+                          (a.ndim() == 1 ? ",)" : ")"));
+  }
+  if constexpr (std::is_floating_point_v<Scalar>) {
+    const Scalar* p = a.data();
+    for (py::ssize_t i = 0; i < a.shape(0) * 3; ++i) {
+      if (!std::isfinite(p[i])) {
+        throw py::value_error(std::string(what) + ": row " + std::to_string(i / 3) +
+                              " is not finite (NaN or infinity)");
+      }
+    }
+  }
+  return a;
+}
+
+template <typename Item, typename Scalar>
+std::vector<Item> copy_rows(
+    const py::array_t<Scalar, py::array::c_style | py::array::forcecast>& a) {
+  static_assert(sizeof(Item) == 3 * sizeof(Scalar), "items are three packed scalars");
+  std::vector<Item> out(static_cast<std::size_t>(a.shape(0)));
+  if (!out.empty())
+    std::memcpy(static_cast<void*>(out.data()), a.data(), out.size() * sizeof(Item));
+  return out;
+}
+
+Cloud make_cloud(const py::handle& points, const py::object& normals, const py::object& colors,
+                 const py::object& sensor_origin) {
+  Cloud cloud;
+  PointCloud& c = *cloud.data;
+  c.positions = copy_rows<Eigen::Vector3f>(rows_of_three<float>(points, "points"));
+  const std::size_t n = c.positions.size();
+  if (!normals.is_none()) {
+    c.normals = copy_rows<Eigen::Vector3f>(rows_of_three<float>(normals, "normals"));
+    if (c.normals.size() != n)
+      throw py::value_error("normals: " + std::to_string(c.normals.size()) + " rows for " +
+                            std::to_string(n) + " points");
+  }
+  if (!colors.is_none()) {
+    // Float colours are usually in [0, 1]: a cast to uint8 would turn them into 0 and 1.
+    const py::array given = py::array::ensure(colors);
+    if (given && given.dtype().kind() == 'f')
+      throw py::value_error("colors: expected integers 0-255 (uint8), got " +
+                            std::string(py::str(given.dtype())) +
+                            " (multiply colours in [0, 1] by 255)");
+    c.colors = copy_rows<Rgb8>(rows_of_three<std::uint8_t>(colors, "colors"));
+    if (c.colors.size() != n)
+      throw py::value_error("colors: " + std::to_string(c.colors.size()) + " rows for " +
+                            std::to_string(n) + " points");
+  }
+  if (!sensor_origin.is_none()) {
+    const auto s = sensor_origin.cast<std::vector<float>>();
+    if (s.size() != 3 || !std::isfinite(s[0]) || !std::isfinite(s[1]) || !std::isfinite(s[2]))
+      throw py::value_error("sensor_origin: expected three finite numbers (x, y, z in metres)");
+    c.sensor_origin = {s[0], s[1], s[2]};
+    c.has_sensor_origin = true;
+  }
+  return cloud;
+}
+
+// reconstruct(): a Cloud, or points with optional normals and colours, through the CLI's
+// pipeline with the CLI's option names.
+Mesh reconstruct(const py::object& input, const py::object& normals, const py::object& colors,
+                 const cli::PipelineOptions& options) {
+  const Cloud cloud = py::isinstance<Cloud>(input) ? input.cast<Cloud>()
+                                                   : make_cloud(input, normals, colors, py::none());
+  if (py::isinstance<Cloud>(input) && !(normals.is_none() && colors.is_none()))
+    throw py::value_error("normals and colors are given with a points array, not with a Cloud");
+  ReconstructionConfig config;
+  try {
+    config = options.config();
+  } catch (const CLI::Error& e) {  // a malformed orient or max_memory
+    throw py::value_error(e.what());
+  } catch (const Error& e) {  // an unknown extract method or optimize step
+    throw py::value_error(e.what());
+  }
+  FramePtr frame;
+  {
+    py::gil_scoped_release no_gil;  // Python threads run while the graph works
+    ThreadLimit limit(options.threads);
+    ReconstructionPipeline pipeline(config, 1);
+    frame = pipeline.reconstruct(*cloud.data, "array");
+  }
+  if (!frame->ok()) throw Error("reconstruct", frame->failed_stage, frame->error);
+  if (frame->mesh.empty())
+    throw Error("reconstruct", "",
+                "no surface was extracted (voxel size " + std::to_string(frame->voxel_size) +
+                    " m too small or too large?)");
+  Mesh mesh;
+  *mesh.data = std::move(frame->mesh);
+  mesh.origin = frame->origin;
+  return mesh;
+}
+
+}  // namespace
+}  // namespace meshflow::python
+
+PYBIND11_MODULE(meshflow, m) {
+  using namespace meshflow;
+  using namespace meshflow::python;
+  m.doc() = "meshflow: surface reconstruction from point clouds and depth images";
+  m.attr("__version__") = MESHFLOW_VERSION;
+  py::register_exception<Error>(m, "Error", PyExc_RuntimeError);
+
+  py::class_<Cloud>(m, "Cloud", "A point cloud: points in metres, optional normals and colours.")
+      .def(py::init(&make_cloud), py::arg("points"), py::arg("normals") = py::none(),
+           py::arg("colors") = py::none(), py::arg("sensor_origin") = py::none(),
+           "Copies (n, 3) arrays: points and normals as float32, colours as uint8.")
+      .def_property_readonly(
+          "points",
+          [](py::object self) {
+            return view<float>(self.cast<Cloud&>().data->positions, 3, self, false);
+          },
+          "(n, 3) float32 view, metres")
+      .def_property_readonly(
+          "normals",
+          [](py::object self) {
+            return view<float>(self.cast<Cloud&>().data->normals, 3, self, true);
+          },
+          "(n, 3) float32 view or None")
+      .def_property_readonly(
+          "colors",
+          [](py::object self) {
+            return view<std::uint8_t>(self.cast<Cloud&>().data->colors, 3, self, true);
+          },
+          "(n, 3) uint8 view or None")
+      .def_property_readonly("sensor_origin",
+                             [](const Cloud& c) -> py::object {
+                               if (!c.data->has_sensor_origin) return py::none();
+                               const Eigen::Vector3f& s = c.data->sensor_origin;
+                               return py::make_tuple(s.x(), s.y(), s.z());
+                             })
+      .def("__len__", [](const Cloud& c) { return c.data->size(); })
+      .def("__repr__", [](const Cloud& c) {
+        return "<meshflow.Cloud " + std::to_string(c.data->size()) + " points" +
+               (c.data->has_normals() ? ", normals" : "") +
+               (c.data->has_colors() ? ", colors" : "") + ">";
+      });
+
+  py::class_<Mesh>(m, "Mesh", "A triangle mesh: vertices in metres, triangles as vertex indices.")
+      .def_property_readonly(
+          "vertices",
+          [](py::object self) {
+            return view<float>(self.cast<Mesh&>().data->vertices, 3, self, false);
+          },
+          "(v, 3) float32 view, metres")
+      .def_property_readonly(
+          "triangles",
+          [](py::object self) {
+            return view<std::uint32_t>(self.cast<Mesh&>().data->triangles, 3, self, false);
+          },
+          "(t, 3) uint32 view, counter-clockwise seen from outside")
+      .def_property_readonly(
+          "normals",
+          [](py::object self) {
+            return view<float>(self.cast<Mesh&>().data->normals, 3, self, true);
+          },
+          "(v, 3) float32 view or None")
+      .def_property_readonly(
+          "colors",
+          [](py::object self) {
+            return view<std::uint8_t>(self.cast<Mesh&>().data->colors, 3, self, true);
+          },
+          "(v, 3) uint8 view or None")
+      .def_property_readonly("origin",
+                             [](const Mesh& mesh) {
+                               return py::make_tuple(mesh.origin.x(), mesh.origin.y(),
+                                                     mesh.origin.z());
+                             })
+      .def(
+          "write",
+          [](const Mesh& mesh, const std::string& path) {
+            py::gil_scoped_release no_gil;
+            io::write_mesh(path, *mesh.data, mesh.origin);
+          },
+          py::arg("path"), "Writes .ply, .obj, .stl, .off or .glb by extension.")
+      .def("__repr__", [](const Mesh& mesh) {
+        return "<meshflow.Mesh " + std::to_string(mesh.data->vertices.size()) + " vertices, " +
+               std::to_string(mesh.data->triangles.size()) + " triangles>";
+      });
+
+  m.def(
+      "read_cloud",
+      [](const std::string& path, const std::string& columns) {
+        Cloud cloud;
+        py::gil_scoped_release no_gil;
+        *cloud.data = io::read_point_cloud(path, columns);
+        return cloud;
+      },
+      py::arg("path"), py::arg("columns") = "",
+      "Reads PLY, PCD, XYZ/TXT/PTS/CSV, 3DTK .3d (+ .pose) or LAS by extension.");
+
+  m.def(
+      "read_mesh",
+      [](const std::string& path) {
+        Mesh mesh;
+        py::gil_scoped_release no_gil;
+        *mesh.data = io::read_mesh(path);
+        return mesh;
+      },
+      py::arg("path"), "Reads a PLY, OBJ, OFF or STL mesh by extension.");
+
+  const cli::PipelineOptions defaults;
+  m.def(
+      "reconstruct",
+      [](const py::object& input, const py::object& normals, const py::object& colors, float voxel,
+         int kn, int ki, int kd, const std::string& extract, const std::string& optimize,
+         const std::string& normal_source, const std::string& orient, std::size_t max_hole,
+         float decimate_to, float max_rim, std::size_t min_component, const std::string& max_memory,
+         int threads) {
+        cli::PipelineOptions o;
+        o.voxel = voxel;
+        o.kn = kn;
+        o.ki = ki;
+        o.kd = kd;
+        o.extract = extract;
+        o.optimize = optimize;
+        o.normals = normal_source;
+        o.orient = orient;
+        o.max_hole = max_hole;
+        o.decimate_to = decimate_to;
+        o.max_rim = max_rim;
+        o.min_component = min_component;
+        o.max_memory = max_memory;
+        o.threads = threads;
+        return reconstruct(input, normals, colors, o);
+      },
+      py::arg("cloud"), py::arg("normals") = py::none(), py::arg("colors") = py::none(),
+      py::kw_only(), py::arg("voxel") = defaults.voxel, py::arg("kn") = defaults.kn,
+      py::arg("ki") = defaults.ki, py::arg("kd") = defaults.kd,
+      py::arg("extract") = defaults.extract, py::arg("optimize") = defaults.optimize,
+      py::arg("normal_source") = defaults.normals, py::arg("orient") = defaults.orient,
+      py::arg("max_hole") = defaults.max_hole, py::arg("decimate_to") = defaults.decimate_to,
+      py::arg("max_rim") = defaults.max_rim, py::arg("min_component") = defaults.min_component,
+      py::arg("max_memory") = defaults.max_memory, py::arg("threads") = defaults.threads,
+      R"(Reconstructs a surface from a Cloud or an (n, 3) points array (with optional (n, 3)
+normals and uint8 colours). Keyword arguments are the CLI's options (--voxel, --kn, --extract,
+--optimize, --normals as normal_source, --orient, ...) with the same defaults: voxel 0 chooses
+3x the median point spacing. The GIL is released while the pipeline runs. Raises
+meshflow.Error for input the pipeline cannot mesh, ValueError for malformed arrays.)");
+}

@@ -1,0 +1,165 @@
+"""The Python module against the CLI and analytic shapes (run by ctest as Python.pytest)."""
+import math
+import os
+import subprocess
+import threading
+
+import numpy as np
+import pytest
+
+import meshflow
+
+CLI = os.environ["MESHFLOW_CLI"]
+DATA = os.environ.get("MESHFLOW_DATA", os.path.join(os.environ["MESHFLOW_SOURCE_DIR"], "..",
+                                                    "shared", "data"))
+
+
+def cli(*args):
+    subprocess.run([CLI, *args, "-q"], check=True)
+
+
+@pytest.fixture(scope="module")
+def torus_ply(tmp_path_factory):
+    path = str(tmp_path_factory.mktemp("torus") / "torus.ply")
+    cli("sample", "torus", "--points", "60000", "-o", path)
+    return path
+
+
+def sphere_points(n=40000, radius=0.5, seed=3):
+    rng = np.random.default_rng(seed)
+    v = rng.normal(size=(n, 3))
+    v /= np.linalg.norm(v, axis=1, keepdims=True)
+    return (radius * v).astype(np.float32), v.astype(np.float32)
+
+
+def test_same_triangles_as_the_cli(torus_ply, tmp_path):
+    out = str(tmp_path / "cli.ply")
+    cli("reconstruct", torus_ply, "--voxel", "0.02", "-o", out)
+    expected = meshflow.read_mesh(out)
+    mesh = meshflow.reconstruct(meshflow.read_cloud(torus_ply), voxel=0.02)
+    np.testing.assert_array_equal(mesh.triangles, expected.triangles)
+    np.testing.assert_array_equal(mesh.vertices, expected.vertices)
+
+
+@pytest.mark.skipif(not os.path.exists(os.path.join(DATA, "kurt3d", "scan000.3d")),
+                    reason="shared data absent (set MESHFLOW_DATA)")
+def test_same_triangles_as_the_cli_on_a_laser_scan(tmp_path):
+    scan = os.path.join(DATA, "kurt3d", "scan000.3d")
+    out = str(tmp_path / "cli.ply")
+    cli("reconstruct", scan, "--voxel", "0.05", "-o", out)
+    mesh = meshflow.reconstruct(meshflow.read_cloud(scan), voxel=0.05)
+    np.testing.assert_array_equal(mesh.triangles, meshflow.read_mesh(out).triangles)
+
+
+def test_arrays_in_sphere_out():
+    points, normals = sphere_points()
+    mesh = meshflow.reconstruct(points, normals, voxel=0.02)
+    radii = np.linalg.norm(mesh.vertices, axis=1)
+    assert mesh.triangles.shape[1] == 3 and len(mesh.triangles) > 1000
+    assert abs(radii.mean() - 0.5) < 0.002 and radii.std() < 0.003
+    assert mesh.triangles.max() < len(mesh.vertices)
+    # Without normals the orientation comes from propagation; still the same sphere.
+    unoriented = meshflow.reconstruct(points.astype(np.float64), voxel=0.02)
+    assert abs(np.linalg.norm(unoriented.vertices, axis=1).mean() - 0.5) < 0.002
+
+
+def test_colours_reach_the_mesh():
+    points, normals = sphere_points(20000)
+    colors = np.where(points[:, 2:3] > 0, [255, 0, 0], [0, 0, 255]).astype(np.uint8)
+    mesh = meshflow.reconstruct(points, normals, colors, voxel=0.04)
+    assert mesh.colors is not None and mesh.colors.shape == mesh.vertices.shape
+    assert mesh.normals is not None
+    np.testing.assert_array_equal(mesh.colors[mesh.vertices[:, 2] > 0.1], [[255, 0, 0]] *
+                                  int((mesh.vertices[:, 2] > 0.1).sum()))
+    np.testing.assert_array_equal(mesh.colors[mesh.vertices[:, 2] < -0.1], [[0, 0, 255]] *
+                                  int((mesh.vertices[:, 2] < -0.1).sum()))
+
+
+def test_arrays_out_are_views_not_copies():
+    points, normals = sphere_points(20000)
+    mesh = meshflow.reconstruct(points, normals, voxel=0.04)
+    v = mesh.vertices
+    assert v.base is mesh and mesh.triangles.base is mesh
+    assert v.dtype == np.float32 and v.flags.c_contiguous
+    assert mesh.vertices.__array_interface__["data"][0] == v.__array_interface__["data"][0]
+    v[0, 0] = 7.0  # writes through to the mesh
+    assert mesh.vertices[0, 0] == 7.0
+    cloud = meshflow.Cloud(points, normals)
+    assert cloud.points.base is cloud and len(cloud) == len(points)
+    np.testing.assert_array_equal(cloud.points, points)
+    del mesh, cloud  # views keep their owners alive
+    assert v[0, 0] == 7.0
+
+
+def test_the_gil_is_released_while_reconstructing():
+    points, normals = sphere_points(150000)
+    ticks = 0
+    done = threading.Event()
+
+    def count():
+        nonlocal ticks
+        while not done.is_set():
+            ticks += 1
+
+    t = threading.Thread(target=count)
+    t.start()
+    try:
+        before = ticks
+        meshflow.reconstruct(points, normals, voxel=0.01, threads=1)
+        during = ticks - before
+    finally:
+        done.set()
+        t.join()
+    assert during > 1000  # the counting thread ran while C++ worked
+
+
+def test_write_round_trip(tmp_path):
+    points, normals = sphere_points(20000)
+    mesh = meshflow.reconstruct(points, normals, voxel=0.04)
+    for ext in ("ply", "obj", "off", "stl"):
+        path = str(tmp_path / f"sphere.{ext}")
+        mesh.write(path)
+        back = meshflow.read_mesh(path)
+        assert len(back.triangles) == len(mesh.triangles), ext
+
+
+def test_bad_arrays_are_value_errors():
+    points, normals = sphere_points(1000)
+    with pytest.raises(ValueError, match=r"points: expected shape \(n, 3\), got \(1000, 2\)"):
+        meshflow.reconstruct(points[:, :2])
+    with pytest.raises(ValueError, match="points: expected shape"):
+        meshflow.reconstruct(points.ravel())
+    bad = points.copy()
+    bad[17, 1] = np.nan
+    with pytest.raises(ValueError, match="points: row 17 is not finite"):
+        meshflow.reconstruct(bad)
+    with pytest.raises(ValueError, match="normals: 999 rows for 1000 points"):
+        meshflow.reconstruct(points, normals[:999])
+    with pytest.raises(ValueError, match="expected an array of numbers"):
+        meshflow.reconstruct([["a", "b", "c"]])
+    with pytest.raises(ValueError, match="orient"):
+        meshflow.reconstruct(points, orient="sideways")
+    with pytest.raises(ValueError, match="extract"):
+        meshflow.reconstruct(points, extract="nonsense")
+    with pytest.raises(ValueError, match=r"colors: expected integers 0-255 \(uint8\), got float64"):
+        meshflow.Cloud(points, colors=np.full((1000, 3), 0.5))
+    colored = meshflow.Cloud(points, colors=np.full((1000, 3), 200, dtype=np.int64))
+    assert colored.colors.dtype == np.uint8 and colored.colors[5, 1] == 200
+    # Strided input is fine: it is copied.
+    wide = np.zeros((1000, 6), dtype=np.float64)
+    wide[:, ::2] = points
+    assert meshflow.Cloud(wide[:, ::2]).points.shape == (1000, 3)
+
+
+def test_meshflow_errors_name_the_file(tmp_path):
+    missing = str(tmp_path / "missing.ply")
+    with pytest.raises(meshflow.Error, match="missing.ply"):
+        meshflow.read_cloud(missing)
+    broken = tmp_path / "broken.ply"
+    broken.write_text("ply\nformat ascii 1.0\nelement vertex 5\nproperty float x\nend_header\n1\n")
+    with pytest.raises(meshflow.Error, match="broken.ply"):
+        meshflow.read_cloud(str(broken))
+    with pytest.raises(meshflow.Error):
+        meshflow.reconstruct(np.zeros((0, 3), dtype=np.float32))
+    assert issubclass(meshflow.Error, RuntimeError)
+    assert meshflow.__version__

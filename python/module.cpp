@@ -8,16 +8,14 @@
 // their `base` is the Cloud or Mesh, which they keep alive. Arrays handed in are copied once
 // into meshflow's structure of arrays (any dtype NumPy can cast to float32 / uint8, any strides).
 
-#include <pybind11/numpy.h>
-#include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
 #include <cmath>
-#include <cstring>
 #include <memory>
 #include <string>
-#include <type_traits>
 #include <vector>
+
+#include "python/bindings.h"
 
 #include "graph/pipeline.h"
 #include "nodes/io/mesh_readers.h"
@@ -25,79 +23,10 @@
 #include "nodes/io/read_point_cloud.h"
 #include "runtime/error.h"
 #include "runtime/threads.h"
+#include "tools/eval_report.h"
 #include "tools/pipeline_options.h"
 
-namespace py = pybind11;
-
 namespace meshflow::python {
-namespace {
-
-/// A cloud shared between Python and the reconstruction (which copies it when it starts).
-struct Cloud {
-  std::shared_ptr<PointCloud> data = std::make_shared<PointCloud>();
-};
-
-/// A reconstructed mesh; `origin` is the world position of its local frame (georeferenced
-/// inputs), which write() puts back.
-struct Mesh {
-  std::shared_ptr<TriangleMesh> data = std::make_shared<TriangleMesh>();
-  Eigen::Vector3d origin = Eigen::Vector3d::Zero();
-};
-
-// An (n, columns) array over `values` (n items of `columns` Scalars each, packed), owned by
-// `owner`: no copy. None when the vector is empty and `none_if_empty`.
-template <typename Scalar, typename Item>
-py::object view(const std::vector<Item>& values, py::ssize_t columns, py::handle owner,
-                bool none_if_empty) {
-  static_assert(sizeof(Item) % sizeof(Scalar) == 0, "items are packed scalars");
-  if (values.empty() && none_if_empty) return py::none();
-  const auto n = static_cast<py::ssize_t>(values.size());
-  return py::array_t<Scalar>(
-      {n, columns},
-      {static_cast<py::ssize_t>(sizeof(Item)), static_cast<py::ssize_t>(sizeof(Scalar))},
-      reinterpret_cast<const Scalar*>(values.data()), owner);
-}
-
-// `array` as n x 3 values of type Scalar (cast by NumPy, any strides), or a ValueError naming
-// `what` for another shape or a non-finite value.
-template <typename Scalar>
-py::array_t<Scalar, py::array::c_style | py::array::forcecast> rows_of_three(
-    const py::handle& array, const char* what) {
-  py::array_t<Scalar, py::array::c_style | py::array::forcecast> a;
-  try {
-    a = py::array_t<Scalar, py::array::c_style | py::array::forcecast>::ensure(array);
-  } catch (const py::error_already_set&) {
-    a = {};
-  }
-  if (!a) throw py::value_error(std::string(what) + ": expected an array of numbers");
-  if (a.ndim() != 2 || a.shape(1) != 3) {
-    std::string shape = "(";
-    for (py::ssize_t d = 0; d < a.ndim(); ++d)
-      shape += (d ? ", " : "") + std::to_string(a.shape(d));
-    throw py::value_error(std::string(what) + ": expected shape (n, 3), got " + shape +
-                          (a.ndim() == 1 ? ",)" : ")"));
-  }
-  if constexpr (std::is_floating_point_v<Scalar>) {
-    const Scalar* p = a.data();
-    for (py::ssize_t i = 0; i < a.shape(0) * 3; ++i) {
-      if (!std::isfinite(p[i])) {
-        throw py::value_error(std::string(what) + ": row " + std::to_string(i / 3) +
-                              " is not finite (NaN or infinity)");
-      }
-    }
-  }
-  return a;
-}
-
-template <typename Item, typename Scalar>
-std::vector<Item> copy_rows(
-    const py::array_t<Scalar, py::array::c_style | py::array::forcecast>& a) {
-  static_assert(sizeof(Item) == 3 * sizeof(Scalar), "items are three packed scalars");
-  std::vector<Item> out(static_cast<std::size_t>(a.shape(0)));
-  if (!out.empty())
-    std::memcpy(static_cast<void*>(out.data()), a.data(), out.size() * sizeof(Item));
-  return out;
-}
 
 Cloud make_cloud(const py::handle& points, const py::object& normals, const py::object& colors,
                  const py::object& sensor_origin) {
@@ -133,6 +62,8 @@ Cloud make_cloud(const py::handle& points, const py::object& normals, const py::
   return cloud;
 }
 
+namespace {
+
 // reconstruct(): a Cloud, or points with optional normals and colours, through the CLI's
 // pipeline with the CLI's option names.
 Mesh reconstruct(const py::object& input, const py::object& normals, const py::object& colors,
@@ -165,6 +96,27 @@ Mesh reconstruct(const py::object& input, const py::object& normals, const py::o
   *mesh.data = std::move(frame->mesh);
   mesh.origin = frame->origin;
   return mesh;
+}
+
+// A reference for evaluate(): a Mesh, a Cloud (its points and normals) or a file eval reads.
+TriangleMesh reference_mesh(const py::object& reference, std::string& name) {
+  if (py::isinstance<Mesh>(reference)) {
+    name = "mesh";
+    return *reference.cast<Mesh>().data;
+  }
+  if (py::isinstance<Cloud>(reference)) {
+    name = "cloud";
+    const PointCloud& cloud = *reference.cast<Cloud>().data;
+    TriangleMesh points;
+    points.vertices = cloud.positions;
+    points.normals = cloud.normals;
+    return points;
+  }
+  if (py::isinstance<py::str>(reference)) {
+    name = reference.cast<std::string>();
+    return cli::read_reference(name);
+  }
+  throw py::value_error("reference: expected a Mesh, a Cloud or a file path");
 }
 
 }  // namespace
@@ -274,6 +226,28 @@ PYBIND11_MODULE(meshflow, m) {
         return mesh;
       },
       py::arg("path"), "Reads a PLY, OBJ, OFF or STL mesh by extension.");
+
+  m.def(
+      "evaluate",
+      [](const Mesh& mesh, const py::object& reference, float wall_radius) {
+        std::string name;
+        const TriangleMesh ref = reference_mesh(reference, name);
+        std::string json;
+        {
+          py::gil_scoped_release no_gil;
+          json = cli::reference_evaluation_json(
+                     cli::evaluate_reference(*mesh.data, ref, wall_radius), "mesh", name)
+                     .dump();
+        }
+        return py::module_::import("json").attr("loads")(json);
+      },
+      py::arg("mesh"), py::arg("reference"), py::arg("wall_radius") = 0.0f,
+      R"(The figures of `meshflow eval MESH --reference REF --json`, as a dict: distances both
+ways (mean, rms, median, p95, max in metres), normal deviation, inside-out share, topology,
+orientation, double walls. reference: a Mesh, a Cloud or a file path.)");
+
+  bind_depth(m);
+  bind_live(m);
 
   const cli::PipelineOptions defaults;
   m.def(

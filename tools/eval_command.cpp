@@ -6,7 +6,6 @@
 #include <memory>
 #include <string>
 
-#include "nodes/eval/double_walls.h"
 #include "nodes/eval/surface_eval.h"
 #include "nodes/eval/truth_eval.h"
 #include "nodes/io/mesh_readers.h"
@@ -16,24 +15,11 @@
 #include "tools/cli_checks.h"
 #include "tools/commands.h"
 #include "tools/console.h"
+#include "tools/eval_report.h"
 #include "tools/json_report.h"
 
 namespace meshflow::cli {
 namespace {
-
-// A mesh file (.ply .obj .off .stl) is read as a mesh (a PLY without faces is a point set); any
-// other point-cloud file is a point set.
-TriangleMesh read_reference(const std::string& path) {
-  if (io::is_mesh_file(path)) return io::read_mesh(path);
-  PointCloud cloud = io::read_point_cloud(path);
-  TriangleMesh points;
-  for (std::size_t i = 0; i < cloud.size(); ++i) {
-    if (!cloud.positions[i].allFinite()) continue;  // scans mark missing returns with NaN
-    points.vertices.push_back(cloud.positions[i]);
-    if (cloud.has_normals()) points.normals.push_back(cloud.normals[i]);
-  }
-  return points;
-}
 
 void print_distances(const char* label, const DistanceStats& s) {
   report("%-18s mean %.6f  rms %.6f  median %.6f  p95 %.6f  max %.6f m  (%zu samples)\n", label,
@@ -49,29 +35,9 @@ void print_topology(const MeshTopology& t) {
       t.edges.closed() && t.edges.inconsistent_edges == 0 ? " (watertight)" : "");
 }
 
-// Double walls within `radius` metres (0: the median edge length), for the report and JSON.
-struct DoubleWalls {
-  float radius;
-  double share;
-};
-DoubleWalls double_walls(const TriangleMesh& mesh, float radius) {
-  const float r = radius > 0.0f ? radius : median_edge_length(mesh);
-  return {r, double_wall_area_share(mesh, r)};
-}
-
 void print_double_walls(const DoubleWalls& w) {
   report("double walls       %.2f %% of the area within %.4g m of another sheet\n", 100.0 * w.share,
          w.radius);
-}
-
-nlohmann::json double_walls_json(const DoubleWalls& w) {
-  return {{"radius", w.radius}, {"area_share", w.share}};
-}
-
-// A watertight mesh's orientation from its enclosed volume: "outward" or "inside out".
-const char* closed_orientation(const MeshTopology& t, double volume) {
-  if (!t.edges.closed() || t.edges.inconsistent_edges > 0) return nullptr;
-  return volume >= 0.0 ? "outward" : "inside out";
 }
 
 // Distances to the exact surface of a built-in object, also relative to its diagonal.
@@ -113,43 +79,21 @@ void evaluate_object(const std::string& path, const TriangleMesh& mesh,
   print_double_walls(walls);
 }
 
-void evaluate_reference(const std::string& mesh_path, const TriangleMesh& mesh,
-                        const std::string& reference_path, float wall_radius) {
-  const DoubleWalls walls = double_walls(mesh, wall_radius);
+void print_reference_evaluation(const std::string& mesh_path, const TriangleMesh& mesh,
+                                const std::string& reference_path, float wall_radius) {
   const TriangleMesh reference = read_reference(reference_path);
-  const SurfaceEvaluation e = evaluate_surface(mesh, reference);
-  const char* orientation = closed_orientation(e.topology, signed_volume(mesh));
-  const bool normals = e.normal_samples > 0;
-  if (console().json) {
-    nlohmann::json doc = {{"mesh", mesh_path},
-                          {"vertices", e.vertices},
-                          {"triangles", e.triangles},
-                          {"reference",
-                           {{"file", reference_path},
-                            {"points", reference.vertices.size()},
-                            {"triangles", reference.triangles.size()}}},
-                          {"mesh_to_reference", distance_json(e.mesh_to_reference)},
-                          {"reference_to_mesh", distance_json(e.reference_to_mesh)},
-                          {"topology", topology_json(e.topology)}};
-    doc["normal_deviation_deg"] =
-        normals ? nlohmann::json{{"mean", e.normal_mean_deg}, {"p95", e.normal_p95_deg}}
-                : nlohmann::json();
-    doc["inside_out_area_share"] = std::isnan(e.inside_out_area_share)
-                                       ? nlohmann::json()
-                                       : nlohmann::json(e.inside_out_area_share);
-    doc["orientation"] = orientation != nullptr ? nlohmann::json(orientation) : nlohmann::json();
-    doc["double_walls"] = double_walls_json(walls);
-    return print_json(doc);
-  }
+  const ReferenceEvaluation r = evaluate_reference(mesh, reference, wall_radius);
+  if (console().json) return print_json(reference_evaluation_json(r, mesh_path, reference_path));
+  const SurfaceEvaluation& e = r.surface;
   report("mesh               %s: %zu vertices, %zu triangles\n", mesh_path.c_str(), e.vertices,
          e.triangles);
-  report("reference          %s: %zu points%s\n", reference_path.c_str(), reference.vertices.size(),
-         reference.triangles.empty()
+  report("reference          %s: %zu points%s\n", reference_path.c_str(), r.reference_points,
+         r.reference_triangles == 0
              ? ""
-             : (", " + std::to_string(reference.triangles.size()) + " triangles").c_str());
+             : (", " + std::to_string(r.reference_triangles) + " triangles").c_str());
   print_distances("mesh -> reference", e.mesh_to_reference);
   print_distances("reference -> mesh", e.reference_to_mesh);
-  if (normals) {
+  if (e.normal_samples > 0) {
     report("normal deviation   mean %.2f  p95 %.2f degrees (orientation ignored)\n",
            e.normal_mean_deg, e.normal_p95_deg);
     report("inside out         %.1f %% of the area faces against the reference's normals\n",
@@ -158,8 +102,8 @@ void evaluate_reference(const std::string& mesh_path, const TriangleMesh& mesh,
     report("normal deviation   n/a (the reference has no normals)\n");
   }
   print_topology(e.topology);
-  if (orientation != nullptr) report("orientation        %s (enclosed volume)\n", orientation);
-  print_double_walls(walls);
+  if (r.orientation != nullptr) report("orientation        %s (enclosed volume)\n", r.orientation);
+  print_double_walls(r.walls);
 }
 
 }  // namespace
@@ -191,7 +135,7 @@ void add_eval_options(CLI::App* cmd) {
                              *wall_radius);
     if (reference_path->empty())
       throw CLI::ValidationError("eval", "give --reference FILE or --object NAME");
-    evaluate_reference(*mesh_path, mesh, *reference_path, *wall_radius);
+    print_reference_evaluation(*mesh_path, mesh, *reference_path, *wall_radius);
   });
 }
 

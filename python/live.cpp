@@ -1,0 +1,224 @@
+// The embedding API from Python: meshflow.Pipeline pushes clouds or depth frames and calls a
+// Python function with each finished mesh, on a pipeline thread (holding the GIL only for the
+// call).
+
+#include <pybind11/functional.h>
+#include <pybind11/stl.h>
+
+#include <memory>
+#include <string>
+#include <utility>
+
+#include "graph/live_pipeline.h"
+#include "python/bindings.h"
+#include "runtime/error.h"
+#include "tools/pipeline_options.h"
+
+namespace meshflow::python {
+namespace {
+
+/// What the callback receives for one frame.
+struct Result {
+  std::uint64_t seq = 0;
+  bool ok = false;
+  std::string error, failed_stage;
+  py::object mesh = py::none();  ///< a Mesh, or None for a failed frame
+  double latency_s = 0.0;
+};
+
+// A LivePipeline and the Python callable it calls. The pipeline's C++ callback holds only a
+// pointer to this object (no Python object: destroying the pipeline happens without the GIL).
+class Pipeline {
+ public:
+  Pipeline(py::function callback, const LiveConfig& config) : callback_(std::move(callback)) {
+    live_ = std::make_unique<LivePipeline>(config, [this](LiveResult& r) { deliver(r); });
+  }
+  ~Pipeline() { close(); }
+  Pipeline(const Pipeline&) = delete;
+  Pipeline& operator=(const Pipeline&) = delete;
+
+  py::tuple push_cloud(const py::object& input, double timestamp_s) {
+    const Cloud cloud = py::isinstance<Cloud>(input)
+                            ? input.cast<Cloud>()
+                            : make_cloud(input, py::none(), py::none(), py::none());
+    PointCloud copy = *cloud.data;
+    LivePipeline::Push p{};
+    {
+      py::gil_scoped_release no_gil;
+      p = open().push(std::move(copy), timestamp_s);
+    }
+    return status(p);
+  }
+
+  py::tuple push_depth(DepthFrame frame) {
+    LivePipeline::Push p{};
+    {
+      py::gil_scoped_release no_gil;
+      p = open().push(std::move(frame));
+    }
+    return status(p);
+  }
+
+  void flush() {
+    py::gil_scoped_release no_gil;  // callbacks need the GIL to finish
+    open().flush();
+  }
+
+  LiveStats stats() const {
+    if (!live_) throw Error("Pipeline", "", "the pipeline is closed");
+    return live_->stats();
+  }
+
+  /// Stops the pipeline (waiting frames are discarded; flush() first to keep them).
+  void close() {
+    if (!live_) return;
+    py::gil_scoped_release no_gil;
+    live_.reset();
+  }
+
+ private:
+  LivePipeline& open() {
+    if (!live_) throw Error("Pipeline", "", "the pipeline is closed");
+    return *live_;
+  }
+
+  static py::tuple status(const LivePipeline::Push& p) {
+    const char* name = p.status == LivePipeline::PushStatus::kAccepted ? "accepted"
+                       : p.status == LivePipeline::PushStatus::kAcceptedDroppedOldest
+                           ? "dropped_oldest"
+                           : "rejected";
+    return py::make_tuple(p.seq, name);
+  }
+
+  // On a pipeline thread: takes the GIL for the Python call only. An exception in the callback
+  // is printed as Python prints one from a thread, and counted (stats()["callback_exceptions"]).
+  void deliver(LiveResult& r) {
+    py::gil_scoped_acquire gil;
+    Result result;
+    result.seq = r.seq;
+    result.ok = r.ok;
+    result.error = r.error;
+    result.failed_stage = r.failed_stage;
+    result.latency_s = r.latency_s;
+    if (r.ok) {
+      Mesh mesh;
+      *mesh.data = std::move(r.mesh);
+      result.mesh = py::cast(std::move(mesh));
+    }
+    try {
+      callback_(std::move(result));
+    } catch (py::error_already_set& e) {
+      e.discard_as_unraisable("meshflow.Pipeline callback");
+      throw std::runtime_error("the Python callback raised");
+    }
+  }
+
+  py::function callback_;
+  std::unique_ptr<LivePipeline> live_;
+};
+
+py::dict stats_dict(const LiveStats& s) {
+  py::dict d;
+  d["pushed"] = s.pushed;
+  d["rejected"] = s.rejected;
+  d["dropped"] = s.dropped;
+  d["delivered"] = s.delivered;
+  d["failed"] = s.failed;
+  d["callback_exceptions"] = s.callback_exceptions;
+  d["waiting"] = s.waiting;
+  d["in_flight"] = s.in_flight;
+  d["latency_p50_s"] = s.latency_p50_s;
+  d["latency_p95_s"] = s.latency_p95_s;
+  d["latency_p99_s"] = s.latency_p99_s;
+  return d;
+}
+
+}  // namespace
+
+void bind_live(py::module_& m) {
+  py::class_<Result>(m, "Result", "One finished frame, as a Pipeline's callback receives it.")
+      .def_readonly("seq", &Result::seq, "what push() returned for the frame")
+      .def_readonly("ok", &Result::ok)
+      .def_readonly("error", &Result::error, "when not ok: what went wrong")
+      .def_readonly("failed_stage", &Result::failed_stage)
+      .def_readonly("mesh", &Result::mesh, "a Mesh, or None when not ok")
+      .def_readonly("latency_s", &Result::latency_s, "from push() to the callback, seconds")
+      .def("__repr__", [](const Result& r) {
+        return "<meshflow.Result seq " + std::to_string(r.seq) + (r.ok ? " ok" : " failed") + ">";
+      });
+
+  const cli::PipelineOptions defaults;
+  py::class_<Pipeline>(m, "Pipeline", R"(The embedding API: push() clouds or depth frames from
+your loop (it never waits for reconstruction), callback(result) is called with each finished
+frame in push order on a pipeline thread. policy 'realtime' drops the oldest waiting frame when
+the queue is full (bounded latency), 'queue' refuses new ones (back-pressure).)")
+      .def(
+          py::init([](py::function callback, const std::string& policy, int threads,
+                      std::size_t frames_in_flight, std::size_t max_waiting, bool triangulate,
+                      const std::string& method, float decimate, float voxel,
+                      const std::string& extract, const std::string& optimize) {
+            LiveConfig c;
+            if (policy == "realtime") {
+              c.policy = LivePolicy::kRealtime;
+            } else if (policy == "queue") {
+              c.policy = LivePolicy::kQueue;
+            } else {
+              throw py::value_error("policy: expected 'realtime' or 'queue', got '" + policy + "'");
+            }
+            if (frames_in_flight < 1 || max_waiting < 1)
+              throw py::value_error("frames_in_flight and max_waiting: at least 1");
+            if (method != "naive" && method != "rqt")
+              throw py::value_error("method: expected 'naive' or 'rqt', got '" + method + "'");
+            if (!(decimate >= 0.0f && decimate < 1.0f))
+              throw py::value_error("decimate: expected a share in [0, 1) (0 = off)");
+            cli::PipelineOptions o;
+            o.voxel = voxel;
+            o.extract = extract;
+            o.optimize = optimize;
+            try {
+              c.reconstruction = o.config();
+            } catch (const std::exception& e) {
+              throw py::value_error(e.what());
+            }
+            c.reconstruction.triangulation.method =
+                method == "rqt" ? DepthTriangulationMethod::kRestrictedQuadtree
+                                : DepthTriangulationMethod::kNaive;
+            c.reconstruction.triangulation.decimate_to = decimate;
+            c.threads = threads;
+            c.frames_in_flight = frames_in_flight;
+            c.max_waiting = max_waiting;
+            c.triangulate_depth_maps = triangulate;
+            return std::make_unique<Pipeline>(std::move(callback), c);
+          }),
+          py::arg("callback"), py::kw_only(), py::arg("policy") = "realtime",
+          py::arg("threads") = 0, py::arg("frames_in_flight") = LiveConfig{}.frames_in_flight,
+          py::arg("max_waiting") = LiveConfig{}.max_waiting, py::arg("triangulate") = false,
+          py::arg("method") = "naive", py::arg("decimate") = 0.0f,
+          py::arg("voxel") = defaults.voxel, py::arg("extract") = defaults.extract,
+          py::arg("optimize") = defaults.optimize)
+      .def("push", &Pipeline::push_cloud, py::arg("cloud"), py::arg("timestamp") = 0.0,
+           "Hands over a Cloud or (n, 3) points; returns (seq, 'accepted' | 'dropped_oldest' | "
+           "'rejected').")
+      .def(
+          "push_depth",
+          [](Pipeline& p, const py::handle& depth, const PinholeIntrinsics& intrinsics,
+             const py::object& pose, float depth_scale, const py::object& color, double timestamp) {
+            DepthFrame frame = make_depth_frame(depth, intrinsics, pose, depth_scale, color);
+            frame.timestamp_s = timestamp;
+            return p.push_depth(std::move(frame));
+          },
+          py::arg("depth"), py::arg("intrinsics"), py::arg("pose") = py::none(),
+          py::arg("depth_scale") = 1000.0f, py::arg("color") = py::none(),
+          py::arg("timestamp") = 0.0, "Hands over a depth image; returns as push().")
+      .def("flush", &Pipeline::flush,
+           "Waits until every accepted, undropped frame has reached the callback.")
+      .def("stats", [](const Pipeline& p) { return stats_dict(p.stats()); })
+      .def("close", &Pipeline::close, "Stops the pipeline; waiting frames are discarded.")
+      .def("__enter__", [](py::object self) { return self; })
+      .def("__exit__", [](Pipeline& p, const py::args&) {
+        p.flush();
+        p.close();
+      });
+}
+
+}  // namespace meshflow::python

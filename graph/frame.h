@@ -111,6 +111,7 @@ struct Frame {
   /// inside "optimize", each step's name (else nullptr): for progress lines. Optional.
   std::function<void(const char* stage, const char* step)> on_stage;
 
+  /// Whether every stage so far succeeded (error is empty).
   bool ok() const { return error.empty(); }
 };
 

@@ -39,7 +39,9 @@ class FusionPipeline : public FramePipeline {
   /// The map's surface (incremental marching cubes, then the configured optimisation steps).
   TriangleMesh extract_mesh();
 
+  /// The TSDF map fused so far.
   const TsdfVolume& map() const { return map_; }
+  /// The configuration the pipeline was made with.
   const FusionConfig& config() const { return config_; }
 
  private:

@@ -92,6 +92,8 @@ class LivePipeline {
   /// image with intrinsics and pose. Thread-safe; O(1) apart from moving the frame in; never
   /// waits for reconstruction work.
   Push push(PointCloud cloud, double timestamp_s = 0.0);
+  /// The same for a depth image with intrinsics and pose (check_depth_frame() runs in the graph: a
+  /// bad frame is delivered failed).
   Push push(DepthFrame frame);
 
   /// Blocks until every accepted, undropped frame has been delivered. Thread-safe.

@@ -21,6 +21,8 @@ namespace meshflow {
 /// config.normals says (auto: towards the frame's sensor where it has one).
 class ScanPreparationPipeline final : public FramePipeline {
  public:
+  /// Prepares up to `max_in_flight` (>= 1) scans at once with `config`'s filter and normals
+  /// settings.
   explicit ScanPreparationPipeline(ReconstructionConfig config, std::size_t max_in_flight = 2);
   void run(const std::function<FramePtr()>& next,
            const std::function<void(const FramePtr&)>& sink) override;

@@ -44,6 +44,7 @@ class ReconstructionPipeline : public FramePipeline {
   /// Reconstructs one in-memory cloud (convenience over run()).
   FramePtr reconstruct(PointCloud cloud, std::string name = "cloud");
 
+  /// The configuration the pipeline was made with.
   const ReconstructionConfig& config() const { return config_; }
 
  private:

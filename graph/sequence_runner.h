@@ -28,6 +28,7 @@ struct SequenceRunStats {
   double wall_s = 0.0;               ///< from the first frame requested to the last delivered
   StageStatistics stages;            ///< per-stage timings of every frame (bounded memory)
   std::vector<StageRecord> records;  ///< with keep_records: every stage of every frame, in order
+  /// Frames (ok or failed) per wall-clock second; 0 before any.
   double frames_per_second() const {
     return wall_s > 0.0 ? static_cast<double>(frames_ok + frames_failed) / wall_s : 0.0;
   }

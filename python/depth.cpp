@@ -160,12 +160,15 @@ share of the triangles (QEM). Vertex colours when color is given.)");
           "Fuses one depth frame seen from pose (4 x 4 camera-to-world); returns its counts.")
       .def(
           "extract",
-          [](Volume& v) {
+          [](Volume& v, bool incremental) {
             py::gil_scoped_release no_gil;
-            return to_mesh(v.mesher.extract(v.volume));
+            if (incremental) return to_mesh(v.mesher.extract(v.volume));
+            TsdfMesher fresh;
+            return to_mesh(fresh.extract(v.volume));
           },
-          "The map's surface (marching cubes; blocks unchanged since the last call reuse their "
-          "meshes).")
+          py::arg("incremental") = true,
+          "The map's surface (marching cubes). incremental: blocks unchanged since the last call "
+          "reuse their meshes (same result); False meshes every block.")
       .def_property_readonly("block_count", [](const Volume& v) { return v.volume.block_count(); })
       .def_property_readonly("memory_bytes",
                              [](const Volume& v) { return v.volume.memory_bytes(); });

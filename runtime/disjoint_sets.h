@@ -12,6 +12,7 @@ namespace meshflow {
 /// depend on the order of unite() calls. Not thread-safe; O(n) memory, near-constant time per call.
 class DisjointSets {
  public:
+  /// n singleton sets 0 .. n - 1.
   explicit DisjointSets(std::size_t n) { reset(n); }
 
   /// Starts over with n singletons, keeping the memory already held. O(n).

@@ -14,6 +14,7 @@ struct DistanceField {
   std::vector<std::uint8_t> valid;  ///< 1 where values[i] is meaningful
   std::size_t disagreeing = 0;  ///< corners invalid by the distance stage's max_disagreement_voxels
   std::size_t extrapolated = 0;  ///< corners invalid by max_extrapolation_voxels
+  /// Corners with a valid value.
   std::size_t valid_count() const;
 };
 

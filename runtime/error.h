@@ -11,10 +11,15 @@ namespace meshflow {
 /// and what was expected. what() reads "SOURCE: LOCATION: PROBLEM" (LOCATION omitted if empty).
 class Error : public std::runtime_error {
  public:
+  /// `source`: the file or stage; `location`: the line, field or element (may be empty);
+  /// `problem`: what was wrong and what was expected.
   Error(std::string source, std::string location, std::string problem);
 
+  /// The file or stage the error is about.
   const std::string& source() const { return source_; }
+  /// The line, field or element (may be empty).
   const std::string& location() const { return location_; }
+  /// What was wrong and what was expected.
   const std::string& problem() const { return problem_; }
 
  private:

@@ -24,20 +24,32 @@ class HalfEdgeMesh {
   /// (a "bow tie"), a triangle repeating a vertex or an index out of range. O(T log T).
   explicit HalfEdgeMesh(const TriangleMesh& mesh);
 
+  /// Vertices (isolated ones included).
   std::size_t vertex_count() const { return positions_.size(); }
+  /// Half-edge slots: 3 per face slot.
   std::size_t half_edge_count() const { return to_.size(); }
   std::size_t face_count() const { return to_.size() / 3; }  ///< slots, removed ones included
+  /// Whether face slot f holds a face (not removed by an edit).
   bool face_alive(std::uint32_t f) const { return alive_[f] != 0; }
+  /// Faces not removed.
   std::size_t live_face_count() const { return live_faces_; }
 
   // Navigation (h: half-edge index, 3 per face: face f owns 3f, 3f + 1, 3f + 2).
+  /// The vertex h points to.
   std::uint32_t to(std::uint32_t h) const { return to_[h]; }
+  /// The vertex h leaves.
   std::uint32_t from(std::uint32_t h) const { return to_[prev(h)]; }
+  /// The next half-edge of h's face (counter-clockwise).
   static std::uint32_t next(std::uint32_t h) { return h - h % 3 + (h + 1) % 3; }
+  /// The previous half-edge of h's face.
   static std::uint32_t prev(std::uint32_t h) { return h - h % 3 + (h + 2) % 3; }
+  /// The face h belongs to.
   static std::uint32_t face(std::uint32_t h) { return h / 3; }
+  /// The opposite half-edge, or kNone on the border.
   std::uint32_t twin(std::uint32_t h) const { return twin_[h]; }
+  /// Whether h has no twin (its edge is on the border).
   bool is_border(std::uint32_t h) const { return twin_[h] == kNone; }
+  /// Vertex v's position (metres).
   const Eigen::Vector3f& position(std::uint32_t v) const { return positions_[v]; }
   /// Moves vertex v (metres). Safe from many threads for distinct vertices.
   void set_position(std::uint32_t v, const Eigen::Vector3f& p) { positions_[v] = p; }
@@ -45,6 +57,7 @@ class HalfEdgeMesh {
   /// A half-edge leaving v (the one whose ring walk covers all of v's faces: on a border vertex,
   /// the border half-edge leaving it), or kNone for an isolated vertex.
   std::uint32_t outgoing(std::uint32_t v) const { return out_[v]; }
+  /// Whether v lies on the border (has a border half-edge leaving it). O(1).
   bool is_border_vertex(std::uint32_t v) const;
 
   /// The half-edges leaving v, counter-clockwise (seen from the normal side) from outgoing(v).

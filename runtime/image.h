@@ -68,9 +68,13 @@ class Image {
     return image;
   }
 
+  /// Height in pixels.
   int rows() const { return rows_; }
+  /// Width in pixels.
   int cols() const { return cols_; }
+  /// The pixel format.
   PixelFormat format() const { return format_; }
+  /// Whether the image has no pixels.
   bool empty() const { return rows_ == 0 || cols_ == 0; }
   /// Same rows and cols as `other` (formats may differ).
   bool same_size(const Image& other) const { return rows_ == other.rows_ && cols_ == other.cols_; }
@@ -82,7 +86,9 @@ class Image {
   std::size_t row_bytes() const {
     return static_cast<std::size_t>(cols_) * bytes_per_pixel(format_);
   }
+  /// The first pixel's bytes (rows contiguous, row_bytes() apart).
   std::uint8_t* data() { return pixels_.get(); }
+  /// The first pixel's bytes, read-only.
   const std::uint8_t* data() const { return pixels_.get(); }
 
   /// The first pixel of row `row` (0 <= row < rows()); T must be the format's pixel type.
@@ -91,6 +97,7 @@ class Image {
     check_access<T>(row);
     return reinterpret_cast<T*>(pixels_.get() + static_cast<std::size_t>(row) * row_bytes());
   }
+  /// The same, read-only.
   template <class T>
   const T* ptr(int row) const {
     check_access<T>(row);
@@ -102,6 +109,7 @@ class Image {
     assert(col >= 0 && col < cols_);
     return ptr<T>(row)[col];
   }
+  /// The same, read-only.
   template <class T>
   const T& at(int row, int col) const {
     assert(col >= 0 && col < cols_);

@@ -28,11 +28,17 @@ struct PointCloud {
   Eigen::Vector3d origin = Eigen::Vector3d::Zero();
   bool has_sensor_origin = false;
 
+  /// Number of points.
   std::size_t size() const { return positions.size(); }
+  /// Whether the cloud has no points.
   bool empty() const { return positions.empty(); }
+  /// Whether every point has a normal.
   bool has_normals() const { return !normals.empty(); }
+  /// Whether every point has a colour.
   bool has_colors() const { return !colors.empty(); }
+  /// Whether every point has an intensity.
   bool has_intensities() const { return !intensities.empty(); }
+  /// Whether the points form a width x height grid (a depth camera's or a scanner's rows).
   bool is_organized() const {
     return height > 1 && static_cast<std::size_t>(width) * height == positions.size();
   }

@@ -7,7 +7,9 @@ namespace meshflow {
 
 struct Rgb8 {
   std::uint8_t r = 0, g = 0, b = 0;
+  /// Same three channels.
   bool operator==(const Rgb8& o) const { return r == o.r && g == o.g && b == o.b; }
+  /// Any channel differs.
   bool operator!=(const Rgb8& o) const { return !(*this == o); }
 };
 static_assert(sizeof(Rgb8) == 3, "Rgb8 is three packed bytes: image rows are arrays of it");

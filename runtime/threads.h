@@ -14,7 +14,9 @@ int hardware_threads();
 /// `threads` <= 0 means "all hardware threads". Create one near main(); not thread-safe.
 class ThreadLimit {
  public:
+  /// Limits oneTBB to `threads` workers (<= 0: every core) while this object lives.
   explicit ThreadLimit(int threads);
+  /// The limit in force (every core's count when 0 was asked for).
   int threads() const { return threads_; }
 
  private:

@@ -22,6 +22,7 @@ struct StageRecord {
   std::uint32_t thread = 0;  ///< current_thread_index() of the thread that started it
   std::uint64_t items = 0;   ///< work items the stage processed (points, corners, triangles)
   std::uint64_t frame = 0;   ///< sequence number of the frame it worked on
+  /// end_s - start_s.
   double duration_s() const { return end_s - start_s; }
 };
 

@@ -23,6 +23,7 @@ struct TriangleMesh {
   std::vector<Eigen::Vector3f> normals;
   std::vector<Rgb8> colors;
 
+  /// Whether the mesh has no triangles.
   bool empty() const { return triangles.empty(); }
 };
 
@@ -48,6 +49,7 @@ struct EdgeStatistics {
   std::size_t boundary_edges = 0;      ///< edges with one adjacent face
   std::size_t non_manifold_edges = 0;  ///< edges with three or more adjacent faces
   std::size_t inconsistent_edges = 0;  ///< two faces traversing the edge in the same direction
+  /// No boundary and no non-manifold edge.
   bool closed() const { return boundary_edges == 0 && non_manifold_edges == 0; }
 };
 

@@ -15,7 +15,9 @@ struct VertexTriangles {
   std::vector<std::uint32_t> offsets;    ///< vertex count + 1
   std::vector<std::uint32_t> triangles;  ///< 3 x triangle count
 
+  /// First triangle index around vertex v.
   const std::uint32_t* begin(std::uint32_t v) const { return triangles.data() + offsets[v]; }
+  /// One past the last triangle index around vertex v.
   const std::uint32_t* end(std::uint32_t v) const { return triangles.data() + offsets[v + 1]; }
 };
 

@@ -11,4 +11,4 @@ $SUDO apt-get install -y --no-install-recommends \
   libspng-dev libjpeg-dev libtiff-dev \
   libcli11-dev libgtest-dev libgmock-dev libbenchmark-dev nlohmann-json3-dev \
   libcgal-dev libmeshoptimizer-dev \
-  pybind11-dev python3-dev python3-numpy python3-pytest
+  pybind11-dev python3-dev python3-numpy python3-pytest doxygen

@@ -57,8 +57,11 @@ class CollapseFan {
     ends[kB * kBlock] = b;
   }
 
+  /// Faces in the fan (the count given to finish()).
   std::size_t size() const { return faces_; }
+  /// Face k's second corner (u, a, b).
   std::uint32_t a(std::size_t k) const { return end(kA, k); }
+  /// Face k's third corner (u, a, b).
   std::uint32_t b(std::size_t k) const { return end(kB, k); }
   /// Ends the fan at `count` faces (at most the room of reset()) and computes what check()
   /// reads from them. O(faces).
@@ -71,6 +74,7 @@ class CollapseFan {
   bool bent_between(std::size_t first, std::size_t second, float min_cos) const;
   /// Face k's area vector (a - u) x (b - u) (twice its area, along its normal) and its length.
   Eigen::Vector3f area_vector(std::size_t k) const;
+  /// The length of area_vector(k).
   float area_vector_norm(std::size_t k) const;
 
  private:

@@ -38,14 +38,18 @@ class VertexRings {
   /// Between two fans of a kFans ring: skip it wherever ring entries are read as vertices.
   static constexpr std::uint32_t kSeparator = 0xFFFFFFFFu;
 
+  /// What v's ring is: closed, open, several fans or complex (Kind).
   Kind kind(std::uint32_t v) const { return slots_[v].kind; }
   /// Whether v is kFans or kComplex, or next to a complex vertex: v must never be collapsed
   /// (a vertex of several fans has more than two border neighbours, so the decimator's border
   /// rule refuses it; a complex one's neighbours could not be updated). Fixed at construction:
   /// collapses of other vertices only ever give a vertex neighbours that are not complex.
   bool locked(std::uint32_t v) const { return locked_[v] != 0; }
+  /// First entry of v's ring (neighbour vertices, kSeparator between fans).
   const std::uint32_t* begin(std::uint32_t v) const { return data_.data() + slots_[v].offset; }
+  /// One past the last entry of v's ring.
   const std::uint32_t* end(std::uint32_t v) const { return begin(v) + slots_[v].size; }
+  /// Entries in v's ring, separators included.
   std::size_t size(std::uint32_t v) const { return slots_[v].size; }
   /// The faces around v: size for a closed ring, size - 1 for an open one, one less per fan
   /// and separator for several, 0 for a complex vertex or one removed by a collapse.
@@ -79,6 +83,7 @@ class VertexRings {
 
   /// Requests v's slot (offset and size), then, in a later call, its ring.
   void prefetch_slot(std::uint32_t v) const { __builtin_prefetch(&slots_[v]); }
+  /// Requests v's ring entries (after prefetch_slot(v)).
   void prefetch_ring(std::uint32_t v) const { __builtin_prefetch(begin(v)); }
 
  private:

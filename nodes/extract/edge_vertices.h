@@ -19,6 +19,7 @@ namespace meshflow {
 /// numbering runs after all marks, ordered after them by the join of the marking loop.
 class EdgeVertexTable {
  public:
+  /// A table of corners x directions unmarked segments. O(corners x directions) bytes.
   EdgeVertexTable(std::size_t corners, std::size_t directions);
 
   /// Segment id of (lower corner, direction).
@@ -45,6 +46,7 @@ class EdgeVertexTable {
   std::size_t direction(std::size_t s) const { return s % directions_; }
   /// Lower and upper corner of a marked segment.
   std::uint32_t lower(std::size_t s) const { return static_cast<std::uint32_t>(s / directions_); }
+  /// Upper corner of a marked segment.
   std::uint32_t upper(std::size_t s) const { return upper_[s]; }
 
  private:

@@ -45,6 +45,7 @@ struct TsdfConfig {
   /// 0 = no limit): the map stays as it was and the frame's error names the limit.
   std::size_t max_memory_bytes = 0;
 
+  /// Truncation distance in metres.
   float truncation() const { return truncation_voxels * voxel_size; }
 };
 
@@ -88,9 +89,11 @@ class TsdfVolume {
   /// O(pixels + touched blocks x 512).
   IntegrationStats integrate(const DepthFrame& frame);
 
+  /// The configuration the volume was made with (max_memory_bytes as last set).
   const TsdfConfig& config() const { return config_; }
   /// Sets config().max_memory_bytes (e.g. for a map read from a file). O(1).
   void set_max_memory_bytes(std::size_t bytes) { config_.max_memory_bytes = bytes; }
+  /// Blocks allocated so far.
   std::size_t block_count() const { return blocks_.size(); }
   /// Bytes held by the blocks and their index.
   std::size_t memory_bytes() const;

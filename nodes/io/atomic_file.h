@@ -21,6 +21,7 @@ void check_output_writable(const std::string& path);
 
 class AtomicOutputFile {
  public:
+  /// Opens `path`.tmp for writing. Throws meshflow::Error naming the file and the system's reason.
   explicit AtomicOutputFile(std::string path);
   ~AtomicOutputFile();
   AtomicOutputFile(const AtomicOutputFile&) = delete;
@@ -28,6 +29,8 @@ class AtomicOutputFile {
 
   /// The stream to write the file's content to (binary; buffered).
   std::ostream& stream() { return stream_; }
+  /// Flushes, closes and renames the temporary file to the final path (atomically). Throws
+  /// meshflow::Error on a failed write or rename, removing the temporary file.
   void commit();
 
  private:

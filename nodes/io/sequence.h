@@ -29,7 +29,9 @@ struct SequenceFrame {
 class Sequence {
  public:
   virtual ~Sequence() = default;
+  /// Number of frames.
   virtual std::size_t size() const = 0;
+  /// Frame i (0 <= i < size()), not loaded yet.
   virtual SequenceFrame frame(std::size_t i) const = 0;
   /// One line: kind, location and frame count, e.g. "3DTK scans in data/kurt3d (3 frames)".
   virtual std::string description() const = 0;

@@ -17,7 +17,9 @@ struct NeighbourTable {
   std::vector<std::uint32_t> indices;  ///< size() * k
   std::vector<std::uint32_t> counts;   ///< one per point, min(k, number of points)
 
+  /// Number of points (rows).
   std::size_t size() const { return counts.size(); }
+  /// Row i: counts[i] neighbour indices, closest first.
   const std::uint32_t* row(std::size_t i) const { return indices.data() + i * k; }
 };
 

@@ -26,17 +26,20 @@ class SpatialIndex {
   virtual std::vector<std::uint32_t> radius_search(const Eigen::Vector3f& q,
                                                    float radius) const = 0;
 
+  /// Number of indexed points.
   virtual std::size_t size() const = 0;
 };
 
 /// FLANN single kd-tree (exact search). Build O(n log n), single-threaded.
 class KdTreeIndex final : public SpatialIndex {
  public:
+  /// Builds the tree over `points` (finite, metres), which must outlive the index unchanged.
   explicit KdTreeIndex(const std::vector<Eigen::Vector3f>& points);
   ~KdTreeIndex() override;
   std::size_t knn(const Eigen::Vector3f& q, std::size_t k, std::uint32_t* indices,
                   float* squared_distances) const override;
   std::vector<std::uint32_t> radius_search(const Eigen::Vector3f& q, float radius) const override;
+  /// Number of indexed points.
   std::size_t size() const override { return size_; }
 
  private:
@@ -48,10 +51,12 @@ class KdTreeIndex final : public SpatialIndex {
 /// Exhaustive search; the oracle for tests. O(n) per query.
 class BruteForceIndex final : public SpatialIndex {
  public:
+  /// Searches `points`, which must outlive the index unchanged. O(1).
   explicit BruteForceIndex(const std::vector<Eigen::Vector3f>& points) : points_(points) {}
   std::size_t knn(const Eigen::Vector3f& q, std::size_t k, std::uint32_t* indices,
                   float* squared_distances) const override;
   std::vector<std::uint32_t> radius_search(const Eigen::Vector3f& q, float radius) const override;
+  /// Number of indexed points.
   std::size_t size() const override { return points_.size(); }
 
  private:

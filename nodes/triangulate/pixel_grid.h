@@ -20,7 +20,9 @@ struct PointGrid {
   int width = 0, height = 0;
   std::vector<Eigen::Vector3f> points;            ///< row-major, world frame, metres; NaN = invalid
   Eigen::Vector3f eye = Eigen::Vector3f::Zero();  ///< camera centre, world frame
+  /// Whether point i was measured (not NaN).
   bool valid(std::size_t i) const { return !std::isnan(points[i].x()); }
+  /// Index of pixel (u, v): column u, row v.
   std::size_t index(int u, int v) const {
     return static_cast<std::size_t>(v) * static_cast<std::size_t>(width) +
            static_cast<std::size_t>(u);
@@ -48,8 +50,10 @@ struct OcclusionRejections {
 /// with a longest edge over `max_edge_ratio` times the shortest.
 class OcclusionTriangleTest {
  public:
+  /// The test with these limits (degrees; longest over shortest edge).
   OcclusionTriangleTest(float max_view_angle_deg, float max_edge_ratio);
   enum Verdict { kKeep, kViewAngle, kShape };
+  /// Whether triangle p0 p1 p2 (metres) seen from `eye` is kept, or why not. Thread-safe; O(1).
   Verdict operator()(const Eigen::Vector3f& p0, const Eigen::Vector3f& p1,
                      const Eigen::Vector3f& p2, const Eigen::Vector3f& eye) const;
   /// The test itself, on the corners' coordinates (x, y, z of p0, then p1, then p2), without

@@ -65,6 +65,7 @@ def test_fused_views_close_around_the_sphere():
         stats = volume.integrate(sphere_depth(pose), K, pose)
         assert stats["pixels_used"] > 1000
     mesh = volume.extract()
+    np.testing.assert_array_equal(volume.extract(incremental=False).triangles, mesh.triangles)
     r = np.linalg.norm(mesh.vertices, axis=1)
     assert volume.block_count > 0 and len(mesh.triangles) > 2000
     assert abs(r.mean() - RADIUS) < 0.002 and np.abs(r - RADIUS).max() < 0.01

@@ -43,17 +43,32 @@ seed_patterns() {
     tsdf_map) echo '*.tsdf' ;;
   esac
 }
-# A small TSDF map (8 blocks of 0.6 m voxels, 49 kB) from meshflow's own synthetic depth camera,
-# when a meshflow executable is at hand: no map files are committed.
-map_seed() {
+# Seeds made by meshflow itself where the fixtures and the shared data have none (no such files
+# are committed): a small TSDF map (8 blocks of 0.6 m voxels, 49 kB) from the synthetic depth
+# camera, and a coarse sphere mesh as OBJ, OFF and STL.
+meshflow_tool() {
   local tool
   for tool in "$build/meshflow" build/meshflow; do
-    if [ -x "$tool" ]; then
-      "$tool" run --synthetic-depth --synthetic-frames 1 --synthetic-size 32x24 --fuse \
-        --voxel 0.6 --save-map "$1/seed_synthetic.tsdf" -o "$build/map_seed" -q && return
-    fi
+    if [ -x "$tool" ]; then echo "$tool"; return; fi
   done
-  echo "fuzz: no meshflow executable to make a map seed; fuzz_tsdf_map starts from nothing" >&2
+}
+made_seeds() {  # TARGET CORPUS
+  local tool
+  tool=$(meshflow_tool)
+  if [ -z "$tool" ]; then
+    echo "fuzz: no meshflow executable to make seeds for fuzz_$1" >&2
+    return
+  fi
+  case $1 in
+    tsdf_map)
+      "$tool" run --synthetic-depth --synthetic-frames 1 --synthetic-size 32x24 --fuse \
+        --voxel 0.6 --save-map "$2/seed_synthetic.tsdf" -o "$build/map_seed" -q ;;
+    mesh)
+      "$tool" sample sphere --points 3000 -o "$build/seed_sphere.ply" -q
+      for ext in obj off stl; do
+        "$tool" reconstruct "$build/seed_sphere.ply" --voxel 0.25 -o "$2/seed_sphere.$ext" -q
+      done ;;
+  esac
 }
 status=0
 for t in "${targets[@]}"; do
@@ -66,7 +81,11 @@ for t in "${targets[@]}"; do
     find tests/data "$data" -name "$pattern" -size -256k -type f 2>/dev/null |
       head -n 50 | while read -r f; do cp "$f" "$corpus/seed_$(basename "$f")"; done
   done
-  if [ "$t" = tsdf_map ]; then map_seed "$corpus"; fi
+  made_seeds "$t" "$corpus"
+  if [ "$t" = tum ]; then  # depth.txt lines, a zero byte, groundtruth.txt lines
+    printf '# depth\n1305031102.160407 depth/1305031102.160407.png\n1305031102.194330 depth/1305031102.194330.png\n\0# timestamp tx ty tz qx qy qz qw\n1305031102.1758 1.3405 0.6266 1.6575 0.6574 0.6126 -0.2949 -0.3248\n' \
+      > "$corpus/seed_association.txt"
+  fi
   echo "== fuzz_$t: $seconds s, $(ls "$corpus" | wc -l) corpus files"
   if ! ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=halt_on_error=1:print_stacktrace=1 \
       "$build/fuzz/fuzz_$t" "$corpus" -max_total_time="$seconds" -max_len=65536 \

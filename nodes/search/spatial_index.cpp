@@ -10,7 +10,10 @@
 
 namespace meshflow {
 
-namespace {
+// Named, not anonymous: KdTreeIndex::Impl (external linkage) holds these types, and GCC warns
+// (-Wsubobject-linkage) when such a member's type lives in an anonymous namespace of a file that
+// a unity build includes.
+namespace kd_tree {
 
 // nanoflann reads the points through this adaptor: packed xyz floats, not copied.
 struct PackedPoints {
@@ -26,6 +29,10 @@ struct PackedPoints {
 
 using Metric = nanoflann::L2_Simple_Adaptor<float, PackedPoints, float, std::uint32_t>;
 using Tree = nanoflann::KDTreeSingleIndexAdaptor<Metric, PackedPoints, 3, std::uint32_t>;
+
+}  // namespace kd_tree
+
+namespace {
 
 // The next float above x >= 0 (x itself for infinity): std::nextafter without libm's call, which
 // cost 3 % of a reconstruction when made on every improvement of a k-nearest result.
@@ -104,8 +111,8 @@ class RadiusResult {
 }  // namespace
 
 struct KdTreeIndex::Impl {
-  PackedPoints points;
-  Tree tree;
+  kd_tree::PackedPoints points;
+  kd_tree::Tree tree;
   explicit Impl(const std::vector<Eigen::Vector3f>& cloud)
       : points{cloud.data(), cloud.size()},
         tree(3, points, nanoflann::KDTreeSingleIndexAdaptorParams(/*leaf_max_size=*/10)) {}

@@ -28,6 +28,8 @@ struct Result {
 
 // A LivePipeline and the Python callable it calls. The pipeline's C++ callback holds only a
 // pointer to this object (no Python object: destroying the pipeline happens without the GIL).
+// Every call into the pipeline releases the GIL first: a callback thread may be waiting for the
+// GIL while it holds a lock of the pipeline's that the call needs.
 class Pipeline {
  public:
   Pipeline(py::function callback, const LiveConfig& config) : callback_(std::move(callback)) {
@@ -38,14 +40,14 @@ class Pipeline {
   Pipeline& operator=(const Pipeline&) = delete;
 
   py::tuple push_cloud(const py::object& input, double timestamp_s) {
-    const Cloud cloud = py::isinstance<Cloud>(input)
-                            ? input.cast<Cloud>()
-                            : make_cloud(input, py::none(), py::none(), py::none());
-    PointCloud copy = *cloud.data;
+    // A Cloud is copied (Python keeps it); arrays are copied once, by make_cloud.
+    PointCloud frame = py::isinstance<Cloud>(input)
+                           ? *input.cast<Cloud>().data
+                           : std::move(*make_cloud(input, py::none(), py::none(), py::none()).data);
     LivePipeline::Push p{};
     {
       py::gil_scoped_release no_gil;
-      p = open().push(std::move(copy), timestamp_s);
+      p = open().push(std::move(frame), timestamp_s);
     }
     return status(p);
   }
@@ -66,6 +68,8 @@ class Pipeline {
 
   LiveStats stats() const {
     if (!live_) throw Error("Pipeline", "", "the pipeline is closed");
+    // Without the GIL: a callback waiting for it may hold the pipeline's own lock.
+    py::gil_scoped_release no_gil;
     return live_->stats();
   }
 

@@ -10,6 +10,7 @@
 
 #include <pybind11/stl.h>
 
+#include <algorithm>
 #include <cmath>
 #include <memory>
 #include <string>
@@ -47,7 +48,16 @@ Cloud make_cloud(const py::handle& points, const py::object& normals, const py::
       throw py::value_error("colors: expected integers 0-255 (uint8), got " +
                             std::string(py::str(given.dtype())) +
                             " (multiply colours in [0, 1] by 255)");
-    c.colors = copy_rows<Rgb8>(rows_of_three<std::uint8_t>(colors, "colors"));
+    // Read wide, so that 256 or -1 is an error instead of wrapping round.
+    const auto wide = rows_of_three<std::int64_t>(colors, "colors");
+    c.colors.resize(static_cast<std::size_t>(wide.shape(0)));
+    const std::int64_t* v = wide.data();
+    for (std::size_t i = 0; i < c.colors.size(); ++i, v += 3) {
+      if (std::min({v[0], v[1], v[2]}) < 0 || std::max({v[0], v[1], v[2]}) > 255)
+        throw py::value_error("colors: row " + std::to_string(i) + " has a value outside 0-255");
+      c.colors[i] = {static_cast<std::uint8_t>(v[0]), static_cast<std::uint8_t>(v[1]),
+                     static_cast<std::uint8_t>(v[2])};
+    }
     if (c.colors.size() != n)
       throw py::value_error("colors: " + std::to_string(c.colors.size()) + " rows for " +
                             std::to_string(n) + " points");

@@ -143,6 +143,10 @@ def test_bad_arrays_are_value_errors():
         meshflow.reconstruct(points, extract="nonsense")
     with pytest.raises(ValueError, match=r"colors: expected integers 0-255 \(uint8\), got float64"):
         meshflow.Cloud(points, colors=np.full((1000, 3), 0.5))
+    over = np.full((1000, 3), 200, dtype=np.int64)
+    over[3, 2] = 256
+    with pytest.raises(ValueError, match="colors: row 3 has a value outside 0-255"):
+        meshflow.Cloud(points, colors=over)
     colored = meshflow.Cloud(points, colors=np.full((1000, 3), 200, dtype=np.int64))
     assert colored.colors.dtype == np.uint8 and colored.colors[5, 1] == 200
     # Strided input is fine: it is copied.

@@ -15,6 +15,7 @@
 #include "runtime/depth_frame.h"
 #include "runtime/point_cloud.h"
 #include "runtime/triangle_mesh.h"
+#include "tools/pipeline_options.h"
 
 namespace meshflow::python {
 
@@ -100,6 +101,14 @@ Cloud make_cloud(const py::handle& points, const py::object& normals, const py::
 /// intrinsics that do not fit.
 DepthFrame make_depth_frame(const py::handle& depth, const PinholeIntrinsics& intrinsics,
                             const py::object& pose, float depth_scale, const py::object& color);
+
+/// The CLI's pipeline options from keyword arguments (`voxel`, `kn`, `extract`, `optimize`,
+/// `normal_source` for --normals, `orient`, ... : option_list()); the rest keep the CLI's
+/// defaults. TypeError for an unknown keyword or a value of the wrong type (python/options.cpp).
+cli::PipelineOptions pipeline_options(const py::kwargs& kwargs);
+
+/// "the CLI's options, with its defaults: voxel=0.0, kn=10, ...", for messages and docstrings.
+std::string option_list();
 
 /// Binds Intrinsics, triangulate_depth and TsdfVolume (python/depth.cpp).
 void bind_depth(py::module_& m);

@@ -12,7 +12,6 @@
 #include "graph/live_pipeline.h"
 #include "python/bindings.h"
 #include "runtime/error.h"
-#include "tools/pipeline_options.h"
 
 namespace meshflow::python {
 namespace {
@@ -151,16 +150,17 @@ void bind_live(py::module_& m) {
         return "<meshflow.Result seq " + std::to_string(r.seq) + (r.ok ? " ok" : " failed") + ">";
       });
 
-  const cli::PipelineOptions defaults;
   py::class_<Pipeline>(m, "Pipeline", R"(The embedding API: push() clouds or depth frames from
 your loop (it never waits for reconstruction), callback(result) is called with each finished
 frame in push order on a pipeline thread. policy 'realtime' drops the oldest waiting frame when
-the queue is full (bounded latency), 'queue' refuses new ones (back-pressure).)")
+the queue is full (bounded latency), 'queue' refuses new ones (back-pressure). threads: the
+pipeline's own threads (0 = every core); triangulate: per-frame depth-map meshes (method 'naive'
+or 'rqt', decimate in [0, 1)) instead of the volumetric stages, whose settings are the other
+keywords, as reconstruct()'s.)")
       .def(
           py::init([](py::function callback, const std::string& policy, int threads,
                       std::size_t frames_in_flight, std::size_t max_waiting, bool triangulate,
-                      const std::string& method, float decimate, float voxel,
-                      const std::string& extract, const std::string& optimize) {
+                      const std::string& method, float decimate, const py::kwargs& options) {
             LiveConfig c;
             if (policy == "realtime") {
               c.policy = LivePolicy::kRealtime;
@@ -175,13 +175,10 @@ the queue is full (bounded latency), 'queue' refuses new ones (back-pressure).)"
               throw py::value_error("method: expected 'naive' or 'rqt', got '" + method + "'");
             if (!(decimate >= 0.0f && decimate < 1.0f))
               throw py::value_error("decimate: expected a share in [0, 1) (0 = off)");
-            cli::PipelineOptions o;
-            o.voxel = voxel;
-            o.extract = extract;
-            o.optimize = optimize;
+            const cli::PipelineOptions o = pipeline_options(options);  // TypeError if unknown
             try {
               c.reconstruction = o.config();
-            } catch (const std::exception& e) {
+            } catch (const std::exception& e) {  // a malformed orient, extract, optimize, ...
               throw py::value_error(e.what());
             }
             c.reconstruction.triangulation.method =
@@ -197,9 +194,7 @@ the queue is full (bounded latency), 'queue' refuses new ones (back-pressure).)"
           py::arg("callback"), py::kw_only(), py::arg("policy") = "realtime",
           py::arg("threads") = 0, py::arg("frames_in_flight") = LiveConfig{}.frames_in_flight,
           py::arg("max_waiting") = LiveConfig{}.max_waiting, py::arg("triangulate") = false,
-          py::arg("method") = "naive", py::arg("decimate") = 0.0f,
-          py::arg("voxel") = defaults.voxel, py::arg("extract") = defaults.extract,
-          py::arg("optimize") = defaults.optimize)
+          py::arg("method") = "naive", py::arg("decimate") = 0.0f)
       .def("push", &Pipeline::push_cloud, py::arg("cloud"), py::arg("timestamp") = 0.0,
            "Hands over a Cloud or (n, 3) points; returns (seq, 'accepted' | 'dropped_oldest' | "
            "'rejected').")

@@ -259,42 +259,19 @@ orientation, double walls. reference: a Mesh, a Cloud or a file path.)");
   bind_depth(m);
   bind_live(m);
 
-  const cli::PipelineOptions defaults;
+  static const std::string reconstruct_doc =
+      R"(Reconstructs a surface from a Cloud or an (n, 3) points array (with optional (n, 3)
+normals and uint8 colours). Keyword arguments are )" +
+      option_list() + R"( (--normals is normal_source; voxel 0 chooses 3x the median point
+spacing). The GIL is released while the pipeline runs. Raises meshflow.Error for input the
+pipeline cannot mesh, ValueError for malformed arrays or settings, TypeError for an unknown
+keyword.)";
   m.def(
       "reconstruct",
-      [](const py::object& input, const py::object& normals, const py::object& colors, float voxel,
-         int kn, int ki, int kd, const std::string& extract, const std::string& optimize,
-         const std::string& normal_source, const std::string& orient, std::size_t max_hole,
-         float decimate_to, float max_rim, std::size_t min_component, const std::string& max_memory,
-         int threads) {
-        cli::PipelineOptions o;
-        o.voxel = voxel;
-        o.kn = kn;
-        o.ki = ki;
-        o.kd = kd;
-        o.extract = extract;
-        o.optimize = optimize;
-        o.normals = normal_source;
-        o.orient = orient;
-        o.max_hole = max_hole;
-        o.decimate_to = decimate_to;
-        o.max_rim = max_rim;
-        o.min_component = min_component;
-        o.max_memory = max_memory;
-        o.threads = threads;
-        return reconstruct(input, normals, colors, o);
+      [](const py::object& input, const py::object& normals, const py::object& colors,
+         const py::kwargs& options) {
+        return reconstruct(input, normals, colors, pipeline_options(options));
       },
       py::arg("cloud"), py::arg("normals") = py::none(), py::arg("colors") = py::none(),
-      py::kw_only(), py::arg("voxel") = defaults.voxel, py::arg("kn") = defaults.kn,
-      py::arg("ki") = defaults.ki, py::arg("kd") = defaults.kd,
-      py::arg("extract") = defaults.extract, py::arg("optimize") = defaults.optimize,
-      py::arg("normal_source") = defaults.normals, py::arg("orient") = defaults.orient,
-      py::arg("max_hole") = defaults.max_hole, py::arg("decimate_to") = defaults.decimate_to,
-      py::arg("max_rim") = defaults.max_rim, py::arg("min_component") = defaults.min_component,
-      py::arg("max_memory") = defaults.max_memory, py::arg("threads") = defaults.threads,
-      R"(Reconstructs a surface from a Cloud or an (n, 3) points array (with optional (n, 3)
-normals and uint8 colours). Keyword arguments are the CLI's options (--voxel, --kn, --extract,
---optimize, --normals as normal_source, --orient, ...) with the same defaults: voxel 0 chooses
-3x the median point spacing. The GIL is released while the pipeline runs. Raises
-meshflow.Error for input the pipeline cannot mesh, ValueError for malformed arrays.)");
+      reconstruct_doc.c_str());
 }

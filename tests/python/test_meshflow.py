@@ -155,6 +155,21 @@ def test_bad_arrays_are_value_errors():
     assert meshflow.Cloud(wide[:, ::2]).points.shape == (1000, 3)
 
 
+def test_every_cli_option_is_a_keyword():
+    points, normals = sphere_points(20000)
+    base = meshflow.reconstruct(points, normals, voxel=0.04)
+    # Options the CLI has, by the CLI's names: kd = 1 averages fewer tangent planes, another mesh.
+    other = meshflow.reconstruct(points, normals, voxel=0.04, kd=1, max_distance=3.0,
+                                 min_component=10, optimize="clean", orient="input")
+    assert not np.array_equal(base.vertices, other.vertices) or len(base.vertices) != len(
+        other.vertices)
+    with pytest.raises(TypeError, match="unexpected keyword argument 'voxle'.*voxel=0.0"):
+        meshflow.reconstruct(points, voxle=0.04)
+    with pytest.raises(TypeError, match="kn: expected a value like 10"):
+        meshflow.reconstruct(points, kn="ten")
+    assert "max_extrapolation=" in meshflow.reconstruct.__doc__
+
+
 def test_meshflow_errors_name_the_file(tmp_path):
     missing = str(tmp_path / "missing.ply")
     with pytest.raises(meshflow.Error, match="missing.ply"):

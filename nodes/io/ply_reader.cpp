@@ -113,6 +113,14 @@ PlyHeader parse_ply_header(std::istream& in, const std::string& path) {
     }
   }
   if (!have_format) throw Error(path, "header", "missing 'format' line");
+  // Rows without properties hold no bytes: a binary element of 10^18 of them would be "read"
+  // for ever without consuming the file (found by fuzz_ply).
+  for (const PlyElement& e : header.elements) {
+    if (e.properties.empty() && e.count > 0) {
+      throw Error(path, "element '" + e.name + "'",
+                  "declares " + std::to_string(e.count) + " rows but no properties");
+    }
+  }
   return header;
 }
 

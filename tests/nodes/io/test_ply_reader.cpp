@@ -103,6 +103,31 @@ TEST(PlyReader, BrokenFilesGiveOneClearError) {
   expect_error("not_a_ply.ply", "not a PLY file");
 }
 
+// Rows without properties take no bytes: a binary element of 10^18 of them used to be read for
+// ever (fuzz_ply's timeout, fuzz/regressions/ply/). Now a header error, at once.
+TEST(PlyReader, ElementWithRowsButNoPropertiesIsAnError) {
+  const std::string path = test::temp_dir() + "/no_properties.ply";
+  test::write_file(path,
+                   "ply\nformat binary_little_endian 1.0\nelement junk 1000000000000000000\n"
+                   "element vertex 1\nproperty float x\nproperty float y\nproperty float z\n"
+                   "end_header\n" +
+                       std::string(12, '\0'));
+  try {
+    read_ply(path);
+    FAIL() << "no error";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.location(), "element 'junk'");
+    EXPECT_NE(std::string(e.what()).find("declares 1000000000000000000 rows but no properties"),
+              std::string::npos)
+        << e.what();
+  }
+  // Zero rows of nothing is harmless.
+  test::write_file(path,
+                   "ply\nformat ascii 1.0\nelement junk 0\nelement vertex 1\nproperty float x\n"
+                   "property float y\nproperty float z\nend_header\n1 2 3\n");
+  EXPECT_EQ(read_ply(path).size(), 1u);
+}
+
 TEST(PlyReader, MissingFileNamesThePath) { EXPECT_THROW(read_ply("/nonexistent/x.ply"), Error); }
 
 // Fuzz-style corruption: every truncation and many byte flips of a valid file either parse or

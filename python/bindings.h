@@ -12,6 +12,7 @@
 #include <type_traits>
 #include <vector>
 
+#include "nodes/triangulate/depth_triangulation.h"
 #include "runtime/depth_frame.h"
 #include "runtime/point_cloud.h"
 #include "runtime/triangle_mesh.h"
@@ -109,6 +110,10 @@ cli::PipelineOptions pipeline_options(const py::kwargs& kwargs);
 
 /// "the CLI's options, with its defaults: voxel=0.0, kn=10, ...", for messages and docstrings.
 std::string option_list();
+
+/// Sets the depth-map triangulation's method ('naive' or 'rqt') and decimation share (in
+/// [0, 1), 0 = off); ValueError naming the argument otherwise (python/depth.cpp).
+void set_triangulation(DepthTriangulationConfig& config, const std::string& method, float decimate);
 
 /// Binds Intrinsics, triangulate_depth and TsdfVolume (python/depth.cpp).
 void bind_depth(py::module_& m);

@@ -53,6 +53,20 @@ DepthFrame make_depth_frame(const py::handle& depth, const PinholeIntrinsics& in
   return frame;
 }
 
+void set_triangulation(DepthTriangulationConfig& config, const std::string& method,
+                       float decimate) {
+  if (method == "naive") {
+    config.method = DepthTriangulationMethod::kNaive;
+  } else if (method == "rqt") {
+    config.method = DepthTriangulationMethod::kRestrictedQuadtree;
+  } else {
+    throw py::value_error("method: expected 'naive' or 'rqt', got '" + method + "'");
+  }
+  if (!(decimate >= 0.0f && decimate < 1.0f))
+    throw py::value_error("decimate: expected a share in [0, 1) (0 = off)");
+  config.decimate_to = decimate;
+}
+
 namespace {
 
 Mesh to_mesh(TriangleMesh triangles) {
@@ -94,16 +108,7 @@ void bind_depth(py::module_& m) {
       [](const py::handle& depth, const PinholeIntrinsics& intrinsics, const py::object& pose,
          const std::string& method, float decimate, float depth_scale, const py::object& color) {
         DepthTriangulationConfig config;
-        if (method == "naive") {
-          config.method = DepthTriangulationMethod::kNaive;
-        } else if (method == "rqt") {
-          config.method = DepthTriangulationMethod::kRestrictedQuadtree;
-        } else {
-          throw py::value_error("method: expected 'naive' or 'rqt', got '" + method + "'");
-        }
-        if (!(decimate >= 0.0f && decimate < 1.0f))
-          throw py::value_error("decimate: expected a share in [0, 1) (0 = off)");
-        config.decimate_to = decimate;
+        set_triangulation(config, method, decimate);
         // The pipeline's own triangulate stage: vertex colours from the image, vertex normals.
         Frame frame;
         frame.name = "depth";

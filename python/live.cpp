@@ -171,20 +171,13 @@ keywords, as reconstruct()'s.)")
             }
             if (frames_in_flight < 1 || max_waiting < 1)
               throw py::value_error("frames_in_flight and max_waiting: at least 1");
-            if (method != "naive" && method != "rqt")
-              throw py::value_error("method: expected 'naive' or 'rqt', got '" + method + "'");
-            if (!(decimate >= 0.0f && decimate < 1.0f))
-              throw py::value_error("decimate: expected a share in [0, 1) (0 = off)");
             const cli::PipelineOptions o = pipeline_options(options);  // TypeError if unknown
             try {
               c.reconstruction = o.config();
             } catch (const std::exception& e) {  // a malformed orient, extract, optimize, ...
               throw py::value_error(e.what());
             }
-            c.reconstruction.triangulation.method =
-                method == "rqt" ? DepthTriangulationMethod::kRestrictedQuadtree
-                                : DepthTriangulationMethod::kNaive;
-            c.reconstruction.triangulation.decimate_to = decimate;
+            set_triangulation(c.reconstruction.triangulation, method, decimate);
             c.threads = threads;
             c.frames_in_flight = frames_in_flight;
             c.max_waiting = max_waiting;

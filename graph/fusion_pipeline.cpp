@@ -18,7 +18,9 @@ FusionPipeline::FusionPipeline(FusionConfig config, std::size_t max_in_flight, T
       max_in_flight_(std::max<std::size_t>(1, max_in_flight)),
       map_(std::move(map)) {
   config_.frames.organized_as_depth = true;  // fusion integrates depth images only
+  if (config_.keep_occlusion_edges) config_.frames.depth_filter.edge_high = 0.0f;
   map_.set_max_memory_bytes(config_.tsdf.max_memory_bytes);
+  map_.set_behind_voxels(config_.tsdf.behind_voxels);
   if (map_.config().voxel_size != config_.tsdf.voxel_size) {
     throw Error("fusion", "voxel size",
                 "the map has " + std::to_string(map_.config().voxel_size) + " m voxels, the run " +

@@ -1,6 +1,7 @@
 // Depth images from Python: camera intrinsics, per-frame triangulation and TSDF fusion.
 
 #include <pybind11/stl.h>
+#include <algorithm>
 
 #include <string>
 
@@ -130,19 +131,24 @@ share of the triangles (QEM). Vertex colours when color is given.)");
 
   py::class_<Volume>(m, "TsdfVolume",
                      "A sparse TSDF map (8^3-voxel blocks) that depth frames are fused into.")
-      .def(py::init([](float voxel, float truncation, float max_weight, bool fuse_color) {
-             TsdfConfig c;
-             c.voxel_size = voxel;
-             c.truncation_voxels = truncation;
-             c.max_weight = max_weight;
-             c.fuse_color = fuse_color;
-             return std::make_unique<Volume>(c);
-           }),
+      .def(py::init(
+               [](float voxel, float truncation, float behind, float max_weight, bool fuse_color) {
+                 TsdfConfig c;
+                 c.voxel_size = voxel;
+                 c.truncation_voxels = truncation;
+                 c.behind_voxels = std::min(behind, truncation);
+                 c.max_weight = max_weight;
+                 c.fuse_color = fuse_color;
+                 return std::make_unique<Volume>(c);
+               }),
            py::arg("voxel") = TsdfConfig{}.voxel_size,
            py::arg("truncation") = TsdfConfig{}.truncation_voxels,
+           py::arg("behind") = TsdfConfig{}.behind_voxels,
            py::arg("max_weight") = TsdfConfig{}.max_weight,
            py::arg("fuse_color") = TsdfConfig{}.fuse_color,
-           "voxel in metres, truncation in voxels (the CLI's run --fuse defaults).")
+           "voxel in metres, truncation in voxels, behind: the least band behind each measured "
+           "surface in voxels (the CLI's run --fuse defaults; behind = truncation: Open3D's "
+           "symmetric band).")
       .def(
           "integrate",
           [](Volume& v, const py::handle& depth, const PinholeIntrinsics& intrinsics,
@@ -155,6 +161,7 @@ share of the triangles (QEM). Vertex colours when color is given.)");
             }
             py::dict d;
             d["pixels_used"] = s.pixels_used;
+            d["noise_per_depth2"] = s.noise_per_depth2;
             d["blocks_touched"] = s.blocks_touched;
             d["blocks_allocated"] = s.blocks_allocated;
             d["voxels_updated"] = s.voxels_updated;

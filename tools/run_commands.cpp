@@ -79,6 +79,7 @@ struct RunOptions {
   bool fuse = false;
   std::size_t mesh_every = 0;
   float truncation_voxels = 4.0f;
+  float behind_voxels = TsdfConfig{}.behind_voxels;
   std::string save_map, load_map;
 };
 
@@ -110,6 +111,7 @@ void run_fusion(const RunOptions& o) {
   config.frames = o.pipeline.config();
   config.tsdf.voxel_size = o.pipeline.voxel > 0.0f ? o.pipeline.voxel : 0.01f;
   config.tsdf.truncation_voxels = o.truncation_voxels;
+  config.tsdf.behind_voxels = std::min(o.behind_voxels, o.truncation_voxels);
   config.tsdf.max_memory_bytes = config.frames.max_memory_bytes;
   config.mesh_every = o.mesh_every;
   const auto pipeline = o.load_map.empty()
@@ -314,6 +316,12 @@ void add_run_options(CLI::App* cmd) {
       ->check(number_in(0, 1e9))
       ->needs(fuse);
   cmd->add_option("--truncation", o->truncation_voxels, "With --fuse: truncation in voxels")
+      ->check(number_in(0, 1000, true))
+      ->needs(fuse);
+  cmd->add_option("--behind", o->behind_voxels,
+                  "With --fuse: the least band behind each measured surface that a frame "
+                  "updates, in voxels; it widens with the frame's depth noise up to --truncation "
+                  "(= --truncation: the symmetric band of KinectFusion and Open3D)")
       ->check(number_in(0, 1000, true))
       ->needs(fuse);
   cmd->add_option("--save-map", o->save_map, "With --fuse: write the TSDF map to this file")

@@ -1,13 +1,18 @@
 // meshflow sample OBJECT -o CLOUD.ply: points drawn uniformly over one of meshflow's closed test
 // objects (nodes/synthetic/closed_objects.h), for trying and measuring object reconstruction
 // without a scanner; `meshflow eval MESH --object OBJECT` measures against its exact surface.
+// With --orbit N: N depth frames of a camera circling the object, written as a TUM RGB-D
+// directory (for `meshflow run DIR --fuse`, and for other tools on the same frames).
 
 #include <cstdio>
 #include <memory>
 #include <string>
 
 #include "nodes/io/mesh_writers.h"
+#include "nodes/io/tum_writer.h"
 #include "nodes/synthetic/closed_objects.h"
+#include "nodes/synthetic/depth_sequence.h"
+#include "nodes/synthetic/object_orbit.h"
 #include "runtime/error.h"
 #include "tools/cli_checks.h"
 #include "tools/commands.h"
@@ -23,10 +28,36 @@ struct SampleOptions {
   float noise = 0.0f;  ///< fraction of the bounding-box diagonal
   bool normals = false;
   std::uint32_t seed = 1;
+  int orbit = 0;                 ///< > 0: depth frames of a camera circling the object
+  std::string size = "640x480";  ///< their image size
+  float depth_noise = 0.001f;    ///< their range noise, metres
 };
+
+void write_orbit(const SampleOptions& o, const synthetic::ClosedObject& object) {
+  synthetic::ObjectOrbitConfig config;
+  config.frames = o.orbit;
+  config.noise_sigma = o.depth_noise;
+  int width = 0, height = 0;
+  if (std::sscanf(o.size.c_str(), "%dx%d", &width, &height) != 2 || width < 8 || height < 8 ||
+      width > 8192 || height > 8192) {
+    throw Error("--size", o.size, "expected WIDTHxHEIGHT, each 8..8192 pixels");
+  }
+  config.intrinsics = synthetic::scaled_default_camera(width, height);
+  const auto sequence = synthetic::make_object_orbit(object, config);
+  io::write_tum_directory(*sequence, o.output);
+  report("object     %s: diagonal %.4f m\n", object.name.c_str(), object.diagonal());
+  report("frames     %d depth + colour frames %dx%d circling it, range noise %.3g m\n", o.orbit,
+         width, height, o.depth_noise);
+  report("output     %s (TUM RGB-D layout: depth/, rgb/, groundtruth.txt, camera.json)\n",
+         o.output.c_str());
+}
 
 void run_sample(const SampleOptions& o) {
   const synthetic::ClosedObject object = *synthetic::closed_test_object(o.object);
+  if (o.orbit > 0) {
+    write_orbit(o, object);
+    return;
+  }
   const PointCloud cloud = object.sample(o.points, o.noise * object.diagonal(), o.seed);
   TriangleMesh points;  // a PLY of vertices only
   points.vertices = cloud.positions;
@@ -45,22 +76,33 @@ void run_sample(const SampleOptions& o) {
 
 std::vector<std::string> closed_object_names() {
   std::vector<std::string> names;
-  for (const synthetic::ClosedObject& o : synthetic::closed_test_objects()) names.push_back(o.name);
+  for (const synthetic::ClosedObject& o : synthetic::all_test_objects()) names.push_back(o.name);
   return names;
 }
 
 void add_sample_options(CLI::App* cmd) {
   auto opts = std::make_shared<SampleOptions>();
-  cmd->add_option("object", opts->object, "sphere, torus, l-shape, chamfered-cube, box-with-hole")
+  cmd->add_option("object", opts->object,
+                  "sphere, torus, l-shape, chamfered-cube, box-with-hole, box, thin-plate")
       ->required()
       ->check(CLI::IsMember(closed_object_names()));
-  cmd->add_option("-o,--output", opts->output, "Output point cloud (.ply)")->required();
+  cmd->add_option("-o,--output", opts->output,
+                  "Output point cloud (.ply), or directory with --orbit")
+      ->required();
   cmd->add_option("--points", opts->points, "Number of points")->check(number_in(1, 1e9));
   cmd->add_option("--noise", opts->noise,
                   "Gaussian noise, as a fraction of the bounding-box diagonal (e.g. 0.002)")
       ->check(number_in(0, 1));
   cmd->add_flag("--normals", opts->normals, "Write the exact outward normals too");
   cmd->add_option("--seed", opts->seed, "Random seed")->check(number_in(0, 4294967295.0));
+  cmd->add_option("--orbit", opts->orbit,
+                  "Instead of points: this many depth frames of a camera circling the object, "
+                  "written as a TUM RGB-D directory")
+      ->check(number_in(0, 100000));
+  cmd->add_option("--size", opts->size, "Image size of the --orbit frames (WIDTHxHEIGHT)");
+  cmd->add_option("--depth-noise", opts->depth_noise,
+                  "Range noise of the --orbit frames, metres (Gaussian sigma)")
+      ->check(number_in(0, 1));
   add_console_flags(cmd, false);
   cmd->callback([opts] { run_sample(*opts); });
 }

@@ -42,6 +42,7 @@ class BlockLattice {
 TsdfMesher::BlockMesh mesh_block(const TsdfVolume& volume, const TsdfBlock& block) {
   const auto& cases = cube_cases();
   const float voxel = volume.config().voxel_size;
+  const float truncation = volume.config().truncation();
   const BlockLattice lattice(volume, block);
   TsdfMesher::BlockMesh out;
   std::vector<std::int32_t> edge_vertex(kLattice * kLattice * kLattice * 3, -1);
@@ -49,16 +50,42 @@ TsdfMesher::BlockMesh mesh_block(const TsdfVolume& volume, const TsdfBlock& bloc
     for (int y = 0; y < kSide; ++y)
       for (int x = 0; x < kSide; ++x) {
         std::array<const TsdfVoxel*, 8> corner{};
-        int pattern = 0;
-        bool valid = true;
-        for (int c = 0; c < 8 && valid; ++c) {
-          corner[static_cast<std::size_t>(c)] =
-              lattice.at(x + (c & 1), y + ((c >> 1) & 1), z + ((c >> 2) & 1));
-          const TsdfVoxel* v = corner[static_cast<std::size_t>(c)];
-          valid = v != nullptr && v->weight > 0.0f;
-          if (valid && v->distance < 0.0f) pattern |= 1 << c;
+        int pattern = 0, observed = 0;
+        const TsdfVoxel* inside = nullptr;  // an observed corner behind the surface
+        for (int c = 0; c < 8; ++c) {
+          const TsdfVoxel* v = lattice.at(x + (c & 1), y + ((c >> 1) & 1), z + ((c >> 2) & 1));
+          if (v == nullptr || !(v->weight > 0.0f)) continue;
+          corner[static_cast<std::size_t>(c)] = v;
+          observed |= 1 << c;
+          if (v->distance < 0.0f) {
+            pattern |= 1 << c;
+            inside = v;
+          }
         }
-        if (!valid || pattern == 0 || pattern == 255) continue;
+        // A cell is meshed when its observed corners lie on both sides of the surface. Corners
+        // no frame reached, when none of their edge neighbours in the cell is in front of the
+        // surface, are behind it (a frame's band reaches farther in front of a surface than
+        // behind it) and count as inside, at the truncation; any other unobserved corner (next
+        // to free space: the edge of a view) leaves the cell out.
+        if (pattern == 0 || pattern == observed) continue;
+        const int in_front = observed & ~pattern;
+        bool fillable = true;
+        for (int c = 0; c < 8 && fillable; ++c) {
+          const int neighbours = (1 << (c ^ 1)) | (1 << (c ^ 2)) | (1 << (c ^ 4));
+          fillable = ((observed >> c) & 1) != 0 || (in_front & neighbours) == 0;
+        }
+        if (!fillable) continue;
+        TsdfVoxel behind;
+        if (observed != 255) {
+          behind.distance = -truncation;
+          behind.color = inside->color;
+          for (int c = 0; c < 8; ++c) {
+            if (((observed >> c) & 1) == 0) {
+              corner[static_cast<std::size_t>(c)] = &behind;
+              pattern |= 1 << c;
+            }
+          }
+        }
         std::array<std::uint32_t, 12> local{};
         for (int e = 0; e < 12; ++e) {
           const auto& ce = kCubeEdges[static_cast<std::size_t>(e)];

@@ -20,12 +20,15 @@ struct TsdfExtractStats {
 
 class TsdfMesher {
  public:
-  /// The surface distance = 0 of `volume`: cells with a corner never observed (weight 0) are
-  /// skipped. Vertex colours are interpolated from the voxels; triangles wind counter-clockwise
-  /// seen from the free-space side (positive distance), vertex normals are area-weighted.
-  /// Re-meshes only blocks changed since this mesher's last call (per-block work in parallel);
-  /// the output is identical to a fresh mesher's and does not depend on the thread count.
-  /// Not thread-safe against integration into `volume` at the same time.
+  /// The surface distance = 0 of `volume`: a cell is meshed when its observed corners (weight
+  /// > 0) lie on both sides of the surface and its corners no frame reached have no edge
+  /// neighbour in the cell in front of the surface: those count as behind it (distance
+  /// -truncation), since every frame's band reaches farther in front of a surface than behind.
+  /// Vertex colours are interpolated from the voxels; triangles wind counter-clockwise seen from
+  /// the free-space side (positive distance), vertex normals are area-weighted. Re-meshes only
+  /// blocks changed since this mesher's last call (per-block work in parallel); the output is
+  /// identical to a fresh mesher's and does not depend on the thread count. Not thread-safe against
+  /// integration into `volume` at the same time.
   TriangleMesh extract(const TsdfVolume& volume, TsdfExtractStats* stats = nullptr);
 
   /// One block's piece of the surface: vertices with the global key of their grid edge.

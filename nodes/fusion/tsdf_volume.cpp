@@ -6,6 +6,7 @@
 #include <cmath>
 #include <string>
 
+#include "nodes/depth/depth_noise.h"
 #include "runtime/error.h"
 #include "runtime/parallel.h"
 #include "runtime/radix_sort.h"
@@ -40,13 +41,23 @@ class RecentKeys {
   std::size_t next_ = 0;
 };
 
-// Keys of the blocks whose voxels lie within the truncation band of row v's valid pixels: for
-// each pixel, every block overlapping the box around the ray segment depth +- truncation.
-// Keys inside the previous pixel's box or emitted recently are skipped; the caller sorts and
-// dedupes the rest. The ray is advanced incrementally along the row (in voxel units).
-void touched_blocks_of_row(const Image& depth, int v, const PinholeIntrinsics& k,
-                           const Eigen::Isometry3f& T_world_camera, float voxel, float truncation,
-                           std::vector<VoxelKey>& out, std::size_t& pixels) {
+// What the blocks a frame touches depend on besides its pose.
+struct BandGeometry {
+  const PinholeIntrinsics& intrinsics;
+  const TsdfConfig& config;
+  const Image& behind;  ///< tsdf_behind_band() per pixel, metres
+};
+
+// Keys of the blocks whose voxels lie within the band of row v's valid pixels: for each pixel,
+// every block overlapping the box around the ray segment from the truncation in front of the
+// depth to tsdf_behind_band() behind it. Keys inside the previous pixel's box or emitted
+// recently are skipped; the caller sorts and dedupes the rest. The ray is advanced
+// incrementally along the row (in voxel units).
+void touched_blocks_of_row(const Image& depth, int v, const BandGeometry& band,
+                           const Eigen::Isometry3f& T_world_camera, std::vector<VoxelKey>& out,
+                           std::size_t& pixels) {
+  const PinholeIntrinsics& k = band.intrinsics;
+  const float voxel = band.config.voxel_size, truncation = band.config.truncation();
   const float* row = depth.ptr<float>(v);
   RecentKeys recent;
   Eigen::Vector3i last_lo(1, 1, 1), last_hi(0, 0, 0);  // an empty box
@@ -65,7 +76,7 @@ void touched_blocks_of_row(const Image& depth, int v, const PinholeIntrinsics& k
     if (!(d > 0.0f) || !std::isfinite(d)) continue;
     ++pixels;
     const Eigen::Vector3f near_point = origin + ray * std::max(d - truncation, 0.0f);
-    const Eigen::Vector3f far_point = origin + ray * (d + truncation);
+    const Eigen::Vector3f far_point = origin + ray * (d + band.behind.at<float>(v, u));
     const Eigen::Vector3f lo = near_point.cwiseMin(far_point);
     const Eigen::Vector3f hi = near_point.cwiseMax(far_point);
     const Eigen::Vector3i vlo(floor_to_int(lo.x()), floor_to_int(lo.y()), floor_to_int(lo.z()));
@@ -94,12 +105,6 @@ float observation_weight(TsdfWeighting scheme, float depth) {
   return scheme == TsdfWeighting::kInverseDepth ? 1.0f / (depth * depth) : 1.0f;
 }
 
-// What the blocks a frame touches depend on besides its pose.
-struct BandGeometry {
-  const PinholeIntrinsics& intrinsics;
-  float voxel, truncation;  ///< metres
-};
-
 // Keys of the blocks within the truncation band of the frame's valid pixels, sorted and unique:
 // per row (local buffers, in parallel), then joined in row order. Adds the valid pixels to
 // `pixels_used`.
@@ -111,8 +116,7 @@ std::vector<VoxelKey> touched_block_keys(const Image& depth, const BandGeometry&
   std::vector<std::size_t> row_pixels(rows, 0);
   tbb::parallel_for(0, depth.rows(), [&](int v) {
     const auto r = static_cast<std::size_t>(v);
-    touched_blocks_of_row(depth, v, band.intrinsics, T_world_camera, band.voxel, band.truncation,
-                          row_keys[r], row_pixels[r]);
+    touched_blocks_of_row(depth, v, band, T_world_camera, row_keys[r], row_pixels[r]);
   });
   std::vector<std::size_t> offsets(rows);
   for (std::size_t r = 0; r < rows; ++r) {
@@ -135,14 +139,19 @@ struct BlockUpdate {
   const PinholeIntrinsics& intrinsics;
   Eigen::Isometry3f T_camera_world;
   const TsdfConfig& config;
+  const Image& behind;  ///< tsdf_behind_band() per pixel, metres
 };
 
 // Projects every voxel of the block into the frame and blends the truncated distance (and
 // colour) of the pixel it lands on into it; voxels outside the image, behind an invalid pixel or
-// more than the truncation behind the surface keep their state. Returns the voxels updated.
+// farther behind the surface than tsdf_behind_band() keep their state. Returns the voxels updated.
 std::size_t update_block(TsdfBlock& block, const BlockUpdate& frame) {
   const PinholeIntrinsics& k = frame.intrinsics;
   const Image& depth = frame.depth;
+  // Rows are contiguous (Image::row_bytes()): one pixel index for the depth and the band.
+  const float* depth_pixels = depth.ptr<float>(0);
+  const float* behind_pixels = frame.behind.ptr<float>(0);
+  const std::size_t width = static_cast<std::size_t>(depth.cols());
   const float voxel = frame.config.voxel_size, truncation = frame.config.truncation();
   const Eigen::Matrix3f rotation = frame.T_camera_world.linear();
   const Eigen::Vector3i origin = block.coords * kTsdfBlockSide;
@@ -161,10 +170,13 @@ std::size_t update_block(TsdfBlock& block, const BlockUpdate& frame) {
           continue;  // outside the image (or NaN)
         }
         const int u = static_cast<int>(uf + 0.5f), v = static_cast<int>(vf + 0.5f);
-        const float d = depth.at<float>(v, u);
+        const std::size_t pixel = static_cast<std::size_t>(v) * width + static_cast<std::size_t>(u);
+        const float d = depth_pixels[pixel];
         if (!(d > 0.0f) || !std::isfinite(d)) continue;
         const float sdf = d - pc.z();
-        if (sdf < -truncation) continue;  // hidden behind the surface: unknown
+        if (sdf < -behind_pixels[pixel]) {
+          continue;  // hidden behind the surface: unknown
+        }
         TsdfVoxel& vox =
             block.voxels[static_cast<std::size_t>(x + kTsdfBlockSide * (y + kTsdfBlockSide * z))];
         const float w = observation_weight(frame.config.weighting, d);
@@ -190,6 +202,68 @@ std::size_t update_block(TsdfBlock& block, const BlockUpdate& frame) {
 
 }  // namespace
 
+namespace {
+
+// tan of the angle between the ray through pixel (u, v) and the surface normal, from the depth
+// two pixels either side on the same surface (one side where the other is unmeasured or across
+// a depth jump): the length of the depth gradient along the row and the column, at most
+// kMaxSlope; an axis where no neighbour qualifies (a silhouette: the surface turns away from
+// the camera) counts kMaxSlope.
+constexpr float kMaxSlope = 4.0f;  // 76 degrees
+// A relative depth difference beyond the occlusion-edge filter's default (depth_filter.h): the
+// neighbour is another surface, and a flying pixel between the two must not widen the band.
+constexpr float kSameSurfaceJump = 0.06f;
+float surface_slope(const Image& depth, int u, int v, float focal) {
+  const float* pixels = depth.ptr<float>(0);  // rows contiguous (Image::row_bytes())
+  const int width = depth.cols(), height = depth.rows();
+  const float d = pixels[static_cast<std::size_t>(v) * static_cast<std::size_t>(width) +
+                         static_cast<std::size_t>(u)];
+  const float pixel = d / focal;  // metres per pixel at this depth
+  auto axis_slope = [&](int du, int dv) {
+    auto at = [&](int k) {
+      const int x = u + k * du, y = v + k * dv;
+      if (x < 0 || y < 0 || x >= width || y >= height) return 0.0f;
+      const float z = pixels[static_cast<std::size_t>(y) * static_cast<std::size_t>(width) +
+                             static_cast<std::size_t>(x)];
+      const bool same_surface = z > 0.0f && std::abs(z - d) <= kSameSurfaceJump * d;
+      return same_surface ? z : 0.0f;  // false for NaN too
+    };
+    const float before = at(-2), after = at(2);
+    if (before > 0.0f && after > 0.0f) return std::abs(after - before) / (4.0f * pixel);
+    if (after > 0.0f) return std::abs(after - d) / (2.0f * pixel);
+    if (before > 0.0f) return std::abs(d - before) / (2.0f * pixel);
+    return kMaxSlope;
+  };
+  const float along_row = axis_slope(1, 0), along_column = axis_slope(0, 1);
+  return std::min(kMaxSlope, std::sqrt(along_row * along_row + along_column * along_column));
+}
+
+}  // namespace
+
+Image tsdf_behind_band(const Image& depth_m, const PinholeIntrinsics& intrinsics,
+                       const TsdfConfig& config, float noise_per_depth2) {
+  Image behind(depth_m.rows(), depth_m.cols(), PixelFormat::F32);
+  const float least = config.behind_voxels * config.voxel_size;
+  const float across = config.voxel_size;  // at least one voxel across the surface
+  const float focal = 0.5f * (intrinsics.fx + intrinsics.fy);
+  tbb::parallel_for(0, depth_m.rows(), [&](int v) {
+    const float* depth_row = depth_m.ptr<float>(v);
+    float* row = behind.ptr<float>(v);
+    for (int u = 0; u < depth_m.cols(); ++u) {
+      const float d = depth_row[u];
+      if (!(d > 0.0f) || !std::isfinite(d)) {
+        row[u] = 0.0f;
+        continue;
+      }
+      const float slope = surface_slope(depth_m, u, v, focal);
+      const float along_ray = std::max(least, across * std::sqrt(1.0f + slope * slope));
+      const float noise = kBehindNoiseMultiple * noise_per_depth2 * d * d;
+      row[u] = std::min(config.truncation(), std::max(along_ray, noise));
+    }
+  });
+  return behind;
+}
+
 // Larger voxels are a unit error; they would also put far vertices beyond float's range.
 constexpr float kMaxVoxelSize = 1000.0f;  // metres
 
@@ -202,6 +276,13 @@ TsdfVolume::TsdfVolume(const TsdfConfig& config) : config_(config) {
   }
   if (!(config.max_weight > 0.0f) || !std::isfinite(config.max_weight))
     throw Error("tsdf", "max_weight", "must be a positive finite number");
+  set_behind_voxels(config.behind_voxels);
+}
+
+void TsdfVolume::set_behind_voxels(float voxels) {
+  if (!(voxels > 0.0f) || !std::isfinite(voxels))
+    throw Error("tsdf", "behind_voxels", "must be a positive number of voxels");
+  config_.behind_voxels = voxels;
 }
 
 std::size_t TsdfVolume::memory_bytes() const { return blocks_.size() * kBytesPerBlock; }
@@ -252,12 +333,14 @@ void TsdfVolume::insert_block(const Eigen::Vector3i& coords,
 IntegrationStats TsdfVolume::integrate(const DepthFrame& frame) {
   IntegrationStats stats;
   const Image depth = depth_in_metres(frame);  // checks the frame (intrinsics, pose)
-  const BandGeometry band{frame.intrinsics, config_.voxel_size, config_.truncation()};
+  stats.noise_per_depth2 = estimate_noise_per_depth2(depth);
+  const Image behind = tsdf_behind_band(depth, frame.intrinsics, config_, stats.noise_per_depth2);
+  const BandGeometry band{frame.intrinsics, config_, behind};
   const std::vector<VoxelKey> keys =
       touched_block_keys(depth, band, frame.T_world_camera, stats.pixels_used);
   const std::vector<std::uint32_t> touched = find_or_allocate(keys, stats.blocks_allocated);
   stats.blocks_touched = touched.size();
-  stats.voxels_updated = update_blocks(touched, depth, frame);
+  stats.voxels_updated = update_blocks(touched, depth, behind, frame);
   return stats;
 }
 
@@ -291,14 +374,18 @@ std::vector<std::uint32_t> TsdfVolume::find_or_allocate(const std::vector<VoxelK
 }
 
 std::size_t TsdfVolume::update_blocks(const std::vector<std::uint32_t>& touched, const Image& depth,
-                                      const DepthFrame& frame) {
+                                      const Image& behind, const DepthFrame& frame) {
   // One task per block; a voxel's new state depends only on its old state and the frame, so the
   // order of blocks does not matter.
   ++generation_;
   const bool color = config_.fuse_color && !frame.color.empty() && frame.color.same_size(depth) &&
                      frame.color.format() == PixelFormat::RGB8;
-  const BlockUpdate update{depth, color ? &frame.color : nullptr, frame.intrinsics,
-                           frame.T_world_camera.inverse(), config_};
+  const BlockUpdate update{depth,
+                           color ? &frame.color : nullptr,
+                           frame.intrinsics,
+                           frame.T_world_camera.inverse(),
+                           config_,
+                           behind};
   std::vector<std::size_t> updated(touched.size(), 0);
   tbb::parallel_for(std::size_t{0}, touched.size(), [&](std::size_t t) {
     TsdfBlock& block = blocks_[touched[t]];

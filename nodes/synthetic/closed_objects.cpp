@@ -298,8 +298,10 @@ ClosedObject box_with_hole_object() {
   return finish(o, Eigen::Vector3f(-a, -b, -h), Eigen::Vector3f(a, b, h));
 }
 
-ClosedObject box_object() {
-  const Eigen::Vector3f h(0.4f, 0.3f, 0.25f);
+namespace {
+
+// An axis-aligned box of half sizes h (plus the common offset).
+ClosedObject axis_box_object(const std::string& name, const Eigen::Vector3f& h) {
   std::vector<Eigen::Vector3f> normals;
   std::vector<float> offsets;
   for (int axis = 0; axis < 3; ++axis)
@@ -309,8 +311,16 @@ ClosedObject box_object() {
       normals.push_back(n);
       offsets.push_back(n.dot(kOffset) + h[axis]);
     }
-  ClosedObject o = convex_polytope_object("box", normals, offsets, 4.0f * h.maxCoeff());
+  ClosedObject o = convex_polytope_object(name, normals, offsets, 4.0f * h.maxCoeff());
   return finish(o, -h, h);
+}
+
+}  // namespace
+
+ClosedObject box_object() { return axis_box_object("box", Eigen::Vector3f(0.4f, 0.3f, 0.25f)); }
+
+ClosedObject thin_plate_object() {
+  return axis_box_object("thin-plate", Eigen::Vector3f(0.3f, 0.2f, 0.01f));
 }
 
 std::vector<ClosedObject> closed_test_objects() {
@@ -318,8 +328,14 @@ std::vector<ClosedObject> closed_test_objects() {
           chamfered_cube_object(), box_with_hole_object(), box_object()};
 }
 
+std::vector<ClosedObject> all_test_objects() {
+  std::vector<ClosedObject> all = closed_test_objects();
+  all.push_back(thin_plate_object());
+  return all;
+}
+
 std::optional<ClosedObject> closed_test_object(const std::string& name) {
-  for (ClosedObject& o : closed_test_objects())
+  for (ClosedObject& o : all_test_objects())
     if (o.name == name) return std::move(o);
   return std::nullopt;
 }

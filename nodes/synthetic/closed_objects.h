@@ -54,12 +54,18 @@ ClosedObject l_shape_object();         ///< L-shaped prism 0.8 x 0.8 x 0.3 m, ar
 ClosedObject chamfered_cube_object();  ///< 0.6 m cube, one edge cut 0.15 m deep at 45 degrees
 ClosedObject box_with_hole_object();   ///< 0.8 x 0.8 x 0.4 m box, a 0.15 m-radius hole along z
 ClosedObject box_object();             ///< 0.8 x 0.6 x 0.5 m box
+/// A 0.6 x 0.4 m plate 0.02 m thick: thinner than a TSDF's usual truncation band at 1 cm voxels,
+/// the hard case of fusing views from both sides.
+ClosedObject thin_plate_object();
 
-/// The six objects above, in that order.
+/// The six objects above before the plate, in that order (the held-out-style accuracy set).
 std::vector<ClosedObject> closed_test_objects();
 
-/// The object of closed_test_objects() called `name` ("sphere", "torus", "l-shape",
-/// "chamfered-cube", "box-with-hole", "box"), or nullopt.
+/// closed_test_objects() and the thin plate.
+std::vector<ClosedObject> all_test_objects();
+
+/// The object of all_test_objects() called `name` ("sphere", "torus", "l-shape",
+/// "chamfered-cube", "box-with-hole", "box", "thin-plate"), or nullopt.
 std::optional<ClosedObject> closed_test_object(const std::string& name);
 
 }  // namespace meshflow::synthetic

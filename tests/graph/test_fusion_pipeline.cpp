@@ -63,7 +63,7 @@ TEST(FusionPipeline, MatchesSequentialIntegrationAndMeshesEveryNFrames) {
   EXPECT_EQ(order, (std::vector<std::size_t>{0, 1, 2, 3, 4, 5}));
   EXPECT_EQ(meshed, (std::vector<std::size_t>{1, 3, 5}));
 
-  expect_same_map(integrated_in_order(*seq, config), pipeline.map());
+  expect_same_map(integrated_in_order(*seq, pipeline.config()), pipeline.map());
   const TriangleMesh mesh = pipeline.extract_mesh();
   EXPECT_GT(mesh.triangles.size(), 5000u);
   EXPECT_EQ(edge_statistics(mesh).non_manifold_edges, 0u);
@@ -80,7 +80,7 @@ TEST(FusionPipeline, ManyTinyFramesArriveInInputOrderEveryRun) {
   FusionConfig config;
   config.tsdf.voxel_size = 0.1f;
   config.mesh_every = 0;
-  const TsdfVolume expected = integrated_in_order(*seq, config);
+  const TsdfVolume expected = integrated_in_order(*seq, FusionPipeline(config).config());
   for (int run = 0; run < 20; ++run) {
     FusionPipeline pipeline(config, 8);
     std::vector<std::size_t> order;

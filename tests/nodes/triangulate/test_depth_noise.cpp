@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <random>
 
+#include "nodes/depth/depth_noise.h"
 #include "nodes/triangulate/depth_triangulation.h"
 #include "runtime/threads.h"
 
@@ -88,6 +89,32 @@ TEST(DepthNoise, SameEstimateWithOneAndTwoThreads) {
     two = estimate_noise_per_depth2(grid);
   }
   EXPECT_EQ(one, two);
+}
+
+// Fusion estimates the noise from the metric depth image itself (depth residuals per depth^2,
+// nodes/depth/depth_noise.h): the same figure as the point grid's within the rays' obliquity
+// (range residual / range^2 = depth residual / depth^2 / |ray|, |ray| <= 1.25 here).
+TEST(DepthNoise, DepthImageEstimateAgreesWithThePointGrids) {
+  for (const Noise noise : {Noise::kQuantised, Noise::kGaussianPerDepth2}) {
+    const DepthFrame frame = plane_frame(noise, 0.002f);
+    const float from_grid = estimate_noise_per_depth2(grid_from_depth(frame, {}));
+    float one = 0.0f, two = 0.0f;
+    {
+      ThreadLimit limit(1);
+      one = estimate_noise_per_depth2(frame.depth);
+    }
+    {
+      ThreadLimit limit(2);
+      two = estimate_noise_per_depth2(frame.depth);
+    }
+    std::printf("[ noise ] depth image %.3e /m, point grid %.3e /m\n", one, from_grid);
+    EXPECT_EQ(one, two);
+    EXPECT_GE(one, 0.95f * from_grid);
+    EXPECT_LE(one, 1.3f * from_grid);
+  }
+  Image empty(480, 640, PixelFormat::F32);
+  empty.fill(0.0f);
+  EXPECT_EQ(estimate_noise_per_depth2(empty), 0.0f);
 }
 
 TEST(DepthNoise, TooFewPixelsGiveNoEstimate) {

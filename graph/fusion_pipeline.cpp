@@ -16,7 +16,8 @@ FusionPipeline::FusionPipeline(const FusionConfig& config, std::size_t max_in_fl
 FusionPipeline::FusionPipeline(FusionConfig config, std::size_t max_in_flight, TsdfVolume map)
     : config_(std::move(config)),
       max_in_flight_(std::max<std::size_t>(1, max_in_flight)),
-      map_(std::move(map)) {
+      map_(std::move(map)),
+      mesher_(config_.min_weight) {
   config_.frames.organized_as_depth = true;  // fusion integrates depth images only
   if (config_.keep_occlusion_edges) config_.frames.depth_filter.edge_high = 0.0f;
   map_.set_max_memory_bytes(config_.tsdf.max_memory_bytes);
@@ -70,8 +71,8 @@ void FusionPipeline::run(const std::function<FramePtr()>& next,
   ends.run(g);
 }
 
-TriangleMesh FusionPipeline::extract_mesh() {
-  return optimize_mesh(mesher_.extract(map_),
+TriangleMesh FusionPipeline::extract_mesh(TsdfExtractStats* stats) {
+  return optimize_mesh(mesher_.extract(map_, stats),
                        optimize_config_for_voxel(config_.frames, config_.tsdf.voxel_size));
 }
 

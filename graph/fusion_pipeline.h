@@ -28,6 +28,8 @@ struct FusionConfig {
   /// bridge but fusion needs (other views correct what they mix); on the Redwood frames at
   /// 1 cm removing them costs 5 % of the completeness.
   bool keep_occlusion_edges = true;
+  /// Extraction treats voxels of at most this accumulated weight as unobserved (TsdfMesher).
+  float min_weight = 0.0f;
 };
 
 class FusionPipeline : public FramePipeline {
@@ -41,8 +43,9 @@ class FusionPipeline : public FramePipeline {
   void run(const std::function<FramePtr()>& next,
            const std::function<void(const FramePtr&)>& sink) override;
 
-  /// The map's surface (incremental marching cubes, then the configured optimisation steps).
-  TriangleMesh extract_mesh();
+  /// The map's surface (incremental marching cubes, then the configured optimisation steps);
+  /// with `stats`, where the surface went (TsdfExtractStats, cells of the whole map).
+  TriangleMesh extract_mesh(TsdfExtractStats* stats = nullptr);
 
   /// The TSDF map fused so far.
   const TsdfVolume& map() const { return map_; }

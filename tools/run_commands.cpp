@@ -16,6 +16,7 @@
 #include "tools/cli_checks.h"
 #include "tools/commands.h"
 #include "tools/console.h"
+#include "tools/fusion_breakdown.h"
 #include "tools/json_report.h"
 #include "tools/pipeline_options.h"
 #include "tools/progress.h"
@@ -80,6 +81,7 @@ struct RunOptions {
   std::size_t mesh_every = 0;
   float truncation_voxels = 4.0f;
   float behind_voxels = TsdfConfig{}.behind_voxels;
+  float min_weight = 0.0f;
   std::string save_map, load_map;
 };
 
@@ -114,6 +116,7 @@ void run_fusion(const RunOptions& o) {
   config.tsdf.behind_voxels = std::min(o.behind_voxels, o.truncation_voxels);
   config.tsdf.max_memory_bytes = config.frames.max_memory_bytes;
   config.mesh_every = o.mesh_every;
+  config.min_weight = o.min_weight;
   const auto pipeline = o.load_map.empty()
                             ? std::make_unique<FusionPipeline>(config, o.sequence.in_flight)
                             : std::make_unique<FusionPipeline>(config, o.sequence.in_flight,
@@ -122,10 +125,12 @@ void run_fusion(const RunOptions& o) {
   std::size_t done = 0, written = 0;
   const std::filesystem::path dir(o.output_dir);
   const SequenceRunOptions run_options{o.sequence.every, o.sequence.max_frames, o.strict};
+  FusionBreakdown breakdown;
   const SequenceRunStats stats =
       run_sequence(*pipeline, *sequence, run_options, [&](const Frame& f) {
         progress.update(++done);
         if (!f.ok()) return report_failure(f);
+        breakdown.add(f);
         if (f.mesh.empty()) return;
         char name[64];
         std::snprintf(name, sizeof name, "fused_%06zu.ply", f.source_index);
@@ -133,7 +138,8 @@ void run_fusion(const RunOptions& o) {
         ++written;
       });
   const double t0 = monotonic_seconds();
-  const TriangleMesh mesh = pipeline->extract_mesh();
+  TsdfExtractStats extraction;
+  const TriangleMesh mesh = pipeline->extract_mesh(&extraction);
   const double extract_s = monotonic_seconds() - t0;
   if (!mesh.empty()) {
     io::write_ply((dir / "fused.ply").string(), mesh);
@@ -149,8 +155,10 @@ void run_fusion(const RunOptions& o) {
          {"bytes", map.memory_bytes()}}},
        {"mesh", {{"vertices", mesh.vertices.size()}, {"triangles", mesh.triangles.size()}}},
        {"extract_ms", extract_s * 1e3},
+       {"completeness", breakdown.json(extraction.cells)},
        {"files_written", written},
        {"output", o.output_dir}});
+  breakdown.print(extraction.cells);
   report("map        %zu blocks of 8^3 voxels at %.4f m, %.1f MB%s%s\n", map.block_count(),
          map.config().voxel_size, static_cast<double>(map.memory_bytes()) / 1e6,
          o.save_map.empty() ? "" : ", saved to ", o.save_map.c_str());
@@ -323,6 +331,11 @@ void add_run_options(CLI::App* cmd) {
                   "updates, in voxels; it widens with the frame's depth noise up to --truncation "
                   "(= --truncation: the symmetric band of KinectFusion and Open3D)")
       ->check(number_in(0, 1000, true))
+      ->needs(fuse);
+  cmd->add_option("--min-weight", o->min_weight,
+                  "With --fuse: extraction treats voxels of at most this accumulated weight as "
+                  "unobserved (0 = all observed voxels; e.g. 2 = surface seen in 3 frames)")
+      ->check(number_in(0, 1e6))
       ->needs(fuse);
   cmd->add_option("--save-map", o->save_map, "With --fuse: write the TSDF map to this file")
       ->needs(fuse);

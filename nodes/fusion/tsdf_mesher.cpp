@@ -3,8 +3,10 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <cmath>
 
 #include "nodes/cube/cube_table.h"
+#include "runtime/error.h"
 #include "runtime/parallel.h"
 #include "runtime/radix_sort.h"
 
@@ -39,12 +41,17 @@ class BlockLattice {
   std::array<const TsdfBlock*, 8> neighbours_{};
 };
 
-TsdfMesher::BlockMesh mesh_block(const TsdfVolume& volume, const TsdfBlock& block) {
+TsdfMesher::BlockMesh mesh_block(const TsdfVolume& volume, const TsdfBlock& block,
+                                 float min_weight) {
   const auto& cases = cube_cases();
   const float voxel = volume.config().voxel_size;
   const float truncation = volume.config().truncation();
   const BlockLattice lattice(volume, block);
   TsdfMesher::BlockMesh out;
+  for (const TsdfVoxel& v : block.voxels) {
+    if (v.weight > min_weight) ++out.counts.voxels_observed;
+    if (v.weight > 0.0f && !(v.weight > min_weight)) ++out.counts.voxels_below_weight;
+  }
   std::vector<std::int32_t> edge_vertex(kLattice * kLattice * kLattice * 3, -1);
   for (int z = 0; z < kSide; ++z)
     for (int y = 0; y < kSide; ++y)
@@ -54,7 +61,7 @@ TsdfMesher::BlockMesh mesh_block(const TsdfVolume& volume, const TsdfBlock& bloc
         const TsdfVoxel* inside = nullptr;  // an observed corner behind the surface
         for (int c = 0; c < 8; ++c) {
           const TsdfVoxel* v = lattice.at(x + (c & 1), y + ((c >> 1) & 1), z + ((c >> 2) & 1));
-          if (v == nullptr || !(v->weight > 0.0f)) continue;
+          if (v == nullptr || !(v->weight > min_weight)) continue;
           corner[static_cast<std::size_t>(c)] = v;
           observed |= 1 << c;
           if (v->distance < 0.0f) {
@@ -74,9 +81,14 @@ TsdfMesher::BlockMesh mesh_block(const TsdfVolume& volume, const TsdfBlock& bloc
           const int neighbours = (1 << (c ^ 1)) | (1 << (c ^ 2)) | (1 << (c ^ 4));
           fillable = ((observed >> c) & 1) != 0 || (in_front & neighbours) == 0;
         }
-        if (!fillable) continue;
+        if (!fillable) {
+          ++out.counts.cells_left_out;
+          continue;
+        }
+        ++out.counts.cells_meshed;
         TsdfVoxel behind;
         if (observed != 255) {
+          ++out.counts.cells_completed;
           behind.distance = -truncation;
           behind.color = inside->color;
           for (int c = 0; c < 8; ++c) {
@@ -174,6 +186,20 @@ TriangleMesh weld_block_meshes(const std::vector<const TsdfMesher::BlockMesh*>& 
 
 }  // namespace
 
+TsdfCellCounts& TsdfCellCounts::operator+=(const TsdfCellCounts& o) {
+  voxels_observed += o.voxels_observed;
+  voxels_below_weight += o.voxels_below_weight;
+  cells_meshed += o.cells_meshed;
+  cells_completed += o.cells_completed;
+  cells_left_out += o.cells_left_out;
+  return *this;
+}
+
+TsdfMesher::TsdfMesher(float min_weight) : min_weight_(min_weight) {
+  if (!(min_weight >= 0.0f) || !std::isfinite(min_weight))
+    throw Error("tsdf mesher", "min_weight", "must be a non-negative number");
+}
+
 TriangleMesh TsdfMesher::extract(const TsdfVolume& volume, TsdfExtractStats* stats) {
   if (volume_ != &volume) {  // another volume: nothing cached applies
     cache_.clear();
@@ -185,6 +211,7 @@ TriangleMesh TsdfMesher::extract(const TsdfVolume& volume, TsdfExtractStats* sta
   TsdfExtractStats s;
   const std::vector<const BlockMesh*> meshes = remesh(volume, order, dirty, s);
   meshed_generation_ = volume.generation();
+  for (const BlockMesh* m : meshes) s.cells += m->counts;
   TriangleMesh mesh = weld_block_meshes(meshes);
   compute_vertex_normals(mesh);
   if (stats != nullptr) *stats = s;
@@ -217,7 +244,7 @@ std::vector<const TsdfMesher::BlockMesh*> TsdfMesher::remesh(
     (dirty[i] ? stats.blocks_meshed : stats.blocks_cached) += 1;
   }
   tbb::parallel_for(std::size_t{0}, order.size(), [&](std::size_t i) {
-    if (dirty[i]) *slots[i] = mesh_block(volume, volume.block(order[i]));
+    if (dirty[i]) *slots[i] = mesh_block(volume, volume.block(order[i]), min_weight_);
   });
   return {slots.begin(), slots.end()};
 }

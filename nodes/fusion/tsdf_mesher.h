@@ -13,15 +13,34 @@
 
 namespace meshflow {
 
+/// Where the map's surface goes at extraction, per cell (8 voxels) and voxel of all blocks.
+struct TsdfCellCounts {
+  std::size_t voxels_observed = 0;      ///< weight above the mesher's minimum
+  std::size_t voxels_below_weight = 0;  ///< observed, but at or below the minimum weight
+  std::size_t cells_meshed = 0;         ///< with a piece of the surface
+  std::size_t cells_completed = 0;  ///< of which had unobserved corners counted behind the surface
+  /// A surface between observed corners, left out: an unobserved corner beside free space (the
+  /// edge of a view) — the holes of the map.
+  std::size_t cells_left_out = 0;
+  /// Adds another count.
+  TsdfCellCounts& operator+=(const TsdfCellCounts& o);
+};
+
 struct TsdfExtractStats {
   std::size_t blocks_meshed = 0;  ///< re-meshed in this call
   std::size_t blocks_cached = 0;  ///< reused from an earlier call
+  TsdfCellCounts cells;           ///< over every block of the map
 };
 
 class TsdfMesher {
  public:
+  /// Voxels whose accumulated weight is at most `min_weight` count as unobserved (0: every
+  /// observed voxel is used; e.g. 2 keeps only surface seen in at least three frames with the
+  /// constant weighting). Throws meshflow::Error for a negative or non-finite value.
+  explicit TsdfMesher(float min_weight = 0.0f);
+
   /// The surface distance = 0 of `volume`: a cell is meshed when its observed corners (weight
-  /// > 0) lie on both sides of the surface and its corners no frame reached have no edge
+  /// > the minimum) lie on both sides of the surface and its corners no frame reached have no edge
   /// neighbour in the cell in front of the surface: those count as behind it (distance
   /// -truncation), since every frame's band reaches farther in front of a surface than behind.
   /// Vertex colours are interpolated from the voxels; triangles wind counter-clockwise seen from
@@ -37,6 +56,7 @@ class TsdfMesher {
     std::vector<Rgb8> colors;
     std::vector<std::uint64_t> edge_keys;  ///< (pack_key(lower voxel) << 2) | axis
     std::vector<Triangle> triangles;       ///< indices into this block's vertices
+    TsdfCellCounts counts;                 ///< this block's cells and voxels
   };
 
  private:
@@ -49,6 +69,7 @@ class TsdfMesher {
                                        const std::vector<std::uint8_t>& dirty,
                                        TsdfExtractStats& stats);
 
+  float min_weight_ = 0.0f;
   std::unordered_map<VoxelKey, BlockMesh> cache_;  // by pack_key(block coords)
   std::uint64_t meshed_generation_ = 0;            // volume generation at the last call
   const TsdfVolume* volume_ = nullptr;             // the volume the cache belongs to

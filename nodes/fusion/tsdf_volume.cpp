@@ -45,7 +45,7 @@ class RecentKeys {
 struct BandGeometry {
   const PinholeIntrinsics& intrinsics;
   const TsdfConfig& config;
-  const Image& behind;  ///< tsdf_behind_band() per pixel, metres
+  const float* pixels;  ///< per pixel: depth, band behind it (metres; depth 0 = invalid)
 };
 
 // Keys of the blocks whose voxels lie within the band of row v's valid pixels: for each pixel,
@@ -53,12 +53,13 @@ struct BandGeometry {
 // depth to tsdf_behind_band() behind it. Keys inside the previous pixel's box or emitted
 // recently are skipped; the caller sorts and dedupes the rest. The ray is advanced
 // incrementally along the row (in voxel units).
-void touched_blocks_of_row(const Image& depth, int v, const BandGeometry& band,
+void touched_blocks_of_row(int width, int v, const BandGeometry& band,
                            const Eigen::Isometry3f& T_world_camera, std::vector<VoxelKey>& out,
                            std::size_t& pixels) {
   const PinholeIntrinsics& k = band.intrinsics;
   const float voxel = band.config.voxel_size, truncation = band.config.truncation();
-  const float* row = depth.ptr<float>(v);
+  const float* row =
+      band.pixels + 2 * static_cast<std::size_t>(v) * static_cast<std::size_t>(width);
   RecentKeys recent;
   Eigen::Vector3i last_lo(1, 1, 1), last_hi(0, 0, 0);  // an empty box
   const float inv_voxel = 1.0f / voxel;
@@ -71,12 +72,12 @@ void touched_blocks_of_row(const Image& depth, int v, const BandGeometry& band,
     return p.x() >= lo.x() && p.y() >= lo.y() && p.z() >= lo.z() && p.x() <= hi.x() &&
            p.y() <= hi.y() && p.z() <= hi.z();
   };
-  for (int u = 0; u < depth.cols(); ++u, ray += ray_step) {
-    const float d = row[u];
-    if (!(d > 0.0f) || !std::isfinite(d)) continue;
+  for (int u = 0; u < width; ++u, ray += ray_step) {
+    const float d = row[2 * u];  // 0 when invalid
+    if (!(d > 0.0f)) continue;
     ++pixels;
     const Eigen::Vector3f near_point = origin + ray * std::max(d - truncation, 0.0f);
-    const Eigen::Vector3f far_point = origin + ray * (d + band.behind.at<float>(v, u));
+    const Eigen::Vector3f far_point = origin + ray * (d + row[2 * u + 1]);
     const Eigen::Vector3f lo = near_point.cwiseMin(far_point);
     const Eigen::Vector3f hi = near_point.cwiseMax(far_point);
     const Eigen::Vector3i vlo(floor_to_int(lo.x()), floor_to_int(lo.y()), floor_to_int(lo.z()));
@@ -108,15 +109,15 @@ float observation_weight(TsdfWeighting scheme, float depth) {
 // Keys of the blocks within the truncation band of the frame's valid pixels, sorted and unique:
 // per row (local buffers, in parallel), then joined in row order. Adds the valid pixels to
 // `pixels_used`.
-std::vector<VoxelKey> touched_block_keys(const Image& depth, const BandGeometry& band,
+std::vector<VoxelKey> touched_block_keys(int width, int height, const BandGeometry& band,
                                          const Eigen::Isometry3f& T_world_camera,
                                          std::size_t& pixels_used) {
-  const auto rows = static_cast<std::size_t>(depth.rows());
+  const auto rows = static_cast<std::size_t>(height);
   std::vector<std::vector<VoxelKey>> row_keys(rows);
   std::vector<std::size_t> row_pixels(rows, 0);
-  tbb::parallel_for(0, depth.rows(), [&](int v) {
+  tbb::parallel_for(0, height, [&](int v) {
     const auto r = static_cast<std::size_t>(v);
-    touched_blocks_of_row(depth, v, band, T_world_camera, row_keys[r], row_pixels[r]);
+    touched_blocks_of_row(width, v, band, T_world_camera, row_keys[r], row_pixels[r]);
   });
   std::vector<std::size_t> offsets(rows);
   for (std::size_t r = 0; r < rows; ++r) {
@@ -134,24 +135,22 @@ std::vector<VoxelKey> touched_block_keys(const Image& depth, const BandGeometry&
 
 // One frame's view of the map's voxels.
 struct BlockUpdate {
-  const Image& depth;  ///< F32 metres
-  const Image* color;  ///< RGB8 of the depth's size, or null: no colour fused
+  const float* pixels;  ///< per pixel: depth, band behind it (metres; depth 0 = invalid)
+  int width, height;    ///< of the depth image
+  const Image* color;   ///< RGB8 of the depth's size, or null: no colour fused
   const PinholeIntrinsics& intrinsics;
   Eigen::Isometry3f T_camera_world;
   const TsdfConfig& config;
-  const Image& behind;  ///< tsdf_behind_band() per pixel, metres
 };
 
 // Projects every voxel of the block into the frame and blends the truncated distance (and
 // colour) of the pixel it lands on into it; voxels outside the image, behind an invalid pixel or
-// farther behind the surface than tsdf_behind_band() keep their state. Returns the voxels updated.
+// farther behind the surface than its band keep their state. Returns the voxels updated.
 std::size_t update_block(TsdfBlock& block, const BlockUpdate& frame) {
   const PinholeIntrinsics& k = frame.intrinsics;
-  const Image& depth = frame.depth;
-  // Rows are contiguous (Image::row_bytes()): one pixel index for the depth and the band.
-  const float* depth_pixels = depth.ptr<float>(0);
-  const float* behind_pixels = frame.behind.ptr<float>(0);
-  const std::size_t width = static_cast<std::size_t>(depth.cols());
+  const std::size_t width = static_cast<std::size_t>(frame.width);
+  const float max_u = static_cast<float>(frame.width) - 0.5f;
+  const float max_v = static_cast<float>(frame.height) - 0.5f;
   const float voxel = frame.config.voxel_size, truncation = frame.config.truncation();
   const Eigen::Matrix3f rotation = frame.T_camera_world.linear();
   const Eigen::Vector3i origin = block.coords * kTsdfBlockSide;
@@ -165,18 +164,15 @@ std::size_t update_block(TsdfBlock& block, const BlockUpdate& frame) {
         if (!(pc.z() > 0.0f)) continue;
         const float inv_z = 1.0f / pc.z();
         const float uf = k.fx * pc.x() * inv_z + k.cx, vf = k.fy * pc.y() * inv_z + k.cy;
-        if (!(uf > -0.5f && vf > -0.5f && uf < static_cast<float>(depth.cols()) - 0.5f &&
-              vf < static_cast<float>(depth.rows()) - 0.5f)) {
+        if (!(uf > -0.5f && vf > -0.5f && uf < max_u && vf < max_v)) {
           continue;  // outside the image (or NaN)
         }
         const int u = static_cast<int>(uf + 0.5f), v = static_cast<int>(vf + 0.5f);
         const std::size_t pixel = static_cast<std::size_t>(v) * width + static_cast<std::size_t>(u);
-        const float d = depth_pixels[pixel];
-        if (!(d > 0.0f) || !std::isfinite(d)) continue;
+        const float d = frame.pixels[2 * pixel];  // 0 when invalid
+        if (!(d > 0.0f)) continue;
         const float sdf = d - pc.z();
-        if (sdf < -behind_pixels[pixel]) {
-          continue;  // hidden behind the surface: unknown
-        }
+        if (sdf < -frame.pixels[2 * pixel + 1]) continue;  // hidden behind the surface: unknown
         TsdfVoxel& vox =
             block.voxels[static_cast<std::size_t>(x + kTsdfBlockSide * (y + kTsdfBlockSide * z))];
         const float w = observation_weight(frame.config.weighting, d);
@@ -238,31 +234,34 @@ float surface_slope(const Image& depth, int u, int v, float focal) {
   return std::min(kMaxSlope, std::sqrt(along_row * along_row + along_column * along_column));
 }
 
-}  // namespace
-
-Image tsdf_behind_band(const Image& depth_m, const PinholeIntrinsics& intrinsics,
-                       const TsdfConfig& config, float noise_per_depth2) {
-  Image behind(depth_m.rows(), depth_m.cols(), PixelFormat::F32);
+// Fills `pixels` with each pixel's depth (0 where invalid) and the band behind it along the ray
+// (the rule of TsdfConfig::behind_voxels). Parallel over rows; O(pixels).
+void band_pixels(const Image& depth_m, const PinholeIntrinsics& intrinsics,
+                 const TsdfConfig& config, float noise_per_depth2, std::vector<float>& pixels) {
+  const std::size_t width = static_cast<std::size_t>(depth_m.cols());
+  pixels.resize(2 * width * static_cast<std::size_t>(depth_m.rows()));
   const float least = config.behind_voxels * config.voxel_size;
   const float across = config.voxel_size;  // at least one voxel across the surface
   const float focal = 0.5f * (intrinsics.fx + intrinsics.fy);
   tbb::parallel_for(0, depth_m.rows(), [&](int v) {
     const float* depth_row = depth_m.ptr<float>(v);
-    float* row = behind.ptr<float>(v);
+    float* row = pixels.data() + 2 * static_cast<std::size_t>(v) * width;
     for (int u = 0; u < depth_m.cols(); ++u) {
       const float d = depth_row[u];
       if (!(d > 0.0f) || !std::isfinite(d)) {
-        row[u] = 0.0f;
+        row[2 * u] = row[2 * u + 1] = 0.0f;
         continue;
       }
       const float slope = surface_slope(depth_m, u, v, focal);
       const float along_ray = std::max(least, across * std::sqrt(1.0f + slope * slope));
       const float noise = kBehindNoiseMultiple * noise_per_depth2 * d * d;
-      row[u] = std::min(config.truncation(), std::max(along_ray, noise));
+      row[2 * u] = d;
+      row[2 * u + 1] = std::min(config.truncation(), std::max(along_ray, noise));
     }
   });
-  return behind;
 }
+
+}  // namespace
 
 // Larger voxels are a unit error; they would also put far vertices beyond float's range.
 constexpr float kMaxVoxelSize = 1000.0f;  // metres
@@ -334,21 +333,36 @@ IntegrationStats TsdfVolume::integrate(const DepthFrame& frame) {
   IntegrationStats stats;
   const Image depth = depth_in_metres(frame);  // checks the frame (intrinsics, pose)
   stats.noise_per_depth2 = estimate_noise_per_depth2(depth);
-  const Image behind = tsdf_behind_band(depth, frame.intrinsics, config_, stats.noise_per_depth2);
-  const BandGeometry band{frame.intrinsics, config_, behind};
+  band_pixels(depth, frame.intrinsics, config_, stats.noise_per_depth2, band_pixels_);
+  const BandGeometry band{frame.intrinsics, config_, band_pixels_.data()};
   const std::vector<VoxelKey> keys =
-      touched_block_keys(depth, band, frame.T_world_camera, stats.pixels_used);
+      touched_block_keys(depth.cols(), depth.rows(), band, frame.T_world_camera, stats.pixels_used);
   const std::vector<std::uint32_t> touched = find_or_allocate(keys, stats.blocks_allocated);
   stats.blocks_touched = touched.size();
-  stats.voxels_updated = update_blocks(touched, depth, behind, frame);
+  stats.voxels_updated = update_blocks(touched, depth, frame);
   return stats;
 }
 
 std::vector<std::uint32_t> TsdfVolume::find_or_allocate(const std::vector<VoxelKey>& keys,
                                                         std::size_t& allocated) {
+  // Existing blocks are looked up in parallel (the index is only read); kNewBlock marks the rest.
+  constexpr std::uint32_t kNewBlock = ~std::uint32_t{0};
+  std::vector<std::uint32_t> blocks(keys.size());
+  tbb::parallel_for(std::size_t{0}, keys.size(), [&](std::size_t i) {
+    const auto it = index_.find(keys[i]);
+    blocks[i] = it != index_.end() ? it->second : kNewBlock;
+  });
+  const auto new_blocks =
+      static_cast<std::size_t>(std::count(blocks.begin(), blocks.end(), kNewBlock));
+  if (config_.max_new_blocks_per_frame > 0 && new_blocks > config_.max_new_blocks_per_frame) {
+    throw Error("tsdf map", "new blocks",
+                "this frame would add " + std::to_string(new_blocks) + " blocks, more than the " +
+                    std::to_string(config_.max_new_blocks_per_frame) +
+                    " allowed per frame (a pose that jumps, or depth in the wrong unit?); the map "
+                    "keeps its " +
+                    std::to_string(blocks_.size()) + " blocks");
+  }
   if (config_.max_memory_bytes > 0) {
-    std::size_t new_blocks = 0;
-    for (const VoxelKey key : keys) new_blocks += index_.count(key) == 0 ? 1 : 0;
     const std::size_t after = memory_bytes() + new_blocks * kBytesPerBlock;
     if (after > config_.max_memory_bytes) {
       const auto mib = [](std::size_t bytes) { return std::to_string(bytes >> 20) + " MiB"; };
@@ -359,33 +373,29 @@ std::vector<std::uint32_t> TsdfVolume::find_or_allocate(const std::vector<VoxelK
                       std::to_string(blocks_.size()) + " blocks");
     }
   }
-  // Serial and in key order: deterministic block numbering.
-  std::vector<std::uint32_t> blocks(keys.size());
+  // The new blocks serially and in key order: deterministic block numbering.
   for (std::size_t i = 0; i < keys.size(); ++i) {
-    const auto it = index_.find(keys[i]);
-    if (it != index_.end()) {
-      blocks[i] = it->second;
-    } else {
-      blocks[i] = allocate(unpack_key(keys[i]));
-      ++allocated;
-    }
+    if (blocks[i] != kNewBlock) continue;
+    blocks[i] = allocate(unpack_key(keys[i]));
+    ++allocated;
   }
   return blocks;
 }
 
 std::size_t TsdfVolume::update_blocks(const std::vector<std::uint32_t>& touched, const Image& depth,
-                                      const Image& behind, const DepthFrame& frame) {
+                                      const DepthFrame& frame) {
   // One task per block; a voxel's new state depends only on its old state and the frame, so the
   // order of blocks does not matter.
   ++generation_;
   const bool color = config_.fuse_color && !frame.color.empty() && frame.color.same_size(depth) &&
                      frame.color.format() == PixelFormat::RGB8;
-  const BlockUpdate update{depth,
+  const BlockUpdate update{band_pixels_.data(),
+                           depth.cols(),
+                           depth.rows(),
                            color ? &frame.color : nullptr,
                            frame.intrinsics,
                            frame.T_world_camera.inverse(),
-                           config_,
-                           behind};
+                           config_};
   std::vector<std::size_t> updated(touched.size(), 0);
   tbb::parallel_for(std::size_t{0}, touched.size(), [&](std::size_t t) {
     TsdfBlock& block = blocks_[touched[t]];

@@ -38,11 +38,15 @@ enum class TsdfWeighting {
 struct TsdfConfig {
   float voxel_size = 0.01f;        ///< metres
   float truncation_voxels = 4.0f;  ///< truncation distance in voxels (in front of the surface)
-  /// The band behind a measured surface that a frame updates, in voxels, at least: it widens
-  /// with the frame's depth noise (tsdf_behind_band()) up to truncation_voxels. A short band
-  /// keeps the far side of thin walls and the faces beside sharp edges from being overwritten by
-  /// views of the near side (a 2 cm plate at 1 cm voxels: 5x more accurate, 8x more complete
-  /// than the symmetric band); truncation_voxels gives KinectFusion's / Open3D's symmetric band.
+  /// The band behind a measured surface that a frame updates, along the ray, in voxels at least.
+  /// Per pixel it widens to one voxel across the surface (divided by the cosine between the ray
+  /// and the surface normal, estimated from the depth two pixels either side on the same
+  /// surface — within a 6 % depth jump — up to 76 degrees, assumed at silhouettes) and to
+  /// kBehindNoiseMultiple x the frame's estimated depth noise (estimate_noise_per_depth2() x
+  /// depth^2), never past the truncation. A short band keeps the far side of thin walls and the
+  /// faces beside sharp edges from being overwritten by views of the near side (a 2 cm plate at
+  /// 1 cm voxels: 5x more accurate, 7x more complete than the symmetric band);
+  /// truncation_voxels gives KinectFusion's / Open3D's symmetric band.
   float behind_voxels = 2.0f;
   TsdfWeighting weighting = TsdfWeighting::kConstant;
   float max_weight = 256.0f;  ///< accumulated weight is capped here (a slowly moving average)
@@ -50,6 +54,10 @@ struct TsdfConfig {
   /// integrate() refuses a frame whose new blocks would take memory_bytes() past this (bytes;
   /// 0 = no limit): the map stays as it was and the frame's error names the limit.
   std::size_t max_memory_bytes = 0;
+  /// integrate() refuses a frame that would add more blocks than this (0 = no limit), leaving
+  /// the map unchanged: a pose that jumps by kilometres or depth in the wrong unit. A 640 x 480
+  /// frame adds at most a few tens of thousands at 4 mm voxels; 250 000 blocks are 1.5 GB.
+  std::size_t max_new_blocks_per_frame = 250000;
 
   /// Truncation distance in metres.
   float truncation() const { return truncation_voxels * voxel_size; }
@@ -72,16 +80,6 @@ struct TsdfBlock {
   std::uint64_t modified = 0;  ///< the volume's generation when a voxel last changed
 };
 
-/// How far behind each pixel's measured surface a frame updates voxels, along the ray (F32
-/// metres, 0 where the depth is invalid): at least config.behind_voxels voxels along the ray
-/// and one voxel across the surface, i.e. divided by the cosine between the ray and the surface
-/// normal estimated from the depth two pixels either side on the same surface (within a 6 %
-/// depth jump; up to 76 degrees, assumed at silhouettes), at least
-/// kBehindNoiseMultiple x the frame's noise (noise_per_depth2 x depth^2, about three standard
-/// deviations), at most the truncation. `depth_m` F32 metres. Parallel over rows; O(pixels).
-Image tsdf_behind_band(const Image& depth_m, const PinholeIntrinsics& intrinsics,
-                       const TsdfConfig& config, float noise_per_depth2);
-
 /// The estimator's 90th percentile is about 2 sigma of the noise; 1.5 x that is about 3 sigma.
 constexpr float kBehindNoiseMultiple = 1.5f;
 
@@ -100,14 +98,15 @@ class TsdfVolume {
   explicit TsdfVolume(const TsdfConfig& config = {});
 
   /// Fuses one depth frame (any depth format of DepthFrame; pixels <= 0 or NaN are ignored)
-  /// seen from frame.T_world_camera: estimates the frame's depth noise, allocates the blocks
-  /// its band (truncation in front of each measurement, tsdf_behind_band() behind it) touches
-  /// (serial, in key order), then updates those blocks in parallel, one task per block. Throws
-  /// meshflow::Error, leaving the map unchanged, when the new blocks would take it past
-  /// config().max_memory_bytes. Voxels behind the
-  /// measured depth by more than the band are left alone. The result does not depend on
-  /// the number of threads. Not thread-safe against other calls on the same volume.
-  /// O(pixels + touched blocks x 512).
+  /// seen from frame.T_world_camera: estimates the frame's depth noise, finds the blocks its
+  /// band touches (the truncation in front of each measurement, config().behind_voxels' rule
+  /// behind it; existing blocks looked up in parallel, new ones allocated serially in key
+  /// order), then updates those blocks in parallel, one task per block. Voxels farther behind
+  /// the measured depth than the band are left alone. Throws meshflow::Error, leaving the map
+  /// unchanged, when the frame would add more than config().max_new_blocks_per_frame blocks or
+  /// take the map past config().max_memory_bytes, and for a pose with NaN entries. The result
+  /// does not depend on the number of threads. Not thread-safe against other calls on the same
+  /// volume. O(pixels + touched blocks x 512).
   IntegrationStats integrate(const DepthFrame& frame);
 
   /// The configuration the volume was made with (max_memory_bytes as last set).
@@ -147,12 +146,13 @@ class TsdfVolume {
   std::vector<std::uint32_t> find_or_allocate(const std::vector<VoxelKey>& keys,
                                               std::size_t& allocated);
   std::size_t update_blocks(const std::vector<std::uint32_t>& touched, const Image& depth,
-                            const Image& behind, const DepthFrame& frame);
+                            const DepthFrame& frame);
 
   TsdfConfig config_;
   std::deque<TsdfBlock> blocks_;                       // stable addresses while growing
   std::unordered_map<VoxelKey, std::uint32_t> index_;  // pack_key(block coords) -> block
   std::uint64_t generation_ = 0;
+  std::vector<float> band_pixels_;  // per pixel of the last frame: depth, band behind (reused)
 };
 
 }  // namespace meshflow

@@ -116,6 +116,30 @@ TEST(CliScripting, JsonOfRunAndProfileAndVerboseFrameLines) {
   EXPECT_NE(p.err.find("2/2 frames"), std::string::npos) << p.err;
 }
 
+// A depth camera circling an object, written as a TUM RGB-D directory by `sample --orbit`, fused
+// by `run --fuse`: the completeness breakdown in --json and the per-frame lines with -v.
+TEST(CliScripting, FusedOrbitReportsWhereTheSurfaceGoes) {
+  const std::string dir = test::temp_dir();
+  ASSERT_EQ(run_cli("sample torus --orbit 6 --size 160x120 -q -o " + dir + "/orbit").exit_code, 0);
+  nlohmann::json doc =
+      parse_json(run_cli("run " + dir + "/orbit --fuse --voxel 0.02 --json -o " + dir + "/fused"));
+  EXPECT_EQ(doc["frames_ok"], 6);
+  const nlohmann::json& c = doc["completeness"];
+  EXPECT_EQ(c["pixels"]["total"], 6 * 160 * 120);
+  EXPECT_GT(c["pixels"]["fused"].get<std::size_t>(), 6000u);
+  EXPECT_EQ(c["pixels"]["occlusion_edges"], 0) << "fusion keeps silhouette pixels";
+  EXPECT_GT(c["voxels_observed"].get<std::size_t>(), 0u);
+  EXPECT_GT(c["cells_meshed"].get<std::size_t>(), 1000u);
+  EXPECT_LT(c["cells_left_out"].get<std::size_t>(), c["cells_meshed"].get<std::size_t>() / 20);
+  EXPECT_GT(doc["mesh"]["triangles"].get<std::size_t>(), 1000u);
+  const CliRun v =
+      run_cli("run " + dir + "/orbit --fuse --voxel 0.02 --min-weight 1 -v -o " + dir + "/v");
+  EXPECT_EQ(v.exit_code, 0) << v.err;
+  EXPECT_NE(v.out.find("pixels fused ("), std::string::npos) << v.out;
+  EXPECT_NE(v.out.find("at or below --min-weight"), std::string::npos) << v.out;
+  EXPECT_EQ(run_cli("run " + dir + "/orbit --fuse --behind 0 -o " + dir + "/b").exit_code, 2);
+}
+
 TEST(CliScripting, OptimizeAMeshFromAnotherTool) {
   const std::string dir = test::temp_dir();
   const std::string cloud = torus_cloud(dir);

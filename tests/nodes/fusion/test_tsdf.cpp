@@ -190,6 +190,53 @@ TEST(Tsdf, AFramePastTheMemoryLimitIsRefusedAndTheMapIsUnchanged) {
   EXPECT_GT(limited.block_count(), reference.block_count());
 }
 
+// Bad frames leave the map as it was: depth with no valid pixel adds nothing, a NaN pose and a
+// pose beyond the volume's range are errors, and a frame whose depth is in the wrong unit
+// (millimetres read as metres: every pixel kilometres away, each touching its own blocks) is
+// refused by the per-frame block limit with a message saying so. A pose that jumps by a
+// kilometre within range allocates no more than a frame at home.
+TEST(Tsdf, BadFramesLeaveTheMapAsItWas) {
+  const std::vector<DepthFrame> frames = room_frames(2);
+  const TsdfVolume reference = fuse(frames, 0, 1);
+  TsdfConfig config{kTsdfVoxel};
+  config.max_new_blocks_per_frame = 10 * reference.block_count();
+  TsdfVolume map(config);
+  map.integrate(frames[0]);
+  expect_same_volume(map, reference);
+  auto expect_refused = [&](const DepthFrame& frame, const std::string& message) {
+    try {
+      map.integrate(frame);
+      ADD_FAILURE() << "expected an error containing '" << message << "'";
+    } catch (const Error& e) {
+      EXPECT_NE(std::string(e.what()).find(message), std::string::npos) << e.what();
+    }
+    expect_same_volume(map, reference);
+  };
+  DepthFrame invalid = frames[1];
+  invalid.depth = Image(invalid.depth.rows(), invalid.depth.cols(), PixelFormat::U16);  // own rows
+  invalid.depth.fill(std::uint16_t{0});
+  const IntegrationStats none = map.integrate(invalid);
+  EXPECT_EQ(none.pixels_used, 0u);
+  EXPECT_EQ(none.blocks_touched, 0u);
+  expect_same_volume(map, reference);
+
+  DepthFrame nan_pose = frames[1];
+  nan_pose.T_world_camera.translation().x() = std::numeric_limits<float>::quiet_NaN();
+  expect_refused(nan_pose, "T_world_camera");
+  DepthFrame far_away = frames[1];
+  far_away.T_world_camera.translation().x() += 100000.0f;  // 100 km: past +-7.8 km at 3 cm
+  expect_refused(far_away, "outside the volume's range");
+  DepthFrame wrong_unit = frames[1];
+  wrong_unit.depth_scale = 1.0f;  // millimetres taken for metres
+  expect_refused(wrong_unit, "allowed per frame");
+
+  DepthFrame jumped = frames[0];
+  jumped.T_world_camera.translation().x() += 500.0f;
+  const IntegrationStats moved = map.integrate(jumped);
+  // The same frame elsewhere (cut into blocks a little differently).
+  EXPECT_LT(moved.blocks_allocated, reference.block_count() * 21 / 20);
+}
+
 TEST(Tsdf, IncrementalExtractionEqualsAFreshOne) {
   const std::vector<DepthFrame> frames = room_frames(8);
   TsdfVolume volume(TsdfConfig{kTsdfVoxel});

@@ -169,7 +169,9 @@ share of the triangles (QEM). Vertex colours when color is given.)");
           },
           py::arg("depth"), py::arg("intrinsics"), py::arg("pose") = py::none(),
           py::arg("depth_scale") = 1000.0f, py::arg("color") = py::none(),
-          "Fuses one depth frame seen from pose (4 x 4 camera-to-world); returns its counts.")
+          "Fuses one depth frame seen from pose (4 x 4 camera-to-world); returns its counts: "
+          "pixels_used, noise_per_depth2 (the frame's estimated depth noise, 1/m), "
+          "blocks_touched, blocks_allocated, voxels_updated.")
       .def(
           "extract",
           [](Volume& v, bool incremental) {

@@ -99,8 +99,45 @@ TEST(FusionCompleteness, TumDirectoryRoundTripFusesLikeTheFramesInMemory) {
               memory.completeness, disk.accuracy, disk.completeness);
   EXPECT_NEAR(disk.accuracy, memory.accuracy, 0.1 * memory.accuracy);
   EXPECT_NEAR(disk.completeness, memory.completeness, 0.1 * memory.completeness);
-  EXPECT_EQ(disk.mesh.colors.size(), disk.mesh.vertices.size());
   EXPECT_EQ(edge_statistics(disk.mesh).boundary_edges, 0u);
+  // The frames shade the surface by its outward normal (rgb = 127.5 (n + 1)): the fused colours
+  // follow the mesh's own normals.
+  ASSERT_EQ(disk.mesh.colors.size(), disk.mesh.vertices.size());
+  ASSERT_EQ(disk.mesh.normals.size(), disk.mesh.vertices.size());
+  double error = 0.0;
+  for (std::size_t i = 0; i < disk.mesh.vertices.size(); ++i) {
+    const Eigen::Vector3f n = disk.mesh.normals[i].normalized();
+    const Rgb8 c = disk.mesh.colors[i];
+    error += std::abs(c.r - 127.5 * (n.x() + 1)) + std::abs(c.g - 127.5 * (n.y() + 1)) +
+             std::abs(c.b - 127.5 * (n.z() + 1));
+  }
+  error /= 3.0 * static_cast<double>(disk.mesh.vertices.size());
+  std::printf("[ torus ] mean colour error against the normal shading: %.1f of 255\n", error);
+  EXPECT_LT(error, 12.0);
+}
+
+// --fuse on every kind of sequence in the shared data: Redwood (trajectory.log), the Kinect
+// grabber's organized PCDs, and its depth-image directories (PCLZF and TIFF, camera frame).
+TEST(FusionCompleteness, EverySharedSequenceKindFusesWithColour) {
+  MESHFLOW_REQUIRE_DATA("kinect_pcl/grabber_sequences/tiff");
+  for (const char* path :
+       {"rgbd_redwood", "kinect_pcl/grabber_sequences/pcd", "kinect_pcl/grabber_sequences/pclzf",
+        "kinect_pcl/grabber_sequences/tiff"}) {
+    const auto sequence = io::open_sequence(test::data_path(path));
+    FusionConfig config;
+    config.tsdf.voxel_size = 0.01f;
+    FusionPipeline pipeline(config, 2);
+    const SequenceRunStats stats = run_sequence(pipeline, *sequence, {}, [&](const Frame& f) {
+      EXPECT_TRUE(f.ok()) << path << ": " << f.error;
+    });
+    EXPECT_EQ(stats.frames_ok, sequence->size()) << path;
+    const TriangleMesh mesh = pipeline.extract_mesh();
+    std::printf("[ %s ] %zu frames, %zu triangles\n", path, sequence->size(),
+                mesh.triangles.size());
+    EXPECT_GT(mesh.triangles.size(), 20000u) << path;
+    EXPECT_EQ(mesh.colors.size(), mesh.vertices.size()) << path;
+    EXPECT_EQ(edge_statistics(mesh).non_manifold_edges, 0u) << path;
+  }
 }
 
 }  // namespace

@@ -64,11 +64,19 @@ def test_fused_views_close_around_the_sphere():
         pose = look_at([1.0 * np.sin(angle), 0.2, -1.0 * np.cos(angle)])
         stats = volume.integrate(sphere_depth(pose), K, pose)
         assert stats["pixels_used"] > 1000
+        assert stats["noise_per_depth2"] >= 0.0
     mesh = volume.extract()
     np.testing.assert_array_equal(volume.extract(incremental=False).triangles, mesh.triangles)
     r = np.linalg.norm(mesh.vertices, axis=1)
     assert volume.block_count > 0 and len(mesh.triangles) > 2000
     assert abs(r.mean() - RADIUS) < 0.002 and np.abs(r - RADIUS).max() < 0.01
+    symmetric = meshflow.TsdfVolume(voxel=0.01, behind=4.0)  # Open3D's band: also closes
+    for angle in np.linspace(0, 2 * np.pi, 8, endpoint=False):
+        pose = look_at([1.0 * np.sin(angle), 0.2, -1.0 * np.cos(angle)])
+        symmetric.integrate(sphere_depth(pose), K, pose)
+    assert len(symmetric.extract().triangles) > 2000
+    with pytest.raises(meshflow.Error, match="behind_voxels"):
+        meshflow.TsdfVolume(voxel=0.01, behind=0.0)
 
 
 def test_bad_depth_input_is_a_clear_error():

@@ -50,7 +50,7 @@ struct BandGeometry {
 
 // Keys of the blocks whose voxels lie within the band of row v's valid pixels: for each pixel,
 // every block overlapping the box around the ray segment from the truncation in front of the
-// depth to tsdf_behind_band() behind it. Keys inside the previous pixel's box or emitted
+// depth to its band behind it (band_pixels()). Keys inside the previous pixel's box or emitted
 // recently are skipped; the caller sorts and dedupes the rest. The ray is advanced
 // incrementally along the row (in voxel units).
 void touched_blocks_of_row(int width, int v, const BandGeometry& band,
@@ -106,7 +106,7 @@ float observation_weight(TsdfWeighting scheme, float depth) {
   return scheme == TsdfWeighting::kInverseDepth ? 1.0f / (depth * depth) : 1.0f;
 }
 
-// Keys of the blocks within the truncation band of the frame's valid pixels, sorted and unique:
+// Keys of the blocks within the band of the frame's valid pixels, sorted and unique:
 // per row (local buffers, in parallel), then joined in row order. Adds the valid pixels to
 // `pixels_used`.
 std::vector<VoxelKey> touched_block_keys(int width, int height, const BandGeometry& band,
@@ -195,10 +195,6 @@ std::size_t update_block(TsdfBlock& block, const BlockUpdate& frame) {
     }
   return count;
 }
-
-}  // namespace
-
-namespace {
 
 // tan of the angle between the ray through pixel (u, v) and the surface normal, from the depth
 // two pixels either side on the same surface (one side where the other is unmeasured or across

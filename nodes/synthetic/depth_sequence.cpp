@@ -65,33 +65,48 @@ Eigen::Isometry3f look_at(const Eigen::Vector3f& eye, const Eigen::Vector3f& tar
   return T_world_camera;
 }
 
-DepthFrame render_depth(const Scene& scene, const PinholeIntrinsics& k,
-                        const Eigen::Isometry3f& T_world_camera, float noise_sigma,
-                        std::uint32_t seed) {
+DepthFrame render_rays(const PinholeIntrinsics& k, const Eigen::Isometry3f& T_world_camera,
+                       float noise_sigma, std::uint32_t seed, const RayCast& cast,
+                       const RayColor& color) {
   DepthFrame frame;
   frame.intrinsics = k;
   frame.T_world_camera = T_world_camera;
   frame.depth_scale = 1000.0f;
   frame.depth = Image(k.height, k.width, PixelFormat::U16);
+  if (color) frame.color = Image(k.height, k.width, PixelFormat::RGB8);
   const Eigen::Matrix3f rotation = T_world_camera.linear();
   const Eigen::Vector3f eye = T_world_camera.translation();
   tbb::parallel_for(0, k.height, [&](int v) {
-    auto* row = frame.depth.ptr<std::uint16_t>(v);
+    auto* depth_row = frame.depth.ptr<std::uint16_t>(v);
+    Rgb8* color_row = color ? frame.color.ptr<Rgb8>(v) : nullptr;
     for (int u = 0; u < k.width; ++u) {
+      depth_row[u] = 0;
+      if (color_row != nullptr) color_row[u] = Rgb8{};
       const Eigen::Vector3f ray_camera((static_cast<float>(u) - k.cx) / k.fx,
                                        (static_cast<float>(v) - k.cy) / k.fy, 1.0f);
-      const float t = cast_ray(scene, eye, (rotation * ray_camera).normalized());
-      if (!(t < std::numeric_limits<float>::infinity())) continue;
+      const Eigen::Vector3f dir = (rotation * ray_camera).normalized();
+      const float t = cast(eye, dir);
+      if (!(t >= 0.0f && t < std::numeric_limits<float>::infinity())) continue;  // a miss
       float z = t / ray_camera.norm();  // depth is the distance along the optical axis
       if (noise_sigma > 0.0f) {
         z += noise_sigma * hashed_gaussian((std::uint64_t{seed} << 40) ^
                                            (static_cast<std::uint64_t>(v) << 20) ^
                                            static_cast<std::uint64_t>(u));
       }
-      row[u] = static_cast<std::uint16_t>(std::clamp(std::lround(z * 1000.0f), 0L, 65535L));
+      depth_row[u] = static_cast<std::uint16_t>(std::clamp(std::lround(z * 1000.0f), 0L, 65535L));
+      if (color_row != nullptr) color_row[u] = color(eye + t * dir, dir);
     }
   });
   return frame;
+}
+
+DepthFrame render_depth(const Scene& scene, const PinholeIntrinsics& k,
+                        const Eigen::Isometry3f& T_world_camera, float noise_sigma,
+                        std::uint32_t seed) {
+  return render_rays(k, T_world_camera, noise_sigma, seed,
+                     [&scene](const Eigen::Vector3f& eye, const Eigen::Vector3f& dir) {
+                       return cast_ray(scene, eye, dir);
+                     });
 }
 
 PinholeIntrinsics scaled_default_camera(int width, int height) {

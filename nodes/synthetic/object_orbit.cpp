@@ -1,13 +1,10 @@
 #include "nodes/synthetic/object_orbit.h"
 
-#include <tbb/parallel_for.h>
-
 #include <algorithm>
 #include <cmath>
 #include <string>
 
 #include "nodes/synthetic/depth_sequence.h"
-#include "nodes/synthetic/hashed_noise.h"
 
 namespace meshflow::synthetic {
 namespace {
@@ -87,37 +84,15 @@ class ObjectOrbit final : public io::Sequence {
 DepthFrame render_object_depth(const ClosedObject& object, const PinholeIntrinsics& k,
                                const Eigen::Isometry3f& T_world_camera, float noise_sigma,
                                std::uint32_t seed) {
-  DepthFrame frame;
-  frame.intrinsics = k;
-  frame.T_world_camera = T_world_camera;
-  frame.depth_scale = 1000.0f;
-  frame.depth = Image(k.height, k.width, PixelFormat::U16);
-  frame.color = Image(k.height, k.width, PixelFormat::RGB8);
-  const Eigen::Matrix3f rotation = T_world_camera.linear();
-  const Eigen::Vector3f eye = T_world_camera.translation();
-  tbb::parallel_for(0, k.height, [&](int v) {
-    auto* depth_row = frame.depth.ptr<std::uint16_t>(v);
-    auto* color_row = frame.color.ptr<Rgb8>(v);
-    for (int u = 0; u < k.width; ++u) {
-      depth_row[u] = 0;
-      color_row[u] = Rgb8{};
-      const Eigen::Vector3f ray_camera((static_cast<float>(u) - k.cx) / k.fx,
-                                       (static_cast<float>(v) - k.cy) / k.fy, 1.0f);
-      const Eigen::Vector3f dir = (rotation * ray_camera).normalized();
-      const float t = trace(object, eye, dir);
-      if (t < 0.0f) continue;
-      float z = t / ray_camera.norm();  // depth is the distance along the optical axis
-      if (noise_sigma > 0.0f) {
-        z += noise_sigma * hashed_gaussian((std::uint64_t{seed} << 40) ^
-                                           (static_cast<std::uint64_t>(v) << 20) ^
-                                           static_cast<std::uint64_t>(u));
-      }
-      depth_row[u] = static_cast<std::uint16_t>(std::clamp(std::lround(z * 1000.0f), 0L, 65535L));
-      const Eigen::Vector3f n = outward_normal(object, eye + t * dir, dir);
-      color_row[u] = Rgb8{shade(n.x()), shade(n.y()), shade(n.z())};
-    }
-  });
-  return frame;
+  return render_rays(
+      k, T_world_camera, noise_sigma, seed,
+      [&object](const Eigen::Vector3f& eye, const Eigen::Vector3f& dir) {
+        return trace(object, eye, dir);
+      },
+      [&object](const Eigen::Vector3f& hit, const Eigen::Vector3f& dir) {
+        const Eigen::Vector3f n = outward_normal(object, hit, dir);
+        return Rgb8{shade(n.x()), shade(n.y()), shade(n.z())};
+      });
 }
 
 std::vector<Eigen::Isometry3f> object_orbit_poses(const ClosedObject& object,

@@ -14,8 +14,8 @@ namespace meshflow::synthetic {
 /// Ray-casts `object` through every pixel by sphere tracing its exact distance: U16 depth in
 /// millimetres (depth_scale 1000, 0 where the ray misses), plus Gaussian range noise of
 /// `noise_sigma` metres (hash of seed and pixel: deterministic for any thread count). Also an
-/// RGB8 colour image shading the surface by its normal (black where the ray misses). Parallel
-/// over rows; O(pixels x steps x patches).
+/// RGB8 colour image shading the surface by its normal (black where the ray misses); through
+/// render_rays(). Parallel over rows; O(pixels x steps x patches).
 DepthFrame render_object_depth(const ClosedObject& object, const PinholeIntrinsics& intrinsics,
                                const Eigen::Isometry3f& T_world_camera, float noise_sigma = 0.0f,
                                std::uint32_t seed = 1);

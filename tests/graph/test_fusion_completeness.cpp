@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <cstdio>
+#include <utility>
 
 #include "graph/fusion_pipeline.h"
 #include "graph/sequence_runner.h"
@@ -56,27 +57,29 @@ std::unique_ptr<io::Sequence> small_orbit(const synthetic::ClosedObject& object)
   return synthetic::make_object_orbit(object, c);
 }
 
+// The object's orbit fused with the default band and with the symmetric one, both printed.
+std::pair<FusedFigures, FusedFigures> default_and_symmetric_band(
+    const synthetic::ClosedObject& object) {
+  const auto orbit = small_orbit(object);
+  FusedFigures band = fuse_and_measure(*orbit, object, TsdfConfig{}.behind_voxels);
+  FusedFigures symmetric = fuse_and_measure(*orbit, object, TsdfConfig{}.truncation_voxels);
+  std::printf("[ %s ] default band: accuracy %.2e completeness %.2e; symmetric: %.2e %.2e\n",
+              object.name.c_str(), band.accuracy, band.completeness, symmetric.accuracy,
+              symmetric.completeness);
+  return {std::move(band), std::move(symmetric)};
+}
+
 TEST(FusionCompleteness, ThinPlateKeepsBothSidesWithTheShortBand) {
   // A 2 cm plate at 1 cm voxels and a 4 cm truncation: the symmetric band lets each side's
   // views overwrite the other side (the plate thins and tears); the default band keeps it.
-  const synthetic::ClosedObject plate = synthetic::thin_plate_object();
-  const auto orbit = small_orbit(plate);
-  const FusedFigures band = fuse_and_measure(*orbit, plate, TsdfConfig{}.behind_voxels);
-  const FusedFigures symmetric = fuse_and_measure(*orbit, plate, TsdfConfig{}.truncation_voxels);
-  std::printf("[ plate ] default band: accuracy %.2e completeness %.2e; symmetric: %.2e %.2e\n",
-              band.accuracy, band.completeness, symmetric.accuracy, symmetric.completeness);
+  const auto [band, symmetric] = default_and_symmetric_band(synthetic::thin_plate_object());
   EXPECT_LT(band.completeness, 0.4 * symmetric.completeness);
   EXPECT_LT(band.accuracy, 0.5 * symmetric.accuracy);
   EXPECT_LT(band.completeness, 2e-3);
 }
 
 TEST(FusionCompleteness, SharpEdgedObjectIsAsCompleteAndMoreAccurate) {
-  const synthetic::ClosedObject l_shape = synthetic::l_shape_object();
-  const auto orbit = small_orbit(l_shape);
-  const FusedFigures band = fuse_and_measure(*orbit, l_shape, TsdfConfig{}.behind_voxels);
-  const FusedFigures symmetric = fuse_and_measure(*orbit, l_shape, TsdfConfig{}.truncation_voxels);
-  std::printf("[ l-shape ] default band: accuracy %.2e completeness %.2e; symmetric: %.2e %.2e\n",
-              band.accuracy, band.completeness, symmetric.accuracy, symmetric.completeness);
+  const auto [band, symmetric] = default_and_symmetric_band(synthetic::l_shape_object());
   EXPECT_LE(band.completeness, symmetric.completeness);
   EXPECT_LT(band.accuracy, 0.7 * symmetric.accuracy);
   const EdgeStatistics edges = edge_statistics(band.mesh);

@@ -206,6 +206,7 @@ class Decimator {
       }
     }
     add_refusals(report);
+    report.collapse_sequence = std::move(sequence_);
     // Faces come out of the rings rotated and reordered (VertexRings::triangles()); when
     // nothing collapsed, the input's faces are returned as given.
     if (report.collapses == 0) return compact_vertices(in_, in_.triangles);
@@ -646,6 +647,7 @@ class Decimator {
     for (const std::uint32_t* x = rings_.begin(u); x != rings_.end(u); ++x)
       pass[*x].changed = number;
     const std::size_t removed = rings_.collapse(u, v);
+    if (cfg_.record_collapses) sequence_.push_back({u, v});
     q_[v].add(q_[u]);
     terms_[v].own_error = q_[v].error(p(v));
     return removed;
@@ -653,7 +655,8 @@ class Decimator {
 
   const TriangleMesh& in_;
   const QemConfig& cfg_;
-  VertexRings rings_;  ///< the mesh as it is now
+  VertexRings rings_;                                   ///< the mesh as it is now
+  std::vector<std::array<std::uint32_t, 2>> sequence_;  ///< collapses applied, if recorded
   std::vector<Quadric> q_;
   std::vector<VertexTerms> terms_;
   float cos_turn_, cos_border_, cos_sharp_, cos2_min_angle_;

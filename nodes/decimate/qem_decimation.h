@@ -6,7 +6,10 @@
 // penalty that keeps sharp edges and avoids needle triangles.
 
 #include <Eigen/Core>
+#include <array>
 #include <cstddef>
+#include <cstdint>
+#include <vector>
 
 #include "runtime/triangle_mesh.h"
 
@@ -31,6 +34,9 @@ struct QemConfig {
   /// time, serially: fewer evaluations and no waits, for callers that keep every core busy with
   /// other work (frames in flight). The output depends on it, never on the thread count.
   std::size_t walk_chunk = 256;
+  /// Record every collapse, in the order applied, in QemReport::collapse_sequence (for
+  /// progressive meshes: replayed in reverse they are the vertex splits).
+  bool record_collapses = false;
 };
 
 struct QemReport {
@@ -40,6 +46,9 @@ struct QemReport {
   std::size_t rejected_topology = 0;  ///< would make the mesh non-manifold
   std::size_t rejected_normal = 0;    ///< would turn or degenerate a face
   std::size_t rejected_border = 0;    ///< would move a border off itself
+  /// With QemConfig::record_collapses: each collapse u -> v as {u, v} (input vertex numbers),
+  /// in the order applied.
+  std::vector<std::array<std::uint32_t, 2>> collapse_sequence;
 };
 
 /// Decimates `mesh` by half-edge collapses u -> v (v keeps its position) in passes: each pass

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "nodes/io/atomic_file.h"
+#include "nodes/io/byte_buffer.h"
 #include "nodes/io/parse_util.h"
 #include "runtime/error.h"
 
@@ -19,84 +20,11 @@ constexpr std::size_t kHeaderBytes = 8 + 4 + 4 + 4 + 4 + 4 + 4 + 8;
 constexpr std::size_t kVoxelBytes = 4 + 4 + 4;
 constexpr std::size_t kBlockBytes = 12 + kTsdfBlockVoxels * kVoxelBytes;
 
-std::uint64_t fnv1a(const unsigned char* data, std::size_t n) {
-  std::uint64_t h = 14695981039346656037ull;
-  for (std::size_t i = 0; i < n; ++i) {
-    h ^= data[i];
-    h *= 1099511628211ull;
-  }
-  return h;
-}
-
-// Little-endian encoding into a byte buffer.
-class Writer {
- public:
-  void bytes(const void* p, std::size_t n) {
-    const auto* b = static_cast<const unsigned char*>(p);
-    out.insert(out.end(), b, b + n);
-  }
-  void u32(std::uint32_t v) {
-    for (int i = 0; i < 4; ++i) out.push_back(static_cast<unsigned char>(v >> (8 * i)));
-  }
-  void u64(std::uint64_t v) {
-    for (int i = 0; i < 8; ++i) out.push_back(static_cast<unsigned char>(v >> (8 * i)));
-  }
-  void i32(std::int32_t v) { u32(static_cast<std::uint32_t>(v)); }
-  void f32(float v) {
-    std::uint32_t bits;
-    std::memcpy(&bits, &v, 4);
-    u32(bits);
-  }
-  std::vector<unsigned char> out;
-};
-
-// Little-endian decoding with the field name in every error.
-class Reader {
- public:
-  Reader(const std::string& path, const std::vector<unsigned char>& data)
-      : path_(path), data_(data) {}
-  std::uint32_t u32(const char* field) {
-    need(4, field);
-    std::uint32_t v = 0;
-    for (int i = 0; i < 4; ++i)
-      v |= static_cast<std::uint32_t>(data_[at_ + static_cast<std::size_t>(i)]) << (8 * i);
-    at_ += 4;
-    return v;
-  }
-  std::uint64_t u64(const char* field) {
-    const std::uint64_t lo = u32(field);
-    return lo | (static_cast<std::uint64_t>(u32(field)) << 32);
-  }
-  std::int32_t i32(const char* field) { return static_cast<std::int32_t>(u32(field)); }
-  float f32(const char* field) {
-    const std::uint32_t bits = u32(field);
-    float v;
-    std::memcpy(&v, &bits, 4);
-    return v;
-  }
-  std::uint8_t u8(const char* field) {
-    need(1, field);
-    return data_[at_++];
-  }
-  std::size_t position() const { return at_; }
-  [[noreturn]] void fail(const std::string& field, const std::string& problem) const {
-    throw Error(path_, field + " at byte " + std::to_string(at_), problem);
-  }
-
- private:
-  void need(std::size_t n, const char* field) const {
-    if (at_ + n > data_.size()) fail(field, "file ends early (truncated)");
-  }
-  const std::string& path_;
-  const std::vector<unsigned char>& data_;
-  std::size_t at_ = 0;
-};
-
 }  // namespace
 
 void write_tsdf_map(const std::string& path, const TsdfVolume& volume) {
   const TsdfConfig& c = volume.config();
-  Writer w;
+  io::ByteWriter w;
   w.out.reserve(kHeaderBytes + volume.block_count() * kBlockBytes + 8);
   w.bytes(kMagic, sizeof kMagic);
   w.u32(kVersion);
@@ -116,7 +44,7 @@ void write_tsdf_map(const std::string& path, const TsdfVolume& volume) {
       w.bytes(rgb0, 4);
     }
   }
-  w.u64(fnv1a(w.out.data(), w.out.size()));
+  w.u64(io::fnv1a64(w.out.data(), w.out.size()));
   io::AtomicOutputFile file(path);
   file.stream().write(reinterpret_cast<const char*>(w.out.data()),
                       static_cast<std::streamsize>(w.out.size()));
@@ -125,7 +53,7 @@ void write_tsdf_map(const std::string& path, const TsdfVolume& volume) {
 
 void reseal_tsdf_map(std::uint8_t* bytes, std::size_t size) {
   if (size < 8) return;
-  const std::uint64_t hash = fnv1a(bytes, size - 8);
+  const std::uint64_t hash = io::fnv1a64(bytes, size - 8);
   std::memcpy(bytes + size - 8, &hash, 8);
 }
 
@@ -133,7 +61,7 @@ TsdfVolume read_tsdf_map(const std::string& path) {
   std::ifstream in = io::open_input(path);
   const std::vector<unsigned char> data((std::istreambuf_iterator<char>(in)),
                                         std::istreambuf_iterator<char>());
-  Reader r(path, data);
+  io::ByteReader r(path, data);
   if (data.size() < sizeof kMagic || std::memcmp(data.data(), kMagic, sizeof kMagic) != 0) {
     throw Error(path, "magic", "not a meshflow TSDF map (expected \"MFTSDF\" at byte 0)");
   }
@@ -168,7 +96,7 @@ TsdfVolume read_tsdf_map(const std::string& path) {
            << (8 * i);
     return h;
   }();
-  if (stored_hash != fnv1a(data.data(), data.size() - 8)) {
+  if (stored_hash != io::fnv1a64(data.data(), data.size() - 8)) {
     throw Error(path, "checksum", "does not match the contents (corrupt file)");
   }
   TsdfVolume volume = [&] {

@@ -1,0 +1,110 @@
+#pragma once
+// meshflow's compressed mesh files (".mfc"): one triangle mesh, coded single-rate (Edgebreaker)
+// or progressively (a base mesh and vertex splits). Format, version 1, little-endian:
+//
+//   bytes 0-7   magic "MFMESH\r\n"
+//   u32         version (1)
+//   u32         kind: 1 = Edgebreaker, 2 = progressive
+//   u32         flags: bit 0 per-vertex normals, bit 1 per-vertex colours
+//   u64         vertices, u64 triangles (of the full mesh)
+//   f64 x 3     quantisation origin (metres), f64 step (metres, > 0), u32 bits (1 .. 30)
+//   ...         kind 1: one body (nodes/compress/mesh_codec.h);
+//               kind 2: the base mesh's body, then packets of vertex splits
+//               (nodes/compress/progressive_mesh.h)
+//   u64         FNV-1a 64 hash of every byte before it
+//
+// A decoded position is within step / 2 of the input's on each axis; normals within 0.1
+// degrees; colours exact; triangles exactly the input's (each may start at another corner),
+// vertices and triangles reordered (the encoder reports the order).
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "nodes/compress/mesh_codec.h"
+#include "runtime/triangle_mesh.h"
+
+namespace meshflow::compress {
+
+enum class CompressionKind : std::uint32_t { kEdgebreaker = 1, kProgressive = 2 };
+
+struct CompressConfig {
+  /// Quantisation step, metres; 0 = 1/64 of the mesh's median edge length (for meshes from the
+  /// extractors, whose edges are about a voxel: positions move by under 1 % of a voxel).
+  double step = 0.0;
+  /// If > 0 (1 .. 30): the bounding box's longest side in 2^bits - 1 steps, overriding `step`.
+  unsigned position_bits = 0;
+  bool normals = true;  ///< store the mesh's normals if it has them
+  bool colors = true;   ///< store the mesh's colours if it has them
+  /// Progressive only: the base mesh is decimated to this share of the triangles (QEM; it may
+  /// stop above it where no valid collapse is left).
+  float base_ratio = 0.02f;
+  /// Progressive only: vertex splits per packet (each packet decodes on its own, so a prefix
+  /// of the file gives a level of detail).
+  std::uint32_t splits_per_packet = 4096;
+};
+
+/// What one encoding gave.
+struct CompressReport {
+  CompressionKind kind = CompressionKind::kEdgebreaker;
+  std::size_t total_bytes = 0;
+  BodyStats body;  ///< the (base) mesh's body
+  Quantizer quantizer;
+  std::size_t base_triangles = 0;  ///< progressive: the base mesh's triangles
+  std::size_t base_bytes = 0;      ///< progressive: bytes up to the end of the base mesh
+  std::size_t splits = 0;          ///< progressive: vertex splits
+  /// Output vertex k is input vertex vertex_order[k]; output triangle k is input triangle
+  /// triangle_order[k] (progressive: at full detail).
+  std::vector<std::uint32_t> vertex_order, triangle_order;
+};
+
+/// The quantiser `config` gives for `mesh` (bounding box origin, step, bits). Throws Error for
+/// non-finite positions. O(V + T).
+Quantizer choose_quantizer(const TriangleMesh& mesh, const CompressConfig& config);
+
+/// Encodes `mesh` single-rate (Edgebreaker). Throws Error for a corner out of range or a
+/// non-finite position. O(T log T); serial (frames in flight compress in parallel).
+std::vector<unsigned char> compress_mesh(const TriangleMesh& mesh,
+                                         const CompressConfig& config = {},
+                                         CompressReport* report = nullptr);
+
+/// What a file's header says.
+struct CompressedMeshInfo {
+  std::uint32_t version = 0;
+  CompressionKind kind = CompressionKind::kEdgebreaker;
+  bool normals = false, colors = false;
+  std::uint64_t vertices = 0, triangles = 0;
+  Quantizer quantizer;
+};
+
+/// Decodes a single-rate or progressive image (the full mesh). `source` names the data in
+/// errors. Throws Error naming the field for a wrong magic or version, truncation, a checksum
+/// mismatch or inconsistent contents. O(T log T).
+TriangleMesh decompress_mesh(const std::vector<unsigned char>& bytes, const std::string& source);
+
+/// Reads and checks the header (and the checksum). Throws Error as decompress_mesh().
+CompressedMeshInfo compressed_mesh_info(const std::vector<unsigned char>& bytes,
+                                        const std::string& source);
+
+/// Reads a whole file into memory. Throws Error naming the file and the system's reason.
+std::vector<unsigned char> read_file_bytes(const std::string& path);
+/// Writes bytes to `path` atomically. Throws Error.
+void write_file_bytes(const std::string& path, const std::vector<unsigned char>& bytes);
+
+/// Rewrites the checksum (the last 8 bytes) to match the bytes before it, for the fuzzers and
+/// tests that corrupt fields on purpose. No effect below 8 bytes.
+void reseal_compressed_mesh(std::vector<unsigned char>& bytes);
+
+namespace detail {
+/// The attributes `config` stores for `mesh` (those it has, per vertex).
+AttributeFlags attribute_flags(const TriangleMesh& mesh, const CompressConfig& config);
+/// Writes the header of a `kind` file (everything before the body).
+void write_header(io::ByteWriter& out, CompressionKind kind, AttributeFlags flags,
+                  std::uint64_t vertices, std::uint64_t triangles, const Quantizer& quantizer);
+/// Checks magic, version, checksum and reads the header; leaves `in` at the body.
+CompressedMeshInfo read_header(io::ByteReader& in, const std::vector<unsigned char>& bytes);
+/// Appends the checksum.
+void seal(io::ByteWriter& out);
+}  // namespace detail
+
+}  // namespace meshflow::compress

@@ -1,0 +1,458 @@
+#include "nodes/compress/edgebreaker_connectivity.h"
+
+#include <algorithm>
+
+#include "runtime/error.h"
+
+namespace meshflow::compress {
+namespace {
+
+// The active loops: doubly linked nodes, each a loop edge from its vertex to the next node's,
+// with `opp` the third vertex of the walked triangle on that edge. The encoder and the decoder
+// change them by the same four operations.
+struct LoopNodes {
+  std::vector<std::uint32_t> vertex, next, prev, opp;
+
+  std::uint32_t add(std::uint32_t v, std::uint32_t o) {
+    vertex.push_back(v);
+    next.push_back(kNone);
+    prev.push_back(kNone);
+    opp.push_back(o);
+    return static_cast<std::uint32_t>(vertex.size() - 1);
+  }
+  void link(std::uint32_t a, std::uint32_t b) {
+    next[a] = b;
+    prev[b] = a;
+  }
+  // The starting triangle (v0, v1, v2): three nodes, returns the first (edge v0 -> v1).
+  std::uint32_t start(std::uint32_t v0, std::uint32_t v1, std::uint32_t v2) {
+    const std::uint32_t n0 = add(v0, v2), n1 = add(v1, v0), n2 = add(v2, v1);
+    link(n0, n1);
+    link(n1, n2);
+    link(n2, n0);
+    return n0;
+  }
+  // C: gate g (a -> b) becomes a -> x -> b; returns the node of x (the next gate).
+  std::uint32_t attach(std::uint32_t g, std::uint32_t x) {
+    const std::uint32_t b = next[g];
+    const std::uint32_t nx = add(x, vertex[g]);
+    link(nx, b);
+    link(g, nx);
+    opp[g] = vertex[b];
+    return nx;
+  }
+  // L: p -> a -> b becomes p -> b; returns p (the next gate).
+  std::uint32_t close_left(std::uint32_t g) {
+    const std::uint32_t p = prev[g];
+    link(p, next[g]);
+    opp[p] = vertex[g];
+    return p;
+  }
+  // R: a -> b -> q becomes a -> q; returns a (the next gate).
+  std::uint32_t close_right(std::uint32_t g) {
+    const std::uint32_t b = next[g];
+    link(g, next[b]);
+    opp[g] = vertex[b];
+    return g;
+  }
+  // S or M with x's node xn: a -> b ... x -> y becomes a -> x' -> y ... and x -> b ...;
+  // returns x' (the new node, on a's side).
+  std::uint32_t split(std::uint32_t g, std::uint32_t xn) {
+    const std::uint32_t b = next[g];
+    const std::uint32_t xc = add(vertex[xn], opp[xn]);
+    link(xc, next[xn]);
+    link(g, xc);
+    opp[g] = vertex[b];
+    opp[xn] = vertex[g];
+    link(xn, b);
+    return xc;
+  }
+  std::uint32_t walk(std::uint32_t n, std::uint32_t steps) const {
+    while (steps-- > 0) n = next[n];
+    return n;
+  }
+  std::uint32_t walk_back(std::uint32_t n, std::uint32_t steps) const {
+    while (steps-- > 0) n = prev[n];
+    return n;
+  }
+};
+
+int op_delta(Op op) {
+  switch (op) {
+    case Op::kC:
+    case Op::kS:
+      return 1;
+    case Op::kL:
+    case Op::kR:
+      return -1;
+    case Op::kE:
+      return -3;
+    case Op::kM:
+      return 0;
+  }
+  return 0;
+}
+
+[[noreturn]] void internal(const char* what) {
+  throw Error("edgebreaker", "traversal", std::string("internal inconsistency: ") + what);
+}
+
+class Encoder {
+ public:
+  explicit Encoder(const ClosedSurface& s)
+      : s_(s),
+        visited_(s.triangle_count(), 0),
+        decoded_(s.vertex_count(), kNone),
+        node_of_half_(s.corner_vertex.size(), kNone) {}
+
+  // Walks every component; `split_offsets` receives every S's true offset.
+  Traversal run(std::vector<std::uint32_t>& split_offsets) {
+    for (std::uint32_t t = 0; t < s_.triangle_count(); ++t)
+      if (!visited_[t]) component(t);
+    split_offsets = std::move(split_truth_);
+    return std::move(out_);
+  }
+
+ private:
+  struct Stacked {
+    std::uint32_t node, label;
+  };
+
+  std::uint32_t decode_id(std::uint32_t v) {
+    decoded_[v] = static_cast<std::uint32_t>(out_.surface_vertex.size());
+    out_.surface_vertex.push_back(v);
+    return decoded_[v];
+  }
+  std::uint32_t new_node(std::uint32_t v, std::uint32_t o, std::uint32_t half,
+                         std::uint32_t label) {
+    const std::uint32_t n = nodes_.add(v, o);
+    half_.push_back(half);
+    label_.push_back(label);
+    node_of_half_[half] = n;
+    return n;
+  }
+  void set_half(std::uint32_t node, std::uint32_t half) {
+    half_[node] = half;
+    node_of_half_[half] = node;
+  }
+  void emit(Op op, std::uint32_t t) {
+    out_.connectivity.ops.push_back(op);
+    out_.surface_triangle.push_back(t);
+  }
+
+  void component(std::uint32_t t0) {
+    ++out_.connectivity.components;
+    visited_[t0] = 1;
+    out_.surface_triangle.push_back(t0);
+    const std::uint32_t h0 = 3 * t0;
+    std::uint32_t ids[3];
+    for (std::uint32_t i = 0; i < 3; ++i) ids[i] = decode_id(s_.corner_vertex[h0 + i]);
+    std::uint32_t label = new_label(3);
+    std::uint32_t nodes[3];
+    for (std::uint32_t i = 0; i < 3; ++i)
+      nodes[i] = new_node(ids[i], ids[(i + 2) % 3], h0 + i, label);
+    for (std::uint32_t i = 0; i < 3; ++i) nodes_.link(nodes[i], nodes[(i + 1) % 3]);
+    std::uint32_t g = nodes[0];
+    std::vector<Stacked> stack;
+    for (;;) {
+      const std::uint32_t h = half_[g];
+      const std::uint32_t tw = s_.twin[h];
+      const std::uint32_t t = tw / 3;
+      const std::uint32_t left_half = next_half(tw), right_half = prev_half(tw);
+      const std::uint32_t x = s_.corner_vertex[right_half];
+      const bool left = visited_[s_.twin[left_half] / 3] != 0;
+      const bool right = visited_[s_.twin[right_half] / 3] != 0;
+      visited_[t] = 1;
+      node_of_half_[h] = kNone;
+      if (decoded_[x] == kNone) {
+        emit(Op::kC, t);
+        const std::uint32_t nx = nodes_.attach(g, decode_id(x));
+        half_.push_back(kNone);
+        label_.push_back(label);
+        set_half(g, left_half);
+        set_half(nx, right_half);
+        ++length_[label];
+        g = nx;
+      } else if (left && right) {
+        emit(Op::kE, t);
+        const std::uint32_t p = nodes_.prev[g];
+        if (nodes_.next[nodes_.next[g]] != p || nodes_.vertex[p] != decoded_[x]) internal("E");
+        node_of_half_[half_[p]] = kNone;
+        node_of_half_[half_[nodes_.next[g]]] = kNone;
+        if (stack.empty()) return;
+        g = stack.back().node;
+        label = stack.back().label;
+        stack.pop_back();
+      } else if (left) {
+        emit(Op::kL, t);
+        const std::uint32_t p = nodes_.prev[g];
+        if (half_[p] != s_.twin[left_half]) internal("L");
+        node_of_half_[half_[p]] = kNone;
+        g = nodes_.close_left(g);
+        set_half(g, right_half);
+        --length_[label];
+      } else if (right) {
+        emit(Op::kR, t);
+        const std::uint32_t b = nodes_.next[g];
+        if (half_[b] != s_.twin[right_half]) internal("R");
+        node_of_half_[half_[b]] = kNone;
+        g = nodes_.close_right(g);
+        set_half(g, left_half);
+        --length_[label];
+      } else {
+        const std::uint32_t xn = node_of(x, right_half);
+        const std::uint32_t b = nodes_.next[g];
+        if (label_[xn] == label) {
+          emit(Op::kS, t);
+          // Walk both parts at once to the split, so the cost is that of the shorter one.
+          const std::uint32_t length = length_[label];
+          std::uint32_t r = b, l = nodes_.next[xn], steps = 0;
+          while (r != xn && l != g) {
+            r = nodes_.next[r];
+            l = nodes_.next[l];
+            ++steps;
+          }
+          // Nodes from b to xn: offset + 1; from xn's next to g: length - offset - 1.
+          const std::uint32_t offset = r == xn ? steps : length - 1 - (steps + 1);
+          split_truth_.push_back(offset);
+          const std::uint32_t old_half = half_[xn];
+          const std::uint32_t xc = nodes_.split(g, xn);
+          half_.push_back(kNone);
+          label_.push_back(label);
+          set_half(xc, old_half);
+          set_half(xn, right_half);
+          set_half(g, left_half);
+          const std::uint32_t right_length = offset + 1, left_length = length - offset;
+          // The shorter part gets a new label.
+          if (r == xn) {
+            const std::uint32_t fresh = new_label(right_length);
+            relabel(b, xn, fresh);
+            length_[label] = left_length;
+            stack.push_back({g, label});
+            label = fresh;
+          } else {
+            const std::uint32_t fresh = new_label(left_length);
+            relabel(xc, g, fresh);
+            length_[label] = right_length;
+            stack.push_back({g, fresh});
+          }
+          g = xn;
+        } else {
+          emit(Op::kM, t);
+          std::size_t k = stack.size();
+          while (k > 0 && stack[k - 1].label != label_[xn]) --k;
+          if (k == 0) internal("M without its loop");
+          const Stacked other = stack[k - 1];
+          std::uint32_t offset = 0;
+          for (std::uint32_t n = other.node; n != xn; n = nodes_.next[n]) ++offset;
+          out_.connectivity.handles.push_back(
+              {static_cast<std::uint32_t>(stack.size() - k), offset});
+          const std::uint32_t old_half = half_[xn];
+          const std::uint32_t xc = nodes_.split(g, xn);
+          half_.push_back(kNone);
+          label_.push_back(label);
+          set_half(xc, old_half);
+          set_half(xn, right_half);
+          set_half(g, left_half);
+          relabel(xc, xn, label);
+          length_[label] += length_[other.label] + 1;
+          stack.erase(stack.begin() + static_cast<std::ptrdiff_t>(k - 1));
+          g = xn;
+        }
+      }
+    }
+  }
+
+  // The loop node of decoded vertex x whose unwalked fan holds the triangle of `from` (a
+  // half-edge leaving x): turns around x through unwalked triangles to the first walked one.
+  std::uint32_t node_of(std::uint32_t x, std::uint32_t from) const {
+    std::uint32_t e = from;
+    for (std::size_t guard = 0; guard <= s_.corner_vertex.size(); ++guard) {
+      const std::uint32_t te = s_.twin[e];  // ends at x
+      if (visited_[te / 3]) {
+        const std::uint32_t n = node_of_half_[te];
+        if (n == kNone || nodes_.vertex[nodes_.next[n]] != decoded_[x]) internal("fan");
+        return nodes_.next[n];
+      }
+      e = next_half(te);
+    }
+    internal("fan without a walked triangle");
+  }
+
+  std::uint32_t new_label(std::uint32_t length) {
+    length_.push_back(length);
+    return static_cast<std::uint32_t>(length_.size() - 1);
+  }
+  // Labels the nodes from `first` to `last` (inclusive, along next).
+  void relabel(std::uint32_t first, std::uint32_t last, std::uint32_t label) {
+    for (std::uint32_t n = first;; n = nodes_.next[n]) {
+      label_[n] = label;
+      if (n == last) break;
+    }
+  }
+
+  const ClosedSurface& s_;
+  std::vector<std::uint8_t> visited_;
+  std::vector<std::uint32_t> decoded_;       // per surface vertex
+  std::vector<std::uint32_t> node_of_half_;  // per half-edge on a loop
+  LoopNodes nodes_;
+  std::vector<std::uint32_t> half_, label_;  // per node
+  std::vector<std::uint32_t> length_;        // per label
+  Traversal out_;
+  std::vector<std::uint32_t> split_truth_;  // every S's offset, in order
+};
+
+}  // namespace
+
+std::vector<std::int64_t> predicted_split_offsets(const std::vector<Op>& ops) {
+  std::vector<std::int64_t> offsets;
+  struct Open {
+    std::size_t split;
+    std::int64_t sum;  // prefix sum including the S
+  };
+  std::vector<Open> open;
+  std::int64_t sum = 0;
+  for (Op op : ops) {
+    sum += op_delta(op);
+    if (op == Op::kS) {
+      open.push_back({offsets.size(), sum});
+      offsets.push_back(-1);
+    } else if (op == Op::kE && !open.empty()) {
+      // The right branch closed a loop of -(its symbols' sum) nodes; the S's vertex is the last.
+      offsets[open.back().split] = -(sum - open.back().sum) - 1;
+      open.pop_back();
+    }
+  }
+  return offsets;
+}
+
+Traversal edgebreaker_traverse(const ClosedSurface& surface) {
+  std::vector<std::uint32_t> truth;
+  Traversal t = Encoder(surface).run(truth);
+  const std::vector<std::int64_t> predicted = predicted_split_offsets(t.connectivity.ops);
+  for (std::uint32_t k = 0; k < truth.size(); ++k)
+    if (predicted[k] != static_cast<std::int64_t>(truth[k]))
+      t.connectivity.split_offsets.push_back({k, truth[k]});
+  return t;
+}
+
+ReplayedSurface edgebreaker_replay(const Connectivity& c, const std::string& source) {
+  const auto fail = [&](std::size_t symbol, const std::string& problem) {
+    throw Error(source, "connectivity symbol " + std::to_string(symbol), problem);
+  };
+  std::vector<std::int64_t> offsets = predicted_split_offsets(c.ops);
+  for (std::size_t i = 0; i < c.split_offsets.size(); ++i) {
+    const SplitOffset& o = c.split_offsets[i];
+    if (o.split >= offsets.size() || (i > 0 && o.split <= c.split_offsets[i - 1].split))
+      throw Error(source, "split offset " + std::to_string(i),
+                  "names split " + std::to_string(o.split) + " (there are " +
+                      std::to_string(offsets.size()) + ", listed in increasing order)");
+    offsets[o.split] = o.offset;
+  }
+  ReplayedSurface out;
+  out.triangles.reserve(c.ops.size() + c.components);
+  LoopNodes nodes;
+  const auto new_vertex = [&](VertexPredictors p) {
+    out.predictors.push_back(p);
+    return out.vertex_count++;
+  };
+  const auto triangle = [&](std::size_t symbol, std::uint32_t b, std::uint32_t a, std::uint32_t x) {
+    if (a == b || b == x || a == x) fail(symbol, "makes a triangle with a repeated vertex");
+    out.triangles.push_back({b, a, x});
+  };
+  struct Stacked {
+    std::uint32_t node, length;
+  };
+  std::size_t i = 0, split = 0, handle = 0;
+  for (std::uint32_t component = 0; component < c.components; ++component) {
+    const std::uint32_t v0 = new_vertex({});
+    const std::uint32_t v1 = new_vertex({v0, kNone, kNone});
+    const std::uint32_t v2 = new_vertex({v0, v1, kNone});
+    out.triangles.push_back({v0, v1, v2});
+    std::uint32_t g = nodes.start(v0, v1, v2);
+    std::uint32_t length = 3;
+    std::vector<Stacked> stack;
+    for (bool open = true; open;) {
+      if (i >= c.ops.size())
+        fail(i, "missing: the symbols end inside component " + std::to_string(component));
+      const std::size_t at = i;
+      const Op op = c.ops[i++];
+      const std::uint32_t a = nodes.vertex[g], b = nodes.vertex[nodes.next[g]];
+      switch (op) {
+        case Op::kC: {
+          const std::uint32_t x = new_vertex({a, b, nodes.opp[g]});
+          triangle(at, b, a, x);
+          g = nodes.attach(g, x);
+          ++length;
+          break;
+        }
+        case Op::kL:
+          if (length < 3) fail(at, "L on a loop of " + std::to_string(length));
+          triangle(at, b, a, nodes.vertex[nodes.prev[g]]);
+          g = nodes.close_left(g);
+          --length;
+          break;
+        case Op::kR:
+          if (length < 3) fail(at, "R on a loop of " + std::to_string(length));
+          triangle(at, b, a, nodes.vertex[nodes.next[nodes.next[g]]]);
+          g = nodes.close_right(g);
+          --length;
+          break;
+        case Op::kE:
+          if (length != 3) fail(at, "E closes a loop of " + std::to_string(length) + ", not 3");
+          triangle(at, b, a, nodes.vertex[nodes.prev[g]]);
+          if (stack.empty()) {
+            open = false;
+          } else {
+            g = stack.back().node;
+            length = stack.back().length;
+            stack.pop_back();
+          }
+          break;
+        case Op::kS: {
+          const std::int64_t offset = offsets[split++];
+          if (offset < 1 || offset > static_cast<std::int64_t>(length) - 2)
+            fail(at, "S offset " + std::to_string(offset) + " outside its loop of " +
+                         std::to_string(length));
+          const auto j = static_cast<std::uint32_t>(offset);
+          // xn is j nodes after b, or length - 1 - j nodes before g: walk the shorter way.
+          const std::uint32_t xn = j + 1 <= length - j - 1 ? nodes.walk(nodes.next[g], j)
+                                                           : nodes.walk_back(g, length - 1 - j);
+          triangle(at, b, a, nodes.vertex[xn]);
+          nodes.split(g, xn);
+          stack.push_back({g, length - j});
+          length = j + 1;
+          g = xn;
+          break;
+        }
+        case Op::kM: {
+          if (handle >= c.handles.size()) fail(at, "M without a handle record");
+          const HandleRecord& r = c.handles[handle++];
+          if (r.depth >= stack.size())
+            fail(at, "M names loop " + std::to_string(r.depth) + " of a stack of " +
+                         std::to_string(stack.size()));
+          const std::size_t k = stack.size() - 1 - r.depth;
+          if (r.offset >= stack[k].length)
+            fail(at, "M offset " + std::to_string(r.offset) + " outside its loop of " +
+                         std::to_string(stack[k].length));
+          const std::uint32_t xn = nodes.walk(stack[k].node, r.offset);
+          triangle(at, b, a, nodes.vertex[xn]);
+          nodes.split(g, xn);
+          length += stack[k].length + 1;
+          stack.erase(stack.begin() + static_cast<std::ptrdiff_t>(k));
+          g = xn;
+          break;
+        }
+        default:
+          fail(at, "unknown symbol " + std::to_string(static_cast<int>(op)));
+      }
+    }
+  }
+  if (i != c.ops.size())
+    fail(i, std::to_string(c.ops.size() - i) + " symbols left after the last component");
+  if (handle != c.handles.size())
+    throw Error(source, "handles", std::to_string(c.handles.size() - handle) + " not used");
+  return out;
+}
+
+}  // namespace meshflow::compress

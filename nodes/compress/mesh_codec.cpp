@@ -1,0 +1,456 @@
+#include "nodes/compress/mesh_codec.h"
+
+#include <algorithm>
+
+#include "nodes/compress/closed_surface.h"
+#include "nodes/compress/edgebreaker_connectivity.h"
+#include "nodes/compress/range_coder.h"
+#include "runtime/error.h"
+
+namespace meshflow::compress {
+namespace {
+
+// The symbol coder: a 6-symbol tree per context of the two symbols before.
+class SymbolCoder {
+ public:
+  void encode(RangeEncoder& enc, Op op) {
+    models_[context_].encode(enc, static_cast<unsigned>(op));
+    advance(op);
+  }
+  Op decode(RangeDecoder& dec, const std::string& source, std::size_t index) {
+    const unsigned v = models_[context_].decode(dec);
+    if (v >= kOpCount)
+      throw Error(source, "connectivity symbol " + std::to_string(index),
+                  "unknown symbol " + std::to_string(v));
+    const auto op = static_cast<Op>(v);
+    advance(op);
+    return op;
+  }
+
+ private:
+  void advance(Op op) { context_ = (context_ % kOpCount) * kOpCount + static_cast<unsigned>(op); }
+  std::vector<SymbolModel<8>> models_ = std::vector<SymbolModel<8>>(kOpCount * kOpCount);
+  unsigned context_ = 0;
+};
+
+// The side data's integer fields, each with its own model.
+struct SideModels {
+  IntegerModel count, depth, offset, index, corner;
+};
+
+// How a vertex's position is predicted, from what its predictors give.
+enum Prediction { kPrevious = 0, kOne = 1, kMidpoint = 2, kParallelogram = 3 };
+
+// Grid positions of decoded vertices (only those already coded are read).
+using Grid = std::vector<std::array<std::int32_t, 3>>;
+
+// The prediction of decoded vertex k from its predictors, skipping holes (`hole`); `last` is
+// the last coded position.
+std::array<std::int32_t, 3> predict(const VertexPredictors& p, const std::vector<char>& hole,
+                                    const Grid& grid, const std::array<std::int32_t, 3>& last,
+                                    Prediction& kind) {
+  const auto real = [&](std::uint32_t v) { return v != kNone && !hole[v]; };
+  std::array<std::int32_t, 3> out = last;
+  if (real(p.a) && real(p.b) && real(p.w)) {
+    kind = kParallelogram;
+    for (std::size_t i = 0; i < 3; ++i)
+      out[i] = static_cast<std::int32_t>(std::int64_t{grid[p.a][i]} + grid[p.b][i] - grid[p.w][i]);
+  } else if (real(p.a) && real(p.b)) {
+    kind = kMidpoint;
+    for (std::size_t i = 0; i < 3; ++i)
+      out[i] = static_cast<std::int32_t>((std::int64_t{grid[p.a][i]} + grid[p.b][i]) / 2);
+  } else if (real(p.a) || real(p.b)) {
+    kind = kOne;
+    out = grid[real(p.a) ? p.a : p.b];
+  } else {
+    kind = kPrevious;
+  }
+  return out;
+}
+
+// The neighbour an attribute is predicted from: a, else b, else kNone (the previous one).
+std::uint32_t attribute_source(const VertexPredictors& p, const std::vector<char>& hole) {
+  if (p.a != kNone && !hole[p.a]) return p.a;
+  if (p.b != kNone && !hole[p.b]) return p.b;
+  return kNone;
+}
+
+void write_section(io::ByteWriter& out, const std::vector<unsigned char>& bytes) {
+  out.u64(bytes.size());
+  out.bytes(bytes.data(), bytes.size());
+}
+
+// What both sides derive from the replayed surface: each decoded vertex's fate.
+struct VertexRoles {
+  std::vector<char> hole;             // per decoded vertex
+  std::vector<std::uint32_t> merged;  // per decoded vertex: the earlier one it is, or kNone
+  std::vector<std::uint32_t> output;  // per decoded vertex: its output vertex (kNone: hole)
+  std::uint32_t surface_outputs = 0;  // output vertices on the surface
+};
+
+VertexRoles assign_outputs(std::vector<char> hole, std::vector<std::uint32_t> merged) {
+  VertexRoles r{std::move(hole), std::move(merged), {}, 0};
+  r.output.assign(r.hole.size(), kNone);
+  for (std::size_t k = 0; k < r.hole.size(); ++k) {
+    if (r.hole[k]) continue;
+    r.output[k] = r.merged[k] != kNone ? r.output[r.merged[k]] : r.surface_outputs++;
+  }
+  return r;
+}
+
+}  // namespace
+
+BodyStats encode_body(const TriangleMesh& mesh, const Quantizer& quantizer, AttributeFlags flags,
+                      io::ByteWriter& out, BodyOrder* order) {
+  const ClosedSurface surface = build_closed_surface(mesh.triangles);
+  const Traversal walk = edgebreaker_traverse(surface);
+  const ReplayedSurface replayed = edgebreaker_replay(walk.connectivity, "edgebreaker encoder");
+  const Connectivity& c = walk.connectivity;
+  const std::size_t decoded = walk.surface_vertex.size();
+
+  // Roles: holes, further fans of a vertex already met, outputs.
+  std::vector<char> hole(decoded, 0);
+  std::vector<std::uint32_t> merged(decoded, kNone);
+  std::vector<std::uint32_t> first(mesh.vertices.size(), kNone);
+  for (std::uint32_t k = 0; k < decoded; ++k) {
+    const std::uint32_t v = surface.input_vertex[walk.surface_vertex[k]];
+    if (v == kNone) {
+      hole[k] = 1;
+    } else if (first[v] != kNone) {
+      merged[k] = first[v];
+    } else {
+      first[v] = k;
+    }
+  }
+  const VertexRoles roles = assign_outputs(hole, merged);
+  std::vector<std::uint32_t> off_surface;
+  for (std::uint32_t v = 0; v < mesh.vertices.size(); ++v)
+    if (first[v] == kNone) off_surface.push_back(v);
+  std::vector<std::uint32_t> output_of_input(mesh.vertices.size(), kNone);
+  BodyOrder local;
+  BodyOrder& o = order != nullptr ? *order : local;
+  o.vertex.clear();
+  for (std::uint32_t k = 0; k < decoded; ++k)
+    if (!hole[k] && merged[k] == kNone)
+      o.vertex.push_back(surface.input_vertex[walk.surface_vertex[k]]);
+  o.vertex.insert(o.vertex.end(), off_surface.begin(), off_surface.end());
+  for (std::uint32_t i = 0; i < o.vertex.size(); ++i) output_of_input[o.vertex[i]] = i;
+  o.triangle.clear();
+  for (std::uint32_t t : walk.surface_triangle)
+    if (surface.input_triangle[t] != kNone) o.triangle.push_back(surface.input_triangle[t]);
+  o.triangle.insert(o.triangle.end(), surface.degenerate_triangles.begin(),
+                    surface.degenerate_triangles.end());
+
+  BodyStats stats;
+  stats.symbols = c.ops.size();
+  stats.holes = surface.hole_count;
+  stats.handles = c.handles.size();
+  stats.split_offsets = c.split_offsets.size();
+  out.u32(c.components);
+  out.u64(c.ops.size());
+  out.u64(decoded);
+
+  {  // Symbols.
+    RangeEncoder enc;
+    SymbolCoder coder;
+    for (Op op : c.ops) coder.encode(enc, op);
+    const std::vector<unsigned char> bytes = enc.finish();
+    stats.connectivity_bytes += bytes.size();
+    write_section(out, bytes);
+  }
+  {  // Side data.
+    RangeEncoder enc;
+    SideModels m;
+    const auto put = [&](IntegerModel& model, std::uint64_t v) {
+      model.encode(enc, static_cast<std::int32_t>(v));
+    };
+    put(m.count, c.handles.size());
+    for (const HandleRecord& h : c.handles) {
+      put(m.depth, h.depth);
+      put(m.offset, h.offset);
+    }
+    put(m.count, c.split_offsets.size());
+    std::uint32_t previous = 0;
+    for (const SplitOffset& s : c.split_offsets) {
+      put(m.index, s.split - previous);
+      put(m.offset, s.offset);
+      previous = s.split;
+    }
+    put(m.count, surface.hole_count);
+    previous = 0;
+    for (std::uint32_t k = 0; k < decoded; ++k)
+      if (hole[k]) {
+        put(m.index, k - previous);
+        previous = k;
+      }
+    std::size_t merges = 0;
+    for (std::uint32_t k = 0; k < decoded; ++k) merges += merged[k] != kNone;
+    stats.merged_fans = merges;
+    put(m.count, merges);
+    previous = 0;
+    for (std::uint32_t k = 0; k < decoded; ++k)
+      if (merged[k] != kNone) {
+        put(m.index, k - previous);
+        put(m.offset, k - merged[k]);
+        previous = k;
+      }
+    put(m.count, off_surface.size());
+    put(m.count, surface.degenerate_triangles.size());
+    for (std::uint32_t t : surface.degenerate_triangles)
+      for (std::uint32_t v : mesh.triangles[t]) put(m.corner, output_of_input[v]);
+    const std::vector<unsigned char> bytes = enc.finish();
+    stats.connectivity_bytes += bytes.size();
+    write_section(out, bytes);
+  }
+  {  // Positions.
+    RangeEncoder enc;
+    IntegerModel models[4][3];
+    Grid grid(decoded);
+    std::array<std::int32_t, 3> last{};
+    const auto code = [&](const std::array<std::int32_t, 3>& q,
+                          const std::array<std::int32_t, 3>& predicted, Prediction kind) {
+      for (std::size_t a = 0; a < 3; ++a) models[kind][a].encode(enc, q[a] - predicted[a]);
+      last = q;
+    };
+    for (std::uint32_t k = 0; k < decoded; ++k) {
+      if (hole[k]) continue;
+      if (merged[k] != kNone) {
+        grid[k] = grid[merged[k]];
+        continue;
+      }
+      grid[k] = quantizer.quantize(mesh.vertices[surface.input_vertex[walk.surface_vertex[k]]]);
+      Prediction kind;
+      const auto predicted = predict(replayed.predictors[k], hole, grid, last, kind);
+      code(grid[k], predicted, kind);
+    }
+    for (std::uint32_t v : off_surface) code(quantizer.quantize(mesh.vertices[v]), last, kPrevious);
+    const std::vector<unsigned char> bytes = enc.finish();
+    stats.position_bytes = bytes.size();
+    write_section(out, bytes);
+  }
+  {  // Attributes, in output order, each predicted from its vertex's first real predictor.
+    RangeEncoder enc;
+    IntegerModel normal_models[2], color_models[3];
+    std::vector<std::uint32_t> source(o.vertex.size(), kNone);  // per output vertex
+    for (std::uint32_t k = 0; k < decoded; ++k)
+      if (!hole[k] && merged[k] == kNone) {
+        const std::uint32_t s = attribute_source(replayed.predictors[k], hole);
+        source[roles.output[k]] = s == kNone ? kNone : roles.output[s];
+      }
+    if (flags.normals) {
+      std::array<std::int32_t, 2> last{};
+      std::vector<std::array<std::int32_t, 2>> coded(o.vertex.size());
+      for (std::size_t i = 0; i < o.vertex.size(); ++i) {
+        coded[i] = octahedral_encode(mesh.normals[o.vertex[i]]);
+        const auto& p = source[i] == kNone ? last : coded[source[i]];
+        for (std::size_t a = 0; a < 2; ++a) normal_models[a].encode(enc, coded[i][a] - p[a]);
+        last = coded[i];
+      }
+    }
+    if (flags.colors) {
+      Rgb8 last{};
+      for (std::size_t i = 0; i < o.vertex.size(); ++i) {
+        const Rgb8 c8 = mesh.colors[o.vertex[i]];
+        const Rgb8 p = source[i] == kNone ? last : mesh.colors[o.vertex[source[i]]];
+        const std::uint8_t now[3] = {c8.r, c8.g, c8.b}, was[3] = {p.r, p.g, p.b};
+        for (std::size_t a = 0; a < 3; ++a)
+          color_models[a].encode(enc, static_cast<std::int8_t>(now[a] - was[a]));
+        last = c8;
+      }
+    }
+    const std::vector<unsigned char> bytes = enc.finish();
+    stats.attribute_bytes = bytes.size();
+    write_section(out, bytes);
+  }
+  return stats;
+}
+
+TriangleMesh decode_body(io::ByteReader& in, const Quantizer& quantizer, AttributeFlags flags,
+                         const std::string& source, BodyCodes* codes) {
+  Connectivity c;
+  c.components = in.u32("components");
+  const std::uint64_t symbols = in.u64("symbol count");
+  const std::uint64_t decoded = in.u64("surface vertex count");
+  const auto section = [&](const char* field) {
+    const std::uint64_t n = in.u64(field);
+    if (n > in.remaining())
+      in.fail(field, "section of " + std::to_string(n) + " bytes, " +
+                         std::to_string(in.remaining()) + " left (truncated)");
+    return std::make_pair(in.bytes(static_cast<std::size_t>(n), field),
+                          static_cast<std::size_t>(n));
+  };
+  const auto [symbol_bytes, symbol_size] = section("symbol section");
+  // A symbol costs at least 3 x 0.022 bits; more symbols than the section can hold is corrupt
+  // (and would allocate without bound).
+  if (symbols > 128 * std::uint64_t{symbol_size} + 64 ||
+      decoded > 3 * symbols + 3 * c.components + 3 || c.components > symbols + 1)
+    in.fail("symbol count", std::to_string(symbols) + " symbols, " + std::to_string(decoded) +
+                                " vertices and " + std::to_string(c.components) +
+                                " components do not fit a section of " +
+                                std::to_string(symbol_size) + " bytes");
+  {
+    RangeDecoder dec(symbol_bytes, symbol_size, source, "symbol section");
+    SymbolCoder coder;
+    c.ops.resize(static_cast<std::size_t>(symbols));
+    for (std::size_t i = 0; i < c.ops.size(); ++i) c.ops[i] = coder.decode(dec, source, i);
+    dec.check();
+  }
+  const auto [side_bytes, side_size] = section("side section");
+  std::vector<char> hole(static_cast<std::size_t>(decoded), 0);
+  std::vector<std::uint32_t> merged(static_cast<std::size_t>(decoded), kNone);
+  std::uint64_t off_surface = 0;
+  std::vector<std::uint32_t> degenerate;
+  {
+    RangeDecoder dec(side_bytes, side_size, source, "side section");
+    SideModels m;
+    const auto get = [&](IntegerModel& model, const char* field, std::uint64_t limit) {
+      const std::int32_t v = model.decode(dec);
+      dec.check();
+      if (v < 0 || static_cast<std::uint64_t>(v) > limit)
+        throw Error(source, std::string("side section: ") + field,
+                    std::to_string(v) + " is outside 0 .. " + std::to_string(limit));
+      return static_cast<std::uint32_t>(v);
+    };
+    c.handles.resize(get(m.count, "handle count", symbols));
+    for (HandleRecord& h : c.handles) {
+      h.depth = get(m.depth, "handle depth", symbols);
+      h.offset = get(m.offset, "handle offset", 3 * symbols + 3);
+    }
+    c.split_offsets.resize(get(m.count, "split offset count", symbols));
+    std::uint32_t previous = 0;
+    for (SplitOffset& s : c.split_offsets) {
+      s.split = previous + get(m.index, "split index", symbols);
+      s.offset = get(m.offset, "split offset", 3 * symbols + 3);
+      previous = s.split;
+    }
+    const std::uint32_t holes = get(m.count, "hole count", decoded);
+    previous = 0;
+    for (std::uint32_t i = 0; i < holes; ++i) {
+      const std::uint64_t k = std::uint64_t{previous} + get(m.index, "hole vertex", decoded);
+      if (k >= decoded || (i > 0 && k == previous))
+        throw Error(source, "side section: hole vertex", "out of order or range");
+      hole[k] = 1;
+      previous = static_cast<std::uint32_t>(k);
+    }
+    const std::uint32_t merges = get(m.count, "merge count", decoded);
+    previous = 0;
+    for (std::uint32_t i = 0; i < merges; ++i) {
+      const std::uint64_t k = std::uint64_t{previous} + get(m.index, "merged vertex", decoded);
+      const std::uint32_t back = get(m.offset, "merge target", decoded);
+      if (k >= decoded || back == 0 || back > k || hole[k] || hole[k - back] ||
+          merged[k - back] != kNone || (i > 0 && k == previous))
+        throw Error(source, "side section: merged vertex", "out of order or range");
+      merged[k] = static_cast<std::uint32_t>(k - back);
+      previous = static_cast<std::uint32_t>(k);
+    }
+    off_surface = get(m.count, "vertices off the surface", 0x7FFFFFFF);
+    if (off_surface > 3 * in.remaining() + 64)
+      throw Error(source, "side section: vertices off the surface",
+                  std::to_string(off_surface) + " do not fit the rest of the file");
+    const std::uint32_t degenerates = get(m.count, "degenerate triangles", 0x7FFFFFFF);
+    if (degenerates > 8 * side_size + 64)
+      throw Error(source, "side section: degenerate triangles", "more than the section holds");
+    degenerate.resize(3 * std::size_t{degenerates});
+    for (std::uint32_t& v : degenerate) v = get(m.corner, "degenerate triangle corner", 0x7FFFFFFF);
+  }
+  const ReplayedSurface replayed = edgebreaker_replay(c, source);
+  if (replayed.vertex_count != decoded)
+    throw Error(source, "surface vertex count",
+                std::to_string(decoded) + " stored, the symbols make " +
+                    std::to_string(replayed.vertex_count));
+  const VertexRoles roles = assign_outputs(std::move(hole), std::move(merged));
+  const std::size_t outputs = roles.surface_outputs + static_cast<std::size_t>(off_surface);
+  TriangleMesh mesh;
+  mesh.vertices.resize(outputs);
+  {
+    const auto [bytes, size] = section("position section");
+    RangeDecoder dec(bytes, size, source, "position section");
+    IntegerModel models[4][3];
+    Grid grid(static_cast<std::size_t>(decoded));
+    std::array<std::int32_t, 3> last{};
+    if (codes != nullptr) codes->positions.assign(outputs, {});
+    const auto read = [&](const std::array<std::int32_t, 3>& predicted, Prediction kind) {
+      std::array<std::int32_t, 3> q{};
+      for (std::size_t a = 0; a < 3; ++a)
+        q[a] = static_cast<std::int32_t>(static_cast<std::uint32_t>(predicted[a]) +
+                                         static_cast<std::uint32_t>(models[kind][a].decode(dec)));
+      last = q;
+      return q;
+    };
+    for (std::uint32_t k = 0; k < decoded; ++k) {
+      if (roles.hole[k]) continue;
+      if (roles.merged[k] != kNone) {
+        grid[k] = grid[roles.merged[k]];
+        continue;
+      }
+      Prediction kind;
+      const auto predicted = predict(replayed.predictors[k], roles.hole, grid, last, kind);
+      grid[k] = read(predicted, kind);
+      mesh.vertices[roles.output[k]] = quantizer.position(grid[k]);
+      if (codes != nullptr) codes->positions[roles.output[k]] = grid[k];
+    }
+    for (std::size_t i = roles.surface_outputs; i < outputs; ++i) {
+      const std::array<std::int32_t, 3> q = read(last, kPrevious);
+      mesh.vertices[i] = quantizer.position(q);
+      if (codes != nullptr) codes->positions[i] = q;
+    }
+    dec.check();
+  }
+  {
+    const auto [bytes, size] = section("attribute section");
+    RangeDecoder dec(bytes, size, source, "attribute section");
+    std::vector<std::uint32_t> from(outputs, kNone);
+    for (std::uint32_t k = 0; k < decoded; ++k)
+      if (!roles.hole[k] && roles.merged[k] == kNone) {
+        const std::uint32_t s = attribute_source(replayed.predictors[k], roles.hole);
+        from[roles.output[k]] = s == kNone ? kNone : roles.output[s];
+      }
+    if (flags.normals) {
+      IntegerModel models[2];
+      std::vector<std::array<std::int32_t, 2>> coded(outputs);
+      std::array<std::int32_t, 2> last{};
+      mesh.normals.resize(outputs);
+      for (std::size_t i = 0; i < outputs; ++i) {
+        const auto& p = from[i] == kNone ? last : coded[from[i]];
+        for (std::size_t a = 0; a < 2; ++a)
+          coded[i][a] = static_cast<std::int32_t>(
+              static_cast<std::uint32_t>(p[a]) + static_cast<std::uint32_t>(models[a].decode(dec)));
+        mesh.normals[i] = octahedral_decode(coded[i]);
+        last = coded[i];
+      }
+      if (codes != nullptr) codes->normals = std::move(coded);
+    }
+    if (flags.colors) {
+      IntegerModel models[3];
+      Rgb8 last{};
+      mesh.colors.resize(outputs);
+      for (std::size_t i = 0; i < outputs; ++i) {
+        const Rgb8 p = from[i] == kNone ? last : mesh.colors[from[i]];
+        const std::uint8_t was[3] = {p.r, p.g, p.b};
+        std::uint8_t now[3];
+        for (std::size_t a = 0; a < 3; ++a)
+          now[a] =
+              static_cast<std::uint8_t>(was[a] + static_cast<std::uint8_t>(models[a].decode(dec)));
+        mesh.colors[i] = Rgb8{now[0], now[1], now[2]};
+        last = mesh.colors[i];
+      }
+    }
+    dec.check();
+  }
+  mesh.triangles.reserve(replayed.triangles.size() + degenerate.size() / 3);
+  for (const Triangle& t : replayed.triangles) {
+    if (roles.hole[t[0]] || roles.hole[t[1]] || roles.hole[t[2]]) continue;
+    mesh.triangles.push_back({roles.output[t[0]], roles.output[t[1]], roles.output[t[2]]});
+  }
+  for (std::size_t i = 0; i < degenerate.size(); i += 3) {
+    for (std::size_t j = 0; j < 3; ++j)
+      if (degenerate[i + j] >= outputs)
+        throw Error(source, "side section: degenerate triangle corner",
+                    std::to_string(degenerate[i + j]) + " is not below the " +
+                        std::to_string(outputs) + " vertices");
+    mesh.triangles.push_back({degenerate[i], degenerate[i + 1], degenerate[i + 2]});
+  }
+  return mesh;
+}
+
+}  // namespace meshflow::compress

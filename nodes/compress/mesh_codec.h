@@ -1,0 +1,66 @@
+#pragma once
+// The single-rate body of a compressed mesh: Edgebreaker connectivity, positions predicted by
+// the parallelogram rule on the quantisation grid, normals and colours predicted from a
+// neighbour, all range-coded. The container (header, checksum) is compressed_mesh.h's; the
+// progressive format stores its base mesh as such a body.
+//
+// Body layout (little-endian): u32 components, u64 symbols, u64 surface vertices, then four
+// sections, each a u64 byte count and a range-coded stream: symbols (CLERS + M, context: the two
+// symbols before), side data (handles, split offsets, hole vertices, merged fans, degenerate
+// triangles, vertices off the surface), positions, attributes (normals, then colours).
+
+#include <array>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "nodes/compress/quantizer.h"
+#include "nodes/io/byte_buffer.h"
+#include "runtime/triangle_mesh.h"
+
+namespace meshflow::compress {
+
+/// Which per-vertex attributes a body carries.
+struct AttributeFlags {
+  bool normals = false;
+  bool colors = false;
+};
+
+/// Sizes and counts of one encoded body.
+struct BodyStats {
+  std::size_t connectivity_bytes = 0;  ///< symbols + side data
+  std::size_t position_bytes = 0;
+  std::size_t attribute_bytes = 0;
+  std::size_t symbols = 0;
+  std::size_t holes = 0;          ///< loops of border (or cut) edges closed for the walk
+  std::size_t handles = 0;        ///< M symbols
+  std::size_t split_offsets = 0;  ///< S offsets stored explicitly
+  std::size_t merged_fans = 0;    ///< extra fans of non-manifold vertices
+};
+
+/// Where each output vertex and triangle of a decoded body came from.
+struct BodyOrder {
+  std::vector<std::uint32_t> vertex;    ///< decoded vertex k is input vertex vertex[k]
+  std::vector<std::uint32_t> triangle;  ///< decoded triangle k is input triangle triangle[k]
+};
+
+/// Appends the body of `mesh` to `out`. Vertices come out in the order the walk meets them, then
+/// those on no triangle (input order); triangles in walk order, then those with a repeated
+/// corner; each triangle keeps its orientation (it may start at another corner). Corners must
+/// be in range. O(T log T); serial.
+BodyStats encode_body(const TriangleMesh& mesh, const Quantizer& quantizer, AttributeFlags flags,
+                      io::ByteWriter& out, BodyOrder* order = nullptr);
+
+/// The integer codes of a decoded body's vertices (output order), for coders that continue
+/// from them (the progressive splits): float positions do not always quantise back exactly.
+struct BodyCodes {
+  std::vector<std::array<std::int32_t, 3>> positions;
+  std::vector<std::array<std::int32_t, 2>> normals;  ///< octahedral; empty without normals
+};
+
+/// Reads a body written by encode_body() with the same quantiser and flags. Throws Error naming
+/// `source` and the field for truncated or inconsistent data. O(T log T).
+TriangleMesh decode_body(io::ByteReader& in, const Quantizer& quantizer, AttributeFlags flags,
+                         const std::string& source, BodyCodes* codes = nullptr);
+
+}  // namespace meshflow::compress

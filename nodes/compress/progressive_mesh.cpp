@@ -1,0 +1,416 @@
+#include "nodes/compress/progressive_mesh.h"
+
+#include <algorithm>
+
+#include "nodes/compress/closed_surface.h"
+#include "nodes/compress/range_coder.h"
+#include "nodes/decimate/qem_decimation.h"
+#include "runtime/error.h"
+
+namespace meshflow::compress {
+namespace {
+
+// The six orders of a triangle's corners (u, v, w): kOrders[k][i] is the role at corner i.
+constexpr std::uint8_t kOrders[6][3] = {{0, 1, 2}, {1, 2, 0}, {2, 0, 1},
+                                        {0, 2, 1}, {2, 1, 0}, {1, 0, 2}};
+
+unsigned bits_for_count(std::size_t count) {
+  unsigned bits = 1;
+  while (bits < 32 && (std::uint64_t{1} << bits) < count) ++bits;
+  return bits;
+}
+
+// A triangle around v ordered by its other two corners, taken from v on.
+std::uint64_t key_around(const Triangle& t, std::uint32_t v) {
+  const std::size_t i = t[0] == v ? 0 : t[1] == v ? 1 : 2;
+  return std::uint64_t{t[(i + 1) % 3]} << 32 | t[(i + 2) % 3];
+}
+
+// The distinct other corners of v's triangles, sorted.
+std::vector<std::uint32_t> neighbours_of(const std::vector<Triangle>& around, std::uint32_t v) {
+  std::vector<std::uint32_t> n;
+  for (const Triangle& t : around)
+    for (std::uint32_t c : t)
+      if (c != v) n.push_back(c);
+  std::sort(n.begin(), n.end());
+  n.erase(std::unique(n.begin(), n.end()), n.end());
+  return n;
+}
+
+// The models of one packet.
+struct SplitModels {
+  IntegerModel position[3], normal[2], color[3], rank;
+  SymbolModel<16> removed;
+  SymbolModel<8> order;
+  BitModel moved[3];
+};
+
+// One collapse as the forward replay saw it, in input vertex numbers.
+struct Collapse {
+  std::uint32_t u, v;
+  std::vector<Triangle> around;     // v's triangles after it
+  std::vector<std::uint8_t> moved;  // per `around`: it had u before
+  std::vector<Triangle> removed;    // the triangles it removed
+  std::vector<std::uint32_t> removed_ids;
+};
+
+// Replays `sequence` on `triangles`; leaves the base mesh's triangles alive.
+std::vector<Collapse> replay_collapses(std::vector<Triangle>& triangles,
+                                       std::vector<std::uint8_t>& alive, std::size_t vertices,
+                                       const std::vector<std::array<std::uint32_t, 2>>& sequence) {
+  std::vector<std::vector<std::uint32_t>> around(vertices);
+  for (std::uint32_t t = 0; t < triangles.size(); ++t)
+    for (std::uint32_t c : triangles[t]) around[c].push_back(t);
+  alive.assign(triangles.size(), 1);
+  std::vector<std::uint32_t> stamp(triangles.size(), 0);
+  std::vector<Collapse> out(sequence.size());
+  for (std::size_t i = 0; i < sequence.size(); ++i) {
+    const auto [u, v] = sequence[i];
+    Collapse& c = out[i];
+    c.u = u;
+    c.v = v;
+    for (std::uint32_t t : around[u]) {
+      if (!alive[t]) continue;
+      Triangle& f = triangles[t];
+      if (f[0] == v || f[1] == v || f[2] == v) {
+        c.removed.push_back(f);
+        c.removed_ids.push_back(t);
+        alive[t] = 0;
+      } else {
+        for (std::uint32_t& x : f)
+          if (x == u) x = v;
+        around[v].push_back(t);
+        stamp[t] = static_cast<std::uint32_t>(i + 1);
+      }
+    }
+    around[u].clear();
+    std::vector<std::uint32_t>& av = around[v];
+    av.erase(std::remove_if(av.begin(), av.end(), [&](std::uint32_t t) { return !alive[t]; }),
+             av.end());
+    for (std::uint32_t t : av) {
+      c.around.push_back(triangles[t]);
+      c.moved.push_back(stamp[t] == i + 1 ? 1 : 0);
+    }
+  }
+  return out;
+}
+
+// The decoder's mesh while splits are applied.
+struct LevelState {
+  TriangleMesh mesh;
+  std::vector<std::array<std::int32_t, 3>> grid;
+  std::vector<std::array<std::int32_t, 2>> normal;
+  std::vector<std::vector<std::uint32_t>> around;
+};
+
+}  // namespace
+
+std::vector<unsigned char> compress_progressive(const TriangleMesh& mesh,
+                                                const CompressConfig& config,
+                                                CompressReport* report) {
+  require_corners_in_range(mesh.triangles, mesh.vertices.size(), "mesh");
+  const Quantizer quantizer = choose_quantizer(mesh, config);
+  const AttributeFlags flags = detail::attribute_flags(mesh, config);
+  const std::size_t n = mesh.vertices.size();
+
+  // Decimate the triangles without a repeated corner, recording the collapses.
+  TriangleMesh work;
+  work.vertices = mesh.vertices;
+  std::vector<std::uint32_t> kept, degenerate;
+  for (std::uint32_t t = 0; t < mesh.triangles.size(); ++t) {
+    const Triangle& f = mesh.triangles[t];
+    if (f[0] == f[1] || f[1] == f[2] || f[0] == f[2]) {
+      degenerate.push_back(t);
+    } else {
+      kept.push_back(t);
+      work.triangles.push_back(f);
+    }
+  }
+  QemConfig qem;
+  qem.target_ratio = config.base_ratio;
+  qem.divide_by_depth2 = false;
+  qem.record_collapses = true;
+  QemReport decimation;
+  qem_decimate(work, qem, &decimation);
+  std::vector<Triangle> triangles = work.triangles;
+  std::vector<std::uint8_t> alive;
+  const std::vector<Collapse> collapses =
+      replay_collapses(triangles, alive, n, decimation.collapse_sequence);
+
+  // The base mesh: every vertex no collapse removed, the triangles left.
+  std::vector<char> removed_vertex(n, 0);
+  for (const Collapse& c : collapses) removed_vertex[c.u] = 1;
+  TriangleMesh base;
+  std::vector<std::uint32_t> base_vertex, base_triangle, local(n, kNone);
+  for (std::uint32_t v = 0; v < n; ++v)
+    if (!removed_vertex[v]) {
+      local[v] = static_cast<std::uint32_t>(base_vertex.size());
+      base_vertex.push_back(v);
+      base.vertices.push_back(mesh.vertices[v]);
+      if (flags.normals) base.normals.push_back(mesh.normals[v]);
+      if (flags.colors) base.colors.push_back(mesh.colors[v]);
+    }
+  for (std::uint32_t t = 0; t < triangles.size(); ++t)
+    if (alive[t]) {
+      base_triangle.push_back(t);
+      base.triangles.push_back(
+          {local[triangles[t][0]], local[triangles[t][1]], local[triangles[t][2]]});
+    }
+
+  io::ByteWriter out;
+  detail::write_header(out, CompressionKind::kProgressive, flags, n, mesh.triangles.size(),
+                       quantizer);
+  BodyOrder order;
+  const BodyStats stats = encode_body(base, quantizer, flags, out, &order);
+  const std::size_t base_bytes = out.out.size();
+
+  // Decoded numbers: the base's in its decoded order, then each split's u.
+  std::vector<std::uint32_t> id(n, kNone), vertex_order, triangle_order;
+  for (std::uint32_t k = 0; k < order.vertex.size(); ++k) {
+    id[base_vertex[order.vertex[k]]] = k;
+    vertex_order.push_back(base_vertex[order.vertex[k]]);
+  }
+  for (std::uint32_t t : order.triangle) triangle_order.push_back(kept[base_triangle[t]]);
+  const std::size_t splits = collapses.size();
+  for (std::size_t j = 0; j < splits; ++j) {
+    const std::uint32_t u = collapses[splits - 1 - j].u;
+    id[u] = static_cast<std::uint32_t>(order.vertex.size() + j);
+    vertex_order.push_back(u);
+  }
+  const auto mapped = [&](const Triangle& t) { return Triangle{id[t[0]], id[t[1]], id[t[2]]}; };
+
+  out.u64(splits);
+  const std::uint32_t per_packet = std::max<std::uint32_t>(1, config.splits_per_packet);
+  const auto packets = static_cast<std::uint32_t>((splits + per_packet - 1) / per_packet);
+  out.u32(packets);
+  std::size_t vertex_count = order.vertex.size();
+  for (std::uint32_t p = 0; p < packets; ++p) {
+    const std::size_t first = std::size_t{p} * per_packet;
+    const std::size_t last = std::min(splits, first + per_packet);
+    RangeEncoder enc;
+    SplitModels m;
+    for (std::size_t j = first; j < last; ++j) {
+      const Collapse& c = collapses[splits - 1 - j];
+      const std::uint32_t v = id[c.v];
+      enc.encode_direct(v, bits_for_count(vertex_count));
+      const auto gu = quantizer.quantize(mesh.vertices[c.u]);
+      const auto gv = quantizer.quantize(mesh.vertices[c.v]);
+      for (std::size_t a = 0; a < 3; ++a) m.position[a].encode(enc, gu[a] - gv[a]);
+      if (flags.normals) {
+        const auto nu = octahedral_encode(mesh.normals[c.u]);
+        const auto nv = octahedral_encode(mesh.normals[c.v]);
+        for (std::size_t a = 0; a < 2; ++a) m.normal[a].encode(enc, nu[a] - nv[a]);
+      }
+      if (flags.colors) {
+        const Rgb8 cu = mesh.colors[c.u], cv = mesh.colors[c.v];
+        const std::uint8_t du[3] = {cu.r, cu.g, cu.b}, dv[3] = {cv.r, cv.g, cv.b};
+        for (std::size_t a = 0; a < 3; ++a)
+          m.color[a].encode(enc, static_cast<std::int8_t>(du[a] - dv[a]));
+      }
+      // Which of v's triangles go to u, in the decoder's order.
+      std::vector<Triangle> around(c.around.size());
+      std::vector<std::pair<std::uint64_t, std::uint8_t>> keyed(c.around.size());
+      for (std::size_t k = 0; k < c.around.size(); ++k) {
+        around[k] = mapped(c.around[k]);
+        keyed[k] = {key_around(around[k], v), c.moved[k]};
+      }
+      std::sort(keyed.begin(), keyed.end());
+      unsigned previous = 2;
+      for (const auto& [key, moved] : keyed) {
+        enc.encode(m.moved[previous], moved);
+        previous = moved;
+      }
+      if (c.removed.size() > 15)
+        throw Error("progressive mesh", "collapse", "removes more than 15 triangles");
+      m.removed.encode(enc, static_cast<unsigned>(c.removed.size()));
+      const std::vector<std::uint32_t> neighbours = neighbours_of(around, v);
+      const std::uint32_t u = id[c.u];
+      for (std::size_t k = 0; k < c.removed.size(); ++k) {
+        const Triangle t = mapped(c.removed[k]);
+        std::uint32_t w = kNone;
+        std::uint8_t role[3];
+        for (std::size_t i = 0; i < 3; ++i) {
+          role[i] = t[i] == u ? 0 : t[i] == v ? 1 : 2;
+          if (role[i] == 2) w = t[i];
+        }
+        const auto it = std::lower_bound(neighbours.begin(), neighbours.end(), w);
+        if (it != neighbours.end() && *it == w) {
+          m.rank.encode(enc, static_cast<std::int32_t>(it - neighbours.begin()) + 1);
+        } else {
+          m.rank.encode(enc, 0);
+          enc.encode_direct(w, bits_for_count(vertex_count + 1));
+        }
+        unsigned k6 = 0;
+        while (!(kOrders[k6][0] == role[0] && kOrders[k6][1] == role[1])) ++k6;
+        m.order.encode(enc, k6);
+        triangle_order.push_back(kept[c.removed_ids[k]]);
+      }
+      ++vertex_count;
+    }
+    const std::vector<unsigned char> bytes = enc.finish();
+    out.u32(static_cast<std::uint32_t>(last - first));
+    out.u64(bytes.size());
+    out.bytes(bytes.data(), bytes.size());
+  }
+  out.u64(degenerate.size());
+  for (std::uint32_t t : degenerate) {
+    for (std::uint32_t c : mesh.triangles[t]) out.u32(id[c]);
+    triangle_order.push_back(t);
+  }
+  detail::seal(out);
+  if (report != nullptr) {
+    *report = CompressReport{};
+    report->kind = CompressionKind::kProgressive;
+    report->total_bytes = out.out.size();
+    report->body = stats;
+    report->quantizer = quantizer;
+    report->base_triangles = base.triangles.size();
+    report->base_bytes = base_bytes;
+    report->splits = splits;
+    report->vertex_order = std::move(vertex_order);
+    report->triangle_order = std::move(triangle_order);
+  }
+  return std::move(out.out);
+}
+
+TriangleMesh decode_progressive(io::ByteReader& in, const CompressedMeshInfo& info,
+                                const std::string& source, const ProgressiveLevel& level) {
+  const AttributeFlags flags{info.normals, info.colors};
+  LevelState s;
+  BodyCodes codes;
+  s.mesh = decode_body(in, info.quantizer, flags, source, &codes);
+  const std::size_t base_vertices = s.mesh.vertices.size();
+  s.grid = std::move(codes.positions);
+  s.normal = std::move(codes.normals);
+  s.around.resize(base_vertices);
+  for (std::uint32_t t = 0; t < s.mesh.triangles.size(); ++t)
+    for (std::uint32_t c : s.mesh.triangles[t]) s.around[c].push_back(t);
+
+  const std::uint64_t splits = in.u64("split count");
+  if (splits > info.vertices || base_vertices + splits != info.vertices)
+    in.fail("split count", std::to_string(splits) + " splits on a base of " +
+                               std::to_string(base_vertices) + " vertices do not make the " +
+                               std::to_string(info.vertices) + " stated");
+  const std::uint32_t packets = in.u32("packet count");
+  std::uint64_t applied = 0;
+  bool full = true;
+  for (std::uint32_t p = 0; p < packets && full; ++p) {
+    const std::uint32_t count = in.u32("packet split count");
+    const std::uint64_t size = in.u64("packet size");
+    if (count > splits - applied) in.fail("packet split count", "more splits than stated");
+    const unsigned char* bytes = in.bytes(static_cast<std::size_t>(size), "packet");
+    RangeDecoder dec(bytes, static_cast<std::size_t>(size), source,
+                     "split packet " + std::to_string(p));
+    SplitModels m;
+    for (std::uint32_t j = 0; j < count; ++j) {
+      if (applied >= level.splits || s.mesh.triangles.size() >= level.triangles) {
+        full = false;
+        break;
+      }
+      const auto fail = [&](const std::string& problem) {
+        throw Error(source, "vertex split " + std::to_string(applied), problem);
+      };
+      const std::size_t vertex_count = s.mesh.vertices.size();
+      const std::uint32_t v = dec.decode_direct(bits_for_count(vertex_count));
+      if (v >= vertex_count)
+        fail("names vertex " + std::to_string(v) + " of " + std::to_string(vertex_count));
+      const auto u = static_cast<std::uint32_t>(vertex_count);
+      std::array<std::int32_t, 3> gu{};
+      for (std::size_t a = 0; a < 3; ++a)
+        gu[a] = static_cast<std::int32_t>(static_cast<std::uint32_t>(s.grid[v][a]) +
+                                          static_cast<std::uint32_t>(m.position[a].decode(dec)));
+      s.grid.push_back(gu);
+      s.mesh.vertices.push_back(info.quantizer.position(gu));
+      if (flags.normals) {
+        std::array<std::int32_t, 2> nu{};
+        for (std::size_t a = 0; a < 2; ++a)
+          nu[a] = static_cast<std::int32_t>(static_cast<std::uint32_t>(s.normal[v][a]) +
+                                            static_cast<std::uint32_t>(m.normal[a].decode(dec)));
+        s.normal.push_back(nu);
+        s.mesh.normals.push_back(octahedral_decode(nu));
+      }
+      if (flags.colors) {
+        const Rgb8 cv = s.mesh.colors[v];
+        const std::uint8_t dv[3] = {cv.r, cv.g, cv.b};
+        std::uint8_t du[3];
+        for (std::size_t a = 0; a < 3; ++a)
+          du[a] =
+              static_cast<std::uint8_t>(dv[a] + static_cast<std::uint8_t>(m.color[a].decode(dec)));
+        s.mesh.colors.push_back(Rgb8{du[0], du[1], du[2]});
+      }
+      s.around.emplace_back();
+      // v's triangles in key order; those marked go to u.
+      std::vector<std::uint32_t>& av = s.around[v];
+      std::vector<Triangle> around;
+      std::vector<std::pair<std::uint64_t, std::uint32_t>> keyed;
+      for (std::uint32_t t : av) {
+        around.push_back(s.mesh.triangles[t]);
+        keyed.push_back({key_around(s.mesh.triangles[t], v), t});
+      }
+      const std::vector<std::uint32_t> neighbours = neighbours_of(around, v);
+      std::sort(keyed.begin(), keyed.end());
+      unsigned previous = 2;
+      std::vector<std::uint32_t> stay;
+      for (const auto& [key, t] : keyed) {
+        const unsigned moved = dec.decode(m.moved[previous]);
+        previous = moved;
+        if (moved) {
+          for (std::uint32_t& x : s.mesh.triangles[t])
+            if (x == v) x = u;
+          s.around[u].push_back(t);
+        } else {
+          stay.push_back(t);
+        }
+      }
+      s.around[v] = std::move(stay);
+      const unsigned removed = m.removed.decode(dec);
+      for (unsigned k = 0; k < removed; ++k) {
+        const std::int32_t rank = m.rank.decode(dec);
+        std::uint32_t w;
+        if (rank == 0) {
+          w = dec.decode_direct(bits_for_count(vertex_count + 1));
+        } else if (rank > 0 && static_cast<std::size_t>(rank) <= neighbours.size()) {
+          w = neighbours[static_cast<std::size_t>(rank) - 1];
+        } else {
+          fail("third vertex rank " + std::to_string(rank) + " of " +
+               std::to_string(neighbours.size()) + " neighbours");
+        }
+        if (w >= u || w == v) fail("third vertex " + std::to_string(w) + " is not valid");
+        const unsigned k6 = m.order.decode(dec);
+        if (k6 >= 6) fail("corner order " + std::to_string(k6));
+        const std::uint32_t roles[3] = {u, v, w};
+        const Triangle t{roles[kOrders[k6][0]], roles[kOrders[k6][1]], roles[kOrders[k6][2]]};
+        const auto index = static_cast<std::uint32_t>(s.mesh.triangles.size());
+        s.mesh.triangles.push_back(t);
+        for (std::uint32_t c : t) s.around[c].push_back(index);
+      }
+      dec.check();
+      ++applied;
+    }
+  }
+  if (!full || applied < splits) return std::move(s.mesh);
+  const std::uint64_t degenerate = in.u64("degenerate triangle count");
+  if (degenerate > in.remaining() / 12)
+    in.fail("degenerate triangle count", std::to_string(degenerate) + " do not fit the file");
+  for (std::uint64_t i = 0; i < degenerate; ++i) {
+    Triangle t;
+    for (std::uint32_t& c : t) {
+      c = in.u32("degenerate triangle corner");
+      if (c >= s.mesh.vertices.size()) in.fail("degenerate triangle corner", "out of range");
+    }
+    s.mesh.triangles.push_back(t);
+  }
+  return std::move(s.mesh);
+}
+
+TriangleMesh decompress_progressive_level(const std::vector<unsigned char>& bytes,
+                                          const std::string& source,
+                                          const ProgressiveLevel& level) {
+  io::ByteReader in(source, bytes.data(), bytes.size() >= 8 ? bytes.size() - 8 : bytes.size());
+  const CompressedMeshInfo info = detail::read_header(in, bytes);
+  if (info.kind != CompressionKind::kProgressive)
+    throw Error(source, "kind", "is single-rate (Edgebreaker): it has no levels of detail");
+  return decode_progressive(in, info, source, level);
+}
+
+}  // namespace meshflow::compress

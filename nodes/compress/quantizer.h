@@ -1,0 +1,67 @@
+#pragma once
+// Position quantisation on a cubic grid over a bounding box, and the octahedral mapping of unit
+// normals to two integers, for the mesh coders.
+
+#include <Eigen/Core>
+#include <array>
+#include <cmath>
+#include <cstdint>
+
+namespace meshflow::compress {
+
+/// Integer grid coordinates q = round((p - origin) / step), each in [0, 2^bits).
+struct Quantizer {
+  Eigen::Vector3d origin = Eigen::Vector3d::Zero();
+  double step = 1.0;  ///< metres per grid unit; a position moves by at most step / 2 per axis
+  unsigned bits = 16;
+
+  std::array<std::int32_t, 3> quantize(const Eigen::Vector3f& p) const {
+    const double top = static_cast<double>((std::uint64_t{1} << bits) - 1);
+    std::array<std::int32_t, 3> q{};
+    for (int a = 0; a < 3; ++a) {
+      const double g = std::round((static_cast<double>(p[a]) - origin[a]) / step);
+      q[static_cast<std::size_t>(a)] = static_cast<std::int32_t>(std::min(std::max(g, 0.0), top));
+    }
+    return q;
+  }
+  Eigen::Vector3f position(const std::array<std::int32_t, 3>& q) const {
+    return Eigen::Vector3f(static_cast<float>(origin.x() + q[0] * step),
+                           static_cast<float>(origin.y() + q[1] * step),
+                           static_cast<float>(origin.z() + q[2] * step));
+  }
+};
+
+/// Bits per octahedral normal coordinate (about 0.1 degree).
+inline constexpr int kNormalBits = 12;
+
+/// A unit normal (zero allowed) as two integers in [-(2^(kNormalBits-1) - 1), 2^(kNormalBits-1)
+/// - 1] on the octahedron. O(1).
+inline std::array<std::int32_t, 2> octahedral_encode(const Eigen::Vector3f& n) {
+  const float l1 = std::abs(n.x()) + std::abs(n.y()) + std::abs(n.z());
+  if (!(l1 > 0.0f)) return {0, 0};
+  float u = n.x() / l1, v = n.y() / l1;
+  if (n.z() < 0.0f) {
+    const float pu = u, pv = v;
+    u = (1.0f - std::abs(pv)) * (pu >= 0.0f ? 1.0f : -1.0f);
+    v = (1.0f - std::abs(pu)) * (pv >= 0.0f ? 1.0f : -1.0f);
+  }
+  const float top = static_cast<float>((1 << (kNormalBits - 1)) - 1);
+  return {static_cast<std::int32_t>(std::lround(u * top)),
+          static_cast<std::int32_t>(std::lround(v * top))};
+}
+
+/// The unit normal of octahedral coordinates (a zero vector for {0, 0} only if it came from a
+/// zero normal: {0, 0} decodes to +z). O(1).
+inline Eigen::Vector3f octahedral_decode(const std::array<std::int32_t, 2>& q) {
+  const float top = static_cast<float>((1 << (kNormalBits - 1)) - 1);
+  float u = static_cast<float>(q[0]) / top, v = static_cast<float>(q[1]) / top;
+  const float z = 1.0f - std::abs(u) - std::abs(v);
+  if (z < 0.0f) {
+    const float pu = u, pv = v;
+    u = (1.0f - std::abs(pv)) * (pu >= 0.0f ? 1.0f : -1.0f);
+    v = (1.0f - std::abs(pu)) * (pv >= 0.0f ? 1.0f : -1.0f);
+  }
+  return Eigen::Vector3f(u, v, z).normalized();
+}
+
+}  // namespace meshflow::compress

@@ -1,0 +1,60 @@
+#pragma once
+// Little-endian binary encoding for meshflow's own file formats (the TSDF map, the compressed
+// mesh): a writer into a byte vector, a reader that names the file and the field in every
+// error, and the FNV-1a 64 checksum both formats end with.
+
+#include <cstddef>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace meshflow::io {
+
+/// FNV-1a 64-bit hash of data[0, n). O(n).
+std::uint64_t fnv1a64(const unsigned char* data, std::size_t n);
+
+/// Appends little-endian values to `out`. Not thread-safe.
+class ByteWriter {
+ public:
+  void bytes(const void* p, std::size_t n);
+  void u8(std::uint8_t v) { out.push_back(v); }
+  void u32(std::uint32_t v);
+  void u64(std::uint64_t v);
+  void i32(std::int32_t v) { u32(static_cast<std::uint32_t>(v)); }
+  void f32(float v);
+  void f64(double v);
+  std::vector<unsigned char> out;
+};
+
+/// Reads little-endian values from `data` (which must outlive it) from the start. Every read
+/// names its field: reading past the end throws Error(path, "FIELD at byte N", "file ends early
+/// (truncated)"). Not thread-safe.
+class ByteReader {
+ public:
+  ByteReader(const std::string& path, const unsigned char* data, std::size_t size)
+      : path_(path), data_(data), size_(size) {}
+  ByteReader(const std::string& path, const std::vector<unsigned char>& data)
+      : ByteReader(path, data.data(), data.size()) {}
+  std::uint8_t u8(const char* field);
+  std::uint32_t u32(const char* field);
+  std::uint64_t u64(const char* field);
+  std::int32_t i32(const char* field) { return static_cast<std::int32_t>(u32(field)); }
+  float f32(const char* field);
+  double f64(const char* field);
+  /// The next n bytes (a pointer into the data), after checking they exist.
+  const unsigned char* bytes(std::size_t n, const char* field);
+  /// Bytes read so far / left.
+  std::size_t position() const { return at_; }
+  std::size_t remaining() const { return size_ - at_; }
+  /// Throws Error(path, "FIELD at byte N", problem) at the current position.
+  [[noreturn]] void fail(const std::string& field, const std::string& problem) const;
+
+ private:
+  void need(std::size_t n, const char* field) const;
+  const std::string& path_;
+  const unsigned char* data_;
+  std::size_t size_;
+  std::size_t at_ = 0;
+};
+
+}  // namespace meshflow::io

@@ -1,0 +1,345 @@
+#include "nodes/compress/compressed_mesh.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <random>
+#include <string>
+
+#include "nodes/compress/progressive_mesh.h"
+#include "nodes/compress/range_coder.h"
+#include "runtime/error.h"
+#include "test_support.h"
+
+namespace meshflow {
+namespace {
+
+using compress::CompressConfig;
+using compress::CompressReport;
+using test::grid_mesh;
+using test::messy_mesh;
+using test::tetrahedron;
+
+// A torus (genus 1) of n x m quads, radii 1 and 0.3, closed, counter-clockwise from outside.
+TriangleMesh torus(std::uint32_t n, std::uint32_t m) {
+  TriangleMesh t;
+  for (std::uint32_t i = 0; i < n; ++i)
+    for (std::uint32_t j = 0; j < m; ++j) {
+      const double u = 2 * M_PI * i / n, v = 2 * M_PI * j / m;
+      t.vertices.emplace_back(static_cast<float>((1 + 0.3 * std::cos(v)) * std::cos(u)),
+                              static_cast<float>((1 + 0.3 * std::cos(v)) * std::sin(u)),
+                              static_cast<float>(0.3 * std::sin(v)));
+    }
+  const auto id = [&](std::uint32_t i, std::uint32_t j) { return (i % n) * m + (j % m); };
+  for (std::uint32_t i = 0; i < n; ++i)
+    for (std::uint32_t j = 0; j < m; ++j) {
+      t.triangles.push_back({id(i, j), id(i + 1, j), id(i + 1, j + 1)});
+      t.triangles.push_back({id(i, j), id(i + 1, j + 1), id(i, j + 1)});
+    }
+  return t;
+}
+
+// A UV sphere of radius 1 (two poles), closed.
+TriangleMesh sphere(std::uint32_t rings, std::uint32_t sectors) {
+  TriangleMesh s;
+  s.vertices.emplace_back(0.0f, 0.0f, 1.0f);
+  for (std::uint32_t r = 1; r < rings; ++r)
+    for (std::uint32_t k = 0; k < sectors; ++k) {
+      const double theta = M_PI * r / rings, phi = 2 * M_PI * k / sectors;
+      s.vertices.emplace_back(static_cast<float>(std::sin(theta) * std::cos(phi)),
+                              static_cast<float>(std::sin(theta) * std::sin(phi)),
+                              static_cast<float>(std::cos(theta)));
+    }
+  s.vertices.emplace_back(0.0f, 0.0f, -1.0f);
+  const auto ring = [&](std::uint32_t r, std::uint32_t k) {
+    return 1 + (r - 1) * sectors + k % sectors;
+  };
+  const auto south = static_cast<std::uint32_t>(s.vertices.size() - 1);
+  for (std::uint32_t k = 0; k < sectors; ++k) {
+    s.triangles.push_back({0, ring(1, k), ring(1, k + 1)});
+    s.triangles.push_back({south, ring(rings - 1, k + 1), ring(rings - 1, k)});
+  }
+  for (std::uint32_t r = 1; r + 1 < rings; ++r)
+    for (std::uint32_t k = 0; k < sectors; ++k) {
+      s.triangles.push_back({ring(r, k), ring(r + 1, k), ring(r + 1, k + 1)});
+      s.triangles.push_back({ring(r, k), ring(r + 1, k + 1), ring(r, k + 1)});
+    }
+  return s;
+}
+
+// a's triangles followed by b's (two components).
+TriangleMesh joined(const TriangleMesh& a, const TriangleMesh& b) {
+  TriangleMesh out = a;
+  const auto offset = static_cast<std::uint32_t>(a.vertices.size());
+  out.vertices.insert(out.vertices.end(), b.vertices.begin(), b.vertices.end());
+  for (Triangle t : b.triangles)
+    out.triangles.push_back({t[0] + offset, t[1] + offset, t[2] + offset});
+  return out;
+}
+
+// Random triangles over few vertices: every kind of cut, non-manifold edge and vertex.
+TriangleMesh soup(std::uint32_t vertices, std::uint32_t triangles, std::uint32_t seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<float> coordinate(-1.0f, 1.0f);
+  std::uniform_int_distribution<std::uint32_t> vertex(0, vertices - 1);
+  TriangleMesh m;
+  for (std::uint32_t i = 0; i < vertices; ++i)
+    m.vertices.emplace_back(coordinate(rng), coordinate(rng), coordinate(rng));
+  for (std::uint32_t i = 0; i < triangles; ++i)
+    m.triangles.push_back({vertex(rng), vertex(rng), vertex(rng)});
+  return m;
+}
+
+// `t` rotated to start at its smallest corner (orientation kept).
+Triangle canonical(Triangle t) {
+  while (t[0] > t[1] || t[0] > t[2]) t = {t[1], t[2], t[0]};
+  return t;
+}
+
+// Decoded equals the input through the report's orders: same triangles (each possibly rotated,
+// never flipped), positions within half a step per axis, normals within 0.2 degrees, colours
+// exact.
+void expect_same_mesh(const TriangleMesh& input, const TriangleMesh& decoded,
+                      const CompressReport& report) {
+  ASSERT_EQ(decoded.vertices.size(), input.vertices.size());
+  ASSERT_EQ(decoded.triangles.size(), input.triangles.size());
+  ASSERT_EQ(report.vertex_order.size(), input.vertices.size());
+  ASSERT_EQ(report.triangle_order.size(), input.triangles.size());
+  std::vector<std::uint32_t> seen(input.triangles.size(), 0);
+  for (std::size_t k = 0; k < decoded.triangles.size(); ++k) {
+    const Triangle& d = decoded.triangles[k];
+    const Triangle mapped{report.vertex_order[d[0]], report.vertex_order[d[1]],
+                          report.vertex_order[d[2]]};
+    const std::uint32_t source = report.triangle_order[k];
+    ASSERT_LT(source, input.triangles.size());
+    ++seen[source];
+    // Triangles with a repeated corner have no rotation to normalise; compare as given.
+    EXPECT_EQ(canonical(mapped), canonical(input.triangles[source])) << "triangle " << k;
+  }
+  EXPECT_TRUE(std::all_of(seen.begin(), seen.end(), [](std::uint32_t c) { return c == 1; }));
+  const double bound = report.quantizer.step / 2 * (1 + 1e-6) + 1e-6;
+  for (std::size_t k = 0; k < decoded.vertices.size(); ++k) {
+    const Eigen::Vector3f& want = input.vertices[report.vertex_order[k]];
+    EXPECT_LE((decoded.vertices[k] - want).cwiseAbs().maxCoeff(), bound) << "vertex " << k;
+    if (!input.normals.empty()) {
+      const Eigen::Vector3f& n = input.normals[report.vertex_order[k]];
+      EXPECT_GT(decoded.normals[k].dot(n.normalized()), std::cos(0.2 * M_PI / 180)) << k;
+    }
+    if (!input.colors.empty()) {
+      const Rgb8 a = decoded.colors[k], b = input.colors[report.vertex_order[k]];
+      EXPECT_TRUE(a.r == b.r && a.g == b.g && a.b == b.b) << "vertex " << k;
+    }
+  }
+}
+
+void round_trip(const TriangleMesh& mesh, const CompressConfig& config = {}) {
+  CompressReport report;
+  const std::vector<unsigned char> bytes = compress::compress_mesh(mesh, config, &report);
+  EXPECT_EQ(report.total_bytes, bytes.size());
+  expect_same_mesh(mesh, compress::decompress_mesh(bytes, "memory"), report);
+}
+
+TEST(RangeCoder, IntegersAndSymbolsRoundTrip) {
+  std::mt19937 rng(7);
+  std::vector<std::int32_t> values = {0, 1, -1, 2147483647, -2147483647 - 1, 12345, -77};
+  for (int i = 0; i < 5000; ++i) values.push_back(static_cast<std::int32_t>(rng()) >> (rng() % 32));
+  compress::RangeEncoder enc;
+  compress::IntegerModel model;
+  compress::SymbolModel<8> symbols;
+  for (std::size_t i = 0; i < values.size(); ++i) {
+    model.encode(enc, values[i]);
+    symbols.encode(enc, static_cast<unsigned>(i % 6));
+    enc.encode_direct(static_cast<std::uint32_t>(i) & 0x1FFFu, 13);
+  }
+  const std::vector<unsigned char> bytes = enc.finish();
+  compress::RangeDecoder dec(bytes.data(), bytes.size(), "memory", "test");
+  compress::IntegerModel model2;
+  compress::SymbolModel<8> symbols2;
+  for (std::size_t i = 0; i < values.size(); ++i) {
+    ASSERT_EQ(model2.decode(dec), values[i]) << i;
+    ASSERT_EQ(symbols2.decode(dec), i % 6) << i;
+    ASSERT_EQ(dec.decode_direct(13), static_cast<std::uint32_t>(i) & 0x1FFFu) << i;
+  }
+  EXPECT_NO_THROW(dec.check());
+}
+
+TEST(Edgebreaker, ClosedSurfacesRoundTripExactly) {
+  round_trip(tetrahedron());
+  round_trip(sphere(24, 32));
+  CompressReport report;
+  const TriangleMesh t = torus(40, 24);
+  compress::compress_mesh(t, {}, &report);
+  EXPECT_GE(report.body.handles, 1u) << "a genus-1 surface has a handle";
+  EXPECT_EQ(report.body.holes, 0u);
+  round_trip(t);
+}
+
+TEST(Edgebreaker, BordersComponentsAndLooseVerticesRoundTrip) {
+  round_trip(grid_mesh(30));  // one border loop
+  TriangleMesh two = joined(sphere(10, 12), joined(grid_mesh(8), torus(12, 8)));
+  two.vertices.emplace_back(5.0f, 5.0f, 5.0f);  // on no triangle
+  CompressReport report;
+  compress::compress_mesh(two, {}, &report);
+  EXPECT_EQ(report.body.holes, 1u);
+  round_trip(two);
+  TriangleMesh holed = grid_mesh(20);  // several holes: drop a few separated triangles
+  for (std::size_t k : {300u, 120u, 44u})
+    holed.triangles.erase(holed.triangles.begin() + static_cast<std::ptrdiff_t>(k));
+  round_trip(holed);
+}
+
+TEST(Edgebreaker, NonManifoldInputRoundTripsThroughCutsAndMergedFans) {
+  for (std::uint32_t seed = 1; seed <= 4; ++seed) {
+    SCOPED_TRACE(seed);
+    const TriangleMesh messy = messy_mesh(12, seed);
+    CompressReport report;
+    compress::compress_mesh(messy, {}, &report);
+    EXPECT_GT(report.body.merged_fans, 0u);
+    round_trip(messy);
+    round_trip(soup(40, 200, seed));
+  }
+}
+
+TEST(Edgebreaker, NormalsAndColoursRoundTrip) {
+  TriangleMesh s = sphere(16, 20);
+  for (const Eigen::Vector3f& p : s.vertices) {
+    s.normals.push_back(p.normalized());
+    s.colors.push_back(Rgb8{static_cast<std::uint8_t>(128 + 127 * p.x()),
+                            static_cast<std::uint8_t>(128 + 127 * p.y()), 40});
+  }
+  round_trip(s);
+  CompressConfig bare;
+  bare.normals = bare.colors = false;
+  const TriangleMesh decoded = compress::decompress_mesh(compress::compress_mesh(s, bare), "m");
+  EXPECT_TRUE(decoded.normals.empty());
+  EXPECT_TRUE(decoded.colors.empty());
+}
+
+TEST(Edgebreaker, QuantisationFollowsTheStepOrTheBits) {
+  const TriangleMesh s = sphere(30, 40);
+  CompressReport report;
+  compress::compress_mesh(s, {}, &report);
+  // Default: 1/64 of the median edge.
+  EXPECT_NEAR(report.quantizer.step, median_edge_length(s) / 64.0, median_edge_length(s) / 640.0);
+  CompressConfig bits;
+  bits.position_bits = 11;
+  compress::compress_mesh(s, bits, &report);
+  EXPECT_EQ(report.quantizer.bits, 11u);
+  EXPECT_NEAR(report.quantizer.step, 2.0 / 2047.0, 1e-6);
+  round_trip(s, bits);
+  // A regular closed mesh's connectivity costs about 2 bits per triangle or less.
+  compress::compress_mesh(s, {}, &report);
+  EXPECT_LT(8.0 * static_cast<double>(report.body.connectivity_bytes) /
+                static_cast<double>(s.triangles.size()),
+            2.0);
+}
+
+TEST(Edgebreaker, EmptyMeshesAndBadInputs) {
+  round_trip(TriangleMesh{});
+  TriangleMesh points;
+  points.vertices = {Eigen::Vector3f(1, 2, 3), Eigen::Vector3f(4, 5, 6)};
+  round_trip(points);
+  TriangleMesh out_of_range = tetrahedron();
+  out_of_range.triangles.push_back({0, 1, 9});
+  EXPECT_THROW(compress::compress_mesh(out_of_range), Error);
+  TriangleMesh nan = tetrahedron();
+  nan.vertices[2].x() = std::nanf("");
+  EXPECT_THROW(compress::compress_mesh(nan), Error);
+}
+
+// Every error names the data and a field; nothing else escapes.
+void expect_clean_error(const std::vector<unsigned char>& bytes) {
+  try {
+    compress::decompress_mesh(bytes, "bad.mfc");
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("bad.mfc"), std::string::npos) << e.what();
+  }
+}
+
+TEST(CompressedMeshFile, TruncatedFlippedAndWrongVersionFilesFailClearly) {
+  const TriangleMesh t = torus(16, 10);
+  for (const bool progressive : {false, true}) {
+    SCOPED_TRACE(progressive);
+    const std::vector<unsigned char> good =
+        progressive ? compress::compress_progressive(t) : compress::compress_mesh(t);
+    for (std::size_t cut = 0; cut < good.size(); cut += 1 + cut / 8) {
+      std::vector<unsigned char> shorter(good.begin(),
+                                         good.begin() + static_cast<std::ptrdiff_t>(cut));
+      EXPECT_THROW(compress::decompress_mesh(shorter, "bad.mfc"), Error) << cut;
+    }
+    std::vector<unsigned char> flipped = good;
+    flipped[good.size() / 2] ^= 0x10;
+    try {
+      compress::decompress_mesh(flipped, "bad.mfc");
+      ADD_FAILURE() << "a flipped bit passed the checksum";
+    } catch (const Error& e) {
+      EXPECT_NE(std::string(e.what()).find("checksum"), std::string::npos) << e.what();
+    }
+    std::vector<unsigned char> version = good;
+    version[8] = 7;
+    compress::reseal_compressed_mesh(version);
+    try {
+      compress::decompress_mesh(version, "bad.mfc");
+      ADD_FAILURE() << "version 7 was read";
+    } catch (const Error& e) {
+      EXPECT_NE(std::string(e.what()).find("version"), std::string::npos) << e.what();
+    }
+    // Flipped bits behind a valid checksum: errors (or a mesh), never a crash.
+    std::uint32_t state = 99;
+    for (int trial = 0; trial < 300; ++trial) {
+      std::vector<unsigned char> bad = good;
+      state = state * 1664525u + 1013904223u;
+      const std::size_t at = 60 + state % (bad.size() - 68);
+      bad[at] ^= static_cast<unsigned char>(1u << (state >> 29));
+      compress::reseal_compressed_mesh(bad);
+      expect_clean_error(bad);
+    }
+  }
+}
+
+TEST(ProgressiveMesh, FullLevelIsTheInputAndEveryLevelIsManifold) {
+  for (const TriangleMesh& mesh : {torus(40, 24), sphere(24, 32), grid_mesh(30)}) {
+    CompressReport report;
+    CompressConfig config;
+    config.splits_per_packet = 100;
+    const std::vector<unsigned char> bytes = compress::compress_progressive(mesh, config, &report);
+    EXPECT_GT(report.splits, mesh.vertices.size() / 2);
+    EXPECT_LT(report.base_triangles, mesh.triangles.size() / 10);
+    expect_same_mesh(mesh, compress::decompress_mesh(bytes, "memory"), report);
+    std::size_t previous = 0;
+    for (std::size_t splits = 0; splits <= report.splits; splits += 1 + splits / 3) {
+      compress::ProgressiveLevel level;
+      level.splits = splits;
+      const TriangleMesh m = compress::decompress_progressive_level(bytes, "memory", level);
+      EXPECT_EQ(m.vertices.size(), mesh.vertices.size() - report.splits + splits);
+      EXPECT_GE(m.triangles.size(), previous);
+      previous = m.triangles.size();
+      const EdgeStatistics e = edge_statistics(m);
+      EXPECT_EQ(e.non_manifold_edges, 0u) << splits;
+      EXPECT_EQ(e.inconsistent_edges, 0u) << splits;
+      EXPECT_EQ(e.boundary_edges == 0, edge_statistics(mesh).boundary_edges == 0) << splits;
+    }
+    compress::ProgressiveLevel by_triangles;
+    by_triangles.triangles = mesh.triangles.size() / 2;
+    const TriangleMesh half = compress::decompress_progressive_level(bytes, "memory", by_triangles);
+    EXPECT_GE(half.triangles.size(), mesh.triangles.size() / 2);
+    EXPECT_LE(half.triangles.size(), mesh.triangles.size() / 2 + 4);
+  }
+}
+
+TEST(ProgressiveMesh, AttributesAndMessyInputRoundTrip) {
+  TriangleMesh s = sphere(16, 20);
+  for (const Eigen::Vector3f& p : s.vertices) {
+    s.normals.push_back(p.normalized());
+    s.colors.push_back(Rgb8{static_cast<std::uint8_t>(128 + 127 * p.z()), 9, 200});
+  }
+  for (const TriangleMesh& mesh : {s, messy_mesh(12, 3), joined(grid_mesh(6), torus(12, 8))}) {
+    CompressReport report;
+    const std::vector<unsigned char> bytes = compress::compress_progressive(mesh, {}, &report);
+    expect_same_mesh(mesh, compress::decompress_mesh(bytes, "memory"), report);
+  }
+}
+
+}  // namespace
+}  // namespace meshflow

@@ -192,6 +192,7 @@ nlohmann::json info_json(const std::string& path, const PointCloud& cloud) {
 }
 
 void run_info(const std::string& path, const std::string& columns) {
+  if (is_compressed_mesh_file(path)) return run_compressed_info(path);
   const PointCloud cloud = io::read_point_cloud(path, columns);
   if (console().json) return print_json(info_json(path, cloud));
   print_info(path, cloud);
@@ -220,7 +221,7 @@ void add_reconstruct_options(CLI::App* cmd) {
 
 void add_info_options(CLI::App* cmd) {
   auto path = std::make_shared<std::string>();
-  cmd->add_option("file", *path, "Point cloud file")->required();
+  cmd->add_option("file", *path, "Point cloud file, or a compressed mesh (.mfc)")->required();
   auto columns = std::make_shared<std::string>();
   add_columns_option(cmd, *columns);
   add_console_flags(cmd, true);

@@ -20,6 +20,13 @@ void add_eval_options(CLI::App* cmd);
 void add_live_options(CLI::App* cmd);
 void add_sample_options(CLI::App* cmd);
 void add_optimize_options(CLI::App* cmd);
+void add_compress_options(CLI::App* cmd);
+void add_decompress_options(CLI::App* cmd);
+
+/// Whether `path` names a meshflow compressed mesh (.mfc).
+bool is_compressed_mesh_file(const std::string& path);
+/// `meshflow info` on a compressed mesh: its header (and --json). Throws Error.
+void run_compressed_info(const std::string& path);
 
 struct Command {
   const char* name;

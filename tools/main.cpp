@@ -14,7 +14,8 @@ namespace meshflow::cli {
 const std::vector<Command>& commands() {
   static const std::vector<Command> all = {
       {"reconstruct", "Reconstruct a mesh from one point cloud", add_reconstruct_options},
-      {"info", "Print counts, bounds and fields of a point cloud", add_info_options},
+      {"info", "Print counts, bounds and fields of a point cloud (or a .mfc header)",
+       add_info_options},
       {"demo", "Reconstruct a built-in synthetic scene and report speed and accuracy",
        add_demo_options},
       {"run", "Mesh every frame of a recorded sequence through the pipelined graph",
@@ -28,6 +29,10 @@ const std::vector<Command>& commands() {
        add_sample_options},
       {"optimize", "Run the optimisation steps on a mesh (.ply .obj .off .stl) from any tool",
        add_optimize_options},
+      {"compress", "Compress a mesh (Edgebreaker or progressive) into a .mfc file",
+       add_compress_options},
+      {"decompress", "Decode a .mfc file (any level of detail of a progressive one) to a mesh",
+       add_decompress_options},
   };
   return all;
 }

@@ -155,6 +155,33 @@ TEST(CliScripting, OptimizeAMeshFromAnotherTool) {
       << "only the optimize settings are options here";
 }
 
+TEST(CliScripting, CompressDecompressAndInfoOfAMesh) {
+  const std::string dir = test::temp_dir();
+  const std::string cloud = torus_cloud(dir);
+  ASSERT_EQ(run_cli("reconstruct " + cloud + " -o " + dir + "/m.ply --voxel 0.02 -q").exit_code, 0);
+  const TriangleMesh input = io::read_mesh(dir + "/m.ply");
+  nlohmann::json doc = parse_json(run_cli("compress " + dir + "/m.ply " + dir + "/m.mfc --json"));
+  EXPECT_EQ(doc["kind"], "edgebreaker");
+  EXPECT_LT(doc["connectivity_bits_per_triangle"].get<double>(), 2.5);
+  EXPECT_EQ(doc["bytes"].get<std::size_t>(), std::filesystem::file_size(dir + "/m.mfc"));
+  doc = parse_json(run_cli("info --json " + dir + "/m.mfc"));
+  EXPECT_EQ(doc["triangles"].get<std::size_t>(), input.triangles.size());
+  doc = parse_json(run_cli("decompress " + dir + "/m.mfc " + dir + "/d.ply --json"));
+  EXPECT_EQ(io::read_mesh(dir + "/d.ply").triangles.size(), input.triangles.size());
+  doc = parse_json(run_cli("compress " + dir + "/m.ply " + dir + "/p.mfc --progressive --json"));
+  EXPECT_EQ(doc["kind"], "progressive");
+  const auto base = doc["base_triangles"].get<std::size_t>();
+  doc = parse_json(run_cli("decompress " + dir + "/p.mfc " + dir + "/b.obj --level 0 --json"));
+  EXPECT_EQ(doc["triangles"].get<std::size_t>(), base);
+  doc = parse_json(run_cli("decompress " + dir + "/p.mfc " + dir + "/h.ply --triangles " +
+                           std::to_string(input.triangles.size() / 2) + " --json"));
+  EXPECT_NEAR(doc["triangles"].get<double>(), static_cast<double>(input.triangles.size()) / 2, 4);
+  test::write_file(dir + "/bad.mfc", "MFMESH\r\n garbage");
+  const CliRun bad = run_cli("decompress " + dir + "/bad.mfc " + dir + "/x.ply");
+  EXPECT_EQ(bad.exit_code, 1);
+  EXPECT_NE(bad.err.find("bad.mfc"), std::string::npos) << bad.err;
+}
+
 TEST(CliScripting, ColumnsOfATextCloud) {
   const std::string path = test::temp_dir() + "/n.txt";
   test::write_file(path, "1 2 3 0 0 1\n4 5 6 0 1 0\n7 8 9 1 0 0\n");

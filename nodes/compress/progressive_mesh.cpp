@@ -129,6 +129,7 @@ std::vector<unsigned char> compress_progressive(const TriangleMesh& mesh,
   QemConfig qem;
   qem.target_ratio = config.base_ratio;
   qem.divide_by_depth2 = false;
+  qem.max_border_turn_deg = 90.0f;  // coarse levels may round borders off (the base stays small)
   qem.record_collapses = true;
   QemReport decimation;
   qem_decimate(work, qem, &decimation);

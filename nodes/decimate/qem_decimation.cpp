@@ -612,6 +612,15 @@ class Decimator {
         return false;
       }
     }
+    // A border u of one face (an ear: only with max_border_turn_deg above 90) takes that face
+    // along; its other two corners must keep a face each, or they would be left with none.
+    if (scratch.neighbour_count == 2) {
+      for (std::size_t j = 0; j < 2; ++j)
+        if (rings_.face_count(scratch.neighbours[j]) < 2) {
+          ++rejected.rejected_topology;
+          return false;
+        }
+    }
     // (Faces that stay must not flip, degenerate or turn beyond the limit: `verdict.turned`,
     // refused by best_collapse() before the cost.)
     // Link condition (last: the dearest check): the common neighbours are exactly the edge's

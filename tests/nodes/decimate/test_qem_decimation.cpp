@@ -366,6 +366,27 @@ TEST(QemDecimation, NoValidCollapseEndsWithTheMeshUnchanged) {
   }
 }
 
+// With borders allowed to turn sharply, ears (a border vertex of one face) collapse, but never
+// the last face of a component: lone triangles and strips stay valid (was a write past a ring).
+TEST(QemDecimation, EarsCollapseButNoComponentLosesItsLastFace) {
+  TriangleMesh m = height_field(12, [](float x, float y) { return 0.05f * x * y; });
+  for (int k = 0; k < 5; ++k) {  // lone triangles beside the grid
+    const auto base = static_cast<std::uint32_t>(m.vertices.size());
+    m.vertices.insert(m.vertices.end(),
+                      {Eigen::Vector3f(2.0f + k, 0, 0), Eigen::Vector3f(2.5f + k, 0, 0),
+                       Eigen::Vector3f(2.0f + k, 0.5f, 0)});
+    m.triangles.push_back({base, base + 1, base + 2});
+  }
+  QemConfig config = plain_config();
+  config.max_border_turn_deg = 180.0f;
+  config.target_ratio = 0.01f;
+  const TriangleMesh out = qem_decimate(m, config);
+  EXPECT_GE(out.triangles.size(), 6u) << "each lone triangle and the grid keep a face";
+  const EdgeStatistics e = edge_statistics(out);
+  EXPECT_EQ(e.non_manifold_edges, 0u);
+  EXPECT_EQ(e.inconsistent_edges, 0u);
+}
+
 // A face naming a vertex the mesh does not have is an error that names the face, not a read
 // out of bounds.
 TEST(QemDecimation, CornerOutOfRangeFailsNamingTheFace) {

@@ -2,35 +2,41 @@
 
 #include <algorithm>
 
-#include "runtime/disjoint_sets.h"
-
 namespace meshflow::compress {
 namespace {
 
-// Pairs the half-edges of edges used by exactly two faces in opposite directions.
-void pair_twins(const std::vector<std::uint32_t>& corners, std::vector<std::uint32_t>& twin) {
-  struct Directed {
-    std::uint64_t key;   // the undirected edge
-    std::uint32_t half;  // the half-edge
-    bool forward;        // origin < destination
-  };
-  std::vector<Directed> edges(corners.size());
-  for (std::uint32_t h = 0; h < corners.size(); ++h) {
-    const std::uint32_t a = corners[h], b = corners[next_half(h)];
-    edges[h] = {undirected_edge_key(a, b), h, a < b};
+// Pairs the half-edges of edges used by exactly two faces in opposite directions: half-edges
+// listed by origin (a counting sort), then each a -> b looks for b -> a among b's and counts
+// the a -> b among a's. O(T x valence).
+void pair_twins(const std::vector<std::uint32_t>& corners, std::size_t vertices,
+                std::vector<std::uint32_t>& twin) {
+  const auto halves = static_cast<std::uint32_t>(corners.size());
+  std::vector<std::uint32_t> first(vertices + 1, 0), by_origin(halves);
+  for (std::uint32_t v : corners) ++first[v + 1];
+  for (std::size_t v = 0; v < vertices; ++v) first[v + 1] += first[v];
+  {
+    std::vector<std::uint32_t> fill(first.begin(), first.end() - 1);
+    for (std::uint32_t h = 0; h < halves; ++h) by_origin[fill[corners[h]]++] = h;
   }
-  std::sort(edges.begin(), edges.end(), [](const Directed& x, const Directed& y) {
-    return x.key != y.key ? x.key < y.key : x.half < y.half;
-  });
-  twin.assign(corners.size(), kNone);
-  for (std::size_t i = 0; i < edges.size();) {
-    std::size_t j = i + 1;
-    while (j < edges.size() && edges[j].key == edges[i].key) ++j;
-    if (j - i == 2 && edges[i].forward != edges[i + 1].forward) {
-      twin[edges[i].half] = edges[i + 1].half;
-      twin[edges[i + 1].half] = edges[i].half;
+  twin.assign(halves, kNone);
+  for (std::uint32_t h = 0; h < halves; ++h) {
+    if (twin[h] != kNone) continue;
+    const std::uint32_t a = corners[h], b = corners[next_half(h)];
+    std::uint32_t reverse = kNone, reverse_count = 0, forward_count = 0;
+    for (std::uint32_t i = first[b]; i < first[b + 1]; ++i) {
+      const std::uint32_t g = by_origin[i];
+      if (corners[next_half(g)] == a) {
+        reverse = g;
+        ++reverse_count;
+      }
     }
-    i = j;
+    if (reverse_count != 1) continue;
+    for (std::uint32_t i = first[a]; i < first[a + 1]; ++i)
+      forward_count += corners[next_half(by_origin[i])] == b;
+    if (forward_count == 1) {
+      twin[h] = reverse;
+      twin[reverse] = h;
+    }
   }
 }
 
@@ -49,23 +55,26 @@ ClosedSurface build_closed_surface(const std::vector<Triangle>& triangles) {
     input_corners.insert(input_corners.end(), f.begin(), f.end());
     s.input_triangle.push_back(t);
   }
-  pair_twins(input_corners, s.twin);
+  std::size_t vertices = 0;
+  for (std::uint32_t v : input_corners) vertices = std::max<std::size_t>(vertices, v + 1);
+  pair_twins(input_corners, vertices, s.twin);
 
-  // Fans: corners joined across shared edges (corner h and the corner of its origin in the
-  // triangle across h's edge).
+  // Fans: the corners around a vertex joined across shared edges. Around origin v, the corner
+  // after h is next(twin(h)), the one before twin(prev(h)); each fan is walked from its first
+  // corner (after a cut) or, if closed, from the corner met first.
   const auto corners = static_cast<std::uint32_t>(input_corners.size());
-  DisjointSets fans(corners);
-  for (std::uint32_t h = 0; h < corners; ++h)
-    if (s.twin[h] != kNone) fans.unite(h, next_half(s.twin[h]));
-  std::vector<std::uint32_t> fan_of_root(corners, kNone);
-  s.corner_vertex.resize(corners);
+  s.corner_vertex.assign(corners, kNone);
   for (std::uint32_t h = 0; h < corners; ++h) {
-    std::uint32_t& fan = fan_of_root[fans.find(h)];
-    if (fan == kNone) {
-      fan = static_cast<std::uint32_t>(s.input_vertex.size());
-      s.input_vertex.push_back(input_corners[h]);
-    }
-    s.corner_vertex[h] = fan;
+    if (s.corner_vertex[h] != kNone) continue;
+    std::uint32_t start = h;
+    for (std::uint32_t before = s.twin[prev_half(start)]; before != kNone && before != h;
+         before = s.twin[prev_half(start)])
+      start = before;
+    const auto fan = static_cast<std::uint32_t>(s.input_vertex.size());
+    s.input_vertex.push_back(input_corners[h]);
+    for (std::uint32_t c = start; c != kNone && s.corner_vertex[c] == kNone;
+         c = s.twin[c] == kNone ? kNone : next_half(s.twin[c]))
+      s.corner_vertex[c] = fan;
   }
 
   // Each fan with a cut has one cut half-edge leaving it and one entering it; a hole loop

@@ -11,18 +11,27 @@ namespace {
 // with `opp` the third vertex of the walked triangle on that edge. The encoder and the decoder
 // change them by the same four operations.
 struct LoopNodes {
-  std::vector<std::uint32_t> vertex, next, prev, opp;
+  struct Node {
+    std::uint32_t vertex, next, prev, opp;
+  };
+  std::vector<Node> nodes;  // one cache line holds a node's four fields
+
+  std::uint32_t& vertex(std::uint32_t n) { return nodes[n].vertex; }
+  std::uint32_t& next(std::uint32_t n) { return nodes[n].next; }
+  std::uint32_t& prev(std::uint32_t n) { return nodes[n].prev; }
+  std::uint32_t& opp(std::uint32_t n) { return nodes[n].opp; }
+  std::uint32_t vertex(std::uint32_t n) const { return nodes[n].vertex; }
+  std::uint32_t next(std::uint32_t n) const { return nodes[n].next; }
+
+  void reserve(std::size_t n) { nodes.reserve(n); }
 
   std::uint32_t add(std::uint32_t v, std::uint32_t o) {
-    vertex.push_back(v);
-    next.push_back(kNone);
-    prev.push_back(kNone);
-    opp.push_back(o);
-    return static_cast<std::uint32_t>(vertex.size() - 1);
+    nodes.push_back({v, kNone, kNone, o});
+    return static_cast<std::uint32_t>(nodes.size() - 1);
   }
   void link(std::uint32_t a, std::uint32_t b) {
-    next[a] = b;
-    prev[b] = a;
+    next(a) = b;
+    prev(b) = a;
   }
   // The starting triangle (v0, v1, v2): three nodes, returns the first (edge v0 -> v1).
   std::uint32_t start(std::uint32_t v0, std::uint32_t v1, std::uint32_t v2) {
@@ -34,45 +43,45 @@ struct LoopNodes {
   }
   // C: gate g (a -> b) becomes a -> x -> b; returns the node of x (the next gate).
   std::uint32_t attach(std::uint32_t g, std::uint32_t x) {
-    const std::uint32_t b = next[g];
-    const std::uint32_t nx = add(x, vertex[g]);
+    const std::uint32_t b = next(g);
+    const std::uint32_t nx = add(x, vertex(g));
     link(nx, b);
     link(g, nx);
-    opp[g] = vertex[b];
+    opp(g) = vertex(b);
     return nx;
   }
   // L: p -> a -> b becomes p -> b; returns p (the next gate).
   std::uint32_t close_left(std::uint32_t g) {
-    const std::uint32_t p = prev[g];
-    link(p, next[g]);
-    opp[p] = vertex[g];
+    const std::uint32_t p = prev(g);
+    link(p, next(g));
+    opp(p) = vertex(g);
     return p;
   }
   // R: a -> b -> q becomes a -> q; returns a (the next gate).
   std::uint32_t close_right(std::uint32_t g) {
-    const std::uint32_t b = next[g];
-    link(g, next[b]);
-    opp[g] = vertex[b];
+    const std::uint32_t b = next(g);
+    link(g, next(b));
+    opp(g) = vertex(b);
     return g;
   }
   // S or M with x's node xn: a -> b ... x -> y becomes a -> x' -> y ... and x -> b ...;
   // returns x' (the new node, on a's side).
   std::uint32_t split(std::uint32_t g, std::uint32_t xn) {
-    const std::uint32_t b = next[g];
-    const std::uint32_t xc = add(vertex[xn], opp[xn]);
-    link(xc, next[xn]);
+    const std::uint32_t b = next(g);
+    const std::uint32_t xc = add(vertex(xn), opp(xn));
+    link(xc, next(xn));
     link(g, xc);
-    opp[g] = vertex[b];
-    opp[xn] = vertex[g];
+    opp(g) = vertex(b);
+    opp(xn) = vertex(g);
     link(xn, b);
     return xc;
   }
   std::uint32_t walk(std::uint32_t n, std::uint32_t steps) const {
-    while (steps-- > 0) n = next[n];
+    while (steps-- > 0) n = nodes[n].next;
     return n;
   }
   std::uint32_t walk_back(std::uint32_t n, std::uint32_t steps) const {
-    while (steps-- > 0) n = prev[n];
+    while (steps-- > 0) n = nodes[n].prev;
     return n;
   }
 };
@@ -175,17 +184,17 @@ class Encoder {
         g = nx;
       } else if (left && right) {
         emit(Op::kE, t);
-        const std::uint32_t p = nodes_.prev[g];
-        if (nodes_.next[nodes_.next[g]] != p || nodes_.vertex[p] != decoded_[x]) internal("E");
+        const std::uint32_t p = nodes_.prev(g);
+        if (nodes_.next(nodes_.next(g)) != p || nodes_.vertex(p) != decoded_[x]) internal("E");
         node_of_half_[half_[p]] = kNone;
-        node_of_half_[half_[nodes_.next[g]]] = kNone;
+        node_of_half_[half_[nodes_.next(g)]] = kNone;
         if (stack.empty()) return;
         g = stack.back().node;
         label = stack.back().label;
         stack.pop_back();
       } else if (left) {
         emit(Op::kL, t);
-        const std::uint32_t p = nodes_.prev[g];
+        const std::uint32_t p = nodes_.prev(g);
         if (half_[p] != s_.twin[left_half]) internal("L");
         node_of_half_[half_[p]] = kNone;
         g = nodes_.close_left(g);
@@ -193,7 +202,7 @@ class Encoder {
         --length_[label];
       } else if (right) {
         emit(Op::kR, t);
-        const std::uint32_t b = nodes_.next[g];
+        const std::uint32_t b = nodes_.next(g);
         if (half_[b] != s_.twin[right_half]) internal("R");
         node_of_half_[half_[b]] = kNone;
         g = nodes_.close_right(g);
@@ -201,15 +210,15 @@ class Encoder {
         --length_[label];
       } else {
         const std::uint32_t xn = node_of(x, right_half);
-        const std::uint32_t b = nodes_.next[g];
+        const std::uint32_t b = nodes_.next(g);
         if (label_[xn] == label) {
           emit(Op::kS, t);
           // Walk both parts at once to the split, so the cost is that of the shorter one.
           const std::uint32_t length = length_[label];
-          std::uint32_t r = b, l = nodes_.next[xn], steps = 0;
+          std::uint32_t r = b, l = nodes_.next(xn), steps = 0;
           while (r != xn && l != g) {
-            r = nodes_.next[r];
-            l = nodes_.next[l];
+            r = nodes_.next(r);
+            l = nodes_.next(l);
             ++steps;
           }
           // Nodes from b to xn: offset + 1; from xn's next to g: length - offset - 1.
@@ -244,7 +253,7 @@ class Encoder {
           if (k == 0) internal("M without its loop");
           const Stacked other = stack[k - 1];
           std::uint32_t offset = 0;
-          for (std::uint32_t n = other.node; n != xn; n = nodes_.next[n]) ++offset;
+          for (std::uint32_t n = other.node; n != xn; n = nodes_.next(n)) ++offset;
           out_.connectivity.handles.push_back(
               {static_cast<std::uint32_t>(stack.size() - k), offset});
           const std::uint32_t old_half = half_[xn];
@@ -271,8 +280,8 @@ class Encoder {
       const std::uint32_t te = s_.twin[e];  // ends at x
       if (visited_[te / 3]) {
         const std::uint32_t n = node_of_half_[te];
-        if (n == kNone || nodes_.vertex[nodes_.next[n]] != decoded_[x]) internal("fan");
-        return nodes_.next[n];
+        if (n == kNone || nodes_.vertex(nodes_.next(n)) != decoded_[x]) internal("fan");
+        return nodes_.next(n);
       }
       e = next_half(te);
     }
@@ -285,7 +294,7 @@ class Encoder {
   }
   // Labels the nodes from `first` to `last` (inclusive, along next).
   void relabel(std::uint32_t first, std::uint32_t last, std::uint32_t label) {
-    for (std::uint32_t n = first;; n = nodes_.next[n]) {
+    for (std::uint32_t n = first;; n = nodes_.next(n)) {
       label_[n] = label;
       if (n == last) break;
     }
@@ -351,7 +360,12 @@ ReplayedSurface edgebreaker_replay(const Connectivity& c, const std::string& sou
   }
   ReplayedSurface out;
   out.triangles.reserve(c.ops.size() + c.components);
+  // At most three vertices per component and one per C; nodes: three per component and at
+  // most one per symbol.
+  const std::size_t most = c.ops.size() + 3 * std::size_t{c.components};
+  out.predictors.reserve(most);
   LoopNodes nodes;
+  nodes.reserve(most);
   const auto new_vertex = [&](VertexPredictors p) {
     out.predictors.push_back(p);
     return out.vertex_count++;
@@ -377,10 +391,10 @@ ReplayedSurface edgebreaker_replay(const Connectivity& c, const std::string& sou
         fail(i, "missing: the symbols end inside component " + std::to_string(component));
       const std::size_t at = i;
       const Op op = c.ops[i++];
-      const std::uint32_t a = nodes.vertex[g], b = nodes.vertex[nodes.next[g]];
+      const std::uint32_t a = nodes.vertex(g), b = nodes.vertex(nodes.next(g));
       switch (op) {
         case Op::kC: {
-          const std::uint32_t x = new_vertex({a, b, nodes.opp[g]});
+          const std::uint32_t x = new_vertex({a, b, nodes.opp(g)});
           triangle(at, b, a, x);
           g = nodes.attach(g, x);
           ++length;
@@ -388,19 +402,19 @@ ReplayedSurface edgebreaker_replay(const Connectivity& c, const std::string& sou
         }
         case Op::kL:
           if (length < 3) fail(at, "L on a loop of " + std::to_string(length));
-          triangle(at, b, a, nodes.vertex[nodes.prev[g]]);
+          triangle(at, b, a, nodes.vertex(nodes.prev(g)));
           g = nodes.close_left(g);
           --length;
           break;
         case Op::kR:
           if (length < 3) fail(at, "R on a loop of " + std::to_string(length));
-          triangle(at, b, a, nodes.vertex[nodes.next[nodes.next[g]]]);
+          triangle(at, b, a, nodes.vertex(nodes.next(nodes.next(g))));
           g = nodes.close_right(g);
           --length;
           break;
         case Op::kE:
           if (length != 3) fail(at, "E closes a loop of " + std::to_string(length) + ", not 3");
-          triangle(at, b, a, nodes.vertex[nodes.prev[g]]);
+          triangle(at, b, a, nodes.vertex(nodes.prev(g)));
           if (stack.empty()) {
             open = false;
           } else {
@@ -416,9 +430,9 @@ ReplayedSurface edgebreaker_replay(const Connectivity& c, const std::string& sou
                          std::to_string(length));
           const auto j = static_cast<std::uint32_t>(offset);
           // xn is j nodes after b, or length - 1 - j nodes before g: walk the shorter way.
-          const std::uint32_t xn = j + 1 <= length - j - 1 ? nodes.walk(nodes.next[g], j)
+          const std::uint32_t xn = j + 1 <= length - j - 1 ? nodes.walk(nodes.next(g), j)
                                                            : nodes.walk_back(g, length - 1 - j);
-          triangle(at, b, a, nodes.vertex[xn]);
+          triangle(at, b, a, nodes.vertex(xn));
           nodes.split(g, xn);
           stack.push_back({g, length - j});
           length = j + 1;
@@ -436,7 +450,7 @@ ReplayedSurface edgebreaker_replay(const Connectivity& c, const std::string& sou
             fail(at, "M offset " + std::to_string(r.offset) + " outside its loop of " +
                          std::to_string(stack[k].length));
           const std::uint32_t xn = nodes.walk(stack[k].node, r.offset);
-          triangle(at, b, a, nodes.vertex[xn]);
+          triangle(at, b, a, nodes.vertex(xn));
           nodes.split(g, xn);
           length += stack[k].length + 1;
           stack.erase(stack.begin() + static_cast<std::ptrdiff_t>(k));

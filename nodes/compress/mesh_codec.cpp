@@ -202,14 +202,14 @@ BodyStats encode_body(const TriangleMesh& mesh, const Quantizer& quantizer, Attr
     stats.connectivity_bytes += bytes.size();
     write_section(out, bytes);
   }
-  {  // Positions.
-    RangeEncoder enc;
+  {  // Positions: one stream per axis (the decoder's three chains then overlap).
+    RangeEncoder enc[3];
     IntegerModel models[4][3];
     Grid grid(decoded);
     std::array<std::int32_t, 3> last{};
     const auto code = [&](const std::array<std::int32_t, 3>& q,
                           const std::array<std::int32_t, 3>& predicted, Prediction kind) {
-      for (std::size_t a = 0; a < 3; ++a) models[kind][a].encode(enc, q[a] - predicted[a]);
+      for (std::size_t a = 0; a < 3; ++a) models[kind][a].encode(enc[a], q[a] - predicted[a]);
       last = q;
     };
     for (std::uint32_t k = 0; k < decoded; ++k) {
@@ -224,9 +224,11 @@ BodyStats encode_body(const TriangleMesh& mesh, const Quantizer& quantizer, Attr
       code(grid[k], predicted, kind);
     }
     for (std::uint32_t v : off_surface) code(quantizer.quantize(mesh.vertices[v]), last, kPrevious);
-    const std::vector<unsigned char> bytes = enc.finish();
-    stats.position_bytes = bytes.size();
-    write_section(out, bytes);
+    for (RangeEncoder& e : enc) {
+      const std::vector<unsigned char> bytes = e.finish();
+      stats.position_bytes += bytes.size();
+      write_section(out, bytes);
+    }
   }
   {  // Attributes, in output order, each predicted from its vertex's first real predictor.
     RangeEncoder enc;
@@ -363,17 +365,23 @@ TriangleMesh decode_body(io::ByteReader& in, const Quantizer& quantizer, Attribu
   TriangleMesh mesh;
   mesh.vertices.resize(outputs);
   {
-    const auto [bytes, size] = section("position section");
-    RangeDecoder dec(bytes, size, source, "position section");
+    const auto [x_bytes, x_size] = section("position section x");
+    const auto [y_bytes, y_size] = section("position section y");
+    const auto [z_bytes, z_size] = section("position section z");
+    RangeDecoder dec[3] = {RangeDecoder(x_bytes, x_size, source, "position section x"),
+                           RangeDecoder(y_bytes, y_size, source, "position section y"),
+                           RangeDecoder(z_bytes, z_size, source, "position section z")};
     IntegerModel models[4][3];
     Grid grid(static_cast<std::size_t>(decoded));
     std::array<std::int32_t, 3> last{};
     if (codes != nullptr) codes->positions.assign(outputs, {});
     const auto read = [&](const std::array<std::int32_t, 3>& predicted, Prediction kind) {
+      const std::array<std::int32_t, 3> residual = IntegerModel::decode_three(
+          models[kind][0], models[kind][1], models[kind][2], dec[0], dec[1], dec[2]);
       std::array<std::int32_t, 3> q{};
       for (std::size_t a = 0; a < 3; ++a)
         q[a] = static_cast<std::int32_t>(static_cast<std::uint32_t>(predicted[a]) +
-                                         static_cast<std::uint32_t>(models[kind][a].decode(dec)));
+                                         static_cast<std::uint32_t>(residual[a]));
       last = q;
       return q;
     };
@@ -394,7 +402,7 @@ TriangleMesh decode_body(io::ByteReader& in, const Quantizer& quantizer, Attribu
       mesh.vertices[i] = quantizer.position(q);
       if (codes != nullptr) codes->positions[i] = q;
     }
-    dec.check();
+    for (const RangeDecoder& d : dec) d.check();
   }
   {
     const auto [bytes, size] = section("attribute section");

@@ -4,10 +4,11 @@
 // neighbour, all range-coded. The container (header, checksum) is compressed_mesh.h's; the
 // progressive format stores its base mesh as such a body.
 //
-// Body layout (little-endian): u32 components, u64 symbols, u64 surface vertices, then four
+// Body layout (little-endian): u32 components, u64 symbols, u64 surface vertices, then six
 // sections, each a u64 byte count and a range-coded stream: symbols (CLERS + M, context: the two
 // symbols before), side data (handles, split offsets, hole vertices, merged fans, degenerate
-// triangles, vertices off the surface), positions, attributes (normals, then colours).
+// triangles, vertices off the surface), positions x, y and z (one stream per axis, so that a
+// decoder's three dependency chains overlap), attributes (normals, then colours).
 
 #include <array>
 #include <cstdint>

@@ -5,9 +5,7 @@
 namespace meshflow::compress {
 namespace {
 
-constexpr unsigned kProbabilityBits = 11;
-constexpr unsigned kAdaptShift = 5;
-constexpr std::uint32_t kTop = 1u << 24;
+constexpr std::uint32_t kTop = RangeEncoder::kTop;
 // A decoder reads up to four bytes ahead of what the encoder flushed; more means the stream
 // was cut or corrupt.
 constexpr std::size_t kAllowedOverrun = 4;
@@ -23,27 +21,13 @@ unsigned bit_length(std::uint32_t v) {
 
 }  // namespace
 
-void RangeEncoder::encode(BitModel& model, unsigned bit) {
-  const std::uint32_t bound = (range_ >> kProbabilityBits) * model.p0;
-  if (bit == 0) {
-    range_ = bound;
-    model.p0 = static_cast<std::uint16_t>(model.p0 +
-                                          (((1u << kProbabilityBits) - model.p0) >> kAdaptShift));
-  } else {
-    low_ += bound;
-    range_ -= bound;
-    model.p0 = static_cast<std::uint16_t>(model.p0 - (model.p0 >> kAdaptShift));
-  }
-  while (range_ < kTop) {
-    range_ <<= 8;
-    shift_low();
-  }
-}
-
 void RangeEncoder::encode_direct(std::uint32_t value, unsigned count) {
-  for (int bit = static_cast<int>(count) - 1; bit >= 0; --bit) {
-    range_ >>= 1;
-    if ((value >> bit) & 1u) low_ += range_;
+  // Up to eight bits per step: the range splits into 2^k equal parts (it stays >= 2^16).
+  while (count > 0) {
+    const unsigned k = count < 8 ? count : 8;
+    count -= k;
+    range_ >>= k;
+    low_ += std::uint64_t{(value >> count) & ((1u << k) - 1u)} * range_;
     while (range_ < kTop) {
       range_ <<= 8;
       shift_low();
@@ -72,58 +56,14 @@ std::vector<unsigned char> RangeEncoder::finish() {
 
 RangeDecoder::RangeDecoder(const unsigned char* data, std::size_t size, std::string source,
                            std::string what)
-    : data_(data), size_(size), source_(std::move(source)), what_(std::move(what)) {
-  for (int i = 0; i < 5; ++i) code_ = (code_ << 8) | next_byte();
-}
-
-std::uint8_t RangeDecoder::next_byte() {
-  if (at_ < size_) return data_[at_++];
-  ++overrun_;
-  return 0;
-}
-
-void RangeDecoder::normalize() {
-  while (range_ < kTop) {
-    range_ <<= 8;
-    code_ = (code_ << 8) | next_byte();
-  }
-}
-
-unsigned RangeDecoder::decode(BitModel& model) {
-  const std::uint32_t bound = (range_ >> kProbabilityBits) * model.p0;
-  unsigned bit;
-  if (code_ < bound) {
-    range_ = bound;
-    model.p0 = static_cast<std::uint16_t>(model.p0 +
-                                          (((1u << kProbabilityBits) - model.p0) >> kAdaptShift));
-    bit = 0;
-  } else {
-    code_ -= bound;
-    range_ -= bound;
-    model.p0 = static_cast<std::uint16_t>(model.p0 - (model.p0 >> kAdaptShift));
-    bit = 1;
-  }
-  normalize();
-  return bit;
-}
-
-std::uint32_t RangeDecoder::decode_direct(unsigned count) {
-  std::uint32_t value = 0;
-  for (unsigned i = 0; i < count; ++i) {
-    range_ >>= 1;
-    unsigned bit = 0;
-    if (code_ >= range_) {
-      code_ -= range_;
-      bit = 1;
-    }
-    value = (value << 1) | bit;
-    normalize();
-  }
-  return value;
+    : source_(std::move(source)), what_(std::move(what)) {
+  core_.data = data;
+  core_.size = size;
+  for (int i = 0; i < 5; ++i) core_.code = (core_.code << 8) | core_.next_byte();
 }
 
 void RangeDecoder::check() const {
-  if (overrun_ > kAllowedOverrun)
+  if (core_.overrun > kAllowedOverrun)
     throw Error(source_, what_, "stream ends early (truncated or corrupt)");
 }
 
@@ -151,8 +91,15 @@ void IntegerModel::encode(RangeEncoder& enc, std::int32_t value) {
   enc.encode(sign_[n - 1], value < 0 ? 1u : 0u);
 }
 
-std::int32_t IntegerModel::decode(RangeDecoder& dec) {
-  unsigned n = length_low_.decode(dec);
+std::int32_t IntegerModel::decode(RangeDecoder& decoder) {
+  RangeDecoder::Session session(decoder);
+  return finish(session.core, length_low_.decode(session.core));
+}
+
+// Inlined into decode_three(), where the three calls then overlap.
+[[gnu::always_inline]] inline std::int32_t IntegerModel::finish(RangeDecoderCore& dec,
+                                                                unsigned length_symbol) {
+  unsigned n = length_symbol;
   if (n == 15) n = 15 + length_high_.decode(dec);
   if (n == 0) return 0;
   if (n > 32) n = 32;  // a corrupt stream; the value is garbage, the caller's checks catch it
@@ -168,6 +115,21 @@ std::int32_t IntegerModel::decode(RangeDecoder& dec) {
   if (below > 0) magnitude = (magnitude << below) | dec.decode_direct(below);
   const bool negative = dec.decode(sign_[n - 1]) != 0;
   return static_cast<std::int32_t>(negative ? 0u - magnitude : magnitude);
+}
+
+std::array<std::int32_t, 3> IntegerModel::decode_three(IntegerModel& mx, IntegerModel& my,
+                                                       IntegerModel& mz, RangeDecoder& dx,
+                                                       RangeDecoder& dy, RangeDecoder& dz) {
+  RangeDecoder::Session sx(dx), sy(dy), sz(dz);
+  unsigned nx = 1, ny = 1, nz = 1;
+  for (int level = 0; level < SymbolModel<16>::levels; ++level) {
+    nx = mx.length_low_.step(sx.core, nx);
+    ny = my.length_low_.step(sy.core, ny);
+    nz = mz.length_low_.step(sz.core, nz);
+  }
+  return {mx.finish(sx.core, SymbolModel<16>::symbol(nx)),
+          my.finish(sy.core, SymbolModel<16>::symbol(ny)),
+          mz.finish(sz.core, SymbolModel<16>::symbol(nz))};
 }
 
 }  // namespace meshflow::compress

@@ -1,0 +1,198 @@
+// Mesh compression: meshflow's Edgebreaker and progressive coders beside Google's Draco
+// (Debian's libdraco, optional: MESHFLOW_HAVE_DRACO) on the same cleaned meshes, positions only
+// at 14 bits (Draco's default quantisation; its default compression level 7). Threads: that
+// many meshes coded at once (frames in flight), one coder each. Counters: bytes, bits per
+// triangle (all, and connectivity alone), and MB/s of the raw mesh (12 bytes per vertex and
+// per triangle) per thread count.
+
+#include <tbb/parallel_for.h>
+
+#include <memory>
+
+#include "bench_support.h"
+#include "nodes/compress/compressed_mesh.h"
+#include "nodes/compress/progressive_mesh.h"
+#include "runtime/threads.h"
+
+#ifdef MESHFLOW_HAVE_DRACO
+#include <draco/compression/decode.h>
+#include <draco/compression/encode.h>
+#include <draco/mesh/mesh.h>
+#endif
+
+namespace meshflow::bench {
+namespace {
+
+constexpr unsigned kBits = 14;
+
+compress::CompressConfig positions_only() {
+  compress::CompressConfig c;
+  c.position_bits = kBits;
+  c.normals = c.colors = false;
+  return c;
+}
+
+double raw_bytes(const TriangleMesh& m) {
+  return 12.0 * static_cast<double>(m.vertices.size() + m.triangles.size());
+}
+
+// Counters shared by every coder: sizes, and throughput over `copies` meshes per iteration.
+void count_coding(benchmark::State& state, const TriangleMesh& m, std::size_t bytes,
+                  double connectivity_bytes, int copies) {
+  const double t = static_cast<double>(m.triangles.size());
+  state.counters["bytes"] = static_cast<double>(bytes);
+  state.counters["bits/tri"] = 8.0 * static_cast<double>(bytes) / t;
+  if (connectivity_bytes > 0) state.counters["conn_bits/tri"] = 8.0 * connectivity_bytes / t;
+  state.counters["MB/s"] = benchmark::Counter(raw_bytes(m) * copies / 1e6,
+                                              benchmark::Counter::kIsIterationInvariantRate);
+}
+
+// Runs f(copy) for copies 0 .. threads - 1 at once.
+template <typename F>
+void in_flight(int threads, F f) {
+  tbb::parallel_for(0, threads, [&](int k) { f(k); });
+}
+
+void BM_EdgebreakerEncode(benchmark::State& state) {
+  const TriangleMesh* mesh = cleaned_mesh(state);
+  if (mesh == nullptr) return;
+  const int threads = static_cast<int>(state.range(0));
+  ThreadLimit limit(threads);
+  compress::CompressReport report;
+  std::size_t bytes = 0;
+  for (auto _ : state)
+    in_flight(threads, [&](int k) {
+      compress::CompressReport r;
+      const std::size_t n = compress::compress_mesh(*mesh, positions_only(), &r).size();
+      if (k == 0) {
+        bytes = n;
+        report = r;
+      }
+    });
+  count_coding(state, *mesh, bytes, static_cast<double>(report.body.connectivity_bytes), threads);
+}
+BENCHMARK(BM_EdgebreakerEncode)->Apply(thread_and_input_args);
+
+void BM_EdgebreakerDecode(benchmark::State& state) {
+  const TriangleMesh* mesh = cleaned_mesh(state);
+  if (mesh == nullptr) return;
+  const int threads = static_cast<int>(state.range(0));
+  ThreadLimit limit(threads);
+  compress::CompressReport report;
+  const std::vector<unsigned char> bytes =
+      compress::compress_mesh(*mesh, positions_only(), &report);
+  for (auto _ : state)
+    in_flight(threads, [&](int) {
+      benchmark::DoNotOptimize(compress::decompress_mesh(bytes, "bench").triangles.size());
+    });
+  count_coding(state, *mesh, bytes.size(), static_cast<double>(report.body.connectivity_bytes),
+               threads);
+}
+BENCHMARK(BM_EdgebreakerDecode)->Apply(thread_and_input_args);
+
+// Progressive: the whole file, and the share of it the base mesh needs.
+void BM_ProgressiveEncode(benchmark::State& state) {
+  const TriangleMesh* mesh = cleaned_mesh(state);
+  if (mesh == nullptr) return;
+  ThreadLimit limit(static_cast<int>(state.range(0)));
+  compress::CompressReport report;
+  std::size_t bytes = 0;
+  for (auto _ : state)
+    benchmark::DoNotOptimize(
+        bytes = compress::compress_progressive(*mesh, positions_only(), &report).size());
+  count_coding(state, *mesh, bytes, 0.0, 1);
+  state.counters["base_%"] =
+      100.0 * static_cast<double>(report.base_bytes) / static_cast<double>(bytes);
+  state.counters["base_tri"] = static_cast<double>(report.base_triangles);
+}
+BENCHMARK(BM_ProgressiveEncode)->Apply(thread_and_input_args);
+
+void BM_ProgressiveDecode(benchmark::State& state) {
+  const TriangleMesh* mesh = cleaned_mesh(state);
+  if (mesh == nullptr) return;
+  ThreadLimit limit(static_cast<int>(state.range(0)));
+  const std::vector<unsigned char> bytes = compress::compress_progressive(*mesh, positions_only());
+  for (auto _ : state)
+    benchmark::DoNotOptimize(compress::decompress_mesh(bytes, "bench").triangles.size());
+  count_coding(state, *mesh, bytes.size(), 0.0, 1);
+}
+BENCHMARK(BM_ProgressiveDecode)->Apply(thread_and_input_args);
+
+#ifdef MESHFLOW_HAVE_DRACO
+// `m` as a Draco mesh (positions only; points shared as in `m`).
+std::unique_ptr<draco::Mesh> to_draco(const TriangleMesh& m) {
+  auto owned = std::make_unique<draco::Mesh>();
+  draco::Mesh& d = *owned;
+  d.set_num_points(static_cast<draco::PointIndex::ValueType>(m.vertices.size()));
+  draco::GeometryAttribute position;
+  position.Init(draco::GeometryAttribute::POSITION, nullptr, 3, draco::DT_FLOAT32, false,
+                sizeof(float) * 3, 0);
+  const int id = d.AddAttribute(position, true, static_cast<std::uint32_t>(m.vertices.size()));
+  for (std::uint32_t i = 0; i < m.vertices.size(); ++i)
+    d.attribute(id)->SetAttributeValue(draco::AttributeValueIndex(i), m.vertices[i].data());
+  for (const Triangle& t : m.triangles)
+    d.AddFace({draco::PointIndex(t[0]), draco::PointIndex(t[1]), draco::PointIndex(t[2])});
+  return owned;
+}
+
+std::size_t draco_encode(const draco::Mesh& d, int bits, draco::EncoderBuffer& out) {
+  draco::Encoder encoder;
+  encoder.SetAttributeQuantization(draco::GeometryAttribute::POSITION, bits);
+  encoder.SetEncodingMethod(draco::MESH_EDGEBREAKER_ENCODING);
+  encoder.SetSpeedOptions(3, 3);  // compression level 7, Draco's default
+  out.Clear();
+  if (!encoder.EncodeMeshToBuffer(d, &out).ok()) return 0;
+  return out.size();
+}
+
+// Draco's connectivity alone: the file with 1-bit positions (which then cost next to nothing).
+double draco_connectivity_bytes(const draco::Mesh& d) {
+  draco::EncoderBuffer b;
+  return static_cast<double>(draco_encode(d, 1, b));
+}
+
+void BM_DracoEncode(benchmark::State& state) {
+  const TriangleMesh* mesh = cleaned_mesh(state);
+  if (mesh == nullptr) return;
+  const int threads = static_cast<int>(state.range(0));
+  ThreadLimit limit(threads);
+  const std::unique_ptr<draco::Mesh> d = to_draco(*mesh);
+  std::size_t bytes = 0;
+  for (auto _ : state)
+    in_flight(threads, [&](int k) {
+      draco::EncoderBuffer out;
+      const std::size_t n = draco_encode(*d, kBits, out);
+      if (k == 0) bytes = n;
+    });
+  if (bytes == 0) return state.SkipWithError("Draco failed to encode");
+  count_coding(state, *mesh, bytes, draco_connectivity_bytes(*d), threads);
+}
+BENCHMARK(BM_DracoEncode)->Apply(thread_and_input_args);
+
+void BM_DracoDecode(benchmark::State& state) {
+  const TriangleMesh* mesh = cleaned_mesh(state);
+  if (mesh == nullptr) return;
+  const int threads = static_cast<int>(state.range(0));
+  ThreadLimit limit(threads);
+  const std::unique_ptr<draco::Mesh> d = to_draco(*mesh);
+  draco::EncoderBuffer encoded;
+  const std::size_t bytes = draco_encode(*d, kBits, encoded);
+  if (bytes == 0) return state.SkipWithError("Draco failed to encode");
+  bool ok = true;
+  for (auto _ : state)
+    in_flight(threads, [&](int) {
+      draco::DecoderBuffer in;
+      in.Init(encoded.data(), encoded.size());
+      draco::Decoder decoder;
+      auto result = decoder.DecodeMeshFromBuffer(&in);
+      if (!result.ok()) ok = false;
+      benchmark::DoNotOptimize(result);
+    });
+  if (!ok) return state.SkipWithError("Draco failed to decode");
+  count_coding(state, *mesh, bytes, draco_connectivity_bytes(*d), threads);
+}
+BENCHMARK(BM_DracoDecode)->Apply(thread_and_input_args);
+#endif
+
+}  // namespace
+}  // namespace meshflow::bench

@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "nodes/compress/compressed_mesh.h"
 #include "nodes/depth/depth_filter.h"
 #include "nodes/distance/hoppe_distance.h"
 #include "nodes/distance/projective_distance.h"
@@ -24,6 +25,9 @@
 #include "runtime/triangle_mesh.h"
 
 namespace meshflow {
+
+/// Whether and how the pipeline's last stage compresses each frame's mesh (Frame::compressed).
+enum class MeshCompression { kNone, kEdgebreaker, kProgressive };
 
 /// Configuration of every stage; defaults are the thesis's published ones.
 /// voxelize.voxel_size <= 0 means "choose from the point spacing" (suggest_voxel_size).
@@ -61,6 +65,10 @@ struct ReconstructionConfig {
   /// gives an error naming the input and the limit before the distance and extract stages
   /// allocate, not an out-of-memory kill. See frame_memory_estimate().
   std::size_t max_memory_bytes = 0;
+  /// A "compress" stage after the last one codes each frame's mesh into Frame::compressed (a
+  /// .mfc image in world coordinates; nodes/compress) with `compress`'s settings.
+  MeshCompression compression = MeshCompression::kNone;
+  compress::CompressConfig compress;
 };
 
 /// Bytes a cloud frame holds once its grid and distance field exist: the points with their
@@ -103,6 +111,9 @@ struct Frame {
   TriangleMesh mesh;  ///< after extract: raw; after optimize: optimised (fusion: the map so far)
   OptimizeReport optimize;       ///< what each optimisation step did
   IntegrationStats integration;  ///< fusion: what integrating this frame did
+  /// With ReconstructionConfig::compression: the mesh as a compressed mesh file's bytes (.mfc,
+  /// positions in world coordinates: origin added), for sending over a link.
+  std::vector<unsigned char> compressed;
 
   std::string error;  ///< empty while the frame is healthy
   std::string failed_stage;

@@ -139,6 +139,7 @@ struct LivePipeline::Impl {
     r.error = f->error;
     r.failed_stage = f->failed_stage;
     r.mesh = std::move(f->mesh);
+    r.compressed = std::move(f->compressed);
     r.timings = std::move(f->timings);
     r.latency_s = monotonic_seconds() - f->submitted_s;
     bool deliver_it = false;

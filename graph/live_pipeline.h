@@ -45,6 +45,9 @@ struct LiveResult {
   std::string error;         ///< when !ok: what went wrong, naming the frame and the field
   std::string failed_stage;  ///< when !ok
   TriangleMesh mesh;
+  /// With reconstruction.compression set: the mesh as compressed-mesh bytes (.mfc, world
+  /// coordinates), ready to send; decode with compress::decompress_mesh().
+  std::vector<unsigned char> compressed;
   std::vector<StageRecord> timings;  ///< per stage, monotonic seconds
   double latency_s = 0.0;            ///< from push() to the callback
 };

@@ -5,6 +5,7 @@
 #include <optional>
 #include <string>
 
+#include "nodes/compress/progressive_mesh.h"
 #include "nodes/depth/organized_depth.h"
 #include "nodes/extract/extract_surface.h"
 #include "nodes/extract/rim_trim.h"
@@ -218,10 +219,24 @@ const NamedStage kPointCloudStages[8] = {
     {"read", read},         {"filter", filter},     {"index", index},     {"normals", normals},
     {"voxelize", voxelize}, {"distance", distance}, {"extract", extract}, {"optimize", optimize}};
 
-std::vector<NamedStage> frame_stages(bool triangulate_depth_maps) {
-  if (triangulate_depth_maps)
-    return {std::begin(kDepthTriangulationStages), std::end(kDepthTriangulationStages)};
-  return {std::begin(kPointCloudStages), std::end(kPointCloudStages)};
+std::uint64_t compress(Frame& f, const ReconstructionConfig& c) {
+  compress::CompressConfig config = c.compress;
+  config.origin_offset += f.origin;
+  f.compressed = c.compression == MeshCompression::kProgressive
+                     ? compress::compress_progressive(f.mesh, config)
+                     : compress::compress_mesh(f.mesh, config);
+  return f.compressed.size();
+}
+
+std::vector<NamedStage> frame_stages(bool triangulate_depth_maps, MeshCompression compression) {
+  std::vector<NamedStage> out;
+  if (triangulate_depth_maps) {
+    out.assign(std::begin(kDepthTriangulationStages), std::end(kDepthTriangulationStages));
+  } else {
+    out.assign(std::begin(kPointCloudStages), std::end(kPointCloudStages));
+  }
+  if (compression != MeshCompression::kNone) out.push_back({"compress", compress});
+  return out;
 }
 
 void run_stage(const char* name, StageFunction body, Frame& f, const ReconstructionConfig& c) {

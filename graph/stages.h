@@ -31,6 +31,10 @@ std::uint64_t filter_depth_image(Frame& f, const ReconstructionConfig& c);  ///<
 /// PCD) seen from its sensor origin. Fails other frames, naming what was expected.
 std::uint64_t triangulate(Frame& f, const ReconstructionConfig& c);  ///< triangles
 
+/// Codes the frame's mesh into f.compressed (c.compression, c.compress; the frame's origin
+/// added). A frame without triangles gets a file of its vertices.
+std::uint64_t compress(Frame& f, const ReconstructionConfig& c);  ///< bytes written
+
 using StageFunction = std::uint64_t (*)(Frame&, const ReconstructionConfig&);
 
 struct NamedStage {
@@ -44,8 +48,10 @@ extern const NamedStage kPointCloudStages[8];
 extern const NamedStage kDepthTriangulationStages[2];
 
 /// The stages a frame pipeline wires, in order: kDepthTriangulationStages when
-/// `triangulate_depth_maps`, else kPointCloudStages.
-std::vector<NamedStage> frame_stages(bool triangulate_depth_maps);
+/// `triangulate_depth_maps`, else kPointCloudStages; then "compress" unless `compression` is
+/// kNone.
+std::vector<NamedStage> frame_stages(bool triangulate_depth_maps,
+                                     MeshCompression compression = MeshCompression::kNone);
 
 /// Runs `body` on `f` unless the frame already failed, appending a StageRecord; a thrown
 /// exception becomes the frame's error. Thread-safe for distinct frames.

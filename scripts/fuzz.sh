@@ -18,7 +18,7 @@ fi
 seconds=${1:-60}
 shift || true
 targets=("$@")
-[ ${#targets[@]} -gt 0 ] || targets=(ply pcd xyz 3dtk las mesh rgbd tum image tsdf_map)
+[ ${#targets[@]} -gt 0 ] || targets=(ply pcd xyz 3dtk las mesh rgbd tum image tsdf_map mfc)
 data=${MESHFLOW_DATA:-../shared/data}
 
 if [ -z "$build" ]; then
@@ -40,12 +40,13 @@ seed_patterns() {
     ply) echo '*.ply' ;; pcd) echo '*.pcd' ;; xyz) echo '*.xyz *.pts *.txt *.csv' ;;
     3dtk) echo '*.3d *.pose' ;; las) echo '*.las' ;; mesh) echo '*.obj *.off *.stl' ;;
     rgbd) echo '*.log *.json' ;; tum) echo '*.txt' ;; image) echo '*.png *.tiff *.tif *.pclzf *.jpg' ;;
-    tsdf_map) echo '*.tsdf' ;;
+    tsdf_map) echo '*.tsdf' ;; mfc) echo '*.mfc' ;;
   esac
 }
 # Seeds made by meshflow itself where the fixtures and the shared data have none (no such files
 # are committed): a small TSDF map (8 blocks of 0.6 m voxels, 49 kB) from the synthetic depth
-# camera, and a coarse sphere mesh as OBJ, OFF and STL.
+# camera, a coarse sphere mesh as OBJ, OFF and STL, and that mesh compressed (Edgebreaker and
+# progressive).
 meshflow_tool() {
   local tool
   for tool in "$build/meshflow" build/meshflow; do
@@ -68,6 +69,11 @@ made_seeds() {  # TARGET CORPUS
       for ext in obj off stl; do
         "$tool" reconstruct "$build/seed_sphere.ply" --voxel 0.25 -o "$2/seed_sphere.$ext" -q
       done ;;
+    mfc)
+      "$tool" sample torus --points 3000 -o "$build/seed_torus.ply" -q
+      "$tool" reconstruct "$build/seed_torus.ply" --voxel 0.2 -o "$2/seed_torus.mfc" -q
+      "$tool" reconstruct "$build/seed_torus.ply" --voxel 0.2 --compress progressive \
+        -o "$2/seed_torus_progressive.mfc" -q ;;
   esac
 }
 status=0

@@ -4,8 +4,10 @@
 #include <string>
 
 #include "graph/pipeline.h"
+#include "nodes/compress/compressed_mesh.h"
 #include "nodes/depth/organized_depth.h"
 #include "nodes/extract/extract_surface.h"
+#include "nodes/io/atomic_file.h"
 #include "nodes/io/mesh_writers.h"
 #include "nodes/io/parse_util.h"
 #include "nodes/io/read_point_cloud.h"
@@ -31,6 +33,7 @@ struct ReconstructOptions {
   std::string output;
   PipelineOptions pipeline;
   bool texture = false;
+  std::string compress;  ///< --compress method, "" = none (a .mfc output: edgebreaker)
 };
 
 // Textures the planar regions of the frame's mesh from its coloured points and writes OBJ +
@@ -78,9 +81,18 @@ void print_settings(const ReconstructionConfig& c) {
 
 void run_reconstruct(const ReconstructOptions& o) {
   ThreadLimit limit(o.pipeline.threads);
-  const ReconstructionConfig config = o.pipeline.config();
+  ReconstructionConfig config = o.pipeline.config();
+  config.compression = compression_for(o.compress, o.output);
+  const bool compressed = config.compression != MeshCompression::kNone;
   // Fail on an unwritable output before spending time on reconstruction.
-  io::check_mesh_output_format(o.output);
+  if (compressed) {
+    if (!is_compressed_mesh_file(o.output))
+      throw Error(o.output, "", "--compress writes a compressed mesh: give a .mfc output");
+    if (o.texture) throw Error(o.output, "", "--texture and --compress exclude each other");
+    io::check_output_writable(o.output);
+  } else {
+    io::check_mesh_output_format(o.output);
+  }
   if (o.texture && io::lower_extension(o.output) != ".obj")
     throw Error(o.output, "", "--texture writes OBJ + MTL + PNG: give an .obj output");
   print_settings(config);
@@ -109,6 +121,8 @@ void run_reconstruct(const ReconstructOptions& o) {
   if (o.texture) {
     progress->begin("texture");
     textures = write_textured(o.output, *frame, config);
+  } else if (compressed) {
+    compress::write_file_bytes(o.output, frame->compressed);
   } else {
     io::write_mesh(o.output, frame->mesh, frame->origin);
   }
@@ -122,10 +136,15 @@ void run_reconstruct(const ReconstructOptions& o) {
     nlohmann::json doc = frame_json(*frame, wall, limit.threads());
     doc["output"] = o.output;
     if (o.texture) doc["textures"] = textures;
+    if (compressed) doc["compressed_bytes"] = frame->compressed.size();
     return print_json(doc);
   }
   print_frame_report(*frame, wall, limit.threads());
   if (o.texture) report("textures   %zu planar regions textured\n", textures);
+  if (compressed)
+    report("compressed %zu bytes (%.2f bits per triangle)\n", frame->compressed.size(),
+           8.0 * static_cast<double>(frame->compressed.size()) /
+               static_cast<double>(frame->mesh.triangles.size()));
   report("output     %s\n", o.output.c_str());
 }
 
@@ -210,8 +229,10 @@ void add_reconstruct_options(CLI::App* cmd) {
   auto opts = std::make_shared<ReconstructOptions>();
   cmd->add_option("input", opts->input, "Point cloud: .ply .pcd .las .xyz .txt .pts .asc .csv .3d")
       ->required();
-  cmd->add_option("-o,--output", opts->output, "Output mesh: .ply .obj .stl .off .glb")->required();
+  cmd->add_option("-o,--output", opts->output, "Output mesh: .ply .obj .stl .off .glb .mfc")
+      ->required();
   add_columns_option(cmd, opts->columns);
+  add_compress_option(cmd, opts->compress);
   add_pipeline_options(cmd, opts->pipeline);
   add_console_flags(cmd, true);
   cmd->add_flag("--texture", opts->texture,

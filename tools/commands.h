@@ -6,6 +6,8 @@
 
 #include <CLI/CLI.hpp>
 
+#include "graph/frame.h"
+
 #include <string>
 #include <vector>
 
@@ -25,6 +27,11 @@ void add_decompress_options(CLI::App* cmd);
 
 /// Whether `path` names a meshflow compressed mesh (.mfc).
 bool is_compressed_mesh_file(const std::string& path);
+/// Registers --compress edgebreaker|progressive on `cmd` (reconstruct, run), into `method`.
+void add_compress_option(CLI::App* cmd, std::string& method);
+/// The pipeline's compression for a --compress value ("" = none) and an output path: a .mfc
+/// output without --compress means Edgebreaker.
+MeshCompression compression_for(const std::string& method, const std::string& output);
 /// `meshflow info` on a compressed mesh: its header (and --json). Throws Error.
 void run_compressed_info(const std::string& path);
 

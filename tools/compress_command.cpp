@@ -130,6 +130,20 @@ bool is_compressed_mesh_file(const std::string& path) {
   return path.size() > 4 && path.compare(path.size() - 4, 4, ".mfc") == 0;
 }
 
+void add_compress_option(CLI::App* cmd, std::string& method) {
+  cmd->add_option("--compress", method,
+                  "Compress each mesh in the graph's last stage and write .mfc files: "
+                  "edgebreaker (single-rate) or progressive (levels of detail)")
+      ->check(CLI::IsMember({"edgebreaker", "progressive"}));
+}
+
+MeshCompression compression_for(const std::string& method, const std::string& output) {
+  if (method == "progressive") return MeshCompression::kProgressive;
+  if (method == "edgebreaker" || is_compressed_mesh_file(output))
+    return MeshCompression::kEdgebreaker;
+  return MeshCompression::kNone;
+}
+
 void run_compressed_info(const std::string& path) {
   const std::vector<unsigned char> bytes = compress::read_file_bytes(path);
   const compress::CompressedMeshInfo info = compress::compressed_mesh_info(bytes, path);

@@ -8,6 +8,8 @@
 #include "graph/fusion_pipeline.h"
 #include "graph/merged_scans.h"
 #include "graph/sequence_runner.h"
+#include "nodes/compress/compressed_mesh.h"
+#include "nodes/compress/progressive_mesh.h"
 #include "nodes/fusion/tsdf_map_file.h"
 #include "nodes/io/atomic_file.h"
 #include "nodes/io/mesh_writers.h"
@@ -83,6 +85,7 @@ struct RunOptions {
   float behind_voxels = TsdfConfig{}.behind_voxels;
   float min_weight = 0.0f;
   std::string save_map, load_map;
+  std::string compress;  ///< --compress method ("" = PLY outputs)
 };
 
 std::unique_ptr<io::Sequence> open_output(const RunOptions& o) {
@@ -96,6 +99,25 @@ std::unique_ptr<io::Sequence> open_output(const RunOptions& o) {
   }
   io::check_output_writable((std::filesystem::path(o.output_dir) / "meshflow_probe").string());
   return sequence;
+}
+
+// Writes DIR/STEM.ply, or with --compress DIR/STEM.mfc: `compressed` when the graph's compress
+// stage made it, else the mesh compressed here (one mesh at the end of a run).
+void write_run_mesh(const RunOptions& o, const std::string& stem, const TriangleMesh& mesh,
+                    const Eigen::Vector3d& origin = Eigen::Vector3d::Zero(),
+                    const std::vector<unsigned char>* compressed = nullptr) {
+  const std::filesystem::path dir(o.output_dir);
+  const MeshCompression method = compression_for(o.compress, "");
+  if (method == MeshCompression::kNone)
+    return io::write_ply((dir / (stem + ".ply")).string(), mesh, io::PlyEncoding::kBinary, origin);
+  const std::string path = (dir / (stem + ".mfc")).string();
+  if (compressed != nullptr && !compressed->empty())
+    return compress::write_file_bytes(path, *compressed);
+  compress::CompressConfig config;
+  config.origin_offset = origin;
+  compress::write_file_bytes(path, method == MeshCompression::kProgressive
+                                       ? compress::compress_progressive(mesh, config)
+                                       : compress::compress_mesh(mesh, config));
 }
 
 void finish_run(const SequenceRunStats& stats) {
@@ -133,8 +155,8 @@ void run_fusion(const RunOptions& o) {
         breakdown.add(f);
         if (f.mesh.empty()) return;
         char name[64];
-        std::snprintf(name, sizeof name, "fused_%06zu.ply", f.source_index);
-        io::write_ply((dir / name).string(), f.mesh);
+        std::snprintf(name, sizeof name, "fused_%06zu", f.source_index);
+        write_run_mesh(o, name, f.mesh);
         ++written;
       });
   const double t0 = monotonic_seconds();
@@ -142,7 +164,7 @@ void run_fusion(const RunOptions& o) {
   const TriangleMesh mesh = pipeline->extract_mesh(&extraction);
   const double extract_s = monotonic_seconds() - t0;
   if (!mesh.empty()) {
-    io::write_ply((dir / "fused.ply").string(), mesh);
+    write_run_mesh(o, "fused", mesh);
     ++written;
   }
   if (!o.save_map.empty()) write_tsdf_map(o.save_map, pipeline->map());
@@ -182,7 +204,8 @@ void append_mesh(TriangleMesh& into, const TriangleMesh& mesh) {
 void run_merged(const RunOptions& o) {
   ThreadLimit limit(o.pipeline.threads);
   const auto sequence = open_output(o);
-  const ReconstructionConfig config = o.pipeline.config();
+  ReconstructionConfig config = o.pipeline.config();
+  config.compression = compression_for(o.compress, "");
   ScanPreparationPipeline preparation(config, o.sequence.in_flight);
   FrameProgress progress(selected_frames(*sequence, o.sequence));
   PointCloud joined;
@@ -207,8 +230,11 @@ void run_merged(const RunOptions& o) {
   const double t0 = monotonic_seconds();
   pipeline.run_frame(frame);
   throw_if_failed(*frame);
-  const std::string output = (std::filesystem::path(o.output_dir) / "merged.ply").string();
-  io::write_ply(output, frame->mesh, io::PlyEncoding::kBinary, frame->origin);
+  const std::string output =
+      (std::filesystem::path(o.output_dir) /
+       (config.compression == MeshCompression::kNone ? "merged.ply" : "merged.mfc"))
+          .string();
+  write_run_mesh(o, "merged", frame->mesh, frame->origin, &frame->compressed);
   const double wall = monotonic_seconds() - t0;
   print_run_summary(*sequence, stats, limit.threads(), o.sequence.in_flight,
                     {{"merged", frame_json(*frame, wall, limit.threads())},
@@ -225,8 +251,9 @@ void run_run(const RunOptions& o) {
   if (o.merged) return run_merged(o);
   ThreadLimit limit(o.pipeline.threads);
   const auto sequence = open_output(o);
-  ReconstructionPipeline pipeline(pipeline_config(o.pipeline, o.triangulation),
-                                  o.sequence.in_flight, o.triangulation.enabled());
+  ReconstructionConfig config = pipeline_config(o.pipeline, o.triangulation);
+  if (!o.concatenate) config.compression = compression_for(o.compress, "");
+  ReconstructionPipeline pipeline(config, o.sequence.in_flight, o.triangulation.enabled());
   FrameProgress progress(selected_frames(*sequence, o.sequence));
   TriangleMesh merged;
   std::size_t done = 0, written = 0;
@@ -238,13 +265,12 @@ void run_run(const RunOptions& o) {
         print_frame_line(f);
         if (o.concatenate) return append_mesh(merged, f.mesh);
         char name[64];
-        std::snprintf(name, sizeof name, "frame_%06zu.ply", f.source_index);
-        io::write_ply((std::filesystem::path(o.output_dir) / name).string(), f.mesh,
-                      io::PlyEncoding::kBinary, f.origin);
+        std::snprintf(name, sizeof name, "frame_%06zu", f.source_index);
+        write_run_mesh(o, name, f.mesh, f.origin, &f.compressed);
         ++written;
       });
   if (o.concatenate && !merged.empty()) {
-    io::write_ply((std::filesystem::path(o.output_dir) / "concatenated.ply").string(), merged);
+    write_run_mesh(o, "concatenated", merged);
     written = 1;
   }
   print_run_summary(*sequence, stats, limit.threads(), o.sequence.in_flight,
@@ -313,6 +339,7 @@ void add_run_options(CLI::App* cmd) {
           ->excludes(per_frame)
           ->excludes(merged);
   cmd->add_flag("--strict", o->strict, "Stop at the first bad frame (exit code 1)");
+  add_compress_option(cmd, o->compress);
   auto* fuse = cmd->add_flag("--fuse", o->fuse,
                              "Fuse depth frames (or organized Kinect-type clouds) into one TSDF "
                              "map (--voxel, default 0.01 m); writes fused.ply")

@@ -60,14 +60,15 @@ AttributeFlags attribute_flags(const TriangleMesh& mesh, const CompressConfig& c
 }
 
 void write_header(io::ByteWriter& out, CompressionKind kind, AttributeFlags flags,
-                  std::uint64_t vertices, std::uint64_t triangles, const Quantizer& quantizer) {
+                  std::uint64_t vertices, std::uint64_t triangles, const Quantizer& quantizer,
+                  const Eigen::Vector3d& offset) {
   out.bytes(kMagic, sizeof kMagic);
   out.u32(kVersion);
   out.u32(static_cast<std::uint32_t>(kind));
   out.u32((flags.normals ? 1u : 0u) | (flags.colors ? 2u : 0u));
   out.u64(vertices);
   out.u64(triangles);
-  for (int a = 0; a < 3; ++a) out.f64(quantizer.origin[a]);
+  for (int a = 0; a < 3; ++a) out.f64(quantizer.origin[a] + offset[a]);
   out.f64(quantizer.step);
   out.u32(quantizer.bits);
 }
@@ -118,7 +119,7 @@ std::vector<unsigned char> compress_mesh(const TriangleMesh& mesh, const Compres
   const AttributeFlags flags = detail::attribute_flags(mesh, config);
   io::ByteWriter out;
   detail::write_header(out, CompressionKind::kEdgebreaker, flags, mesh.vertices.size(),
-                       mesh.triangles.size(), quantizer);
+                       mesh.triangles.size(), quantizer, config.origin_offset);
   BodyOrder order;
   const BodyStats stats = encode_body(mesh, quantizer, flags, out, &order);
   detail::seal(out);

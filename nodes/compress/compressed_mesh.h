@@ -39,6 +39,9 @@ struct CompressConfig {
   /// Progressive only: the base mesh is decimated to this share of the triangles (QEM; it may
   /// stop above it where no valid collapse is left).
   float base_ratio = 0.02f;
+  /// Added to every position (metres, double precision) as it is stored: for meshes kept in a
+  /// local frame (Frame::origin), so that the decoded mesh is in world coordinates.
+  Eigen::Vector3d origin_offset = Eigen::Vector3d::Zero();
   /// Progressive only: vertex splits per packet (each packet decodes on its own, so a prefix
   /// of the file gives a level of detail).
   std::uint32_t splits_per_packet = 4096;
@@ -58,8 +61,8 @@ struct CompressReport {
   std::vector<std::uint32_t> vertex_order, triangle_order;
 };
 
-/// The quantiser `config` gives for `mesh` (bounding box origin, step, bits). Throws Error for
-/// non-finite positions. O(V + T).
+/// The quantiser `config` gives for `mesh` (bounding box origin, step, bits; without
+/// origin_offset). Throws Error for non-finite positions. O(V + T).
 Quantizer choose_quantizer(const TriangleMesh& mesh, const CompressConfig& config);
 
 /// Encodes `mesh` single-rate (Edgebreaker). Throws Error for a corner out of range or a
@@ -98,9 +101,11 @@ void reseal_compressed_mesh(std::vector<unsigned char>& bytes);
 namespace detail {
 /// The attributes `config` stores for `mesh` (those it has, per vertex).
 AttributeFlags attribute_flags(const TriangleMesh& mesh, const CompressConfig& config);
-/// Writes the header of a `kind` file (everything before the body).
+/// Writes the header of a `kind` file (everything before the body); the stored origin is the
+/// quantiser's plus `offset`.
 void write_header(io::ByteWriter& out, CompressionKind kind, AttributeFlags flags,
-                  std::uint64_t vertices, std::uint64_t triangles, const Quantizer& quantizer);
+                  std::uint64_t vertices, std::uint64_t triangles, const Quantizer& quantizer,
+                  const Eigen::Vector3d& offset);
 /// Checks magic, version, checksum and reads the header; leaves `in` at the body.
 CompressedMeshInfo read_header(io::ByteReader& in, const std::vector<unsigned char>& bytes);
 /// Appends the checksum.

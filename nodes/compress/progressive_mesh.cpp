@@ -160,7 +160,7 @@ std::vector<unsigned char> compress_progressive(const TriangleMesh& mesh,
 
   io::ByteWriter out;
   detail::write_header(out, CompressionKind::kProgressive, flags, n, mesh.triangles.size(),
-                       quantizer);
+                       quantizer, config.origin_offset);
   BodyOrder order;
   const BodyStats stats = encode_body(base, quantizer, flags, out, &order);
   const std::size_t base_bytes = out.out.size();

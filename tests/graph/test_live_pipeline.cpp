@@ -77,6 +77,34 @@ TEST(LivePipeline, QueuePolicyDeliversEveryFrameInOrderWithFailuresReported) {
   EXPECT_GE(s.latency_p99_s, s.latency_p50_s);
 }
 
+// The embedding API hands the callback the compressed bytes when asked: they decode to the
+// frame's mesh (positions within the quantisation step).
+TEST(LivePipeline, CallbackGetsTheCompressedMeshWhenAsked) {
+  for (const MeshCompression method :
+       {MeshCompression::kEdgebreaker, MeshCompression::kProgressive}) {
+    Received got;
+    LiveConfig config = live_sphere_config(LivePolicy::kQueue, 2, 8);
+    config.reconstruction.compression = method;
+    {
+      LivePipeline live(config, [&](LiveResult& r) { got.add(r); });
+      for (int i = 0; i < 3; ++i) live.push(sphere(i));
+      live.flush();
+    }
+    ASSERT_EQ(got.results.size(), 3u);
+    for (const LiveResult& r : got.results) {
+      ASSERT_TRUE(r.ok) << r.error;
+      ASSERT_FALSE(r.compressed.empty());
+      EXPECT_EQ(r.timings.back().stage, std::string("compress"));
+      const TriangleMesh decoded = compress::decompress_mesh(r.compressed, "live");
+      EXPECT_EQ(decoded.triangles.size(), r.mesh.triangles.size());
+      EXPECT_EQ(decoded.vertices.size(), r.mesh.vertices.size());
+      EXPECT_LT(8.0 * static_cast<double>(r.compressed.size()) /
+                    static_cast<double>(r.mesh.triangles.size()),
+                64.0);
+    }
+  }
+}
+
 TEST(LivePipeline, QueuePolicyRefusesFramesWhileFullAndLosesNoAcceptedOne) {
   Received got;
   LivePipeline live(live_sphere_config(LivePolicy::kQueue, 1, 2),

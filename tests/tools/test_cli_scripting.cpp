@@ -176,6 +176,19 @@ TEST(CliScripting, CompressDecompressAndInfoOfAMesh) {
   doc = parse_json(run_cli("decompress " + dir + "/p.mfc " + dir + "/h.ply --triangles " +
                            std::to_string(input.triangles.size() / 2) + " --json"));
   EXPECT_NEAR(doc["triangles"].get<double>(), static_cast<double>(input.triangles.size()) / 2, 4);
+  // From the graph's compress stage: reconstruct to a .mfc, run --compress per frame.
+  doc = parse_json(run_cli("reconstruct " + cloud + " -o " + dir + "/r.mfc --voxel 0.02 --json"));
+  EXPECT_GT(doc["compressed_bytes"].get<std::size_t>(), 1000u);
+  EXPECT_EQ(parse_json(run_cli("info --json " + dir + "/r.mfc"))["kind"], "edgebreaker");
+  EXPECT_EQ(
+      run_cli("reconstruct " + cloud + " -o " + dir + "/r.ply --compress progressive").exit_code, 1)
+      << "--compress needs a .mfc output";
+  ASSERT_EQ(run_cli("sample sphere --orbit 3 --size 160x120 -q -o " + dir + "/orbit").exit_code, 0);
+  doc = parse_json(run_cli("run " + dir + "/orbit --voxel 0.02 --compress progressive --json -o " +
+                           dir + "/frames"));
+  EXPECT_EQ(doc["frames_ok"], 3);
+  EXPECT_EQ(parse_json(run_cli("info --json " + dir + "/frames/frame_000000.mfc"))["kind"],
+            "progressive");
   test::write_file(dir + "/bad.mfc", "MFMESH\r\n garbage");
   const CliRun bad = run_cli("decompress " + dir + "/bad.mfc " + dir + "/x.ply");
   EXPECT_EQ(bad.exit_code, 1);

@@ -38,7 +38,9 @@ struct ClosedSurface {
   std::vector<std::uint32_t> degenerate_triangles;
   std::uint32_t hole_count = 0;  ///< loops of cut edges closed by a hole vertex
 
+  /// Triangles of the surface (input's and hole fans').
   std::size_t triangle_count() const { return corner_vertex.size() / 3; }
+  /// Vertices of the surface (fans and hole vertices).
   std::size_t vertex_count() const { return input_vertex.size(); }
 };
 

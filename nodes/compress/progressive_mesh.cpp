@@ -367,7 +367,7 @@ TriangleMesh decode_progressive(io::ByteReader& in, const CompressedMeshInfo& in
       const unsigned removed = m.removed.decode(dec);
       for (unsigned k = 0; k < removed; ++k) {
         const std::int32_t rank = m.rank.decode(dec);
-        std::uint32_t w;
+        std::uint32_t w = kNone;
         if (rank == 0) {
           w = dec.decode_direct(bits_for_count(vertex_count + 1));
         } else if (rank > 0 && static_cast<std::size_t>(rank) <= neighbours.size()) {

@@ -15,6 +15,7 @@ struct Quantizer {
   double step = 1.0;  ///< metres per grid unit; a position moves by at most step / 2 per axis
   unsigned bits = 16;
 
+  /// The grid coordinates of p, each clamped to [0, 2^bits).
   std::array<std::int32_t, 3> quantize(const Eigen::Vector3f& p) const {
     const double top = static_cast<double>((std::uint64_t{1} << bits) - 1);
     std::array<std::int32_t, 3> q{};
@@ -24,6 +25,7 @@ struct Quantizer {
     }
     return q;
   }
+  /// The position of grid coordinates q (metres).
   Eigen::Vector3f position(const std::array<std::int32_t, 3>& q) const {
     return Eigen::Vector3f(static_cast<float>(origin.x() + q[0] * step),
                            static_cast<float>(origin.y() + q[1] * step),

@@ -5,7 +5,6 @@
 namespace meshflow::compress {
 namespace {
 
-constexpr std::uint32_t kTop = RangeEncoder::kTop;
 // A decoder reads up to four bytes ahead of what the encoder flushed; more means the stream
 // was cut or corrupt.
 constexpr std::size_t kAllowedOverrun = 4;
@@ -122,7 +121,7 @@ std::array<std::int32_t, 3> IntegerModel::decode_three(IntegerModel& mx, Integer
                                                        RangeDecoder& dy, RangeDecoder& dz) {
   RangeDecoder::Session sx(dx), sy(dy), sz(dz);
   unsigned nx = 1, ny = 1, nz = 1;
-  for (int level = 0; level < SymbolModel<16>::levels; ++level) {
+  for (int level = 0; level < SymbolModel<16>::kLevels; ++level) {
     nx = mx.length_low_.step(sx.core, nx);
     ny = my.length_low_.step(sy.core, ny);
     nz = mz.length_low_.step(sz.core, nz);

@@ -61,6 +61,7 @@ struct RangeDecoderCore {
   const unsigned char* data = nullptr;
   std::size_t size = 0, at = 0, overrun = 0;
 
+  /// The next byte of the data, 0 past its end (counted in `overrun`).
   std::uint8_t next_byte() {
     if (at < size) return data[at++];
     ++overrun;
@@ -112,7 +113,9 @@ class RangeDecoder {
   /// Decodes from data[0, size) (which must outlive the decoder). `what` names the stream in
   /// errors ("connectivity", ...) and `source` the file.
   RangeDecoder(const unsigned char* data, std::size_t size, std::string source, std::string what);
+  /// The next bit of `model` (adapted).
   unsigned decode(BitModel& model) { return core_.decode(model); }
+  /// `count` (<= 32) bits at even odds.
   std::uint32_t decode_direct(unsigned count) { return core_.decode_direct(count); }
   /// Throws Error(source, what, "...") when the decoder has read more than a few bytes past
   /// the end of its data (the stream was truncated or corrupt). Cheap; call it at checkpoints.
@@ -121,6 +124,7 @@ class RangeDecoder {
   /// The core copied into a local for a run of decodes and stored back when destroyed.
   class Session {
    public:
+    /// Copies d's core; the destructor stores it back.
     explicit Session(RangeDecoder& d) : owner_(d), core(d.core_) {}
     ~Session() { owner_.core_ = core; }
     Session(const Session&) = delete;
@@ -143,6 +147,7 @@ template <unsigned N>
 class SymbolModel {
  public:
   static_assert(N >= 2 && N <= 32);
+  /// Codes `symbol` (< N).
   void encode(RangeEncoder& enc, unsigned symbol) {
     unsigned node = 1;
     for (int bit = kBits - 1; bit >= 0; --bit) {
@@ -151,19 +156,23 @@ class SymbolModel {
       node = node * 2 + b;
     }
   }
+  /// The next symbol (< 2^kLevels: callers check it against N).
   unsigned decode(RangeDecoder& dec) {
     RangeDecoder::Session s(dec);
     return decode(s.core);
   }
+  /// The same on a core a caller holds (RangeDecoder::Session).
   unsigned decode(RangeDecoderCore& dec) {
     unsigned node = 1;
     for (int bit = kBits - 1; bit >= 0; --bit) node = step(dec, node);
     return symbol(node);
   }
   /// Decoding one level at a time (for decoders that interleave several streams): from node 1,
-  /// `levels` steps, then symbol().
-  static constexpr int levels = N <= 2 ? 1 : N <= 4 ? 2 : N <= 8 ? 3 : N <= 16 ? 4 : 5;
+  /// kLevels steps, then symbol().
+  static constexpr int kLevels = N <= 2 ? 1 : N <= 4 ? 2 : N <= 8 ? 3 : N <= 16 ? 4 : 5;
+  /// One level down the tree from `node`.
   unsigned step(RangeDecoderCore& dec, unsigned node) { return node * 2 + dec.decode(tree_[node]); }
+  /// The symbol of the leaf `node` reached after kLevels steps.
   static unsigned symbol(unsigned node) { return node - (1u << kBits); }
 
  private:
@@ -176,7 +185,9 @@ class SymbolModel {
 /// adaptively. Small residuals cost a few bits; any 32-bit value round-trips.
 class IntegerModel {
  public:
+  /// Codes `value`.
   void encode(RangeEncoder& enc, std::int32_t value);
+  /// The next value.
   std::int32_t decode(RangeDecoder& dec);
   /// Three values from three streams (one per model), their steps interleaved so that the three
   /// decoders' dependency chains overlap: about twice as fast as three decode() calls.

@@ -16,14 +16,21 @@ std::uint64_t fnv1a64(const unsigned char* data, std::size_t n);
 /// Appends little-endian values to `out`. Not thread-safe.
 class ByteWriter {
  public:
+  /// Appends n raw bytes from p.
   void bytes(const void* p, std::size_t n);
+  /// Appends one byte.
   void u8(std::uint8_t v) { out.push_back(v); }
+  /// Appends 4 bytes, little-endian.
   void u32(std::uint32_t v);
+  /// Appends 8 bytes, little-endian.
   void u64(std::uint64_t v);
+  /// Appends v's two's complement as u32.
   void i32(std::int32_t v) { u32(static_cast<std::uint32_t>(v)); }
+  /// Appends v's IEEE-754 bits as u32.
   void f32(float v);
+  /// Appends v's IEEE-754 bits as u64.
   void f64(double v);
-  std::vector<unsigned char> out;
+  std::vector<unsigned char> out;  ///< everything written so far
 };
 
 /// Reads little-endian values from `data` (which must outlive it) from the start. Every read
@@ -31,20 +38,29 @@ class ByteWriter {
 /// (truncated)"). Not thread-safe.
 class ByteReader {
  public:
+  /// Reads data[0, size); `path` (which must outlive the reader) names the data in errors.
   ByteReader(const std::string& path, const unsigned char* data, std::size_t size)
       : path_(path), data_(data), size_(size) {}
+  /// Reads all of `data`.
   ByteReader(const std::string& path, const std::vector<unsigned char>& data)
       : ByteReader(path, data.data(), data.size()) {}
+  /// The next byte.
   std::uint8_t u8(const char* field);
+  /// The next 4 bytes, little-endian.
   std::uint32_t u32(const char* field);
+  /// The next 8 bytes, little-endian.
   std::uint64_t u64(const char* field);
+  /// The next u32 as two's complement.
   std::int32_t i32(const char* field) { return static_cast<std::int32_t>(u32(field)); }
+  /// The next u32 as IEEE-754 bits.
   float f32(const char* field);
+  /// The next u64 as IEEE-754 bits.
   double f64(const char* field);
   /// The next n bytes (a pointer into the data), after checking they exist.
   const unsigned char* bytes(std::size_t n, const char* field);
-  /// Bytes read so far / left.
+  /// Bytes read so far.
   std::size_t position() const { return at_; }
+  /// Bytes left.
   std::size_t remaining() const { return size_ - at_; }
   /// Throws Error(path, "FIELD at byte N", problem) at the current position.
   [[noreturn]] void fail(const std::string& field, const std::string& problem) const;

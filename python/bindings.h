@@ -121,4 +121,7 @@ void bind_depth(py::module_& m);
 /// Binds Pipeline, the embedding API (python/live.cpp).
 void bind_live(py::module_& m);
 
+/// Binds compress and decompress (python/compress.cpp).
+void bind_compress(py::module_& m);
+
 }  // namespace meshflow::python

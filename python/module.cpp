@@ -258,6 +258,7 @@ orientation, double walls. reference: a Mesh, a Cloud or a file path.)");
 
   bind_depth(m);
   bind_live(m);
+  bind_compress(m);
 
   static const std::string reconstruct_doc =
       R"(Reconstructs a surface from a Cloud or an (n, 3) points array (with optional (n, 3)

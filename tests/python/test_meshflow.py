@@ -182,3 +182,26 @@ def test_meshflow_errors_name_the_file(tmp_path):
         meshflow.reconstruct(np.zeros((0, 3), dtype=np.float32))
     assert issubclass(meshflow.Error, RuntimeError)
     assert meshflow.__version__
+
+
+def test_compress_round_trip_and_levels(torus_ply):
+    mesh = meshflow.reconstruct(meshflow.read_cloud(torus_ply), voxel=0.02)
+    data = meshflow.compress(mesh)
+    assert isinstance(data, bytes)
+    assert 8 * len(data) / len(mesh.triangles) < 32
+    back = meshflow.decompress(data)
+    assert len(back.triangles) == len(mesh.triangles)
+    assert len(back.vertices) == len(mesh.vertices)
+    # Vertices come back reordered, each within half a quantisation step (1/64 of the median
+    # edge): the bounds and the centroid agree to that.
+    step = np.median(np.linalg.norm(mesh.vertices[mesh.triangles[:, 0]] -
+                                    mesh.vertices[mesh.triangles[:, 1]], axis=1)) / 64
+    for reduce in (np.min, np.max, np.mean):
+        assert np.abs(reduce(mesh.vertices, axis=0) - reduce(back.vertices, axis=0)).max() < step
+    stream = meshflow.compress(mesh, progressive=True)
+    coarse = meshflow.decompress(stream, splits=0)
+    assert 0 < len(coarse.triangles) < len(mesh.triangles) / 10
+    half = meshflow.decompress(stream, triangles=len(mesh.triangles) // 2)
+    assert abs(len(half.triangles) - len(mesh.triangles) // 2) <= 4
+    with pytest.raises(meshflow.Error, match="checksum"):
+        meshflow.decompress(data[:-9] + bytes([data[-9] ^ 1]) + data[-8:])

@@ -286,6 +286,7 @@ struct ProfileOptions {
   SequenceArgument sequence;
   std::string trace_path;
   std::string csv_path;
+  std::string compress;  ///< --compress: time the compress stage too
 };
 
 void write_text(const std::string& path, const std::string& text) {
@@ -297,8 +298,9 @@ void write_text(const std::string& path, const std::string& text) {
 void run_profile(const ProfileOptions& o) {
   ThreadLimit limit(o.pipeline.threads);
   const auto sequence = open_sequence_argument(o.sequence);
-  ReconstructionPipeline pipeline(pipeline_config(o.pipeline, o.triangulation),
-                                  o.sequence.in_flight, o.triangulation.enabled());
+  ReconstructionConfig config = pipeline_config(o.pipeline, o.triangulation);
+  config.compression = compression_for(o.compress, "");
+  ReconstructionPipeline pipeline(config, o.sequence.in_flight, o.triangulation.enabled());
   const SequenceRunOptions run_options{o.sequence.every, o.sequence.max_frames, false,
                                        !o.trace_path.empty()};
   const SequenceRunStats stats = run_sequence(pipeline, *sequence, run_options, [](const Frame& f) {
@@ -382,6 +384,7 @@ void add_profile_options(CLI::App* cmd) {
   cmd->add_option("--trace", o->trace_path,
                   "Write a Chrome trace-event JSON (Perfetto, chrome://tracing)");
   cmd->add_option("--csv", o->csv_path, "Write the stage table as CSV");
+  add_compress_option(cmd, o->compress);
   add_triangulation_options(cmd, o->triangulation);
   add_pipeline_options(cmd, o->pipeline);
   add_console_flags(cmd, true);

@@ -189,6 +189,12 @@ TEST(CliScripting, CompressDecompressAndInfoOfAMesh) {
   EXPECT_EQ(doc["frames_ok"], 3);
   EXPECT_EQ(parse_json(run_cli("info --json " + dir + "/frames/frame_000000.mfc"))["kind"],
             "progressive");
+  // The profiler times the compress stage like any other.
+  const CliRun profile =
+      run_cli("profile " + dir + "/orbit --voxel 0.02 --compress edgebreaker --csv " + dir +
+              "/stages.csv -q");
+  EXPECT_EQ(profile.exit_code, 0) << profile.err;
+  EXPECT_NE(test::read_file(dir + "/stages.csv").find("compress"), std::string::npos);
   test::write_file(dir + "/bad.mfc", "MFMESH\r\n garbage");
   const CliRun bad = run_cli("decompress " + dir + "/bad.mfc " + dir + "/x.ply");
   EXPECT_EQ(bad.exit_code, 1);

@@ -20,6 +20,7 @@ constexpr std::uint32_t kVersion = 1;
 }  // namespace
 
 Quantizer choose_quantizer(const TriangleMesh& mesh, const CompressConfig& config) {
+  require_corners_in_range(mesh.triangles, mesh.vertices.size(), "mesh");
   Eigen::Vector3d lo = Eigen::Vector3d::Constant(0.0), hi = lo;
   for (std::size_t i = 0; i < mesh.vertices.size(); ++i) {
     const Eigen::Vector3d p = mesh.vertices[i].cast<double>();

@@ -62,7 +62,7 @@ struct CompressReport {
 };
 
 /// The quantiser `config` gives for `mesh` (bounding box origin, step, bits; without
-/// origin_offset). Throws Error for non-finite positions. O(V + T).
+/// origin_offset). Throws Error for non-finite positions or a corner out of range. O(V + T).
 Quantizer choose_quantizer(const TriangleMesh& mesh, const CompressConfig& config);
 
 /// Encodes `mesh` single-rate (Edgebreaker). Throws Error for a corner out of range or a

@@ -35,9 +35,8 @@ class StageNodeBody {
 using StageNode = tbb::flow::function_node<FramePtr, FramePtr>;
 
 /// One unlimited node per stage of stages::frame_stages(triangulate_depth_maps,
-/// config.compression) (frames overlap
-/// in every stage), each joined to the next; the caller connects front() and back(). `config`
-/// must outlive the chain.
+/// config.compression) (frames overlap in every stage), each joined to the next; the caller
+/// connects front() and back(). `config` must outlive the chain.
 class StageChain {
  public:
   StageChain(tbb::flow::graph& g, bool triangulate_depth_maps, const ReconstructionConfig& config)

@@ -8,6 +8,7 @@
 #include "nodes/depth/organized_depth.h"
 #include "nodes/extract/extract_surface.h"
 #include "nodes/io/atomic_file.h"
+#include "nodes/io/byte_buffer.h"
 #include "nodes/io/mesh_writers.h"
 #include "nodes/io/parse_util.h"
 #include "nodes/io/read_point_cloud.h"
@@ -122,7 +123,7 @@ void run_reconstruct(const ReconstructOptions& o) {
     progress->begin("texture");
     textures = write_textured(o.output, *frame, config);
   } else if (compressed) {
-    compress::write_file_bytes(o.output, frame->compressed);
+    io::write_file_bytes(o.output, frame->compressed);
   } else {
     io::write_mesh(o.output, frame->mesh, frame->origin);
   }

@@ -6,6 +6,7 @@
 
 #include "nodes/compress/compressed_mesh.h"
 #include "nodes/compress/progressive_mesh.h"
+#include "nodes/io/byte_buffer.h"
 #include "nodes/io/mesh_readers.h"
 #include "nodes/io/mesh_writers.h"
 #include "runtime/error.h"
@@ -43,7 +44,7 @@ void run_compress(const CompressOptions& o) {
                                                ? compress::compress_progressive(mesh, config, &r)
                                                : compress::compress_mesh(mesh, config, &r);
   const double encode_s = monotonic_seconds() - t0;
-  compress::write_file_bytes(o.output, bytes);
+  io::write_file_bytes(o.output, bytes);
   const double triangles = static_cast<double>(std::max<std::size_t>(1, mesh.triangles.size()));
   const double connectivity_bpt = 8.0 * static_cast<double>(r.body.connectivity_bytes) /
                                   static_cast<double>(std::max<std::size_t>(
@@ -100,7 +101,7 @@ struct DecompressOptions {
 
 void run_decompress(const DecompressOptions& o) {
   io::check_mesh_output_format(o.output);
-  const std::vector<unsigned char> bytes = compress::read_file_bytes(o.input);
+  const std::vector<unsigned char> bytes = io::read_file_bytes(o.input);
   const double t0 = monotonic_seconds();
   TriangleMesh mesh;
   if (o.splits >= 0 || o.triangles >= 0) {
@@ -146,7 +147,7 @@ MeshCompression compression_for(const std::string& method, const std::string& ou
 }
 
 void run_compressed_info(const std::string& path) {
-  const std::vector<unsigned char> bytes = compress::read_file_bytes(path);
+  const std::vector<unsigned char> bytes = io::read_file_bytes(path);
   const compress::CompressedMeshInfo info = compress::compressed_mesh_info(bytes, path);
   if (console().json)
     return print_json({{"file", path},

@@ -12,6 +12,7 @@
 #include "nodes/compress/progressive_mesh.h"
 #include "nodes/fusion/tsdf_map_file.h"
 #include "nodes/io/atomic_file.h"
+#include "nodes/io/byte_buffer.h"
 #include "nodes/io/mesh_writers.h"
 #include "runtime/error.h"
 #include "runtime/threads.h"
@@ -111,13 +112,12 @@ void write_run_mesh(const RunOptions& o, const std::string& stem, const Triangle
   if (method == MeshCompression::kNone)
     return io::write_ply((dir / (stem + ".ply")).string(), mesh, io::PlyEncoding::kBinary, origin);
   const std::string path = (dir / (stem + ".mfc")).string();
-  if (compressed != nullptr && !compressed->empty())
-    return compress::write_file_bytes(path, *compressed);
+  if (compressed != nullptr && !compressed->empty()) return io::write_file_bytes(path, *compressed);
   compress::CompressConfig config;
   config.origin_offset = origin;
-  compress::write_file_bytes(path, method == MeshCompression::kProgressive
-                                       ? compress::compress_progressive(mesh, config)
-                                       : compress::compress_mesh(mesh, config));
+  io::write_file_bytes(path, method == MeshCompression::kProgressive
+                                 ? compress::compress_progressive(mesh, config)
+                                 : compress::compress_mesh(mesh, config));
 }
 
 void finish_run(const SequenceRunStats& stats) {

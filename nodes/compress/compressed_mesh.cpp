@@ -3,12 +3,8 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
-#include <fstream>
-#include <iterator>
 
 #include "nodes/compress/progressive_mesh.h"
-#include "nodes/io/atomic_file.h"
-#include "nodes/io/parse_util.h"
 #include "runtime/error.h"
 
 namespace meshflow::compress {
@@ -72,6 +68,10 @@ void write_header(io::ByteWriter& out, CompressionKind kind, AttributeFlags flag
   for (int a = 0; a < 3; ++a) out.f64(quantizer.origin[a] + offset[a]);
   out.f64(quantizer.step);
   out.u32(quantizer.bits);
+}
+
+io::ByteReader body_reader(const std::vector<unsigned char>& bytes, const std::string& source) {
+  return io::ByteReader(source, bytes.data(), bytes.size() >= 8 ? bytes.size() - 8 : bytes.size());
 }
 
 void seal(io::ByteWriter& out) { out.u64(io::fnv1a64(out.out.data(), out.out.size())); }
@@ -143,7 +143,7 @@ CompressedMeshInfo compressed_mesh_info(const std::vector<unsigned char>& bytes,
 }
 
 TriangleMesh decompress_mesh(const std::vector<unsigned char>& bytes, const std::string& source) {
-  io::ByteReader in(source, bytes.data(), bytes.size() >= 8 ? bytes.size() - 8 : bytes.size());
+  io::ByteReader in = detail::body_reader(bytes, source);
   const CompressedMeshInfo info = detail::read_header(in, bytes);
   TriangleMesh mesh;
   if (info.kind == CompressionKind::kProgressive) {
@@ -161,24 +161,8 @@ TriangleMesh decompress_mesh(const std::vector<unsigned char>& bytes, const std:
   return mesh;
 }
 
-std::vector<unsigned char> read_file_bytes(const std::string& path) {
-  std::ifstream in = io::open_input(path);
-  return std::vector<unsigned char>((std::istreambuf_iterator<char>(in)),
-                                    std::istreambuf_iterator<char>());
-}
-
-void write_file_bytes(const std::string& path, const std::vector<unsigned char>& bytes) {
-  io::AtomicOutputFile file(path);
-  file.stream().write(reinterpret_cast<const char*>(bytes.data()),
-                      static_cast<std::streamsize>(bytes.size()));
-  file.commit();
-}
-
 void reseal_compressed_mesh(std::vector<unsigned char>& bytes) {
-  if (bytes.size() < 8) return;
-  const std::uint64_t hash = io::fnv1a64(bytes.data(), bytes.size() - 8);
-  for (std::size_t i = 0; i < 8; ++i)
-    bytes[bytes.size() - 8 + i] = static_cast<unsigned char>(hash >> (8 * i));
+  io::reseal_fnv1a64(bytes.data(), bytes.size());
 }
 
 }  // namespace meshflow::compress

@@ -89,11 +89,6 @@ TriangleMesh decompress_mesh(const std::vector<unsigned char>& bytes, const std:
 CompressedMeshInfo compressed_mesh_info(const std::vector<unsigned char>& bytes,
                                         const std::string& source);
 
-/// Reads a whole file into memory. Throws Error naming the file and the system's reason.
-std::vector<unsigned char> read_file_bytes(const std::string& path);
-/// Writes bytes to `path` atomically. Throws Error.
-void write_file_bytes(const std::string& path, const std::vector<unsigned char>& bytes);
-
 /// Rewrites the checksum (the last 8 bytes) to match the bytes before it, for the fuzzers and
 /// tests that corrupt fields on purpose. No effect below 8 bytes.
 void reseal_compressed_mesh(std::vector<unsigned char>& bytes);
@@ -108,6 +103,9 @@ void write_header(io::ByteWriter& out, CompressionKind kind, AttributeFlags flag
                   const Eigen::Vector3d& offset);
 /// Checks magic, version, checksum and reads the header; leaves `in` at the body.
 CompressedMeshInfo read_header(io::ByteReader& in, const std::vector<unsigned char>& bytes);
+/// A reader over `bytes` without their checksum (the body's end), `source` naming them (it
+/// must outlive the reader).
+io::ByteReader body_reader(const std::vector<unsigned char>& bytes, const std::string& source);
 /// Appends the checksum.
 void seal(io::ByteWriter& out);
 }  // namespace detail

@@ -224,13 +224,7 @@ class Encoder {
           // Nodes from b to xn: offset + 1; from xn's next to g: length - offset - 1.
           const std::uint32_t offset = r == xn ? steps : length - 1 - (steps + 1);
           split_truth_.push_back(offset);
-          const std::uint32_t old_half = half_[xn];
-          const std::uint32_t xc = nodes_.split(g, xn);
-          half_.push_back(kNone);
-          label_.push_back(label);
-          set_half(xc, old_half);
-          set_half(xn, right_half);
-          set_half(g, left_half);
+          const std::uint32_t xc = split(g, xn, left_half, right_half, label);
           const std::uint32_t right_length = offset + 1, left_length = length - offset;
           // The shorter part gets a new label.
           if (r == xn) {
@@ -256,13 +250,7 @@ class Encoder {
           for (std::uint32_t n = other.node; n != xn; n = nodes_.next(n)) ++offset;
           out_.connectivity.handles.push_back(
               {static_cast<std::uint32_t>(stack.size() - k), offset});
-          const std::uint32_t old_half = half_[xn];
-          const std::uint32_t xc = nodes_.split(g, xn);
-          half_.push_back(kNone);
-          label_.push_back(label);
-          set_half(xc, old_half);
-          set_half(xn, right_half);
-          set_half(g, left_half);
+          const std::uint32_t xc = split(g, xn, left_half, right_half, label);
           relabel(xc, xn, label);
           length_[label] += length_[other.label] + 1;
           stack.erase(stack.begin() + static_cast<std::ptrdiff_t>(k - 1));
@@ -270,6 +258,21 @@ class Encoder {
         }
       }
     }
+  }
+
+  // S and M: the triangle across gate g (its half-edges a -> x `left_half`, x -> b
+  // `right_half`) joins x's node xn; returns x's new node on a's side (labelled `label`, which
+  // the caller corrects where the parts differ).
+  std::uint32_t split(std::uint32_t g, std::uint32_t xn, std::uint32_t left_half,
+                      std::uint32_t right_half, std::uint32_t label) {
+    const std::uint32_t old_half = half_[xn];
+    const std::uint32_t xc = nodes_.split(g, xn);
+    half_.push_back(kNone);
+    label_.push_back(label);
+    set_half(xc, old_half);
+    set_half(xn, right_half);
+    set_half(g, left_half);
+    return xc;
   }
 
   // The loop node of decoded vertex x whose unwalked fan holds the triangle of `from` (a

@@ -407,7 +407,7 @@ TriangleMesh decode_progressive(io::ByteReader& in, const CompressedMeshInfo& in
 TriangleMesh decompress_progressive_level(const std::vector<unsigned char>& bytes,
                                           const std::string& source,
                                           const ProgressiveLevel& level) {
-  io::ByteReader in(source, bytes.data(), bytes.size() >= 8 ? bytes.size() - 8 : bytes.size());
+  io::ByteReader in = detail::body_reader(bytes, source);
   const CompressedMeshInfo info = detail::read_header(in, bytes);
   if (info.kind != CompressionKind::kProgressive)
     throw Error(source, "kind", "is single-rate (Edgebreaker): it has no levels of detail");

@@ -2,13 +2,9 @@
 
 #include <cmath>
 #include <cstring>
-#include <fstream>
-#include <iterator>
 #include <vector>
 
-#include "nodes/io/atomic_file.h"
 #include "nodes/io/byte_buffer.h"
-#include "nodes/io/parse_util.h"
 #include "runtime/error.h"
 
 namespace meshflow {
@@ -45,22 +41,13 @@ void write_tsdf_map(const std::string& path, const TsdfVolume& volume) {
     }
   }
   w.u64(io::fnv1a64(w.out.data(), w.out.size()));
-  io::AtomicOutputFile file(path);
-  file.stream().write(reinterpret_cast<const char*>(w.out.data()),
-                      static_cast<std::streamsize>(w.out.size()));
-  file.commit();
+  io::write_file_bytes(path, w.out);
 }
 
-void reseal_tsdf_map(std::uint8_t* bytes, std::size_t size) {
-  if (size < 8) return;
-  const std::uint64_t hash = io::fnv1a64(bytes, size - 8);
-  std::memcpy(bytes + size - 8, &hash, 8);
-}
+void reseal_tsdf_map(std::uint8_t* bytes, std::size_t size) { io::reseal_fnv1a64(bytes, size); }
 
 TsdfVolume read_tsdf_map(const std::string& path) {
-  std::ifstream in = io::open_input(path);
-  const std::vector<unsigned char> data((std::istreambuf_iterator<char>(in)),
-                                        std::istreambuf_iterator<char>());
+  const std::vector<unsigned char> data = io::read_file_bytes(path);
   io::ByteReader r(path, data);
   if (data.size() < sizeof kMagic || std::memcmp(data.data(), kMagic, sizeof kMagic) != 0) {
     throw Error(path, "magic", "not a meshflow TSDF map (expected \"MFTSDF\" at byte 0)");

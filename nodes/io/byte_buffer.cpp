@@ -1,7 +1,11 @@
 #include "nodes/io/byte_buffer.h"
 
 #include <cstring>
+#include <fstream>
+#include <iterator>
 
+#include "nodes/io/atomic_file.h"
+#include "nodes/io/parse_util.h"
 #include "runtime/error.h"
 
 namespace meshflow::io {
@@ -13,6 +17,26 @@ std::uint64_t fnv1a64(const unsigned char* data, std::size_t n) {
     h *= 1099511628211ull;
   }
   return h;
+}
+
+void reseal_fnv1a64(unsigned char* data, std::size_t size) {
+  if (size < 8) return;
+  const std::uint64_t hash = fnv1a64(data, size - 8);
+  for (std::size_t i = 0; i < 8; ++i)
+    data[size - 8 + i] = static_cast<unsigned char>(hash >> (8 * i));
+}
+
+std::vector<unsigned char> read_file_bytes(const std::string& path) {
+  std::ifstream in = open_input(path);
+  return std::vector<unsigned char>((std::istreambuf_iterator<char>(in)),
+                                    std::istreambuf_iterator<char>());
+}
+
+void write_file_bytes(const std::string& path, const std::vector<unsigned char>& bytes) {
+  AtomicOutputFile file(path);
+  file.stream().write(reinterpret_cast<const char*>(bytes.data()),
+                      static_cast<std::streamsize>(bytes.size()));
+  file.commit();
 }
 
 void ByteWriter::bytes(const void* p, std::size_t n) {

@@ -13,6 +13,17 @@ namespace meshflow::io {
 /// FNV-1a 64-bit hash of data[0, n). O(n).
 std::uint64_t fnv1a64(const unsigned char* data, std::size_t n);
 
+/// Rewrites the last 8 bytes of data[0, size) as the FNV-1a 64 hash (little-endian) of the
+/// bytes before them: the checksum meshflow's own formats end with, for programs that edit a
+/// file's image on purpose (fuzzers, tests). No effect below 8 bytes. O(size).
+void reseal_fnv1a64(unsigned char* data, std::size_t size);
+
+/// The whole file at `path`. Throws Error naming the file and the system's reason. O(size).
+std::vector<unsigned char> read_file_bytes(const std::string& path);
+
+/// Writes `bytes` to `path` atomically (complete file or none). Throws Error. O(size).
+void write_file_bytes(const std::string& path, const std::vector<unsigned char>& bytes);
+
 /// Appends little-endian values to `out`. Not thread-safe.
 class ByteWriter {
  public:

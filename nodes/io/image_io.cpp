@@ -13,6 +13,7 @@
 #include <memory>
 
 #include "nodes/io/atomic_file.h"
+#include "nodes/io/byte_buffer.h"
 #include "nodes/io/parse_util.h"
 #include "runtime/error.h"
 
@@ -22,13 +23,6 @@ namespace {
 constexpr std::uint64_t kMaxPixels = std::uint64_t{1} << 28;  // 16 k x 16 k
 
 enum class Kind { kPng, kJpeg, kTiff, kPclzf, kOther };
-
-std::vector<std::uint8_t> file_bytes(const std::string& path) {
-  std::ifstream in = open_input(path);
-  std::vector<std::uint8_t> bytes((std::istreambuf_iterator<char>(in)),
-                                  std::istreambuf_iterator<char>());
-  return bytes;
-}
 
 Kind kind_of(const std::vector<std::uint8_t>& b) {
   if (b.size() >= 8 && std::memcmp(b.data(), "\x89PNG\r\n\x1a\n", 8) == 0) return Kind::kPng;
@@ -280,7 +274,7 @@ Image decode_pclzf(const std::vector<std::uint8_t>& bytes, const std::string& pa
 }
 
 Image read_image(const std::string& path, bool depth) {
-  const std::vector<std::uint8_t> bytes = file_bytes(path);
+  const std::vector<std::uint8_t> bytes = read_file_bytes(path);
   switch (kind_of(bytes)) {
     case Kind::kPng:
       return decode_png(bytes, path, depth);

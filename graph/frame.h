@@ -4,6 +4,7 @@
 #include <cstdint>
 #include <functional>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -104,10 +105,17 @@ struct Frame {
   FilterCounts filter_counts;
   std::shared_ptr<const SpatialIndex> index;  ///< over cloud.positions, built by "index"
   float voxel_size = 0.0f;
+  /// Chunked (out-of-core) reconstruction: "voxelize" keeps only these cells, the ones this
+  /// chunk owns, so each cell's surface comes from one chunk (graph/chunked_reconstruction.h).
+  std::optional<CellRange> owned_cells;
   SparseGrid grid;
   DistanceField distance;
   ExtractMethod extract_method = ExtractMethod::kAuto;  ///< the method "extract" used
   std::size_t rim_trimmed = 0;  ///< triangles "extract" peeled off the rim (max_rim_voxels)
+  /// Chunks (owned_cells set): per mesh vertex, whether it lies beyond the data as trim_rim
+  /// judges (vertices_beyond_data); the rim is trimmed after stitching, where chunk cuts are
+  /// no border.
+  std::vector<std::uint8_t> beyond_data;
   TriangleMesh mesh;  ///< after extract: raw; after optimize: optimised (fusion: the map so far)
   OptimizeReport optimize;       ///< what each optimisation step did
   IntegrationStats integration;  ///< fusion: what integrating this frame did

@@ -144,6 +144,7 @@ std::uint64_t voxelize(Frame& f, const ReconstructionConfig& c) {
   }
   f.voxel_size = vc.voxel_size;
   f.grid = meshflow::voxelize(f.cloud, vc);
+  if (f.owned_cells) keep_cells_in(f.grid, *f.owned_cells);
   const std::size_t bytes = frame_memory_estimate(f.cloud, f.grid);
   if (c.max_memory_bytes > 0 && bytes > c.max_memory_bytes) {
     const auto mib = [](std::size_t b) { return std::to_string(b >> 20) + " MiB"; };
@@ -176,9 +177,13 @@ std::uint64_t extract(Frame& f, const ReconstructionConfig& c) {
         f.normals.sharp ? ExtractMethod::kExtendedMarchingCubes : ExtractMethod::kMarchingCubes;
   f.extract_method = config.method;
   f.mesh = extract_surface(f.grid, f.distance, f.cloud, f.index.get(), config);
-  if (f.index && c.max_rim_voxels > 0.0f)
-    f.mesh = trim_rim(f.mesh, f.cloud.positions, *f.index, c.max_rim_voxels * f.voxel_size,
-                      &f.rim_trimmed);
+  if (f.index && c.max_rim_voxels > 0.0f) {
+    const float limit = c.max_rim_voxels * f.voxel_size;
+    if (f.owned_cells)  // a chunk: the rim is trimmed once the chunks are stitched
+      f.beyond_data = vertices_beyond_data(f.mesh.vertices, f.cloud.positions, *f.index, limit);
+    else
+      f.mesh = trim_rim(f.mesh, f.cloud.positions, *f.index, limit, &f.rim_trimmed);
+  }
   if (f.depth) {  // a depth frame with a colour image gives a coloured mesh
     f.mesh.colors = vertex_colors_from_image(f.mesh.vertices, *f.depth);
     f.depth.reset();

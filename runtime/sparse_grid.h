@@ -11,6 +11,16 @@
 
 namespace meshflow {
 
+/// A box of cells, [lo, hi) per axis (cell indices as in cell_of()).
+struct CellRange {
+  Eigen::Vector3i lo = Eigen::Vector3i::Zero();
+  Eigen::Vector3i hi = Eigen::Vector3i::Zero();
+  /// Whether cell c lies in the box.
+  bool contains(const Eigen::Vector3i& c) const {
+    return (c.array() >= lo.array()).all() && (c.array() < hi.array()).all();
+  }
+};
+
 /// Cells are addressed by the packed index of their minimum corner; corner c of a cell
 /// (c = x + 2y + 4z, bits selecting +1 along each axis) is cell_corners[cell][c].
 struct SparseGrid {

@@ -34,7 +34,8 @@ struct ReconstructOptions {
   std::string output;
   PipelineOptions pipeline;
   bool texture = false;
-  std::string compress;  ///< --compress method, "" = none (a .mfc output: edgebreaker)
+  std::string compress;     ///< --compress method, "" = none (a .mfc output: edgebreaker)
+  ChunkingConfig chunking;  ///< chunk_size 0: one piece (no --chunk)
 };
 
 // Textures the planar regions of the frame's mesh from its coloured points and writes OBJ +
@@ -83,6 +84,14 @@ void print_settings(const ReconstructionConfig& c) {
 void run_reconstruct(const ReconstructOptions& o) {
   ThreadLimit limit(o.pipeline.threads);
   ReconstructionConfig config = o.pipeline.config();
+  if (o.chunking.chunk_size > 0.0f) {
+    if (o.texture || !o.compress.empty() || is_compressed_mesh_file(o.output))
+      throw Error("--chunk", "",
+                  "writes a mesh file (.ply .obj .stl .off .glb): no --texture or --compress");
+    print_settings(config);
+    return run_chunked_reconstruct(o.input, o.columns, o.output, config, o.chunking,
+                                   limit.threads());
+  }
   config.compression = compression_for(o.compress, o.output);
   const bool compressed = config.compression != MeshCompression::kNone;
   // Fail on an unwritable output before spending time on reconstruction.
@@ -238,6 +247,20 @@ void add_reconstruct_options(CLI::App* cmd) {
   add_console_flags(cmd, true);
   cmd->add_flag("--texture", opts->texture,
                 "Texture planar regions from the points' colours (OBJ + MTL + PNG output)");
+  opts->chunking.chunk_size = 0.0f;
+  cmd->add_option("--chunk", opts->chunking.chunk_size,
+                  "Out of core: stream the input into chunks of this edge (metres) on disk and "
+                  "mesh them a few at a time, seams welded exactly (0 = whole cloud in memory)")
+      ->check(number_in(0, 1e6));
+  cmd->add_option("--chunk-overlap", opts->chunking.overlap_voxels,
+                  "Voxels of points each chunk sees beyond its own cells")
+      ->check(number_in(1, 64))
+      ->capture_default_str();
+  cmd->add_option("--chunk-dir", opts->chunking.directory,
+                  "Where the chunk files go (default: the system's temporary directory)");
+  cmd->add_option("--chunks-in-flight", opts->chunking.in_flight, "Chunks meshed at once")
+      ->check(number_in(1, 64))
+      ->capture_default_str();
   cmd->callback([opts] { run_reconstruct(*opts); });
 }
 

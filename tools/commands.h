@@ -6,6 +6,7 @@
 
 #include <CLI/CLI.hpp>
 
+#include "graph/chunked_reconstruction.h"
 #include "graph/frame.h"
 
 #include <string>
@@ -34,6 +35,12 @@ void add_compress_option(CLI::App* cmd, std::string& method);
 MeshCompression compression_for(const std::string& method, const std::string& output);
 /// `meshflow info` on a compressed mesh: its header (and --json). Throws Error.
 void run_compressed_info(const std::string& path);
+
+/// `reconstruct --chunk`: the out-of-core path (graph/chunked_reconstruction.h) from `input` to
+/// the mesh file `output`, with its report (or --json document). Throws meshflow::Error.
+void run_chunked_reconstruct(const std::string& input, const std::string& columns,
+                             const std::string& output, const ReconstructionConfig& config,
+                             const ChunkingConfig& chunking, int threads);
 
 struct Command {
   const char* name;

@@ -3,13 +3,18 @@
 // without a scanner; `meshflow eval MESH --object OBJECT` measures against its exact surface.
 // With --orbit N: N depth frames of a camera circling the object, written as a TUM RGB-D
 // directory (for `meshflow run DIR --fuse`, and for other tools on the same frames).
+// `sample city`: a large scanned site (terrain and buildings) streamed to PLY, for the
+// out-of-core path (`reconstruct --chunk`).
 
+#include <cmath>
 #include <cstdio>
 #include <memory>
 #include <string>
 
 #include "nodes/io/mesh_writers.h"
+#include "nodes/io/ply_point_writer.h"
 #include "nodes/io/tum_writer.h"
+#include "nodes/synthetic/city_scene.h"
 #include "nodes/synthetic/closed_objects.h"
 #include "nodes/synthetic/depth_sequence.h"
 #include "nodes/synthetic/object_orbit.h"
@@ -31,7 +36,32 @@ struct SampleOptions {
   int orbit = 0;                 ///< > 0: depth frames of a camera circling the object
   std::string size = "640x480";  ///< their image size
   float depth_noise = 0.001f;    ///< their range noise, metres
+  float site = synthetic::CitySceneConfig{}.size;  ///< city: side of the site, metres
 };
+
+// The large scene, streamed to a binary PLY batch by batch (any number of points).
+void write_city(const SampleOptions& o) {
+  synthetic::CitySceneConfig config;
+  config.size = o.site;
+  config.seed = o.seed;
+  const synthetic::CityScene city(config);
+  io::PlyPointWriter writer(o.output, o.points, o.normals, false);
+  const float noise = o.noise * city.bounds().diagonal().norm();
+  city.sample(o.points, noise, [&](const PointCloud& batch) {
+    if (o.normals) return writer.append(batch);
+    PointCloud positions;
+    positions.positions = batch.positions;
+    writer.append(positions);
+  });
+  writer.finish();
+  const Eigen::Vector3f size = city.bounds().sizes();
+  report("scene      city: %.0f x %.0f x %.1f m, %zu buildings, surface %.0f m^2\n", size.x(),
+         size.y(), size.z(), city.buildings().size(), city.area());
+  report("points     %zu%s, %.1f per m^2 (spacing about %.3f m), noise %.3g m\n", o.points,
+         o.normals ? " with exact normals" : "", static_cast<double>(o.points) / city.area(),
+         std::sqrt(city.area() / static_cast<double>(o.points)), noise);
+  report("output     %s\n", o.output.c_str());
+}
 
 void write_orbit(const SampleOptions& o, const synthetic::ClosedObject& object) {
   synthetic::ObjectOrbitConfig config;
@@ -53,6 +83,10 @@ void write_orbit(const SampleOptions& o, const synthetic::ClosedObject& object) 
 }
 
 void run_sample(const SampleOptions& o) {
+  if (o.object == "city") {
+    if (o.orbit > 0) throw Error("--orbit", "city", "the city is sampled as points only");
+    return write_city(o);
+  }
   const synthetic::ClosedObject object = *synthetic::closed_test_object(o.object);
   if (o.orbit > 0) {
     write_orbit(o, object);
@@ -80,12 +114,21 @@ std::vector<std::string> closed_object_names() {
   return names;
 }
 
+namespace {
+std::vector<std::string> sample_names() {
+  std::vector<std::string> names = closed_object_names();
+  names.push_back("city");
+  return names;
+}
+}  // namespace
+
 void add_sample_options(CLI::App* cmd) {
   auto opts = std::make_shared<SampleOptions>();
   cmd->add_option("object", opts->object,
-                  "sphere, torus, l-shape, chamfered-cube, box-with-hole, box, thin-plate")
+                  "sphere, torus, l-shape, chamfered-cube, box-with-hole, box, thin-plate, or "
+                  "city (a large terrain with buildings, streamed: any number of points)")
       ->required()
-      ->check(CLI::IsMember(closed_object_names()));
+      ->check(CLI::IsMember(sample_names()));
   cmd->add_option("-o,--output", opts->output,
                   "Output point cloud (.ply), or directory with --orbit")
       ->required();
@@ -103,6 +146,8 @@ void add_sample_options(CLI::App* cmd) {
   cmd->add_option("--depth-noise", opts->depth_noise,
                   "Range noise of the --orbit frames, metres (Gaussian sigma)")
       ->check(number_in(0, 1));
+  cmd->add_option("--site", opts->site, "city: side of the square site, metres")
+      ->check(number_in(10, 20000));
   add_console_flags(cmd, false);
   cmd->callback([opts] { run_sample(*opts); });
 }

@@ -25,10 +25,10 @@ bool beyond_data(const Eigen::Vector3f& v, const std::vector<Eigen::Vector3f>& p
   return d2 > 4.0f * pair_d2[1];
 }
 
-}  // namespace
-
-TriangleMesh trim_rim(const TriangleMesh& mesh, const std::vector<Eigen::Vector3f>& positions,
-                      const SpatialIndex& points, float max_distance, std::size_t* removed) {
+// The peeling rounds of trim_rim(); measure(v) tells whether vertex v lies beyond the data
+// (called in parallel, at most once per vertex).
+template <typename Measure>
+TriangleMesh peel_rim(const TriangleMesh& mesh, const Measure& measure, std::size_t* removed) {
   constexpr int kMaxRounds = 16;
   const VertexTriangles around = vertex_triangles(mesh);
   std::vector<std::uint8_t> alive(mesh.triangles.size(), 1);
@@ -72,10 +72,8 @@ TriangleMesh trim_rim(const TriangleMesh& mesh, const std::vector<Eigen::Vector3
           unmeasured.push_back(mesh.triangles[candidates[i]][k]);
     std::sort(unmeasured.begin(), unmeasured.end());
     unmeasured.erase(std::unique(unmeasured.begin(), unmeasured.end()), unmeasured.end());
-    tbb::parallel_for(std::size_t{0}, unmeasured.size(), [&](std::size_t i) {
-      far[unmeasured[i]] =
-          beyond_data(mesh.vertices[unmeasured[i]], positions, points, max_distance) ? 1 : 0;
-    });
+    tbb::parallel_for(std::size_t{0}, unmeasured.size(),
+                      [&](std::size_t i) { far[unmeasured[i]] = measure(unmeasured[i]) ? 1 : 0; });
     std::vector<std::uint32_t> dropped;
     for (std::size_t i = 0; i < candidates.size(); ++i) {
       const Triangle& t = mesh.triangles[candidates[i]];
@@ -104,6 +102,34 @@ TriangleMesh trim_rim(const TriangleMesh& mesh, const std::vector<Eigen::Vector3
   for (std::size_t t = 0; t < mesh.triangles.size(); ++t)
     if (alive[t]) kept.push_back(mesh.triangles[t]);
   return compact_vertices(mesh, kept);
+}
+
+}  // namespace
+
+TriangleMesh trim_rim(const TriangleMesh& mesh, const std::vector<Eigen::Vector3f>& positions,
+                      const SpatialIndex& points, float max_distance, std::size_t* removed) {
+  return peel_rim(
+      mesh,
+      [&](std::uint32_t v) {
+        return beyond_data(mesh.vertices[v], positions, points, max_distance);
+      },
+      removed);
+}
+
+TriangleMesh trim_rim(const TriangleMesh& mesh, const std::vector<std::uint8_t>& beyond,
+                      std::size_t* removed) {
+  return peel_rim(
+      mesh, [&](std::uint32_t v) { return beyond[v] != 0; }, removed);
+}
+
+std::vector<std::uint8_t> vertices_beyond_data(const std::vector<Eigen::Vector3f>& vertices,
+                                               const std::vector<Eigen::Vector3f>& positions,
+                                               const SpatialIndex& points, float max_distance) {
+  std::vector<std::uint8_t> beyond(vertices.size());
+  tbb::parallel_for(std::size_t{0}, vertices.size(), [&](std::size_t v) {
+    beyond[v] = beyond_data(vertices[v], positions, points, max_distance) ? 1 : 0;
+  });
+  return beyond;
 }
 
 }  // namespace meshflow

@@ -4,6 +4,7 @@
 // runs on for up to two voxels beyond the data (the bunny's rim: 32 mm at 18 mm voxels).
 // Peeling the border back to the data keeps every rim within a voxel of it.
 
+#include <cstdint>
 #include <vector>
 
 #include "nodes/search/spatial_index.h"
@@ -25,6 +26,18 @@ namespace meshflow {
 /// degree d.
 TriangleMesh trim_rim(const TriangleMesh& mesh, const std::vector<Eigen::Vector3f>& positions,
                       const SpatialIndex& points, float max_distance,
+                      std::size_t* removed = nullptr);
+
+/// Per vertex, 1 if it lies beyond the data as trim_rim() judges a border corner (farther than
+/// `max_distance` from the nearest point and than twice that point's spacing), else 0. For
+/// meshes trimmed later (chunks, trimmed once stitched). Parallel; O(V log n).
+std::vector<std::uint8_t> vertices_beyond_data(const std::vector<Eigen::Vector3f>& vertices,
+                                               const std::vector<Eigen::Vector3f>& positions,
+                                               const SpatialIndex& points, float max_distance);
+
+/// trim_rim() with every vertex's verdict given (`beyond`, one per vertex, from
+/// vertices_beyond_data()) instead of measured. Same rounds, same result.
+TriangleMesh trim_rim(const TriangleMesh& mesh, const std::vector<std::uint8_t>& beyond,
                       std::size_t* removed = nullptr);
 
 }  // namespace meshflow

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <functional>
 #include <optional>
 
 #include "nodes/io/binary_value.h"
@@ -350,9 +351,11 @@ class ElementReader {
 namespace {
 
 // Reads the vertex element into `cloud` and, when `triangles` is given, the face element's
-// vertex index lists (polygons fan-triangulated) into it.
-void read_ply_elements(const std::string& path, PointCloud& cloud,
-                       std::vector<Triangle>* triangles) {
+// vertex index lists (polygons fan-triangulated) into it. With `flush`, hands `cloud` to it
+// (and empties it) each time it holds `batch` points, and once more with the rest.
+void read_ply_elements(const std::string& path, PointCloud& cloud, std::vector<Triangle>* triangles,
+                       std::size_t batch = 0,
+                       const std::function<void(const PointCloud&)>* flush = nullptr) {
   std::ifstream in = open_input(path);
   const PlyHeader header = parse_ply_header(in, path);
   const auto vertex_it = std::find_if(header.elements.begin(), header.elements.end(),
@@ -378,18 +381,28 @@ void read_ply_elements(const std::string& path, PointCloud& cloud,
 
   // Never trust the declared count for allocation: a lying header must not exhaust memory.
   const std::uint64_t plausible = file_size(path) / 3 + 1;
-  const std::size_t reserve = static_cast<std::size_t>(std::min(vertex_it->count, plausible));
+  std::size_t reserve = static_cast<std::size_t>(std::min(vertex_it->count, plausible));
+  if (flush) reserve = std::min(reserve, batch);
   cloud.positions.reserve(reserve);
   if (map.has_normals()) cloud.normals.reserve(reserve);
   if (map.has_colors()) cloud.colors.reserve(reserve);
   if (map.has_intensity()) cloud.intensities.reserve(reserve);
 
+  const auto hand_over = [&] {
+    (*flush)(cloud);
+    cloud.positions.clear();
+    cloud.normals.clear();
+    cloud.colors.clear();
+    cloud.intensities.clear();
+  };
   ElementReader reader(in, path, header.format);
   for (const PlyElement& e : header.elements) {
     if (&e == &*vertex_it) {
       reader.read(e, [&](const std::vector<double>& v, std::uint64_t row) {
         append_vertex(v, map, cloud, path, row);
+        if (flush && cloud.size() >= batch) hand_over();
       });
+      if (flush && !cloud.empty()) hand_over();
     } else if (triangles && face_it != header.elements.end() && &e == &*face_it) {
       reader.collect_lists(true);
       reader.read(e, [&](const std::vector<double>&, std::uint64_t row) {
@@ -429,6 +442,13 @@ PointCloud read_ply(const std::string& path) {
   PointCloud cloud;
   read_ply_elements(path, cloud, nullptr);
   return cloud;
+}
+
+void read_ply_batches(const std::string& path, std::size_t batch,
+                      const std::function<void(const PointCloud&)>& sink) {
+  PointCloud cloud;
+  const std::size_t size = std::max<std::size_t>(batch, 1);
+  read_ply_elements(path, cloud, nullptr, size, &sink);
 }
 
 TriangleMesh read_ply_mesh(const std::string& path) {

@@ -1,6 +1,7 @@
 #pragma once
 // PLY point reader: ascii, binary_little_endian and binary_big_endian.
 
+#include <functional>
 #include <string>
 
 #include "runtime/point_cloud.h"
@@ -16,6 +17,12 @@ namespace meshflow::io {
 /// malformed, truncated or inconsistent input (including data past the declared counts).
 /// Streams the file: memory is the size of the output plus a fixed buffer. O(file size).
 PointCloud read_ply(const std::string& path);
+
+/// read_ply() in pieces: hands the vertices to `sink` in file order, `batch` (>= 1) at a time
+/// (the last piece smaller), so a file larger than memory can be streamed. The cloud passed to
+/// `sink` is reused after it returns. Throws as read_ply() does, possibly after some batches.
+void read_ply_batches(const std::string& path, std::size_t batch,
+                      const std::function<void(const PointCloud&)>& sink);
 
 /// Reads a PLY mesh: the vertex element as in read_ply (positions, normals, colours) and the
 /// `face` element's `vertex_indices` lists (polygons are fan-triangulated). Throws

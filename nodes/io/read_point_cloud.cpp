@@ -1,5 +1,7 @@
 #include "nodes/io/read_point_cloud.h"
 
+#include <algorithm>
+
 #include "nodes/io/las_reader.h"
 #include "nodes/io/parse_util.h"
 #include "nodes/io/pcd_reader.h"
@@ -37,6 +39,32 @@ PointCloud read_point_cloud(const std::string& path) {
   throw Error(path, "",
               "unknown point cloud format '" + ext +
                   "' (expected .ply, .pcd, .xyz, .txt, .pts, .asc, .csv, .3d or .las)");
+}
+
+void for_each_point_batch(const std::string& path, const std::string& columns, std::size_t batch,
+                          const std::function<void(const PointCloud&)>& sink) {
+  batch = std::max<std::size_t>(batch, 1);
+  if (columns.empty() && lower_extension(path) == ".ply")
+    return read_ply_batches(path, batch, sink);
+  PointCloud whole = read_point_cloud(path, columns);
+  if (whole.size() <= batch) return sink(whole);
+  PointCloud piece;
+  piece.origin = whole.origin;
+  piece.sensor_origin = whole.sensor_origin;
+  piece.has_sensor_origin = whole.has_sensor_origin;
+  for (std::size_t begin = 0; begin < whole.size(); begin += batch) {
+    const std::size_t end = std::min(whole.size(), begin + batch);
+    const auto slice = [&](const auto& from, auto& to) {
+      if (from.empty()) return;
+      to.assign(from.begin() + static_cast<std::ptrdiff_t>(begin),
+                from.begin() + static_cast<std::ptrdiff_t>(end));
+    };
+    slice(whole.positions, piece.positions);
+    slice(whole.normals, piece.normals);
+    slice(whole.colors, piece.colors);
+    slice(whole.intensities, piece.intensities);
+    sink(piece);
+  }
 }
 
 }  // namespace meshflow::io

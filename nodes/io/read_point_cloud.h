@@ -1,6 +1,8 @@
 #pragma once
 // One entry point for every point-cloud format meshflow reads.
 
+#include <cstddef>
+#include <functional>
 #include <string>
 
 #include "runtime/point_cloud.h"
@@ -15,5 +17,12 @@ PointCloud read_point_cloud(const std::string& path);
 /// The same with the columns of a text cloud given (see read_xyz); `columns` must be empty
 /// for the other formats (a meshflow::Error naming --columns otherwise).
 PointCloud read_point_cloud(const std::string& path, const std::string& columns);
+
+/// The points of `path` (columns as above) handed to `sink` in file order, at most `batch` at a
+/// time, each piece with the file's origin and sensor. PLY is streamed (memory: one batch);
+/// the other formats are read whole and then handed over in pieces. The cloud passed to `sink`
+/// is reused after it returns. Throws as read_point_cloud() does.
+void for_each_point_batch(const std::string& path, const std::string& columns, std::size_t batch,
+                          const std::function<void(const PointCloud&)>& sink);
 
 }  // namespace meshflow::io

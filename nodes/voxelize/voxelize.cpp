@@ -283,6 +283,29 @@ SparseGrid voxelize(const PointCloud& cloud, const VoxelizeConfig& config) {
   return grid;
 }
 
+void keep_cells_in(SparseGrid& grid, const CellRange& range) {
+  std::vector<std::uint8_t> used(grid.corners.size(), 0);
+  std::size_t kept = 0;
+  for (std::size_t i = 0; i < grid.cells.size(); ++i) {
+    if (!range.contains(unpack_key(grid.cells[i]))) continue;
+    grid.cells[kept] = grid.cells[i];
+    grid.cell_corners[kept] = grid.cell_corners[i];
+    for (std::uint32_t c : grid.cell_corners[kept]) used[c] = 1;
+    ++kept;
+  }
+  grid.cells.resize(kept);
+  grid.cell_corners.resize(kept);
+  std::vector<std::uint32_t> renumbered(grid.corners.size());
+  std::uint32_t next = 0;
+  for (std::size_t c = 0; c < grid.corners.size(); ++c) {
+    renumbered[c] = next;
+    if (used[c]) grid.corners[next++] = grid.corners[c];
+  }
+  grid.corners.resize(next);
+  for (auto& corners : grid.cell_corners)
+    for (std::uint32_t& c : corners) c = renumbered[c];
+}
+
 float suggest_voxel_size(const PointCloud& cloud, const SpatialIndex& index, float factor) {
   const std::size_t n = cloud.size();
   if (n < 2) return 0.05f;

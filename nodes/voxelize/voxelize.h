@@ -27,6 +27,11 @@ struct VoxelizeConfig {
 /// (about +-1e6 cells) or the voxel size or margin is invalid. O(n + cells), parallel inside.
 SparseGrid voxelize(const PointCloud& cloud, const VoxelizeConfig& config);
 
+/// Removes every cell of `grid` outside `range` and the corners only they used (the chunked
+/// path keeps the cells a chunk owns, so each cell's surface comes from exactly one chunk).
+/// Keys stay sorted; corner indices are renumbered. Serial; O(cells + corners).
+void keep_cells_in(SparseGrid& grid, const CellRange& range);
+
 /// A voxel size suited to the sampling: `factor` x the median nearest-neighbour spacing of a
 /// deterministic subset of the points, and at least 1/2000 of the bounding-box diagonal
 /// (which bounds memory). `index` must be built over cloud.positions. Returns metres; 0 when

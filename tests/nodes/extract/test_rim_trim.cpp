@@ -50,6 +50,22 @@ TEST(RimTrim, PeelsTheBorderBackToWithinTheLimitOfTheData) {
     for (std::uint32_t v : t) ASSERT_LT(v, out.vertices.size());
 }
 
+TEST(RimTrim, GivenVerdictsPeelExactlyAsMeasuredOnes) {
+  const std::vector<Eigen::Vector3f> points = square_points();
+  const KdTreeIndex index(points);
+  const TriangleMesh mesh = long_grid();
+  std::size_t measured_removed = 0, given_removed = 0;
+  const TriangleMesh measured = trim_rim(mesh, points, index, 0.25f, &measured_removed);
+  const std::vector<std::uint8_t> beyond =
+      vertices_beyond_data(mesh.vertices, points, index, 0.25f);
+  ASSERT_EQ(beyond.size(), mesh.vertices.size());
+  const TriangleMesh given = trim_rim(mesh, beyond, &given_removed);
+  EXPECT_GT(measured_removed, 0u);
+  EXPECT_EQ(given_removed, measured_removed);
+  EXPECT_EQ(given.vertices, measured.vertices);
+  EXPECT_EQ(given.triangles, measured.triangles);
+}
+
 TEST(RimTrim, ClosedMeshesAndBordersOnTheDataAreUnchanged) {
   const TriangleMesh tet = test::tetrahedron();
   const KdTreeIndex far_index(tet.vertices);

@@ -1,0 +1,163 @@
+#include "graph/chunked_reconstruction.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "graph/pipeline.h"
+#include "nodes/chunk/mesh_stitch.h"
+#include "nodes/extract/rim_trim.h"
+#include "nodes/filter/filter.h"
+#include "nodes/io/read_point_cloud.h"
+#include "nodes/search/spatial_index.h"
+#include "runtime/error.h"
+#include "runtime/tracing.h"
+
+namespace meshflow {
+namespace {
+
+// The voxel suggest_voxel_size() gives for the finite points of one batch (0 if none).
+float voxel_from_batch(const PointCloud& batch) {
+  PointCloud finite;
+  for (const Eigen::Vector3f& p : batch.positions)
+    if (p.allFinite()) finite.positions.push_back(p);
+  if (finite.size() < 2) return 0.0f;
+  const KdTreeIndex index(finite.positions);
+  return suggest_voxel_size(finite, index);
+}
+
+std::string chunk_label(const chunk::ChunkFile& file) {
+  return "chunk (" + std::to_string(file.index.x()) + "," + std::to_string(file.index.y()) + "," +
+         std::to_string(file.index.z()) + ")";
+}
+
+}  // namespace
+
+ReconstructionConfig chunk_stage_config(const ReconstructionConfig& config, float voxel_size) {
+  ReconstructionConfig c = config;
+  c.voxelize.voxel_size = voxel_size;
+  c.optimize.steps.clear();
+  c.compression = MeshCompression::kNone;
+  return c;
+}
+
+chunk::ChunkGrid make_chunk_grid(float voxel_size, const ChunkingConfig& chunking) {
+  if (!(chunking.chunk_size > 0.0f) || !std::isfinite(chunking.chunk_size))
+    throw Error("--chunk", std::to_string(chunking.chunk_size),
+                "expected a positive size in metres");
+  chunk::ChunkGrid grid;
+  grid.voxel_size = voxel_size;
+  const double cells = std::round(static_cast<double>(chunking.chunk_size) / voxel_size);
+  grid.chunk_cells = static_cast<int>(std::clamp(cells, 1.0, 100000.0));
+  grid.overlap_cells = std::max(1, chunking.overlap_voxels);
+  return grid;
+}
+
+std::unique_ptr<chunk::ChunkStore> partition_input(
+    const std::string& path, const std::string& columns, const ReconstructionConfig& config,
+    const ChunkingConfig& chunking, std::vector<chunk::ChunkFile>& files, float& voxel_size) {
+  std::unique_ptr<chunk::ChunkStore> store;
+  voxel_size = config.voxelize.voxel_size;
+  io::for_each_point_batch(path, columns, chunking.batch_points, [&](const PointCloud& batch) {
+    if (!store) {
+      if (!(voxel_size > 0.0f)) voxel_size = voxel_from_batch(batch);
+      if (!(voxel_size > 0.0f)) {
+        throw Error(path, "voxel size",
+                    "cannot be chosen from the first points (fewer than 2 finite, or all "
+                    "coincide); give --voxel");
+      }
+      store = std::make_unique<chunk::ChunkStore>(make_chunk_grid(voxel_size, chunking),
+                                                  chunking.directory);
+    }
+    store->add(batch);
+  });
+  if (!store || store->points_read() == 0)
+    throw Error(path, "points", "no finite points to reconstruct");
+  files = store->finish();
+  return store;
+}
+
+void mesh_chunk_files(const chunk::ChunkStore& store, const std::vector<chunk::ChunkFile>& files,
+                      const ReconstructionConfig& config, float voxel_size, std::size_t in_flight,
+                      const std::string& name, const std::function<void(const FramePtr&)>& sink) {
+  const ReconstructionConfig stage_config = chunk_stage_config(config, voxel_size);
+  ReconstructionPipeline pipeline(stage_config, in_flight);
+  std::size_t next = 0;
+  pipeline.run(
+      [&]() -> FramePtr {
+        if (next == files.size()) return nullptr;
+        const chunk::ChunkFile& file = files[next++];
+        auto frame = std::make_shared<Frame>();
+        frame->name = name + " " + chunk_label(file);
+        frame->source_index = next - 1;
+        frame->owned_cells = store.grid().owned_cells(file.index);
+        const chunk::ChunkStore* s = &store;
+        frame->load = [s, file] {
+          PointCloud cloud = s->read(file);
+          s->remove(file);
+          return cloud;
+        };
+        return frame;
+      },
+      sink);
+}
+
+ChunkedResult reconstruct_chunked(const std::string& path, const std::string& columns,
+                                  const ReconstructionConfig& config,
+                                  const ChunkingConfig& chunking,
+                                  const std::function<void(const std::string&)>& on_stage) {
+  const auto tell = [&](const std::string& what) {
+    if (on_stage) on_stage(what);
+  };
+  ChunkedResult result;
+  ChunkedReport& report = result.report;
+  double t = monotonic_seconds();
+  tell("partition");
+  std::vector<chunk::ChunkFile> files;
+  float voxel = 0.0f;
+  const std::unique_ptr<chunk::ChunkStore> store =
+      partition_input(path, columns, config, chunking, files, voxel);
+  report.voxel_size = voxel;
+  report.chunk_cells = store->grid().chunk_cells;
+  report.chunks = files.size();
+  report.points = store->points_read();
+  report.dropped = store->points_dropped();
+  report.rows_written = store->rows_written();
+  for (const chunk::ChunkFile& f : files)
+    report.max_chunk_points = std::max(report.max_chunk_points, f.points);
+  result.origin = store->origin();
+  report.partition_s = monotonic_seconds() - t;
+
+  t = monotonic_seconds();
+  chunk::MeshStitcher stitcher(voxel);
+  std::size_t done = 0;
+  mesh_chunk_files(
+      *store, files, config, voxel, chunking.in_flight, path, [&](const FramePtr& frame) {
+        ++done;
+        tell("chunk " + std::to_string(done) + "/" + std::to_string(files.size()));
+        report.timings.insert(report.timings.end(), frame->timings.begin(), frame->timings.end());
+        if (!frame->ok()) {
+          report.failed.push_back(frame->name + ": " + frame->error);
+          return;
+        }
+        stitcher.add(frame->mesh, frame->beyond_data);
+        frame->mesh = TriangleMesh{};
+        frame->beyond_data.clear();
+      });
+  report.mesh_s = monotonic_seconds() - t;
+
+  t = monotonic_seconds();
+  tell("stitch");
+  std::vector<std::uint8_t> beyond;
+  TriangleMesh joined = stitcher.stitch(&report.seam_vertices, &beyond);
+  if (!beyond.empty()) joined = trim_rim(joined, beyond, &report.rim_trimmed);
+  report.stitch_s = monotonic_seconds() - t;
+
+  t = monotonic_seconds();
+  OptimizeConfig optimize = optimize_config_for_voxel(config, voxel);
+  optimize.on_step = [&](OptimizeStep step) { tell(optimize_step_name(step)); };
+  result.mesh = optimize_mesh(joined, optimize, &report.optimize);
+  report.optimize_s = monotonic_seconds() - t;
+  return result;
+}
+
+}  // namespace meshflow

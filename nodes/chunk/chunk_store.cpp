@@ -1,0 +1,193 @@
+#include "nodes/chunk/chunk_store.h"
+
+#include <algorithm>
+#include <cerrno>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+#include <memory>
+
+#include "runtime/error.h"
+#include "runtime/voxel_key.h"
+
+namespace meshflow::chunk {
+namespace {
+
+std::string chunk_name(const Eigen::Vector3i& k) {
+  return "chunk_" + std::to_string(k.x()) + "_" + std::to_string(k.y()) + "_" +
+         std::to_string(k.z()) + ".bin";
+}
+
+struct FileCloser {
+  void operator()(std::FILE* f) const { std::fclose(f); }
+};
+using File = std::unique_ptr<std::FILE, FileCloser>;
+
+}  // namespace
+
+ChunkStore::ChunkStore(const ChunkGrid& grid, const std::string& parent, std::size_t buffer_bytes)
+    : grid_(grid), buffer_bytes_(std::max<std::size_t>(buffer_bytes, 4096)) {
+  if (!(grid.voxel_size > 0.0f) || grid.chunk_cells < 1 || grid.overlap_cells < 1)
+    throw Error("chunks", "grid", "voxel size, chunk size and overlap must be positive");
+  std::error_code ec;
+  const std::filesystem::path base =
+      parent.empty() ? std::filesystem::temp_directory_path(ec) : std::filesystem::path(parent);
+  std::string pattern = (base / "meshflow-chunks-XXXXXX").string();
+  if (ec || ::mkdtemp(pattern.data()) == nullptr) {
+    throw Error(
+        base.string(), "chunk directory",
+        std::string("cannot create a directory for the chunk files: ") + std::strerror(errno));
+  }
+  directory_ = pattern;
+}
+
+ChunkStore::~ChunkStore() {
+  std::error_code ec;
+  std::filesystem::remove_all(directory_, ec);
+}
+
+std::size_t ChunkStore::row_bytes() const { return 12 + (normals_ ? 12 : 0) + (colors_ ? 3 : 0); }
+
+void ChunkStore::spill(Pending& chunk) {
+  if (chunk.buffer.empty()) return;
+  File f(std::fopen(chunk.file.path.c_str(), "ab"));
+  if (!f ||
+      std::fwrite(chunk.buffer.data(), 1, chunk.buffer.size(), f.get()) != chunk.buffer.size()) {
+    throw Error(chunk.file.path, "chunk file",
+                std::string("cannot write the points: ") + std::strerror(errno));
+  }
+  if (std::fflush(f.get()) != 0)
+    throw Error(chunk.file.path, "chunk file",
+                std::string("cannot write: ") + std::strerror(errno));
+  chunk.buffer.clear();
+}
+
+void ChunkStore::add(const PointCloud& batch) {
+  const bool normals = batch.has_normals(), colors = batch.has_colors();
+  if (first_) {
+    first_ = false;
+    normals_ = normals;
+    colors_ = colors;
+    origin_ = batch.origin;
+  } else if (normals != normals_ || colors != colors_ || batch.origin != origin_) {
+    throw Error("chunks", "point batch",
+                "a batch of the input differs from the first in its normals, colours or origin");
+  }
+  const std::size_t row = row_bytes();
+  std::vector<Eigen::Vector3i> seeing;
+  std::vector<Pending*> targets;
+  Eigen::Vector3i cached_lo(1, 0, 0), cached_hi(0, 0, 0);  // empty: no cache yet
+  for (std::size_t i = 0; i < batch.size(); ++i) {
+    const Eigen::Vector3f& p = batch.positions[i];
+    if (!p.allFinite()) {
+      ++dropped_;
+      continue;
+    }
+    const Eigen::Vector3i cell = cell_of(p, grid_.voxel_size);
+    if (!cell_index_in_range(cell)) {
+      throw Error("chunks", "point " + std::to_string(points_read_ + dropped_),
+                  "lies outside the grid's range at a voxel of " +
+                      std::to_string(grid_.voxel_size) + " m (about +-" +
+                      std::to_string(kMaxCellIndex) + " cells from the origin)");
+    }
+    const Eigen::Vector3i lo =
+        grid_.chunk_of_cell(cell - Eigen::Vector3i::Constant(grid_.overlap_cells));
+    const Eigen::Vector3i hi =
+        grid_.chunk_of_cell(cell + Eigen::Vector3i::Constant(grid_.overlap_cells));
+    if (lo != cached_lo || hi != cached_hi) {  // most points share their neighbour's chunks
+      cached_lo = lo;
+      cached_hi = hi;
+      grid_.chunks_seeing_cell(cell, seeing);
+      targets.clear();
+      for (const Eigen::Vector3i& k : seeing) {
+        Pending& chunk = chunks_[pack_key(k)];
+        if (chunk.file.path.empty()) {
+          chunk.file.index = k;
+          chunk.file.path = directory_ + "/" + chunk_name(k);
+        }
+        targets.push_back(&chunk);
+      }
+    }
+    // Chunks whose own cells a point can put surface in: its cell's and the neighbours' (the
+    // grid has cells around points, VoxelizeConfig::margin <= 1).
+    const Eigen::Vector3i near_lo = grid_.chunk_of_cell(cell - Eigen::Vector3i::Ones());
+    const Eigen::Vector3i near_hi = grid_.chunk_of_cell(cell + Eigen::Vector3i::Ones());
+    for (Pending* chunk : targets) {
+      const std::size_t at = chunk->buffer.size();
+      chunk->buffer.resize(at + row);
+      char* out = chunk->buffer.data() + at;
+      std::memcpy(out, p.data(), 12);
+      if (normals_) std::memcpy(out + 12, batch.normals[i].data(), 12);
+      if (colors_) {
+        const Rgb8& c = batch.colors[i];
+        out[row - 3] = static_cast<char>(c.r);
+        out[row - 2] = static_cast<char>(c.g);
+        out[row - 1] = static_cast<char>(c.b);
+      }
+      ++chunk->file.points;
+      const Eigen::Vector3i& k = chunk->file.index;
+      if ((k.array() >= near_lo.array()).all() && (k.array() <= near_hi.array()).all())
+        ++chunk->file.core_points;
+      if (chunk->buffer.size() + row > buffer_bytes_) spill(*chunk);
+    }
+    rows_written_ += targets.size();
+    bounds_.extend(p);
+    ++points_read_;
+  }
+}
+
+std::vector<ChunkFile> ChunkStore::finish() {
+  std::vector<ChunkFile> files;
+  for (auto& [key, chunk] : chunks_) {
+    if (chunk.file.core_points == 0) {  // only far overlap: no surface of its own
+      chunk.buffer = std::vector<char>();
+      std::error_code ec;
+      std::filesystem::remove(chunk.file.path, ec);
+      continue;
+    }
+    spill(chunk);
+    chunk.buffer = std::vector<char>();
+    files.push_back(chunk.file);
+  }
+  chunks_.clear();
+  std::sort(files.begin(), files.end(), [](const ChunkFile& a, const ChunkFile& b) {
+    return morton_code(a.index) < morton_code(b.index);
+  });
+  return files;
+}
+
+PointCloud ChunkStore::read(const ChunkFile& chunk) const {
+  const std::size_t row = row_bytes();
+  std::vector<char> bytes(chunk.points * row);
+  File f(std::fopen(chunk.path.c_str(), "rb"));
+  if (!f || std::fread(bytes.data(), 1, bytes.size(), f.get()) != bytes.size()) {
+    throw Error(chunk.path, "chunk file",
+                "expected " + std::to_string(chunk.points) + " points of " + std::to_string(row) +
+                    " bytes: " + (f ? "the file is short" : std::strerror(errno)));
+  }
+  PointCloud cloud;
+  cloud.origin = origin_;
+  const std::size_t n = chunk.points;
+  cloud.positions.resize(n);
+  if (normals_) cloud.normals.resize(n);
+  if (colors_) cloud.colors.resize(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    const char* in = bytes.data() + i * row;
+    std::memcpy(cloud.positions[i].data(), in, 12);
+    if (normals_) std::memcpy(cloud.normals[i].data(), in + 12, 12);
+    if (colors_) {
+      cloud.colors[i] =
+          Rgb8{static_cast<std::uint8_t>(in[row - 3]), static_cast<std::uint8_t>(in[row - 2]),
+               static_cast<std::uint8_t>(in[row - 1])};
+    }
+  }
+  return cloud;
+}
+
+void ChunkStore::remove(const ChunkFile& chunk) const {
+  std::error_code ec;
+  std::filesystem::remove(chunk.path, ec);
+}
+
+}  // namespace meshflow::chunk

@@ -1,0 +1,90 @@
+#pragma once
+// Points spilled to one file per chunk in a single streaming pass over the input, so a cloud
+// larger than memory can be reconstructed chunk by chunk (nodes/chunk/chunk_grid.h).
+
+#include <Eigen/Core>
+#include <cstdint>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "nodes/chunk/chunk_grid.h"
+#include "runtime/point_cloud.h"
+
+namespace meshflow::chunk {
+
+/// One chunk's file and what went into it.
+struct ChunkFile {
+  Eigen::Vector3i index = Eigen::Vector3i::Zero();  ///< chunk index (ChunkGrid)
+  /// Points in the chunk's own cells or one cell around them: those that can put surface in
+  /// its cells (the rest of the overlap only informs normals and distances).
+  std::uint64_t core_points = 0;
+  std::uint64_t points = 0;  ///< all points of the file: core points and the overlap's
+  std::string path;
+};
+
+/// Distributes point batches to chunk files under a fresh directory. Each point goes to every
+/// chunk that sees its cell (ChunkGrid::chunks_seeing_cell), so a chunk's file holds all the
+/// points its stages need; points keep their input order within a file. Buffers at most
+/// `buffer_bytes` per chunk before appending to its file. Rows are raw little-endian floats
+/// (x y z, then nx ny nz when the input has normals) and r g b bytes when it has colours.
+/// The directory and files are removed by the destructor. Not thread-safe.
+class ChunkStore {
+ public:
+  /// Creates a directory "meshflow-chunks-XXXXXX" under `parent` (the system's temporary
+  /// directory when empty). Throws meshflow::Error naming it and the system's reason.
+  ChunkStore(const ChunkGrid& grid, const std::string& parent,
+             std::size_t buffer_bytes = std::size_t{1} << 18);
+  ~ChunkStore();
+  ChunkStore(const ChunkStore&) = delete;
+  ChunkStore& operator=(const ChunkStore&) = delete;
+
+  /// Spills `batch` (local coordinates of `batch.origin`, which must equal the first batch's;
+  /// finite points only, the others are counted and dropped). The first batch fixes whether
+  /// rows carry normals and colours; a later batch that differs is a meshflow::Error. O(batch).
+  void add(const PointCloud& batch);
+
+  /// Writes every buffer out; returns the chunks with core points (ChunkFile), in
+  /// Morton order (morton_code). Call once, after the last add().
+  std::vector<ChunkFile> finish();
+
+  /// Reads a chunk's points back (with the origin of the input and normals / colours as
+  /// spilled). Thread-safe for distinct chunks. Throws meshflow::Error on a short file.
+  PointCloud read(const ChunkFile& chunk) const;
+  /// Deletes a chunk's file once it has been read (disk space back early). Thread-safe.
+  void remove(const ChunkFile& chunk) const;
+
+  std::uint64_t points_read() const { return points_read_; }    ///< finite points added
+  std::uint64_t points_dropped() const { return dropped_; }     ///< NaN / Inf points
+  std::uint64_t rows_written() const { return rows_written_; }  ///< with overlap copies
+  bool has_normals() const { return normals_; }  ///< rows carry normals
+  bool has_colors() const { return colors_; }  ///< rows carry colours
+  /// Bounds of the finite points read, local coordinates.
+  const Eigen::AlignedBox3f& bounds() const { return bounds_; }
+  /// The input's origin (PointCloud::origin), shared by every chunk.
+  const Eigen::Vector3d& origin() const { return origin_; }
+  /// The directory holding the chunk files.
+  const std::string& directory() const { return directory_; }
+  /// The partition the store was made with.
+  const ChunkGrid& grid() const { return grid_; }
+
+ private:
+  struct Pending {
+    ChunkFile file;
+    std::vector<char> buffer;
+  };
+  std::size_t row_bytes() const;
+  void spill(Pending& chunk);
+
+  ChunkGrid grid_;
+  std::string directory_;
+  std::size_t buffer_bytes_;
+  std::map<std::uint64_t, Pending> chunks_;  // by packed chunk index
+  bool first_ = true;
+  bool normals_ = false, colors_ = false;
+  Eigen::Vector3d origin_ = Eigen::Vector3d::Zero();
+  Eigen::AlignedBox3f bounds_;
+  std::uint64_t points_read_ = 0, dropped_ = 0, rows_written_ = 0;
+};
+
+}  // namespace meshflow::chunk

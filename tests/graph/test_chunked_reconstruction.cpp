@@ -1,0 +1,252 @@
+// The out-of-core path (reconstruct --chunk): chunk meshes stitched on the global grid equal the
+// single-process mesh, seams are manifold and welded, the result does not depend on the chunks
+// in flight or the threads, and the pieces (chunk grid, store, stitcher) keep their contracts.
+
+#include "graph/chunked_reconstruction.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <filesystem>
+#include <map>
+#include <set>
+
+#include "graph/pipeline.h"
+#include "nodes/chunk/mesh_stitch.h"
+#include "nodes/io/ply_point_writer.h"
+#include "nodes/io/read_point_cloud.h"
+#include "nodes/synthetic/city_scene.h"
+#include "runtime/error.h"
+#include "test_support.h"
+
+namespace meshflow {
+namespace {
+
+using Corner = std::array<std::int64_t, 3>;
+using TriangleKey = std::array<Corner, 3>;
+
+// Each triangle as its three corners rounded to 10 um, in a canonical rotation.
+std::set<TriangleKey> triangle_keys(const TriangleMesh& mesh) {
+  std::set<TriangleKey> keys;
+  for (const Triangle& t : mesh.triangles) {
+    TriangleKey key;
+    for (int k = 0; k < 3; ++k)
+      for (int a = 0; a < 3; ++a)
+        key[k][a] = std::llround(static_cast<double>(mesh.vertices[t[k]][a]) * 1e5);
+    const auto first = std::min_element(key.begin(), key.end());
+    std::rotate(key.begin(), first, key.end());
+    keys.insert(key);
+  }
+  return keys;
+}
+
+struct CityInput {
+  synthetic::CityScene scene{[] {
+    synthetic::CitySceneConfig c;
+    c.size = 90.0f;
+    c.block = 30.0f;
+    return c;
+  }()};
+  std::string path = test::temp_dir() + "/chunk_city.ply";
+  CityInput(std::uint64_t points, bool normals) {
+    io::PlyPointWriter writer(path, points, normals, false);
+    scene.sample(points, 0.0f, [&](const PointCloud& batch) {
+      if (normals) return writer.append(batch);
+      PointCloud positions;
+      positions.positions = batch.positions;
+      writer.append(positions);
+    });
+    writer.finish();
+  }
+  ~CityInput() { std::filesystem::remove(path); }
+};
+
+ReconstructionConfig raw_config(float voxel) {
+  ReconstructionConfig c;
+  c.voxelize.voxel_size = voxel;
+  c.optimize.steps.clear();  // compare the extracted surfaces themselves
+  return c;
+}
+
+ChunkingConfig chunks_of(float metres) {
+  ChunkingConfig c;
+  c.chunk_size = metres;
+  c.directory = test::temp_dir();
+  c.batch_points = 50000;  // several batches: the streaming path
+  return c;
+}
+
+TEST(ChunkedReconstruction, EqualsTheSingleProcessMeshWithManifoldWeldedSeams) {
+  const CityInput input(150000, true);
+  const float voxel = 0.9f;
+  const ReconstructionConfig config = raw_config(voxel);
+  ReconstructionPipeline whole_pipeline(config, 1);
+  auto frame = std::make_shared<Frame>();
+  frame->name = input.path;
+  frame->load = [&] { return io::read_point_cloud(input.path); };
+  whole_pipeline.run_frame(frame);
+  ASSERT_TRUE(frame->ok()) << frame->error;
+  const TriangleMesh& whole = frame->mesh;
+
+  const ChunkedResult chunked = reconstruct_chunked(input.path, "", config, chunks_of(15.0f));
+  const ChunkedReport& r = chunked.report;
+  EXPECT_GT(r.chunks, 12u);
+  EXPECT_TRUE(r.failed.empty());
+  EXPECT_EQ(r.points, 150000u);
+  EXPECT_GT(r.seam_vertices, 500u) << "seams cross the surface, so vertices must be welded";
+
+  const std::set<TriangleKey> a = triangle_keys(whole), b = triangle_keys(chunked.mesh);
+  std::size_t common = 0;
+  for (const TriangleKey& k : a) common += b.count(k);
+  EXPECT_EQ(common, a.size()) << "triangles of the single-process mesh missing from the chunks";
+  EXPECT_EQ(common, b.size()) << "triangles only the chunks made";
+  EXPECT_EQ(chunked.mesh.triangles.size(), whole.triangles.size());
+
+  const EdgeStatistics seams = edge_statistics(chunked.mesh), single = edge_statistics(whole);
+  EXPECT_EQ(seams.non_manifold_edges, 0u);
+  EXPECT_EQ(seams.inconsistent_edges, 0u);
+  EXPECT_EQ(seams.boundary_edges, single.boundary_edges) << "an unwelded seam leaves a border";
+  std::vector<Corner> positions;
+  for (const Eigen::Vector3f& v : chunked.mesh.vertices)
+    positions.push_back(
+        {std::llround(v.x() * 1e5), std::llround(v.y() * 1e5), std::llround(v.z() * 1e5)});
+  std::sort(positions.begin(), positions.end());
+  EXPECT_EQ(std::adjacent_find(positions.begin(), positions.end()), positions.end())
+      << "duplicate vertices";
+
+  double sum = 0.0;
+  for (const Eigen::Vector3f& v : chunked.mesh.vertices) sum += input.scene.surface_distance(v);
+  EXPECT_LT(sum / static_cast<double>(chunked.mesh.vertices.size()), 0.05 * voxel);
+}
+
+TEST(ChunkedReconstruction, SameMeshForAnyChunksInFlightAndThreads) {
+  const CityInput input(60000, true);
+  const ReconstructionConfig config = raw_config(1.2f);
+  ChunkingConfig one = chunks_of(20.0f);
+  one.in_flight = 1;
+  const TriangleMesh serial =
+      test::with_threads(1, [&] { return reconstruct_chunked(input.path, "", config, one).mesh; });
+  ChunkingConfig three = chunks_of(20.0f);
+  three.in_flight = 3;
+  const TriangleMesh parallel = test::with_threads(
+      2, [&] { return reconstruct_chunked(input.path, "", config, three).mesh; });
+  EXPECT_EQ(serial.vertices, parallel.vertices);
+  EXPECT_EQ(serial.triangles, parallel.triangles);
+  EXPECT_FALSE(serial.empty());
+}
+
+TEST(ChunkedReconstruction, EstimatedNormalsAndTheDefaultOptimizeGiveAnAccurateSurface) {
+  const CityInput input(120000, false);  // no normals: estimated and oriented per chunk
+  ReconstructionConfig config;
+  config.voxelize.voxel_size = 0.9f;
+  const ChunkedResult chunked = reconstruct_chunked(input.path, "", config, chunks_of(15.0f));
+  ASSERT_FALSE(chunked.mesh.empty());
+  double sum = 0.0;
+  for (const Eigen::Vector3f& v : chunked.mesh.vertices) sum += input.scene.surface_distance(v);
+  EXPECT_LT(sum / static_cast<double>(chunked.mesh.vertices.size()), 0.1 * 0.9);
+  EXPECT_EQ(edge_statistics(chunked.mesh).non_manifold_edges, 0u);
+}
+
+TEST(ChunkGrid, OwnedRangesTileSpaceAndOverlapReachesNeighbours) {
+  chunk::ChunkGrid grid{0.1f, 10, 2};
+  EXPECT_EQ(grid.chunk_of_cell({-1, 0, 9}), Eigen::Vector3i(-1, 0, 0));
+  EXPECT_EQ(grid.chunk_of_cell({-10, -11, 10}), Eigen::Vector3i(-1, -2, 1));
+  const CellRange r = grid.owned_cells({-1, 0, 2});
+  EXPECT_EQ(r.lo, Eigen::Vector3i(-10, 0, 20));
+  EXPECT_EQ(r.hi, Eigen::Vector3i(0, 10, 30));
+  std::vector<Eigen::Vector3i> seeing;
+  grid.chunks_seeing_cell({5, 5, 5}, seeing);
+  EXPECT_EQ(seeing.size(), 1u);
+  grid.chunks_seeing_cell({1, 5, 9}, seeing);  // near x = 0 and z = 10
+  EXPECT_EQ(seeing.size(), 4u);
+  EXPECT_LT(chunk::morton_code({0, 0, 0}), chunk::morton_code({1, 1, 1}));
+}
+
+TEST(MeshStitch, LatticeEdgeKeysIdentifyEdgeVerticesOnly) {
+  const float v = 0.25f;
+  const std::uint64_t k = chunk::lattice_edge_key({0.25f * 3 + 0.1f, 0.5f, -0.75f}, v);
+  EXPECT_NE(k, UINT64_MAX);
+  EXPECT_EQ(k % 3, 0u);  // along x
+  EXPECT_EQ(k, chunk::lattice_edge_key({0.25f * 3 + 0.2f, 0.5f, -0.75f}, v)) << "same edge";
+  EXPECT_NE(k, chunk::lattice_edge_key({0.25f * 4 + 0.1f, 0.5f, -0.75f}, v)) << "next edge";
+  EXPECT_EQ(chunk::lattice_edge_key({0.1f, 0.13f, 0.5f}, v), UINT64_MAX) << "inside a face";
+  EXPECT_EQ(chunk::lattice_edge_key({0.5f, 0.25f, 0.5f}, v), UINT64_MAX) << "a corner";
+}
+
+TEST(MeshStitch, WeldsSharedEdgeVerticesAndKeepsTheRest) {
+  // Two triangles in neighbouring chunks sharing the vertices on two lattice edges.
+  const float v = 1.0f;
+  TriangleMesh left, right;
+  left.vertices = {{0.5f, 0, 0}, {1, 0.5f, 0}, {0.2f, 0.3f, 0.4f}};  // the last on no edge
+  left.triangles = {{0, 1, 2}};
+  right.vertices = {{1, 0.5f, 0}, {0.5f, 0, 0}, {1.5f, 1, 0}};
+  right.triangles = {{1, 0, 2}};
+  chunk::MeshStitcher stitcher(v);
+  stitcher.add(left);
+  stitcher.add(right);
+  std::size_t merged = 0;
+  const TriangleMesh joined = stitcher.stitch(&merged);
+  EXPECT_EQ(merged, 2u);
+  EXPECT_EQ(joined.vertices.size(), 4u);
+  ASSERT_EQ(joined.triangles.size(), 2u);
+  EXPECT_EQ(joined.triangles[1][0], joined.triangles[0][0]);
+  EXPECT_EQ(joined.triangles[1][1], joined.triangles[0][1]);
+}
+
+TEST(ChunkStore, EveryPointReachesItsChunkAndTheOverlapOnce) {
+  chunk::ChunkGrid grid{1.0f, 4, 1};
+  chunk::ChunkStore store(grid, test::temp_dir());
+  PointCloud batch;
+  batch.positions = {{0.5f, 0.5f, 0.5f},  // chunk 0 only
+                     {3.5f, 0.5f, 0.5f},  // cell 3: chunk 0, and chunk 1's overlap
+                     {std::nanf(""), 0, 0},
+                     {-0.5f, 0.5f, 0.5f}};  // chunk -1, and chunk 0's overlap
+  store.add(batch);
+  const std::vector<chunk::ChunkFile> files = store.finish();
+  EXPECT_EQ(store.points_read(), 3u);
+  EXPECT_EQ(store.points_dropped(), 1u);
+  std::map<int, chunk::ChunkFile> by_x;
+  for (const chunk::ChunkFile& f : files) by_x[f.index.x()] = f;
+  ASSERT_EQ(by_x.count(0), 1u);
+  EXPECT_EQ(by_x[0].points, 3u);
+  EXPECT_EQ(store.read(by_x[0]).positions[1], batch.positions[1]);
+  ASSERT_EQ(by_x.count(1), 1u);
+  EXPECT_EQ(by_x[1].points, 1u);
+  const std::string directory = store.directory();
+  EXPECT_TRUE(std::filesystem::exists(directory));
+}
+
+TEST(ChunkStore, RemovesItsDirectoryAndRejectsInconsistentBatches) {
+  std::string directory;
+  {
+    chunk::ChunkStore store(chunk::ChunkGrid{1.0f, 4, 1}, test::temp_dir());
+    directory = store.directory();
+    PointCloud a;
+    a.positions = {{0, 0, 0}};
+    store.add(a);
+    PointCloud b = a;
+    b.normals = {{0, 0, 1}};
+    EXPECT_THROW(store.add(b), Error);
+  }
+  EXPECT_FALSE(std::filesystem::exists(directory));
+}
+
+TEST(ChunkedReconstruction, BadInputNamesTheFile) {
+  const std::string path = test::temp_dir() + "/chunk_truncated.ply";
+  test::write_file(path,
+                   "ply\nformat binary_little_endian 1.0\nelement vertex 100\n"
+                   "property float x\nproperty float y\nproperty float z\nend_header\n");
+  try {
+    reconstruct_chunked(path, "", ReconstructionConfig{}, chunks_of(5.0f));
+    FAIL() << "a truncated file must be an error";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find(path), std::string::npos) << e.what();
+  }
+  ChunkingConfig zero = chunks_of(0.0f);
+  EXPECT_THROW(make_chunk_grid(0.1f, zero), Error);
+}
+
+}  // namespace
+}  // namespace meshflow

@@ -76,11 +76,11 @@ std::unique_ptr<chunk::ChunkStore> partition_input(
   return store;
 }
 
-void mesh_chunk_files(const chunk::ChunkStore& store, const std::vector<chunk::ChunkFile>& files,
-                      const ReconstructionConfig& config, float voxel_size, std::size_t in_flight,
-                      const std::string& name, const std::function<void(const FramePtr&)>& sink) {
-  const ReconstructionConfig stage_config = chunk_stage_config(config, voxel_size);
-  ReconstructionPipeline pipeline(stage_config, in_flight);
+void mesh_chunk_files(const std::vector<chunk::ChunkFile>& files, const chunk::ChunkGrid& grid,
+                      const chunk::ChunkRows& rows, const ReconstructionConfig& config,
+                      std::size_t in_flight, const std::string& name,
+                      const std::function<void(const FramePtr&)>& sink) {
+  ReconstructionPipeline pipeline(chunk_stage_config(config, grid.voxel_size), in_flight);
   std::size_t next = 0;
   pipeline.run(
       [&]() -> FramePtr {
@@ -89,16 +89,42 @@ void mesh_chunk_files(const chunk::ChunkStore& store, const std::vector<chunk::C
         auto frame = std::make_shared<Frame>();
         frame->name = name + " " + chunk_label(file);
         frame->source_index = next - 1;
-        frame->owned_cells = store.grid().owned_cells(file.index);
-        const chunk::ChunkStore* s = &store;
-        frame->load = [s, file] {
-          PointCloud cloud = s->read(file);
-          s->remove(file);
+        frame->owned_cells = grid.owned_cells(file.index);
+        frame->load = [file, rows] {
+          PointCloud cloud = chunk::read_chunk_file(file, rows);
+          chunk::remove_chunk_file(file);
           return cloud;
         };
         return frame;
       },
       sink);
+}
+
+void collect_chunk_frame(Frame& frame, chunk::MeshStitcher& stitcher, ChunkedReport& report) {
+  report.timings.insert(report.timings.end(), frame.timings.begin(), frame.timings.end());
+  if (!frame.ok()) {
+    report.failed.push_back(frame.name + ": " + frame.error);
+    return;
+  }
+  stitcher.add(frame.mesh, frame.beyond_data);
+  frame.mesh = TriangleMesh{};
+  frame.beyond_data.clear();
+}
+
+TriangleMesh finish_chunked_mesh(chunk::MeshStitcher& stitcher, const ReconstructionConfig& config,
+                                 float voxel_size, ChunkedReport& report,
+                                 const std::function<void(const std::string&)>& on_step) {
+  double t = monotonic_seconds();
+  std::vector<std::uint8_t> beyond;
+  TriangleMesh joined = stitcher.stitch(&report.seam_vertices, &beyond);
+  if (!beyond.empty()) joined = trim_rim(joined, beyond, &report.rim_trimmed);
+  report.stitch_s = monotonic_seconds() - t;
+  t = monotonic_seconds();
+  OptimizeConfig optimize = optimize_config_for_voxel(config, voxel_size);
+  if (on_step) optimize.on_step = [&](OptimizeStep step) { on_step(optimize_step_name(step)); };
+  TriangleMesh mesh = optimize_mesh(joined, optimize, &report.optimize);
+  report.optimize_s = monotonic_seconds() - t;
+  return mesh;
 }
 
 ChunkedResult reconstruct_chunked(const std::string& path, const std::string& columns,
@@ -124,39 +150,22 @@ ChunkedResult reconstruct_chunked(const std::string& path, const std::string& co
   report.rows_written = store->rows_written();
   for (const chunk::ChunkFile& f : files)
     report.max_chunk_points = std::max(report.max_chunk_points, f.points);
-  result.origin = store->origin();
+  result.origin = store->rows().origin;
   report.partition_s = monotonic_seconds() - t;
 
   t = monotonic_seconds();
   chunk::MeshStitcher stitcher(voxel);
   std::size_t done = 0;
-  mesh_chunk_files(
-      *store, files, config, voxel, chunking.in_flight, path, [&](const FramePtr& frame) {
-        ++done;
-        tell("chunk " + std::to_string(done) + "/" + std::to_string(files.size()));
-        report.timings.insert(report.timings.end(), frame->timings.begin(), frame->timings.end());
-        if (!frame->ok()) {
-          report.failed.push_back(frame->name + ": " + frame->error);
-          return;
-        }
-        stitcher.add(frame->mesh, frame->beyond_data);
-        frame->mesh = TriangleMesh{};
-        frame->beyond_data.clear();
-      });
+  mesh_chunk_files(files, store->grid(), store->rows(), config, chunking.in_flight, path,
+                   [&](const FramePtr& frame) {
+                     ++done;
+                     tell("chunk " + std::to_string(done) + "/" + std::to_string(files.size()));
+                     collect_chunk_frame(*frame, stitcher, report);
+                   });
   report.mesh_s = monotonic_seconds() - t;
 
-  t = monotonic_seconds();
   tell("stitch");
-  std::vector<std::uint8_t> beyond;
-  TriangleMesh joined = stitcher.stitch(&report.seam_vertices, &beyond);
-  if (!beyond.empty()) joined = trim_rim(joined, beyond, &report.rim_trimmed);
-  report.stitch_s = monotonic_seconds() - t;
-
-  t = monotonic_seconds();
-  OptimizeConfig optimize = optimize_config_for_voxel(config, voxel);
-  optimize.on_step = [&](OptimizeStep step) { tell(optimize_step_name(step)); };
-  result.mesh = optimize_mesh(joined, optimize, &report.optimize);
-  report.optimize_s = monotonic_seconds() - t;
+  result.mesh = finish_chunked_mesh(stitcher, config, voxel, report, tell);
   return result;
 }
 

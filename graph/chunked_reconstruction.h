@@ -18,6 +18,7 @@
 
 #include "graph/frame.h"
 #include "nodes/chunk/chunk_store.h"
+#include "nodes/chunk/mesh_stitch.h"
 
 namespace meshflow {
 
@@ -70,12 +71,25 @@ std::unique_ptr<chunk::ChunkStore> partition_input(
     const std::string& path, const std::string& columns, const ReconstructionConfig& config,
     const ChunkingConfig& chunking, std::vector<chunk::ChunkFile>& files, float& voxel_size);
 
-/// Meshes `files` (of `store`) through one flow graph, `in_flight` at a time; hands each
-/// finished chunk frame (failed ones with `error` set) to `sink` in the order of `files`, from
-/// one thread at a time. Each chunk's file is deleted once read.
-void mesh_chunk_files(const chunk::ChunkStore& store, const std::vector<chunk::ChunkFile>& files,
-                      const ReconstructionConfig& config, float voxel_size, std::size_t in_flight,
-                      const std::string& name, const std::function<void(const FramePtr&)>& sink);
+/// Meshes `files` (chunk files of `grid` with rows `rows`) through one flow graph, `in_flight`
+/// at a time; hands each finished chunk frame (failed ones with `error` set; the mesh in the
+/// input's local frame, with Frame::beyond_data for the rim trim) to `sink` in the order of
+/// `files`, from one thread at a time. Each chunk's file is deleted once read.
+void mesh_chunk_files(const std::vector<chunk::ChunkFile>& files, const chunk::ChunkGrid& grid,
+                      const chunk::ChunkRows& rows, const ReconstructionConfig& config,
+                      std::size_t in_flight, const std::string& name,
+                      const std::function<void(const FramePtr&)>& sink);
+
+/// What a chunk's sink does: its stage records into `report`, its mesh (and rim verdicts) into
+/// `stitcher`, or its error into report.failed; frees the frame's mesh.
+void collect_chunk_frame(Frame& frame, chunk::MeshStitcher& stitcher, ChunkedReport& report);
+
+/// Welds chunk meshes delivered in order (MeshStitcher), then trims the rim over the stitched
+/// mesh (config.max_rim_voxels) and runs config's optimize steps once; fills the report's
+/// seam, rim, stitch and optimize fields. `on_step` (optional) is told each optimize step.
+TriangleMesh finish_chunked_mesh(chunk::MeshStitcher& stitcher, const ReconstructionConfig& config,
+                                 float voxel_size, ChunkedReport& report,
+                                 const std::function<void(const std::string&)>& on_step = {});
 
 /// The whole path in one process: partition, mesh the chunks, stitch, optimise (config's
 /// steps, on the stitched mesh). `on_stage` (optional) is told each phase ("partition",

@@ -10,5 +10,5 @@ $SUDO apt-get install -y --no-install-recommends \
   libtbb-dev libeigen3-dev libnanoflann-dev liblzf-dev \
   libspng-dev libjpeg-dev libtiff-dev \
   libcli11-dev libgtest-dev libgmock-dev libbenchmark-dev nlohmann-json3-dev \
-  libcgal-dev libmeshoptimizer-dev libdraco-dev \
+  libcgal-dev libmeshoptimizer-dev libdraco-dev libopenmpi-dev openmpi-bin \
   pybind11-dev python3-dev python3-numpy python3-pytest doxygen

@@ -26,6 +26,34 @@ using File = std::unique_ptr<std::FILE, FileCloser>;
 
 }  // namespace
 
+PointCloud read_chunk_file(const ChunkFile& chunk, const ChunkRows& rows) {
+  const std::size_t row = rows.bytes();
+  std::vector<char> bytes(chunk.points * row);
+  File f(std::fopen(chunk.path.c_str(), "rb"));
+  if (!f || std::fread(bytes.data(), 1, bytes.size(), f.get()) != bytes.size()) {
+    throw Error(chunk.path, "chunk file",
+                "expected " + std::to_string(chunk.points) + " points of " + std::to_string(row) +
+                    " bytes: " + (f ? "the file is short" : std::strerror(errno)));
+  }
+  PointCloud cloud;
+  cloud.origin = rows.origin;
+  const std::size_t n = chunk.points;
+  cloud.positions.resize(n);
+  if (rows.normals) cloud.normals.resize(n);
+  if (rows.colors) cloud.colors.resize(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    const char* in = bytes.data() + i * row;
+    std::memcpy(cloud.positions[i].data(), in, 12);
+    if (rows.normals) std::memcpy(cloud.normals[i].data(), in + 12, 12);
+    if (rows.colors) {
+      cloud.colors[i] =
+          Rgb8{static_cast<std::uint8_t>(in[row - 3]), static_cast<std::uint8_t>(in[row - 2]),
+               static_cast<std::uint8_t>(in[row - 1])};
+    }
+  }
+  return cloud;
+}
+
 ChunkStore::ChunkStore(const ChunkGrid& grid, const std::string& parent, std::size_t buffer_bytes)
     : grid_(grid), buffer_bytes_(std::max<std::size_t>(buffer_bytes, 4096)) {
   if (!(grid.voxel_size > 0.0f) || grid.chunk_cells < 1 || grid.overlap_cells < 1)
@@ -47,8 +75,6 @@ ChunkStore::~ChunkStore() {
   std::filesystem::remove_all(directory_, ec);
 }
 
-std::size_t ChunkStore::row_bytes() const { return 12 + (normals_ ? 12 : 0) + (colors_ ? 3 : 0); }
-
 void ChunkStore::spill(Pending& chunk) {
   if (chunk.buffer.empty()) return;
   File f(std::fopen(chunk.file.path.c_str(), "ab"));
@@ -67,14 +93,14 @@ void ChunkStore::add(const PointCloud& batch) {
   const bool normals = batch.has_normals(), colors = batch.has_colors();
   if (first_) {
     first_ = false;
-    normals_ = normals;
-    colors_ = colors;
-    origin_ = batch.origin;
-  } else if (normals != normals_ || colors != colors_ || batch.origin != origin_) {
+    rows_.normals = normals;
+    rows_.colors = colors;
+    rows_.origin = batch.origin;
+  } else if (normals != rows_.normals || colors != rows_.colors || batch.origin != rows_.origin) {
     throw Error("chunks", "point batch",
                 "a batch of the input differs from the first in its normals, colours or origin");
   }
-  const std::size_t row = row_bytes();
+  const std::size_t row = rows_.bytes();
   std::vector<Eigen::Vector3i> seeing;
   std::vector<Pending*> targets;
   Eigen::Vector3i cached_lo(1, 0, 0), cached_hi(0, 0, 0);  // empty: no cache yet
@@ -118,8 +144,8 @@ void ChunkStore::add(const PointCloud& batch) {
       chunk->buffer.resize(at + row);
       char* out = chunk->buffer.data() + at;
       std::memcpy(out, p.data(), 12);
-      if (normals_) std::memcpy(out + 12, batch.normals[i].data(), 12);
-      if (colors_) {
+      if (rows_.normals) std::memcpy(out + 12, batch.normals[i].data(), 12);
+      if (rows_.colors) {
         const Rgb8& c = batch.colors[i];
         out[row - 3] = static_cast<char>(c.r);
         out[row - 2] = static_cast<char>(c.g);
@@ -157,35 +183,11 @@ std::vector<ChunkFile> ChunkStore::finish() {
   return files;
 }
 
-PointCloud ChunkStore::read(const ChunkFile& chunk) const {
-  const std::size_t row = row_bytes();
-  std::vector<char> bytes(chunk.points * row);
-  File f(std::fopen(chunk.path.c_str(), "rb"));
-  if (!f || std::fread(bytes.data(), 1, bytes.size(), f.get()) != bytes.size()) {
-    throw Error(chunk.path, "chunk file",
-                "expected " + std::to_string(chunk.points) + " points of " + std::to_string(row) +
-                    " bytes: " + (f ? "the file is short" : std::strerror(errno)));
-  }
-  PointCloud cloud;
-  cloud.origin = origin_;
-  const std::size_t n = chunk.points;
-  cloud.positions.resize(n);
-  if (normals_) cloud.normals.resize(n);
-  if (colors_) cloud.colors.resize(n);
-  for (std::size_t i = 0; i < n; ++i) {
-    const char* in = bytes.data() + i * row;
-    std::memcpy(cloud.positions[i].data(), in, 12);
-    if (normals_) std::memcpy(cloud.normals[i].data(), in + 12, 12);
-    if (colors_) {
-      cloud.colors[i] =
-          Rgb8{static_cast<std::uint8_t>(in[row - 3]), static_cast<std::uint8_t>(in[row - 2]),
-               static_cast<std::uint8_t>(in[row - 1])};
-    }
-  }
-  return cloud;
-}
+PointCloud ChunkStore::read(const ChunkFile& chunk) const { return read_chunk_file(chunk, rows_); }
 
-void ChunkStore::remove(const ChunkFile& chunk) const {
+void ChunkStore::remove(const ChunkFile& chunk) const { remove_chunk_file(chunk); }
+
+void remove_chunk_file(const ChunkFile& chunk) {
   std::error_code ec;
   std::filesystem::remove(chunk.path, ec);
 }

@@ -23,6 +23,24 @@ struct ChunkFile {
   std::string path;
 };
 
+/// What each row of a chunk file holds besides x y z, and the frame its points are in.
+struct ChunkRows {
+  bool normals = false;                              ///< nx ny nz floats follow x y z
+  bool colors = false;                               ///< r g b bytes end the row
+  Eigen::Vector3d origin = Eigen::Vector3d::Zero();  ///< PointCloud::origin of the input
+  /// Bytes per row.
+  std::size_t bytes() const { return 12 + (normals ? 12 : 0) + (colors ? 3 : 0); }
+};
+
+/// Reads a chunk file written by ChunkStore (any process that sees the file: MPI ranks on a
+/// shared directory). Throws meshflow::Error naming the file when it is missing or short.
+/// Thread-safe. O(points).
+PointCloud read_chunk_file(const ChunkFile& chunk, const ChunkRows& rows);
+
+/// Deletes a chunk file once read (disk space back early); a missing file is no error.
+/// Thread-safe.
+void remove_chunk_file(const ChunkFile& chunk);
+
 /// Distributes point batches to chunk files under a fresh directory. Each point goes to every
 /// chunk that sees its cell (ChunkGrid::chunks_seeing_cell), so a chunk's file holds all the
 /// points its stages need; points keep their input order within a file. Buffers at most
@@ -57,12 +75,10 @@ class ChunkStore {
   std::uint64_t points_read() const { return points_read_; }    ///< finite points added
   std::uint64_t points_dropped() const { return dropped_; }     ///< NaN / Inf points
   std::uint64_t rows_written() const { return rows_written_; }  ///< with overlap copies
-  bool has_normals() const { return normals_; }  ///< rows carry normals
-  bool has_colors() const { return colors_; }  ///< rows carry colours
+  /// The rows' layout and the input's origin (PointCloud::origin), shared by every chunk.
+  const ChunkRows& rows() const { return rows_; }
   /// Bounds of the finite points read, local coordinates.
   const Eigen::AlignedBox3f& bounds() const { return bounds_; }
-  /// The input's origin (PointCloud::origin), shared by every chunk.
-  const Eigen::Vector3d& origin() const { return origin_; }
   /// The directory holding the chunk files.
   const std::string& directory() const { return directory_; }
   /// The partition the store was made with.
@@ -73,7 +89,6 @@ class ChunkStore {
     ChunkFile file;
     std::vector<char> buffer;
   };
-  std::size_t row_bytes() const;
   void spill(Pending& chunk);
 
   ChunkGrid grid_;
@@ -81,8 +96,7 @@ class ChunkStore {
   std::size_t buffer_bytes_;
   std::map<std::uint64_t, Pending> chunks_;  // by packed chunk index
   bool first_ = true;
-  bool normals_ = false, colors_ = false;
-  Eigen::Vector3d origin_ = Eigen::Vector3d::Zero();
+  ChunkRows rows_;
   Eigen::AlignedBox3f bounds_;
   std::uint64_t points_read_ = 0, dropped_ = 0, rows_written_ = 0;
 };

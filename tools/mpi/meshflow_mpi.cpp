@@ -1,0 +1,315 @@
+// meshflow-mpi: the out-of-core reconstruction (graph/chunked_reconstruction.h) spread over MPI
+// ranks. A separate program, so that the meshflow CLI does not load Open MPI at every start-up.
+//
+//   mpirun -n N meshflow-mpi IN -o OUT --chunk S [--voxel V] [--chunk-dir SHARED_DIR] ...
+//
+// Rank 0 streams the input into chunk files under --chunk-dir (a directory every rank sees: a
+// shared file system on a cluster) and broadcasts the chunk list; the chunks, in Morton order,
+// are split into N contiguous runs (static assignment along the space-filling curve, so each
+// rank's chunks are neighbours and most seams are welded locally); each rank meshes its run
+// through its own flow graph and welds it, then sends the welded mesh to rank 0, which welds
+// the ranks' meshes in rank order, trims the rim, optimizes and writes OUT. The mesh is the same
+// for any N (and equals `meshflow reconstruct --chunk`).
+
+#include <mpi.h>
+
+#include <CLI/CLI.hpp>
+
+#include <cstdint>
+#include <cstdio>
+#include <cstring>
+#include <exception>
+#include <string>
+#include <vector>
+
+#include "graph/chunked_reconstruction.h"
+#include "nodes/io/mesh_writers.h"
+#include "runtime/error.h"
+#include "runtime/threads.h"
+#include "runtime/tracing.h"
+#include "tools/pipeline_options.h"
+
+namespace meshflow::cli {
+namespace {
+
+// Plain byte (de)serialisation of what crosses ranks; every rank runs the same binary.
+class Bytes {
+ public:
+  template <typename T>
+  void put(const T& v) {
+    const auto* p = reinterpret_cast<const char*>(&v);
+    data.insert(data.end(), p, p + sizeof(T));
+  }
+  template <typename T>
+  void put_vector(const std::vector<T>& v) {
+    put<std::uint64_t>(v.size());
+    const auto* p = reinterpret_cast<const char*>(v.data());
+    data.insert(data.end(), p, p + v.size() * sizeof(T));
+  }
+  void put_string(const std::string& s) {
+    put<std::uint64_t>(s.size());
+    data.insert(data.end(), s.begin(), s.end());
+  }
+  template <typename T>
+  T get() {
+    T v;
+    std::memcpy(static_cast<void*>(&v), data.data() + at, sizeof(T));
+    at += sizeof(T);
+    return v;
+  }
+  template <typename T>
+  std::vector<T> get_vector() {
+    std::vector<T> v(get<std::uint64_t>());
+    std::memcpy(static_cast<void*>(v.data()), data.data() + at, v.size() * sizeof(T));
+    at += v.size() * sizeof(T);
+    return v;
+  }
+  std::string get_string() {
+    const auto n = get<std::uint64_t>();
+    std::string s(data.data() + at, n);
+    at += n;
+    return s;
+  }
+  std::vector<char> data;
+  std::size_t at = 0;
+};
+
+constexpr std::size_t kMessagePiece = std::size_t{1} << 30;  // MPI counts are int
+
+void send_bytes(const std::vector<char>& data, int to) {
+  std::uint64_t size = data.size();
+  MPI_Send(&size, 1, MPI_UINT64_T, to, 0, MPI_COMM_WORLD);
+  for (std::size_t at = 0; at < data.size(); at += kMessagePiece) {
+    const auto n = static_cast<int>(std::min(kMessagePiece, data.size() - at));
+    MPI_Send(data.data() + at, n, MPI_BYTE, to, 1, MPI_COMM_WORLD);
+  }
+}
+
+std::vector<char> receive_bytes(int from) {
+  std::uint64_t size = 0;
+  MPI_Recv(&size, 1, MPI_UINT64_T, from, 0, MPI_COMM_WORLD, MPI_STATUS_IGNORE);
+  std::vector<char> data(size);
+  for (std::size_t at = 0; at < data.size(); at += kMessagePiece) {
+    const auto n = static_cast<int>(std::min(kMessagePiece, data.size() - at));
+    MPI_Recv(data.data() + at, n, MPI_BYTE, from, 1, MPI_COMM_WORLD, MPI_STATUS_IGNORE);
+  }
+  return data;
+}
+
+void broadcast_bytes(std::vector<char>& data) {
+  std::uint64_t size = data.size();
+  MPI_Bcast(&size, 1, MPI_UINT64_T, 0, MPI_COMM_WORLD);
+  data.resize(size);
+  for (std::size_t at = 0; at < data.size(); at += kMessagePiece) {
+    const auto n = static_cast<int>(std::min(kMessagePiece, data.size() - at));
+    MPI_Bcast(data.data() + at, n, MPI_BYTE, 0, MPI_COMM_WORLD);
+  }
+}
+
+// What rank 0 tells every rank after partitioning ("" error: go on).
+struct Plan {
+  std::string error;
+  chunk::ChunkGrid grid;
+  chunk::ChunkRows rows;
+  std::vector<chunk::ChunkFile> files;
+};
+
+std::vector<char> encode(const Plan& plan) {
+  Bytes b;
+  b.put_string(plan.error);
+  b.put(plan.grid);
+  b.put(plan.rows.normals);
+  b.put(plan.rows.colors);
+  b.put(plan.rows.origin);
+  b.put<std::uint64_t>(plan.files.size());
+  for (const chunk::ChunkFile& f : plan.files) {
+    b.put(f.index);
+    b.put(f.core_points);
+    b.put(f.points);
+    b.put_string(f.path);
+  }
+  return b.data;
+}
+
+Plan decode_plan(std::vector<char> data) {
+  Bytes b;
+  b.data = std::move(data);
+  Plan plan;
+  plan.error = b.get_string();
+  plan.grid = b.get<chunk::ChunkGrid>();
+  plan.rows.normals = b.get<bool>();
+  plan.rows.colors = b.get<bool>();
+  plan.rows.origin = b.get<Eigen::Vector3d>();
+  plan.files.resize(b.get<std::uint64_t>());
+  for (chunk::ChunkFile& f : plan.files) {
+    f.index = b.get<Eigen::Vector3i>();
+    f.core_points = b.get<std::uint64_t>();
+    f.points = b.get<std::uint64_t>();
+    f.path = b.get_string();
+  }
+  return plan;
+}
+
+// A rank's welded mesh, its rim verdicts and its failures.
+std::vector<char> encode(const TriangleMesh& mesh, const std::vector<std::uint8_t>& beyond,
+                         const ChunkedReport& report) {
+  Bytes b;
+  b.put_vector(mesh.vertices);
+  b.put_vector(mesh.normals);
+  b.put_vector(mesh.colors);
+  b.put_vector(mesh.triangles);
+  b.put_vector(beyond);
+  b.put<std::uint64_t>(report.failed.size());
+  for (const std::string& f : report.failed) b.put_string(f);
+  b.put_vector(std::vector<double>{report.mesh_s});
+  return b.data;
+}
+
+struct Options {
+  std::string input, columns, output;
+  PipelineOptions pipeline;
+  ChunkingConfig chunking;
+};
+
+int run(const Options& o, int rank, int ranks) {
+  ThreadLimit limit(o.pipeline.threads);
+  const ReconstructionConfig config = o.pipeline.config();
+  const double t0 = monotonic_seconds();
+  Plan plan;
+  std::unique_ptr<chunk::ChunkStore> store;  // rank 0: owns the directory until the end
+  if (rank == 0) {
+    try {
+      io::check_mesh_output_format(o.output);
+      float voxel = 0.0f;
+      store = partition_input(o.input, o.columns, config, o.chunking, plan.files, voxel);
+      plan.grid = store->grid();
+      plan.rows = store->rows();
+    } catch (const std::exception& e) {
+      plan.error = e.what();
+    }
+  }
+  std::vector<char> message = rank == 0 ? encode(plan) : std::vector<char>();
+  broadcast_bytes(message);
+  if (rank != 0) plan = decode_plan(std::move(message));
+  if (!plan.error.empty()) {
+    if (rank == 0) std::fprintf(stderr, "meshflow-mpi: error: %s\n", plan.error.c_str());
+    return 1;
+  }
+  const double partition_s = monotonic_seconds() - t0;
+
+  // This rank's contiguous run of chunks along the Morton curve.
+  const std::size_t n = plan.files.size();
+  const std::size_t begin = n * static_cast<std::size_t>(rank) / static_cast<std::size_t>(ranks);
+  const std::size_t end = n * static_cast<std::size_t>(rank + 1) / static_cast<std::size_t>(ranks);
+  const std::vector<chunk::ChunkFile> mine(plan.files.begin() + static_cast<std::ptrdiff_t>(begin),
+                                           plan.files.begin() + static_cast<std::ptrdiff_t>(end));
+  double t = monotonic_seconds();
+  chunk::MeshStitcher local(plan.grid.voxel_size);
+  ChunkedReport report;
+  mesh_chunk_files(mine, plan.grid, plan.rows, config, o.chunking.in_flight, o.input,
+                   [&](const FramePtr& frame) { collect_chunk_frame(*frame, local, report); });
+  report.mesh_s = monotonic_seconds() - t;
+  std::vector<std::uint8_t> beyond;
+  std::size_t welded = 0;
+  const TriangleMesh piece = local.stitch(&welded, &beyond);
+  std::fprintf(stderr, "meshflow-mpi: rank %d/%d: %zu chunks meshed in %.2f s, %zu triangles\n",
+               rank, ranks, mine.size(), report.mesh_s, piece.triangles.size());
+  for (const std::string& failure : report.failed)
+    std::fprintf(stderr, "meshflow-mpi: rank %d: chunk failed, its cells are missing: %s\n", rank,
+                 failure.c_str());
+  if (rank != 0) {
+    send_bytes(encode(piece, beyond, report), 0);
+    return 0;
+  }
+
+  // Rank 0: weld the ranks' meshes in rank order (its own first), then finish once.
+  t = monotonic_seconds();
+  chunk::MeshStitcher global(plan.grid.voxel_size);
+  global.add(piece, beyond);
+  std::size_t gathered_bytes = 0;
+  for (int from = 1; from < ranks; ++from) {
+    Bytes b;
+    b.data = receive_bytes(from);
+    gathered_bytes += b.data.size();
+    TriangleMesh mesh;
+    mesh.vertices = b.get_vector<Eigen::Vector3f>();
+    mesh.normals = b.get_vector<Eigen::Vector3f>();
+    mesh.colors = b.get_vector<Rgb8>();
+    mesh.triangles = b.get_vector<Triangle>();
+    global.add(mesh, b.get_vector<std::uint8_t>());
+  }
+  const double gather_s = monotonic_seconds() - t;
+  ChunkedReport total;
+  const TriangleMesh mesh = finish_chunked_mesh(global, config, plan.grid.voxel_size, total);
+  if (mesh.empty()) {
+    std::fprintf(stderr, "meshflow-mpi: error: %s: no surface was extracted\n", o.input.c_str());
+    return 1;
+  }
+  io::write_mesh(o.output, mesh, plan.rows.origin);
+  std::printf("input      %s: %zu chunks of %d cells at voxel %.4f m over %d ranks\n",
+              o.input.c_str(), n, plan.grid.chunk_cells, plan.grid.voxel_size, ranks);
+  std::printf("mesh       %zu vertices, %zu triangles\n", mesh.vertices.size(),
+              mesh.triangles.size());
+  std::printf(
+      "time       %.1f s: partition %.1f s, rank 0 chunks %.1f s, gather %.1f s (%.1f MB), "
+      "stitch %.1f s, optimize %.1f s\n",
+      monotonic_seconds() - t0, partition_s, report.mesh_s, gather_s,
+      static_cast<double>(gathered_bytes) / 1e6, total.stitch_s, total.optimize_s);
+  std::printf("output     %s\n", o.output.c_str());
+  return 0;
+}
+
+}  // namespace
+}  // namespace meshflow::cli
+
+namespace meshflow::cli {
+namespace {
+
+// Parses the command line (every rank; only rank 0 prints help and parse errors) and runs.
+int parse_and_run(int argc, char** argv, int rank, int ranks) {
+  Options o;
+  CLI::App app{"meshflow-mpi: out-of-core reconstruction over MPI ranks (mpirun -n N ...)"};
+  app.option_defaults()->always_capture_default();
+  app.add_option("input", o.input, "Point cloud: .ply (streamed) .pcd .las .xyz .txt .3d")
+      ->required();
+  app.add_option("-o,--output", o.output, "Output mesh: .ply .obj .stl .off .glb")->required();
+  app.add_option("--columns", o.columns, "Text clouds: the columns' meaning");
+  app.add_option("--chunk", o.chunking.chunk_size, "Chunk edge, metres")->required();
+  app.add_option("--chunk-overlap", o.chunking.overlap_voxels,
+                 "Voxels of points each chunk sees beyond its own cells");
+  app.add_option("--chunk-dir", o.chunking.directory,
+                 "Where rank 0 writes the chunk files; every rank must see it (a shared file "
+                 "system on a cluster)");
+  app.add_option("--chunks-in-flight", o.chunking.in_flight, "Chunks meshed at once per rank");
+  add_pipeline_options(&app, o.pipeline);
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {  // --help too: printed once, by rank 0
+    const int code = e.get_exit_code();
+    if (rank == 0) app.exit(e);
+    return code == 0 ? 0 : 2;
+  }
+  return run(o, rank, ranks);
+}
+
+}  // namespace
+}  // namespace meshflow::cli
+
+int main(int argc, char** argv) {
+  int provided = 0;
+  MPI_Init_thread(&argc, &argv, MPI_THREAD_FUNNELED, &provided);
+  int rank = 0, ranks = 1;
+  MPI_Comm_rank(MPI_COMM_WORLD, &rank);
+  MPI_Comm_size(MPI_COMM_WORLD, &ranks);
+  int status = 0;
+  try {
+    status = meshflow::cli::parse_and_run(argc, argv, rank, ranks);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "meshflow-mpi: rank %d: error: %s\n", rank, e.what());
+    MPI_Abort(MPI_COMM_WORLD, 1);
+  } catch (...) {
+    MPI_Abort(MPI_COMM_WORLD, 1);
+  }
+  MPI_Finalize();
+  return status;
+}

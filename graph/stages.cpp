@@ -154,7 +154,9 @@ std::uint64_t voxelize(Frame& f, const ReconstructionConfig& c) {
     throw Error(f.name, "memory",
                 std::to_string(f.cloud.size()) + " points in " + grid + " need about " +
                     mib(bytes) + " with their distances, past the limit of " +
-                    mib(c.max_memory_bytes) + " (--max-memory); use a larger --voxel");
+                    mib(c.max_memory_bytes) +
+                    " (--max-memory); use a larger --voxel, or --chunk METRES to mesh it in pieces "
+                    "out of core");
   }
   return f.grid.cells.size();
 }

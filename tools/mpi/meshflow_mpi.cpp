@@ -5,16 +5,17 @@
 //
 // Rank 0 streams the input into chunk files under --chunk-dir (a directory every rank sees: a
 // shared file system on a cluster) and broadcasts the chunk list; the chunks, in Morton order,
-// are split into N contiguous runs (static assignment along the space-filling curve, so each
-// rank's chunks are neighbours and most seams are welded locally); each rank meshes its run
-// through its own flow graph and welds it, then sends the welded mesh to rank 0, which welds
-// the ranks' meshes in rank order, trims the rim, optimizes and writes OUT. The mesh is the same
-// for any N (and equals `meshflow reconstruct --chunk`).
+// are split into N contiguous runs of about equal point counts (static assignment along the
+// space-filling curve, so each rank's chunks are neighbours and most seams are welded locally);
+// each rank meshes its run through its own flow graph and welds it, then sends the welded mesh to
+// rank 0, which welds the ranks' meshes in rank order, trims the rim, optimizes and writes OUT. The
+// mesh is the same for any N (and equals `meshflow reconstruct --chunk`).
 
 #include <mpi.h>
 
 #include <CLI/CLI.hpp>
 
+#include <algorithm>
 #include <cstdint>
 #include <cstdio>
 #include <cstring>
@@ -197,12 +198,19 @@ int run(const Options& o, int rank, int ranks) {
   }
   const double partition_s = monotonic_seconds() - t0;
 
-  // This rank's contiguous run of chunks along the Morton curve.
+  // This rank's contiguous run of chunks along the Morton curve, of about 1/N of the points:
+  // chunk i goes to the rank whose share of the running point count holds its midpoint.
   const std::size_t n = plan.files.size();
-  const std::size_t begin = n * static_cast<std::size_t>(rank) / static_cast<std::size_t>(ranks);
-  const std::size_t end = n * static_cast<std::size_t>(rank + 1) / static_cast<std::size_t>(ranks);
-  const std::vector<chunk::ChunkFile> mine(plan.files.begin() + static_cast<std::ptrdiff_t>(begin),
-                                           plan.files.begin() + static_cast<std::ptrdiff_t>(end));
+  std::uint64_t all_points = 0;
+  for (const chunk::ChunkFile& f : plan.files) all_points += f.points;
+  std::vector<chunk::ChunkFile> mine;
+  std::uint64_t before = 0;
+  for (const chunk::ChunkFile& f : plan.files) {
+    const double middle = (static_cast<double>(before) + 0.5 * static_cast<double>(f.points)) /
+                          static_cast<double>(std::max<std::uint64_t>(all_points, 1));
+    if (std::min(static_cast<int>(middle * ranks), ranks - 1) == rank) mine.push_back(f);
+    before += f.points;
+  }
   double t = monotonic_seconds();
   chunk::MeshStitcher local(plan.grid.voxel_size);
   ChunkedReport report;

@@ -154,7 +154,7 @@ ChunkedResult reconstruct_chunked(const std::string& path, const std::string& co
   report.partition_s = monotonic_seconds() - t;
 
   t = monotonic_seconds();
-  chunk::MeshStitcher stitcher(voxel);
+  chunk::MeshStitcher stitcher(voxel, report.chunk_cells);
   std::size_t done = 0;
   mesh_chunk_files(files, store->grid(), store->rows(), config, chunking.in_flight, path,
                    [&](const FramePtr& frame) {

@@ -5,6 +5,8 @@
 
 #include <Eigen/Core>
 #include <cstdint>
+#include <unordered_map>
+#include <utility>
 #include <vector>
 
 #include "runtime/triangle_mesh.h"
@@ -21,29 +23,70 @@ std::uint64_t lattice_edge_key(const Eigen::Vector3f& p, float voxel_size);
 
 /// Collects chunk meshes and welds them (not thread-safe; add in a fixed order for a
 /// deterministic result).
+///
+/// Orientation: a chunk whose normals were estimated and oriented on its own (no normals in the
+/// input, no sensor) can come out wound the other way round than its neighbour. Given the chunk
+/// edge (`chunk_cells`), every connected piece of every added mesh is related to the pieces it
+/// shares seam edges with (edges on a chunk boundary plane between two lattice-edge vertices):
+/// the same way round when most shared edges run opposite ways (consistent winding), turned
+/// when most run the same way. stitch() solves these relations with a union-find that keeps
+/// each piece's parity (the strongest relations first; one that contradicts the stronger ones
+/// is dropped), then turns, in each connected group, whichever side holds fewer triangles: the
+/// chunks' own majority decides which side is outside, whatever the order they came in.
 class MeshStitcher {
  public:
-  /// `voxel_size` of the grid every chunk mesh was extracted on, metres.
-  explicit MeshStitcher(float voxel_size) : voxel_size_(voxel_size) {}
+  /// `voxel_size` of the grid every chunk mesh was extracted on, metres; `chunk_cells` the
+  /// chunk edge in cells (0: no orientation relations).
+  explicit MeshStitcher(float voxel_size, int chunk_cells = 0)
+      : voxel_size_(voxel_size), chunk_cells_(chunk_cells) {}
 
   /// Appends a chunk's mesh (vertices in the common local frame; normals and colours kept when
   /// every chunk has them) and optionally a byte per vertex (`vertex_flags`, e.g. Frame::
-  /// beyond_data; kept when every chunk gives them). O(V + T).
+  /// beyond_data; kept when every chunk gives them); with `chunk_cells`, records its pieces and
+  /// their seam relations (see the class comment). O(V + T), plus O(S) hashing for S seam edges.
   void add(const TriangleMesh& mesh, const std::vector<std::uint8_t>& vertex_flags = {});
 
-  /// The joined mesh: vertices with one lattice edge key merged (the first chunk's copy kept),
-  /// vertices on no lattice edge kept apart, unused vertices dropped, triangles in the order
-  /// added. `merged` (optional) receives the number of seam vertices merged, `vertex_flags`
-  /// (optional) the kept vertices' flags (empty unless every chunk gave them). O(V log V + T).
+  /// The joined mesh: pieces turned as the relations say, vertices with one lattice edge key
+  /// merged (the first chunk's copy kept), vertices on no lattice edge kept apart, unused
+  /// vertices dropped, triangles in the order added. `merged` (optional) receives the number of
+  /// seam vertices merged, `vertex_flags` (optional) the kept vertices' flags (empty unless
+  /// every chunk gave them), `turned` (optional) the number of triangles turned over.
+  /// O(V log V + T + R log R) for R relations.
   TriangleMesh stitch(std::size_t* merged = nullptr,
-                      std::vector<std::uint8_t>* vertex_flags = nullptr);
+                      std::vector<std::uint8_t>* vertex_flags = nullptr,
+                      std::size_t* turned = nullptr);
 
  private:
+  // Records the pieces of the mesh just appended (vertices from `first_vertex`, triangles from
+  // `first_triangle`) and their relations to earlier pieces through shared seam edges.
+  void relate_pieces(std::size_t first_vertex, std::size_t first_triangle);
+  // Which pieces to turn over (one byte per piece), from the recorded relations.
+  std::vector<std::uint8_t> pieces_to_turn() const;
+
+  struct SeamSide {
+    std::uint32_t piece;
+    std::uint8_t direction;  // 1: the triangle runs from the lower vertex key to the higher
+  };
+  struct Relation {
+    std::uint32_t agree = 0, disagree = 0;  // shared seam edges run opposite / the same way
+  };
+
   float voxel_size_;
+  int chunk_cells_;
   TriangleMesh joined_;
   std::vector<std::uint64_t> keys_;
   std::vector<std::uint8_t> flags_;
   bool normals_ = true, colors_ = true, flags_given_ = true;
+  std::vector<std::uint32_t> triangle_piece_, vertex_piece_;
+  std::vector<std::uint64_t> piece_triangles_;
+  struct KeyPairHash {
+    std::size_t operator()(const std::pair<std::uint64_t, std::uint64_t>& k) const {
+      return std::hash<std::uint64_t>()(k.first * 0x9e3779b97f4a7c15ULL ^ k.second);
+    }
+  };
+  // Seam edges seen so far, by their vertices' lattice keys (lower, higher).
+  std::unordered_map<std::pair<std::uint64_t, std::uint64_t>, SeamSide, KeyPairHash> seam_edges_;
+  std::unordered_map<std::uint64_t, Relation> relations_;  // by piece pair (lower << 32 | higher)
 };
 
 }  // namespace meshflow::chunk

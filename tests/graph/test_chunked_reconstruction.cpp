@@ -146,7 +146,60 @@ TEST(ChunkedReconstruction, EstimatedNormalsAndTheDefaultOptimizeGiveAnAccurateS
   double sum = 0.0;
   for (const Eigen::Vector3f& v : chunked.mesh.vertices) sum += input.scene.surface_distance(v);
   EXPECT_LT(sum / static_cast<double>(chunked.mesh.vertices.size()), 0.1 * 0.9);
-  EXPECT_EQ(edge_statistics(chunked.mesh).non_manifold_edges, 0u);
+  const EdgeStatistics edges = edge_statistics(chunked.mesh);
+  EXPECT_EQ(edges.non_manifold_edges, 0u);
+  EXPECT_EQ(edges.inconsistent_edges, 0u) << "chunks oriented on their own must agree at seams";
+  // Outward: the faces of roofs and terrain (face normal within 25 degrees of vertical) face up.
+  double up = 0.0, down = 0.0;
+  for (const Triangle& t : chunked.mesh.triangles) {
+    const Eigen::Vector3f& a = chunked.mesh.vertices[t[0]];
+    const Eigen::Vector3f n =
+        (chunked.mesh.vertices[t[1]] - a).cross(chunked.mesh.vertices[t[2]] - a);
+    if (std::abs(n.z()) < 0.9f * n.norm()) continue;
+    (n.z() > 0.0f ? up : down) += n.norm();
+  }
+  EXPECT_GT(up, 99.0 * down) << "the mesh is turned inside out where it faces down";
+}
+
+TEST(MeshStitch, TurnsAChunkWoundAgainstItsNeighbourOver) {
+  // A 2 x 2 grid of unit cells at height 0.5 (vertices on vertical lattice edges), split at the
+  // chunk plane x = 1 (chunk edge 1 cell); the right chunk arrives wound the other way.
+  const float v = 1.0f;
+  const auto quad = [](float x0) {
+    TriangleMesh m;
+    m.vertices = {{x0, 0, 0.5f}, {x0 + 1, 0, 0.5f}, {x0 + 1, 1, 0.5f}, {x0, 1, 0.5f}};
+    m.triangles = {{0, 1, 2}, {0, 2, 3}};
+    return m;
+  };
+  TriangleMesh left = quad(0.0f), right = quad(1.0f), third = quad(2.0f);
+  for (Triangle& t : right.triangles) std::swap(t[1], t[2]);
+  chunk::MeshStitcher stitcher(v, 1);
+  stitcher.add(left);
+  stitcher.add(right);
+  stitcher.add(third);
+  std::size_t turned = 0;
+  const TriangleMesh joined = stitcher.stitch(nullptr, nullptr, &turned);
+  EXPECT_EQ(turned, 2u);
+  EXPECT_EQ(edge_statistics(joined).inconsistent_edges, 0u);
+  for (const Triangle& t : joined.triangles) {  // the majority (left, third) faces up: +z
+    const Eigen::Vector3f n = (joined.vertices[t[1]] - joined.vertices[t[0]])
+                                  .cross(joined.vertices[t[2]] - joined.vertices[t[0]]);
+    EXPECT_GT(n.z(), 0.0f);
+  }
+  chunk::MeshStitcher minority(v, 1);  // now the turned chunks are the majority: all face down
+  for (Triangle& t : left.triangles) std::swap(t[1], t[2]);
+  for (Triangle& t : third.triangles) std::swap(t[1], t[2]);
+  for (Triangle& t : right.triangles) std::swap(t[1], t[2]);
+  minority.add(right);  // up, first
+  minority.add(left);   // down
+  minority.add(third);  // down
+  const TriangleMesh flipped = minority.stitch();
+  EXPECT_EQ(edge_statistics(flipped).inconsistent_edges, 0u);
+  for (const Triangle& t : flipped.triangles) {
+    const Eigen::Vector3f n = (flipped.vertices[t[1]] - flipped.vertices[t[0]])
+                                  .cross(flipped.vertices[t[2]] - flipped.vertices[t[0]]);
+    EXPECT_LT(n.z(), 0.0f);
+  }
 }
 
 TEST(ChunkGrid, OwnedRangesTileSpaceAndOverlapReachesNeighbours) {

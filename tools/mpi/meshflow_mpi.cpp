@@ -6,10 +6,11 @@
 // Rank 0 streams the input into chunk files under --chunk-dir (a directory every rank sees: a
 // shared file system on a cluster) and broadcasts the chunk list; the chunks, in Morton order,
 // are split into N contiguous runs of about equal point counts (static assignment along the
-// space-filling curve, so each rank's chunks are neighbours and most seams are welded locally);
-// each rank meshes its run through its own flow graph and welds it, then sends the welded mesh to
-// rank 0, which welds the ranks' meshes in rank order, trims the rim, optimizes and writes OUT. The
-// mesh is the same for any N (and equals `meshflow reconstruct --chunk`).
+// space-filling curve); each rank meshes its run through its own flow graph and sends the chunk
+// meshes to rank 0, which welds every chunk in Morton order (its own as they come out, then the
+// other ranks' in rank order), trims the rim, optimizes and writes OUT. Welding and the seam
+// orientation see the chunks in the one-process order, so the mesh is the same for any N (and
+// equals `meshflow reconstruct --chunk`).
 
 #include <mpi.h>
 
@@ -151,19 +152,25 @@ Plan decode_plan(std::vector<char> data) {
   return plan;
 }
 
-// A rank's welded mesh, its rim verdicts and its failures.
-std::vector<char> encode(const TriangleMesh& mesh, const std::vector<std::uint8_t>& beyond,
-                         const ChunkedReport& report) {
-  Bytes b;
-  b.put_vector(mesh.vertices);
-  b.put_vector(mesh.normals);
-  b.put_vector(mesh.colors);
-  b.put_vector(mesh.triangles);
-  b.put_vector(beyond);
-  b.put<std::uint64_t>(report.failed.size());
-  for (const std::string& f : report.failed) b.put_string(f);
-  b.put_vector(std::vector<double>{report.mesh_s});
-  return b.data;
+// A rank's chunk meshes in its order, each with its rim verdicts (Frame::beyond_data).
+void encode_chunk(Bytes& b, const Frame& frame) {
+  b.put_vector(frame.mesh.vertices);
+  b.put_vector(frame.mesh.normals);
+  b.put_vector(frame.mesh.colors);
+  b.put_vector(frame.mesh.triangles);
+  b.put_vector(frame.beyond_data);
+}
+
+// Adds the chunk meshes of one rank's message to `stitcher`, in the rank's order.
+void add_chunks(Bytes& b, std::uint64_t chunks, chunk::MeshStitcher& stitcher) {
+  for (std::uint64_t c = 0; c < chunks; ++c) {
+    TriangleMesh mesh;
+    mesh.vertices = b.get_vector<Eigen::Vector3f>();
+    mesh.normals = b.get_vector<Eigen::Vector3f>();
+    mesh.colors = b.get_vector<Rgb8>();
+    mesh.triangles = b.get_vector<Triangle>();
+    stitcher.add(mesh, b.get_vector<std::uint8_t>());
+  }
 }
 
 struct Options {
@@ -211,44 +218,51 @@ int run(const Options& o, int rank, int ranks) {
     if (std::min(static_cast<int>(middle * ranks), ranks - 1) == rank) mine.push_back(f);
     before += f.points;
   }
+  // Rank 0 welds its own chunks as they come out of its graph, then the other ranks' chunk
+  // meshes in rank order: the chunks meet the stitcher in Morton order, as in one process, so
+  // welding and orientation give the same mesh for any number of ranks.
   double t = monotonic_seconds();
-  chunk::MeshStitcher local(plan.grid.voxel_size);
+  chunk::MeshStitcher stitcher(plan.grid.voxel_size, plan.grid.chunk_cells);
   ChunkedReport report;
+  Bytes outgoing;
+  std::uint64_t sent_chunks = 0;
   mesh_chunk_files(mine, plan.grid, plan.rows, config, o.chunking.in_flight, o.input,
-                   [&](const FramePtr& frame) { collect_chunk_frame(*frame, local, report); });
+                   [&](const FramePtr& frame) {
+                     if (rank == 0) return collect_chunk_frame(*frame, stitcher, report);
+                     if (!frame->ok()) {
+                       report.failed.push_back(frame->name + ": " + frame->error);
+                       return;
+                     }
+                     encode_chunk(outgoing, *frame);
+                     ++sent_chunks;
+                     frame->mesh = TriangleMesh{};
+                   });
   report.mesh_s = monotonic_seconds() - t;
-  std::vector<std::uint8_t> beyond;
-  std::size_t welded = 0;
-  const TriangleMesh piece = local.stitch(&welded, &beyond);
-  std::fprintf(stderr, "meshflow-mpi: rank %d/%d: %zu chunks meshed in %.2f s, %zu triangles\n",
-               rank, ranks, mine.size(), report.mesh_s, piece.triangles.size());
+  std::fprintf(stderr, "meshflow-mpi: rank %d/%d: %zu chunks meshed in %.2f s\n", rank, ranks,
+               mine.size(), report.mesh_s);
   for (const std::string& failure : report.failed)
     std::fprintf(stderr, "meshflow-mpi: rank %d: chunk failed, its cells are missing: %s\n", rank,
                  failure.c_str());
   if (rank != 0) {
-    send_bytes(encode(piece, beyond, report), 0);
+    Bytes chunks;
+    chunks.put(sent_chunks);
+    chunks.data.insert(chunks.data.end(), outgoing.data.begin(), outgoing.data.end());
+    outgoing = Bytes();
+    send_bytes(chunks.data, 0);
     return 0;
   }
-
-  // Rank 0: weld the ranks' meshes in rank order (its own first), then finish once.
   t = monotonic_seconds();
-  chunk::MeshStitcher global(plan.grid.voxel_size);
-  global.add(piece, beyond);
   std::size_t gathered_bytes = 0;
   for (int from = 1; from < ranks; ++from) {
     Bytes b;
     b.data = receive_bytes(from);
     gathered_bytes += b.data.size();
-    TriangleMesh mesh;
-    mesh.vertices = b.get_vector<Eigen::Vector3f>();
-    mesh.normals = b.get_vector<Eigen::Vector3f>();
-    mesh.colors = b.get_vector<Rgb8>();
-    mesh.triangles = b.get_vector<Triangle>();
-    global.add(mesh, b.get_vector<std::uint8_t>());
+    const auto chunks = b.get<std::uint64_t>();
+    add_chunks(b, chunks, stitcher);
   }
   const double gather_s = monotonic_seconds() - t;
   ChunkedReport total;
-  const TriangleMesh mesh = finish_chunked_mesh(global, config, plan.grid.voxel_size, total);
+  const TriangleMesh mesh = finish_chunked_mesh(stitcher, config, plan.grid.voxel_size, total);
   if (mesh.empty()) {
     std::fprintf(stderr, "meshflow-mpi: error: %s: no surface was extracted\n", o.input.c_str());
     return 1;

@@ -48,7 +48,7 @@ if [ -x "$build/meshflow-mpi" ] && command -v mpirun > /dev/null; then
   echo "|---|---:|---:|---|"
   for spec in "1 2" "2 1" "4 1"; do
     read -r ranks threads <<< "$spec"
-    read -r s mib < <(measure mpirun --bind-to none -n "$ranks" "$build/meshflow-mpi" "$work/city_20.ply" \
+    read -r s mib < <(measure mpirun --bind-to none -n "$ranks" "$build/meshflow-mpi" reconstruct "$work/city_20.ply" \
       -o "$work/mesh_mpi.ply" --chunk $chunk --voxel $voxel --threads "$threads")
     phases=$(grep '^time' "$work/out.txt" | sed 's/^time *//')
     echo "| $ranks rank(s) x $threads thread(s) | $s | $mib | $phases |"

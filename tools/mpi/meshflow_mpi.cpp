@@ -1,317 +1,42 @@
-// meshflow-mpi: the out-of-core reconstruction (graph/chunked_reconstruction.h) spread over MPI
-// ranks. A separate program, so that the meshflow CLI does not load Open MPI at every start-up.
+// meshflow-mpi: meshflow's work spread over MPI ranks, on one machine or a cluster (mpirun). A
+// program of its own, so that the meshflow CLI never loads Open MPI at start-up.
 //
-//   mpirun -n N meshflow-mpi IN -o OUT --chunk S [--voxel V] [--chunk-dir SHARED_DIR] ...
-//
-// Rank 0 streams the input into chunk files under --chunk-dir (a directory every rank sees: a
-// shared file system on a cluster) and broadcasts the chunk list; the chunks, in Morton order,
-// are split into N contiguous runs of about equal point counts (static assignment along the
-// space-filling curve); each rank meshes its run through its own flow graph and sends the chunk
-// meshes to rank 0, which welds every chunk in Morton order (its own as they come out, then the
-// other ranks' in rank order), trims the rim, optimizes and writes OUT. Welding and the seam
-// orientation see the chunks in the one-process order, so the mesh is the same for any N (and
-// equals `meshflow reconstruct --chunk`).
+//   mpirun -n N meshflow-mpi reconstruct IN -o OUT --chunk S [stage options]
+//   mpirun -n N meshflow-mpi run SEQUENCE -o DIR [stage options]
 
 #include <mpi.h>
 
 #include <CLI/CLI.hpp>
 
-#include <algorithm>
-#include <cstdint>
 #include <cstdio>
-#include <cstring>
 #include <exception>
-#include <string>
-#include <vector>
 
-#include "graph/chunked_reconstruction.h"
-#include "nodes/io/mesh_writers.h"
-#include "runtime/error.h"
-#include "runtime/threads.h"
-#include "runtime/tracing.h"
-#include "tools/pipeline_options.h"
+#include "tools/mpi/mpi_commands.h"
 
 namespace meshflow::cli {
 namespace {
 
-// Plain byte (de)serialisation of what crosses ranks; every rank runs the same binary.
-class Bytes {
- public:
-  template <typename T>
-  void put(const T& v) {
-    const auto* p = reinterpret_cast<const char*>(&v);
-    data.insert(data.end(), p, p + sizeof(T));
-  }
-  template <typename T>
-  void put_vector(const std::vector<T>& v) {
-    put<std::uint64_t>(v.size());
-    const auto* p = reinterpret_cast<const char*>(v.data());
-    data.insert(data.end(), p, p + v.size() * sizeof(T));
-  }
-  void put_string(const std::string& s) {
-    put<std::uint64_t>(s.size());
-    data.insert(data.end(), s.begin(), s.end());
-  }
-  template <typename T>
-  T get() {
-    T v;
-    std::memcpy(static_cast<void*>(&v), data.data() + at, sizeof(T));
-    at += sizeof(T);
-    return v;
-  }
-  template <typename T>
-  std::vector<T> get_vector() {
-    std::vector<T> v(get<std::uint64_t>());
-    std::memcpy(static_cast<void*>(v.data()), data.data() + at, v.size() * sizeof(T));
-    at += v.size() * sizeof(T);
-    return v;
-  }
-  std::string get_string() {
-    const auto n = get<std::uint64_t>();
-    std::string s(data.data() + at, n);
-    at += n;
-    return s;
-  }
-  std::vector<char> data;
-  std::size_t at = 0;
-};
-
-constexpr std::size_t kMessagePiece = std::size_t{1} << 30;  // MPI counts are int
-
-void send_bytes(const std::vector<char>& data, int to) {
-  std::uint64_t size = data.size();
-  MPI_Send(&size, 1, MPI_UINT64_T, to, 0, MPI_COMM_WORLD);
-  for (std::size_t at = 0; at < data.size(); at += kMessagePiece) {
-    const auto n = static_cast<int>(std::min(kMessagePiece, data.size() - at));
-    MPI_Send(data.data() + at, n, MPI_BYTE, to, 1, MPI_COMM_WORLD);
-  }
-}
-
-std::vector<char> receive_bytes(int from) {
-  std::uint64_t size = 0;
-  MPI_Recv(&size, 1, MPI_UINT64_T, from, 0, MPI_COMM_WORLD, MPI_STATUS_IGNORE);
-  std::vector<char> data(size);
-  for (std::size_t at = 0; at < data.size(); at += kMessagePiece) {
-    const auto n = static_cast<int>(std::min(kMessagePiece, data.size() - at));
-    MPI_Recv(data.data() + at, n, MPI_BYTE, from, 1, MPI_COMM_WORLD, MPI_STATUS_IGNORE);
-  }
-  return data;
-}
-
-void broadcast_bytes(std::vector<char>& data) {
-  std::uint64_t size = data.size();
-  MPI_Bcast(&size, 1, MPI_UINT64_T, 0, MPI_COMM_WORLD);
-  data.resize(size);
-  for (std::size_t at = 0; at < data.size(); at += kMessagePiece) {
-    const auto n = static_cast<int>(std::min(kMessagePiece, data.size() - at));
-    MPI_Bcast(data.data() + at, n, MPI_BYTE, 0, MPI_COMM_WORLD);
-  }
-}
-
-// What rank 0 tells every rank after partitioning ("" error: go on).
-struct Plan {
-  std::string error;
-  chunk::ChunkGrid grid;
-  chunk::ChunkRows rows;
-  std::vector<chunk::ChunkFile> files;
-};
-
-std::vector<char> encode(const Plan& plan) {
-  Bytes b;
-  b.put_string(plan.error);
-  b.put(plan.grid);
-  b.put(plan.rows.normals);
-  b.put(plan.rows.colors);
-  b.put(plan.rows.origin);
-  b.put<std::uint64_t>(plan.files.size());
-  for (const chunk::ChunkFile& f : plan.files) {
-    b.put(f.index);
-    b.put(f.core_points);
-    b.put(f.points);
-    b.put_string(f.path);
-  }
-  return b.data;
-}
-
-Plan decode_plan(std::vector<char> data) {
-  Bytes b;
-  b.data = std::move(data);
-  Plan plan;
-  plan.error = b.get_string();
-  plan.grid = b.get<chunk::ChunkGrid>();
-  plan.rows.normals = b.get<bool>();
-  plan.rows.colors = b.get<bool>();
-  plan.rows.origin = b.get<Eigen::Vector3d>();
-  plan.files.resize(b.get<std::uint64_t>());
-  for (chunk::ChunkFile& f : plan.files) {
-    f.index = b.get<Eigen::Vector3i>();
-    f.core_points = b.get<std::uint64_t>();
-    f.points = b.get<std::uint64_t>();
-    f.path = b.get_string();
-  }
-  return plan;
-}
-
-// A rank's chunk meshes in its order, each with its rim verdicts (Frame::beyond_data).
-void encode_chunk(Bytes& b, const Frame& frame) {
-  b.put_vector(frame.mesh.vertices);
-  b.put_vector(frame.mesh.normals);
-  b.put_vector(frame.mesh.colors);
-  b.put_vector(frame.mesh.triangles);
-  b.put_vector(frame.beyond_data);
-}
-
-// Adds the chunk meshes of one rank's message to `stitcher`, in the rank's order.
-void add_chunks(Bytes& b, std::uint64_t chunks, chunk::MeshStitcher& stitcher) {
-  for (std::uint64_t c = 0; c < chunks; ++c) {
-    TriangleMesh mesh;
-    mesh.vertices = b.get_vector<Eigen::Vector3f>();
-    mesh.normals = b.get_vector<Eigen::Vector3f>();
-    mesh.colors = b.get_vector<Rgb8>();
-    mesh.triangles = b.get_vector<Triangle>();
-    stitcher.add(mesh, b.get_vector<std::uint8_t>());
-  }
-}
-
-struct Options {
-  std::string input, columns, output;
-  PipelineOptions pipeline;
-  ChunkingConfig chunking;
-};
-
-int run(const Options& o, int rank, int ranks) {
-  ThreadLimit limit(o.pipeline.threads);
-  const ReconstructionConfig config = o.pipeline.config();
-  const double t0 = monotonic_seconds();
-  Plan plan;
-  std::unique_ptr<chunk::ChunkStore> store;  // rank 0: owns the directory until the end
-  if (rank == 0) {
-    try {
-      io::check_mesh_output_format(o.output);
-      float voxel = 0.0f;
-      store = partition_input(o.input, o.columns, config, o.chunking, plan.files, voxel);
-      plan.grid = store->grid();
-      plan.rows = store->rows();
-    } catch (const std::exception& e) {
-      plan.error = e.what();
-    }
-  }
-  std::vector<char> message = rank == 0 ? encode(plan) : std::vector<char>();
-  broadcast_bytes(message);
-  if (rank != 0) plan = decode_plan(std::move(message));
-  if (!plan.error.empty()) {
-    if (rank == 0) std::fprintf(stderr, "meshflow-mpi: error: %s\n", plan.error.c_str());
-    return 1;
-  }
-  const double partition_s = monotonic_seconds() - t0;
-
-  // This rank's contiguous run of chunks along the Morton curve, of about 1/N of the points:
-  // chunk i goes to the rank whose share of the running point count holds its midpoint.
-  const std::size_t n = plan.files.size();
-  std::uint64_t all_points = 0;
-  for (const chunk::ChunkFile& f : plan.files) all_points += f.points;
-  std::vector<chunk::ChunkFile> mine;
-  std::uint64_t before = 0;
-  for (const chunk::ChunkFile& f : plan.files) {
-    const double middle = (static_cast<double>(before) + 0.5 * static_cast<double>(f.points)) /
-                          static_cast<double>(std::max<std::uint64_t>(all_points, 1));
-    if (std::min(static_cast<int>(middle * ranks), ranks - 1) == rank) mine.push_back(f);
-    before += f.points;
-  }
-  // Rank 0 welds its own chunks as they come out of its graph, then the other ranks' chunk
-  // meshes in rank order: the chunks meet the stitcher in Morton order, as in one process, so
-  // welding and orientation give the same mesh for any number of ranks.
-  double t = monotonic_seconds();
-  chunk::MeshStitcher stitcher(plan.grid.voxel_size, plan.grid.chunk_cells);
-  ChunkedReport report;
-  Bytes outgoing;
-  std::uint64_t sent_chunks = 0;
-  mesh_chunk_files(mine, plan.grid, plan.rows, config, o.chunking.in_flight, o.input,
-                   [&](const FramePtr& frame) {
-                     if (rank == 0) return collect_chunk_frame(*frame, stitcher, report);
-                     if (!frame->ok()) {
-                       report.failed.push_back(frame->name + ": " + frame->error);
-                       return;
-                     }
-                     encode_chunk(outgoing, *frame);
-                     ++sent_chunks;
-                     frame->mesh = TriangleMesh{};
-                   });
-  report.mesh_s = monotonic_seconds() - t;
-  std::fprintf(stderr, "meshflow-mpi: rank %d/%d: %zu chunks meshed in %.2f s\n", rank, ranks,
-               mine.size(), report.mesh_s);
-  for (const std::string& failure : report.failed)
-    std::fprintf(stderr, "meshflow-mpi: rank %d: chunk failed, its cells are missing: %s\n", rank,
-                 failure.c_str());
-  if (rank != 0) {
-    Bytes chunks;
-    chunks.put(sent_chunks);
-    chunks.data.insert(chunks.data.end(), outgoing.data.begin(), outgoing.data.end());
-    outgoing = Bytes();
-    send_bytes(chunks.data, 0);
-    return 0;
-  }
-  t = monotonic_seconds();
-  std::size_t gathered_bytes = 0;
-  for (int from = 1; from < ranks; ++from) {
-    Bytes b;
-    b.data = receive_bytes(from);
-    gathered_bytes += b.data.size();
-    const auto chunks = b.get<std::uint64_t>();
-    add_chunks(b, chunks, stitcher);
-  }
-  const double gather_s = monotonic_seconds() - t;
-  ChunkedReport total;
-  const TriangleMesh mesh = finish_chunked_mesh(stitcher, config, plan.grid.voxel_size, total);
-  if (mesh.empty()) {
-    std::fprintf(stderr, "meshflow-mpi: error: %s: no surface was extracted\n", o.input.c_str());
-    return 1;
-  }
-  io::write_mesh(o.output, mesh, plan.rows.origin);
-  std::printf("input      %s: %zu chunks of %d cells at voxel %.4f m over %d ranks\n",
-              o.input.c_str(), n, plan.grid.chunk_cells, plan.grid.voxel_size, ranks);
-  std::printf("mesh       %zu vertices, %zu triangles\n", mesh.vertices.size(),
-              mesh.triangles.size());
-  std::printf(
-      "time       %.1f s: partition %.1f s, rank 0 chunks %.1f s, gather %.1f s (%.1f MB), "
-      "stitch %.1f s, optimize %.1f s\n",
-      monotonic_seconds() - t0, partition_s, report.mesh_s, gather_s,
-      static_cast<double>(gathered_bytes) / 1e6, total.stitch_s, total.optimize_s);
-  std::printf("output     %s\n", o.output.c_str());
-  return 0;
-}
-
-}  // namespace
-}  // namespace meshflow::cli
-
-namespace meshflow::cli {
-namespace {
-
-// Parses the command line (every rank; only rank 0 prints help and parse errors) and runs.
-int parse_and_run(int argc, char** argv, int rank, int ranks) {
-  Options o;
-  CLI::App app{"meshflow-mpi: out-of-core reconstruction over MPI ranks (mpirun -n N ...)"};
+// Parses the command line (every rank; only rank 0 prints help and parse errors) and runs the
+// chosen subcommand; returns the exit status.
+int parse_and_run(int argc, char** argv, const MpiWorld& world) {
+  CLI::App app{"meshflow-mpi: meshflow over MPI ranks (mpirun -n N meshflow-mpi COMMAND ...)"};
+  app.require_subcommand(1);
   app.option_defaults()->always_capture_default();
-  app.add_option("input", o.input, "Point cloud: .ply (streamed) .pcd .las .xyz .txt .3d")
-      ->required();
-  app.add_option("-o,--output", o.output, "Output mesh: .ply .obj .stl .off .glb")->required();
-  app.add_option("--columns", o.columns, "Text clouds: the columns' meaning");
-  app.add_option("--chunk", o.chunking.chunk_size, "Chunk edge, metres")->required();
-  app.add_option("--chunk-overlap", o.chunking.overlap_voxels,
-                 "Voxels of points each chunk sees beyond its own cells");
-  app.add_option("--chunk-dir", o.chunking.directory,
-                 "Where rank 0 writes the chunk files; every rank must see it (a shared file "
-                 "system on a cluster)");
-  app.add_option("--chunks-in-flight", o.chunking.in_flight, "Chunks meshed at once per rank");
-  add_pipeline_options(&app, o.pipeline);
+  int status = 0;
+  add_mpi_reconstruct(
+      app.add_subcommand("reconstruct", "One cloud larger than memory, its chunks over the ranks"),
+      world, status);
+  add_mpi_run(
+      app.add_subcommand("run", "A recorded sequence meshed per frame, frames over the ranks"),
+      world, status);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {  // --help too: printed once, by rank 0
     const int code = e.get_exit_code();
-    if (rank == 0) app.exit(e);
+    if (world.rank == 0) app.exit(e);
     return code == 0 ? 0 : 2;
   }
-  return run(o, rank, ranks);
+  return status;
 }
 
 }  // namespace
@@ -320,14 +45,14 @@ int parse_and_run(int argc, char** argv, int rank, int ranks) {
 int main(int argc, char** argv) {
   int provided = 0;
   MPI_Init_thread(&argc, &argv, MPI_THREAD_FUNNELED, &provided);
-  int rank = 0, ranks = 1;
-  MPI_Comm_rank(MPI_COMM_WORLD, &rank);
-  MPI_Comm_size(MPI_COMM_WORLD, &ranks);
+  meshflow::cli::MpiWorld world;
+  MPI_Comm_rank(MPI_COMM_WORLD, &world.rank);
+  MPI_Comm_size(MPI_COMM_WORLD, &world.ranks);
   int status = 0;
   try {
-    status = meshflow::cli::parse_and_run(argc, argv, rank, ranks);
+    status = meshflow::cli::parse_and_run(argc, argv, world);
   } catch (const std::exception& e) {
-    std::fprintf(stderr, "meshflow-mpi: rank %d: error: %s\n", rank, e.what());
+    std::fprintf(stderr, "meshflow-mpi: rank %d: error: %s\n", world.rank, e.what());
     MPI_Abort(MPI_COMM_WORLD, 1);
   } catch (...) {
     MPI_Abort(MPI_COMM_WORLD, 1);

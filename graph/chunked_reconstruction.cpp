@@ -76,19 +76,20 @@ std::unique_ptr<chunk::ChunkStore> partition_input(
   return store;
 }
 
-void mesh_chunk_files(const std::vector<chunk::ChunkFile>& files, const chunk::ChunkGrid& grid,
+void mesh_chunk_files(const std::vector<chunk::ChunkFile>& files,
+                      const std::function<long long()>& next, const chunk::ChunkGrid& grid,
                       const chunk::ChunkRows& rows, const ReconstructionConfig& config,
                       std::size_t in_flight, const std::string& name,
                       const std::function<void(const FramePtr&)>& sink) {
   ReconstructionPipeline pipeline(chunk_stage_config(config, grid.voxel_size), in_flight);
-  std::size_t next = 0;
   pipeline.run(
       [&]() -> FramePtr {
-        if (next == files.size()) return nullptr;
-        const chunk::ChunkFile& file = files[next++];
+        const long long position = next();
+        if (position < 0 || static_cast<std::size_t>(position) >= files.size()) return nullptr;
+        const chunk::ChunkFile& file = files[static_cast<std::size_t>(position)];
         auto frame = std::make_shared<Frame>();
         frame->name = name + " " + chunk_label(file);
-        frame->source_index = next - 1;
+        frame->source_index = static_cast<std::size_t>(position);
         frame->owned_cells = grid.owned_cells(file.index);
         frame->load = [file, rows] {
           PointCloud cloud = chunk::read_chunk_file(file, rows);
@@ -97,6 +98,17 @@ void mesh_chunk_files(const std::vector<chunk::ChunkFile>& files, const chunk::C
         };
         return frame;
       },
+      sink);
+}
+
+void mesh_chunk_files(const std::vector<chunk::ChunkFile>& files, const chunk::ChunkGrid& grid,
+                      const chunk::ChunkRows& rows, const ReconstructionConfig& config,
+                      std::size_t in_flight, const std::string& name,
+                      const std::function<void(const FramePtr&)>& sink) {
+  long long position = 0;
+  const auto n = static_cast<long long>(files.size());
+  mesh_chunk_files(
+      files, [&] { return position < n ? position++ : -1LL; }, grid, rows, config, in_flight, name,
       sink);
 }
 

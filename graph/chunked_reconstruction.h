@@ -73,9 +73,20 @@ std::unique_ptr<chunk::ChunkStore> partition_input(
 
 /// Meshes `files` (chunk files of `grid` with rows `rows`) through one flow graph, `in_flight`
 /// at a time; hands each finished chunk frame (failed ones with `error` set; the mesh in the
-/// input's local frame, with Frame::beyond_data for the rim trim) to `sink` in the order of
-/// `files`, from one thread at a time. Each chunk's file is deleted once read.
+/// input's local frame, with Frame::beyond_data for the rim trim; Frame::source_index = its
+/// position in `files`) to `sink` in the order of `files`, from one thread at a time. Each
+/// chunk's file is deleted once read.
 void mesh_chunk_files(const std::vector<chunk::ChunkFile>& files, const chunk::ChunkGrid& grid,
+                      const chunk::ChunkRows& rows, const ReconstructionConfig& config,
+                      std::size_t in_flight, const std::string& name,
+                      const std::function<void(const FramePtr&)>& sink);
+
+/// The same with the chunks taken as the graph asks for them: `next()` returns the position in
+/// `files` of the next chunk to mesh, or a negative value when there is none left (a work
+/// queue shared with other processes: MPI ranks). Called from graph threads, never
+/// concurrently with itself; `sink` sees the chunks in the order `next` gave them.
+void mesh_chunk_files(const std::vector<chunk::ChunkFile>& files,
+                      const std::function<long long()>& next, const chunk::ChunkGrid& grid,
                       const chunk::ChunkRows& rows, const ReconstructionConfig& config,
                       std::size_t in_flight, const std::string& name,
                       const std::function<void(const FramePtr&)>& sink);

@@ -43,11 +43,20 @@ int parse_and_run(int argc, char** argv, const MpiWorld& world) {
 }  // namespace meshflow::cli
 
 int main(int argc, char** argv) {
+  // Serialized: a rank's graph thread asks rank 0 for chunks while its main thread waits.
   int provided = 0;
-  MPI_Init_thread(&argc, &argv, MPI_THREAD_FUNNELED, &provided);
+  MPI_Init_thread(&argc, &argv, MPI_THREAD_SERIALIZED, &provided);
   meshflow::cli::MpiWorld world;
   MPI_Comm_rank(MPI_COMM_WORLD, &world.rank);
   MPI_Comm_size(MPI_COMM_WORLD, &world.ranks);
+  if (provided < MPI_THREAD_SERIALIZED) {
+    if (world.rank == 0)
+      std::fprintf(stderr,
+                   "meshflow-mpi: error: this MPI library does not provide "
+                   "MPI_THREAD_SERIALIZED (graph threads exchange messages)\n");
+    MPI_Finalize();
+    return 1;
+  }
   int status = 0;
   try {
     status = meshflow::cli::parse_and_run(argc, argv, world);

@@ -4,13 +4,12 @@
 //   mpirun -n N meshflow-mpi reconstruct IN -o OUT --chunk S [--voxel V] [--chunk-dir DIR] ...
 //
 // Rank 0 streams the input into chunk files under --chunk-dir (a directory every rank sees: a
-// shared file system on a cluster) and broadcasts the chunk list; the chunks, in Morton order,
-// are split into N contiguous runs of about equal point counts (static assignment along the
-// space-filling curve); each rank meshes its run through its own flow graph and sends the chunk
-// meshes to rank 0, which welds every chunk in Morton order (its own as they come out, then the
-// other ranks' in rank order), trims the rim, optimizes and writes OUT. Welding and the seam
-// orientation see the chunks in the one-process order, so the mesh is the same for any N (and
-// equals `meshflow reconstruct --chunk`).
+// shared file system on a cluster) and broadcasts the chunk list. The chunks go out from a queue
+// on rank 0 in Morton order, each to the rank that asks first (rank 0's own graph included); each
+// rank meshes what it gets through its own flow graph and sends the chunk meshes to rank 0,
+// which welds every chunk in Morton order, trims the rim, optimizes and writes OUT. Welding and
+// the seam orientation see the chunks in the one-process order, so the mesh is the same for any
+// N and any assignment (and equals `meshflow reconstruct --chunk`).
 
 #include <mpi.h>
 
@@ -19,10 +18,14 @@
 #include <memory>
 
 #include <algorithm>
+#include <atomic>
 #include <cstdint>
 #include <cstdio>
 #include <cstring>
+#include <exception>
+#include <functional>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "graph/chunked_reconstruction.h"
@@ -81,24 +84,57 @@ Plan decode_plan(std::vector<char> data) {
   return plan;
 }
 
-// A rank's chunk meshes in its order, each with its rim verdicts (Frame::beyond_data).
-void encode_chunk(Bytes& b, const Frame& frame) {
-  b.put_vector(frame.mesh.vertices);
-  b.put_vector(frame.mesh.normals);
-  b.put_vector(frame.mesh.colors);
-  b.put_vector(frame.mesh.triangles);
-  b.put_vector(frame.beyond_data);
+constexpr int kRequestTag = 2;  // a rank asks rank 0 for a chunk
+constexpr int kAnswerTag = 3;   // rank 0 answers with its position in the plan, or -1
+
+// One chunk meshed by some rank: its position in the plan and its mesh, or its error.
+struct ChunkResult {
+  std::uint64_t position = 0;
+  TriangleMesh mesh;
+  std::vector<std::uint8_t> beyond;  // Frame::beyond_data
+  std::string error;                 // non-empty: the chunk failed
+};
+
+std::vector<char> encode(const std::vector<ChunkResult>& results) {
+  Bytes b;
+  b.put<std::uint64_t>(results.size());
+  for (const ChunkResult& r : results) {
+    b.put(r.position);
+    b.put_string(r.error);
+    b.put_vector(r.mesh.vertices);
+    b.put_vector(r.mesh.normals);
+    b.put_vector(r.mesh.colors);
+    b.put_vector(r.mesh.triangles);
+    b.put_vector(r.beyond);
+  }
+  return b.data;
 }
 
-// Adds the chunk meshes of one rank's message to `stitcher`, in the rank's order.
-void add_chunks(Bytes& b, std::uint64_t chunks, chunk::MeshStitcher& stitcher) {
-  for (std::uint64_t c = 0; c < chunks; ++c) {
-    TriangleMesh mesh;
-    mesh.vertices = b.get_vector<Eigen::Vector3f>();
-    mesh.normals = b.get_vector<Eigen::Vector3f>();
-    mesh.colors = b.get_vector<Rgb8>();
-    mesh.triangles = b.get_vector<Triangle>();
-    stitcher.add(mesh, b.get_vector<std::uint8_t>());
+void decode_into(Bytes& b, std::vector<ChunkResult>& results) {
+  const auto count = b.get<std::uint64_t>();
+  for (std::uint64_t i = 0; i < count; ++i) {
+    ChunkResult r;
+    r.position = b.get<std::uint64_t>();
+    r.error = b.get_string();
+    r.mesh.vertices = b.get_vector<Eigen::Vector3f>();
+    r.mesh.normals = b.get_vector<Eigen::Vector3f>();
+    r.mesh.colors = b.get_vector<Rgb8>();
+    r.mesh.triangles = b.get_vector<Triangle>();
+    r.beyond = b.get_vector<std::uint8_t>();
+    results.push_back(std::move(r));
+  }
+}
+
+// Rank 0's main thread: answers every other rank's requests for a chunk with take()'s next one
+// until each has been told there is none left.
+void serve_chunk_queue(const std::function<long long()>& take, int ranks) {
+  for (int finished = 0; finished < ranks - 1;) {
+    int request = 0;
+    MPI_Status status;
+    MPI_Recv(&request, 1, MPI_INT, MPI_ANY_SOURCE, kRequestTag, MPI_COMM_WORLD, &status);
+    const long long position = take();
+    MPI_Send(&position, 1, MPI_LONG_LONG, status.MPI_SOURCE, kAnswerTag, MPI_COMM_WORLD);
+    if (position < 0) ++finished;
   }
 }
 
@@ -134,60 +170,85 @@ int run(const Options& o, int rank, int ranks) {
   }
   const double partition_s = monotonic_seconds() - t0;
 
-  // This rank's contiguous run of chunks along the Morton curve, of about 1/N of the points:
-  // chunk i goes to the rank whose share of the running point count holds its midpoint.
+  // The chunks go out from a queue on rank 0 in Morton order, each to whichever rank asks first
+  // (rank 0's own graph included), so a rank with cheap chunks takes more. Rank 0 then welds
+  // every chunk in Morton order, as in one process, so welding and orientation give the same
+  // mesh for any number of ranks and any assignment.
   const std::size_t n = plan.files.size();
-  std::uint64_t all_points = 0;
-  for (const chunk::ChunkFile& f : plan.files) all_points += f.points;
-  std::vector<chunk::ChunkFile> mine;
-  std::uint64_t before = 0;
-  for (const chunk::ChunkFile& f : plan.files) {
-    const double middle = (static_cast<double>(before) + 0.5 * static_cast<double>(f.points)) /
-                          static_cast<double>(std::max<std::uint64_t>(all_points, 1));
-    if (std::min(static_cast<int>(middle * ranks), ranks - 1) == rank) mine.push_back(f);
-    before += f.points;
-  }
-  // Rank 0 welds its own chunks as they come out of its graph, then the other ranks' chunk
-  // meshes in rank order: the chunks meet the stitcher in Morton order, as in one process, so
-  // welding and orientation give the same mesh for any number of ranks.
+  const auto chunks = static_cast<long long>(n);
   double t = monotonic_seconds();
-  chunk::MeshStitcher stitcher(plan.grid.voxel_size, plan.grid.chunk_cells);
   ChunkedReport report;
-  Bytes outgoing;
-  std::uint64_t sent_chunks = 0;
-  mesh_chunk_files(mine, plan.grid, plan.rows, config, o.chunking.in_flight, o.input,
-                   [&](const FramePtr& frame) {
-                     if (rank == 0) return collect_chunk_frame(*frame, stitcher, report);
-                     if (!frame->ok()) {
-                       report.failed.push_back(frame->name + ": " + frame->error);
-                       return;
-                     }
-                     encode_chunk(outgoing, *frame);
-                     ++sent_chunks;
-                     frame->mesh = TriangleMesh{};
-                   });
+  std::vector<ChunkResult> results;
+  const auto collect = [&](const FramePtr& frame) {
+    report.timings.insert(report.timings.end(), frame->timings.begin(), frame->timings.end());
+    ChunkResult r;
+    r.position = frame->source_index;
+    if (frame->ok()) {
+      r.mesh = std::move(frame->mesh);
+      r.beyond = std::move(frame->beyond_data);
+    } else {
+      r.error = frame->name + ": " + frame->error;
+    }
+    results.push_back(std::move(r));
+  };
+  if (rank == 0) {
+    std::atomic<long long> next{0};
+    const std::function<long long()> take = [&] {
+      const long long p = next.fetch_add(1);
+      return p < chunks ? p : -1LL;
+    };
+    std::exception_ptr failure;
+    std::thread own([&] {
+      try {
+        mesh_chunk_files(plan.files, take, plan.grid, plan.rows, config, o.chunking.in_flight,
+                         o.input, collect);
+      } catch (...) {
+        failure = std::current_exception();
+      }
+    });
+    serve_chunk_queue(take, ranks);  // MPI from this (the main) thread only
+    own.join();
+    if (failure) std::rethrow_exception(failure);
+  } else {
+    bool exhausted = false;
+    const std::function<long long()> ask = [&]() -> long long {
+      if (exhausted) return -1;
+      int request = 0;
+      long long position = -1;
+      MPI_Send(&request, 1, MPI_INT, 0, kRequestTag, MPI_COMM_WORLD);
+      MPI_Recv(&position, 1, MPI_LONG_LONG, 0, kAnswerTag, MPI_COMM_WORLD, MPI_STATUS_IGNORE);
+      exhausted = position < 0;
+      return position;
+    };
+    mesh_chunk_files(plan.files, ask, plan.grid, plan.rows, config, o.chunking.in_flight, o.input,
+                     collect);
+  }
   report.mesh_s = monotonic_seconds() - t;
   std::fprintf(stderr, "meshflow-mpi: rank %d/%d: %zu chunks meshed in %.2f s\n", rank, ranks,
-               mine.size(), report.mesh_s);
-  for (const std::string& failure : report.failed)
-    std::fprintf(stderr, "meshflow-mpi: rank %d: chunk failed, its cells are missing: %s\n", rank,
-                 failure.c_str());
+               results.size(), report.mesh_s);
   if (rank != 0) {
-    Bytes chunks;
-    chunks.put(sent_chunks);
-    chunks.data.insert(chunks.data.end(), outgoing.data.begin(), outgoing.data.end());
-    outgoing = Bytes();
-    send_bytes(chunks.data, 0);
+    send_bytes(encode(results), 0);
     return 0;
   }
   t = monotonic_seconds();
   std::size_t gathered_bytes = 0;
   for (int from = 1; from < ranks; ++from) {
-    Bytes b;
-    b.data = receive_bytes(from);
-    gathered_bytes += b.data.size();
-    const auto chunks = b.get<std::uint64_t>();
-    add_chunks(b, chunks, stitcher);
+    Bytes received;
+    received.data = receive_bytes(from);
+    gathered_bytes += received.data.size();
+    decode_into(received, results);
+  }
+  std::sort(results.begin(), results.end(),
+            [](const ChunkResult& a, const ChunkResult& b) { return a.position < b.position; });
+  chunk::MeshStitcher stitcher(plan.grid.voxel_size, plan.grid.chunk_cells);
+  for (ChunkResult& r : results) {
+    if (!r.error.empty()) {
+      std::fprintf(stderr, "meshflow-mpi: chunk failed, its cells are missing: %s\n",
+                   r.error.c_str());
+      continue;
+    }
+    stitcher.add(r.mesh, r.beyond);
+    r = ChunkResult{};
   }
   const double gather_s = monotonic_seconds() - t;
   ChunkedReport total;
@@ -202,7 +263,7 @@ int run(const Options& o, int rank, int ranks) {
   std::printf("mesh       %zu vertices, %zu triangles\n", mesh.vertices.size(),
               mesh.triangles.size());
   std::printf(
-      "time       %.1f s: partition %.1f s, rank 0 chunks %.1f s, gather %.1f s (%.1f MB), "
+      "time       %.1f s: partition %.1f s, chunks %.1f s, gather %.1f s (%.1f MB), "
       "stitch %.1f s, optimize %.1f s\n",
       monotonic_seconds() - t0, partition_s, report.mesh_s, gather_s,
       static_cast<double>(gathered_bytes) / 1e6, total.stitch_s, total.optimize_s);

@@ -15,14 +15,28 @@
 namespace meshflow {
 namespace {
 
-// The voxel suggest_voxel_size() gives for the finite points of one batch (0 if none).
-float voxel_from_batch(const PointCloud& batch) {
+// The voxel (unless given) and the chunk grid from the first batch of the input: the voxel as
+// suggest_voxel_size() gives it, the chunk edge as given or as auto_chunk_size() gives it.
+// Throws meshflow::Error naming `path` when the batch has too few distinct finite points.
+chunk::ChunkGrid grid_from_first_batch(const PointCloud& batch, float voxel_size,
+                                       ChunkingConfig chunking, const std::string& path) {
   PointCloud finite;
   for (const Eigen::Vector3f& p : batch.positions)
     if (p.allFinite()) finite.positions.push_back(p);
-  if (finite.size() < 2) return 0.0f;
-  const KdTreeIndex index(finite.positions);
-  return suggest_voxel_size(finite, index);
+  std::unique_ptr<KdTreeIndex> index;
+  if (finite.size() >= 2) index = std::make_unique<KdTreeIndex>(finite.positions);
+  if (!(voxel_size > 0.0f) && index) voxel_size = suggest_voxel_size(finite, *index);
+  if (!(voxel_size > 0.0f)) {
+    throw Error(path, "voxel size",
+                "cannot be chosen from the first points (fewer than 2 finite, or all "
+                "coincide); give --voxel");
+  }
+  if (!(chunking.chunk_size > 0.0f)) {
+    chunking.chunk_size = index ? auto_chunk_size(finite, *index, voxel_size,
+                                                  chunking.memory_budget, chunking.in_flight)
+                                : 4.0f * voxel_size;
+  }
+  return make_chunk_grid(voxel_size, chunking);
 }
 
 std::string chunk_label(const chunk::ChunkFile& file) {
@@ -38,6 +52,19 @@ ReconstructionConfig chunk_stage_config(const ReconstructionConfig& config, floa
   c.optimize.steps.clear();
   c.compression = MeshCompression::kNone;
   return c;
+}
+
+float auto_chunk_size(const PointCloud& sample, const SpatialIndex& index, float voxel_size,
+                      std::size_t memory_budget, std::size_t in_flight) {
+  const std::size_t budget = memory_budget > 0 ? memory_budget : std::size_t{1} << 30;
+  const double points = static_cast<double>(budget) /
+                        static_cast<double>(std::max<std::size_t>(in_flight, 1)) /
+                        static_cast<double>(kChunkBytesPerPoint);
+  // suggest_voxel_size() with factor 1: the median nearest-neighbour spacing (or 1/2000 of the
+  // sample's diagonal, whichever is larger).
+  const double spacing = suggest_voxel_size(sample, index, 1.0f);
+  const double edge = spacing * std::sqrt(4.5 * points / 2.0);
+  return static_cast<float>(std::max(edge, 4.0 * static_cast<double>(voxel_size)));
 }
 
 chunk::ChunkGrid make_chunk_grid(float voxel_size, const ChunkingConfig& chunking) {
@@ -59,14 +86,9 @@ std::unique_ptr<chunk::ChunkStore> partition_input(
   voxel_size = config.voxelize.voxel_size;
   io::for_each_point_batch(path, columns, chunking.batch_points, [&](const PointCloud& batch) {
     if (!store) {
-      if (!(voxel_size > 0.0f)) voxel_size = voxel_from_batch(batch);
-      if (!(voxel_size > 0.0f)) {
-        throw Error(path, "voxel size",
-                    "cannot be chosen from the first points (fewer than 2 finite, or all "
-                    "coincide); give --voxel");
-      }
-      store = std::make_unique<chunk::ChunkStore>(make_chunk_grid(voxel_size, chunking),
-                                                  chunking.directory);
+      const chunk::ChunkGrid grid = grid_from_first_batch(batch, voxel_size, chunking, path);
+      voxel_size = grid.voxel_size;
+      store = std::make_unique<chunk::ChunkStore>(grid, chunking.directory);
     }
     store->add(batch);
   });

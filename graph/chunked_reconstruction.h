@@ -23,7 +23,11 @@
 namespace meshflow {
 
 struct ChunkingConfig {
-  float chunk_size = 10.0f;  ///< chunk edge, metres (rounded to whole voxels)
+  /// Chunk edge, metres (rounded to whole voxels); <= 0: chosen from `memory_budget` and the
+  /// first points' spacing (auto_chunk_size).
+  float chunk_size = 10.0f;
+  /// Bytes the chunks in flight may take together (the automatic chunk size); 0 = 1 GiB.
+  std::size_t memory_budget = 0;
   /// Points within this many voxels of a chunk go to it too: enough for the normals' and the
   /// distance's neighbours of its border corners (distance.max_distance_voxels + 2 suffices).
   int overlap_voxels = 5;
@@ -59,14 +63,26 @@ struct ChunkedResult {
 /// runs once on the stitched mesh) and no compression.
 ReconstructionConfig chunk_stage_config(const ReconstructionConfig& config, float voxel_size);
 
+/// Bytes a chunk holds per point while in the graph (points, normals, kd-tree, grid, distances,
+/// mesh; measured on the synthetic city at 3-6 points per voxel, with margin).
+constexpr std::size_t kChunkBytesPerPoint = 1024;
+
+/// A chunk edge (metres) for which `in_flight` chunks fit `memory_budget` bytes: a chunk of edge
+/// c holds about 2 c^2 of surface (terrain and walls), sampled as densely as `sample` (a piece of
+/// the input: its median nearest-neighbour spacing d gives about 4.5 d^2 of surface per point),
+/// at kChunkBytesPerPoint. At least 4 voxels. `index` is over sample.positions. O(log n).
+float auto_chunk_size(const PointCloud& sample, const SpatialIndex& index, float voxel_size,
+                      std::size_t memory_budget, std::size_t in_flight);
+
 /// The chunk grid for `voxel_size` and `chunking` (chunk edge rounded to whole cells, >= 1).
 chunk::ChunkGrid make_chunk_grid(float voxel_size, const ChunkingConfig& chunking);
 
 /// Streams `path` (columns as io::read_point_cloud) into chunk files. The voxel size is
 /// config.voxelize.voxel_size, or when that is 0 chosen from the first batch of points (3x its
-/// median spacing, as suggest_voxel_size). Returns the store; `files` receives the chunks to
-/// mesh in Morton order. Throws meshflow::Error for unreadable input or a cloud without finite
-/// points.
+/// median spacing, as suggest_voxel_size); the chunk edge is chunking.chunk_size or, when that
+/// is <= 0, auto_chunk_size() of the same batch (the store's grid() holds the one used).
+/// Returns the store; `files` receives the chunks to mesh in Morton order. Throws meshflow::Error
+/// for unreadable input or a cloud without finite points.
 std::unique_ptr<chunk::ChunkStore> partition_input(
     const std::string& path, const std::string& columns, const ReconstructionConfig& config,
     const ChunkingConfig& chunking, std::vector<chunk::ChunkFile>& files, float& voxel_size);

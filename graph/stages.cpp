@@ -151,12 +151,12 @@ std::uint64_t voxelize(Frame& f, const ReconstructionConfig& c) {
     const std::string grid =
         std::to_string(f.grid.cells.size()) + " cells of " + std::to_string(vc.voxel_size) + " m";
     f.grid = SparseGrid{};
-    throw Error(f.name, "memory",
-                std::to_string(f.cloud.size()) + " points in " + grid + " need about " +
-                    mib(bytes) + " with their distances, past the limit of " +
-                    mib(c.max_memory_bytes) +
-                    " (--max-memory); use a larger --voxel, or --chunk METRES to mesh it in pieces "
-                    "out of core");
+    throw Error(
+        f.name, "memory",
+        std::to_string(f.cloud.size()) + " points in " + grid + " need about " + mib(bytes) +
+            " with their distances, past the limit of " + mib(c.max_memory_bytes) +
+            " (--max-memory); use a larger --voxel, or --chunk auto to mesh it in pieces out "
+            "of core");
   }
   return f.grid.cells.size();
 }

@@ -17,6 +17,7 @@
 #include "runtime/error.h"
 #include "runtime/half_edge_mesh.h"
 #include "runtime/threads.h"
+#include "tools/cli_checks.h"
 #include "tools/commands.h"
 #include "tools/console.h"
 #include "tools/json_report.h"
@@ -35,7 +36,8 @@ struct ReconstructOptions {
   PipelineOptions pipeline;
   bool texture = false;
   std::string compress;     ///< --compress method, "" = none (a .mfc output: edgebreaker)
-  ChunkingConfig chunking;  ///< chunk_size 0: one piece (no --chunk)
+  std::string chunk;        ///< --chunk: "" (whole cloud), "auto" or metres
+  ChunkingConfig chunking;  ///< the other --chunk* options
 };
 
 // Textures the planar regions of the frame's mesh from its coloured points and writes OBJ +
@@ -84,13 +86,16 @@ void print_settings(const ReconstructionConfig& c) {
 void run_reconstruct(const ReconstructOptions& o) {
   ThreadLimit limit(o.pipeline.threads);
   ReconstructionConfig config = o.pipeline.config();
-  if (o.chunking.chunk_size > 0.0f) {
+  if (!o.chunk.empty() && o.chunk != "0") {
     if (o.texture || !o.compress.empty() || is_compressed_mesh_file(o.output))
       throw Error("--chunk", "",
                   "writes a mesh file (.ply .obj .stl .off .glb): no --texture or --compress");
+    ChunkingConfig chunking = o.chunking;
+    // "auto": the chunks in flight get half of --max-memory (the rest: the welded mesh).
+    chunking.chunk_size = o.chunk == "auto" ? 0.0f : std::stof(o.chunk);
+    chunking.memory_budget = config.max_memory_bytes / 2;
     print_settings(config);
-    return run_chunked_reconstruct(o.input, o.columns, o.output, config, o.chunking,
-                                   limit.threads());
+    return run_chunked_reconstruct(o.input, o.columns, o.output, config, chunking, limit.threads());
   }
   config.compression = compression_for(o.compress, o.output);
   const bool compressed = config.compression != MeshCompression::kNone;
@@ -247,11 +252,11 @@ void add_reconstruct_options(CLI::App* cmd) {
   add_console_flags(cmd, true);
   cmd->add_flag("--texture", opts->texture,
                 "Texture planar regions from the points' colours (OBJ + MTL + PNG output)");
-  opts->chunking.chunk_size = 0.0f;
-  cmd->add_option("--chunk", opts->chunking.chunk_size,
+  cmd->add_option("--chunk", opts->chunk,
                   "Out of core: stream the input into chunks of this edge (metres) on disk and "
-                  "mesh them a few at a time, seams welded exactly (0 = whole cloud in memory)")
-      ->check(number_in(0, 1e6));
+                  "mesh them a few at a time, seams welded exactly; 'auto': the edge that lets "
+                  "the chunks in flight fit half of --max-memory (default: whole cloud in memory)")
+      ->check(CLI::IsMember({"auto"}) | number_in(0, 1e6));
   cmd->add_option("--chunk-overlap", opts->chunking.overlap_voxels,
                   "Voxels of points each chunk sees beyond its own cells")
       ->check(number_in(1, 64))

@@ -202,6 +202,18 @@ TEST(MeshStitch, TurnsAChunkWoundAgainstItsNeighbourOver) {
   }
 }
 
+TEST(ChunkedReconstruction, AutomaticChunkSizeKeepsChunksNearTheMemoryBudget) {
+  const CityInput input(120000, true);
+  ChunkingConfig automatic = chunks_of(0.0f);
+  const std::size_t target = 10000;  // points per chunk
+  automatic.memory_budget = automatic.in_flight * kChunkBytesPerPoint * target;
+  const ChunkedResult chunked = reconstruct_chunked(input.path, "", raw_config(0.9f), automatic);
+  EXPECT_GT(chunked.report.chunks, 6u);
+  EXPECT_LT(chunked.report.max_chunk_points, 4 * target) << "chunks far over the budget";
+  EXPECT_GT(chunked.report.max_chunk_points, target / 4) << "chunks far under the budget";
+  EXPECT_FALSE(chunked.mesh.empty());
+}
+
 TEST(ChunkGrid, OwnedRangesTileSpaceAndOverlapReachesNeighbours) {
   chunk::ChunkGrid grid{0.1f, 10, 2};
   EXPECT_EQ(grid.chunk_of_cell({-1, 0, 9}), Eigen::Vector3i(-1, 0, 0));

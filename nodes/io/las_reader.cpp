@@ -5,6 +5,7 @@
 #include <cstdint>
 #include <cstdio>
 #include <cstring>
+#include <functional>
 #include <vector>
 
 #include "nodes/io/parse_util.h"
@@ -119,62 +120,112 @@ Eigen::Vector3d local_origin_near(const Eigen::Vector3d& p) {
 
 }  // namespace
 
-PointCloud read_las(const std::string& path) {
-  std::ifstream in = open_input(path);
-  const std::uint64_t size = file_size(path);
-  const LasHeader header = read_header(in, path, size);
-  const LasLayout layout = layout_of(header.format);
-  PointCloud cloud;
-  cloud.positions.resize(header.points);
-  cloud.intensities.resize(header.points);
-  std::vector<std::uint16_t> rgb16(layout.rgb_at >= 0 ? 3 * header.points : 0);
+namespace {
+
+// Calls visit(first, count, records) for consecutive runs of point records (about 4 MiB each,
+// never more than the file holds: a record may be up to 64 KiB long), from the stream's position.
+template <typename Visit>
+void for_each_record_run(std::ifstream& in, const std::string& path, const LasHeader& header,
+                         Visit&& visit) {
+  in.clear();
   in.seekg(header.point_offset);
-  // Records per read: about 4 MiB of them, never more than the file holds (a record may be up
-  // to 64 KiB long; a fixed count of records could ask for gigabytes).
-  constexpr std::uint64_t kChunkBytes = std::uint64_t{4} << 20;
-  const std::uint64_t per_chunk = std::max<std::uint64_t>(
-      1, std::min<std::uint64_t>(header.points, kChunkBytes / header.record_length));
-  std::vector<unsigned char> buffer(per_chunk * header.record_length);
-  for (std::uint64_t first = 0; first < header.points; first += per_chunk) {
-    const std::uint64_t count = std::min(per_chunk, header.points - first);
+  constexpr std::uint64_t kRunBytes = std::uint64_t{4} << 20;
+  const std::uint64_t per_run = std::max<std::uint64_t>(
+      1, std::min<std::uint64_t>(header.points, kRunBytes / header.record_length));
+  std::vector<unsigned char> buffer(per_run * header.record_length);
+  for (std::uint64_t first = 0; first < header.points; first += per_run) {
+    const std::uint64_t count = std::min(per_run, header.points - first);
     in.read(reinterpret_cast<char*>(buffer.data()),
             static_cast<std::streamsize>(count * header.record_length));
     if (static_cast<std::uint64_t>(in.gcount()) != count * header.record_length)
       throw Error(path, "point " + std::to_string(first), "the point data is truncated");
-    for (std::uint64_t i = 0; i < count; ++i) {
-      const unsigned char* record = buffer.data() + i * header.record_length;
-      Eigen::Vector3d p;
-      for (int k = 0; k < 3; ++k)
-        p[k] = field<std::int32_t>(record + 4 * k) * header.scale[k] + header.offset[k];
-      if (first + i == 0) cloud.origin = local_origin_near(p);
-      const Eigen::Vector3d local = p - cloud.origin;
-      if (!local.allFinite() || (local.array().abs() > kMaxAbsCoordinate).any()) {
-        char where[128];
-        std::snprintf(where, sizeof where,
-                      "(%.3f, %.3f, %.3f) lies more than 1e6 m from the "
-                      "first point",
-                      p.x(), p.y(), p.z());
-        throw Error(path, "point " + std::to_string(first + i),
-                    std::string(where) + ": corrupt data or a cloud too large for one local frame");
-      }
-      cloud.positions[first + i] = local.cast<float>();
-      cloud.intensities[first + i] = field<std::uint16_t>(record + 12);
-      if (layout.rgb_at >= 0)
-        for (int c = 0; c < 3; ++c)
-          rgb16[3 * (first + i) + c] = field<std::uint16_t>(record + layout.rgb_at + 2 * c);
-    }
+    visit(first, count, buffer.data());
   }
-  if (!rgb16.empty()) {
-    const bool sixteen_bit =
-        std::any_of(rgb16.begin(), rgb16.end(), [](std::uint16_t v) { return v > 255; });
-    const int shift = sixteen_bit ? 8 : 0;
-    cloud.colors.resize(header.points);
-    for (std::uint64_t i = 0; i < header.points; ++i)
-      cloud.colors[i] = Rgb8{static_cast<std::uint8_t>(rgb16[3 * i] >> shift),
-                             static_cast<std::uint8_t>(rgb16[3 * i + 1] >> shift),
-                             static_cast<std::uint8_t>(rgb16[3 * i + 2] >> shift)};
-  }
-  return cloud;
+}
+
+// Whether the file's colours use 16 bits (some channel above 255), which decides their scaling
+// to 8 bits for every point: a pass over the colour fields alone.
+bool colors_are_16_bit(std::ifstream& in, const std::string& path, const LasHeader& header,
+                       const LasLayout& layout) {
+  bool sixteen = false;
+  for_each_record_run(in, path, header,
+                      [&](std::uint64_t, std::uint64_t count, const unsigned char* records) {
+                        for (std::uint64_t i = 0; i < count && !sixteen; ++i)
+                          for (int c = 0; c < 3; ++c)
+                            sixteen |= field<std::uint16_t>(records + i * header.record_length +
+                                                            layout.rgb_at + 2 * c) > 255;
+                      });
+  return sixteen;
+}
+
+// Streams the points of `path` to sink(batch), `batch_points` at a time at most (0: one
+// batch), every batch in the local frame of the first point (PointCloud::origin).
+void read_las_points(const std::string& path, std::size_t batch_points,
+                     const std::function<void(PointCloud&)>& sink) {
+  std::ifstream in = open_input(path);
+  const std::uint64_t size = file_size(path);
+  const LasHeader header = read_header(in, path, size);
+  const LasLayout layout = layout_of(header.format);
+  const int shift = layout.rgb_at >= 0 && colors_are_16_bit(in, path, header, layout) ? 8 : 0;
+  const std::uint64_t per_batch = batch_points > 0 ? batch_points : header.points;
+  PointCloud cloud;
+  const auto reserve = [&](std::uint64_t n) {
+    cloud.positions.reserve(n);
+    cloud.intensities.reserve(n);
+    if (layout.rgb_at >= 0) cloud.colors.reserve(n);
+  };
+  reserve(std::min<std::uint64_t>(per_batch, header.points));
+  for_each_record_run(
+      in, path, header,
+      [&](std::uint64_t first, std::uint64_t count, const unsigned char* records) {
+        for (std::uint64_t i = 0; i < count; ++i) {
+          const unsigned char* record = records + i * header.record_length;
+          Eigen::Vector3d p;
+          for (int k = 0; k < 3; ++k)
+            p[k] = field<std::int32_t>(record + 4 * k) * header.scale[k] + header.offset[k];
+          if (first + i == 0) cloud.origin = local_origin_near(p);
+          const Eigen::Vector3d local = p - cloud.origin;
+          if (!local.allFinite() || (local.array().abs() > kMaxAbsCoordinate).any()) {
+            char where[128];
+            std::snprintf(where, sizeof where,
+                          "(%.3f, %.3f, %.3f) lies more than 1e6 m from the "
+                          "first point",
+                          p.x(), p.y(), p.z());
+            throw Error(
+                path, "point " + std::to_string(first + i),
+                std::string(where) + ": corrupt data or a cloud too large for one local frame");
+          }
+          cloud.positions.push_back(local.cast<float>());
+          cloud.intensities.push_back(field<std::uint16_t>(record + 12));
+          if (layout.rgb_at >= 0) {
+            const auto channel = [&](int c) {
+              return static_cast<std::uint8_t>(
+                  field<std::uint16_t>(record + layout.rgb_at + 2 * c) >> shift);
+            };
+            cloud.colors.push_back(Rgb8{channel(0), channel(1), channel(2)});
+          }
+          if (cloud.size() == per_batch) {
+            sink(cloud);
+            cloud.positions.clear();
+            cloud.intensities.clear();
+            cloud.colors.clear();
+          }
+        }
+      });
+  if (!cloud.empty() || header.points == 0) sink(cloud);
+}
+
+}  // namespace
+
+PointCloud read_las(const std::string& path) {
+  PointCloud whole;
+  read_las_points(path, 0, [&](PointCloud& cloud) { whole = std::move(cloud); });
+  return whole;
+}
+
+void read_las_batches(const std::string& path, std::size_t batch,
+                      const std::function<void(const PointCloud&)>& sink) {
+  read_las_points(path, std::max<std::size_t>(batch, 1), [&](PointCloud& cloud) { sink(cloud); });
 }
 
 }  // namespace meshflow::io

@@ -3,6 +3,7 @@
 // 0-3 and 6-8. No Debian library reads LAS; the format is small and documented (ASPRS LAS 1.4
 // R15, "Public Header Block" and "Point Data Records").
 
+#include <functional>
 #include <string>
 
 #include "runtime/point_cloud.h"
@@ -22,5 +23,13 @@ namespace meshflow::io {
 /// positions are relative to it, exact to the file's resolution (floats near the world origin
 /// instead of millions of metres). O(file size), streamed in chunks.
 PointCloud read_las(const std::string& path);
+
+/// read_las() in pieces: the points in file order, `batch` (>= 1) at a time, each piece in the
+/// local frame of the first point (the same origin for all), so a file larger than memory can be
+/// streamed (the out-of-core path). Colours are scaled as read_las() scales them (a first pass
+/// over the colour fields decides). The cloud passed to `sink` is reused after it returns.
+/// Throws as read_las() does, possibly after some pieces.
+void read_las_batches(const std::string& path, std::size_t batch,
+                      const std::function<void(const PointCloud&)>& sink);
 
 }  // namespace meshflow::io

@@ -19,7 +19,8 @@ PointCloud read_point_cloud(const std::string& path);
 PointCloud read_point_cloud(const std::string& path, const std::string& columns);
 
 /// The points of `path` (columns as above) handed to `sink` in file order, at most `batch` at a
-/// time, each piece with the file's origin and sensor. PLY is streamed (memory: one batch);
+/// time, each piece with the file's origin and sensor. PLY and LAS are streamed (memory: one
+/// batch);
 /// the other formats are read whole and then handed over in pieces. The cloud passed to `sink`
 /// is reused after it returns. Throws as read_point_cloud() does.
 void for_each_point_batch(const std::string& path, const std::string& columns, std::size_t batch,

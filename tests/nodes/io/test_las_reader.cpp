@@ -95,6 +95,27 @@ TEST(LasReader, GeoreferencedFilesAreReadInALocalFrame) {
   EXPECT_TRUE(read_las(dir + "/local.las").origin.isZero());
 }
 
+TEST(LasReader, BatchesAreTheWholeCloudInPiecesWithOneOrigin) {
+  const std::string path = test::temp_dir() + "/batches.las";
+  test::write_file(path, las_file(2, 3, 34, 50, 256, 5000123.0));  // 16-bit colours, UTM
+  const PointCloud whole = read_las(path);
+  PointCloud joined;
+  std::size_t pieces = 0;
+  read_las_batches(path, 16, [&](const PointCloud& piece) {
+    EXPECT_LE(piece.size(), 16u);
+    EXPECT_EQ(piece.origin, whole.origin);
+    ++pieces;
+    joined.positions.insert(joined.positions.end(), piece.positions.begin(), piece.positions.end());
+    joined.colors.insert(joined.colors.end(), piece.colors.begin(), piece.colors.end());
+    joined.intensities.insert(joined.intensities.end(), piece.intensities.begin(),
+                              piece.intensities.end());
+  });
+  EXPECT_EQ(pieces, 4u);
+  EXPECT_EQ(joined.positions, whole.positions);
+  EXPECT_EQ(joined.colors, whole.colors) << "colour scaling decided over the whole file";
+  EXPECT_EQ(joined.intensities, whole.intensities);
+}
+
 TEST(LasReader, BadFilesAreClearErrorsBeforeAnyAllocation) {
   const std::string dir = test::temp_dir();
   std::string huge = las_file(2, 0, 20, 3);

@@ -6,7 +6,6 @@
 #include "graph/pipeline.h"
 #include "nodes/chunk/mesh_stitch.h"
 #include "nodes/extract/rim_trim.h"
-#include "nodes/filter/filter.h"
 #include "nodes/io/read_point_cloud.h"
 #include "nodes/search/spatial_index.h"
 #include "runtime/error.h"

@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <memory>
 
+#include "nodes/io/byte_buffer.h"
 #include "runtime/error.h"
 #include "runtime/voxel_key.h"
 
@@ -28,12 +29,11 @@ using File = std::unique_ptr<std::FILE, FileCloser>;
 
 PointCloud read_chunk_file(const ChunkFile& chunk, const ChunkRows& rows) {
   const std::size_t row = rows.bytes();
-  std::vector<char> bytes(chunk.points * row);
-  File f(std::fopen(chunk.path.c_str(), "rb"));
-  if (!f || std::fread(bytes.data(), 1, bytes.size(), f.get()) != bytes.size()) {
+  const std::vector<unsigned char> bytes = io::read_file_bytes(chunk.path);
+  if (bytes.size() != chunk.points * row) {
     throw Error(chunk.path, "chunk file",
                 "expected " + std::to_string(chunk.points) + " points of " + std::to_string(row) +
-                    " bytes: " + (f ? "the file is short" : std::strerror(errno)));
+                    " bytes, found " + std::to_string(bytes.size()) + " bytes");
   }
   PointCloud cloud;
   cloud.origin = rows.origin;
@@ -42,13 +42,11 @@ PointCloud read_chunk_file(const ChunkFile& chunk, const ChunkRows& rows) {
   if (rows.normals) cloud.normals.resize(n);
   if (rows.colors) cloud.colors.resize(n);
   for (std::size_t i = 0; i < n; ++i) {
-    const char* in = bytes.data() + i * row;
+    const unsigned char* in = bytes.data() + i * row;
     std::memcpy(cloud.positions[i].data(), in, 12);
     if (rows.normals) std::memcpy(cloud.normals[i].data(), in + 12, 12);
     if (rows.colors) {
-      cloud.colors[i] =
-          Rgb8{static_cast<std::uint8_t>(in[row - 3]), static_cast<std::uint8_t>(in[row - 2]),
-               static_cast<std::uint8_t>(in[row - 1])};
+      cloud.colors[i] = Rgb8{in[row - 3], in[row - 2], in[row - 1]};
     }
   }
   return cloud;

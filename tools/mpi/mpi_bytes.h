@@ -1,5 +1,5 @@
 #pragma once
-// What meshflow-mpi's ranks send each other: byte buffers of plain values, and point-to-point
+// What meshflow-mpi's ranks send each other: plain values in byte buffers, and point-to-point
 // and broadcast transfers of any size (MPI counts are int: sent in pieces of 1 GiB).
 
 #include <cstddef>
@@ -8,62 +8,58 @@
 #include <string>
 #include <vector>
 
+#include "nodes/io/byte_buffer.h"
+
 namespace meshflow::cli {
 
-/// Plain byte (de)serialisation of what crosses ranks (every rank runs the same binary, so
-/// values are copied as they are in memory). Not thread-safe.
-class Bytes {
- public:
-  /// Appends the bytes of a trivially copyable value.
-  template <typename T>
-  void put(const T& v) {
-    const auto* p = reinterpret_cast<const char*>(&v);
-    data.insert(data.end(), p, p + sizeof(T));
-  }
-  /// Appends a vector: its size, then its elements' bytes.
-  template <typename T>
-  void put_vector(const std::vector<T>& v) {
-    put<std::uint64_t>(v.size());
-    const auto* p = reinterpret_cast<const char*>(v.data());
-    data.insert(data.end(), p, p + v.size() * sizeof(T));
-  }
-  /// Appends a string: its size, then its characters.
-  void put_string(const std::string& s) {
-    put<std::uint64_t>(s.size());
-    data.insert(data.end(), s.begin(), s.end());
-  }
-  /// Reads a value written by put() at the read position.
-  template <typename T>
-  T get() {
-    T v;
-    std::memcpy(static_cast<void*>(&v), data.data() + at, sizeof(T));
-    at += sizeof(T);
-    return v;
-  }
-  /// Reads a vector written by put_vector().
-  template <typename T>
-  std::vector<T> get_vector() {
-    std::vector<T> v(get<std::uint64_t>());
-    std::memcpy(static_cast<void*>(v.data()), data.data() + at, v.size() * sizeof(T));
-    at += v.size() * sizeof(T);
-    return v;
-  }
-  /// Reads a string written by put_string().
-  std::string get_string() {
-    const auto n = get<std::uint64_t>();
-    std::string s(data.data() + at, n);
-    at += n;
-    return s;
-  }
-  std::vector<char> data;  ///< the bytes
-  std::size_t at = 0;      ///< read position
-};
+// Values cross ranks as their bytes in memory (every rank runs the same binary), through
+// io::ByteWriter / io::ByteReader, whose reads are checked against the message's end.
+
+/// Appends the bytes of a trivially copyable value.
+template <typename T>
+void put(io::ByteWriter& w, const T& v) {
+  w.bytes(&v, sizeof(T));
+}
+/// Reads a value written by put(); `field` names it in errors.
+template <typename T>
+T get(io::ByteReader& r, const char* field) {
+  T v;
+  std::memcpy(static_cast<void*>(&v), r.bytes(sizeof(T), field), sizeof(T));
+  return v;
+}
+/// Appends a vector: its size, then its elements' bytes.
+template <typename T>
+void put_vector(io::ByteWriter& w, const std::vector<T>& v) {
+  w.u64(v.size());
+  w.bytes(v.data(), v.size() * sizeof(T));
+}
+/// Reads a vector written by put_vector().
+template <typename T>
+std::vector<T> get_vector(io::ByteReader& r, const char* field) {
+  const std::uint64_t n = r.u64(field);
+  if (n > r.remaining() / sizeof(T)) r.fail(field, "more elements than the message holds");
+  std::vector<T> v(n);
+  std::memcpy(static_cast<void*>(v.data()), r.bytes(n * sizeof(T), field), n * sizeof(T));
+  return v;
+}
+/// Appends a string: its size, then its characters.
+inline void put_string(io::ByteWriter& w, const std::string& s) {
+  w.u64(s.size());
+  w.bytes(s.data(), s.size());
+}
+/// Reads a string written by put_string().
+inline std::string get_string(io::ByteReader& r, const char* field) {
+  const std::uint64_t n = r.u64(field);
+  if (n > r.remaining()) r.fail(field, "a string longer than the message");
+  const unsigned char* at = r.bytes(n, field);
+  return std::string(reinterpret_cast<const char*>(at), n);
+}
 
 /// Sends `data` (its size first) to rank `to`. Blocks until sent.
-void send_bytes(const std::vector<char>& data, int to);
+void send_bytes(const std::vector<unsigned char>& data, int to);
 /// Receives what send_bytes() sent from rank `from`. Blocks.
-std::vector<char> receive_bytes(int from);
+std::vector<unsigned char> receive_bytes(int from);
 /// Rank 0's `data` to every rank (the others' is replaced). Collective.
-void broadcast_bytes(std::vector<char>& data);
+void broadcast_bytes(std::vector<unsigned char>& data);
 
 }  // namespace meshflow::cli

@@ -48,38 +48,38 @@ struct Plan {
   std::vector<chunk::ChunkFile> files;
 };
 
-std::vector<char> encode(const Plan& plan) {
-  Bytes b;
-  b.put_string(plan.error);
-  b.put(plan.grid);
-  b.put(plan.rows.normals);
-  b.put(plan.rows.colors);
-  b.put(plan.rows.origin);
-  b.put<std::uint64_t>(plan.files.size());
+std::vector<unsigned char> encode(const Plan& plan) {
+  io::ByteWriter w;
+  put_string(w, plan.error);
+  put(w, plan.grid);
+  put(w, plan.rows.normals);
+  put(w, plan.rows.colors);
+  put(w, plan.rows.origin);
+  w.u64(plan.files.size());
   for (const chunk::ChunkFile& f : plan.files) {
-    b.put(f.index);
-    b.put(f.core_points);
-    b.put(f.points);
-    b.put_string(f.path);
+    put(w, f.index);
+    w.u64(f.core_points);
+    w.u64(f.points);
+    put_string(w, f.path);
   }
-  return b.data;
+  return std::move(w.out);
 }
 
-Plan decode_plan(std::vector<char> data) {
-  Bytes b;
-  b.data = std::move(data);
+Plan decode_plan(const std::vector<unsigned char>& message) {
+  const std::string source = "chunk plan from rank 0";  // the reader keeps a reference
+  io::ByteReader r(source, message);
   Plan plan;
-  plan.error = b.get_string();
-  plan.grid = b.get<chunk::ChunkGrid>();
-  plan.rows.normals = b.get<bool>();
-  plan.rows.colors = b.get<bool>();
-  plan.rows.origin = b.get<Eigen::Vector3d>();
-  plan.files.resize(b.get<std::uint64_t>());
+  plan.error = get_string(r, "error");
+  plan.grid = get<chunk::ChunkGrid>(r, "grid");
+  plan.rows.normals = get<bool>(r, "normals");
+  plan.rows.colors = get<bool>(r, "colors");
+  plan.rows.origin = get<Eigen::Vector3d>(r, "origin");
+  plan.files.resize(r.u64("chunks"));
   for (chunk::ChunkFile& f : plan.files) {
-    f.index = b.get<Eigen::Vector3i>();
-    f.core_points = b.get<std::uint64_t>();
-    f.points = b.get<std::uint64_t>();
-    f.path = b.get_string();
+    f.index = get<Eigen::Vector3i>(r, "chunk index");
+    f.core_points = r.u64("core points");
+    f.points = r.u64("points");
+    f.path = get_string(r, "path");
   }
   return plan;
 }
@@ -95,33 +95,36 @@ struct ChunkResult {
   std::string error;                 // non-empty: the chunk failed
 };
 
-std::vector<char> encode(const std::vector<ChunkResult>& results) {
-  Bytes b;
-  b.put<std::uint64_t>(results.size());
+std::vector<unsigned char> encode(const std::vector<ChunkResult>& results) {
+  io::ByteWriter w;
+  w.u64(results.size());
   for (const ChunkResult& r : results) {
-    b.put(r.position);
-    b.put_string(r.error);
-    b.put_vector(r.mesh.vertices);
-    b.put_vector(r.mesh.normals);
-    b.put_vector(r.mesh.colors);
-    b.put_vector(r.mesh.triangles);
-    b.put_vector(r.beyond);
+    w.u64(r.position);
+    put_string(w, r.error);
+    put_vector(w, r.mesh.vertices);
+    put_vector(w, r.mesh.normals);
+    put_vector(w, r.mesh.colors);
+    put_vector(w, r.mesh.triangles);
+    put_vector(w, r.beyond);
   }
-  return b.data;
+  return std::move(w.out);
 }
 
-void decode_into(Bytes& b, std::vector<ChunkResult>& results) {
-  const auto count = b.get<std::uint64_t>();
+void decode_into(const std::vector<unsigned char>& message, int from,
+                 std::vector<ChunkResult>& results) {
+  const std::string source = "chunk meshes from rank " + std::to_string(from);
+  io::ByteReader r(source, message);
+  const std::uint64_t count = r.u64("chunks");
   for (std::uint64_t i = 0; i < count; ++i) {
-    ChunkResult r;
-    r.position = b.get<std::uint64_t>();
-    r.error = b.get_string();
-    r.mesh.vertices = b.get_vector<Eigen::Vector3f>();
-    r.mesh.normals = b.get_vector<Eigen::Vector3f>();
-    r.mesh.colors = b.get_vector<Rgb8>();
-    r.mesh.triangles = b.get_vector<Triangle>();
-    r.beyond = b.get_vector<std::uint8_t>();
-    results.push_back(std::move(r));
+    ChunkResult c;
+    c.position = r.u64("position");
+    c.error = get_string(r, "error");
+    c.mesh.vertices = get_vector<Eigen::Vector3f>(r, "vertices");
+    c.mesh.normals = get_vector<Eigen::Vector3f>(r, "normals");
+    c.mesh.colors = get_vector<Rgb8>(r, "colors");
+    c.mesh.triangles = get_vector<Triangle>(r, "triangles");
+    c.beyond = get_vector<std::uint8_t>(r, "rim verdicts");
+    results.push_back(std::move(c));
   }
 }
 
@@ -161,9 +164,9 @@ int run(const Options& o, int rank, int ranks) {
       plan.error = e.what();
     }
   }
-  std::vector<char> message = rank == 0 ? encode(plan) : std::vector<char>();
+  std::vector<unsigned char> message = rank == 0 ? encode(plan) : std::vector<unsigned char>();
   broadcast_bytes(message);
-  if (rank != 0) plan = decode_plan(std::move(message));
+  if (rank != 0) plan = decode_plan(message);
   if (!plan.error.empty()) {
     if (rank == 0) std::fprintf(stderr, "meshflow-mpi: error: %s\n", plan.error.c_str());
     return 1;
@@ -233,10 +236,9 @@ int run(const Options& o, int rank, int ranks) {
   t = monotonic_seconds();
   std::size_t gathered_bytes = 0;
   for (int from = 1; from < ranks; ++from) {
-    Bytes received;
-    received.data = receive_bytes(from);
-    gathered_bytes += received.data.size();
-    decode_into(received, results);
+    const std::vector<unsigned char> received = receive_bytes(from);
+    gathered_bytes += received.size();
+    decode_into(received, from, results);
   }
   std::sort(results.begin(), results.end(),
             [](const ChunkResult& a, const ChunkResult& b) { return a.position < b.position; });

@@ -11,6 +11,7 @@
 #include <cstdio>
 #include <exception>
 
+#include "runtime/process_heap.h"
 #include "tools/mpi/mpi_commands.h"
 
 namespace meshflow::cli {
@@ -43,6 +44,7 @@ int parse_and_run(int argc, char** argv, const MpiWorld& world) {
 }  // namespace meshflow::cli
 
 int main(int argc, char** argv) {
+  meshflow::tune_process_heap();  // before MPI starts its threads
   // Serialized: a rank's graph thread asks rank 0 for chunks while its main thread waits.
   int provided = 0;
   MPI_Init_thread(&argc, &argv, MPI_THREAD_SERIALIZED, &provided);

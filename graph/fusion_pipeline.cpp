@@ -22,6 +22,7 @@ FusionPipeline::FusionPipeline(FusionConfig config, std::size_t max_in_flight, T
   if (config_.keep_occlusion_edges) config_.frames.depth_filter.edge_high = 0.0f;
   map_.set_max_memory_bytes(config_.tsdf.max_memory_bytes);
   map_.set_behind_voxels(config_.tsdf.behind_voxels);
+  map_.set_integrator(config_.tsdf.integrator);
   if (map_.config().voxel_size != config_.tsdf.voxel_size) {
     throw Error("fusion", "voxel size",
                 "the map has " + std::to_string(map_.config().voxel_size) + " m voxels, the run " +

@@ -131,24 +131,30 @@ share of the triangles (QEM). Vertex colours when color is given.)");
 
   py::class_<Volume>(m, "TsdfVolume",
                      "A sparse TSDF map (8^3-voxel blocks) that depth frames are fused into.")
-      .def(py::init(
-               [](float voxel, float truncation, float behind, float max_weight, bool fuse_color) {
-                 TsdfConfig c;
-                 c.voxel_size = voxel;
-                 c.truncation_voxels = truncation;
-                 c.behind_voxels = std::min(behind, truncation);
-                 c.max_weight = max_weight;
-                 c.fuse_color = fuse_color;
-                 return std::make_unique<Volume>(c);
-               }),
+      .def(py::init([](float voxel, float truncation, float behind, float max_weight,
+                       bool fuse_color, const std::string& integrator) {
+             if (integrator != "projective" && integrator != "along-ray")
+               throw Error("TsdfVolume", "integrator",
+                           "must be 'projective' or 'along-ray', not '" + integrator + "'");
+             TsdfConfig c;
+             c.integrator = integrator == "along-ray" ? TsdfIntegrator::kAlongRay
+                                                      : TsdfIntegrator::kProjective;
+             c.voxel_size = voxel;
+             c.truncation_voxels = truncation;
+             c.behind_voxels = std::min(behind, truncation);
+             c.max_weight = max_weight;
+             c.fuse_color = fuse_color;
+             return std::make_unique<Volume>(c);
+           }),
            py::arg("voxel") = TsdfConfig{}.voxel_size,
            py::arg("truncation") = TsdfConfig{}.truncation_voxels,
            py::arg("behind") = TsdfConfig{}.behind_voxels,
            py::arg("max_weight") = TsdfConfig{}.max_weight,
-           py::arg("fuse_color") = TsdfConfig{}.fuse_color,
+           py::arg("fuse_color") = TsdfConfig{}.fuse_color, py::arg("integrator") = "projective",
            "voxel in metres, truncation in voxels, behind: the least band behind each measured "
            "surface in voxels (the CLI's run --fuse defaults; behind = truncation: Open3D's "
-           "symmetric band).")
+           "symmetric band); integrator: 'projective' (each voxel of a touched block projected "
+           "into the image) or 'along-ray' (each pixel's ray walks its band, voxblox-style).")
       .def(
           "integrate",
           [](Volume& v, const py::handle& depth, const PinholeIntrinsics& intrinsics,

@@ -6,6 +6,8 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include <algorithm>
+#include <cstddef>
 #include <cstdint>
 #include <vector>
 
@@ -23,6 +25,20 @@ T exclusive_scan_in_place(std::vector<T>& counts) {
     sum += v;
   }
   return sum;
+}
+
+/// The parts' elements in part order, as one vector (the copies in parallel). T must be
+/// default-constructible. O(total elements).
+template <typename T>
+std::vector<T> concatenate_parts(const std::vector<std::vector<T>>& parts) {
+  std::vector<std::size_t> offsets(parts.size());
+  for (std::size_t i = 0; i < parts.size(); ++i) offsets[i] = parts[i].size();
+  std::vector<T> out(exclusive_scan_in_place(offsets));
+  tbb::parallel_for(std::size_t{0}, parts.size(), [&](std::size_t i) {
+    std::copy(parts[i].begin(), parts[i].end(),
+              out.begin() + static_cast<std::ptrdiff_t>(offsets[i]));
+  });
+  return out;
 }
 
 /// Indices i in [0, n) with keep(i), in increasing order. `keep` must be thread-safe.

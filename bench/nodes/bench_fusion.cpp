@@ -9,7 +9,8 @@
 namespace meshflow::bench {
 namespace {
 
-// Args: threads, voxel in 0.1 mm, input (1 = Redwood, 0 = synthetic).
+// Args: threads, voxel in 0.1 mm, input (1 = Redwood, 0 = synthetic), integrator (0 =
+// projective, 1 = along rays).
 void BM_TsdfIntegrate(benchmark::State& state) {
   const std::vector<DepthFrame>* frames = require_depth_frames(state, state.range(2) == 1);
   if (frames == nullptr) return;
@@ -19,7 +20,10 @@ void BM_TsdfIntegrate(benchmark::State& state) {
   std::size_t voxels = 0, blocks = 0;
   for (auto _ : state) {
     state.PauseTiming();
-    TsdfVolume volume(TsdfConfig{voxel});
+    TsdfConfig config{voxel};
+    config.integrator =
+        state.range(3) == 1 ? TsdfIntegrator::kAlongRay : TsdfIntegrator::kProjective;
+    TsdfVolume volume(config);
     voxels = 0;
     state.ResumeTiming();
     for (const DepthFrame& f : input) voxels += volume.integrate(f).voxels_updated;
@@ -35,8 +39,8 @@ void BM_TsdfIntegrate(benchmark::State& state) {
   state.counters["blocks"] = static_cast<double>(blocks);
 }
 BENCHMARK(BM_TsdfIntegrate)
-    ->ArgNames({"threads", "voxel_0.1mm", "redwood"})
-    ->ArgsProduct({{1, 2}, {100, 50}, {1, 0}})
+    ->ArgNames({"threads", "voxel_0.1mm", "redwood", "along_ray"})
+    ->ArgsProduct({{1, 2}, {100, 50}, {1, 0}, {0, 1}})
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
 

@@ -7,17 +7,13 @@
 #include <string>
 
 #include "nodes/depth/depth_noise.h"
+#include "nodes/fusion/tsdf_band.h"
 #include "runtime/error.h"
 #include "runtime/parallel.h"
 #include "runtime/radix_sort.h"
 
 namespace meshflow {
 namespace {
-
-Eigen::Vector3i block_of_voxel(const Eigen::Vector3i& voxel) {
-  // Floor division by 8 for negative indices too.
-  return {voxel.x() >> 3, voxel.y() >> 3, voxel.z() >> 3};
-}
 
 // The last few distinct keys a row emitted: neighbouring pixels touch the same handful of
 // blocks, so checking these few drops almost every repeat before the global sort.
@@ -83,7 +79,7 @@ void touched_blocks_of_row(int width, int v, const BandGeometry& band,
     const Eigen::Vector3i vlo(floor_to_int(lo.x()), floor_to_int(lo.y()), floor_to_int(lo.z()));
     const Eigen::Vector3i vhi(floor_to_int(hi.x()) + 1, floor_to_int(hi.y()) + 1,
                               floor_to_int(hi.z()) + 1);
-    const Eigen::Vector3i blo = block_of_voxel(vlo), bhi = block_of_voxel(vhi);
+    const Eigen::Vector3i blo = tsdf_block_of_voxel(vlo), bhi = tsdf_block_of_voxel(vhi);
     if (inside(blo, last_lo, last_hi) && inside(bhi, last_lo, last_hi)) continue;
     if (!tsdf_block_in_range(blo) || !tsdf_block_in_range(bhi)) {
       throw Error("tsdf", "pixel (" + std::to_string(u) + ", " + std::to_string(v) + ")",
@@ -102,10 +98,6 @@ void touched_blocks_of_row(int width, int v, const BandGeometry& band,
   }
 }
 
-float observation_weight(TsdfWeighting scheme, float depth) {
-  return scheme == TsdfWeighting::kInverseDepth ? 1.0f / (depth * depth) : 1.0f;
-}
-
 // Keys of the blocks within the band of the frame's valid pixels, sorted and unique:
 // per row (local buffers, in parallel), then joined in row order. Adds the valid pixels to
 // `pixels_used`.
@@ -119,16 +111,8 @@ std::vector<VoxelKey> touched_block_keys(int width, int height, const BandGeomet
     const auto r = static_cast<std::size_t>(v);
     touched_blocks_of_row(width, v, band, T_world_camera, row_keys[r], row_pixels[r]);
   });
-  std::vector<std::size_t> offsets(rows);
-  for (std::size_t r = 0; r < rows; ++r) {
-    offsets[r] = row_keys[r].size();
-    pixels_used += row_pixels[r];
-  }
-  std::vector<VoxelKey> keys(exclusive_scan_in_place(offsets));
-  tbb::parallel_for(std::size_t{0}, rows, [&](std::size_t r) {
-    std::copy(row_keys[r].begin(), row_keys[r].end(),
-              keys.begin() + static_cast<std::ptrdiff_t>(offsets[r]));
-  });
+  for (std::size_t pixels : row_pixels) pixels_used += pixels;
+  std::vector<VoxelKey> keys = concatenate_parts(row_keys);
   radix_sort_unique(keys);
   return keys;
 }
@@ -194,67 +178,6 @@ std::size_t update_block(TsdfBlock& block, const BlockUpdate& frame) {
       }
     }
   return count;
-}
-
-// tan of the angle between the ray through pixel (u, v) and the surface normal, from the depth
-// two pixels either side on the same surface (one side where the other is unmeasured or across
-// a depth jump): the length of the depth gradient along the row and the column, at most
-// kMaxSlope; an axis where no neighbour qualifies (a silhouette: the surface turns away from
-// the camera) counts kMaxSlope.
-constexpr float kMaxSlope = 4.0f;  // 76 degrees
-// A relative depth difference beyond the occlusion-edge filter's default (depth_filter.h): the
-// neighbour is another surface, and a flying pixel between the two must not widen the band.
-constexpr float kSameSurfaceJump = 0.06f;
-float surface_slope(const Image& depth, int u, int v, float focal) {
-  const float* pixels = depth.ptr<float>(0);  // rows contiguous (Image::row_bytes())
-  const int width = depth.cols(), height = depth.rows();
-  const float d = pixels[static_cast<std::size_t>(v) * static_cast<std::size_t>(width) +
-                         static_cast<std::size_t>(u)];
-  const float pixel = d / focal;  // metres per pixel at this depth
-  auto axis_slope = [&](int du, int dv) {
-    auto at = [&](int k) {
-      const int x = u + k * du, y = v + k * dv;
-      if (x < 0 || y < 0 || x >= width || y >= height) return 0.0f;
-      const float z = pixels[static_cast<std::size_t>(y) * static_cast<std::size_t>(width) +
-                             static_cast<std::size_t>(x)];
-      const bool same_surface = z > 0.0f && std::abs(z - d) <= kSameSurfaceJump * d;
-      return same_surface ? z : 0.0f;  // false for NaN too
-    };
-    const float before = at(-2), after = at(2);
-    if (before > 0.0f && after > 0.0f) return std::abs(after - before) / (4.0f * pixel);
-    if (after > 0.0f) return std::abs(after - d) / (2.0f * pixel);
-    if (before > 0.0f) return std::abs(d - before) / (2.0f * pixel);
-    return kMaxSlope;
-  };
-  const float along_row = axis_slope(1, 0), along_column = axis_slope(0, 1);
-  return std::min(kMaxSlope, std::sqrt(along_row * along_row + along_column * along_column));
-}
-
-// Fills `pixels` with each pixel's depth (0 where invalid) and the band behind it along the ray
-// (the rule of TsdfConfig::behind_voxels). Parallel over rows; O(pixels).
-void band_pixels(const Image& depth_m, const PinholeIntrinsics& intrinsics,
-                 const TsdfConfig& config, float noise_per_depth2, std::vector<float>& pixels) {
-  const std::size_t width = static_cast<std::size_t>(depth_m.cols());
-  pixels.resize(2 * width * static_cast<std::size_t>(depth_m.rows()));
-  const float least = config.behind_voxels * config.voxel_size;
-  const float across = config.voxel_size;  // at least one voxel across the surface
-  const float focal = 0.5f * (intrinsics.fx + intrinsics.fy);
-  tbb::parallel_for(0, depth_m.rows(), [&](int v) {
-    const float* depth_row = depth_m.ptr<float>(v);
-    float* row = pixels.data() + 2 * static_cast<std::size_t>(v) * width;
-    for (int u = 0; u < depth_m.cols(); ++u) {
-      const float d = depth_row[u];
-      if (!(d > 0.0f) || !std::isfinite(d)) {
-        row[2 * u] = row[2 * u + 1] = 0.0f;
-        continue;
-      }
-      const float slope = surface_slope(depth_m, u, v, focal);
-      const float along_ray = std::max(least, across * std::sqrt(1.0f + slope * slope));
-      const float noise = kBehindNoiseMultiple * noise_per_depth2 * d * d;
-      row[2 * u] = d;
-      row[2 * u + 1] = std::min(config.truncation(), std::max(along_ray, noise));
-    }
-  });
 }
 
 }  // namespace
@@ -330,6 +253,10 @@ IntegrationStats TsdfVolume::integrate(const DepthFrame& frame) {
   const Image depth = depth_in_metres(frame);  // checks the frame (intrinsics, pose)
   stats.noise_per_depth2 = estimate_noise_per_depth2(depth);
   band_pixels(depth, frame.intrinsics, config_, stats.noise_per_depth2, band_pixels_);
+  if (config_.integrator == TsdfIntegrator::kAlongRay) {
+    integrate_along_rays(frame, depth, stats);
+    return stats;
+  }
   const BandGeometry band{frame.intrinsics, config_, band_pixels_.data()};
   const std::vector<VoxelKey> keys =
       touched_block_keys(depth.cols(), depth.rows(), band, frame.T_world_camera, stats.pixels_used);
@@ -378,13 +305,17 @@ std::vector<std::uint32_t> TsdfVolume::find_or_allocate(const std::vector<VoxelK
   return blocks;
 }
 
+bool TsdfVolume::fuses_color_of(const DepthFrame& frame, const Image& depth) const {
+  return config_.fuse_color && !frame.color.empty() && frame.color.same_size(depth) &&
+         frame.color.format() == PixelFormat::RGB8;
+}
+
 std::size_t TsdfVolume::update_blocks(const std::vector<std::uint32_t>& touched, const Image& depth,
                                       const DepthFrame& frame) {
   // One task per block; a voxel's new state depends only on its old state and the frame, so the
   // order of blocks does not matter.
   ++generation_;
-  const bool color = config_.fuse_color && !frame.color.empty() && frame.color.same_size(depth) &&
-                     frame.color.format() == PixelFormat::RGB8;
+  const bool color = fuses_color_of(frame, depth);
   const BlockUpdate update{band_pixels_.data(),
                            depth.cols(),
                            depth.rows(),

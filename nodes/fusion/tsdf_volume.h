@@ -30,9 +30,27 @@ inline bool tsdf_block_in_range(const Eigen::Vector3i& block_coords) {
          (block_coords.array() <= kMaxTsdfBlockIndex).all();
 }
 
+/// The block holding voxel (i, j, k): floor division by 8, for negative indices too.
+inline Eigen::Vector3i tsdf_block_of_voxel(const Eigen::Vector3i& voxel) {
+  return {voxel.x() >> 3, voxel.y() >> 3, voxel.z() >> 3};
+}
+
 enum class TsdfWeighting {
   kConstant,      ///< every observation weighs 1
   kInverseDepth,  ///< weight 1 / depth^2 (metres): near measurements count more (noise ~ depth^2)
+};
+
+/// How a frame's measurements reach the voxels.
+enum class TsdfIntegrator {
+  /// Every voxel of each block the band touches is projected into the image and takes the
+  /// pixel it lands on (KinectFusion's, Open3D's): parallel over blocks.
+  kProjective,
+  /// Each pixel's ray walks the voxels of its band (truncation in front, band behind) and
+  /// updates them with the distance along the ray; consecutive pixels of a row whose points
+  /// fall in one voxel merge into one ray weighing their count (voxblox's merged-ray
+  /// integrator). Updates only voxels near measured rays; parallel over blocks, rays applied in
+  /// pixel order.
+  kAlongRay,
 };
 
 struct TsdfConfig {
@@ -51,6 +69,7 @@ struct TsdfConfig {
   TsdfWeighting weighting = TsdfWeighting::kConstant;
   float max_weight = 256.0f;  ///< accumulated weight is capped here (a slowly moving average)
   bool fuse_color = true;     ///< average the frame's colour into the voxels when it has one
+  TsdfIntegrator integrator = TsdfIntegrator::kProjective;
   /// integrate() refuses a frame whose new blocks would take memory_bytes() past this (bytes;
   /// 0 = no limit): the map stays as it was and the frame's error names the limit.
   std::size_t max_memory_bytes = 0;
@@ -101,12 +120,13 @@ class TsdfVolume {
   /// seen from frame.T_world_camera: estimates the frame's depth noise, finds the blocks its
   /// band touches (the truncation in front of each measurement, config().behind_voxels' rule
   /// behind it; existing blocks looked up in parallel, new ones allocated serially in key
-  /// order), then updates those blocks in parallel, one task per block. Voxels farther behind
+  /// order), then updates those blocks in parallel, one task per block, as config().integrator
+  /// says. Voxels farther behind
   /// the measured depth than the band are left alone. Throws meshflow::Error, leaving the map
   /// unchanged, when the frame would add more than config().max_new_blocks_per_frame blocks or
   /// take the map past config().max_memory_bytes, and for a pose with NaN entries. The result
   /// does not depend on the number of threads. Not thread-safe against other calls on the same
-  /// volume. O(pixels + touched blocks x 512).
+  /// volume. O(pixels + touched blocks x 512) projective; O(pixels x band voxels) along rays.
   IntegrationStats integrate(const DepthFrame& frame);
 
   /// The configuration the volume was made with (max_memory_bytes as last set).
@@ -116,6 +136,9 @@ class TsdfVolume {
   /// Sets config().behind_voxels for the frames integrated from now on (a map read from a file
   /// does not record it). Throws meshflow::Error unless positive and finite. O(1).
   void set_behind_voxels(float voxels);
+  /// Sets config().integrator for the frames integrated from now on (a map read from a file
+  /// does not record it). O(1).
+  void set_integrator(TsdfIntegrator integrator) { config_.integrator = integrator; }
   /// Blocks allocated so far.
   std::size_t block_count() const { return blocks_.size(); }
   /// Bytes held by the blocks and their index.
@@ -147,6 +170,10 @@ class TsdfVolume {
                                               std::size_t& allocated);
   std::size_t update_blocks(const std::vector<std::uint32_t>& touched, const Image& depth,
                             const DepthFrame& frame);
+  // TsdfIntegrator::kAlongRay's phases after the band (tsdf_ray_integration.cpp).
+  void integrate_along_rays(const DepthFrame& frame, const Image& depth, IntegrationStats& stats);
+  // Whether the frame's colour image can be fused with this depth image.
+  bool fuses_color_of(const DepthFrame& frame, const Image& depth) const;
 
   TsdfConfig config_;
   std::deque<TsdfBlock> blocks_;                       // stable addresses while growing

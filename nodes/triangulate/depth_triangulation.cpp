@@ -20,12 +20,7 @@ std::vector<Triangle> naive_triangles(const PointGrid& g, const OcclusionTriangl
       append_quad_triangles(g, u, static_cast<int>(v), per_row[v]);
     keep.filter(g, per_row[v], 0, &rejected[v]);
   });
-  std::vector<std::uint32_t> offsets(rows);
-  for (std::size_t v = 0; v < rows; ++v) offsets[v] = static_cast<std::uint32_t>(per_row[v].size());
-  std::vector<Triangle> out(exclusive_scan_in_place(offsets));
-  tbb::parallel_for(std::size_t{0}, rows, [&](std::size_t v) {
-    std::copy(per_row[v].begin(), per_row[v].end(), out.begin() + offsets[v]);
-  });
+  std::vector<Triangle> out = concatenate_parts(per_row);
   if (counts != nullptr)
     for (const OcclusionRejections& r : rejected) {
       counts->rejected_view += r.view;

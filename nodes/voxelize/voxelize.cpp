@@ -126,14 +126,7 @@ std::vector<VoxelKey> dilate_along(const std::vector<VoxelKey>& keys, int axis,
     parts[b].reserve(2 * (i1 - i0));
     merge_shifted(keys, i0, i1, j0, j1, step, flag, parts[b]);
   });
-  std::vector<std::size_t> offsets(blocks);
-  for (std::size_t b = 0; b < blocks; ++b) offsets[b] = parts[b].size();
-  std::vector<VoxelKey> out(exclusive_scan_in_place(offsets));
-  tbb::parallel_for(std::size_t{0}, blocks, [&](std::size_t b) {
-    std::copy(parts[b].begin(), parts[b].end(),
-              out.begin() + static_cast<std::ptrdiff_t>(offsets[b]));
-  });
-  return out;
+  return concatenate_parts(parts);
 }
 
 // Keys of flagged blocks, each dilated along the axes its flags name; flags dropped.

@@ -75,8 +75,16 @@ def test_fused_views_close_around_the_sphere():
         pose = look_at([1.0 * np.sin(angle), 0.2, -1.0 * np.cos(angle)])
         symmetric.integrate(sphere_depth(pose), K, pose)
     assert len(symmetric.extract().triangles) > 2000
+    along = meshflow.TsdfVolume(voxel=0.01, integrator="along-ray")  # voxblox-style rays
+    for angle in np.linspace(0, 2 * np.pi, 8, endpoint=False):
+        pose = look_at([1.0 * np.sin(angle), 0.2, -1.0 * np.cos(angle)])
+        along.integrate(sphere_depth(pose), K, pose)
+    r = np.linalg.norm(along.extract().vertices, axis=1)
+    assert len(r) > 1000 and abs(r.mean() - RADIUS) < 0.002 and np.abs(r - RADIUS).max() < 0.01
     with pytest.raises(meshflow.Error, match="behind_voxels"):
         meshflow.TsdfVolume(voxel=0.01, behind=0.0)
+    with pytest.raises(meshflow.Error, match="integrator"):
+        meshflow.TsdfVolume(integrator="raycast")
 
 
 def test_bad_depth_input_is_a_clear_error():

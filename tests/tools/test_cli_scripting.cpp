@@ -138,6 +138,18 @@ TEST(CliScripting, FusedOrbitReportsWhereTheSurfaceGoes) {
   EXPECT_NE(v.out.find("pixels fused ("), std::string::npos) << v.out;
   EXPECT_NE(v.out.find("at or below --min-weight"), std::string::npos) << v.out;
   EXPECT_EQ(run_cli("run " + dir + "/orbit --fuse --behind 0 -o " + dir + "/b").exit_code, 2);
+  // The along-ray integrator: a mesh about as large, from fewer observed voxels.
+  nlohmann::json along = parse_json(run_cli("run " + dir +
+                                            "/orbit --fuse --voxel 0.02 --integrator along-ray "
+                                            "--json -o " +
+                                            dir + "/along"));
+  EXPECT_EQ(along["frames_ok"], 6);
+  EXPECT_GT(along["mesh"]["triangles"].get<std::size_t>(),
+            doc["mesh"]["triangles"].get<std::size_t>() * 8 / 10);
+  EXPECT_LT(along["completeness"]["voxels_observed"].get<std::size_t>(),
+            c["voxels_observed"].get<std::size_t>());
+  EXPECT_EQ(run_cli("run " + dir + "/orbit --fuse --integrator raycast -o " + dir + "/r").exit_code,
+            2);
 }
 
 TEST(CliScripting, OptimizeAMeshFromAnotherTool) {

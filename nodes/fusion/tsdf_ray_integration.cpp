@@ -1,0 +1,304 @@
+// TsdfIntegrator::kAlongRay: each (merged) pixel ray walks the voxels of its band.
+//
+// Phases, each parallel: (1) per tile of 8 x 8 pixels, pixels whose points fall in one voxel
+// merge into one ray; (2) each ray walks its segment through the voxel grid and
+// lists the blocks it crosses; the blocks are found or allocated as for the projective
+// integrator; (3) one task per block applies the rays crossing it in pixel order, so the map
+// does not depend on the number of threads.
+
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <limits>
+#include <string>
+
+#include "nodes/fusion/tsdf_band.h"
+#include "nodes/fusion/tsdf_volume.h"
+#include "runtime/error.h"
+#include "runtime/parallel.h"
+#include "runtime/radix_sort.h"
+
+namespace meshflow {
+namespace {
+
+// Pixels of a tile whose points fall in one voxel, as one ray.
+struct MergedRay {
+  Eigen::Vector3f point_sum = Eigen::Vector3f::Zero();  // world metres
+  std::array<float, 3> color_sum{};                     // RGB, 0..255
+  float weight = 0.0f;                                  // sum of observation weights
+  float band = 0.0f;                                    // behind the point, metres (largest)
+  std::uint32_t pixels = 0;
+  Eigen::Vector3i voxel;  // the voxel nearest its pixels' points
+};
+
+// A ray's segment in voxel units: from `truncation` in front of its mean point (not behind the
+// camera) to its band behind it, with the unit direction from the camera.
+struct RaySegment {
+  Eigen::Vector3f point, direction, from, to;  // point, from, to in voxel units
+  float band = 0.0f, truncation = 0.0f;        // voxel units
+};
+
+RaySegment segment_of(const MergedRay& ray, const Eigen::Vector3f& camera, float inv_voxel,
+                      float truncation) {
+  RaySegment s;
+  const Eigen::Vector3f point = ray.point_sum / static_cast<float>(ray.pixels);
+  const Eigen::Vector3f to_point = point - camera;
+  const float range = to_point.norm();
+  s.direction = to_point / range;
+  s.point = point * inv_voxel;
+  s.truncation = truncation * inv_voxel;
+  s.band = ray.band * inv_voxel;
+  s.from = s.point - s.direction * std::min(s.truncation, range * inv_voxel);
+  s.to = s.point + s.direction * s.band;
+  return s;
+}
+
+// Calls visit(voxel) for every voxel whose cell (the unit cube centred on its sample point)
+// the segment from -> to (voxel units) crosses, in order (Amanatides & Woo's traversal).
+template <class Visit>
+void walk_voxels(const Eigen::Vector3f& from, const Eigen::Vector3f& to, Visit&& visit) {
+  const Eigen::Vector3f a = from.array() + 0.5f, b = to.array() + 0.5f;  // cells [i, i + 1)
+  Eigen::Vector3i cell(floor_to_int(a.x()), floor_to_int(a.y()), floor_to_int(a.z()));
+  const Eigen::Vector3i last(floor_to_int(b.x()), floor_to_int(b.y()), floor_to_int(b.z()));
+  const Eigen::Vector3f d = b - a;
+  Eigen::Vector3i step;
+  Eigen::Vector3f next, delta;  // segment parameter of the next boundary per axis, per cell
+  constexpr float kNever = std::numeric_limits<float>::infinity();
+  for (int i = 0; i < 3; ++i) {
+    step[i] = d[i] > 0.0f ? 1 : (d[i] < 0.0f ? -1 : 0);
+    if (step[i] == 0) {
+      next[i] = delta[i] = kNever;
+      continue;
+    }
+    const float boundary = static_cast<float>(cell[i] + (step[i] > 0 ? 1 : 0));
+    next[i] = (boundary - a[i]) / d[i];
+    delta[i] = static_cast<float>(step[i]) / d[i];
+  }
+  // Rounding can miss `last` by a cell: the walk stops after the cells a straight line needs.
+  const int steps = (last - cell).cwiseAbs().sum();
+  for (int s = 0;; ++s) {
+    visit(cell);
+    if (s == steps) break;
+    int axis = 0;
+    if (next[1] < next[axis]) axis = 1;
+    if (next[2] < next[axis]) axis = 2;
+    cell[axis] += step[axis];
+    next[axis] += delta[axis];
+  }
+}
+
+// The part of the segment from -> to (voxel units) inside the cells of the block whose first
+// voxel is `origin` (with a little margin: cells outside are skipped by the caller), or false
+// when it misses them (the slab method).
+bool clip_to_block(const Eigen::Vector3f& from, const Eigen::Vector3f& to,
+                   const Eigen::Vector3i& origin, Eigen::Vector3f& clipped_from,
+                   Eigen::Vector3f& clipped_to) {
+  constexpr float kMargin = 1e-3f;
+  const Eigen::Vector3f lo = origin.cast<float>().array() - (0.5f + kMargin);
+  const Eigen::Vector3f hi = lo.array() + (static_cast<float>(kTsdfBlockSide) + 2.0f * kMargin);
+  const Eigen::Vector3f d = to - from;
+  float t0 = 0.0f, t1 = 1.0f;
+  for (int i = 0; i < 3; ++i) {
+    if (d[i] == 0.0f) {
+      if (from[i] < lo[i] || from[i] > hi[i]) return false;
+      continue;
+    }
+    float a = (lo[i] - from[i]) / d[i], b = (hi[i] - from[i]) / d[i];
+    if (a > b) std::swap(a, b);
+    t0 = std::max(t0, a);
+    t1 = std::min(t1, b);
+  }
+  if (t0 > t1) return false;
+  clipped_from = from + t0 * d;
+  clipped_to = from + t1 * d;
+  return true;
+}
+
+// Pixels are merged in tiles of kTile x kTile: those whose points fall in one voxel become one
+// ray (voxblox merges over the whole image; tiles keep it parallel and deterministic).
+constexpr int kTile = 8;
+
+// The rays of the tiles in tile row `tile_row` (tiles left to right, each tile's rays in the
+// order of their first pixel), appended to `out`; adds the valid pixels to `pixels`.
+void rays_of_tile_row(int tile_row, const Image& depth, const float* band_pixels,
+                      const PinholeIntrinsics& k, const Eigen::Isometry3f& T_world_camera,
+                      const Image* color, TsdfWeighting weighting, float inv_voxel,
+                      std::vector<MergedRay>& out, std::size_t& pixels) {
+  const int width = depth.cols(), v0 = tile_row * kTile, v1 = std::min(depth.rows(), v0 + kTile);
+  for (int u0 = 0; u0 < width; u0 += kTile) {
+    const std::size_t first = out.size();
+    const int u1 = std::min(width, u0 + kTile);
+    for (int v = v0; v < v1; ++v) {
+      const float* row =
+          band_pixels + 2 * static_cast<std::size_t>(v) * static_cast<std::size_t>(width);
+      const float y = (static_cast<float>(v) - k.cy) / k.fy;
+      for (int u = u0; u < u1; ++u) {
+        const float d = row[2 * u];
+        if (!(d > 0.0f)) continue;
+        ++pixels;
+        const Eigen::Vector3f point =
+            T_world_camera * Eigen::Vector3f((static_cast<float>(u) - k.cx) / k.fx * d, y * d, d);
+        const Eigen::Vector3f q = point * inv_voxel;
+        const Eigen::Vector3i voxel(floor_to_int(q.x() + 0.5f), floor_to_int(q.y() + 0.5f),
+                                    floor_to_int(q.z() + 0.5f));
+        std::size_t r = first;
+        while (r < out.size() && out[r].voxel != voxel) ++r;
+        if (r == out.size()) {
+          out.emplace_back();
+          out.back().voxel = voxel;
+        }
+        MergedRay& ray = out[r];
+        ray.point_sum += point;
+        ray.weight += observation_weight(weighting, d);
+        ray.band = std::max(ray.band, row[2 * u + 1]);
+        ++ray.pixels;
+        if (color != nullptr) {
+          const Rgb8 c = color->at<Rgb8>(v, u);
+          ray.color_sum[0] += c.r;
+          ray.color_sum[1] += c.g;
+          ray.color_sum[2] += c.b;
+        }
+      }
+    }
+  }
+}
+
+// Every ray of the frame in tile order (tile rows in parallel, then joined).
+std::vector<MergedRay> merged_rays(const Image& depth, const float* band_pixels,
+                                   const DepthFrame& frame, const Image* color,
+                                   const TsdfConfig& config, std::size_t& pixels_used) {
+  const int tile_rows = (depth.rows() + kTile - 1) / kTile;
+  const auto rows = static_cast<std::size_t>(tile_rows);
+  std::vector<std::vector<MergedRay>> row_rays(rows);
+  std::vector<std::size_t> row_pixels(rows, 0);
+  const float inv_voxel = 1.0f / config.voxel_size;
+  tbb::parallel_for(0, tile_rows, [&](int t) {
+    const auto r = static_cast<std::size_t>(t);
+    rays_of_tile_row(t, depth, band_pixels, frame.intrinsics, frame.T_world_camera, color,
+                     config.weighting, inv_voxel, row_rays[r], row_pixels[r]);
+  });
+  for (std::size_t pixels : row_pixels) pixels_used += pixels;
+  return concatenate_parts(row_rays);
+}
+
+// A block a ray crosses.
+struct RayBlock {
+  VoxelKey block;
+  std::uint32_t ray;
+};
+
+constexpr std::size_t kRaysPerTask = 2048;
+
+// The (block, ray) pairs of every ray's segment, rays in fixed slices (parallel); throws when a
+// ray reaches outside the volume's range.
+std::vector<RayBlock> blocks_crossed(const std::vector<RaySegment>& segments) {
+  const std::size_t slices = (segments.size() + kRaysPerTask - 1) / kRaysPerTask;
+  std::vector<std::vector<RayBlock>> per_slice(slices);
+  tbb::parallel_for(std::size_t{0}, slices, [&](std::size_t slice) {
+    const std::size_t end = std::min(segments.size(), (slice + 1) * kRaysPerTask);
+    for (std::size_t r = slice * kRaysPerTask; r < end; ++r) {
+      const RaySegment& s = segments[r];
+      VoxelKey previous = ~VoxelKey{0};  // never a packed key
+      walk_voxels(s.from, s.to, [&](const Eigen::Vector3i& voxel) {
+        const Eigen::Vector3i block = tsdf_block_of_voxel(voxel);
+        if (!tsdf_block_in_range(block)) {
+          throw Error("tsdf", "ray " + std::to_string(r),
+                      "reaches outside the volume's range (pose or depth far too large)");
+        }
+        const VoxelKey key = pack_key(block);
+        if (key == previous) return;
+        previous = key;
+        per_slice[slice].push_back({key, static_cast<std::uint32_t>(r)});
+      });
+    }
+  });
+  return concatenate_parts(per_slice);
+}
+
+// Blends one ray's distance (voxel units, clipped to the truncation) and colour into a voxel.
+void blend(TsdfVoxel& voxel, float sdf_metres, float truncation, const MergedRay& ray, bool color,
+           float max_weight) {
+  const float w = ray.weight;
+  const float total = voxel.weight + w;
+  const float inv_total = 1.0f / total;
+  voxel.distance =
+      (voxel.distance * voxel.weight + std::min(sdf_metres, truncation) * w) * inv_total;
+  if (color) {
+    const float inv_pixels = 1.0f / static_cast<float>(ray.pixels);
+    auto mix = [&](std::uint8_t old, float sum) {
+      return static_cast<std::uint8_t>(
+          (static_cast<float>(old) * voxel.weight + sum * inv_pixels * w) * inv_total + 0.5f);
+    };
+    voxel.color = Rgb8{mix(voxel.color.r, ray.color_sum[0]), mix(voxel.color.g, ray.color_sum[1]),
+                       mix(voxel.color.b, ray.color_sum[2])};
+  }
+  voxel.weight = std::min(total, max_weight);
+}
+
+}  // namespace
+
+void TsdfVolume::integrate_along_rays(const DepthFrame& frame, const Image& depth,
+                                      IntegrationStats& stats) {
+  const bool color = fuses_color_of(frame, depth);
+  const std::vector<MergedRay> rays =
+      merged_rays(depth, band_pixels_.data(), frame, color ? &frame.color : nullptr, config_,
+                  stats.pixels_used);
+  const Eigen::Vector3f camera = frame.T_world_camera.translation();
+  const float inv_voxel = 1.0f / config_.voxel_size, truncation = config_.truncation();
+  std::vector<RaySegment> segments(rays.size());
+  tbb::parallel_for(std::size_t{0}, rays.size(), [&](std::size_t r) {
+    segments[r] = segment_of(rays[r], camera, inv_voxel, truncation);
+  });
+  std::vector<RayBlock> pairs = blocks_crossed(segments);
+  std::vector<VoxelKey> keys(pairs.size());
+  for (std::size_t i = 0; i < pairs.size(); ++i) keys[i] = pairs[i].block;
+  radix_sort_unique(keys);
+  const std::vector<std::uint32_t> blocks = find_or_allocate(keys, stats.blocks_allocated);
+  stats.blocks_touched = blocks.size();
+
+  // (position of the block among the keys, ray): sorted, the rays of each block in pixel order.
+  std::vector<std::uint64_t> block_rays(pairs.size());
+  tbb::parallel_for(std::size_t{0}, pairs.size(), [&](std::size_t i) {
+    const auto at = std::lower_bound(keys.begin(), keys.end(), pairs[i].block) - keys.begin();
+    block_rays[i] = (static_cast<std::uint64_t>(at) << 32) | pairs[i].ray;
+  });
+  pairs = {};
+  radix_sort(block_rays);
+  std::vector<std::size_t> starts(keys.size() + 1, block_rays.size());  // every key has a ray
+  for (std::size_t i = 0; i < block_rays.size(); ++i) {
+    const std::size_t b = block_rays[i] >> 32;
+    if (i == 0 || (block_rays[i - 1] >> 32) != b) starts[b] = i;
+  }
+
+  ++generation_;
+  std::vector<std::size_t> updated(keys.size(), 0);
+  tbb::parallel_for(std::size_t{0}, keys.size(), [&](std::size_t b) {
+    TsdfBlock& block = blocks_[blocks[b]];
+    const Eigen::Vector3i origin = block.coords * kTsdfBlockSide;
+    std::size_t count = 0;
+    for (std::size_t i = starts[b]; i < starts[b + 1]; ++i) {
+      const std::size_t r = block_rays[i] & 0xffffffffu;
+      const MergedRay& ray = rays[r];
+      const RaySegment& s = segments[r];
+      Eigen::Vector3f from, to;
+      if (!clip_to_block(s.from, s.to, origin, from, to)) continue;
+      walk_voxels(from, to, [&](const Eigen::Vector3i& voxel) {
+        const Eigen::Vector3i local = voxel - origin;
+        if ((local.array() < 0).any() || (local.array() >= kTsdfBlockSide).any()) return;
+        const float sdf = (s.point - voxel.cast<float>()).dot(s.direction);  // voxel units
+        if (sdf < -s.band) return;  // beyond the band behind the surface: unknown
+        TsdfVoxel& v = block.voxels[static_cast<std::size_t>(
+            local.x() + kTsdfBlockSide * (local.y() + kTsdfBlockSide * local.z()))];
+        blend(v, sdf * config_.voxel_size, truncation, ray, color, config_.max_weight);
+        ++count;
+      });
+    }
+    updated[b] = count;
+    if (count > 0) block.modified = generation_;
+  });
+  for (std::size_t c : updated) stats.voxels_updated += c;
+}
+
+}  // namespace meshflow

@@ -275,7 +275,7 @@ void TsdfVolume::integrate_along_rays(const DepthFrame& frame, const Image& dept
   ++generation_;
   std::vector<std::size_t> updated(keys.size(), 0);
   tbb::parallel_for(std::size_t{0}, keys.size(), [&](std::size_t b) {
-    TsdfBlock& block = blocks_[blocks[b]];
+    TsdfBlock& block = *blocks_[blocks[b]];
     const Eigen::Vector3i origin = block.coords * kTsdfBlockSide;
     std::size_t count = 0;
     for (std::size_t i = starts[b]; i < starts[b + 1]; ++i) {

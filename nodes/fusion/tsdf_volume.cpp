@@ -4,7 +4,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <new>
 #include <string>
+#include <type_traits>
 
 #include "nodes/depth/depth_noise.h"
 #include "nodes/fusion/tsdf_band.h"
@@ -208,14 +210,14 @@ std::size_t TsdfVolume::memory_bytes() const { return blocks_.size() * kBytesPer
 const TsdfBlock* TsdfVolume::find(const Eigen::Vector3i& block_coords) const {
   if (!tsdf_block_in_range(block_coords)) return nullptr;
   const auto it = index_.find(pack_key(block_coords));
-  return it == index_.end() ? nullptr : &blocks_[it->second];
+  return it == index_.end() ? nullptr : blocks_[it->second];
 }
 
 std::vector<std::uint32_t> TsdfVolume::blocks_in_key_order() const {
   std::vector<std::uint64_t> keyed(blocks_.size());
   for (std::size_t i = 0; i < blocks_.size(); ++i) {
     // Block keys use 57 bits; the index is recovered through the map after sorting.
-    keyed[i] = pack_key(blocks_[i].coords);
+    keyed[i] = pack_key(blocks_[i]->coords);
   }
   radix_sort(keyed);
   std::vector<std::uint32_t> order(keyed.size());
@@ -223,12 +225,23 @@ std::vector<std::uint32_t> TsdfVolume::blocks_in_key_order() const {
   return order;
 }
 
-std::uint32_t TsdfVolume::allocate(const Eigen::Vector3i& coords) {
-  const auto id = static_cast<std::uint32_t>(blocks_.size());
-  blocks_.emplace_back();
-  blocks_.back().coords = coords;
-  index_.emplace(pack_key(coords), id);
-  return id;
+std::uint32_t TsdfVolume::allocate(const std::vector<Eigen::Vector3i>& coords) {
+  const auto first = static_cast<std::uint32_t>(blocks_.size());
+  // One slab for the batch, left uninitialised here (new[] of bytes is aligned for any
+  // fundamental type); the blocks are constructed (voxels zeroed, 6 KiB each) in parallel.
+  // TsdfBlock needs no destructor.
+  static_assert(std::is_trivially_destructible_v<TsdfBlock>);
+  slabs_.emplace_back(new unsigned char[coords.size() * sizeof(TsdfBlock)]);
+  unsigned char* const slab = slabs_.back().get();
+  blocks_.resize(blocks_.size() + coords.size());
+  tbb::parallel_for(std::size_t{0}, coords.size(), [&](std::size_t i) {
+    auto* block = new (slab + i * sizeof(TsdfBlock)) TsdfBlock();
+    block->coords = coords[i];
+    blocks_[first + i] = block;
+  });
+  for (std::size_t i = 0; i < coords.size(); ++i)
+    index_.emplace(pack_key(coords[i]), first + static_cast<std::uint32_t>(i));
+  return first;
 }
 
 void TsdfVolume::insert_block(const Eigen::Vector3i& coords,
@@ -243,7 +256,7 @@ void TsdfVolume::insert_block(const Eigen::Vector3i& coords,
                     std::to_string(coords.z()) + ")",
                 "appears twice");
   }
-  TsdfBlock& block = blocks_[allocate(coords)];
+  TsdfBlock& block = *blocks_[allocate({coords})];
   block.voxels = voxels;
   block.modified = ++generation_;
 }
@@ -296,12 +309,16 @@ std::vector<std::uint32_t> TsdfVolume::find_or_allocate(const std::vector<VoxelK
                       std::to_string(blocks_.size()) + " blocks");
     }
   }
-  // The new blocks serially and in key order: deterministic block numbering.
-  for (std::size_t i = 0; i < keys.size(); ++i) {
-    if (blocks[i] != kNewBlock) continue;
-    blocks[i] = allocate(unpack_key(keys[i]));
-    ++allocated;
-  }
+  // The new blocks in key order: deterministic block numbering.
+  std::vector<Eigen::Vector3i> fresh;
+  fresh.reserve(new_blocks);
+  for (std::size_t i = 0; i < keys.size(); ++i)
+    if (blocks[i] == kNewBlock) fresh.push_back(unpack_key(keys[i]));
+  if (fresh.empty()) return blocks;
+  std::uint32_t next = allocate(fresh);
+  for (std::uint32_t& b : blocks)
+    if (b == kNewBlock) b = next++;
+  allocated += fresh.size();
   return blocks;
 }
 
@@ -325,7 +342,7 @@ std::size_t TsdfVolume::update_blocks(const std::vector<std::uint32_t>& touched,
                            config_};
   std::vector<std::size_t> updated(touched.size(), 0);
   tbb::parallel_for(std::size_t{0}, touched.size(), [&](std::size_t t) {
-    TsdfBlock& block = blocks_[touched[t]];
+    TsdfBlock& block = *blocks_[touched[t]];
     updated[t] = update_block(block, update);
     if (updated[t] > 0) block.modified = generation_;
   });

@@ -6,7 +6,7 @@
 #include <Eigen/Geometry>
 #include <array>
 #include <cstdint>
-#include <deque>
+#include <memory>
 #include <unordered_map>
 #include <vector>
 
@@ -119,14 +119,14 @@ class TsdfVolume {
   /// Fuses one depth frame (any depth format of DepthFrame; pixels <= 0 or NaN are ignored)
   /// seen from frame.T_world_camera: estimates the frame's depth noise, finds the blocks its
   /// band touches (the truncation in front of each measurement, config().behind_voxels' rule
-  /// behind it; existing blocks looked up in parallel, new ones allocated serially in key
-  /// order), then updates those blocks in parallel, one task per block, as config().integrator
-  /// says. Voxels farther behind
-  /// the measured depth than the band are left alone. Throws meshflow::Error, leaving the map
-  /// unchanged, when the frame would add more than config().max_new_blocks_per_frame blocks or
-  /// take the map past config().max_memory_bytes, and for a pose with NaN entries. The result
-  /// does not depend on the number of threads. Not thread-safe against other calls on the same
-  /// volume. O(pixels + touched blocks x 512) projective; O(pixels x band voxels) along rays.
+  /// behind it; existing blocks looked up in parallel, new ones numbered in key order and zeroed
+  /// in parallel), then updates those blocks in parallel, one task per block, as
+  /// config().integrator says. Voxels farther behind the measured depth than the band are left
+  /// alone. Throws meshflow::Error, leaving the map unchanged, when the frame would add more
+  /// than config().max_new_blocks_per_frame blocks or take the map past
+  /// config().max_memory_bytes, and for a pose with NaN entries. The result does not depend on
+  /// the number of threads. Not thread-safe against other calls on the same volume.
+  /// O(pixels + touched blocks x 512) projective; O(pixels x band voxels) along rays.
   IntegrationStats integrate(const DepthFrame& frame);
 
   /// The configuration the volume was made with (max_memory_bytes as last set).
@@ -145,12 +145,12 @@ class TsdfVolume {
   std::size_t memory_bytes() const;
   /// Bytes one more block adds to memory_bytes().
   static constexpr std::size_t kBytesPerBlock =
-      sizeof(TsdfBlock) + sizeof(VoxelKey) + sizeof(std::uint32_t) + 2 * sizeof(void*);
+      sizeof(TsdfBlock) + sizeof(VoxelKey) + sizeof(std::uint32_t) + 3 * sizeof(void*);
   /// Incremented by every integrate(); blocks record it when they change.
   std::uint64_t generation() const { return generation_; }
 
   /// Block i, 0 <= i < block_count(), numbered in allocation order.
-  const TsdfBlock& block(std::size_t i) const { return blocks_[i]; }
+  const TsdfBlock& block(std::size_t i) const { return *blocks_[i]; }
   /// The block with these block coordinates, or nullptr if it was never allocated. O(1).
   const TsdfBlock* find(const Eigen::Vector3i& block_coords) const;
   /// Block indices sorted by block key (z, then y, then x): a deterministic iteration order.
@@ -162,7 +162,9 @@ class TsdfVolume {
                     const std::array<TsdfVoxel, kTsdfBlockVoxels>& voxels);
 
  private:
-  std::uint32_t allocate(const Eigen::Vector3i& coords);
+  // Appends blocks with these coordinates (zeroed in parallel, in one slab), numbered in order;
+  // returns the first one's number.
+  std::uint32_t allocate(const std::vector<Eigen::Vector3i>& coords);
   // integrate()'s phases after the touched blocks' keys: their block numbers (allocating the
   // new ones, counted in `allocated`), then the update of their voxels (returns the voxels
   // updated).
@@ -176,8 +178,9 @@ class TsdfVolume {
   bool fuses_color_of(const DepthFrame& frame, const Image& depth) const;
 
   TsdfConfig config_;
-  std::deque<TsdfBlock> blocks_;                       // stable addresses while growing
-  std::unordered_map<VoxelKey, std::uint32_t> index_;  // pack_key(block coords) -> block
+  std::vector<std::unique_ptr<unsigned char[]>> slabs_;  // the blocks' storage, one per batch
+  std::vector<TsdfBlock*> blocks_;                       // in allocation order, into the slabs
+  std::unordered_map<VoxelKey, std::uint32_t> index_;    // pack_key(block coords) -> block
   std::uint64_t generation_ = 0;
   std::vector<float> band_pixels_;  // per pixel of the last frame: depth, band behind (reused)
 };

@@ -217,7 +217,7 @@ std::vector<RayBlock> blocks_crossed(const std::vector<RaySegment>& segments) {
   return concatenate_parts(per_slice);
 }
 
-// Blends one ray's distance (voxel units, clipped to the truncation) and colour into a voxel.
+// Blends one ray's distance (metres, clipped to the truncation) and colour into a voxel.
 void blend(TsdfVoxel& voxel, float sdf_metres, float truncation, const MergedRay& ray, bool color,
            float max_weight) {
   const float w = ray.weight;

@@ -37,7 +37,7 @@ struct MergedRay {
 // camera) to its band behind it, with the unit direction from the camera.
 struct RaySegment {
   Eigen::Vector3f point, direction, from, to;  // point, from, to in voxel units
-  float band = 0.0f, truncation = 0.0f;        // voxel units
+  float band = 0.0f;                           // voxel units
 };
 
 RaySegment segment_of(const MergedRay& ray, const Eigen::Vector3f& camera, float inv_voxel,
@@ -48,9 +48,8 @@ RaySegment segment_of(const MergedRay& ray, const Eigen::Vector3f& camera, float
   const float range = to_point.norm();
   s.direction = to_point / range;
   s.point = point * inv_voxel;
-  s.truncation = truncation * inv_voxel;
   s.band = ray.band * inv_voxel;
-  s.from = s.point - s.direction * std::min(s.truncation, range * inv_voxel);
+  s.from = s.point - s.direction * (std::min(truncation, range) * inv_voxel);
   s.to = s.point + s.direction * s.band;
   return s;
 }

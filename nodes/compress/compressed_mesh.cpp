@@ -11,7 +11,7 @@ namespace meshflow::compress {
 namespace {
 
 constexpr char kMagic[8] = {'M', 'F', 'M', 'E', 'S', 'H', '\r', '\n'};
-constexpr std::uint32_t kVersion = 1;
+constexpr std::uint32_t kVersion = 2;
 
 }  // namespace
 

@@ -1,9 +1,9 @@
 #pragma once
 // meshflow's compressed mesh files (".mfc"): one triangle mesh, coded single-rate (Edgebreaker)
-// or progressively (a base mesh and vertex splits). Format, version 1, little-endian:
+// or progressively (a base mesh and vertex splits). Format, version 2, little-endian:
 //
 //   bytes 0-7   magic "MFMESH\r\n"
-//   u32         version (1)
+//   u32         version (2; version 1 coded the symbols first to last)
 //   u32         kind: 1 = Edgebreaker, 2 = progressive
 //   u32         flags: bit 0 per-vertex normals, bit 1 per-vertex colours
 //   u64         vertices, u64 triangles (of the full mesh)

@@ -7,100 +7,57 @@
 namespace meshflow::compress {
 namespace {
 
-// The active loops: doubly linked nodes, each a loop edge from its vertex to the next node's,
-// with `opp` the third vertex of the walked triangle on that edge. The encoder and the decoder
-// change them by the same four operations.
+// The active loops: doubly linked nodes, each a loop edge from its vertex to the next node's.
+// The walk changes them by four operations; the decoder undoes them (edgebreaker_replay.cpp).
 struct LoopNodes {
   struct Node {
-    std::uint32_t vertex, next, prev, opp;
+    std::uint32_t vertex, next, prev;
   };
-  std::vector<Node> nodes;  // one cache line holds a node's four fields
+  std::vector<Node> nodes;
 
   std::uint32_t& vertex(std::uint32_t n) { return nodes[n].vertex; }
   std::uint32_t& next(std::uint32_t n) { return nodes[n].next; }
   std::uint32_t& prev(std::uint32_t n) { return nodes[n].prev; }
-  std::uint32_t& opp(std::uint32_t n) { return nodes[n].opp; }
   std::uint32_t vertex(std::uint32_t n) const { return nodes[n].vertex; }
   std::uint32_t next(std::uint32_t n) const { return nodes[n].next; }
 
-  void reserve(std::size_t n) { nodes.reserve(n); }
-
-  std::uint32_t add(std::uint32_t v, std::uint32_t o) {
-    nodes.push_back({v, kNone, kNone, o});
+  std::uint32_t add(std::uint32_t v) {
+    nodes.push_back({v, kNone, kNone});
     return static_cast<std::uint32_t>(nodes.size() - 1);
   }
   void link(std::uint32_t a, std::uint32_t b) {
     next(a) = b;
     prev(b) = a;
   }
-  // The starting triangle (v0, v1, v2): three nodes, returns the first (edge v0 -> v1).
-  std::uint32_t start(std::uint32_t v0, std::uint32_t v1, std::uint32_t v2) {
-    const std::uint32_t n0 = add(v0, v2), n1 = add(v1, v0), n2 = add(v2, v1);
-    link(n0, n1);
-    link(n1, n2);
-    link(n2, n0);
-    return n0;
-  }
   // C: gate g (a -> b) becomes a -> x -> b; returns the node of x (the next gate).
   std::uint32_t attach(std::uint32_t g, std::uint32_t x) {
-    const std::uint32_t b = next(g);
-    const std::uint32_t nx = add(x, vertex(g));
-    link(nx, b);
+    const std::uint32_t nx = add(x);
+    link(nx, next(g));
     link(g, nx);
-    opp(g) = vertex(b);
     return nx;
   }
   // L: p -> a -> b becomes p -> b; returns p (the next gate).
   std::uint32_t close_left(std::uint32_t g) {
     const std::uint32_t p = prev(g);
     link(p, next(g));
-    opp(p) = vertex(g);
     return p;
   }
   // R: a -> b -> q becomes a -> q; returns a (the next gate).
   std::uint32_t close_right(std::uint32_t g) {
-    const std::uint32_t b = next(g);
-    link(g, next(b));
-    opp(g) = vertex(b);
+    link(g, next(next(g)));
     return g;
   }
   // S or M with x's node xn: a -> b ... x -> y becomes a -> x' -> y ... and x -> b ...;
   // returns x' (the new node, on a's side).
   std::uint32_t split(std::uint32_t g, std::uint32_t xn) {
     const std::uint32_t b = next(g);
-    const std::uint32_t xc = add(vertex(xn), opp(xn));
+    const std::uint32_t xc = add(vertex(xn));
     link(xc, next(xn));
     link(g, xc);
-    opp(g) = vertex(b);
-    opp(xn) = vertex(g);
     link(xn, b);
     return xc;
   }
-  std::uint32_t walk(std::uint32_t n, std::uint32_t steps) const {
-    while (steps-- > 0) n = nodes[n].next;
-    return n;
-  }
-  std::uint32_t walk_back(std::uint32_t n, std::uint32_t steps) const {
-    while (steps-- > 0) n = nodes[n].prev;
-    return n;
-  }
 };
-
-int op_delta(Op op) {
-  switch (op) {
-    case Op::kC:
-    case Op::kS:
-      return 1;
-    case Op::kL:
-    case Op::kR:
-      return -1;
-    case Op::kE:
-      return -3;
-    case Op::kM:
-      return 0;
-  }
-  return 0;
-}
 
 [[noreturn]] void internal(const char* what) {
   throw Error("edgebreaker", "traversal", std::string("internal inconsistency: ") + what);
@@ -114,11 +71,10 @@ class Encoder {
         decoded_(s.vertex_count(), kNone),
         node_of_half_(s.corner_vertex.size(), kNone) {}
 
-  // Walks every component; `split_offsets` receives every S's true offset.
-  Traversal run(std::vector<std::uint32_t>& split_offsets) {
+  // Walks every component.
+  Traversal run() {
     for (std::uint32_t t = 0; t < s_.triangle_count(); ++t)
       if (!visited_[t]) component(t);
-    split_offsets = std::move(split_truth_);
     return std::move(out_);
   }
 
@@ -132,9 +88,8 @@ class Encoder {
     out_.surface_vertex.push_back(v);
     return decoded_[v];
   }
-  std::uint32_t new_node(std::uint32_t v, std::uint32_t o, std::uint32_t half,
-                         std::uint32_t label) {
-    const std::uint32_t n = nodes_.add(v, o);
+  std::uint32_t new_node(std::uint32_t v, std::uint32_t half, std::uint32_t label) {
+    const std::uint32_t n = nodes_.add(v);
     half_.push_back(half);
     label_.push_back(label);
     node_of_half_[half] = n;
@@ -151,6 +106,7 @@ class Encoder {
 
   void component(std::uint32_t t0) {
     ++out_.connectivity.components;
+    out_.component_first_symbol.push_back(out_.connectivity.ops.size());
     visited_[t0] = 1;
     out_.surface_triangle.push_back(t0);
     const std::uint32_t h0 = 3 * t0;
@@ -158,8 +114,7 @@ class Encoder {
     for (std::uint32_t i = 0; i < 3; ++i) ids[i] = decode_id(s_.corner_vertex[h0 + i]);
     std::uint32_t label = new_label(3);
     std::uint32_t nodes[3];
-    for (std::uint32_t i = 0; i < 3; ++i)
-      nodes[i] = new_node(ids[i], ids[(i + 2) % 3], h0 + i, label);
+    for (std::uint32_t i = 0; i < 3; ++i) nodes[i] = new_node(ids[i], h0 + i, label);
     for (std::uint32_t i = 0; i < 3; ++i) nodes_.link(nodes[i], nodes[(i + 1) % 3]);
     std::uint32_t g = nodes[0];
     std::vector<Stacked> stack;
@@ -223,7 +178,6 @@ class Encoder {
           }
           // Nodes from b to xn: offset + 1; from xn's next to g: length - offset - 1.
           const std::uint32_t offset = r == xn ? steps : length - 1 - (steps + 1);
-          split_truth_.push_back(offset);
           const std::uint32_t xc = split(g, xn, left_half, right_half, label);
           const std::uint32_t right_length = offset + 1, left_length = length - offset;
           // The shorter part gets a new label.
@@ -249,7 +203,7 @@ class Encoder {
           std::uint32_t offset = 0;
           for (std::uint32_t n = other.node; n != xn; n = nodes_.next(n)) ++offset;
           out_.connectivity.handles.push_back(
-              {static_cast<std::uint32_t>(stack.size() - k), offset});
+              {static_cast<std::uint32_t>(stack.size() - k), offset, length_[other.label]});
           const std::uint32_t xc = split(g, xn, left_half, right_half, label);
           relabel(xc, xn, label);
           length_[label] += length_[other.label] + 1;
@@ -311,165 +265,10 @@ class Encoder {
   std::vector<std::uint32_t> half_, label_;  // per node
   std::vector<std::uint32_t> length_;        // per label
   Traversal out_;
-  std::vector<std::uint32_t> split_truth_;  // every S's offset, in order
 };
 
 }  // namespace
 
-std::vector<std::int64_t> predicted_split_offsets(const std::vector<Op>& ops) {
-  std::vector<std::int64_t> offsets;
-  struct Open {
-    std::size_t split;
-    std::int64_t sum;  // prefix sum including the S
-  };
-  std::vector<Open> open;
-  std::int64_t sum = 0;
-  for (Op op : ops) {
-    sum += op_delta(op);
-    if (op == Op::kS) {
-      open.push_back({offsets.size(), sum});
-      offsets.push_back(-1);
-    } else if (op == Op::kE && !open.empty()) {
-      // The right branch closed a loop of -(its symbols' sum) nodes; the S's vertex is the last.
-      offsets[open.back().split] = -(sum - open.back().sum) - 1;
-      open.pop_back();
-    }
-  }
-  return offsets;
-}
-
-Traversal edgebreaker_traverse(const ClosedSurface& surface) {
-  std::vector<std::uint32_t> truth;
-  Traversal t = Encoder(surface).run(truth);
-  const std::vector<std::int64_t> predicted = predicted_split_offsets(t.connectivity.ops);
-  for (std::uint32_t k = 0; k < truth.size(); ++k)
-    if (predicted[k] != static_cast<std::int64_t>(truth[k]))
-      t.connectivity.split_offsets.push_back({k, truth[k]});
-  return t;
-}
-
-ReplayedSurface edgebreaker_replay(const Connectivity& c, const std::string& source) {
-  const auto fail = [&](std::size_t symbol, const std::string& problem) {
-    throw Error(source, "connectivity symbol " + std::to_string(symbol), problem);
-  };
-  std::vector<std::int64_t> offsets = predicted_split_offsets(c.ops);
-  for (std::size_t i = 0; i < c.split_offsets.size(); ++i) {
-    const SplitOffset& o = c.split_offsets[i];
-    if (o.split >= offsets.size() || (i > 0 && o.split <= c.split_offsets[i - 1].split))
-      throw Error(source, "split offset " + std::to_string(i),
-                  "names split " + std::to_string(o.split) + " (there are " +
-                      std::to_string(offsets.size()) + ", listed in increasing order)");
-    offsets[o.split] = o.offset;
-  }
-  ReplayedSurface out;
-  out.triangles.reserve(c.ops.size() + c.components);
-  // At most three vertices per component and one per C; nodes: three per component and at
-  // most one per symbol.
-  const std::size_t most = c.ops.size() + 3 * std::size_t{c.components};
-  out.predictors.reserve(most);
-  LoopNodes nodes;
-  nodes.reserve(most);
-  const auto new_vertex = [&](VertexPredictors p) {
-    out.predictors.push_back(p);
-    return out.vertex_count++;
-  };
-  const auto triangle = [&](std::size_t symbol, std::uint32_t b, std::uint32_t a, std::uint32_t x) {
-    if (a == b || b == x || a == x) fail(symbol, "makes a triangle with a repeated vertex");
-    out.triangles.push_back({b, a, x});
-  };
-  struct Stacked {
-    std::uint32_t node, length;
-  };
-  std::size_t i = 0, split = 0, handle = 0;
-  for (std::uint32_t component = 0; component < c.components; ++component) {
-    const std::uint32_t v0 = new_vertex({});
-    const std::uint32_t v1 = new_vertex({v0, kNone, kNone});
-    const std::uint32_t v2 = new_vertex({v0, v1, kNone});
-    out.triangles.push_back({v0, v1, v2});
-    std::uint32_t g = nodes.start(v0, v1, v2);
-    std::uint32_t length = 3;
-    std::vector<Stacked> stack;
-    for (bool open = true; open;) {
-      if (i >= c.ops.size())
-        fail(i, "missing: the symbols end inside component " + std::to_string(component));
-      const std::size_t at = i;
-      const Op op = c.ops[i++];
-      const std::uint32_t a = nodes.vertex(g), b = nodes.vertex(nodes.next(g));
-      switch (op) {
-        case Op::kC: {
-          const std::uint32_t x = new_vertex({a, b, nodes.opp(g)});
-          triangle(at, b, a, x);
-          g = nodes.attach(g, x);
-          ++length;
-          break;
-        }
-        case Op::kL:
-          if (length < 3) fail(at, "L on a loop of " + std::to_string(length));
-          triangle(at, b, a, nodes.vertex(nodes.prev(g)));
-          g = nodes.close_left(g);
-          --length;
-          break;
-        case Op::kR:
-          if (length < 3) fail(at, "R on a loop of " + std::to_string(length));
-          triangle(at, b, a, nodes.vertex(nodes.next(nodes.next(g))));
-          g = nodes.close_right(g);
-          --length;
-          break;
-        case Op::kE:
-          if (length != 3) fail(at, "E closes a loop of " + std::to_string(length) + ", not 3");
-          triangle(at, b, a, nodes.vertex(nodes.prev(g)));
-          if (stack.empty()) {
-            open = false;
-          } else {
-            g = stack.back().node;
-            length = stack.back().length;
-            stack.pop_back();
-          }
-          break;
-        case Op::kS: {
-          const std::int64_t offset = offsets[split++];
-          if (offset < 1 || offset > static_cast<std::int64_t>(length) - 2)
-            fail(at, "S offset " + std::to_string(offset) + " outside its loop of " +
-                         std::to_string(length));
-          const auto j = static_cast<std::uint32_t>(offset);
-          // xn is j nodes after b, or length - 1 - j nodes before g: walk the shorter way.
-          const std::uint32_t xn = j + 1 <= length - j - 1 ? nodes.walk(nodes.next(g), j)
-                                                           : nodes.walk_back(g, length - 1 - j);
-          triangle(at, b, a, nodes.vertex(xn));
-          nodes.split(g, xn);
-          stack.push_back({g, length - j});
-          length = j + 1;
-          g = xn;
-          break;
-        }
-        case Op::kM: {
-          if (handle >= c.handles.size()) fail(at, "M without a handle record");
-          const HandleRecord& r = c.handles[handle++];
-          if (r.depth >= stack.size())
-            fail(at, "M names loop " + std::to_string(r.depth) + " of a stack of " +
-                         std::to_string(stack.size()));
-          const std::size_t k = stack.size() - 1 - r.depth;
-          if (r.offset >= stack[k].length)
-            fail(at, "M offset " + std::to_string(r.offset) + " outside its loop of " +
-                         std::to_string(stack[k].length));
-          const std::uint32_t xn = nodes.walk(stack[k].node, r.offset);
-          triangle(at, b, a, nodes.vertex(xn));
-          nodes.split(g, xn);
-          length += stack[k].length + 1;
-          stack.erase(stack.begin() + static_cast<std::ptrdiff_t>(k));
-          g = xn;
-          break;
-        }
-        default:
-          fail(at, "unknown symbol " + std::to_string(static_cast<int>(op)));
-      }
-    }
-  }
-  if (i != c.ops.size())
-    fail(i, std::to_string(c.ops.size() - i) + " symbols left after the last component");
-  if (handle != c.handles.size())
-    throw Error(source, "handles", std::to_string(c.handles.size() - handle) + " not used");
-  return out;
-}
+Traversal edgebreaker_traverse(const ClosedSurface& surface) { return Encoder(surface).run(); }
 
 }  // namespace meshflow::compress

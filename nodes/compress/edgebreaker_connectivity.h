@@ -5,10 +5,8 @@
 //   C  a new vertex;            L  the vertex before the gate;   R  the vertex after the gate;
 //   E  the loop is this triangle (it closes);   S  elsewhere on the loop (it splits in two);
 //   M  on a loop waiting on the stack (a handle: the two loops merge).
-// The decoder replays the symbols on the same loop structure. An S's vertex is found from the
-// string alone (its right branch has to close a loop of the length the symbols in it consume;
-// Rossignac's offset rule); the encoder checks the rule against the walk and stores the few
-// offsets it gets wrong (after M symbols) explicitly, and every M its loop and offset.
+// The decoder (nodes/compress/edgebreaker_replay.h) undoes the symbols last first on the same
+// loop structure, so an S needs no offset; every M stores its other loop's place and length.
 
 #include <cstdint>
 #include <string>
@@ -22,26 +20,19 @@ namespace meshflow::compress {
 enum class Op : std::uint8_t { kC = 0, kL = 1, kR = 2, kS = 3, kE = 4, kM = 5 };
 inline constexpr unsigned kOpCount = 6;
 
-/// An M symbol's other loop: `depth` loops below the top of the stack, its vertex `offset`
-/// nodes after the loop's gate.
+/// An M symbol's other loop: `depth` loops below the top of the stack, `length` nodes long,
+/// its vertex `offset` nodes after the loop's gate.
 struct HandleRecord {
   std::uint32_t depth = 0;
   std::uint32_t offset = 0;
-};
-
-/// An S symbol (counted from 0 among the S symbols) whose vertex is `offset` nodes after the
-/// gate's end, where the offset rule predicts otherwise.
-struct SplitOffset {
-  std::uint32_t split = 0;
-  std::uint32_t offset = 0;
+  std::uint32_t length = 0;
 };
 
 /// Everything the decoder needs to rebuild the surface's triangles.
 struct Connectivity {
-  std::uint32_t components = 0;            ///< each starts with a triangle of three new vertices
-  std::vector<Op> ops;                     ///< one per triangle after each component's first
-  std::vector<HandleRecord> handles;       ///< one per M, in order
-  std::vector<SplitOffset> split_offsets;  ///< in increasing split order
+  std::uint32_t components = 0;       ///< each starts with a triangle of three new vertices
+  std::vector<Op> ops;                ///< one per triangle after each component's first
+  std::vector<HandleRecord> handles;  ///< one per M, in order
 };
 
 /// A vertex's position predictors (decoded vertex numbers, kNone where absent): the gate's ends
@@ -51,7 +42,7 @@ struct VertexPredictors {
   std::uint32_t a = kNone, b = kNone, w = kNone;
 };
 
-/// What replaying the connectivity gives.
+/// What replaying the connectivity gives (the walk's vertex numbers and triangle order).
 struct ReplayedSurface {
   std::uint32_t vertex_count = 0;            ///< decoded vertices, numbered in order of creation
   std::vector<Triangle> triangles;           ///< in decoding order
@@ -61,8 +52,9 @@ struct ReplayedSurface {
 /// The encoder's walk.
 struct Traversal {
   Connectivity connectivity;
-  std::vector<std::uint32_t> surface_vertex;    ///< per decoded vertex: the surface vertex
-  std::vector<std::uint32_t> surface_triangle;  ///< per decoded triangle: the surface triangle
+  std::vector<std::uint32_t> surface_vertex;        ///< per decoded vertex: the surface vertex
+  std::vector<std::uint32_t> surface_triangle;      ///< per decoded triangle: the surface triangle
+  std::vector<std::size_t> component_first_symbol;  ///< per component: its first symbol's index
 };
 
 /// Walks every component of `surface` (starting each at its lowest-numbered triangle) and
@@ -70,14 +62,5 @@ struct Traversal {
 /// corners rotated so that it starts at the gate's end; its vertices are decoded vertex numbers
 /// that surface_vertex maps back. O(T log T) (splitting a loop walks its shorter part); serial.
 Traversal edgebreaker_traverse(const ClosedSurface& surface);
-
-/// The offset of every S symbol's vertex that Rossignac's rule predicts from the symbols alone
-/// (-1 where it predicts none). O(number of symbols).
-std::vector<std::int64_t> predicted_split_offsets(const std::vector<Op>& ops);
-
-/// Rebuilds the triangles from the connectivity. Throws Error(source, "connectivity", ...) for
-/// symbols that do not describe a surface (a loop closed that is not a triangle, an offset past
-/// its loop, symbols left over or missing). O(T log T).
-ReplayedSurface edgebreaker_replay(const Connectivity& connectivity, const std::string& source);
 
 }  // namespace meshflow::compress

@@ -4,34 +4,72 @@
 
 #include "nodes/compress/closed_surface.h"
 #include "nodes/compress/edgebreaker_connectivity.h"
+#include "nodes/compress/edgebreaker_replay.h"
 #include "nodes/compress/range_coder.h"
 #include "runtime/error.h"
 
 namespace meshflow::compress {
 namespace {
 
-// The symbol coder: a 6-symbol tree per context of the two symbols before.
-class SymbolCoder {
- public:
-  void encode(RangeEncoder& enc, Op op) {
-    models_[context_].encode(enc, static_cast<unsigned>(op));
-    advance(op);
-  }
-  Op decode(RangeDecoder& dec, const std::string& source, std::size_t index) {
-    const unsigned v = models_[context_].decode(dec);
-    if (v >= kOpCount)
-      throw Error(source, "connectivity symbol " + std::to_string(index),
-                  "unknown symbol " + std::to_string(v));
-    const auto op = static_cast<Op>(v);
-    advance(op);
-    return op;
-  }
-
- private:
-  void advance(Op op) { context_ = (context_ % kOpCount) * kOpCount + static_cast<unsigned>(op); }
-  std::vector<SymbolModel<8>> models_ = std::vector<SymbolModel<8>>(kOpCount * kOpCount);
-  unsigned context_ = 0;
+// The symbol section: the symbols last first, each by a 6-symbol tree per replay context
+// (nodes/compress/edgebreaker_replay.h), and where a component may start a bit saying whether it
+// does.
+struct SymbolModels {
+  std::vector<SymbolModel<8>> symbol = std::vector<SymbolModel<8>>(ReverseReplay::kContexts);
+  BitModel starts;
 };
+
+// Codes the walk's symbols; returns the surface the decoder will rebuild.
+ReplayedSurface encode_symbols(const Traversal& walk, std::size_t vertices, RangeEncoder& enc) {
+  const Connectivity& c = walk.connectivity;
+  ReverseReplay replay(c.components, c.ops.size(), vertices, c.handles, "edgebreaker encoder");
+  SymbolModels m;
+  for (;;) {
+    switch (replay.next()) {
+      case ReverseReplay::Step::kSymbol: {
+        const Op op = c.ops[replay.symbols_left() - 1];
+        m.symbol[replay.context()].encode(enc, static_cast<unsigned>(op));
+        replay.apply(op);
+        break;
+      }
+      case ReverseReplay::Step::kComponentStart: {
+        const bool starts =
+            replay.symbols_left() == walk.component_first_symbol[replay.component()];
+        enc.encode(m.starts, starts ? 1u : 0u);
+        replay.answer(starts);
+        break;
+      }
+      case ReverseReplay::Step::kDone:
+        return replay.finish();
+    }
+  }
+}
+
+// Decodes the symbols while replaying them.
+ReplayedSurface decode_symbols(std::uint32_t components, std::size_t symbols, std::size_t vertices,
+                               const std::vector<HandleRecord>& handles, RangeDecoder& dec,
+                               const std::string& source) {
+  ReverseReplay replay(components, symbols, vertices, handles, source);
+  SymbolModels m;
+  for (;;) {
+    switch (replay.next()) {
+      case ReverseReplay::Step::kSymbol: {
+        const unsigned v = m.symbol[replay.context()].decode(dec);
+        if (v >= kOpCount)
+          throw Error(source, "connectivity symbol " + std::to_string(replay.symbols_left() - 1),
+                      "unknown symbol " + std::to_string(v));
+        replay.apply(static_cast<Op>(v));
+        break;
+      }
+      case ReverseReplay::Step::kComponentStart:
+        replay.answer(dec.decode(m.starts) != 0);
+        break;
+      case ReverseReplay::Step::kDone:
+        dec.check();
+        return replay.finish();
+    }
+  }
+}
 
 // The side data's integer fields, each with its own model.
 struct SideModels {
@@ -104,9 +142,10 @@ BodyStats encode_body(const TriangleMesh& mesh, const Quantizer& quantizer, Attr
                       io::ByteWriter& out, BodyOrder* order) {
   const ClosedSurface surface = build_closed_surface(mesh.triangles);
   const Traversal walk = edgebreaker_traverse(surface);
-  const ReplayedSurface replayed = edgebreaker_replay(walk.connectivity, "edgebreaker encoder");
   const Connectivity& c = walk.connectivity;
   const std::size_t decoded = walk.surface_vertex.size();
+  RangeEncoder symbol_encoder;
+  const ReplayedSurface replayed = encode_symbols(walk, decoded, symbol_encoder);
 
   // Roles: holes, further fans of a vertex already met, outputs.
   std::vector<char> hole(decoded, 0);
@@ -145,20 +184,11 @@ BodyStats encode_body(const TriangleMesh& mesh, const Quantizer& quantizer, Attr
   stats.symbols = c.ops.size();
   stats.holes = surface.hole_count;
   stats.handles = c.handles.size();
-  stats.split_offsets = c.split_offsets.size();
   out.u32(c.components);
   out.u64(c.ops.size());
   out.u64(decoded);
 
-  {  // Symbols.
-    RangeEncoder enc;
-    SymbolCoder coder;
-    for (Op op : c.ops) coder.encode(enc, op);
-    const std::vector<unsigned char> bytes = enc.finish();
-    stats.connectivity_bytes += bytes.size();
-    write_section(out, bytes);
-  }
-  {  // Side data.
+  {  // Side data (the decoder needs the handles before the symbols).
     RangeEncoder enc;
     SideModels m;
     const auto put = [&](IntegerModel& model, std::uint64_t v) {
@@ -168,16 +198,10 @@ BodyStats encode_body(const TriangleMesh& mesh, const Quantizer& quantizer, Attr
     for (const HandleRecord& h : c.handles) {
       put(m.depth, h.depth);
       put(m.offset, h.offset);
-    }
-    put(m.count, c.split_offsets.size());
-    std::uint32_t previous = 0;
-    for (const SplitOffset& s : c.split_offsets) {
-      put(m.index, s.split - previous);
-      put(m.offset, s.offset);
-      previous = s.split;
+      put(m.offset, h.length);
     }
     put(m.count, surface.hole_count);
-    previous = 0;
+    std::uint32_t previous = 0;
     for (std::uint32_t k = 0; k < decoded; ++k)
       if (hole[k]) {
         put(m.index, k - previous);
@@ -199,6 +223,11 @@ BodyStats encode_body(const TriangleMesh& mesh, const Quantizer& quantizer, Attr
     for (std::uint32_t t : surface.degenerate_triangles)
       for (std::uint32_t v : mesh.triangles[t]) put(m.corner, output_of_input[v]);
     const std::vector<unsigned char> bytes = enc.finish();
+    stats.connectivity_bytes += bytes.size();
+    write_section(out, bytes);
+  }
+  {  // Symbols.
+    const std::vector<unsigned char> bytes = symbol_encoder.finish();
     stats.connectivity_bytes += bytes.size();
     write_section(out, bytes);
   }
@@ -281,6 +310,7 @@ TriangleMesh decode_body(io::ByteReader& in, const Quantizer& quantizer, Attribu
     return std::make_pair(in.bytes(static_cast<std::size_t>(n), field),
                           static_cast<std::size_t>(n));
   };
+  const auto [side_bytes, side_size] = section("side section");
   const auto [symbol_bytes, symbol_size] = section("symbol section");
   // A symbol costs at least 3 x 0.022 bits; more symbols than the section can hold is corrupt
   // (and would allocate without bound).
@@ -290,14 +320,6 @@ TriangleMesh decode_body(io::ByteReader& in, const Quantizer& quantizer, Attribu
                                 " vertices and " + std::to_string(c.components) +
                                 " components do not fit a section of " +
                                 std::to_string(symbol_size) + " bytes");
-  {
-    RangeDecoder dec(symbol_bytes, symbol_size, source, "symbol section");
-    SymbolCoder coder;
-    c.ops.resize(static_cast<std::size_t>(symbols));
-    for (std::size_t i = 0; i < c.ops.size(); ++i) c.ops[i] = coder.decode(dec, source, i);
-    dec.check();
-  }
-  const auto [side_bytes, side_size] = section("side section");
   std::vector<char> hole(static_cast<std::size_t>(decoded), 0);
   std::vector<std::uint32_t> merged(static_cast<std::size_t>(decoded), kNone);
   std::uint64_t off_surface = 0;
@@ -317,16 +339,10 @@ TriangleMesh decode_body(io::ByteReader& in, const Quantizer& quantizer, Attribu
     for (HandleRecord& h : c.handles) {
       h.depth = get(m.depth, "handle depth", symbols);
       h.offset = get(m.offset, "handle offset", 3 * symbols + 3);
-    }
-    c.split_offsets.resize(get(m.count, "split offset count", symbols));
-    std::uint32_t previous = 0;
-    for (SplitOffset& s : c.split_offsets) {
-      s.split = previous + get(m.index, "split index", symbols);
-      s.offset = get(m.offset, "split offset", 3 * symbols + 3);
-      previous = s.split;
+      h.length = get(m.offset, "handle loop length", 3 * symbols + 3);
     }
     const std::uint32_t holes = get(m.count, "hole count", decoded);
-    previous = 0;
+    std::uint32_t previous = 0;
     for (std::uint32_t i = 0; i < holes; ++i) {
       const std::uint64_t k = std::uint64_t{previous} + get(m.index, "hole vertex", decoded);
       if (k >= decoded || (i > 0 && k == previous))
@@ -355,11 +371,10 @@ TriangleMesh decode_body(io::ByteReader& in, const Quantizer& quantizer, Attribu
     degenerate.resize(3 * std::size_t{degenerates});
     for (std::uint32_t& v : degenerate) v = get(m.corner, "degenerate triangle corner", 0x7FFFFFFF);
   }
-  const ReplayedSurface replayed = edgebreaker_replay(c, source);
-  if (replayed.vertex_count != decoded)
-    throw Error(source, "surface vertex count",
-                std::to_string(decoded) + " stored, the symbols make " +
-                    std::to_string(replayed.vertex_count));
+  RangeDecoder symbol_decoder(symbol_bytes, symbol_size, source, "symbol section");
+  const ReplayedSurface replayed =
+      decode_symbols(c.components, static_cast<std::size_t>(symbols),
+                     static_cast<std::size_t>(decoded), c.handles, symbol_decoder, source);
   const VertexRoles roles = assign_outputs(std::move(hole), std::move(merged));
   const std::size_t outputs = roles.surface_outputs + static_cast<std::size_t>(off_surface);
   TriangleMesh mesh;

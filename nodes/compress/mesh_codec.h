@@ -5,9 +5,10 @@
 // progressive format stores its base mesh as such a body.
 //
 // Body layout (little-endian): u32 components, u64 symbols, u64 surface vertices, then six
-// sections, each a u64 byte count and a range-coded stream: symbols (CLERS + M, context: the two
-// symbols before), side data (handles, split offsets, hole vertices, merged fans, degenerate
-// triangles, vertices off the surface), positions x, y and z (one stream per axis, so that a
+// sections, each a u64 byte count and a range-coded stream: side data (handles, hole vertices,
+// merged fans, degenerate triangles, vertices off the surface), symbols (CLERS + M, last first,
+// context: the rebuilt triangles at the gate's vertices and the symbol after; see
+// nodes/compress/edgebreaker_replay.h), positions x, y and z (one stream per axis, so that a
 // decoder's three dependency chains overlap), attributes (normals, then colours).
 
 #include <array>
@@ -33,10 +34,9 @@ struct BodyStats {
   std::size_t position_bytes = 0;
   std::size_t attribute_bytes = 0;
   std::size_t symbols = 0;
-  std::size_t holes = 0;          ///< loops of border (or cut) edges closed for the walk
-  std::size_t handles = 0;        ///< M symbols
-  std::size_t split_offsets = 0;  ///< S offsets stored explicitly
-  std::size_t merged_fans = 0;    ///< extra fans of non-manifold vertices
+  std::size_t holes = 0;        ///< loops of border (or cut) edges closed for the walk
+  std::size_t handles = 0;      ///< M symbols
+  std::size_t merged_fans = 0;  ///< extra fans of non-manifold vertices
 };
 
 /// Where each output vertex and triangle of a decoded body came from.

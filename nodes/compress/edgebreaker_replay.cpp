@@ -6,8 +6,9 @@ namespace meshflow::compress {
 
 // The loops are the walk's (nodes/compress/edgebreaker_connectivity.cpp): node n is the loop
 // edge from its vertex to the next node's; the walked side of each edge is the region the walk
-// has covered, the rebuilt side the triangles replayed so far. Every node holds its own vertex
-// copy: a vertex split by an S (or an M) has a copy per loop until undoing the split merges them.
+// has covered, the rebuilt side the triangles replayed so far. Every node is its own vertex copy
+// (node n's vertex is copy n, in the triangles too): a vertex split by an S (or an M) has a copy
+// per loop until undoing the split merges them. Nodes are never reused.
 
 ReverseReplay::ReverseReplay(std::uint32_t components, std::size_t symbols, std::size_t vertices,
                              const std::vector<HandleRecord>& handles, std::string source)
@@ -29,10 +30,12 @@ ReverseReplay::ReverseReplay(std::uint32_t components, std::size_t symbols, std:
                     std::to_string(symbols) + " symbols");
   triangles_.resize(symbols + components);
   predictors_.resize(vertices);
-  nodes_.reserve(symbols / 2 + 16);
-  parent_.reserve(symbols + 16);
-  incident_.reserve(symbols + 16);
-  number_.reserve(symbols + 16);
+  // A node per L and R, three per E (at most a symbol and a quarter on any mesh meshflow makes;
+  // more only grows the vectors).
+  const std::size_t nodes = symbols + symbols / 4 + 3 * std::size_t{components} + 16;
+  nodes_.reserve(nodes);
+  parent_.reserve(nodes);
+  number_.reserve(nodes);
   update_step();
 }
 
@@ -40,98 +43,91 @@ void ReverseReplay::fail(const std::string& problem) const {
   throw Error(source_, "connectivity symbol " + std::to_string(index_), problem);
 }
 
-std::uint32_t ReverseReplay::fresh_id() {
-  const auto id = static_cast<std::uint32_t>(parent_.size());
-  parent_.push_back(id);
-  incident_.push_back(0);
+inline std::uint32_t ReverseReplay::add_node() {
+  const auto n = static_cast<std::uint32_t>(nodes_.size());
+  nodes_.push_back({kNone, kNone, kNone, 0});
+  parent_.push_back(n);
   number_.push_back(kNone);
-  return id;
+  return n;
 }
 
-std::uint32_t ReverseReplay::add_node(std::uint32_t id) {
-  nodes_.push_back({id, kNone, kNone, kNone});
-  return static_cast<std::uint32_t>(nodes_.size() - 1);
-}
-
-void ReverseReplay::resolve(std::uint32_t n, std::uint32_t w) {
+inline void ReverseReplay::resolve(std::uint32_t n, std::uint32_t w) {
   if (nodes_[n].waiting != kNone) predictors_[nodes_[n].waiting].w = w;
   nodes_[n].waiting = kNone;
 }
 
-void ReverseReplay::triangle(std::uint32_t b, std::uint32_t a, std::uint32_t x) {
+inline void ReverseReplay::triangle(std::uint32_t b, std::uint32_t a, std::uint32_t x) {
   // Walk triangle k of component c is number k + c + 1 (each component starts with one); the
   // symbol being undone is k = index_ - 1 and c = components_left_ - 1.
   triangles_[index_ + components_left_ - 1] = {b, a, x};
-  ++incident_[a];
-  ++incident_[b];
-  ++incident_[x];
+  ++nodes_[a].incident;
+  ++nodes_[b].incident;
+  ++nodes_[x].incident;
 }
 
-void ReverseReplay::merge(std::uint32_t gone, std::uint32_t kept) {
+inline void ReverseReplay::merge(std::uint32_t gone, std::uint32_t kept) {
   parent_[gone] = kept;
-  incident_[kept] += incident_[gone];
+  nodes_[kept].incident += nodes_[gone].incident;
 }
 
-void ReverseReplay::undo_e() {
+inline void ReverseReplay::undo_e() {
   // The E closed the loop p -> a -> b (gate a) and then took the loop on top of the stack, or
   // ended the component: the current loop (if any) goes back on the stack, p, a and b return
   // as new copies.
   if (open_) stack_.push_back({gate_, length_});
-  const std::uint32_t p = add_node(fresh_id()), a = add_node(fresh_id()), b = add_node(fresh_id());
+  const std::uint32_t p = add_node(), a = add_node(), b = add_node();
   link(p, a);
   link(a, b);
   link(b, p);
-  triangle(nodes_[b].id, nodes_[a].id, nodes_[p].id);
+  triangle(b, a, p);
   gate_ = a;
   length_ = 3;
   open_ = true;
 }
 
-void ReverseReplay::undo_c() {
+inline void ReverseReplay::undo_c() {
   // a -> x -> b (gate x -> b) was a -> b before x was met (a loop of two at least): x is
   // complete.
   if (length_ < 3) fail("C on a loop of " + std::to_string(length_) + " (needs 3 or more)");
   if (c_left_ == 0) fail("more C symbols than the vertex count allows");
   const std::uint32_t xn = gate_, an = nodes_[xn].prev, bn = nodes_[xn].next;
-  const std::uint32_t x = nodes_[xn].id, a = nodes_[an].id, b = nodes_[bn].id;
-  triangle(b, a, x);
+  triangle(bn, an, xn);
   // Vertex numbers: each component's three, then one per C, in walk order.
   const std::size_t k = 3 * std::size_t{components_left_} + --c_left_;
-  if (number_[x] != kNone) fail("completes a vertex twice");
-  number_[x] = static_cast<std::uint32_t>(k);
-  predictors_[k] = {a, b, kNone};
-  resolve(an, b);
-  resolve(xn, a);
+  number_[xn] = static_cast<std::uint32_t>(k);  // xn is on a loop, so not completed before
+  predictors_[k] = {an, bn, kNone};
+  resolve(an, bn);
+  resolve(xn, an);
   link(an, bn);
   nodes_[an].waiting = static_cast<std::uint32_t>(k);
   gate_ = an;
   --length_;
 }
 
-void ReverseReplay::undo_l() {
+inline void ReverseReplay::undo_l() {
   // p -> b (gate p) was p -> a -> b (gate a): a returns as a new copy.
   const std::uint32_t pn = gate_, bn = nodes_[pn].next;
-  const std::uint32_t an = add_node(fresh_id());
-  triangle(nodes_[bn].id, nodes_[an].id, nodes_[pn].id);
-  resolve(pn, nodes_[an].id);
+  const std::uint32_t an = add_node();
+  triangle(bn, an, pn);
+  resolve(pn, an);
   link(pn, an);
   link(an, bn);
   gate_ = an;
   ++length_;
 }
 
-void ReverseReplay::undo_r() {
+inline void ReverseReplay::undo_r() {
   // a -> q (gate a) was a -> b -> q (gate a): b returns as a new copy.
   const std::uint32_t an = gate_, qn = nodes_[an].next;
-  const std::uint32_t bn = add_node(fresh_id());
-  triangle(nodes_[bn].id, nodes_[an].id, nodes_[qn].id);
-  resolve(an, nodes_[bn].id);
+  const std::uint32_t bn = add_node();
+  triangle(bn, an, qn);
+  resolve(an, bn);
   link(an, bn);
   link(bn, qn);
   ++length_;
 }
 
-void ReverseReplay::undo_s() {
+inline void ReverseReplay::undo_s() {
   // The current loop x -> b ... -> x (gate x) and the stacked a -> x' -> y ... -> a (gate a)
   // were one loop a -> b ... -> x -> y ... -> a (gate a).
   if (stack_.empty()) fail("S with no loop stacked");
@@ -142,14 +138,13 @@ void ReverseReplay::undo_s() {
   length_ = length_ + left.length - 1;
 }
 
-void ReverseReplay::unsplit(std::uint32_t an, std::uint32_t xn) {
+inline void ReverseReplay::unsplit(std::uint32_t an, std::uint32_t xn) {
   const std::uint32_t xc = nodes_[an].next, yn = nodes_[xc].next;
   const std::uint32_t bn = nodes_[xn].next, last = nodes_[xn].prev;
-  const std::uint32_t a = nodes_[an].id, b = nodes_[bn].id, x = nodes_[xn].id;
-  merge(nodes_[xc].id, x);
-  triangle(b, a, x);
-  resolve(an, b);
-  resolve(xn, a);
+  merge(xc, xn);
+  triangle(bn, an, xn);
+  resolve(an, bn);
+  resolve(xn, an);
   nodes_[xn].waiting = nodes_[xc].waiting;  // xn takes over x' -> y
   link(an, bn);
   link(last, xn);
@@ -220,26 +215,22 @@ void ReverseReplay::answer(bool starts) {
 void ReverseReplay::start_component() {
   // The component's first triangle v0 -> v1 -> v2 with the gate on v0 -> v1.
   const std::uint32_t n0 = gate_, n1 = nodes_[n0].next, n2 = nodes_[n1].next;
-  const std::uint32_t v0 = nodes_[n0].id, v1 = nodes_[n1].id, v2 = nodes_[n2].id;
   --components_left_;
   const std::size_t base = 3 * std::size_t{components_left_} + c_left_;
-  triangles_[index_ + components_left_] = {v0, v1, v2};
-  const std::uint32_t ids[3] = {v0, v1, v2};
-  for (std::uint32_t i = 0; i < 3; ++i) {
-    if (number_[ids[i]] != kNone) fail("completes a vertex twice");
-    number_[ids[i]] = static_cast<std::uint32_t>(base + i);
-  }
+  triangles_[index_ + components_left_] = {n0, n1, n2};
+  const std::uint32_t n[3] = {n0, n1, n2};
+  for (std::uint32_t i = 0; i < 3; ++i) number_[n[i]] = static_cast<std::uint32_t>(base + i);
   predictors_[base] = {};
-  predictors_[base + 1] = {v0, kNone, kNone};
-  predictors_[base + 2] = {v0, v1, kNone};
-  resolve(n0, v2);
-  resolve(n1, v0);
-  resolve(n2, v1);
+  predictors_[base + 1] = {n0, kNone, kNone};
+  predictors_[base + 2] = {n0, n1, kNone};
+  resolve(n0, n2);
+  resolve(n1, n0);
+  resolve(n2, n1);
   open_ = false;
   asked_ = false;
 }
 
-void ReverseReplay::update_step() {
+inline void ReverseReplay::update_step() {
   for (;;) {
     if (!open_) {
       if (components_left_ == 0) {

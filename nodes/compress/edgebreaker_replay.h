@@ -49,7 +49,7 @@ class ReverseReplay {
   /// capped at 8) and the symbol after it in the walk. Below kContexts.
   unsigned context() const {
     const LoopNode& g = nodes_[gate_];
-    const std::uint32_t a = incident_[g.id], b = incident_[nodes_[g.next].id];
+    const std::uint32_t a = g.incident, b = nodes_[g.next].incident;
     return ((a < 8 ? a : 8) * 9 + (b < 8 ? b : 8)) * kOpCount + static_cast<unsigned>(after_);
   }
   /// Undoes symbol symbols_left() - 1. Throws Error(source, "connectivity symbol K", ...) where the
@@ -62,18 +62,18 @@ class ReverseReplay {
   ReplayedSurface finish();
 
  private:
+  // A loop edge from its vertex copy (the node's own number) to the next node's.
   struct LoopNode {
-    std::uint32_t id;  // the vertex copy at the start of this loop edge
     std::uint32_t next, prev;
-    std::uint32_t waiting;  // a C vertex whose predictor w is this edge's walked-side vertex
+    std::uint32_t waiting;   // a C vertex whose predictor w is this edge's walked-side vertex
+    std::uint32_t incident;  // rebuilt triangles at the copy (merged copies: all of them)
   };
   struct Stacked {
     std::uint32_t node, length;
   };
 
   [[noreturn]] void fail(const std::string& problem) const;
-  std::uint32_t fresh_id();
-  std::uint32_t add_node(std::uint32_t id);
+  std::uint32_t add_node();  // a new node, its copy on no triangle yet
   void link(std::uint32_t a, std::uint32_t b) {
     nodes_[a].next = b;
     nodes_[b].prev = a;
@@ -110,9 +110,8 @@ class ReverseReplay {
   std::vector<LoopNode> nodes_;
   std::uint32_t gate_ = 0, length_ = 0;
   std::vector<Stacked> stack_;
-  // Per vertex copy: its parent in the merge forest, rebuilt triangles at it, its number once
-  // completed (kNone before).
-  std::vector<std::uint32_t> parent_, incident_, number_;
+  // Per node (vertex copy): its parent in the merge forest, its number once completed.
+  std::vector<std::uint32_t> parent_, number_;
   std::vector<Triangle> triangles_;           // per walk triangle, in copies
   std::vector<VertexPredictors> predictors_;  // per vertex number, in copies
 };

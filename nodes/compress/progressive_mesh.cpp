@@ -129,7 +129,10 @@ std::vector<unsigned char> compress_progressive(const TriangleMesh& mesh,
   QemConfig qem;
   qem.target_ratio = config.base_ratio;
   qem.divide_by_depth2 = false;
-  qem.max_border_turn_deg = 90.0f;  // coarse levels may round borders off (the base stays small)
+  // Borders still collapse only along themselves, but at any turn: coarse levels round them off,
+  // and a scan's many holes do not hold the base up (kurt3d at 90 degrees: 5.9 % of the
+  // triangles were left, 5.2 % of the file; now 4.3 % and 3.6 %).
+  qem.max_border_turn_deg = 180.0f;
   qem.record_collapses = true;
   QemReport decimation;
   qem_decimate(work, qem, &decimation);

@@ -6,38 +6,42 @@ namespace meshflow::compress {
 namespace {
 
 // Pairs the half-edges of edges used by exactly two faces in opposite directions: half-edges
-// listed by origin (a counting sort), then each a -> b looks for b -> a among b's and counts
-// the a -> b among a's. O(T x valence).
+// listed by origin with their ends beside them (a counting sort), then each a -> b looks for
+// b -> a among b's and counts the a -> b among a's, reading two short runs of the list.
+// O(T x valence).
 void pair_twins(const std::vector<std::uint32_t>& corners, std::size_t vertices,
                 std::vector<std::uint32_t>& twin) {
   const auto halves = static_cast<std::uint32_t>(corners.size());
-  std::vector<std::uint32_t> first(vertices + 1, 0), by_origin(halves);
+  std::vector<std::uint32_t> first(vertices + 1, 0), by_origin(halves), end(halves);
   for (std::uint32_t v : corners) ++first[v + 1];
   for (std::size_t v = 0; v < vertices; ++v) first[v + 1] += first[v];
   {
     std::vector<std::uint32_t> fill(first.begin(), first.end() - 1);
-    for (std::uint32_t h = 0; h < halves; ++h) by_origin[fill[corners[h]]++] = h;
+    for (std::uint32_t h = 0; h < halves; ++h) {
+      const std::uint32_t i = fill[corners[h]]++;
+      by_origin[i] = h;
+      end[i] = corners[next_half(h)];
+    }
   }
   twin.assign(halves, kNone);
-  for (std::uint32_t h = 0; h < halves; ++h) {
-    if (twin[h] != kNone) continue;
-    const std::uint32_t a = corners[h], b = corners[next_half(h)];
-    std::uint32_t reverse = kNone, reverse_count = 0, forward_count = 0;
-    for (std::uint32_t i = first[b]; i < first[b + 1]; ++i) {
-      const std::uint32_t g = by_origin[i];
-      if (corners[next_half(g)] == a) {
-        reverse = g;
-        ++reverse_count;
+  for (std::uint32_t a = 0; a < vertices; ++a)
+    for (std::uint32_t j = first[a]; j < first[a + 1]; ++j) {
+      const std::uint32_t h = by_origin[j];
+      if (twin[h] != kNone) continue;
+      const std::uint32_t b = end[j];
+      std::uint32_t reverse = kNone, reverse_count = 0, forward_count = 0;
+      for (std::uint32_t i = first[b]; i < first[b + 1]; ++i)
+        if (end[i] == a) {
+          reverse = by_origin[i];
+          ++reverse_count;
+        }
+      if (reverse_count != 1) continue;
+      for (std::uint32_t i = first[a]; i < first[a + 1]; ++i) forward_count += end[i] == b;
+      if (forward_count == 1) {
+        twin[h] = reverse;
+        twin[reverse] = h;
       }
     }
-    if (reverse_count != 1) continue;
-    for (std::uint32_t i = first[a]; i < first[a + 1]; ++i)
-      forward_count += corners[next_half(by_origin[i])] == b;
-    if (forward_count == 1) {
-      twin[h] = reverse;
-      twin[reverse] = h;
-    }
-  }
 }
 
 }  // namespace

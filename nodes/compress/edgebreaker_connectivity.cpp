@@ -69,7 +69,16 @@ class Encoder {
       : s_(s),
         visited_(s.triangle_count(), 0),
         decoded_(s.vertex_count(), kNone),
-        node_of_half_(s.corner_vertex.size(), kNone) {}
+        node_of_half_(s.corner_vertex.size(), kNone) {
+    // A node per C, S and M, three per component: at most one per triangle and two more.
+    const std::size_t nodes = s.triangle_count() + 2;
+    nodes_.nodes.reserve(nodes);
+    half_.reserve(nodes);
+    label_.reserve(nodes);
+    out_.connectivity.ops.reserve(s.triangle_count());
+    out_.surface_triangle.reserve(s.triangle_count());
+    out_.surface_vertex.reserve(s.vertex_count());
+  }
 
   // Walks every component.
   Traversal run() {

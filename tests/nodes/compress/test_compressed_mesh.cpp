@@ -175,6 +175,20 @@ TEST(Edgebreaker, ClosedSurfacesRoundTripExactly) {
   round_trip(t);
 }
 
+// The symbols are coded last first in the context of the rebuilt triangles at the gate's
+// vertices: on a mesh whose vertices all have six triangles, that context nearly decides each
+// symbol (0.14 bits per triangle here; coded first to last with the two symbols before as
+// context it took 0.27).
+TEST(Edgebreaker, ValenceContextsMakeRegularConnectivityCheap) {
+  const TriangleMesh t = torus(100, 60);
+  CompressReport report;
+  round_trip(t);
+  compress::compress_mesh(t, {}, &report);
+  EXPECT_LT(8.0 * static_cast<double>(report.body.connectivity_bytes) /
+                static_cast<double>(t.triangles.size()),
+            0.2);
+}
+
 TEST(Edgebreaker, BordersComponentsAndLooseVerticesRoundTrip) {
   round_trip(grid_mesh(30));  // one border loop
   TriangleMesh two = joined(sphere(10, 12), joined(grid_mesh(8), torus(12, 8)));

@@ -17,6 +17,7 @@ void FusionBreakdown::add(const Frame& f) {
   pixels_.out_of_range += f.depth_counts.out_of_range;
   pixels_.edges += f.depth_counts.edges;
   pixels_.valid += f.depth_counts.valid;
+  pixels_.smoothed += f.depth_counts.smoothed;
   ++frames_;
   blocks_touched_ += f.integration.blocks_touched;
   voxels_updated_ += f.integration.voxels_updated;
@@ -41,7 +42,8 @@ nlohmann::json FusionBreakdown::json(const TsdfCellCounts& c) const {
             {"unmeasured", pixels_.invalid},
             {"out_of_range", pixels_.out_of_range},
             {"occlusion_edges", pixels_.edges},
-            {"fused", pixels_.valid}}},
+            {"fused", pixels_.valid},
+            {"moved_by_smoothing", pixels_.smoothed}}},
           {"noise_per_depth2_mean", mean_noise()},
           {"blocks_touched", blocks_touched_},
           {"voxels_updated", voxels_updated_},
@@ -55,9 +57,10 @@ nlohmann::json FusionBreakdown::json(const TsdfCellCounts& c) const {
 void FusionBreakdown::print(const TsdfCellCounts& c) const {
   report(
       "pixels     %.1f %% fused; dropped: %.1f %% unmeasured, %.1f %% out of range, %.1f %% "
-      "occlusion edges\n",
+      "occlusion edges, none by smoothing (it moved %.1f %%)\n",
       share(pixels_.valid, pixels_.pixels), share(pixels_.invalid, pixels_.pixels),
-      share(pixels_.out_of_range, pixels_.pixels), share(pixels_.edges, pixels_.pixels));
+      share(pixels_.out_of_range, pixels_.pixels), share(pixels_.edges, pixels_.pixels),
+      share(pixels_.smoothed, pixels_.pixels));
   report(
       "voxels     %zu observed, %zu at or below --min-weight; depth noise %.2e x depth^2 "
       "(mean over frames)\n",

@@ -17,9 +17,9 @@ class FusionBreakdown {
   /// Adds one fused frame's counts (and prints its line with -v). O(1).
   void add(const Frame& f);
   /// The run's figures with the extraction's cell counts: {"pixels": {"total", "unmeasured",
-  /// "out_of_range", "occlusion_edges", "fused"}, "noise_per_depth2_mean", "blocks_touched",
-  /// "voxels_updated", "voxels_observed", "voxels_below_min_weight", "cells_meshed",
-  /// "cells_completed_behind", "cells_left_out"}.
+  /// "out_of_range", "occlusion_edges", "fused", "moved_by_smoothing"}, "noise_per_depth2_mean",
+  /// "blocks_touched", "voxels_updated", "voxels_observed", "voxels_below_min_weight",
+  /// "cells_meshed", "cells_completed_behind", "cells_left_out"}.
   nlohmann::json json(const TsdfCellCounts& cells) const;
   /// Prints the pixels, voxels and cells lines of the report.
   void print(const TsdfCellCounts& cells) const;

@@ -24,6 +24,8 @@ ReconstructionConfig PipelineOptions::config() const {
   c.filter.outlier_k = outlier_k;
   c.filter.min_range = min_range;
   c.filter.max_range = max_range;
+  c.depth_filter.median_kernel = depth_median;
+  c.depth_filter.bilateral_sigma_depth = depth_bilateral;
   c.extract.method = parse_extract_method(extract);
   c.optimize.steps = parse_optimize_steps(optimize);
   c.optimize.holes.max_edges = max_hole;
@@ -126,6 +128,14 @@ void add_pipeline_options(CLI::App* cmd, PipelineOptions& o) {
   cmd->add_option("--max-range", o.max_range,
                   "Drop points farther from the sensor, metres (0 = off)")
       ->check(number_in(0, 1e6));
+  cmd->add_option("--depth-median", o.depth_median,
+                  "Depth frames: median of each pixel's 3 x 3 or 5 x 5 window of valid depths "
+                  "before meshing or fusion (0 = off); drops no pixel")
+      ->check(CLI::IsMember({0, 3, 5}));
+  cmd->add_option("--depth-bilateral", o.depth_bilateral,
+                  "Depth frames: bilateral smoothing with this depth sigma, metres (e.g. 0.01; "
+                  "0 = off); drops no pixel")
+      ->check(number_in(0, 10));
   cmd->add_option("--optimize", o.optimize,
                   "Mesh optimisation: default (clean,holes), none, or a list of clean, holes, "
                   "planes, sharpen, retriangulate, remesh, decimate in the order to run")

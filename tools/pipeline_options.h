@@ -24,6 +24,8 @@ struct PipelineOptions {
   float filter_voxel = 0.0f;
   int outlier_k = 0;
   float min_range = 0.0f, max_range = 0.0f;
+  int depth_median = 0;          ///< depth frames: median window (3 or 5; 0 = off)
+  float depth_bilateral = 0.0f;  ///< depth frames: bilateral depth sigma, metres (0 = off)
   std::string extract = "auto";
   std::string optimize = "default";
   std::size_t max_hole = 30;
@@ -44,7 +46,8 @@ struct PipelineOptions {
 
 /// Registers --voxel --kn --ki --kd --threads --adaptive-k --max-distance --max-disagreement
 /// --max-extrapolation --max-rim --min-component
-/// --filter-voxel --outlier-k --min-range --max-range --extract --optimize --max-hole
+/// --filter-voxel --outlier-k --min-range --max-range --depth-median --depth-bilateral
+/// --extract --optimize --max-hole
 /// --contour-tolerance --max-projection --plane-tolerance --remesh-tolerance --decimate-to
 /// --organized-as-depth
 /// --normals --orient on `cmd`, writing into `options`.

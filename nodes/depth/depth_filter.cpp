@@ -60,6 +60,12 @@ MESHFLOW_AVX2_CLONES void clear_out_of_range(float* row, int cols, float min_dep
   out_of_range += outside_count;
 }
 
+MESHFLOW_AVX2_CLONES std::size_t count_changed(const float* before, const float* after, int cols) {
+  std::size_t n = 0;
+  for (int u = 0; u < cols; ++u) n += before[u] != after[u];
+  return n;
+}
+
 MESHFLOW_AVX2_CLONES std::size_t count_positive(const float* row, int cols) {
   std::size_t n = 0;
   for (int u = 0; u < cols; ++u) n += row[u] > 0.0f;
@@ -140,10 +146,15 @@ Image filter_depth(const DepthFrame& frame, const DepthFilterConfig& config,
   for (int v = 0; v < rows; ++v)
     clear_out_of_range(d.ptr<float>(v), cols, config.min_depth, config.max_depth, c.invalid,
                        c.out_of_range);
-  if (config.median_kernel == 3 || config.median_kernel == 5)
-    d = median_filter_depth(d, config.median_kernel);
-  if (config.bilateral_sigma_depth > 0.0f)
-    d = bilateral_filter_depth(d, config.bilateral_sigma_depth);
+  const bool median = config.median_kernel == 3 || config.median_kernel == 5;
+  const bool bilateral = config.bilateral_sigma_depth > 0.0f;
+  if (median || bilateral) {
+    const Image raw = d;  // shares the pixels: the filters return new images
+    if (median) d = median_filter_depth(d, config.median_kernel);
+    if (bilateral) d = bilateral_filter_depth(d, config.bilateral_sigma_depth);
+    for (int v = 0; v < rows; ++v)
+      c.smoothed += count_changed(raw.ptr<float>(v), d.ptr<float>(v), cols);
+  }
   if (config.edge_high > 0.0f) {
     const Image edges =
         occlusion_edges(d, config.edge_high, std::min(config.edge_low, config.edge_high));

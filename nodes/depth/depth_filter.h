@@ -28,6 +28,9 @@ struct DepthFilterCounts {
   std::size_t out_of_range = 0;
   std::size_t edges = 0;  ///< removed as occlusion edges
   std::size_t valid = 0;  ///< left for back-projection
+  /// Pixels whose depth the median / bilateral smoothing moved (the smoothing drops none: a
+  /// pixel is valid after it exactly when it was before).
+  std::size_t smoothed = 0;
 };
 
 /// Filters `frame`'s depth. Deterministic; O(pixels).

@@ -128,6 +128,7 @@ TEST(CliScripting, FusedOrbitReportsWhereTheSurfaceGoes) {
   EXPECT_EQ(c["pixels"]["total"], 6 * 160 * 120);
   EXPECT_GT(c["pixels"]["fused"].get<std::size_t>(), 6000u);
   EXPECT_EQ(c["pixels"]["occlusion_edges"], 0) << "fusion keeps silhouette pixels";
+  EXPECT_EQ(c["pixels"]["moved_by_smoothing"], 0);
   EXPECT_GT(c["voxels_observed"].get<std::size_t>(), 0u);
   EXPECT_GT(c["cells_meshed"].get<std::size_t>(), 1000u);
   EXPECT_LT(c["cells_left_out"].get<std::size_t>(), c["cells_meshed"].get<std::size_t>() / 20);
@@ -138,6 +139,12 @@ TEST(CliScripting, FusedOrbitReportsWhereTheSurfaceGoes) {
   EXPECT_NE(v.out.find("pixels fused ("), std::string::npos) << v.out;
   EXPECT_NE(v.out.find("at or below --min-weight"), std::string::npos) << v.out;
   EXPECT_EQ(run_cli("run " + dir + "/orbit --fuse --behind 0 -o " + dir + "/b").exit_code, 2);
+  // Smoothing moves depths but drops no pixel.
+  const nlohmann::json smoothed = parse_json(run_cli(
+      "run " + dir + "/orbit --fuse --voxel 0.02 --depth-median 5 --json -o " + dir + "/m"));
+  EXPECT_GT(smoothed["completeness"]["pixels"]["moved_by_smoothing"].get<std::size_t>(), 100u);
+  EXPECT_EQ(smoothed["completeness"]["pixels"]["fused"], c["pixels"]["fused"]);
+  EXPECT_EQ(run_cli("run " + dir + "/orbit --fuse --depth-median 4 -o " + dir + "/x").exit_code, 2);
   // The along-ray integrator: a mesh about as large, from fewer observed voxels.
   nlohmann::json along = parse_json(run_cli("run " + dir +
                                             "/orbit --fuse --voxel 0.02 --integrator along-ray "

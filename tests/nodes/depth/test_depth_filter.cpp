@@ -125,6 +125,14 @@ TEST(DepthFilter, MedianDoesNotInventDepthAndEdgesCanBeOff) {
   EXPECT_EQ(counts.edges, 0u);
   EXPECT_EQ(d.at<float>(0, 0), 0.0f);
   EXPECT_EQ(counts.valid, counts.pixels - 2);
+  // The median moves the pixels along the box's outline (and next to the holes), drops none.
+  EXPECT_GT(counts.smoothed, 0u);
+  EXPECT_LT(counts.smoothed, counts.valid / 2);
+  DepthFilterCounts plain;
+  c.median_kernel = 0;
+  filter_depth(f, c, &plain);
+  EXPECT_EQ(plain.smoothed, 0u);
+  EXPECT_EQ(plain.valid, counts.valid);
 }
 
 }  // namespace

@@ -29,10 +29,11 @@ struct FusedFigures {
 
 // Fuses `sequence` at 1 cm with the given band behind the surface and measures the mesh.
 FusedFigures fuse_and_measure(const io::Sequence& sequence, const synthetic::ClosedObject& object,
-                              float behind_voxels) {
+                              float behind_voxels, bool subpixel_depth = true) {
   FusionConfig config;
   config.tsdf.voxel_size = 0.01f;
   config.tsdf.behind_voxels = behind_voxels;
+  config.tsdf.subpixel_depth = subpixel_depth;
   FusionPipeline pipeline(config, 2);
   const SequenceRunStats stats =
       run_sequence(pipeline, sequence, {}, [](const Frame& f) { ASSERT_TRUE(f.ok()) << f.error; });
@@ -85,6 +86,21 @@ TEST(FusionCompleteness, SharpEdgedObjectIsAsCompleteAndMoreAccurate) {
   const EdgeStatistics edges = edge_statistics(band.mesh);
   EXPECT_EQ(edges.boundary_edges, 0u);  // watertight
   EXPECT_EQ(edges.non_manifold_edges, 0u);
+}
+
+TEST(FusionCompleteness, SubpixelDepthBeatsTheNearestPixelOnASmoothObject) {
+  // The nearest pixel's depth is off by up to half a pixel's depth step wherever the surface is
+  // slanted; correcting it by the depth slope to the voxel's exact projection removes most of
+  // that error (accuracy / completeness 3.5e-4 / 3.3e-4 against 5.7e-4 / 5.4e-4).
+  const synthetic::ClosedObject sphere = synthetic::sphere_object();
+  const auto orbit = small_orbit(sphere);
+  const FusedFigures subpixel = fuse_and_measure(*orbit, sphere, TsdfConfig{}.behind_voxels);
+  const FusedFigures nearest = fuse_and_measure(*orbit, sphere, TsdfConfig{}.behind_voxels, false);
+  std::printf("[ sphere ] subpixel depth: %.2e / %.2e; nearest pixel: %.2e / %.2e\n",
+              subpixel.accuracy, subpixel.completeness, nearest.accuracy, nearest.completeness);
+  EXPECT_LT(subpixel.accuracy, 0.75 * nearest.accuracy);
+  EXPECT_LT(subpixel.completeness, 0.75 * nearest.completeness);
+  EXPECT_EQ(edge_statistics(subpixel.mesh).boundary_edges, 0u);
 }
 
 TEST(FusionCompleteness, TumDirectoryRoundTripFusesLikeTheFramesInMemory) {

@@ -4,20 +4,6 @@
 
 namespace meshflow {
 
-std::size_t bytes_per_pixel(PixelFormat format) {
-  switch (format) {
-    case PixelFormat::U8:
-      return 1;
-    case PixelFormat::U16:
-      return 2;
-    case PixelFormat::F32:
-      return 4;
-    case PixelFormat::RGB8:
-      return 3;
-  }
-  return 1;
-}
-
 const char* pixel_format_name(PixelFormat format) {
   switch (format) {
     case PixelFormat::U8:

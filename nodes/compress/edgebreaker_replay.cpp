@@ -40,7 +40,9 @@ ReverseReplay::ReverseReplay(std::uint32_t components, std::size_t symbols, std:
 }
 
 void ReverseReplay::fail(const std::string& problem) const {
-  throw Error(source_, "connectivity symbol " + std::to_string(index_), problem);
+  // The symbol being undone (index_ - 1), or the first when none is left.
+  throw Error(source_, "connectivity symbol " + std::to_string(index_ == 0 ? 0 : index_ - 1),
+              problem);
 }
 
 inline std::uint32_t ReverseReplay::add_node() {

@@ -35,7 +35,8 @@ class ReverseReplay {
   static constexpr unsigned kContexts = 9 * 9 * kOpCount;
 
   /// `components` components of `symbols` symbols and `vertices` surface vertices, the walk's M
-  /// records `handles` (in walk order). `source` names the data in errors.
+  /// records `handles` (in walk order; read in place, so they must outlive the replay). `source`
+  /// names the data in errors. Throws Error for counts that cannot fit together.
   ReverseReplay(std::uint32_t components, std::size_t symbols, std::size_t vertices,
                 const std::vector<HandleRecord>& handles, std::string source);
 

@@ -183,6 +183,8 @@ struct BlockProjection {
   alignas(32) float v[kTsdfBlockVoxels];
 };
 
+// Fills `out` for the block whose first voxel is `origin` (voxel units). Plain IEEE products and
+// quotients (neither clone contracts to FMA), so every CPU gets the same floats.
 MESHFLOW_AVX2_CLONES void project_block(const Eigen::Vector3i& origin, const BlockUpdate& frame,
                                         BlockProjection& out) {
   static_assert(kTsdfBlockSide == 8, "one 8-wide vector per voxel row");

@@ -102,16 +102,18 @@ void touched_blocks_of_row(int width, int v, const BandGeometry& band,
 }
 
 // Keys of the blocks within the band of the frame's valid pixels, sorted and unique:
-// per row (local buffers, in parallel), then joined in row order. Adds the valid pixels to
-// `pixels_used`.
+// per row (in parallel, into `row_keys`, one buffer per row kept across frames so that their
+// capacity is reused), then joined in row order. Adds the valid pixels to `pixels_used`.
 std::vector<VoxelKey> touched_block_keys(int width, int height, const BandGeometry& band,
                                          const Eigen::Isometry3f& T_world_camera,
+                                         std::vector<std::vector<VoxelKey>>& row_keys,
                                          std::size_t& pixels_used) {
   const auto rows = static_cast<std::size_t>(height);
-  std::vector<std::vector<VoxelKey>> row_keys(rows);
+  row_keys.resize(rows);
   std::vector<std::size_t> row_pixels(rows, 0);
   tbb::parallel_for(0, height, [&](int v) {
     const auto r = static_cast<std::size_t>(v);
+    row_keys[r].clear();
     touched_blocks_of_row(width, v, band, T_world_camera, row_keys[r], row_pixels[r]);
   });
   for (std::size_t pixels : row_pixels) pixels_used += pixels;
@@ -347,8 +349,8 @@ IntegrationStats TsdfVolume::integrate(const DepthFrame& frame) {
     return stats;
   }
   const BandGeometry band{frame.intrinsics, config_, band_pixels_.data()};
-  const std::vector<VoxelKey> keys =
-      touched_block_keys(depth.cols(), depth.rows(), band, frame.T_world_camera, stats.pixels_used);
+  const std::vector<VoxelKey> keys = touched_block_keys(
+      depth.cols(), depth.rows(), band, frame.T_world_camera, row_keys_, stats.pixels_used);
   const std::vector<std::uint32_t> touched = find_or_allocate(keys, stats.blocks_allocated);
   stats.blocks_touched = touched.size();
   stats.voxels_updated = update_blocks(touched, depth, frame);

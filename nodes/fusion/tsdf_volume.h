@@ -191,6 +191,7 @@ class TsdfVolume {
   std::uint64_t generation_ = 0;
   std::vector<float> band_pixels_;   // per pixel of the last frame: depth, band behind (reused)
   std::vector<float> depth_slopes_;  // per pixel of the last frame: depth slopes (reused)
+  std::vector<std::vector<std::uint64_t>> row_keys_;  // per image row: touched block keys (reused)
 };
 
 }  // namespace meshflow

@@ -15,7 +15,6 @@ struct LoopNodes {
   };
   std::vector<Node> nodes;
 
-  std::uint32_t& vertex(std::uint32_t n) { return nodes[n].vertex; }
   std::uint32_t& next(std::uint32_t n) { return nodes[n].next; }
   std::uint32_t& prev(std::uint32_t n) { return nodes[n].prev; }
   std::uint32_t vertex(std::uint32_t n) const { return nodes[n].vertex; }
@@ -70,7 +69,8 @@ class Encoder {
         visited_(s.triangle_count(), 0),
         decoded_(s.vertex_count(), kNone),
         node_of_half_(s.corner_vertex.size(), kNone) {
-    // A node per C, S and M, three per component: at most one per triangle and two more.
+    // A node per C, S and M and three per component: one per triangle and two more per
+    // component (meshes with many components only grow the vectors).
     const std::size_t nodes = s.triangle_count() + 2;
     nodes_.nodes.reserve(nodes);
     half_.reserve(nodes);

@@ -9,7 +9,6 @@
 // loop structure, so an S needs no offset; every M stores its other loop's place and length.
 
 #include <cstdint>
-#include <string>
 #include <vector>
 
 #include "nodes/compress/closed_surface.h"

@@ -23,6 +23,7 @@ FusionPipeline::FusionPipeline(FusionConfig config, std::size_t max_in_flight, T
   map_.set_max_memory_bytes(config_.tsdf.max_memory_bytes);
   map_.set_behind_voxels(config_.tsdf.behind_voxels);
   map_.set_integrator(config_.tsdf.integrator);
+  map_.set_carve_free_space(config_.tsdf.carve_free_space);
   if (map_.config().voxel_size != config_.tsdf.voxel_size) {
     throw Error("fusion", "voxel size",
                 "the map has " + std::to_string(map_.config().voxel_size) + " m voxels, the run " +

@@ -131,30 +131,35 @@ share of the triangles (QEM). Vertex colours when color is given.)");
 
   py::class_<Volume>(m, "TsdfVolume",
                      "A sparse TSDF map (8^3-voxel blocks) that depth frames are fused into.")
-      .def(py::init([](float voxel, float truncation, float behind, float max_weight,
-                       bool fuse_color, const std::string& integrator) {
-             if (integrator != "projective" && integrator != "along-ray")
-               throw Error("TsdfVolume", "integrator",
-                           "must be 'projective' or 'along-ray', not '" + integrator + "'");
-             TsdfConfig c;
-             c.integrator = integrator == "along-ray" ? TsdfIntegrator::kAlongRay
-                                                      : TsdfIntegrator::kProjective;
-             c.voxel_size = voxel;
-             c.truncation_voxels = truncation;
-             c.behind_voxels = std::min(behind, truncation);
-             c.max_weight = max_weight;
-             c.fuse_color = fuse_color;
-             return std::make_unique<Volume>(c);
-           }),
-           py::arg("voxel") = TsdfConfig{}.voxel_size,
-           py::arg("truncation") = TsdfConfig{}.truncation_voxels,
-           py::arg("behind") = TsdfConfig{}.behind_voxels,
-           py::arg("max_weight") = TsdfConfig{}.max_weight,
-           py::arg("fuse_color") = TsdfConfig{}.fuse_color, py::arg("integrator") = "projective",
-           "voxel in metres, truncation in voxels, behind: the least band behind each measured "
-           "surface in voxels (the CLI's run --fuse defaults; behind = truncation: Open3D's "
-           "symmetric band); integrator: 'projective' (each voxel of a touched block projected "
-           "into the image) or 'along-ray' (each pixel's ray walks its band, voxblox-style).")
+      .def(
+          py::init([](float voxel, float truncation, float behind, float max_weight,
+                      bool fuse_color, const std::string& integrator, bool carve) {
+            if (integrator != "projective" && integrator != "along-ray")
+              throw Error("TsdfVolume", "integrator",
+                          "must be 'projective' or 'along-ray', not '" + integrator + "'");
+            TsdfConfig c;
+            c.integrator =
+                integrator == "along-ray" ? TsdfIntegrator::kAlongRay : TsdfIntegrator::kProjective;
+            c.voxel_size = voxel;
+            c.truncation_voxels = truncation;
+            c.behind_voxels = std::min(behind, truncation);
+            c.max_weight = max_weight;
+            c.fuse_color = fuse_color;
+            c.carve_free_space = carve;
+            return std::make_unique<Volume>(c);
+          }),
+          py::arg("voxel") = TsdfConfig{}.voxel_size,
+          py::arg("truncation") = TsdfConfig{}.truncation_voxels,
+          py::arg("behind") = TsdfConfig{}.behind_voxels,
+          py::arg("max_weight") = TsdfConfig{}.max_weight,
+          py::arg("fuse_color") = TsdfConfig{}.fuse_color, py::arg("integrator") = "projective",
+          py::arg("carve") = TsdfConfig{}.carve_free_space,
+          "voxel in metres, truncation in voxels, behind: the least band behind each measured "
+          "surface in voxels (the CLI's run --fuse defaults; behind = truncation: Open3D's "
+          "symmetric band); integrator: 'projective' (each voxel of a touched block projected "
+          "into the image) or 'along-ray' (each pixel's ray walks its band, voxblox-style); carve: "
+          "frames carve existing blocks wholly in the free space they measured (moved objects "
+          "and stray surface leave the map).")
       .def(
           "integrate",
           [](Volume& v, const py::handle& depth, const PinholeIntrinsics& intrinsics,
@@ -171,13 +176,15 @@ share of the triangles (QEM). Vertex colours when color is given.)");
             d["blocks_touched"] = s.blocks_touched;
             d["blocks_allocated"] = s.blocks_allocated;
             d["voxels_updated"] = s.voxels_updated;
+            d["blocks_carved"] = s.blocks_carved;
             return d;
           },
           py::arg("depth"), py::arg("intrinsics"), py::arg("pose") = py::none(),
           py::arg("depth_scale") = 1000.0f, py::arg("color") = py::none(),
           "Fuses one depth frame seen from pose (4 x 4 camera-to-world); returns its counts: "
           "pixels_used, noise_per_depth2 (the frame's estimated depth noise, 1/m), "
-          "blocks_touched, blocks_allocated, voxels_updated.")
+          "blocks_touched, blocks_allocated, voxels_updated, blocks_carved (existing blocks "
+          "updated as the free space the frame saw through).")
       .def(
           "extract",
           [](Volume& v, bool incremental) {

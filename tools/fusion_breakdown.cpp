@@ -20,16 +20,17 @@ void FusionBreakdown::add(const Frame& f) {
   pixels_.smoothed += f.depth_counts.smoothed;
   ++frames_;
   blocks_touched_ += f.integration.blocks_touched;
+  blocks_carved_ += f.integration.blocks_carved;
   voxels_updated_ += f.integration.voxels_updated;
   noise_sum_ += f.integration.noise_per_depth2;
   detail(
       "frame      %s: %zu of %zu pixels fused (%zu unmeasured, %zu out of range, %zu "
-      "occlusion edges); noise %.2e x depth^2; %zu blocks touched, %zu new; %zu voxels "
-      "updated\n",
+      "occlusion edges); noise %.2e x depth^2; %zu blocks touched, %zu new, %zu carved; %zu "
+      "voxels updated\n",
       f.name.c_str(), f.depth_counts.valid, f.depth_counts.pixels, f.depth_counts.invalid,
       f.depth_counts.out_of_range, f.depth_counts.edges,
       static_cast<double>(f.integration.noise_per_depth2), f.integration.blocks_touched,
-      f.integration.blocks_allocated, f.integration.voxels_updated);
+      f.integration.blocks_allocated, f.integration.blocks_carved, f.integration.voxels_updated);
 }
 
 double FusionBreakdown::mean_noise() const {
@@ -46,6 +47,7 @@ nlohmann::json FusionBreakdown::json(const TsdfCellCounts& c) const {
             {"moved_by_smoothing", pixels_.smoothed}}},
           {"noise_per_depth2_mean", mean_noise()},
           {"blocks_touched", blocks_touched_},
+          {"blocks_carved", blocks_carved_},
           {"voxels_updated", voxels_updated_},
           {"voxels_observed", c.voxels_observed},
           {"voxels_below_min_weight", c.voxels_below_weight},
@@ -63,8 +65,8 @@ void FusionBreakdown::print(const TsdfCellCounts& c) const {
       share(pixels_.smoothed, pixels_.pixels));
   report(
       "voxels     %zu observed, %zu at or below --min-weight; depth noise %.2e x depth^2 "
-      "(mean over frames)\n",
-      c.voxels_observed, c.voxels_below_weight, mean_noise());
+      "(mean over frames); %zu blocks carved as free space (summed over frames)\n",
+      c.voxels_observed, c.voxels_below_weight, mean_noise(), blocks_carved_);
   report(
       "cells      %zu meshed (%zu completed behind the surface), %zu left out beside "
       "unobserved space (%.2f %%)\n",

@@ -18,8 +18,8 @@ class FusionBreakdown {
   void add(const Frame& f);
   /// The run's figures with the extraction's cell counts: {"pixels": {"total", "unmeasured",
   /// "out_of_range", "occlusion_edges", "fused", "moved_by_smoothing"}, "noise_per_depth2_mean",
-  /// "blocks_touched", "voxels_updated", "voxels_observed", "voxels_below_min_weight",
-  /// "cells_meshed", "cells_completed_behind", "cells_left_out"}.
+  /// "blocks_touched", "blocks_carved", "voxels_updated", "voxels_observed",
+  /// "voxels_below_min_weight", "cells_meshed", "cells_completed_behind", "cells_left_out"}.
   nlohmann::json json(const TsdfCellCounts& cells) const;
   /// Prints the pixels, voxels and cells lines of the report.
   void print(const TsdfCellCounts& cells) const;
@@ -28,7 +28,7 @@ class FusionBreakdown {
   double mean_noise() const;
 
   DepthFilterCounts pixels_;  // summed over the fused frames
-  std::size_t frames_ = 0, blocks_touched_ = 0, voxels_updated_ = 0;
+  std::size_t frames_ = 0, blocks_touched_ = 0, blocks_carved_ = 0, voxels_updated_ = 0;
   double noise_sum_ = 0.0;  // of the frames' noise_per_depth2
 };
 

@@ -85,6 +85,7 @@ struct RunOptions {
   float truncation_voxels = 4.0f;
   float behind_voxels = TsdfConfig{}.behind_voxels;
   std::string integrator = "projective";  ///< --integrator
+  bool no_carve = false;                  ///< --no-carve
   float min_weight = 0.0f;
   std::string save_map, load_map;
   std::string compress;  ///< --compress method ("" = PLY outputs)
@@ -139,6 +140,7 @@ void run_fusion(const RunOptions& o) {
   config.tsdf.behind_voxels = std::min(o.behind_voxels, o.truncation_voxels);
   config.tsdf.integrator =
       o.integrator == "along-ray" ? TsdfIntegrator::kAlongRay : TsdfIntegrator::kProjective;
+  config.tsdf.carve_free_space = !o.no_carve;
   config.tsdf.max_memory_bytes = config.frames.max_memory_bytes;
   config.mesh_every = o.mesh_every;
   config.min_weight = o.min_weight;
@@ -370,6 +372,11 @@ void add_run_options(CLI::App* cmd) {
                   "its band, pixels in one voxel merged as in voxblox; more accurate, about 2-3x "
                   "slower at 1 cm)")
       ->check(CLI::IsMember({"projective", "along-ray"}))
+      ->needs(fuse);
+  cmd->add_flag("--no-carve", o->no_carve,
+                "With --fuse: keep surface that later frames see through (by default a frame "
+                "carves existing blocks wholly in the free space it measured: moved objects and "
+                "stray surface leave the map)")
       ->needs(fuse);
   cmd->add_option("--min-weight", o->min_weight,
                   "With --fuse: extraction treats voxels of at most this accumulated weight as "

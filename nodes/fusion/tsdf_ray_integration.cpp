@@ -238,8 +238,9 @@ void blend(TsdfVoxel& voxel, float sdf_metres, float truncation, const MergedRay
 
 }  // namespace
 
-void TsdfVolume::integrate_along_rays(const DepthFrame& frame, const Image& depth,
-                                      IntegrationStats& stats) {
+std::vector<std::uint32_t> TsdfVolume::integrate_along_rays(const DepthFrame& frame,
+                                                            const Image& depth,
+                                                            IntegrationStats& stats) {
   const bool color = fuses_color_of(frame, depth);
   const std::vector<MergedRay> rays =
       merged_rays(depth, band_pixels_.data(), frame, color ? &frame.color : nullptr, config_,
@@ -254,8 +255,7 @@ void TsdfVolume::integrate_along_rays(const DepthFrame& frame, const Image& dept
   std::vector<VoxelKey> keys(pairs.size());
   for (std::size_t i = 0; i < pairs.size(); ++i) keys[i] = pairs[i].block;
   radix_sort_unique(keys);
-  const std::vector<std::uint32_t> blocks = find_or_allocate(keys, stats.blocks_allocated);
-  stats.blocks_touched = blocks.size();
+  std::vector<std::uint32_t> blocks = find_or_allocate(keys, stats.blocks_allocated);
 
   // (position of the block among the keys, ray): sorted, the rays of each block in pixel order.
   std::vector<std::uint64_t> block_rays(pairs.size());
@@ -298,6 +298,7 @@ void TsdfVolume::integrate_along_rays(const DepthFrame& frame, const Image& dept
     if (count > 0) block.modified = generation_;
   });
   for (std::size_t c : updated) stats.voxels_updated += c;
+  return blocks;
 }
 
 }  // namespace meshflow

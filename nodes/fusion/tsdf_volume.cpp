@@ -10,10 +10,10 @@
 
 #include "nodes/depth/depth_noise.h"
 #include "nodes/fusion/tsdf_band.h"
+#include "nodes/fusion/tsdf_projective_update.h"
 #include "runtime/error.h"
 #include "runtime/parallel.h"
 #include "runtime/radix_sort.h"
-#include "runtime/simd.h"
 
 namespace meshflow {
 namespace {
@@ -122,144 +122,6 @@ std::vector<VoxelKey> touched_block_keys(int width, int height, const BandGeomet
   return keys;
 }
 
-// Two neighbouring pixels lie on one surface when their depths differ by at most this many
-// pixel footprints (depth / fx): surfaces up to 80 degrees from facing the camera. Measured
-// (Redwood frames and the sphere orbit): 3 footprints gave 3.3335 mm / 4.42e-4 completeness, 6
-// gave 3.3232 mm / 3.34e-4, 8 gave 3.3217 mm / 3.19e-4; beyond that depth edges start to count.
-constexpr float kSlopeFootprints = 6.0f;
-
-// The depth slope at each pixel, in metres per pixel along u and along v: the central
-// difference where both neighbours are valid and within `one_surface` x depth of the pixel (one
-// surface), else the one-sided difference to a neighbour that is, else 0. A voxel reads its
-// nearest pixel's depth corrected by the slope to its exact projection. Layout: (du, dv) per
-// pixel. Parallel over rows; O(pixels).
-void depth_slopes(const std::vector<float>& pixels, int width, int height, float one_surface,
-                  std::vector<float>& slopes) {
-  const auto w = static_cast<std::size_t>(width);
-  slopes.resize(pixels.size());
-  tbb::parallel_for(0, height, [&](int v) {
-    const std::size_t row = static_cast<std::size_t>(v) * w;
-    const float* here = pixels.data() + 2 * row;
-    const float* above = v > 0 ? here - 2 * w : nullptr;
-    const float* below = v + 1 < height ? here + 2 * w : nullptr;
-    float* out = slopes.data() + 2 * row;
-    // Half the difference across both neighbours on d's surface, the difference to the one that
-    // is, or 0.
-    const auto slope = [&](float before, float d, float after) {
-      const float limit = one_surface * d;
-      const bool b = before > 0.0f && std::abs(before - d) <= limit;
-      const bool a = after > 0.0f && std::abs(after - d) <= limit;
-      if (a && b) return 0.5f * (after - before);
-      if (a) return after - d;
-      if (b) return d - before;
-      return 0.0f;
-    };
-    for (std::size_t u = 0; u < w; ++u) {
-      const float d = here[2 * u];
-      if (!(d > 0.0f)) {
-        out[2 * u] = out[2 * u + 1] = 0.0f;
-        continue;
-      }
-      out[2 * u] = slope(u > 0 ? here[2 * u - 2] : 0.0f, d, u + 1 < w ? here[2 * u + 2] : 0.0f);
-      out[2 * u + 1] = slope(above ? above[2 * u] : 0.0f, d, below ? below[2 * u] : 0.0f);
-    }
-  });
-}
-
-// One frame's view of the map's voxels.
-struct BlockUpdate {
-  const float* pixels;  ///< per pixel: depth, band behind it (metres; depth 0 = invalid)
-  int width, height;    ///< of the depth image
-  const float* slopes;  ///< per pixel: depth slopes along u and v (depth_slopes()), or null
-  const Image* color;   ///< RGB8 of the depth's size, or null: no colour fused
-  const PinholeIntrinsics& intrinsics;
-  Eigen::Isometry3f T_camera_world;
-  const TsdfConfig& config;
-};
-
-// Every voxel of a block in the frame's camera: depth z (metres) and image position (uf, vf),
-// voxel i = x + 8 y + 64 z, 8-wide along x (one vector per voxel row; AVX2 where the CPU has it).
-struct BlockProjection {
-  alignas(32) float z[kTsdfBlockVoxels];
-  alignas(32) float u[kTsdfBlockVoxels];
-  alignas(32) float v[kTsdfBlockVoxels];
-};
-
-// Fills `out` for the block whose first voxel is `origin` (voxel units). Plain IEEE products and
-// quotients (neither clone contracts to FMA), so every CPU gets the same floats.
-MESHFLOW_AVX2_CLONES void project_block(const Eigen::Vector3i& origin, const BlockUpdate& frame,
-                                        BlockProjection& out) {
-  static_assert(kTsdfBlockSide == 8, "one 8-wide vector per voxel row");
-  const PinholeIntrinsics& k = frame.intrinsics;
-  const float voxel = frame.config.voxel_size;
-  const Eigen::Matrix3f r = frame.T_camera_world.linear();
-  const Eigen::Vector3f base = frame.T_camera_world * (origin.cast<float>() * voxel);
-  const Eigen::Vector3f step_x = r.col(0) * voxel, step_y = r.col(1) * voxel,
-                        step_z = r.col(2) * voxel;
-  const simd::Floats8 lanes = {0, 1, 2, 3, 4, 5, 6, 7};
-  const simd::Floats8 dx = lanes * step_x.x(), dy = lanes * step_x.y(), dz = lanes * step_x.z();
-  for (int z = 0; z < kTsdfBlockSide; ++z)
-    for (int y = 0; y < kTsdfBlockSide; ++y) {
-      const Eigen::Vector3f row =
-          base + step_y * static_cast<float>(y) + step_z * static_cast<float>(z);
-      const simd::Floats8 pz = row.z() + dz;
-      const simd::Floats8 inv_z = 1.0f / pz;
-      const simd::Floats8 uf = k.fx * (row.x() + dx) * inv_z + k.cx;
-      const simd::Floats8 vf = k.fy * (row.y() + dy) * inv_z + k.cy;
-      const std::size_t i = static_cast<std::size_t>(kTsdfBlockSide * (y + kTsdfBlockSide * z));
-      __builtin_memcpy(out.z + i, &pz, sizeof pz);
-      __builtin_memcpy(out.u + i, &uf, sizeof uf);
-      __builtin_memcpy(out.v + i, &vf, sizeof vf);
-    }
-}
-
-// Projects every voxel of the block into the frame and blends the truncated distance (and
-// colour) of the pixel it lands on into it; voxels outside the image, behind an invalid pixel or
-// farther behind the surface than its band keep their state. Returns the voxels updated.
-std::size_t update_block(TsdfBlock& block, const BlockUpdate& frame) {
-  const std::size_t width = static_cast<std::size_t>(frame.width);
-  const float max_u = static_cast<float>(frame.width) - 0.5f;
-  const float max_v = static_cast<float>(frame.height) - 0.5f;
-  const float truncation = frame.config.truncation();
-  BlockProjection projection;
-  project_block(block.coords * kTsdfBlockSide, frame, projection);
-  std::size_t count = 0;
-  for (std::size_t i = 0; i < kTsdfBlockVoxels; ++i) {
-    const float pz = projection.z[i];
-    if (!(pz > 0.0f)) continue;
-    const float uf = projection.u[i], vf = projection.v[i];
-    if (!(uf > -0.5f && vf > -0.5f && uf < max_u && vf < max_v)) {
-      continue;  // outside the image (or NaN)
-    }
-    const int u = static_cast<int>(uf + 0.5f), v = static_cast<int>(vf + 0.5f);
-    const std::size_t pixel = static_cast<std::size_t>(v) * width + static_cast<std::size_t>(u);
-    float d = frame.pixels[2 * pixel];  // 0 when invalid
-    if (!(d > 0.0f)) continue;
-    if (frame.slopes != nullptr)
-      d += frame.slopes[2 * pixel] * (uf - static_cast<float>(u)) +
-           frame.slopes[2 * pixel + 1] * (vf - static_cast<float>(v));
-    const float sdf = d - pz;
-    if (sdf < -frame.pixels[2 * pixel + 1]) continue;  // hidden behind the surface: unknown
-    TsdfVoxel& vox = block.voxels[i];
-    const float w = observation_weight(frame.config.weighting, d);
-    const float total = vox.weight + w;
-    const float inv_total = 1.0f / total;
-    vox.distance = (vox.distance * vox.weight + std::min(sdf, truncation) * w) * inv_total;
-    if (frame.color != nullptr) {
-      const Rgb8 c = frame.color->at<Rgb8>(v, u);
-      auto blend = [&](std::uint8_t old, std::uint8_t now) {
-        return static_cast<std::uint8_t>(
-            (static_cast<float>(old) * vox.weight + static_cast<float>(now) * w) * inv_total +
-            0.5f);  // round to nearest: the value is >= 0
-      };
-      vox.color = Rgb8{blend(vox.color.r, c.r), blend(vox.color.g, c.g), blend(vox.color.b, c.b)};
-    }
-    vox.weight = std::min(total, frame.config.max_weight);
-    ++count;
-  }
-  return count;
-}
-
 }  // namespace
 
 // Larger voxels are a unit error; they would also put far vertices beyond float's range.
@@ -344,16 +206,18 @@ IntegrationStats TsdfVolume::integrate(const DepthFrame& frame) {
   const Image depth = depth_in_metres(frame);  // checks the frame (intrinsics, pose)
   stats.noise_per_depth2 = estimate_noise_per_depth2(depth);
   band_pixels(depth, frame.intrinsics, config_, stats.noise_per_depth2, band_pixels_);
+  std::vector<std::uint32_t> touched;
   if (config_.integrator == TsdfIntegrator::kAlongRay) {
-    integrate_along_rays(frame, depth, stats);
-    return stats;
+    touched = integrate_along_rays(frame, depth, stats);
+  } else {
+    const BandGeometry band{frame.intrinsics, config_, band_pixels_.data()};
+    const std::vector<VoxelKey> keys = touched_block_keys(
+        depth.cols(), depth.rows(), band, frame.T_world_camera, row_keys_, stats.pixels_used);
+    touched = find_or_allocate(keys, stats.blocks_allocated);
+    stats.voxels_updated = update_blocks(touched, depth, frame);
   }
-  const BandGeometry band{frame.intrinsics, config_, band_pixels_.data()};
-  const std::vector<VoxelKey> keys = touched_block_keys(
-      depth.cols(), depth.rows(), band, frame.T_world_camera, row_keys_, stats.pixels_used);
-  const std::vector<std::uint32_t> touched = find_or_allocate(keys, stats.blocks_allocated);
   stats.blocks_touched = touched.size();
-  stats.voxels_updated = update_blocks(touched, depth, frame);
+  if (config_.carve_free_space) carve_free_blocks(frame, depth, touched, stats);
   return stats;
 }
 

@@ -10,6 +10,7 @@
 #include <unordered_map>
 #include <vector>
 
+#include "nodes/depth/depth_bounds_pyramid.h"
 #include "runtime/depth_frame.h"
 #include "runtime/point_cloud.h"
 #include "runtime/voxel_key.h"
@@ -77,6 +78,17 @@ struct TsdfConfig {
   /// by up to half a pixel's depth step on a slanted surface: the sphere orbit fuses 1.6x less
   /// accurately).
   bool subpixel_depth = true;
+  /// Free-space carving: after its band, a frame also updates the existing blocks that lie wholly
+  /// in the free space it saw (every voxel more than a truncation in front of the depth of every
+  /// pixel the block can project to, all of them measured, the block inside the image) and still
+  /// hold surface (an observed voxel at distance <= 0): their voxels move towards +truncation as
+  /// a projective update moves the free voxels of a touched block. Surface seen once and then
+  /// seen through (a person who walked by, flying pixels, a mis-registered frame) leaves the
+  /// map; surface seen many times outweighs a few frames that miss it. Allocates no block, so
+  /// memory stays bounded by the surface band; unmeasured pixels and depth edges never carve.
+  /// Costs one projected bounding sphere per block per frame. Caveat: structure the sensor
+  /// cannot see (thin wires, glass) is carved by frames that see past it.
+  bool carve_free_space = true;
   /// integrate() refuses a frame whose new blocks would take memory_bytes() past this (bytes;
   /// 0 = no limit): the map stays as it was and the frame's error names the limit.
   std::size_t max_memory_bytes = 0;
@@ -114,7 +126,8 @@ struct IntegrationStats {
   std::size_t pixels_used = 0;       ///< valid depth pixels
   std::size_t blocks_touched = 0;    ///< blocks the truncation band passes through
   std::size_t blocks_allocated = 0;  ///< of which new
-  std::size_t voxels_updated = 0;    ///< voxels whose distance was fused
+  std::size_t voxels_updated = 0;    ///< voxels whose distance was fused (carved ones too)
+  std::size_t blocks_carved = 0;     ///< untouched blocks updated as free space
 };
 
 class TsdfVolume {
@@ -128,12 +141,13 @@ class TsdfVolume {
   /// band touches (the truncation in front of each measurement, config().behind_voxels' rule
   /// behind it; existing blocks looked up in parallel, new ones numbered in key order and zeroed
   /// in parallel), then updates those blocks in parallel, one task per block, as
-  /// config().integrator says. Voxels farther behind the measured depth than the band are left
-  /// alone. Throws meshflow::Error, leaving the map unchanged, when the frame would add more
-  /// than config().max_new_blocks_per_frame blocks or take the map past
-  /// config().max_memory_bytes, and for a pose with NaN entries. The result does not depend on
-  /// the number of threads. Not thread-safe against other calls on the same volume.
-  /// O(pixels + touched blocks x 512) projective; O(pixels x band voxels) along rays.
+  /// config().integrator says, and carves free space (config().carve_free_space). Voxels
+  /// farther behind the measured depth than the band are left alone. Throws meshflow::Error,
+  /// leaving the map unchanged, when the frame would add more than
+  /// config().max_new_blocks_per_frame blocks or take the map past config().max_memory_bytes, and
+  /// for a pose with NaN entries. The result does not depend on the number of threads. Not
+  /// thread-safe against other calls on the same volume. O(pixels + touched blocks x 512)
+  /// projective; O(pixels x band voxels) along rays.
   IntegrationStats integrate(const DepthFrame& frame);
 
   /// The configuration the volume was made with (max_memory_bytes as last set).
@@ -146,6 +160,9 @@ class TsdfVolume {
   /// Sets config().integrator for the frames integrated from now on (a map read from a file
   /// does not record it). O(1).
   void set_integrator(TsdfIntegrator integrator) { config_.integrator = integrator; }
+  /// Sets config().carve_free_space for the frames integrated from now on (not recorded in map
+  /// files either). O(1).
+  void set_carve_free_space(bool carve) { config_.carve_free_space = carve; }
   /// Blocks allocated so far.
   std::size_t block_count() const { return blocks_.size(); }
   /// Bytes held by the blocks and their index.
@@ -179,8 +196,15 @@ class TsdfVolume {
                                               std::size_t& allocated);
   std::size_t update_blocks(const std::vector<std::uint32_t>& touched, const Image& depth,
                             const DepthFrame& frame);
-  // TsdfIntegrator::kAlongRay's phases after the band (tsdf_ray_integration.cpp).
-  void integrate_along_rays(const DepthFrame& frame, const Image& depth, IntegrationStats& stats);
+  // TsdfIntegrator::kAlongRay's phases after the band (tsdf_ray_integration.cpp); returns the
+  // blocks it touched.
+  std::vector<std::uint32_t> integrate_along_rays(const DepthFrame& frame, const Image& depth,
+                                                  IntegrationStats& stats);
+  // config().carve_free_space's phase (tsdf_carving.cpp): the blocks outside `touched` wholly
+  // in the frame's observed free space (band_pixels_) that hold surface take +truncation;
+  // counted in `stats`.
+  void carve_free_blocks(const DepthFrame& frame, const Image& depth,
+                         const std::vector<std::uint32_t>& touched, IntegrationStats& stats);
   // Whether the frame's colour image can be fused with this depth image.
   bool fuses_color_of(const DepthFrame& frame, const Image& depth) const;
 
@@ -192,6 +216,8 @@ class TsdfVolume {
   std::vector<float> band_pixels_;   // per pixel of the last frame: depth, band behind (reused)
   std::vector<float> depth_slopes_;  // per pixel of the last frame: depth slopes (reused)
   std::vector<std::vector<std::uint64_t>> row_keys_;  // per image row: touched block keys (reused)
+  DepthBoundsPyramid depth_bounds_;                   // of the last frame, for carving (reused)
+  std::vector<std::uint8_t> touched_mark_;            // per block: touched by the last frame
 };
 
 }  // namespace meshflow

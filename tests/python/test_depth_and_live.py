@@ -87,6 +87,21 @@ def test_fused_views_close_around_the_sphere():
         meshflow.TsdfVolume(integrator="raycast")
 
 
+def test_surface_seen_through_later_is_carved():
+    wall = np.full((K.height, K.width), 3.0, dtype=np.float32)
+    passer_by = wall.copy()  # something 1.5 m away in the first frame only
+    passer_by[K.height // 3 : 2 * K.height // 3, K.width // 3 : 2 * K.width // 3] = 1.5
+    for carve in (True, False):
+        volume = meshflow.TsdfVolume(voxel=0.03, carve=carve)
+        volume.integrate(passer_by, K)
+        carved = volume.integrate(wall, K)["blocks_carved"]
+        in_front = int((volume.extract().vertices[:, 2] < 2.5).sum())
+        if carve:
+            assert carved > 0 and in_front == 0
+        else:
+            assert carved == 0 and in_front > 100
+
+
 def test_bad_depth_input_is_a_clear_error():
     pose = look_at([0.0, 0.0, -1.2])
     depth = sphere_depth(pose)

@@ -157,6 +157,13 @@ TEST(CliScripting, FusedOrbitReportsWhereTheSurfaceGoes) {
             c["voxels_observed"].get<std::size_t>());
   EXPECT_EQ(run_cli("run " + dir + "/orbit --fuse --integrator raycast -o " + dir + "/r").exit_code,
             2);
+  // Carving is counted, and --no-carve turns it off.
+  EXPECT_TRUE(c["blocks_carved"].is_number_unsigned());
+  const nlohmann::json kept = parse_json(
+      run_cli("run " + dir + "/orbit --fuse --voxel 0.02 --no-carve --json -o " + dir + "/k"));
+  EXPECT_EQ(kept["completeness"]["blocks_carved"], 0);
+  EXPECT_EQ(run_cli("run " + dir + "/orbit --no-carve -o " + dir + "/n").exit_code, 2)
+      << "--no-carve needs --fuse";
 }
 
 TEST(CliScripting, OptimizeAMeshFromAnotherTool) {

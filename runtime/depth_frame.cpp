@@ -1,5 +1,7 @@
 #include "runtime/depth_frame.h"
 
+#include <tbb/parallel_for.h>
+
 #include <cmath>
 #include <string>
 
@@ -31,26 +33,30 @@ void check_depth_frame(const DepthFrame& frame) {
     fail("T_world_camera", "pose has NaN or infinite entries");
 }
 
-Image depth_in_metres(const DepthFrame& frame) {
+void depth_in_metres(const DepthFrame& frame, Image& out) {
   check_depth_frame(frame);
   const Image& in = frame.depth;
-  Image out(in.rows(), in.cols(), PixelFormat::F32);
+  if (!(out.rows() == in.rows() && out.cols() == in.cols() && out.format() == PixelFormat::F32))
+    out = Image(in.rows(), in.cols(), PixelFormat::F32);
   const int cols = in.cols();
-  if (in.format() == PixelFormat::U16) {
-    const float metres_per_unit = static_cast<float>(1.0 / frame.depth_scale);
-    for (int v = 0; v < in.rows(); ++v) {
+  const bool raw16 = in.format() == PixelFormat::U16;
+  const float metres_per_unit = static_cast<float>(1.0 / frame.depth_scale);
+  tbb::parallel_for(0, in.rows(), [&](int v) {
+    float* metres = out.ptr<float>(v);
+    if (raw16) {
       const std::uint16_t* raw = in.ptr<std::uint16_t>(v);
-      float* metres = out.ptr<float>(v);
       for (int u = 0; u < cols; ++u) metres[u] = static_cast<float>(raw[u]) * metres_per_unit;
-    }
-  } else {
-    for (int v = 0; v < in.rows(); ++v) {
+    } else {
       const float* raw = in.ptr<float>(v);
-      float* metres = out.ptr<float>(v);
       for (int u = 0; u < cols; ++u)
         metres[u] = std::isfinite(raw[u]) && raw[u] > 0.0f ? raw[u] : 0.0f;
     }
-  }
+  });
+}
+
+Image depth_in_metres(const DepthFrame& frame) {
+  Image out;
+  depth_in_metres(frame, out);
   return out;
 }
 

@@ -34,5 +34,9 @@ void check_depth_frame(const DepthFrame& frame);
 /// Depth of `frame` in metres as a new F32 image; invalid pixels (0, negative, NaN, infinite)
 /// are 0. Checks the frame first (check_depth_frame()). O(pixels).
 Image depth_in_metres(const DepthFrame& frame);
+/// The same into `out`, whose pixels are reused when it already is an F32 image of the frame's
+/// size (so a caller converting frame after frame allocates once); `out` must not share its
+/// pixels with an image the caller still reads. Parallel over rows; O(pixels).
+void depth_in_metres(const DepthFrame& frame, Image& out);
 
 }  // namespace meshflow

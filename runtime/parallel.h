@@ -27,17 +27,24 @@ T exclusive_scan_in_place(std::vector<T>& counts) {
   return sum;
 }
 
-/// The parts' elements in part order, as one vector (the copies in parallel). T must be
-/// default-constructible. O(total elements).
+/// The parts' elements in part order, into `out` (resized; its capacity reused), the copies in
+/// parallel. T must be default-constructible. O(total elements).
 template <typename T>
-std::vector<T> concatenate_parts(const std::vector<std::vector<T>>& parts) {
+void concatenate_parts(const std::vector<std::vector<T>>& parts, std::vector<T>& out) {
   std::vector<std::size_t> offsets(parts.size());
   for (std::size_t i = 0; i < parts.size(); ++i) offsets[i] = parts[i].size();
-  std::vector<T> out(exclusive_scan_in_place(offsets));
+  out.resize(exclusive_scan_in_place(offsets));
   tbb::parallel_for(std::size_t{0}, parts.size(), [&](std::size_t i) {
     std::copy(parts[i].begin(), parts[i].end(),
               out.begin() + static_cast<std::ptrdiff_t>(offsets[i]));
   });
+}
+
+/// The parts' elements in part order, as one new vector. O(total elements).
+template <typename T>
+std::vector<T> concatenate_parts(const std::vector<std::vector<T>>& parts) {
+  std::vector<T> out;
+  concatenate_parts(parts, out);
   return out;
 }
 

@@ -238,9 +238,8 @@ void blend(TsdfVoxel& voxel, float sdf_metres, float truncation, const MergedRay
 
 }  // namespace
 
-std::vector<std::uint32_t> TsdfVolume::integrate_along_rays(const DepthFrame& frame,
-                                                            const Image& depth,
-                                                            IntegrationStats& stats) {
+void TsdfVolume::integrate_along_rays(const DepthFrame& frame, const Image& depth,
+                                      IntegrationStats& stats) {
   const bool color = fuses_color_of(frame, depth);
   const std::vector<MergedRay> rays =
       merged_rays(depth, band_pixels_.data(), frame, color ? &frame.color : nullptr, config_,
@@ -255,7 +254,8 @@ std::vector<std::uint32_t> TsdfVolume::integrate_along_rays(const DepthFrame& fr
   std::vector<VoxelKey> keys(pairs.size());
   for (std::size_t i = 0; i < pairs.size(); ++i) keys[i] = pairs[i].block;
   radix_sort_unique(keys);
-  std::vector<std::uint32_t> blocks = find_or_allocate(keys, stats.blocks_allocated);
+  find_or_allocate(keys, stats.blocks_allocated, touched_);
+  const std::vector<std::uint32_t>& blocks = touched_;
 
   // (position of the block among the keys, ray): sorted, the rays of each block in pixel order.
   std::vector<std::uint64_t> block_rays(pairs.size());
@@ -298,7 +298,6 @@ std::vector<std::uint32_t> TsdfVolume::integrate_along_rays(const DepthFrame& fr
     if (count > 0) block.modified = generation_;
   });
   for (std::size_t c : updated) stats.voxels_updated += c;
-  return blocks;
 }
 
 }  // namespace meshflow

@@ -1,9 +1,12 @@
 #include "nodes/fusion/tsdf_volume.h"
 
+#include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_reduce.h>
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <new>
 #include <string>
 #include <type_traits>
@@ -101,13 +104,14 @@ void touched_blocks_of_row(int width, int v, const BandGeometry& band,
   }
 }
 
-// Keys of the blocks within the band of the frame's valid pixels, sorted and unique:
-// per row (in parallel, into `row_keys`, one buffer per row kept across frames so that their
-// capacity is reused), then joined in row order. Adds the valid pixels to `pixels_used`.
-std::vector<VoxelKey> touched_block_keys(int width, int height, const BandGeometry& band,
-                                         const Eigen::Isometry3f& T_world_camera,
-                                         std::vector<std::vector<VoxelKey>>& row_keys,
-                                         std::size_t& pixels_used) {
+// Keys of the blocks within the band of the frame's valid pixels, sorted and unique, into
+// `keys`: per row (in parallel, into `row_keys`, one buffer per row), then joined in row order;
+// the buffers are kept across frames so that their capacity is reused. Adds the valid pixels to
+// `pixels_used`.
+void touched_block_keys(int width, int height, const BandGeometry& band,
+                        const Eigen::Isometry3f& T_world_camera,
+                        std::vector<std::vector<VoxelKey>>& row_keys, std::vector<VoxelKey>& keys,
+                        std::size_t& pixels_used) {
   const auto rows = static_cast<std::size_t>(height);
   row_keys.resize(rows);
   std::vector<std::size_t> row_pixels(rows, 0);
@@ -117,9 +121,8 @@ std::vector<VoxelKey> touched_block_keys(int width, int height, const BandGeomet
     touched_blocks_of_row(width, v, band, T_world_camera, row_keys[r], row_pixels[r]);
   });
   for (std::size_t pixels : row_pixels) pixels_used += pixels;
-  std::vector<VoxelKey> keys = concatenate_parts(row_keys);
+  concatenate_parts(row_keys, keys);
   radix_sort_unique(keys);
-  return keys;
 }
 
 }  // namespace
@@ -203,29 +206,29 @@ void TsdfVolume::insert_block(const Eigen::Vector3i& coords,
 
 IntegrationStats TsdfVolume::integrate(const DepthFrame& frame) {
   IntegrationStats stats;
-  const Image depth = depth_in_metres(frame);  // checks the frame (intrinsics, pose)
+  depth_in_metres(frame, depth_m_);  // checks the frame (intrinsics, pose)
+  const Image& depth = depth_m_;
   stats.noise_per_depth2 = estimate_noise_per_depth2(depth);
   band_pixels(depth, frame.intrinsics, config_, stats.noise_per_depth2, band_pixels_);
-  std::vector<std::uint32_t> touched;
   if (config_.integrator == TsdfIntegrator::kAlongRay) {
-    touched = integrate_along_rays(frame, depth, stats);
+    integrate_along_rays(frame, depth, stats);  // fills touched_
   } else {
     const BandGeometry band{frame.intrinsics, config_, band_pixels_.data()};
-    const std::vector<VoxelKey> keys = touched_block_keys(
-        depth.cols(), depth.rows(), band, frame.T_world_camera, row_keys_, stats.pixels_used);
-    touched = find_or_allocate(keys, stats.blocks_allocated);
-    stats.voxels_updated = update_blocks(touched, depth, frame);
+    touched_block_keys(depth.cols(), depth.rows(), band, frame.T_world_camera, row_keys_, keys_,
+                       stats.pixels_used);
+    find_or_allocate(keys_, stats.blocks_allocated, touched_);
+    stats.voxels_updated = update_blocks(touched_, depth, frame);
   }
-  stats.blocks_touched = touched.size();
-  if (config_.carve_free_space) carve_free_blocks(frame, depth, touched, stats);
+  stats.blocks_touched = touched_.size();
+  if (config_.carve_free_space) carve_free_blocks(frame, depth, touched_, stats);
   return stats;
 }
 
-std::vector<std::uint32_t> TsdfVolume::find_or_allocate(const std::vector<VoxelKey>& keys,
-                                                        std::size_t& allocated) {
+void TsdfVolume::find_or_allocate(const std::vector<VoxelKey>& keys, std::size_t& allocated,
+                                  std::vector<std::uint32_t>& blocks) {
   // Existing blocks are looked up in parallel (the index is only read); kNewBlock marks the rest.
   constexpr std::uint32_t kNewBlock = ~std::uint32_t{0};
-  std::vector<std::uint32_t> blocks(keys.size());
+  blocks.resize(keys.size());
   tbb::parallel_for(std::size_t{0}, keys.size(), [&](std::size_t i) {
     const auto it = index_.find(keys[i]);
     blocks[i] = it != index_.end() ? it->second : kNewBlock;
@@ -256,12 +259,11 @@ std::vector<std::uint32_t> TsdfVolume::find_or_allocate(const std::vector<VoxelK
   fresh.reserve(new_blocks);
   for (std::size_t i = 0; i < keys.size(); ++i)
     if (blocks[i] == kNewBlock) fresh.push_back(unpack_key(keys[i]));
-  if (fresh.empty()) return blocks;
+  if (fresh.empty()) return;
   std::uint32_t next = allocate(fresh);
   for (std::uint32_t& b : blocks)
     if (b == kNewBlock) b = next++;
   allocated += fresh.size();
-  return blocks;
 }
 
 bool TsdfVolume::fuses_color_of(const DepthFrame& frame, const Image& depth) const {
@@ -286,15 +288,18 @@ std::size_t TsdfVolume::update_blocks(const std::vector<std::uint32_t>& touched,
                            frame.intrinsics,
                            frame.T_world_camera.inverse(),
                            config_};
-  std::vector<std::size_t> updated(touched.size(), 0);
-  tbb::parallel_for(std::size_t{0}, touched.size(), [&](std::size_t t) {
-    TsdfBlock& block = *blocks_[touched[t]];
-    updated[t] = update_block(block, update);
-    if (updated[t] > 0) block.modified = generation_;
-  });
-  std::size_t total = 0;
-  for (std::size_t c : updated) total += c;
-  return total;
+  return tbb::parallel_reduce(
+      tbb::blocked_range<std::size_t>(0, touched.size()), std::size_t{0},
+      [&](const tbb::blocked_range<std::size_t>& range, std::size_t sum) {
+        for (std::size_t t = range.begin(); t != range.end(); ++t) {
+          TsdfBlock& block = *blocks_[touched[t]];
+          const std::size_t updated = update_block(block, update);
+          if (updated > 0) block.modified = generation_;
+          sum += updated;
+        }
+        return sum;
+      },
+      std::plus<>());
 }
 
 }  // namespace meshflow

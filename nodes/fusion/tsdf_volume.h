@@ -189,17 +189,16 @@ class TsdfVolume {
   // Appends blocks with these coordinates (zeroed in parallel, in one slab), numbered in order;
   // returns the first one's number.
   std::uint32_t allocate(const std::vector<Eigen::Vector3i>& coords);
-  // integrate()'s phases after the touched blocks' keys: their block numbers (allocating the
-  // new ones, counted in `allocated`), then the update of their voxels (returns the voxels
-  // updated).
-  std::vector<std::uint32_t> find_or_allocate(const std::vector<VoxelKey>& keys,
-                                              std::size_t& allocated);
+  // integrate()'s phases after the touched blocks' keys: their block numbers into `blocks`
+  // (allocating the new ones, counted in `allocated`), then the update of their voxels (returns
+  // the voxels updated).
+  void find_or_allocate(const std::vector<VoxelKey>& keys, std::size_t& allocated,
+                        std::vector<std::uint32_t>& blocks);
   std::size_t update_blocks(const std::vector<std::uint32_t>& touched, const Image& depth,
                             const DepthFrame& frame);
-  // TsdfIntegrator::kAlongRay's phases after the band (tsdf_ray_integration.cpp); returns the
-  // blocks it touched.
-  std::vector<std::uint32_t> integrate_along_rays(const DepthFrame& frame, const Image& depth,
-                                                  IntegrationStats& stats);
+  // TsdfIntegrator::kAlongRay's phases after the band (tsdf_ray_integration.cpp); the blocks it
+  // touched into touched_.
+  void integrate_along_rays(const DepthFrame& frame, const Image& depth, IntegrationStats& stats);
   // config().carve_free_space's phase (tsdf_carving.cpp): the blocks outside `touched` wholly
   // in the frame's observed free space (band_pixels_) that hold surface take +truncation;
   // counted in `stats`.
@@ -216,8 +215,13 @@ class TsdfVolume {
   std::vector<float> band_pixels_;   // per pixel of the last frame: depth, band behind (reused)
   std::vector<float> depth_slopes_;  // per pixel of the last frame: depth slopes (reused)
   std::vector<std::vector<std::uint64_t>> row_keys_;  // per image row: touched block keys (reused)
-  DepthBoundsPyramid depth_bounds_;                   // of the last frame, for carving (reused)
-  std::vector<std::uint8_t> touched_mark_;            // per block: touched by the last frame
+  // Per-frame scratch, kept so that its capacity is reused: the frame's depth in metres, the
+  // touched blocks' keys and numbers.
+  Image depth_m_;
+  std::vector<VoxelKey> keys_;
+  std::vector<std::uint32_t> touched_;
+  DepthBoundsPyramid depth_bounds_;         // of the last frame, for carving (reused)
+  std::vector<std::uint8_t> touched_mark_;  // per block: touched by the last frame
 };
 
 }  // namespace meshflow

@@ -158,8 +158,8 @@ share of the triangles (QEM). Vertex colours when color is given.)");
           "surface in voxels (the CLI's run --fuse defaults; behind = truncation: Open3D's "
           "symmetric band); integrator: 'projective' (each voxel of a touched block projected "
           "into the image) or 'along-ray' (each pixel's ray walks its band, voxblox-style); carve: "
-          "frames carve existing blocks wholly in the free space they measured (moved objects "
-          "and stray surface leave the map).")
+          "frames carve existing surface where they measured free space a truncation behind it "
+          "(moved objects and stray surface leave the map).")
       .def(
           "integrate",
           [](Volume& v, const py::handle& depth, const PinholeIntrinsics& intrinsics,

@@ -375,8 +375,8 @@ void add_run_options(CLI::App* cmd) {
       ->needs(fuse);
   cmd->add_flag("--no-carve", o->no_carve,
                 "With --fuse: keep surface that later frames see through (by default a frame "
-                "carves existing blocks wholly in the free space it measured: moved objects and "
-                "stray surface leave the map)")
+                "carves existing surface where it measured free space a truncation behind it: "
+                "moved objects and stray surface leave the map)")
       ->needs(fuse);
   cmd->add_option("--min-weight", o->min_weight,
                   "With --fuse: extraction treats voxels of at most this accumulated weight as "

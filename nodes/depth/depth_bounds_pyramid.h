@@ -28,6 +28,11 @@ class DepthBoundsPyramid {
   /// as the rectangle, so they may include pixels up to the rectangle's size (rounded up to a
   /// power of two, at least 2) beyond it: min is at most, max at least the rectangle's own. O(1).
   DepthBounds bounds_over(int u0, int v0, int u1, int v1) const;
+  /// The bounds over the whole image (after build(); zeros before). O(1).
+  DepthBounds whole_image() const {
+    return levels_.empty() || levels_.back().bounds.empty() ? DepthBounds{}
+                                                            : levels_.back().bounds[0];
+  }
 
  private:
   struct Level {

@@ -6,14 +6,14 @@
 // depth over rectangles). In those, a voxel inside the image is carved when every pixel its
 // cell can project to is measured and lies more than a truncation behind it (the pyramid's
 // lower bound over the cell's rectangle, a pixel wider each side, clipped to the image): the
-// projective update's free-space value,
-// +truncation, blends into it, colour untouched. Depth edges and unmeasured pixels near a voxel
-// stop its carving. Each block is decided from its own state and the frame alone, so the map
-// does not depend on the number of threads.
+// projective update's free-space value, +truncation, blends into it, colour untouched. Depth
+// edges and unmeasured pixels near a voxel stop its carving. Each block is decided from its own
+// state and the frame alone, so the map does not depend on the number of threads.
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_reduce.h>
 
+#include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
 #include <functional>
@@ -36,11 +36,10 @@ bool holds_surface(const TsdfBlock& block) {
 }
 
 // The pixels [u0, u1] x [v0, v1] that a sphere of `radius` around the camera-frame point `p`
-// can project to (nearest-pixel rounding), clipped to the image; false when it reaches behind
-// (or up to) the camera or misses the image. `whole` says whether clipping left it intact.
+// can project to (nearest-pixel rounding), clipped to the image; false when it comes within half
+// its radius of the camera's plane (or behind it) or misses the image.
 struct PixelRect {
   int u0, v0, u1, v1;
-  bool whole;
 };
 bool sphere_pixels(const Eigen::Vector3f& p, float radius, const BlockUpdate& frame,
                    PixelRect& rect) {
@@ -57,12 +56,28 @@ bool sphere_pixels(const Eigen::Vector3f& p, float radius, const BlockUpdate& fr
   const float v_hi = k.cy + k.fy * std::max(y1 / near, y1 / far) + 0.5f;
   const auto width = static_cast<float>(frame.width), height = static_cast<float>(frame.height);
   if (!(u_hi >= 0.0f && v_hi >= 0.0f && u_lo < width && v_lo < height)) return false;
-  rect.whole = u_lo >= 0.0f && v_lo >= 0.0f && u_hi < width && v_hi < height;
   rect.u0 = static_cast<int>(std::max(u_lo, 0.0f));
   rect.v0 = static_cast<int>(std::max(v_lo, 0.0f));
   rect.u1 = static_cast<int>(std::min(u_hi, width - 1.0f));
   rect.v1 = static_cast<int>(std::min(v_hi, height - 1.0f));
   return true;
+}
+
+// Block coordinates lo..hi (inclusive) of a box around the camera's view up to `deepest`
+// metres: the camera and its image corners at that depth span the frustum.
+struct BlockBox {
+  Eigen::Vector3i lo, hi;
+};
+BlockBox frustum_blocks(const DepthFrame& frame, float deepest, float voxel) {
+  const PinholeIntrinsics& k = frame.intrinsics;
+  Eigen::AlignedBox3f box(frame.T_world_camera.translation());
+  for (const float u : {-0.5f, static_cast<float>(k.width) - 0.5f})
+    for (const float v : {-0.5f, static_cast<float>(k.height) - 0.5f})
+      box.extend(frame.T_world_camera *
+                 (Eigen::Vector3f((u - k.cx) / k.fx, (v - k.cy) / k.fy, 1.0f) * deepest));
+  // A carved voxel's sample point lies in the box; one block more each way is margin.
+  return {tsdf_block_of_voxel(cell_of(box.min(), voxel)) - Eigen::Vector3i::Ones(),
+          tsdf_block_of_voxel(cell_of(box.max(), voxel)) + Eigen::Vector3i::Ones()};
 }
 
 // The weight a carved voxel at depth `voxel_depth` takes from a frame measuring
@@ -117,6 +132,9 @@ void TsdfVolume::carve_free_blocks(const DepthFrame& frame, const Image& depth,
                                    const std::vector<std::uint32_t>& touched,
                                    IntegrationStats& stats) {
   depth_bounds_.build(band_pixels_.data(), 2, depth.cols(), depth.rows());
+  const float deepest = depth_bounds_.whole_image().max;
+  if (!(deepest > 0.0f)) return;  // nothing measured: nothing seen free
+  const BlockBox frustum = frustum_blocks(frame, deepest, config_.voxel_size);
   touched_mark_.assign(blocks_.size(), 0);
   for (std::uint32_t b : touched) touched_mark_[b] = 1;
   const BlockUpdate view{band_pixels_.data(),
@@ -136,6 +154,9 @@ void TsdfVolume::carve_free_blocks(const DepthFrame& frame, const Image& depth,
         for (std::size_t b = range.begin(); b != range.end(); ++b) {
           if (touched_mark_[b]) continue;
           TsdfBlock& block = *blocks_[b];
+          if ((block.coords.array() < frustum.lo.array()).any() ||
+              (block.coords.array() > frustum.hi.array()).any())
+            continue;
           const Eigen::Vector3f first =
               block.coords.cast<float>() * static_cast<float>(kTsdfBlockSide);
           const Eigen::Vector3f centre =

@@ -78,16 +78,17 @@ struct TsdfConfig {
   /// by up to half a pixel's depth step on a slanted surface: the sphere orbit fuses 1.6x less
   /// accurately).
   bool subpixel_depth = true;
-  /// Free-space carving: after its band, a frame also updates the existing blocks that lie wholly
-  /// in the free space it saw (every voxel more than a truncation in front of the depth of every
-  /// pixel the block can project to, all of them measured, the block inside the image) and still
-  /// hold surface (an observed voxel at distance <= 0): their voxels move towards +truncation as
-  /// a projective update moves the free voxels of a touched block. Surface seen once and then
-  /// seen through (a person who walked by, flying pixels, a mis-registered frame) leaves the
-  /// map; surface seen many times outweighs a few frames that miss it. Allocates no block, so
-  /// memory stays bounded by the surface band; unmeasured pixels and depth edges never carve.
-  /// Costs one projected bounding sphere per block per frame. Caveat: structure the sensor
-  /// cannot see (thin wires, glass) is carved by frames that see past it.
+  /// Free-space carving: after its band, a frame also visits the existing blocks it did not
+  /// touch that hold surface (an observed voxel at distance <= 0), and a voxel there inside the
+  /// image takes +truncation, as a projective update gives the free voxels of a touched block,
+  /// when every pixel its cell can project to (a pixel wider each side) is measured and lies more
+  /// than a truncation behind it. Surface seen once and then seen through (a person who walked
+  /// by, flying pixels, a mis-registered frame) leaves the map; surface seen n times needs frames
+  /// seeing through it in proportion to n. Allocates no block, so memory stays bounded by the
+  /// surface band; unmeasured pixels and depth edges (a nearer object's outline) carve nothing.
+  /// Costs a min/max depth pyramid and one projected bounding sphere per untouched block per
+  /// frame. Caveat: structure the sensor cannot see (thin wires, glass) is carved by frames
+  /// that see past it.
   bool carve_free_space = true;
   /// integrate() refuses a frame whose new blocks would take memory_bytes() past this (bytes;
   /// 0 = no limit): the map stays as it was and the frame's error names the limit.
@@ -199,9 +200,9 @@ class TsdfVolume {
   // TsdfIntegrator::kAlongRay's phases after the band (tsdf_ray_integration.cpp); the blocks it
   // touched into touched_.
   void integrate_along_rays(const DepthFrame& frame, const Image& depth, IntegrationStats& stats);
-  // config().carve_free_space's phase (tsdf_carving.cpp): the blocks outside `touched` wholly
-  // in the frame's observed free space (band_pixels_) that hold surface take +truncation;
-  // counted in `stats`.
+  // config().carve_free_space's phase (tsdf_carving.cpp): in the blocks outside `touched` that
+  // hold surface, the voxels in the frame's observed free space (band_pixels_) take
+  // +truncation; counted in `stats`.
   void carve_free_blocks(const DepthFrame& frame, const Image& depth,
                          const std::vector<std::uint32_t>& touched, IntegrationStats& stats);
   // Whether the frame's colour image can be fused with this depth image.

@@ -73,6 +73,9 @@ TEST(DepthBoundsPyramid, RebuildsForANewImageOfAnotherSize) {
   EXPECT_EQ(pyramid.bounds_over(0, 0, 1, 0).max, 5.0f);
   EXPECT_EQ(pyramid.bounds_over(0, 0, 2, 0).min, 3.0f);
   EXPECT_EQ(pyramid.bounds_over(2, 0, 2, 0).max, 3.0f);  // its 2 x 2 tile holds only itself
+  EXPECT_EQ(pyramid.whole_image().min, 3.0f);
+  EXPECT_EQ(pyramid.whole_image().max, 5.0f);
+  EXPECT_EQ(DepthBoundsPyramid().whole_image().max, 0.0f);
 }
 
 }  // namespace

@@ -15,6 +15,7 @@
 #include <string>
 
 #include "nodes/fusion/tsdf_band.h"
+#include "nodes/fusion/tsdf_ray_scratch.h"
 #include "nodes/fusion/tsdf_volume.h"
 #include "runtime/error.h"
 #include "runtime/parallel.h"
@@ -22,23 +23,6 @@
 
 namespace meshflow {
 namespace {
-
-// Pixels of a tile whose points fall in one voxel, as one ray.
-struct MergedRay {
-  Eigen::Vector3f point_sum = Eigen::Vector3f::Zero();  // world metres
-  std::array<float, 3> color_sum{};                     // RGB, 0..255
-  float weight = 0.0f;                                  // sum of observation weights
-  float band = 0.0f;                                    // behind the point, metres (largest)
-  std::uint32_t pixels = 0;
-  Eigen::Vector3i voxel;  // the voxel nearest its pixels' points
-};
-
-// A ray's segment in voxel units: from `truncation` in front of its mean point (not behind the
-// camera) to its band behind it, with the unit direction from the camera.
-struct RaySegment {
-  Eigen::Vector3f point, direction, from, to;  // point, from, to in voxel units
-  float band = 0.0f;                           // voxel units
-};
 
 RaySegment segment_of(const MergedRay& ray, const Eigen::Vector3f& camera, float inv_voxel,
                       float truncation) {
@@ -164,38 +148,37 @@ void rays_of_tile_row(int tile_row, const Image& depth, const float* band_pixels
   }
 }
 
-// Every ray of the frame in tile order (tile rows in parallel, then joined).
-std::vector<MergedRay> merged_rays(const Image& depth, const float* band_pixels,
-                                   const DepthFrame& frame, const Image* color,
-                                   const TsdfConfig& config, std::size_t& pixels_used) {
+// Every ray of the frame in tile order into `rays` (tile rows in parallel into `row_rays`,
+// then joined).
+void merged_rays(const Image& depth, const float* band_pixels, const DepthFrame& frame,
+                 const Image* color, const TsdfConfig& config,
+                 std::vector<std::vector<MergedRay>>& row_rays, std::vector<MergedRay>& rays,
+                 std::size_t& pixels_used) {
   const int tile_rows = (depth.rows() + kTile - 1) / kTile;
   const auto rows = static_cast<std::size_t>(tile_rows);
-  std::vector<std::vector<MergedRay>> row_rays(rows);
+  row_rays.resize(rows);
   std::vector<std::size_t> row_pixels(rows, 0);
   const float inv_voxel = 1.0f / config.voxel_size;
   tbb::parallel_for(0, tile_rows, [&](int t) {
     const auto r = static_cast<std::size_t>(t);
+    row_rays[r].clear();
     rays_of_tile_row(t, depth, band_pixels, frame.intrinsics, frame.T_world_camera, color,
                      config.weighting, inv_voxel, row_rays[r], row_pixels[r]);
   });
   for (std::size_t pixels : row_pixels) pixels_used += pixels;
-  return concatenate_parts(row_rays);
+  concatenate_parts(row_rays, rays);
 }
-
-// A block a ray crosses.
-struct RayBlock {
-  VoxelKey block;
-  std::uint32_t ray;
-};
 
 constexpr std::size_t kRaysPerTask = 2048;
 
-// The (block, ray) pairs of every ray's segment, rays in fixed slices (parallel); throws when a
-// ray reaches outside the volume's range.
-std::vector<RayBlock> blocks_crossed(const std::vector<RaySegment>& segments) {
+// The (block, ray) pairs of every ray's segment into `pairs`, rays in fixed slices (parallel,
+// into `per_slice`); throws when a ray reaches outside the volume's range.
+void blocks_crossed(const std::vector<RaySegment>& segments,
+                    std::vector<std::vector<RayBlock>>& per_slice, std::vector<RayBlock>& pairs) {
   const std::size_t slices = (segments.size() + kRaysPerTask - 1) / kRaysPerTask;
-  std::vector<std::vector<RayBlock>> per_slice(slices);
+  per_slice.resize(slices);
   tbb::parallel_for(std::size_t{0}, slices, [&](std::size_t slice) {
+    per_slice[slice].clear();
     const std::size_t end = std::min(segments.size(), (slice + 1) * kRaysPerTask);
     for (std::size_t r = slice * kRaysPerTask; r < end; ++r) {
       const RaySegment& s = segments[r];
@@ -213,7 +196,7 @@ std::vector<RayBlock> blocks_crossed(const std::vector<RaySegment>& segments) {
       });
     }
   });
-  return concatenate_parts(per_slice);
+  concatenate_parts(per_slice, pairs);
 }
 
 // Blends one ray's distance (metres, clipped to the truncation) and colour into a voxel.
@@ -240,39 +223,44 @@ void blend(TsdfVoxel& voxel, float sdf_metres, float truncation, const MergedRay
 
 void TsdfVolume::integrate_along_rays(const DepthFrame& frame, const Image& depth,
                                       IntegrationStats& stats) {
+  RayScratch& x = ray_scratch_;
   const bool color = fuses_color_of(frame, depth);
-  const std::vector<MergedRay> rays =
-      merged_rays(depth, band_pixels_.data(), frame, color ? &frame.color : nullptr, config_,
-                  stats.pixels_used);
+  merged_rays(depth, band_pixels_.data(), frame, color ? &frame.color : nullptr, config_,
+              x.tile_row_rays, x.rays, stats.pixels_used);
+  const std::vector<MergedRay>& rays = x.rays;
   const Eigen::Vector3f camera = frame.T_world_camera.translation();
   const float inv_voxel = 1.0f / config_.voxel_size, truncation = config_.truncation();
-  std::vector<RaySegment> segments(rays.size());
+  x.segments.resize(rays.size());
   tbb::parallel_for(std::size_t{0}, rays.size(), [&](std::size_t r) {
-    segments[r] = segment_of(rays[r], camera, inv_voxel, truncation);
+    x.segments[r] = segment_of(rays[r], camera, inv_voxel, truncation);
   });
-  std::vector<RayBlock> pairs = blocks_crossed(segments);
-  std::vector<VoxelKey> keys(pairs.size());
+  const std::vector<RaySegment>& segments = x.segments;
+  blocks_crossed(segments, x.slice_pairs, x.pairs);
+  const std::vector<RayBlock>& pairs = x.pairs;
+  std::vector<VoxelKey>& keys = keys_;
+  keys.resize(pairs.size());
   for (std::size_t i = 0; i < pairs.size(); ++i) keys[i] = pairs[i].block;
   radix_sort_unique(keys);
   find_or_allocate(keys, stats.blocks_allocated, touched_);
   const std::vector<std::uint32_t>& blocks = touched_;
 
   // (position of the block among the keys, ray): sorted, the rays of each block in pixel order.
-  std::vector<std::uint64_t> block_rays(pairs.size());
+  std::vector<std::uint64_t>& block_rays = x.block_rays;
+  block_rays.resize(pairs.size());
   tbb::parallel_for(std::size_t{0}, pairs.size(), [&](std::size_t i) {
     const auto at = std::lower_bound(keys.begin(), keys.end(), pairs[i].block) - keys.begin();
     block_rays[i] = (static_cast<std::uint64_t>(at) << 32) | pairs[i].ray;
   });
-  pairs = {};
   radix_sort(block_rays);
-  std::vector<std::size_t> starts(keys.size() + 1, block_rays.size());  // every key has a ray
+  std::vector<std::size_t>& starts = x.starts;
+  starts.assign(keys.size() + 1, block_rays.size());  // every key has a ray
   for (std::size_t i = 0; i < block_rays.size(); ++i) {
     const std::size_t b = block_rays[i] >> 32;
     if (i == 0 || (block_rays[i - 1] >> 32) != b) starts[b] = i;
   }
 
   ++generation_;
-  std::vector<std::size_t> updated(keys.size(), 0);
+  x.updated.assign(keys.size(), 0);
   tbb::parallel_for(std::size_t{0}, keys.size(), [&](std::size_t b) {
     TsdfBlock& block = *blocks_[blocks[b]];
     const Eigen::Vector3i origin = block.coords * kTsdfBlockSide;
@@ -294,10 +282,10 @@ void TsdfVolume::integrate_along_rays(const DepthFrame& frame, const Image& dept
         ++count;
       });
     }
-    updated[b] = count;
+    x.updated[b] = count;
     if (count > 0) block.modified = generation_;
   });
-  for (std::size_t c : updated) stats.voxels_updated += c;
+  for (std::size_t c : x.updated) stats.voxels_updated += c;
 }
 
 }  // namespace meshflow

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "nodes/depth/depth_bounds_pyramid.h"
+#include "nodes/fusion/tsdf_ray_scratch.h"
 #include "runtime/depth_frame.h"
 #include "runtime/point_cloud.h"
 #include "runtime/voxel_key.h"
@@ -217,10 +218,11 @@ class TsdfVolume {
   std::vector<float> depth_slopes_;  // per pixel of the last frame: depth slopes (reused)
   std::vector<std::vector<std::uint64_t>> row_keys_;  // per image row: touched block keys (reused)
   // Per-frame scratch, kept so that its capacity is reused: the frame's depth in metres, the
-  // touched blocks' keys and numbers.
+  // touched blocks' keys and numbers, the along-ray integrator's lists.
   Image depth_m_;
   std::vector<VoxelKey> keys_;
   std::vector<std::uint32_t> touched_;
+  RayScratch ray_scratch_;
   DepthBoundsPyramid depth_bounds_;         // of the last frame, for carving (reused)
   std::vector<std::uint8_t> touched_mark_;  // per block: touched by the last frame
 };

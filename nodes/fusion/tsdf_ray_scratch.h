@@ -1,0 +1,51 @@
+#pragma once
+// The along-ray integrator's rays and per-frame lists (tsdf_ray_integration.cpp); TsdfVolume
+// keeps a RayScratch across frames so that the lists' capacity is reused. Internal to
+// nodes/fusion.
+
+#include <Eigen/Core>
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+#include "runtime/voxel_key.h"
+
+namespace meshflow {
+
+/// Pixels of a tile whose points fall in one voxel, as one ray.
+struct MergedRay {
+  Eigen::Vector3f point_sum = Eigen::Vector3f::Zero();  ///< world metres
+  std::array<float, 3> color_sum{};                     ///< RGB, 0..255
+  float weight = 0.0f;                                  ///< sum of observation weights
+  float band = 0.0f;                                    ///< behind the point, metres (largest)
+  std::uint32_t pixels = 0;                             ///< merged pixels
+  Eigen::Vector3i voxel;                                ///< the voxel nearest its pixels' points
+};
+
+/// A ray's segment in voxel units: from `truncation` in front of its mean point (not behind the
+/// camera) to its band behind it, with the unit direction from the camera.
+struct RaySegment {
+  Eigen::Vector3f point, direction, from, to;  ///< point, from, to in voxel units
+  float band = 0.0f;                           ///< voxel units
+};
+
+/// A block a ray crosses.
+struct RayBlock {
+  VoxelKey block;     ///< pack_key() of its coordinates
+  std::uint32_t ray;  ///< index into RayScratch::segments
+};
+
+/// One frame's lists of the along-ray integration, cleared and refilled every frame.
+struct RayScratch {
+  std::vector<std::vector<MergedRay>> tile_row_rays;  ///< per row of 8 x 8 pixel tiles
+  std::vector<MergedRay> rays;                        ///< joined in tile order
+  std::vector<RaySegment> segments;                   ///< per ray
+  std::vector<std::vector<RayBlock>> slice_pairs;     ///< (block, ray) per slice of rays
+  std::vector<RayBlock> pairs;                        ///< joined in ray order
+  std::vector<std::uint64_t> block_rays;              ///< (block position, ray), sorted
+  std::vector<std::size_t> starts;                    ///< per block: its first entry in block_rays
+  std::vector<std::size_t> updated;                   ///< per block: voxels updated
+};
+
+}  // namespace meshflow

@@ -6,8 +6,9 @@
 // depth over rectangles). In those, a voxel inside the image is carved when every pixel its
 // cell can project to is measured and lies more than a truncation behind it (the pyramid's
 // lower bound over the cell's rectangle, a pixel wider each side, clipped to the image): the
-// projective update's free-space value, +truncation, blends into it, colour untouched. Depth
-// edges and unmeasured pixels near a voxel stop its carving. Each block is decided from its own
+// projective update's free-space value, +truncation, blends into it, colour untouched (voxels
+// seen free already, at +truncation, are left as they are). Depth edges and unmeasured pixels
+// near a voxel stop its carving. Each block is decided from its own
 // state and the frame alone, so the map does not depend on the number of threads.
 
 #include <tbb/blocked_range.h>
@@ -102,6 +103,8 @@ std::size_t carve_block(TsdfBlock& block, const BlockUpdate& frame,
   const auto width = static_cast<float>(frame.width), height = static_cast<float>(frame.height);
   std::size_t carved = 0;
   for (std::size_t i = 0; i < kTsdfBlockVoxels; ++i) {
+    TsdfVoxel& v = block.voxels[i];
+    if (v.weight > 0.0f && !(v.distance < truncation)) continue;  // seen free already
     const float pz = projection.z[i];
     if (!(pz > 2.0f * cell_radius)) continue;
     // As the projective update: the voxel's own position must fall inside the image; its
@@ -116,7 +119,6 @@ std::size_t carve_block(TsdfBlock& block, const BlockUpdate& frame,
                                           static_cast<int>(std::min(vf + r, height - 1.0f)))
                              .min;
     if (!(behind >= pz + truncation)) continue;
-    TsdfVoxel& v = block.voxels[i];
     const float w = carving_weight(frame, behind, pz);
     const float total = v.weight + w;
     v.distance = (v.distance * v.weight + truncation * w) / total;

@@ -81,15 +81,15 @@ struct TsdfConfig {
   bool subpixel_depth = true;
   /// Free-space carving: after its band, a frame also visits the existing blocks it did not
   /// touch that hold surface (an observed voxel at distance <= 0), and a voxel there inside the
-  /// image takes +truncation, as a projective update gives the free voxels of a touched block,
-  /// when every pixel its cell can project to (a pixel wider each side) is measured and lies more
-  /// than a truncation behind it. Surface seen once and then seen through (a person who walked
-  /// by, flying pixels, a mis-registered frame) leaves the map; surface seen n times needs frames
-  /// seeing through it in proportion to n. Allocates no block, so memory stays bounded by the
-  /// surface band; unmeasured pixels and depth edges (a nearer object's outline) carve nothing.
-  /// Costs a min/max depth pyramid and one projected bounding sphere per untouched block per
-  /// frame. Caveat: structure the sensor cannot see (thin wires, glass) is carved by frames
-  /// that see past it.
+  /// image, not already at +truncation, takes +truncation, as a projective update gives the free
+  /// voxels of a touched block, when every pixel its cell can project to (a pixel wider each
+  /// side) is measured and lies more than a truncation behind it. Surface seen once and then seen
+  /// through (a person who walked by, flying pixels, a mis-registered frame) leaves the map;
+  /// surface seen n times needs frames seeing through it in proportion to n. Allocates no block, so
+  /// memory stays bounded by the surface band; unmeasured pixels and depth edges (a nearer object's
+  /// outline) carve nothing. Costs a min/max depth pyramid and one projected bounding sphere per
+  /// untouched block per frame. Caveat: structure the sensor cannot see (thin wires, glass) is
+  /// carved by frames that see past it.
   bool carve_free_space = true;
   /// integrate() refuses a frame whose new blocks would take memory_bytes() past this (bytes;
   /// 0 = no limit): the map stays as it was and the frame's error names the limit.

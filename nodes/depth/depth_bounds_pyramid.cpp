@@ -11,55 +11,48 @@ DepthBounds merged(const DepthBounds& a, const DepthBounds& b) {
   return {std::min(a.min, b.min), std::max(a.max, b.max)};
 }
 
+// Fills `coarse` with the bounds over 2 x 2 cells of a width x height grid whose cell (u, v) is
+// at(u, v) (cells past the last row or column repeat it). Parallel over rows.
+template <class At>
+void halve(int width, int height, const At& at, int& coarse_width, int& coarse_height,
+           std::vector<DepthBounds>& coarse) {
+  coarse_width = (width + 1) / 2;
+  coarse_height = (height + 1) / 2;
+  coarse.resize(static_cast<std::size_t>(coarse_width) * static_cast<std::size_t>(coarse_height));
+  tbb::parallel_for(0, coarse_height, [&](int v) {
+    const int v0 = 2 * v, v1 = std::min(v0 + 1, height - 1);
+    DepthBounds* out =
+        coarse.data() + static_cast<std::size_t>(v) * static_cast<std::size_t>(coarse_width);
+    for (int u = 0; u < coarse_width; ++u) {
+      const int u0 = 2 * u, u1 = std::min(u0 + 1, width - 1);
+      out[u] = merged(merged(at(u0, v0), at(u1, v0)), merged(at(u0, v1), at(u1, v1)));
+    }
+  });
+}
+
 }  // namespace
 
 void DepthBoundsPyramid::build(const float* depth, std::size_t stride, int width, int height) {
   if (levels_.empty()) levels_.emplace_back();
   // The finest level: 2 x 2 pixel tiles, read from the strided image.
-  Level& base = levels_[0];
-  base.width = (width + 1) / 2;
-  base.height = (height + 1) / 2;
-  base.bounds.resize(static_cast<std::size_t>(base.width) * static_cast<std::size_t>(base.height));
   const auto pixel = [&](int u, int v) {
     const float d = depth[stride * (static_cast<std::size_t>(v) * static_cast<std::size_t>(width) +
                                     static_cast<std::size_t>(u))];
     const float measured = d > 0.0f ? d : 0.0f;  // NaN too
     return DepthBounds{measured, measured};
   };
-  tbb::parallel_for(0, base.height, [&](int v) {
-    const int v1 = std::min(2 * v + 1, height - 1);
-    DepthBounds* out =
-        base.bounds.data() + static_cast<std::size_t>(v) * static_cast<std::size_t>(base.width);
-    for (int u = 0; u < base.width; ++u) {
-      const int u1 = std::min(2 * u + 1, width - 1);
-      out[u] = merged(merged(pixel(2 * u, 2 * v), pixel(u1, 2 * v)),
-                      merged(pixel(2 * u, v1), pixel(u1, v1)));
-    }
-  });
+  Level& base = levels_[0];
+  halve(width, height, pixel, base.width, base.height, base.bounds);
   std::size_t count = 1;
   while (levels_[count - 1].width > 1 || levels_[count - 1].height > 1) {
     if (levels_.size() == count) levels_.emplace_back();
     const Level& fine = levels_[count - 1];
+    const auto cell = [&](int u, int v) {
+      return fine.bounds[static_cast<std::size_t>(v) * static_cast<std::size_t>(fine.width) +
+                         static_cast<std::size_t>(u)];
+    };
     Level& coarse = levels_[count];
-    coarse.width = (fine.width + 1) / 2;
-    coarse.height = (fine.height + 1) / 2;
-    coarse.bounds.resize(static_cast<std::size_t>(coarse.width) *
-                         static_cast<std::size_t>(coarse.height));
-    tbb::parallel_for(0, coarse.height, [&](int v) {
-      const int v1 = std::min(2 * v + 1, fine.height - 1);
-      const auto fine_row = [&](int r) {
-        return fine.bounds.data() +
-               static_cast<std::size_t>(r) * static_cast<std::size_t>(fine.width);
-      };
-      const DepthBounds* top = fine_row(2 * v);
-      const DepthBounds* bottom = fine_row(v1);
-      DepthBounds* out = coarse.bounds.data() +
-                         static_cast<std::size_t>(v) * static_cast<std::size_t>(coarse.width);
-      for (int u = 0; u < coarse.width; ++u) {
-        const int u1 = std::min(2 * u + 1, fine.width - 1);
-        out[u] = merged(merged(top[2 * u], top[u1]), merged(bottom[2 * u], bottom[u1]));
-      }
-    });
+    halve(fine.width, fine.height, cell, coarse.width, coarse.height, coarse.bounds);
     ++count;
   }
   levels_.resize(count);

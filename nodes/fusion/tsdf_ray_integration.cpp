@@ -6,11 +6,14 @@
 // integrator; (3) one task per block applies the rays crossing it in pixel order, so the map
 // does not depend on the number of threads.
 
+#include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_reduce.h>
 
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <functional>
 #include <limits>
 #include <string>
 
@@ -260,8 +263,8 @@ void TsdfVolume::integrate_along_rays(const DepthFrame& frame, const Image& dept
   }
 
   ++generation_;
-  x.updated.assign(keys.size(), 0);
-  tbb::parallel_for(std::size_t{0}, keys.size(), [&](std::size_t b) {
+  // Applies block b's rays in pixel order; returns the voxels it updated.
+  const auto apply_rays = [&](std::size_t b) {
     TsdfBlock& block = *blocks_[blocks[b]];
     const Eigen::Vector3i origin = block.coords * kTsdfBlockSide;
     std::size_t count = 0;
@@ -282,10 +285,16 @@ void TsdfVolume::integrate_along_rays(const DepthFrame& frame, const Image& dept
         ++count;
       });
     }
-    x.updated[b] = count;
     if (count > 0) block.modified = generation_;
-  });
-  for (std::size_t c : x.updated) stats.voxels_updated += c;
+    return count;
+  };
+  stats.voxels_updated += tbb::parallel_reduce(
+      tbb::blocked_range<std::size_t>(0, keys.size()), std::size_t{0},
+      [&](const tbb::blocked_range<std::size_t>& range, std::size_t sum) {
+        for (std::size_t b = range.begin(); b != range.end(); ++b) sum += apply_rays(b);
+        return sum;
+      },
+      std::plus<>());
 }
 
 }  // namespace meshflow

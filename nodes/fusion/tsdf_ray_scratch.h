@@ -45,7 +45,6 @@ struct RayScratch {
   std::vector<RayBlock> pairs;                        ///< joined in ray order
   std::vector<std::uint64_t> block_rays;              ///< (block position, ray), sorted
   std::vector<std::size_t> starts;                    ///< per block: its first entry in block_rays
-  std::vector<std::size_t> updated;                   ///< per block: voxels updated
 };
 
 }  // namespace meshflow

@@ -50,6 +50,7 @@ ReconstructionConfig chunk_stage_config(const ReconstructionConfig& config, floa
   c.voxelize.voxel_size = voxel_size;
   c.optimize.steps.clear();
   c.compression = MeshCompression::kNone;
+  c.normals.may_be_camera_view = false;  // a chunk is a piece of a larger cloud, never one view
   return c;
 }
 

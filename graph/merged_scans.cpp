@@ -20,6 +20,7 @@ void ScanPreparationPipeline::run(const std::function<FramePtr()>& next,
 
 void append_scan(PointCloud& into, const PointCloud& scan) {
   const bool colors = scan.has_colors() && (into.positions.empty() || into.has_colors());
+  into.z_up = scan.z_up && (into.positions.empty() || into.z_up);
   if (into.positions.empty()) into.origin = scan.origin;
   // Georeferenced scans may each have their own local origin: moved into `into`'s.
   const Eigen::Vector3f shift = (scan.origin - into.origin).cast<float>();

@@ -13,10 +13,10 @@
 #include <vector>
 
 #include "nodes/triangulate/depth_triangulation.h"
+#include "options/pipeline_options.h"
 #include "runtime/depth_frame.h"
 #include "runtime/point_cloud.h"
 #include "runtime/triangle_mesh.h"
-#include "tools/pipeline_options.h"
 
 namespace meshflow::python {
 
@@ -95,6 +95,12 @@ inline std::vector<Item> copy_rows(
 Cloud make_cloud(const py::handle& points, const py::object& normals, const py::object& colors,
                  const py::object& sensor_origin);
 
+/// A Mesh from (v, 3) vertices, (t, 3) vertex indices and optional (v, 3) normals and colours
+/// (0-255), copied. ValueError naming the array for a wrong shape, a non-finite vertex, an index
+/// out of range or a row count that does not match (python/module.cpp).
+Mesh make_mesh(const py::handle& vertices, const py::handle& triangles, const py::object& normals,
+               const py::object& colors);
+
 /// A depth frame from NumPy: `depth` (h, w) uint16 (1/depth_scale metres, 0 = none) or float
 /// (metres, 0 or NaN = none), `intrinsics` of the same size, `pose` a 4 x 4 camera-to-world
 /// matrix (None: identity), `color` None or (h, w, 3) uint8. Copies the pixels. ValueError
@@ -105,8 +111,9 @@ DepthFrame make_depth_frame(const py::handle& depth, const PinholeIntrinsics& in
 
 /// The CLI's pipeline options from keyword arguments (`voxel`, `kn`, `extract`, `optimize`,
 /// `normal_source` for --normals, `orient`, ... : option_list()); the rest keep the CLI's
-/// defaults. TypeError for an unknown keyword or a value of the wrong type (python/options.cpp).
-cli::PipelineOptions pipeline_options(const py::kwargs& kwargs);
+/// defaults. TypeError for an unknown keyword or a value of the wrong type, ValueError with the
+/// option model's message for a value out of range (python/options.cpp).
+options::PipelineOptions pipeline_options(const py::kwargs& kwargs);
 
 /// "the CLI's options, with its defaults: voxel=0.0, kn=10, ...", for messages and docstrings.
 std::string option_list();

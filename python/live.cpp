@@ -171,7 +171,7 @@ keywords, as reconstruct()'s.)")
             }
             if (frames_in_flight < 1 || max_waiting < 1)
               throw py::value_error("frames_in_flight and max_waiting: at least 1");
-            const cli::PipelineOptions o = pipeline_options(options);  // TypeError if unknown
+            const options::PipelineOptions o = pipeline_options(options);  // TypeError if unknown
             try {
               c.reconstruction = o.config();
             } catch (const std::exception& e) {  // a malformed orient, extract, optimize, ...

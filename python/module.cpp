@@ -25,9 +25,50 @@
 #include "runtime/error.h"
 #include "runtime/threads.h"
 #include "tools/eval_report.h"
-#include "tools/pipeline_options.h"
 
 namespace meshflow::python {
+
+namespace {
+
+// Optional (n, 3) normals; ValueError for another row count (`items`: "points", "vertices").
+std::vector<Eigen::Vector3f> normal_rows(const py::object& normals, std::size_t n,
+                                         const char* items) {
+  if (normals.is_none()) return {};
+  std::vector<Eigen::Vector3f> rows =
+      copy_rows<Eigen::Vector3f>(rows_of_three<float>(normals, "normals"));
+  if (rows.size() != n)
+    throw py::value_error("normals: " + std::to_string(rows.size()) + " rows for " +
+                          std::to_string(n) + " " + items);
+  return rows;
+}
+
+// Optional (n, 3) colours 0-255; ValueError for floats, values outside 0-255 or another row
+// count.
+std::vector<Rgb8> color_rows(const py::object& colors, std::size_t n, const char* items) {
+  if (colors.is_none()) return {};
+  // Float colours are usually in [0, 1]: a cast to uint8 would turn them into 0 and 1.
+  const py::array given = py::array::ensure(colors);
+  if (given && given.dtype().kind() == 'f')
+    throw py::value_error("colors: expected integers 0-255 (uint8), got " +
+                          std::string(py::str(given.dtype())) +
+                          " (multiply colours in [0, 1] by 255)");
+  // Read wide, so that 256 or -1 is an error instead of wrapping round.
+  const auto wide = rows_of_three<std::int64_t>(colors, "colors");
+  std::vector<Rgb8> rows(static_cast<std::size_t>(wide.shape(0)));
+  const std::int64_t* v = wide.data();
+  for (std::size_t i = 0; i < rows.size(); ++i, v += 3) {
+    if (std::min({v[0], v[1], v[2]}) < 0 || std::max({v[0], v[1], v[2]}) > 255)
+      throw py::value_error("colors: row " + std::to_string(i) + " has a value outside 0-255");
+    rows[i] = {static_cast<std::uint8_t>(v[0]), static_cast<std::uint8_t>(v[1]),
+               static_cast<std::uint8_t>(v[2])};
+  }
+  if (rows.size() != n)
+    throw py::value_error("colors: " + std::to_string(rows.size()) + " rows for " +
+                          std::to_string(n) + " " + items);
+  return rows;
+}
+
+}  // namespace
 
 Cloud make_cloud(const py::handle& points, const py::object& normals, const py::object& colors,
                  const py::object& sensor_origin) {
@@ -35,33 +76,8 @@ Cloud make_cloud(const py::handle& points, const py::object& normals, const py::
   PointCloud& c = *cloud.data;
   c.positions = copy_rows<Eigen::Vector3f>(rows_of_three<float>(points, "points"));
   const std::size_t n = c.positions.size();
-  if (!normals.is_none()) {
-    c.normals = copy_rows<Eigen::Vector3f>(rows_of_three<float>(normals, "normals"));
-    if (c.normals.size() != n)
-      throw py::value_error("normals: " + std::to_string(c.normals.size()) + " rows for " +
-                            std::to_string(n) + " points");
-  }
-  if (!colors.is_none()) {
-    // Float colours are usually in [0, 1]: a cast to uint8 would turn them into 0 and 1.
-    const py::array given = py::array::ensure(colors);
-    if (given && given.dtype().kind() == 'f')
-      throw py::value_error("colors: expected integers 0-255 (uint8), got " +
-                            std::string(py::str(given.dtype())) +
-                            " (multiply colours in [0, 1] by 255)");
-    // Read wide, so that 256 or -1 is an error instead of wrapping round.
-    const auto wide = rows_of_three<std::int64_t>(colors, "colors");
-    c.colors.resize(static_cast<std::size_t>(wide.shape(0)));
-    const std::int64_t* v = wide.data();
-    for (std::size_t i = 0; i < c.colors.size(); ++i, v += 3) {
-      if (std::min({v[0], v[1], v[2]}) < 0 || std::max({v[0], v[1], v[2]}) > 255)
-        throw py::value_error("colors: row " + std::to_string(i) + " has a value outside 0-255");
-      c.colors[i] = {static_cast<std::uint8_t>(v[0]), static_cast<std::uint8_t>(v[1]),
-                     static_cast<std::uint8_t>(v[2])};
-    }
-    if (c.colors.size() != n)
-      throw py::value_error("colors: " + std::to_string(c.colors.size()) + " rows for " +
-                            std::to_string(n) + " points");
-  }
+  c.normals = normal_rows(normals, n, "points");
+  c.colors = color_rows(colors, n, "points");
   if (!sensor_origin.is_none()) {
     const auto s = sensor_origin.cast<std::vector<float>>();
     if (s.size() != 3 || !std::isfinite(s[0]) || !std::isfinite(s[1]) || !std::isfinite(s[2]))
@@ -72,12 +88,38 @@ Cloud make_cloud(const py::handle& points, const py::object& normals, const py::
   return cloud;
 }
 
+Mesh make_mesh(const py::handle& vertices, const py::handle& triangles, const py::object& normals,
+               const py::object& colors) {
+  Mesh mesh;
+  TriangleMesh& m = *mesh.data;
+  m.vertices = copy_rows<Eigen::Vector3f>(rows_of_three<float>(vertices, "vertices"));
+  const std::size_t n = m.vertices.size();
+  for (std::size_t i = 0; i < n; ++i)
+    if (!m.vertices[i].allFinite())
+      throw py::value_error("vertices: row " + std::to_string(i) + " is not finite");
+  // Read wide, so that -1 or 2^32 is an error instead of wrapping round.
+  const auto wide = rows_of_three<std::int64_t>(triangles, "triangles");
+  m.triangles.resize(static_cast<std::size_t>(wide.shape(0)));
+  const std::int64_t* t = wide.data();
+  for (std::size_t i = 0; i < m.triangles.size(); ++i, t += 3) {
+    for (int k = 0; k < 3; ++k) {
+      if (t[k] < 0 || static_cast<std::uint64_t>(t[k]) >= n)
+        throw py::value_error("triangles: row " + std::to_string(i) + " refers to vertex " +
+                              std::to_string(t[k]) + " of " + std::to_string(n));
+      m.triangles[i][k] = static_cast<std::uint32_t>(t[k]);
+    }
+  }
+  m.normals = normal_rows(normals, n, "vertices");
+  m.colors = color_rows(colors, n, "vertices");
+  return mesh;
+}
+
 namespace {
 
 // reconstruct(): a Cloud, or points with optional normals and colours, through the CLI's
 // pipeline with the CLI's option names.
 Mesh reconstruct(const py::object& input, const py::object& normals, const py::object& colors,
-                 const cli::PipelineOptions& options) {
+                 const options::PipelineOptions& options) {
   const Cloud cloud = py::isinstance<Cloud>(input) ? input.cast<Cloud>()
                                                    : make_cloud(input, normals, colors, py::none());
   if (py::isinstance<Cloud>(input) && !(normals.is_none() && colors.is_none()))
@@ -85,9 +127,7 @@ Mesh reconstruct(const py::object& input, const py::object& normals, const py::o
   ReconstructionConfig config;
   try {
     config = options.config();
-  } catch (const CLI::Error& e) {  // a malformed orient or max_memory
-    throw py::value_error(e.what());
-  } catch (const Error& e) {  // an unknown extract method or optimize step
+  } catch (const Error& e) {  // checked when set; kept for a value changed since
     throw py::value_error(e.what());
   }
   FramePtr frame;
@@ -175,6 +215,16 @@ PYBIND11_MODULE(meshflow, m) {
       });
 
   py::class_<Mesh>(m, "Mesh", "A triangle mesh: vertices in metres, triangles as vertex indices.")
+      .def(py::init([](const py::handle& vertices, const py::handle& triangles,
+                       const py::object& normals, const py::object& colors) {
+             return make_mesh(vertices, triangles, normals, colors);
+           }),
+           py::arg("vertices"), py::arg("triangles"), py::arg("normals") = py::none(),
+           py::arg("colors") = py::none(),
+           "A mesh from arrays (e.g. an Open3D mesh's np.asarray(vertices), "
+           "np.asarray(triangles)): vertices (v, 3) metres, triangles (t, 3) vertex indices, "
+           "optional normals (v, 3) and colours (v, 3) 0-255; copied. ValueError naming the "
+           "array for a wrong shape, a non-finite vertex or an index out of range.")
       .def_property_readonly(
           "vertices",
           [](py::object self) {

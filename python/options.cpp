@@ -1,96 +1,85 @@
-// The CLI's pipeline options as Python keyword arguments: one table, so reconstruct() and
+// The option model (options/pipeline_options.h) as Python keyword arguments: reconstruct() and
 // Pipeline() accept every option `meshflow reconstruct` has, under its name (dashes as
 // underscores; --normals is normal_source, the normals argument being the array), with its
-// default.
+// default, checked by the same checks with the same messages.
 
 #include <pybind11/stl.h>
 
-#include <functional>
 #include <string>
-#include <vector>
+#include <type_traits>
+#include <variant>
 
 #include "python/bindings.h"
 
 namespace meshflow::python {
 namespace {
 
-struct Option {
-  const char* name;
-  std::function<void(cli::PipelineOptions&, const py::handle&)> set;
-  std::function<py::object(const cli::PipelineOptions&)> get;
-};
+using options::OptionSpec;
+using options::PipelineOptions;
 
-template <typename T>
-Option option(const char* name, T cli::PipelineOptions::*member) {
-  return {name,
-          [member, name](cli::PipelineOptions& o, const py::handle& value) {
-            try {
-              o.*member = value.cast<T>();
-            } catch (const py::cast_error&) {
-              throw py::type_error(std::string(name) + ": expected a value like " +
-                                   std::string(py::repr(py::cast(cli::PipelineOptions{}.*member))) +
-                                   ", got " + std::string(py::repr(value)));
-            }
-          },
-          [member](const cli::PipelineOptions& o) { return py::cast(o.*member); }};
+const OptionSpec* find_spec(const std::string& name) {
+  for (const OptionSpec& spec : options::pipeline_option_specs())
+    if (options::python_name(spec) == name) return &spec;
+  return nullptr;
 }
 
-const std::vector<Option>& options() {
-  using O = cli::PipelineOptions;
-  static const std::vector<Option> table = {
-      option("voxel", &O::voxel),
-      option("kn", &O::kn),
-      option("ki", &O::ki),
-      option("kd", &O::kd),
-      option("threads", &O::threads),
-      option("adaptive_k", &O::adaptive_k),
-      option("max_distance", &O::max_distance),
-      option("max_disagreement", &O::max_disagreement),
-      option("max_extrapolation", &O::max_extrapolation),
-      option("min_component", &O::min_component),
-      option("filter_voxel", &O::filter_voxel),
-      option("outlier_k", &O::outlier_k),
-      option("min_range", &O::min_range),
-      option("max_range", &O::max_range),
-      option("extract", &O::extract),
-      option("optimize", &O::optimize),
-      option("max_hole", &O::max_hole),
-      option("decimate_to", &O::decimate_to),
-      option("contour_tolerance", &O::contour_tolerance),
-      option("max_projection", &O::max_projection),
-      option("plane_tolerance", &O::plane_tolerance),
-      option("max_rim", &O::max_rim),
-      option("remesh_tolerance", &O::remesh_tolerance),
-      option("organized_as_depth", &O::organized_as_depth),
-      option("normal_source", &O::normals),
-      option("orient", &O::orient),
-      option("max_memory", &O::max_memory),
-  };
-  return table;
+// Stores `value` in the spec's field of `o`: TypeError for a value of another type, ValueError
+// with the model's message for one that fails the check.
+void set_option(const OptionSpec& spec, PipelineOptions& o, const py::handle& value) {
+  const std::string name = options::python_name(spec);
+  std::visit(
+      [&](auto member) {
+        using T = std::remove_reference_t<decltype(o.*member)>;
+        // bool and str only from their own types; numbers from ints and floats (not bools).
+        const bool right_type =
+            std::is_same_v<T, bool>          ? py::isinstance<py::bool_>(value)
+            : std::is_same_v<T, std::string> ? py::isinstance<py::str>(value)
+            : std::is_floating_point_v<T>
+                ? (py::isinstance<py::float_>(value) || py::isinstance<py::int_>(value)) &&
+                      !py::isinstance<py::bool_>(value)
+                : py::isinstance<py::int_>(value) && !py::isinstance<py::bool_>(value);
+        if (!right_type)
+          throw py::type_error(name + ": expected a value like " +
+                               std::string(py::repr(py::cast(PipelineOptions{}.*member))) +
+                               ", got " + std::string(py::repr(value)));
+        if constexpr (std::is_integral_v<T> && !std::is_same_v<T, bool>) {
+          // Range first: a negative count or one past the type is the model's error, not a cast's.
+          const auto wide = value.cast<long long>();
+          if (wide < 0 && std::is_unsigned_v<T>)
+            throw py::value_error(name + ": expected a whole number >= 0, got " +
+                                  std::to_string(wide));
+          o.*member = static_cast<T>(wide);
+        } else {
+          o.*member = value.cast<T>();
+        }
+      },
+      spec.field);
+  const std::string problem = spec.check(o);
+  if (!problem.empty()) throw py::value_error(name + ": " + problem);
 }
 
 }  // namespace
 
-cli::PipelineOptions pipeline_options(const py::kwargs& kwargs) {
-  cli::PipelineOptions o;
+PipelineOptions pipeline_options(const py::kwargs& kwargs) {
+  PipelineOptions o;
   for (const auto& [key, value] : kwargs) {
     const std::string name = py::str(key);
-    const Option* found = nullptr;
-    for (const Option& candidate : options())
-      if (name == candidate.name) found = &candidate;
-    if (found == nullptr)
+    const OptionSpec* spec = find_spec(name);
+    if (spec == nullptr)
       throw py::type_error("unexpected keyword argument '" + name + "'; " + option_list());
-    found->set(o, value);
+    set_option(*spec, o, value);
   }
   return o;
 }
 
 std::string option_list() {
-  const cli::PipelineOptions defaults;
+  const PipelineOptions defaults;
   std::string out = "the CLI's options, with its defaults:";
   const char* separator = " ";
-  for (const Option& option : options()) {
-    out += separator + std::string(option.name) + "=" + std::string(py::repr(option.get(defaults)));
+  for (const OptionSpec& spec : options::pipeline_option_specs()) {
+    const std::string value = std::visit(
+        [&](auto member) { return std::string(py::repr(py::cast(defaults.*member))); }, spec.field);
+    out += separator + options::python_name(spec) + "=" + value;
     separator = ", ";
   }
   return out;

@@ -22,10 +22,15 @@ PointCloud select_points(const PointCloud& cloud, const std::vector<std::uint32_
   gather(cloud.normals, indices, out.normals);
   gather(cloud.colors, indices, out.colors);
   gather(cloud.intensities, indices, out.intensities);
-  out.sensor_origin = cloud.sensor_origin;
-  out.origin = cloud.origin;
-  out.has_sensor_origin = cloud.has_sensor_origin;
+  copy_frame_description(cloud, out);
   return out;
+}
+
+void copy_frame_description(const PointCloud& from, PointCloud& to) {
+  to.sensor_origin = from.sensor_origin;
+  to.origin = from.origin;
+  to.has_sensor_origin = from.has_sensor_origin;
+  to.z_up = from.z_up;
 }
 
 std::size_t count_finite_points(const PointCloud& cloud) {

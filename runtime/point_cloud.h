@@ -27,6 +27,9 @@ struct PointCloud {
   /// every mesh made of them) are relative to. Zero for everything else.
   Eigen::Vector3d origin = Eigen::Vector3d::Zero();
   bool has_sensor_origin = false;
+  /// The format fixes +z as up (LAS: heights above a datum), so normals of a scene without a
+  /// sensor position are turned up rather than outward (NormalOrientation::kAuto).
+  bool z_up = false;
 
   /// Number of points.
   std::size_t size() const { return positions.size(); }
@@ -43,6 +46,10 @@ struct PointCloud {
     return height > 1 && static_cast<std::size_t>(width) * height == positions.size();
   }
 };
+
+/// Copies what `from` says of its frame and sensor (origin, sensor_origin, has_sensor_origin,
+/// z_up) to `to`, points untouched. O(1).
+void copy_frame_description(const PointCloud& from, PointCloud& to);
 
 /// Returns the points at `indices` (in that order) with all their attributes; the result is
 /// unorganized and keeps the sensor origin. O(indices.size()), parallel, deterministic.

@@ -22,9 +22,8 @@ void run_chunked_reconstruct(const std::string& input, const std::string& column
   io::check_mesh_output_format(output);
   auto progress = std::make_unique<StepProgress>();
   const double t0 = monotonic_seconds();
-  ChunkedResult result =
-      reconstruct_chunked(input, columns, config, chunking,
-                          [&](const std::string& what) { progress->begin(what.c_str()); });
+  ChunkedResult result = reconstruct_chunked(
+      input, columns, config, chunking, [&](const std::string& what) { progress->begin(what); });
   const ChunkedReport& r = result.report;
   if (result.mesh.empty()) {
     throw Error(input, "",
@@ -44,7 +43,7 @@ void run_chunked_reconstruct(const std::string& input, const std::string& column
         {"output", output},
         {"threads", threads},
         {"wall_s", wall},
-        {"voxel_size", r.voxel_size},
+        {"voxel", r.voxel_size},  // the keys of the single-process report where they agree
         {"chunk", {{"cells", r.chunk_cells}, {"metres", r.chunk_cells * r.voxel_size}}},
         {"chunks", r.chunks},
         {"failed_chunks", r.failed},
@@ -53,8 +52,8 @@ void run_chunked_reconstruct(const std::string& input, const std::string& column
         {"spilled_points", r.rows_written},
         {"max_chunk_points", r.max_chunk_points},
         {"seam_vertices", r.seam_vertices},
-        {"vertices", result.mesh.vertices.size()},
-        {"triangles", result.mesh.triangles.size()},
+        {"mesh",
+         {{"vertices", result.mesh.vertices.size()}, {"triangles", result.mesh.triangles.size()}}},
         {"phases_s",
          {{"partition", r.partition_s},
           {"mesh", r.mesh_s},

@@ -12,15 +12,4 @@ namespace meshflow::cli {
 /// For integer options give whole bounds; CLI11 then also refuses fractions when it converts.
 CLI::Validator number_in(double low, double high, bool low_open = false);
 
-/// Bytes from a size as users write it: a number with an optional K, M, G or T suffix (powers of
-/// 1024, e.g. "512M", "1.5G"; no suffix = bytes), "0" for no limit. Throws
-/// CLI::ValidationError naming `option` for anything else.
-std::size_t parse_byte_size(const std::string& text, const std::string& option);
-
-/// Validator for options parsed with parse_byte_size().
-CLI::Validator byte_size();
-
-/// The --max-memory default: 80 % of the machine's physical memory (0 when it cannot be read).
-std::size_t default_memory_limit();
-
 }  // namespace meshflow::cli

@@ -65,12 +65,23 @@ std::string normals_plan(const PointCloud& cloud, nlohmann::json& plan) {
   }
   const NormalOrientation o = resolve_orientation(cloud);
   plan = {{"source", "estimate"}, {"orientation", orientation_name(o)}};
-  return std::string("none in the file: estimated, --orient auto = ") + orientation_name(o) + " (" +
-         (o == NormalOrientation::kPropagate
-              ? "no sensor position: consistent over neighbours, outward"
-          : cloud.has_sensor_origin ? "towards the sensor position"
-                                    : "organized: towards the sensor at the origin") +
-         ")";
+  if (o != NormalOrientation::kPropagate)
+    return std::string("none in the file: estimated, --orient auto = ") + orientation_name(o) +
+           (cloud.has_sensor_origin ? " (towards the sensor position)"
+                                    : " (organized: towards the sensor at the origin)");
+  const ComponentSide side = scene_side(cloud);
+  const char* rule = side == ComponentSide::kAlongAxis ? "up (LAS: heights along z)"
+                     : side == ComponentSide::kViewOrOutward
+                         ? "towards the origin if the normals agree on one camera view, else "
+                           "outward"
+                         : "outward (a closed object)";
+  plan["side"] = side == ComponentSide::kAlongAxis       ? "up"
+                 : side == ComponentSide::kViewOrOutward ? "camera-view-or-outward"
+                                                         : "outward";
+  return std::string(
+             "none in the file: estimated, --orient auto = propagate (no sensor "
+             "position: consistent over neighbours, then ") +
+         rule + ")";
 }
 
 // -v: the settings that decide the mesh, as the stages will use them.

@@ -49,11 +49,14 @@ nlohmann::json normals_json(const Frame& f) {
     n["kn"] = r.kn;
     n["median_variation"] = r.median_variation;
     n["sharp"] = r.sharp;
-    if (r.orientation == NormalOrientation::kPropagate) {
+    if (r.orientation == NormalOrientation::kPropagate || r.orientation == NormalOrientation::kUp ||
+        r.orientation == NormalOrientation::kDown) {
       n["components"] = r.components;
       n["flipped_by_vote"] = r.flipped_by_vote;
+      n["side"] = side_name(r.side, r.side_axis);
     }
   }
+  n["flipped"] = r.flipped;
   return n;
 }
 

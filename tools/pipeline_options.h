@@ -1,5 +1,7 @@
 #pragma once
-// Command-line options that configure the reconstruction stages, shared by the subcommands.
+// Command-line options that configure the reconstruction stages, shared by the subcommands:
+// the option model's table registered with CLI11, and the CLI-only triangulation and sequence
+// arguments.
 
 #include <CLI/CLI.hpp>
 
@@ -9,54 +11,17 @@
 
 #include "graph/frame.h"
 #include "nodes/io/sequence.h"
+#include "options/pipeline_options.h"
 
 namespace meshflow::cli {
 
-struct PipelineOptions {
-  float voxel = 0.0f;
-  int kn = 10, ki = 10, kd = 5;
-  int threads = 0;
-  bool adaptive_k = false;
-  float max_distance = 2.0f;
-  float max_disagreement = DistanceConfig{}.max_disagreement_voxels;
-  float max_extrapolation = DistanceConfig{}.max_extrapolation_voxels;
-  std::size_t min_component = 20;
-  float filter_voxel = 0.0f;
-  int outlier_k = 0;
-  float min_range = 0.0f, max_range = 0.0f;
-  int depth_median = 0;          ///< depth frames: median window (3 or 5; 0 = off)
-  float depth_bilateral = 0.0f;  ///< depth frames: bilateral depth sigma, metres (0 = off)
-  std::string extract = "auto";
-  std::string optimize = "default";
-  std::size_t max_hole = 30;
-  float decimate_to = 0.25f;
-  float contour_tolerance = -1.0f;  ///< metres; negative: 0.4 voxel
-  float max_projection = 0.0f;
-  float plane_tolerance = ReconstructionConfig{}.plane_tolerance_voxels;
-  float max_rim = ReconstructionConfig{}.max_rim_voxels;
-  float remesh_tolerance = 0.0f;
-  bool organized_as_depth = false;
-  std::string normals = "auto";  ///< auto | input | estimate
-  std::string orient = "auto";   ///< auto | sensor | propagate | input | viewpoint=X,Y,Z | ...
-  std::string max_memory;        ///< --max-memory as given; empty: default_memory_limit()
+/// The option model's settings (options/pipeline_options.h): the CLI registers its table.
+using PipelineOptions = options::PipelineOptions;
 
-  /// The stages' configuration; throws CLI::ValidationError for a malformed --orient.
-  ReconstructionConfig config() const;
-};
-
-/// Registers --voxel --kn --ki --kd --threads --adaptive-k --max-distance --max-disagreement
-/// --max-extrapolation --max-rim --min-component
-/// --filter-voxel --outlier-k --min-range --max-range --depth-median --depth-bilateral
-/// --extract --optimize --max-hole
-/// --contour-tolerance --max-projection --plane-tolerance --remesh-tolerance --decimate-to
-/// --organized-as-depth
-/// --normals --orient on `cmd`, writing into `options`.
+/// Registers every option of the model (options::pipeline_option_specs()) on `cmd` as --NAME,
+/// writing into `options`; values are checked by the model's checks (a usage error, exit 2,
+/// with the model's message); help shows what a sentinel default means.
 void add_pipeline_options(CLI::App* cmd, PipelineOptions& options);
-
-/// Parses --orient: "auto", "sensor", "propagate", "input", "viewpoint=X,Y,Z" (towards a
-/// point, metres) or "away=X,Y,Z" (away from a point, e.g. a closed object's centre) into
-/// `normals`. Throws CLI::ValidationError naming what was expected.
-void parse_orientation(const std::string& text, NormalsConfig& normals);
 
 /// Per-frame depth-map triangulation instead of the volumetric stages (run, profile, live).
 struct TriangulationOptions {

@@ -44,28 +44,33 @@ StepProgress::~StepProgress() {
   if (printed_ && tty_) std::fputs("\r\033[K", stderr);
 }
 
-void StepProgress::begin(const char* step, const char* sub_step) {
+void StepProgress::begin(const std::string& step, const char* sub_step) {
   if (!enabled_) return;
   std::lock_guard<std::mutex> lock(mutex_);
   step_ = step;
-  sub_step_ = sub_step;
+  sub_step_ = sub_step != nullptr ? sub_step : "";
+  ++step_number_;
   step_start_ = monotonic_seconds();
 }
 
 void StepProgress::watch() {
   std::unique_lock<std::mutex> lock(mutex_);
   double last_print = -1e9;
+  std::size_t printed_step = 0;  // step_number_ of the step last printed (0: none)
   while (!stop_) {
     wake_.wait_for(lock, std::chrono::milliseconds(250));
-    if (stop_ || step_ == nullptr) continue;
+    if (stop_ || step_number_ == 0) continue;
     const double now = monotonic_seconds();
     const double running = now - step_start_;
-    if (running < 1.0 || now - last_print < (tty_ ? 0.25 : 5.0)) continue;
+    // A step that has run for a second is printed at once; the same step again only after the
+    // refresh interval.
+    const bool new_step = printed_step != step_number_;
+    if (running < 1.0 || (!new_step && now - last_print < (tty_ ? 0.25 : 5.0))) continue;
     last_print = now;
+    printed_step = step_number_;
     printed_ = true;
-    std::fprintf(stderr, "%s%s%s%s ... %.1f s%s", tty_ ? "\r" : "", step_,
-                 sub_step_ != nullptr ? ": " : "", sub_step_ != nullptr ? sub_step_ : "", running,
-                 tty_ ? "\033[K" : "\n");
+    std::fprintf(stderr, "%s%s%s%s ... %.1f s%s", tty_ ? "\r" : "", step_.c_str(),
+                 sub_step_.empty() ? "" : ": ", sub_step_.c_str(), running, tty_ ? "\033[K" : "\n");
   }
 }
 

@@ -24,9 +24,10 @@ class FrameProgress {
   double start_, last_ = -1e9;
 };
 
-/// "normals ... 1.4 s" for one job of named steps: a watcher thread prints the current step
-/// once it has run for a second, and refreshes it until the next step begins. begin() may be
-/// called from any thread (e.g. the flow graph's stages); the destructor stops the watcher.
+/// "normals ... 1.4 s" for one job of named steps: a watcher thread prints every step once it
+/// has run for a second (whatever was printed just before), and refreshes it until the next
+/// step begins (every 0.25 s on a terminal, every 5 s otherwise). begin() may be called from
+/// any thread (e.g. the flow graph's stages); the destructor stops the watcher.
 class StepProgress {
  public:
   StepProgress();
@@ -34,9 +35,8 @@ class StepProgress {
   StepProgress(const StepProgress&) = delete;
   StepProgress& operator=(const StepProgress&) = delete;
 
-  /// The step now running, optionally a sub-step ("optimize", "holes"); string literals or
-  /// strings that outlive the step.
-  void begin(const char* step, const char* sub_step = nullptr);
+  /// The step now running, optionally a sub-step ("optimize", "holes"; nullptr: none); copied.
+  void begin(const std::string& step, const char* sub_step = nullptr);
 
  private:
   void watch();
@@ -44,8 +44,8 @@ class StepProgress {
   bool enabled_, tty_;
   std::mutex mutex_;
   std::condition_variable wake_;
-  const char* step_ = nullptr;
-  const char* sub_step_ = nullptr;
+  std::string step_, sub_step_;
+  std::size_t step_number_ = 0;  // begin() calls so far: tells a new step from a refresh
   double step_start_ = 0.0;
   bool stop_ = false, printed_ = false;
   std::thread watcher_;

@@ -8,9 +8,30 @@
 
 namespace meshflow::cli {
 
+namespace {
+
+// Which way propagation turned the components, and why.
+std::string side_rule(const NormalsReport& r) {
+  const std::string name = side_name(r.side, r.side_axis);
+  switch (r.side) {
+    case ComponentSide::kTowardPoint:
+      return "facing the origin (one camera view in its camera frame)";
+    case ComponentSide::kAlongAxis:
+      return r.orientation == NormalOrientation::kPropagate ? name + " (LAS: heights along z)"
+                                                            : name;
+    case ComponentSide::kOutward:
+    case ComponentSide::kViewOrOutward:
+      break;
+  }
+  return "outward (a closed object, or no single view)";
+}
+
+}  // namespace
+
 std::string describe_normals(const NormalsReport& r) {
+  const std::string flipped = r.flipped ? ", then turned over (--orient flip)" : "";
   if (r.source == NormalSource::kInput) {
-    if (r.estimated == 0) return "from the input";
+    if (r.estimated == 0) return "from the input" + flipped;
     return "from the input, " + std::to_string(r.estimated) +
            " missing (zero or NaN) estimated and oriented by their neighbours";
   }
@@ -20,20 +41,22 @@ std::string describe_normals(const NormalsReport& r) {
   const std::string text = fits;
   switch (r.orientation) {
     case NormalOrientation::kTowardSensor:
-      return text + "towards the sensor";
+      return text + "towards the sensor" + flipped;
     case NormalOrientation::kTowardViewpoint:
-      return text + "towards the viewpoint";
+      return text + "towards the viewpoint" + flipped;
     case NormalOrientation::kAwayFromViewpoint:
-      return text + "away from the viewpoint";
+      return text + "away from the viewpoint" + flipped;
     case NormalOrientation::kInput:
-      return text + "as the input normals";
+      return text + "as the input normals" + flipped;
     case NormalOrientation::kAuto:
     case NormalOrientation::kPropagate:
+    case NormalOrientation::kUp:
+    case NormalOrientation::kDown:
       break;
   }
   return text + "by propagation (" + std::to_string(r.components) + " component" +
          (r.components == 1 ? "" : "s") + ", " + std::to_string(r.flipped_by_vote) +
-         " turned by the vote)";
+         " turned by the vote), " + side_rule(r) + flipped;
 }
 
 // "marching cubes", "extended marching cubes (clean samples without a sensor)", ...

@@ -37,6 +37,7 @@ PointCloud read_chunk_file(const ChunkFile& chunk, const ChunkRows& rows) {
   }
   PointCloud cloud;
   cloud.origin = rows.origin;
+  cloud.z_up = rows.z_up;
   const std::size_t n = chunk.points;
   cloud.positions.resize(n);
   if (rows.normals) cloud.normals.resize(n);
@@ -94,6 +95,7 @@ void ChunkStore::add(const PointCloud& batch) {
     rows_.normals = normals;
     rows_.colors = colors;
     rows_.origin = batch.origin;
+    rows_.z_up = batch.z_up;
   } else if (normals != rows_.normals || colors != rows_.colors || batch.origin != rows_.origin) {
     throw Error("chunks", "point batch",
                 "a batch of the input differs from the first in its normals, colours or origin");

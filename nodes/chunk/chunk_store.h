@@ -28,6 +28,7 @@ struct ChunkRows {
   bool normals = false;                              ///< nx ny nz floats follow x y z
   bool colors = false;                               ///< r g b bytes end the row
   Eigen::Vector3d origin = Eigen::Vector3d::Zero();  ///< PointCloud::origin of the input
+  bool z_up = false;                                 ///< PointCloud::z_up of the input
   /// Bytes per row.
   std::size_t bytes() const { return 12 + (normals ? 12 : 0) + (colors ? 3 : 0); }
 };

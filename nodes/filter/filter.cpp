@@ -95,9 +95,7 @@ PointCloud voxel_grid_downsample(const PointCloud& cloud, float voxel_size) {
   starts.push_back(static_cast<std::uint32_t>(n));
 
   PointCloud out;
-  out.sensor_origin = cloud.sensor_origin;
-  out.origin = cloud.origin;
-  out.has_sensor_origin = cloud.has_sensor_origin;
+  copy_frame_description(cloud, out);
   out.positions.resize(cells);
   if (cloud.has_normals()) out.normals.resize(cells);
   if (cloud.has_colors()) out.colors.resize(cells);

@@ -183,7 +183,10 @@ void read_las_points(const std::string& path, std::size_t batch_points,
           Eigen::Vector3d p;
           for (int k = 0; k < 3; ++k)
             p[k] = field<std::int32_t>(record + 4 * k) * header.scale[k] + header.offset[k];
-          if (first + i == 0) cloud.origin = local_origin_near(p);
+          if (first + i == 0) {
+            cloud.origin = local_origin_near(p);
+            cloud.z_up = true;  // LAS z: heights (airborne and terrestrial surveys alike)
+          }
           const Eigen::Vector3d local = p - cloud.origin;
           if (!local.allFinite() || (local.array().abs() > kMaxAbsCoordinate).any()) {
             char where[128];

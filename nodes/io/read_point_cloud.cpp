@@ -49,9 +49,7 @@ void for_each_point_batch(const std::string& path, const std::string& columns, s
   PointCloud whole = read_point_cloud(path, columns);
   if (whole.size() <= batch) return sink(whole);
   PointCloud piece;
-  piece.origin = whole.origin;
-  piece.sensor_origin = whole.sensor_origin;
-  piece.has_sensor_origin = whole.has_sensor_origin;
+  copy_frame_description(whole, piece);
   for (std::size_t begin = 0; begin < whole.size(); begin += batch) {
     const std::size_t end = std::min(whole.size(), begin + batch);
     const auto slice = [&](const auto& from, auto& to) {

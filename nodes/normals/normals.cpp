@@ -1,9 +1,11 @@
 #include "nodes/normals/normals.h"
 
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_reduce.h>
 
 #include <Eigen/Eigenvalues>
 #include <algorithm>
+#include <cmath>
 
 #include "nodes/search/neighbour_table.h"
 #include "runtime/error.h"
@@ -233,6 +235,64 @@ NormalSource resolve_source(const PointCloud& cloud, const std::vector<std::uint
 
 }  // namespace
 
+bool looks_like_camera_view(const PointCloud& cloud) {
+  if (!cloud.origin.isZero() || cloud.empty()) return false;
+  const Eigen::AlignedBox3f box = finite_bounds(cloud);
+  if (box.isEmpty() || box.contains(Eigen::Vector3f::Zero())) return false;
+  const float cos_max = std::cos(75.0f * 3.14159265f / 180.0f);
+  constexpr float kMaxRange = 25.0f;  // metres
+  const std::size_t n = cloud.size();
+  struct Counts {
+    std::size_t finite = 0, in_view = 0;
+    Eigen::Vector3d directions = Eigen::Vector3d::Zero();  // sum of unit directions
+  };
+  const Counts counts = tbb::parallel_reduce(
+      tbb::blocked_range<std::size_t>(0, n, 16384), Counts{},
+      [&](const tbb::blocked_range<std::size_t>& r, Counts c) {
+        for (std::size_t i = r.begin(); i != r.end(); ++i) {
+          const Eigen::Vector3f& p = cloud.positions[i];
+          if (!p.allFinite()) continue;
+          ++c.finite;
+          const float length = p.norm();
+          if (p.z() > 0.0f && p.z() >= cos_max * length && length <= kMaxRange) ++c.in_view;
+          if (length > 0.0f) c.directions += (p / length).cast<double>();
+        }
+        return c;
+      },
+      [](Counts a, const Counts& b) {
+        a.finite += b.finite;
+        a.in_view += b.in_view;
+        a.directions += b.directions;
+        return a;
+      });
+  // The image is around the optical axis: the points' mean direction within 40 degrees of +z.
+  const double mean_length = counts.directions.norm();
+  return counts.finite > 0 && counts.in_view >= 0.99 * static_cast<double>(counts.finite) &&
+         mean_length > 0.0 &&
+         counts.directions.z() >= std::cos(40.0 * 3.14159265 / 180.0) * mean_length;
+}
+
+ComponentSide scene_side(const PointCloud& cloud, bool may_be_camera_view) {
+  if (cloud.z_up) return ComponentSide::kAlongAxis;
+  return may_be_camera_view && looks_like_camera_view(cloud) ? ComponentSide::kViewOrOutward
+                                                             : ComponentSide::kOutward;
+}
+
+const char* side_name(ComponentSide side, const Eigen::Vector3f& axis) {
+  switch (side) {
+    case ComponentSide::kOutward:
+    case ComponentSide::kViewOrOutward:
+      return "outward";
+    case ComponentSide::kTowardPoint:
+      return "towards-origin";
+    case ComponentSide::kAlongAxis:
+      if (axis == Eigen::Vector3f::UnitZ()) return "up";
+      if (axis == -Eigen::Vector3f::UnitZ()) return "down";
+      return "axis";
+  }
+  return "?";
+}
+
 NormalOrientation resolve_orientation(const PointCloud& cloud) {
   if (cloud.has_normals()) return NormalOrientation::kInput;
   if (cloud.has_sensor_origin || cloud.is_organized()) return NormalOrientation::kTowardSensor;
@@ -253,6 +313,10 @@ const char* orientation_name(NormalOrientation orientation) {
       return "propagate";
     case NormalOrientation::kInput:
       return "input";
+    case NormalOrientation::kUp:
+      return "up";
+    case NormalOrientation::kDown:
+      return "down";
   }
   return "?";
 }
@@ -262,8 +326,61 @@ Eigen::Vector3f fit_plane_normal(const std::vector<Eigen::Vector3f>& points) {
   return principal_frame(points, points.size()).axes.col(0).normalized().cast<float>();
 }
 
-ComputedNormals compute_normals(const PointCloud& cloud, const SpatialIndex& index,
-                                const NormalsConfig& config) {
+namespace {
+
+// Median plane-fit variation over at most `samples` points spread evenly over the cloud (kn
+// nearest neighbours each): how clean the samples are when no fit is needed for the normals.
+float sampled_median_variation(const PointCloud& cloud, const SpatialIndex& index, int kn,
+                               std::size_t samples) {
+  const std::size_t n = cloud.size();
+  const std::size_t k = static_cast<std::size_t>(std::max(kn, 3));
+  if (n < k) return 1.0f;
+  const std::size_t count = std::min(n, samples);
+  std::vector<float> variation(count, 1.0f);
+  tbb::parallel_for(
+      tbb::blocked_range<std::size_t>(0, count, 64), [&](const tbb::blocked_range<std::size_t>& r) {
+        std::vector<std::uint32_t> idx(k);
+        std::vector<float> d2(k);
+        std::vector<Eigen::Vector3f> pts(k);
+        for (std::size_t s = r.begin(); s != r.end(); ++s) {
+          const std::size_t i = s * n / count;
+          const std::size_t found = index.knn(cloud.positions[i], k, idx.data(), d2.data());
+          if (found < 3) continue;
+          for (std::size_t j = 0; j < found; ++j) pts[j] = cloud.positions[idx[j]];
+          const LocalFrame frame = principal_frame(pts, found);
+          const double total = frame.values.sum();
+          variation[s] = total > 0.0 ? static_cast<float>(frame.values[0] / total) : 1.0f;
+        }
+      });
+  const auto middle = variation.begin() + static_cast<std::ptrdiff_t>(count / 2);
+  std::nth_element(variation.begin(), middle, variation.end());
+  return *middle;
+}
+
+// The side rule and its point or axis for a propagated `orientation`.
+PropagationConfig propagation_for(const PointCloud& cloud, NormalOrientation orientation,
+                                  const NormalsConfig& config) {
+  PropagationConfig p = config.propagation;
+  p.point = Eigen::Vector3f::Zero();
+  switch (orientation) {
+    case NormalOrientation::kUp:
+      p.side = ComponentSide::kAlongAxis;
+      p.axis = Eigen::Vector3f::UnitZ();
+      break;
+    case NormalOrientation::kDown:
+      p.side = ComponentSide::kAlongAxis;
+      p.axis = -Eigen::Vector3f::UnitZ();
+      break;
+    default:
+      p.side = scene_side(cloud, config.may_be_camera_view);
+      p.axis = Eigen::Vector3f::UnitZ();
+      break;
+  }
+  return p;
+}
+
+ComputedNormals normals_before_flip(const PointCloud& cloud, const SpatialIndex& index,
+                                    const NormalsConfig& config) {
   const std::size_t n = cloud.size();
   const std::vector<std::uint8_t> usable = usable_input_normals(cloud);
   ComputedNormals out;
@@ -280,7 +397,17 @@ ComputedNormals compute_normals(const PointCloud& cloud, const SpatialIndex& ind
     tbb::parallel_for(std::size_t{0}, n, [&](std::size_t i) {
       out.normals[i] = usable[i] ? cloud.normals[i].normalized() : Eigen::Vector3f::Zero();
     });
-    if (report.estimated == 0) return out;
+    if (report.estimated == 0) {
+      // Exact samples of a CAD-like part with their exact normals: extended marching cubes
+      // keeps its edges (the normals are used as they are).
+      if (config.sharp == NormalsConfig::Sharp::kWhenClean) {
+        report.kn = std::max(config.kn, 3);
+        report.median_variation = sampled_median_variation(cloud, index, config.kn, 4096);
+        report.sharp = report.median_variation < config.clean_variation;
+      }
+      report.sharp = report.sharp || config.sharp == NormalsConfig::Sharp::kOn;
+      return out;
+    }
   } else {
     report.estimated = n;
   }
@@ -314,19 +441,23 @@ ComputedNormals compute_normals(const PointCloud& cloud, const SpatialIndex& ind
   // two faces and carry it. Sharp normals then take the signs of their points' oriented fits.
   std::vector<Eigen::Vector3f> fitted = normals_of(fits);
 
+  // The viewpoint in the cloud's local frame (it is given in the file's own coordinates).
+  const Eigen::Vector3f viewpoint = (config.viewpoint.cast<double>() - cloud.origin).cast<float>();
   switch (orientation) {
     case NormalOrientation::kAuto:  // resolved above
     case NormalOrientation::kTowardSensor:
-      orient_to_viewpoint(cloud, cloud.has_sensor_origin ? cloud.sensor_origin : config.viewpoint,
-                          1.0f, fitted);
+      orient_to_viewpoint(cloud, cloud.has_sensor_origin ? cloud.sensor_origin : viewpoint, 1.0f,
+                          fitted);
       break;
     case NormalOrientation::kTowardViewpoint:
-      orient_to_viewpoint(cloud, config.viewpoint, 1.0f, fitted);
+      orient_to_viewpoint(cloud, viewpoint, 1.0f, fitted);
       break;
     case NormalOrientation::kAwayFromViewpoint:
-      orient_to_viewpoint(cloud, config.viewpoint, -1.0f, fitted);
+      orient_to_viewpoint(cloud, viewpoint, -1.0f, fitted);
       break;
     case NormalOrientation::kPropagate:
+    case NormalOrientation::kUp:
+    case NormalOrientation::kDown:
     case NormalOrientation::kInput: {
       // Fixed points: those with a usable input normal. Estimated ones take its sign; when the
       // source is the input, the input normal itself.
@@ -343,10 +474,14 @@ ComputedNormals compute_normals(const PointCloud& cloud, const SpatialIndex& ind
       }
       for (Eigen::Vector3f& v : fitted)
         if (v.isZero()) v = Eigen::Vector3f::UnitX();  // fewer than 3 neighbours
+      const PropagationConfig propagation = propagation_for(cloud, orientation, config);
       OrientedNormals oriented =
-          orient_by_propagation(cloud.positions, fitted, table, fixed, config.propagation);
+          orient_by_propagation(cloud.positions, fitted, table, fixed, propagation);
       report.components = oriented.components;
       report.flipped_by_vote = oriented.flipped_by_vote;
+      report.side = oriented.side;
+      report.view_agreement = oriented.view_agreement;
+      report.side_axis = propagation.axis;
       fitted = std::move(oriented.normals);
       break;
     }
@@ -362,6 +497,22 @@ ComputedNormals compute_normals(const PointCloud& cloud, const SpatialIndex& ind
   const float min_agreement = report.sharp ? 0.9f : -1.0f;
   out.normals =
       ki <= 1 ? std::move(fitted) : interpolate(fitted, table, ki, estimate, min_agreement);
+  return out;
+}
+
+}  // namespace
+
+ComputedNormals compute_normals(const PointCloud& cloud, const SpatialIndex& index,
+                                const NormalsConfig& config) {
+  ComputedNormals out = normals_before_flip(cloud, index, config);
+  if (config.flip) {
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, out.normals.size(), 8192),
+                      [&](const tbb::blocked_range<std::size_t>& r) {
+                        for (std::size_t i = r.begin(); i != r.end(); ++i)
+                          out.normals[i] = -out.normals[i];
+                      });
+    out.report.flipped = true;
+  }
   return out;
 }
 

@@ -17,15 +17,19 @@ namespace meshflow {
 enum class NormalOrientation {
   /// The signs of the cloud's own normals where it has them (kInput); else towards the sensor
   /// where the cloud carries one (a scan pose, a PCD VIEWPOINT, an organized depth-camera
-  /// cloud: kTowardSensor); else consistent propagation (kPropagate).
+  /// cloud: kTowardSensor); else consistent propagation (kPropagate), each component turned
+  /// by scene_side(): up for LAS, towards the origin for one camera view in its camera frame,
+  /// outward for everything else (closed objects).
   kAuto,
   kTowardSensor,       ///< towards cloud.sensor_origin (the origin when it has none)
   kTowardViewpoint,    ///< towards NormalsConfig::viewpoint
   kAwayFromViewpoint,  ///< away from `viewpoint` (e.g. the centre of a closed object)
-  kPropagate,          ///< orient_by_propagation(): no sensor needed (objects, CAD samples)
+  kPropagate,  ///< orient_by_propagation(), components turned by scene_side() (no sensor needed)
   /// Each estimated normal takes the sign of the cloud's normal at that point; points whose
   /// normal is missing (zero, NaN) are reached by propagation from the others.
-  kInput
+  kInput,
+  kUp,   ///< propagation, each component facing +z on the whole (terrain, floors)
+  kDown  ///< propagation, each component facing -z on the whole (ceilings, scans from below)
 };
 
 /// Where normals come from.
@@ -47,8 +51,17 @@ struct NormalsConfig {
   float adaptive_ratio = 0.2f;
   int adaptive_max_k = 80;
   NormalOrientation orientation = NormalOrientation::kAuto;
-  Eigen::Vector3f viewpoint = Eigen::Vector3f::Zero();  ///< metres, world frame
-  PropagationConfig propagation;                        ///< kPropagate / kInput
+  /// Metres, in the file's own coordinates: for a georeferenced cloud (PointCloud::origin not
+  /// zero) the world coordinates, moved into the cloud's local frame here.
+  Eigen::Vector3f viewpoint = Eigen::Vector3f::Zero();
+  /// kPropagate / kInput / kUp / kDown (their `side` is set by compute_normals()).
+  PropagationConfig propagation;
+  /// Every output normal turned over at the end, the input's own included (`--orient flip`:
+  /// the automatic result, the other way round).
+  bool flip = false;
+  /// Whether propagation without a sensor may take the cloud for one camera view
+  /// (looks_like_camera_view()); off for pieces of a larger cloud (the out-of-core chunks).
+  bool may_be_camera_view = true;
   /// Normals for sharp features (extended marching cubes): each point takes the plane of the
   /// flattest neighbourhood within two rings of neighbours that passes through it
   /// (neighbourhood shifting), and interpolation skips neighbours more than 25 degrees off, so
@@ -83,6 +96,11 @@ struct NormalsReport {
   bool sharp = false;               ///< sharp-feature normals (see NormalsConfig::sharp)
   std::size_t components = 0;       ///< propagation: components of the neighbour graph
   std::size_t flipped_by_vote = 0;  ///< propagation: normals turned by the final vote
+  /// Propagation: the side its components were turned to (kViewOrOutward resolved).
+  ComponentSide side = ComponentSide::kOutward;
+  Eigen::Vector3f side_axis = Eigen::Vector3f::UnitZ();  ///< kAlongAxis's axis
+  double view_agreement = 0.0;  ///< when the camera-view test ran: its agreement (0-1)
+  bool flipped = false;         ///< NormalsConfig::flip applied
 };
 
 struct ComputedNormals {
@@ -109,8 +127,28 @@ std::vector<Eigen::Vector3f> estimate_normals(const PointCloud& cloud, const Spa
 /// kTowardSensor when it carries a sensor or is organized, else kPropagate. O(1).
 NormalOrientation resolve_orientation(const PointCloud& cloud);
 
-/// "auto", "sensor", "viewpoint", "away-from-viewpoint", "propagate" or "input".
+/// "auto", "sensor", "viewpoint", "away-from-viewpoint", "propagate", "input", "up" or "down".
 const char* orientation_name(NormalOrientation orientation);
+
+/// The side rule propagation uses for `cloud` under kAuto / kPropagate: kAlongAxis (+z) when
+/// cloud.z_up (LAS), kViewOrOutward towards the origin when `may_be_camera_view` and
+/// looks_like_camera_view(cloud), else kOutward. O(n), parallel.
+ComponentSide scene_side(const PointCloud& cloud, bool may_be_camera_view = true);
+
+/// Whether `cloud` may be one view from the origin of its coordinates, as depth-camera clouds
+/// are when written in the camera's frame (Open3D, PCL; invalid pixels dropped, no VIEWPOINT):
+/// not georeferenced, the origin outside the points' bounding box, at least 99 % of the finite
+/// points in front of it (z > 0) within 75 degrees of +z (wider than any depth camera's field
+/// of view) and within 25 m of it (a depth or stereo camera's range), and their mean direction
+/// within 40 degrees of +z (the image lies around the optical axis). Geometry only:
+/// kViewOrOutward then checks that the normals agree. O(n), parallel.
+/// Ambiguous by nature: a terrain tile above an origin at its centre looks like a camera
+/// looking up; LAS files are told apart by PointCloud::z_up.
+bool looks_like_camera_view(const PointCloud& cloud);
+
+/// The side rule's name for reports and JSON: "outward", "towards-origin" (kTowardPoint, the
+/// one point compute_normals() looks from), "up" / "down" (kAlongAxis along +z / -z), "axis".
+const char* side_name(ComponentSide side, const Eigen::Vector3f& axis);
 
 /// Normal of the least-squares plane through `points` (smallest-eigenvalue eigenvector of the
 /// covariance), unit length, arbitrary sign; zero vector for fewer than 3 points.

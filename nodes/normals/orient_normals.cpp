@@ -298,10 +298,12 @@ std::size_t vote(const NeighbourTable& t, const std::vector<Eigen::Vector3f>& sm
   return total;
 }
 
-// Per-component sums for the outward rule.
+// Per-component sums for the side rules.
 struct ComponentSums {
   Eigen::Vector3d position_sum = Eigen::Vector3d::Zero();
-  double points = 0.0, signed_sum = 0.0, absolute_sum = 0.0;
+  double points = 0.0, signed_sum = 0.0, absolute_sum = 0.0;  // n . (p - centroid)
+  double toward_sum = 0.0, toward_absolute = 0.0;             // n . (point - p) / |point - p|
+  double along_sum = 0.0;                                     // n . axis
   std::uint32_t extreme = std::numeric_limits<std::uint32_t>::max();  // point of largest x
   bool has_fixed = false;
 };
@@ -388,12 +390,13 @@ void turn_nested_components_inward(const std::vector<Eigen::Vector3f>& p,
                     });
 }
 
-// Turns every component without a fixed point outward (see the header), then the walls of
-// cavities inward.
-void turn_components_outward(const std::vector<Eigen::Vector3f>& p,
-                             const std::vector<Eigen::Vector3f>& n, const NeighbourTable& t,
-                             const Components& comps, const std::vector<std::uint8_t>& fixed,
-                             Signs& sign) {
+// Turns every component without a fixed point to the side `config.side` asks for (see the
+// header) and returns the rule applied (kViewOrOutward resolved).
+ComponentSide turn_components(const std::vector<Eigen::Vector3f>& p,
+                              const std::vector<Eigen::Vector3f>& n, const NeighbourTable& t,
+                              const Components& comps, const std::vector<std::uint8_t>& fixed,
+                              const PropagationConfig& config, Signs& sign,
+                              double& view_agreement) {
   auto larger_x = [&p](std::uint32_t a, std::uint32_t b) {  // b beats a (ties: lower index)
     const std::uint32_t none = std::numeric_limits<std::uint32_t>::max();
     return a == none || (b != none && (p[b].x() > p[a].x() || (p[b].x() == p[a].x() && b < a)));
@@ -415,31 +418,70 @@ void turn_components_outward(const std::vector<Eigen::Vector3f>& p,
       });
   std::vector<Eigen::Vector3d> centroid(comps.count);
   for (std::size_t c = 0; c < comps.count; ++c) centroid[c] = sums[c].position_sum / sums[c].points;
+  const Eigen::Vector3d point = config.point.cast<double>();
+  const Eigen::Vector3d axis = config.axis.cast<double>().normalized();
   sums = accumulate(
       comps, std::move(sums),
       [&](ComponentSums& s, std::size_t i) {
-        const double d =
-            sign[i] * n[i].cast<double>().dot(p[i].cast<double>() - centroid[comps.of[i]]);
+        const Eigen::Vector3d ni = sign[i] * n[i].cast<double>();
+        const Eigen::Vector3d pi = p[i].cast<double>();
+        const double d = ni.dot(pi - centroid[comps.of[i]]);
         s.signed_sum += d;
         s.absolute_sum += std::abs(d);
+        const Eigen::Vector3d to_point = point - pi;
+        const double distance = to_point.norm();
+        const double facing = distance > 0.0 ? ni.dot(to_point) / distance : 0.0;
+        s.toward_sum += facing;
+        s.toward_absolute += std::abs(facing);
+        s.along_sum += ni.dot(axis);
       },
       [&](ComponentSums& into, const ComponentSums& from) {
         into.signed_sum += from.signed_sum;
         into.absolute_sum += from.absolute_sum;
+        into.toward_sum += from.toward_sum;
+        into.toward_absolute += from.toward_absolute;
+        into.along_sum += from.along_sum;
       });
+  ComponentSide side = config.side;
+  if (side == ComponentSide::kViewOrOutward) {
+    // One view from the point: each component, once facing it, agrees with itself on facing it.
+    double agreeing = 0.0, total = 0.0;
+    for (const ComponentSums& s : sums) {
+      agreeing += std::abs(s.toward_sum);
+      total += s.toward_absolute;
+    }
+    view_agreement = total > 0.0 ? agreeing / total : 0.0;
+    side = view_agreement >= config.min_view_agreement ? ComponentSide::kTowardPoint
+                                                       : ComponentSide::kOutward;
+  }
   std::vector<std::uint8_t> flip(comps.count, 0);
   for (std::size_t c = 0; c < comps.count; ++c) {
     const ComponentSums& s = sums[c];
     if (s.has_fixed) continue;
-    const bool decisive = std::abs(s.signed_sum) > 0.05 * s.absolute_sum;
-    flip[c] = decisive ? s.signed_sum < 0.0 : sign[s.extreme] * n[s.extreme].x() < 0.0f;
+    const bool extreme_faces_minus_x = sign[s.extreme] * n[s.extreme].x() < 0.0f;
+    switch (side) {
+      case ComponentSide::kTowardPoint:
+        flip[c] = s.toward_sum != 0.0 ? s.toward_sum < 0.0 : extreme_faces_minus_x;
+        break;
+      case ComponentSide::kAlongAxis:
+        flip[c] = s.along_sum != 0.0 ? s.along_sum < 0.0 : extreme_faces_minus_x;
+        break;
+      case ComponentSide::kOutward:
+      case ComponentSide::kViewOrOutward: {
+        const bool decisive = std::abs(s.signed_sum) > 0.05 * s.absolute_sum;
+        flip[c] = decisive ? s.signed_sum < 0.0 : extreme_faces_minus_x;
+        break;
+      }
+    }
   }
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, p.size(), 8192),
                     [&](const tbb::blocked_range<std::size_t>& r) {
                       for (std::size_t i = r.begin(); i != r.end(); ++i)
                         if (flip[comps.of[i]]) sign[i] = static_cast<std::int8_t>(-sign[i]);
                     });
-  turn_nested_components_inward(p, n, t, comps, centroid, sums, sign);
+  if (side == ComponentSide::kOutward)
+    turn_nested_components_inward(p, n, t, comps, centroid, sums, sign);
+  return side;
 }
 
 }  // namespace
@@ -466,7 +508,8 @@ OrientedNormals orient_by_propagation(const std::vector<Eigen::Vector3f>& positi
     out.flipped_by_vote += turned;
     if (turned == 0) break;
   }
-  turn_components_outward(positions, normals, neighbours, comps, fixed, sign);
+  out.side = turn_components(positions, normals, neighbours, comps, fixed, config, sign,
+                             out.view_agreement);
   out.normals.resize(positions.size());
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, positions.size(), 8192),
                     [&](const tbb::blocked_range<std::size_t>& r) {

@@ -19,11 +19,37 @@
 
 namespace meshflow {
 
+/// Which way each component of the neighbour graph faces once its normals agree with each
+/// other (propagation fixes signs only relative to one another).
+enum class ComponentSide {
+  /// Closed objects: outward, i.e. the sum of n_i . (p_i - centroid) over the component's
+  /// points positive; where that sum is indecisive (an open, flat piece), the normal of its
+  /// point of largest x has a non-negative x; a component inside an odd number of larger ones
+  /// (a cavity's wall, a hollow ball's inner shell) then faces inward, towards the cavity.
+  kOutward,
+  /// Open scenes seen from one place (a camera-frame cloud): the sum over the component's
+  /// points of n_i . (point - p_i) / |point - p_i| positive.
+  kTowardPoint,
+  /// Terrain (heights along an axis, e.g. airborne LAS): the sum of n_i . axis positive.
+  kAlongAxis,
+  /// kTowardPoint when the cloud looks like one view from `point`: with every component facing
+  /// it, sum |sum over a component of n_i . v_i| >= min_view_agreement x sum |n_i . v_i| (v_i
+  /// the unit direction from p_i to the point; 1 for a single view, near 0 for a closed object
+  /// seen from outside); kOutward otherwise.
+  kViewOrOutward
+};
+
 struct PropagationConfig {
   /// Passes of a final vote in which a normal that disagrees with the confidence-weighted
   /// majority of its neighbours is turned over (0 = off). Repairs single points that the tree
   /// reached through a poor edge.
   int vote_passes = 2;
+  ComponentSide side = ComponentSide::kOutward;
+  Eigen::Vector3f point = Eigen::Vector3f::Zero();  ///< kTowardPoint / kViewOrOutward, metres
+  Eigen::Vector3f axis = Eigen::Vector3f::UnitZ();  ///< kAlongAxis (any length but zero)
+  /// kViewOrOutward's threshold. Measured: single camera views 0.9-1.0, closed objects around
+  /// the point 0.0-0.2.
+  double min_view_agreement = 0.5;
 };
 
 /// The result of orient_by_propagation().
@@ -31,6 +57,10 @@ struct OrientedNormals {
   std::vector<Eigen::Vector3f> normals;  ///< one per point, consistently oriented
   std::size_t components = 0;            ///< connected components of the neighbour graph
   std::size_t flipped_by_vote = 0;       ///< normals the vote turned after propagation
+  /// The side rule applied (kViewOrOutward resolved to kTowardPoint or kOutward).
+  ComponentSide side = ComponentSide::kOutward;
+  /// kViewOrOutward: the agreement on facing the point that decided it (0-1).
+  double view_agreement = 0.0;
 };
 
 /// Orients `normals` (one per position; unit or zero; either sign) consistently:
@@ -43,13 +73,10 @@ struct OrientedNormals {
 /// 4. `config.vote_passes` votes (each point against the sum of n_i . n_j over its neighbours);
 /// 5. each component's sign: where `fixed` flags points whose sign is known (one flag per
 ///    point, or empty for none), the tree starts from them and they are never turned;
-///    a component without such a point is turned outward, i.e. so that the sum of
-///    n_i . (p_i - centroid) over its points is positive (for a closed surface that sum is a
-///    multiple of the enclosed volume); where that sum is indecisive (an open, flat piece), so
-///    that the normal of its point of largest x has a non-negative x; a component inside an odd
-///    number of larger ones (a cavity's wall, a hollow ball's inner shell: the generalized
-///    winding number of each larger one at its centroid) then faces inward, towards the
-///    cavity (up to 64 components).
+///    a component without such a point is turned to `config.side` (see ComponentSide; for
+///    kOutward, a closed surface's sum of n_i . (p_i - centroid) is a multiple of its enclosed
+///    volume, and a cavity is found by the generalized winding number of each larger component
+///    at its centroid, up to 64 components).
 /// Output identical for any thread count. Parallel agreements, sort and vote; the spanning
 /// forest and traversal are serial. O(n k) memory and time (plus union-find's near-constant
 /// factor).

@@ -157,9 +157,11 @@ def test_bad_arrays_are_value_errors():
 
 def test_every_cli_option_is_a_keyword():
     points, normals = sphere_points(20000)
-    base = meshflow.reconstruct(points, normals, voxel=0.04)
+    # Exact samples with exact normals get extended marching cubes, which places vertices from
+    # the points themselves; marching cubes shows the distance settings.
+    base = meshflow.reconstruct(points, normals, voxel=0.04, extract="mc")
     # Options the CLI has, by the CLI's names: kd = 1 averages fewer tangent planes, another mesh.
-    other = meshflow.reconstruct(points, normals, voxel=0.04, kd=1, max_distance=3.0,
+    other = meshflow.reconstruct(points, normals, voxel=0.04, extract="mc", kd=1, max_distance=3.0,
                                  min_component=10, optimize="clean", orient="input")
     assert not np.array_equal(base.vertices, other.vertices) or len(base.vertices) != len(
         other.vertices)
@@ -168,6 +170,28 @@ def test_every_cli_option_is_a_keyword():
     with pytest.raises(TypeError, match="kn: expected a value like 10"):
         meshflow.reconstruct(points, kn="ten")
     assert "max_extrapolation=" in meshflow.reconstruct.__doc__
+
+
+def test_values_the_cli_refuses_python_refuses_with_the_same_message():
+    # Issue 55: these were accepted (max_distance=-1 returned 56 triangles).
+    points, _ = sphere_points(2000)
+    cases = {
+        "voxel": (-5, r"voxel: expected a number in \[0, 1000\], got -5"),
+        "kn": (-3, r"kn: expected a number in \[3, 1000\], got -3"),
+        "decimate_to": (5, r"decimate_to: expected a number in \[0, 1\], got 5"),
+        "max_distance": (-1, r"max_distance: expected a number in \(0, 1000\], got -1"),
+        "min_component": (-2, r"min_component: expected a whole number >= 0, got -2"),
+        "depth_median": (4, r"depth_median: expected one of 0, 3, 5; got 4"),
+    }
+    for name, (value, message) in cases.items():
+        with pytest.raises(ValueError, match=message):
+            meshflow.reconstruct(points, **{name: value})
+        with pytest.raises(ValueError, match=message):
+            meshflow.Pipeline(lambda result: None, **{name: value})
+    with pytest.raises(ValueError, match=r"voxel: expected a number in \[0, 1000\], got nan"):
+        meshflow.reconstruct(points, voxel=float("nan"))
+    with pytest.raises(TypeError, match="adaptive_k: expected a value like False"):
+        meshflow.reconstruct(points, adaptive_k=1)
 
 
 def test_meshflow_errors_name_the_file(tmp_path):
@@ -205,3 +229,28 @@ def test_compress_round_trip_and_levels(torus_ply):
     assert abs(len(half.triangles) - len(mesh.triangles) // 2) <= 4
     with pytest.raises(meshflow.Error, match="checksum"):
         meshflow.decompress(data[:-9] + bytes([data[-9] ^ 1]) + data[-8:])
+
+
+def test_a_mesh_from_arrays_writes_and_reads_back(tmp_path):
+    # Issue 55: an Open3D mesh (np.asarray(mesh.vertices), np.asarray(mesh.triangles)) comes in
+    # without a file.
+    vertices = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], dtype=np.float64)
+    triangles = np.array([[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]], dtype=np.int32)
+    colors = np.array([[255, 0, 0], [0, 255, 0], [0, 0, 255], [9, 9, 9]], dtype=np.uint8)
+    mesh = meshflow.Mesh(vertices, triangles, colors=colors)
+    assert mesh.vertices.shape == (4, 3) and mesh.triangles.shape == (4, 3)
+    assert mesh.normals is None and mesh.colors[3, 0] == 9
+    path = str(tmp_path / "tet.ply")
+    mesh.write(path)
+    back = meshflow.read_mesh(path)
+    assert np.array_equal(back.triangles, mesh.triangles)
+    with pytest.raises(ValueError, match="triangles: row 1 refers to vertex 4 of 4"):
+        meshflow.Mesh(vertices, np.array([[0, 1, 2], [1, 2, 4]]))
+    with pytest.raises(ValueError, match="triangles: row 0 refers to vertex -1 of 4"):
+        meshflow.Mesh(vertices, np.array([[0, 1, -1]]))
+    with pytest.raises(ValueError, match="normals: 3 rows for 4 vertices"):
+        meshflow.Mesh(vertices, triangles, normals=vertices[:3])
+    bad = vertices.copy()
+    bad[2, 0] = np.inf
+    with pytest.raises(ValueError, match="vertices: row 2 is not finite"):
+        meshflow.Mesh(bad, triangles)

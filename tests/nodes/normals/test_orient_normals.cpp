@@ -5,10 +5,13 @@
 
 #include <gtest/gtest.h>
 
+#include <cstdio>
 #include <random>
 
 #include "nodes/normals/normals.h"
 #include "nodes/synthetic/closed_objects.h"
+#include "nodes/synthetic/depth_sequence.h"
+#include "nodes/synthetic/scan_simulator.h"
 #include "runtime/threads.h"
 #include "test_support.h"
 
@@ -150,6 +153,138 @@ TEST(OrientNormals, EmptyAndTinyInputs) {
   const ComputedNormals computed = propagated_normals(three);
   ASSERT_EQ(computed.normals.size(), 3u);
   for (const Eigen::Vector3f& n : computed.normals) EXPECT_NEAR(std::abs(n.z()), 1.0f, 1e-5f);
+}
+
+// A camera-frame cloud as Open3D (remove_non_finite_points, write_point_cloud) or PCL write
+// one: the organized frame's finite points, no grid, no sensor position, no normals.
+PointCloud written_without_sensor(const PointCloud& organized) {
+  std::vector<std::uint32_t> finite;
+  for (std::size_t i = 0; i < organized.size(); ++i)
+    if (organized.positions[i].allFinite()) finite.push_back(static_cast<std::uint32_t>(i));
+  PointCloud cloud = select_points(organized, finite);
+  cloud.has_sensor_origin = false;
+  cloud.sensor_origin = Eigen::Vector3f::Zero();
+  cloud.normals.clear();
+  return cloud;
+}
+
+// Share of the normals facing `point` (n . (point - p) > 0).
+double share_facing(const PointCloud& cloud, const std::vector<Eigen::Vector3f>& normals,
+                    const Eigen::Vector3f& point) {
+  std::size_t facing = 0;
+  for (std::size_t i = 0; i < cloud.size(); ++i)
+    facing += normals[i].dot(point - cloud.positions[i]) > 0.0f ? 1 : 0;
+  return static_cast<double>(facing) / static_cast<double>(cloud.size());
+}
+
+// Share of the normals with a positive z.
+double share_up(const std::vector<Eigen::Vector3f>& normals) {
+  std::size_t up = 0;
+  for (const Eigen::Vector3f& n : normals) up += n.z() > 0.0f ? 1 : 0;
+  return static_cast<double>(up) / static_cast<double>(normals.size());
+}
+
+ComputedNormals normals_as(const PointCloud& cloud, const NormalsConfig& config) {
+  const KdTreeIndex index(cloud.positions);
+  return compute_normals(cloud, index, config);
+}
+
+// A hilly terrain tile of 60 x 60 m, heights around 30 m, as an airborne LAS gives it.
+PointCloud terrain_tile(bool z_up) {
+  PointCloud tile;
+  for (int i = 0; i < 150; ++i)
+    for (int j = 0; j < 150; ++j) {
+      const float x = 0.4f * static_cast<float>(i), y = 0.4f * static_cast<float>(j);
+      tile.positions.emplace_back(x, y, 30.0f + 3.0f * std::sin(0.2f * x) * std::cos(0.15f * y));
+    }
+  tile.z_up = z_up;
+  return tile;
+}
+
+// Issue 55: inside a room, outward from the points' centroid is away from the camera; a cloud
+// in its camera's frame must face the camera at the origin without being told.
+TEST(SceneSide, OneCameraViewWithoutASensorFacesTheCamera) {
+  synthetic::DepthSequenceConfig camera;
+  camera.frames = 4;
+  camera.intrinsics = synthetic::scaled_default_camera(160, 120);
+  const auto sequence = synthetic::make_depth_sequence(synthetic::demo_room_scene(), camera);
+  for (std::size_t f = 0; f < 2; ++f) {
+    const PointCloud cloud =
+        written_without_sensor(test::camera_frame_cloud(sequence->frame(f).load_depth()));
+    ASSERT_GT(cloud.size(), 10000u);
+    EXPECT_TRUE(looks_like_camera_view(cloud));
+    const ComputedNormals computed = normals_as(cloud, NormalsConfig{});
+    EXPECT_EQ(computed.report.orientation, NormalOrientation::kPropagate);
+    EXPECT_EQ(computed.report.side, ComponentSide::kTowardPoint);
+    EXPECT_GE(share_facing(cloud, computed.normals, Eigen::Vector3f::Zero()), 0.97)
+        << "frame " << f;
+    std::printf("[ camera view ] frame %zu: agreement %.3f\n", f, computed.report.view_agreement);
+  }
+}
+
+// A closed object in front of the origin passes the camera's geometric test, but its normals
+// do not agree on facing the origin: it stays outward.
+TEST(SceneSide, AClosedObjectInFrontOfTheOriginStaysOutward) {
+  for (const synthetic::ClosedObject& solid :
+       {synthetic::sphere_object(), synthetic::chamfered_cube_object()}) {
+    PointCloud samples = solid.sample(30000, 0.0f, 5);
+    for (Eigen::Vector3f& p : samples.positions) p += Eigen::Vector3f(0.2f, 0.1f, 3.0f);
+    const std::vector<Eigen::Vector3f> truth = samples.normals;
+    samples.normals.clear();
+    EXPECT_TRUE(looks_like_camera_view(samples)) << solid.name;
+    const ComputedNormals computed = normals_as(samples, NormalsConfig{});
+    EXPECT_EQ(computed.report.side, ComponentSide::kOutward) << solid.name;
+    std::printf("[ closed object ] %s: agreement %.3f\n", solid.name.c_str(),
+                computed.report.view_agreement);
+    EXPECT_GE(share_agreeing(computed.normals, truth), 0.999) << solid.name;
+  }
+}
+
+// LAS heights: the terrain faces up wherever the origin is (here below it, where "towards the
+// origin" would turn it down, and with the centroid's rule indecisive on an open sheet).
+TEST(SceneSide, LasTerrainFacesUp) {
+  const PointCloud tile = terrain_tile(true);
+  EXPECT_EQ(scene_side(tile), ComponentSide::kAlongAxis);
+  const ComputedNormals computed = normals_as(tile, NormalsConfig{});
+  EXPECT_EQ(computed.report.side, ComponentSide::kAlongAxis);
+  EXPECT_STREQ(side_name(computed.report.side, computed.report.side_axis), "up");
+  EXPECT_GE(share_up(computed.normals), 0.999);
+  // Without the LAS flag this tile (its origin a corner below it, points up to 85 degrees off
+  // the z axis) is no camera view either: the centroid's rule decides.
+  EXPECT_FALSE(looks_like_camera_view(terrain_tile(false)));
+}
+
+TEST(SceneSide, UpDownAndFlipAreTheUsersChoice) {
+  const PointCloud tile = terrain_tile(false);
+  NormalsConfig config;
+  config.orientation = NormalOrientation::kDown;
+  EXPECT_LE(share_up(normals_as(tile, config).normals), 0.001);
+  config.orientation = NormalOrientation::kUp;
+  EXPECT_GE(share_up(normals_as(tile, config).normals), 0.999);
+  config.flip = true;  // up, turned over
+  const ComputedNormals flipped = normals_as(tile, config);
+  EXPECT_TRUE(flipped.report.flipped);
+  EXPECT_LE(share_up(flipped.normals), 0.001);
+  // The input's own normals are turned over too.
+  PointCloud with_normals = tile;
+  with_normals.normals.assign(tile.size(), Eigen::Vector3f::UnitZ());
+  NormalsConfig flip_only;
+  flip_only.flip = true;
+  const ComputedNormals input = normals_as(with_normals, flip_only);
+  EXPECT_EQ(input.report.source, NormalSource::kInput);
+  EXPECT_LE(share_up(input.normals), 0.0);
+}
+
+// `--orient viewpoint=X,Y,Z` on a georeferenced cloud names a point in world coordinates.
+TEST(SceneSide, AViewpointIsInTheFilesOwnCoordinates) {
+  PointCloud tile = terrain_tile(true);
+  tile.origin = Eigen::Vector3d(512000.0, 5403000.0, 0.0);  // a UTM tile's local frame
+  NormalsConfig config;
+  config.orientation = NormalOrientation::kTowardViewpoint;
+  config.viewpoint = Eigen::Vector3f(512030.0f, 5403030.0f, 1000.0f);  // above the tile
+  EXPECT_GE(share_up(normals_as(tile, config).normals), 0.999);
+  config.viewpoint = Eigen::Vector3f(512030.0f, 5403030.0f, -1000.0f);  // below it
+  EXPECT_LE(share_up(normals_as(tile, config).normals), 0.001);
 }
 
 }  // namespace

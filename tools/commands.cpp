@@ -123,12 +123,7 @@ void run_reconstruct(const ReconstructOptions& o) {
   };
   const double t0 = monotonic_seconds();
   pipeline.run_frame(frame);
-  throw_if_failed(*frame);
-  if (frame->mesh.empty()) {
-    throw Error(o.input, "",
-                "no surface was extracted (voxel size " + std::to_string(frame->voxel_size) +
-                    " m too small or too large?)");
-  }
+  throw_if_failed(*frame);  // an empty surface fails the extract or optimize stage
   if (o.texture && !frame->cloud.has_colors())
     throw Error(o.input, "", "--texture needs coloured points (the input has no colours)");
   std::size_t textures = 0;

@@ -77,6 +77,25 @@ TEST(LivePipeline, QueuePolicyDeliversEveryFrameInOrderWithFailuresReported) {
   EXPECT_GE(s.latency_p99_s, s.latency_p50_s);
 }
 
+// A cloud that gives no surface is delivered as a failed frame with the reason, never as an
+// ok frame with an empty mesh.
+TEST(LivePipeline, ACloudWithoutASurfaceIsDeliveredFailed) {
+  Received got;
+  LivePipeline live(live_sphere_config(LivePolicy::kQueue, 1, 4),
+                    [&](LiveResult& r) { got.add(r); });
+  PointCloud three;
+  three.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
+  live.push(std::move(three));
+  live.push(sphere(0));
+  live.flush();
+  ASSERT_EQ(got.results.size(), 2u);
+  EXPECT_FALSE(got.results[0].ok) << got.results[0].mesh.triangles.size() << " triangles";
+  EXPECT_FALSE(got.results[0].failed_stage.empty());
+  EXPECT_NE(got.results[0].error.find("triangle"), std::string::npos) << got.results[0].error;
+  EXPECT_TRUE(got.results[1].ok) << got.results[1].error;
+  EXPECT_EQ(live.stats().failed, 1u);
+}
+
 // The embedding API hands the callback the compressed bytes when asked: they decode to the
 // frame's mesh (positions within the quantisation step).
 TEST(LivePipeline, CallbackGetsTheCompressedMeshWhenAsked) {

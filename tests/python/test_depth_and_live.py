@@ -153,6 +153,23 @@ def test_pipeline_calls_back_in_push_order_with_exact_accounting():
     assert caller not in threads  # called back on the pipeline's threads
 
 
+def test_a_degenerate_cloud_is_a_failed_frame_not_an_empty_mesh():
+    """Three points: reconstruct() raises, and Pipeline delivers a failed frame saying why."""
+    three = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0]], dtype=np.float32)
+    with pytest.raises(meshflow.Error, match="triangle"):
+        meshflow.reconstruct(three)
+    results = []
+    with meshflow.Pipeline(results.append, policy="queue") as live:
+        live.push(three)
+        live.flush()
+        stats = live.stats()
+    assert len(results) == 1
+    assert not results[0].ok and results[0].mesh is None
+    assert results[0].failed_stage in ("extract", "optimize")
+    assert "triangle" in results[0].error
+    assert stats["delivered"] == 1 and stats["failed"] == 1
+
+
 # The callback's exception is printed as Python prints one raised in a thread (pytest turns
 # that into a warning).
 @pytest.mark.filterwarnings("ignore::pytest.PytestUnraisableExceptionWarning")

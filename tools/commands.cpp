@@ -106,6 +106,11 @@ void run_reconstruct(const ReconstructOptions& o) {
     if (o.texture) throw Error(o.output, "", "--texture and --compress exclude each other");
     io::check_output_writable(o.output);
   } else {
+    const std::string ext = io::lower_extension(o.output);
+    if (ext != ".ply" && ext != ".obj" && ext != ".stl" && ext != ".off" && ext != ".glb")
+      throw Error(o.output, "",
+                  "unknown mesh format '" + ext +
+                      "' (expected .ply .obj .stl .off or .glb, or .mfc for a compressed mesh)");
     io::check_mesh_output_format(o.output);
   }
   if (o.texture && io::lower_extension(o.output) != ".obj")

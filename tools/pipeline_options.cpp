@@ -5,6 +5,7 @@
 #include "nodes/extract/extract_surface.h"
 #include "nodes/synthetic/depth_sequence.h"
 #include "nodes/synthetic/scan_sequence.h"
+#include "runtime/error.h"
 #include "tools/cli_checks.h"
 
 namespace meshflow::cli {
@@ -74,26 +75,32 @@ void parse_orientation(const std::string& text, NormalsConfig& normals) {
       return;
     }
   }
-  throw CLI::ValidationError("--orient",
-                             "expected auto, sensor, propagate, input, "
-                             "viewpoint=X,Y,Z or away=X,Y,Z; got '" +
-                                 text + "'");
+  throw CLI::ValidationError("--orient", orientation_expected(text));
+}
+
+std::string orientation_expected(const std::string& text) {
+  return "expected auto, sensor, propagate, input, viewpoint=X,Y,Z or away=X,Y,Z; got '" + text +
+         "'";
 }
 
 void add_pipeline_options(CLI::App* cmd, PipelineOptions& o) {
-  cmd->add_option("--voxel", o.voxel, "Voxel size in metres (default: 3x the median point spacing)")
-      ->check(number_in(0, 1000));
+  // Options whose default is a sentinel (0, -1, empty) show what it stands for in --help.
+  cmd->add_option("--voxel", o.voxel, "Voxel size in metres (auto: 3x the median point spacing)")
+      ->check(number_in(0, 1000))
+      ->default_str("auto");
   cmd->add_option("--kn", o.kn, "Neighbours for normal estimation")->check(CLI::Range(3, 1000));
   cmd->add_option("--ki", o.ki, "Neighbours for normal interpolation (0 = off)")
       ->check(CLI::Range(0, 1000));
   cmd->add_option("--kd", o.kd, "Tangent planes averaged per distance sample")
       ->check(CLI::Range(1, 64));
-  cmd->add_option("--threads", o.threads, "Worker threads (default: all cores)")
-      ->check(CLI::Range(0, 1024));
+  cmd->add_option("--threads", o.threads, "Worker threads (0: all cores)")
+      ->check(CLI::Range(0, 1024))
+      ->default_str("all cores");
   cmd->add_option("--max-memory", o.max_memory,
                   "Refuse a frame whose points, grid and distances (or a fused map) would take "
-                  "more memory: 512M, 4G, ...; 0 = no limit (default: 80 % of physical memory)")
-      ->check(byte_size());
+                  "more memory: 512M, 4G, ...; 0 = no limit")
+      ->check(byte_size())
+      ->default_str("80% of RAM");
   cmd->add_flag("--adaptive-k", o.adaptive_k, "Grow kn where neighbourhoods are degenerate");
   cmd->add_option("--max-distance", o.max_distance,
                   "Distance samples farther than this many voxels from the data are invalid")
@@ -143,16 +150,17 @@ void add_pipeline_options(CLI::App* cmd, PipelineOptions& o) {
         try {
           parse_optimize_steps(list);
           return "";
-        } catch (const std::exception& e) {
-          return e.what();
+        } catch (const Error& e) {  // CLI11 puts the option's name in front
+          return e.location() + ": " + e.problem();
         }
       });
   cmd->add_option("--max-hole", o.max_hole, "holes step: close border loops up to this many edges")
       ->check(number_in(0, 1e9));
   cmd->add_option("--contour-tolerance", o.contour_tolerance,
                   "retriangulate step: Douglas-Peucker tolerance of region contours, metres "
-                  "(default: 0.4 voxel)")
-      ->check(number_in(0, 1000));
+                  "(auto: 0.4 voxel)")
+      ->check(number_in(0, 1000))
+      ->default_str("auto");
   cmd->add_option("--max-projection", o.max_projection,
                   "planes step: vertices farther from their plane stay, metres (0 = no limit)")
       ->check(number_in(0, 1000));
@@ -162,8 +170,9 @@ void add_pipeline_options(CLI::App* cmd, PipelineOptions& o) {
       ->check(number_in(0, 1000));
   cmd->add_option("--remesh-tolerance", o.remesh_tolerance,
                   "remesh step: largest deviation of an edge from the surface, metres "
-                  "(0 = a quarter of the median edge)")
-      ->check(number_in(0, 1000));
+                  "(auto, 0: a quarter of the median edge)")
+      ->check(number_in(0, 1000))
+      ->default_str("auto");
   cmd->add_option("--decimate-to", o.decimate_to, "decimate step: share of the triangles to keep")
       ->check(number_in(0, 1));
   cmd->add_option("--normals", o.normals,
@@ -180,8 +189,8 @@ void add_pipeline_options(CLI::App* cmd, PipelineOptions& o) {
           NormalsConfig probe;
           parse_orientation(text, probe);
           return "";
-        } catch (const CLI::ValidationError& e) {
-          return e.what();
+        } catch (const CLI::ValidationError&) {  // CLI11 puts the option's name in front
+          return orientation_expected(text);
         }
       });
   cmd->add_flag("--organized-as-depth", o.organized_as_depth,
@@ -237,12 +246,14 @@ void add_sequence_options(CLI::App* cmd, SequenceArgument& a) {
                        w <= 8192 && h <= 8192
                    ? ""
                    : "expected WxH between 16x16 and 8192x8192, got '" + text + "'";
-      });
+      })
+      ->default_str("640x480");
   cmd->add_option("--in-flight", a.in_flight, "Frames in the pipeline at once")
       ->check(CLI::Range(1, 64));
   cmd->add_option("--every", a.every, "Take every N-th frame")->check(CLI::Range(1, 1000000));
   cmd->add_option("--max-frames", a.max_frames, "Stop after N frames (0 = all)")
-      ->check(number_in(0, 1e15));
+      ->check(number_in(0, 1e15))
+      ->default_str("all");
 }
 
 std::unique_ptr<io::Sequence> open_sequence_argument(const SequenceArgument& a) {

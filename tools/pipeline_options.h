@@ -58,6 +58,9 @@ void add_pipeline_options(CLI::App* cmd, PipelineOptions& options);
 /// `normals`. Throws CLI::ValidationError naming what was expected.
 void parse_orientation(const std::string& text, NormalsConfig& normals);
 
+/// parse_orientation()'s message for `text` it refuses, without the option's name.
+std::string orientation_expected(const std::string& text);
+
 /// Per-frame depth-map triangulation instead of the volumetric stages (run, profile, live).
 struct TriangulationOptions {
   std::string method;  ///< "" (volumetric stages), "naive" or "rqt"

@@ -98,7 +98,8 @@ Mesh reconstruct(const py::object& input, const py::object& normals, const py::o
     frame = pipeline.reconstruct(*cloud.data, "array");
   }
   // An empty surface fails the extract or optimize stage, as on the CLI and in Pipeline.
-  if (!frame->ok()) throw Error("reconstruct", frame->failed_stage, frame->error);
+  // frame->error names the input and the stage already ("array: extract: ...").
+  if (!frame->ok()) throw Error("reconstruct", "", frame->error);
   Mesh mesh;
   *mesh.data = std::move(frame->mesh);
   mesh.origin = frame->origin;

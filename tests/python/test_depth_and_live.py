@@ -156,8 +156,10 @@ def test_pipeline_calls_back_in_push_order_with_exact_accounting():
 def test_a_degenerate_cloud_is_a_failed_frame_not_an_empty_mesh():
     """Three points: reconstruct() raises, and Pipeline delivers a failed frame saying why."""
     three = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0]], dtype=np.float32)
-    with pytest.raises(meshflow.Error, match="no surface|triangles"):
+    with pytest.raises(meshflow.Error, match="no surface|triangles") as raised:
         meshflow.reconstruct(three)
+    message = str(raised.value)
+    assert message.count(": extract:") + message.count(": optimize:") == 1, message  # once
     results = []
     with meshflow.Pipeline(results.append, policy="queue") as live:
         live.push(three)

@@ -129,6 +129,19 @@ TEST(Pipeline, ThreePointsFailAStageInsteadOfGivingAnEmptyMesh) {
   }
 }
 
+// Optimisation that removes every triangle fails the frame too, naming the step.
+TEST(Pipeline, AnOptimizeStepThatRemovesEveryTriangleFailsTheFrame) {
+  ReconstructionConfig config = sphere_config();
+  config.optimize.cleanup.min_component_triangles = 1000000;  // larger than the sphere's mesh
+  ReconstructionPipeline pipeline(config);
+  const FramePtr f = pipeline.reconstruct(
+      synthetic::sample_surface(synthetic::Sphere{{0, 0, 0}, 1.0f}, 0.05f, 0.0f, 1), "sphere");
+  ASSERT_FALSE(f->ok()) << f->mesh.triangles.size() << " triangles";
+  EXPECT_EQ(f->failed_stage, "optimize");
+  EXPECT_NE(f->error.find("the clean step removed all"), std::string::npos) << f->error;
+  EXPECT_NE(f->error.find("--min-component 1000000"), std::string::npos) << f->error;
+}
+
 TEST(Pipeline, StagesRecordTimingsAndItems) {
   Frame f;
   f.cloud = synthetic::sample_surface(synthetic::Sphere{}, 0.05f, 0.0f, 1);

@@ -109,6 +109,8 @@ def test_bad_depth_input_is_a_clear_error():
         meshflow.triangulate_depth(depth[0], K, pose)
     with pytest.raises(ValueError, match="pose: expected a 4 x 4"):
         meshflow.triangulate_depth(depth, K, np.eye(3))
+    with pytest.raises(meshflow.Error, match="triangulate: no triangle"):  # not an empty Mesh
+        meshflow.triangulate_depth(np.zeros_like(depth), K, pose)
     bad_pose = pose.copy()
     bad_pose[0, 3] = np.nan
     with pytest.raises(ValueError, match="pose: not finite"):

@@ -1,5 +1,6 @@
 #include "graph/stages.h"
 
+#include <cstdio>
 #include <exception>
 #include <iterator>
 #include <optional>
@@ -37,6 +38,16 @@ std::size_t frame_memory_estimate(const PointCloud& cloud, const SparseGrid& gri
 }  // namespace meshflow
 
 namespace meshflow::stages {
+namespace {
+
+// A size or setting in a message: "0.05", "3", "1.5e-05" (std::to_string gives "0.050000").
+std::string short_number(float value) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%g", static_cast<double>(value));
+  return text;
+}
+
+}  // namespace
 
 std::uint64_t read(Frame& f, const ReconstructionConfig& c) {
   if (f.load_depth) {
@@ -179,12 +190,29 @@ std::uint64_t extract(Frame& f, const ReconstructionConfig& c) {
         f.normals.sharp ? ExtractMethod::kExtendedMarchingCubes : ExtractMethod::kMarchingCubes;
   f.extract_method = config.method;
   f.mesh = extract_surface(f.grid, f.distance, f.cloud, f.index.get(), config);
+  const std::size_t extracted = f.mesh.triangles.size();
   if (f.index && c.max_rim_voxels > 0.0f) {
     const float limit = c.max_rim_voxels * f.voxel_size;
     if (f.owned_cells)  // a chunk: the rim is trimmed once the chunks are stitched
       f.beyond_data = vertices_beyond_data(f.mesh.vertices, f.cloud.positions, *f.index, limit);
     else
       f.mesh = trim_rim(f.mesh, f.cloud.positions, *f.index, limit, &f.rim_trimmed);
+  }
+  // A frame without a surface fails here, on every path (reconstruct, run, the embedding API),
+  // rather than passing on as an "ok" frame with an empty mesh. A chunk may own no surface.
+  if (f.mesh.triangles.empty() && !f.owned_cells) {
+    const std::string grid = std::to_string(f.grid.cells.size()) + " cells of " +
+                             short_number(f.voxel_size) + " m from " +
+                             std::to_string(f.cloud.size()) + " points";
+    throw Error(f.name, "extract",
+                extracted == 0
+                    ? "no surface was extracted (" + grid +
+                          "); expected at least one triangle: too few points, or a voxel size "
+                          "too small or too large for their spacing?"
+                    : "the rim trim (--max-rim " + short_number(c.max_rim_voxels) +
+                          " voxels) removed all " + std::to_string(extracted) +
+                          " extracted triangles (" + grid +
+                          "); expected a surface within reach of the points");
   }
   if (f.depth) {  // a depth frame with a colour image gives a coloured mesh
     f.mesh.colors = vertex_colors_from_image(f.mesh.vertices, *f.depth);
@@ -198,7 +226,22 @@ std::uint64_t optimize(Frame& f, const ReconstructionConfig& c) {
   OptimizeConfig config = optimize_config_for_voxel(c, f.voxel_size);
   if (f.on_stage)
     config.on_step = [&f](OptimizeStep step) { f.on_stage("optimize", optimize_step_name(step)); };
+  const std::size_t before = f.mesh.triangles.size();
   f.mesh = optimize_mesh(f.mesh, config, &f.optimize);
+  if (f.mesh.triangles.empty() && before > 0 && !f.owned_cells) {  // nothing left: a failed frame
+    std::string why = "the steps removed all " + std::to_string(before) + " triangles";
+    for (const OptimizeStepReport& step : f.optimize.steps) {
+      if (step.triangles_in == 0 || step.triangles_out > 0) continue;
+      why = "the " + std::string(optimize_step_name(step.step)) + " step removed all " +
+            std::to_string(step.triangles_in) + " triangles" +
+            (step.detail.empty() ? "" : " (" + step.detail + ")");
+      if (step.step == OptimizeStep::kClean)
+        why += ": every component has fewer than --min-component " +
+               std::to_string(config.cleanup.min_component_triangles) + " triangles";
+      break;
+    }
+    throw Error(f.name, "optimize", why + "; expected a mesh with at least one triangle");
+  }
   return f.mesh.triangles.size();
 }
 
@@ -217,6 +260,10 @@ std::uint64_t triangulate(Frame& f, const ReconstructionConfig& c) {
                 "(width x height points); got an unorganized cloud of " +
                     std::to_string(f.cloud.size()) + " points");
   }
+  if (f.mesh.triangles.empty())  // a failed frame, not an "ok" one with an empty mesh
+    throw Error(f.name, "triangulate",
+                "no triangle was made: expected valid depths at three neighbouring pixels or "
+                "points at least once (is the frame empty or all out of range?)");
   return f.mesh.triangles.size();
 }
 

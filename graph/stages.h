@@ -19,7 +19,11 @@ std::uint64_t index(Frame& f, const ReconstructionConfig& c);     ///< points in
 std::uint64_t normals(Frame& f, const ReconstructionConfig& c);   ///< normals estimated
 std::uint64_t voxelize(Frame& f, const ReconstructionConfig& c);  ///< cells
 std::uint64_t distance(Frame& f, const ReconstructionConfig& c);  ///< corners evaluated
-std::uint64_t extract(Frame& f, const ReconstructionConfig& c);   ///< triangles
+/// Fails a frame left without triangles (nothing extracted, or the rim trim took them all),
+/// saying why, so no path passes on an "ok" frame with an empty mesh; a chunk (owned_cells
+/// set) may be empty.
+std::uint64_t extract(Frame& f, const ReconstructionConfig& c);  ///< triangles
+/// Fails a frame (not a chunk) whose steps removed every triangle, naming the step.
 std::uint64_t optimize(Frame& f, const ReconstructionConfig& c);  ///< triangles kept
 
 /// Fusion's filter: the depth filter only (no back-projection); keeps the frame's colour.
@@ -28,7 +32,8 @@ std::uint64_t filter_depth_image(Frame& f, const ReconstructionConfig& c);  ///<
 
 /// Depth-map triangulation straight into `mesh` (c.triangulation; no voxel grid) of a depth
 /// frame, or of an organized point cloud (width x height points, NaN = invalid, e.g. a Kinect
-/// PCD) seen from its sensor origin. Fails other frames, naming what was expected.
+/// PCD) seen from its sensor origin. Fails other frames, naming what was expected, and frames
+/// that give no triangle.
 std::uint64_t triangulate(Frame& f, const ReconstructionConfig& c);  ///< triangles
 
 /// Codes the frame's mesh into f.compressed (c.compression, c.compress; the frame's origin

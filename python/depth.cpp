@@ -127,7 +127,8 @@ void bind_depth(py::module_& m) {
       R"(Triangulates one depth image in the world frame (pose: 4 x 4 camera-to-world; None =
 the camera frame): 'naive' (two triangles per pixel quad, occlusion edges cut) or 'rqt' (the
 restricted quadtree: large triangles where the surface is flat); decimate in (0, 1) keeps that
-share of the triangles (QEM). Vertex colours when color is given.)");
+share of the triangles (QEM). Vertex colours when color is given. An image that gives no
+triangle (no valid depth) raises meshflow.Error.)");
 
   py::class_<Volume>(m, "TsdfVolume",
                      "A sparse TSDF map (8^3-voxel blocks) that depth frames are fused into.")

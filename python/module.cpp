@@ -137,11 +137,9 @@ Mesh reconstruct(const py::object& input, const py::object& normals, const py::o
     ReconstructionPipeline pipeline(config, 1);
     frame = pipeline.reconstruct(*cloud.data, "array");
   }
-  if (!frame->ok()) throw Error("reconstruct", frame->failed_stage, frame->error);
-  if (frame->mesh.empty())
-    throw Error("reconstruct", "",
-                "no surface was extracted (voxel size " + std::to_string(frame->voxel_size) +
-                    " m too small or too large?)");
+  // An empty surface fails the extract or optimize stage, as on the CLI and in Pipeline.
+  // frame->error names the input and the stage already ("array: extract: ...").
+  if (!frame->ok()) throw Error("reconstruct", "", frame->error);
   Mesh mesh;
   *mesh.data = std::move(frame->mesh);
   mesh.origin = frame->origin;

@@ -117,6 +117,11 @@ void run_reconstruct(const ReconstructOptions& o) {
     if (o.texture) throw Error(o.output, "", "--texture and --compress exclude each other");
     io::check_output_writable(o.output);
   } else {
+    const std::string ext = io::lower_extension(o.output);
+    if (ext != ".ply" && ext != ".obj" && ext != ".stl" && ext != ".off" && ext != ".glb")
+      throw Error(o.output, "",
+                  "unknown mesh format '" + ext +
+                      "' (expected .ply .obj .stl .off or .glb, or .mfc for a compressed mesh)");
     io::check_mesh_output_format(o.output);
   }
   if (o.texture && io::lower_extension(o.output) != ".obj")
@@ -134,12 +139,7 @@ void run_reconstruct(const ReconstructOptions& o) {
   };
   const double t0 = monotonic_seconds();
   pipeline.run_frame(frame);
-  throw_if_failed(*frame);
-  if (frame->mesh.empty()) {
-    throw Error(o.input, "",
-                "no surface was extracted (voxel size " + std::to_string(frame->voxel_size) +
-                    " m too small or too large?)");
-  }
+  throw_if_failed(*frame);  // an empty surface fails the extract or optimize stage
   if (o.texture && !frame->cloud.has_colors())
     throw Error(o.input, "", "--texture needs coloured points (the input has no colours)");
   std::size_t textures = 0;

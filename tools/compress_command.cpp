@@ -174,16 +174,18 @@ void run_compressed_info(const std::string& path) {
 void add_compress_options(CLI::App* cmd) {
   auto o = std::make_shared<CompressOptions>();
   cmd->add_option("input", o->input, "Mesh: .ply .obj .off .stl")->required();
-  cmd->add_option("output", o->output, "Compressed mesh (.mfc)")->required();
+  cmd->add_option("output,-o,--output", o->output, "Compressed mesh (.mfc)")->required();
   cmd->add_flag("--progressive", o->progressive,
                 "Progressive mesh (a coarse base mesh and vertex splits) instead of Edgebreaker");
   cmd->add_option("--bits", o->bits,
                   "Position quantisation: the bounding box's longest side in 2^bits steps "
-                  "(default: from --step)")
-      ->check(CLI::Range(1u, 30u));
+                  "(auto: from --step)")
+      ->check(CLI::Range(1u, 30u))
+      ->default_str("auto");
   cmd->add_option("--step", o->step,
-                  "Quantisation step, metres (default: 1/64 of the median edge length)")
-      ->check(CLI::PositiveNumber);
+                  "Quantisation step, metres (auto: 1/64 of the median edge length)")
+      ->check(CLI::PositiveNumber)
+      ->default_str("auto");
   cmd->add_flag("--no-normals", o->no_normals, "Leave the mesh's normals out");
   cmd->add_flag("--no-colors", o->no_colors, "Leave the mesh's colours out");
   cmd->add_option("--base-ratio", o->base_ratio,
@@ -197,13 +199,17 @@ void add_compress_options(CLI::App* cmd) {
 void add_decompress_options(CLI::App* cmd) {
   auto o = std::make_shared<DecompressOptions>();
   cmd->add_option("input", o->input, "Compressed mesh (.mfc)")->required();
-  cmd->add_option("output", o->output, "Output mesh: .ply .obj .stl .off .glb")->required();
+  cmd->add_option("output,-o,--output", o->output, "Output mesh: .ply .obj .stl .off .glb")
+      ->required();
   cmd->add_option("--level", o->splits,
-                  "Progressive: apply this many vertex splits to the base mesh (0: the base)")
-      ->check(CLI::NonNegativeNumber);
+                  "Progressive: apply this many vertex splits to the base mesh (0: the base; "
+                  "default: all of them, the full mesh)")
+      ->check(CLI::NonNegativeNumber)
+      ->default_str("all");
   cmd->add_option("--triangles", o->triangles,
                   "Progressive: refine until the mesh has this many triangles")
-      ->check(CLI::NonNegativeNumber);
+      ->check(CLI::NonNegativeNumber)
+      ->default_str("all");
   add_console_flags(cmd, true);
   cmd->callback([o] { run_decompress(*o); });
 }

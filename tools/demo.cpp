@@ -77,8 +77,9 @@ void add_demo_options(CLI::App* cmd) {
   cmd->add_option("--voxel", opts->voxel, "Voxel size in metres")->check(number_in(0, 1000, true));
   cmd->add_option("--noise", opts->noise, "Range noise of the simulated scanner, metres")
       ->check(number_in(0, 1));
-  cmd->add_option("--threads", opts->threads, "Worker threads (default: all cores)")
-      ->check(CLI::Range(0, 1024));
+  cmd->add_option("--threads", opts->threads, "Worker threads (0: all cores)")
+      ->check(CLI::Range(0, 1024))
+      ->default_str("all cores");
   add_console_flags(cmd, false);
   cmd->callback([opts] { run_demo(*opts); });
 }

@@ -124,8 +124,9 @@ void add_eval_options(CLI::App* cmd) {
   auto wall_radius = std::make_shared<float>(0.0f);
   cmd->add_option("--wall-radius", *wall_radius,
                   "Double walls: parts of the mesh closer than this (metres) that are 3x as far "
-                  "apart along the mesh (0 = the median edge length)")
-      ->check(number_in(0, 1e6));
+                  "apart along the mesh (auto, 0: the median edge length)")
+      ->check(number_in(0, 1e6))
+      ->default_str("auto");
   add_console_flags(cmd, true);
   cmd->callback([mesh_path, reference_path, object_name, wall_radius] {
     const TriangleMesh mesh = io::read_mesh(*mesh_path);

@@ -66,16 +66,19 @@ void run_optimize(const OptimizeOptions& o) {
 void add_optimize_options(CLI::App* cmd) {
   auto o = std::make_shared<OptimizeOptions>();
   cmd->add_option("input", o->input, "Mesh to optimise: .ply .obj .off .stl")->required();
-  cmd->add_option("output", o->output, "Output mesh: .ply .obj .stl .off .glb")->required();
+  cmd->add_option("output,-o,--output", o->output, "Output mesh: .ply .obj .stl .off .glb")
+      ->required();
   add_pipeline_options(cmd, o->pipeline);
   // Only the optimize settings apply here; --voxel is the scale of the voxel-relative ones.
   for (const char* unused :
        {"--kn", "--ki", "--kd", "--adaptive-k", "--max-distance", "--max-disagreement",
-        "--max-extrapolation", "--filter-voxel", "--outlier-k", "--min-range", "--max-range",
-        "--extract", "--normals", "--orient", "--organized-as-depth"})
+        "--max-extrapolation", "--max-rim", "--filter-voxel", "--outlier-k", "--min-range",
+        "--max-range", "--depth-median", "--depth-bilateral", "--extract", "--normals", "--orient",
+        "--organized-as-depth", "--max-memory"})
     cmd->remove_option(cmd->get_option(unused));
-  cmd->get_option("--voxel")->description(
-      "Scale of the voxel-relative tolerances, metres (default: the median edge length)");
+  cmd->get_option("--voxel")
+      ->description("Scale of the voxel-relative tolerances, metres (auto: the median edge length)")
+      ->default_str("auto");
   add_console_flags(cmd, true);
   cmd->callback([o] { run_optimize(*o); });
 }

@@ -8,6 +8,7 @@
 #include "nodes/extract/extract_surface.h"
 #include "nodes/synthetic/depth_sequence.h"
 #include "nodes/synthetic/scan_sequence.h"
+#include "runtime/error.h"
 #include "tools/cli_checks.h"
 
 namespace meshflow::cli {
@@ -113,12 +114,14 @@ void add_sequence_options(CLI::App* cmd, SequenceArgument& a) {
                        w <= 8192 && h <= 8192
                    ? ""
                    : "expected WxH between 16x16 and 8192x8192, got '" + text + "'";
-      });
+      })
+      ->default_str("640x480");
   cmd->add_option("--in-flight", a.in_flight, "Frames in the pipeline at once")
       ->check(CLI::Range(1, 64));
   cmd->add_option("--every", a.every, "Take every N-th frame")->check(CLI::Range(1, 1000000));
   cmd->add_option("--max-frames", a.max_frames, "Stop after N frames (0 = all)")
-      ->check(number_in(0, 1e15));
+      ->check(number_in(0, 1e15))
+      ->default_str("all");
 }
 
 std::unique_ptr<io::Sequence> open_sequence_argument(const SequenceArgument& a) {

@@ -4,6 +4,8 @@
 #include <filesystem>
 #include <memory>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "graph/fusion_pipeline.h"
 #include "graph/merged_scans.h"
@@ -14,6 +16,7 @@
 #include "nodes/io/atomic_file.h"
 #include "nodes/io/byte_buffer.h"
 #include "nodes/io/mesh_writers.h"
+#include "nodes/io/parse_util.h"
 #include "runtime/error.h"
 #include "runtime/threads.h"
 #include "tools/cli_checks.h"
@@ -91,17 +94,70 @@ struct RunOptions {
   std::string compress;  ///< --compress method ("" = PLY outputs)
 };
 
-std::unique_ptr<io::Sequence> open_output(const RunOptions& o) {
-  auto sequence = open_sequence_argument(o.sequence);
-  std::error_code ec;
-  std::filesystem::create_directories(o.output_dir, ec);
-  if (ec || !std::filesystem::is_directory(o.output_dir)) {
-    throw Error(o.output_dir, "",
-                "cannot create output directory: " +
-                    (ec ? ec.message() : std::string("a file of that name exists")));
+// -o of run names a directory; a mesh file's name there is a usage error, not a directory
+// called "out.ply".
+std::string output_directory_check(const std::string& path) {
+  const std::string ext = io::lower_extension(path);
+  for (const char* mesh : {".ply", ".obj", ".stl", ".off", ".glb", ".mfc"}) {
+    if (ext == mesh)
+      return "run writes its meshes into a directory (frame_NNNNNN.ply, merged.ply, fused.ply, "
+             "...); '" +
+             path + "' is a mesh file's name: give a directory";
   }
-  io::check_output_writable((std::filesystem::path(o.output_dir) / "meshflow_probe").string());
-  return sequence;
+  return "";
+}
+
+// The output directory of a run: created (with its missing parents) before the first frame, so
+// an unwritable place fails before any work, and removed again when the run leaves it empty
+// (a failed run leaves no empty directories behind).
+class OutputDirectory {
+ public:
+  explicit OutputDirectory(const std::string& path) {
+    namespace fs = std::filesystem;
+    std::error_code ec;
+    fs::path deepest = fs::path(path).lexically_normal();
+    if (!deepest.has_filename()) deepest = deepest.parent_path();  // "dir/"
+    for (fs::path p = deepest; !p.empty() && !fs::exists(p, ec); p = p.parent_path()) {
+      created_.push_back(p);
+      if (p == p.parent_path()) break;
+    }
+    fs::create_directories(path, ec);
+    if (ec || !fs::is_directory(path)) {
+      remove_if_empty();
+      throw Error(path, "",
+                  "cannot create output directory: " +
+                      (ec ? ec.message() : std::string("a file of that name exists")));
+    }
+    try {
+      io::check_output_writable((fs::path(path) / "meshflow_probe").string());
+    } catch (...) {
+      remove_if_empty();
+      throw;
+    }
+  }
+  ~OutputDirectory() { remove_if_empty(); }
+  OutputDirectory(const OutputDirectory&) = delete;
+  OutputDirectory& operator=(const OutputDirectory&) = delete;
+
+ private:
+  // The directories this run created, deepest first, while they are empty.
+  void remove_if_empty() noexcept {
+    std::error_code ec;
+    for (const std::filesystem::path& p : created_) {
+      if (!std::filesystem::is_empty(p, ec) || ec) return;
+      std::filesystem::remove(p, ec);
+    }
+    created_.clear();
+  }
+
+  std::vector<std::filesystem::path> created_;
+};
+
+// The sequence, and the output directory (which removes itself when the run leaves it empty).
+std::pair<std::unique_ptr<io::Sequence>, std::unique_ptr<OutputDirectory>> open_output(
+    const RunOptions& o) {
+  auto sequence = open_sequence_argument(o.sequence);
+  return {std::move(sequence), std::make_unique<OutputDirectory>(o.output_dir)};
 }
 
 // Writes DIR/STEM.ply, or with --compress DIR/STEM.mfc: `compressed` when the graph's compress
@@ -131,7 +187,8 @@ void finish_run(const SequenceRunStats& stats) {
 // fused_NNNNNN.ply after every --mesh-every frames).
 void run_fusion(const RunOptions& o) {
   ThreadLimit limit(o.pipeline.threads);
-  const auto sequence = open_output(o);
+  const auto opened = open_output(o);
+  const std::unique_ptr<io::Sequence>& sequence = opened.first;
   if (!o.save_map.empty()) io::check_output_writable(o.save_map);
   FusionConfig config;
   config.frames = o.pipeline.config();
@@ -208,7 +265,8 @@ void append_mesh(TriangleMesh& into, const TriangleMesh& mesh) {
 // in a flow graph, the clouds joined in the world frame, one reconstruction of the whole.
 void run_merged(const RunOptions& o) {
   ThreadLimit limit(o.pipeline.threads);
-  const auto sequence = open_output(o);
+  const auto opened = open_output(o);
+  const std::unique_ptr<io::Sequence>& sequence = opened.first;
   ReconstructionConfig config = o.pipeline.config();
   config.compression = compression_for(o.compress, "");
   ScanPreparationPipeline preparation(config, o.sequence.in_flight);
@@ -255,7 +313,8 @@ void run_run(const RunOptions& o) {
   if (o.fuse) return run_fusion(o);
   if (o.merged) return run_merged(o);
   ThreadLimit limit(o.pipeline.threads);
-  const auto sequence = open_output(o);
+  const auto opened = open_output(o);
+  const std::unique_ptr<io::Sequence>& sequence = opened.first;
   ReconstructionConfig config = pipeline_config(o.pipeline, o.triangulation);
   if (!o.concatenate) config.compression = compression_for(o.compress, "");
   ReconstructionPipeline pipeline(config, o.sequence.in_flight, o.triangulation.enabled());
@@ -333,7 +392,10 @@ void run_profile(const ProfileOptions& o) {
 void add_run_options(CLI::App* cmd) {
   auto o = std::make_shared<RunOptions>();
   add_sequence_options(cmd, o->sequence);
-  cmd->add_option("-o,--output", o->output_dir, "Output directory")->required();
+  cmd->add_option("-o,--output", o->output_dir,
+                  "Output directory (created if missing; not a mesh file's name)")
+      ->required()
+      ->check(CLI::Validator(output_directory_check, "DIR"));
   auto* per_frame = cmd->add_flag("--per-frame", "One mesh per frame, frame_NNNNNN.ply (default)");
   auto* merged = cmd->add_flag("--merged", o->merged,
                                "One surface of all frames (registered scans, posed depth frames): "

@@ -133,6 +133,22 @@ std::unique_ptr<Sequence> open_sequence(const std::string& path) {
           return open_depth_image_directory(path);
       }
     }
+    bool scans = false;
+    std::size_t entries = 0;
+    for (const auto& entry : fs::directory_iterator(path)) {
+      ++entries;
+      scans |= entry.is_regular_file() && scan_number(entry.path().filename().string()) >= 0;
+    }
+    if (!scans)
+      throw Error(path, "",
+                  "holds no recognisable sequence (" +
+                      (entries == 0   ? std::string("the directory is empty")
+                       : entries == 1 ? std::string("1 entry, not a frame")
+                                      : std::to_string(entries) + " entries, none of them frames") +
+                      "); looked for 3DTK scans (scanNNN.3d + scanNNN.pose), point clouds "
+                      "(*.pcd, *.ply), depth images (*depth*.png, .tif, .tiff, .pclzf), a "
+                      "Redwood / Open3D RGB-D directory (depth/) and a TUM RGB-D directory "
+                      "(depth.txt)");
     return open_3dtk_directory(path);
   }
   if (!fs::exists(path)) throw Error(path, "", "no such file or directory");

@@ -77,6 +77,46 @@ TEST(LivePipeline, QueuePolicyDeliversEveryFrameInOrderWithFailuresReported) {
   EXPECT_GE(s.latency_p99_s, s.latency_p50_s);
 }
 
+// A cloud that gives no surface is delivered as a failed frame with the reason, never as an
+// ok frame with an empty mesh.
+TEST(LivePipeline, ACloudWithoutASurfaceIsDeliveredFailed) {
+  Received got;
+  LivePipeline live(live_sphere_config(LivePolicy::kQueue, 1, 4),
+                    [&](LiveResult& r) { got.add(r); });
+  PointCloud three;
+  three.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
+  live.push(std::move(three));
+  live.push(sphere(0));
+  live.flush();
+  ASSERT_EQ(got.results.size(), 2u);
+  EXPECT_FALSE(got.results[0].ok) << got.results[0].mesh.triangles.size() << " triangles";
+  EXPECT_FALSE(got.results[0].failed_stage.empty());
+  EXPECT_NE(got.results[0].error.find("triangle"), std::string::npos) << got.results[0].error;
+  EXPECT_TRUE(got.results[1].ok) << got.results[1].error;
+  EXPECT_EQ(live.stats().failed, 1u);
+}
+
+// The same on the per-frame triangulation path: a depth image without a valid pixel.
+TEST(LivePipeline, ADepthImageWithoutMeasurementsIsDeliveredFailedWhenTriangulating) {
+  synthetic::DepthSequenceConfig camera;
+  camera.frames = 1;
+  camera.intrinsics = PinholeIntrinsics{160, 120, 131.25f, 131.25f, 79.5f, 59.5f};
+  const auto seq = synthetic::make_depth_sequence(synthetic::demo_room_scene(), camera);
+  LiveConfig config;
+  config.policy = LivePolicy::kQueue;
+  config.triangulate_depth_maps = true;
+  Received got;
+  LivePipeline live(config, [&](LiveResult& r) { got.add(r); });
+  DepthFrame blank = seq->frame(0).load_depth();
+  blank.depth = Image(blank.depth.rows(), blank.depth.cols(), PixelFormat::U16);  // all 0
+  live.push(std::move(blank));
+  live.flush();
+  ASSERT_EQ(got.results.size(), 1u);
+  EXPECT_FALSE(got.results[0].ok) << got.results[0].mesh.vertices.size() << " vertices";
+  EXPECT_EQ(got.results[0].failed_stage, "triangulate");
+  EXPECT_NE(got.results[0].error.find("no triangle"), std::string::npos) << got.results[0].error;
+}
+
 // The embedding API hands the callback the compressed bytes when asked: they decode to the
 // frame's mesh (positions within the quantisation step).
 TEST(LivePipeline, CallbackGetsTheCompressedMeshWhenAsked) {

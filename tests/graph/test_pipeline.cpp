@@ -111,6 +111,37 @@ TEST(Pipeline, CoincidentPointsFailWithAReasonWhateverTheVoxelSize) {
   }
 }
 
+// Three points span a plane but make no surface: the frame fails in a stage, saying so, instead
+// of passing as an "ok" frame with an empty mesh (the CLI's run, the embedding API and Python
+// all go through these stages).
+TEST(Pipeline, ThreePointsFailAStageInsteadOfGivingAnEmptyMesh) {
+  for (float voxel : {0.0f, 0.05f}) {  // 0: chosen from the points
+    ReconstructionConfig config;
+    config.voxelize.voxel_size = voxel;
+    ReconstructionPipeline pipeline(config);
+    PointCloud three;
+    three.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
+    const FramePtr f = pipeline.reconstruct(three, "three.xyz");
+    ASSERT_FALSE(f->ok()) << "voxel " << voxel << ": " << f->mesh.triangles.size() << " triangles";
+    EXPECT_TRUE(f->failed_stage == "extract" || f->failed_stage == "optimize") << f->failed_stage;
+    EXPECT_NE(f->error.find("three.xyz: " + f->failed_stage + ": "), std::string::npos) << f->error;
+    EXPECT_NE(f->error.find("triangle"), std::string::npos) << f->error;
+  }
+}
+
+// Optimisation that removes every triangle fails the frame too, naming the step.
+TEST(Pipeline, AnOptimizeStepThatRemovesEveryTriangleFailsTheFrame) {
+  ReconstructionConfig config = sphere_config();
+  config.optimize.cleanup.min_component_triangles = 1000000;  // larger than the sphere's mesh
+  ReconstructionPipeline pipeline(config);
+  const FramePtr f = pipeline.reconstruct(
+      synthetic::sample_surface(synthetic::Sphere{{0, 0, 0}, 1.0f}, 0.05f, 0.0f, 1), "sphere");
+  ASSERT_FALSE(f->ok()) << f->mesh.triangles.size() << " triangles";
+  EXPECT_EQ(f->failed_stage, "optimize");
+  EXPECT_NE(f->error.find("the clean step removed all"), std::string::npos) << f->error;
+  EXPECT_NE(f->error.find("--min-component 1000000"), std::string::npos) << f->error;
+}
+
 TEST(Pipeline, StagesRecordTimingsAndItems) {
   Frame f;
   f.cloud = synthetic::sample_surface(synthetic::Sphere{}, 0.05f, 0.0f, 1);

@@ -109,6 +109,8 @@ def test_bad_depth_input_is_a_clear_error():
         meshflow.triangulate_depth(depth[0], K, pose)
     with pytest.raises(ValueError, match="pose: expected a 4 x 4"):
         meshflow.triangulate_depth(depth, K, np.eye(3))
+    with pytest.raises(meshflow.Error, match="triangulate: no triangle"):  # not an empty Mesh
+        meshflow.triangulate_depth(np.zeros_like(depth), K, pose)
     bad_pose = pose.copy()
     bad_pose[0, 3] = np.nan
     with pytest.raises(ValueError, match="pose: not finite"):
@@ -151,6 +153,25 @@ def test_pipeline_calls_back_in_push_order_with_exact_accounting():
         assert abs(radii.mean() - RADIUS) < 0.01
     assert stats["pushed"] == 8 and stats["delivered"] == 8 and stats["failed"] == 1
     assert caller not in threads  # called back on the pipeline's threads
+
+
+def test_a_degenerate_cloud_is_a_failed_frame_not_an_empty_mesh():
+    """Three points: reconstruct() raises, and Pipeline delivers a failed frame saying why."""
+    three = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0]], dtype=np.float32)
+    with pytest.raises(meshflow.Error, match="no surface|triangles") as raised:
+        meshflow.reconstruct(three)
+    message = str(raised.value)
+    assert message.count(": extract:") + message.count(": optimize:") == 1, message  # once
+    results = []
+    with meshflow.Pipeline(results.append, policy="queue") as live:
+        live.push(three)
+        live.flush()
+        stats = live.stats()
+    assert len(results) == 1
+    assert not results[0].ok and results[0].mesh is None
+    assert results[0].failed_stage in ("extract", "optimize")
+    assert "triangle" in results[0].error
+    assert stats["delivered"] == 1 and stats["failed"] == 1
 
 
 # The callback's exception is printed as Python prints one raised in a thread (pytest turns

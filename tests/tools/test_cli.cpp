@@ -281,6 +281,70 @@ TEST(Cli, RunReportsABadFrameAndContinuesStrictStops) {
   EXPECT_FALSE(std::filesystem::exists(strict_out + "/frame_000002.ply"));
 }
 
+// Issue 55: three points gave reconstruct exit 1 but run "1 ok" and a 0-triangle mesh. Now the
+// frame fails in a stage on every path: reconstruct exits 1, run counts a failed frame with the
+// reason (and fails, as no frame was meshed) and leaves no output directory behind.
+TEST(Cli, ADegenerateCloudIsAnErrorForReconstructAndAFailedFrameForRun) {
+  const std::string dir = test::temp_dir();
+  test::write_file(dir + "/three.xyz", "0 0 0\n1 0 0\n0 1 0\n");
+  CliRun r = run_cli("reconstruct " + dir + "/three.xyz -o " + dir + "/m.ply");
+  EXPECT_EQ(r.exit_code, 1) << r.err;
+  EXPECT_NE(r.err.find("three.xyz"), std::string::npos) << r.err;
+  EXPECT_FALSE(std::filesystem::exists(dir + "/m.ply"));
+
+  r = run_cli("run " + dir + "/three.xyz -o " + dir + "/out/frames");
+  EXPECT_EQ(r.exit_code, 1) << r.err;
+  EXPECT_NE(r.out.find("0 ok, 1 failed"), std::string::npos) << r.out;
+  EXPECT_NE(r.err.find("frame 0 ("), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("triangle"), std::string::npos) << r.err;
+  EXPECT_FALSE(std::filesystem::exists(dir + "/out")) << "the empty directories it made are gone";
+
+  // With a good frame beside it: one ok, one failed, exit 0; the directory stays with its mesh.
+  const std::string seq = dir + "/seq";
+  std::filesystem::create_directories(seq);
+  ASSERT_EQ(run_cli("sample sphere --points 4000 -q -o " + seq + "/a.ply").exit_code, 0);
+  test::write_file(seq + "/b.ply",
+                   "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float "
+                   "y\nproperty float z\nend_header\n0 0 0\n1 0 0\n0 1 0\n");
+  r = run_cli("run " + seq + " -o " + dir + "/both --voxel 0.05");
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("1 ok, 1 failed"), std::string::npos) << r.out;
+  EXPECT_NE(r.err.find("frame 1 ("), std::string::npos) << r.err;
+  EXPECT_TRUE(std::filesystem::exists(dir + "/both/frame_000000.ply"));
+  EXPECT_FALSE(std::filesystem::exists(dir + "/both/frame_000001.ply"));
+}
+
+// -o of run is a directory: a mesh file's name is a usage error, and nothing is created.
+TEST(Cli, RunOutputIsADirectoryNotAMeshFile) {
+  const std::string dir = test::temp_dir();
+  for (const char* name : {"out.ply", "out.OBJ", "out.mfc", "out.glb"}) {
+    const CliRun r = run_cli("run --synthetic --max-frames 1 -o " + dir + "/" + name);
+    EXPECT_EQ(r.exit_code, 2) << name << ": " << r.err;
+    EXPECT_NE(r.err.find("give a directory"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("mesh file"), std::string::npos) << r.err;
+    EXPECT_FALSE(std::filesystem::exists(dir + "/" + name)) << name;
+  }
+}
+
+// An empty directory (or one of unrelated files) is no sequence: the message says what was
+// looked for, not just "no scanNNN.3d files".
+TEST(Cli, ADirectoryWithoutASequenceSaysWhatWasLookedFor) {
+  const std::string dir = test::temp_dir() + "/empty";
+  std::filesystem::create_directories(dir);
+  CliRun r = run_cli("run " + dir + " -o " + dir + "/../out");
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.err.find("holds no recognisable sequence (the directory is empty)"),
+            std::string::npos)
+      << r.err;
+  for (const char* kind : {"scanNNN.3d", "*.pcd", "*.ply", "depth", "Redwood", "TUM"})
+    EXPECT_NE(r.err.find(kind), std::string::npos) << kind << ": " << r.err;
+  EXPECT_FALSE(std::filesystem::exists(dir + "/../out"));
+  test::write_file(dir + "/notes.txt", "hello\n");
+  r = run_cli("run " + dir + " -o " + dir + "/../out");
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.err.find("1 entry, not a frame"), std::string::npos) << r.err;
+}
+
 TEST(Cli, LiveSkipsAnUnreadableFrameAndReplaysTheOthers) {
   const std::string seq = scan_directory_with_a_bad_frame();
   CliRun r = run_cli("live " + seq + " --voxel 0.05 --rate 1000 --policy queue --waiting 8");

@@ -46,6 +46,58 @@ TEST(CliScripting, VersionAndDefaultsInHelp) {
   EXPECT_EQ(run_cli("reconstruct a.ply -o b.ply -q -v").exit_code, 2) << "-q excludes -v";
 }
 
+// The line of `help` that shows `option`.
+std::string help_line(const std::string& help, const std::string& option) {
+  const std::size_t at = help.find("  " + option + " ");
+  if (at == std::string::npos) return "";
+  return help.substr(at, help.find('\n', at) - at);
+}
+
+// Issue 55: defaults that are sentinels show what they mean, --max-memory shows its default,
+// optimize lists only the options it uses.
+TEST(CliScripting, HelpShowsWhatSentinelDefaultsMean) {
+  const CliRun r = run_cli("reconstruct --help");
+  ASSERT_EQ(r.exit_code, 0);
+  for (const char* option :
+       {"--voxel", "--contour-tolerance", "--remesh-tolerance", "--threads", "--max-memory"}) {
+    const std::string line = help_line(r.out, option);
+    ASSERT_NE(line, "") << option << "\n" << r.out;
+    EXPECT_EQ(line.find("=-1"), std::string::npos) << line;
+    EXPECT_EQ(line.find("=0 "), std::string::npos) << line;
+  }
+  EXPECT_NE(help_line(r.out, "--voxel").find("=auto"), std::string::npos) << r.out;
+  EXPECT_NE(help_line(r.out, "--contour-tolerance").find("=auto"), std::string::npos) << r.out;
+  EXPECT_NE(help_line(r.out, "--max-memory").find("=80% of RAM"), std::string::npos) << r.out;
+  const CliRun d = run_cli("decompress --help");
+  ASSERT_EQ(d.exit_code, 0);
+  EXPECT_EQ(d.out.find("=-1"), std::string::npos) << d.out;
+  EXPECT_NE(help_line(d.out, "--level").find("=all"), std::string::npos) << d.out;
+  const CliRun o = run_cli("optimize --help");
+  ASSERT_EQ(o.exit_code, 0);
+  for (const char* unused : {"--depth-median", "--depth-bilateral", "--max-rim", "--max-memory"})
+    EXPECT_EQ(o.out.find(unused), std::string::npos) << unused << "\n" << o.out;
+  EXPECT_NE(help_line(o.out, "--voxel").find("=auto"), std::string::npos) << o.out;
+  EXPECT_EQ(run_cli("optimize a.ply b.ply --depth-median 3").exit_code, 2);
+}
+
+// An option's name appears once in its error, and the bad-extension error lists .mfc where
+// reconstruct accepts it.
+TEST(CliScripting, UsageErrorsNameTheOptionOnce) {
+  CliRun r = run_cli("reconstruct a.ply -o b.ply --optimize clean,foo");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("--optimize: step 'foo': expected"), std::string::npos) << r.err;
+  EXPECT_EQ(r.err.find("--optimize: --optimize"), std::string::npos) << r.err;
+  r = run_cli("reconstruct a.ply -o b.ply --orient sideways");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("--orient: expected auto"), std::string::npos) << r.err;
+  EXPECT_EQ(r.err.find("--orient: --orient"), std::string::npos) << r.err;
+  const std::string dir = test::temp_dir();
+  r = run_cli("reconstruct " + torus_cloud(dir) + " -o " + dir + "/m.vrml");
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.err.find("unknown mesh format '.vrml'"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find(".mfc"), std::string::npos) << r.err;
+}
+
 TEST(CliScripting, JsonDocumentsOfInfoReconstructAndEval) {
   const std::string dir = test::temp_dir();
   const std::string cloud = torus_cloud(dir);
@@ -177,6 +229,14 @@ TEST(CliScripting, OptimizeAMeshFromAnotherTool) {
   EXPECT_NEAR(out / in, 0.25, 0.02);
   EXPECT_EQ(io::read_mesh(dir + "/d.ply").triangles.size(), static_cast<std::size_t>(out));
   EXPECT_EQ(run_cli("optimize " + dir + "/m.obj " + dir + "/d.vrml").exit_code, 1);
+  // The output also as -o / --output, as reconstruct takes it.
+  ASSERT_EQ(run_cli("optimize " + dir + "/m.obj -o " + dir + "/o.ply -q").exit_code, 0);
+  EXPECT_TRUE(std::filesystem::exists(dir + "/o.ply"));
+  ASSERT_EQ(run_cli("optimize --output " + dir + "/o.obj " + dir + "/m.obj -q").exit_code, 0);
+  EXPECT_TRUE(std::filesystem::exists(dir + "/o.obj"));
+  EXPECT_EQ(run_cli("optimize " + dir + "/m.obj " + dir + "/x.ply -o " + dir + "/y.ply").exit_code,
+            2)
+      << "two outputs";
   EXPECT_EQ(run_cli("optimize " + dir + "/m.obj " + dir + "/d.ply --kn 5").exit_code, 2)
       << "only the optimize settings are options here";
 }
@@ -221,6 +281,10 @@ TEST(CliScripting, CompressDecompressAndInfoOfAMesh) {
               "/stages.csv -q");
   EXPECT_EQ(profile.exit_code, 0) << profile.err;
   EXPECT_NE(test::read_file(dir + "/stages.csv").find("compress"), std::string::npos);
+  // The output also as -o / --output.
+  ASSERT_EQ(run_cli("compress " + dir + "/m.ply -o " + dir + "/o.mfc -q").exit_code, 0);
+  ASSERT_EQ(run_cli("decompress " + dir + "/o.mfc --output " + dir + "/o.ply -q").exit_code, 0);
+  EXPECT_EQ(io::read_mesh(dir + "/o.ply").triangles.size(), input.triangles.size());
   test::write_file(dir + "/bad.mfc", "MFMESH\r\n garbage");
   const CliRun bad = run_cli("decompress " + dir + "/bad.mfc " + dir + "/x.ply");
   EXPECT_EQ(bad.exit_code, 1);

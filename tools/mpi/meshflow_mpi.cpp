@@ -22,6 +22,7 @@ namespace {
 int parse_and_run(int argc, char** argv, const MpiWorld& world) {
   CLI::App app{"meshflow-mpi: meshflow over MPI ranks (mpirun -n N meshflow-mpi COMMAND ...)"};
   app.require_subcommand(1);
+  app.set_version_flag("--version", "meshflow-mpi " MESHFLOW_VERSION);
   app.option_defaults()->always_capture_default();
   int status = 0;
   add_mpi_reconstruct(
@@ -32,7 +33,7 @@ int parse_and_run(int argc, char** argv, const MpiWorld& world) {
       world, status);
   try {
     app.parse(argc, argv);
-  } catch (const CLI::ParseError& e) {  // --help too: printed once, by rank 0
+  } catch (const CLI::ParseError& e) {  // --help and --version too: printed once, by rank 0
     const int code = e.get_exit_code();
     if (world.rank == 0) app.exit(e);
     return code == 0 ? 0 : 2;

@@ -4,7 +4,8 @@
 #   nodes/X/  includes runtime/, its own folder X (and X's sub-folders), and the shared node
 #             folders io/ (files), search/ (spatial queries), cube/ (cube tables), depth/
 #             (depth-image pre-processing) and decimate/ (QEM), never another stage's folder;
-#   graph/    includes runtime/, nodes/ and graph/, never tools/.
+#   graph/    includes runtime/, nodes/ and graph/, never tools/;
+#   serve/    includes runtime/, nodes/, graph/ and serve/, never a front end (tools/ web/ python/).
 # Prints each offending include as file:line and exits 1 if there is one.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -25,11 +26,13 @@ while IFS= read -r file; do
           ok=0
         fi ;;
       graph) [[ $target != tools/* ]] || ok=0 ;;
+      serve) [[ $target != tools/* && $target != web/* && $target != python/* ]] || ok=0 ;;
     esac
     if [ $ok = 0 ]; then
       echo "$file:$line: includes $target"
       status=1
     fi
   done < <(grep -n '^#include "' "$file" | sed -E 's/^([0-9]+):#include "([^"]+)".*/\1:\2/')
-done < <(git ls-files 'runtime/*.h' 'runtime/*.cpp' 'nodes/*.h' 'nodes/*.cpp' 'graph/*.h' 'graph/*.cpp')
+done < <(git ls-files 'runtime/*.h' 'runtime/*.cpp' 'nodes/*.h' 'nodes/*.cpp' 'graph/*.h' 'graph/*.cpp' \
+           'serve/*.h' 'serve/*.cpp')
 exit $status

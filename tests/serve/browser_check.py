@@ -14,6 +14,8 @@ Exit 0 when document.body.dataset.state became "complete" or "error" (the caller
 import base64
 import json
 import os
+import select
+import shutil
 import subprocess
 import sys
 import tempfile
@@ -73,7 +75,8 @@ def reply(wanted):
                 if "error" in message:
                     raise RuntimeError(f"DevTools error: {message['error']}")
                 return message["result"]
-        if time.monotonic() > deadline:
+        left = deadline - time.monotonic()
+        if left <= 0 or not select.select([from_browser_r], [], [], left)[0]:
             raise TimeoutError("no answer from Chromium in time")
         chunk = os.read(from_browser_r, 1 << 20)
         if not chunk:
@@ -121,4 +124,5 @@ finally:
     except subprocess.TimeoutExpired:
         browser.kill()
         browser.wait()
+    shutil.rmtree(profile, ignore_errors=True)
 sys.exit(status)

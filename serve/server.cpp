@@ -18,6 +18,7 @@
 #include <utility>
 
 #include "runtime/error.h"
+#include "serve/client_message.h"
 #include "serve/mesh_stream.h"
 
 namespace meshflow::serve {
@@ -105,6 +106,8 @@ class Server::Impl {
 
   void publish(std::shared_ptr<const MeshMessage> mesh, std::shared_ptr<const std::string> stats) {
     std::lock_guard<std::mutex> lock(pending_mutex_);
+    if (mesh && pending_mesh_) ++counters_.publications_replaced;
+    if (stats && pending_stats_) ++counters_.publications_replaced;
     if (mesh) pending_mesh_ = std::move(mesh);
     if (stats) pending_stats_ = std::move(stats);
     if (!drain_posted_) {
@@ -137,21 +140,10 @@ class Server::Impl {
   struct Counters {
     std::atomic<std::size_t> clients{0};
     std::atomic<std::uint64_t> clients_accepted{0}, clients_refused{0}, clients_closed_bad{0},
-        frames_sent{0}, frames_dropped{0}, bytes_sent{0}, http_requests{0}, meshes{0};
+        frames_sent{0}, frames_dropped{0}, bytes_sent{0}, http_requests{0}, meshes{0},
+        publications_replaced{0}, max_client_queue{0};
   } counters_;
 };
-
-namespace {
-
-/// Whether a client message is one the protocol knows: a JSON object {"type":"hello"|"ping"}.
-bool valid_client_message(const std::string& text) {
-  const nlohmann::json doc = nlohmann::json::parse(text, nullptr, /*allow_exceptions=*/false);
-  if (!doc.is_object()) return false;
-  const auto type = doc.find("type");
-  return type != doc.end() && type->is_string() && (*type == "hello" || *type == "ping");
-}
-
-}  // namespace
 
 /// One WebSocket client: a read loop that validates each message, and a write queue holding
 /// only the newest mesh and stats.
@@ -182,6 +174,8 @@ class WsSession : public std::enable_shared_from_this<WsSession> {
       queue_.erase(stale, queue_.end());
     }
     queue_.push_back(frame);
+    const std::size_t queued = queue_.size() + (writing_ ? 1 : 0);
+    if (queued > server_.counters_.max_client_queue) server_.counters_.max_client_queue = queued;
     if (!writing_) write_next();
   }
 
@@ -519,6 +513,8 @@ ServerStats Server::stats() const {
   s.bytes_sent = c.bytes_sent;
   s.http_requests = c.http_requests;
   s.meshes_published = c.meshes;
+  s.publications_replaced = c.publications_replaced;
+  s.max_client_queue_frames = c.max_client_queue;
   return s;
 }
 

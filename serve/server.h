@@ -81,6 +81,11 @@ struct ServerStats {
   std::uint64_t bytes_sent = 0;      ///< WebSocket payload bytes written
   std::uint64_t http_requests = 0;   ///< HTTP requests answered
   std::uint64_t meshes_published = 0;
+  /// Publications replaced by newer ones before the I/O thread took them (never sent).
+  std::uint64_t publications_replaced = 0;
+  /// The longest any client's send queue has been, in frames (the frame being written
+  /// included): at most one mesh's frames and one stats message, however slow the client.
+  std::size_t max_client_queue_frames = 0;
 };
 
 /// The server. Construction binds and starts the I/O thread (throws meshflow::Error when the

@@ -4,6 +4,7 @@
 #include <atomic>
 #include <boost/asio/ip/tcp.hpp>
 #include <boost/asio/post.hpp>
+#include <boost/asio/steady_timer.hpp>
 #include <boost/beast/core.hpp>
 #include <boost/beast/http.hpp>
 #include <boost/beast/websocket.hpp>
@@ -239,6 +240,7 @@ class WsSession : public std::enable_shared_from_this<WsSession> {
   void finish() {
     closing_ = true;
     queue_.clear();
+    pace_.cancel();
     server_.remove_client(shared_from_this());
     error_code ec;
     beast::get_lowest_layer(ws_).socket().close(ec);
@@ -252,6 +254,25 @@ class WsSession : public std::enable_shared_from_this<WsSession> {
     writing_ = true;
     in_flight_ = std::move(queue_.front());
     queue_.pop_front();
+    // A bandwidth cap (ServerConfig::client_megabits_per_second) waits until the previous
+    // frame's bytes have "left" at the capped rate; the frame taken stays in_flight_.
+    if (server_.config_.client_megabits_per_second > 0.0 &&
+        next_send_ > std::chrono::steady_clock::now()) {
+      pace_.expires_at(next_send_);
+      pace_.async_wait([self = shared_from_this()](error_code ec) {
+        if (ec || self->closing_) {
+          self->writing_ = false;
+          return;
+        }
+        self->start_write();
+      });
+      return;
+    }
+    start_write();
+  }
+
+  void start_write() {
+    write_started_ = std::chrono::steady_clock::now();
     ws_.binary(in_flight_.binary);
     ws_.async_write(asio::buffer(*in_flight_.data),
                     beast::bind_front_handler(&WsSession::on_write, shared_from_this()));
@@ -261,6 +282,12 @@ class WsSession : public std::enable_shared_from_this<WsSession> {
     if (ec) return finish();
     ++server_.counters_.frames_sent;
     server_.counters_.bytes_sent += bytes;
+    const double rate = server_.config_.client_megabits_per_second;
+    if (rate > 0.0)
+      next_send_ =
+          write_started_ +
+          std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+              std::chrono::duration<double>(8.0 * static_cast<double>(bytes) / (rate * 1e6)));
     write_next();
   }
 
@@ -269,6 +296,8 @@ class WsSession : public std::enable_shared_from_this<WsSession> {
   Server::Impl& server_;
   std::deque<Outgoing> queue_;  // not yet started
   Outgoing in_flight_;          // being written (its bytes must live until the write ends)
+  asio::steady_timer pace_{ws_.get_executor()};
+  std::chrono::steady_clock::time_point write_started_, next_send_;
   bool writing_ = false;
   bool closing_ = false;
   double tokens_;

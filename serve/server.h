@@ -66,6 +66,10 @@ struct ServerConfig {
   std::map<std::string, StaticResource> resources;
   /// The path of the WebSocket endpoint.
   std::string websocket_path = "/ws";
+  /// Caps each client's bandwidth, megabits per second (0: no cap): whole frames are sent no
+  /// faster than this, to feel a narrow link or to spare a robot's uplink. Frames waiting for
+  /// the cap are dropped for newer ones like those of a slow client.
+  double client_megabits_per_second = 0.0;
   /// Bytes of one mesh per binary frame (cut at progressive packet boundaries when possible).
   std::size_t chunk_bytes = 64 * 1024;
 };

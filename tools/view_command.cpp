@@ -44,6 +44,7 @@ struct ViewOptions {
   std::uint32_t splits_per_packet = 1024;
   std::size_t chunk_kb = 64;
   std::size_t max_clients = 8;
+  double rate_mbit = 0.0;
 };
 
 std::atomic<bool> g_stop{false};
@@ -123,6 +124,7 @@ void run_view(const ViewOptions& o) {
   server_config.host = address.host;
   server_config.port = address.port;
   server_config.max_clients = o.max_clients;
+  server_config.client_megabits_per_second = o.rate_mbit;
   server_config.chunk_bytes = o.chunk_kb * 1024;
   server_config.resources = page_resources();
   serve::Server server(std::move(server_config));
@@ -182,6 +184,9 @@ void add_view_options(CLI::App* cmd) {
       ->check(CLI::Range(std::size_t{1}, std::size_t{1} << 20));
   cmd->add_option("--max-viewers", o->max_clients, "Browsers connected at once")
       ->check(CLI::Range(std::size_t{1}, std::size_t{256}));
+  cmd->add_option("--serve-rate", o->rate_mbit,
+                  "Cap each viewer's bandwidth, Mbit/s (0: none): how a narrow link feels")
+      ->check(CLI::NonNegativeNumber);
   cmd->callback([o] { run_view(*o); });
 }
 

@@ -33,7 +33,9 @@ triangles=$(sed -n 's/^element face \([0-9]*\)$/\1/p' <<<"$header")
 echo "mesh.ply: $vertices vertices, $triangles triangles"
 [ -n "$vertices" ] && [ -n "$triangles" ] || { echo "FAIL: no counts in mesh.ply's header" >&2; exit 1; }
 
-"$meshflow" view "$work/mesh.ply" --serve 127.0.0.1:0 --exit-after 90 --chunk-kb 4 \
+# 1 Mbit/s: the 120 kB stream takes about a second, so the page shows the base mesh and
+# finer levels before the full one (data-levels counts the levels it drew).
+"$meshflow" view "$work/mesh.ply" --serve 0 --exit-after 90 --chunk-kb 4 --serve-rate 1 \
   > "$work/view.log" 2>&1 &
 server=$!
 cleanup() {
@@ -56,7 +58,7 @@ fi
 echo "serving at $url"
 case "$url" in
   http://127.0.0.1:*) ;;
-  *) echo "FAIL: not bound to 127.0.0.1 by default host: $url" >&2; exit 1 ;;
+  *) echo "FAIL: --serve PORT did not bind 127.0.0.1: $url" >&2; exit 1 ;;
 esac
 
 # Chromium through the DevTools protocol (browser_check.py): it waits for the page's own
@@ -67,10 +69,15 @@ if ! timeout 120 python3 "$here/browser_check.py" "$chromium" "$url" "$work/page
   echo "FAIL: the page did not load (Chromium's log: $work/page.json.chromium.log)" >&2
   exit 1
 fi
-read -r state page_triangles page_vertices < <(python3 -c '
+read -r state page_triangles page_vertices levels < <(python3 -c '
 import json, sys
 d = json.load(open(sys.argv[1]))
-print(d.get("state", "-"), d.get("triangles", "-"), d.get("vertices", "-"))' "$work/page.json")
+print(d.get("state", "-"), d.get("triangles", "-"), d.get("vertices", "-"), d.get("levels", 0))' \
+  "$work/page.json")
+if [ "$levels" -lt 2 ]; then
+  echo "FAIL: the page drew $levels level(s): no coarser level before the full mesh" >&2
+  status=1
+fi
 if [ "$state" != complete ]; then
   echo "FAIL: the page's state is '$state', not complete" >&2
   status=1

@@ -291,6 +291,31 @@ TEST(Server, StreamsAProgressiveMeshBaseFirstAndEveryPrefixDecodes) {
   EXPECT_NE(mf_decode(received.data(), received.size() - 1, 0, -1), 0) << "checksum checked";
 }
 
+TEST(Server, CapsEachClientsBandwidth) {
+  // 0.8 Mbit/s = 100 kB/s: a 50+ kB mesh in 4 kB frames takes about half a second or more.
+  const std::vector<unsigned char> mfc =
+      compress::compress_progressive(wavy_grid(150, 0.05f), compress::CompressConfig{});
+  ASSERT_GT(mfc.size(), 50'000u);
+  ServerConfig config = config_with_page();
+  config.client_megabits_per_second = 0.8;
+  config.chunk_bytes = 4096;
+  Server server{config};
+  Client client;
+  ASSERT_FALSE(client.connect(server.port()));
+  const auto start = std::chrono::steady_clock::now();
+  server.publish_mesh(mfc);
+  std::size_t received = 0;
+  while (received < mfc.size()) {
+    std::string message;
+    bool binary = false;
+    ASSERT_FALSE(client.read(message, binary));
+    if (binary) received += message.size() - 8;
+  }
+  const double seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  EXPECT_GT(seconds, 0.8 * static_cast<double>(mfc.size()) / 100e3) << mfc.size() << " bytes";
+}
+
 TEST(Server, ANewClientGetsTheCurrentMesh) {
   Server server{config_with_page()};
   server.publish_mesh(compress::compress_mesh(wavy_grid(8)));

@@ -18,7 +18,7 @@ fi
 seconds=${1:-60}
 shift || true
 targets=("$@")
-[ ${#targets[@]} -gt 0 ] || targets=(ply pcd xyz 3dtk las mesh rgbd tum image tsdf_map mfc)
+[ ${#targets[@]} -gt 0 ] || targets=(ply pcd xyz 3dtk las mesh rgbd tum image tsdf_map mfc client_message)
 data=${MESHFLOW_DATA:-../shared/data}
 
 if [ -z "$build" ]; then
@@ -88,6 +88,10 @@ for t in "${targets[@]}"; do
       head -n 50 | while read -r f; do cp "$f" "$corpus/seed_$(basename "$f")"; done
   done
   made_seeds "$t" "$corpus"
+  if [ "$t" = client_message ]; then  # the two messages a browser may send
+    printf '{"type":"hello"}' > "$corpus/seed_hello.json"
+    printf '{"type":"ping","t":12.5}' > "$corpus/seed_ping.json"
+  fi
   if [ "$t" = tum ]; then  # depth.txt lines, a zero byte, groundtruth.txt lines
     printf '# depth\n1305031102.160407 depth/1305031102.160407.png\n1305031102.194330 depth/1305031102.194330.png\n\0# timestamp tx ty tz qx qy qz qw\n1305031102.1758 1.3405 0.6266 1.6575 0.6574 0.6126 -0.2949 -0.3248\n' \
       > "$corpus/seed_association.txt"

@@ -12,3 +12,7 @@ $SUDO apt-get install -y --no-install-recommends \
   libcli11-dev libgtest-dev libgmock-dev libbenchmark-dev nlohmann-json3-dev \
   libcgal-dev libmeshoptimizer-dev libdraco-dev libopenmpi-dev openmpi-bin \
   pybind11-dev python3-dev python3-numpy python3-pytest doxygen
+# The serving layer and the viewer page (`meshflow view`): Boost.Beast and Asio (headers), three.js
+# (libjs-three), emscripten (the WebAssembly decoder) and Chromium (the browser test).
+$SUDO apt-get install -y --no-install-recommends \
+  libboost-dev libjs-three emscripten chromium

@@ -25,6 +25,7 @@ void add_sample_options(CLI::App* cmd);
 void add_optimize_options(CLI::App* cmd);
 void add_compress_options(CLI::App* cmd);
 void add_decompress_options(CLI::App* cmd);
+void add_view_options(CLI::App* cmd);  // with the serving layer (MESHFLOW_WITH_SERVE)
 
 /// Whether `path` names a meshflow compressed mesh (.mfc).
 bool is_compressed_mesh_file(const std::string& path);

@@ -34,6 +34,11 @@ const std::vector<Command>& commands() {
        add_compress_options},
       {"decompress", "Decode a .mfc file (any level of detail of a progressive one) to a mesh",
        add_decompress_options},
+#ifdef MESHFLOW_WITH_SERVE
+      {"view",
+       "Show a mesh or .mfc file in the browser: served progressively, decoded in WebAssembly",
+       add_view_options},
+#endif
   };
   return all;
 }

@@ -1,0 +1,550 @@
+#include "serve/server.h"
+
+#include <algorithm>
+#include <atomic>
+#include <boost/asio/ip/tcp.hpp>
+#include <boost/asio/post.hpp>
+#include <boost/asio/steady_timer.hpp>
+#include <boost/beast/core.hpp>
+#include <boost/beast/http.hpp>
+#include <boost/beast/websocket.hpp>
+#include <chrono>
+#include <cstring>
+#include <deque>
+#include <mutex>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <set>
+#include <thread>
+#include <utility>
+
+#include "runtime/error.h"
+#include "serve/client_message.h"
+#include "serve/mesh_stream.h"
+
+namespace meshflow::serve {
+
+namespace asio = boost::asio;
+namespace beast = boost::beast;
+namespace http = beast::http;
+namespace websocket = beast::websocket;
+using tcp = asio::ip::tcp;
+using error_code = boost::system::error_code;
+
+ServeAddress parse_serve_address(const std::string& text) {
+  ServeAddress address;
+  std::string port = text;
+  if (!text.empty() && text.front() == '[') {
+    const std::size_t close = text.find(']');
+    if (close == std::string::npos || close + 1 >= text.size() || text[close + 1] != ':')
+      throw Error("--serve", "address", "[IPV6]:PORT, got \"" + text + "\"");
+    address.host = text.substr(1, close - 1);
+    port = text.substr(close + 2);
+  } else if (const std::size_t colon = text.rfind(':'); colon != std::string::npos) {
+    address.host = text.substr(0, colon);
+    port = text.substr(colon + 1);
+    if (address.host.empty()) address.host = "127.0.0.1";
+  }
+  if (port.empty() || port.size() > 5 ||
+      !std::all_of(port.begin(), port.end(), [](char c) { return c >= '0' && c <= '9'; }) ||
+      std::stoul(port) > 65535)
+    throw Error("--serve", "port", "a number 0 .. 65535, got \"" + port + "\"");
+  address.port = static_cast<std::uint16_t>(std::stoul(port));
+  return address;
+}
+
+namespace {
+
+/// One frame queued for a client; its bytes are shared by every client.
+struct Outgoing {
+  enum class Kind { kMesh, kStats } kind = Kind::kMesh;
+  bool binary = false;
+  std::shared_ptr<const std::string> data;
+};
+
+/// A published mesh, ready to send: its header message and its binary chunks.
+struct MeshMessage {
+  std::vector<Outgoing> frames;
+};
+
+}  // namespace
+
+class WsSession;
+class HttpSession;
+
+class Server::Impl {
+ public:
+  explicit Impl(ServerConfig config) : config_(std::move(config)), acceptor_(ioc_) {
+    asio::ip::address address;
+    error_code ec;
+    const std::string host = config_.host == "localhost" ? "127.0.0.1" : config_.host;
+    address = asio::ip::make_address(host, ec);
+    if (ec) throw Error("server", "host", "an IP address or localhost, got \"" + host + "\"");
+    const tcp::endpoint endpoint(address, config_.port);
+    acceptor_.open(endpoint.protocol(), ec);
+    if (!ec) acceptor_.set_option(asio::socket_base::reuse_address(true), ec);
+    if (!ec) acceptor_.bind(endpoint, ec);
+    if (!ec) acceptor_.listen(asio::socket_base::max_listen_connections, ec);
+    if (ec)
+      throw Error("server", "address " + host + ":" + std::to_string(config_.port),
+                  "an address this machine can listen on (" + ec.message() + ")");
+    host_ = acceptor_.local_endpoint().address().to_string();
+    port_ = acceptor_.local_endpoint().port();
+    do_accept();
+    thread_ = std::thread([this] { ioc_.run(); });
+  }
+
+  ~Impl() {
+    asio::post(ioc_, [this] { shut_down(); });
+    thread_.join();
+  }
+
+  void do_accept();
+  void shut_down();
+  void drain();
+  bool add_client(const std::shared_ptr<WsSession>& session);
+  void remove_client(const std::shared_ptr<WsSession>& session);
+
+  void publish(std::shared_ptr<const MeshMessage> mesh, std::shared_ptr<const std::string> stats) {
+    std::lock_guard<std::mutex> lock(pending_mutex_);
+    if (mesh && pending_mesh_) ++counters_.publications_replaced;
+    if (stats && pending_stats_) ++counters_.publications_replaced;
+    if (mesh) pending_mesh_ = std::move(mesh);
+    if (stats) pending_stats_ = std::move(stats);
+    if (!drain_posted_) {
+      drain_posted_ = true;
+      asio::post(ioc_, [this] { drain(); });
+    }
+  }
+
+  ServerConfig config_;
+  asio::io_context ioc_{1};
+  tcp::acceptor acceptor_;
+  std::string host_;
+  std::uint16_t port_ = 0;
+  std::thread thread_;
+  bool stopping_ = false;  // I/O thread only
+
+  // I/O thread only: the clients and what a new one is sent first.
+  std::set<std::shared_ptr<WsSession>> clients_;
+  std::set<std::shared_ptr<HttpSession>> connections_;
+  std::shared_ptr<const MeshMessage> current_mesh_;
+  std::shared_ptr<const std::string> current_stats_;
+
+  // Producers to the I/O thread: the newest unsent publications (older ones are replaced).
+  std::mutex pending_mutex_;
+  std::shared_ptr<const MeshMessage> pending_mesh_;
+  std::shared_ptr<const std::string> pending_stats_;
+  bool drain_posted_ = false;
+
+  std::atomic<std::uint64_t> mesh_id_{0};
+  struct Counters {
+    std::atomic<std::size_t> clients{0};
+    std::atomic<std::uint64_t> clients_accepted{0}, clients_refused{0}, clients_closed_bad{0},
+        frames_sent{0}, frames_dropped{0}, bytes_sent{0}, http_requests{0}, meshes{0},
+        publications_replaced{0}, max_client_queue{0};
+  } counters_;
+};
+
+/// One WebSocket client: a read loop that validates each message, and a write queue holding
+/// only the newest mesh and stats.
+class WsSession : public std::enable_shared_from_this<WsSession> {
+ public:
+  WsSession(tcp::socket socket, Server::Impl& server)
+      : ws_(std::move(socket)),
+        server_(server),
+        tokens_(server.config_.client_message_burst),
+        last_refill_(std::chrono::steady_clock::now()) {}
+
+  void run(http::request<http::string_body> request) {
+    ws_.set_option(websocket::stream_base::timeout::suggested(beast::role_type::server));
+    ws_.read_message_max(server_.config_.max_client_message_bytes);
+    ws_.set_option(websocket::stream_base::decorator(
+        [](websocket::response_type& response) { response.set(http::field::server, "meshflow"); }));
+    ws_.async_accept(request, beast::bind_front_handler(&WsSession::on_accept, shared_from_this()));
+  }
+
+  void enqueue(const Outgoing& frame) {
+    if (closing_) return;
+    // Stale frames of the same kind (an older mesh, older stats) that have not started are
+    // dropped: the queue never holds more than the newest of each.
+    if (frame.kind == Outgoing::Kind::kStats || starts_mesh(frame)) {
+      auto stale = std::remove_if(queue_.begin(), queue_.end(),
+                                  [&](const Outgoing& o) { return o.kind == frame.kind; });
+      server_.counters_.frames_dropped += static_cast<std::uint64_t>(queue_.end() - stale);
+      queue_.erase(stale, queue_.end());
+    }
+    queue_.push_back(frame);
+    const std::size_t queued = queue_.size() + (writing_ ? 1 : 0);
+    if (queued > server_.counters_.max_client_queue) server_.counters_.max_client_queue = queued;
+    if (!writing_) write_next();
+  }
+
+  void close() {
+    if (closing_) return;
+    closing_ = true;
+    error_code ec;
+    beast::get_lowest_layer(ws_).socket().shutdown(tcp::socket::shutdown_both, ec);
+    beast::get_lowest_layer(ws_).socket().close(ec);
+  }
+
+ private:
+  static bool starts_mesh(const Outgoing& frame) {
+    return frame.kind == Outgoing::Kind::kMesh && !frame.binary;
+  }
+
+  void on_accept(error_code ec) {
+    if (ec) return;
+    if (!server_.add_client(shared_from_this())) return;
+    do_read();
+  }
+
+  void do_read() {
+    ws_.async_read(in_, beast::bind_front_handler(&WsSession::on_read, shared_from_this()));
+  }
+
+  void on_read(error_code ec, std::size_t) {
+    if (ec) {
+      // An oversized message ends here too: Beast has sent close code 1009 already.
+      if (ec == websocket::error::message_too_big) ++server_.counters_.clients_closed_bad;
+      return finish();
+    }
+    const std::string text = beast::buffers_to_string(in_.data());
+    in_.consume(in_.size());
+    if (!ws_.got_text()) return refuse(websocket::close_code::unknown_data);
+    if (!take_token() || !valid_client_message(text))
+      return refuse(websocket::close_code::policy_error);
+    do_read();
+  }
+
+  bool take_token() {
+    const auto now = std::chrono::steady_clock::now();
+    const double seconds = std::chrono::duration<double>(now - last_refill_).count();
+    last_refill_ = now;
+    tokens_ = std::min(server_.config_.client_message_burst,
+                       tokens_ + seconds * server_.config_.client_messages_per_second);
+    if (tokens_ < 1.0) return false;
+    tokens_ -= 1.0;
+    return true;
+  }
+
+  void refuse(websocket::close_code code) {
+    ++server_.counters_.clients_closed_bad;
+    if (closing_) return;
+    closing_ = true;
+    queue_.clear();
+    // The close handshake is bounded by the stream's timeout; then the socket goes.
+    ws_.async_close(code, [self = shared_from_this()](error_code) { self->finish(); });
+  }
+
+  void finish() {
+    closing_ = true;
+    queue_.clear();
+    pace_.cancel();
+    server_.remove_client(shared_from_this());
+    error_code ec;
+    beast::get_lowest_layer(ws_).socket().close(ec);
+  }
+
+  void write_next() {
+    if (queue_.empty() || closing_) {
+      writing_ = false;
+      return;
+    }
+    writing_ = true;
+    in_flight_ = std::move(queue_.front());
+    queue_.pop_front();
+    // A bandwidth cap (ServerConfig::client_megabits_per_second) waits until the previous
+    // frame's bytes have "left" at the capped rate; the frame taken stays in_flight_.
+    if (server_.config_.client_megabits_per_second > 0.0 &&
+        next_send_ > std::chrono::steady_clock::now()) {
+      pace_.expires_at(next_send_);
+      pace_.async_wait([self = shared_from_this()](error_code ec) {
+        if (ec || self->closing_) {
+          self->writing_ = false;
+          return;
+        }
+        self->start_write();
+      });
+      return;
+    }
+    start_write();
+  }
+
+  void start_write() {
+    write_started_ = std::chrono::steady_clock::now();
+    ws_.binary(in_flight_.binary);
+    ws_.async_write(asio::buffer(*in_flight_.data),
+                    beast::bind_front_handler(&WsSession::on_write, shared_from_this()));
+  }
+
+  void on_write(error_code ec, std::size_t bytes) {
+    if (ec) return finish();
+    ++server_.counters_.frames_sent;
+    server_.counters_.bytes_sent += bytes;
+    const double rate = server_.config_.client_megabits_per_second;
+    if (rate > 0.0)
+      next_send_ =
+          write_started_ +
+          std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+              std::chrono::duration<double>(8.0 * static_cast<double>(bytes) / (rate * 1e6)));
+    write_next();
+  }
+
+  websocket::stream<beast::tcp_stream> ws_;
+  beast::flat_buffer in_;
+  Server::Impl& server_;
+  std::deque<Outgoing> queue_;  // not yet started
+  Outgoing in_flight_;          // being written (its bytes must live until the write ends)
+  asio::steady_timer pace_{ws_.get_executor()};
+  std::chrono::steady_clock::time_point write_started_, next_send_;
+  bool writing_ = false;
+  bool closing_ = false;
+  double tokens_;
+  std::chrono::steady_clock::time_point last_refill_;
+};
+
+/// One HTTP connection: GET/HEAD of the fixed resources, or the upgrade to a WebSocket client.
+class HttpSession : public std::enable_shared_from_this<HttpSession> {
+ public:
+  HttpSession(tcp::socket socket, Server::Impl& server)
+      : stream_(std::move(socket)), server_(server) {}
+
+  void run() { do_read(); }
+
+  void close() {
+    error_code ec;
+    stream_.socket().shutdown(tcp::socket::shutdown_both, ec);
+    stream_.socket().close(ec);
+  }
+
+ private:
+  void do_read() {
+    parser_.emplace();
+    parser_->header_limit(8 * 1024);
+    parser_->body_limit(1024);
+    stream_.expires_after(std::chrono::seconds(15));
+    http::async_read(stream_, buffer_, *parser_,
+                     beast::bind_front_handler(&HttpSession::on_read, shared_from_this()));
+  }
+
+  void on_read(error_code ec, std::size_t) {
+    if (ec) return finish();
+    http::request<http::string_body> request = parser_->release();
+    if (websocket::is_upgrade(request)) return upgrade(std::move(request));
+    respond(request);
+  }
+
+  void upgrade(http::request<http::string_body> request) {
+    const std::string target(request.target());
+    if (target != server_.config_.websocket_path)
+      return send_error(request, http::status::not_found, "no such endpoint\n");
+    if (server_.clients_.size() >= server_.config_.max_clients) {
+      ++server_.counters_.clients_refused;
+      return send_error(request, http::status::service_unavailable, "too many viewers\n");
+    }
+    stream_.expires_never();
+    auto session = std::make_shared<WsSession>(stream_.release_socket(), server_);
+    server_.connections_.erase(shared_from_this());
+    session->run(std::move(request));
+  }
+
+  void respond(const http::request<http::string_body>& request) {
+    ++server_.counters_.http_requests;
+    if (request.method() != http::verb::get && request.method() != http::verb::head)
+      return send_error(request, http::status::method_not_allowed, "read-only server\n");
+    std::string path(request.target());
+    path = path.substr(0, path.find('?'));
+    const auto found = server_.config_.resources.find(path);
+    if (found == server_.config_.resources.end())
+      return send_error(request, http::status::not_found, "not found\n");
+    auto response =
+        std::make_shared<http::response<http::string_body>>(http::status::ok, request.version());
+    response->set(http::field::server, "meshflow");
+    response->set(http::field::content_type, found->second.content_type);
+    response->set(http::field::cache_control, "no-store");
+    response->set("X-Content-Type-Options", "nosniff");
+    if (request.method() == http::verb::get) response->body() = *found->second.body;
+    response->prepare_payload();
+    if (request.method() == http::verb::head) response->content_length(found->second.body->size());
+    response->keep_alive(request.keep_alive());
+    write(std::move(response));
+  }
+
+  void send_error(const http::request<http::string_body>& request, http::status status,
+                  const char* text) {
+    auto response = std::make_shared<http::response<http::string_body>>(status, request.version());
+    response->set(http::field::server, "meshflow");
+    response->set(http::field::content_type, "text/plain; charset=utf-8");
+    response->body() = text;
+    response->prepare_payload();
+    response->keep_alive(false);
+    write(std::move(response));
+  }
+
+  void write(std::shared_ptr<http::response<http::string_body>> response) {
+    response_ = std::move(response);
+    stream_.expires_after(std::chrono::seconds(30));
+    http::async_write(stream_, *response_,
+                      beast::bind_front_handler(&HttpSession::on_write, shared_from_this()));
+  }
+
+  void on_write(error_code ec, std::size_t) {
+    const bool keep = !ec && response_->keep_alive();
+    response_.reset();
+    if (!keep) return finish();
+    do_read();
+  }
+
+  void finish() {
+    close();
+    server_.connections_.erase(shared_from_this());
+  }
+
+  beast::tcp_stream stream_;
+  beast::flat_buffer buffer_;
+  Server::Impl& server_;
+  std::optional<http::request_parser<http::string_body>> parser_;
+  std::shared_ptr<http::response<http::string_body>> response_;
+};
+
+void Server::Impl::do_accept() {
+  acceptor_.async_accept([this](error_code ec, tcp::socket socket) {
+    if (stopping_) return;
+    if (!ec) {
+      if (connections_.size() >= config_.max_connections) {
+        error_code ignored;
+        socket.close(ignored);
+      } else {
+        auto session = std::make_shared<HttpSession>(std::move(socket), *this);
+        connections_.insert(session);
+        session->run();
+      }
+    }
+    do_accept();
+  });
+}
+
+void Server::Impl::shut_down() {
+  stopping_ = true;
+  error_code ec;
+  acceptor_.close(ec);
+  for (const auto& client : std::set<std::shared_ptr<WsSession>>(clients_)) client->close();
+  for (const auto& connection : std::set<std::shared_ptr<HttpSession>>(connections_))
+    connection->close();
+  clients_.clear();
+  connections_.clear();
+  counters_.clients = 0;
+  ioc_.stop();
+}
+
+void Server::Impl::drain() {
+  std::shared_ptr<const MeshMessage> mesh;
+  std::shared_ptr<const std::string> stats;
+  {
+    std::lock_guard<std::mutex> lock(pending_mutex_);
+    mesh = std::move(pending_mesh_);
+    stats = std::move(pending_stats_);
+    pending_mesh_.reset();
+    pending_stats_.reset();
+    drain_posted_ = false;
+  }
+  if (stopping_) return;
+  // Stats first: a few hundred bytes that would otherwise wait behind a whole mesh.
+  if (stats) {
+    current_stats_ = stats;
+    for (const auto& client : clients_) client->enqueue({Outgoing::Kind::kStats, false, stats});
+  }
+  if (mesh) {
+    current_mesh_ = mesh;
+    for (const auto& client : clients_)
+      for (const Outgoing& frame : mesh->frames) client->enqueue(frame);
+  }
+}
+
+bool Server::Impl::add_client(const std::shared_ptr<WsSession>& session) {
+  if (stopping_) {
+    session->close();
+    return false;
+  }
+  clients_.insert(session);
+  counters_.clients = clients_.size();
+  ++counters_.clients_accepted;
+  if (current_stats_) session->enqueue({Outgoing::Kind::kStats, false, current_stats_});
+  if (current_mesh_)
+    for (const Outgoing& frame : current_mesh_->frames) session->enqueue(frame);
+  return true;
+}
+
+void Server::Impl::remove_client(const std::shared_ptr<WsSession>& session) {
+  clients_.erase(session);
+  counters_.clients = clients_.size();
+}
+
+Server::Server(ServerConfig config) : impl_(std::make_unique<Impl>(std::move(config))) {}
+
+Server::~Server() = default;
+
+const std::string& Server::host() const { return impl_->host_; }
+
+std::uint16_t Server::port() const { return impl_->port_; }
+
+std::string Server::url() const {
+  const bool v6 = impl_->host_.find(':') != std::string::npos;
+  return "http://" + (v6 ? "[" + impl_->host_ + "]" : impl_->host_) + ":" +
+         std::to_string(impl_->port_) + "/";
+}
+
+void Server::publish_mesh(std::vector<unsigned char> mfc) {
+  const MeshStreamPlan plan = plan_mesh_stream(mfc, impl_->config_.chunk_bytes);
+  const std::uint32_t id = static_cast<std::uint32_t>(++impl_->mesh_id_);
+  auto message = std::make_shared<MeshMessage>();
+  const nlohmann::json header = {{"type", "mesh"},
+                                 {"id", id},
+                                 {"kind", plan.progressive ? "progressive" : "edgebreaker"},
+                                 {"bytes", mfc.size()},
+                                 {"base_end", plan.base_end},
+                                 {"packet_ends", plan.packet_ends},
+                                 {"vertices", plan.vertices},
+                                 {"triangles", plan.triangles},
+                                 {"chunks", plan.chunk_ends.size()}};
+  message->frames.push_back(
+      {Outgoing::Kind::kMesh, false, std::make_shared<const std::string>(header.dump())});
+  std::size_t begin = 0;
+  for (std::size_t end : plan.chunk_ends) {
+    std::string frame(8 + (end - begin), '\0');
+    const std::uint32_t fields[2] = {id, static_cast<std::uint32_t>(begin)};
+    for (int f = 0; f < 2; ++f)
+      for (int b = 0; b < 4; ++b)
+        frame[static_cast<std::size_t>(4 * f + b)] = static_cast<char>(fields[f] >> (8 * b));
+    std::memcpy(frame.data() + 8, mfc.data() + begin, end - begin);
+    message->frames.push_back(
+        {Outgoing::Kind::kMesh, true, std::make_shared<const std::string>(std::move(frame))});
+    begin = end;
+  }
+  ++impl_->counters_.meshes;
+  impl_->publish(std::move(message), nullptr);
+}
+
+void Server::publish_stats(std::string json) {
+  impl_->publish(nullptr, std::make_shared<const std::string>(std::move(json)));
+}
+
+ServerStats Server::stats() const {
+  const Impl::Counters& c = impl_->counters_;
+  ServerStats s;
+  s.clients = c.clients;
+  s.clients_accepted = c.clients_accepted;
+  s.clients_refused = c.clients_refused;
+  s.clients_closed_bad_message = c.clients_closed_bad;
+  s.frames_sent = c.frames_sent;
+  s.frames_dropped = c.frames_dropped;
+  s.bytes_sent = c.bytes_sent;
+  s.http_requests = c.http_requests;
+  s.meshes_published = c.meshes;
+  s.publications_replaced = c.publications_replaced;
+  s.max_client_queue_frames = c.max_client_queue;
+  return s;
+}
+
+}  // namespace meshflow::serve

@@ -1,0 +1,128 @@
+#pragma once
+// meshflow's HTTP + WebSocket server (Boost.Beast over Boost.Asio): it serves a fixed set of
+// in-memory resources (the viewer page) and streams what the rest of meshflow publishes (meshes
+// in meshflow's own codec, small JSON messages) to every connected browser.
+//
+// Safe by default:
+//   - binds 127.0.0.1 unless the config names another host;
+//   - read-only: a request's path is only looked up in `ServerConfig::resources` (fixed when
+//     the server starts); nothing a client sends reaches the filesystem or changes the run;
+//   - a bounded number of WebSocket clients (others get HTTP 503) and of HTTP connections;
+//   - each client's send queue holds only the newest mesh and the newest stats: a published
+//     mesh replaces the unsent frames of older ones (counted as dropped), so a slow or stalled
+//     client costs memory for one mesh (shared by all clients), never a blocked producer;
+//   - every client message is checked: larger than `max_client_message_bytes` (Beast closes
+//     with 1009), faster than the rate limit, binary, or not a JSON object {"type": "hello" |
+//     "ping"} closes the connection (1008 policy / 1003 unsupported data).
+//
+// Wire protocol, server to client (see web/viewer.js):
+//   text   {"type":"mesh","id":N,"kind":"progressive"|"edgebreaker","bytes":B,
+//           "base_end":E,"packet_ends":[...],"vertices":V,"triangles":T,"chunks":C}
+//   binary u32 id, u32 offset (little-endian), then bytes [offset, offset + n) of mesh N's .mfc
+//          image; chunks of one mesh arrive in order, the first holds the base mesh
+//   text   the JSON objects given to publish_stats() (they carry their own "type")
+//
+// Threads: the server runs its own I/O thread. Every public member is thread-safe and returns
+// without waiting for the network.
+
+#include <cstddef>
+#include <cstdint>
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace meshflow::serve {
+
+/// One resource the server answers GET / HEAD with.
+struct StaticResource {
+  std::string content_type;                 ///< e.g. "text/html; charset=utf-8"
+  std::shared_ptr<const std::string> body;  ///< the bytes (shared, never copied per client)
+};
+
+/// Where to bind: `[HOST:]PORT` (HOST an IPv4 address, "localhost" or a bracketed IPv6
+/// address). Throws meshflow::Error for a malformed value or a port outside 0 .. 65535.
+struct ServeAddress {
+  std::string host = "127.0.0.1";
+  std::uint16_t port = 0;
+};
+ServeAddress parse_serve_address(const std::string& text);
+
+struct ServerConfig {
+  /// The address to listen on; the default is the loopback interface only.
+  std::string host = "127.0.0.1";
+  /// 0: any free port (Server::port() tells which).
+  std::uint16_t port = 0;
+  /// WebSocket clients at once; more get HTTP 503.
+  std::size_t max_clients = 8;
+  /// Open HTTP connections at once (page loads included); more are closed at accept.
+  std::size_t max_connections = 64;
+  /// A client message larger than this closes the connection (close code 1009).
+  std::size_t max_client_message_bytes = 1024;
+  /// Token bucket of client messages: `client_message_burst` at once, refilled at this rate.
+  double client_messages_per_second = 10.0;
+  double client_message_burst = 20.0;
+  /// The resources, by request path ("/", "/viewer.js", ...). Nothing else is served.
+  std::map<std::string, StaticResource> resources;
+  /// The path of the WebSocket endpoint.
+  std::string websocket_path = "/ws";
+  /// Caps each client's bandwidth, megabits per second (0: no cap): whole frames are sent no
+  /// faster than this, to feel a narrow link or to spare a robot's uplink. Frames waiting for
+  /// the cap are dropped for newer ones like those of a slow client.
+  double client_megabits_per_second = 0.0;
+  /// Bytes of one mesh per binary frame (cut at progressive packet boundaries when possible).
+  std::size_t chunk_bytes = 64 * 1024;
+};
+
+/// Counters since the server started.
+struct ServerStats {
+  std::size_t clients = 0;                       ///< WebSocket clients connected now
+  std::uint64_t clients_accepted = 0;            ///< WebSocket handshakes completed
+  std::uint64_t clients_refused = 0;             ///< upgrades refused (client limit)
+  std::uint64_t clients_closed_bad_message = 0;  ///< closed for a malformed/oversized/fast message
+  std::uint64_t frames_sent = 0;                 ///< WebSocket frames written
+  std::uint64_t frames_dropped = 0;  ///< frames replaced by newer ones before they were sent
+  std::uint64_t bytes_sent = 0;      ///< WebSocket payload bytes written
+  std::uint64_t http_requests = 0;   ///< HTTP requests answered
+  std::uint64_t meshes_published = 0;
+  /// Publications replaced by newer ones before the I/O thread took them (never sent).
+  std::uint64_t publications_replaced = 0;
+  /// The longest any client's send queue has been, in frames (the frame being written
+  /// included): at most one mesh's frames and one stats message, however slow the client.
+  std::size_t max_client_queue_frames = 0;
+};
+
+/// The server. Construction binds and starts the I/O thread (throws meshflow::Error when the
+/// address cannot be bound); destruction closes every connection and joins the thread.
+class Server {
+ public:
+  explicit Server(ServerConfig config);
+  ~Server();
+  Server(const Server&) = delete;
+  Server& operator=(const Server&) = delete;
+
+  /// The bound address and port.
+  const std::string& host() const;
+  std::uint16_t port() const;
+  /// "http://HOST:PORT/".
+  std::string url() const;
+
+  /// Publishes a mesh as a .mfc image (compressed_mesh.h; progressive images are cut into a
+  /// base chunk and chunks of whole split packets). Every client gets it, new clients too;
+  /// frames of older meshes not yet sent are dropped. Throws meshflow::Error if `mfc` is not a
+  /// valid .mfc image (its header and, when progressive, its packet layout are read here, on
+  /// the caller's thread: O(base mesh)). Does not wait for the network.
+  void publish_mesh(std::vector<unsigned char> mfc);
+  /// Publishes a JSON object text (sent as is; give it a "type"). The newest replaces unsent
+  /// older ones; new clients get the newest. Does not wait for the network.
+  void publish_stats(std::string json);
+
+  ServerStats stats() const;
+
+  class Impl;
+
+ private:
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace meshflow::serve

@@ -1,0 +1,453 @@
+// The serving layer: what it binds to by default, that it serves only its fixed resources, that a
+// published mesh streams in chunks (base first) whose prefixes decode to growing levels ending
+// in the full mesh, and that bad, oversized, flooding, surplus or stalled clients cost the
+// producer nothing. Every client here talks to 127.0.0.1 with bounded waits.
+
+#include <gtest/gtest.h>
+
+#include <boost/asio/connect.hpp>
+#include <boost/asio/ip/tcp.hpp>
+#include <boost/beast/core.hpp>
+#include <boost/beast/http.hpp>
+#include <boost/beast/websocket.hpp>
+#include <chrono>
+#include <cmath>
+#include <cstring>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "nodes/compress/compressed_mesh.h"
+#include "nodes/compress/progressive_mesh.h"
+#include "runtime/error.h"
+#include "serve/client_message.h"
+#include "serve/mesh_stream.h"
+#include "serve/server.h"
+#include "web/mfc_decoder.h"
+
+namespace meshflow::serve {
+namespace {
+
+namespace asio = boost::asio;
+namespace beast = boost::beast;
+namespace http = beast::http;
+namespace websocket = beast::websocket;
+using tcp = asio::ip::tcp;
+using error_code = boost::system::error_code;
+using namespace std::chrono_literals;
+
+/// An n x n grid of vertices on a wavy sheet, two triangles per square; `roughness` adds hashed
+/// noise to the heights (meshes that compress less).
+TriangleMesh wavy_grid(std::uint32_t n, float roughness = 0.0f) {
+  TriangleMesh mesh;
+  for (std::uint32_t y = 0; y < n; ++y)
+    for (std::uint32_t x = 0; x < n; ++x) {
+      const float fx = static_cast<float>(x) / static_cast<float>(n - 1);
+      const float fy = static_cast<float>(y) / static_cast<float>(n - 1);
+      const std::uint32_t hash = (x * 73856093u) ^ (y * 19349663u) * 2654435761u;
+      const float noise = roughness * static_cast<float>(hash % 1000u) / 1000.0f;
+      mesh.vertices.emplace_back(fx, fy, 0.1f * std::sin(7.0f * fx) * std::cos(5.0f * fy) + noise);
+    }
+  for (std::uint32_t y = 0; y + 1 < n; ++y)
+    for (std::uint32_t x = 0; x + 1 < n; ++x) {
+      const std::uint32_t a = y * n + x, b = a + 1, c = a + n, d = c + 1;
+      mesh.triangles.push_back({a, b, d});
+      mesh.triangles.push_back({a, d, c});
+    }
+  return mesh;
+}
+
+/// A WebSocket client on its own io_context; every operation waits at most `timeout`.
+class Client {
+ public:
+  explicit Client(std::size_t receive_buffer = 0) : receive_buffer_(receive_buffer) {}
+
+  error_code connect(std::uint16_t port, const std::string& target = "/ws") {
+    error_code result;
+    bool done = false;
+    auto& socket = beast::get_lowest_layer(ws_).socket();
+    socket.open(tcp::v4());
+    if (receive_buffer_ > 0)
+      socket.set_option(asio::socket_base::receive_buffer_size(static_cast<int>(receive_buffer_)));
+    beast::get_lowest_layer(ws_).async_connect(
+        tcp::endpoint(asio::ip::make_address("127.0.0.1"), port), [&](error_code ec) {
+          if (ec) {
+            result = ec;
+            done = true;
+            return;
+          }
+          ws_.async_handshake("127.0.0.1", target, [&](error_code ec2) {
+            result = ec2;
+            done = true;
+          });
+        });
+    return wait(done, result);
+  }
+
+  error_code read(std::string& message, bool& binary) {
+    error_code result;
+    bool done = false;
+    buffer_.consume(buffer_.size());
+    ws_.async_read(buffer_, [&](error_code ec, std::size_t) {
+      result = ec;
+      done = true;
+    });
+    wait(done, result);
+    message = beast::buffers_to_string(buffer_.data());
+    binary = ws_.got_binary();
+    return result;
+  }
+
+  error_code write(const std::string& message, bool binary = false) {
+    error_code result;
+    bool done = false;
+    ws_.binary(binary);
+    ws_.async_write(asio::buffer(message), [&](error_code ec, std::size_t) {
+      result = ec;
+      done = true;
+    });
+    return wait(done, result);
+  }
+
+  /// Reads until the connection ends (the error that ended it) or `timeout` passes
+  /// (asio::error::timed_out).
+  error_code read_until_closed() {
+    for (;;) {
+      std::string message;
+      bool binary = false;
+      const error_code ec = read(message, binary);
+      if (ec) return ec;
+    }
+  }
+
+  websocket::close_reason reason() const { return ws_.reason(); }
+
+ private:
+  error_code wait(bool& done, error_code& result) {
+    ioc_.restart();
+    const auto deadline = std::chrono::steady_clock::now() + 5s;
+    while (!done && std::chrono::steady_clock::now() < deadline) ioc_.run_one_for(20ms);
+    if (!done) {
+      beast::get_lowest_layer(ws_).socket().cancel();
+      while (!done) ioc_.run_one_for(20ms);
+      return asio::error::timed_out;
+    }
+    return result;
+  }
+
+  std::size_t receive_buffer_;
+  asio::io_context ioc_;
+  websocket::stream<beast::tcp_stream> ws_{ioc_};
+  beast::flat_buffer buffer_;
+};
+
+/// One HTTP request to the server; the response (status 0 if none came).
+http::response<http::string_body> http_request(std::uint16_t port, http::verb verb,
+                                               const std::string& target) {
+  asio::io_context ioc;
+  beast::tcp_stream stream(ioc);
+  stream.connect(tcp::endpoint(asio::ip::make_address("127.0.0.1"), port));
+  http::request<http::string_body> request(verb, target, 11);
+  request.set(http::field::host, "127.0.0.1");
+  request.keep_alive(false);
+  http::write(stream, request);
+  beast::flat_buffer buffer;
+  http::response<http::string_body> response;
+  error_code ec;
+  http::read(stream, buffer, response, ec);
+  return response;
+}
+
+ServerConfig config_with_page() {
+  ServerConfig config;
+  config.resources["/"] = {"text/html", std::make_shared<const std::string>("<p>page</p>")};
+  return config;
+}
+
+TEST(ServeAddress, ParsesPortHostAndIpv6) {
+  ServeAddress a = parse_serve_address("8080");
+  EXPECT_EQ(a.host, "127.0.0.1");
+  EXPECT_EQ(a.port, 8080);
+  a = parse_serve_address("0.0.0.0:9000");
+  EXPECT_EQ(a.host, "0.0.0.0");
+  EXPECT_EQ(a.port, 9000);
+  a = parse_serve_address("[::1]:0");
+  EXPECT_EQ(a.host, "::1");
+  EXPECT_EQ(a.port, 0);
+  EXPECT_THROW(parse_serve_address("x"), Error);
+  EXPECT_THROW(parse_serve_address("70000"), Error);
+  EXPECT_THROW(parse_serve_address("host:"), Error);
+  EXPECT_THROW(parse_serve_address("[::1]"), Error);
+}
+
+TEST(ClientMessage, OnlyHelloAndPingObjects) {
+  EXPECT_TRUE(valid_client_message(R"({"type":"hello"})"));
+  EXPECT_TRUE(valid_client_message(R"({"type":"ping","t":1})"));
+  for (const char* bad : {"", "hello", "[]", "{}", R"({"type":1})", R"({"type":"get"})",
+                          R"({"type":"hello")", "\xff\xfe", R"("type")"})
+    EXPECT_FALSE(valid_client_message(bad)) << bad;
+}
+
+TEST(Server, BindsLoopbackByDefault) {
+  EXPECT_EQ(ServerConfig{}.host, "127.0.0.1");
+  Server server{ServerConfig{}};
+  EXPECT_EQ(server.host(), "127.0.0.1");
+  EXPECT_NE(server.port(), 0);
+  EXPECT_EQ(server.url(), "http://127.0.0.1:" + std::to_string(server.port()) + "/");
+}
+
+TEST(Server, RefusesAHostThatIsNotAnAddress) {
+  ServerConfig config;
+  config.host = "example.invalid";
+  EXPECT_THROW(Server{config}, Error);
+}
+
+TEST(Server, ServesOnlyItsFixedResources) {
+  Server server{config_with_page()};
+  auto response = http_request(server.port(), http::verb::get, "/");
+  EXPECT_EQ(response.result(), http::status::ok);
+  EXPECT_EQ(response.body(), "<p>page</p>");
+  EXPECT_EQ(response[http::field::content_type], "text/html");
+  for (const char* target : {"/etc/passwd", "/../../../../etc/passwd", "/%2e%2e/etc/passwd",
+                             "//etc/passwd", "/index.html"})
+    EXPECT_EQ(http_request(server.port(), http::verb::get, target).result(),
+              http::status::not_found)
+        << target;
+  EXPECT_EQ(http_request(server.port(), http::verb::post, "/").result(),
+            http::status::method_not_allowed);
+  EXPECT_EQ(http_request(server.port(), http::verb::put, "/").result(),
+            http::status::method_not_allowed);
+}
+
+TEST(Server, StreamsAProgressiveMeshBaseFirstAndEveryPrefixDecodes) {
+  const TriangleMesh mesh = wavy_grid(48);
+  compress::CompressConfig cc;
+  cc.splits_per_packet = 64;
+  cc.base_ratio = 0.05f;
+  const std::vector<unsigned char> mfc = compress::compress_progressive(mesh, cc);
+  ServerConfig config = config_with_page();
+  config.chunk_bytes = 512;
+  Server server{config};
+  Client client;
+  ASSERT_FALSE(client.connect(server.port()));
+  ASSERT_FALSE(client.write(R"({"type":"hello"})"));
+  server.publish_stats(R"({"type":"stats","stages":{"compress_ms":1.5}})");
+  server.publish_mesh(mfc);
+
+  std::string message;
+  bool binary = false;
+  nlohmann::json header;
+  std::vector<unsigned char> received;
+  std::uint32_t last_triangles = 0;
+  int levels = 0;
+  bool got_stats = false;
+  while (header.is_null() || received.size() < header["bytes"].get<std::size_t>()) {
+    ASSERT_FALSE(client.read(message, binary));
+    if (!binary) {
+      const nlohmann::json doc = nlohmann::json::parse(message);
+      if (doc["type"] == "stats") got_stats = true;
+      if (doc["type"] == "mesh") header = doc;
+      continue;
+    }
+    ASSERT_FALSE(header.is_null()) << "a chunk came before its mesh's header";
+    ASSERT_GE(message.size(), 8u);
+    std::uint32_t id = 0, offset = 0;
+    std::memcpy(&id, message.data(), 4);
+    std::memcpy(&offset, message.data() + 4, 4);
+    EXPECT_EQ(id, header["id"].get<std::uint32_t>());
+    ASSERT_EQ(offset, received.size()) << "chunks arrive in order";
+    received.insert(received.end(), message.begin() + 8, message.end());
+    const std::size_t base_end = header["base_end"];
+    if (received.size() == header["bytes"].get<std::size_t>()) break;
+    // Every chunk ends at the base or a packet's end: the prefix decodes as a level of detail.
+    const std::vector<std::size_t> ends = header["packet_ends"];
+    int packets = 0;
+    while (packets < static_cast<int>(ends.size()) &&
+           ends[static_cast<std::size_t>(packets)] <= received.size())
+      ++packets;
+    const std::size_t prefix =
+        packets == 0 ? base_end : ends[static_cast<std::size_t>(packets - 1)];
+    ASSERT_EQ(prefix, received.size());
+    ASSERT_EQ(mf_decode(received.data(), received.size(), base_end, packets), 0) << mf_error();
+    EXPECT_GT(mf_triangle_count(), last_triangles) << "levels grow";
+    last_triangles = mf_triangle_count();
+    ++levels;
+  }
+  EXPECT_TRUE(got_stats);
+  EXPECT_EQ(header["kind"], "progressive");
+  EXPECT_GE(levels, 3) << "base and at least two finer levels before the full mesh";
+  ASSERT_EQ(received, mfc);
+  ASSERT_EQ(mf_decode(received.data(), received.size(), 0, -1), 0) << mf_error();
+  EXPECT_EQ(mf_triangle_count(), mesh.triangles.size());
+  EXPECT_EQ(mf_vertex_count(), mesh.vertices.size());
+  EXPECT_EQ(header["triangles"].get<std::size_t>(), mesh.triangles.size());
+  EXPECT_EQ(header["vertices"].get<std::size_t>(), mesh.vertices.size());
+  const TriangleMesh full = compress::decompress_mesh(mfc, "test");
+  EXPECT_EQ(0, std::memcmp(mf_positions(), full.vertices[0].data(),
+                           full.vertices.size() * sizeof(full.vertices[0])));
+  EXPECT_EQ(0, std::memcmp(mf_indices(), full.triangles[0].data(),
+                           full.triangles.size() * sizeof(full.triangles[0])));
+  EXPECT_NE(mf_decode(received.data(), received.size() - 1, 0, -1), 0) << "checksum checked";
+}
+
+TEST(Server, CapsEachClientsBandwidth) {
+  // 0.8 Mbit/s = 100 kB/s: a 50+ kB mesh in 4 kB frames takes about half a second or more.
+  const std::vector<unsigned char> mfc =
+      compress::compress_progressive(wavy_grid(150, 0.05f), compress::CompressConfig{});
+  ASSERT_GT(mfc.size(), 50'000u);
+  ServerConfig config = config_with_page();
+  config.client_megabits_per_second = 0.8;
+  config.chunk_bytes = 4096;
+  Server server{config};
+  Client client;
+  ASSERT_FALSE(client.connect(server.port()));
+  const auto start = std::chrono::steady_clock::now();
+  server.publish_mesh(mfc);
+  std::size_t received = 0;
+  while (received < mfc.size()) {
+    std::string message;
+    bool binary = false;
+    ASSERT_FALSE(client.read(message, binary));
+    if (binary) received += message.size() - 8;
+  }
+  const double seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  EXPECT_GT(seconds, 0.8 * static_cast<double>(mfc.size()) / 100e3) << mfc.size() << " bytes";
+}
+
+TEST(Server, ANewClientGetsTheCurrentMesh) {
+  Server server{config_with_page()};
+  server.publish_mesh(compress::compress_mesh(wavy_grid(8)));
+  std::this_thread::sleep_for(50ms);
+  Client client;
+  ASSERT_FALSE(client.connect(server.port()));
+  std::string message;
+  bool binary = true;
+  ASSERT_FALSE(client.read(message, binary));
+  EXPECT_FALSE(binary);
+  const nlohmann::json header = nlohmann::json::parse(message);
+  EXPECT_EQ(header["type"], "mesh");
+  EXPECT_EQ(header["kind"], "edgebreaker");
+  EXPECT_EQ(header["triangles"], 2 * 7 * 7);
+}
+
+TEST(Server, RefusesAnInvalidMfcImage) {
+  Server server{config_with_page()};
+  EXPECT_THROW(server.publish_mesh({1, 2, 3}), Error);
+}
+
+TEST(Server, AnOversizedClientMessageClosesTheConnection) {
+  ServerConfig config = config_with_page();
+  config.max_client_message_bytes = 256;
+  Server server{config};
+  Client client;
+  ASSERT_FALSE(client.connect(server.port()));
+  ASSERT_FALSE(client.write(R"({"type":"hello","pad":")" + std::string(1000, 'x') + "\"}"));
+  const error_code ec = client.read_until_closed();
+  EXPECT_NE(ec, asio::error::timed_out);
+  EXPECT_EQ(client.reason().code, websocket::close_code::too_big);
+  // The server counts it when its read ends, after the close handshake the client saw.
+  for (int i = 0; i < 200 && server.stats().clients_closed_bad_message == 0; ++i)
+    std::this_thread::sleep_for(10ms);
+  EXPECT_EQ(server.stats().clients_closed_bad_message, 1u);
+}
+
+TEST(Server, MalformedClientMessagesCloseTheConnection) {
+  Server server{config_with_page()};
+  const std::vector<std::pair<std::string, bool>> bad = {
+      {"not json", false},
+      {"[1,2,3]", false},
+      {R"({"type":"delete","path":"/etc/passwd"})", false},
+      {R"({"kind":"hello"})", false},
+      {std::string("\x01\x02\x03", 3), true}};
+  for (const auto& [message, binary] : bad) {
+    Client client;
+    ASSERT_FALSE(client.connect(server.port()));
+    ASSERT_FALSE(client.write(R"({"type":"ping"})"));  // a valid one first: kept open
+    ASSERT_FALSE(client.write(message, binary));
+    const error_code ec = client.read_until_closed();
+    EXPECT_NE(ec, asio::error::timed_out) << message;
+    EXPECT_EQ(client.reason().code,
+              binary ? websocket::close_code::unknown_data : websocket::close_code::policy_error)
+        << message;
+  }
+  EXPECT_EQ(server.stats().clients_closed_bad_message, bad.size());
+}
+
+TEST(Server, AFloodOfClientMessagesClosesTheConnection) {
+  ServerConfig config = config_with_page();
+  config.client_message_burst = 5;
+  config.client_messages_per_second = 1;
+  Server server{config};
+  Client client;
+  ASSERT_FALSE(client.connect(server.port()));
+  for (int i = 0; i < 50; ++i)
+    if (client.write(R"({"type":"ping"})")) break;
+  EXPECT_NE(client.read_until_closed(), asio::error::timed_out);
+  EXPECT_EQ(client.reason().code, websocket::close_code::policy_error);
+}
+
+TEST(Server, RefusesClientsBeyondTheLimit) {
+  ServerConfig config = config_with_page();
+  config.max_clients = 1;
+  Server server{config};
+  Client first, second;
+  ASSERT_FALSE(first.connect(server.port()));
+  for (int i = 0; i < 100 && server.stats().clients < 1; ++i) std::this_thread::sleep_for(10ms);
+  EXPECT_TRUE(second.connect(server.port()));
+  EXPECT_EQ(server.stats().clients_refused, 1u);
+  Client wrong_path;
+  EXPECT_TRUE(wrong_path.connect(server.port(), "/../ws"));
+}
+
+TEST(Server, AClientThatNeverReadsDoesNotBlockPublishing) {
+  // A mesh of over 50 kB, published 400 times (20 MB) to a client with a 4 kB receive buffer
+  // that never reads: each publish returns at once, stale frames are dropped, and a reading
+  // client still gets the newest mesh.
+  const std::vector<unsigned char> mfc = compress::compress_mesh(wavy_grid(200, 0.05f));
+  ASSERT_GT(mfc.size(), 50'000u);
+  Server server{config_with_page()};
+  Client stalled(4096);
+  ASSERT_FALSE(stalled.connect(server.port()));
+  for (int i = 0; i < 100 && server.stats().clients < 1; ++i) std::this_thread::sleep_for(10ms);
+  double slowest = 0.0;
+  const auto start = std::chrono::steady_clock::now();
+  for (int i = 0; i < 400; ++i) {
+    const auto t0 = std::chrono::steady_clock::now();
+    server.publish_mesh(mfc);
+    server.publish_stats(R"({"type":"stats","frame":)" + std::to_string(i) + "}");
+    slowest = std::max(
+        slowest, std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+  }
+  const double total =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  // Generous bounds (a loaded CI machine): a publish that waited on the stalled client would
+  // wait forever.
+  EXPECT_LT(slowest, 2.0) << "one publish waited on the network";
+  EXPECT_LT(total, 30.0);
+  // What the stalled client could not take was dropped (from its queue, or replaced before the
+  // I/O thread took it), and its queue never held more than one mesh (header + one chunk of
+  // this single-rate image), one stats message and the frame being written.
+  const auto dropped = [&] {
+    const ServerStats s = server.stats();
+    return s.frames_dropped + s.publications_replaced;
+  };
+  for (int i = 0; i < 500 && dropped() == 0; ++i) std::this_thread::sleep_for(10ms);
+  EXPECT_GT(dropped(), 0u);
+  EXPECT_LE(server.stats().max_client_queue_frames, 4u);
+
+  Client reader;
+  ASSERT_FALSE(reader.connect(server.port()));
+  std::string message;
+  bool binary = false;
+  ASSERT_FALSE(reader.read(message, binary));
+  EXPECT_EQ(nlohmann::json::parse(message)["frame"], 399) << "the newest stats first";
+  ASSERT_FALSE(reader.read(message, binary));
+  const nlohmann::json header = nlohmann::json::parse(message);
+  EXPECT_EQ(header["type"], "mesh");
+  EXPECT_EQ(header["id"], server.stats().meshes_published);
+}
+
+}  // namespace
+}  // namespace meshflow::serve

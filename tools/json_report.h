@@ -1,7 +1,7 @@
 #pragma once
 // The --json documents of the subcommands, built with nlohmann-json. Field names are
 // snake_case, lengths in metres, times in milliseconds unless the name says otherwise
-// (README "Machine-readable output" lists them).
+// (docs/JSON.md lists them).
 
 #include <nlohmann/json.hpp>
 

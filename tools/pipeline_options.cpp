@@ -20,6 +20,7 @@ ReconstructionConfig PipelineOptions::config() const {
   c.distance.max_disagreement_voxels = max_disagreement;
   c.distance.max_extrapolation_voxels = max_extrapolation;
   c.optimize.cleanup.min_component_triangles = min_component;
+  c.triangulation.min_component_triangles = min_component;  // one setting for both paths
   c.filter.voxel_size = filter_voxel;
   c.filter.outlier_k = outlier_k;
   c.filter.min_range = min_range;
@@ -110,7 +111,9 @@ void add_pipeline_options(CLI::App* cmd, PipelineOptions& o) {
                   "Border triangles farther than this many voxels from the data are peeled off "
                   "(an open scan's rim; 0 = off)")
       ->check(number_in(0, 1000));
-  cmd->add_option("--min-component", o.min_component, "Remove mesh components with fewer triangles")
+  cmd->add_option("--min-component", o.min_component,
+                  "Remove mesh components with fewer triangles (the clean step and per-frame "
+                  "triangulation; 0 = keep all)")
       ->check(number_in(0, 1e9));
   cmd->add_option("--filter-voxel", o.filter_voxel,
                   "Voxel-grid downsampling before meshing, metres (0 = off)")

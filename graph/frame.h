@@ -116,6 +116,9 @@ struct Frame {
   /// judges (vertices_beyond_data); the rim is trimmed after stitching, where chunk cuts are
   /// no border.
   std::vector<std::uint8_t> beyond_data;
+  /// Per-frame depth-map triangulation ("triangulate"): what its filter, occlusion tests and
+  /// component filter dropped.
+  TriangulationCounts triangulation;
   TriangleMesh mesh;  ///< after extract: raw; after optimize: optimised (fusion: the map so far)
   OptimizeReport optimize;       ///< what each optimisation step did
   IntegrationStats integration;  ///< fusion: what integrating this frame did

@@ -1,5 +1,6 @@
 #include "graph/stages.h"
 
+#include <algorithm>
 #include <cstdio>
 #include <exception>
 #include <iterator>
@@ -245,14 +246,33 @@ std::uint64_t optimize(Frame& f, const ReconstructionConfig& c) {
   return f.mesh.triangles.size();
 }
 
+namespace {
+
+// Vertex normals where the mesh has none: computed from its triangles, as for a depth image. An
+// input's normal that is missing (NaN or zero, as PCL leaves them at image borders) takes the
+// computed one.
+void complete_vertex_normals(TriangleMesh& mesh) {
+  if (mesh.normals.empty()) return compute_vertex_normals(mesh);
+  const auto missing = [](const Eigen::Vector3f& n) {
+    return !n.allFinite() || n.squaredNorm() == 0.0f;
+  };
+  if (std::none_of(mesh.normals.begin(), mesh.normals.end(), missing)) return;
+  std::vector<Eigen::Vector3f> given = std::move(mesh.normals);
+  compute_vertex_normals(mesh);
+  for (std::size_t v = 0; v < given.size(); ++v)
+    if (!missing(given[v])) mesh.normals[v] = given[v];
+}
+
+}  // namespace
+
 std::uint64_t triangulate(Frame& f, const ReconstructionConfig& c) {
   if (f.depth) {
-    f.mesh = triangulate_depth(*f.depth, c.triangulation);
+    f.mesh = triangulate_depth(*f.depth, c.triangulation, &f.triangulation);
     f.mesh.colors = vertex_colors_from_image(f.mesh.vertices, *f.depth);
-    if (f.mesh.normals.empty()) compute_vertex_normals(f.mesh);
     f.depth.reset();
   } else if (f.cloud.is_organized()) {
-    f.mesh = triangulate_organized(f.cloud, c.triangulation);
+    // The cloud's colours and normals stay on the vertices (each vertex is one of its points).
+    f.mesh = triangulate_organized(f.cloud, c.triangulation, &f.triangulation);
     f.cloud = PointCloud{};  // keep frames in flight small
   } else {
     throw Error(f.name, "input",
@@ -264,6 +284,7 @@ std::uint64_t triangulate(Frame& f, const ReconstructionConfig& c) {
     throw Error(f.name, "triangulate",
                 "no triangle was made: expected valid depths at three neighbouring pixels or "
                 "points at least once (is the frame empty or all out of range?)");
+  complete_vertex_normals(f.mesh);
   return f.mesh.triangles.size();
 }
 

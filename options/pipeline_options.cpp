@@ -120,8 +120,10 @@ std::vector<OptionSpec> make_specs() {
        "Border triangles farther than this many voxels from the data are peeled off (an open "
        "scan's rim; 0 = off)",
        nullptr, in_range(&O::max_rim, 0, 1000)},
-      {"min-component", &O::min_component, "Remove mesh components with fewer triangles", nullptr,
-       in_range(&O::min_component, 0, 1e9)},
+      {"min-component", &O::min_component,
+       "Remove mesh components with fewer triangles (the clean step and per-frame "
+       "triangulation; 0 = keep all)",
+       nullptr, in_range(&O::min_component, 0, 1e9)},
       {"filter-voxel", &O::filter_voxel, "Voxel-grid downsampling before meshing, metres (0 = off)",
        nullptr, in_range(&O::filter_voxel, 0, 1000)},
       {"outlier-k", &O::outlier_k, "Statistical outlier removal with k neighbours (0 = off)",
@@ -228,6 +230,7 @@ ReconstructionConfig PipelineOptions::config() const {
   c.distance.max_disagreement_voxels = max_disagreement;
   c.distance.max_extrapolation_voxels = max_extrapolation;
   c.optimize.cleanup.min_component_triangles = min_component;
+  c.triangulation.min_component_triangles = min_component;  // one setting for both paths
   c.filter.voxel_size = filter_voxel;
   c.filter.outlier_k = outlier_k;
   c.filter.min_range = min_range;

@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <cstdint>
 
+#include "runtime/disjoint_sets.h"
 #include "runtime/error.h"
 #include "runtime/parallel.h"
 #include "runtime/vertex_triangles.h"
@@ -157,6 +158,37 @@ TriangleMesh compact_vertices(const TriangleMesh& source, const std::vector<Tria
   for (const Triangle& t : triangles)
     out.triangles.push_back(Triangle{id[t[0]], id[t[1]], id[t[2]]});
   return out;
+}
+
+void remove_small_components(std::vector<Triangle>& triangles, std::size_t vertex_count,
+                             std::size_t min_triangles, ComponentCounts* counts) {
+  DisjointSets sets(vertex_count);
+  for (const Triangle& t : triangles) {
+    sets.unite(t[0], t[1]);
+    sets.unite(t[1], t[2]);
+  }
+  std::vector<std::uint32_t> component_size(vertex_count, 0);
+  for (const Triangle& t : triangles) ++component_size[sets.find(t[0])];
+  ComponentCounts c;
+  for (std::uint32_t s : component_size) {
+    if (s == 0) continue;
+    ++c.components;
+    if (s < min_triangles) {
+      ++c.removed_components;
+      c.removed_triangles += s;
+    }
+  }
+  if (counts != nullptr) {
+    counts->components += c.components;
+    counts->removed_components += c.removed_components;
+    counts->removed_triangles += c.removed_triangles;
+  }
+  if (c.removed_components == 0) return;
+  triangles.erase(std::remove_if(triangles.begin(), triangles.end(),
+                                 [&](const Triangle& t) {
+                                   return component_size[sets.find(t[0])] < min_triangles;
+                                 }),
+                  triangles.end());
 }
 
 void require_corners_in_range(const std::vector<Triangle>& triangles, std::size_t vertex_count,

@@ -77,6 +77,21 @@ std::vector<BorderEdge> border_edges(const TriangleMesh& mesh, const VertexTrian
 /// 0 for no triangles. O(T).
 float median_edge_length(const TriangleMesh& mesh);
 
+/// What remove_small_components() counted.
+struct ComponentCounts {
+  std::size_t components = 0;          ///< components (by shared vertices) before removal
+  std::size_t removed_components = 0;  ///< of them, those with fewer triangles than the limit
+  std::size_t removed_triangles = 0;   ///< their triangles
+};
+
+/// Drops the triangles of connected components (triangles joined by shared vertices) with fewer
+/// than `min_triangles` triangles, keeping the others in order (min_triangles 0: keeps all, only
+/// counts); corners index `vertex_count` vertices. The one component filter of meshflow: the
+/// clean step and the per-frame triangulations both use it. Adds to `counts` when given.
+/// Serial, deterministic; O(V + T).
+void remove_small_components(std::vector<Triangle>& triangles, std::size_t vertex_count,
+                             std::size_t min_triangles, ComponentCounts* counts = nullptr);
+
 /// Throws Error(source, "face F", "vertex index I out of range (N vertices)") for the first
 /// corner of `triangles` that is not below `vertex_count`. O(T).
 void require_corners_in_range(const std::vector<Triangle>& triangles, std::size_t vertex_count,

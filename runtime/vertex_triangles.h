@@ -31,4 +31,47 @@ VertexTriangles vertex_triangles(const TriangleMesh& mesh);
 /// The same for bare triangles over `vertex_count` vertices.
 VertexTriangles vertex_triangles(const std::vector<Triangle>& triangles, std::size_t vertex_count);
 
+/// The fans around every vertex (triangles around it joined through shared edges, i.e. shared
+/// corners other than the vertex): writes fan[s] for every slot s of `around` (0 = the fan
+/// holding the vertex's lowest triangle, then in order of their lowest triangles) and returns
+/// the fan count of each vertex (0 for an unused vertex). `around` is vertex_triangles() of
+/// `triangles`. Parallel per vertex; deterministic. O(V + T), plus O(V) memory per worker.
+std::vector<std::uint32_t> vertex_fans(const std::vector<Triangle>& triangles,
+                                       const VertexTriangles& around,
+                                       std::vector<std::uint32_t>& fan);
+
+// Non-manifold vertices: where two sheets of a marching-cubes surface touch at a single grid
+// point, or two pieces of an open scan's border meet corner to corner (a bow tie), one vertex
+// joins two (or more) fans of triangles. Half-edge based steps need one fan per vertex.
+//
+// The clean step and the per-frame triangulations remove the triangles of the smaller fans
+// (remove_smaller_fans). Splitting the vertex into one copy per fan (split_non_manifold_vertices)
+// changes no geometry but leaves coincident vertices, and readers that weld vertices on load
+// (Open3D's OBJ and glTF readers, trimesh, MeshLab's "merge close vertices") join them into the
+// same non-manifold vertex again: the file is manifold only to a reader that keeps indices as
+// written. Moving the copies apart does not help either: a move small enough to change no geometry
+// is undone by a welding tolerance or by a writer's decimal digits, a larger one makes spikes or
+// self-intersections. The smaller fans are a few triangles (a Kinect frame's marching-cubes mesh:
+// bow ties of 1-5 triangles on the scan's border at 73 vertices, about 150 of 197 000 triangles);
+// on a closed surface the hole left is a small border loop that the holes step closes.
+
+/// What remove_smaller_fans() did.
+struct FanRemovalCounts {
+  std::size_t vertices = 0;   ///< non-manifold vertices met (over all passes)
+  std::size_t triangles = 0;  ///< triangles removed
+  std::size_t passes = 0;     ///< passes until every vertex had one fan
+};
+
+/// Removes, at every vertex whose triangles form k > 1 fans (triangles around the vertex joined
+/// through shared edges), the triangles of all fans but the largest (the most triangles; of
+/// equal ones, the fan holding the lowest triangle index), keeping the other triangles in
+/// order; corners index `vertex_count` vertices. Removing a fan can leave one of its other
+/// corners with two fans, so passes repeat, each over the corners of the triangles the previous
+/// one removed, until every vertex has one fan (two or three passes on scanned meshes).
+/// Vertices are not touched: no position moves and none is added. Adds to `counts` when given.
+/// Deterministic. O(V + T) for the first pass (fans found in parallel per vertex, O(V) memory
+/// per worker thread), then O(triangles around the vertices looked at) per pass, serial.
+void remove_smaller_fans(std::vector<Triangle>& triangles, std::size_t vertex_count,
+                         FanRemovalCounts* counts = nullptr);
+
 }  // namespace meshflow

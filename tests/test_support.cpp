@@ -12,6 +12,8 @@
 #include <iterator>
 #include <limits>
 #include <random>
+#include <tuple>
+#include <vector>
 
 #include "nodes/fusion/tsdf_map_file.h"
 #include "nodes/normals/organized_normals.h"
@@ -116,6 +118,56 @@ TriangleMesh tetrahedron() {
   m.vertices = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
   m.triangles = {{0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {1, 2, 3}};
   return m;
+}
+
+WeldedTopology welded_topology(const TriangleMesh& mesh) {
+  WeldedTopology w;
+  const std::size_t n = mesh.vertices.size();
+  // Weld: each vertex to the first at its position (positions sorted, then runs joined).
+  std::vector<std::uint32_t> order(n), to(n);
+  for (std::uint32_t v = 0; v < n; ++v) order[v] = to[v] = v;
+  const auto key = [&](std::uint32_t v) {
+    const Eigen::Vector3f& p = mesh.vertices[v];
+    return std::make_tuple(p.x(), p.y(), p.z(), v);
+  };
+  std::sort(order.begin(), order.end(),
+            [&](std::uint32_t a, std::uint32_t b) { return key(a) < key(b); });
+  for (std::size_t i = 0, j = 0; i < n; i = j) {
+    for (j = i + 1; j < n && mesh.vertices[order[j]] == mesh.vertices[order[i]]; ++j)
+      to[order[j]] = order[i];
+    w.coincident_pairs += (j - i) * (j - i - 1) / 2;
+  }
+  std::vector<Triangle> welded;
+  for (const Triangle& t : mesh.triangles) welded.push_back({to[t[0]], to[t[1]], to[t[2]]});
+  TriangleMesh as_read;
+  as_read.vertices = mesh.vertices;
+  as_read.triangles = welded;
+  w.non_manifold_edges = edge_statistics(as_read).non_manifold_edges;
+  // Fans: the triangles around v joined where they share a corner other than v.
+  std::vector<std::vector<std::uint32_t>> around(n);
+  for (std::uint32_t t = 0; t < welded.size(); ++t)
+    for (std::uint32_t c : welded[t]) around[c].push_back(t);
+  for (std::uint32_t v = 0; v < n; ++v) {
+    const std::vector<std::uint32_t>& tris = around[v];
+    std::vector<std::uint32_t> fan(tris.size());
+    for (std::uint32_t i = 0; i < fan.size(); ++i) fan[i] = i;
+    const auto find = [&](std::uint32_t x) {
+      while (fan[x] != x) x = fan[x];
+      return x;
+    };
+    for (std::uint32_t i = 0; i < tris.size(); ++i)
+      for (std::uint32_t j = 0; j < i; ++j)
+        for (std::uint32_t x : welded[tris[i]])
+          for (std::uint32_t y : welded[tris[j]])
+            if (x != v && x == y) {
+              const std::uint32_t a = find(i), b = find(j);
+              fan[std::max(a, b)] = std::min(a, b);
+            }
+    std::size_t fans = 0;
+    for (std::uint32_t i = 0; i < fan.size(); ++i) fans += find(i) == i;
+    w.non_manifold_vertices += fans > 1;
+  }
+  return w;
 }
 
 TriangleMesh grid_mesh(std::uint32_t n) {

@@ -60,6 +60,16 @@ TriangleMesh grid_mesh(std::uint32_t n);
 /// random vertices (edges with three or more faces, vertices joining several fans).
 TriangleMesh messy_mesh(std::uint32_t n, std::uint32_t seed);
 
+/// What a reader that welds vertices on load (joins vertices at the same position, as Open3D's
+/// OBJ and glTF readers and trimesh do) makes of a mesh's topology.
+struct WeldedTopology {
+  std::size_t coincident_pairs = 0;       ///< pairs of distinct vertices at the same position
+  std::size_t non_manifold_vertices = 0;  ///< welded vertices whose triangles form several fans
+  std::size_t non_manifold_edges = 0;     ///< welded edges with three or more triangles
+};
+/// Welds `mesh` by exact position and counts; brute force per vertex (tests only).
+WeldedTopology welded_topology(const TriangleMesh& mesh);
+
 /// `frame` as a Kinect driver delivers it: the organized cloud of its metric depth
 /// (back_project) in the camera frame, whatever its pose; NaN where a pixel has no point.
 PointCloud camera_frame_cloud(const DepthFrame& frame);

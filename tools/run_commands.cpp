@@ -49,10 +49,45 @@ void print_frame_line(const Frame& f) {
   if (!f.ok()) return;
   double busy = 0.0;
   for (const StageRecord& r : f.timings) busy += r.end_s - r.start_s;
-  detail("frame %zu   %s: %zu points -> %zu vertices, %zu triangles, %.1f ms in stages\n",
+  const ComponentCounts& removed = f.triangulation.components;
+  std::string components;
+  if (removed.removed_components > 0)
+    components = ", " + std::to_string(removed.removed_components) + " small components (" +
+                 std::to_string(removed.removed_triangles) + " triangles) removed";
+  detail("frame %zu   %s: %zu points -> %zu vertices, %zu triangles%s, %.1f ms in stages\n",
          f.source_index, f.name.c_str(), f.filter_counts.input, f.mesh.vertices.size(),
-         f.mesh.triangles.size(), 1e3 * busy);
+         f.mesh.triangles.size(), components.c_str(), 1e3 * busy);
 }
+
+// Per-frame triangulation: the smaller fans and small components removed over the frames.
+struct RemovedComponents {
+  ComponentCounts sum;
+  FanRemovalCounts fans;
+  void add(const Frame& f) {
+    sum.components += f.triangulation.components.components;
+    sum.removed_components += f.triangulation.components.removed_components;
+    sum.removed_triangles += f.triangulation.components.removed_triangles;
+    fans.vertices += f.triangulation.fans.vertices;
+    fans.triangles += f.triangulation.fans.triangles;
+  }
+  nlohmann::json json(std::size_t min_triangles) const {
+    return {{"components", sum.components},
+            {"removed_components", sum.removed_components},
+            {"removed_triangles", sum.removed_triangles},
+            {"min_component", min_triangles},
+            {"non_manifold_vertices", fans.vertices},
+            {"removed_fan_triangles", fans.triangles}};
+  }
+  void print(std::size_t min_triangles) const {
+    report("components %zu of %zu removed for having fewer than %zu triangles (%zu triangles)\n",
+           sum.removed_components, sum.components, min_triangles, sum.removed_triangles);
+    if (fans.vertices > 0)
+      report(
+          "manifold   %zu non-manifold vertices repaired (%zu triangles of their smaller fans "
+          "removed)\n",
+          fans.vertices, fans.triangles);
+  }
+};
 
 void report_failure(const Frame& f) {
   std::fprintf(stderr, "meshflow: frame %zu (%s) failed in %s: %s\n", f.source_index,
@@ -253,10 +288,18 @@ void run_fusion(const RunOptions& o) {
   finish_run(stats);
 }
 
+// Appends `mesh` to `into`; normals and colours stay while every mesh so far had them.
 void append_mesh(TriangleMesh& into, const TriangleMesh& mesh) {
   const auto offset = static_cast<std::uint32_t>(into.vertices.size());
+  const auto append = [&](auto& to, const auto& from) {
+    if (to.size() == into.vertices.size() && from.size() == mesh.vertices.size())
+      to.insert(to.end(), from.begin(), from.end());
+    else
+      to.clear();
+  };
+  append(into.normals, mesh.normals);
+  append(into.colors, mesh.colors);
   into.vertices.insert(into.vertices.end(), mesh.vertices.begin(), mesh.vertices.end());
-  into.normals.insert(into.normals.end(), mesh.normals.begin(), mesh.normals.end());
   for (const Triangle& t : mesh.triangles)
     into.triangles.push_back({t[0] + offset, t[1] + offset, t[2] + offset});
 }
@@ -321,12 +364,14 @@ void run_run(const RunOptions& o) {
   FrameProgress progress(selected_frames(*sequence, o.sequence));
   TriangleMesh merged;
   std::size_t done = 0, written = 0;
+  RemovedComponents removed;
   const SequenceRunOptions run_options{o.sequence.every, o.sequence.max_frames, o.strict};
   const SequenceRunStats stats =
       run_sequence(pipeline, *sequence, run_options, [&](const Frame& f) {
         progress.update(++done);
         if (!f.ok()) return report_failure(f);
         print_frame_line(f);
+        removed.add(f);
         if (o.concatenate) return append_mesh(merged, f.mesh);
         char name[64];
         std::snprintf(name, sizeof name, "frame_%06zu", f.source_index);
@@ -337,8 +382,11 @@ void run_run(const RunOptions& o) {
     write_run_mesh(o, "concatenated", merged);
     written = 1;
   }
-  print_run_summary(*sequence, stats, limit.threads(), o.sequence.in_flight,
-                    {{"files_written", written}, {"output", o.output_dir}});
+  nlohmann::json extra = {{"files_written", written}, {"output", o.output_dir}};
+  const std::size_t min_component = config.triangulation.min_component_triangles;
+  if (o.triangulation.enabled()) extra["components"] = removed.json(min_component);
+  print_run_summary(*sequence, stats, limit.threads(), o.sequence.in_flight, extra);
+  if (o.triangulation.enabled()) removed.print(min_component);
   report("output     %zu mesh file%s in %s\n", written, written == 1 ? "" : "s",
          o.output_dir.c_str());
   finish_run(stats);

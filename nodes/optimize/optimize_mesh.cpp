@@ -36,10 +36,14 @@ TriangleMesh clean_step(const TriangleMesh& mesh, const OptimizeConfig& config,
                         OptimizeReport& report, OptimizeStepReport& step) {
   TriangleMesh out = clean_mesh(mesh, config.cleanup, &report.cleanup);
   const CleanupReport& c = report.cleanup;
-  step.detail = format("removed %zu degenerate/duplicate, %zu in %zu small components",
-                       c.degenerate_triangles + c.duplicate_triangles,
-                       c.removed_component_triangles, c.removed_components) +
-                format(", %zu non-manifold vertices split", c.split_vertices);
+  step.detail =
+      format("removed %zu degenerate/duplicate, %zu in %zu small components",
+             c.degenerate_triangles + c.duplicate_triangles, c.removed_component_triangles,
+             c.removed_components) +
+      (c.split_vertices > 0 ? format(", %zu non-manifold vertices split", c.split_vertices)
+                            : format(", %zu non-manifold vertices repaired (%zu triangles of their "
+                                     "smaller fans removed)",
+                                     c.non_manifold_vertices, c.removed_fan_triangles));
   return out;
 }
 

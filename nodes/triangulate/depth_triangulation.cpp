@@ -2,6 +2,8 @@
 
 #include <tbb/parallel_for.h>
 
+#include <utility>
+
 #include "nodes/triangulate/quad_triangles.h"
 #include "runtime/parallel.h"
 
@@ -47,7 +49,12 @@ namespace {
 // Triangulates and compacts `grid` (made with c.filter filled in); reports c through `counts`.
 TriangleMesh grid_mesh(const PointGrid& grid, const DepthTriangulationConfig& config,
                        TriangulationCounts& c, TriangulationCounts* counts) {
-  TriangleMesh mesh = mesh_from_pixel_triangles(grid, triangulate_grid(grid, config, &c));
+  std::vector<Triangle> triangles = triangulate_grid(grid, config, &c);
+  if (config.repair_non_manifold_vertices)
+    remove_smaller_fans(triangles, grid.points.size(), &c.fans);
+  remove_small_components(triangles, grid.points.size(), config.min_component_triangles,
+                          &c.components);
+  TriangleMesh mesh = mesh_from_pixel_triangles(grid, std::move(triangles));
   if (config.decimate_to > 0.0f && config.decimate_to < 1.0f) {
     QemConfig qem = config.decimation;
     qem.target_ratio = config.decimate_to;

@@ -11,6 +11,7 @@
 #include "nodes/decimate/qem_decimation.h"
 #include "nodes/triangulate/pixel_grid.h"
 #include "nodes/triangulate/restricted_quadtree.h"
+#include "runtime/vertex_triangles.h"
 
 namespace meshflow {
 
@@ -26,6 +27,15 @@ struct DepthTriangulationConfig {
   /// A triangle whose longest edge exceeds this many times its shortest is a sliver across a
   /// jump.
   float max_edge_ratio = 8.0f;
+  /// Before decimation, as the clean step does (CleanupConfig): at vertices joining several fans
+  /// of triangles (bow ties where two pixel quads meet at a corner across an occlusion edge),
+  /// the smaller fans are removed (remove_smaller_fans: the mesh stays manifold, also for
+  /// readers that weld vertices), ...
+  bool repair_non_manifold_vertices = true;
+  /// ... then connected components with fewer triangles: specks around occlusion edges and
+  /// flying pixels (office1's RQT mesh had 241 edge-connected components, 217 of them under 20
+  /// triangles). The clean step's rule and default (--min-component sets both); 0 = keep all.
+  std::size_t min_component_triangles = 20;
   /// When in (0, 1): QEM decimation (qem_decimate, depth from the camera) down to this share
   /// of the triangles after triangulation; 0 = off.
   float decimate_to = 0.0f;
@@ -45,16 +55,24 @@ struct TriangulationCounts {
   std::size_t rejected_shape = 0;  ///< naive: triangles dropped for their edge ratio
   /// rqt: the threshold coefficient used (1/m; quadtree_threshold_per_depth2)
   float threshold_per_depth2 = 0.0f;
+  FanRemovalCounts fans;  ///< remove_smaller_fans: non-manifold vertices and triangles removed
+  /// Components of the triangulation (after the fans), and those removed
+  /// (min_component_triangles).
+  ComponentCounts components;
 };
 
 /// Triangulates a depth frame in the world frame (T_world_camera; metres). Triangles wind
-/// counter-clockwise seen from the camera; vertices are the used pixels in row-major order.
+/// counter-clockwise seen from the camera; vertices are the used pixels in row-major order;
+/// smaller fans at non-manifold vertices and components smaller than
+/// config.min_component_triangles are left out. No normals or colours
+/// (the graph's triangulate stage adds normals, and colours from the frame's colour image).
 /// Deterministic; O(pixels). Throws meshflow::Error for an empty or mis-sized image.
 TriangleMesh triangulate_depth(const DepthFrame& frame, const DepthTriangulationConfig& config = {},
                                TriangulationCounts* counts = nullptr);
 
 /// The same for an organized cloud (width x height points, NaN = invalid), e.g. a Kinect PCD
-/// (see grid_from_organized). Throws meshflow::Error for an unorganized cloud.
+/// (see grid_from_organized); each vertex keeps its point's colour and normal where the cloud
+/// has them. Throws meshflow::Error for an unorganized cloud.
 TriangleMesh triangulate_organized(const PointCloud& cloud,
                                    const DepthTriangulationConfig& config = {},
                                    TriangulationCounts* counts = nullptr);

@@ -75,6 +75,8 @@ PointGrid grid_from_organized(const PointCloud& cloud, const DepthFilterConfig& 
   g.height = static_cast<int>(cloud.height);
   g.eye = cloud.has_sensor_origin ? cloud.sensor_origin : Eigen::Vector3f::Zero();
   g.points = cloud.positions;
+  if (cloud.colors.size() == cloud.positions.size()) g.colors = cloud.colors;
+  if (cloud.normals.size() == cloud.positions.size()) g.normals = cloud.normals;
   // Range image for the limits and the occlusion edges (0 = invalid).
   Image range(g.height, g.width, PixelFormat::F32);
   c.pixels = g.points.size();
@@ -185,7 +187,11 @@ TriangleMesh mesh_from_pixel_triangles(const PointGrid& grid,
     row_offsets[v] = n;
   });
   TriangleMesh mesh;
-  mesh.vertices.resize(exclusive_scan_in_place(row_offsets));
+  const std::size_t vertices = exclusive_scan_in_place(row_offsets);
+  mesh.vertices.resize(vertices);
+  const bool colors = grid.colors.size() == pixels, normals = grid.normals.size() == pixels;
+  if (colors) mesh.colors.resize(vertices);
+  if (normals) mesh.normals.resize(vertices);
   // Ids are written for used pixels only (the others are never read).
   std::unique_ptr<std::uint32_t[]> vertex_of(new std::uint32_t[pixels]);
   tbb::parallel_for(std::size_t{0}, h, [&](std::size_t v) {
@@ -193,6 +199,8 @@ TriangleMesh mesh_from_pixel_triangles(const PointGrid& grid,
     for (std::size_t u = 0; u < w; ++u) {
       if (used[v * w + u] == 0) continue;
       vertex_of[v * w + u] = next;
+      if (colors) mesh.colors[next] = grid.colors[v * w + u];
+      if (normals) mesh.normals[next] = grid.normals[v * w + u];
       mesh.vertices[next++] = grid.points[v * w + u];
     }
   });

@@ -20,6 +20,10 @@ struct PointGrid {
   int width = 0, height = 0;
   std::vector<Eigen::Vector3f> points;            ///< row-major, world frame, metres; NaN = invalid
   Eigen::Vector3f eye = Eigen::Vector3f::Zero();  ///< camera centre, world frame
+  /// Per pixel, row-major, when the input has them (an organized cloud's); else empty. The
+  /// mesh's vertices keep them (mesh_from_pixel_triangles).
+  std::vector<Rgb8> colors;
+  std::vector<Eigen::Vector3f> normals;
   /// Whether point i was measured (not NaN).
   bool valid(std::size_t i) const { return !std::isnan(points[i].x()); }
   /// Index of pixel (u, v): column u, row v.
@@ -36,8 +40,9 @@ PointGrid grid_from_depth(const DepthFrame& frame, const DepthFilterConfig& filt
                           DepthFilterCounts* counts = nullptr);
 
 /// An organized cloud (width x height, NaN = invalid) as a grid seen from its sensor origin (the
-/// origin when unset); the range limits and occlusion edges of `filter` apply to the range from
-/// it. Throws meshflow::Error for an unorganized cloud or a non-finite sensor origin. O(pixels).
+/// origin when unset), with the cloud's colours and normals; the range limits and occlusion
+/// edges of `filter` apply to the range from it. Throws meshflow::Error for an unorganized cloud or
+/// a non-finite sensor origin. O(pixels).
 PointGrid grid_from_organized(const PointCloud& cloud, const DepthFilterConfig& filter,
                               DepthFilterCounts* counts = nullptr);
 
@@ -107,8 +112,9 @@ inline OcclusionTriangleTest::Verdict OcclusionTriangleTest::operator()(
 }
 
 /// The mesh of `pixel_triangles` (corners are pixel indices of `grid`): vertices are the used
-/// pixels in row-major order; the triangles are renumbered in place (pass an rvalue to avoid a
-/// copy). Parallel over rows; deterministic; O(pixels + triangles).
+/// pixels in row-major order, with the grid's colours and normals when it has them; the triangles
+/// are renumbered in place (pass an rvalue to avoid a copy). Parallel over rows; deterministic;
+/// O(pixels + triangles).
 TriangleMesh mesh_from_pixel_triangles(const PointGrid& grid,
                                        std::vector<Triangle> pixel_triangles);
 

@@ -6,7 +6,6 @@
 #include <algorithm>
 
 #include "nodes/optimize/cleanup/manifold_repair.h"
-#include "runtime/disjoint_sets.h"
 
 namespace meshflow {
 namespace {
@@ -63,31 +62,14 @@ std::vector<std::uint8_t> duplicate_faces(const std::vector<Triangle>& tris,
 
 namespace {
 
-// Drops the triangles of components (by shared vertices) with fewer than `min_triangles`
-// triangles, keeping the others in order; counts components and removals into `r`. O(V + T).
+// remove_small_components() (runtime/triangle_mesh.h), counted into the report.
 void remove_small_components(std::vector<Triangle>& triangles, std::size_t vertex_count,
                              std::size_t min_triangles, CleanupReport& r) {
-  DisjointSets sets(vertex_count);
-  for (const Triangle& t : triangles) {
-    sets.unite(t[0], t[1]);
-    sets.unite(t[1], t[2]);
-  }
-  std::vector<std::uint32_t> component_size(vertex_count, 0);
-  for (const Triangle& t : triangles) ++component_size[sets.find(t[0])];
-  for (std::uint32_t s : component_size) {
-    if (s == 0) continue;
-    ++r.components;
-    if (s < min_triangles) {
-      ++r.removed_components;
-      r.removed_component_triangles += s;
-    }
-  }
-  if (min_triangles == 0) return;
-  triangles.erase(std::remove_if(triangles.begin(), triangles.end(),
-                                 [&](const Triangle& t) {
-                                   return component_size[sets.find(t[0])] < min_triangles;
-                                 }),
-                  triangles.end());
+  ComponentCounts counts;
+  meshflow::remove_small_components(triangles, vertex_count, min_triangles, &counts);
+  r.components += counts.components;
+  r.removed_components += counts.removed_components;
+  r.removed_component_triangles += counts.removed_triangles;
 }
 
 }  // namespace
@@ -116,10 +98,17 @@ TriangleMesh clean_mesh(const TriangleMesh& mesh, const CleanupConfig& config,
     kept = mesh.triangles;
   }
 
+  if (config.non_manifold_vertices == NonManifoldVertexRepair::kRemoveSmallerFans) {
+    FanRemovalCounts fans;
+    remove_smaller_fans(kept, mesh.vertices.size(), &fans);
+    r.non_manifold_vertices = fans.vertices;
+    r.removed_fan_triangles = fans.triangles;
+  }
+  // After the fans: a piece that hung on the rest by a vertex is a component of its own now.
   remove_small_components(kept, mesh.vertices.size(), config.min_component_triangles, r);
   TriangleMesh out = compact_vertices(mesh, kept);
   r.removed_vertices = mesh.vertices.size() - out.vertices.size();
-  if (config.split_non_manifold_vertices) {
+  if (config.non_manifold_vertices == NonManifoldVertexRepair::kSplit) {
     r.split_vertices = split_non_manifold_vertices(out);
     // Splitting separates the fans that met at a vertex: pieces that hung on the rest of the
     // mesh by one vertex become components of their own and get the same size rule.

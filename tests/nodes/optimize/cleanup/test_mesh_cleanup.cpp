@@ -3,10 +3,13 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cstdio>
 #include <limits>
+#include <map>
 #include <numeric>
 
 #include "fixtures/mesh_fixtures.h"
+#include "nodes/optimize/cleanup/hole_filling.h"
 #include "nodes/optimize/cleanup/manifold_repair.h"
 #include "test_support.h"
 
@@ -77,6 +80,7 @@ TEST(MeshCleanup, SplitsVerticesWhereTwoSheetsTouch) {
   compute_vertex_normals(m);
   CleanupConfig config;
   config.min_component_triangles = 0;
+  config.non_manifold_vertices = NonManifoldVertexRepair::kSplit;
   CleanupReport report;
   const TriangleMesh out = clean_mesh(m, config, &report);
   EXPECT_EQ(report.split_vertices, 2u);
@@ -87,7 +91,7 @@ TEST(MeshCleanup, SplitsVerticesWhereTwoSheetsTouch) {
   for (std::size_t t = 4; t < 8; ++t)
     EXPECT_EQ(std::count(out.triangles[t].begin(), out.triangles[t].end(), 0u), 0);
   EXPECT_EQ(test::half_edge_problem(out), "");
-  config.split_non_manifold_vertices = false;
+  config.non_manifold_vertices = NonManifoldVertexRepair::kNone;
   EXPECT_EQ(clean_mesh(m, config).vertices.size(), m.vertices.size());
 }
 
@@ -100,6 +104,7 @@ TEST(MeshCleanup, PiecesTheSplitSeparatesAreRemovedWhenSmall) {
   m.triangles.push_back({0, b, b + 1});
   CleanupConfig config;
   config.min_component_triangles = 20;
+  config.non_manifold_vertices = NonManifoldVertexRepair::kSplit;
   CleanupReport report;
   const TriangleMesh out = clean_mesh(m, config, &report);
   EXPECT_EQ(report.split_vertices, 1u);
@@ -107,6 +112,124 @@ TEST(MeshCleanup, PiecesTheSplitSeparatesAreRemovedWhenSmall) {
   EXPECT_EQ(report.removed_component_triangles, 1u);
   EXPECT_EQ(out.triangles.size(), 50u);
   EXPECT_EQ(out.vertices.size(), 36u) << "the split copy and the hanging corners are gone";
+  EXPECT_EQ(test::half_edge_problem(out), "");
+  // By default the hanging triangle is the smaller fan at vertex 0 and goes the same way.
+  CleanupReport fans;
+  const TriangleMesh removed = clean_mesh(m, CleanupConfig{}, &fans);
+  EXPECT_EQ(fans.non_manifold_vertices, 1u);
+  EXPECT_EQ(fans.removed_fan_triangles, 1u);
+  EXPECT_EQ(fans.split_vertices, 0u);
+  EXPECT_EQ(removed.triangles, out.triangles);
+  EXPECT_EQ(removed.vertices, out.vertices);
+}
+
+// Two 5 x 5 grids (32 triangles each, above the component limit) meeting corner to corner at
+// one vertex, as two pieces of a scan's border do (a bow tie), and a third sheet touching the
+// first grid's middle (a closed fan meeting an open one). Splitting left two coincident copies
+// there, which a reader that welds vertices on load (Open3D's OBJ / glTF readers, trimesh)
+// joins into the non-manifold vertex again; the clean step now removes the smaller fans.
+TEST(MeshCleanup, NoCoincidentVerticesAfterNonManifoldVerticesAreRepaired) {
+  TriangleMesh m = test::grid_mesh(5);
+  TriangleMesh other = test::grid_mesh(5);  // its vertex 0 on the first grid's last vertex 24
+  const auto offset = static_cast<std::uint32_t>(m.vertices.size());
+  for (const Eigen::Vector3f& p : other.vertices)
+    m.vertices.push_back(p + Eigen::Vector3f(4.0f, 4.0f, 0.0f));
+  for (Triangle t : other.triangles) {
+    for (std::uint32_t& c : t) c = c == 0 ? 24u : c + offset;
+    m.triangles.push_back(t);
+  }
+  const TriangleMesh input = compact_vertices(m, m.triangles);  // other's vertex 0 dropped
+  const test::WeldedTopology before = test::welded_topology(input);
+  EXPECT_EQ(before.coincident_pairs, 0u);
+  EXPECT_EQ(before.non_manifold_vertices, 1u);
+
+  CleanupConfig split;
+  split.non_manifold_vertices = NonManifoldVertexRepair::kSplit;
+  const test::WeldedTopology after_split = test::welded_topology(clean_mesh(input, split));
+  EXPECT_EQ(after_split.coincident_pairs, 1u) << "what the split left";
+  EXPECT_EQ(after_split.non_manifold_vertices, 1u);
+
+  for (int threads : {1, 2}) {
+    CleanupReport report;
+    const TriangleMesh out =
+        test::with_threads(threads, [&] { return clean_mesh(input, CleanupConfig{}, &report); });
+    const test::WeldedTopology after = test::welded_topology(out);
+    EXPECT_EQ(after.coincident_pairs, 0u);
+    EXPECT_EQ(after.non_manifold_vertices, 0u);
+    EXPECT_EQ(after.non_manifold_edges, 0u);
+    EXPECT_EQ(report.non_manifold_vertices, 1u);
+    // Vertex 24 holds one triangle of each grid's corner cell or two; the first grid's
+    // (lower triangle indices) stays on a tie.
+    EXPECT_GE(report.removed_fan_triangles, 1u);
+    EXPECT_LE(report.removed_fan_triangles, 2u);
+    EXPECT_EQ(out.triangles.size(), input.triangles.size() - report.removed_fan_triangles);
+    EXPECT_EQ(std::vector<Triangle>(out.triangles.begin(), out.triangles.begin() + 32),
+              test::grid_mesh(5).triangles)
+        << "the first grid keeps every triangle";
+    EXPECT_EQ(test::half_edge_problem(out), "");
+  }
+}
+
+// A closed sphere of radius 1 around `centre`: an octahedron (vertices on the axes) with each
+// face subdivided twice and the vertices pushed onto the sphere; 128 triangles, outward.
+TriangleMesh sphere_mesh(const Eigen::Vector3f& centre) {
+  TriangleMesh m;
+  m.vertices = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
+  m.triangles = {{0, 2, 4}, {2, 1, 4}, {1, 3, 4}, {3, 0, 4},
+                 {2, 0, 5}, {1, 2, 5}, {3, 1, 5}, {0, 3, 5}};
+  for (int level = 0; level < 2; ++level) {
+    std::map<std::pair<std::uint32_t, std::uint32_t>, std::uint32_t> middle;
+    const auto mid = [&](std::uint32_t a, std::uint32_t b) {
+      const auto key = std::minmax(a, b);
+      auto [it, fresh] = middle.emplace(key, static_cast<std::uint32_t>(m.vertices.size()));
+      if (fresh) m.vertices.push_back((m.vertices[a] + m.vertices[b]).normalized());
+      return it->second;
+    };
+    std::vector<Triangle> finer;
+    for (const Triangle& t : m.triangles) {
+      const std::uint32_t ab = mid(t[0], t[1]), bc = mid(t[1], t[2]), ca = mid(t[2], t[0]);
+      finer.insert(finer.end(), {{t[0], ab, ca}, {ab, t[1], bc}, {ca, bc, t[2]}, {ab, bc, ca}});
+    }
+    m.triangles = std::move(finer);
+  }
+  for (Eigen::Vector3f& p : m.vertices) p += centre;
+  return m;
+}
+
+// Two closed spheres touching at one vertex (the marching-cubes case: two closed sheets at one
+// grid point). Removing the smaller fan opens a 4-edge hole in one of them, which the holes
+// step closes: clean and holes (the default steps) give closed, manifold surfaces without
+// coincident vertices, where the split gave a copy that welds back into the pinch.
+TEST(MeshCleanup, ClosedSheetsTouchingAtAVertexComeOutClosed) {
+  TriangleMesh m = sphere_mesh(Eigen::Vector3f::Zero());
+  const TriangleMesh second = sphere_mesh(Eigen::Vector3f(2, 0, 0));  // its vertex 1 on vertex 0
+  const auto offset = static_cast<std::uint32_t>(m.vertices.size());
+  m.vertices.insert(m.vertices.end(), second.vertices.begin(), second.vertices.end());
+  for (Triangle t : second.triangles) {
+    for (std::uint32_t& c : t) c = c == 1 ? 0u : c + offset;
+    m.triangles.push_back(t);
+  }
+  m = compact_vertices(m, m.triangles);
+  ASSERT_EQ(test::welded_topology(m).non_manifold_vertices, 1u);
+
+  CleanupConfig split;
+  split.non_manifold_vertices = NonManifoldVertexRepair::kSplit;
+  const TriangleMesh split_mesh = fill_holes(clean_mesh(m, split));
+  EXPECT_EQ(test::welded_topology(split_mesh).coincident_pairs, 1u) << "what the split left";
+  EXPECT_EQ(test::welded_topology(split_mesh).non_manifold_vertices, 1u);
+
+  CleanupReport report;
+  const TriangleMesh cleaned = clean_mesh(m, CleanupConfig{}, &report);
+  EXPECT_EQ(report.non_manifold_vertices, 1u);
+  EXPECT_EQ(report.removed_fan_triangles, 4u);  // a tie: the first sphere's fan stays
+  EXPECT_EQ(edge_statistics(cleaned).boundary_edges, 4u);
+  HoleFillingReport holes;
+  const TriangleMesh out = fill_holes(cleaned, HoleFillingConfig{}, &holes);
+  EXPECT_EQ(holes.filled, 1u);
+  EXPECT_TRUE(edge_statistics(out).closed());
+  const test::WeldedTopology after = test::welded_topology(out);
+  EXPECT_EQ(after.coincident_pairs, 0u);
+  EXPECT_EQ(after.non_manifold_vertices, 0u);
   EXPECT_EQ(test::half_edge_problem(out), "");
 }
 
@@ -169,7 +292,7 @@ TEST(MeshCleanup, DuplicatesAndNonManifoldSplitsMatchTheDefinitionsOnMessyMeshes
     const TriangleMesh m = test::messy_mesh(12, seed);
     CleanupConfig config;
     config.min_component_triangles = 0;
-    config.split_non_manifold_vertices = false;
+    config.non_manifold_vertices = NonManifoldVertexRepair::kNone;
     const std::vector<bool> dup = duplicates_oracle(m.triangles);
     for (int threads : {1, 2}) {
       CleanupReport report;
@@ -197,6 +320,39 @@ TEST(MeshCleanup, DuplicatesAndNonManifoldSplitsMatchTheDefinitionsOnMessyMeshes
       EXPECT_GT(added, 0u) << "seed " << seed;  // the junk made some
       EXPECT_EQ(split.vertices, expected.vertices) << "seed " << seed;
       EXPECT_EQ(split.triangles, expected.triangles) << "seed " << seed;
+    }
+  }
+}
+
+// On meshes with junk (triangles joining random vertices: vertices with several fans, edges
+// with three or more faces), the passes leave every vertex with one fan (the split oracle adds
+// no copy), keep the other triangles in order, and do not depend on the thread count.
+TEST(MeshCleanup, RemovingSmallerFansLeavesOneFanPerVertexOnMessyMeshes) {
+  for (std::uint32_t seed : {1u, 2u, 3u}) {
+    const TriangleMesh m = test::messy_mesh(12, seed);
+    std::vector<Triangle> first;
+    for (int threads : {1, 2}) {
+      std::vector<Triangle> kept = m.triangles;
+      FanRemovalCounts counts;
+      test::with_threads(threads, [&] {
+        remove_smaller_fans(kept, m.vertices.size(), &counts);
+        return 0;
+      });
+      EXPECT_GT(counts.vertices, 0u) << "seed " << seed;
+      EXPECT_EQ(counts.triangles, m.triangles.size() - kept.size()) << "seed " << seed;
+      TriangleMesh repaired = m;
+      repaired.triangles = kept;
+      EXPECT_EQ(split_oracle(repaired).vertices.size(), m.vertices.size()) << "seed " << seed;
+      std::size_t at = 0;  // kept is a subsequence of the input
+      for (const Triangle& t : m.triangles) at += at < kept.size() && kept[at] == t;
+      EXPECT_EQ(at, kept.size()) << "seed " << seed;
+      if (threads == 1)
+        first = kept;
+      else
+        EXPECT_EQ(kept, first) << "seed " << seed;
+      std::printf(
+          "[ cleanup ] messy mesh %u: %zu of %zu triangles removed at %zu vertices in %zu passes\n",
+          seed, counts.triangles, m.triangles.size(), counts.vertices, counts.passes);
     }
   }
 }

@@ -5,6 +5,7 @@
 
 #include <pybind11/stl.h>
 
+#include <limits>
 #include <string>
 #include <type_traits>
 #include <variant>
@@ -47,6 +48,11 @@ void set_option(const OptionSpec& spec, PipelineOptions& o, const py::handle& va
           const auto wide = value.cast<long long>();
           if (wide < 0 && std::is_unsigned_v<T>)
             throw py::value_error(name + ": expected a whole number >= 0, got " +
+                                  std::to_string(wide));
+          if (static_cast<long double>(wide) >
+                  static_cast<long double>(std::numeric_limits<T>::max()) ||
+              (std::is_signed_v<T> && wide < static_cast<long long>(std::numeric_limits<T>::min())))
+            throw py::value_error(name + ": expected a whole number in range, got " +
                                   std::to_string(wide));
           o.*member = static_cast<T>(wide);
         } else {

@@ -61,7 +61,9 @@ TEST(SequenceRunner, SameMeshesWithOneAndTwoThreads) {
   };
   const auto one = meshes(1), two = meshes(2);
   ASSERT_EQ(one.size(), two.size());
+  ASSERT_EQ(one.size(), 3u);
   for (std::size_t i = 0; i < one.size(); ++i) {
+    EXPECT_GT(one[i].triangles.size(), 100u);
     EXPECT_EQ(one[i].vertices, two[i].vertices);
     EXPECT_EQ(one[i].triangles, two[i].triangles);
   }

@@ -45,6 +45,7 @@ TEST(SpatialOrder, SameOrderWithOneAndTwoThreadsAndOrganizedCloudsUntouched) {
     ThreadLimit limit(2);
     two = morton_order(cloud);
   }
+  EXPECT_EQ(one.size(), cloud.size());
   EXPECT_EQ(one, two);
   PointCloud grid;
   grid.width = 2;

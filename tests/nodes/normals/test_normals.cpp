@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <random>
@@ -87,6 +88,10 @@ TEST(Normals, SameResultWithOneAndTwoThreads) {
     ThreadLimit limit(2);
     two = estimate_normals(c, index, NormalsConfig{});
   }
+  ASSERT_EQ(one.size(), c.size());
+  EXPECT_TRUE(std::all_of(one.begin(), one.end(), [](const Eigen::Vector3f& n) {
+    return std::abs(n.norm() - 1.0f) < 1e-4f;
+  }));
   EXPECT_EQ(one, two);
 }
 

@@ -78,6 +78,7 @@ TEST(OrientNormals, SameSignsWithOneAndTwoThreads) {
     ThreadLimit limit(2);
     two = propagated_normals(cloud).normals;
   }
+  EXPECT_EQ(one.size(), cloud.size());
   EXPECT_EQ(one, two);
 }
 

@@ -70,7 +70,8 @@ std::string normals_plan(const PointCloud& cloud, nlohmann::json& plan) {
            (cloud.has_sensor_origin ? " (towards the sensor position)"
                                     : " (organized: towards the sensor at the origin)");
   const ComponentSide side = scene_side(cloud);
-  const char* rule = side == ComponentSide::kAlongAxis ? "up (LAS: heights along z)"
+  const char* rule = side == ComponentSide::kAlongAxis
+                         ? "up (LAS or map coordinates: heights along z)"
                      : side == ComponentSide::kViewOrOutward
                          ? "towards the origin if the normals agree on one camera view, else "
                            "outward"

@@ -17,8 +17,9 @@ std::string side_rule(const NormalsReport& r) {
     case ComponentSide::kTowardPoint:
       return "facing the origin (one camera view in its camera frame)";
     case ComponentSide::kAlongAxis:
-      return r.orientation == NormalOrientation::kPropagate ? name + " (LAS: heights along z)"
-                                                            : name;
+      return r.orientation == NormalOrientation::kPropagate
+                 ? name + " (LAS or map coordinates: heights along z)"
+                 : name;
     case ComponentSide::kOutward:
     case ComponentSide::kViewOrOutward:
       break;

@@ -108,20 +108,6 @@ LasHeader read_header(std::ifstream& in, const std::string& path, std::uint64_t 
   return header;
 }
 
-// The local origin for a cloud whose first point is `p`: zero when the point is within
-// kGeoreferencedBeyond of the world origin (floats hold such coordinates to under a
-// millimetre), else `p` rounded to whole kilometres, so nearby tiles share round origins.
-Eigen::Vector3d local_origin_near(const Eigen::Vector3d& p) {
-  constexpr double kGeoreferencedBeyond = 1e4;  // metres; float ulp there: 1 mm
-  if (!p.allFinite() || (p.array().abs() <= kGeoreferencedBeyond).all())
-    return Eigen::Vector3d::Zero();
-  return ((p / 1000.0).array().round() * 1000.0 + 0.0).matrix();  // + 0.0: no "-0" origin
-}
-
-}  // namespace
-
-namespace {
-
 // Calls visit(first, count, records) for consecutive runs of point records (about 4 MiB each,
 // never more than the file holds: a record may be up to 64 KiB long), from the stream's position.
 template <typename Visit>

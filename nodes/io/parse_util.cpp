@@ -108,6 +108,45 @@ void check_position(const Eigen::Vector3d& p, const std::string& source,
                   " is not finite or beyond +-1e6 m: corrupt data or wrong units");
 }
 
+Eigen::Vector3d local_origin_near(const Eigen::Vector3d& p) {
+  constexpr double kGeoreferencedBeyond = 1e4;  // metres; float ulp there: 1 mm
+  if (!p.allFinite() || (p.array().abs() <= kGeoreferencedBeyond).all() ||
+      (p.array().abs() > 1e8).any())  // (no map coordinate: local_position() refuses it)
+    return Eigen::Vector3d::Zero();
+  return ((p / 1000.0).array().round() * 1000.0 + 0.0).matrix();  // + 0.0: no "-0" origin
+}
+
+bool is_map_frame(const Eigen::Vector3d& origin) {
+  return origin.z() == 0.0 && (origin.x() != 0.0 || origin.y() != 0.0);
+}
+
+Eigen::Vector3f local_position(const Eigen::Vector3d& p, const Eigen::Vector3d& origin,
+                               const std::string& source, std::string_view what,
+                               std::uint64_t index) {
+  // Map coordinates reach 1e7 m (UTM northings; eastings with a zone prefix under 1e8): past
+  // that a number is no position on Earth, first point or not.
+  constexpr double kMaxGeoreferenced = 1e8;
+  const Eigen::Vector3d local = p - origin;
+  for (int i = 0; i < 3; ++i) {
+    if (!std::isfinite(p[i])) continue;
+    char where[160] = "";
+    if (std::abs(p[i]) > kMaxGeoreferenced ||
+        (origin.isZero() && std::abs(p[i]) > kMaxAbsCoordinate))
+      std::snprintf(where, sizeof where, "coordinate %c = %g is beyond +-%g m", "xyz"[i], p[i],
+                    origin.isZero() ? kMaxAbsCoordinate : kMaxGeoreferenced);
+    else if (std::abs(local[i]) > kMaxAbsCoordinate)
+      std::snprintf(where, sizeof where,
+                    "(%.3f, %.3f, %.3f) lies more than 1e6 m from the first point", p.x(), p.y(),
+                    p.z());
+    if (where[0] != '\0')
+      throw Error(source, std::string(what) + " " + std::to_string(index),
+                  std::string(where) +
+                      ": corrupt data, wrong units or a cloud too large for one "
+                      "local frame");
+  }
+  return local.cast<float>();
+}
+
 std::ifstream open_input(const std::string& path) {
   std::error_code ec;
   const std::filesystem::file_status status = std::filesystem::status(path, ec);

@@ -53,6 +53,24 @@ void check_coordinates(const Eigen::Vector3d& p, const std::string& source, std:
 void check_position(const Eigen::Vector3d& p, const std::string& source,
                     const std::string& location, std::string_view what);
 
+/// The local frame of a georeferenced cloud whose first point is `p` (world coordinates, metres):
+/// zero when every coordinate is within 1e4 m (floats hold those to a millimetre), else `p`
+/// rounded to whole kilometres, so nearby tiles share round origins (PointCloud::origin). O(1).
+Eigen::Vector3d local_origin_near(const Eigen::Vector3d& p);
+
+/// Whether a local frame `origin` (local_origin_near) is a map's: shifted horizontally only, as
+/// projected coordinates (UTM, national grids) are, whose z is a height: +z is up. O(1).
+bool is_map_frame(const Eigen::Vector3d& origin);
+
+/// `p` (world coordinates, metres) relative to `origin`, as stored in a PointCloud; throws
+/// meshflow::Error naming `source` and "<what> <index>" when a finite coordinate lies more than
+/// kMaxAbsCoordinate from the origin (corrupt data, wrong units, or a cloud too large for one
+/// local frame) or beyond 1e8 m (no map coordinate is). NaN/Inf pass through (organized clouds
+/// use them). O(1).
+Eigen::Vector3f local_position(const Eigen::Vector3d& p, const Eigen::Vector3d& origin,
+                               const std::string& source, std::string_view what,
+                               std::uint64_t index);
+
 /// Opens the regular file `path` for binary reading; throws meshflow::Error naming it when it is
 /// missing or unreadable (with the errno text), a directory, a FIFO, a socket or a device.
 std::ifstream open_input(const std::string& path);

@@ -184,8 +184,11 @@ void append_vertex(const std::vector<double>& values, const FieldMap& map, Point
                    const std::string& path, std::uint64_t row) {
   auto value = [&](int slot) { return values[static_cast<std::size_t>(map.prop[slot])]; };
   const Eigen::Vector3d p(value(FieldMap::kX), value(FieldMap::kY), value(FieldMap::kZ));
-  check_coordinates(p, path, "vertex", row);
-  cloud.positions.push_back(p.cast<float>());
+  if (row == 0) {  // map coordinates (UTM, in doubles) get a local frame, +z up
+    cloud.origin = local_origin_near(p);
+    cloud.z_up = is_map_frame(cloud.origin);
+  }
+  cloud.positions.push_back(local_position(p, cloud.origin, path, "vertex", row));
   if (map.has_normals()) {
     cloud.normals.emplace_back(static_cast<float>(value(FieldMap::kNx)),
                                static_cast<float>(value(FieldMap::kNy)),
@@ -456,6 +459,8 @@ TriangleMesh read_ply_mesh(const std::string& path) {
   TriangleMesh mesh;
   read_ply_elements(path, cloud, &mesh.triangles);
   mesh.vertices = std::move(cloud.positions);
+  if (!cloud.origin.isZero())  // a mesh has no local frame: world coordinates, as floats hold them
+    for (Eigen::Vector3f& v : mesh.vertices) v = (v.cast<double>() + cloud.origin).cast<float>();
   mesh.normals = std::move(cloud.normals);
   mesh.colors = std::move(cloud.colors);
   return mesh;

@@ -9,7 +9,8 @@
 
 namespace meshflow::io {
 
-/// Reads the `vertex` element of a PLY file into a PointCloud (metres as stored).
+/// Reads the `vertex` element of a PLY file into a PointCloud (metres as stored; map coordinates,
+/// more than 1e4 m out, relative to a local origin with +z up: PointCloud::origin, z_up).
 /// Recognised properties: x y z (required); nx ny nz (or normal_x..); red green blue
 /// (or r g b / diffuse_*; 8-bit, 16-bit or float 0..1); intensity (or scalar_intensity,
 /// reflectance). Every other property and element, list properties included, is skipped.
@@ -24,7 +25,8 @@ PointCloud read_ply(const std::string& path);
 void read_ply_batches(const std::string& path, std::size_t batch,
                       const std::function<void(const PointCloud&)>& sink);
 
-/// Reads a PLY mesh: the vertex element as in read_ply (positions, normals, colours) and the
+/// Reads a PLY mesh: the vertex element as in read_ply (positions, normals, colours; map
+/// coordinates back in the world frame: a TriangleMesh has no local origin) and the
 /// `face` element's `vertex_indices` lists (polygons are fan-triangulated). Throws
 /// A file without a `face` element gives a mesh without triangles (a point set). Throws
 /// meshflow::Error naming the file and face row for an index out of range or a face with fewer

@@ -136,7 +136,7 @@ std::uint8_t color_value(double v, const std::string& path, const std::string& l
 
 // Appends the point of one data line.
 void append_point(const std::vector<std::string_view>& tok, const std::vector<Role>& roles,
-                  const std::string& path, const std::string& loc, PointCloud& cloud) {
+                  const std::string& path, int line_no, const std::string& loc, PointCloud& cloud) {
   double value[10] = {0, 0, 0, 0, 0, 0, 0, 0, 0, 0};
   bool has[10] = {false, false, false, false, false, false, false, false, false, false};
   for (std::size_t c = 0; c < roles.size(); ++c) {
@@ -146,8 +146,12 @@ void append_point(const std::vector<std::string_view>& tok, const std::vector<Ro
     has[r] = true;
   }
   const Eigen::Vector3d p(value[0], value[1], value[2]);
-  check_coordinates(p, path, loc);
-  cloud.positions.push_back(p.cast<float>());
+  if (cloud.positions.empty()) {  // map coordinates (UTM tiles) get a local frame, +z up
+    cloud.origin = local_origin_near(p);
+    cloud.z_up = is_map_frame(cloud.origin);
+  }
+  cloud.positions.push_back(
+      local_position(p, cloud.origin, path, "line", static_cast<std::uint64_t>(line_no)));
   if (has[static_cast<int>(Role::kNx)])
     cloud.normals.emplace_back(static_cast<float>(value[3]), static_cast<float>(value[4]),
                                static_cast<float>(value[5]));
@@ -231,7 +235,7 @@ PointCloud read_xyz(const std::string& path, const std::string& columns) {
                       (given ? "--columns" : "the first line") + ", found " +
                       std::to_string(tok.size()));
     }
-    append_point(tok, roles, path, loc, cloud);
+    append_point(tok, roles, path, line_no, loc, cloud);
   }
   if (declared && *declared != cloud.size()) {
     throw Error(path, "line 1",

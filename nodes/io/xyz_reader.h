@@ -21,7 +21,8 @@ namespace meshflow::io {
 /// header names above, and "skip" or "_" for a column to ignore) replaces the header and the
 /// detection; a header line is then skipped. Throws meshflow::Error naming the file, line and
 /// column on malformed input, or naming --columns for an unknown name or an incomplete triple.
-/// O(file size).
+/// Map coordinates (more than 1e4 m out, e.g. a UTM terrain tile) are read relative to a local
+/// origin with +z up (PointCloud::origin, z_up). O(file size).
 PointCloud read_xyz(const std::string& path, const std::string& columns = "");
 
 }  // namespace meshflow::io

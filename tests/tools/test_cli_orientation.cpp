@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 
 #include "cli_runner.h"
@@ -90,10 +91,32 @@ TEST(CliOrientation, AnAerialLasTileFacesUpWithoutAFlag) {
   const test::CliRun run =
       test::run_cli("reconstruct " + dir + "/tile.las -o " + dir + "/tile.ply --voxel 1");
   ASSERT_EQ(run.exit_code, 0) << run.err;
-  EXPECT_NE(run.out.find("up (LAS: heights along z)"), std::string::npos) << run.out;
+  EXPECT_NE(run.out.find("up (LAS or map coordinates: heights along z)"), std::string::npos)
+      << run.out;
   const TriangleMesh mesh = io::read_mesh(dir + "/tile.ply");
   ASSERT_GT(mesh.triangles.size(), 1000u);
   EXPECT_GE(share_up(mesh), 0.99);
+}
+
+// The same tile as ASCII XYZ in map coordinates (a terrain tile as mapping agencies hand it out):
+// a local frame, heights along z, faces up without a flag.
+TEST(CliOrientation, AnXyzTerrainTileInMapCoordinatesFacesUp) {
+  const std::string dir = test::temp_dir();
+  std::string text;
+  char line[96];
+  for (const Eigen::Vector3d& p : utm_terrain()) {
+    std::snprintf(line, sizeof line, "%.3f %.3f %.3f\n", p.x(), p.y(), p.z());
+    text += line;
+  }
+  test::write_file(dir + "/tile.xyz", text);
+  const test::CliRun run =
+      test::run_cli("reconstruct " + dir + "/tile.xyz -o " + dir + "/tile.ply --voxel 1");
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  EXPECT_NE(run.out.find("heights along z"), std::string::npos) << run.out;
+  const TriangleMesh mesh = io::read_mesh(dir + "/tile.ply");
+  ASSERT_GT(mesh.triangles.size(), 1000u);
+  EXPECT_GE(share_up(mesh), 0.98);                 // (98.9 % measured)
+  EXPECT_GT(mesh.vertices.front().x(), 51000.0f);  // written back in world coordinates
 }
 
 TEST(CliOrientation, UpDownFlipAndViewpointsInWorldCoordinates) {

@@ -103,6 +103,20 @@ TEST(PlyReader, BrokenFilesGiveOneClearError) {
   expect_error("not_a_ply.ply", "not a PLY file");
 }
 
+// Map coordinates in doubles (as CloudCompare and PDAL write UTM clouds): a local frame at whole
+// kilometres, +z up, positions exact to the file's millimetres.
+TEST(PlyReader, MapCoordinatesInDoublesGetALocalFrameWithZUp) {
+  const std::string path = test::temp_dir() + "/utm.ply";
+  test::write_file(path,
+                   "ply\nformat ascii 1.0\nelement vertex 2\nproperty double x\n"
+                   "property double y\nproperty double z\nend_header\n"
+                   "612345.125 5801234.5 41.25\n612346.5 5801235.75 42\n");
+  const PointCloud c = read_ply(path);
+  EXPECT_EQ(c.origin, Eigen::Vector3d(612000, 5801000, 0));
+  EXPECT_TRUE(c.z_up);
+  EXPECT_EQ(c.positions[1], Eigen::Vector3f(346.5f, 235.75f, 42.0f));
+}
+
 // Rows without properties take no bytes: a binary element of 10^18 of them used to be read for
 // ever (fuzz_ply's timeout, fuzz/regressions/ply/). Now a header error, at once.
 TEST(PlyReader, ElementWithRowsButNoPropertiesIsAnError) {

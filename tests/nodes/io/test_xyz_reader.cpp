@@ -104,6 +104,35 @@ TEST(XyzReader, ErrorsNameFileAndLine) {
   }
 }
 
+// A terrain tile in UTM (as national mapping agencies hand out ASCII XYZ): read in a local frame
+// at whole kilometres, +z up; a point 2000 km away is an error naming its line.
+TEST(XyzReader, MapCoordinatesGetALocalFrameWithZUp) {
+  const std::string dir = test::temp_dir();
+  test::write_file(dir + "/utm.xyz",
+                   "500123.25 5401987.5 101.25\n500124.25 5401988.5 102.5\n500125.5 5401989 99\n");
+  const PointCloud tile = read_xyz(dir + "/utm.xyz");
+  ASSERT_EQ(tile.size(), 3u);
+  EXPECT_EQ(tile.origin, Eigen::Vector3d(500000, 5402000, 0));
+  EXPECT_TRUE(tile.z_up);
+  EXPECT_EQ(tile.positions[1], Eigen::Vector3f(124.25f, -11.5f, 102.5f));  // exact in floats
+  // Local coordinates: no frame, no flag.
+  test::write_file(dir + "/local.xyz", "1 2 3\n4 5 6\n");
+  const PointCloud local = read_xyz(dir + "/local.xyz");
+  EXPECT_FALSE(local.z_up);
+  EXPECT_TRUE(local.origin.isZero());
+  test::write_file(dir + "/far.xyz", "500123 5401987 101\n2500123 5401987 101\n");
+  try {
+    read_xyz(dir + "/far.xyz");
+    FAIL();
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("line 2"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("more than 1e6 m from the first point"), std::string::npos)
+        << e.what();
+  }
+  test::write_file(dir + "/garbage.xyz", "1e30 0 0\n");  // no position on Earth
+  EXPECT_THROW(read_xyz(dir + "/garbage.xyz"), Error);
+}
+
 TEST(XyzReader, NaNRowsAreKeptForTheFilterToCount) {
   const PointCloud c = read_xyz(test::fixture("bad/nan_rows.xyz"));
   EXPECT_EQ(c.size(), 4u);

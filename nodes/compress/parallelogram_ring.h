@@ -23,9 +23,10 @@ class ParallelogramRing {
                     std::size_t vertices);
 
   /// Sums into `sum` the parallelograms available to vertex `k` (corners below k and not holes,
-  /// read from `grid`) and returns how many there are (0: `sum` is zero). O(valence^2).
+  /// read from `grid`), sets `spread` to their largest minus smallest value per axis (how much
+  /// they disagree) and returns how many there are (0: both zero). O(valence^2).
   unsigned sum(std::uint32_t k, const std::vector<std::array<std::int32_t, 3>>& grid,
-               std::array<std::int64_t, 3>& sum) const;
+               std::array<std::int64_t, 3>& sum, std::array<std::int64_t, 3>& spread) const;
 
  private:
   // The vertex opposite the directed edge from -> to in a triangle holding to -> from, or kNone.

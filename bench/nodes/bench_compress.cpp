@@ -1,9 +1,10 @@
 // Mesh compression: meshflow's Edgebreaker and progressive coders beside Google's Draco
-// (Debian's libdraco, optional: MESHFLOW_HAVE_DRACO) on the same cleaned meshes, positions only
-// at 14 bits (Draco's default quantisation; its default compression level 7). Threads: that
-// many meshes coded at once (frames in flight), one coder each. Counters: bytes, bits per
-// triangle (all, and connectivity alone), and MB/s of the raw mesh (12 bytes per vertex and
-// per triangle) per thread count.
+// (Debian's libdraco, optional: MESHFLOW_HAVE_DRACO) on the same cleaned meshes, positions at
+// 14 bits (Draco's default compression level 7), and with the `normals` argument 1 also the
+// mesh's normals at 8 octahedral bits on both sides (the Draco tool's default -qn; equal error,
+// bench/compress_vs_draco.sh). Threads: that many meshes coded at once (frames in flight), one
+// coder each. Counters: bytes, bits per triangle (all, and connectivity alone), and MB/s of
+// the raw mesh (12 bytes per vertex, per normal and per triangle) per thread count.
 
 #include <tbb/parallel_for.h>
 
@@ -24,6 +25,7 @@ namespace meshflow::bench {
 namespace {
 
 constexpr unsigned kBits = 14;
+constexpr unsigned kNormalBits = 8;
 
 compress::CompressConfig positions_only() {
   compress::CompressConfig c;
@@ -32,18 +34,40 @@ compress::CompressConfig positions_only() {
   return c;
 }
 
-double raw_bytes(const TriangleMesh& m) {
-  return 12.0 * static_cast<double>(m.vertices.size() + m.triangles.size());
+// The coded attributes of the Edgebreaker benchmarks: positions, and normals with `normals`.
+compress::CompressConfig codec_config(bool normals) {
+  compress::CompressConfig c = positions_only();
+  c.normals = normals;
+  c.normal_bits = kNormalBits;
+  return c;
+}
+
+bool with_normals(const benchmark::State& state, const TriangleMesh& m) {
+  return state.range(2) != 0 && m.normals.size() == m.vertices.size();
+}
+
+double raw_bytes(const TriangleMesh& m, bool normals = false) {
+  return 12.0 * static_cast<double>(m.vertices.size() + m.triangles.size() +
+                                    (normals ? m.normals.size() : 0));
+}
+
+// thread_and_input_args, each with and without normals (the third argument).
+void codec_args(benchmark::internal::Benchmark* b) {
+  b->ArgNames({"threads", "input", "normals"});
+  for (int input : {kSynthetic, kKurt3d})
+    for (int normals : {0, 1})
+      for (int threads : {1, 2}) b->Args({threads, input, normals});
+  b->Unit(benchmark::kMillisecond)->UseRealTime();
 }
 
 // Counters shared by every coder: sizes, and throughput over `copies` meshes per iteration.
 void count_coding(benchmark::State& state, const TriangleMesh& m, std::size_t bytes,
-                  double connectivity_bytes, int copies) {
+                  double connectivity_bytes, int copies, bool normals = false) {
   const double t = static_cast<double>(m.triangles.size());
   state.counters["bytes"] = static_cast<double>(bytes);
   state.counters["bits/tri"] = 8.0 * static_cast<double>(bytes) / t;
   if (connectivity_bytes > 0) state.counters["conn_bits/tri"] = 8.0 * connectivity_bytes / t;
-  state.counters["MB/s"] = benchmark::Counter(raw_bytes(m) * copies / 1e6,
+  state.counters["MB/s"] = benchmark::Counter(raw_bytes(m, normals) * copies / 1e6,
                                               benchmark::Counter::kIsIterationInvariantRate);
 }
 
@@ -57,38 +81,41 @@ void BM_EdgebreakerEncode(benchmark::State& state) {
   const TriangleMesh* mesh = cleaned_mesh(state);
   if (mesh == nullptr) return;
   const int threads = static_cast<int>(state.range(0));
+  const bool normals = with_normals(state, *mesh);
   ThreadLimit limit(threads);
   compress::CompressReport report;
   std::size_t bytes = 0;
   for (auto _ : state)
     in_flight(threads, [&](int k) {
       compress::CompressReport r;
-      const std::size_t n = compress::compress_mesh(*mesh, positions_only(), &r).size();
+      const std::size_t n = compress::compress_mesh(*mesh, codec_config(normals), &r).size();
       if (k == 0) {
         bytes = n;
         report = r;
       }
     });
-  count_coding(state, *mesh, bytes, static_cast<double>(report.body.connectivity_bytes), threads);
+  count_coding(state, *mesh, bytes, static_cast<double>(report.body.connectivity_bytes), threads,
+               normals);
 }
-BENCHMARK(BM_EdgebreakerEncode)->Apply(thread_and_input_args);
+BENCHMARK(BM_EdgebreakerEncode)->Apply(codec_args);
 
 void BM_EdgebreakerDecode(benchmark::State& state) {
   const TriangleMesh* mesh = cleaned_mesh(state);
   if (mesh == nullptr) return;
   const int threads = static_cast<int>(state.range(0));
+  const bool normals = with_normals(state, *mesh);
   ThreadLimit limit(threads);
   compress::CompressReport report;
   const std::vector<unsigned char> bytes =
-      compress::compress_mesh(*mesh, positions_only(), &report);
+      compress::compress_mesh(*mesh, codec_config(normals), &report);
   for (auto _ : state)
     in_flight(threads, [&](int) {
       benchmark::DoNotOptimize(compress::decompress_mesh(bytes, "bench").triangles.size());
     });
   count_coding(state, *mesh, bytes.size(), static_cast<double>(report.body.connectivity_bytes),
-               threads);
+               threads, normals);
 }
-BENCHMARK(BM_EdgebreakerDecode)->Apply(thread_and_input_args);
+BENCHMARK(BM_EdgebreakerDecode)->Apply(codec_args);
 
 // Progressive: the whole file, and the share of it the base mesh needs.
 void BM_ProgressiveEncode(benchmark::State& state) {
@@ -119,8 +146,8 @@ void BM_ProgressiveDecode(benchmark::State& state) {
 BENCHMARK(BM_ProgressiveDecode)->Apply(thread_and_input_args);
 
 #ifdef MESHFLOW_HAVE_DRACO
-// `m` as a Draco mesh (positions only; points shared as in `m`).
-std::unique_ptr<draco::Mesh> to_draco(const TriangleMesh& m) {
+// `m` as a Draco mesh (positions, and normals with `normals`; points shared as in `m`).
+std::unique_ptr<draco::Mesh> to_draco(const TriangleMesh& m, bool normals = false) {
   auto owned = std::make_unique<draco::Mesh>();
   draco::Mesh& d = *owned;
   d.set_num_points(static_cast<draco::PointIndex::ValueType>(m.vertices.size()));
@@ -130,6 +157,14 @@ std::unique_ptr<draco::Mesh> to_draco(const TriangleMesh& m) {
   const int id = d.AddAttribute(position, true, static_cast<std::uint32_t>(m.vertices.size()));
   for (std::uint32_t i = 0; i < m.vertices.size(); ++i)
     d.attribute(id)->SetAttributeValue(draco::AttributeValueIndex(i), m.vertices[i].data());
+  if (normals) {
+    draco::GeometryAttribute normal;
+    normal.Init(draco::GeometryAttribute::NORMAL, nullptr, 3, draco::DT_FLOAT32, false,
+                sizeof(float) * 3, 0);
+    const int n = d.AddAttribute(normal, true, static_cast<std::uint32_t>(m.vertices.size()));
+    for (std::uint32_t i = 0; i < m.vertices.size(); ++i)
+      d.attribute(n)->SetAttributeValue(draco::AttributeValueIndex(i), m.normals[i].data());
+  }
   for (const Triangle& t : m.triangles)
     d.AddFace({draco::PointIndex(t[0]), draco::PointIndex(t[1]), draco::PointIndex(t[2])});
   return owned;
@@ -138,6 +173,7 @@ std::unique_ptr<draco::Mesh> to_draco(const TriangleMesh& m) {
 std::size_t draco_encode(const draco::Mesh& d, int bits, draco::EncoderBuffer& out) {
   draco::Encoder encoder;
   encoder.SetAttributeQuantization(draco::GeometryAttribute::POSITION, bits);
+  encoder.SetAttributeQuantization(draco::GeometryAttribute::NORMAL, kNormalBits);
   encoder.SetEncodingMethod(draco::MESH_EDGEBREAKER_ENCODING);
   encoder.SetSpeedOptions(3, 3);  // compression level 7, Draco's default
   out.Clear();
@@ -155,8 +191,9 @@ void BM_DracoEncode(benchmark::State& state) {
   const TriangleMesh* mesh = cleaned_mesh(state);
   if (mesh == nullptr) return;
   const int threads = static_cast<int>(state.range(0));
+  const bool normals = with_normals(state, *mesh);
   ThreadLimit limit(threads);
-  const std::unique_ptr<draco::Mesh> d = to_draco(*mesh);
+  const std::unique_ptr<draco::Mesh> d = to_draco(*mesh, normals);
   std::size_t bytes = 0;
   for (auto _ : state)
     in_flight(threads, [&](int k) {
@@ -165,16 +202,17 @@ void BM_DracoEncode(benchmark::State& state) {
       if (k == 0) bytes = n;
     });
   if (bytes == 0) return state.SkipWithError("Draco failed to encode");
-  count_coding(state, *mesh, bytes, draco_connectivity_bytes(*d), threads);
+  count_coding(state, *mesh, bytes, draco_connectivity_bytes(*d), threads, normals);
 }
-BENCHMARK(BM_DracoEncode)->Apply(thread_and_input_args);
+BENCHMARK(BM_DracoEncode)->Apply(codec_args);
 
 void BM_DracoDecode(benchmark::State& state) {
   const TriangleMesh* mesh = cleaned_mesh(state);
   if (mesh == nullptr) return;
   const int threads = static_cast<int>(state.range(0));
+  const bool normals = with_normals(state, *mesh);
   ThreadLimit limit(threads);
-  const std::unique_ptr<draco::Mesh> d = to_draco(*mesh);
+  const std::unique_ptr<draco::Mesh> d = to_draco(*mesh, normals);
   draco::EncoderBuffer encoded;
   const std::size_t bytes = draco_encode(*d, kBits, encoded);
   if (bytes == 0) return state.SkipWithError("Draco failed to encode");
@@ -189,9 +227,9 @@ void BM_DracoDecode(benchmark::State& state) {
       benchmark::DoNotOptimize(result);
     });
   if (!ok) return state.SkipWithError("Draco failed to decode");
-  count_coding(state, *mesh, bytes, draco_connectivity_bytes(*d), threads);
+  count_coding(state, *mesh, bytes, draco_connectivity_bytes(*d), threads, normals);
 }
-BENCHMARK(BM_DracoDecode)->Apply(thread_and_input_args);
+BENCHMARK(BM_DracoDecode)->Apply(codec_args);
 #endif
 
 }  // namespace

@@ -1,11 +1,13 @@
 #include "nodes/compress/mesh_codec.h"
 
 #include <algorithm>
+#include <optional>
 
 #include "nodes/compress/attribute_coder.h"
 #include "nodes/compress/closed_surface.h"
 #include "nodes/compress/edgebreaker_connectivity.h"
 #include "nodes/compress/edgebreaker_replay.h"
+#include "nodes/compress/parallelogram_ring.h"
 #include "nodes/compress/range_coder.h"
 #include "runtime/error.h"
 
@@ -77,20 +79,51 @@ struct SideModels {
   IntegerModel count, depth, offset, index, corner;
 };
 
-// How a vertex's position is predicted, from what its predictors give.
-enum Prediction { kPrevious = 0, kOne = 1, kMidpoint = 2, kParallelogram = 3 };
+// How a vertex's position is predicted, from what its predictors give; the multi-parallelogram
+// mode's means of 2 and of 3 or more parallelograms have contexts of their own.
+enum Prediction { kPrevious = 0, kOne, kMidpoint, kParallelogram, kMean2, kMean3, kPredictions };
+
+// A mean's residuals are further split per axis by how much its parallelograms disagree on that
+// axis (0, 1, 2-3, 4-7, 8 or more steps): where they agree (a plane along the axis) the
+// residual is mostly zero.
+constexpr std::size_t kSpreads = 5;
+constexpr std::size_t kPositionContexts = kPredictions * kSpreads;
+constexpr std::array<std::size_t, 3> kPreviousContext = {0, 0, 0};  // kPrevious, no spread
+
+// The residual context of one axis.
+std::size_t spread_context(Prediction kind, std::int64_t spread) {
+  std::size_t s = 0;
+  while (s + 1 < kSpreads && spread >= (std::int64_t{1} << s)) ++s;
+  return static_cast<std::size_t>(kind) * kSpreads + s;
+}
+
+// The body's position predictors, chosen per mesh by size: the gate's single parallelogram, or
+// the mean of every parallelogram the decoder can form (nodes/compress/parallelogram_ring.h).
+enum PositionMode : std::uint8_t { kSingleParallelogram = 0, kMultiParallelogram = 1 };
 
 // Grid positions of decoded vertices (only those already coded are read).
 using Grid = std::vector<std::array<std::int32_t, 3>>;
 
 // The prediction of decoded vertex k from its predictors, skipping holes (`hole`); `last` is
-// the last coded position.
-std::array<std::int32_t, 3> predict(const VertexPredictors& p, const std::vector<char>& hole,
+// the last coded position. In the multi-parallelogram mode (`ring` given) the mean of the
+// parallelograms replaces the single one wherever there is one. Sets each axis's residual
+// context.
+std::array<std::int32_t, 3> predict(std::uint32_t k, const VertexPredictors& p,
+                                    const ParallelogramRing* ring, const std::vector<char>& hole,
                                     const Grid& grid, const std::array<std::int32_t, 3>& last,
-                                    Prediction& kind) {
+                                    std::array<std::size_t, 3>& context) {
   const auto real = [&](std::uint32_t v) { return v != kNone && !hole[v]; };
   std::array<std::int32_t, 3> out = last;
-  if (real(p.a) && real(p.b) && real(p.w)) {
+  std::array<std::int64_t, 3> sum, spread{};
+  const unsigned n = ring != nullptr ? ring->sum(k, grid, sum, spread) : 0;
+  Prediction kind;
+  if (n > 0) {
+    kind = n == 1 ? kParallelogram : n == 2 ? kMean2 : kMean3;
+    const std::int64_t half = n / 2;
+    for (std::size_t i = 0; i < 3; ++i)
+      out[i] = static_cast<std::int32_t>((sum[i] >= 0 ? sum[i] + half : sum[i] - half) /
+                                         std::int64_t{n});
+  } else if (real(p.a) && real(p.b) && real(p.w)) {
     kind = kParallelogram;
     for (std::size_t i = 0; i < 3; ++i)
       out[i] = static_cast<std::int32_t>(std::int64_t{grid[p.a][i]} + grid[p.b][i] - grid[p.w][i]);
@@ -104,6 +137,7 @@ std::array<std::int32_t, 3> predict(const VertexPredictors& p, const std::vector
   } else {
     kind = kPrevious;
   }
+  for (std::size_t a = 0; a < 3; ++a) context[a] = spread_context(kind, spread[a]);
   return out;
 }
 
@@ -225,30 +259,47 @@ BodyStats encode_body(const TriangleMesh& mesh, const Quantizer& quantizer, Attr
     stats.connectivity_bytes += bytes.size();
     write_section(out, bytes);
   }
-  {  // Positions: one stream per axis (the decoder's three chains then overlap).
-    RangeEncoder enc[3];
-    IntegerModel models[4][3];
-    Grid grid(decoded);
-    std::array<std::int32_t, 3> last{};
-    const auto code = [&](const std::array<std::int32_t, 3>& q,
-                          const std::array<std::int32_t, 3>& predicted, Prediction kind) {
-      for (std::size_t a = 0; a < 3; ++a) models[kind][a].encode(enc[a], q[a] - predicted[a]);
-      last = q;
-    };
-    for (std::uint32_t k = 0; k < decoded; ++k) {
-      if (hole[k]) continue;
-      if (merged[k] != kNone) {
-        grid[k] = grid[merged[k]];
-        continue;
+  {  // Positions: one stream per axis (the decoder's three chains then overlap), in the mode
+     // that gives fewer bytes.
+    const ParallelogramRing ring(replayed.triangles, hole, decoded);
+    const auto code_positions = [&](const ParallelogramRing* r) {
+      std::array<std::vector<unsigned char>, 3> streams;
+      RangeEncoder enc[3];
+      std::vector<std::array<IntegerModel, 3>> models(kPositionContexts);
+      Grid grid(decoded);
+      std::array<std::int32_t, 3> last{};
+      const auto code = [&](const std::array<std::int32_t, 3>& q,
+                            const std::array<std::int32_t, 3>& predicted,
+                            const std::array<std::size_t, 3>& context) {
+        for (std::size_t a = 0; a < 3; ++a)
+          models[context[a]][a].encode(enc[a], q[a] - predicted[a]);
+        last = q;
+      };
+      for (std::uint32_t k = 0; k < decoded; ++k) {
+        if (hole[k]) continue;
+        if (merged[k] != kNone) {
+          grid[k] = grid[merged[k]];
+          continue;
+        }
+        grid[k] = quantizer.quantize(mesh.vertices[surface.input_vertex[walk.surface_vertex[k]]]);
+        std::array<std::size_t, 3> context;
+        const auto predicted = predict(k, replayed.predictors[k], r, hole, grid, last, context);
+        code(grid[k], predicted, context);
       }
-      grid[k] = quantizer.quantize(mesh.vertices[surface.input_vertex[walk.surface_vertex[k]]]);
-      Prediction kind;
-      const auto predicted = predict(replayed.predictors[k], hole, grid, last, kind);
-      code(grid[k], predicted, kind);
-    }
-    for (std::uint32_t v : off_surface) code(quantizer.quantize(mesh.vertices[v]), last, kPrevious);
-    for (RangeEncoder& e : enc) {
-      const std::vector<unsigned char> bytes = e.finish();
+      for (std::uint32_t v : off_surface)
+        code(quantizer.quantize(mesh.vertices[v]), last, kPreviousContext);
+      for (std::size_t a = 0; a < 3; ++a) streams[a] = enc[a].finish();
+      return streams;
+    };
+    const auto size = [](const std::array<std::vector<unsigned char>, 3>& s) {
+      return s[0].size() + s[1].size() + s[2].size();
+    };
+    const std::array<std::vector<unsigned char>, 3> single = code_positions(nullptr);
+    const std::array<std::vector<unsigned char>, 3> multi = code_positions(&ring);
+    const bool use_multi = size(multi) < size(single);
+    stats.multi_parallelogram = use_multi;
+    out.u8(use_multi ? kMultiParallelogram : kSingleParallelogram);
+    for (const std::vector<unsigned char>& bytes : use_multi ? multi : single) {
       stats.position_bytes += bytes.size();
       write_section(out, bytes);
     }
@@ -372,18 +423,28 @@ TriangleMesh decode_body(io::ByteReader& in, const Quantizer& quantizer, Attribu
   mesh.vertices.resize(outputs);
   std::vector<std::array<std::int32_t, 3>> grid_out(outputs);  // per output vertex
   {
+    const std::uint8_t mode = in.u8("position prediction mode");
+    if (mode != kSingleParallelogram && mode != kMultiParallelogram)
+      in.fail("position prediction mode", std::to_string(mode) + " is not 0 or 1");
+    const std::optional<ParallelogramRing> ring =
+        mode == kMultiParallelogram
+            ? std::optional<ParallelogramRing>(std::in_place, replayed.triangles, roles.hole,
+                                               static_cast<std::size_t>(decoded))
+            : std::nullopt;
     const auto [x_bytes, x_size] = section("position section x");
     const auto [y_bytes, y_size] = section("position section y");
     const auto [z_bytes, z_size] = section("position section z");
     RangeDecoder dec[3] = {RangeDecoder(x_bytes, x_size, source, "position section x"),
                            RangeDecoder(y_bytes, y_size, source, "position section y"),
                            RangeDecoder(z_bytes, z_size, source, "position section z")};
-    IntegerModel models[4][3];
+    std::vector<std::array<IntegerModel, 3>> models(kPositionContexts);
     Grid grid(static_cast<std::size_t>(decoded));
     std::array<std::int32_t, 3> last{};
-    const auto read = [&](const std::array<std::int32_t, 3>& predicted, Prediction kind) {
-      const std::array<std::int32_t, 3> residual = IntegerModel::decode_three(
-          models[kind][0], models[kind][1], models[kind][2], dec[0], dec[1], dec[2]);
+    const auto read = [&](const std::array<std::int32_t, 3>& predicted,
+                          const std::array<std::size_t, 3>& context) {
+      const std::array<std::int32_t, 3> residual =
+          IntegerModel::decode_three(models[context[0]][0], models[context[1]][1],
+                                     models[context[2]][2], dec[0], dec[1], dec[2]);
       std::array<std::int32_t, 3> q{};
       for (std::size_t a = 0; a < 3; ++a)
         q[a] = static_cast<std::int32_t>(static_cast<std::uint32_t>(predicted[a]) +
@@ -397,14 +458,15 @@ TriangleMesh decode_body(io::ByteReader& in, const Quantizer& quantizer, Attribu
         grid[k] = grid[roles.merged[k]];
         continue;
       }
-      Prediction kind;
-      const auto predicted = predict(replayed.predictors[k], roles.hole, grid, last, kind);
-      grid[k] = read(predicted, kind);
+      std::array<std::size_t, 3> context;
+      const auto predicted = predict(k, replayed.predictors[k], ring ? &*ring : nullptr, roles.hole,
+                                     grid, last, context);
+      grid[k] = read(predicted, context);
       mesh.vertices[roles.output[k]] = quantizer.position(grid[k]);
       grid_out[roles.output[k]] = grid[k];
     }
     for (std::size_t i = roles.surface_outputs; i < outputs; ++i) {
-      const std::array<std::int32_t, 3> q = read(last, kPrevious);
+      const std::array<std::int32_t, 3> q = read(last, kPreviousContext);
       mesh.vertices[i] = quantizer.position(q);
       grid_out[i] = q;
     }

@@ -283,7 +283,7 @@ PYBIND11_MODULE(meshflow, m) {
         *mesh.data = io::read_mesh(path);
         return mesh;
       },
-      py::arg("path"), "Reads a PLY, OBJ, OFF or STL mesh by extension.");
+      py::arg("path"), "Reads a PLY, OBJ, OFF, STL or glTF binary (.glb) mesh by extension.");
 
   m.def(
       "evaluate",
@@ -305,6 +305,7 @@ ways (mean, rms, median, p95, max in metres), normal deviation, inside-out share
 orientation, double walls. reference: a Mesh, a Cloud or a file path.)");
 
   bind_depth(m);
+  bind_readers(m);
   bind_live(m);
   bind_compress(m);
 

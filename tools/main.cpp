@@ -15,7 +15,8 @@ namespace meshflow::cli {
 const std::vector<Command>& commands() {
   static const std::vector<Command> all = {
       {"reconstruct", "Reconstruct a mesh from one point cloud", add_reconstruct_options},
-      {"info", "Print counts, bounds and fields of a point cloud (or a .mfc header)",
+      {"info",
+       "Print counts, bounds and fields of a point cloud, statistics of a mesh, or a .mfc header",
        add_info_options},
       {"demo", "Reconstruct a built-in synthetic scene and report speed and accuracy",
        add_demo_options},

@@ -29,7 +29,7 @@ const std::vector<Command>& commands() {
        add_live_options},
       {"sample", "Write points sampled uniformly over a built-in closed object (no sensor)",
        add_sample_options},
-      {"optimize", "Run the optimisation steps on a mesh (.ply .obj .off .stl) from any tool",
+      {"optimize", "Run the optimisation steps on a mesh (.ply .obj .off .stl .glb) from any tool",
        add_optimize_options},
       {"compress", "Compress a mesh (Edgebreaker or progressive) into a .mfc file",
        add_compress_options},

@@ -123,3 +123,24 @@ def test_crop_from_python_as_numbers_or_text():
         meshflow.reconstruct(cloud, crop=(0, 0, 1))
     with pytest.raises(TypeError, match="crop"):
         meshflow.reconstruct(cloud, crop=(0, 0, "a", 1, 1, 1))
+
+
+def test_vertex_quality_is_the_distance_to_the_nearest_point(tmp_path):
+    cloud = sphere_cloud(3, 5000)
+    mesh = meshflow.reconstruct(cloud, voxel=0.03)
+    quality = meshflow.vertex_quality(mesh, cloud)
+    assert quality.dtype == np.float32 and quality.shape == (len(mesh.vertices),)
+    points = np.asarray(cloud.points)
+    for i in range(0, len(mesh.vertices), 97):  # brute force
+        nearest = np.linalg.norm(points - mesh.vertices[i], axis=1).min()
+        assert abs(quality[i] - nearest) < 1e-6
+    assert np.array_equal(meshflow.vertex_quality(mesh, points), quality)  # arrays too
+    path = str(tmp_path / "q.ply")
+    mesh.write(path, quality=quality)
+    header = open(path, "rb").read(400).split(b"end_header")[0]
+    assert b"property float quality" in header
+    assert len(meshflow.read_mesh(path).vertices) == len(mesh.vertices)
+    with pytest.raises(ValueError, match="one number per vertex"):
+        mesh.write(path, quality=quality[:-1])
+    with pytest.raises(ValueError, match=r"\.ply"):
+        mesh.write(str(tmp_path / "q.obj"), quality=quality)

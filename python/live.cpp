@@ -88,7 +88,8 @@ class Pipeline {
   }
 
   // Pushes a cloud or depth frame. 'offline': first waits (polling every millisecond, without
-  // the GIL) until the queue has room, so the frame is neither refused nor dropped. A frame
+  // the GIL) until the queue has room, so the frame is neither refused nor dropped (a push from
+  // the callback does not wait). A frame
   // dropped or refused (policy 'realtime' or 'queue'; or an offline pipeline that a callback
   // pushes into as well) raises FrameDroppedWarning, shown once per call site by Python's
   // default warning filter.
@@ -98,7 +99,9 @@ class Pipeline {
     {
       py::gil_scoped_release no_gil;
       LivePipeline& live = open();
-      while (wait_for_room_ && live.stats().waiting >= max_waiting_)
+      // Not from a callback: its pipeline thread waiting for room would stop the deliveries
+      // that make room.
+      while (wait_for_room_ && !delivering_ && live.stats().waiting >= max_waiting_)
         std::this_thread::sleep_for(std::chrono::milliseconds(1));
       p = push_one(live, std::move(frame), timestamp_s);
     }
@@ -150,6 +153,10 @@ class Pipeline {
       *mesh.data = std::move(r.mesh);
       result.mesh = py::cast(std::move(mesh));
     }
+    delivering_ = true;  // a push() from the callback must not wait for room
+    struct Reset {
+      ~Reset() { delivering_ = false; }
+    } reset;
     try {
       callback_(std::move(result));
     } catch (py::error_already_set& e) {
@@ -161,8 +168,11 @@ class Pipeline {
   py::function callback_;
   bool wait_for_room_ = false;
   std::size_t max_waiting_ = 1;
+  static thread_local bool delivering_;  ///< this thread is in the Python callback
   std::unique_ptr<LivePipeline> live_;
 };
+
+thread_local bool Pipeline::delivering_ = false;
 
 py::dict stats_dict(const LiveStats& s) {
   py::dict d;

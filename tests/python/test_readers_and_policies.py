@@ -144,3 +144,26 @@ def test_vertex_quality_is_the_distance_to_the_nearest_point(tmp_path):
         mesh.write(path, quality=quality[:-1])
     with pytest.raises(ValueError, match=r"\.ply"):
         mesh.write(str(tmp_path / "q.obj"), quality=quality)
+
+
+@pytest.mark.filterwarnings("ignore::meshflow.FrameDroppedWarning")
+def test_offline_callback_may_push_without_waiting_for_itself():
+    """A callback that pushes into an offline pipeline does not wait for room (its own thread
+    makes the room): no deadlock, every push accounted for."""
+    results = []
+
+    def on_mesh(result):
+        results.append(result.seq)
+        if result.seq < 2:
+            live.push(sphere_cloud(10 + result.seq))
+
+    live = meshflow.Pipeline(on_mesh, policy="offline", frames_in_flight=1, max_waiting=1,
+                             voxel=0.03)
+    for i in range(3):
+        live.push(sphere_cloud(i))
+    live.flush()
+    stats = live.stats()
+    live.close()
+    assert stats["pushed"] == 5
+    assert stats["delivered"] + stats["rejected"] == 5 and stats["dropped"] == 0
+    assert results == sorted(results)

@@ -91,7 +91,9 @@ std::uint64_t filter(Frame& f, const ReconstructionConfig& c) {
     throw Error(f.name, "filter",
                 "only " + std::to_string(f.cloud.size()) + " finite points remain of " +
                     std::to_string(f.filter_counts.input) + " (" +
-                    std::to_string(f.filter_counts.non_finite) + " NaN/Inf); need at least 3");
+                    std::to_string(f.filter_counts.non_finite) + " NaN/Inf, " +
+                    std::to_string(f.filter_counts.cropped) +
+                    " outside the crop box or range); need at least 3");
   }
   if (!f.depth) {  // a point or a line has no surface: say so instead of meshing a ribbon
     const Eigen::Vector3d extents = principal_extents(f.cloud);

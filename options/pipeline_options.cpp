@@ -130,6 +130,15 @@ std::vector<OptionSpec> make_specs() {
        nullptr, in_range(&O::outlier_k, 0, 1000)},
       {"min-range", &O::min_range, "Drop points closer to the sensor, metres", nullptr,
        in_range(&O::min_range, 0, 1e6)},
+      {"crop", &O::crop,
+       "Keep only the points inside the box minx,miny,minz,maxx,maxy,maxz (metres, the file's "
+       "own coordinates), right after reading",
+       "none",
+       parses(&O::crop,
+              [](const std::string& s) {
+                FilterConfig probe;
+                parse_crop_box(s, probe);
+              })},
       {"max-range", &O::max_range, "Drop points farther from the sensor, metres (0 = off)", nullptr,
        in_range(&O::max_range, 0, 1e6)},
       {"extract", &O::extract,
@@ -246,6 +255,7 @@ ReconstructionConfig PipelineOptions::config() const {
   c.filter.outlier_k = outlier_k;
   c.filter.min_range = min_range;
   c.filter.max_range = max_range;
+  parse_crop_box(crop, c.filter);
   c.depth_filter.median_kernel = depth_median;
   c.depth_filter.bilateral_sigma_depth = depth_bilateral;
   c.extract.method = parse_extract_method(extract);
@@ -308,6 +318,35 @@ void parse_orientation(const std::string& text, NormalsConfig& normals) {
               "expected auto, sensor, propagate, input, up, down, flip, viewpoint=X,Y,Z or "
               "away=X,Y,Z; got '" +
                   text + "'");
+}
+
+void parse_crop_box(const std::string& text, FilterConfig& filter) {
+  if (text.empty()) return;  // no crop
+  std::vector<float> values;
+  std::size_t at = 0;
+  bool numbers = true;
+  while (numbers && at <= text.size()) {
+    const std::size_t comma = std::min(text.find(',', at), text.size());
+    const std::string item = text.substr(at, comma - at);
+    char* end = nullptr;
+    const double value = std::strtod(item.c_str(), &end);
+    numbers = !item.empty() && end != item.c_str() && *end == '\0' && std::isfinite(value) &&
+              std::abs(value) <= 1e9;
+    values.push_back(static_cast<float>(value));
+    at = comma + 1;
+  }
+  if (!numbers || values.size() != 6)
+    throw Error("--crop", "",
+                "expected six numbers minx,miny,minz,maxx,maxy,maxz (metres), got '" + text + "'");
+  for (int k = 0; k < 3; ++k) {
+    if (values[static_cast<std::size_t>(k)] >= values[static_cast<std::size_t>(k + 3)])
+      throw Error("--crop", "",
+                  std::string("min") + "xyz"[k] + " must be below max" + "xyz"[k] + ", got " +
+                      number_text(values[static_cast<std::size_t>(k)]) + " and " +
+                      number_text(values[static_cast<std::size_t>(k + 3)]) + " in '" + text + "'");
+  }
+  filter.crop_min = Eigen::Vector3f(values[0], values[1], values[2]);
+  filter.crop_max = Eigen::Vector3f(values[3], values[4], values[5]);
 }
 
 std::size_t parse_byte_size(const std::string& text, const std::string& option) {

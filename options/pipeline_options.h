@@ -29,7 +29,8 @@ struct PipelineOptions {
   float filter_voxel = 0.0f;
   int outlier_k = 0;
   float min_range = 0.0f, max_range = 0.0f;
-  int depth_median = 0;          ///< depth frames: median window (3 or 5; 0 = off)
+  std::string crop;      ///< "minx,miny,minz,maxx,maxy,maxz" metres (parse_crop_box); empty: none
+  int depth_median = 0;  ///< depth frames: median window (3 or 5; 0 = off)
   float depth_bilateral = 0.0f;  ///< depth frames: bilateral depth sigma, metres (0 = off)
   std::string extract = "auto";
   std::string optimize = "default";
@@ -86,6 +87,11 @@ void validate(const PipelineOptions& options);
 /// "away=X,Y,Z" (away from a point, e.g. a closed object's centre) into `normals`. Throws
 /// meshflow::Error("--orient", "", what was expected).
 void parse_orientation(const std::string& text, NormalsConfig& normals);
+
+/// Parses a crop box "minx,miny,minz,maxx,maxy,maxz" (metres, the file's own coordinates: six
+/// finite numbers, each min below its max) into `filter`'s crop_min / crop_max. Throws
+/// meshflow::Error("--crop", "", what was expected and what was given). O(1).
+void parse_crop_box(const std::string& text, FilterConfig& filter);
 
 /// Bytes from a size as users write it: a number with an optional K, M, G or T suffix (powers of
 /// 1024, e.g. "512M", "1.5G"; no suffix = bytes), "0" for no limit. Throws

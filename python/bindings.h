@@ -128,6 +128,9 @@ void bind_depth(py::module_& m);
 /// Binds Pipeline, the embedding API (python/live.cpp).
 void bind_live(py::module_& m);
 
+/// Binds read_depth, read_color, read_trajectory and read_intrinsics (python/readers.cpp).
+void bind_readers(py::module_& m);
+
 /// Binds compress and decompress (python/compress.cpp).
 void bind_compress(py::module_& m);
 

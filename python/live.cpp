@@ -5,8 +5,10 @@
 #include <pybind11/functional.h>
 #include <pybind11/stl.h>
 
+#include <chrono>
 #include <memory>
 #include <string>
+#include <thread>
 #include <utility>
 
 #include "graph/live_pipeline.h"
@@ -14,6 +16,10 @@
 #include "runtime/error.h"
 
 namespace meshflow::python {
+
+/// meshflow.FrameDroppedWarning (a RuntimeWarning subclass).
+py::handle frame_dropped_warning();
+
 namespace {
 
 /// What the callback receives for one frame.
@@ -31,7 +37,12 @@ struct Result {
 // GIL while it holds a lock of the pipeline's that the call needs.
 class Pipeline {
  public:
-  Pipeline(py::function callback, const LiveConfig& config) : callback_(std::move(callback)) {
+  /// `wait_for_room`: the 'offline' policy (a kQueue pipeline whose push() waits instead of
+  /// refusing a frame).
+  Pipeline(py::function callback, const LiveConfig& config, bool wait_for_room)
+      : callback_(std::move(callback)),
+        wait_for_room_(wait_for_room),
+        max_waiting_(config.max_waiting) {
     live_ = std::make_unique<LivePipeline>(config, [this](LiveResult& r) { deliver(r); });
   }
   ~Pipeline() { close(); }
@@ -43,21 +54,12 @@ class Pipeline {
     PointCloud frame = py::isinstance<Cloud>(input)
                            ? *input.cast<Cloud>().data
                            : std::move(*make_cloud(input, py::none(), py::none(), py::none()).data);
-    LivePipeline::Push p{};
-    {
-      py::gil_scoped_release no_gil;
-      p = open().push(std::move(frame), timestamp_s);
-    }
-    return status(p);
+    return push(std::move(frame), timestamp_s);
   }
 
   py::tuple push_depth(DepthFrame frame) {
-    LivePipeline::Push p{};
-    {
-      py::gil_scoped_release no_gil;
-      p = open().push(std::move(frame));
-    }
-    return status(p);
+    const double timestamp_s = frame.timestamp_s;
+    return push(std::move(frame), timestamp_s);
   }
 
   void flush() {
@@ -85,6 +87,49 @@ class Pipeline {
     return *live_;
   }
 
+  // Pushes a cloud or depth frame. 'offline': first waits (polling every millisecond, without
+  // the GIL) until the queue has room, so the frame is neither refused nor dropped (a push from
+  // the callback does not wait). A frame
+  // dropped or refused (policy 'realtime' or 'queue'; or an offline pipeline that a callback
+  // pushes into as well) raises FrameDroppedWarning, shown once per call site by Python's
+  // default warning filter.
+  template <typename Input>
+  py::tuple push(Input frame, double timestamp_s) {
+    LivePipeline::Push p{};
+    {
+      py::gil_scoped_release no_gil;
+      LivePipeline& live = open();
+      // Not from a callback: its pipeline thread waiting for room would stop the deliveries
+      // that make room.
+      while (wait_for_room_ && !delivering_ && live.stats().waiting >= max_waiting_)
+        std::this_thread::sleep_for(std::chrono::milliseconds(1));
+      p = push_one(live, std::move(frame), timestamp_s);
+    }
+    if (p.status == LivePipeline::PushStatus::kAcceptedDroppedOldest)
+      warn_dropped("the oldest waiting frame was dropped for frame " + std::to_string(p.seq) +
+                   " (policy 'realtime' keeps latency bounded)");
+    else if (p.status == LivePipeline::PushStatus::kRejected)
+      warn_dropped("frame " + std::to_string(p.seq) +
+                   " was refused: the queue is full (policy 'queue'; push it again later)");
+    return status(p);
+  }
+
+  static LivePipeline::Push push_one(LivePipeline& live, PointCloud cloud, double timestamp_s) {
+    return live.push(std::move(cloud), timestamp_s);
+  }
+  static LivePipeline::Push push_one(LivePipeline& live, DepthFrame frame, double) {
+    return live.push(std::move(frame));
+  }
+
+  static void warn_dropped(const std::string& what) {
+    const std::string message =
+        "meshflow.Pipeline: " + what +
+        "; for offline use, where every frame counts, use policy='offline' (push() then waits "
+        "for room)";
+    if (PyErr_WarnEx(frame_dropped_warning().ptr(), message.c_str(), 1) != 0)
+      throw py::error_already_set();  // warnings turned into errors
+  }
+
   static py::tuple status(const LivePipeline::Push& p) {
     const char* name = p.status == LivePipeline::PushStatus::kAccepted ? "accepted"
                        : p.status == LivePipeline::PushStatus::kAcceptedDroppedOldest
@@ -108,6 +153,10 @@ class Pipeline {
       *mesh.data = std::move(r.mesh);
       result.mesh = py::cast(std::move(mesh));
     }
+    delivering_ = true;  // a push() from the callback must not wait for room
+    struct Reset {
+      ~Reset() { delivering_ = false; }
+    } reset;
     try {
       callback_(std::move(result));
     } catch (py::error_already_set& e) {
@@ -117,8 +166,13 @@ class Pipeline {
   }
 
   py::function callback_;
+  bool wait_for_room_ = false;
+  std::size_t max_waiting_ = 1;
+  static thread_local bool delivering_;  ///< this thread is in the Python callback
   std::unique_ptr<LivePipeline> live_;
 };
+
+thread_local bool Pipeline::delivering_ = false;
 
 py::dict stats_dict(const LiveStats& s) {
   py::dict d;
@@ -138,7 +192,17 @@ py::dict stats_dict(const LiveStats& s) {
 
 }  // namespace
 
+py::handle frame_dropped_warning() {
+  // Created once with the module (bind_live), never freed: the module lives as long.
+  static py::handle warning = PyErr_NewExceptionWithDoc(
+      "meshflow.FrameDroppedWarning",
+      "A Pipeline dropped or refused a pushed frame (policy 'realtime' or 'queue').",
+      PyExc_RuntimeWarning, nullptr);
+  return warning;
+}
+
 void bind_live(py::module_& m) {
+  m.attr("FrameDroppedWarning") = frame_dropped_warning();
   py::class_<Result>(m, "Result", "One finished frame, as a Pipeline's callback receives it.")
       .def_readonly("seq", &Result::seq, "what push() returned for the frame")
       .def_readonly("ok", &Result::ok)
@@ -151,43 +215,45 @@ void bind_live(py::module_& m) {
       });
 
   py::class_<Pipeline>(m, "Pipeline", R"(The embedding API: push() clouds or depth frames from
-your loop (it never waits for reconstruction), callback(result) is called with each finished
-frame in push order on a pipeline thread. policy 'realtime' drops the oldest waiting frame when
-the queue is full (bounded latency), 'queue' refuses new ones (back-pressure). threads: the
+your loop, callback(result) is called with each finished frame in push order on a pipeline
+thread. policy 'realtime' (a live sensor; push() never waits) drops the oldest waiting frame
+when the queue is full (bounded latency), 'queue' refuses new ones (back-pressure): both raise
+a meshflow.FrameDroppedWarning when they do. 'offline' (files, a script's loop) never drops or
+refuses: push() waits until the queue has room. threads: the
 pipeline's own threads (0 = every core); triangulate: per-frame depth-map meshes (method 'naive'
 or 'rqt', decimate in [0, 1)) instead of the volumetric stages, whose settings are the other
 keywords, as reconstruct()'s.)")
-      .def(
-          py::init([](py::function callback, const std::string& policy, int threads,
-                      std::size_t frames_in_flight, std::size_t max_waiting, bool triangulate,
-                      const std::string& method, float decimate, const py::kwargs& options) {
-            LiveConfig c;
-            if (policy == "realtime") {
-              c.policy = LivePolicy::kRealtime;
-            } else if (policy == "queue") {
-              c.policy = LivePolicy::kQueue;
-            } else {
-              throw py::value_error("policy: expected 'realtime' or 'queue', got '" + policy + "'");
-            }
-            if (frames_in_flight < 1 || max_waiting < 1)
-              throw py::value_error("frames_in_flight and max_waiting: at least 1");
-            const options::PipelineOptions o = pipeline_options(options);  // TypeError if unknown
-            try {
-              c.reconstruction = o.config();
-            } catch (const std::exception& e) {  // a malformed orient, extract, optimize, ...
-              throw py::value_error(e.what());
-            }
-            set_triangulation(c.reconstruction.triangulation, method, decimate);
-            c.threads = threads;
-            c.frames_in_flight = frames_in_flight;
-            c.max_waiting = max_waiting;
-            c.triangulate_depth_maps = triangulate;
-            return std::make_unique<Pipeline>(std::move(callback), c);
-          }),
-          py::arg("callback"), py::kw_only(), py::arg("policy") = "realtime",
-          py::arg("threads") = 0, py::arg("frames_in_flight") = LiveConfig{}.frames_in_flight,
-          py::arg("max_waiting") = LiveConfig{}.max_waiting, py::arg("triangulate") = false,
-          py::arg("method") = "naive", py::arg("decimate") = 0.0f)
+      .def(py::init([](py::function callback, const std::string& policy, int threads,
+                       std::size_t frames_in_flight, std::size_t max_waiting, bool triangulate,
+                       const std::string& method, float decimate, const py::kwargs& options) {
+             LiveConfig c;
+             if (policy == "realtime") {
+               c.policy = LivePolicy::kRealtime;
+             } else if (policy == "queue" || policy == "offline") {
+               c.policy = LivePolicy::kQueue;
+             } else {
+               throw py::value_error("policy: expected 'realtime', 'queue' or 'offline', got '" +
+                                     policy + "'");
+             }
+             if (frames_in_flight < 1 || max_waiting < 1)
+               throw py::value_error("frames_in_flight and max_waiting: at least 1");
+             const options::PipelineOptions o = pipeline_options(options);  // TypeError if unknown
+             try {
+               c.reconstruction = o.config();
+             } catch (const std::exception& e) {  // a malformed orient, extract, optimize, ...
+               throw py::value_error(e.what());
+             }
+             set_triangulation(c.reconstruction.triangulation, method, decimate);
+             c.threads = threads;
+             c.frames_in_flight = frames_in_flight;
+             c.max_waiting = max_waiting;
+             c.triangulate_depth_maps = triangulate;
+             return std::make_unique<Pipeline>(std::move(callback), c, policy == "offline");
+           }),
+           py::arg("callback"), py::kw_only(), py::arg("policy") = "realtime",
+           py::arg("threads") = 0, py::arg("frames_in_flight") = LiveConfig{}.frames_in_flight,
+           py::arg("max_waiting") = LiveConfig{}.max_waiting, py::arg("triangulate") = false,
+           py::arg("method") = "naive", py::arg("decimate") = 0.0f)
       .def("push", &Pipeline::push_cloud, py::arg("cloud"), py::arg("timestamp") = 0.0,
            "Hands over a Cloud or (n, 3) points; returns (seq, 'accepted' | 'dropped_oldest' | "
            "'rejected').")

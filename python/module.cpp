@@ -19,8 +19,10 @@
 #include "python/bindings.h"
 
 #include "graph/pipeline.h"
+#include "nodes/eval/vertex_quality.h"
 #include "nodes/io/mesh_readers.h"
 #include "nodes/io/mesh_writers.h"
+#include "nodes/io/parse_util.h"
 #include "nodes/io/read_point_cloud.h"
 #include "runtime/error.h"
 #include "runtime/threads.h"
@@ -254,11 +256,26 @@ PYBIND11_MODULE(meshflow, m) {
                              })
       .def(
           "write",
-          [](const Mesh& mesh, const std::string& path) {
+          [](const Mesh& mesh, const std::string& path, const py::object& quality) {
+            if (quality.is_none()) {
+              py::gil_scoped_release no_gil;
+              return io::write_mesh(path, *mesh.data, mesh.origin);
+            }
+            if (io::lower_extension(path) != ".ply")
+              throw py::value_error("quality: a PLY vertex property; give a .ply path");
+            const auto q =
+                py::array_t<float, py::array::c_style | py::array::forcecast>::ensure(quality);
+            if (!q || q.ndim() != 1 ||
+                static_cast<std::size_t>(q.shape(0)) != mesh.data->vertices.size())
+              throw py::value_error("quality: expected one number per vertex (" +
+                                    std::to_string(mesh.data->vertices.size()) + ")");
+            const std::vector<float> values(q.data(), q.data() + q.shape(0));
             py::gil_scoped_release no_gil;
-            io::write_mesh(path, *mesh.data, mesh.origin);
+            io::write_ply(path, *mesh.data, io::PlyEncoding::kBinary, mesh.origin, &values);
           },
-          py::arg("path"), "Writes .ply, .obj, .stl, .off or .glb by extension.")
+          py::arg("path"), py::arg("quality") = py::none(),
+          "Writes .ply, .obj, .stl, .off or .glb by extension; quality: optional (v,) floats "
+          "written as the PLY vertex property 'quality' (e.g. vertex_quality(mesh, cloud)).")
       .def("__repr__", [](const Mesh& mesh) {
         return "<meshflow.Mesh " + std::to_string(mesh.data->vertices.size()) + " vertices, " +
                std::to_string(mesh.data->triangles.size()) + " triangles>";
@@ -283,7 +300,27 @@ PYBIND11_MODULE(meshflow, m) {
         *mesh.data = io::read_mesh(path);
         return mesh;
       },
-      py::arg("path"), "Reads a PLY, OBJ, OFF or STL mesh by extension.");
+      py::arg("path"), "Reads a PLY, OBJ, OFF, STL or glTF binary (.glb) mesh by extension.");
+
+  m.def(
+      "vertex_quality",
+      [](const Mesh& mesh, const py::object& points) {
+        const PointCloud cloud = py::isinstance<Cloud>(points)
+                                     ? *points.cast<Cloud>().data
+                                     : *make_cloud(points, py::none(), py::none(), py::none()).data;
+        std::vector<float> d;
+        {
+          py::gil_scoped_release no_gil;
+          d = nearest_point_distances(mesh.data->vertices, cloud.positions);
+        }
+        py::array_t<float> out(static_cast<py::ssize_t>(d.size()));
+        std::copy(d.begin(), d.end(), out.mutable_data());
+        return out;
+      },
+      py::arg("mesh"), py::arg("points"),
+      R"(Each vertex's distance in metres to the nearest of `points` (a Cloud or (n, 3) array,
+e.g. the cloud the mesh was made from), as a (v,) float32 array: what reconstruct --quality
+writes. Exact (kd-tree); parallel, the GIL released.)");
 
   m.def(
       "evaluate",
@@ -305,6 +342,7 @@ ways (mean, rms, median, p95, max in metres), normal deviation, inside-out share
 orientation, double walls. reference: a Mesh, a Cloud or a file path.)");
 
   bind_depth(m);
+  bind_readers(m);
   bind_live(m);
   bind_compress(m);
 

@@ -5,6 +5,7 @@
 
 #include <pybind11/stl.h>
 
+#include <cstdio>
 #include <limits>
 #include <string>
 #include <type_traits>
@@ -28,6 +29,18 @@ const OptionSpec* find_spec(const std::string& name) {
 // with the model's message for one that fails the check.
 void set_option(const OptionSpec& spec, PipelineOptions& o, const py::handle& value) {
   const std::string name = options::python_name(spec);
+  if (name == "crop" && !py::isinstance<py::str>(value) && py::isinstance<py::sequence>(value)) {
+    // crop=(minx, miny, minz, maxx, maxy, maxz): the model's text, checked there.
+    std::string text;
+    for (const py::handle item : value) {
+      if (!py::isinstance<py::float_>(item) && !py::isinstance<py::int_>(item))
+        throw py::type_error("crop: expected six numbers, got " + std::string(py::repr(value)));
+      char number[40];
+      std::snprintf(number, sizeof number, "%.9g", item.cast<double>());
+      text += (text.empty() ? "" : ",") + std::string(number);
+    }
+    return set_option(spec, o, py::str(text));
+  }
   std::visit(
       [&](auto member) {
         using T = std::remove_reference_t<decltype(o.*member)>;

@@ -6,6 +6,7 @@
 #include "graph/pipeline.h"
 #include "nodes/compress/compressed_mesh.h"
 #include "nodes/depth/organized_depth.h"
+#include "nodes/eval/vertex_quality.h"
 #include "nodes/extract/extract_surface.h"
 #include "nodes/io/atomic_file.h"
 #include "nodes/io/byte_buffer.h"
@@ -35,6 +36,7 @@ struct ReconstructOptions {
   std::string output;
   PipelineOptions pipeline;
   bool texture = false;
+  bool quality = false;     ///< --quality: a per-vertex `quality` property (PLY output)
   std::string compress;     ///< --compress method, "" = none (a .mfc output: edgebreaker)
   std::string chunk;        ///< --chunk: "" (whole cloud), "auto" or metres
   ChunkingConfig chunking;  ///< the other --chunk* options
@@ -99,9 +101,10 @@ void run_reconstruct(const ReconstructOptions& o) {
   ThreadLimit limit(o.pipeline.threads);
   ReconstructionConfig config = o.pipeline.config();
   if (!o.chunk.empty() && o.chunk != "0") {
-    if (o.texture || !o.compress.empty() || is_compressed_mesh_file(o.output))
+    if (o.texture || o.quality || !o.compress.empty() || is_compressed_mesh_file(o.output))
       throw Error("--chunk", "",
-                  "writes a mesh file (.ply .obj .stl .off .glb): no --texture or --compress");
+                  "writes a mesh file (.ply .obj .stl .off .glb): no --texture, --quality or "
+                  "--compress");
     ChunkingConfig chunking = o.chunking;
     // "auto": the chunks in flight get half of --max-memory (the rest: the welded mesh).
     chunking.chunk_size = o.chunk == "auto" ? 0.0f : std::stof(o.chunk);
@@ -127,6 +130,8 @@ void run_reconstruct(const ReconstructOptions& o) {
   }
   if (o.texture && io::lower_extension(o.output) != ".obj")
     throw Error(o.output, "", "--texture writes OBJ + MTL + PNG: give an .obj output");
+  if (o.quality && io::lower_extension(o.output) != ".ply")
+    throw Error(o.output, "", "--quality writes a PLY vertex property: give a .ply output");
   print_settings(config);
 
   ReconstructionPipeline pipeline(config, 1);
@@ -144,12 +149,16 @@ void run_reconstruct(const ReconstructOptions& o) {
   if (o.texture && !frame->cloud.has_colors())
     throw Error(o.input, "", "--texture needs coloured points (the input has no colours)");
   std::size_t textures = 0;
+  std::vector<float> quality;  // --quality: metres from each vertex to the nearest point
   progress->begin("write");
   if (o.texture) {
     progress->begin("texture");
     textures = write_textured(o.output, *frame, config);
   } else if (compressed) {
     io::write_file_bytes(o.output, frame->compressed);
+  } else if (o.quality) {
+    quality = nearest_point_distances(frame->mesh.vertices, frame->cloud.positions);
+    io::write_ply(o.output, frame->mesh, io::PlyEncoding::kBinary, frame->origin, &quality);
   } else {
     io::write_mesh(o.output, frame->mesh, frame->origin);
   }
@@ -164,10 +173,18 @@ void run_reconstruct(const ReconstructOptions& o) {
     doc["output"] = o.output;
     if (o.texture) doc["textures"] = textures;
     if (compressed) doc["compressed_bytes"] = frame->compressed.size();
+    if (o.quality) doc["quality"] = distance_json(distance_stats(quality));
     return print_json(doc);
   }
   print_frame_report(*frame, wall, limit.threads());
   if (o.texture) report("textures   %zu planar regions textured\n", textures);
+  if (o.quality) {
+    const DistanceStats q = distance_stats(quality);
+    report(
+        "quality    vertex to nearest point: mean %.3g mm, p95 %.3g mm, max %.3g mm (PLY "
+        "property 'quality', metres)\n",
+        1e3 * q.mean, 1e3 * q.p95, 1e3 * q.max);
+  }
   if (compressed)
     report("compressed %zu bytes (%.2f bits per triangle)\n", frame->compressed.size(),
            8.0 * static_cast<double>(frame->compressed.size()) /
@@ -239,6 +256,7 @@ nlohmann::json info_json(const std::string& path, const PointCloud& cloud) {
 
 void run_info(const std::string& path, const std::string& columns) {
   if (is_compressed_mesh_file(path)) return run_compressed_info(path);
+  if (is_mesh_info_file(path)) return run_mesh_info(path);
   const PointCloud cloud = io::read_point_cloud(path, columns);
   if (console().json) return print_json(info_json(path, cloud));
   print_info(path, cloud);
@@ -264,6 +282,9 @@ void add_reconstruct_options(CLI::App* cmd) {
   add_console_flags(cmd, true);
   cmd->add_flag("--texture", opts->texture,
                 "Texture planar regions from the points' colours (OBJ + MTL + PNG output)");
+  cmd->add_flag("--quality", opts->quality,
+                "Write each vertex's distance to the nearest input point (metres, after the "
+                "filter stage) as the float vertex property 'quality' (PLY output)");
   cmd->add_option("--chunk", opts->chunk,
                   "Out of core: stream the input into chunks of this edge (metres) on disk and "
                   "mesh them a few at a time, seams welded exactly; 'auto': the edge that lets "
@@ -283,7 +304,10 @@ void add_reconstruct_options(CLI::App* cmd) {
 
 void add_info_options(CLI::App* cmd) {
   auto path = std::make_shared<std::string>();
-  cmd->add_option("file", *path, "Point cloud file, or a compressed mesh (.mfc)")->required();
+  cmd->add_option("file", *path,
+                  "Point cloud file, a mesh (.ply with faces, .obj .off .stl .glb: area, volume, "
+                  "genus, components, borders, manifoldness) or a compressed mesh (.mfc)")
+      ->required();
   auto columns = std::make_shared<std::string>();
   add_columns_option(cmd, *columns);
   add_console_flags(cmd, true);

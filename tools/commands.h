@@ -34,6 +34,11 @@ void add_compress_option(CLI::App* cmd, std::string& method);
 /// The pipeline's compression for a --compress value ("" = none) and an output path: a .mfc
 /// output without --compress means Edgebreaker.
 MeshCompression compression_for(const std::string& method, const std::string& output);
+/// Whether `meshflow info` reads `path` as a mesh: .obj .off .stl .glb, or a .ply whose header
+/// declares faces (a PLY without faces is a point cloud). Throws Error on an unreadable PLY.
+bool is_mesh_info_file(const std::string& path);
+/// `meshflow info` on a mesh: mesh_statistics() printed (or --json). Throws Error.
+void run_mesh_info(const std::string& path);
 /// `meshflow info` on a compressed mesh: its header (and --json). Throws Error.
 void run_compressed_info(const std::string& path);
 

@@ -36,7 +36,8 @@ nlohmann::json optimize_json(const OptimizeReport& report);
 nlohmann::json frame_json(const Frame& frame, double wall_s, int threads);
 
 /// A sequence run: "sequence", "frames_ok", "frames_failed", "stopped_early", "wall_s",
-/// "frames_per_second", "threads", "in_flight", "stages".
+/// "frames_per_second", "threads", "in_flight", "stages" (run/profile add "failed_frames":
+/// index, file, stage and message of each failed frame; tools/run_commands.cpp).
 nlohmann::json run_json(const std::string& sequence, const SequenceRunStats& stats, int threads,
                         std::size_t in_flight);
 

@@ -28,7 +28,7 @@ struct LiveOptions {
   std::size_t waiting = 2;
   std::size_t loops = 1;
   TriangulationOptions triangulation;
-  bool warm_up = false;
+  bool warm_up = true;  ///< --no-warm-up: time a cold start
 };
 
 using SensorFrame = std::variant<PointCloud, DepthFrame>;
@@ -155,12 +155,13 @@ void add_live_options(CLI::App* cmd) {
   cmd->add_option("--waiting", o->waiting, "Frames that may wait for a slot")
       ->check(CLI::Range(1, 1024));
   add_triangulation_options(cmd, o->triangulation);
-  cmd->add_flag("--warm-up", o->warm_up,
-                "Before the timed replay, mesh every frame once, then again up to " +
+  cmd->add_flag("--warm-up,!--no-warm-up", o->warm_up,
+                "Before the timed replay (on by default; --no-warm-up times a cold start), mesh "
+                "every frame once, then again up to " +
                     std::to_string(kWarmUpFrames) + " frames or " +
                     std::to_string(static_cast<int>(kWarmUpSeconds)) +
                     " s, in a throwaway pipeline (worker threads and allocator pools start), so "
-                    "the numbers are the steady state");
+                    "the first frames of the replay are not dropped for start-up costs");
   cmd->add_option("--loops", o->loops, "Replay the frames this many times")
       ->check(CLI::Range(1, 100000));
   add_pipeline_options(cmd, o->pipeline);

@@ -15,7 +15,8 @@ namespace meshflow::cli {
 const std::vector<Command>& commands() {
   static const std::vector<Command> all = {
       {"reconstruct", "Reconstruct a mesh from one point cloud", add_reconstruct_options},
-      {"info", "Print counts, bounds and fields of a point cloud (or a .mfc header)",
+      {"info",
+       "Print counts, bounds and fields of a point cloud, statistics of a mesh, or a .mfc header",
        add_info_options},
       {"demo", "Reconstruct a built-in synthetic scene and report speed and accuracy",
        add_demo_options},
@@ -28,7 +29,7 @@ const std::vector<Command>& commands() {
        add_live_options},
       {"sample", "Write points sampled uniformly over a built-in closed object (no sensor)",
        add_sample_options},
-      {"optimize", "Run the optimisation steps on a mesh (.ply .obj .off .stl) from any tool",
+      {"optimize", "Run the optimisation steps on a mesh (.ply .obj .off .stl .glb) from any tool",
        add_optimize_options},
       {"compress", "Compress a mesh (Edgebreaker or progressive) into a .mfc file",
        add_compress_options},

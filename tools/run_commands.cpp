@@ -12,6 +12,7 @@
 #include "graph/sequence_runner.h"
 #include "nodes/compress/compressed_mesh.h"
 #include "nodes/compress/progressive_mesh.h"
+#include "nodes/eval/vertex_quality.h"
 #include "nodes/fusion/tsdf_map_file.h"
 #include "nodes/io/atomic_file.h"
 #include "nodes/io/byte_buffer.h"
@@ -89,16 +90,31 @@ struct RemovedComponents {
   }
 };
 
-void report_failure(const Frame& f) {
-  std::fprintf(stderr, "meshflow: frame %zu (%s) failed in %s: %s\n", f.source_index,
-               f.name.c_str(), f.failed_stage.c_str(), f.error.c_str());
-}
+// The failed frames of a run: each printed to stderr as it arrives and kept for --json's
+// "failed_frames" (index, file, stage, message).
+class FailedFrames {
+ public:
+  void add(const Frame& f) {
+    std::fprintf(stderr, "meshflow: frame %zu (%s) failed in %s: %s\n", f.source_index,
+                 f.name.c_str(), f.failed_stage.c_str(), f.error.c_str());
+    frames_.push_back({{"index", f.source_index},
+                       {"file", f.name},
+                       {"stage", f.failed_stage},
+                       {"message", f.error}});
+  }
+  const nlohmann::json& json() const { return frames_; }
+
+ private:
+  nlohmann::json frames_ = nlohmann::json::array();
+};
 
 // The human report of a run, or with --json the document (with `extra` fields merged in).
 void print_run_summary(const io::Sequence& seq, const SequenceRunStats& stats, int threads,
-                       std::size_t in_flight, const nlohmann::json& extra = {}) {
+                       std::size_t in_flight, const FailedFrames& failed,
+                       const nlohmann::json& extra = {}) {
   if (console().json) {
     nlohmann::json doc = run_json(seq.description(), stats, threads, in_flight);
+    doc["failed_frames"] = failed.json();
     if (extra.is_object()) doc.update(extra);
     return print_json(doc);
   }
@@ -117,6 +133,7 @@ struct RunOptions {
   std::string output_dir;
   bool merged = false;       ///< one surface from all frames
   bool concatenate = false;  ///< the per-frame meshes in one file
+  bool quality = false;      ///< per-frame PLYs get each vertex's distance to the frame's points
   bool strict = false;
   bool fuse = false;
   std::size_t mesh_every = 0;
@@ -199,11 +216,13 @@ std::pair<std::unique_ptr<io::Sequence>, std::unique_ptr<OutputDirectory>> open_
 // stage made it, else the mesh compressed here (one mesh at the end of a run).
 void write_run_mesh(const RunOptions& o, const std::string& stem, const TriangleMesh& mesh,
                     const Eigen::Vector3d& origin = Eigen::Vector3d::Zero(),
-                    const std::vector<unsigned char>* compressed = nullptr) {
+                    const std::vector<unsigned char>* compressed = nullptr,
+                    const std::vector<float>* quality = nullptr) {
   const std::filesystem::path dir(o.output_dir);
   const MeshCompression method = compression_for(o.compress, "");
   if (method == MeshCompression::kNone)
-    return io::write_ply((dir / (stem + ".ply")).string(), mesh, io::PlyEncoding::kBinary, origin);
+    return io::write_ply((dir / (stem + ".ply")).string(), mesh, io::PlyEncoding::kBinary, origin,
+                         quality);
   const std::string path = (dir / (stem + ".mfc")).string();
   if (compressed != nullptr && !compressed->empty()) return io::write_file_bytes(path, *compressed);
   compress::CompressConfig config;
@@ -245,10 +264,11 @@ void run_fusion(const RunOptions& o) {
   const std::filesystem::path dir(o.output_dir);
   const SequenceRunOptions run_options{o.sequence.every, o.sequence.max_frames, o.strict};
   FusionBreakdown breakdown;
+  FailedFrames failed;
   const SequenceRunStats stats =
       run_sequence(*pipeline, *sequence, run_options, [&](const Frame& f) {
         progress.update(++done);
-        if (!f.ok()) return report_failure(f);
+        if (!f.ok()) return failed.add(f);
         breakdown.add(f);
         if (f.mesh.empty()) return;
         char name[64];
@@ -267,7 +287,7 @@ void run_fusion(const RunOptions& o) {
   if (!o.save_map.empty()) write_tsdf_map(o.save_map, pipeline->map());
   const TsdfVolume& map = pipeline->map();
   print_run_summary(
-      *sequence, stats, limit.threads(), o.sequence.in_flight,
+      *sequence, stats, limit.threads(), o.sequence.in_flight, failed,
       {{"map",
         {{"blocks", map.block_count()},
          {"voxel", map.config().voxel_size},
@@ -317,10 +337,11 @@ void run_merged(const RunOptions& o) {
   PointCloud joined;
   std::size_t done = 0;
   const SequenceRunOptions run_options{o.sequence.every, o.sequence.max_frames, o.strict};
+  FailedFrames failed;
   const SequenceRunStats stats =
       run_sequence(preparation, *sequence, run_options, [&](const Frame& f) {
         progress.update(++done);
-        if (!f.ok()) return report_failure(f);
+        if (!f.ok()) return failed.add(f);
         detail("frame %zu   %s: %zu points, normals %s\n", f.source_index, f.name.c_str(),
                f.cloud.size(),
                f.normals_from_image ? "from the image" : describe_normals(f.normals).c_str());
@@ -342,7 +363,7 @@ void run_merged(const RunOptions& o) {
           .string();
   write_run_mesh(o, "merged", frame->mesh, frame->origin, &frame->compressed);
   const double wall = monotonic_seconds() - t0;
-  print_run_summary(*sequence, stats, limit.threads(), o.sequence.in_flight,
+  print_run_summary(*sequence, stats, limit.threads(), o.sequence.in_flight, failed,
                     {{"merged", frame_json(*frame, wall, limit.threads())},
                      {"files_written", 1},
                      {"output", output}});
@@ -366,16 +387,19 @@ void run_run(const RunOptions& o) {
   std::size_t done = 0, written = 0;
   RemovedComponents removed;
   const SequenceRunOptions run_options{o.sequence.every, o.sequence.max_frames, o.strict};
+  FailedFrames failed;
   const SequenceRunStats stats =
       run_sequence(pipeline, *sequence, run_options, [&](const Frame& f) {
         progress.update(++done);
-        if (!f.ok()) return report_failure(f);
+        if (!f.ok()) return failed.add(f);
         print_frame_line(f);
         removed.add(f);
         if (o.concatenate) return append_mesh(merged, f.mesh);
         char name[64];
         std::snprintf(name, sizeof name, "frame_%06zu", f.source_index);
-        write_run_mesh(o, name, f.mesh, f.origin, &f.compressed);
+        std::vector<float> quality;  // --quality: metres to the frame's nearest point
+        if (o.quality) quality = nearest_point_distances(f.mesh.vertices, f.cloud.positions);
+        write_run_mesh(o, name, f.mesh, f.origin, &f.compressed, o.quality ? &quality : nullptr);
         ++written;
       });
   if (o.concatenate && !merged.empty()) {
@@ -385,7 +409,7 @@ void run_run(const RunOptions& o) {
   nlohmann::json extra = {{"files_written", written}, {"output", o.output_dir}};
   const std::size_t min_component = config.triangulation.min_component_triangles;
   if (o.triangulation.enabled()) extra["components"] = removed.json(min_component);
-  print_run_summary(*sequence, stats, limit.threads(), o.sequence.in_flight, extra);
+  print_run_summary(*sequence, stats, limit.threads(), o.sequence.in_flight, failed, extra);
   if (o.triangulation.enabled()) removed.print(min_component);
   report("output     %zu mesh file%s in %s\n", written, written == 1 ? "" : "s",
          o.output_dir.c_str());
@@ -415,14 +439,16 @@ void run_profile(const ProfileOptions& o) {
   ReconstructionPipeline pipeline(config, o.sequence.in_flight, o.triangulation.enabled());
   const SequenceRunOptions run_options{o.sequence.every, o.sequence.max_frames, false,
                                        !o.trace_path.empty()};
-  const SequenceRunStats stats = run_sequence(pipeline, *sequence, run_options, [](const Frame& f) {
-    if (!f.ok()) return report_failure(f);
-    print_frame_line(f);
-  });
+  FailedFrames failed;
+  const SequenceRunStats stats =
+      run_sequence(pipeline, *sequence, run_options, [&failed](const Frame& f) {
+        if (!f.ok()) return failed.add(f);
+        print_frame_line(f);
+      });
   nlohmann::json files = nlohmann::json::object();
   if (!o.trace_path.empty()) files["trace"] = o.trace_path;
   if (!o.csv_path.empty()) files["csv"] = o.csv_path;
-  print_run_summary(*sequence, stats, limit.threads(), o.sequence.in_flight, files);
+  print_run_summary(*sequence, stats, limit.threads(), o.sequence.in_flight, failed, files);
   const auto summaries = stats.stages.summaries();
   if (!o.trace_path.empty()) {
     write_text(o.trace_path, chrome_trace_json(stats.records));
@@ -456,7 +482,14 @@ void add_run_options(CLI::App* cmd) {
           ->excludes(per_frame)
           ->excludes(merged);
   cmd->add_flag("--strict", o->strict, "Stop at the first bad frame (exit code 1)");
+  auto* quality =
+      cmd->add_flag("--quality", o->quality,
+                    "Per-frame PLYs: each vertex's distance to the frame's nearest point "
+                    "(metres, after the filter stage) as the float vertex property 'quality'")
+          ->excludes(merged)
+          ->excludes(concatenate);
   add_compress_option(cmd, o->compress);
+  quality->excludes("--compress");
   auto* fuse = cmd->add_flag("--fuse", o->fuse,
                              "Fuse depth frames (or organized Kinect-type clouds) into one TSDF "
                              "map (--voxel, default 0.01 m); writes fused.ply")
@@ -499,6 +532,7 @@ void add_run_options(CLI::App* cmd) {
       ->needs(fuse);
   add_triangulation_options(cmd, o->triangulation);
   fuse->excludes("--triangulate");
+  quality->excludes(fuse)->excludes("--triangulate");
   merged->excludes("--triangulate");
   add_pipeline_options(cmd, o->pipeline);
   add_console_flags(cmd, true);

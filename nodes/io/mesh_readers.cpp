@@ -7,6 +7,7 @@
 #include <unordered_map>
 #include <vector>
 
+#include "nodes/io/glb_reader.h"
 #include "nodes/io/parse_util.h"
 #include "nodes/io/ply_reader.h"
 #include "nodes/io/text_chunks.h"
@@ -334,7 +335,7 @@ TriangleMesh read_stl_mesh(const std::string& path) {
 
 bool is_mesh_file(const std::string& path) {
   const std::string ext = lower_extension(path);
-  return ext == ".ply" || ext == ".obj" || ext == ".off" || ext == ".stl";
+  return ext == ".ply" || ext == ".obj" || ext == ".off" || ext == ".stl" || ext == ".glb";
 }
 
 TriangleMesh read_mesh(const std::string& path) {
@@ -343,7 +344,8 @@ TriangleMesh read_mesh(const std::string& path) {
   if (ext == ".obj") return read_obj_mesh(path);
   if (ext == ".off") return read_off_mesh(path);
   if (ext == ".stl") return read_stl_mesh(path);
-  throw Error(path, "", "unknown mesh format '" + ext + "' (reads .ply .obj .off .stl)");
+  if (ext == ".glb") return read_glb_mesh(path);
+  throw Error(path, "", "unknown mesh format '" + ext + "' (reads .ply .obj .off .stl .glb)");
 }
 
 }  // namespace meshflow::io

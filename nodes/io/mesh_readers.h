@@ -30,7 +30,8 @@ TriangleMesh read_off_mesh(const std::string& path);
 /// and triangle or line. O(T) expected (hash of positions).
 TriangleMesh read_stl_mesh(const std::string& path);
 
-/// The mesh in `path` by its extension: .ply (read_ply_mesh), .obj, .off, .stl. Throws
+/// The mesh in `path` by its extension: .ply (read_ply_mesh), .obj, .off, .stl, .glb
+/// (read_glb_mesh). Throws
 /// meshflow::Error for another extension, naming the formats it reads.
 TriangleMesh read_mesh(const std::string& path);
 

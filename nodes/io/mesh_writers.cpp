@@ -35,7 +35,11 @@ std::string world_position_text(const char* prefix, const Eigen::Vector3f& v,
 }  // namespace
 
 void write_ply(const std::string& path, const TriangleMesh& mesh, PlyEncoding encoding,
-               const Eigen::Vector3d& origin) {
+               const Eigen::Vector3d& origin, const std::vector<float>* quality) {
+  if (quality != nullptr && quality->size() != mesh.vertices.size())
+    throw Error(path, "quality",
+                std::to_string(quality->size()) + " values for " +
+                    std::to_string(mesh.vertices.size()) + " vertices");
   AtomicOutputFile file(path);
   std::ostream& out = file.stream();
   const bool normals = mesh.normals.size() == mesh.vertices.size() && !mesh.normals.empty();
@@ -49,6 +53,7 @@ void write_ply(const std::string& path, const TriangleMesh& mesh, PlyEncoding en
                 : "property float x\nproperty float y\nproperty float z\n");
   if (normals) out << "property float nx\nproperty float ny\nproperty float nz\n";
   if (colors) out << "property uchar red\nproperty uchar green\nproperty uchar blue\n";
+  if (quality != nullptr) out << "property float quality\n";
   out << "element face " << mesh.triangles.size()
       << "\nproperty list uchar uint vertex_indices\nend_header\n";
   if (encoding == PlyEncoding::kAscii) {
@@ -64,15 +69,18 @@ void write_ply(const std::string& path, const TriangleMesh& mesh, PlyEncoding en
       }
       if (colors) {
         const auto& c = mesh.colors[i];
-        std::snprintf(line + n, sizeof line - static_cast<std::size_t>(n), " %d %d %d", c.r, c.g,
-                      c.b);
+        n += std::snprintf(line + n, sizeof line - static_cast<std::size_t>(n), " %d %d %d", c.r,
+                           c.g, c.b);
       }
+      if (quality != nullptr)
+        std::snprintf(line + n, sizeof line - static_cast<std::size_t>(n), " %.7g", (*quality)[i]);
       out << line << '\n';
     }
     for (const Triangle& t : mesh.triangles)
       out << "3 " << t[0] << ' ' << t[1] << ' ' << t[2] << '\n';
   } else {
-    const std::size_t vertex_bytes = (world ? 24 : 12) + (normals ? 12 : 0) + (colors ? 3 : 0);
+    const std::size_t vertex_bytes =
+        (world ? 24 : 12) + (normals ? 12 : 0) + (colors ? 3 : 0) + (quality ? 4 : 0);
     std::vector<char> buf(mesh.vertices.size() * vertex_bytes + mesh.triangles.size() * 13);
     char* at = buf.data();
     for (std::size_t i = 0; i < mesh.vertices.size(); ++i) {
@@ -85,6 +93,7 @@ void write_ply(const std::string& path, const TriangleMesh& mesh, PlyEncoding en
         const Rgb8& c = mesh.colors[i];
         for (std::uint8_t channel : {c.r, c.g, c.b}) at = put(at, channel);
       }
+      if (quality != nullptr) at = put(at, (*quality)[i]);
     }
     for (const Triangle& t : mesh.triangles) {
       at = put(at, std::uint8_t{3});

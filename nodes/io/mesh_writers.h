@@ -4,6 +4,7 @@
 
 #include <Eigen/Core>
 #include <string>
+#include <vector>
 
 #include "runtime/triangle_mesh.h"
 
@@ -18,11 +19,14 @@ enum class PlyEncoding { kBinary, kAscii };
 // translation, which viewers apply).
 
 /// Writes vertices (float x y z; double with a non-zero origin), normals (nx ny nz) and colours
-/// (uchar red green blue) when present, and faces (uchar count, uint vertex_indices). Atomic:
-/// the file appears complete or not at all. Throws meshflow::Error on I/O failure. O(V + T).
+/// (uchar red green blue) when present, `quality` (float, one per vertex: e.g. the distance to
+/// the data in metres, nearest_point_distances()) when given with one value per vertex, and
+/// faces (uchar count, uint vertex_indices). Atomic: the file appears complete or not at all.
+/// Throws meshflow::Error on I/O failure or a quality array of another length. O(V + T).
 void write_ply(const std::string& path, const TriangleMesh& mesh,
                PlyEncoding encoding = PlyEncoding::kBinary,
-               const Eigen::Vector3d& origin = Eigen::Vector3d::Zero());
+               const Eigen::Vector3d& origin = Eigen::Vector3d::Zero(),
+               const std::vector<float>* quality = nullptr);
 
 /// Writes v / vn / f lines (1-based indices, "f a//a b//b c//c" when normals exist); colours as
 /// the common extension "v x y z r g b" (0..1). Atomic.

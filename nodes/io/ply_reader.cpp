@@ -454,6 +454,13 @@ void read_ply_batches(const std::string& path, std::size_t batch,
   read_ply_elements(path, cloud, nullptr, size, &sink);
 }
 
+bool ply_has_faces(const std::string& path) {
+  std::ifstream in = open_input(path);
+  const PlyHeader header = parse_ply_header(in, path);
+  return std::any_of(header.elements.begin(), header.elements.end(),
+                     [](const PlyElement& e) { return e.name == "face" && e.count > 0; });
+}
+
 TriangleMesh read_ply_mesh(const std::string& path) {
   PointCloud cloud;
   TriangleMesh mesh;

@@ -33,4 +33,9 @@ void read_ply_batches(const std::string& path, std::size_t batch,
 /// than 3 vertices, and on everything read_ply rejects. O(file size).
 TriangleMesh read_ply_mesh(const std::string& path);
 
+/// Whether the PLY file's header declares a `face` element with at least one face (a mesh, not
+/// a point set). Reads the header only. Throws meshflow::Error as read_ply() does on a
+/// malformed header.
+bool ply_has_faces(const std::string& path);
+
 }  // namespace meshflow::io

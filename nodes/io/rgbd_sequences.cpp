@@ -136,10 +136,7 @@ std::vector<TimedFile> read_timed_list(const std::string& path, const fs::path& 
   return out;
 }
 
-struct TimedPose {
-  double t;
-  Eigen::Isometry3f T_world_camera;
-};
+}  // namespace
 
 std::vector<TimedPose> read_tum_groundtruth(const std::string& path) {
   std::ifstream in = open_input(path);
@@ -170,6 +167,8 @@ std::vector<TimedPose> read_tum_groundtruth(const std::string& path) {
             [](const TimedPose& a, const TimedPose& b) { return a.t < b.t; });
   return out;
 }
+
+namespace {
 
 class TumSequence final : public Sequence {
  public:

@@ -21,6 +21,18 @@ Image read_depth_image(const std::string& path);
 /// translation beyond +-1e6 m.
 std::vector<Eigen::Isometry3f> read_trajectory_log(const std::string& path);
 
+/// One pose of a timed trajectory: seconds, and the camera-to-world transform.
+struct TimedPose {
+  double t;
+  Eigen::Isometry3f T_world_camera;
+};
+
+/// Reads a TUM RGB-D trajectory (groundtruth.txt: "timestamp tx ty tz qx qy qz qw" lines, world
+/// from camera, '#' comments), sorted by timestamp. Throws meshflow::Error naming the file and
+/// line for a malformed line, a non-finite value, a quaternion that is not unit length (within
+/// 1 %) or a translation beyond +-1e6 m. O(lines log lines).
+std::vector<TimedPose> read_tum_groundtruth(const std::string& path);
+
 /// Reads Open3D's camera JSON ({"width", "height", "intrinsic_matrix": 9 numbers, column-major}).
 /// Throws meshflow::Error naming the file and the field for invalid JSON, a missing field, a
 /// value that is not a number or out of range (width and height whole numbers in 1..65535,

@@ -105,3 +105,34 @@ TEST(PipelineOptions, ByteSizes) {
 
 }  // namespace
 }  // namespace meshflow::options
+
+namespace meshflow::options {
+namespace {
+
+// --crop (issue 55 item 9): six numbers, each min below its max; the box reaches the filter.
+TEST(PipelineOptions, CropBoxIsSixNumbersWithMinBelowMax) {
+  PipelineOptions o;
+  o.crop = "-1,-2,-3,1,2,3.5";
+  const ReconstructionConfig c = o.config();
+  EXPECT_EQ(c.filter.crop_min, Eigen::Vector3f(-1, -2, -3));
+  EXPECT_EQ(c.filter.crop_max, Eigen::Vector3f(1, 2, 3.5f));
+  EXPECT_TRUE(PipelineOptions{}.config().filter.keeps_every_finite_point());
+  const struct {
+    const char* text;
+    const char* expected;
+  } bad[] = {{"1,2,3", "expected six numbers minx,miny,minz,maxx,maxy,maxz (metres), got '1,2,3'"},
+             {"0,0,0,1,1,1,1", "expected six numbers"},
+             {"0,0,0,1,1,", "expected six numbers"},
+             {"0,0,nan,1,1,1", "expected six numbers"},
+             {"0,0,a,1,1,1", "expected six numbers"},
+             {"0,0,2,1,1,1", "minz must be below maxz, got 2 and 1 in '0,0,2,1,1,1'"},
+             {"1,0,0,1,1,1", "minx must be below maxx"}};
+  for (const auto& b : bad) {
+    o.crop = b.text;
+    EXPECT_NE(problem_of(o).find(std::string("--crop: ") + b.expected), std::string::npos)
+        << b.text << ": " << problem_of(o);
+  }
+}
+
+}  // namespace
+}  // namespace meshflow::options

@@ -364,8 +364,9 @@ TEST(Cli, LiveSkipsAnUnreadableFrameAndReplaysTheOthers) {
   EXPECT_NE(r.err.find("none readable (1 skipped)"), std::string::npos) << r.err;
 }
 
-// --warm-up meshes a short sequence's frames over again (the allocator's pools are still growing
-// after a few frames), up to 32 frames or a second, before the timed replay, which is unchanged.
+// The warm-up (--warm-up, the default) meshes a short sequence's frames over again (the allocator's
+// pools are still growing after a few frames), up to 32 frames or a second, before the timed
+// replay, which is unchanged.
 TEST(Cli, LiveWarmUpCyclesAShortSequence) {
   const CliRun r = run_cli(
       "live --synthetic-depth --max-frames 3 --triangulate rqt --rate 1000 --warm-up "
@@ -378,6 +379,15 @@ TEST(Cli, LiveWarmUpCyclesAShortSequence) {
   EXPECT_GT(warmed, 3) << r.out;  // more than one round (a round takes well under the second)
   EXPECT_LE(warmed, 32) << r.out;
   EXPECT_NE(r.out.find("3 pushed, 3 delivered (0 failed)"), std::string::npos) << r.out;
+  // The warm-up is on without the flag (issue 55 item 8: first frames were dropped for start-up
+  // costs); --no-warm-up times a cold start.
+  const std::string replay = "live --synthetic-depth --max-frames 3 --triangulate rqt --rate 1000";
+  CliRun d = run_cli(replay);
+  EXPECT_EQ(d.exit_code, 0) << d.err;
+  EXPECT_NE(d.out.find(label), std::string::npos) << d.out;
+  d = run_cli(replay + " --no-warm-up");
+  EXPECT_EQ(d.exit_code, 0) << d.err;
+  EXPECT_EQ(d.out.find(label), std::string::npos) << d.out;
 }
 
 TEST(Cli, RunMergedAndUsageErrors) {

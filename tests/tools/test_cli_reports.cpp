@@ -4,6 +4,8 @@
 
 #include <nlohmann/json.hpp>
 
+#include <filesystem>
+
 #include "cli_runner.h"
 
 namespace meshflow {
@@ -35,6 +37,36 @@ TEST(CliReports, ChunkedRunsReportTheKeysOfOneProcess) {
   }
   EXPECT_FALSE(chunked.contains("voxel_size"));
   EXPECT_NEAR(chunked["voxel"].get<double>(), whole["voxel"].get<double>(), 1e-6);
+}
+
+// run --json names each failed frame with its file, stage and reason (issue 55 item 6).
+TEST(CliReports, RunJsonNamesTheFailedFrameAndWhy) {
+  const std::string dir = test::temp_dir(), seq = dir + "/seq";
+  std::filesystem::create_directories(seq);
+  for (const char* name : {"a", "c"})
+    ASSERT_EQ(test::run_cli(std::string("sample sphere -o ") + seq + "/" + name +
+                            ".ply --points 3000 --seed " + std::to_string(name[0]))
+                  .exit_code,
+              0);
+  test::write_file(seq + "/b.ply",
+                   "ply\nformat ascii 1.0\nelement vertex 5\nproperty float x\n"
+                   "property float y\nproperty float z\nend_header\n0 0 0\n");
+  const test::CliRun run = test::run_cli("run " + seq + " -o " + dir + "/out --json");
+  const nlohmann::json doc = json_of(run);
+  EXPECT_EQ(doc["frames_ok"], 2);
+  EXPECT_EQ(doc["frames_failed"], 1);
+  ASSERT_EQ(doc["failed_frames"].size(), 1u) << doc.dump();
+  const nlohmann::json& failed = doc["failed_frames"][0];
+  EXPECT_EQ(failed["index"], 1);
+  EXPECT_NE(failed["file"].get<std::string>().find("b.ply"), std::string::npos) << failed;
+  EXPECT_EQ(failed["stage"], "read") << failed;
+  EXPECT_NE(failed["message"].get<std::string>().find("b.ply"), std::string::npos) << failed;
+  EXPECT_FALSE(failed["message"].get<std::string>().empty());
+  // A run without failures has the key, empty.
+  const nlohmann::json clean =
+      json_of(test::run_cli("run " + seq + "/a.ply -o " + dir + "/one --json"));
+  EXPECT_TRUE(clean["failed_frames"].is_array());
+  EXPECT_TRUE(clean["failed_frames"].empty());
 }
 
 }  // namespace

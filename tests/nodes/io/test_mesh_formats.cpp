@@ -7,6 +7,7 @@
 #include <cstring>
 #include <nlohmann/json.hpp>
 
+#include "nodes/io/glb_reader.h"
 #include "nodes/io/glb_writer.h"
 #include "nodes/io/mesh_readers.h"
 #include "nodes/io/mesh_writers.h"
@@ -39,7 +40,7 @@ void expect_same_geometry(const TriangleMesh& a, const TriangleMesh& b) {
 TEST(MeshFormats, EveryWriterRoundTripsThroughReadMesh) {
   const TriangleMesh m = coloured_tetrahedron();
   const std::string dir = test::temp_dir();
-  for (const char* ext : {".ply", ".obj", ".off", ".stl"}) {
+  for (const char* ext : {".ply", ".obj", ".off", ".stl", ".glb"}) {
     SCOPED_TRACE(ext);
     const std::string path = dir + "/m" + ext;
     write_mesh(path, m);
@@ -49,7 +50,7 @@ TEST(MeshFormats, EveryWriterRoundTripsThroughReadMesh) {
       ASSERT_EQ(back.colors.size(), m.colors.size());
       for (std::size_t i = 0; i < m.colors.size(); ++i) EXPECT_EQ(back.colors[i], m.colors[i]);
     }
-    if (std::string(ext) == ".ply" || std::string(ext) == ".obj") {
+    if (std::string(ext) == ".ply" || std::string(ext) == ".obj" || std::string(ext) == ".glb") {
       ASSERT_EQ(back.normals.size(), m.normals.size());
       EXPECT_TRUE(back.normals[0].isApprox(m.normals[0], 1e-6f));
     }
@@ -138,7 +139,7 @@ TEST(MeshFormats, MutatedFilesNeverCrash) {
   const std::string dir = test::temp_dir();
   const TriangleMesh m = coloured_tetrahedron();
   std::uint32_t state = 7;
-  for (const char* ext : {".obj", ".off", ".stl"}) {
+  for (const char* ext : {".obj", ".off", ".stl", ".glb"}) {
     const std::string good = dir + "/good" + ext;
     write_mesh(good, m);
     const std::string bytes = test::read_file(good);
@@ -243,6 +244,54 @@ TEST(MeshFormats, GlbFollowsTheGltf2Layout) {
     for (int c = 0; c < 3; ++c)
       EXPECT_EQ(read_at<std::uint32_t>(glb, offset(indices) + 12 * t + 4 * c), m.triangles[t][c]);
   EXPECT_THROW(encode_glb(TriangleMesh{}), Error);
+}
+
+// A .glb whose JSON points outside its binary chunk, or has an index past the vertices, or is
+// no glTF at all: an error naming the file and the field.
+TEST(MeshFormats, GlbReaderRefusesBrokenFiles) {
+  const std::vector<std::uint8_t> glb = encode_glb(coloured_tetrahedron());
+  const auto json_length = read_at<std::uint32_t>(glb, 12);
+  nlohmann::json doc = nlohmann::json::parse(glb.begin() + 20, glb.begin() + 20 + json_length);
+  const std::vector<unsigned char> bin(glb.begin() + 20 + json_length + 8, glb.end());
+  // Rebuilds the file around an edited JSON chunk (padded with spaces as glTF asks).
+  const auto rebuild = [&](const nlohmann::json& edited) {
+    std::string json = edited.dump();
+    json.resize((json.size() + 3) / 4 * 4, ' ');
+    std::vector<unsigned char> out;
+    const auto u32 = [&](std::uint32_t v) {
+      for (int k = 0; k < 4; ++k) out.push_back(static_cast<unsigned char>(v >> (8 * k)));
+    };
+    u32(0x46546C67u), u32(2), u32(static_cast<std::uint32_t>(28 + json.size() + bin.size()));
+    u32(static_cast<std::uint32_t>(json.size())), u32(0x4E4F534Au);
+    out.insert(out.end(), json.begin(), json.end());
+    u32(static_cast<std::uint32_t>(bin.size())), u32(0x004E4942u);
+    out.insert(out.end(), bin.begin(), bin.end());
+    return out;
+  };
+  EXPECT_EQ(decode_glb(rebuild(doc), "same.glb").triangles.size(), 4u);
+  nlohmann::json far = doc;
+  far["accessors"][0]["count"] = 1000000;
+  nlohmann::json index = doc;
+  const int indices = doc["meshes"][0]["primitives"][0]["indices"];
+  index["accessors"][indices]["componentType"] = 5126;  // float indices
+  nlohmann::json lines = doc;
+  lines["meshes"][0]["primitives"][0]["mode"] = 1;
+  const struct {
+    std::vector<unsigned char> bytes;
+    const char* expected;
+  } cases[] = {{rebuild(far), "accessors[0]"},
+               {rebuild(index), "indices"},
+               {rebuild(lines), "mode"},
+               {std::vector<unsigned char>(40, 'x'), "magic"}};
+  for (const auto& c : cases) {
+    try {
+      decode_glb(c.bytes, "bad.glb");
+      ADD_FAILURE() << "no error for " << c.expected;
+    } catch (const Error& e) {
+      EXPECT_NE(std::string(e.what()).find("bad.glb"), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find(c.expected), std::string::npos) << e.what();
+    }
+  }
 }
 
 }  // namespace

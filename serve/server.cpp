@@ -57,7 +57,7 @@ namespace {
 
 /// One frame queued for a client; its bytes are shared by every client.
 struct Outgoing {
-  enum class Kind { kMesh, kStats } kind = Kind::kMesh;
+  enum class Kind { kMesh, kStats, kEnd } kind = Kind::kMesh;
   bool binary = false;
   std::shared_ptr<const std::string> data;
 };
@@ -71,6 +71,16 @@ struct MeshMessage {
 
 class WsSession;
 class HttpSession;
+
+namespace {
+
+/// {"type":"end"}: queued behind everything else, never dropped (nothing follows it).
+Outgoing end_message() {
+  static const auto text = std::make_shared<const std::string>(R"({"type":"end"})");
+  return {Outgoing::Kind::kEnd, false, text};
+}
+
+}  // namespace
 
 class Server::Impl {
  public:
@@ -105,8 +115,10 @@ class Server::Impl {
   bool add_client(const std::shared_ptr<WsSession>& session);
   void remove_client(const std::shared_ptr<WsSession>& session);
 
-  void publish(std::shared_ptr<const MeshMessage> mesh, std::shared_ptr<const std::string> stats) {
+  void publish(std::shared_ptr<const MeshMessage> mesh, std::shared_ptr<const std::string> stats,
+               bool finish = false) {
     std::lock_guard<std::mutex> lock(pending_mutex_);
+    if (finish) pending_finish_ = true;
     if (mesh && pending_mesh_) ++counters_.publications_replaced;
     if (stats && pending_stats_) ++counters_.publications_replaced;
     if (mesh) pending_mesh_ = std::move(mesh);
@@ -130,11 +142,13 @@ class Server::Impl {
   std::set<std::shared_ptr<HttpSession>> connections_;
   std::shared_ptr<const MeshMessage> current_mesh_;
   std::shared_ptr<const std::string> current_stats_;
+  bool finished_ = false;  // finish() reached the I/O thread: clients get the end message
 
   // Producers to the I/O thread: the newest unsent publications (older ones are replaced).
   std::mutex pending_mutex_;
   std::shared_ptr<const MeshMessage> pending_mesh_;
   std::shared_ptr<const std::string> pending_stats_;
+  bool pending_finish_ = false;
   bool drain_posted_ = false;
 
   std::atomic<std::uint64_t> mesh_id_{0};
@@ -441,12 +455,14 @@ void Server::Impl::shut_down() {
 void Server::Impl::drain() {
   std::shared_ptr<const MeshMessage> mesh;
   std::shared_ptr<const std::string> stats;
+  bool finish = false;
   {
     std::lock_guard<std::mutex> lock(pending_mutex_);
     mesh = std::move(pending_mesh_);
     stats = std::move(pending_stats_);
     pending_mesh_.reset();
     pending_stats_.reset();
+    finish = std::exchange(pending_finish_, false);
     drain_posted_ = false;
   }
   if (stopping_) return;
@@ -459,6 +475,10 @@ void Server::Impl::drain() {
     current_mesh_ = mesh;
     for (const auto& client : clients_)
       for (const Outgoing& frame : mesh->frames) client->enqueue(frame);
+  }
+  if (finish && !finished_) {
+    finished_ = true;
+    for (const auto& client : clients_) client->enqueue(end_message());
   }
 }
 
@@ -473,6 +493,7 @@ bool Server::Impl::add_client(const std::shared_ptr<WsSession>& session) {
   if (current_stats_) session->enqueue({Outgoing::Kind::kStats, false, current_stats_});
   if (current_mesh_)
     for (const Outgoing& frame : current_mesh_->frames) session->enqueue(frame);
+  if (finished_) session->enqueue(end_message());
   return true;
 }
 
@@ -529,6 +550,8 @@ void Server::publish_mesh(std::vector<unsigned char> mfc) {
 void Server::publish_stats(std::string json) {
   impl_->publish(nullptr, std::make_shared<const std::string>(std::move(json)));
 }
+
+void Server::finish() { impl_->publish(nullptr, nullptr, true); }
 
 ServerStats Server::stats() const {
   const Impl::Counters& c = impl_->counters_;

@@ -21,6 +21,8 @@
 //   binary u32 id, u32 offset (little-endian), then bytes [offset, offset + n) of mesh N's .mfc
 //          image; chunks of one mesh arrive in order, the first holds the base mesh
 //   text   the JSON objects given to publish_stats() (they carry their own "type")
+//   text   {"type":"end"} after finish(): the producer is done and the client holds everything
+//          it published (sent last, after the client's queue has drained)
 //
 // Threads: the server runs its own I/O thread. Every public member is thread-safe and returns
 // without waiting for the network.
@@ -116,6 +118,9 @@ class Server {
   /// Publishes a JSON object text (sent as is; give it a "type"). The newest replaces unsent
   /// older ones; new clients get the newest. Does not wait for the network.
   void publish_stats(std::string json);
+  /// Tells the server nothing more will be published (a run is over): each client, present or
+  /// future, gets {"type":"end"} after what is queued for it. Does not wait for the network.
+  void finish();
 
   ServerStats stats() const;
 

@@ -2,7 +2,10 @@
 // server that served the page (serve/server.h documents the messages), decodes them with the C++
 // decoder compiled to WebAssembly (web/mfc_decoder.cpp over nodes/compress), and shows them with
 // three.js (Debian's libjs-three, served by meshflow). A progressive mesh is shown from its base
-// level on; each chunk of vertex-split packets refines it.
+// level on; each chunk of vertex-split packets refines it. A run (meshflow run/live/reconstruct
+// --serve) sends its newest mesh and stats as it goes; {"type":"end"} says the run is over and
+// everything it published has arrived: the page's state becomes "complete" once that mesh is
+// shown in full.
 
 import * as THREE from '/three/build/three.module.js';
 import { OrbitControls } from '/three/examples/jsm/controls/OrbitControls.js';
@@ -47,7 +50,8 @@ const material = new THREE.MeshStandardMaterial({
   color: 0xb8c4d0, roughness: 0.7, metalness: 0.0, side: THREE.DoubleSide,
 });
 let mesh = null;
-let fittedId = -1;
+let fitted = false;  // the camera is fitted to the first mesh only (a run's frames keep the view)
+let ended = false;   // the server said nothing more will come
 
 function render() {
   if (renderer) renderer.render(scene, camera);
@@ -119,8 +123,8 @@ function show(result, header, level) {
   mesh = new THREE.Mesh(result.geometry, material);
   scene.add(mesh);
   applyColors();
-  if (fittedId !== header.id) {
-    fittedId = header.id;
+  if (!fitted) {
+    fitted = true;
     result.geometry.computeBoundingSphere();
     const { center, radius } = result.geometry.boundingSphere;
     const r = Math.max(radius, 1e-6);
@@ -158,7 +162,8 @@ function decodeLatest() {
       c.shownPrefix = h.bytes;
       show(decode(c.data, h.bytes, 0, -1), h, 'full');
       $('full-ms').textContent = (performance.now() - openedAt).toFixed(0) + ' ms';
-      setState('complete');
+      document.body.dataset.meshes = Number(document.body.dataset.meshes || 0) + 1;
+      setState(ended ? 'complete' : 'shown');
       return;
     }
     if (h.kind !== 'progressive' || c.received < h.base_end) return;
@@ -184,7 +189,22 @@ function onText(text) {
     for (const [stage, ms] of Object.entries(message.stages_ms || {})) {
       rows.push(`<tr><td>${stage}</td><td>${Number(ms).toFixed(1)} ms</td></tr>`);
     }
-    $('stages').innerHTML = rows.join('');
+    if (rows.length > 0) $('stages').innerHTML = rows.join('');
+    if (message.source) $('source').textContent = message.source;
+    if (message.frames !== undefined) {
+      $('frames').textContent = message.frames;
+      document.body.dataset.frames = message.frames;
+    }
+    if (message.frames_per_second !== undefined) {
+      $('fps').textContent = Number(message.frames_per_second).toFixed(1);
+    }
+    if (message.state === 'finished') document.body.dataset.run = 'finished';
+  } else if (message.type === 'end') {
+    ended = true;
+    const c = current;
+    if (!c || (c.received === c.header.bytes && c.shownPrefix === c.header.bytes)) {
+      setState('complete');
+    }
   }
 }
 

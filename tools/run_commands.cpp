@@ -243,6 +243,9 @@ void run_fusion(const RunOptions& o) {
                             : std::make_unique<FusionPipeline>(config, o.sequence.in_flight,
                                                                read_tsdf_map(o.load_map));
   const std::unique_ptr<RunView> view = start_run_view(o.serve, "meshflow run --fuse");
+  if (view)
+    pipeline->set_integration_observer(
+        view->map_observer(config.tsdf.voxel_size, config.min_weight));
   FrameProgress progress(selected_frames(*sequence, o.sequence));
   std::size_t done = 0, written = 0;
   const std::filesystem::path dir(o.output_dir);
@@ -290,7 +293,10 @@ void run_fusion(const RunOptions& o) {
   report("output     %zu mesh file%s in %s\n", written, written == 1 ? "" : "s",
          o.output_dir.c_str());
   if (view) {
-    view->result(mesh, Eigen::Vector3d::Zero(), {});
+    // The map's blocks make extract()'s mesh; the optimisation steps change it, so then the
+    // page gets fused.ply's mesh as a whole too.
+    view->map_result(pipeline->map());
+    if (!config.frames.optimize.steps.empty()) view->result(mesh, Eigen::Vector3d::Zero(), {});
     view->finish_and_serve();
   }
   finish_run(stats);

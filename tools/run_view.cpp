@@ -14,6 +14,7 @@
 
 #include "runtime/error.h"
 #include "runtime/tracing.h"
+#include "serve/map_publisher.h"
 #include "serve/run_publisher.h"
 #include "tools/viewer_server.h"
 
@@ -79,6 +80,13 @@ class ServedRunView final : public RunView {
               const std::vector<unsigned char>& encoded) override {
     publisher_.result(mesh, origin, serve::MeshCoding::kProgressive, encoded);
   }
+  std::function<void(const TsdfVolume&)> map_observer(float voxel_size, float min_weight) override {
+    map_ = std::make_unique<serve::MapPublisher>(*server_, voxel_size, min_weight);
+    return [map = map_.get()](const TsdfVolume& volume) { map->integrated(volume); };
+  }
+  void map_result(const TsdfVolume& map) override {
+    if (map_) map_->finish(map);
+  }
   void finish_and_serve() override {
     publisher_.finish();
     serve_until_stopped(*server_, options_.exit_after, stderr);
@@ -88,6 +96,7 @@ class ServedRunView final : public RunView {
   ServeOptions options_;
   std::unique_ptr<serve::Server> server_;
   serve::RunPublisher publisher_;
+  std::unique_ptr<serve::MapPublisher> map_;
 };
 
 }  // namespace

@@ -9,12 +9,14 @@
 #include <CLI/CLI.hpp>
 
 #include <cstddef>
+#include <functional>
 #include <memory>
 #include <string>
 #include <vector>
 
 #include "graph/frame.h"
 #include "graph/live_pipeline.h"
+#include "nodes/fusion/tsdf_volume.h"
 
 namespace meshflow::cli {
 
@@ -43,6 +45,13 @@ class RunView {
   /// The run's final mesh (progressive; `encoded` a ready .mfc image of it, or empty).
   virtual void result(const TriangleMesh& mesh, const Eigen::Vector3d& origin,
                       const std::vector<unsigned char>& encoded) = 0;
+  /// A fused run: the observer for FusionPipeline::set_integration_observer, which sends the
+  /// map's changed blocks as it grows (serve/map_publisher.h), for a map of `voxel_size` metres
+  /// meshed with `min_weight`.
+  virtual std::function<void(const TsdfVolume&)> map_observer(float voxel_size,
+                                                              float min_weight) = 0;
+  /// After a fused run (map_observer() given): the map's blocks changed since the last update.
+  virtual void map_result(const TsdfVolume& map) = 0;
   /// After the run's files and report: publishes the last mesh and the end of the run, then
   /// serves until Ctrl-C or --exit-after seconds, and prints what was served (stderr).
   virtual void finish_and_serve() = 0;

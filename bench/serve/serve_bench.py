@@ -9,7 +9,7 @@
 2. Frames/s of `meshflow run --synthetic-depth --triangulate rqt` (640 x 480) with 0, 1 and 4
    viewers that read everything (plain WebSocket clients: a handshake, then reading the socket).
 
-usage: serve_bench.py BUILD_DIR [RUNS]
+usage: serve_bench.py BUILD_DIR [RUNS] [view,viewers]
 """
 import base64
 import json
@@ -26,6 +26,8 @@ import time
 
 build = sys.argv[1]
 runs = int(sys.argv[2]) if len(sys.argv) > 2 else 3
+parts = sys.argv[3] if len(sys.argv) > 3 else "view,viewers"  # which measurements
+RATES = (10, 100)
 here = os.path.dirname(os.path.abspath(__file__))
 source = os.path.dirname(os.path.dirname(here))
 meshflow = os.path.join(build, "meshflow")
@@ -36,16 +38,19 @@ work = tempfile.mkdtemp(prefix="meshflow-serve-bench-")
 
 
 def start(args):
-    """Starts meshflow with --serve 0; returns (process, url) once it printed its URL."""
-    log = open(os.path.join(work, "server.log"), "w+")
-    p = subprocess.Popen([meshflow] + args, stdout=subprocess.PIPE, stderr=log, text=True)
+    """Starts meshflow with --serve 0; returns (process, url, stdout file) once it printed its URL
+    (view on stdout, the run commands on stderr)."""
+    out = open(os.path.join(work, "server.out"), "w+")
+    err = open(os.path.join(work, "server.err"), "w+")
+    p = subprocess.Popen([meshflow] + args, stdout=out, stderr=err, text=True)
     for _ in range(400):
-        log.seek(0)
-        for line in log.read().splitlines():
-            if line.startswith("url http"):
-                return p, line.split()[1], log
+        for f in (out, err):
+            f.seek(0)
+            for line in f.read().splitlines():
+                if line.startswith("url http"):
+                    return p, line.split()[1], out
         time.sleep(0.05)
-    raise RuntimeError("no url: " + open(log.name).read())
+    raise RuntimeError("no url: " + open(err.name).read())
 
 
 def viewer(url, stop):
@@ -67,6 +72,8 @@ def viewer(url, stop):
 
 
 # 1. first picture / full mesh
+if "view" not in parts:
+    RATES = ()
 scan = os.path.join(data, "kurt3d", "scan000.3d")
 mesh = os.path.join(work, "kurt3d.ply")
 subprocess.run([meshflow, "reconstruct", scan, "--voxel", "0.05", "-o", mesh], check=True,
@@ -78,7 +85,7 @@ ply_bytes, mfc_bytes = os.path.getsize(mesh), os.path.getsize(mfc)
 print(f"kurt3d scan000 at 5 cm: PLY {ply_bytes} bytes, single-rate .mfc {mfc_bytes} bytes")
 print("| cap | first picture (ms) | full mesh (ms) | progressive bytes | PLY at the cap | .mfc at the cap |")
 print("|---:|---:|---:|---:|---:|---:|")
-for rate in (10, 100):
+for rate in RATES:
     first, full = [], []
     for _ in range(runs):
         p, url, log = start(["view", mesh, "--serve", "0", "--serve-rate", str(rate),
@@ -90,7 +97,9 @@ for rate in (10, 100):
         first.append(float(d["firstMs"]))
         full.append(float(d["fullMs"]))
         p.terminate()
-        stdout = p.communicate()[0]
+        p.wait()
+        log.seek(0)
+        stdout = log.read()
     progressive = int(re.search(r"(\d+) bytes progressive", stdout).group(1))
     print(f"| {rate} Mbit/s | {statistics.median(first):.0f} | {statistics.median(full):.0f} | "
           f"{progressive} | {ply_bytes * 8 / (rate * 1e3):.0f} ms | "
@@ -99,7 +108,7 @@ for rate in (10, 100):
 # 2. frames/s with 0, 1, 4 viewers
 print("| viewers | frames/s (median of runs) | runs |")
 print("|---:|---:|---|")
-for viewers in (0, 1, 4):
+for viewers in (0, 1, 4) if "viewers" in parts else ():
     rates = []
     for _ in range(runs):
         p, url, log = start(["run", "--synthetic-depth", "--synthetic-frames", "120",
@@ -109,7 +118,9 @@ for viewers in (0, 1, 4):
         threads = [threading.Thread(target=viewer, args=(url, stop)) for _ in range(viewers)]
         for t in threads:
             t.start()
-        doc = json.loads(p.communicate()[0])
+        p.wait()
+        log.seek(0)
+        doc = json.loads(log.read())
         stop.set()
         for t in threads:
             t.join()

@@ -80,12 +80,14 @@ void RunPublisher::publish_frame_stats(std::uint64_t index, bool ok,
   std::map<std::string, double> stages;  // a stage may record more than once (steps)
   for (const StageRecord& r : timings) stages[r.stage] += 1e3 * r.duration_s();
   RunPublisherCounts c;
+  const double now = monotonic_seconds();
   {
     std::lock_guard<std::mutex> lock(mutex_);
     ++counts_.frames;
     c = counts_;
+    last_frame_s_ = now;
   }
-  const double elapsed = monotonic_seconds() - started_s_;
+  const double elapsed = now - started_s_;
   nlohmann::json doc = {
       {"type", "stats"},
       {"source", source_},
@@ -106,8 +108,8 @@ void RunPublisher::finish() {
   changed_.notify_all();
   changed_.wait(lock, [this] { return !slot_ && !encoding_; });
   const RunPublisherCounts c = counts_;
+  const double wall = (c.frames > 0 ? last_frame_s_ : monotonic_seconds()) - started_s_;
   lock.unlock();
-  const double wall = monotonic_seconds() - started_s_;
   const nlohmann::json doc = {
       {"type", "stats"},
       {"source", source_},

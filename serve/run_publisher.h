@@ -8,7 +8,8 @@
 //
 // Stats message: {"type":"stats","source":S,"frame":I,"frames":N,"failed":F,
 //   "frames_per_second":R,"stages_ms":{stage:ms},"vertices":V,"triangles":T,
-//   "meshes_replaced":D} and, from finish(), "state":"finished" with "wall_s".
+//   "meshes_replaced":D} and, from finish(), "state":"finished" with "wall_s" (to the last
+//   frame; the rate over it).
 
 #include <condition_variable>
 #include <cstdint>
@@ -82,6 +83,7 @@ class RunPublisher {
   std::string source_;
   compress::CompressConfig compress_;
   double started_s_ = 0.0;
+  double last_frame_s_ = 0.0;  // when the last frame was reported (under mutex_)
 
   mutable std::mutex mutex_;
   std::condition_variable changed_;

@@ -53,6 +53,7 @@ const material = new THREE.MeshStandardMaterial({
 let mesh = null;
 let fitted = false;  // the camera is fitted to the first mesh only (a run's frames keep the view)
 let ended = false;   // the server said nothing more will come
+let userMoved = false;  // the camera follows a growing map until the user moves it
 // A fused map's blocks (see onBlocks).
 const blockGroup = new THREE.Group();
 scene.add(blockGroup);
@@ -64,7 +65,10 @@ let blockTriangles = 0;
 function render() {
   if (renderer) renderer.render(scene, camera);
 }
-if (controls) controls.addEventListener('change', render);
+if (controls) {
+  controls.addEventListener('change', render);
+  controls.addEventListener('start', () => { userMoved = true; });
+}
 window.addEventListener('resize', () => {
   camera.aspect = window.innerWidth / window.innerHeight;
   camera.updateProjectionMatrix();
@@ -161,9 +165,10 @@ function fitCamera({ center, radius }) {
     controls.target.copy(center);
     controls.update();
   }
+  if (document.body.dataset.firstMs) return;
   const first = performance.now() - openedAt;
   $('first-ms').textContent = first.toFixed(0) + ' ms';
-  document.body.dataset.firstMs = first.toFixed(1);  // for bench/serve_view.sh
+  document.body.dataset.firstMs = first.toFixed(1);  // for bench/serve/serve_bench.py
 }
 
 function showCounts(vertices, triangles, level) {
@@ -241,7 +246,7 @@ function onBlocks(buffer) {
   }
   document.body.dataset.blocks = blocks.size;
   if (mesh) return;  // a whole mesh is shown: the blocks stay hidden
-  if (!fitted && blocks.size > 0) {
+  if (!userMoved && blocks.size > 0) {
     fitCamera(new THREE.Box3().setFromObject(blockGroup).getBoundingSphere(new THREE.Sphere()));
   }
   applyColors();

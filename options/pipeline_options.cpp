@@ -170,6 +170,17 @@ std::vector<OptionSpec> make_specs() {
       {"normals", &O::normals,
        "Point normals: auto (the input's when it has them, else estimated), input, estimate",
        nullptr, one_of<std::string>(&O::normals, {"auto", "input", "estimate"})},
+      {"normal-bits", &O::normal_bits,
+       "Compressed meshes (.mfc): octahedral bits per normal coordinate, 4..20 (10: within 0.26 "
+       "degrees, Draco's default grid); 0 stores no normals and the decoder recomputes them from "
+       "the decoded geometry",
+       nullptr,
+       [](const O& o) -> std::string {
+         if (o.normal_bits == 0 || (o.normal_bits >= static_cast<int>(compress::kMinNormalBits) &&
+                                    o.normal_bits <= static_cast<int>(compress::kMaxNormalBits)))
+           return "";
+         return "expected 0 or an integer in [4, 20], got " + std::to_string(o.normal_bits);
+       }},
       {"orient", &O::orient,
        "Orientation of estimated normals: auto (the input normals' signs, else the sensor where "
        "the data has one, else propagate), sensor, propagate (consistent over neighbours, then up "
@@ -254,6 +265,7 @@ ReconstructionConfig PipelineOptions::config() const {
                      : normals == "estimate" ? NormalSource::kEstimate
                                              : NormalSource::kAuto;
   parse_orientation(orient, c.normals);
+  c.compress.normal_bits = static_cast<unsigned>(normal_bits);
   c.max_memory_bytes =
       max_memory.empty() ? default_memory_limit() : parse_byte_size(max_memory, "--max-memory");
   return c;

@@ -44,6 +44,8 @@ struct PipelineOptions {
   std::string normals = "auto";  ///< auto | input | estimate
   std::string orient = "auto";   ///< see parse_orientation()
   std::string max_memory;        ///< "512M", "4G", "0"; empty: default_memory_limit()
+  /// Compressed meshes (--compress): octahedral bits per normal coordinate, 0 = recomputed.
+  int normal_bits = static_cast<int>(compress::kDefaultNormalBits);
 
   /// The stages' configuration. Throws meshflow::Error (source "--NAME") for the first option
   /// that fails its check (validate()). O(options).

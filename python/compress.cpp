@@ -5,15 +5,24 @@
 #include "bindings.h"
 #include "nodes/compress/compressed_mesh.h"
 #include "nodes/compress/progressive_mesh.h"
+#include "options/pipeline_options.h"
 
 namespace meshflow::python {
 
 void bind_compress(py::module_& m) {
   m.def(
       "compress",
-      [](const Mesh& mesh, bool progressive, unsigned bits, double step, bool normals,
-         bool colors) {
+      [](const Mesh& mesh, bool progressive, unsigned bits, double step, bool normals, bool colors,
+         int normal_bits) {
+        options::PipelineOptions model;
+        model.normal_bits = normal_bits;
+        for (const options::OptionSpec& spec : options::pipeline_option_specs())
+          if (std::string(spec.name) == "normal-bits") {
+            const std::string problem = spec.check(model);
+            if (!problem.empty()) throw py::value_error("normal_bits: " + problem);
+          }
         compress::CompressConfig config;
+        config.normal_bits = static_cast<unsigned>(normal_bits);
         config.position_bits = bits;
         config.step = step;
         config.normals = normals;
@@ -30,34 +39,39 @@ void bind_compress(py::module_& m) {
       },
       py::arg("mesh"), py::arg("progressive") = false, py::arg("bits") = 0u, py::arg("step") = 0.0,
       py::arg("normals") = true, py::arg("colors") = true,
+      py::arg("normal_bits") = static_cast<int>(compress::kDefaultNormalBits),
       R"(The mesh as compressed-mesh bytes (the .mfc format): Edgebreaker, or with
 progressive=True a base mesh and vertex splits. bits (1..30) or step (metres) set the position
-quantisation (default: 1/64 of the median edge). Positions are stored in world coordinates
-(the mesh's origin added).)");
+quantisation (default: 1/64 of the median edge). normal_bits (4..20, default 10: within 0.26
+degrees) sets the normals' octahedral precision; 0 stores none and the decoder recomputes them
+from the decoded geometry. Positions are stored in world coordinates (the mesh's origin
+added).)");
 
   m.def(
       "decompress",
-      [](const py::bytes& data, py::object splits, py::object triangles) {
+      [](const py::bytes& data, py::object splits, py::object triangles, bool partial) {
         const std::string_view view = data;
         const std::vector<unsigned char> bytes(view.begin(), view.end());
         Mesh mesh;
+        compress::ProgressiveLevel level;
+        if (!splits.is_none()) level.splits = splits.cast<std::size_t>();
+        if (!triangles.is_none()) level.triangles = triangles.cast<std::size_t>();
         py::gil_scoped_release no_gil;
-        if (splits.is_none() && triangles.is_none()) {
+        if (partial) {
+          *mesh.data = compress::decompress_progressive_prefix(bytes, "bytes", level).mesh;
+        } else if (splits.is_none() && triangles.is_none()) {
           *mesh.data = compress::decompress_mesh(bytes, "bytes");
         } else {
-          compress::ProgressiveLevel level;
-          {
-            py::gil_scoped_acquire gil;
-            if (!splits.is_none()) level.splits = splits.cast<std::size_t>();
-            if (!triangles.is_none()) level.triangles = triangles.cast<std::size_t>();
-          }
           *mesh.data = compress::decompress_progressive_level(bytes, "bytes", level);
         }
         return mesh;
       },
       py::arg("data"), py::arg("splits") = py::none(), py::arg("triangles") = py::none(),
+      py::arg("partial") = false,
       R"(A Mesh from compressed-mesh bytes; for a progressive stream, splits=K applies K
 vertex splits to the base mesh and triangles=N stops at N triangles (default: the full mesh).
+partial=True accepts a prefix of a progressive file ending at a packet boundary (a stream's
+first bytes) and decodes the levels it holds, every part's checksum checked.
 Raises meshflow.Error naming the field for corrupt or truncated data.)");
 }
 

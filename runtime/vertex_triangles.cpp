@@ -8,6 +8,8 @@
 #include <algorithm>
 #include <numeric>
 
+#include "runtime/parallel.h"
+
 namespace meshflow {
 
 VertexTriangles vertex_triangles(const TriangleMesh& mesh) {
@@ -89,40 +91,121 @@ struct FanScratch {
   std::vector<std::uint32_t> parent;  ///< union-find over the slots of v's triangles
 };
 
-// Writes the fan of each triangle around v to fan[0 .. k) (0 = the fan with the lowest triangle
-// index, then in order of their lowest triangles), given the k triangles around v in ascending
-// order. Triangles sharing an edge v-x (a corner x other than v) are in one fan: each spoke x
-// joins the triangle holding it to the previous one that did. Returns the fan count. O(k).
-std::uint32_t fans_around(const std::vector<Triangle>& triangles, std::uint32_t v,
-                          const std::uint32_t* begin, const std::uint32_t* end, std::uint32_t* fan,
-                          FanScratch& scratch) {
-  const auto k = static_cast<std::uint32_t>(end - begin);
-  auto& spokes = scratch.spokes;
-  auto& parent = scratch.parent;  // (a reference, not a structured binding: lambdas capture it)
-  parent.resize(k);
-  std::iota(parent.begin(), parent.end(), 0u);
-  // Union-find with path halving whose roots are the lowest slot of their set.
-  const auto find = [&parent](std::uint32_t x) {
+// Union-find over slots with path halving whose roots are the lowest slot of their set.
+struct SlotSets {
+  std::uint32_t* parent;
+  std::uint32_t find(std::uint32_t x) const {
     while (parent[x] != x) x = parent[x] = parent[parent[x]];
     return x;
-  };
-  for (std::uint32_t i = 0; i < k; ++i)
-    for (std::uint32_t x : triangles[begin[i]]) {
-      if (x == v || x >= spokes.size()) continue;  // (an index past the vertices: no spoke)
-      FanScratch::Spoke& spoke = spokes[x];
-      if (spoke.vertex == v) {  // joined with the previous of v's triangles holding x
-        const std::uint32_t a = find(i), b = find(spoke.slot);
-        parent[std::max(a, b)] = std::min(a, b);
-      }
-      spoke = {v, i};
-    }
-  // A root is its fan's lowest slot, so slots in order meet each root before its other members.
+  }
+  void unite(std::uint32_t a, std::uint32_t b) const {
+    a = find(a);
+    b = find(b);
+    parent[std::max(a, b)] = std::min(a, b);
+  }
+};
+
+// Numbers the sets: fan[i] = the set of slot i (0 = the set of slot 0, then in order of their
+// lowest slots; a root is its set's lowest slot, so slots in order meet each root before its
+// other members). Returns the set count.
+std::uint32_t number_fans(const SlotSets& sets, std::uint32_t k, std::uint32_t* fan) {
   std::uint32_t fans = 0;
   for (std::uint32_t i = 0; i < k; ++i) {
-    const std::uint32_t r = find(i);
+    const std::uint32_t r = sets.find(i);
     fan[i] = r == i ? fans++ : fan[r];
   }
   return fans;
+}
+
+// Whether the k (1 to 16) triangles around v form one consistently oriented fan: walking from the
+// first triangle along its out-spoke (the corner after v), each step to the triangle whose
+// in-spoke (the corner before v) it is, then backwards the same way, reaches all k. Visited
+// triangles share spokes, so reaching all of them proves one fan; false says nothing (several
+// fans, or orientations that disagree: the caller decides pairwise). O(k^2) comparisons.
+bool one_oriented_fan(const std::vector<Triangle>& triangles, std::uint32_t v,
+                      std::size_t vertex_count, const std::uint32_t* begin, std::uint32_t k) {
+  std::uint32_t in[16], out[16];
+  for (std::uint32_t i = 0; i < k; ++i) {
+    const Triangle& t = triangles[begin[i]];
+    const int r = t[0] == v ? 0 : t[1] == v ? 1 : 2;
+    out[i] = t[(r + 1) % 3];
+    in[i] = t[(r + 2) % 3];
+    if (out[i] == v || in[i] == v || out[i] >= vertex_count || in[i] >= vertex_count)
+      return false;  // (a corner repeated, or past the vertices: decided pairwise)
+  }
+  std::uint32_t visited = 1, reached = 1;
+  // Forward from triangle 0, then backward from it; each step looks for an unvisited neighbour.
+  for (int direction = 0; direction < 2; ++direction) {
+    for (std::uint32_t at = 0;;) {
+      const std::uint32_t spoke = direction == 0 ? out[at] : in[at];
+      const std::uint32_t* ends = direction == 0 ? in : out;
+      std::uint32_t next = k;
+      for (std::uint32_t j = 0; j < k; ++j)
+        if (ends[j] == spoke && (visited >> j & 1u) == 0) {
+          next = j;
+          break;
+        }
+      if (next == k) break;
+      visited |= 1u << next;
+      ++reached;
+      at = next;
+    }
+  }
+  return reached == k;
+}
+
+// Fans of a vertex with few triangles (every pixel-grid vertex, most vertices of any mesh): one
+// oriented fan confirmed by a walk (the common case), else each pair of triangles compared by
+// their spokes, on the stack. O(k^2).
+constexpr std::uint32_t kFewTriangles = 16;
+std::uint32_t fans_around_few(const std::vector<Triangle>& triangles, std::uint32_t v,
+                              std::size_t vertex_count, const std::uint32_t* begin, std::uint32_t k,
+                              std::uint32_t* fan) {
+  if (k == 0) return 0;
+  if (one_oriented_fan(triangles, v, vertex_count, begin, k)) {
+    std::fill(fan, fan + k, 0u);
+    return 1;
+  }
+  std::uint32_t spokes[kFewTriangles][2], parent[kFewTriangles];
+  for (std::uint32_t i = 0; i < k; ++i) {
+    parent[i] = i;
+    std::uint32_t n = 0;
+    spokes[i][0] = spokes[i][1] = UINT32_MAX;  // (no spoke: matches nothing below)
+    for (std::uint32_t x : triangles[begin[i]])
+      if (x != v && x < vertex_count && n < 2) spokes[i][n++] = x;
+  }
+  const SlotSets sets{parent};
+  for (std::uint32_t i = 1; i < k; ++i)
+    for (std::uint32_t j = 0; j < i; ++j)
+      for (std::uint32_t x : spokes[i])
+        if (x != UINT32_MAX && (x == spokes[j][0] || x == spokes[j][1])) sets.unite(i, j);
+  return number_fans(sets, k, fan);
+}
+
+// Writes the fan of each triangle around v to fan[0 .. k) (0 = the fan with the lowest triangle
+// index, then in order of their lowest triangles), given the k triangles around v in ascending
+// order and `vertex_count` vertices. Triangles sharing an edge v-x (a corner x other than v) are
+// in one fan. Few triangles go through fans_around_few(); more go through a spoke table: each spoke
+// x joins the triangle holding it to the previous one that did. Returns the fan count. O(k^2) for
+// k <= 16, else O(k) with O(vertex_count) scratch (allocated on first use).
+std::uint32_t fans_around(const std::vector<Triangle>& triangles, std::uint32_t v,
+                          std::size_t vertex_count, const std::uint32_t* begin,
+                          const std::uint32_t* end, std::uint32_t* fan, FanScratch& scratch) {
+  const auto k = static_cast<std::uint32_t>(end - begin);
+  if (k <= kFewTriangles) return fans_around_few(triangles, v, vertex_count, begin, k, fan);
+  auto& spokes = scratch.spokes;
+  if (spokes.size() != vertex_count) spokes.assign(vertex_count, FanScratch::Spoke{});
+  scratch.parent.resize(k);
+  std::iota(scratch.parent.begin(), scratch.parent.end(), 0u);
+  const SlotSets sets{scratch.parent.data()};
+  for (std::uint32_t i = 0; i < k; ++i)
+    for (std::uint32_t x : triangles[begin[i]]) {
+      if (x == v || x >= vertex_count) continue;  // (an index past the vertices: no spoke)
+      FanScratch::Spoke& spoke = spokes[x];
+      if (spoke.vertex == v) sets.unite(i, spoke.slot);  // the previous triangle holding x
+      spoke = {v, i};
+    }
+  return number_fans(sets, k, fan);
 }
 
 }  // namespace
@@ -133,56 +216,70 @@ std::vector<std::uint32_t> vertex_fans(const std::vector<Triangle>& triangles,
   const std::size_t n = around.offsets.size() - 1;
   fan.resize(around.triangles.size());
   std::vector<std::uint32_t> fans(n, 0);
-  tbb::enumerable_thread_specific<FanScratch> scratch_per_thread([n] {
-    FanScratch scratch;
-    scratch.spokes.resize(n);
-    return scratch;
-  });
+  tbb::enumerable_thread_specific<FanScratch> scratch_per_thread;
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n),
                     [&](const tbb::blocked_range<std::size_t>& range) {
                       FanScratch& scratch = scratch_per_thread.local();
                       for (std::size_t i = range.begin(); i != range.end(); ++i) {
                         const auto v = static_cast<std::uint32_t>(i);
-                        fans[i] = fans_around(triangles, v, around.begin(v), around.end(v),
+                        fans[i] = fans_around(triangles, v, n, around.begin(v), around.end(v),
                                               fan.data() + around.offsets[v], scratch);
                       }
                     });
   return fans;
 }
 
+namespace {
+
+// The vertices whose triangles form more than one fan, ascending. Parallel per vertex (a fan
+// count each; the fan of every triangle is not kept: few vertices need it); deterministic. O(V+T).
+std::vector<std::uint32_t> vertices_with_several_fans(const std::vector<Triangle>& triangles,
+                                                      const VertexTriangles& around) {
+  const std::size_t n = around.offsets.size() - 1;
+  std::vector<std::uint8_t> several(n, 0);
+  struct Scratch {
+    FanScratch fans;
+    std::vector<std::uint32_t> fan;
+  };
+  tbb::enumerable_thread_specific<Scratch> scratch_per_thread;
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n),
+                    [&](const tbb::blocked_range<std::size_t>& range) {
+                      Scratch& scratch = scratch_per_thread.local();
+                      for (std::size_t i = range.begin(); i != range.end(); ++i) {
+                        const auto v = static_cast<std::uint32_t>(i);
+                        scratch.fan.resize(around.offsets[v + 1] - around.offsets[v]);
+                        several[i] = fans_around(triangles, v, n, around.begin(v), around.end(v),
+                                                 scratch.fan.data(), scratch.fans) > 1;
+                      }
+                    });
+  return parallel_select_indices(n, [&several](std::size_t v) { return several[v] != 0; });
+}
+
+}  // namespace
+
 void remove_smaller_fans(std::vector<Triangle>& triangles, std::size_t vertex_count,
                          FanRemovalCounts* counts) {
   FanRemovalCounts c;
-  // The first pass looks at every vertex (in parallel); a later one only at the corners of the
-  // triangles the pass before removed, the only vertices whose fans can have changed.
+  // The first pass looks at the vertices with several fans (found in parallel); a later one at
+  // the corners of the triangles the pass before removed, the only vertices whose fans can have
+  // changed.
   const VertexTriangles around = vertex_triangles(triangles, vertex_count);
-  std::vector<std::uint32_t> fan;
-  const std::vector<std::uint32_t> first_fans = vertex_fans(triangles, around, fan);
-  std::vector<std::uint32_t> candidates;
-  for (std::uint32_t v = 0; v < vertex_count; ++v)
-    if (first_fans[v] > 1) candidates.push_back(v);
-  std::vector<std::uint8_t> removed(triangles.size(), 0);
+  std::vector<std::uint32_t> candidates = vertices_with_several_fans(triangles, around);
+  std::vector<std::uint8_t> removed(candidates.empty() ? 0 : triangles.size(), 0);
   FanScratch scratch;
-  std::vector<std::uint32_t> alive, alive_fan, size, marks;
-  for (bool first_pass = true; !candidates.empty(); first_pass = false) {
+  std::vector<std::uint32_t> alive, fan_of, size, marks;
+  while (!candidates.empty()) {
     // Each candidate decides on the mesh as the pass found it (marks are applied afterwards),
     // in vertex order, serially: nothing depends on the thread count.
     marks.clear();
     for (const std::uint32_t v : candidates) {
-      const std::uint32_t* slots = around.begin(v);
-      const std::uint32_t* fan_of = fan.data() + around.offsets[v];
-      std::uint32_t k = static_cast<std::uint32_t>(around.end(v) - slots), fans = first_fans[v];
-      if (!first_pass) {
-        alive.clear();
-        for (const std::uint32_t* t = slots; t != around.end(v); ++t)
-          if (removed[*t] == 0) alive.push_back(*t);
-        k = static_cast<std::uint32_t>(alive.size());
-        alive_fan.resize(k);
-        if (scratch.spokes.size() != vertex_count) scratch.spokes.resize(vertex_count);
-        fans = fans_around(triangles, v, alive.data(), alive.data() + k, alive_fan.data(), scratch);
-        slots = alive.data();
-        fan_of = alive_fan.data();
-      }
+      alive.clear();
+      for (const std::uint32_t* t = around.begin(v); t != around.end(v); ++t)
+        if (removed[*t] == 0) alive.push_back(*t);
+      const auto k = static_cast<std::uint32_t>(alive.size());
+      fan_of.resize(k);
+      const std::uint32_t fans = fans_around(triangles, v, vertex_count, alive.data(),
+                                             alive.data() + k, fan_of.data(), scratch);
       if (fans < 2) continue;
       ++c.vertices;
       size.assign(fans, 0);
@@ -191,7 +288,7 @@ void remove_smaller_fans(std::vector<Triangle>& triangles, std::size_t vertex_co
       const auto keep =
           static_cast<std::uint32_t>(std::max_element(size.begin(), size.end()) - size.begin());
       for (std::uint32_t s = 0; s < k; ++s)
-        if (fan_of[s] != keep) marks.push_back(slots[s]);
+        if (fan_of[s] != keep) marks.push_back(alive[s]);
     }
     candidates.clear();
     for (const std::uint32_t t : marks) {

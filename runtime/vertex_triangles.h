@@ -35,7 +35,8 @@ VertexTriangles vertex_triangles(const std::vector<Triangle>& triangles, std::si
 /// corners other than the vertex): writes fan[s] for every slot s of `around` (0 = the fan
 /// holding the vertex's lowest triangle, then in order of their lowest triangles) and returns
 /// the fan count of each vertex (0 for an unused vertex). `around` is vertex_triangles() of
-/// `triangles`. Parallel per vertex; deterministic. O(V + T), plus O(V) memory per worker.
+/// `triangles`. Parallel per vertex; deterministic. O(V + T), plus O(V) memory per worker where
+/// a vertex has more than 16 triangles.
 std::vector<std::uint32_t> vertex_fans(const std::vector<Triangle>& triangles,
                                        const VertexTriangles& around,
                                        std::vector<std::uint32_t>& fan);
@@ -69,8 +70,9 @@ struct FanRemovalCounts {
 /// corners with two fans, so passes repeat, each over the corners of the triangles the previous
 /// one removed, until every vertex has one fan (two or three passes on scanned meshes).
 /// Vertices are not touched: no position moves and none is added. Adds to `counts` when given.
-/// Deterministic. O(V + T) for the first pass (fans found in parallel per vertex, O(V) memory
-/// per worker thread), then O(triangles around the vertices looked at) per pass, serial.
+/// Deterministic. O(V + T) for the first pass (fans counted in parallel per vertex; O(V) memory
+/// per worker thread only where a vertex has more than 16 triangles), then O(triangles around the
+/// vertices looked at) per pass, serial.
 void remove_smaller_fans(std::vector<Triangle>& triangles, std::size_t vertex_count,
                          FanRemovalCounts* counts = nullptr);
 

@@ -9,6 +9,7 @@
 #include "nodes/io/byte_buffer.h"
 #include "nodes/io/mesh_readers.h"
 #include "nodes/io/mesh_writers.h"
+#include "options/pipeline_options.h"
 #include "runtime/error.h"
 #include "runtime/threads.h"
 #include "tools/commands.h"
@@ -23,8 +24,16 @@ struct CompressOptions {
   unsigned bits = 0;
   double step = 0.0;
   bool no_normals = false, no_colors = false;
+  options::PipelineOptions model;  // the option model's settings (--normal-bits)
   float base_ratio = 0.02f;
 };
+
+// The option model's row `name` (options/pipeline_options.h).
+const options::OptionSpec& model_spec(const char* name) {
+  for (const options::OptionSpec& s : options::pipeline_option_specs())
+    if (std::string(s.name) == name) return s;
+  throw Error("meshflow", name, "not in the option model");
+}
 
 const char* kind_name(compress::CompressionKind kind) {
   return kind == compress::CompressionKind::kProgressive ? "progressive" : "edgebreaker";
@@ -36,6 +45,7 @@ void run_compress(const CompressOptions& o) {
   config.step = o.step;
   config.normals = !o.no_normals;
   config.colors = !o.no_colors;
+  config.normal_bits = static_cast<unsigned>(o.model.normal_bits);
   config.base_ratio = o.base_ratio;
   const TriangleMesh mesh = io::read_mesh(o.input);
   const double t0 = monotonic_seconds();
@@ -97,6 +107,7 @@ void run_compress(const CompressOptions& o) {
 struct DecompressOptions {
   std::string input, output;
   long long splits = -1, triangles = -1;
+  bool partial = false;
 };
 
 void run_decompress(const DecompressOptions& o) {
@@ -104,10 +115,16 @@ void run_decompress(const DecompressOptions& o) {
   const std::vector<unsigned char> bytes = io::read_file_bytes(o.input);
   const double t0 = monotonic_seconds();
   TriangleMesh mesh;
-  if (o.splits >= 0 || o.triangles >= 0) {
-    compress::ProgressiveLevel level;
-    if (o.splits >= 0) level.splits = static_cast<std::size_t>(o.splits);
-    if (o.triangles >= 0) level.triangles = static_cast<std::size_t>(o.triangles);
+  compress::ProgressiveLevel level;
+  if (o.splits >= 0) level.splits = static_cast<std::size_t>(o.splits);
+  if (o.triangles >= 0) level.triangles = static_cast<std::size_t>(o.triangles);
+  std::size_t packets = 0, packets_stated = 0;
+  if (o.partial) {
+    compress::PrefixDecode d = compress::decompress_progressive_prefix(bytes, o.input, level);
+    mesh = std::move(d.mesh);
+    packets = d.packets;
+    packets_stated = d.packets_stated;
+  } else if (o.splits >= 0 || o.triangles >= 0) {
     mesh = compress::decompress_progressive_level(bytes, o.input, level);
   } else {
     mesh = compress::decompress_mesh(bytes, o.input);
@@ -119,7 +136,10 @@ void run_decompress(const DecompressOptions& o) {
                        {"output", o.output},
                        {"vertices", mesh.vertices.size()},
                        {"triangles", mesh.triangles.size()},
+                       {"packets", packets},
+                       {"packets_stated", packets_stated},
                        {"decode_ms", 1e3 * decode_s}});
+  if (o.partial) report("prefix %zu of %zu split packets\n", packets, packets_stated);
   report("mesh   %zu vertices, %zu triangles, decoded in %.1f ms\n", mesh.vertices.size(),
          mesh.triangles.size(), 1e3 * decode_s);
   report("output %s\n", o.output.c_str());
@@ -158,6 +178,7 @@ void run_compressed_info(const std::string& path) {
                        {"triangles", info.triangles},
                        {"normals", info.normals},
                        {"colors", info.colors},
+                       {"recomputed_normals", info.recomputed_normals},
                        {"bytes", bytes.size()},
                        {"quantisation_step_m", info.quantizer.step},
                        {"quantisation_bits", info.quantizer.bits}});
@@ -166,7 +187,10 @@ void run_compressed_info(const std::string& path) {
   report("kind         %s\n", kind_name(info.kind));
   report("mesh         %llu vertices, %llu triangles%s%s\n",
          static_cast<unsigned long long>(info.vertices),
-         static_cast<unsigned long long>(info.triangles), info.normals ? ", normals" : "",
+         static_cast<unsigned long long>(info.triangles),
+         info.normals              ? ", normals"
+         : info.recomputed_normals ? ", normals (recomputed)"
+                                   : "",
          info.colors ? ", colours" : "");
   report("quantisation %u bits, step %.3g m\n", info.quantizer.bits, info.quantizer.step);
 }
@@ -187,6 +211,17 @@ void add_compress_options(CLI::App* cmd) {
       ->check(CLI::PositiveNumber)
       ->default_str("auto");
   cmd->add_flag("--no-normals", o->no_normals, "Leave the mesh's normals out");
+  cmd->add_option("--normal-bits", o->model.normal_bits, model_spec("normal-bits").help)
+      ->capture_default_str()
+      ->check([](const std::string& text) -> std::string {
+        options::PipelineOptions value;
+        try {
+          value.normal_bits = std::stoi(text);
+        } catch (const std::exception&) {
+          return "expected an integer, got '" + text + "'";
+        }
+        return model_spec("normal-bits").check(value);
+      });
   cmd->add_flag("--no-colors", o->no_colors, "Leave the mesh's colours out");
   cmd->add_option("--base-ratio", o->base_ratio,
                   "Progressive: share of the triangles in the base mesh")
@@ -210,6 +245,9 @@ void add_decompress_options(CLI::App* cmd) {
                   "Progressive: refine until the mesh has this many triangles")
       ->check(CLI::NonNegativeNumber)
       ->default_str("all");
+  cmd->add_flag("--partial", o->partial,
+                "Progressive: the input may be a prefix (a stream's first bytes) ending at a "
+                "packet boundary; decode the levels it holds (every part's checksum checked)");
   add_console_flags(cmd, true);
   cmd->callback([o] { run_decompress(*o); });
 }

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstring>
 
+#include "nodes/compress/attribute_coder.h"
 #include "nodes/compress/progressive_mesh.h"
 #include "runtime/error.h"
 
@@ -11,7 +12,7 @@ namespace meshflow::compress {
 namespace {
 
 constexpr char kMagic[8] = {'M', 'F', 'M', 'E', 'S', 'H', '\r', '\n'};
-constexpr std::uint32_t kVersion = 2;
+constexpr std::uint32_t kVersion = 3;
 
 }  // namespace
 
@@ -52,8 +53,40 @@ Quantizer choose_quantizer(const TriangleMesh& mesh, const CompressConfig& confi
 namespace detail {
 
 AttributeFlags attribute_flags(const TriangleMesh& mesh, const CompressConfig& config) {
-  return {config.normals && !mesh.normals.empty() && mesh.normals.size() == mesh.vertices.size(),
-          config.colors && !mesh.colors.empty() && mesh.colors.size() == mesh.vertices.size()};
+  if (config.normal_bits != 0 &&
+      (config.normal_bits < kMinNormalBits || config.normal_bits > kMaxNormalBits))
+    throw Error("compression", "normal bits",
+                "must be 0 (recomputed by the decoder) or " + std::to_string(kMinNormalBits) +
+                    " .. " + std::to_string(kMaxNormalBits) + ", not " +
+                    std::to_string(config.normal_bits));
+  const bool normals =
+      config.normals && !mesh.normals.empty() && mesh.normals.size() == mesh.vertices.size();
+  AttributeFlags flags;
+  flags.normals = normals && config.normal_bits > 0;
+  flags.recomputed_normals = normals && config.normal_bits == 0;
+  flags.colors =
+      config.colors && !mesh.colors.empty() && mesh.colors.size() == mesh.vertices.size();
+  flags.normal_bits = flags.normals ? config.normal_bits : kDefaultNormalBits;
+  return flags;
+}
+
+std::uint64_t fnv1a64_continue(std::uint64_t hash, const unsigned char* data, std::size_t n) {
+  for (std::size_t i = 0; i < n; ++i) {
+    hash ^= data[i];
+    hash *= 1099511628211ull;
+  }
+  return hash;
+}
+
+std::uint64_t prefix_checksum(const unsigned char* bytes, std::size_t end) {
+  const unsigned char zero[8] = {};
+  std::uint64_t h = fnv1a64_continue(14695981039346656037ull, bytes, kPrefixChecksumOffset);
+  h = fnv1a64_continue(h, zero, 8);
+  return fnv1a64_continue(h, bytes + kPrefixChecksumOffset + 8, end - kPrefixChecksumOffset - 8);
+}
+
+void recompute_normals(TriangleMesh& mesh, const std::vector<std::array<std::int32_t, 3>>& grid) {
+  mesh.normals = recomputed_normals({grid, mesh.triangles});
 }
 
 void write_header(io::ByteWriter& out, CompressionKind kind, AttributeFlags flags,
@@ -62,12 +95,14 @@ void write_header(io::ByteWriter& out, CompressionKind kind, AttributeFlags flag
   out.bytes(kMagic, sizeof kMagic);
   out.u32(kVersion);
   out.u32(static_cast<std::uint32_t>(kind));
-  out.u32((flags.normals ? 1u : 0u) | (flags.colors ? 2u : 0u));
+  out.u32((flags.normals ? 1u : 0u) | (flags.colors ? 2u : 0u) |
+          (flags.recomputed_normals ? 4u : 0u));
   out.u64(vertices);
   out.u64(triangles);
   for (int a = 0; a < 3; ++a) out.f64(quantizer.origin[a] + offset[a]);
   out.f64(quantizer.step);
   out.u32(quantizer.bits);
+  out.u64(0);  // the prefix checksum (progressive_mesh.cpp sets it)
 }
 
 io::ByteReader body_reader(const std::vector<unsigned char>& bytes, const std::string& source) {
@@ -76,22 +111,28 @@ io::ByteReader body_reader(const std::vector<unsigned char>& bytes, const std::s
 
 void seal(io::ByteWriter& out) { out.u64(io::fnv1a64(out.out.data(), out.out.size())); }
 
-CompressedMeshInfo read_header(io::ByteReader& in, const std::vector<unsigned char>& bytes) {
+CompressedMeshInfo read_header(io::ByteReader& in, const std::vector<unsigned char>& bytes,
+                               bool check_file_checksum) {
   if (bytes.size() < sizeof kMagic || std::memcmp(bytes.data(), kMagic, sizeof kMagic) != 0)
     in.fail("magic", "not a meshflow compressed mesh (expected \"MFMESH\" at byte 0)");
   in.bytes(sizeof kMagic, "magic");
   CompressedMeshInfo info;
   info.version = in.u32("version");
   if (info.version != kVersion)
-    in.fail("version", "is " + std::to_string(info.version) + "; this build reads version " +
-                           std::to_string(kVersion));
+    in.fail("version",
+            "is " + std::to_string(info.version) + "; this build reads version " +
+                std::to_string(kVersion) +
+                (info.version < kVersion ? " only (compress the mesh again with this build)"
+                                         : " (the file is from a newer meshflow)"));
   const std::uint32_t kind = in.u32("kind");
   if (kind != 1 && kind != 2) in.fail("kind", std::to_string(kind) + " is not 1 or 2");
   info.kind = static_cast<CompressionKind>(kind);
   const std::uint32_t flags = in.u32("flags");
-  if (flags > 3) in.fail("flags", "unknown bits set");
+  if (flags > 7) in.fail("flags", "unknown bits set");
+  if ((flags & 5u) == 5u) in.fail("flags", "normals both stored and recomputed");
   info.normals = (flags & 1u) != 0;
   info.colors = (flags & 2u) != 0;
+  info.recomputed_normals = (flags & 4u) != 0;
   info.vertices = in.u64("vertex count");
   info.triangles = in.u64("triangle count");
   for (int a = 0; a < 3; ++a) info.quantizer.origin[a] = in.f64("quantisation origin");
@@ -102,6 +143,8 @@ CompressedMeshInfo read_header(io::ByteReader& in, const std::vector<unsigned ch
     in.fail("quantisation step", "must be finite and > 0");
   if (info.quantizer.bits < 1 || info.quantizer.bits > 30)
     in.fail("quantisation bits", "must be 1 .. 30");
+  info.prefix_checksum = in.u64("prefix checksum");
+  if (!check_file_checksum) return info;
   if (bytes.size() < in.position() + 8) in.fail("checksum", "file ends early (truncated)");
   std::uint64_t stored = 0;
   for (std::size_t i = 0; i < 8; ++i)
@@ -149,7 +192,9 @@ TriangleMesh decompress_mesh(const std::vector<unsigned char>& bytes, const std:
   if (info.kind == CompressionKind::kProgressive) {
     mesh = decode_progressive(in, info, source, ProgressiveLevel{});
   } else {
-    mesh = decode_body(in, info.quantizer, {info.normals, info.colors}, source);
+    BodyCodes codes;
+    mesh = decode_body(in, info.quantizer, {info.normals, info.colors}, source, &codes);
+    if (info.recomputed_normals) detail::recompute_normals(mesh, codes.positions);
   }
   if (in.remaining() != 0)
     in.fail("end of data", std::to_string(in.remaining()) + " bytes left before the checksum");

@@ -1,21 +1,27 @@
 #pragma once
 // meshflow's compressed mesh files (".mfc"): one triangle mesh, coded single-rate (Edgebreaker)
-// or progressively (a base mesh and vertex splits). Format, version 2, little-endian:
+// or progressively (a base mesh and vertex splits). Format, version 3, little-endian:
 //
 //   bytes 0-7   magic "MFMESH\r\n"
-//   u32         version (2; version 1 coded the symbols first to last)
+//   u32         version (3; 2 had no prefix checksums and coded attributes from one neighbour)
 //   u32         kind: 1 = Edgebreaker, 2 = progressive
-//   u32         flags: bit 0 per-vertex normals, bit 1 per-vertex colours
+//   u32         flags: bit 0 per-vertex normals stored, bit 1 per-vertex colours, bit 2 normals
+//               not stored: the decoder recomputes them from the decoded geometry
 //   u64         vertices, u64 triangles (of the full mesh)
 //   f64 x 3     quantisation origin (metres), f64 step (metres, > 0), u32 bits (1 .. 30)
+//   u64         progressive: the prefix checksum, FNV-1a 64 of the bytes up to the end of the
+//               packet count (this field read as zero); single-rate: 0
 //   ...         kind 1: one body (nodes/compress/mesh_codec.h);
-//               kind 2: the base mesh's body, then packets of vertex splits
-//               (nodes/compress/progressive_mesh.h)
+//               kind 2: the base mesh's body, then packets of vertex splits, each ending in a
+//               checksum chained from the one before (nodes/compress/progressive_mesh.h)
 //   u64         FNV-1a 64 hash of every byte before it
 //
-// A decoded position is within step / 2 of the input's on each axis; normals within 0.1
-// degrees; colours exact; triangles exactly the input's (each may start at another corner),
-// vertices and triangles reordered (the encoder reports the order).
+// So every prefix of a progressive file that ends at a packet boundary is checked and decodes to
+// the levels it holds (decompress_progressive_prefix()). A decoded position is within step / 2
+// of the input's on each axis; normals within the octahedral grid's bound (0.26 degrees at the
+// default 10 bits; CompressConfig::normal_bits); colours exact; triangles exactly the input's
+// (each may start at another corner), vertices and triangles reordered (the encoder reports the
+// order).
 
 #include <cstdint>
 #include <string>
@@ -34,8 +40,13 @@ struct CompressConfig {
   double step = 0.0;
   /// If > 0 (1 .. 30): the bounding box's longest side in 2^bits - 1 steps, overriding `step`.
   unsigned position_bits = 0;
-  bool normals = true;  ///< store the mesh's normals if it has them
-  bool colors = true;   ///< store the mesh's colours if it has them
+  bool normals = true;  ///< keep the mesh's normals if it has them
+  /// Octahedral bits per normal coordinate (kMinNormalBits .. kMaxNormalBits; the default is
+  /// Draco's default grid, within 0.26 degrees), or 0: store none and have the decoder recompute
+  /// them as area-weighted face normals of the decoded geometry (exact for meshes whose normals
+  /// were made that way, the extractors'; any other normals come back as the surface's).
+  unsigned normal_bits = kDefaultNormalBits;
+  bool colors = true;  ///< store the mesh's colours if it has them
   /// Progressive only: the base mesh is decimated to this share of the triangles (QEM; it may
   /// stop above it where no valid collapse is left).
   float base_ratio = 0.02f;
@@ -76,7 +87,9 @@ struct CompressedMeshInfo {
   std::uint32_t version = 0;
   CompressionKind kind = CompressionKind::kEdgebreaker;
   bool normals = false, colors = false;
+  bool recomputed_normals = false;  ///< the decoder recomputes the normals (flag bit 2)
   std::uint64_t vertices = 0, triangles = 0;
+  std::uint64_t prefix_checksum = 0;  ///< progressive: FNV-1a of the base prefix
   Quantizer quantizer;
 };
 
@@ -85,7 +98,8 @@ struct CompressedMeshInfo {
 /// mismatch or inconsistent contents. O(T log T).
 TriangleMesh decompress_mesh(const std::vector<unsigned char>& bytes, const std::string& source);
 
-/// Reads and checks the header (and the checksum). Throws Error as decompress_mesh().
+/// Reads and checks the header (and the file checksum). Throws Error as decompress_mesh();
+/// the version error names the version found and the one this build reads.
 CompressedMeshInfo compressed_mesh_info(const std::vector<unsigned char>& bytes,
                                         const std::string& source);
 
@@ -101,8 +115,19 @@ AttributeFlags attribute_flags(const TriangleMesh& mesh, const CompressConfig& c
 void write_header(io::ByteWriter& out, CompressionKind kind, AttributeFlags flags,
                   std::uint64_t vertices, std::uint64_t triangles, const Quantizer& quantizer,
                   const Eigen::Vector3d& offset);
-/// Checks magic, version, checksum and reads the header; leaves `in` at the body.
-CompressedMeshInfo read_header(io::ByteReader& in, const std::vector<unsigned char>& bytes);
+/// Checks magic, version, checksum and reads the header; leaves `in` at the body. With
+/// `check_file_checksum` false (prefixes of progressive files) the trailing checksum is not read.
+CompressedMeshInfo read_header(io::ByteReader& in, const std::vector<unsigned char>& bytes,
+                               bool check_file_checksum = true);
+/// Byte offset of the prefix checksum field in the header.
+inline constexpr std::size_t kPrefixChecksumOffset = 72;
+/// FNV-1a 64 continued from `hash` over data[0, n) (fnv1a64 is this from its offset basis).
+std::uint64_t fnv1a64_continue(std::uint64_t hash, const unsigned char* data, std::size_t n);
+/// The prefix checksum of bytes[0, end) (the field at kPrefixChecksumOffset read as zero).
+std::uint64_t prefix_checksum(const unsigned char* bytes, std::size_t end);
+/// The normals a decoder gives a file with flag bit 2: area-weighted face normals of the
+/// decoded grid positions `grid` (per vertex of `mesh`).
+void recompute_normals(TriangleMesh& mesh, const std::vector<std::array<std::int32_t, 3>>& grid);
 /// A reader over `bytes` without their checksum (the body's end), `source` naming them (it
 /// must outlive the reader).
 io::ByteReader body_reader(const std::vector<unsigned char>& bytes, const std::string& source);

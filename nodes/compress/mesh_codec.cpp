@@ -2,6 +2,7 @@
 
 #include <algorithm>
 
+#include "nodes/compress/attribute_coder.h"
 #include "nodes/compress/closed_surface.h"
 #include "nodes/compress/edgebreaker_connectivity.h"
 #include "nodes/compress/edgebreaker_replay.h"
@@ -106,13 +107,6 @@ std::array<std::int32_t, 3> predict(const VertexPredictors& p, const std::vector
   return out;
 }
 
-// The neighbour an attribute is predicted from: a, else b, else kNone (the previous one).
-std::uint32_t attribute_source(const VertexPredictors& p, const std::vector<char>& hole) {
-  if (p.a != kNone && !hole[p.a]) return p.a;
-  if (p.b != kNone && !hole[p.b]) return p.b;
-  return kNone;
-}
-
 void write_section(io::ByteWriter& out, const std::vector<unsigned char>& bytes) {
   out.u64(bytes.size());
   out.bytes(bytes.data(), bytes.size());
@@ -139,7 +133,7 @@ VertexRoles assign_outputs(std::vector<char> hole, std::vector<std::uint32_t> me
 }  // namespace
 
 BodyStats encode_body(const TriangleMesh& mesh, const Quantizer& quantizer, AttributeFlags flags,
-                      io::ByteWriter& out, BodyOrder* order) {
+                      io::ByteWriter& out, BodyOrder* order, BodyCodes* codes) {
   const ClosedSurface surface = build_closed_surface(mesh.triangles);
   const Traversal walk = edgebreaker_traverse(surface);
   const Connectivity& c = walk.connectivity;
@@ -259,39 +253,36 @@ BodyStats encode_body(const TriangleMesh& mesh, const Quantizer& quantizer, Attr
       write_section(out, bytes);
     }
   }
-  {  // Attributes, in output order, each predicted from its vertex's first real predictor.
+  {  // Attributes (nodes/compress/attribute_coder.h), predicted from the decoded geometry.
+    std::vector<std::array<std::int32_t, 3>> grid(o.vertex.size());
+    for (std::size_t i = 0; i < o.vertex.size(); ++i)
+      grid[i] = quantizer.quantize(mesh.vertices[o.vertex[i]]);
+    std::vector<Triangle> triangles(o.triangle.size());
+    for (std::size_t k = 0; k < o.triangle.size(); ++k)
+      for (std::size_t j = 0; j < 3; ++j)
+        triangles[k][j] = output_of_input[mesh.triangles[o.triangle[k]][j]];
+    const DecodedGeometry geometry{grid, triangles};
     RangeEncoder enc;
-    IntegerModel normal_models[2], color_models[3];
-    std::vector<std::uint32_t> source(o.vertex.size(), kNone);  // per output vertex
-    for (std::uint32_t k = 0; k < decoded; ++k)
-      if (!hole[k] && merged[k] == kNone) {
-        const std::uint32_t s = attribute_source(replayed.predictors[k], hole);
-        source[roles.output[k]] = s == kNone ? kNone : roles.output[s];
-      }
+    out.u8(static_cast<std::uint8_t>(flags.normals ? flags.normal_bits : 0));
+    std::vector<Eigen::Vector3f> decoded_normals;
     if (flags.normals) {
-      std::array<std::int32_t, 2> last{};
-      std::vector<std::array<std::int32_t, 2>> coded(o.vertex.size());
-      for (std::size_t i = 0; i < o.vertex.size(); ++i) {
-        coded[i] = octahedral_encode(mesh.normals[o.vertex[i]]);
-        const auto& p = source[i] == kNone ? last : coded[source[i]];
-        for (std::size_t a = 0; a < 2; ++a) normal_models[a].encode(enc, coded[i][a] - p[a]);
-        last = coded[i];
-      }
+      std::vector<Eigen::Vector3f> normals(o.vertex.size());
+      for (std::size_t i = 0; i < o.vertex.size(); ++i) normals[i] = mesh.normals[o.vertex[i]];
+      decoded_normals = encode_normals(geometry, normals, flags.normal_bits, enc);
     }
     if (flags.colors) {
-      Rgb8 last{};
-      for (std::size_t i = 0; i < o.vertex.size(); ++i) {
-        const Rgb8 c8 = mesh.colors[o.vertex[i]];
-        const Rgb8 p = source[i] == kNone ? last : mesh.colors[o.vertex[source[i]]];
-        const std::uint8_t now[3] = {c8.r, c8.g, c8.b}, was[3] = {p.r, p.g, p.b};
-        for (std::size_t a = 0; a < 3; ++a)
-          color_models[a].encode(enc, static_cast<std::int8_t>(now[a] - was[a]));
-        last = c8;
-      }
+      std::vector<Rgb8> colors(o.vertex.size());
+      for (std::size_t i = 0; i < o.vertex.size(); ++i) colors[i] = mesh.colors[o.vertex[i]];
+      encode_colors(geometry, colors, enc);
     }
     const std::vector<unsigned char> bytes = enc.finish();
     stats.attribute_bytes = bytes.size();
     write_section(out, bytes);
+    if (codes != nullptr) {
+      codes->positions = std::move(grid);
+      codes->normals = std::move(decoded_normals);
+      codes->normal_bits = flags.normals ? flags.normal_bits : 0;
+    }
   }
   return stats;
 }
@@ -379,6 +370,7 @@ TriangleMesh decode_body(io::ByteReader& in, const Quantizer& quantizer, Attribu
   const std::size_t outputs = roles.surface_outputs + static_cast<std::size_t>(off_surface);
   TriangleMesh mesh;
   mesh.vertices.resize(outputs);
+  std::vector<std::array<std::int32_t, 3>> grid_out(outputs);  // per output vertex
   {
     const auto [x_bytes, x_size] = section("position section x");
     const auto [y_bytes, y_size] = section("position section y");
@@ -389,7 +381,6 @@ TriangleMesh decode_body(io::ByteReader& in, const Quantizer& quantizer, Attribu
     IntegerModel models[4][3];
     Grid grid(static_cast<std::size_t>(decoded));
     std::array<std::int32_t, 3> last{};
-    if (codes != nullptr) codes->positions.assign(outputs, {});
     const auto read = [&](const std::array<std::int32_t, 3>& predicted, Prediction kind) {
       const std::array<std::int32_t, 3> residual = IntegerModel::decode_three(
           models[kind][0], models[kind][1], models[kind][2], dec[0], dec[1], dec[2]);
@@ -410,55 +401,14 @@ TriangleMesh decode_body(io::ByteReader& in, const Quantizer& quantizer, Attribu
       const auto predicted = predict(replayed.predictors[k], roles.hole, grid, last, kind);
       grid[k] = read(predicted, kind);
       mesh.vertices[roles.output[k]] = quantizer.position(grid[k]);
-      if (codes != nullptr) codes->positions[roles.output[k]] = grid[k];
+      grid_out[roles.output[k]] = grid[k];
     }
     for (std::size_t i = roles.surface_outputs; i < outputs; ++i) {
       const std::array<std::int32_t, 3> q = read(last, kPrevious);
       mesh.vertices[i] = quantizer.position(q);
-      if (codes != nullptr) codes->positions[i] = q;
+      grid_out[i] = q;
     }
     for (const RangeDecoder& d : dec) d.check();
-  }
-  {
-    const auto [bytes, size] = section("attribute section");
-    RangeDecoder dec(bytes, size, source, "attribute section");
-    std::vector<std::uint32_t> from(outputs, kNone);
-    for (std::uint32_t k = 0; k < decoded; ++k)
-      if (!roles.hole[k] && roles.merged[k] == kNone) {
-        const std::uint32_t s = attribute_source(replayed.predictors[k], roles.hole);
-        from[roles.output[k]] = s == kNone ? kNone : roles.output[s];
-      }
-    if (flags.normals) {
-      IntegerModel models[2];
-      std::vector<std::array<std::int32_t, 2>> coded(outputs);
-      std::array<std::int32_t, 2> last{};
-      mesh.normals.resize(outputs);
-      for (std::size_t i = 0; i < outputs; ++i) {
-        const auto& p = from[i] == kNone ? last : coded[from[i]];
-        for (std::size_t a = 0; a < 2; ++a)
-          coded[i][a] = static_cast<std::int32_t>(
-              static_cast<std::uint32_t>(p[a]) + static_cast<std::uint32_t>(models[a].decode(dec)));
-        mesh.normals[i] = octahedral_decode(coded[i]);
-        last = coded[i];
-      }
-      if (codes != nullptr) codes->normals = std::move(coded);
-    }
-    if (flags.colors) {
-      IntegerModel models[3];
-      Rgb8 last{};
-      mesh.colors.resize(outputs);
-      for (std::size_t i = 0; i < outputs; ++i) {
-        const Rgb8 p = from[i] == kNone ? last : mesh.colors[from[i]];
-        const std::uint8_t was[3] = {p.r, p.g, p.b};
-        std::uint8_t now[3];
-        for (std::size_t a = 0; a < 3; ++a)
-          now[a] =
-              static_cast<std::uint8_t>(was[a] + static_cast<std::uint8_t>(models[a].decode(dec)));
-        mesh.colors[i] = Rgb8{now[0], now[1], now[2]};
-        last = mesh.colors[i];
-      }
-    }
-    dec.check();
   }
   mesh.triangles.reserve(replayed.triangles.size() + degenerate.size() / 3);
   for (const Triangle& t : replayed.triangles) {
@@ -472,6 +422,26 @@ TriangleMesh decode_body(io::ByteReader& in, const Quantizer& quantizer, Attribu
                     std::to_string(degenerate[i + j]) + " is not below the " +
                         std::to_string(outputs) + " vertices");
     mesh.triangles.push_back({degenerate[i], degenerate[i + 1], degenerate[i + 2]});
+  }
+  const unsigned normal_bits = in.u8("normal bits");
+  {
+    if (flags.normals && (normal_bits < kMinNormalBits || normal_bits > kMaxNormalBits))
+      in.fail("normal bits", std::to_string(normal_bits) + " is not " +
+                                 std::to_string(kMinNormalBits) + " .. " +
+                                 std::to_string(kMaxNormalBits));
+    if (!flags.normals && normal_bits != 0)
+      in.fail("normal bits", std::to_string(normal_bits) + " but the header flags no normals");
+    const auto [bytes, size] = section("attribute section");
+    RangeDecoder dec(bytes, size, source, "attribute section");
+    const DecodedGeometry geometry{grid_out, mesh.triangles};
+    if (flags.normals) mesh.normals = decode_normals(geometry, normal_bits, dec);
+    if (flags.colors) mesh.colors = decode_colors(geometry, dec);
+    dec.check();
+  }
+  if (codes != nullptr) {
+    codes->positions = std::move(grid_out);
+    codes->normals = mesh.normals;
+    codes->normal_bits = normal_bits;
   }
   return mesh;
 }

@@ -1,15 +1,16 @@
 #pragma once
 // The single-rate body of a compressed mesh: Edgebreaker connectivity, positions predicted by
-// the parallelogram rule on the quantisation grid, normals and colours predicted from a
-// neighbour, all range-coded. The container (header, checksum) is compressed_mesh.h's; the
-// progressive format stores its base mesh as such a body.
+// the parallelogram rule on the quantisation grid, normals and colours predicted from the
+// decoded geometry (nodes/compress/attribute_coder.h), all range-coded. The container (header,
+// checksum) is compressed_mesh.h's; the progressive format stores its base mesh as such a body.
 //
 // Body layout (little-endian): u32 components, u64 symbols, u64 surface vertices, then six
 // sections, each a u64 byte count and a range-coded stream: side data (handles, hole vertices,
 // merged fans, degenerate triangles, vertices off the surface), symbols (CLERS + M, last first,
 // context: the rebuilt triangles at the gate's vertices and the symbol after; see
 // nodes/compress/edgebreaker_replay.h), positions x, y and z (one stream per axis, so that a
-// decoder's three dependency chains overlap), attributes (normals, then colours).
+// decoder's three dependency chains overlap); then a u8 of octahedral normal bits (0 without
+// normals) and the attribute section (normals, then colours).
 
 #include <array>
 #include <cstdint>
@@ -26,6 +27,11 @@ namespace meshflow::compress {
 struct AttributeFlags {
   bool normals = false;
   bool colors = false;
+  /// Encoding only: octahedral bits per normal coordinate (kMinNormalBits .. kMaxNormalBits);
+  /// a decoder reads them from the body.
+  unsigned normal_bits = kDefaultNormalBits;
+  /// File level: the body stores no normals and the decoder recomputes them (header flag bit 2).
+  bool recomputed_normals = false;
 };
 
 /// Sizes and counts of one encoded body.
@@ -45,19 +51,20 @@ struct BodyOrder {
   std::vector<std::uint32_t> triangle;  ///< decoded triangle k is input triangle triangle[k]
 };
 
-/// Appends the body of `mesh` to `out`. Vertices come out in the order the walk meets them, then
-/// those on no triangle (input order); triangles in walk order, then those with a repeated
-/// corner; each triangle keeps its orientation (it may start at another corner). Corners must
-/// be in range. O(T log T); serial.
-BodyStats encode_body(const TriangleMesh& mesh, const Quantizer& quantizer, AttributeFlags flags,
-                      io::ByteWriter& out, BodyOrder* order = nullptr);
-
 /// The integer codes of a decoded body's vertices (output order), for coders that continue
 /// from them (the progressive splits): float positions do not always quantise back exactly.
 struct BodyCodes {
   std::vector<std::array<std::int32_t, 3>> positions;
-  std::vector<std::array<std::int32_t, 2>> normals;  ///< octahedral; empty without normals
+  std::vector<Eigen::Vector3f> normals;  ///< as decoded; empty without normals
+  unsigned normal_bits = 0;              ///< octahedral bits of the normals (0: none)
 };
+
+/// Appends the body of `mesh` to `out`. Vertices come out in the order the walk meets them, then
+/// those on no triangle (input order); triangles in walk order, then those with a repeated
+/// corner; each triangle keeps its orientation (it may start at another corner). Corners must
+/// be in range. `codes`, if given, receives what decode_body() will give. O(T log T); serial.
+BodyStats encode_body(const TriangleMesh& mesh, const Quantizer& quantizer, AttributeFlags flags,
+                      io::ByteWriter& out, BodyOrder* order = nullptr, BodyCodes* codes = nullptr);
 
 /// Reads a body written by encode_body() with the same quantiser and flags. Throws Error naming
 /// `source` and the field for truncated or inconsistent data. O(T log T).

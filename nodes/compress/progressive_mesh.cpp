@@ -2,6 +2,7 @@
 
 #include <algorithm>
 
+#include "nodes/compress/attribute_coder.h"
 #include "nodes/compress/closed_surface.h"
 #include "nodes/compress/range_coder.h"
 #include "nodes/decimate/qem_decimation.h"
@@ -99,9 +100,13 @@ std::vector<Collapse> replay_collapses(std::vector<Triangle>& triangles,
 struct LevelState {
   TriangleMesh mesh;
   std::vector<std::array<std::int32_t, 3>> grid;
-  std::vector<std::array<std::int32_t, 2>> normal;
   std::vector<std::vector<std::uint32_t>> around;
 };
+
+// Recomputes the normals of a file that asks for it, at the level decoded.
+void finish_levels(LevelState& s, const CompressedMeshInfo& info) {
+  if (info.recomputed_normals) detail::recompute_normals(s.mesh, s.grid);
+}
 
 }  // namespace
 
@@ -165,8 +170,10 @@ std::vector<unsigned char> compress_progressive(const TriangleMesh& mesh,
   detail::write_header(out, CompressionKind::kProgressive, flags, n, mesh.triangles.size(),
                        quantizer, config.origin_offset);
   BodyOrder order;
-  const BodyStats stats = encode_body(base, quantizer, flags, out, &order);
+  BodyCodes codes;
+  const BodyStats stats = encode_body(base, quantizer, flags, out, &order, &codes);
   const std::size_t base_bytes = out.out.size();
+  std::vector<Eigen::Vector3f> decoded_normals = std::move(codes.normals);  // per decoded id
 
   // Decoded numbers: the base's in its decoded order, then each split's u.
   std::vector<std::uint32_t> id(n, kNone), vertex_order, triangle_order;
@@ -187,6 +194,9 @@ std::vector<unsigned char> compress_progressive(const TriangleMesh& mesh,
   const std::uint32_t per_packet = std::max<std::uint32_t>(1, config.splits_per_packet);
   const auto packets = static_cast<std::uint32_t>((splits + per_packet - 1) / per_packet);
   out.u32(packets);
+  std::uint64_t chain = detail::prefix_checksum(out.out.data(), out.out.size());
+  for (std::size_t i = 0; i < 8; ++i)
+    out.out[detail::kPrefixChecksumOffset + i] = static_cast<unsigned char>(chain >> (8 * i));
   std::size_t vertex_count = order.vertex.size();
   for (std::uint32_t p = 0; p < packets; ++p) {
     const std::size_t first = std::size_t{p} * per_packet;
@@ -201,9 +211,11 @@ std::vector<unsigned char> compress_progressive(const TriangleMesh& mesh,
       const auto gv = quantizer.quantize(mesh.vertices[c.v]);
       for (std::size_t a = 0; a < 3; ++a) m.position[a].encode(enc, gu[a] - gv[a]);
       if (flags.normals) {
-        const auto nu = octahedral_encode(mesh.normals[c.u]);
-        const auto nv = octahedral_encode(mesh.normals[c.v]);
-        for (std::size_t a = 0; a < 2; ++a) m.normal[a].encode(enc, nu[a] - nv[a]);
+        Eigen::Vector3f decoded;
+        const auto d =
+            normal_residual(decoded_normals[v], mesh.normals[c.u], flags.normal_bits, decoded);
+        for (std::size_t a = 0; a < 2; ++a) m.normal[a].encode(enc, d[a]);
+        decoded_normals.push_back(decoded);
       }
       if (flags.colors) {
         const Rgb8 cu = mesh.colors[c.u], cv = mesh.colors[c.v];
@@ -252,9 +264,12 @@ std::vector<unsigned char> compress_progressive(const TriangleMesh& mesh,
       ++vertex_count;
     }
     const std::vector<unsigned char> bytes = enc.finish();
+    const std::size_t start = out.out.size();
     out.u32(static_cast<std::uint32_t>(last - first));
-    out.u64(bytes.size());
+    out.u64(bytes.size() + 8);
     out.bytes(bytes.data(), bytes.size());
+    chain = detail::fnv1a64_continue(chain, out.out.data() + start, out.out.size() - start);
+    out.u64(chain);
   }
   out.u64(degenerate.size());
   for (std::uint32_t t : degenerate) {
@@ -277,15 +292,28 @@ std::vector<unsigned char> compress_progressive(const TriangleMesh& mesh,
   return std::move(out.out);
 }
 
+namespace {
+
+// The little-endian bytes of a packet's header, for its checksum.
+std::uint64_t chain_header(std::uint64_t chain, std::uint32_t count, std::uint64_t size) {
+  unsigned char h[12];
+  for (std::size_t i = 0; i < 4; ++i) h[i] = static_cast<unsigned char>(count >> (8 * i));
+  for (std::size_t i = 0; i < 8; ++i) h[4 + i] = static_cast<unsigned char>(size >> (8 * i));
+  return detail::fnv1a64_continue(chain, h, sizeof h);
+}
+
+}  // namespace
+
 TriangleMesh decode_progressive(io::ByteReader& in, const CompressedMeshInfo& info,
-                                const std::string& source, const ProgressiveLevel& level) {
+                                const std::string& source, const ProgressiveLevel& level,
+                                PrefixState* prefix) {
   const AttributeFlags flags{info.normals, info.colors};
   LevelState s;
   BodyCodes codes;
   s.mesh = decode_body(in, info.quantizer, flags, source, &codes);
   const std::size_t base_vertices = s.mesh.vertices.size();
   s.grid = std::move(codes.positions);
-  s.normal = std::move(codes.normals);
+  const unsigned normal_bits = codes.normal_bits;
   s.around.resize(base_vertices);
   for (std::uint32_t t = 0; t < s.mesh.triangles.size(); ++t)
     for (std::uint32_t c : s.mesh.triangles[t]) s.around[c].push_back(t);
@@ -296,19 +324,40 @@ TriangleMesh decode_progressive(io::ByteReader& in, const CompressedMeshInfo& in
                                std::to_string(base_vertices) + " vertices do not make the " +
                                std::to_string(info.vertices) + " stated");
   const std::uint32_t packets = in.u32("packet count");
-  std::uint64_t applied = 0;
+  if (prefix != nullptr) {
+    prefix->packets_stated = packets;
+    if (detail::prefix_checksum(prefix->image, in.position()) != info.prefix_checksum)
+      in.fail("prefix checksum",
+              "does not match the header and base mesh (corrupt data, or not a prefix of a "
+              "progressive file)");
+  }
+  std::uint64_t applied = 0, chain = info.prefix_checksum;
   bool full = true;
   for (std::uint32_t p = 0; p < packets && full; ++p) {
+    if (prefix != nullptr && in.remaining() == 0) {  // the prefix ends at a packet boundary
+      finish_levels(s, info);
+      return std::move(s.mesh);
+    }
     const std::uint32_t count = in.u32("packet split count");
     const std::uint64_t size = in.u64("packet size");
     if (count > splits - applied) in.fail("packet split count", "more splits than stated");
-    const unsigned char* bytes = in.bytes(static_cast<std::size_t>(size), "packet");
-    RangeDecoder dec(bytes, static_cast<std::size_t>(size), source,
-                     "split packet " + std::to_string(p));
+    if (size < 8) in.fail("packet size", std::to_string(size) + " bytes hold no checksum");
+    if (size > in.remaining())
+      in.fail("packet size", "packet " + std::to_string(p) + " needs " + std::to_string(size) +
+                                 " bytes, " + std::to_string(in.remaining()) +
+                                 " left (truncated inside a packet, or corrupt)");
+    const auto stream = static_cast<std::size_t>(size - 8);
+    const unsigned char* bytes = in.bytes(stream, "packet");
+    chain = detail::fnv1a64_continue(chain_header(chain, count, size), bytes, stream);
+    if (in.u64("packet checksum") != chain)
+      in.fail("packet checksum", "packet " + std::to_string(p) + " does not match its contents");
+    if (prefix != nullptr) ++prefix->packets_read;
+    RangeDecoder dec(bytes, stream, source, "split packet " + std::to_string(p));
     SplitModels m;
     for (std::uint32_t j = 0; j < count; ++j) {
       if (applied >= level.splits || s.mesh.triangles.size() >= level.triangles) {
         full = false;
+        if (prefix != nullptr) prefix->stopped_at_level = true;
         break;
       }
       const auto fail = [&](const std::string& problem) {
@@ -326,12 +375,9 @@ TriangleMesh decode_progressive(io::ByteReader& in, const CompressedMeshInfo& in
       s.grid.push_back(gu);
       s.mesh.vertices.push_back(info.quantizer.position(gu));
       if (flags.normals) {
-        std::array<std::int32_t, 2> nu{};
-        for (std::size_t a = 0; a < 2; ++a)
-          nu[a] = static_cast<std::int32_t>(static_cast<std::uint32_t>(s.normal[v][a]) +
-                                            static_cast<std::uint32_t>(m.normal[a].decode(dec)));
-        s.normal.push_back(nu);
-        s.mesh.normals.push_back(octahedral_decode(nu));
+        std::array<std::int32_t, 2> d{};
+        for (std::size_t a = 0; a < 2; ++a) d[a] = m.normal[a].decode(dec);
+        s.mesh.normals.push_back(apply_normal_residual(s.mesh.normals[v], d, normal_bits));
       }
       if (flags.colors) {
         const Rgb8 cv = s.mesh.colors[v];
@@ -392,7 +438,14 @@ TriangleMesh decode_progressive(io::ByteReader& in, const CompressedMeshInfo& in
       ++applied;
     }
   }
-  if (!full || applied < splits) return std::move(s.mesh);
+  if (!full || applied < splits) {
+    finish_levels(s, info);
+    return std::move(s.mesh);
+  }
+  if (prefix != nullptr && in.remaining() == 0) {  // every packet, not the end of the file
+    finish_levels(s, info);
+    return std::move(s.mesh);
+  }
   const std::uint64_t degenerate = in.u64("degenerate triangle count");
   if (degenerate > in.remaining() / 12)
     in.fail("degenerate triangle count", std::to_string(degenerate) + " do not fit the file");
@@ -404,6 +457,8 @@ TriangleMesh decode_progressive(io::ByteReader& in, const CompressedMeshInfo& in
     }
     s.mesh.triangles.push_back(t);
   }
+  if (prefix != nullptr) prefix->complete = true;
+  finish_levels(s, info);
   return std::move(s.mesh);
 }
 
@@ -415,6 +470,48 @@ TriangleMesh decompress_progressive_level(const std::vector<unsigned char>& byte
   if (info.kind != CompressionKind::kProgressive)
     throw Error(source, "kind", "is single-rate (Edgebreaker): it has no levels of detail");
   return decode_progressive(in, info, source, level);
+}
+
+}  // namespace meshflow::compress
+
+namespace meshflow::compress {
+
+PrefixDecode decompress_progressive_prefix(const std::vector<unsigned char>& bytes,
+                                           const std::string& source,
+                                           const ProgressiveLevel& level) {
+  PrefixDecode out;
+  io::ByteReader in(source, bytes);
+  const CompressedMeshInfo info = detail::read_header(in, bytes, false);
+  if (info.kind != CompressionKind::kProgressive)
+    throw Error(source, "kind", "is single-rate (Edgebreaker): only the whole file decodes");
+  // A whole file: its checksum covers everything (the tail too).
+  if (bytes.size() >= 8) {
+    std::uint64_t stored = 0;
+    for (std::size_t i = 0; i < 8; ++i)
+      stored |= static_cast<std::uint64_t>(bytes[bytes.size() - 8 + i]) << (8 * i);
+    if (stored == io::fnv1a64(bytes.data(), bytes.size() - 8)) {
+      io::ByteReader body = detail::body_reader(bytes, source);
+      detail::read_header(body, bytes);
+      PrefixState state{bytes.data()};
+      out.mesh = decode_progressive(body, info, source, level, &state);
+      out.packets = state.packets_read;
+      out.packets_stated = state.packets_stated;
+      out.complete = state.complete;
+      if (state.complete && body.remaining() != 0)
+        body.fail("end of data",
+                  std::to_string(body.remaining()) + " bytes left before the checksum");
+      return out;
+    }
+  }
+  PrefixState state{bytes.data()};
+  out.mesh = decode_progressive(in, info, source, level, &state);
+  out.packets = state.packets_read;
+  out.packets_stated = state.packets_stated;
+  if (!state.stopped_at_level && (state.complete || in.remaining() != 0))
+    in.fail("checksum",
+            "the file's end does not match its contents (corrupt, or cut inside "
+            "its last part)");
+  return out;
 }
 
 }  // namespace meshflow::compress

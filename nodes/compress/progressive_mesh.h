@@ -6,14 +6,16 @@
 // splits is a level of detail; all of them give the input's triangles exactly.
 //
 // After the base body (compressed_mesh.h's kind 2):
-//   u64 split count, u32 packet count, then each packet: u32 splits, u64 bytes, a range-coded
-//   stream (fresh models per packet, so each decodes on its own once those before it have);
+//   u64 split count, u32 packet count, then each packet: u32 splits, u64 bytes (the stream and
+//   its checksum), a range-coded stream (fresh models per packet, so each decodes on its own
+//   once those before it have), and u64 FNV-1a 64 of the packet's header and stream continued
+//   from the checksum before (the header's prefix checksum for the first packet);
 //   then u64 triangles with a repeated corner (added at full detail only) and their corners.
 // One split: v (the surviving vertex, direct bits), u's grid position relative to v's, u's
-// normal and colour relative to v's, one bit per triangle around v (ordered by their other two
-// vertices) saying whether it goes to u, the number of triangles brought back, and for each
-// its third vertex (its rank among v's neighbours, or an escape and the vertex) and the order
-// of its corners.
+// normal relative to v's (in v's normal's frame: attribute_coder.h) and colour relative to v's, one
+// bit per triangle around v (ordered by their other two vertices) saying whether it goes to u, the
+// number of triangles brought back, and for each its third vertex (its rank among v's neighbours,
+// or an escape and the vertex) and the order of its corners.
 
 #include <cstddef>
 #include <limits>
@@ -41,11 +43,40 @@ std::vector<unsigned char> compress_progressive(const TriangleMesh& mesh,
                                                 const CompressConfig& config = {},
                                                 CompressReport* report = nullptr);
 
+/// Decoding a prefix of a progressive image: the image's first byte (to check the prefix
+/// checksum against), and what was found.
+struct PrefixState {
+  const unsigned char* image = nullptr;
+  std::size_t packets_read = 0, packets_stated = 0;
+  bool complete = false;          ///< the image went on to the end of the file's data
+  bool stopped_at_level = false;  ///< the level asked for was reached before the data's end
+};
+
 /// Decodes the level `level` of a progressive image (header already read into `info`; `in`
-/// at the base body). Without the full level, the data after the last split decoded is not
-/// read. Throws Error naming the field for inconsistent data. O(T log T).
+/// at the base body). Each packet's checksum is checked as it is read. Without the full level,
+/// the data after the last split decoded is not read. With `prefix`, the prefix checksum is
+/// checked and the data may end at any packet boundary (the level then stops there). Throws
+/// Error naming the field for inconsistent data or a checksum mismatch. O(T log T).
 TriangleMesh decode_progressive(io::ByteReader& in, const CompressedMeshInfo& info,
-                                const std::string& source, const ProgressiveLevel& level);
+                                const std::string& source, const ProgressiveLevel& level,
+                                PrefixState* prefix = nullptr);
+
+/// What decompress_progressive_prefix() gave.
+struct PrefixDecode {
+  TriangleMesh mesh;
+  std::size_t packets = 0;         ///< split packets the prefix held (and that were applied)
+  std::size_t packets_stated = 0;  ///< split packets in the whole file
+  bool complete = false;           ///< the whole file (or the level asked for) was decoded
+};
+
+/// Decodes a prefix of a progressive file (a network stream's first bytes): the whole file, or
+/// the header and base mesh and any number of whole split packets (cut at a packet boundary),
+/// to the level it holds (at most `level`). The prefix checksum and every packet's checksum are
+/// checked, so a flipped byte anywhere is reported. Throws Error naming the field for a
+/// mismatch, a cut inside the base or a packet, or a single-rate file. O(T log T).
+PrefixDecode decompress_progressive_prefix(const std::vector<unsigned char>& bytes,
+                                           const std::string& source,
+                                           const ProgressiveLevel& level = {});
 
 /// Decodes a level of a progressive file image (checksum checked). Throws Error.
 TriangleMesh decompress_progressive_level(const std::vector<unsigned char>& bytes,

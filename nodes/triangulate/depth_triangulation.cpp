@@ -50,11 +50,18 @@ namespace {
 TriangleMesh grid_mesh(const PointGrid& grid, const DepthTriangulationConfig& config,
                        TriangulationCounts& c, TriangulationCounts* counts) {
   std::vector<Triangle> triangles = triangulate_grid(grid, config, &c);
-  if (config.repair_non_manifold_vertices)
-    remove_smaller_fans(triangles, grid.points.size(), &c.fans);
-  remove_small_components(triangles, grid.points.size(), config.min_component_triangles,
-                          &c.components);
-  TriangleMesh mesh = mesh_from_pixel_triangles(grid, std::move(triangles));
+  // Vertices numbered first, so that the repairs below work over the used pixels (a tenth of
+  // the grid for a quadtree) rather than over every pixel.
+  std::vector<std::uint32_t> pixels = renumber_used_vertices(triangles, grid.points.size());
+  const std::size_t triangulated = triangles.size();
+  if (config.repair_non_manifold_vertices) remove_smaller_fans(triangles, pixels.size(), &c.fans);
+  remove_small_components(triangles, pixels.size(), config.min_component_triangles, &c.components);
+  if (triangles.size() != triangulated) {  // the removed triangles' own vertices are unused now
+    std::vector<std::uint32_t> kept = renumber_used_vertices(triangles, pixels.size());
+    for (std::uint32_t& vertex : kept) vertex = pixels[vertex];
+    pixels = std::move(kept);
+  }
+  TriangleMesh mesh = mesh_from_grid_pixels(grid, pixels, std::move(triangles));
   if (config.decimate_to > 0.0f && config.decimate_to < 1.0f) {
     QemConfig qem = config.decimation;
     qem.target_ratio = config.decimate_to;

@@ -1,12 +1,12 @@
 #include "nodes/triangulate/pixel_grid.h"
 
+#include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
 #include <limits>
-#include <memory>
 #include <string>
 
 #include "runtime/error.h"
@@ -169,47 +169,33 @@ void OcclusionTriangleTest::filter(const PointGrid& grid, std::vector<Triangle>&
   }
 }
 
+TriangleMesh mesh_from_grid_pixels(const PointGrid& grid, const std::vector<std::uint32_t>& pixels,
+                                   std::vector<Triangle> triangles) {
+  TriangleMesh mesh;
+  const std::size_t n = pixels.size(), grid_pixels = grid.points.size();
+  const bool colors = grid.colors.size() == grid_pixels,
+             normals = grid.normals.size() == grid_pixels;
+  mesh.vertices.resize(n);
+  if (colors) mesh.colors.resize(n);
+  if (normals) mesh.normals.resize(n);
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n),
+                    [&](const tbb::blocked_range<std::size_t>& range) {
+                      for (std::size_t i = range.begin(); i != range.end(); ++i) {
+                        const std::uint32_t p = pixels[i];
+                        mesh.vertices[i] = grid.points[p];
+                        if (colors) mesh.colors[i] = grid.colors[p];
+                        if (normals) mesh.normals[i] = grid.normals[p];
+                      }
+                    });
+  mesh.triangles = std::move(triangles);
+  return mesh;
+}
+
 TriangleMesh mesh_from_pixel_triangles(const PointGrid& grid,
                                        std::vector<Triangle> pixel_triangles) {
-  const std::size_t pixels = grid.points.size();
-  // Mark used pixels in a byte mask (every writer stores the same 1; a quarter of the memory
-  // traffic of marking the ids themselves), then number them in row-major order.
-  std::vector<std::uint8_t> used(pixels, 0);
-  tbb::parallel_for(std::size_t{0}, pixel_triangles.size(), [&](std::size_t t) {
-    for (std::uint32_t p : pixel_triangles[t]) __atomic_store_n(&used[p], 1, __ATOMIC_RELAXED);
-  });
-  const std::size_t h = static_cast<std::size_t>(grid.height),
-                    w = static_cast<std::size_t>(grid.width);
-  std::vector<std::uint32_t> row_offsets(h, 0);
-  tbb::parallel_for(std::size_t{0}, h, [&](std::size_t v) {
-    std::uint32_t n = 0;
-    for (std::size_t u = 0; u < w; ++u) n += used[v * w + u];
-    row_offsets[v] = n;
-  });
-  TriangleMesh mesh;
-  const std::size_t vertices = exclusive_scan_in_place(row_offsets);
-  mesh.vertices.resize(vertices);
-  const bool colors = grid.colors.size() == pixels, normals = grid.normals.size() == pixels;
-  if (colors) mesh.colors.resize(vertices);
-  if (normals) mesh.normals.resize(vertices);
-  // Ids are written for used pixels only (the others are never read).
-  std::unique_ptr<std::uint32_t[]> vertex_of(new std::uint32_t[pixels]);
-  tbb::parallel_for(std::size_t{0}, h, [&](std::size_t v) {
-    std::uint32_t next = row_offsets[v];
-    for (std::size_t u = 0; u < w; ++u) {
-      if (used[v * w + u] == 0) continue;
-      vertex_of[v * w + u] = next;
-      if (colors) mesh.colors[next] = grid.colors[v * w + u];
-      if (normals) mesh.normals[next] = grid.normals[v * w + u];
-      mesh.vertices[next++] = grid.points[v * w + u];
-    }
-  });
-  // Renumbered in place: the triangles' memory becomes the mesh's (no allocation per frame).
-  tbb::parallel_for(std::size_t{0}, pixel_triangles.size(), [&](std::size_t t) {
-    for (std::uint32_t& corner : pixel_triangles[t]) corner = vertex_of[corner];
-  });
-  mesh.triangles = std::move(pixel_triangles);
-  return mesh;
+  const std::vector<std::uint32_t> pixels =
+      renumber_used_vertices(pixel_triangles, grid.points.size());
+  return mesh_from_grid_pixels(grid, pixels, std::move(pixel_triangles));
 }
 
 }  // namespace meshflow

@@ -111,10 +111,15 @@ inline OcclusionTriangleTest::Verdict OcclusionTriangleTest::operator()(
   return verdict(corners, at, min_cos_view_squared_, max_ratio_squared_);
 }
 
+/// The mesh whose vertex i is pixel `pixels[i]` of `grid` (position, and the grid's colour and
+/// normal when it has them), with `triangles` indexing those vertices (moved in: pass an rvalue
+/// to avoid a copy). Parallel over vertices; deterministic; O(vertices + triangles).
+TriangleMesh mesh_from_grid_pixels(const PointGrid& grid, const std::vector<std::uint32_t>& pixels,
+                                   std::vector<Triangle> triangles);
+
 /// The mesh of `pixel_triangles` (corners are pixel indices of `grid`): vertices are the used
-/// pixels in row-major order, with the grid's colours and normals when it has them; the triangles
-/// are renumbered in place (pass an rvalue to avoid a copy). Parallel over rows; deterministic;
-/// O(pixels + triangles).
+/// pixels in row-major order (renumber_used_vertices), with the grid's colours and normals when
+/// it has them. Parallel; deterministic; O(pixels + triangles).
 TriangleMesh mesh_from_pixel_triangles(const PointGrid& grid,
                                        std::vector<Triangle> pixel_triangles);
 

@@ -84,6 +84,127 @@ TEST(VertexTriangles, MatchesABruteForceIncidenceForAnyWorkerCount) {
   eight.execute([&] { expect_oracle(vertex_triangles(m)); });
 }
 
+// The fans around v by definition: v's slots (one per corner equal to v, in triangle order)
+// joined when their triangles share a corner other than v (below vertex_count), numbered in
+// order of their lowest slot. Brute force (tests only).
+std::vector<std::uint32_t> fans_oracle(const std::vector<Triangle>& tris, std::uint32_t v,
+                                       std::size_t vertex_count) {
+  std::vector<std::uint32_t> slots;
+  for (std::uint32_t t = 0; t < tris.size(); ++t)
+    for (std::uint32_t x : tris[t])
+      if (x == v) slots.push_back(t);
+  const auto shares = [&](std::uint32_t a, std::uint32_t b) {
+    for (std::uint32_t x : tris[a])
+      for (std::uint32_t y : tris[b])
+        if (x == y && x != v && x < vertex_count) return true;
+    return false;
+  };
+  std::vector<std::uint32_t> fan(slots.size(), UINT32_MAX);
+  std::uint32_t fans = 0;
+  for (std::size_t s = 0; s < slots.size(); ++s) {
+    if (fan[s] != UINT32_MAX) continue;
+    std::vector<std::size_t> stack{s};  // flood fill from the lowest unreached slot
+    fan[s] = fans;
+    while (!stack.empty()) {
+      const std::size_t a = stack.back();
+      stack.pop_back();
+      for (std::size_t b = 0; b < slots.size(); ++b)
+        if (fan[b] == UINT32_MAX && shares(slots[a], slots[b])) {
+          fan[b] = fans;
+          stack.push_back(b);
+        }
+    }
+    ++fans;
+  }
+  return fan;
+}
+
+// Meshes whose vertices have every kind of fan: messy meshes (copies, repeated corners, bow
+// ties, flipped triangles), a wavy grid with holes punched in it (one oriented fan, open or
+// closed, at most vertices), and a vertex with 2 x 20 triangles: two closed cones touching at
+// their apex (more triangles than the pairwise path takes), plus a corner past the vertices.
+std::vector<std::pair<std::vector<Triangle>, std::size_t>> fan_test_meshes() {
+  std::vector<std::pair<std::vector<Triangle>, std::size_t>> out;
+  for (std::uint32_t seed : {1u, 2u, 3u}) {
+    const TriangleMesh m = test::messy_mesh(14, seed);
+    out.emplace_back(m.triangles, m.vertices.size());
+  }
+  TriangleMesh grid = wavy_grid(40);
+  std::vector<Triangle> holed;
+  for (std::size_t t = 0; t < grid.triangles.size(); ++t)
+    if ((t * 2654435761u) % 7 != 0) holed.push_back(grid.triangles[t]);
+  out.emplace_back(holed, grid.vertices.size());
+  std::vector<Triangle> cones;
+  const std::uint32_t rim = 20;
+  for (std::uint32_t cone = 0; cone < 2; ++cone)
+    for (std::uint32_t i = 0; i < rim; ++i)
+      cones.push_back({0, 1 + cone * rim + i, 1 + cone * rim + (i + 1) % rim});
+  cones.push_back({0, 5, 99});  // 99 is past the 41 vertices: not a spoke
+  out.emplace_back(cones, 2 * rim + 1);
+  return out;
+}
+
+TEST(VertexFans, MatchTheDefinitionOnEveryKindOfVertex) {
+  for (const auto& [tris, n] : fan_test_meshes()) {
+    const VertexTriangles around = vertex_triangles(tris, n);
+    for (int threads : {1, 2}) {
+      std::vector<std::uint32_t> fan;
+      const std::vector<std::uint32_t> fans =
+          test::with_threads(threads, [&] { return vertex_fans(tris, around, fan); });
+      for (std::uint32_t v = 0; v < n; ++v) {
+        const std::vector<std::uint32_t> expected = fans_oracle(tris, v, n);
+        const std::vector<std::uint32_t> got(fan.begin() + around.offsets[v],
+                                             fan.begin() + around.offsets[v + 1]);
+        ASSERT_EQ(got, expected) << "vertex " << v << ", threads " << threads;
+        const std::uint32_t count =
+            expected.empty() ? 0 : *std::max_element(expected.begin(), expected.end()) + 1;
+        ASSERT_EQ(fans[v], count) << "vertex " << v;
+      }
+    }
+  }
+  // The two cones' apex: two closed fans of 20 (and the lone triangle through vertex 5 joins the
+  // first cone's fan there).
+  const auto [cones, n] = fan_test_meshes().back();  // (a copy: the list is a temporary)
+  std::vector<std::uint32_t> fan;
+  EXPECT_EQ(vertex_fans(cones, vertex_triangles(cones, n), fan)[0], 2u);
+}
+
+TEST(VertexFans, RemovingTheSmallerFansLeavesOneFanEverywhereWithAnyThreadCount) {
+  for (const auto& [tris, n] : fan_test_meshes()) {
+    std::vector<Triangle> results[2];
+    for (int threads : {1, 2}) {
+      std::vector<Triangle> kept = tris;
+      test::with_threads(threads, [&] {
+        remove_smaller_fans(kept, n);
+        return 0;
+      });
+      for (std::uint32_t v = 0; v < n; ++v) {
+        const std::vector<std::uint32_t> fan = fans_oracle(kept, v, n);
+        ASSERT_TRUE(std::all_of(fan.begin(), fan.end(), [](std::uint32_t f) { return f == 0; }))
+            << "vertex " << v;
+      }
+      // Only removals, the rest in order: `kept` is a subsequence of `tris`.
+      std::size_t at = 0;
+      for (const Triangle& t : tris)
+        if (at < kept.size() && kept[at] == t) ++at;
+      EXPECT_EQ(at, kept.size());
+      EXPECT_LT(kept.size(), tris.size());
+      results[threads - 1] = kept;
+    }
+    EXPECT_EQ(results[0], results[1]);
+    EXPECT_FALSE(results[0].empty());
+  }
+}
+
+TEST(TriangleMesh, RenumberUsedVerticesKeepsTheirOrder) {
+  std::vector<Triangle> tris{{7, 2, 9}, {2, 9, 4}, {9, 7, 4}};
+  const std::vector<Triangle> before = tris;
+  const std::vector<std::uint32_t> original = renumber_used_vertices(tris, 12);
+  EXPECT_EQ(original, (std::vector<std::uint32_t>{2, 4, 7, 9}));
+  for (std::size_t t = 0; t < tris.size(); ++t)
+    for (int k = 0; k < 3; ++k) EXPECT_EQ(original[tris[t][k]], before[t][k]);
+}
+
 TEST(VertexTriangles, CornersPastTheVerticesAreLeftOut) {
   // Triangle 1 names vertex 7 of 4: its other corners are listed, that one nowhere.
   const std::vector<Triangle> tris{{0, 1, 2}, {1, 7, 3}, {2, 1, 3}};

@@ -178,7 +178,9 @@ TEST(MapPublisher, TheBlocksAViewerWasSentAssembleToTheFusedMesh) {
   EXPECT_TRUE(every_vertex_near(assembled, fused, tolerance));
   EXPECT_TRUE(every_vertex_near(fused, assembled, tolerance));
   const MapPublisherCounts c = publisher.counts();
-  EXPECT_GT(c.updates, 2u) << "blocks went out while the map grew";
+  // The first integration always updates (a viewer, the coder idle); later ones may find the
+  // coder busy. With finish()'s: at least two.
+  EXPECT_GE(c.updates, 2u) << "blocks went out while the map grew";
   EXPECT_EQ(c.encode_errors, 0u);
   EXPECT_GT(server.stats().blocks_published, table.size()) << "blocks went again when they changed";
 }

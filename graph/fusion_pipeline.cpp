@@ -53,6 +53,7 @@ void FusionPipeline::run(const std::function<FramePtr()>& next,
   detail::InOrderNode<FramePtr> integrate(g, flow::serial, [&](const FramePtr& f) {
     stages::run_stage(
         "integrate", [this](Frame& frame) { return this->integrate(frame); }, *f);
+    if (f->ok() && observer_) observer_(map_);
     if (f->ok() && config_.mesh_every > 0 && integrated_ % config_.mesh_every == 0) {
       stages::run_stage(
           "extract",

@@ -8,6 +8,7 @@
 // in input order (so the map does not depend on scheduling), each frame parallel inside.
 
 #include <cstddef>
+#include <functional>
 
 #include "graph/pipeline.h"
 #include "nodes/fusion/tsdf_mesher.h"
@@ -49,6 +50,13 @@ class FusionPipeline : public FramePipeline {
 
   /// The TSDF map fused so far.
   const TsdfVolume& map() const { return map_; }
+  /// Called in the integration node after each frame is integrated (frames in input order, one
+  /// at a time, never during another integration): the one place a run may read the growing map,
+  /// e.g. to send its changed blocks to viewers (serve/map_publisher.h). It must not keep the
+  /// reference, and whatever time it takes holds up the next integration. Set before run().
+  void set_integration_observer(std::function<void(const TsdfVolume& map)> observer) {
+    observer_ = std::move(observer);
+  }
   /// The configuration the pipeline was made with.
   const FusionConfig& config() const { return config_; }
 
@@ -60,6 +68,7 @@ class FusionPipeline : public FramePipeline {
   TsdfVolume map_;
   TsdfMesher mesher_;
   std::size_t integrated_ = 0;
+  std::function<void(const TsdfVolume&)> observer_;
 };
 
 }  // namespace meshflow

@@ -1,6 +1,7 @@
 #include "serve/server.h"
 
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <boost/asio/ip/tcp.hpp>
 #include <boost/asio/post.hpp>
@@ -57,10 +58,13 @@ namespace {
 
 /// One frame queued for a client; its bytes are shared by every client.
 struct Outgoing {
-  enum class Kind { kMesh, kStats } kind = Kind::kMesh;
+  enum class Kind { kMesh, kStats, kEnd, kBlocks } kind = Kind::kMesh;
   bool binary = false;
   std::shared_ptr<const std::string> data;
 };
+
+/// A block of a fused map by its coordinates.
+using BlockKey = std::array<std::int32_t, 3>;
 
 /// A published mesh, ready to send: its header message and its binary chunks.
 struct MeshMessage {
@@ -71,6 +75,16 @@ struct MeshMessage {
 
 class WsSession;
 class HttpSession;
+
+namespace {
+
+/// {"type":"end"}: queued behind everything else, never dropped (nothing follows it).
+Outgoing end_message() {
+  static const auto text = std::make_shared<const std::string>(R"({"type":"end"})");
+  return {Outgoing::Kind::kEnd, false, text};
+}
+
+}  // namespace
 
 class Server::Impl {
  public:
@@ -105,8 +119,11 @@ class Server::Impl {
   bool add_client(const std::shared_ptr<WsSession>& session);
   void remove_client(const std::shared_ptr<WsSession>& session);
 
-  void publish(std::shared_ptr<const MeshMessage> mesh, std::shared_ptr<const std::string> stats) {
+  void publish(std::shared_ptr<const MeshMessage> mesh, std::shared_ptr<const std::string> stats,
+               bool finish = false, std::vector<MapBlock> blocks = {}) {
     std::lock_guard<std::mutex> lock(pending_mutex_);
+    if (finish) pending_finish_ = true;
+    for (MapBlock& b : blocks) pending_blocks_[BlockKey{b.x, b.y, b.z}] = std::move(b.payload);
     if (mesh && pending_mesh_) ++counters_.publications_replaced;
     if (stats && pending_stats_) ++counters_.publications_replaced;
     if (mesh) pending_mesh_ = std::move(mesh);
@@ -130,11 +147,15 @@ class Server::Impl {
   std::set<std::shared_ptr<HttpSession>> connections_;
   std::shared_ptr<const MeshMessage> current_mesh_;
   std::shared_ptr<const std::string> current_stats_;
+  bool finished_ = false;  // finish() reached the I/O thread: clients get the end message
+  std::map<BlockKey, std::shared_ptr<const std::string>> blocks_;  // the newest of each block
 
   // Producers to the I/O thread: the newest unsent publications (older ones are replaced).
   std::mutex pending_mutex_;
   std::shared_ptr<const MeshMessage> pending_mesh_;
   std::shared_ptr<const std::string> pending_stats_;
+  bool pending_finish_ = false;
+  std::map<BlockKey, std::shared_ptr<const std::string>> pending_blocks_;
   bool drain_posted_ = false;
 
   std::atomic<std::uint64_t> mesh_id_{0};
@@ -142,7 +163,8 @@ class Server::Impl {
     std::atomic<std::size_t> clients{0};
     std::atomic<std::uint64_t> clients_accepted{0}, clients_refused{0}, clients_closed_bad{0},
         frames_sent{0}, frames_dropped{0}, bytes_sent{0}, http_requests{0}, meshes{0},
-        publications_replaced{0}, max_client_queue{0};
+        publications_replaced{0}, max_client_queue{0}, blocks_published{0}, blocks_sent{0},
+        blocks_superseded{0}, max_pending_blocks{0};
   } counters_;
 };
 
@@ -180,6 +202,20 @@ class WsSession : public std::enable_shared_from_this<WsSession> {
     if (!writing_) write_next();
   }
 
+  /// The client is to be sent these blocks (their newest payloads, taken when a batch is cut).
+  void mark_blocks(const std::vector<BlockKey>& keys) {
+    if (closing_) return;
+    for (const BlockKey& key : keys) {
+      if (block_pending_.insert(key).second)
+        block_order_.push_back(key);
+      else
+        ++server_.counters_.blocks_superseded;
+    }
+    if (block_pending_.size() > server_.counters_.max_pending_blocks)
+      server_.counters_.max_pending_blocks = block_pending_.size();
+    if (!writing_) write_next();
+  }
+
   void close() {
     if (closing_) return;
     closing_ = true;
@@ -189,6 +225,33 @@ class WsSession : public std::enable_shared_from_this<WsSession> {
   }
 
  private:
+  /// The next batch of pending blocks, about chunk_bytes (at least one block), as one frame:
+  /// u32 0, u32 count, then per block i32 x, y, z, u32 n, n payload bytes.
+  Outgoing block_batch() {
+    std::string frame(8, '\0');
+    std::uint32_t count = 0;
+    const auto put = [&frame](std::uint32_t v) {
+      for (int b = 0; b < 4; ++b) frame.push_back(static_cast<char>(v >> (8 * b)));
+    };
+    while (!block_order_.empty() && (count == 0 || frame.size() < server_.config_.chunk_bytes)) {
+      const BlockKey key = block_order_.front();
+      block_order_.pop_front();
+      block_pending_.erase(key);
+      const auto found = server_.blocks_.find(key);
+      const std::string empty;
+      const std::string& payload =
+          found != server_.blocks_.end() && found->second ? *found->second : empty;
+      for (std::int32_t c : key) put(static_cast<std::uint32_t>(c));
+      put(static_cast<std::uint32_t>(payload.size()));
+      frame += payload;
+      ++count;
+    }
+    for (int b = 0; b < 4; ++b)
+      frame[static_cast<std::size_t>(4 + b)] = static_cast<char>(count >> (8 * b));
+    server_.counters_.blocks_sent += count;
+    return {Outgoing::Kind::kBlocks, true, std::make_shared<const std::string>(std::move(frame))};
+  }
+
   static bool starts_mesh(const Outgoing& frame) {
     return frame.kind == Outgoing::Kind::kMesh && !frame.binary;
   }
@@ -247,13 +310,19 @@ class WsSession : public std::enable_shared_from_this<WsSession> {
   }
 
   void write_next() {
-    if (queue_.empty() || closing_) {
+    // Stats and mesh frames first, then map blocks, the end message last.
+    const bool frame_first = !queue_.empty() && queue_.front().kind != Outgoing::Kind::kEnd;
+    if (closing_ || (queue_.empty() && block_order_.empty())) {
       writing_ = false;
       return;
     }
     writing_ = true;
-    in_flight_ = std::move(queue_.front());
-    queue_.pop_front();
+    if (frame_first || block_order_.empty()) {
+      in_flight_ = std::move(queue_.front());
+      queue_.pop_front();
+    } else {
+      in_flight_ = block_batch();
+    }
     // A bandwidth cap (ServerConfig::client_megabits_per_second) waits until the previous
     // frame's bytes have "left" at the capped rate; the frame taken stays in_flight_.
     if (server_.config_.client_megabits_per_second > 0.0 &&
@@ -294,8 +363,10 @@ class WsSession : public std::enable_shared_from_this<WsSession> {
   websocket::stream<beast::tcp_stream> ws_;
   beast::flat_buffer in_;
   Server::Impl& server_;
-  std::deque<Outgoing> queue_;  // not yet started
-  Outgoing in_flight_;          // being written (its bytes must live until the write ends)
+  std::deque<Outgoing> queue_;        // not yet started
+  std::deque<BlockKey> block_order_;  // blocks to send, oldest change first
+  std::set<BlockKey> block_pending_;  // the same keys, for lookup
+  Outgoing in_flight_;                // being written (its bytes must live until the write ends)
   asio::steady_timer pace_{ws_.get_executor()};
   std::chrono::steady_clock::time_point write_started_, next_send_;
   bool writing_ = false;
@@ -441,12 +512,16 @@ void Server::Impl::shut_down() {
 void Server::Impl::drain() {
   std::shared_ptr<const MeshMessage> mesh;
   std::shared_ptr<const std::string> stats;
+  bool finish = false;
+  std::map<BlockKey, std::shared_ptr<const std::string>> blocks;
   {
     std::lock_guard<std::mutex> lock(pending_mutex_);
+    blocks.swap(pending_blocks_);
     mesh = std::move(pending_mesh_);
     stats = std::move(pending_stats_);
     pending_mesh_.reset();
     pending_stats_.reset();
+    finish = std::exchange(pending_finish_, false);
     drain_posted_ = false;
   }
   if (stopping_) return;
@@ -459,6 +534,19 @@ void Server::Impl::drain() {
     current_mesh_ = mesh;
     for (const auto& client : clients_)
       for (const Outgoing& frame : mesh->frames) client->enqueue(frame);
+  }
+  if (!blocks.empty()) {
+    std::vector<BlockKey> keys;
+    keys.reserve(blocks.size());
+    for (auto& [key, payload] : blocks) {
+      blocks_[key] = std::move(payload);
+      keys.push_back(key);
+    }
+    for (const auto& client : clients_) client->mark_blocks(keys);
+  }
+  if (finish && !finished_) {
+    finished_ = true;
+    for (const auto& client : clients_) client->enqueue(end_message());
   }
 }
 
@@ -473,6 +561,13 @@ bool Server::Impl::add_client(const std::shared_ptr<WsSession>& session) {
   if (current_stats_) session->enqueue({Outgoing::Kind::kStats, false, current_stats_});
   if (current_mesh_)
     for (const Outgoing& frame : current_mesh_->frames) session->enqueue(frame);
+  if (!blocks_.empty()) {
+    std::vector<BlockKey> keys;
+    keys.reserve(blocks_.size());
+    for (const auto& entry : blocks_) keys.push_back(entry.first);
+    session->mark_blocks(keys);
+  }
+  if (finished_) session->enqueue(end_message());
   return true;
 }
 
@@ -530,6 +625,13 @@ void Server::publish_stats(std::string json) {
   impl_->publish(nullptr, std::make_shared<const std::string>(std::move(json)));
 }
 
+void Server::finish() { impl_->publish(nullptr, nullptr, true); }
+
+void Server::publish_blocks(std::vector<MapBlock> blocks) {
+  impl_->counters_.blocks_published += blocks.size();
+  impl_->publish(nullptr, nullptr, false, std::move(blocks));
+}
+
 ServerStats Server::stats() const {
   const Impl::Counters& c = impl_->counters_;
   ServerStats s;
@@ -544,6 +646,10 @@ ServerStats Server::stats() const {
   s.meshes_published = c.meshes;
   s.publications_replaced = c.publications_replaced;
   s.max_client_queue_frames = c.max_client_queue;
+  s.blocks_published = c.blocks_published;
+  s.blocks_sent = c.blocks_sent;
+  s.blocks_superseded = c.blocks_superseded;
+  s.max_client_pending_blocks = c.max_pending_blocks;
   return s;
 }
 

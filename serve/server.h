@@ -20,7 +20,13 @@
 //           "base_end":E,"packet_ends":[...],"vertices":V,"triangles":T,"chunks":C}
 //   binary u32 id, u32 offset (little-endian), then bytes [offset, offset + n) of mesh N's .mfc
 //          image; chunks of one mesh arrive in order, the first holds the base mesh
+//   binary u32 0 (a block batch: mesh ids start at 1), u32 count, then count blocks of a fused
+//          map, each i32 x, y, z (block coordinates), u32 n and n bytes of its payload
+//          (publish_blocks(); serve/map_publisher.h says what a payload holds; n = 0: the block
+//          has no surface any more)
 //   text   the JSON objects given to publish_stats() (they carry their own "type")
+//   text   {"type":"end"} after finish(): the producer is done and the client holds everything
+//          it published (sent last, after the client's queue has drained)
 //
 // Threads: the server runs its own I/O thread. Every public member is thread-safe and returns
 // without waiting for the network.
@@ -74,6 +80,13 @@ struct ServerConfig {
   std::size_t chunk_bytes = 64 * 1024;
 };
 
+/// One block of a fused map as published: its block coordinates and payload (empty: the block
+/// has no surface any more).
+struct MapBlock {
+  std::int32_t x = 0, y = 0, z = 0;
+  std::shared_ptr<const std::string> payload;
+};
+
 /// Counters since the server started.
 struct ServerStats {
   std::size_t clients = 0;                       ///< WebSocket clients connected now
@@ -90,6 +103,12 @@ struct ServerStats {
   /// The longest any client's send queue has been, in frames (the frame being written
   /// included): at most one mesh's frames and one stats message, however slow the client.
   std::size_t max_client_queue_frames = 0;
+  std::uint64_t blocks_published = 0;  ///< blocks handed to publish_blocks()
+  std::uint64_t blocks_sent = 0;       ///< blocks written to clients (in batches)
+  /// Blocks published again while a client still waited for the block: sent once, the newest.
+  std::uint64_t blocks_superseded = 0;
+  /// The most blocks any client has waited for at once (at most the map's blocks).
+  std::size_t max_client_pending_blocks = 0;
 };
 
 /// The server. Construction binds and starts the I/O thread (throws meshflow::Error when the
@@ -116,6 +135,15 @@ class Server {
   /// Publishes a JSON object text (sent as is; give it a "type"). The newest replaces unsent
   /// older ones; new clients get the newest. Does not wait for the network.
   void publish_stats(std::string json);
+  /// Publishes changed blocks of a fused map. Every client is sent each block that changed since
+  /// it was last sent that block, the newest payload only (a block changed twice before a slow
+  /// client took it goes once), in batches of about `chunk_bytes` after its stats and mesh
+  /// frames; a new client gets every block. Memory: the newest payload per block (shared by all
+  /// clients) and per client the keys of the blocks it waits for. Does not wait for the network.
+  void publish_blocks(std::vector<MapBlock> blocks);
+  /// Tells the server nothing more will be published (a run is over): each client, present or
+  /// future, gets {"type":"end"} after what is queued for it. Does not wait for the network.
+  void finish();
 
   ServerStats stats() const;
 

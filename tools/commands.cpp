@@ -25,6 +25,7 @@
 #include "tools/pipeline_options.h"
 #include "tools/progress.h"
 #include "tools/report.h"
+#include "tools/run_view.h"
 
 namespace meshflow::cli {
 
@@ -40,6 +41,7 @@ struct ReconstructOptions {
   std::string compress;     ///< --compress method, "" = none (a .mfc output: edgebreaker)
   std::string chunk;        ///< --chunk: "" (whole cloud), "auto" or metres
   ChunkingConfig chunking;  ///< the other --chunk* options
+  ServeOptions serve;       ///< --serve: show the result in a browser
 };
 
 // Textures the planar regions of the frame's mesh from its coloured points and writes OBJ +
@@ -109,6 +111,7 @@ void run_reconstruct(const ReconstructOptions& o) {
     // "auto": the chunks in flight get half of --max-memory (the rest: the welded mesh).
     chunking.chunk_size = o.chunk == "auto" ? 0.0f : std::stof(o.chunk);
     chunking.memory_budget = config.max_memory_bytes / 2;
+    if (o.serve.enabled()) throw Error("--serve", "", "a reconstruction without --chunk");
     print_settings(config);
     return run_chunked_reconstruct(o.input, o.columns, o.output, config, chunking, limit.threads());
   }
@@ -133,6 +136,7 @@ void run_reconstruct(const ReconstructOptions& o) {
   if (o.quality && io::lower_extension(o.output) != ".ply")
     throw Error(o.output, "", "--quality writes a PLY vertex property: give a .ply output");
   print_settings(config);
+  const std::unique_ptr<RunView> view = start_run_view(o.serve, "meshflow reconstruct");
 
   ReconstructionPipeline pipeline(config, 1);
   auto frame = std::make_shared<Frame>();
@@ -190,6 +194,14 @@ void run_reconstruct(const ReconstructOptions& o) {
            8.0 * static_cast<double>(frame->compressed.size()) /
                static_cast<double>(frame->mesh.triangles.size()));
   report("output     %s\n", o.output.c_str());
+  if (view) {
+    view->frame(*frame, false);  // the stage timings
+    view->result(frame->mesh, frame->origin,
+                 config.compression == MeshCompression::kProgressive
+                     ? frame->compressed
+                     : std::vector<unsigned char>{});
+    view->finish_and_serve();
+  }
 }
 
 void print_info(const std::string& path, const PointCloud& cloud) {
@@ -279,6 +291,7 @@ void add_reconstruct_options(CLI::App* cmd) {
   add_columns_option(cmd, opts->columns);
   add_compress_option(cmd, opts->compress);
   add_pipeline_options(cmd, opts->pipeline);
+  add_serve_options(cmd, opts->serve);
   add_console_flags(cmd, true);
   cmd->add_flag("--texture", opts->texture,
                 "Texture planar regions from the points' colours (OBJ + MTL + PNG output)");

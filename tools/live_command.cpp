@@ -16,6 +16,7 @@
 #include "tools/commands.h"
 #include "tools/console.h"
 #include "tools/pipeline_options.h"
+#include "tools/run_view.h"
 
 namespace meshflow::cli {
 namespace {
@@ -29,6 +30,7 @@ struct LiveOptions {
   std::size_t loops = 1;
   TriangulationOptions triangulation;
   bool warm_up = true;  ///< --no-warm-up: time a cold start
+  ServeOptions serve;   ///< --serve: show the meshes in a browser
 };
 
 using SensorFrame = std::variant<PointCloud, DepthFrame>;
@@ -105,9 +107,11 @@ void run_live(const LiveOptions& o) {
   config.triangulate_depth_maps = o.triangulation.enabled();
   o.triangulation.apply(config.reconstruction);
   if (o.warm_up) warm_up(config, frames);
+  const std::unique_ptr<RunView> view = start_run_view(o.serve, "meshflow live");
   std::size_t triangles = 0;
   LivePipeline live(config, [&](LiveResult& r) {
     triangles += r.mesh.triangles.size();
+    if (view) view->frame(r);
     if (!r.ok)
       std::fprintf(stderr, "meshflow: frame %llu failed in %s: %s\n",
                    static_cast<unsigned long long>(r.seq), r.failed_stage.c_str(), r.error.c_str());
@@ -140,6 +144,7 @@ void run_live(const LiveOptions& o) {
          1e3 * s.latency_p50_s, 1e3 * s.latency_p95_s, 1e3 * s.latency_p99_s);
   report("loop       longest push() %.3f ms; %.1f meshes/s over %.2f s; %zu triangles\n",
          1e3 * worst_push_s, static_cast<double>(s.delivered) / wall_s, wall_s, triangles);
+  if (view) view->finish_and_serve();
 }
 
 }  // namespace
@@ -165,6 +170,7 @@ void add_live_options(CLI::App* cmd) {
   cmd->add_option("--loops", o->loops, "Replay the frames this many times")
       ->check(CLI::Range(1, 100000));
   add_pipeline_options(cmd, o->pipeline);
+  add_serve_options(cmd, o->serve);
   add_console_flags(cmd, false);
   cmd->callback([o] { run_live(*o); });
 }

@@ -28,6 +28,7 @@
 #include "tools/pipeline_options.h"
 #include "tools/progress.h"
 #include "tools/report.h"
+#include "tools/run_view.h"
 
 namespace meshflow::cli {
 namespace {
@@ -144,6 +145,7 @@ struct RunOptions {
   float min_weight = 0.0f;
   std::string save_map, load_map;
   std::string compress;  ///< --compress method ("" = PLY outputs)
+  ServeOptions serve;    ///< --serve: show the run in a browser
 };
 
 // -o of run names a directory; a mesh file's name there is a usage error, not a directory
@@ -259,6 +261,10 @@ void run_fusion(const RunOptions& o) {
                             ? std::make_unique<FusionPipeline>(config, o.sequence.in_flight)
                             : std::make_unique<FusionPipeline>(config, o.sequence.in_flight,
                                                                read_tsdf_map(o.load_map));
+  const std::unique_ptr<RunView> view = start_run_view(o.serve, "meshflow run --fuse");
+  if (view)
+    pipeline->set_integration_observer(
+        view->map_observer(config.tsdf.voxel_size, config.min_weight));
   FrameProgress progress(selected_frames(*sequence, o.sequence));
   std::size_t done = 0, written = 0;
   const std::filesystem::path dir(o.output_dir);
@@ -268,6 +274,7 @@ void run_fusion(const RunOptions& o) {
   const SequenceRunStats stats =
       run_sequence(*pipeline, *sequence, run_options, [&](const Frame& f) {
         progress.update(++done);
+        if (view) view->frame(f, false);
         if (!f.ok()) return failed.add(f);
         breakdown.add(f);
         if (f.mesh.empty()) return;
@@ -305,6 +312,13 @@ void run_fusion(const RunOptions& o) {
          mesh.triangles.size(), extract_s * 1e3);
   report("output     %zu mesh file%s in %s\n", written, written == 1 ? "" : "s",
          o.output_dir.c_str());
+  if (view) {
+    // The map's blocks make extract()'s mesh; the optimisation steps change it, so then the
+    // page gets fused.ply's mesh as a whole too.
+    view->map_result(pipeline->map());
+    if (!config.frames.optimize.steps.empty()) view->result(mesh, Eigen::Vector3d::Zero(), {});
+    view->finish_and_serve();
+  }
   finish_run(stats);
 }
 
@@ -333,6 +347,7 @@ void run_merged(const RunOptions& o) {
   ReconstructionConfig config = o.pipeline.config();
   config.compression = compression_for(o.compress, "");
   ScanPreparationPipeline preparation(config, o.sequence.in_flight);
+  const std::unique_ptr<RunView> view = start_run_view(o.serve, "meshflow run --merged");
   FrameProgress progress(selected_frames(*sequence, o.sequence));
   PointCloud joined;
   std::size_t done = 0;
@@ -341,6 +356,7 @@ void run_merged(const RunOptions& o) {
   const SequenceRunStats stats =
       run_sequence(preparation, *sequence, run_options, [&](const Frame& f) {
         progress.update(++done);
+        if (view) view->frame(f, false);
         if (!f.ok()) return failed.add(f);
         detail("frame %zu   %s: %zu points, normals %s\n", f.source_index, f.name.c_str(),
                f.cloud.size(),
@@ -371,6 +387,14 @@ void run_merged(const RunOptions& o) {
          frame->filter_counts.input, stats.frames_ok, frame->mesh.vertices.size(),
          frame->mesh.triangles.size(), 1e3 * wall);
   report("output     %s\n", output.c_str());
+  if (view) {
+    view->frame(*frame, false);  // the merged pass's stage timings
+    view->result(frame->mesh, frame->origin,
+                 config.compression == MeshCompression::kProgressive
+                     ? frame->compressed
+                     : std::vector<unsigned char>{});
+    view->finish_and_serve();
+  }
 }
 
 void run_run(const RunOptions& o) {
@@ -382,6 +406,7 @@ void run_run(const RunOptions& o) {
   ReconstructionConfig config = pipeline_config(o.pipeline, o.triangulation);
   if (!o.concatenate) config.compression = compression_for(o.compress, "");
   ReconstructionPipeline pipeline(config, o.sequence.in_flight, o.triangulation.enabled());
+  const std::unique_ptr<RunView> view = start_run_view(o.serve, "meshflow run");
   FrameProgress progress(selected_frames(*sequence, o.sequence));
   TriangleMesh merged;
   std::size_t done = 0, written = 0;
@@ -391,6 +416,7 @@ void run_run(const RunOptions& o) {
   const SequenceRunStats stats =
       run_sequence(pipeline, *sequence, run_options, [&](const Frame& f) {
         progress.update(++done);
+        if (view) view->frame(f, true);
         if (!f.ok()) return failed.add(f);
         print_frame_line(f);
         removed.add(f);
@@ -413,6 +439,7 @@ void run_run(const RunOptions& o) {
   if (o.triangulation.enabled()) removed.print(min_component);
   report("output     %zu mesh file%s in %s\n", written, written == 1 ? "" : "s",
          o.output_dir.c_str());
+  if (view) view->finish_and_serve();
   finish_run(stats);
 }
 
@@ -535,6 +562,7 @@ void add_run_options(CLI::App* cmd) {
   quality->excludes(fuse)->excludes("--triangulate");
   merged->excludes("--triangulate");
   add_pipeline_options(cmd, o->pipeline);
+  add_serve_options(cmd, o->serve);
   add_console_flags(cmd, true);
   cmd->callback([o] { run_run(*o); });
 }

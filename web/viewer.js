@@ -2,7 +2,10 @@
 // server that served the page (serve/server.h documents the messages), decodes them with the C++
 // decoder compiled to WebAssembly (web/mfc_decoder.cpp over nodes/compress), and shows them with
 // three.js (Debian's libjs-three, served by meshflow). A progressive mesh is shown from its base
-// level on; each chunk of vertex-split packets refines it.
+// level on; each chunk of vertex-split packets refines it. A run (meshflow run/live/reconstruct
+// --serve) sends its newest mesh and stats as it goes; {"type":"end"} says the run is over and
+// everything it published has arrived: the page's state becomes "complete" once that mesh is
+// shown in full.
 
 import * as THREE from '/three/build/three.module.js';
 import { OrbitControls } from '/three/examples/jsm/controls/OrbitControls.js';
@@ -18,6 +21,7 @@ function setState(state) {
 function fail(message) {
   setState('error');
   $('error').textContent = message;
+  document.body.dataset.error = message;  // for the browser tests
 }
 
 // --- three.js scene --------------------------------------------------------------------------
@@ -47,12 +51,24 @@ const material = new THREE.MeshStandardMaterial({
   color: 0xb8c4d0, roughness: 0.7, metalness: 0.0, side: THREE.DoubleSide,
 });
 let mesh = null;
-let fittedId = -1;
+let fitted = false;  // the camera is fitted to the first mesh only (a run's frames keep the view)
+let ended = false;   // the server said nothing more will come
+let userMoved = false;  // the camera follows a growing map until the user moves it
+// A fused map's blocks (see onBlocks).
+const blockGroup = new THREE.Group();
+scene.add(blockGroup);
+const blocks = new Map();       // "x,y,z" -> { object, interior, shared: [edge], triangles }
+const sharedEdges = new Map();  // global edge "gx,gy,gz,axis" -> blocks that list it
+let blockInterior = 0;
+let blockTriangles = 0;
 
 function render() {
   if (renderer) renderer.render(scene, camera);
 }
-if (controls) controls.addEventListener('change', render);
+if (controls) {
+  controls.addEventListener('change', render);
+  controls.addEventListener('start', () => { userMoved = true; });
+}
 window.addEventListener('resize', () => {
   camera.aspect = window.innerWidth / window.innerHeight;
   camera.updateProjectionMatrix();
@@ -63,7 +79,7 @@ $('wireframe').addEventListener('change', (e) => { material.wireframe = e.target
 $('colors').addEventListener('change', () => { applyColors(); render(); });
 
 function applyColors() {
-  const has = mesh && mesh.geometry.getAttribute('color') !== undefined;
+  const has = (mesh && mesh.geometry.getAttribute('color') !== undefined) || blocks.size > 0;
   material.vertexColors = has && $('colors').checked ? THREE.VertexColors : THREE.NoColors;
   material.color.set(material.vertexColors === THREE.VertexColors ? 0xffffff : 0xb8c4d0);
   material.needsUpdate = true;
@@ -110,6 +126,12 @@ let current = null;  // { header, data: Uint8Array, received, shownPrefix }
 let bytesReceived = 0;
 let openedAt = 0;
 let decodeQueued = false;
+// A level is decoded from the start each time (the decoder keeps no state between calls), so
+// finer levels are decoded no more often than every two decodes' time: on a fast link the chunks
+// then go straight to the full mesh instead of the decoder working through every level
+// (bench/serve/serve_bench.py measures both). The first picture and the full mesh never wait.
+let lastDecodeEnd = 0;
+let lastDecodeMs = 0;
 
 function show(result, header, level) {
   if (mesh) {
@@ -119,31 +141,118 @@ function show(result, header, level) {
   mesh = new THREE.Mesh(result.geometry, material);
   scene.add(mesh);
   applyColors();
-  if (fittedId !== header.id) {
-    fittedId = header.id;
+  blockGroup.visible = false;  // a whole mesh (a fused run's final one) replaces the blocks
+  if (!fitted) {
     result.geometry.computeBoundingSphere();
-    const { center, radius } = result.geometry.boundingSphere;
-    const r = Math.max(radius, 1e-6);
-    camera.near = r / 100;
-    camera.far = r * 100;
-    // The whole bounding sphere in view, with a margin, seen from above and in front.
-    const distance = 1.3 * r / Math.sin((camera.fov / 2) * Math.PI / 180);
-    const direction = new THREE.Vector3(0.35, 0.45, 0.82).normalize();
-    camera.position.copy(center).addScaledVector(direction, distance);
-    camera.updateProjectionMatrix();
-    if (controls) {
-      controls.target.copy(center);
-      controls.update();
-    }
-    $('first-ms').textContent = (performance.now() - openedAt).toFixed(0) + ' ms';
+    fitCamera(result.geometry.boundingSphere);
   }
-  $('triangles').textContent = result.triangles;
-  $('vertices').textContent = result.vertices;
-  $('level').textContent = level;
+  showCounts(result.vertices, result.triangles, level);
   $('decode-ms').textContent = result.ms.toFixed(1) + ' ms';
+  render();
+}
+
+// The whole bounding sphere in view, with a margin, seen from above and in front; once.
+function fitCamera({ center, radius }) {
+  fitted = true;
+  const r = Math.max(radius, 1e-6);
+  camera.near = r / 100;
+  camera.far = r * 100;
+  const distance = 1.3 * r / Math.sin((camera.fov / 2) * Math.PI / 180);
+  const direction = new THREE.Vector3(0.35, 0.45, 0.82).normalize();
+  camera.position.copy(center).addScaledVector(direction, distance);
+  camera.updateProjectionMatrix();
+  if (controls) {
+    controls.target.copy(center);
+    controls.update();
+  }
+  if (document.body.dataset.firstMs) return;
+  const first = performance.now() - openedAt;
+  $('first-ms').textContent = first.toFixed(0) + ' ms';
+  document.body.dataset.firstMs = first.toFixed(1);  // for bench/serve/serve_bench.py
+}
+
+function showCounts(vertices, triangles, level) {
+  $('triangles').textContent = triangles;
+  $('vertices').textContent = vertices;
+  $('level').textContent = level;
   document.body.dataset.levels = Number(document.body.dataset.levels || 0) + 1;
-  document.body.dataset.triangles = result.triangles;
-  document.body.dataset.vertices = result.vertices;
+  document.body.dataset.triangles = triangles;
+  document.body.dataset.vertices = vertices;
+}
+
+// --- a fused map, block by block (serve/map_publisher.h: the payload) --------------------------
+// Each block is its own three.js mesh; vertices on edges that neighbouring blocks share are
+// listed by global grid edge, so the counts are those of the welded map (TsdfMesher::extract()).
+
+function globalEdge(x, y, z, code) {
+  const axis = code % 3;
+  let rest = (code - axis) / 3;
+  const lz = rest % 9;
+  rest = (rest - lz) / 9;
+  const ly = rest % 9;
+  const lx = (rest - ly) / 9;
+  return `${8 * x + lx},${8 * y + ly},${8 * z + lz},${axis}`;
+}
+
+function removeBlock(key) {
+  const b = blocks.get(key);
+  if (!b) return;
+  blockGroup.remove(b.object);
+  b.object.geometry.dispose();
+  blockInterior -= b.interior;
+  blockTriangles -= b.triangles;
+  for (const e of b.shared) {
+    const n = sharedEdges.get(e) - 1;
+    if (n === 0) sharedEdges.delete(e); else sharedEdges.set(e, n);
+  }
+  blocks.delete(key);
+}
+
+// A batch: u32 0, u32 count, then per block i32 x, y, z, u32 n, n payload bytes.
+function onBlocks(buffer) {
+  const view = new DataView(buffer);
+  const count = view.getUint32(4, true);
+  let at = 8;
+  let ms = 0;
+  try {
+    for (let i = 0; i < count; ++i) {
+      const x = view.getInt32(at, true), y = view.getInt32(at + 4, true);
+      const z = view.getInt32(at + 8, true), n = view.getUint32(at + 12, true);
+      at += 16;
+      if (at + n > buffer.byteLength) throw new Error('a block past the batch\'s end');
+      const key = `${x},${y},${z}`;
+      removeBlock(key);
+      if (n > 0) {
+        const s = view.getUint16(at, true);
+        const mfcAt = at + 2 + 4 * s;
+        const bytes = new Uint8Array(buffer, mfcAt, at + n - mfcAt);
+        const result = decode(bytes, bytes.length, 0, -1);
+        ms += result.ms;
+        const shared = [];
+        for (let k = 0; k < s; ++k) {
+          shared.push(globalEdge(x, y, z, view.getUint16(at + 2 + 4 * k + 2, true)));
+        }
+        for (const e of shared) sharedEdges.set(e, (sharedEdges.get(e) || 0) + 1);
+        const object = new THREE.Mesh(result.geometry, material);
+        blockGroup.add(object);
+        blocks.set(key, { object, interior: result.vertices - s, shared, triangles: result.triangles });
+        blockInterior += result.vertices - s;
+        blockTriangles += result.triangles;
+      }
+      at += n;
+    }
+  } catch (e) {
+    return fail('block: ' + e.message);
+  }
+  document.body.dataset.blocks = blocks.size;
+  if (mesh) return;  // a whole mesh is shown: the blocks stay hidden
+  if (!userMoved && blocks.size > 0) {
+    fitCamera(new THREE.Box3().setFromObject(blockGroup).getBoundingSphere(new THREE.Sphere()));
+  }
+  applyColors();
+  showCounts(blockInterior + sharedEdges.size, blockTriangles, `map: ${blocks.size} blocks`);
+  $('decode-ms').textContent = ms.toFixed(1) + ' ms';
+  if (document.body.dataset.state !== 'complete') setState('shown');
   render();
 }
 
@@ -157,8 +266,11 @@ function decodeLatest() {
       if (c.shownPrefix === h.bytes) return;
       c.shownPrefix = h.bytes;
       show(decode(c.data, h.bytes, 0, -1), h, 'full');
-      $('full-ms').textContent = (performance.now() - openedAt).toFixed(0) + ' ms';
-      setState('complete');
+      const full = performance.now() - openedAt;
+      $('full-ms').textContent = full.toFixed(0) + ' ms';
+      document.body.dataset.fullMs = full.toFixed(1);
+      document.body.dataset.meshes = Number(document.body.dataset.meshes || 0) + 1;
+      setState(ended ? 'complete' : 'shown');
       return;
     }
     if (h.kind !== 'progressive' || c.received < h.base_end) return;
@@ -166,9 +278,17 @@ function decodeLatest() {
     while (packets < h.packet_ends.length && h.packet_ends[packets] <= c.received) ++packets;
     const prefix = packets === 0 ? h.base_end : h.packet_ends[packets - 1];
     if (prefix <= c.shownPrefix) return;
+    const wait = lastDecodeEnd + 2 * lastDecodeMs - performance.now();
+    if (c.shownPrefix > 0 && wait > 0) {
+      decodeQueued = true;
+      setTimeout(decodeLatest, wait);
+      return;
+    }
     c.shownPrefix = prefix;
-    show(decode(c.data, prefix, h.base_end, packets), h,
-         `${packets} / ${h.packet_ends.length} packets`);
+    const result = decode(c.data, prefix, h.base_end, packets);
+    lastDecodeEnd = performance.now();
+    lastDecodeMs = result.ms;
+    show(result, h, `${packets} / ${h.packet_ends.length} packets`);
   } catch (e) {
     fail('decode: ' + e.message);
   }
@@ -184,7 +304,23 @@ function onText(text) {
     for (const [stage, ms] of Object.entries(message.stages_ms || {})) {
       rows.push(`<tr><td>${stage}</td><td>${Number(ms).toFixed(1)} ms</td></tr>`);
     }
-    $('stages').innerHTML = rows.join('');
+    if (rows.length > 0) $('stages').innerHTML = rows.join('');
+    if (message.source) $('source').textContent = message.source;
+    if (message.frames !== undefined) {
+      $('frames').textContent = message.frames;
+      document.body.dataset.frames = message.frames;
+    }
+    if (message.frames_per_second !== undefined) {
+      $('fps').textContent = Number(message.frames_per_second).toFixed(1);
+    }
+    if (message.state === 'finished') document.body.dataset.run = 'finished';
+  } else if (message.type === 'end') {
+    ended = true;
+    const c = current;
+    if (document.body.dataset.state === 'error') return;
+    if (!c || (c.received === c.header.bytes && c.shownPrefix === c.header.bytes)) {
+      setState('complete');
+    }
   }
 }
 
@@ -193,6 +329,7 @@ function onBinary(buffer) {
   $('bytes').textContent = bytesReceived.toLocaleString('en');
   const view = new DataView(buffer);
   const id = view.getUint32(0, true);
+  if (id === 0) return onBlocks(buffer);
   const offset = view.getUint32(4, true);
   const c = current;
   if (!c || c.header.id !== id || c.received !== offset) return;  // a stale mesh's chunk
@@ -200,7 +337,9 @@ function onBinary(buffer) {
   if (offset + chunk.length > c.header.bytes) return fail('a chunk past the mesh\'s end');
   c.data.set(chunk, offset);
   c.received += chunk.length;
-  if (!decodeQueued) {
+  if (c.received === c.header.bytes) {
+    setTimeout(decodeLatest, 0);  // the full mesh at once (a waiting level's timer then returns)
+  } else if (!decodeQueued) {
     decodeQueued = true;
     setTimeout(decodeLatest, 0);  // several chunks in one task decode once
   }

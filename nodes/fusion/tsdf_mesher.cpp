@@ -234,17 +234,51 @@ std::vector<std::uint8_t> TsdfMesher::dirty_blocks(const TsdfVolume& volume,
   return dirty;
 }
 
+std::vector<VoxelKey> TsdfMesher::update(const TsdfVolume& volume, TsdfExtractStats* stats) {
+  if (volume_ != &volume) {
+    cache_.clear();
+    meshed_generation_ = 0;
+    volume_ = &volume;
+  }
+  const std::vector<std::uint32_t> order = volume.blocks_in_key_order();
+  const std::vector<std::uint8_t> dirty = dirty_blocks(volume, order);
+  TsdfExtractStats s;
+  std::vector<std::uint8_t> changed;
+  const std::vector<const BlockMesh*> meshes = remesh(volume, order, dirty, s, &changed);
+  meshed_generation_ = volume.generation();
+  for (const BlockMesh* m : meshes) s.cells += m->counts;
+  if (stats != nullptr) *stats = s;
+  std::vector<VoxelKey> keys;
+  for (std::size_t i = 0; i < order.size(); ++i)
+    if (changed[i]) keys.push_back(pack_key(volume.block(order[i]).coords));
+  return keys;
+}
+
+const TsdfMesher::BlockMesh* TsdfMesher::block_mesh(VoxelKey key) const {
+  const auto found = cache_.find(key);
+  return found == cache_.end() ? nullptr : &found->second;
+}
+
 std::vector<const TsdfMesher::BlockMesh*> TsdfMesher::remesh(
     const TsdfVolume& volume, const std::vector<std::uint32_t>& order,
-    const std::vector<std::uint8_t>& dirty, TsdfExtractStats& stats) {
+    const std::vector<std::uint8_t>& dirty, TsdfExtractStats& stats,
+    std::vector<std::uint8_t>* changed) {
   // Cache entries are made first, serially, so the map never rehashes while tasks write into it.
   std::vector<BlockMesh*> slots(order.size(), nullptr);
   for (std::size_t i = 0; i < order.size(); ++i) {
     slots[i] = &cache_[pack_key(volume.block(order[i]).coords)];
     (dirty[i] ? stats.blocks_meshed : stats.blocks_cached) += 1;
   }
+  if (changed != nullptr) changed->assign(order.size(), 0);
   tbb::parallel_for(std::size_t{0}, order.size(), [&](std::size_t i) {
-    if (dirty[i]) *slots[i] = mesh_block(volume, volume.block(order[i]), min_weight_);
+    if (!dirty[i]) return;
+    BlockMesh fresh = mesh_block(volume, volume.block(order[i]), min_weight_);
+    if (changed != nullptr)
+      (*changed)[i] = fresh.vertices != slots[i]->vertices || fresh.colors != slots[i]->colors ||
+                              fresh.triangles != slots[i]->triangles
+                          ? 1
+                          : 0;
+    *slots[i] = std::move(fresh);
   });
   return {slots.begin(), slots.end()};
 }

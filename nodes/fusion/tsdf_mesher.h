@@ -59,6 +59,16 @@ class TsdfMesher {
     TsdfCellCounts counts;                 ///< this block's cells and voxels
   };
 
+  /// The blocks' meshes brought up to date as extract() does (only changed blocks re-meshed),
+  /// without joining them: returns pack_key(block coords) of every block whose piece of the
+  /// surface (vertices, colours, triangles) differs from what this mesher held before (a block
+  /// new to the mesher counts when its piece is not empty), in the volume's key order. For
+  /// sending a growing map's changes (serve/map_publisher.h). Same thread-safety as extract().
+  std::vector<VoxelKey> update(const TsdfVolume& volume, TsdfExtractStats* stats = nullptr);
+  /// The piece of block `key` (pack_key of its coordinates) as of the last update() or
+  /// extract(), or nullptr. Valid until the next call of either.
+  const BlockMesh* block_mesh(VoxelKey key) const;
+
  private:
   // extract()'s phases: which blocks to mesh again, then their meshes (cached ones reused), in
   // the volume's key order.
@@ -67,7 +77,8 @@ class TsdfMesher {
   std::vector<const BlockMesh*> remesh(const TsdfVolume& volume,
                                        const std::vector<std::uint32_t>& order,
                                        const std::vector<std::uint8_t>& dirty,
-                                       TsdfExtractStats& stats);
+                                       TsdfExtractStats& stats,
+                                       std::vector<std::uint8_t>* changed = nullptr);
 
   float min_weight_ = 0.0f;
   std::unordered_map<VoxelKey, BlockMesh> cache_;  // by pack_key(block coords)

@@ -8,6 +8,8 @@
 #include <cstring>
 #include <fstream>
 #include <limits>
+#include <set>
+#include <unordered_map>
 #include <utility>
 
 #include "nodes/fusion/tsdf_map_file.h"
@@ -320,6 +322,53 @@ TEST(Tsdf, IncrementalExtractionEqualsAFreshOne) {
   TsdfExtractStats unchanged;
   incremental.extract(volume, &unchanged);
   EXPECT_EQ(unchanged.blocks_meshed, 0u);
+}
+
+// update() names exactly the blocks whose piece of the surface differs from what the mesher held
+// (checked against a fresh mesher's pieces of the same map), and nothing when the map did not
+// change; what it leaves in block_mesh() is extract()'s blocks.
+TEST(Tsdf, UpdateNamesExactlyTheBlocksWhosePieceChanged) {
+  const std::vector<DepthFrame> frames = room_frames(8);
+  TsdfVolume volume(TsdfConfig{kTsdfVoxel});
+  for (std::size_t i = 0; i < 4; ++i) volume.integrate(frames[i]);
+  TsdfMesher incremental;
+  const std::vector<VoxelKey> first = incremental.update(volume);
+  std::size_t with_surface = 0;
+  std::unordered_map<VoxelKey, TsdfMesher::BlockMesh> before;
+  for (std::size_t b = 0; b < volume.block_count(); ++b) {
+    const VoxelKey key = pack_key(volume.block(b).coords);
+    const TsdfMesher::BlockMesh* piece = incremental.block_mesh(key);
+    ASSERT_NE(piece, nullptr);
+    before[key] = *piece;
+    with_surface += piece->triangles.empty() ? 0 : 1;
+  }
+  EXPECT_EQ(first.size(), with_surface) << "a new block counts when its piece is not empty";
+  ASSERT_GT(with_surface, 0u);
+
+  volume.integrate(frames[4]);
+  const std::vector<VoxelKey> changed = incremental.update(volume);
+  const std::set<VoxelKey> named(changed.begin(), changed.end());
+  TsdfMesher fresh;
+  fresh.update(volume);
+  std::size_t differ = 0;
+  for (std::size_t b = 0; b < volume.block_count(); ++b) {
+    const VoxelKey key = pack_key(volume.block(b).coords);
+    const TsdfMesher::BlockMesh& now = *fresh.block_mesh(key);
+    const auto old = before.find(key);
+    const bool differs = old == before.end() ? !now.triangles.empty()
+                                             : now.vertices != old->second.vertices ||
+                                                   now.colors != old->second.colors ||
+                                                   now.triangles != old->second.triangles;
+    EXPECT_EQ(named.count(key) == 1, differs) << "block " << b;
+    differ += differs ? 1 : 0;
+    EXPECT_EQ(incremental.block_mesh(key)->triangles, now.triangles);
+  }
+  EXPECT_GT(differ, 0u);
+  EXPECT_LT(differ, volume.block_count()) << "one more frame changes part of the map";
+  EXPECT_TRUE(incremental.update(volume).empty());
+  const TriangleMesh a = incremental.extract(volume), b = TsdfMesher().extract(volume);
+  EXPECT_EQ(a.vertices, b.vertices);
+  EXPECT_EQ(a.triangles, b.triangles);
 }
 
 // A wall 3 m in front of the camera (identity pose, 160 x 120); with `patch` > 0 a 40 x 40

@@ -1,0 +1,208 @@
+// A fused map sent block by block (serve/map_publisher.h): a viewer connected while meshflow's
+// synthetic depth sequence is fused (reading only after the run, so blocks change again before
+// it takes them) assembles, from the blocks it was sent, the mesh TsdfMesher::extract() gives:
+// the same vertex and triangle counts (shared vertices welded by their grid edge) and every
+// vertex within the quantisation of one of the fused mesh's. A viewer that never reads waits
+// for at most one copy of each block.
+
+#include <gtest/gtest.h>
+
+#include <array>
+#include <cmath>
+#include <cstring>
+#include <map>
+#include <nlohmann/json.hpp>
+#include <set>
+#include <string>
+#include <thread>
+#include <unordered_map>
+#include <vector>
+
+#include "graph/fusion_pipeline.h"
+#include "graph/sequence_runner.h"
+#include "nodes/compress/compressed_mesh.h"
+#include "nodes/synthetic/depth_sequence.h"
+#include "nodes/synthetic/scan_simulator.h"
+#include "serve/map_publisher.h"
+#include "serve/server.h"
+#include "tests/serve/test_client.h"
+
+namespace meshflow::serve {
+namespace {
+
+using namespace std::chrono_literals;
+using testing::Client;
+using testing::config_with_page;
+
+constexpr float kVoxel = 0.05f;
+
+std::uint32_t u32_at(const std::string& s, std::size_t at) {
+  std::uint32_t v = 0;
+  std::memcpy(&v, s.data() + at, 4);
+  return v;
+}
+
+std::uint16_t u16_at(const std::string& s, std::size_t at) {
+  std::uint16_t v = 0;
+  std::memcpy(&v, s.data() + at, 2);
+  return v;
+}
+
+/// What a viewer holds: the newest payload of every block it was sent, after the end message.
+std::map<std::array<std::int32_t, 3>, std::string> read_blocks_to_end(Client& client) {
+  std::map<std::array<std::int32_t, 3>, std::string> table;
+  std::string message;
+  bool binary = false;
+  for (;;) {
+    if (client.read(message, binary)) {
+      ADD_FAILURE() << "the stream ended without the end message";
+      return table;
+    }
+    if (!binary) {
+      if (nlohmann::json::parse(message)["type"] == "end") return table;
+      continue;
+    }
+    if (u32_at(message, 0) != 0) continue;  // a mesh chunk
+    const std::uint32_t count = u32_at(message, 4);
+    std::size_t at = 8;
+    for (std::uint32_t i = 0; i < count; ++i) {
+      std::array<std::int32_t, 3> key{};
+      std::memcpy(key.data(), message.data() + at, 12);
+      const std::uint32_t n = u32_at(message, at + 12);
+      at += 16;
+      table[key] = message.substr(at, n);
+      at += n;
+    }
+    EXPECT_EQ(at, message.size());
+  }
+}
+
+/// The viewer's map: every block decoded, vertices on shared edges welded by global edge.
+TriangleMesh assemble(const std::map<std::array<std::int32_t, 3>, std::string>& table) {
+  TriangleMesh mesh;
+  std::map<std::array<std::int32_t, 4>, std::uint32_t> welded;  // global edge -> vertex
+  for (const auto& [key, payload] : table) {
+    if (payload.empty()) continue;
+    const std::uint16_t shared = u16_at(payload, 0);
+    const std::size_t mfc_at = 2 + 4 * static_cast<std::size_t>(shared);
+    const TriangleMesh piece = compress::decompress_mesh(
+        std::vector<unsigned char>(payload.begin() + static_cast<std::ptrdiff_t>(mfc_at),
+                                   payload.end()),
+        "block");
+    std::vector<std::uint32_t> id(piece.vertices.size(), UINT32_MAX);
+    for (std::uint16_t k = 0; k < shared; ++k) {
+      const std::uint16_t vertex = u16_at(payload, 2 + 4 * k);
+      std::uint32_t code = u16_at(payload, 2 + 4 * k + 2);
+      const std::int32_t axis = static_cast<std::int32_t>(code % 3);
+      code /= 3;
+      const std::array<std::int32_t, 4> edge{key[0] * 8 + static_cast<std::int32_t>(code / 81),
+                                             key[1] * 8 + static_cast<std::int32_t>(code / 9 % 9),
+                                             key[2] * 8 + static_cast<std::int32_t>(code % 9),
+                                             axis};
+      const auto [it, fresh] =
+          welded.emplace(edge, static_cast<std::uint32_t>(mesh.vertices.size()));
+      if (fresh) mesh.vertices.push_back(piece.vertices[vertex]);
+      id[vertex] = it->second;
+    }
+    for (std::size_t v = 0; v < piece.vertices.size(); ++v) {
+      if (id[v] != UINT32_MAX) continue;
+      id[v] = static_cast<std::uint32_t>(mesh.vertices.size());
+      mesh.vertices.push_back(piece.vertices[v]);
+    }
+    for (const Triangle& t : piece.triangles)
+      mesh.triangles.push_back({id[t[0]], id[t[1]], id[t[2]]});
+  }
+  return mesh;
+}
+
+/// Whether every vertex of `a` has one of `b` within `tolerance` on each axis (a grid of
+/// tolerance-sized cells over b).
+bool every_vertex_near(const TriangleMesh& a, const TriangleMesh& b, float tolerance) {
+  const auto cell = [tolerance](const Eigen::Vector3f& p) {
+    return std::array<std::int64_t, 3>{static_cast<std::int64_t>(std::floor(p.x() / tolerance)),
+                                       static_cast<std::int64_t>(std::floor(p.y() / tolerance)),
+                                       static_cast<std::int64_t>(std::floor(p.z() / tolerance))};
+  };
+  std::map<std::array<std::int64_t, 3>, std::vector<std::uint32_t>> grid;
+  for (std::uint32_t i = 0; i < b.vertices.size(); ++i) grid[cell(b.vertices[i])].push_back(i);
+  for (const Eigen::Vector3f& p : a.vertices) {
+    const auto c = cell(p);
+    bool found = false;
+    for (int d = 0; d < 27 && !found; ++d) {
+      const auto it = grid.find({c[0] + d % 3 - 1, c[1] + d / 3 % 3 - 1, c[2] + d / 9 - 1});
+      if (it == grid.end()) continue;
+      for (std::uint32_t i : it->second)
+        if ((b.vertices[i] - p).cwiseAbs().maxCoeff() <= tolerance) found = true;
+    }
+    if (!found) return false;
+  }
+  return true;
+}
+
+std::unique_ptr<io::Sequence> small_depth_sequence() {
+  synthetic::DepthSequenceConfig c;
+  c.frames = 6;
+  c.intrinsics = synthetic::scaled_default_camera(160, 120);
+  return synthetic::make_depth_sequence(synthetic::demo_room_scene(), c);
+}
+
+FusionConfig fusion_config() {
+  FusionConfig config;
+  config.tsdf.voxel_size = kVoxel;
+  config.frames.optimize.steps.clear();  // fused mesh = the mesher's
+  return config;
+}
+
+TEST(MapPublisher, TheBlocksAViewerWasSentAssembleToTheFusedMesh) {
+  Server server{config_with_page()};
+  Client viewer;
+  ASSERT_FALSE(viewer.connect(server.port()));
+  for (int i = 0; i < 100 && server.stats().clients < 1; ++i) std::this_thread::sleep_for(10ms);
+  const FusionConfig config = fusion_config();
+  FusionPipeline pipeline(config, 2);
+  MapPublisher publisher(server, kVoxel, config.min_weight, /*min_interval_s=*/0.0);
+  pipeline.set_integration_observer([&](const TsdfVolume& map) { publisher.integrated(map); });
+  const auto sequence = small_depth_sequence();
+  run_sequence(pipeline, *sequence, {}, [](const Frame& f) { ASSERT_TRUE(f.ok()) << f.error; });
+  publisher.finish(pipeline.map());
+  server.finish();
+  const TriangleMesh fused = pipeline.extract_mesh();
+  ASSERT_GT(fused.triangles.size(), 1000u);
+
+  const auto table = read_blocks_to_end(viewer);
+  const TriangleMesh assembled = assemble(table);
+  EXPECT_EQ(assembled.vertices.size(), fused.vertices.size());
+  EXPECT_EQ(assembled.triangles.size(), fused.triangles.size());
+  // Within the quantisation (voxel / 64, half a step per axis), both ways.
+  const float tolerance = 0.5f * kVoxel / 64.0f + 1e-6f;
+  EXPECT_TRUE(every_vertex_near(assembled, fused, tolerance));
+  EXPECT_TRUE(every_vertex_near(fused, assembled, tolerance));
+  const MapPublisherCounts c = publisher.counts();
+  // The first integration always updates (a viewer, the coder idle); later ones may find the
+  // coder busy. With finish()'s: at least two.
+  EXPECT_GE(c.updates, 2u) << "blocks went out while the map grew";
+  EXPECT_EQ(c.encode_errors, 0u);
+  EXPECT_GT(server.stats().blocks_published, table.size()) << "blocks went again when they changed";
+}
+
+TEST(MapPublisher, AViewerThatNeverReadsWaitsForEachBlockAtMostOnce) {
+  Server server{config_with_page()};
+  Client stalled(4096);
+  ASSERT_FALSE(stalled.connect(server.port()));
+  for (int i = 0; i < 100 && server.stats().clients < 1; ++i) std::this_thread::sleep_for(10ms);
+  const FusionConfig config = fusion_config();
+  FusionPipeline pipeline(config, 2);
+  MapPublisher publisher(server, kVoxel, config.min_weight, 0.0);
+  pipeline.set_integration_observer([&](const TsdfVolume& map) { publisher.integrated(map); });
+  run_sequence(pipeline, *small_depth_sequence(), {}, [](const Frame&) {});
+  publisher.finish(pipeline.map());
+  std::this_thread::sleep_for(100ms);
+  const ServerStats s = server.stats();
+  EXPECT_GT(s.blocks_published, pipeline.map().block_count() / 4);
+  EXPECT_LE(s.max_client_pending_blocks, pipeline.map().block_count());
+  EXPECT_LE(s.blocks_sent, s.blocks_published);
+  EXPECT_LE(s.max_client_queue_frames, 3u);
+}
+
+}  // namespace
+}  // namespace meshflow::serve

@@ -1,0 +1,65 @@
+#pragma once
+// --serve on the commands that make meshes (view, reconstruct, run, live): the options, and a
+// viewer of a run that feeds the serving layer (serve/run_publisher.h) and keeps serving the
+// result afterwards. These options are the CLI's alone on purpose: the Python module has no
+// server yet, so they are not in the option model (options/); they move there when a second
+// front end serves. Without the serving layer (-DMESHFLOW_SERVE=OFF or no Boost) --serve is
+// still accepted by the parser and fails with a message saying so (tools/run_view_off.cpp).
+
+#include <CLI/CLI.hpp>
+
+#include <cstddef>
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "graph/frame.h"
+#include "graph/live_pipeline.h"
+#include "nodes/fusion/tsdf_volume.h"
+
+namespace meshflow::cli {
+
+struct ServeOptions {
+  std::string address;      ///< [HOST:]PORT; empty: no server
+  double rate_mbit = 0.0;   ///< per-viewer bandwidth cap (0: none)
+  double exit_after = 0.0;  ///< seconds of serving once the result is ready (0: until Ctrl-C)
+  std::size_t max_viewers = 8;
+  bool enabled() const { return !address.empty(); }
+};
+
+/// Registers --serve, --serve-rate, --exit-after and --max-viewers on `cmd`. With
+/// `address_default` (view), --serve has that default; otherwise (run, live, reconstruct) the
+/// server starts only when --serve is given and the other three need it.
+void add_serve_options(CLI::App* cmd, ServeOptions& options, const char* address_default = nullptr);
+
+/// What a run shows its viewers. Called from the run's sink thread (one call at a time); no call
+/// waits on the network.
+class RunView {
+ public:
+  virtual ~RunView() = default;
+  /// A delivered frame: its stats, and with `with_mesh` its mesh (newest only, single-rate).
+  virtual void frame(const Frame& f, bool with_mesh) = 0;
+  /// A frame of `meshflow live`.
+  virtual void frame(const LiveResult& result) = 0;
+  /// The run's final mesh (progressive; `encoded` a ready .mfc image of it, or empty).
+  virtual void result(const TriangleMesh& mesh, const Eigen::Vector3d& origin,
+                      const std::vector<unsigned char>& encoded) = 0;
+  /// A fused run: the observer for FusionPipeline::set_integration_observer, which sends the
+  /// map's changed blocks as it grows (serve/map_publisher.h), for a map of `voxel_size` metres
+  /// meshed with `min_weight`.
+  virtual std::function<void(const TsdfVolume&)> map_observer(float voxel_size,
+                                                              float min_weight) = 0;
+  /// After a fused run (map_observer() given): the map's blocks changed since the last update.
+  virtual void map_result(const TsdfVolume& map) = 0;
+  /// After the run's files and report: publishes the last mesh and the end of the run, then
+  /// serves until Ctrl-C or --exit-after seconds, and prints what was served (stderr).
+  virtual void finish_and_serve() = 0;
+};
+
+/// The view of a run named `source` when --serve was given (the server started, its URL printed
+/// on stderr as "url URL"), else nullptr. Throws meshflow::Error for a bad address or an address
+/// in use, or when this meshflow was built without the serving layer.
+std::unique_ptr<RunView> start_run_view(const ServeOptions& options, const std::string& source);
+
+}  // namespace meshflow::cli

@@ -111,7 +111,7 @@ TEST(RunPublisher, AViewerThatNeverReadsCostsTheSinkOnlyDroppedFrames) {
   // 200 frames of a 50+ kB mesh to a viewer with a 4 kB receive buffer that never reads: every
   // frame is stats plus a mesh offer; what the viewer cannot take is dropped, its queue stays
   // at one mesh, and a viewer that reads gets the last frame when the run ends.
-  const TriangleMesh mesh = wavy_grid(200, 0.05f);
+  const TriangleMesh mesh = wavy_grid(240, 0.05f);
   ASSERT_GT(compress::compress_mesh(mesh).size(), 50'000u);
   Server server{config_with_page()};
   Client stalled(4096);

@@ -298,7 +298,7 @@ TEST(Server, AClientThatNeverReadsDoesNotBlockPublishing) {
   // A mesh of over 50 kB, published 400 times (20 MB) to a client with a 4 kB receive buffer
   // that never reads: each publish returns at once, stale frames are dropped, and a reading
   // client still gets the newest mesh.
-  const std::vector<unsigned char> mfc = compress::compress_mesh(wavy_grid(200, 0.05f));
+  const std::vector<unsigned char> mfc = compress::compress_mesh(wavy_grid(240, 0.05f));
   ASSERT_GT(mfc.size(), 50'000u);
   Server server{config_with_page()};
   Client stalled(4096);

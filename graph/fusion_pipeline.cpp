@@ -53,7 +53,14 @@ void FusionPipeline::run(const std::function<FramePtr()>& next,
   detail::InOrderNode<FramePtr> integrate(g, flow::serial, [&](const FramePtr& f) {
     stages::run_stage(
         "integrate", [this](Frame& frame) { return this->integrate(frame); }, *f);
-    if (f->ok() && observer_) observer_(map_);
+    if (f->ok() && observer_)  // (a viewer's: its time and failure are the frame's)
+      stages::run_stage(
+          "publish",
+          [this](Frame&) {
+            observer_(map_);
+            return std::uint64_t{0};
+          },
+          *f);
     if (f->ok() && config_.mesh_every > 0 && integrated_ % config_.mesh_every == 0) {
       stages::run_stage(
           "extract",

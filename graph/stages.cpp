@@ -84,8 +84,13 @@ std::uint64_t filter(Frame& f, const ReconstructionConfig& c) {
   if (f.depth && c.filter.keeps_every_finite_point()) {  // nothing left to filter: no copy
     f.filter_counts = FilterCounts{};
     f.filter_counts.input = f.filter_counts.output = f.cloud.size();
-  } else {
+  } else if (f.cloud.origin.isZero()) {
     f.cloud = filter_cloud(f.cloud, c.filter, &f.filter_counts);
+  } else {  // a georeferenced cloud is in its local frame; the crop box in the file's world one
+    FilterConfig local = c.filter;
+    local.crop_min = (c.filter.crop_min.cast<double>() - f.cloud.origin).cast<float>();
+    local.crop_max = (c.filter.crop_max.cast<double>() - f.cloud.origin).cast<float>();
+    f.cloud = filter_cloud(f.cloud, local, &f.filter_counts);
   }
   if (f.cloud.size() < 3) {
     throw Error(f.name, "filter",

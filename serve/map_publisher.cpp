@@ -1,5 +1,6 @@
 #include "serve/map_publisher.h"
 
+#include <exception>
 #include <utility>
 
 #include "runtime/error.h"
@@ -123,7 +124,7 @@ void MapPublisher::coder_loop() {
       try {
         b.payload =
             std::make_shared<const std::string>(encode_block_payload(p.coords, p.mesh, config_));
-      } catch (const Error&) {
+      } catch (const std::exception&) {  // the codec's refusal, or memory for the block
         b.payload = std::make_shared<const std::string>();  // shown as removed
         ++errors;
       }

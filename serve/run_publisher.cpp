@@ -1,6 +1,7 @@
 #include "serve/run_publisher.h"
 
 #include <chrono>
+#include <exception>
 #include <map>
 #include <nlohmann/json.hpp>
 #include <utility>
@@ -152,8 +153,8 @@ void RunPublisher::encoder_loop() {
       }
       server_.publish_mesh(std::move(o.encoded));
       published = true;
-    } catch (const Error&) {
-      // A mesh the codec refuses is not shown; the run goes on (counted).
+    } catch (const std::exception&) {
+      // A mesh the codec refuses (or memory for it) is not shown; the run goes on (counted).
     }
     lock.lock();
     encoding_ = false;

@@ -6,10 +6,11 @@
 // run never waits on the encoder or the network. Meshes are encoded only while a viewer is
 // connected, except the last one (finish()), so a viewer that comes later sees the result.
 //
-// Stats message: {"type":"stats","source":S,"frame":I,"frames":N,"failed":F,
+// Stats message: {"type":"stats","source":S,"frame":I,"ok":B,"frames":N,
 //   "frames_per_second":R,"stages_ms":{stage:ms},"vertices":V,"triangles":T,
-//   "meshes_replaced":D} and, from finish(), "state":"finished" with "wall_s" (to the last
-//   frame; the rate over it).
+//   "meshes_replaced":D}; from finish(): {"type":"stats","source":S,"state":"finished",
+//   "frames":N,"wall_s":W (to the last frame),"frames_per_second":R (over it),
+//   "meshes_published":P,"meshes_replaced":D}.
 
 #include <condition_variable>
 #include <cstdint>

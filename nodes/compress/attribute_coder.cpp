@@ -75,14 +75,16 @@ RingSums ring_sums(const DecodedGeometry& g) {
     const auto& a = g.grid[t[0]];
     const auto& b = g.grid[t[1]];
     const auto& c = g.grid[t[2]];
-    std::int64_t e[3], f[3];
+    // In doubles: the same IEEE operations in encoder and decoder (native or WebAssembly), exact
+    // up to 2^26 grid steps, and no overflow for a corrupt stream's grid (any int32, where int64
+    // products would overflow).
+    double e[3], f[3];
     for (std::size_t k = 0; k < 3; ++k) {
-      e[k] = std::int64_t{b[k]} - a[k];
-      f[k] = std::int64_t{c[k]} - a[k];
+      e[k] = static_cast<double>(b[k]) - a[k];
+      f[k] = static_cast<double>(c[k]) - a[k];
     }
-    const double n[3] = {static_cast<double>(e[1] * f[2] - e[2] * f[1]),
-                         static_cast<double>(e[2] * f[0] - e[0] * f[2]),
-                         static_cast<double>(e[0] * f[1] - e[1] * f[0])};
+    const double n[3] = {e[1] * f[2] - e[2] * f[1], e[2] * f[0] - e[0] * f[2],
+                         e[0] * f[1] - e[1] * f[0]};
     const double length = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
     for (std::uint32_t v : t) {
       for (std::size_t k = 0; k < 3; ++k) r.sum[v][k] += n[k];
@@ -262,12 +264,12 @@ std::vector<Rgb8> decode_colors(const DecodedGeometry& g, RangeDecoder& dec) {
     std::size_t count = 0;
     const std::array<std::int32_t, 3> p = predict_color(adj, colors, i, count);
     std::array<std::int32_t, 3> d{};
-    d[0] = m.y[std::min<std::size_t>(count, 3)].decode(dec);
+    // Residuals of a valid stream are within +-1020; clamping keeps corrupt ones from
+    // overflowing (the checksum reports the corruption), Y's before its context negates it.
+    d[0] = std::clamp(m.y[std::min<std::size_t>(count, 3)].decode(dec), -4096, 4096);
     const std::size_t ctx = ColorModels::chroma_context(d[0]);
     d[1] = m.co[ctx].decode(dec);
     d[2] = m.cg[ctx].decode(dec);
-    // Residuals of a valid stream are within +-1020; clamping keeps corrupt ones from
-    // overflowing (the checksum reports the corruption).
     for (std::int32_t& x : d) x = std::clamp(x, -4096, 4096);
     const std::array<std::int32_t, 3> rgb = from_ycocg(d);
     const auto channel = [](std::int32_t v) {

@@ -123,10 +123,14 @@ bool is_map_frame(const Eigen::Vector3d& origin) {
 Eigen::Vector3f local_position(const Eigen::Vector3d& p, const Eigen::Vector3d& origin,
                                const std::string& source, std::string_view what,
                                std::uint64_t index) {
+  const Eigen::Vector3d local = p - origin;
   // Map coordinates reach 1e7 m (UTM northings; eastings with a zone prefix under 1e8): past
   // that a number is no position on Earth, first point or not.
   constexpr double kMaxGeoreferenced = 1e8;
-  const Eigen::Vector3d local = p - origin;
+  // Fast path (every point of a good file): one comparison per coordinate (NaN fails them).
+  if ((local.array().abs() <= kMaxAbsCoordinate).all() &&
+      (p.array().abs() <= kMaxGeoreferenced).all())
+    return local.cast<float>();
   for (int i = 0; i < 3; ++i) {
     if (!std::isfinite(p[i])) continue;
     char where[160] = "";

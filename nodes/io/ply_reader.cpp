@@ -466,8 +466,14 @@ TriangleMesh read_ply_mesh(const std::string& path) {
   TriangleMesh mesh;
   read_ply_elements(path, cloud, &mesh.triangles);
   mesh.vertices = std::move(cloud.positions);
-  if (!cloud.origin.isZero())  // a mesh has no local frame: world coordinates, as floats hold them
-    for (Eigen::Vector3f& v : mesh.vertices) v = (v.cast<double>() + cloud.origin).cast<float>();
+  // A mesh has no local frame: world coordinates, as floats, which hold them to a few mm within
+  // 1e6 m; farther out (a UTM northing: 0.5 m steps) the mesh is refused, as before.
+  if (!cloud.origin.isZero())
+    for (std::size_t i = 0; i < mesh.vertices.size(); ++i) {
+      const Eigen::Vector3d world = mesh.vertices[i].cast<double>() + cloud.origin;
+      check_coordinates(world, path, "vertex", i);
+      mesh.vertices[i] = world.cast<float>();
+    }
   mesh.normals = std::move(cloud.normals);
   mesh.colors = std::move(cloud.colors);
   return mesh;

@@ -25,8 +25,9 @@ PointCloud read_ply(const std::string& path);
 void read_ply_batches(const std::string& path, std::size_t batch,
                       const std::function<void(const PointCloud&)>& sink);
 
-/// Reads a PLY mesh: the vertex element as in read_ply (positions, normals, colours; map
-/// coordinates back in the world frame: a TriangleMesh has no local origin) and the
+/// Reads a PLY mesh: the vertex element as in read_ply (positions, normals, colours; in world
+/// coordinates, refused beyond +-1e6 m as floats hold them no better: a TriangleMesh has no
+/// local origin) and the
 /// `face` element's `vertex_indices` lists (polygons are fan-triangulated). Throws
 /// A file without a `face` element gives a mesh without triangles (a point set). Throws
 /// meshflow::Error naming the file and face row for an index out of range or a face with fewer

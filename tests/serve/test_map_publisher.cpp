@@ -157,7 +157,7 @@ TEST(MapPublisher, TheBlocksAViewerWasSentAssembleToTheFusedMesh) {
   Server server{config_with_page()};
   Client viewer;
   ASSERT_FALSE(viewer.connect(server.port()));
-  for (int i = 0; i < 100 && server.stats().clients < 1; ++i) std::this_thread::sleep_for(10ms);
+  for (int i = 0; i < 1000 && server.stats().clients < 1; ++i) std::this_thread::sleep_for(10ms);
   const FusionConfig config = fusion_config();
   FusionPipeline pipeline(config, 2);
   MapPublisher publisher(server, kVoxel, config.min_weight, /*min_interval_s=*/0.0);
@@ -189,7 +189,7 @@ TEST(MapPublisher, AViewerThatNeverReadsWaitsForEachBlockAtMostOnce) {
   Server server{config_with_page()};
   Client stalled(4096);
   ASSERT_FALSE(stalled.connect(server.port()));
-  for (int i = 0; i < 100 && server.stats().clients < 1; ++i) std::this_thread::sleep_for(10ms);
+  for (int i = 0; i < 1000 && server.stats().clients < 1; ++i) std::this_thread::sleep_for(10ms);
   const FusionConfig config = fusion_config();
   FusionPipeline pipeline(config, 2);
   MapPublisher publisher(server, kVoxel, config.min_weight, 0.0);

@@ -116,7 +116,7 @@ TEST(RunPublisher, AViewerThatNeverReadsCostsTheSinkOnlyDroppedFrames) {
   Server server{config_with_page()};
   Client stalled(4096);
   ASSERT_FALSE(stalled.connect(server.port()));
-  for (int i = 0; i < 100 && server.stats().clients < 1; ++i) std::this_thread::sleep_for(10ms);
+  for (int i = 0; i < 1000 && server.stats().clients < 1; ++i) std::this_thread::sleep_for(10ms);
   RunPublisher publisher(server, "test");
   const Frame f = frame_with_mesh(0, mesh);
   for (std::size_t i = 0; i < 200; ++i) publisher.frame(f, true);

@@ -117,6 +117,14 @@ TEST(CliOrientation, AnXyzTerrainTileInMapCoordinatesFacesUp) {
   ASSERT_GT(mesh.triangles.size(), 1000u);
   EXPECT_GE(share_up(mesh), 0.98);                 // (98.9 % measured)
   EXPECT_GT(mesh.vertices.front().x(), 51000.0f);  // written back in world coordinates
+  // --crop is in the file's own (world) coordinates too: the western half.
+  const test::CliRun cropped =
+      test::run_cli("reconstruct " + dir + "/tile.xyz -o " + dir +
+                    "/west.ply --voxel 1 --crop 51990,42990,0,52025,43060,1000");
+  ASSERT_EQ(cropped.exit_code, 0) << cropped.err;
+  const TriangleMesh west = io::read_mesh(dir + "/west.ply");
+  ASSERT_GT(west.triangles.size(), 200u);
+  for (const Eigen::Vector3f& v : west.vertices) ASSERT_LT(v.x(), 52027.0f);
 }
 
 TEST(CliOrientation, UpDownFlipAndViewpointsInWorldCoordinates) {

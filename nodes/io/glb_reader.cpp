@@ -3,7 +3,9 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <limits>
 #include <nlohmann/json.hpp>
+#include <type_traits>
 
 #include "nodes/io/byte_buffer.h"
 #include "runtime/error.h"
@@ -90,10 +92,34 @@ class GlbDocument {
   T get(const nlohmann::json& object, const char* key, const std::string& field) const {
     if (!object.is_object() || !object.contains(key))
       throw Error(source_, field, std::string("has no '") + key + "'");
+    return as<T>(object.at(key), field + "." + key);
+  }
+
+  // A member of `object` as T, `fallback` when absent, or an error naming `field`.
+  template <typename T>
+  T optional(const nlohmann::json& object, const char* key, T fallback,
+             const std::string& field) const {
+    if (!object.is_object() || !object.contains(key)) return fallback;
+    return as<T>(object.at(key), field + "." + key);
+  }
+
+  // `value` as T; integers must be JSON integers in T's range (nlohmann would cast a float such
+  // as 1e30 or -1.5 to an integer type, which is undefined behaviour).
+  template <typename T>
+  T as(const nlohmann::json& value, const std::string& field) const {
+    if constexpr (std::is_integral_v<T> && !std::is_same_v<T, bool>) {
+      const bool fits = std::is_unsigned_v<T>
+                            ? value.is_number_unsigned() &&
+                                  value.get<std::uint64_t>() <= std::numeric_limits<T>::max()
+                            : value.is_number_integer() &&
+                                  value.get<std::int64_t>() >= std::numeric_limits<T>::min() &&
+                                  value.get<std::int64_t>() <= std::numeric_limits<T>::max();
+      if (!fits) throw Error(source_, field, "expected an integer in range");
+    }
     try {
-      return object.at(key).get<T>();
+      return value.get<T>();
     } catch (const nlohmann::json::exception&) {
-      throw Error(source_, field + "." + key, "has the wrong type");
+      throw Error(source_, field, "has the wrong type");
     }
   }
 
@@ -113,7 +139,7 @@ class GlbDocument {
     v.count = get<std::size_t>(a, "count", field);
     v.component = get<int>(a, "componentType", field);
     v.width = type_width(get<std::string>(a, "type", field));
-    v.normalized = a.value("normalized", false);
+    v.normalized = optional(a, "normalized", false, field);
     if (v.width == 0 || (v.component != kUnsignedByte && v.component != kUnsignedShort &&
                          v.component != kUnsignedInt && v.component != kFloat))
       throw Error(source_, field,
@@ -125,11 +151,11 @@ class GlbDocument {
     if (get<std::size_t>(view, "buffer", view_field) != 0 || bin_ == nullptr)
       throw Error(source_, view_field, "refers to a buffer outside the file's BIN chunk");
     const std::size_t element_bytes = v.width * component_size(v.component);
-    v.stride = view.value("byteStride", std::size_t{0});
+    v.stride = optional(view, "byteStride", std::size_t{0}, view_field);
     if (v.stride == 0) v.stride = element_bytes;
-    const std::size_t view_offset = view.value("byteOffset", std::size_t{0});
+    const std::size_t view_offset = optional(view, "byteOffset", std::size_t{0}, view_field);
     const std::size_t view_length = get<std::size_t>(view, "byteLength", view_field);
-    const std::size_t offset = a.value("byteOffset", std::size_t{0});
+    const std::size_t offset = optional(a, "byteOffset", std::size_t{0}, field);
     // The last element ends at offset + (count - 1) * stride + element bytes, inside the view,
     // and the view inside the chunk (checked without overflow).
     if (view_offset > bin_size_ || view_length > bin_size_ - view_offset ||
@@ -137,6 +163,13 @@ class GlbDocument {
                          (v.count - 1) > (view_length - offset) / v.stride ||
                          (v.count - 1) * v.stride + element_bytes > view_length - offset)))
       throw Error(source_, field, "reaches past its buffer view or the BIN chunk");
+    // Primitives may share an accessor, each decoding it again: bounded, so that a small file
+    // cannot make the reader allocate without limit (count * element_bytes <= the chunk here).
+    decoded_bytes_ += v.count * element_bytes;
+    if (decoded_bytes_ > kMaxDecodedPerByte * bin_size_ + kDecodedSlack)
+      throw Error(source_, field,
+                  "the accessors decoded so far hold more than 16 times the BIN chunk's bytes "
+                  "(accessors shared by that many primitives are not read)");
     v.data = bin_ + view_offset + offset;
     return v;
   }
@@ -148,6 +181,8 @@ class GlbDocument {
   nlohmann::json doc_;
   const unsigned char* bin_ = nullptr;
   std::size_t bin_size_ = 0;
+  static constexpr std::size_t kMaxDecodedPerByte = 16, kDecodedSlack = std::size_t{1} << 16;
+  mutable std::size_t decoded_bytes_ = 0;  ///< element bytes of every accessor() so far
 };
 
 void check(const AccessorView& v, std::size_t width, bool float_only, const std::string& source,
@@ -177,7 +212,7 @@ TriangleMesh decode(const std::vector<unsigned char>& bytes, const std::string& 
     for (std::size_t p = 0; p < primitives.size(); ++p) {
       const std::string field = mesh_field + ".primitives[" + std::to_string(p) + "]";
       const nlohmann::json& primitive = primitives[p];
-      if (primitive.value("mode", 4) != 4)
+      if (glb.optional(primitive, "mode", 4, field) != 4)
         throw Error(source, field + ".mode", "not triangles (mode 4)");
       const auto attributes = glb.get<nlohmann::json>(primitive, "attributes", field);
       const AccessorView position =

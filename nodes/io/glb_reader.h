@@ -18,8 +18,9 @@ namespace meshflow::io {
 /// are as stored: node transforms (a georeferenced mesh's translation) are not applied.
 /// Throws meshflow::Error naming `source` and the JSON field or byte offset for a wrong magic,
 /// version or chunk, a buffer outside the binary chunk, an accessor type it does not read,
-/// sparse accessors, external buffer URIs, a non-triangle primitive or an index out of range.
-/// O(file size).
+/// sparse accessors, external buffer URIs, a non-triangle primitive, an index out of range, a
+/// non-integer or negative count / offset / index field, or accessors decoding more than 16
+/// times the binary chunk (shared by that many primitives). O(file size).
 TriangleMesh decode_glb(const std::vector<unsigned char>& bytes, const std::string& source);
 
 /// decode_glb() of the file at `path`. Throws meshflow::Error naming the file.

@@ -276,12 +276,25 @@ TEST(MeshFormats, GlbReaderRefusesBrokenFiles) {
   index["accessors"][indices]["componentType"] = 5126;  // float indices
   nlohmann::json lines = doc;
   lines["meshes"][0]["primitives"][0]["mode"] = 1;
+  // Numbers nlohmann would cast to integers with undefined behaviour: refused by name.
+  nlohmann::json huge = doc;
+  huge["accessors"][0]["count"] = 1e30;
+  nlohmann::json negative = doc;
+  negative["bufferViews"][0]["byteStride"] = -1.5;
+  // A primitive repeated 600 times decodes its accessors 600 times: refused past 16x the chunk
+  // (and 64 KiB).
+  nlohmann::json repeated = doc;
+  for (int i = 0; i < 600; ++i)
+    repeated["meshes"][0]["primitives"].push_back(doc["meshes"][0]["primitives"][0]);
   const struct {
     std::vector<unsigned char> bytes;
     const char* expected;
   } cases[] = {{rebuild(far), "accessors[0]"},
                {rebuild(index), "indices"},
                {rebuild(lines), "mode"},
+               {rebuild(huge), "accessors[0].count"},
+               {rebuild(negative), "byteStride"},
+               {rebuild(repeated), "16 times"},
                {std::vector<unsigned char>(40, 'x'), "magic"}};
   for (const auto& c : cases) {
     try {

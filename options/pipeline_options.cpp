@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <stdexcept>
 
 #include "nodes/extract/extract_surface.h"
 #include "nodes/optimize/optimize_mesh.h"
@@ -214,6 +215,12 @@ std::vector<OptionSpec> make_specs() {
 const std::vector<OptionSpec>& pipeline_option_specs() {
   static const std::vector<OptionSpec> specs = make_specs();
   return specs;
+}
+
+const OptionSpec& option_spec(const std::string& name) {
+  for (const OptionSpec& spec : pipeline_option_specs())
+    if (name == spec.name) return spec;
+  throw std::out_of_range("option_spec: '" + name + "' is not in the option model");
 }
 
 std::string python_name(const OptionSpec& spec) {

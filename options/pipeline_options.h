@@ -74,6 +74,10 @@ struct OptionSpec {
 /// The table, in the order the CLI's help lists them. Thread-safe (a constant).
 const std::vector<OptionSpec>& pipeline_option_specs();
 
+/// The row named `name` (CLI spelling without "--"). Throws std::out_of_range for a name not in
+/// the table (a programming error). O(rows).
+const OptionSpec& option_spec(const std::string& name);
+
 /// `spec`'s name as a Python keyword: dashes as underscores; "normals" is "normal_source" there
 /// (Python's `normals` argument is the normal array).
 std::string python_name(const OptionSpec& spec);

@@ -16,11 +16,8 @@ void bind_compress(py::module_& m) {
          int normal_bits) {
         options::PipelineOptions model;
         model.normal_bits = normal_bits;
-        for (const options::OptionSpec& spec : options::pipeline_option_specs())
-          if (std::string(spec.name) == "normal-bits") {
-            const std::string problem = spec.check(model);
-            if (!problem.empty()) throw py::value_error("normal_bits: " + problem);
-          }
+        const std::string problem = options::option_spec("normal-bits").check(model);
+        if (!problem.empty()) throw py::value_error("normal_bits: " + problem);
         compress::CompressConfig config;
         config.normal_bits = static_cast<unsigned>(normal_bits);
         config.position_bits = bits;

@@ -10,7 +10,6 @@
 #include "nodes/io/mesh_readers.h"
 #include "nodes/io/mesh_writers.h"
 #include "options/pipeline_options.h"
-#include "runtime/error.h"
 #include "runtime/threads.h"
 #include "tools/commands.h"
 #include "tools/console.h"
@@ -27,13 +26,6 @@ struct CompressOptions {
   options::PipelineOptions model;  // the option model's settings (--normal-bits)
   float base_ratio = 0.02f;
 };
-
-// The option model's row `name` (options/pipeline_options.h).
-const options::OptionSpec& model_spec(const char* name) {
-  for (const options::OptionSpec& s : options::pipeline_option_specs())
-    if (std::string(s.name) == name) return s;
-  throw Error("meshflow", name, "not in the option model");
-}
 
 const char* kind_name(compress::CompressionKind kind) {
   return kind == compress::CompressionKind::kProgressive ? "progressive" : "edgebreaker";
@@ -211,7 +203,7 @@ void add_compress_options(CLI::App* cmd) {
       ->check(CLI::PositiveNumber)
       ->default_str("auto");
   cmd->add_flag("--no-normals", o->no_normals, "Leave the mesh's normals out");
-  cmd->add_option("--normal-bits", o->model.normal_bits, model_spec("normal-bits").help)
+  cmd->add_option("--normal-bits", o->model.normal_bits, options::option_spec("normal-bits").help)
       ->capture_default_str()
       ->check([](const std::string& text) -> std::string {
         options::PipelineOptions value;
@@ -220,7 +212,7 @@ void add_compress_options(CLI::App* cmd) {
         } catch (const std::exception&) {
           return "expected an integer, got '" + text + "'";
         }
-        return model_spec("normal-bits").check(value);
+        return options::option_spec("normal-bits").check(value);
       });
   cmd->add_flag("--no-colors", o->no_colors, "Leave the mesh's colours out");
   cmd->add_option("--base-ratio", o->base_ratio,

@@ -311,7 +311,16 @@ PYBIND11_MODULE(meshflow, m) {
         std::vector<float> d;
         {
           py::gil_scoped_release no_gil;
-          d = nearest_point_distances(mesh.data->vertices, cloud.positions);
+          // The mesh's vertices in the cloud's frame (each may be georeferenced: a local frame
+          // at its own origin, or world coordinates).
+          const Eigen::Vector3d shift = mesh.origin - cloud.origin;
+          if (shift.isZero()) {
+            d = nearest_point_distances(mesh.data->vertices, cloud.positions);
+          } else {
+            std::vector<Eigen::Vector3f> vertices = mesh.data->vertices;
+            for (Eigen::Vector3f& v : vertices) v = (v.cast<double>() + shift).cast<float>();
+            d = nearest_point_distances(vertices, cloud.positions);
+          }
         }
         py::array_t<float> out(static_cast<py::ssize_t>(d.size()));
         std::copy(d.begin(), d.end(), out.mutable_data());
@@ -319,8 +328,8 @@ PYBIND11_MODULE(meshflow, m) {
       },
       py::arg("mesh"), py::arg("points"),
       R"(Each vertex's distance in metres to the nearest of `points` (a Cloud or (n, 3) array,
-e.g. the cloud the mesh was made from), as a (v,) float32 array: what reconstruct --quality
-writes. Exact (kd-tree); parallel, the GIL released.)");
+e.g. the cloud the mesh was made from; georeferenced ones compared in one frame), as a (v,)
+float32 array: what reconstruct --quality writes. Exact (kd-tree); parallel, the GIL released.)");
 
   m.def(
       "evaluate",

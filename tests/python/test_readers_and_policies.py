@@ -167,3 +167,21 @@ def test_offline_callback_may_push_without_waiting_for_itself():
     assert stats["pushed"] == 5
     assert stats["delivered"] + stats["rejected"] == 5 and stats["dropped"] == 0
     assert results == sorted(results)
+
+
+def test_vertex_quality_compares_georeferenced_mesh_and_cloud_in_one_frame(tmp_path):
+    """A terrain tile in map coordinates is read in a local frame; its mesh written and read
+    back is in world coordinates: the distances are the same either way."""
+    x, y = np.meshgrid(np.arange(0, 20, 0.4), np.arange(0, 20, 0.4))
+    z = 300 + np.sin(0.3 * x) * np.cos(0.2 * y)
+    xyz = np.column_stack([52000 + x.ravel(), 43000 + y.ravel(), z.ravel()])
+    path = str(tmp_path / "tile.xyz")
+    np.savetxt(path, xyz, fmt="%.3f")
+    cloud = meshflow.read_cloud(path)
+    mesh = meshflow.reconstruct(cloud, voxel=0.5)
+    local = meshflow.vertex_quality(mesh, cloud)
+    assert np.median(local) < 0.3 and local.max() < 1.0  # (points 0.4 m apart)
+    mesh.write(str(tmp_path / "tile.ply"))
+    world = meshflow.read_mesh(str(tmp_path / "tile.ply"))
+    assert np.asarray(world.vertices)[:, 0].min() > 51000
+    assert np.allclose(meshflow.vertex_quality(world, cloud), local, atol=0.01)

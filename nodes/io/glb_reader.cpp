@@ -108,12 +108,14 @@ class GlbDocument {
   template <typename T>
   T as(const nlohmann::json& value, const std::string& field) const {
     if constexpr (std::is_integral_v<T> && !std::is_same_v<T, bool>) {
-      const bool fits = std::is_unsigned_v<T>
-                            ? value.is_number_unsigned() &&
-                                  value.get<std::uint64_t>() <= std::numeric_limits<T>::max()
-                            : value.is_number_integer() &&
-                                  value.get<std::int64_t>() >= std::numeric_limits<T>::min() &&
-                                  value.get<std::int64_t>() <= std::numeric_limits<T>::max();
+      bool fits = std::is_unsigned_v<T> ? value.is_number_unsigned() : value.is_number_integer();
+      if constexpr (sizeof(T) < sizeof(std::int64_t)) {  // (64-bit types hold any such number)
+        if (fits && std::is_unsigned_v<T>)
+          fits = value.get<std::uint64_t>() <= std::uint64_t{std::numeric_limits<T>::max()};
+        else if (fits)
+          fits = value.get<std::int64_t>() >= std::int64_t{std::numeric_limits<T>::min()} &&
+                 value.get<std::int64_t>() <= std::int64_t{std::numeric_limits<T>::max()};
+      }
       if (!fits) throw Error(source_, field, "expected an integer in range");
     }
     try {

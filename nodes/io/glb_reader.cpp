@@ -8,15 +8,18 @@
 #include <type_traits>
 
 #include "nodes/io/byte_buffer.h"
+#include "nodes/io/glb_format.h"
 #include "runtime/error.h"
 
 namespace meshflow::io {
 namespace {
 
-constexpr std::uint32_t kGlbMagic = 0x46546C67;   // "glTF"
-constexpr std::uint32_t kJsonChunk = 0x4E4F534A;  // "JSON"
-constexpr std::uint32_t kBinChunk = 0x004E4942;   // "BIN\0"
-constexpr int kUnsignedByte = 5121, kUnsignedShort = 5123, kUnsignedInt = 5125, kFloat = 5126;
+using glb::kBinChunk;
+using glb::kFloat;
+using glb::kJsonChunk;
+using glb::kUnsignedByte;
+using glb::kUnsignedInt;
+using glb::kUnsignedShort;
 
 std::size_t component_size(int type) {
   return type == kUnsignedByte ? 1 : type == kUnsignedShort ? 2 : 4;
@@ -63,7 +66,7 @@ class GlbDocument {
   GlbDocument(const std::vector<unsigned char>& bytes, const std::string& source)
       : source_(source) {
     ByteReader in(source, bytes);
-    if (in.u32("magic") != kGlbMagic) in.fail("magic", "not a binary glTF file (no 'glTF')");
+    if (in.u32("magic") != glb::kMagic) in.fail("magic", "not a binary glTF file (no 'glTF')");
     if (const std::uint32_t version = in.u32("version"); version != 2)
       throw Error(source, "version", "glTF " + std::to_string(version) + " (reads version 2)");
     if (in.u32("length") > bytes.size())

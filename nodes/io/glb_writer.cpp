@@ -5,15 +5,18 @@
 #include <nlohmann/json.hpp>
 
 #include "nodes/io/atomic_file.h"
+#include "nodes/io/glb_format.h"
 #include "runtime/error.h"
 
 namespace meshflow::io {
 namespace {
 
-constexpr std::uint32_t kGlbMagic = 0x46546C67;   // "glTF"
-constexpr std::uint32_t kJsonChunk = 0x4E4F534A;  // "JSON"
-constexpr std::uint32_t kBinChunk = 0x004E4942;   // "BIN\0"
-constexpr int kFloat = 5126, kUnsignedByte = 5121, kUnsignedInt = 5125;
+using glb::kBinChunk;
+using glb::kFloat;
+using glb::kJsonChunk;
+using glb::kUnsignedByte;
+using glb::kUnsignedInt;
+
 constexpr int kArrayBuffer = 34962, kElementArrayBuffer = 34963;
 
 template <typename T>
@@ -115,7 +118,7 @@ std::vector<std::uint8_t> encode_glb(const TriangleMesh& mesh, const Eigen::Vect
       {"accessors", buffers.accessors()}};
   const std::string json = doc.dump();
   std::vector<std::uint8_t> out;
-  append(out, kGlbMagic);
+  append(out, glb::kMagic);
   append(out, std::uint32_t{2});
   append(out, std::uint32_t{0});  // total length, set below
   append_chunk(out, kJsonChunk, std::vector<std::uint8_t>(json.begin(), json.end()), ' ');

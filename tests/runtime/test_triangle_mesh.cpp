@@ -145,7 +145,9 @@ std::vector<std::pair<std::vector<Triangle>, std::size_t>> fan_test_meshes() {
 }
 
 TEST(VertexFans, MatchTheDefinitionOnEveryKindOfVertex) {
-  for (const auto& [tris, n] : fan_test_meshes()) {
+  for (const auto& mesh : fan_test_meshes()) {
+    const std::vector<Triangle>& tris = mesh.first;  // (no structured binding: lambdas use it)
+    const std::size_t n = mesh.second;
     const VertexTriangles around = vertex_triangles(tris, n);
     for (int threads : {1, 2}) {
       std::vector<std::uint32_t> fan;
@@ -170,7 +172,9 @@ TEST(VertexFans, MatchTheDefinitionOnEveryKindOfVertex) {
 }
 
 TEST(VertexFans, RemovingTheSmallerFansLeavesOneFanEverywhereWithAnyThreadCount) {
-  for (const auto& [tris, n] : fan_test_meshes()) {
+  for (const auto& mesh : fan_test_meshes()) {
+    const std::vector<Triangle>& tris = mesh.first;  // (no structured binding: lambdas use it)
+    const std::size_t n = mesh.second;
     std::vector<Triangle> results[2];
     for (int threads : {1, 2}) {
       std::vector<Triangle> kept = tris;

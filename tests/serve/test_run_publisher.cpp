@@ -128,12 +128,9 @@ TEST(RunPublisher, AViewerThatNeverReadsCostsTheSinkOnlyDroppedFrames) {
   EXPECT_EQ(c.encode_errors, 0u);
   EXPECT_GT(c.meshes_replaced, 0u) << "frames offered faster than encoded are replaced";
   const ServerStats s = server.stats();
-  // Of three or more meshes published, the stalled viewer (one being written, one waiting) must
-  // have lost some at the server too; under a sanitizer the encoder is slow enough that the
-  // publisher's slot absorbs nearly all, and as few as one or two meshes reach the server.
-  if (c.meshes_encoded >= 3) {
-    EXPECT_GT(s.frames_dropped + s.publications_replaced, 0u);
-  }
+  // (Server-side dropping for a stalled viewer is Server.AClientThatNeverReadsDoesNotBlock-
+  // Publishing's: here few meshes may reach the server, and the kernel's socket buffers can
+  // hold them all, under a sanitizer's slow encoder especially.)
   // One mesh (header + one chunk: a single-rate image under 64 kB... or a few chunks), one
   // stats message and the frame being written.
   const std::size_t chunks = compress::compress_mesh(mesh).size() / (64 * 1024) + 1;

@@ -8,6 +8,9 @@
 #include <sstream>
 #include <string>
 
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
 #include "test_support.h"
 
 namespace meshflow::test {
@@ -30,6 +33,18 @@ inline CliRun run_cli(const std::string& args) {
     return s.str();
   };
   return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, slurp(dir + "/out"), slurp(dir + "/err")};
+}
+
+/// The JSON document a successful `run` printed (--json); a test failure, and an empty document,
+/// for a non-zero exit or output that is not JSON.
+inline nlohmann::json json_of(const CliRun& run) {
+  EXPECT_EQ(run.exit_code, 0) << run.err;
+  try {
+    return nlohmann::json::parse(run.out);
+  } catch (const nlohmann::json::exception& e) {
+    ADD_FAILURE() << e.what() << "\n" << run.out;
+    return {};
+  }
 }
 
 }  // namespace meshflow::test

@@ -21,14 +21,7 @@ namespace {
 constexpr double kPi = 3.14159265358979323846;
 
 nlohmann::json info_json(const std::string& path) {
-  const test::CliRun run = test::run_cli("info " + path + " --json");
-  EXPECT_EQ(run.exit_code, 0) << run.err;
-  try {
-    return nlohmann::json::parse(run.out);
-  } catch (const nlohmann::json::exception& e) {
-    ADD_FAILURE() << e.what() << "\n" << run.out;
-    return {};
-  }
+  return test::json_of(test::run_cli("info " + path + " --json"));
 }
 
 TEST(CliInfo, ReconstructedObjectsHaveTheirAnalyticAreaVolumeAndGenus) {

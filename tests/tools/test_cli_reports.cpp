@@ -11,15 +11,7 @@
 namespace meshflow {
 namespace {
 
-nlohmann::json json_of(const test::CliRun& run) {
-  EXPECT_EQ(run.exit_code, 0) << run.err;
-  try {
-    return nlohmann::json::parse(run.out);
-  } catch (const nlohmann::json::exception& e) {
-    ADD_FAILURE() << e.what() << "\n" << run.out;
-    return {};
-  }
-}
+using test::json_of;
 
 TEST(CliReports, ChunkedRunsReportTheKeysOfOneProcess) {
   const std::string dir = test::temp_dir();

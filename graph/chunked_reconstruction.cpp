@@ -7,6 +7,7 @@
 #include "nodes/chunk/mesh_stitch.h"
 #include "nodes/extract/rim_trim.h"
 #include "nodes/io/read_point_cloud.h"
+#include "nodes/normals/scene_side.h"
 #include "nodes/search/spatial_index.h"
 #include "runtime/error.h"
 #include "runtime/tracing.h"
@@ -50,7 +51,7 @@ ReconstructionConfig chunk_stage_config(const ReconstructionConfig& config, floa
   c.voxelize.voxel_size = voxel_size;
   c.optimize.steps.clear();
   c.compression = MeshCompression::kNone;
-  c.normals.may_be_camera_view = false;  // a chunk is a piece of a larger cloud, never one view
+  c.normals.whole_scene = false;  // a chunk is a piece of a larger cloud: no view, no terrain
   return c;
 }
 
@@ -89,6 +90,12 @@ std::unique_ptr<chunk::ChunkStore> partition_input(
       const chunk::ChunkGrid grid = grid_from_first_batch(batch, voxel_size, chunking, path);
       voxel_size = grid.voxel_size;
       store = std::make_unique<chunk::ChunkStore>(grid, chunking.directory);
+      store->add(batch);
+      // A chunk cannot tell a terrain from an object by itself (whole_scene is off for chunks):
+      // the first batch decides for all, as one process decides for the whole cloud.
+      if (!batch.has_normals() && classify_scene(batch) == SceneKind::kHeightField)
+        store->set_z_up();
+      return;
     }
     store->add(batch);
   });

@@ -73,20 +73,17 @@ std::string normals_plan(const PointCloud& cloud, nlohmann::json& plan) {
     return std::string("none in the file: estimated, --orient auto = ") + orientation_name(o) +
            (cloud.has_sensor_origin ? " (towards the sensor position)"
                                     : " (organized: towards the sensor at the origin)");
-  const ComponentSide side = scene_side(cloud);
-  const char* rule = side == ComponentSide::kAlongAxis
-                         ? "up (LAS or map coordinates: heights along z)"
-                     : side == ComponentSide::kViewOrOutward
-                         ? "towards the origin if the normals agree on one camera view, else "
-                           "outward"
-                         : "outward (a closed object)";
+  const SceneKind scene = classify_scene(cloud);
+  const ComponentSide side = side_of_scene(scene);
   plan["side"] = side == ComponentSide::kAlongAxis       ? "up"
+                 : side == ComponentSide::kAxisOrOutward ? "up-or-outward"
                  : side == ComponentSide::kViewOrOutward ? "camera-view-or-outward"
                                                          : "outward";
+  plan["scene"] = scene_kind_name(scene);
   return std::string(
              "none in the file: estimated, --orient auto = propagate (no sensor "
              "position: consistent over neighbours, then ") +
-         rule + ")";
+         scene_rule(scene) + ")";
 }
 
 // -v: the settings that decide the mesh, as the stages will use them.

@@ -54,6 +54,7 @@ nlohmann::json normals_json(const Frame& f) {
       n["components"] = r.components;
       n["flipped_by_vote"] = r.flipped_by_vote;
       n["side"] = side_name(r.side, r.side_axis);
+      if (r.orientation == NormalOrientation::kPropagate) n["scene"] = scene_kind_name(r.scene);
     }
   }
   n["flipped"] = r.flipped;

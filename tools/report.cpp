@@ -8,6 +8,21 @@
 
 namespace meshflow::cli {
 
+const char* scene_rule(SceneKind kind) {
+  switch (kind) {
+    case SceneKind::kMapFrame:
+      return "up (LAS or map coordinates: heights along z)";
+    case SceneKind::kHeightField:
+      return "up (one surface over x-y, a terrain tile, unless its normals disagree on up: "
+             "--orient down or flip turns it)";
+    case SceneKind::kCameraView:
+      return "towards the origin if the normals agree on one camera view, else outward";
+    case SceneKind::kObject:
+      break;
+  }
+  return "outward (a closed object)";
+}
+
 namespace {
 
 // Which way propagation turned the components, and why.
@@ -17,14 +32,13 @@ std::string side_rule(const NormalsReport& r) {
     case ComponentSide::kTowardPoint:
       return "facing the origin (one camera view in its camera frame)";
     case ComponentSide::kAlongAxis:
-      return r.orientation == NormalOrientation::kPropagate
-                 ? name + " (LAS or map coordinates: heights along z)"
-                 : name;
+      return r.orientation == NormalOrientation::kPropagate ? scene_rule(r.scene) : name;
     case ComponentSide::kOutward:
     case ComponentSide::kViewOrOutward:
+    case ComponentSide::kAxisOrOutward:
       break;
   }
-  return "outward (a closed object, or no single view)";
+  return "outward (a closed object, or no single view or surface over x-y)";
 }
 
 }  // namespace

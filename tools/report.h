@@ -15,6 +15,10 @@ void print_frame_report(const Frame& frame, double wall_s, int threads);
 /// propagation (1 component, 3 turned by the vote)".
 std::string describe_normals(const NormalsReport& report);
 
+/// Why automatic propagation turned a scene of this kind as it did, for the console: e.g.
+/// "up (LAS or map coordinates: heights along z)". Static text.
+const char* scene_rule(SceneKind kind);
+
 /// Throws meshflow::Error carrying the frame's error if it failed.
 void throw_if_failed(const Frame& frame);
 

@@ -78,6 +78,9 @@ class ChunkStore {
   std::uint64_t rows_written() const { return rows_written_; }  ///< with overlap copies
   /// The rows' layout and the input's origin (PointCloud::origin), shared by every chunk.
   const ChunkRows& rows() const { return rows_; }
+  /// Chunks are read with PointCloud::z_up set: the caller judged the whole input a height
+  /// field (its estimated normals then face +z in every chunk, as in one process). O(1).
+  void set_z_up() { rows_.z_up = true; }
   /// Bounds of the finite points read, local coordinates.
   const Eigen::AlignedBox3f& bounds() const { return bounds_; }
   /// The directory holding the chunk files.

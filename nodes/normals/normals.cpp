@@ -235,53 +235,11 @@ NormalSource resolve_source(const PointCloud& cloud, const std::vector<std::uint
 
 }  // namespace
 
-bool looks_like_camera_view(const PointCloud& cloud) {
-  if (!cloud.origin.isZero() || cloud.empty()) return false;
-  const Eigen::AlignedBox3f box = finite_bounds(cloud);
-  if (box.isEmpty() || box.contains(Eigen::Vector3f::Zero())) return false;
-  const float cos_max = std::cos(75.0f * 3.14159265f / 180.0f);
-  constexpr float kMaxRange = 25.0f;  // metres
-  const std::size_t n = cloud.size();
-  struct Counts {
-    std::size_t finite = 0, in_view = 0;
-    Eigen::Vector3d directions = Eigen::Vector3d::Zero();  // sum of unit directions
-  };
-  const Counts counts = tbb::parallel_reduce(
-      tbb::blocked_range<std::size_t>(0, n, 16384), Counts{},
-      [&](const tbb::blocked_range<std::size_t>& r, Counts c) {
-        for (std::size_t i = r.begin(); i != r.end(); ++i) {
-          const Eigen::Vector3f& p = cloud.positions[i];
-          if (!p.allFinite()) continue;
-          ++c.finite;
-          const float length = p.norm();
-          if (p.z() > 0.0f && p.z() >= cos_max * length && length <= kMaxRange) ++c.in_view;
-          if (length > 0.0f) c.directions += (p / length).cast<double>();
-        }
-        return c;
-      },
-      [](Counts a, const Counts& b) {
-        a.finite += b.finite;
-        a.in_view += b.in_view;
-        a.directions += b.directions;
-        return a;
-      });
-  // The image is around the optical axis: the points' mean direction within 40 degrees of +z.
-  const double mean_length = counts.directions.norm();
-  return counts.finite > 0 && counts.in_view >= 0.99 * static_cast<double>(counts.finite) &&
-         mean_length > 0.0 &&
-         counts.directions.z() >= std::cos(40.0 * 3.14159265 / 180.0) * mean_length;
-}
-
-ComponentSide scene_side(const PointCloud& cloud, bool may_be_camera_view) {
-  if (cloud.z_up) return ComponentSide::kAlongAxis;
-  return may_be_camera_view && looks_like_camera_view(cloud) ? ComponentSide::kViewOrOutward
-                                                             : ComponentSide::kOutward;
-}
-
 const char* side_name(ComponentSide side, const Eigen::Vector3f& axis) {
   switch (side) {
     case ComponentSide::kOutward:
     case ComponentSide::kViewOrOutward:
+    case ComponentSide::kAxisOrOutward:
       return "outward";
     case ComponentSide::kTowardPoint:
       return "towards-origin";
@@ -357,9 +315,10 @@ float sampled_median_variation(const PointCloud& cloud, const SpatialIndex& inde
   return *middle;
 }
 
-// The side rule and its point or axis for a propagated `orientation`.
+// The side rule and its point or axis for a propagated `orientation`; `scene` is what the
+// automatic rule took the cloud for (untouched for kUp / kDown).
 PropagationConfig propagation_for(const PointCloud& cloud, NormalOrientation orientation,
-                                  const NormalsConfig& config) {
+                                  const NormalsConfig& config, SceneKind& scene) {
   PropagationConfig p = config.propagation;
   p.point = Eigen::Vector3f::Zero();
   switch (orientation) {
@@ -372,7 +331,8 @@ PropagationConfig propagation_for(const PointCloud& cloud, NormalOrientation ori
       p.axis = -Eigen::Vector3f::UnitZ();
       break;
     default:
-      p.side = scene_side(cloud, config.may_be_camera_view);
+      scene = classify_scene(cloud, config.whole_scene);
+      p.side = side_of_scene(scene);
       p.axis = Eigen::Vector3f::UnitZ();
       break;
   }
@@ -474,7 +434,8 @@ ComputedNormals normals_before_flip(const PointCloud& cloud, const SpatialIndex&
       }
       for (Eigen::Vector3f& v : fitted)
         if (v.isZero()) v = Eigen::Vector3f::UnitX();  // fewer than 3 neighbours
-      const PropagationConfig propagation = propagation_for(cloud, orientation, config);
+      const PropagationConfig propagation =
+          propagation_for(cloud, orientation, config, report.scene);
       OrientedNormals oriented =
           orient_by_propagation(cloud.positions, fitted, table, fixed, propagation);
       report.components = oriented.components;

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "nodes/normals/orient_normals.h"
+#include "nodes/normals/scene_side.h"
 #include "nodes/search/spatial_index.h"
 #include "runtime/point_cloud.h"
 
@@ -18,8 +19,9 @@ enum class NormalOrientation {
   /// The signs of the cloud's own normals where it has them (kInput); else towards the sensor
   /// where the cloud carries one (a scan pose, a PCD VIEWPOINT, an organized depth-camera
   /// cloud: kTowardSensor); else consistent propagation (kPropagate), each component turned
-  /// by scene_side(): up for LAS, towards the origin for one camera view in its camera frame,
-  /// outward for everything else (closed objects).
+  /// by classify_scene(): up for LAS, map coordinates and height fields (terrain tiles),
+  /// towards the origin for one camera view in its camera frame, outward for everything else
+  /// (closed objects).
   kAuto,
   kTowardSensor,       ///< towards cloud.sensor_origin (the origin when it has none)
   kTowardViewpoint,    ///< towards NormalsConfig::viewpoint
@@ -59,9 +61,10 @@ struct NormalsConfig {
   /// Every output normal turned over at the end, the input's own included (`--orient flip`:
   /// the automatic result, the other way round).
   bool flip = false;
-  /// Whether propagation without a sensor may take the cloud for one camera view
-  /// (looks_like_camera_view()); off for pieces of a larger cloud (the out-of-core chunks).
-  bool may_be_camera_view = true;
+  /// Whether the cloud is the whole scene, so propagation without a sensor may take it for one
+  /// camera view or a height field by its geometry (classify_scene()); off for pieces of a
+  /// larger cloud (the out-of-core chunks), where neighbouring pieces could disagree.
+  bool whole_scene = true;
   /// Normals for sharp features (extended marching cubes): each point takes the plane of the
   /// flattest neighbourhood within two rings of neighbours that passes through it
   /// (neighbourhood shifting), and interpolation skips neighbours more than 25 degrees off, so
@@ -99,6 +102,8 @@ struct NormalsReport {
   /// Propagation: the side its components were turned to (kViewOrOutward resolved).
   ComponentSide side = ComponentSide::kOutward;
   Eigen::Vector3f side_axis = Eigen::Vector3f::UnitZ();  ///< kAlongAxis's axis
+  /// Automatic propagation (kAuto / kPropagate): what the cloud was taken for.
+  SceneKind scene = SceneKind::kObject;
   double view_agreement = 0.0;  ///< when the camera-view test ran: its agreement (0-1)
   bool flipped = false;         ///< NormalsConfig::flip applied
 };
@@ -129,22 +134,6 @@ NormalOrientation resolve_orientation(const PointCloud& cloud);
 
 /// "auto", "sensor", "viewpoint", "away-from-viewpoint", "propagate", "input", "up" or "down".
 const char* orientation_name(NormalOrientation orientation);
-
-/// The side rule propagation uses for `cloud` under kAuto / kPropagate: kAlongAxis (+z) when
-/// cloud.z_up (LAS), kViewOrOutward towards the origin when `may_be_camera_view` and
-/// looks_like_camera_view(cloud), else kOutward. O(n), parallel.
-ComponentSide scene_side(const PointCloud& cloud, bool may_be_camera_view = true);
-
-/// Whether `cloud` may be one view from the origin of its coordinates, as depth-camera clouds
-/// are when written in the camera's frame (Open3D, PCL; invalid pixels dropped, no VIEWPOINT):
-/// not georeferenced, the origin outside the points' bounding box, at least 99 % of the finite
-/// points in front of it (z > 0) within 75 degrees of +z (wider than any depth camera's field
-/// of view) and within 25 m of it (a depth or stereo camera's range), and their mean direction
-/// within 40 degrees of +z (the image lies around the optical axis). Geometry only:
-/// kViewOrOutward then checks that the normals agree. O(n), parallel.
-/// Ambiguous by nature: a terrain tile above an origin at its centre looks like a camera
-/// looking up; LAS files are told apart by PointCloud::z_up.
-bool looks_like_camera_view(const PointCloud& cloud);
 
 /// The side rule's name for reports and JSON: "outward", "towards-origin" (kTowardPoint, the
 /// one point compute_normals() looks from), "up" / "down" (kAlongAxis along +z / -z), "axis".

@@ -303,7 +303,7 @@ struct ComponentSums {
   Eigen::Vector3d position_sum = Eigen::Vector3d::Zero();
   double points = 0.0, signed_sum = 0.0, absolute_sum = 0.0;  // n . (p - centroid)
   double toward_sum = 0.0, toward_absolute = 0.0;             // n . (point - p) / |point - p|
-  double along_sum = 0.0;                                     // n . axis
+  double along_sum = 0.0, along_absolute = 0.0;               // n . axis
   std::uint32_t extreme = std::numeric_limits<std::uint32_t>::max();  // point of largest x
   bool has_fixed = false;
 };
@@ -434,6 +434,7 @@ ComponentSide turn_components(const std::vector<Eigen::Vector3f>& p,
         s.toward_sum += facing;
         s.toward_absolute += std::abs(facing);
         s.along_sum += ni.dot(axis);
+        s.along_absolute += std::abs(ni.dot(axis));
       },
       [&](ComponentSums& into, const ComponentSums& from) {
         into.signed_sum += from.signed_sum;
@@ -441,17 +442,26 @@ ComponentSide turn_components(const std::vector<Eigen::Vector3f>& p,
         into.toward_sum += from.toward_sum;
         into.toward_absolute += from.toward_absolute;
         into.along_sum += from.along_sum;
+        into.along_absolute += from.along_absolute;
       });
-  ComponentSide side = config.side;
-  if (side == ComponentSide::kViewOrOutward) {
-    // One view from the point: each component, once facing it, agrees with itself on facing it.
+  // One view from the point (one surface along the axis): each component, once facing it,
+  // agrees with itself on facing it.
+  const auto agreement = [&sums](double ComponentSums::*sum, double ComponentSums::*absolute) {
     double agreeing = 0.0, total = 0.0;
     for (const ComponentSums& s : sums) {
-      agreeing += std::abs(s.toward_sum);
-      total += s.toward_absolute;
+      agreeing += std::abs(s.*sum);
+      total += s.*absolute;
     }
-    view_agreement = total > 0.0 ? agreeing / total : 0.0;
+    return total > 0.0 ? agreeing / total : 0.0;
+  };
+  ComponentSide side = config.side;
+  if (side == ComponentSide::kViewOrOutward) {
+    view_agreement = agreement(&ComponentSums::toward_sum, &ComponentSums::toward_absolute);
     side = view_agreement >= config.min_view_agreement ? ComponentSide::kTowardPoint
+                                                       : ComponentSide::kOutward;
+  } else if (side == ComponentSide::kAxisOrOutward) {
+    view_agreement = agreement(&ComponentSums::along_sum, &ComponentSums::along_absolute);
+    side = view_agreement >= config.min_view_agreement ? ComponentSide::kAlongAxis
                                                        : ComponentSide::kOutward;
   }
   std::vector<std::uint8_t> flip(comps.count, 0);
@@ -467,7 +477,8 @@ ComponentSide turn_components(const std::vector<Eigen::Vector3f>& p,
         flip[c] = s.along_sum != 0.0 ? s.along_sum < 0.0 : extreme_faces_minus_x;
         break;
       case ComponentSide::kOutward:
-      case ComponentSide::kViewOrOutward: {
+      case ComponentSide::kViewOrOutward:
+      case ComponentSide::kAxisOrOutward: {
         const bool decisive = std::abs(s.signed_sum) > 0.05 * s.absolute_sum;
         flip[c] = decisive ? s.signed_sum < 0.0 : extreme_faces_minus_x;
         break;

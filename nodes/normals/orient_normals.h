@@ -36,7 +36,12 @@ enum class ComponentSide {
   /// it, sum |sum over a component of n_i . v_i| >= min_view_agreement x sum |n_i . v_i| (v_i
   /// the unit direction from p_i to the point; 1 for a single view, near 0 for a closed object
   /// seen from outside); kOutward otherwise.
-  kViewOrOutward
+  kViewOrOutward,
+  /// kAlongAxis when the cloud looks like one surface facing along `axis` (a terrain tile):
+  /// with every component facing along it, sum |sum over a component of n_i . axis| >=
+  /// min_view_agreement x sum |n_i . axis| (1 for a height field, near 0 for a closed object
+  /// such as a thin plate, whose top and bottom cancel); kOutward otherwise.
+  kAxisOrOutward
 };
 
 struct PropagationConfig {
@@ -47,8 +52,8 @@ struct PropagationConfig {
   ComponentSide side = ComponentSide::kOutward;
   Eigen::Vector3f point = Eigen::Vector3f::Zero();  ///< kTowardPoint / kViewOrOutward, metres
   Eigen::Vector3f axis = Eigen::Vector3f::UnitZ();  ///< kAlongAxis (any length but zero)
-  /// kViewOrOutward's threshold. Measured: single camera views 0.9-1.0, closed objects around
-  /// the point 0.0-0.2.
+  /// kViewOrOutward's and kAxisOrOutward's threshold. Measured: single camera views 0.9-1.0, closed
+  /// objects around the point 0.0-0.2.
   double min_view_agreement = 0.5;
 };
 
@@ -57,9 +62,11 @@ struct OrientedNormals {
   std::vector<Eigen::Vector3f> normals;  ///< one per point, consistently oriented
   std::size_t components = 0;            ///< connected components of the neighbour graph
   std::size_t flipped_by_vote = 0;       ///< normals the vote turned after propagation
-  /// The side rule applied (kViewOrOutward resolved to kTowardPoint or kOutward).
+  /// The side rule applied (kViewOrOutward resolved to kTowardPoint or kOutward,
+  /// kAxisOrOutward to kAlongAxis or kOutward).
   ComponentSide side = ComponentSide::kOutward;
-  /// kViewOrOutward: the agreement on facing the point that decided it (0-1).
+  /// kViewOrOutward / kAxisOrOutward: the agreement on facing the point / the axis that
+  /// decided it (0-1).
   double view_agreement = 0.0;
 };
 

@@ -127,6 +127,38 @@ TEST(CliOrientation, AnXyzTerrainTileInMapCoordinatesFacesUp) {
   for (const Eigen::Vector3f& v : west.vertices) ASSERT_LT(v.x(), 52027.0f);
 }
 
+// The same hills in local coordinates (no map offset, no LAS flag: nothing in the file says
+// which way is up), around a valley, so outward from the centroid would face down: up, because
+// the points form one surface over x-y, and the report says so.
+TEST(CliOrientation, AnXyzTerrainTileInLocalCoordinatesFacesUp) {
+  const std::string dir = test::temp_dir();
+  std::string text;
+  char line[96];
+  for (const Eigen::Vector3d& p : utm_terrain()) {
+    const double x = p.x() - 52025.0, y = p.y() - 43025.0;
+    std::snprintf(line, sizeof line, "%.3f %.3f %.3f\n", x, y,
+                  p.z() - 300.0 + 0.01 * (x * x + y * y));
+    text += line;
+  }
+  test::write_file(dir + "/tile.xyz", text);
+  const test::CliRun run =
+      test::run_cli("reconstruct " + dir + "/tile.xyz -o " + dir + "/tile.ply --voxel 1");
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  EXPECT_NE(run.out.find("one surface over x-y"), std::string::npos) << run.out;
+  const TriangleMesh mesh = io::read_mesh(dir + "/tile.ply");
+  ASSERT_GT(mesh.triangles.size(), 1000u);
+  EXPECT_GE(share_up(mesh), 0.98);
+  const test::CliRun info = test::run_cli("info " + dir + "/tile.xyz");
+  EXPECT_NE(info.out.find("one surface over x-y"), std::string::npos) << info.out;
+  // Out of core: a chunk cannot tell a terrain by itself; the first batch decides for all.
+  const test::CliRun chunked = test::run_cli("reconstruct " + dir + "/tile.xyz -o " + dir +
+                                             "/chunked.ply --voxel 1 --chunk 20");
+  ASSERT_EQ(chunked.exit_code, 0) << chunked.err;
+  const TriangleMesh chunked_mesh = io::read_mesh(dir + "/chunked.ply");
+  ASSERT_GT(chunked_mesh.triangles.size(), 1000u);
+  EXPECT_GE(share_up(chunked_mesh), 0.98);
+}
+
 TEST(CliOrientation, UpDownFlipAndViewpointsInWorldCoordinates) {
   const std::string dir = test::temp_dir();
   test::write_file(dir + "/tile.las", las_file_of(utm_terrain()));

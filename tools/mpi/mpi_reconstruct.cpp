@@ -55,6 +55,7 @@ std::vector<unsigned char> encode(const Plan& plan) {
   put(w, plan.rows.normals);
   put(w, plan.rows.colors);
   put(w, plan.rows.origin);
+  put(w, plan.rows.z_up);
   w.u64(plan.files.size());
   for (const chunk::ChunkFile& f : plan.files) {
     put(w, f.index);
@@ -74,6 +75,7 @@ Plan decode_plan(const std::vector<unsigned char>& message) {
   plan.rows.normals = get<bool>(r, "normals");
   plan.rows.colors = get<bool>(r, "colors");
   plan.rows.origin = get<Eigen::Vector3d>(r, "origin");
+  plan.rows.z_up = get<bool>(r, "z_up");
   plan.files.resize(r.u64("chunks"));
   for (chunk::ChunkFile& f : plan.files) {
     f.index = get<Eigen::Vector3i>(r, "chunk index");

@@ -251,8 +251,59 @@ TEST(SceneSide, LasTerrainFacesUp) {
   EXPECT_STREQ(side_name(computed.report.side, computed.report.side_axis), "up");
   EXPECT_GE(share_up(computed.normals), 0.999);
   // Without the LAS flag this tile (its origin a corner below it, points up to 85 degrees off
-  // the z axis) is no camera view either: the centroid's rule decides.
+  // the z axis) is no camera view either.
   EXPECT_FALSE(looks_like_camera_view(terrain_tile(false)));
+}
+
+// A 60 x 60 m valley, heights 0-36 m (slopes up to 50 degrees), in local coordinates: outward
+// from the centroid (which lies above the valley floor) would face it down.
+PointCloud valley_tile() {
+  PointCloud tile;
+  for (int i = 0; i < 150; ++i)
+    for (int j = 0; j < 150; ++j) {
+      const float x = 0.4f * static_cast<float>(i) - 30.0f,
+                  y = 0.4f * static_cast<float>(j) - 30.0f;
+      tile.positions.emplace_back(x, y, 0.02f * (x * x + y * y) + 0.3f * std::sin(x));
+    }
+  return tile;
+}
+
+// Issue 55: a terrain tile in local coordinates (no LAS flag, no map offset) is one surface over
+// x-y: it faces up without a flag, and the report says why.
+TEST(SceneSide, ATerrainTileInLocalCoordinatesFacesUp) {
+  for (const PointCloud& tile : {terrain_tile(false), valley_tile()}) {
+    EXPECT_TRUE(looks_like_height_field(tile));
+    EXPECT_EQ(classify_scene(tile), SceneKind::kHeightField);
+    const ComputedNormals computed = normals_as(tile, NormalsConfig{});
+    EXPECT_EQ(computed.report.scene, SceneKind::kHeightField);
+    EXPECT_EQ(computed.report.side, ComponentSide::kAlongAxis);
+    EXPECT_GE(computed.report.view_agreement, 0.9);
+    EXPECT_GE(share_up(computed.normals), 0.999);
+    // A piece of a larger cloud (an out-of-core chunk) decides nothing from its own geometry.
+    EXPECT_EQ(classify_scene(tile, false), SceneKind::kObject);
+  }
+}
+
+// Closed objects cross every column twice, so they are no height fields; the thin plate lying
+// flat (2 cm thick) is one by its geometry, but its normals cancel on up: outward still.
+TEST(SceneSide, ClosedObjectsAreNoTerrain) {
+  for (const synthetic::ClosedObject& solid : synthetic::all_test_objects()) {
+    const PointCloud samples = solid.sample(30000, 0.0f, 5);
+    const SceneKind kind = classify_scene(samples);
+    if (solid.name != "thin-plate") {
+      EXPECT_EQ(kind, SceneKind::kObject) << solid.name;
+    }
+    if (kind != SceneKind::kHeightField) continue;
+    PointCloud without = samples;
+    without.normals.clear();
+    const ComputedNormals computed = normals_as(without, NormalsConfig{});
+    EXPECT_EQ(computed.report.side, ComponentSide::kOutward) << solid.name;
+    EXPECT_LT(computed.report.view_agreement, 0.5) << solid.name;
+  }
+  // Too few points to tell.
+  PointCloud few;
+  for (int i = 0; i < 40; ++i) few.positions.emplace_back(0.1f * static_cast<float>(i), 0.0f, 0.0f);
+  EXPECT_FALSE(looks_like_height_field(few));
 }
 
 TEST(SceneSide, UpDownAndFlipAreTheUsersChoice) {

@@ -256,26 +256,31 @@ PYBIND11_MODULE(meshflow, m) {
                              })
       .def(
           "write",
-          [](const Mesh& mesh, const std::string& path, const py::object& quality) {
-            if (quality.is_none()) {
-              py::gil_scoped_release no_gil;
-              return io::write_mesh(path, *mesh.data, mesh.origin);
-            }
-            if (io::lower_extension(path) != ".ply")
-              throw py::value_error("quality: a PLY vertex property; give a .ply path");
-            const auto q =
-                py::array_t<float, py::array::c_style | py::array::forcecast>::ensure(quality);
-            if (!q || q.ndim() != 1 ||
-                static_cast<std::size_t>(q.shape(0)) != mesh.data->vertices.size())
-              throw py::value_error("quality: expected one number per vertex (" +
-                                    std::to_string(mesh.data->vertices.size()) + ")");
-            const std::vector<float> values(q.data(), q.data() + q.shape(0));
+          [](const Mesh& mesh, const std::string& path, const py::object& quality,
+             const py::object& observations) {
+            std::vector<io::VertexScalar> scalars;
+            const auto add = [&](const std::string& name, const py::object& values) {
+              if (values.is_none()) return;
+              if (io::lower_extension(path) != ".ply")
+                throw py::value_error(name + ": a PLY vertex property; give a .ply path");
+              const auto q =
+                  py::array_t<float, py::array::c_style | py::array::forcecast>::ensure(values);
+              if (!q || q.ndim() != 1 ||
+                  static_cast<std::size_t>(q.shape(0)) != mesh.data->vertices.size())
+                throw py::value_error(name + ": expected one number per vertex (" +
+                                      std::to_string(mesh.data->vertices.size()) + ")");
+              scalars.push_back({name, std::vector<float>(q.data(), q.data() + q.shape(0))});
+            };
+            add("quality", quality);
+            add("observations", observations);
             py::gil_scoped_release no_gil;
-            io::write_ply(path, *mesh.data, io::PlyEncoding::kBinary, mesh.origin, &values);
+            if (scalars.empty()) return io::write_mesh(path, *mesh.data, mesh.origin);
+            io::write_ply(path, *mesh.data, io::PlyEncoding::kBinary, mesh.origin, scalars);
           },
-          py::arg("path"), py::arg("quality") = py::none(),
-          "Writes .ply, .obj, .stl, .off or .glb by extension; quality: optional (v,) floats "
-          "written as the PLY vertex property 'quality' (e.g. vertex_quality(mesh, cloud)).")
+          py::arg("path"), py::arg("quality") = py::none(), py::arg("observations") = py::none(),
+          "Writes .ply, .obj, .stl, .off or .glb by extension; quality, observations: optional "
+          "(v,) floats written as the PLY vertex properties of those names (e.g. "
+          "vertex_quality(mesh, cloud), vertex_observations(mesh, cloud, voxel)).")
       .def("__repr__", [](const Mesh& mesh) {
         return "<meshflow.Mesh " + std::to_string(mesh.data->vertices.size()) + " vertices, " +
                std::to_string(mesh.data->triangles.size()) + " triangles>";
@@ -302,34 +307,61 @@ PYBIND11_MODULE(meshflow, m) {
       },
       py::arg("path"), "Reads a PLY, OBJ, OFF, STL or glTF binary (.glb) mesh by extension.");
 
+  // The mesh's vertices in the cloud's frame (each may be georeferenced: a local frame at its
+  // own origin, or world coordinates), and the cloud.
+  struct VerticesAndPoints {
+    std::vector<Eigen::Vector3f> vertices;
+    PointCloud cloud;
+  };
+  const auto in_one_frame = [](const Mesh& mesh, const py::object& points) {
+    VerticesAndPoints out;
+    out.cloud = py::isinstance<Cloud>(points)
+                    ? *points.cast<Cloud>().data
+                    : *make_cloud(points, py::none(), py::none(), py::none()).data;
+    out.vertices = mesh.data->vertices;
+    const Eigen::Vector3d shift = mesh.origin - out.cloud.origin;
+    if (!shift.isZero())
+      for (Eigen::Vector3f& v : out.vertices) v = (v.cast<double>() + shift).cast<float>();
+    return out;
+  };
+  const auto as_array = [](const std::vector<float>& values) {
+    py::array_t<float> out(static_cast<py::ssize_t>(values.size()));
+    std::copy(values.begin(), values.end(), out.mutable_data());
+    return out;
+  };
+
   m.def(
       "vertex_quality",
-      [](const Mesh& mesh, const py::object& points) {
-        const PointCloud cloud = py::isinstance<Cloud>(points)
-                                     ? *points.cast<Cloud>().data
-                                     : *make_cloud(points, py::none(), py::none(), py::none()).data;
+      [in_one_frame, as_array](const Mesh& mesh, const py::object& points) {
+        const VerticesAndPoints both = in_one_frame(mesh, points);
         std::vector<float> d;
         {
           py::gil_scoped_release no_gil;
-          // The mesh's vertices in the cloud's frame (each may be georeferenced: a local frame
-          // at its own origin, or world coordinates).
-          const Eigen::Vector3d shift = mesh.origin - cloud.origin;
-          if (shift.isZero()) {
-            d = nearest_point_distances(mesh.data->vertices, cloud.positions);
-          } else {
-            std::vector<Eigen::Vector3f> vertices = mesh.data->vertices;
-            for (Eigen::Vector3f& v : vertices) v = (v.cast<double>() + shift).cast<float>();
-            d = nearest_point_distances(vertices, cloud.positions);
-          }
+          d = nearest_point_distances(both.vertices, both.cloud.positions);
         }
-        py::array_t<float> out(static_cast<py::ssize_t>(d.size()));
-        std::copy(d.begin(), d.end(), out.mutable_data());
-        return out;
+        return as_array(d);
       },
       py::arg("mesh"), py::arg("points"),
       R"(Each vertex's distance in metres to the nearest of `points` (a Cloud or (n, 3) array,
 e.g. the cloud the mesh was made from; georeferenced ones compared in one frame), as a (v,)
 float32 array: what reconstruct --quality writes. Exact (kd-tree); parallel, the GIL released.)");
+
+  m.def(
+      "vertex_observations",
+      [in_one_frame, as_array](const Mesh& mesh, const py::object& points, float radius) {
+        const VerticesAndPoints both = in_one_frame(mesh, points);
+        VertexSupport support;
+        {
+          py::gil_scoped_release no_gil;
+          support = vertex_support(both.vertices, both.cloud.positions, radius);
+        }
+        return as_array(support.observations);
+      },
+      py::arg("mesh"), py::arg("points"), py::arg("radius"),
+      R"(For each vertex, how many of `points` (a Cloud or (n, 3) array) lie within `radius`
+metres, as a (v,) float32 array: reconstruct --quality writes it as 'observations' with the voxel
+size as the radius. Exact (kd-tree); parallel, the GIL released. meshflow.Error on a radius
+<= 0.)");
 
   m.def(
       "evaluate",

@@ -150,7 +150,7 @@ void run_reconstruct(const ReconstructOptions& o) {
   if (o.texture && !frame->cloud.has_colors())
     throw Error(o.input, "", "--texture needs coloured points (the input has no colours)");
   std::size_t textures = 0;
-  std::vector<float> quality;  // --quality: metres from each vertex to the nearest point
+  VertexSupport support;  // --quality: each vertex's distance to the points and their count
   progress->begin("write");
   if (o.texture) {
     progress->begin("texture");
@@ -158,8 +158,9 @@ void run_reconstruct(const ReconstructOptions& o) {
   } else if (compressed) {
     io::write_file_bytes(o.output, frame->compressed);
   } else if (o.quality) {
-    quality = nearest_point_distances(frame->mesh.vertices, frame->cloud.positions);
-    io::write_ply(o.output, frame->mesh, io::PlyEncoding::kBinary, frame->origin, &quality);
+    support = vertex_support(frame->mesh.vertices, frame->cloud.positions, frame->voxel_size);
+    io::write_ply(o.output, frame->mesh, io::PlyEncoding::kBinary, frame->origin,
+                  {{"quality", support.distances}, {"observations", support.observations}});
   } else {
     io::write_mesh(o.output, frame->mesh, frame->origin);
   }
@@ -174,17 +175,21 @@ void run_reconstruct(const ReconstructOptions& o) {
     doc["output"] = o.output;
     if (o.texture) doc["textures"] = textures;
     if (compressed) doc["compressed_bytes"] = frame->compressed.size();
-    if (o.quality) doc["quality"] = distance_json(distance_stats(quality));
+    if (o.quality) {
+      doc["quality"] = distance_json(distance_stats(support.distances));
+      doc["observations"] = observations_json(support.observations);
+    }
     return print_json(doc);
   }
   print_frame_report(*frame, wall, limit.threads());
   if (o.texture) report("textures   %zu planar regions textured\n", textures);
   if (o.quality) {
-    const DistanceStats q = distance_stats(quality);
+    const DistanceStats q = distance_stats(support.distances);
     report(
         "quality    vertex to nearest point: mean %.3g mm, p95 %.3g mm, max %.3g mm (PLY "
         "property 'quality', metres)\n",
         1e3 * q.mean, 1e3 * q.p95, 1e3 * q.max);
+    report_observations(support.observations, "points within one voxel");
   }
   if (compressed)
     report("compressed %zu bytes (%.2f bits per triangle)\n", frame->compressed.size(),
@@ -294,7 +299,8 @@ void add_reconstruct_options(CLI::App* cmd) {
                 "Texture planar regions from the points' colours (OBJ + MTL + PNG output)");
   cmd->add_flag("--quality", opts->quality,
                 "Write each vertex's distance to the nearest input point (metres, after the "
-                "filter stage) as the float vertex property 'quality' (PLY output)");
+                "filter stage) and the number of input points within one voxel of it as the "
+                "float vertex properties 'quality' and 'observations' (PLY output)");
   cmd->add_option("--chunk", opts->chunk,
                   "Out of core: stream the input into chunks of this edge (metres) on disk and "
                   "mesh them a few at a time, seams welded exactly; 'auto': the edge that lets "

@@ -2,6 +2,7 @@
 
 #include <cmath>
 
+#include "nodes/eval/vertex_quality.h"
 #include "nodes/extract/extract_surface.h"
 #include "nodes/normals/normals.h"
 
@@ -10,6 +11,15 @@ namespace meshflow::cli {
 nlohmann::json distance_json(const DistanceStats& s) {
   return {{"mean", s.mean}, {"rms", s.rms}, {"median", s.median},
           {"p95", s.p95},   {"max", s.max}, {"samples", s.samples}};
+}
+
+nlohmann::json observations_json(const std::vector<float>& counts) {
+  const ObservationStats s = observation_stats(counts);
+  return {{"mean", s.mean},
+          {"median", s.median},
+          {"p5", s.p5},
+          {"min", s.min},
+          {"vertices", s.vertices}};
 }
 
 nlohmann::json topology_json(const MeshTopology& t) {

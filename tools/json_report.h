@@ -18,6 +18,9 @@ namespace meshflow::cli {
 /// {"mean", "rms", "median", "p95", "max", "samples"} in metres.
 nlohmann::json distance_json(const DistanceStats& s);
 
+/// {"mean", "median", "p5", "min", "vertices"}: per-vertex observation counts.
+nlohmann::json observations_json(const std::vector<float>& counts);
+
 /// {"edges", "boundary_edges", "non_manifold_edges", "inconsistent_edges", "boundary_loops",
 /// "degenerate_faces", "watertight"}.
 nlohmann::json topology_json(const MeshTopology& t);

@@ -4,9 +4,18 @@
 #include <stdexcept>
 #include <string>
 
+#include "nodes/eval/vertex_quality.h"
 #include "tools/console.h"
 
 namespace meshflow::cli {
+
+void report_observations(const std::vector<float>& counts, const char* what) {
+  const ObservationStats s = observation_stats(counts);
+  report(
+      "observed   %s: median %.4g, 5 %% of vertices at or below %.4g, min %.4g (PLY property "
+      "'observations')\n",
+      what, static_cast<double>(s.median), static_cast<double>(s.p5), static_cast<double>(s.min));
+}
 
 const char* scene_rule(SceneKind kind) {
   switch (kind) {

@@ -2,6 +2,7 @@
 // Console reports shared by the subcommands.
 
 #include <string>
+#include <vector>
 
 #include "graph/frame.h"
 
@@ -18,6 +19,10 @@ std::string describe_normals(const NormalsReport& report);
 /// Why automatic propagation turned a scene of this kind as it did, for the console: e.g.
 /// "up (LAS or map coordinates: heights along z)". Static text.
 const char* scene_rule(SceneKind kind);
+
+/// One console line on per-vertex observation counts (`what` each counts, e.g. "points within
+/// one voxel"): median, 5th percentile, minimum, and the PLY property that holds them.
+void report_observations(const std::vector<float>& counts, const char* what);
 
 /// Throws meshflow::Error carrying the frame's error if it failed.
 void throw_if_failed(const Frame& frame);

@@ -14,6 +14,7 @@
 #include "nodes/compress/progressive_mesh.h"
 #include "nodes/eval/vertex_quality.h"
 #include "nodes/fusion/tsdf_map_file.h"
+#include "nodes/fusion/tsdf_sampling.h"
 #include "nodes/io/atomic_file.h"
 #include "nodes/io/byte_buffer.h"
 #include "nodes/io/mesh_writers.h"
@@ -219,12 +220,12 @@ std::pair<std::unique_ptr<io::Sequence>, std::unique_ptr<OutputDirectory>> open_
 void write_run_mesh(const RunOptions& o, const std::string& stem, const TriangleMesh& mesh,
                     const Eigen::Vector3d& origin = Eigen::Vector3d::Zero(),
                     const std::vector<unsigned char>* compressed = nullptr,
-                    const std::vector<float>* quality = nullptr) {
+                    const std::vector<io::VertexScalar>& scalars = {}) {
   const std::filesystem::path dir(o.output_dir);
   const MeshCompression method = compression_for(o.compress, "");
   if (method == MeshCompression::kNone)
     return io::write_ply((dir / (stem + ".ply")).string(), mesh, io::PlyEncoding::kBinary, origin,
-                         quality);
+                         scalars);
   const std::string path = (dir / (stem + ".mfc")).string();
   if (compressed != nullptr && !compressed->empty()) return io::write_file_bytes(path, *compressed);
   compress::CompressConfig config;
@@ -287,29 +288,35 @@ void run_fusion(const RunOptions& o) {
   TsdfExtractStats extraction;
   const TriangleMesh mesh = pipeline->extract_mesh(&extraction);
   const double extract_s = monotonic_seconds() - t0;
+  std::vector<float> observations;  // --quality: the map's weight at each vertex
   if (!mesh.empty()) {
-    write_run_mesh(o, "fused", mesh);
+    if (o.quality) observations = tsdf_weights_at(pipeline->map(), mesh.vertices);
+    write_run_mesh(o, "fused", mesh, Eigen::Vector3d::Zero(), nullptr,
+                   o.quality ? std::vector<io::VertexScalar>{{"observations", observations}}
+                             : std::vector<io::VertexScalar>{});
     ++written;
   }
   if (!o.save_map.empty()) write_tsdf_map(o.save_map, pipeline->map());
   const TsdfVolume& map = pipeline->map();
-  print_run_summary(
-      *sequence, stats, limit.threads(), o.sequence.in_flight, failed,
-      {{"map",
-        {{"blocks", map.block_count()},
-         {"voxel", map.config().voxel_size},
-         {"bytes", map.memory_bytes()}}},
-       {"mesh", {{"vertices", mesh.vertices.size()}, {"triangles", mesh.triangles.size()}}},
-       {"extract_ms", extract_s * 1e3},
-       {"completeness", breakdown.json(extraction.cells)},
-       {"files_written", written},
-       {"output", o.output_dir}});
+  nlohmann::json summary = {
+      {"map",
+       {{"blocks", map.block_count()},
+        {"voxel", map.config().voxel_size},
+        {"bytes", map.memory_bytes()}}},
+      {"mesh", {{"vertices", mesh.vertices.size()}, {"triangles", mesh.triangles.size()}}},
+      {"extract_ms", extract_s * 1e3},
+      {"completeness", breakdown.json(extraction.cells)},
+      {"files_written", written},
+      {"output", o.output_dir}};
+  if (o.quality) summary["observations"] = observations_json(observations);
+  print_run_summary(*sequence, stats, limit.threads(), o.sequence.in_flight, failed, summary);
   breakdown.print(extraction.cells);
   report("map        %zu blocks of 8^3 voxels at %.4f m, %.1f MB%s%s\n", map.block_count(),
          map.config().voxel_size, static_cast<double>(map.memory_bytes()) / 1e6,
          o.save_map.empty() ? "" : ", saved to ", o.save_map.c_str());
   report("mesh       %zu vertices, %zu triangles, extracted in %.1f ms\n", mesh.vertices.size(),
          mesh.triangles.size(), extract_s * 1e3);
+  if (o.quality) report_observations(observations, "the map's weight (frames) at each vertex");
   report("output     %zu mesh file%s in %s\n", written, written == 1 ? "" : "s",
          o.output_dir.c_str());
   if (view) {
@@ -423,9 +430,13 @@ void run_run(const RunOptions& o) {
         if (o.concatenate) return append_mesh(merged, f.mesh);
         char name[64];
         std::snprintf(name, sizeof name, "frame_%06zu", f.source_index);
-        std::vector<float> quality;  // --quality: metres to the frame's nearest point
-        if (o.quality) quality = nearest_point_distances(f.mesh.vertices, f.cloud.positions);
-        write_run_mesh(o, name, f.mesh, f.origin, &f.compressed, o.quality ? &quality : nullptr);
+        std::vector<io::VertexScalar> scalars;  // --quality: distances to the frame's points
+        if (o.quality) {
+          VertexSupport support = vertex_support(f.mesh.vertices, f.cloud.positions, f.voxel_size);
+          scalars = {{"quality", std::move(support.distances)},
+                     {"observations", std::move(support.observations)}};
+        }
+        write_run_mesh(o, name, f.mesh, f.origin, &f.compressed, scalars);
         ++written;
       });
   if (o.concatenate && !merged.empty()) {
@@ -512,7 +523,10 @@ void add_run_options(CLI::App* cmd) {
   auto* quality =
       cmd->add_flag("--quality", o->quality,
                     "Per-frame PLYs: each vertex's distance to the frame's nearest point "
-                    "(metres, after the filter stage) as the float vertex property 'quality'")
+                    "(metres, after the filter stage) and the frame's points within one voxel of "
+                    "it as the float vertex properties 'quality' and 'observations'; with --fuse: "
+                    "fused.ply's 'observations', the map's accumulated weight at each vertex "
+                    "(frames that saw it, at the default constant weighting)")
           ->excludes(merged)
           ->excludes(concatenate);
   add_compress_option(cmd, o->compress);
@@ -559,7 +573,7 @@ void add_run_options(CLI::App* cmd) {
       ->needs(fuse);
   add_triangulation_options(cmd, o->triangulation);
   fuse->excludes("--triangulate");
-  quality->excludes(fuse)->excludes("--triangulate");
+  quality->excludes("--triangulate");
   merged->excludes("--triangulate");
   add_pipeline_options(cmd, o->pipeline);
   add_serve_options(cmd, o->serve);

@@ -14,4 +14,27 @@ namespace meshflow {
 std::vector<float> nearest_point_distances(const std::vector<Eigen::Vector3f>& queries,
                                            const std::vector<Eigen::Vector3f>& points);
 
+/// What supports each vertex of a mesh made from one cloud.
+struct VertexSupport {
+  std::vector<float> distances;     ///< metres to the nearest point (nearest_point_distances())
+  std::vector<float> observations;  ///< points within the radius (a count, as a float)
+};
+
+/// For each of `queries`: the distance to the nearest finite point of `points` and how many
+/// finite points lie within `radius` metres (> 0; e.g. the reconstruction's voxel size): the
+/// measurements that support the vertex. One kd-tree for both. Parallel over queries,
+/// deterministic. O((Q + P) log P + Q k), k the points found per query.
+/// Statistics of per-vertex observation counts, the low end first (where data is thin).
+struct ObservationStats {
+  double mean = 0.0;
+  float min = 0.0f, p5 = 0.0f, median = 0.0f;  ///< nearest rank; 0 for no values
+  std::size_t vertices = 0;
+};
+
+/// ObservationStats of `counts`. O(n) (two selections).
+ObservationStats observation_stats(std::vector<float> counts);
+
+VertexSupport vertex_support(const std::vector<Eigen::Vector3f>& queries,
+                             const std::vector<Eigen::Vector3f>& points, float radius);
+
 }  // namespace meshflow

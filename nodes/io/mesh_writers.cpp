@@ -1,5 +1,7 @@
 #include "nodes/io/mesh_writers.h"
 
+#include <algorithm>
+#include <cctype>
 #include <cstdint>
 #include <cstring>
 #include <vector>
@@ -35,11 +37,18 @@ std::string world_position_text(const char* prefix, const Eigen::Vector3f& v,
 }  // namespace
 
 void write_ply(const std::string& path, const TriangleMesh& mesh, PlyEncoding encoding,
-               const Eigen::Vector3d& origin, const std::vector<float>* quality) {
-  if (quality != nullptr && quality->size() != mesh.vertices.size())
-    throw Error(path, "quality",
-                std::to_string(quality->size()) + " values for " +
-                    std::to_string(mesh.vertices.size()) + " vertices");
+               const Eigen::Vector3d& origin, const std::vector<VertexScalar>& scalars) {
+  for (const VertexScalar& scalar : scalars) {
+    const bool word =
+        !scalar.name.empty() && std::all_of(scalar.name.begin(), scalar.name.end(), [](char c) {
+          return std::isalnum(static_cast<unsigned char>(c)) != 0 || c == '_';
+        });
+    if (!word) throw Error(path, scalar.name, "a vertex property name must be a PLY word");
+    if (scalar.values.size() != mesh.vertices.size())
+      throw Error(path, scalar.name,
+                  std::to_string(scalar.values.size()) + " values for " +
+                      std::to_string(mesh.vertices.size()) + " vertices");
+  }
   AtomicOutputFile file(path);
   std::ostream& out = file.stream();
   const bool normals = mesh.normals.size() == mesh.vertices.size() && !mesh.normals.empty();
@@ -53,7 +62,7 @@ void write_ply(const std::string& path, const TriangleMesh& mesh, PlyEncoding en
                 : "property float x\nproperty float y\nproperty float z\n");
   if (normals) out << "property float nx\nproperty float ny\nproperty float nz\n";
   if (colors) out << "property uchar red\nproperty uchar green\nproperty uchar blue\n";
-  if (quality != nullptr) out << "property float quality\n";
+  for (const VertexScalar& scalar : scalars) out << "property float " << scalar.name << '\n';
   out << "element face " << mesh.triangles.size()
       << "\nproperty list uchar uint vertex_indices\nend_header\n";
   if (encoding == PlyEncoding::kAscii) {
@@ -72,15 +81,18 @@ void write_ply(const std::string& path, const TriangleMesh& mesh, PlyEncoding en
         n += std::snprintf(line + n, sizeof line - static_cast<std::size_t>(n), " %d %d %d", c.r,
                            c.g, c.b);
       }
-      if (quality != nullptr)
-        std::snprintf(line + n, sizeof line - static_cast<std::size_t>(n), " %.7g", (*quality)[i]);
-      out << line << '\n';
+      out << line;
+      for (const VertexScalar& scalar : scalars) {
+        std::snprintf(line, sizeof line, " %.7g", static_cast<double>(scalar.values[i]));
+        out << line;
+      }
+      out << '\n';
     }
     for (const Triangle& t : mesh.triangles)
       out << "3 " << t[0] << ' ' << t[1] << ' ' << t[2] << '\n';
   } else {
     const std::size_t vertex_bytes =
-        (world ? 24 : 12) + (normals ? 12 : 0) + (colors ? 3 : 0) + (quality ? 4 : 0);
+        (world ? 24 : 12) + (normals ? 12 : 0) + (colors ? 3 : 0) + 4 * scalars.size();
     std::vector<char> buf(mesh.vertices.size() * vertex_bytes + mesh.triangles.size() * 13);
     char* at = buf.data();
     for (std::size_t i = 0; i < mesh.vertices.size(); ++i) {
@@ -93,7 +105,7 @@ void write_ply(const std::string& path, const TriangleMesh& mesh, PlyEncoding en
         const Rgb8& c = mesh.colors[i];
         for (std::uint8_t channel : {c.r, c.g, c.b}) at = put(at, channel);
       }
-      if (quality != nullptr) at = put(at, (*quality)[i]);
+      for (const VertexScalar& scalar : scalars) at = put(at, scalar.values[i]);
     }
     for (const Triangle& t : mesh.triangles) {
       at = put(at, std::uint8_t{3});

@@ -18,15 +18,23 @@ enum class PlyEncoding { kBinary, kAscii };
 // keep the local coordinates and record the origin (the STL header's text, the glTF node's
 // translation, which viewers apply).
 
+/// A per-vertex float property of a PLY file, such as `quality` (the distance to the data in
+/// metres, nearest_point_distances()) or `observations` (how many measurements support the
+/// vertex): scalar fields in CloudCompare and MeshLab.
+struct VertexScalar {
+  std::string name;           ///< PLY property name (letters, digits, '_')
+  std::vector<float> values;  ///< one per vertex
+};
+
 /// Writes vertices (float x y z; double with a non-zero origin), normals (nx ny nz) and colours
-/// (uchar red green blue) when present, `quality` (float, one per vertex: e.g. the distance to
-/// the data in metres, nearest_point_distances()) when given with one value per vertex, and
-/// faces (uchar count, uint vertex_indices). Atomic: the file appears complete or not at all.
-/// Throws meshflow::Error on I/O failure or a quality array of another length. O(V + T).
+/// (uchar red green blue) when present, then each of `scalars` as a float property in order,
+/// and faces (uchar count, uint vertex_indices). Atomic: the file appears complete or not at
+/// all. Throws meshflow::Error on I/O failure, or a scalar with another number of values than
+/// vertices or a name that is not a PLY word. O(V + T).
 void write_ply(const std::string& path, const TriangleMesh& mesh,
                PlyEncoding encoding = PlyEncoding::kBinary,
                const Eigen::Vector3d& origin = Eigen::Vector3d::Zero(),
-               const std::vector<float>* quality = nullptr);
+               const std::vector<VertexScalar>& scalars = {});
 
 /// Writes v / vn / f lines (1-based indices, "f a//a b//b c//c" when normals exist); colours as
 /// the common extension "v x y z r g b" (0..1). Atomic.

@@ -146,6 +146,25 @@ def test_vertex_quality_is_the_distance_to_the_nearest_point(tmp_path):
         mesh.write(str(tmp_path / "q.obj"), quality=quality)
 
 
+def test_vertex_observations_count_the_points_within_the_radius(tmp_path):
+    cloud = sphere_cloud(3, 5000)
+    mesh = meshflow.reconstruct(cloud, voxel=0.03)
+    observations = meshflow.vertex_observations(mesh, cloud, 0.03)
+    assert observations.dtype == np.float32 and observations.shape == (len(mesh.vertices),)
+    points = np.asarray(cloud.points)
+    for i in range(0, len(mesh.vertices), 97):  # brute force
+        within = (np.linalg.norm(points - mesh.vertices[i], axis=1) <= 0.03).sum()
+        assert abs(observations[i] - within) <= 1  # rounding at the radius
+    assert observations.min() >= 1
+    path = str(tmp_path / "o.ply")
+    quality = meshflow.vertex_quality(mesh, cloud)
+    mesh.write(path, quality=quality, observations=observations)
+    header = open(path, "rb").read(500).split(b"end_header")[0]
+    assert b"property float quality\nproperty float observations" in header
+    with pytest.raises(meshflow.Error, match="positive radius"):
+        meshflow.vertex_observations(mesh, cloud, 0.0)
+
+
 @pytest.mark.filterwarnings("ignore::meshflow.FrameDroppedWarning")
 def test_offline_callback_may_push_without_waiting_for_itself():
     """A callback that pushes into an offline pipeline does not wait for room (its own thread

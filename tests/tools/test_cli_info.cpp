@@ -107,9 +107,9 @@ TEST(CliInfo, PlyWithoutFacesIsStillACloud) {
 namespace meshflow {
 namespace {
 
-// The `quality` vertex property of a binary PLY written by meshflow, with the positions.
-void read_quality(const std::string& path, std::vector<Eigen::Vector3f>& positions,
-                  std::vector<float>& quality) {
+// The float vertex property `property` of a binary PLY written by meshflow, with the positions.
+void read_vertex_scalar(const std::string& path, const std::string& property,
+                        std::vector<Eigen::Vector3f>& positions, std::vector<float>& values) {
   const std::string bytes = test::read_file(path);
   const std::size_t end = bytes.find("end_header\n");
   ASSERT_NE(end, std::string::npos);
@@ -128,7 +128,7 @@ void read_quality(const std::string& path, std::vector<Eigen::Vector3f>& positio
     } else if (word == "property" && in_vertex) {
       words >> type >> name;
       if (name == "x") x_at = stride;
-      if (name == "quality") quality_at = stride, has_quality = true;
+      if (name == property) quality_at = stride, has_quality = true;
       ASSERT_TRUE(type == "float" || type == "uchar") << line;
       stride += type == "float" ? 4 : 1;
     }
@@ -141,7 +141,7 @@ void read_quality(const std::string& path, std::vector<Eigen::Vector3f>& positio
     std::memcpy(p.data(), data + i * stride + x_at, 12);
     std::memcpy(&q, data + i * stride + quality_at, 4);
     positions.push_back(p);
-    quality.push_back(q);
+    values.push_back(q);
   }
 }
 
@@ -156,7 +156,7 @@ TEST(CliQuality, VertexQualityIsTheDistanceToTheNearestInputPoint) {
   const nlohmann::json doc = nlohmann::json::parse(run.out);
   std::vector<Eigen::Vector3f> vertices;
   std::vector<float> quality;
-  read_quality(dir + "/m.ply", vertices, quality);
+  read_vertex_scalar(dir + "/m.ply", "quality", vertices, quality);
   ASSERT_GT(vertices.size(), 100u);
   const PointCloud input = io::read_point_cloud(dir + "/s.ply");
   float max = 0.0f;
@@ -170,11 +170,49 @@ TEST(CliQuality, VertexQualityIsTheDistanceToTheNearestInputPoint) {
   EXPECT_NEAR(doc["quality"]["max"].get<double>(), max, 1e-6);
   EXPECT_LT(doc["quality"]["p95"].get<double>(), doc["voxel"].get<double>()) << "near the data";
   EXPECT_LT(max, doc["voxel"].get<double>() * 3);
+  // `observations`: the input points within one voxel of each vertex, as brute force counts.
+  std::vector<Eigen::Vector3f> same;
+  std::vector<float> observations;
+  read_vertex_scalar(dir + "/m.ply", "observations", same, observations);
+  ASSERT_EQ(same, vertices);
+  const float voxel = doc["voxel"].get<float>();
+  for (std::size_t i = 0; i < vertices.size(); i += 7) {
+    std::size_t within = 0;
+    for (const Eigen::Vector3f& p : input.positions) within += (p - vertices[i]).norm() <= voxel;
+    EXPECT_NEAR(observations[i], static_cast<float>(within), 1.0f) << i;  // rounding at r
+  }
+  // 5 000 points on a sphere at the automatic voxel: a handful per vertex, a few vertices (those
+  // over a voxel from the nearest point, where `quality` is largest) with none.
+  EXPECT_GE(doc["observations"]["median"].get<double>(), 3.0);
+  EXPECT_GE(doc["observations"]["p5"].get<double>(), 1.0);
+  EXPECT_EQ(doc["observations"]["min"].get<double>() == 0.0, max > voxel);
   // Other formats have no place for it: a clear error before any work.
   const test::CliRun obj =
       test::run_cli("reconstruct " + dir + "/s.ply -o " + dir + "/m.obj --quality");
   EXPECT_EQ(obj.exit_code, 1);
   EXPECT_NE(obj.err.find("--quality writes a PLY vertex property"), std::string::npos) << obj.err;
+}
+
+// run --fuse --quality: fused.ply's `observations` are the map's weight at each vertex, the
+// frames that saw it (constant weighting): between 0 and the number of frames, most surface
+// seen by several.
+TEST(CliQuality, FusedMapObservationsCountTheFramesThatSawEachVertex) {
+  const std::string dir = test::temp_dir();
+  const test::CliRun run = test::run_cli(
+      "run --synthetic-depth --synthetic-frames 12 --synthetic-size 160x120 --fuse -o " + dir +
+      "/out --quality --voxel 0.04 --json");
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  const nlohmann::json doc = nlohmann::json::parse(run.out);
+  std::vector<Eigen::Vector3f> vertices;
+  std::vector<float> observations;
+  read_vertex_scalar(dir + "/out/fused.ply", "observations", vertices, observations);
+  ASSERT_GT(vertices.size(), 1000u);
+  for (float w : observations) {
+    ASSERT_GE(w, 0.0f);
+    ASSERT_LE(w, 12.0f + 1e-4f);
+  }
+  EXPECT_GE(doc["observations"]["median"].get<double>(), 2.0);
+  EXPECT_EQ(doc["observations"]["vertices"].get<std::size_t>(), vertices.size());
 }
 
 }  // namespace

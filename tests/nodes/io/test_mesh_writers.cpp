@@ -26,24 +26,28 @@ TriangleMesh sample_mesh() {
 TEST(MeshWriters, PlyQualityPropertyFollowsTheColours) {
   const TriangleMesh m = sample_mesh();
   const std::string dir = test::temp_dir();
-  const std::vector<float> quality = {0.25f, 0.5f, 0.001f};
-  write_ply(dir + "/q.ply", m, PlyEncoding::kAscii, Eigen::Vector3d::Zero(), &quality);
+  const std::vector<VertexScalar> quality = {{"quality", {0.25f, 0.5f, 0.001f}},
+                                             {"observations", {12.0f, 3.0f, 0.0f}}};
+  write_ply(dir + "/q.ply", m, PlyEncoding::kAscii, Eigen::Vector3d::Zero(), quality);
   const std::string text = test::read_file(dir + "/q.ply");
-  EXPECT_NE(text.find("property uchar blue\nproperty float quality\nelement face"),
+  EXPECT_NE(text.find("property uchar blue\nproperty float quality\nproperty float "
+                      "observations\nelement face"),
             std::string::npos)
       << text;
-  EXPECT_NE(text.find(" 7 8 9 0.001\n"), std::string::npos) << text;
+  EXPECT_NE(text.find(" 7 8 9 0.001 0\n"), std::string::npos) << text;
   for (PlyEncoding enc : {PlyEncoding::kBinary, PlyEncoding::kAscii}) {
-    write_ply(dir + "/q.ply", m, enc, Eigen::Vector3d::Zero(), &quality);
+    write_ply(dir + "/q.ply", m, enc, Eigen::Vector3d::Zero(), quality);
     const TriangleMesh back = read_ply_mesh(dir + "/q.ply");
     EXPECT_EQ(back.vertices, m.vertices);
     EXPECT_EQ(back.colors, m.colors);
     EXPECT_EQ(back.triangles, m.triangles);
   }
-  const std::vector<float> short_quality = {1.0f};
-  EXPECT_THROW(
-      write_ply(dir + "/bad.ply", m, PlyEncoding::kBinary, Eigen::Vector3d::Zero(), &short_quality),
-      Error);
+  EXPECT_THROW(write_ply(dir + "/bad.ply", m, PlyEncoding::kBinary, Eigen::Vector3d::Zero(),
+                         {{"quality", {1.0f}}}),
+               Error);
+  EXPECT_THROW(write_ply(dir + "/bad.ply", m, PlyEncoding::kBinary, Eigen::Vector3d::Zero(),
+                         {{"two words", {1.0f, 2.0f, 3.0f}}}),
+               Error);
   EXPECT_FALSE(std::filesystem::exists(dir + "/bad.ply"));
 }
 

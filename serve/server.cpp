@@ -32,28 +32,6 @@ namespace websocket = beast::websocket;
 using tcp = asio::ip::tcp;
 using error_code = boost::system::error_code;
 
-ServeAddress parse_serve_address(const std::string& text) {
-  ServeAddress address;
-  std::string port = text;
-  if (!text.empty() && text.front() == '[') {
-    const std::size_t close = text.find(']');
-    if (close == std::string::npos || close + 1 >= text.size() || text[close + 1] != ':')
-      throw Error("--serve", "address", "[IPV6]:PORT, got \"" + text + "\"");
-    address.host = text.substr(1, close - 1);
-    port = text.substr(close + 2);
-  } else if (const std::size_t colon = text.rfind(':'); colon != std::string::npos) {
-    address.host = text.substr(0, colon);
-    port = text.substr(colon + 1);
-    if (address.host.empty()) address.host = "127.0.0.1";
-  }
-  if (port.empty() || port.size() > 5 ||
-      !std::all_of(port.begin(), port.end(), [](char c) { return c >= '0' && c <= '9'; }) ||
-      std::stoul(port) > 65535)
-    throw Error("--serve", "port", "a number 0 .. 65535, got \"" + port + "\"");
-  address.port = static_cast<std::uint16_t>(std::stoul(port));
-  return address;
-}
-
 namespace {
 
 /// One frame queued for a client; its bytes are shared by every client.

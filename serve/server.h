@@ -46,14 +46,6 @@ struct StaticResource {
   std::shared_ptr<const std::string> body;  ///< the bytes (shared, never copied per client)
 };
 
-/// Where to bind: `[HOST:]PORT` (HOST an IPv4 address, "localhost" or a bracketed IPv6
-/// address). Throws meshflow::Error for a malformed value or a port outside 0 .. 65535.
-struct ServeAddress {
-  std::string host = "127.0.0.1";
-  std::uint16_t port = 0;
-};
-ServeAddress parse_serve_address(const std::string& text);
-
 struct ServerConfig {
   /// The address to listen on; the default is the loopback interface only.
   std::string host = "127.0.0.1";

@@ -102,7 +102,7 @@ class ServedRunView final : public RunView {
 }  // namespace
 
 std::unique_ptr<serve::Server> start_viewer_server(const ServeOptions& o, std::size_t chunk_bytes) {
-  const serve::ServeAddress address = serve::parse_serve_address(o.address);
+  const options::ServeAddress address = options::parse_serve_address(o.address);
   serve::ServerConfig config;
   config.host = address.host;
   config.port = address.port;

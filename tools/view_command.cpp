@@ -32,7 +32,6 @@ struct ViewOptions {
 };
 
 void run_view(const ViewOptions& o) {
-  serve::parse_serve_address(o.serve.address);  // a usage error before any work
   const double t0 = monotonic_seconds();
   compress::CompressConfig config;
   config.base_ratio = o.base_ratio;

@@ -33,6 +33,7 @@ FusionPipeline::FusionPipeline(FusionConfig config, std::size_t max_in_flight, T
 
 std::uint64_t FusionPipeline::integrate(Frame& f) {
   f.integration = map_.integrate(*f.depth);
+  last_sensor_ = f.depth->T_world_camera.translation();
   f.depth.reset();
   ++integrated_;
   return f.integration.voxels_updated;
@@ -57,7 +58,7 @@ void FusionPipeline::run(const std::function<FramePtr()>& next,
       stages::run_stage(
           "publish",
           [this](Frame&) {
-            observer_(map_);
+            observer_(map_, last_sensor_);
             return std::uint64_t{0};
           },
           *f);

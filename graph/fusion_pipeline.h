@@ -51,10 +51,12 @@ class FusionPipeline : public FramePipeline {
   /// The TSDF map fused so far.
   const TsdfVolume& map() const { return map_; }
   /// Called in the integration node after each frame is integrated (frames in input order, one
-  /// at a time, never during another integration): the one place a run may read the growing map,
-  /// e.g. to send its changed blocks to viewers (serve/map_publisher.h). It must not keep the
+  /// at a time, never during another integration) with the map and that frame's camera centre
+  /// (world metres): the one place a run may read the growing map, e.g. to send its changed
+  /// blocks to viewers nearest the sensor first (serve/map_publisher.h). It must not keep the
   /// reference, and whatever time it takes holds up the next integration. Set before run().
-  void set_integration_observer(std::function<void(const TsdfVolume& map)> observer) {
+  void set_integration_observer(
+      std::function<void(const TsdfVolume& map, const Eigen::Vector3f& sensor)> observer) {
     observer_ = std::move(observer);
   }
   /// The configuration the pipeline was made with.
@@ -68,7 +70,8 @@ class FusionPipeline : public FramePipeline {
   TsdfVolume map_;
   TsdfMesher mesher_;
   std::size_t integrated_ = 0;
-  std::function<void(const TsdfVolume&)> observer_;
+  Eigen::Vector3f last_sensor_ = Eigen::Vector3f::Zero();  // the integrated frame's camera
+  std::function<void(const TsdfVolume&, const Eigen::Vector3f&)> observer_;
 };
 
 }  // namespace meshflow

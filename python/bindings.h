@@ -134,4 +134,7 @@ void bind_readers(py::module_& m);
 /// Binds compress and decompress (python/compress.cpp).
 void bind_compress(py::module_& m);
 
+/// Binds serve and ServedView, when built with the serving layer (python/serve.cpp).
+void bind_serve(py::module_& m);
+
 }  // namespace meshflow::python

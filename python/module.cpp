@@ -386,6 +386,9 @@ orientation, double walls. reference: a Mesh, a Cloud or a file path.)");
   bind_readers(m);
   bind_live(m);
   bind_compress(m);
+#ifdef MESHFLOW_WITH_SERVE
+  bind_serve(m);
+#endif
 
   static const std::string reconstruct_doc =
       R"(Reconstructs a surface from a Cloud or an (n, 3) points array (with optional (n, 3)

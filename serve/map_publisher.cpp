@@ -51,7 +51,10 @@ std::string encode_block_payload(const Eigen::Vector3i& coords, const TsdfMesher
 
 MapPublisher::MapPublisher(Server& server, float voxel_size, float min_weight,
                            double min_interval_s)
-    : server_(server), min_interval_s_(min_interval_s), mesher_(min_weight) {
+    : server_(server),
+      block_side_m_(voxel_size * static_cast<float>(kTsdfBlockSide)),
+      min_interval_s_(min_interval_s),
+      mesher_(min_weight) {
   config_.step = static_cast<double>(voxel_size) / 64.0;
   config_.normals = false;  // the pieces have none; the page computes them
   coder_ = std::thread([this] { coder_loop(); });
@@ -66,7 +69,14 @@ MapPublisher::~MapPublisher() {
   coder_.join();
 }
 
-void MapPublisher::integrated(const TsdfVolume& map) {
+BlockPoint MapPublisher::block_point(const Eigen::Vector3f& sensor) const {
+  return {static_cast<double>(sensor.x() / block_side_m_),
+          static_cast<double>(sensor.y() / block_side_m_),
+          static_cast<double>(sensor.z() / block_side_m_)};
+}
+
+void MapPublisher::integrated(const TsdfVolume& map, const Eigen::Vector3f& sensor) {
+  if (sensor.allFinite()) focus_ = block_point(sensor);
   const double now = monotonic_seconds();
   {
     std::lock_guard<std::mutex> lock(mutex_);
@@ -100,6 +110,7 @@ void MapPublisher::update(const TsdfVolume& map) {
   ++counts_.updates;
   if (pieces.empty()) return;
   batch_ = std::move(pieces);
+  batch_focus_ = focus_;
   changed_.notify_all();
 }
 
@@ -115,6 +126,7 @@ void MapPublisher::coder_loop() {
     if (stop_) return;
     std::vector<Piece> pieces = std::move(batch_);
     batch_.clear();
+    const BlockPoint focus = batch_focus_;
     coding_ = true;
     lock.unlock();
     std::vector<MapBlock> blocks;
@@ -131,7 +143,7 @@ void MapPublisher::coder_loop() {
       blocks.push_back(std::move(b));
     }
     const std::size_t published = blocks.size();
-    server_.publish_blocks(std::move(blocks));
+    server_.publish_blocks(std::move(blocks), focus);
     lock.lock();
     coding_ = false;
     counts_.blocks += published;

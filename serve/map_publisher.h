@@ -51,13 +51,16 @@ class MapPublisher {
   MapPublisher(const MapPublisher&) = delete;
   MapPublisher& operator=(const MapPublisher&) = delete;
 
-  /// After an integration, from the integration node (FusionPipeline's observer): when a viewer
-  /// is connected, the coder is idle and min_interval_s has passed, re-meshes the changed blocks
-  /// and hands copies of their pieces to the coder; otherwise returns at once. Its cost, held
-  /// against the next integration: O(blocks) to find the changed ones + O(their cells).
-  void integrated(const TsdfVolume& map);
+  /// After an integration, from the integration node (FusionPipeline's observer), with the
+  /// integrated frame's camera centre `sensor` (world metres): when a viewer is connected, the
+  /// coder is idle and min_interval_s has passed, re-meshes the changed blocks and hands copies
+  /// of their pieces to the coder; otherwise returns at once. The blocks go to each viewer
+  /// nearest the newest `sensor` first (Server::publish_blocks). Its cost, held against the
+  /// next integration: O(blocks) to find the changed ones + O(their cells).
+  void integrated(const TsdfVolume& map, const Eigen::Vector3f& sensor);
   /// After the run (no integration running): publishes every block changed since the last
-  /// update, viewers or not, and returns when they are published.
+  /// update, viewers or not (nearest the last sensor position first), and returns when they are
+  /// published.
   void finish(const TsdfVolume& map);
 
   MapPublisherCounts counts() const;
@@ -67,18 +70,23 @@ class MapPublisher {
     Eigen::Vector3i coords;
     TsdfMesher::BlockMesh mesh;
   };
+  /// `sensor` (world metres) in block units (serve/block_order.h).
+  BlockPoint block_point(const Eigen::Vector3f& sensor) const;
   void update(const TsdfVolume& map);
   void coder_loop();
 
   Server& server_;
+  float block_side_m_;  // a block's edge, metres (8 voxels)
   compress::CompressConfig config_;
   double min_interval_s_;
   double last_update_s_ = -1e300;
-  TsdfMesher mesher_;  // the integration node's (or finish()'s) only
+  TsdfMesher mesher_;                // the integration node's (or finish()'s) only
+  BlockPoint focus_{0.0, 0.0, 0.0};  // the newest sensor position (integration node only)
 
   mutable std::mutex mutex_;
   std::condition_variable changed_;
-  std::vector<Piece> batch_;  // handed to the coder
+  std::vector<Piece> batch_;               // handed to the coder
+  BlockPoint batch_focus_{0.0, 0.0, 0.0};  // the sensor position when the batch was made
   bool coding_ = false;
   bool stop_ = false;
   MapPublisherCounts counts_;

@@ -32,28 +32,6 @@ namespace websocket = beast::websocket;
 using tcp = asio::ip::tcp;
 using error_code = boost::system::error_code;
 
-ServeAddress parse_serve_address(const std::string& text) {
-  ServeAddress address;
-  std::string port = text;
-  if (!text.empty() && text.front() == '[') {
-    const std::size_t close = text.find(']');
-    if (close == std::string::npos || close + 1 >= text.size() || text[close + 1] != ':')
-      throw Error("--serve", "address", "[IPV6]:PORT, got \"" + text + "\"");
-    address.host = text.substr(1, close - 1);
-    port = text.substr(close + 2);
-  } else if (const std::size_t colon = text.rfind(':'); colon != std::string::npos) {
-    address.host = text.substr(0, colon);
-    port = text.substr(colon + 1);
-    if (address.host.empty()) address.host = "127.0.0.1";
-  }
-  if (port.empty() || port.size() > 5 ||
-      !std::all_of(port.begin(), port.end(), [](char c) { return c >= '0' && c <= '9'; }) ||
-      std::stoul(port) > 65535)
-    throw Error("--serve", "port", "a number 0 .. 65535, got \"" + port + "\"");
-  address.port = static_cast<std::uint16_t>(std::stoul(port));
-  return address;
-}
-
 namespace {
 
 /// One frame queued for a client; its bytes are shared by every client.
@@ -62,9 +40,6 @@ struct Outgoing {
   bool binary = false;
   std::shared_ptr<const std::string> data;
 };
-
-/// A block of a fused map by its coordinates.
-using BlockKey = std::array<std::int32_t, 3>;
 
 /// A published mesh, ready to send: its header message and its binary chunks.
 struct MeshMessage {
@@ -120,9 +95,11 @@ class Server::Impl {
   void remove_client(const std::shared_ptr<WsSession>& session);
 
   void publish(std::shared_ptr<const MeshMessage> mesh, std::shared_ptr<const std::string> stats,
-               bool finish = false, std::vector<MapBlock> blocks = {}) {
+               bool finish = false, std::vector<MapBlock> blocks = {},
+               std::optional<BlockPoint> focus = std::nullopt) {
     std::lock_guard<std::mutex> lock(pending_mutex_);
     if (finish) pending_finish_ = true;
+    if (focus) pending_focus_ = focus;
     for (MapBlock& b : blocks) pending_blocks_[BlockKey{b.x, b.y, b.z}] = std::move(b.payload);
     if (mesh && pending_mesh_) ++counters_.publications_replaced;
     if (stats && pending_stats_) ++counters_.publications_replaced;
@@ -149,6 +126,7 @@ class Server::Impl {
   std::shared_ptr<const std::string> current_stats_;
   bool finished_ = false;  // finish() reached the I/O thread: clients get the end message
   std::map<BlockKey, std::shared_ptr<const std::string>> blocks_;  // the newest of each block
+  BlockPoint focus_{0.0, 0.0, 0.0};  // the newest sensor position: nearest blocks go first
 
   // Producers to the I/O thread: the newest unsent publications (older ones are replaced).
   std::mutex pending_mutex_;
@@ -156,6 +134,7 @@ class Server::Impl {
   std::shared_ptr<const std::string> pending_stats_;
   bool pending_finish_ = false;
   std::map<BlockKey, std::shared_ptr<const std::string>> pending_blocks_;
+  std::optional<BlockPoint> pending_focus_;
   bool drain_posted_ = false;
 
   std::atomic<std::uint64_t> mesh_id_{0};
@@ -202,17 +181,15 @@ class WsSession : public std::enable_shared_from_this<WsSession> {
     if (!writing_) write_next();
   }
 
-  /// The client is to be sent these blocks (their newest payloads, taken when a batch is cut).
-  void mark_blocks(const std::vector<BlockKey>& keys) {
+  /// The client is to be sent these blocks (their newest payloads, taken when a batch is cut),
+  /// with those it waits for already, nearest to `focus` (block units) first.
+  void mark_blocks(const std::vector<BlockKey>& keys, const BlockPoint& focus) {
     if (closing_) return;
-    for (const BlockKey& key : keys) {
-      if (block_pending_.insert(key).second)
-        block_order_.push_back(key);
-      else
-        ++server_.counters_.blocks_superseded;
-    }
-    if (block_pending_.size() > server_.counters_.max_pending_blocks)
-      server_.counters_.max_pending_blocks = block_pending_.size();
+    blocks_waiting_.set_focus(focus);
+    for (const BlockKey& key : keys)
+      if (!blocks_waiting_.push(key)) ++server_.counters_.blocks_superseded;
+    if (blocks_waiting_.size() > server_.counters_.max_pending_blocks)
+      server_.counters_.max_pending_blocks = blocks_waiting_.size();
     if (!writing_) write_next();
   }
 
@@ -233,10 +210,8 @@ class WsSession : public std::enable_shared_from_this<WsSession> {
     const auto put = [&frame](std::uint32_t v) {
       for (int b = 0; b < 4; ++b) frame.push_back(static_cast<char>(v >> (8 * b)));
     };
-    while (!block_order_.empty() && (count == 0 || frame.size() < server_.config_.chunk_bytes)) {
-      const BlockKey key = block_order_.front();
-      block_order_.pop_front();
-      block_pending_.erase(key);
+    while (!blocks_waiting_.empty() && (count == 0 || frame.size() < server_.config_.chunk_bytes)) {
+      const BlockKey key = blocks_waiting_.pop();
       const auto found = server_.blocks_.find(key);
       const std::string empty;
       const std::string& payload =
@@ -312,12 +287,12 @@ class WsSession : public std::enable_shared_from_this<WsSession> {
   void write_next() {
     // Stats and mesh frames first, then map blocks, the end message last.
     const bool frame_first = !queue_.empty() && queue_.front().kind != Outgoing::Kind::kEnd;
-    if (closing_ || (queue_.empty() && block_order_.empty())) {
+    if (closing_ || (queue_.empty() && blocks_waiting_.empty())) {
       writing_ = false;
       return;
     }
     writing_ = true;
-    if (frame_first || block_order_.empty()) {
+    if (frame_first || blocks_waiting_.empty()) {
       in_flight_ = std::move(queue_.front());
       queue_.pop_front();
     } else {
@@ -364,8 +339,7 @@ class WsSession : public std::enable_shared_from_this<WsSession> {
   beast::flat_buffer in_;
   Server::Impl& server_;
   std::deque<Outgoing> queue_;        // not yet started
-  std::deque<BlockKey> block_order_;  // blocks to send, oldest change first
-  std::set<BlockKey> block_pending_;  // the same keys, for lookup
+  NearestBlockQueue blocks_waiting_;  // blocks to send, nearest the sensor first
   Outgoing in_flight_;                // being written (its bytes must live until the write ends)
   asio::steady_timer pace_{ws_.get_executor()};
   std::chrono::steady_clock::time_point write_started_, next_send_;
@@ -517,6 +491,7 @@ void Server::Impl::drain() {
   {
     std::lock_guard<std::mutex> lock(pending_mutex_);
     blocks.swap(pending_blocks_);
+    if (pending_focus_) focus_ = *std::exchange(pending_focus_, std::nullopt);
     mesh = std::move(pending_mesh_);
     stats = std::move(pending_stats_);
     pending_mesh_.reset();
@@ -542,7 +517,7 @@ void Server::Impl::drain() {
       blocks_[key] = std::move(payload);
       keys.push_back(key);
     }
-    for (const auto& client : clients_) client->mark_blocks(keys);
+    for (const auto& client : clients_) client->mark_blocks(keys, focus_);
   }
   if (finish && !finished_) {
     finished_ = true;
@@ -565,7 +540,7 @@ bool Server::Impl::add_client(const std::shared_ptr<WsSession>& session) {
     std::vector<BlockKey> keys;
     keys.reserve(blocks_.size());
     for (const auto& entry : blocks_) keys.push_back(entry.first);
-    session->mark_blocks(keys);
+    session->mark_blocks(keys, focus_);
   }
   if (finished_) session->enqueue(end_message());
   return true;
@@ -627,9 +602,9 @@ void Server::publish_stats(std::string json) {
 
 void Server::finish() { impl_->publish(nullptr, nullptr, true); }
 
-void Server::publish_blocks(std::vector<MapBlock> blocks) {
+void Server::publish_blocks(std::vector<MapBlock> blocks, std::optional<BlockPoint> focus) {
   impl_->counters_.blocks_published += blocks.size();
-  impl_->publish(nullptr, nullptr, false, std::move(blocks));
+  impl_->publish(nullptr, nullptr, false, std::move(blocks), focus);
 }
 
 ServerStats Server::stats() const {

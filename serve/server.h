@@ -35,8 +35,11 @@
 #include <cstdint>
 #include <map>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
+
+#include "serve/block_order.h"
 
 namespace meshflow::serve {
 
@@ -45,14 +48,6 @@ struct StaticResource {
   std::string content_type;                 ///< e.g. "text/html; charset=utf-8"
   std::shared_ptr<const std::string> body;  ///< the bytes (shared, never copied per client)
 };
-
-/// Where to bind: `[HOST:]PORT` (HOST an IPv4 address, "localhost" or a bracketed IPv6
-/// address). Throws meshflow::Error for a malformed value or a port outside 0 .. 65535.
-struct ServeAddress {
-  std::string host = "127.0.0.1";
-  std::uint16_t port = 0;
-};
-ServeAddress parse_serve_address(const std::string& text);
 
 struct ServerConfig {
   /// The address to listen on; the default is the loopback interface only.
@@ -138,9 +133,12 @@ class Server {
   /// Publishes changed blocks of a fused map. Every client is sent each block that changed since
   /// it was last sent that block, the newest payload only (a block changed twice before a slow
   /// client took it goes once), in batches of about `chunk_bytes` after its stats and mesh
-  /// frames; a new client gets every block. Memory: the newest payload per block (shared by all
-  /// clients) and per client the keys of the blocks it waits for. Does not wait for the network.
-  void publish_blocks(std::vector<MapBlock> blocks);
+  /// frames; a new client gets every block. The blocks a client waits for go nearest first to
+  /// `focus`, the newest sensor position in block units (serve/block_order.h; the last focus
+  /// given stays, the origin until one is), ties by block coordinates. Memory: the newest
+  /// payload per block (shared by all clients) and per client the keys of the blocks it waits
+  /// for. Does not wait for the network; O(b log b) per client for b waiting blocks.
+  void publish_blocks(std::vector<MapBlock> blocks, std::optional<BlockPoint> focus = std::nullopt);
   /// Tells the server nothing more will be published (a run is over): each client, present or
   /// future, gets {"type":"end"} after what is queued for it. Does not wait for the network.
   void finish();

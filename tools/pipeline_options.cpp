@@ -10,43 +10,9 @@
 #include "nodes/synthetic/scan_sequence.h"
 #include "runtime/error.h"
 #include "tools/cli_checks.h"
+#include "tools/model_check.h"
 
 namespace meshflow::cli {
-
-namespace {
-
-// A CLI11 validator that converts the text as CLI11 will, stores it in a copy of the defaults
-// and runs the model's check on it. Text that is no number of the field's type: the model's
-// expectation for a number.
-template <typename T>
-CLI::Validator model_check(const options::OptionSpec& spec, T PipelineOptions::*member) {
-  return CLI::Validator(
-      [&spec, member](std::string& text) -> std::string {
-        PipelineOptions probe;
-        if constexpr (std::is_same_v<T, std::string>) {
-          probe.*member = text;
-        } else {
-          if constexpr (std::is_unsigned_v<T>) {  // strtoull would wrap "-1"
-            if (text.find('-') != std::string::npos)
-              return "expected a whole number >= 0, got '" + text + "'";
-          }
-          char* end = nullptr;
-          const double value = std::strtod(text.c_str(), &end);
-          if (text.empty() || end != text.c_str() + text.size())
-            return "expected a number, got '" + text + "'";
-          if (!std::isfinite(value)) return options::check_number(value, 0, 0);
-          if (!std::is_floating_point_v<T> && value != std::floor(value))
-            return "expected a whole number, got '" + text + "'";
-          probe.*member = static_cast<T>(value);
-          if (static_cast<double>(probe.*member) != value && !std::is_floating_point_v<T>)
-            return "expected a whole number in range, got '" + text + "'";
-        }
-        return spec.check(probe);
-      },
-      "");
-}
-
-}  // namespace
 
 void add_pipeline_options(CLI::App* cmd, PipelineOptions& o) {
   for (const options::OptionSpec& spec : options::pipeline_option_specs()) {
@@ -57,8 +23,8 @@ void add_pipeline_options(CLI::App* cmd, PipelineOptions& o) {
           if constexpr (std::is_same_v<T, bool>) {
             cmd->add_flag(flag, o.*member, spec.help);
           } else {
-            CLI::Option* option =
-                cmd->add_option(flag, o.*member, spec.help)->check(model_check(spec, member));
+            CLI::Option* option = cmd->add_option(flag, o.*member, spec.help)
+                                      ->check(model_check<PipelineOptions>(spec, member));
             if (spec.default_text != nullptr) option->default_str(spec.default_text);
           }
         },

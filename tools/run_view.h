@@ -1,9 +1,8 @@
 #pragma once
 // --serve on the commands that make meshes (view, reconstruct, run, live): the options, and a
 // viewer of a run that feeds the serving layer (serve/run_publisher.h) and keeps serving the
-// result afterwards. These options are the CLI's alone on purpose: the Python module has no
-// server yet, so they are not in the option model (options/); they move there when a second
-// front end serves. Without the serving layer (-DMESHFLOW_SERVE=OFF or no Boost) --serve is
+// result afterwards. The options are the option model's (options/serve_options.h), shared with
+// the Python module. Without the serving layer (-DMESHFLOW_SERVE=OFF or no Boost) --serve is
 // still accepted by the parser and fails with a message saying so (tools/run_view_off.cpp).
 
 #include <CLI/CLI.hpp>
@@ -17,18 +16,16 @@
 #include "graph/frame.h"
 #include "graph/live_pipeline.h"
 #include "nodes/fusion/tsdf_volume.h"
+#include "options/serve_options.h"
 
 namespace meshflow::cli {
 
-struct ServeOptions {
-  std::string address;      ///< [HOST:]PORT; empty: no server
-  double rate_mbit = 0.0;   ///< per-viewer bandwidth cap (0: none)
-  double exit_after = 0.0;  ///< seconds of serving once the result is ready (0: until Ctrl-C)
-  std::size_t max_viewers = 8;
-  bool enabled() const { return !address.empty(); }
-};
+/// The serving options of the option model (options/serve_options.h): --serve's address is
+/// checked when the command line is parsed (a usage error, exit 2, before any input is read).
+using ServeOptions = options::ServeOptions;
 
-/// Registers --serve, --serve-rate, --exit-after and --max-viewers on `cmd`. With
+/// Registers the option model's serving options (--serve, --serve-rate, --exit-after,
+/// --max-viewers) on `cmd`, checked by the model when parsed. With
 /// `address_default` (view), --serve has that default; otherwise (run, live, reconstruct) the
 /// server starts only when --serve is given and the other three need it.
 void add_serve_options(CLI::App* cmd, ServeOptions& options, const char* address_default = nullptr);
@@ -48,8 +45,8 @@ class RunView {
   /// A fused run: the observer for FusionPipeline::set_integration_observer, which sends the
   /// map's changed blocks as it grows (serve/map_publisher.h), for a map of `voxel_size` metres
   /// meshed with `min_weight`.
-  virtual std::function<void(const TsdfVolume&)> map_observer(float voxel_size,
-                                                              float min_weight) = 0;
+  virtual std::function<void(const TsdfVolume&, const Eigen::Vector3f&)> map_observer(
+      float voxel_size, float min_weight) = 0;
   /// After a fused run (map_observer() given): the map's blocks changed since the last update.
   virtual void map_result(const TsdfVolume& map) = 0;
   /// After the run's files and report: publishes the last mesh and the end of the run, then

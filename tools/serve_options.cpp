@@ -1,28 +1,39 @@
+#include <string>
+#include <type_traits>
+
+#include "tools/model_check.h"
 #include "tools/run_view.h"
 
 namespace meshflow::cli {
 
 void add_serve_options(CLI::App* cmd, ServeOptions& o, const char* address_default) {
-  CLI::Option* serve =
-      cmd->add_option("--serve", o.address,
-                      address_default != nullptr
-                          ? "Where to serve the page: [HOST:]PORT (HOST 127.0.0.1 unless given; "
-                            "port 0: any free port; the URL is printed)"
-                          : "Show the run in a browser: serve the viewer page at [HOST:]PORT "
-                            "(HOST 127.0.0.1 unless given; port 0: any free port; the URL is "
-                            "printed). The files written are the same with and without it");
-  if (address_default != nullptr) o.address = address_default;
-  CLI::Option* options[] = {
-      cmd->add_option("--exit-after", o.exit_after,
-                      "Stop serving this many seconds after the result is ready (0: at Ctrl-C)")
-          ->check(CLI::NonNegativeNumber),
-      cmd->add_option("--serve-rate", o.rate_mbit,
-                      "Cap each viewer's bandwidth, Mbit/s (0: none): how a narrow link feels")
-          ->check(CLI::NonNegativeNumber),
-      cmd->add_option("--max-viewers", o.max_viewers, "Browsers connected at once")
-          ->check(CLI::Range(std::size_t{1}, std::size_t{256}))};
-  if (address_default == nullptr)
-    for (CLI::Option* option : options) option->needs(serve);
+  std::vector<CLI::Option*> others;
+  CLI::Option* serve = nullptr;
+  for (const options::ServeOptionSpec& spec : options::serve_option_specs()) {
+    const std::string name = spec.name;
+    const std::string help =
+        name != "serve" ? spec.help
+        : address_default != nullptr
+            ? "Where to serve the page: [HOST:]PORT (HOST 127.0.0.1 "
+              "unless given; port 0: any free port; the URL is printed)"
+            : std::string(spec.help) + ". The files written are the same with and without it";
+    CLI::Option* option = std::visit(
+        [&](auto member) {
+          return cmd->add_option("--" + name, o.*member, help)
+              ->check(model_check<ServeOptions>(spec, member));
+        },
+        spec.field);
+    if (name == "serve")
+      serve = option;
+    else
+      others.push_back(option);
+  }
+  if (address_default != nullptr) {
+    o.address = address_default;
+    serve->default_str(address_default);
+  } else {
+    for (CLI::Option* option : others) option->needs(serve);
+  }
 }
 
 }  // namespace meshflow::cli

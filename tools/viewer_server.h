@@ -1,24 +1,62 @@
 #pragma once
-// The viewer's server for the CLI (built with the serving layer only): the page's fixed files,
-// the server on the user's --serve options, and serving until Ctrl-C or --exit-after.
+// The viewer's server for the front ends (built with the serving layer only; the CLI and the
+// Python module compile it): the page's fixed files, the server on the option model's serving
+// options (options/serve_options.h), a finished mesh encoded and published the way
+// `meshflow view` shows it, and (CLI) serving until Ctrl-C or --exit-after.
 
 #include <cstddef>
 #include <cstdio>
+#include <map>
 #include <memory>
+#include <string>
+#include <vector>
 
+#include "nodes/compress/compressed_mesh.h"
+#include "options/serve_options.h"
+#include "runtime/triangle_mesh.h"
 #include "serve/server.h"
-#include "tools/run_view.h"
 
 namespace meshflow::cli {
 
 /// Starts the server with the viewer page (web/ and Debian's libjs-three, read once) on
-/// `options`' address, rate cap and viewer limit, cutting meshes into `chunk_bytes` messages.
-/// Throws meshflow::Error for a bad address, one in use, or a missing page file.
-std::unique_ptr<serve::Server> start_viewer_server(const ServeOptions& options,
-                                                   std::size_t chunk_bytes = 64 * 1024);
+/// `options`' address (validated by the option model first), rate cap and viewer limit, cutting
+/// meshes into `chunk_bytes` messages; `extra` resources (e.g. "/mesh.mfc") are served beside
+/// the page. Throws meshflow::Error for a bad address ("--serve"), one that cannot be bound
+/// (naming it), or a missing page file.
+std::unique_ptr<serve::Server> start_viewer_server(
+    const options::ServeOptions& options, std::size_t chunk_bytes = 64 * 1024,
+    std::map<std::string, serve::StaticResource> extra = {});
+
+/// The codec settings a finished mesh is shown with (`meshflow view`, meshflow.serve): a base
+/// mesh of 2 % of the triangles, 1024 vertex splits per packet (the finest step the page shows).
+compress::CompressConfig view_compress_config();
+
+/// A finished mesh ready for the page: its progressive .mfc image and the panel's figures.
+struct ViewImage {
+  std::vector<unsigned char> mfc;  ///< progressive .mfc image (base mesh first)
+  compress::CompressedMeshInfo info;
+  std::size_t base_bytes = 0;  ///< bytes of the base mesh when encoded here (0: taken as given)
+  double read_s = 0.0, encode_s = 0.0;
+};
+
+/// `path` (a mesh read_mesh() reads, or a .mfc file) as a progressive image: a progressive
+/// .mfc is taken as it is, a single-rate one decoded and re-encoded (a picture from the first
+/// bytes), a mesh encoded with `config`. Throws meshflow::Error naming the file for one that
+/// cannot be read or has no triangles.
+ViewImage view_image_of_file(const std::string& path, const compress::CompressConfig& config);
+
+/// `mesh` (with triangles) as a progressive image encoded with `config` (positions plus
+/// `origin`, world coordinates). Throws meshflow::Error for a mesh without triangles.
+ViewImage view_image_of_mesh(const TriangleMesh& mesh, const compress::CompressConfig& config,
+                             const std::string& name);
+
+/// Publishes `image` on `server` as `meshflow view` does: the mesh, the panel's stats (`source`
+/// e.g. "meshflow view", `file` the name shown), then the end. Does not wait for the network.
+void publish_view(serve::Server& server, const ViewImage& image, const std::string& source,
+                  const std::string& file);
 
 /// Returns at Ctrl-C (SIGINT, SIGTERM) or after `exit_after` seconds (0: only at Ctrl-C), then
-/// prints what `server` sent on `out`.
+/// prints what `server` sent on `out` (CLI only: tools/run_view.cpp).
 void serve_until_stopped(const serve::Server& server, double exit_after, std::FILE* out);
 
 }  // namespace meshflow::cli

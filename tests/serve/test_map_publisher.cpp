@@ -161,7 +161,9 @@ TEST(MapPublisher, TheBlocksAViewerWasSentAssembleToTheFusedMesh) {
   const FusionConfig config = fusion_config();
   FusionPipeline pipeline(config, 2);
   MapPublisher publisher(server, kVoxel, config.min_weight, /*min_interval_s=*/0.0);
-  pipeline.set_integration_observer([&](const TsdfVolume& map) { publisher.integrated(map); });
+  pipeline.set_integration_observer([&](const TsdfVolume& map, const Eigen::Vector3f& sensor) {
+    publisher.integrated(map, sensor);
+  });
   const auto sequence = small_depth_sequence();
   run_sequence(pipeline, *sequence, {}, [](const Frame& f) { ASSERT_TRUE(f.ok()) << f.error; });
   publisher.finish(pipeline.map());
@@ -193,7 +195,9 @@ TEST(MapPublisher, AViewerThatNeverReadsWaitsForEachBlockAtMostOnce) {
   const FusionConfig config = fusion_config();
   FusionPipeline pipeline(config, 2);
   MapPublisher publisher(server, kVoxel, config.min_weight, 0.0);
-  pipeline.set_integration_observer([&](const TsdfVolume& map) { publisher.integrated(map); });
+  pipeline.set_integration_observer([&](const TsdfVolume& map, const Eigen::Vector3f& sensor) {
+    publisher.integrated(map, sensor);
+  });
   run_sequence(pipeline, *small_depth_sequence(), {}, [](const Frame&) {});
   publisher.finish(pipeline.map());
   std::this_thread::sleep_for(100ms);

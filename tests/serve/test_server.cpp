@@ -58,22 +58,6 @@ http::response<http::string_body> http_request(std::uint16_t port, http::verb ve
   return response;
 }
 
-TEST(ServeAddress, ParsesPortHostAndIpv6) {
-  ServeAddress a = parse_serve_address("8080");
-  EXPECT_EQ(a.host, "127.0.0.1");
-  EXPECT_EQ(a.port, 8080);
-  a = parse_serve_address("0.0.0.0:9000");
-  EXPECT_EQ(a.host, "0.0.0.0");
-  EXPECT_EQ(a.port, 9000);
-  a = parse_serve_address("[::1]:0");
-  EXPECT_EQ(a.host, "::1");
-  EXPECT_EQ(a.port, 0);
-  EXPECT_THROW(parse_serve_address("x"), Error);
-  EXPECT_THROW(parse_serve_address("70000"), Error);
-  EXPECT_THROW(parse_serve_address("host:"), Error);
-  EXPECT_THROW(parse_serve_address("[::1]"), Error);
-}
-
 TEST(ClientMessage, OnlyHelloAndPingObjects) {
   EXPECT_TRUE(valid_client_message(R"({"type":"hello"})"));
   EXPECT_TRUE(valid_client_message(R"({"type":"ping","t":1})"));

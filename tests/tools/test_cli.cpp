@@ -364,6 +364,25 @@ TEST(Cli, LiveSkipsAnUnreadableFrameAndReplaysTheOthers) {
   EXPECT_NE(r.err.find("none readable (1 skipped)"), std::string::npos) << r.err;
 }
 
+// Frames pushed faster than the volumetric path meshes them are dropped (realtime policy), and
+// the report names the per-frame path that keeps up with a depth camera; --triangulate has no
+// faster path to name.
+TEST(Cli, LiveNamesTheFastPathWhenFramesAreDropped) {
+  const std::string replay =
+      "live --synthetic-depth --synthetic-size 160x120 --max-frames 8 --rate 10000 --waiting 1 "
+      "--no-warm-up";
+  const CliRun volumetric = run_cli(replay);
+  ASSERT_EQ(volumetric.exit_code, 0) << volumetric.err;
+  EXPECT_EQ(volumetric.out.find(" 0 dropped"), std::string::npos) << volumetric.out;
+  EXPECT_NE(volumetric.out.find("--triangulate rqt meshes each depth image directly"),
+            std::string::npos)
+      << volumetric.out;
+  const CliRun triangulated = run_cli(replay + " --triangulate rqt");
+  ASSERT_EQ(triangulated.exit_code, 0) << triangulated.err;
+  EXPECT_EQ(triangulated.out.find("--triangulate rqt meshes"), std::string::npos)
+      << triangulated.out;
+}
+
 // The warm-up (--warm-up, the default) meshes a short sequence's frames over again (the allocator's
 // pools are still growing after a few frames), up to 32 frames or a second, before the timed
 // replay, which is unchanged.

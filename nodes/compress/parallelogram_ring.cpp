@@ -1,7 +1,5 @@
 #include "nodes/compress/parallelogram_ring.h"
 
-#include <algorithm>
-
 #include "nodes/compress/closed_surface.h"
 
 namespace meshflow::compress {
@@ -27,15 +25,12 @@ std::uint32_t ParallelogramRing::across(std::uint32_t from, std::uint32_t to) co
   return kNone;
 }
 
-unsigned ParallelogramRing::sum(std::uint32_t k,
-                                const std::vector<std::array<std::int32_t, 3>>& grid,
-                                std::array<std::int64_t, 3>& sum,
-                                std::array<std::int64_t, 3>& spread) const {
-  sum = {0, 0, 0};
-  std::array<std::int64_t, 3> low{}, high{};
+unsigned ParallelogramRing::gather(std::uint32_t k,
+                                   const std::vector<std::array<std::int32_t, 3>>& grid,
+                                   Parallelograms& out) const {
   unsigned count = 0;
   const auto known = [&](std::uint32_t v) { return v < k && !hole_[v]; };
-  for (std::uint32_t i = first_[k]; i < first_[k + 1]; ++i) {
+  for (std::uint32_t i = first_[k]; i < first_[k + 1] && count < kMaxParallelograms; ++i) {
     const Triangle& t = triangles_[incident_[i]];
     std::size_t j = 0;
     while (j < 2 && t[j] != k) ++j;
@@ -43,15 +38,10 @@ unsigned ParallelogramRing::sum(std::uint32_t k,
     if (!known(x) || !known(y)) continue;
     const std::uint32_t w = across(x, y);
     if (w == kNone || !known(w)) continue;
-    for (std::size_t a = 0; a < 3; ++a) {
-      const std::int64_t p = std::int64_t{grid[x][a]} + grid[y][a] - grid[w][a];
-      sum[a] += p;
-      low[a] = count == 0 ? p : std::min(low[a], p);
-      high[a] = count == 0 ? p : std::max(high[a], p);
-    }
+    for (std::size_t a = 0; a < 3; ++a)
+      out[count][a] = std::int64_t{grid[x][a]} + grid[y][a] - grid[w][a];
     ++count;
   }
-  for (std::size_t a = 0; a < 3; ++a) spread[a] = high[a] - low[a];
   return count;
 }
 

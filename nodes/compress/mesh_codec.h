@@ -44,9 +44,9 @@ struct BodyStats {
   std::size_t position_bytes = 0;
   std::size_t attribute_bytes = 0;
   std::size_t symbols = 0;
-  std::size_t holes = 0;             ///< loops of border (or cut) edges closed for the walk
-  std::size_t handles = 0;           ///< M symbols
-  std::size_t merged_fans = 0;       ///< extra fans of non-manifold vertices
+  std::size_t holes = 0;                   ///< loops of border (or cut) edges closed for the walk
+  std::size_t handles = 0;                 ///< M symbols
+  std::size_t merged_fans = 0;             ///< extra fans of non-manifold vertices
   std::size_t offered_parallelograms = 0;  ///< parallelograms the ring offered, all vertices
   std::size_t trusted_parallelograms = 0;  ///< of which the encoder flagged as trusted
 };

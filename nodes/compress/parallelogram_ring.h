@@ -40,7 +40,7 @@ class ParallelogramRing {
   const std::vector<Triangle>& triangles_;
   const std::vector<char>& hole_;
   std::vector<std::uint32_t> first_;     // per vertex + 1: offsets into incident_
-  std::vector<std::uint32_t> incident_;  // triangle numbers, grouped by vertex
+  std::vector<std::uint32_t> incident_;  // corners (3 triangle + j), grouped by vertex
 };
 
 }  // namespace meshflow::compress

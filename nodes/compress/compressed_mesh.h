@@ -1,9 +1,10 @@
 #pragma once
 // meshflow's compressed mesh files (".mfc"): one triangle mesh, coded single-rate (Edgebreaker)
-// or progressively (a base mesh and vertex splits). Format, version 4, little-endian:
+// or progressively (a base mesh and vertex splits). Format, version 5, little-endian:
 //
 //   bytes 0-7   magic "MFMESH\r\n"
-//   u32         version (4; 3 had no position mode byte, 2 no prefix checksums and coded
+//   u32         version (5; 4 had a position mode byte and no trust flags, 3 no position mode
+//               byte, 2 no prefix checksums and coded
 //               attributes from one neighbour)
 //   u32         kind: 1 = Edgebreaker, 2 = progressive
 //   u32         flags: bit 0 per-vertex normals stored, bit 1 per-vertex colours, bit 2 normals

@@ -1,7 +1,6 @@
 #include "nodes/compress/mesh_codec.h"
 
 #include <algorithm>
-#include <optional>
 
 #include "nodes/compress/attribute_coder.h"
 #include "nodes/compress/closed_surface.h"
@@ -79,65 +78,129 @@ struct SideModels {
   IntegerModel count, depth, offset, index, corner;
 };
 
-// How a vertex's position is predicted, from what its predictors give; the multi-parallelogram
-// mode's means of 2 and of 3 or more parallelograms have contexts of their own.
-enum Prediction { kPrevious = 0, kOne, kMidpoint, kParallelogram, kMean2, kMean3, kPredictions };
+// How a vertex's position is predicted: without parallelograms from what the gate gives; with
+// them by the mean of the flagged ones (1, 2, 3 or more), or, all refused, by the gate's
+// midpoint (a crease: kRefused).
+enum Prediction {
+  kPrevious = 0,
+  kOne,
+  kMidpoint,
+  kParallelogram,
+  kMean2,
+  kMean3,
+  kRefused,
+  kPredictions
+};
 
-// A mean's residuals are further split per axis by how much its parallelograms disagree on that
-// axis (0, 1, 2-3, 4-7, 8 or more steps): where they agree (a plane along the axis) the
+// Residuals are further split per axis by how much the vertex's parallelograms disagree on
+// that axis (0, 1, 2-3, 4-7, 8 or more steps): where they agree (a plane along the axis) the
 // residual is mostly zero.
+// And by the extent of the gate's decoded corners along the axis (0, 1-3, 4-15, 16-63, 64 or more
+// steps): a surface flat along an axis (a wall, a floor) keeps the new vertex on its plane.
 constexpr std::size_t kSpreads = 5;
-constexpr std::size_t kPositionContexts = kPredictions * kSpreads;
+constexpr std::size_t kExtents = 5;
+constexpr std::size_t kPositionContexts = kPredictions * kSpreads * kExtents;
 constexpr std::array<std::size_t, 3> kPreviousContext = {0, 0, 0};  // kPrevious, no spread
+constexpr unsigned kMaxParallelograms = ParallelogramRing::kMaxParallelograms;
 
 // The residual context of one axis.
-std::size_t spread_context(Prediction kind, std::int64_t spread) {
+std::size_t spread_context(Prediction kind, std::int64_t spread, std::int64_t extent) {
   std::size_t s = 0;
   while (s + 1 < kSpreads && spread >= (std::int64_t{1} << s)) ++s;
-  return static_cast<std::size_t>(kind) * kSpreads + s;
+  const std::size_t e = extent == 0 ? 0 : extent < 4 ? 1 : extent < 16 ? 2 : extent < 64 ? 3 : 4;
+  return (static_cast<std::size_t>(kind) * kSpreads + s) * kExtents + e;
 }
-
-// The body's position predictors, chosen per mesh by size: the gate's single parallelogram, or
-// the mean of every parallelogram the decoder can form (nodes/compress/parallelogram_ring.h).
-enum PositionMode : std::uint8_t { kSingleParallelogram = 0, kMultiParallelogram = 1 };
 
 // Grid positions of decoded vertices (only those already coded are read).
 using Grid = std::vector<std::array<std::int32_t, 3>>;
 
-// The prediction of decoded vertex k from its predictors, skipping holes (`hole`); `last` is
-// the last coded position. In the multi-parallelogram mode (`ring` given) the mean of the
-// parallelograms replaces the single one wherever there is one. Sets each axis's residual
-// context.
-std::array<std::int32_t, 3> predict(std::uint32_t k, const VertexPredictors& p,
-                                    const ParallelogramRing* ring, const std::vector<char>& hole,
-                                    const Grid& grid, const std::array<std::int32_t, 3>& last,
-                                    std::array<std::size_t, 3>& context) {
-  const auto real = [&](std::uint32_t v) { return v != kNone && !hole[v]; };
-  std::array<std::int32_t, 3> out = last;
-  std::array<std::int64_t, 3> sum, spread{};
-  const unsigned n = ring != nullptr ? ring->sum(k, grid, sum, spread) : 0;
-  Prediction kind;
-  if (n > 0) {
-    kind = n == 1 ? kParallelogram : n == 2 ? kMean2 : kMean3;
-    const std::int64_t half = n / 2;
-    for (std::size_t i = 0; i < 3; ++i)
-      out[i] = static_cast<std::int32_t>((sum[i] >= 0 ? sum[i] + half : sum[i] - half) /
-                                         std::int64_t{n});
-  } else if (real(p.a) && real(p.b) && real(p.w)) {
-    kind = kParallelogram;
-    for (std::size_t i = 0; i < 3; ++i)
-      out[i] = static_cast<std::int32_t>(std::int64_t{grid[p.a][i]} + grid[p.b][i] - grid[p.w][i]);
-  } else if (real(p.a) && real(p.b)) {
-    kind = kMidpoint;
-    for (std::size_t i = 0; i < 3; ++i)
-      out[i] = static_cast<std::int32_t>((std::int64_t{grid[p.a][i]} + grid[p.b][i]) / 2);
-  } else if (real(p.a) || real(p.b)) {
-    kind = kOne;
-    out = grid[real(p.a) ? p.a : p.b];
-  } else {
-    kind = kPrevious;
+// The position section's models: residuals per axis and context, and the flags that say which
+// parallelograms a vertex trusts (per count offered and position in the offer).
+struct PositionModels {
+  std::vector<std::array<IntegerModel, 3>> residual =
+      std::vector<std::array<IntegerModel, 3>>(kPositionContexts);
+  std::array<std::array<BitModel, kMaxParallelograms>, kMaxParallelograms> trusted{};
+};
+
+// What predicts decoded vertex k before its flags are read: the ring's parallelograms, their
+// disagreement per axis, and the prediction without them.
+struct Candidates {
+  unsigned n = 0;
+  ParallelogramRing::Parallelograms parallelogram;
+  std::array<std::int64_t, 3> spread{};
+  std::array<std::int64_t, 3> extent{};  // of the gate's decoded corners, per axis
+  std::array<std::int32_t, 3> fallback{};
+  Prediction fallback_kind = kPrevious;
+};
+
+// The candidates of vertex k from its gate predictors (skipping holes, `hole`) and the ring;
+// `last` is the last coded position.
+Candidates candidates(std::uint32_t k, const VertexPredictors& p, const ParallelogramRing& ring,
+                      const std::vector<char>& hole, const Grid& grid,
+                      const std::array<std::int32_t, 3>& last) {
+  Candidates c;
+  c.n = ring.gather(k, grid, c.parallelogram);
+  for (std::size_t a = 0; a < 3 && c.n > 1; ++a) {
+    std::int64_t low = c.parallelogram[0][a], high = low;
+    for (unsigned i = 1; i < c.n; ++i) {
+      low = std::min(low, c.parallelogram[i][a]);
+      high = std::max(high, c.parallelogram[i][a]);
+    }
+    c.spread[a] = high - low;
   }
-  for (std::size_t a = 0; a < 3; ++a) context[a] = spread_context(kind, spread[a]);
+  const auto real = [&](std::uint32_t v) { return v != kNone && !hole[v]; };
+  bool any = false;
+  std::array<std::int64_t, 3> low{}, high{};
+  for (std::uint32_t v : {p.a, p.b, p.w}) {
+    if (!real(v)) continue;
+    for (std::size_t a = 0; a < 3; ++a) {
+      low[a] = any ? std::min<std::int64_t>(low[a], grid[v][a]) : grid[v][a];
+      high[a] = any ? std::max<std::int64_t>(high[a], grid[v][a]) : grid[v][a];
+    }
+    any = true;
+  }
+  for (std::size_t a = 0; a < 3; ++a) c.extent[a] = high[a] - low[a];
+  c.fallback = last;
+  if (c.n == 0 && real(p.a) && real(p.b) && real(p.w)) {
+    c.fallback_kind = kParallelogram;
+    for (std::size_t i = 0; i < 3; ++i)
+      c.fallback[i] =
+          static_cast<std::int32_t>(std::int64_t{grid[p.a][i]} + grid[p.b][i] - grid[p.w][i]);
+  } else if (real(p.a) && real(p.b)) {
+    c.fallback_kind = kMidpoint;
+    for (std::size_t i = 0; i < 3; ++i)
+      c.fallback[i] = static_cast<std::int32_t>((std::int64_t{grid[p.a][i]} + grid[p.b][i]) / 2);
+  } else if (real(p.a) || real(p.b)) {
+    c.fallback_kind = kOne;
+    c.fallback = grid[real(p.a) ? p.a : p.b];
+  }
+  if (c.n > 0) c.fallback_kind = kRefused;
+  return c;
+}
+
+// The prediction from the parallelograms `trusted` selects (bit i: parallelogram i), their
+// rounded mean, or the fallback when none; sets each axis's residual context.
+std::array<std::int32_t, 3> predict(const Candidates& c, unsigned trusted,
+                                    std::array<std::size_t, 3>& context) {
+  if (trusted == 0) {
+    for (std::size_t a = 0; a < 3; ++a)
+      context[a] = spread_context(c.fallback_kind, c.spread[a], c.extent[a]);
+    return c.fallback;
+  }
+  std::array<std::int64_t, 3> sum{};
+  std::int64_t n = 0;
+  for (unsigned i = 0; i < c.n; ++i) {
+    if (((trusted >> i) & 1u) == 0) continue;
+    ++n;
+    for (std::size_t a = 0; a < 3; ++a) sum[a] += c.parallelogram[i][a];
+  }
+  const Prediction kind = n == 1 ? kParallelogram : n == 2 ? kMean2 : kMean3;
+  std::array<std::int32_t, 3> out;
+  const std::int64_t half = n / 2;
+  for (std::size_t a = 0; a < 3; ++a) {
+    out[a] = static_cast<std::int32_t>((sum[a] >= 0 ? sum[a] + half : sum[a] - half) / n);
+    context[a] = spread_context(kind, c.spread[a], c.extent[a]);
+  }
   return out;
 }
 
@@ -259,47 +322,57 @@ BodyStats encode_body(const TriangleMesh& mesh, const Quantizer& quantizer, Attr
     stats.connectivity_bytes += bytes.size();
     write_section(out, bytes);
   }
-  {  // Positions: one stream per axis (the decoder's three chains then overlap), in the mode
-     // that gives fewer bytes.
+  {  // Positions: one stream per axis (the decoder's three chains then overlap); a vertex's
+     // trust flags go first on the x stream. The encoder flags the subset of the offered
+     // parallelograms whose residuals and flags cost least under the models as they stand.
     const ParallelogramRing ring(replayed.triangles, hole, decoded);
-    const auto code_positions = [&](const ParallelogramRing* r) {
-      std::array<std::vector<unsigned char>, 3> streams;
-      RangeEncoder enc[3];
-      std::vector<std::array<IntegerModel, 3>> models(kPositionContexts);
-      Grid grid(decoded);
-      std::array<std::int32_t, 3> last{};
-      const auto code = [&](const std::array<std::int32_t, 3>& q,
-                            const std::array<std::int32_t, 3>& predicted,
-                            const std::array<std::size_t, 3>& context) {
-        for (std::size_t a = 0; a < 3; ++a)
-          models[context[a]][a].encode(enc[a], q[a] - predicted[a]);
-        last = q;
-      };
-      for (std::uint32_t k = 0; k < decoded; ++k) {
-        if (hole[k]) continue;
-        if (merged[k] != kNone) {
-          grid[k] = grid[merged[k]];
-          continue;
-        }
-        grid[k] = quantizer.quantize(mesh.vertices[surface.input_vertex[walk.surface_vertex[k]]]);
-        std::array<std::size_t, 3> context;
-        const auto predicted = predict(k, replayed.predictors[k], r, hole, grid, last, context);
-        code(grid[k], predicted, context);
+    RangeEncoder enc[3];
+    PositionModels m;
+    Grid grid(decoded);
+    std::array<std::int32_t, 3> last{};
+    const auto code = [&](const std::array<std::int32_t, 3>& q,
+                          const std::array<std::int32_t, 3>& predicted,
+                          const std::array<std::size_t, 3>& context) {
+      for (std::size_t a = 0; a < 3; ++a)
+        m.residual[context[a]][a].encode(enc[a], q[a] - predicted[a]);
+      last = q;
+    };
+    for (std::uint32_t k = 0; k < decoded; ++k) {
+      if (hole[k]) continue;
+      if (merged[k] != kNone) {
+        grid[k] = grid[merged[k]];
+        continue;
       }
-      for (std::uint32_t v : off_surface)
-        code(quantizer.quantize(mesh.vertices[v]), last, kPreviousContext);
-      for (std::size_t a = 0; a < 3; ++a) streams[a] = enc[a].finish();
-      return streams;
-    };
-    const auto size = [](const std::array<std::vector<unsigned char>, 3>& s) {
-      return s[0].size() + s[1].size() + s[2].size();
-    };
-    const std::array<std::vector<unsigned char>, 3> single = code_positions(nullptr);
-    const std::array<std::vector<unsigned char>, 3> multi = code_positions(&ring);
-    const bool use_multi = size(multi) < size(single);
-    stats.multi_parallelogram = use_multi;
-    out.u8(use_multi ? kMultiParallelogram : kSingleParallelogram);
-    for (const std::vector<unsigned char>& bytes : use_multi ? multi : single) {
+      const std::array<std::int32_t, 3> q =
+          quantizer.quantize(mesh.vertices[surface.input_vertex[walk.surface_vertex[k]]]);
+      const Candidates offer = candidates(k, replayed.predictors[k], ring, hole, grid, last);
+      unsigned best = 0;
+      std::uint32_t best_cost = ~0u;
+      std::array<std::size_t, 3> context;
+      for (unsigned trusted = 0; offer.n > 0 && trusted < (1u << offer.n); ++trusted) {
+        const std::array<std::int32_t, 3> predicted = predict(offer, trusted, context);
+        std::uint32_t cost = 0;
+        for (unsigned i = 0; i < offer.n; ++i)
+          cost += bit_cost(m.trusted[offer.n - 1][i], (trusted >> i) & 1u);
+        for (std::size_t a = 0; a < 3; ++a)
+          cost += m.residual[context[a]][a].cost(q[a] - predicted[a]);
+        if (cost < best_cost) {
+          best_cost = cost;
+          best = trusted;
+        }
+      }
+      for (unsigned i = 0; i < offer.n; ++i)
+        enc[0].encode(m.trusted[offer.n - 1][i], (best >> i) & 1u);
+      stats.trusted_parallelograms += static_cast<std::size_t>(__builtin_popcount(best));
+      stats.offered_parallelograms += offer.n;
+      const std::array<std::int32_t, 3> predicted = predict(offer, best, context);
+      grid[k] = q;
+      code(q, predicted, context);
+    }
+    for (std::uint32_t v : off_surface)
+      code(quantizer.quantize(mesh.vertices[v]), last, kPreviousContext);
+    for (RangeEncoder& e : enc) {
+      const std::vector<unsigned char> bytes = e.finish();
       stats.position_bytes += bytes.size();
       write_section(out, bytes);
     }
@@ -423,28 +496,21 @@ TriangleMesh decode_body(io::ByteReader& in, const Quantizer& quantizer, Attribu
   mesh.vertices.resize(outputs);
   std::vector<std::array<std::int32_t, 3>> grid_out(outputs);  // per output vertex
   {
-    const std::uint8_t mode = in.u8("position prediction mode");
-    if (mode != kSingleParallelogram && mode != kMultiParallelogram)
-      in.fail("position prediction mode", std::to_string(mode) + " is not 0 or 1");
-    const std::optional<ParallelogramRing> ring =
-        mode == kMultiParallelogram
-            ? std::optional<ParallelogramRing>(std::in_place, replayed.triangles, roles.hole,
-                                               static_cast<std::size_t>(decoded))
-            : std::nullopt;
+    const ParallelogramRing ring(replayed.triangles, roles.hole, static_cast<std::size_t>(decoded));
     const auto [x_bytes, x_size] = section("position section x");
     const auto [y_bytes, y_size] = section("position section y");
     const auto [z_bytes, z_size] = section("position section z");
     RangeDecoder dec[3] = {RangeDecoder(x_bytes, x_size, source, "position section x"),
                            RangeDecoder(y_bytes, y_size, source, "position section y"),
                            RangeDecoder(z_bytes, z_size, source, "position section z")};
-    std::vector<std::array<IntegerModel, 3>> models(kPositionContexts);
+    PositionModels m;
     Grid grid(static_cast<std::size_t>(decoded));
     std::array<std::int32_t, 3> last{};
     const auto read = [&](const std::array<std::int32_t, 3>& predicted,
                           const std::array<std::size_t, 3>& context) {
       const std::array<std::int32_t, 3> residual =
-          IntegerModel::decode_three(models[context[0]][0], models[context[1]][1],
-                                     models[context[2]][2], dec[0], dec[1], dec[2]);
+          IntegerModel::decode_three(m.residual[context[0]][0], m.residual[context[1]][1],
+                                     m.residual[context[2]][2], dec[0], dec[1], dec[2]);
       std::array<std::int32_t, 3> q{};
       for (std::size_t a = 0; a < 3; ++a)
         q[a] = static_cast<std::int32_t>(static_cast<std::uint32_t>(predicted[a]) +
@@ -458,9 +524,12 @@ TriangleMesh decode_body(io::ByteReader& in, const Quantizer& quantizer, Attribu
         grid[k] = grid[roles.merged[k]];
         continue;
       }
+      const Candidates offer = candidates(k, replayed.predictors[k], ring, roles.hole, grid, last);
+      unsigned trusted = 0;
+      for (unsigned i = 0; i < offer.n; ++i)
+        trusted |= dec[0].decode(m.trusted[offer.n - 1][i]) << i;
       std::array<std::size_t, 3> context;
-      const auto predicted = predict(k, replayed.predictors[k], ring ? &*ring : nullptr, roles.hole,
-                                     grid, last, context);
+      const std::array<std::int32_t, 3> predicted = predict(offer, trusted, context);
       grid[k] = read(predicted, context);
       mesh.vertices[roles.output[k]] = quantizer.position(grid[k]);
       grid_out[roles.output[k]] = grid[k];

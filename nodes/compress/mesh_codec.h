@@ -1,7 +1,8 @@
 #pragma once
 // The single-rate body of a compressed mesh: Edgebreaker connectivity, positions predicted on
-// the quantisation grid by the gate's parallelogram or by the mean of all the parallelograms the
-// decoder can form (nodes/compress/parallelogram_ring.h; whichever is smaller for the mesh),
+// the quantisation grid by the mean of the parallelograms the encoder flags as trusted among
+// those the decoder can form (nodes/compress/parallelogram_ring.h; constrained
+// multi-parallelogram prediction),
 // normals and colours predicted from the decoded geometry (nodes/compress/attribute_coder.h), all
 // range-coded. The container (header, checksum) is compressed_mesh.h's; the progressive format
 // stores its base mesh as such a body.
@@ -10,9 +11,9 @@
 // sections, each a u64 byte count and a range-coded stream: side data (handles, hole vertices,
 // merged fans, degenerate triangles, vertices off the surface), symbols (CLERS + M, last first,
 // context: the rebuilt triangles at the gate's vertices and the symbol after; see
-// nodes/compress/edgebreaker_replay.h), a u8 position mode (0 single, 1 multi-parallelogram),
-// positions x, y and z (one stream per axis, so that a
-// decoder's three dependency chains overlap); then a u8 of octahedral normal bits (0 without
+// nodes/compress/edgebreaker_replay.h), positions x, y and z (one stream per axis, so that a
+// decoder's three dependency chains overlap; each vertex's trust flags, one per offered
+// parallelogram, precede its x residual); then a u8 of octahedral normal bits (0 without
 // normals) and the attribute section (normals, then colours).
 
 #include <array>
@@ -43,10 +44,11 @@ struct BodyStats {
   std::size_t position_bytes = 0;
   std::size_t attribute_bytes = 0;
   std::size_t symbols = 0;
-  std::size_t holes = 0;             ///< loops of border (or cut) edges closed for the walk
-  std::size_t handles = 0;           ///< M symbols
-  std::size_t merged_fans = 0;       ///< extra fans of non-manifold vertices
-  bool multi_parallelogram = false;  ///< positions by the mean of all parallelograms
+  std::size_t holes = 0;                   ///< loops of border (or cut) edges closed for the walk
+  std::size_t handles = 0;                 ///< M symbols
+  std::size_t merged_fans = 0;             ///< extra fans of non-manifold vertices
+  std::size_t offered_parallelograms = 0;  ///< parallelograms the ring offered, all vertices
+  std::size_t trusted_parallelograms = 0;  ///< of which the encoder flagged as trusted
 };
 
 /// Where each output vertex and triangle of a decoded body came from.

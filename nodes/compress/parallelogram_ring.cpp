@@ -1,10 +1,13 @@
 #include "nodes/compress/parallelogram_ring.h"
 
-#include <algorithm>
-
 #include "nodes/compress/closed_surface.h"
 
 namespace meshflow::compress {
+namespace {
+
+constexpr std::uint32_t kRingNext[3] = {1, 2, 0};  // the corner after j in a triangle
+
+}  // namespace
 
 ParallelogramRing::ParallelogramRing(const std::vector<Triangle>& triangles,
                                      const std::vector<char>& hole, std::size_t vertices)
@@ -15,43 +18,36 @@ ParallelogramRing::ParallelogramRing(const std::vector<Triangle>& triangles,
   incident_.resize(first_[vertices]);
   std::vector<std::uint32_t> fill(first_.begin(), first_.end() - 1);
   for (std::uint32_t t = 0; t < triangles.size(); ++t)
-    for (std::uint32_t v : triangles[t]) incident_[fill[v]++] = t;
+    for (std::uint32_t j = 0; j < 3; ++j) incident_[fill[triangles[t][j]]++] = 3 * t + j;
 }
 
 std::uint32_t ParallelogramRing::across(std::uint32_t from, std::uint32_t to) const {
   for (std::uint32_t i = first_[to]; i < first_[to + 1]; ++i) {
-    const Triangle& u = triangles_[incident_[i]];
-    for (std::size_t j = 0; j < 3; ++j)
-      if (u[j] == to && u[(j + 1) % 3] == from) return u[(j + 2) % 3];
+    const std::uint32_t corner = incident_[i];
+    const Triangle& u = triangles_[corner / 3];
+    const std::uint32_t j = corner % 3;
+    if (u[kRingNext[j]] == from) return u[kRingNext[kRingNext[j]]];
   }
   return kNone;
 }
 
-unsigned ParallelogramRing::sum(std::uint32_t k,
-                                const std::vector<std::array<std::int32_t, 3>>& grid,
-                                std::array<std::int64_t, 3>& sum,
-                                std::array<std::int64_t, 3>& spread) const {
-  sum = {0, 0, 0};
-  std::array<std::int64_t, 3> low{}, high{};
+unsigned ParallelogramRing::gather(std::uint32_t k,
+                                   const std::vector<std::array<std::int32_t, 3>>& grid,
+                                   Parallelograms& out) const {
   unsigned count = 0;
   const auto known = [&](std::uint32_t v) { return v < k && !hole_[v]; };
-  for (std::uint32_t i = first_[k]; i < first_[k + 1]; ++i) {
-    const Triangle& t = triangles_[incident_[i]];
-    std::size_t j = 0;
-    while (j < 2 && t[j] != k) ++j;
-    const std::uint32_t x = t[(j + 1) % 3], y = t[(j + 2) % 3];
+  for (std::uint32_t i = first_[k]; i < first_[k + 1] && count < kMaxParallelograms; ++i) {
+    const std::uint32_t corner = incident_[i];
+    const Triangle& t = triangles_[corner / 3];
+    const std::uint32_t j = corner % 3;
+    const std::uint32_t x = t[kRingNext[j]], y = t[kRingNext[kRingNext[j]]];
     if (!known(x) || !known(y)) continue;
     const std::uint32_t w = across(x, y);
     if (w == kNone || !known(w)) continue;
-    for (std::size_t a = 0; a < 3; ++a) {
-      const std::int64_t p = std::int64_t{grid[x][a]} + grid[y][a] - grid[w][a];
-      sum[a] += p;
-      low[a] = count == 0 ? p : std::min(low[a], p);
-      high[a] = count == 0 ? p : std::max(high[a], p);
-    }
+    for (std::size_t a = 0; a < 3; ++a)
+      out[count][a] = std::int64_t{grid[x][a]} + grid[y][a] - grid[w][a];
     ++count;
   }
-  for (std::size_t a = 0; a < 3; ++a) spread[a] = high[a] - low[a];
   return count;
 }
 

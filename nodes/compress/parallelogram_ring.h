@@ -1,9 +1,10 @@
 #pragma once
-// Multi-parallelogram position prediction (the idea of Draco's multi-parallelogram schemes,
-// written afresh): a vertex is predicted by the mean of every parallelogram x + y - w the
-// decoder can already form, one per triangle (k, x, y) at the vertex whose far edge (x, y) is
-// shared with a triangle (y, x, w) and whose x, y and w were all decoded before k. Built from the
-// replayed connectivity, which the decoder holds in full before it reads any position.
+// The parallelograms a decoder can form for a vertex (the idea of Draco's constrained
+// multi-parallelogram scheme, written afresh): one parallelogram x + y - w per triangle (k, x, y)
+// at the vertex whose far edge (x, y) is shared with a triangle (y, x, w) and whose x, y and w
+// were all decoded before k. The codec (nodes/compress/mesh_codec.cpp) predicts a vertex by the
+// mean of the ones the encoder flags as trusted. Built from the replayed connectivity, which the
+// decoder holds in full before it reads any position.
 
 #include <array>
 #include <cstdint>
@@ -22,11 +23,15 @@ class ParallelogramRing {
   ParallelogramRing(const std::vector<Triangle>& triangles, const std::vector<char>& hole,
                     std::size_t vertices);
 
-  /// Sums into `sum` the parallelograms available to vertex `k` (corners below k and not holes,
-  /// read from `grid`), sets `spread` to their largest minus smallest value per axis (how much
-  /// they disagree) and returns how many there are (0: both zero). O(valence^2).
-  unsigned sum(std::uint32_t k, const std::vector<std::array<std::int32_t, 3>>& grid,
-               std::array<std::int64_t, 3>& sum, std::array<std::int64_t, 3>& spread) const;
+  /// At most this many parallelograms per vertex are offered (the first in incidence order).
+  static constexpr unsigned kMaxParallelograms = 4;
+  using Parallelograms = std::array<std::array<std::int64_t, 3>, kMaxParallelograms>;
+
+  /// Writes to out[0 .. n) the parallelograms available to vertex `k` (corners below k and not
+  /// holes, read from `grid`), in an order both coder sides share, and returns n (<=
+  /// kMaxParallelograms). O(valence^2).
+  unsigned gather(std::uint32_t k, const std::vector<std::array<std::int32_t, 3>>& grid,
+                  Parallelograms& out) const;
 
  private:
   // The vertex opposite the directed edge from -> to in a triangle holding to -> from, or kNone.
@@ -35,7 +40,7 @@ class ParallelogramRing {
   const std::vector<Triangle>& triangles_;
   const std::vector<char>& hole_;
   std::vector<std::uint32_t> first_;     // per vertex + 1: offsets into incident_
-  std::vector<std::uint32_t> incident_;  // triangle numbers, grouped by vertex
+  std::vector<std::uint32_t> incident_;  // corners (3 triangle + j), grouped by vertex
 };
 
 }  // namespace meshflow::compress

@@ -1,5 +1,7 @@
 #include "nodes/compress/range_coder.h"
 
+#include <cmath>
+
 #include "runtime/error.h"
 
 namespace meshflow::compress {
@@ -18,7 +20,23 @@ unsigned bit_length(std::uint32_t v) {
   return n;
 }
 
+// -16 log2(p / 2048) for p = 1 .. 2048 (index p - 1).
+std::array<std::uint16_t, RangeEncoder::kOne> make_cost_table() {
+  std::array<std::uint16_t, RangeEncoder::kOne> t{};
+  for (std::uint32_t p = 1; p <= RangeEncoder::kOne; ++p)
+    t[p - 1] = static_cast<std::uint16_t>(
+        std::lround(-16.0 * std::log2(static_cast<double>(p) / RangeEncoder::kOne)));
+  return t;
+}
+
+const std::array<std::uint16_t, RangeEncoder::kOne> kBitCost = make_cost_table();
+
 }  // namespace
+
+std::uint32_t bit_cost(const BitModel& model, unsigned bit) {
+  const std::uint32_t p = bit != 0 ? RangeEncoder::kOne - model.p0 : model.p0;
+  return kBitCost[(p > 0 ? p : 1) - 1];
+}
 
 void RangeEncoder::encode_direct(std::uint32_t value, unsigned count) {
   // Up to eight bits per step: the range splits into 2^k equal parts (it stays >= 2^16).
@@ -88,6 +106,24 @@ void IntegerModel::encode(RangeEncoder& enc, std::int32_t value) {
   }
   if (below > 0) enc.encode_direct(magnitude & ((1u << below) - 1u), below);
   enc.encode(sign_[n - 1], value < 0 ? 1u : 0u);
+}
+
+std::uint32_t IntegerModel::cost(std::int32_t value) const {
+  const std::uint32_t magnitude =
+      value < 0 ? 0u - static_cast<std::uint32_t>(value) : static_cast<std::uint32_t>(value);
+  const unsigned n = bit_length(magnitude);
+  std::uint32_t total =
+      n < 15 ? length_low_.cost(n) : length_low_.cost(15) + length_high_.cost(n - 15);
+  if (n == 0) return total;
+  unsigned below = n - 1;
+  unsigned node = 1;
+  for (unsigned k = 0; k < 2 && below > 0; ++k) {
+    --below;
+    const unsigned b = (magnitude >> below) & 1u;
+    total += bit_cost(top_[n - 1][node], b);
+    node = node * 2 + b;
+  }
+  return total + 16 * below + bit_cost(sign_[n - 1], value < 0 ? 1u : 0u);
 }
 
 std::int32_t IntegerModel::decode(RangeDecoder& decoder) {

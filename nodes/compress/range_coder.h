@@ -19,6 +19,10 @@ struct BitModel {
   std::uint16_t p0 = 1024;
 };
 
+/// The cost of coding `bit` with `model` as it stands, in 1/16ths of a bit (-16 log2 p), for
+/// encoders that choose between codings. O(1) (a table); thread-safe.
+std::uint32_t bit_cost(const BitModel& model, unsigned bit);
+
 class RangeEncoder {
  public:
   /// Codes `bit` with the adaptive model (and adapts it). Branch-free but for renormalising.
@@ -167,6 +171,17 @@ class SymbolModel {
     for (int bit = kBits - 1; bit >= 0; --bit) node = step(dec, node);
     return symbol(node);
   }
+  /// The cost of coding `symbol` (< N) now, in 1/16ths of a bit (bit_cost()).
+  std::uint32_t cost(unsigned symbol) const {
+    std::uint32_t total = 0;
+    unsigned node = 1;
+    for (int bit = kBits - 1; bit >= 0; --bit) {
+      const unsigned b = (symbol >> bit) & 1u;
+      total += bit_cost(tree_[node], b);
+      node = node * 2 + b;
+    }
+    return total;
+  }
   /// Decoding one level at a time (for decoders that interleave several streams): from node 1,
   /// kLevels steps, then symbol().
   static constexpr int kLevels = N <= 2 ? 1 : N <= 4 ? 2 : N <= 8 ? 3 : N <= 16 ? 4 : 5;
@@ -187,6 +202,8 @@ class IntegerModel {
  public:
   /// Codes `value`.
   void encode(RangeEncoder& enc, std::int32_t value);
+  /// What encode(value) would cost now, in 1/16ths of a bit (bit_cost()); changes nothing.
+  std::uint32_t cost(std::int32_t value) const;
   /// The next value.
   std::int32_t decode(RangeDecoder& dec);
   /// Three values from three streams (one per model), their steps interleaved so that the three

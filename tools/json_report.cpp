@@ -85,6 +85,8 @@ nlohmann::json frame_json(const Frame& f, double wall_s, int threads) {
             {"cropped", c.cropped},
             {"merged", c.merged},
             {"outliers", c.outliers},
+            {"isolated", c.isolated},
+            {"sparse_clusters", c.sparse_clusters},
             {"output", c.output}}},
           {"normals", normals_json(f)},
           {"voxel", f.voxel_size},

@@ -89,6 +89,10 @@ void print_frame_report(const Frame& f, double wall_s, int threads) {
   if (c.cropped + c.merged + c.outliers > 0) {
     report("filter     cropped %zu, merged %zu, outliers %zu\n", c.cropped, c.merged, c.outliers);
   }
+  if (c.isolated + c.sparse_clusters > 0)
+    report(
+        "outliers   dropped %zu isolated points and %zu in sparse clusters (--outlier-cluster)\n",
+        c.isolated, c.sparse_clusters);
   if (!f.normals_from_image) report("normals    %s\n", describe_normals(f.normals).c_str());
   report("grid       voxel %.4g m, %zu cells, %zu corners (%zu valid", f.voxel_size,
          f.grid.cells.size(), f.grid.corners.size(), f.distance.valid_count());

@@ -7,6 +7,7 @@
 #include <optional>
 #include <string>
 
+#include "nodes/close/close_surface.h"
 #include "nodes/compress/progressive_mesh.h"
 #include "nodes/depth/organized_depth.h"
 #include "nodes/extract/extract_surface.h"
@@ -226,6 +227,16 @@ std::uint64_t distance(Frame& f, const ReconstructionConfig& c) {
   return f.grid.corners.size();
 }
 
+std::uint64_t close(Frame& f, const ReconstructionConfig& c) {
+  if (f.owned_cells)
+    throw Error(f.name, "close",
+                "--close needs the whole cloud in one piece; it cannot close chunks (--chunk)");
+  ClosedDistance closed = close_distance_field(f.grid, f.distance, f.cloud, c.close, &f.closing);
+  f.grid = std::move(closed.grid);
+  f.distance = std::move(closed.distance);
+  return f.closing.filled;
+}
+
 std::uint64_t extract(Frame& f, const ReconstructionConfig& c) {
   ExtractConfig config = c.extract;
   if (config.method == ExtractMethod::kAuto)  // sharp normals were estimated for clean samples
@@ -345,12 +356,17 @@ std::uint64_t compress(Frame& f, const ReconstructionConfig& c) {
   return f.compressed.size();
 }
 
-std::vector<NamedStage> frame_stages(bool triangulate_depth_maps, MeshCompression compression) {
+std::vector<NamedStage> frame_stages(bool triangulate_depth_maps, MeshCompression compression,
+                                     bool close_surfaces) {
   std::vector<NamedStage> out;
   if (triangulate_depth_maps) {
     out.assign(std::begin(kDepthTriangulationStages), std::end(kDepthTriangulationStages));
   } else {
-    out.assign(std::begin(kPointCloudStages), std::end(kPointCloudStages));
+    for (const NamedStage& stage : kPointCloudStages) {
+      if (close_surfaces && std::string(stage.name) == "extract")
+        out.push_back({"close", stages::close});
+      out.push_back(stage);
+    }
   }
   if (compression != MeshCompression::kNone) out.push_back({"compress", compress});
   return out;

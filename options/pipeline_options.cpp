@@ -211,6 +211,11 @@ std::vector<OptionSpec> make_specs() {
                 NormalsConfig probe;
                 parse_orientation(s, probe);
               })},
+      {"close", &O::close,
+       "Watertight output: the distance where no data is (unseen parts, holes) filled by "
+       "volumetric diffusion, data's distances kept, lines of sight kept empty when a sensor is "
+       "known; one closed surface per object",
+       nullptr, always_valid()},
       {"organized-as-depth", &O::organized_as_depth,
        "Organized clouds that are a pinhole back-projection (Kinect PCDs): take the depth-image "
        "path (image normals, projective distance; faster, single view)",
@@ -288,6 +293,7 @@ ReconstructionConfig PipelineOptions::config() const {
   c.max_rim_voxels = max_rim;
   c.optimize.remesh.tolerance = remesh_tolerance;
   c.organized_as_depth = organized_as_depth;
+  c.close.enabled = close;
   c.normals.source = normals == "input"      ? NormalSource::kInput
                      : normals == "estimate" ? NormalSource::kEstimate
                                              : NormalSource::kAuto;

@@ -44,6 +44,7 @@ struct PipelineOptions {
   float max_rim = ReconstructionConfig{}.max_rim_voxels;
   float remesh_tolerance = 0.0f;
   bool organized_as_depth = false;
+  bool close = false;  ///< --close: a watertight surface (volumetric diffusion of the distance)
   std::string normals = "auto";  ///< auto | input | estimate
   std::string orient = "auto";   ///< see parse_orientation()
   std::string max_memory;        ///< "512M", "4G", "0"; empty: default_memory_limit()

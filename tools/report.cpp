@@ -100,6 +100,12 @@ void print_frame_report(const Frame& f, double wall_s, int threads) {
     report("; invalid: %zu where tangent planes disagree, %zu past the data's border",
            f.distance.disagreeing, f.distance.extrapolated);
   report(")\n");
+  if (f.closing.ran)
+    report(
+        "close      %zu corners filled by diffusion (%d levels on %d x %d x %d), %zu held by data, "
+        "%zu seen empty; %zu cells added\n",
+        f.closing.filled, f.closing.levels, f.closing.lattice.x(), f.closing.lattice.y(),
+        f.closing.lattice.z(), f.closing.observed, f.closing.seen_empty, f.closing.cells_added);
   if (f.rim_trimmed > 0)
     report("rim        %zu border triangles more than --max-rim voxels from the data peeled off\n",
            f.rim_trimmed);

@@ -55,7 +55,8 @@ float median_surface_distance(const TriangleMesh& mesh, const std::vector<std::s
   return d[d.size() / 2];
 }
 
-synthetic::ObjectScan scanned(const synthetic::ClosedObject& object, std::uint32_t seed) {
+synthetic::ObjectScan scan_with_outliers(const synthetic::ClosedObject& object,
+                                         std::uint32_t seed) {
   synthetic::ObjectScanConfig sc;
   sc.outlier_fraction = 0.005f;
   sc.seed = seed;
@@ -86,7 +87,7 @@ class ScannedObject : public ::testing::TestWithParam<int> {
 
 TEST_P(ScannedObject, NoComponentMadeOfOutliers) {
   const synthetic::ClosedObject object = this->object();
-  const synthetic::ObjectScan scan = scanned(object, 31);
+  const synthetic::ObjectScan scan = scan_with_outliers(object, 31);
   ReconstructionConfig config = scan_config(object);
   const float voxel = config.voxelize.voxel_size;
   const FramePtr f = ReconstructionPipeline(config).reconstruct(scan.cloud);
@@ -116,7 +117,8 @@ TEST(ScannedObjects, WithoutTheRemovalOutliersMakeComponents) {
     ReconstructionConfig config = scan_config(object);
     config.optimize.steps.clear();
     config.filter.outlier_cluster = 0;
-    const FramePtr off = ReconstructionPipeline(config).reconstruct(scanned(object, 31).cloud);
+    const FramePtr off =
+        ReconstructionPipeline(config).reconstruct(scan_with_outliers(object, 31).cloud);
     ASSERT_TRUE(off->ok()) << off->error;
     EXPECT_EQ(off->filter_counts.isolated + off->filter_counts.sparse_clusters, 0u);
     components += outlier_components(off->mesh, object, config.voxelize.voxel_size);
@@ -131,7 +133,7 @@ INSTANTIATE_TEST_SUITE_P(Objects, ScannedObject, ::testing::Range(0, 6),
 
 TEST(ScannedObjects, OutlierRemovalSameMeshWithOneAndTwoThreads) {
   const synthetic::ClosedObject object = synthetic::box_with_hole_object();
-  const synthetic::ObjectScan scan = scanned(object, 32);
+  const synthetic::ObjectScan scan = scan_with_outliers(object, 32);
   const auto mesh = [&](int threads) {
     return test::with_threads(threads, [&] {
       const FramePtr f = ReconstructionPipeline(scan_config(object)).reconstruct(scan.cloud);
@@ -177,7 +179,7 @@ SplitErrors split_errors(const TriangleMesh& mesh, const synthetic::ClosedObject
 
 TEST_P(ScannedObject, CloseGivesOneWatertightOutwardSurfaceExactWhereObserved) {
   const synthetic::ClosedObject object = this->object();
-  const synthetic::ObjectScan scan = scanned(object, 33);
+  const synthetic::ObjectScan scan = scan_with_outliers(object, 33);
   ReconstructionConfig config = scan_config(object);
   const float voxel = config.voxelize.voxel_size;
   const FramePtr open = ReconstructionPipeline(config).reconstruct(scan.cloud);
@@ -224,7 +226,7 @@ TEST_P(ScannedObject, CloseGivesOneWatertightOutwardSurfaceExactWhereObserved) {
 
 TEST(ScannedObjects, CloseSameMeshWithOneAndTwoThreads) {
   const synthetic::ClosedObject object = synthetic::l_shape_object();
-  const synthetic::ObjectScan scan = scanned(object, 34);
+  const synthetic::ObjectScan scan = scan_with_outliers(object, 34);
   ReconstructionConfig config = scan_config(object);
   config.close.enabled = true;
   const auto mesh = [&](int threads) {

@@ -276,5 +276,7 @@ def test_close_and_outlier_removal_are_keywords():
     closed = meshflow.reconstruct(cloud, voxel=0.02, close=True)
     assert border_edge_count(closed.triangles) == 0
     assert closed.vertices[:, 2].max() > 0.3  # the cap's opening is spanned
-    kept = meshflow.reconstruct(cloud, voxel=0.02, outlier_cluster=0, optimize="none")
-    assert np.linalg.norm(kept.vertices, axis=1).max() > 1.0  # off: the strays make surface
+    off = meshflow.reconstruct(cloud, voxel=0.02, outlier_cluster=0, outlier_radius=3.0)
+    assert len(off.triangles) > 1000
+    with pytest.raises(ValueError, match="outlier_radius"):
+        meshflow.reconstruct(cloud, outlier_radius=0.0)

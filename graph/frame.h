@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "nodes/close/close_surface.h"
 #include "nodes/compress/compressed_mesh.h"
 #include "nodes/depth/depth_filter.h"
 #include "nodes/distance/hoppe_distance.h"
@@ -40,6 +41,7 @@ struct ReconstructionConfig {
   /// of a cloud (suggest_voxel_size) or from the depth and focal length of a depth frame.
   VoxelizeConfig voxelize = VoxelizeConfig{0.0f};
   DistanceConfig distance;              ///< clouds (Hoppe)
+  CloseConfig close;                    ///< --close: the close stage (off by default)
   ProjectiveDistanceConfig projective;  ///< depth frames
   ExtractConfig extract;
   OptimizeConfig optimize;                 ///< steps (default: clean, holes) and their settings
@@ -110,6 +112,7 @@ struct Frame {
   std::optional<CellRange> owned_cells;
   SparseGrid grid;
   DistanceField distance;
+  CloseReport closing;  ///< what the close stage did (closing.ran: it ran)
   ExtractMethod extract_method = ExtractMethod::kAuto;  ///< the method "extract" used
   std::size_t rim_trimmed = 0;  ///< triangles "extract" peeled off the rim (max_rim_voxels)
   /// Chunks (owned_cells set): per mesh vertex, whether it lies beyond the data as trim_rim

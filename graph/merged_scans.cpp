@@ -41,6 +41,7 @@ void append_scan(PointCloud& into, const PointCloud& scan) {
 ReconstructionConfig merged_pass_config(const ReconstructionConfig& config) {
   ReconstructionConfig c = config;
   c.filter = FilterConfig{};
+  c.filter.outlier_cluster = 0;  // each scan's clusters were judged in its own pass
   c.normals.source = NormalSource::kInput;
   c.organized_as_depth = false;
   return c;

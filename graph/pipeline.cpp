@@ -14,9 +14,10 @@ ReconstructionPipeline::ReconstructionPipeline(ReconstructionConfig config,
 
 void ReconstructionPipeline::run(const std::function<FramePtr()>& next,
                                  const std::function<void(const FramePtr&)>& sink) {
-  detail::run_stage_chain(max_in_flight_,
-                          stages::frame_stages(triangulate_depth_maps_, config_.compression),
-                          config_, next, sink);
+  detail::run_stage_chain(
+      max_in_flight_,
+      stages::frame_stages(triangulate_depth_maps_, config_.compression, config_.close.enabled),
+      config_, next, sink);
 }
 
 FramePtr ReconstructionPipeline::run_frame(FramePtr frame) {

@@ -7,11 +7,13 @@
 #include <optional>
 #include <string>
 
+#include "nodes/close/close_surface.h"
 #include "nodes/compress/progressive_mesh.h"
 #include "nodes/depth/organized_depth.h"
 #include "nodes/extract/extract_surface.h"
 #include "nodes/extract/rim_trim.h"
 #include "nodes/extract/vertex_colors.h"
+#include "nodes/filter/point_clusters.h"
 #include "nodes/filter/spatial_order.h"
 #include "nodes/normals/organized_normals.h"
 #include "runtime/error.h"
@@ -46,6 +48,39 @@ std::string short_number(float value) {
   char text[32];
   std::snprintf(text, sizeof text, "%g", static_cast<double>(value));
   return text;
+}
+
+// The scale of the outlier links: the configured voxel, but never below the one the points'
+// spacing suggests (a voxel chosen far smaller than the spacing must not isolate every point).
+float outlier_link_voxel(const Frame& f, const ReconstructionConfig& c) {
+  return std::max(c.voxelize.voxel_size, suggest_voxel_size(f.cloud, *f.index));
+}
+
+// Drops the points of clusters too small to make a surface (c.filter.outlier_cluster), with the
+// index just built, and rebuilds the index over the points kept; counts them in filter_counts.
+void remove_point_clusters(Frame& f, const ReconstructionConfig& c) {
+  ClusterConfig config;
+  config.min_points = c.filter.outlier_cluster;
+  config.link_radius = c.filter.outlier_radius_voxels * outlier_link_voxel(f, c);
+  if (!(config.link_radius > 0.0f)) return;  // coinciding points: "voxelize" says so
+  ClusterCounts counts;
+  const std::vector<std::uint32_t> keep =
+      surface_cluster_indices(f.cloud, *f.index, config, &counts);
+  // No cluster large enough: the cloud is too small for the criterion; the later stages say
+  // why it gives no surface.
+  if (keep.size() == f.cloud.size() || counts.clusters == 0) return;
+  f.filter_counts.isolated = counts.isolated;
+  f.filter_counts.sparse_clusters = counts.sparse;
+  if (keep.size() < 3)
+    throw Error(f.name, "outliers",
+                "only " + std::to_string(keep.size()) + " of " + std::to_string(f.cloud.size()) +
+                    " points lie in clusters of at least --outlier-cluster " +
+                    std::to_string(config.min_points) + " points linked within " +
+                    short_number(config.link_radius) +
+                    " m; need at least 3 (is the voxel size too small for the spacing?)");
+  f.cloud = select_points(f.cloud, keep);  // keeps the Morton order
+  f.filter_counts.output = f.cloud.size();
+  f.index = std::make_shared<KdTreeIndex>(f.cloud.positions);
 }
 
 }  // namespace
@@ -130,11 +165,12 @@ std::uint64_t filter_depth_image(Frame& f, const ReconstructionConfig& c) {
   return f.depth_counts.valid;
 }
 
-std::uint64_t index(Frame& f, const ReconstructionConfig&) {
+std::uint64_t index(Frame& f, const ReconstructionConfig& c) {
   if (f.depth) return 0;  // depth frames need no search: image normals, projective distance
   // Neighbours in space become neighbours in memory for every pass that follows.
   if (!f.cloud.is_organized()) f.cloud = in_morton_order(f.cloud);
   f.index = std::make_shared<KdTreeIndex>(f.cloud.positions);
+  if (c.filter.outlier_cluster > 1 && !f.cloud.is_organized()) remove_point_clusters(f, c);
   return f.cloud.size();
 }
 
@@ -189,6 +225,16 @@ std::uint64_t distance(Frame& f, const ReconstructionConfig& c) {
   }
   f.distance = hoppe_distance(f.grid, f.cloud, *f.index, c.distance);
   return f.grid.corners.size();
+}
+
+std::uint64_t close(Frame& f, const ReconstructionConfig& c) {
+  if (f.owned_cells)
+    throw Error(f.name, "close",
+                "--close needs the whole cloud in one piece; it cannot close chunks (--chunk)");
+  ClosedDistance closed = close_distance_field(f.grid, f.distance, f.cloud, c.close, &f.closing);
+  f.grid = std::move(closed.grid);
+  f.distance = std::move(closed.distance);
+  return f.closing.filled;
 }
 
 std::uint64_t extract(Frame& f, const ReconstructionConfig& c) {
@@ -310,12 +356,17 @@ std::uint64_t compress(Frame& f, const ReconstructionConfig& c) {
   return f.compressed.size();
 }
 
-std::vector<NamedStage> frame_stages(bool triangulate_depth_maps, MeshCompression compression) {
+std::vector<NamedStage> frame_stages(bool triangulate_depth_maps, MeshCompression compression,
+                                     bool close_surfaces) {
   std::vector<NamedStage> out;
   if (triangulate_depth_maps) {
     out.assign(std::begin(kDepthTriangulationStages), std::end(kDepthTriangulationStages));
   } else {
-    out.assign(std::begin(kPointCloudStages), std::end(kPointCloudStages));
+    for (const NamedStage& stage : kPointCloudStages) {
+      if (close_surfaces && std::string(stage.name) == "extract")
+        out.push_back({"close", stages::close});
+      out.push_back(stage);
+    }
   }
   if (compression != MeshCompression::kNone) out.push_back({"compress", compress});
   return out;

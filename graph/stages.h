@@ -19,6 +19,10 @@ std::uint64_t index(Frame& f, const ReconstructionConfig& c);     ///< points in
 std::uint64_t normals(Frame& f, const ReconstructionConfig& c);   ///< normals estimated
 std::uint64_t voxelize(Frame& f, const ReconstructionConfig& c);  ///< cells
 std::uint64_t distance(Frame& f, const ReconstructionConfig& c);  ///< corners evaluated
+/// --close (c.close): fills the distance of the corners without data by volumetric diffusion
+/// and adds the cells the closed surface crosses (close_distance_field(), f.closing). Fails a
+/// chunk (owned_cells set): closing needs the whole cloud.
+std::uint64_t close(Frame& f, const ReconstructionConfig& c);  ///< corners filled
 /// Fails a frame left without triangles (nothing extracted, or the rim trim took them all),
 /// saying why, so no path passes on an "ok" frame with an empty mesh; a chunk (owned_cells
 /// set) may be empty.
@@ -53,10 +57,11 @@ extern const NamedStage kPointCloudStages[8];
 extern const NamedStage kDepthTriangulationStages[2];
 
 /// The stages a frame pipeline wires, in order: kDepthTriangulationStages when
-/// `triangulate_depth_maps`, else kPointCloudStages; then "compress" unless `compression` is
-/// kNone.
+/// `triangulate_depth_maps`, else kPointCloudStages with "close" between "distance" and
+/// "extract" when `close_surfaces`; then "compress" unless `compression` is kNone.
 std::vector<NamedStage> frame_stages(bool triangulate_depth_maps,
-                                     MeshCompression compression = MeshCompression::kNone);
+                                     MeshCompression compression = MeshCompression::kNone,
+                                     bool close_surfaces = false);
 
 /// Runs `body` on `f` unless the frame already failed, appending a StageRecord; a thrown
 /// exception becomes the frame's error. Thread-safe for distinct frames.

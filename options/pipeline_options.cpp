@@ -129,6 +129,14 @@ std::vector<OptionSpec> make_specs() {
        nullptr, in_range(&O::filter_voxel, 0, 1000)},
       {"outlier-k", &O::outlier_k, "Statistical outlier removal with k neighbours (0 = off)",
        nullptr, in_range(&O::outlier_k, 0, 1000)},
+      {"outlier-cluster", &O::outlier_cluster,
+       "Drop points whose cluster (points linked to neighbours within --outlier-radius voxels) "
+       "has fewer points: isolated points and sparse clusters that cannot make a surface (0 = "
+       "off)",
+       nullptr, in_range(&O::outlier_cluster, 0, 1e9)},
+      {"outlier-radius", &O::outlier_radius,
+       "Longest link between points of one cluster for --outlier-cluster, voxels", nullptr,
+       in_range(&O::outlier_radius, 0, 1000, true)},
       {"min-range", &O::min_range, "Drop points closer to the sensor, metres", nullptr,
        in_range(&O::min_range, 0, 1e6)},
       {"crop", &O::crop,
@@ -203,6 +211,11 @@ std::vector<OptionSpec> make_specs() {
                 NormalsConfig probe;
                 parse_orientation(s, probe);
               })},
+      {"close", &O::close,
+       "Watertight output: the distance where no data is (unseen parts, holes) filled by "
+       "volumetric diffusion, data's distances kept, lines of sight kept empty when a sensor is "
+       "known; one closed surface per object",
+       nullptr, always_valid()},
       {"organized-as-depth", &O::organized_as_depth,
        "Organized clouds that are a pinhole back-projection (Kinect PCDs): take the depth-image "
        "path (image normals, projective distance; faster, single view)",
@@ -260,6 +273,8 @@ ReconstructionConfig PipelineOptions::config() const {
   c.triangulation.min_component_triangles = min_component;  // one setting for both paths
   c.filter.voxel_size = filter_voxel;
   c.filter.outlier_k = outlier_k;
+  c.filter.outlier_cluster = outlier_cluster;
+  c.filter.outlier_radius_voxels = outlier_radius;
   c.filter.min_range = min_range;
   c.filter.max_range = max_range;
   parse_crop_box(crop, c.filter);
@@ -278,6 +293,7 @@ ReconstructionConfig PipelineOptions::config() const {
   c.max_rim_voxels = max_rim;
   c.optimize.remesh.tolerance = remesh_tolerance;
   c.organized_as_depth = organized_as_depth;
+  c.close.enabled = close;
   c.normals.source = normals == "input"      ? NormalSource::kInput
                      : normals == "estimate" ? NormalSource::kEstimate
                                              : NormalSource::kAuto;

@@ -28,6 +28,8 @@ struct PipelineOptions {
   std::size_t min_component = 20;
   float filter_voxel = 0.0f;
   int outlier_k = 0;
+  std::size_t outlier_cluster = FilterConfig{}.outlier_cluster;
+  float outlier_radius = FilterConfig{}.outlier_radius_voxels;
   float min_range = 0.0f, max_range = 0.0f;
   std::string crop;      ///< "minx,miny,minz,maxx,maxy,maxz" metres (parse_crop_box); empty: none
   int depth_median = 0;  ///< depth frames: median window (3 or 5; 0 = off)
@@ -42,6 +44,7 @@ struct PipelineOptions {
   float max_rim = ReconstructionConfig{}.max_rim_voxels;
   float remesh_tolerance = 0.0f;
   bool organized_as_depth = false;
+  bool close = false;  ///< --close: a watertight surface (volumetric diffusion of the distance)
   std::string normals = "auto";  ///< auto | input | estimate
   std::string orient = "auto";   ///< see parse_orientation()
   std::string max_memory;        ///< "512M", "4G", "0"; empty: default_memory_limit()

@@ -76,6 +76,8 @@ void add_optimize_options(CLI::App* cmd) {
         "--max-range", "--depth-median", "--depth-bilateral", "--extract", "--normals", "--orient",
         "--organized-as-depth", "--max-memory"})
     cmd->remove_option(cmd->get_option(unused));
+  for (const char* unused : {"--outlier-cluster", "--outlier-radius", "--close"})
+    cmd->remove_option(cmd->get_option(unused));
   cmd->get_option("--voxel")
       ->description("Scale of the voxel-relative tolerances, metres (auto: the median edge length)")
       ->default_str("auto");

@@ -112,6 +112,10 @@ void print_frame_report(const Frame& f, double wall_s, int threads) {
   if (c.cropped + c.merged + c.outliers > 0) {
     report("filter     cropped %zu, merged %zu, outliers %zu\n", c.cropped, c.merged, c.outliers);
   }
+  if (c.isolated + c.sparse_clusters > 0)
+    report(
+        "outliers   dropped %zu isolated points and %zu in sparse clusters (--outlier-cluster)\n",
+        c.isolated, c.sparse_clusters);
   if (!f.normals_from_image) report("normals    %s\n", describe_normals(f.normals).c_str());
   report("grid       voxel %.4g m, %zu cells, %zu corners (%zu valid", f.voxel_size,
          f.grid.cells.size(), f.grid.corners.size(), f.distance.valid_count());
@@ -119,6 +123,12 @@ void print_frame_report(const Frame& f, double wall_s, int threads) {
     report("; invalid: %zu where tangent planes disagree, %zu past the data's border",
            f.distance.disagreeing, f.distance.extrapolated);
   report(")\n");
+  if (f.closing.ran)
+    report(
+        "close      %zu corners filled by diffusion (%d levels on %d x %d x %d), %zu held by data, "
+        "%zu seen empty; %zu cells added\n",
+        f.closing.filled, f.closing.levels, f.closing.lattice.x(), f.closing.lattice.y(),
+        f.closing.lattice.z(), f.closing.observed, f.closing.seen_empty, f.closing.cells_added);
   if (f.rim_trimmed > 0)
     report("rim        %zu border triangles more than --max-rim voxels from the data peeled off\n",
            f.rim_trimmed);

@@ -18,6 +18,10 @@ struct FilterCounts {
   std::size_t cropped = 0;     ///< outside the crop box or the range limits
   std::size_t merged = 0;      ///< folded into voxel-grid centroids
   std::size_t outliers = 0;    ///< statistical outliers
+  /// Removed by the pipeline's index stage (outlier_cluster): points with no neighbour within
+  /// the link radius, and points of clusters smaller than outlier_cluster.
+  std::size_t isolated = 0;
+  std::size_t sparse_clusters = 0;
   std::size_t output = 0;
 };
 
@@ -31,6 +35,17 @@ struct FilterConfig {
   int outlier_k = 0;            ///< neighbours for outlier removal; 0 = off (PCL's default is 50)
   float outlier_stddev = 1.0f;  ///< remove points whose mean neighbour distance exceeds
                                 ///< mean + outlier_stddev * stddev over the cloud
+  /// Outliers that cannot make surfaces (nodes/filter/point_clusters.h): points in clusters of
+  /// fewer than this many points, a cluster being the points linked by neighbour links of at
+  /// most outlier_radius_voxels voxels. Removed by the pipeline's index stage with the kd-tree
+  /// it builds for normals (not by filter_cloud()); unorganized clouds only. 0 = off.
+  std::size_t outlier_cluster = 20;
+  /// Link length of outlier_cluster in voxels (of the voxel size in use, or of the one the
+  /// points' spacing suggests where that is larger): a point farther than this from every
+  /// other gives no valid distance sample shared with them (DistanceConfig's
+  /// max_distance_voxels is 2), so it cannot join their surface. A cloud with no cluster of
+  /// outlier_cluster points is left whole.
+  float outlier_radius_voxels = 2.0f;
 
   /// True when filter_cloud() with this config removes nothing but non-finite points.
   bool keeps_every_finite_point() const {

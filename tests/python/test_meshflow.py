@@ -254,3 +254,29 @@ def test_a_mesh_from_arrays_writes_and_reads_back(tmp_path):
     bad[2, 0] = np.inf
     with pytest.raises(ValueError, match="vertices: row 2 is not finite"):
         meshflow.Mesh(bad, triangles)
+
+
+def border_edge_count(triangles):
+    """Edges used by one triangle only."""
+    edges = np.sort(np.concatenate([triangles[:, [0, 1]], triangles[:, [1, 2]],
+                                    triangles[:, [2, 0]]]), axis=1)
+    _, counts = np.unique(edges, axis=0, return_counts=True)
+    return int((counts == 1).sum())
+
+
+def test_close_and_outlier_removal_are_keywords():
+    # A sphere without its top cap (unseen), plus isolated points far from it.
+    points, normals = sphere_points(30000)
+    keep = points[:, 2] < 0.3
+    strays = np.array([[0.9, 0.9, 0.9], [-0.9, 0.9, -0.9], [0.9, -0.9, 0.0]], np.float32)
+    cloud = np.concatenate([points[keep], strays])
+    open_mesh = meshflow.reconstruct(cloud, voxel=0.02)
+    assert border_edge_count(open_mesh.triangles) > 0
+    assert np.linalg.norm(open_mesh.vertices, axis=1).max() < 0.55  # the strays are gone
+    closed = meshflow.reconstruct(cloud, voxel=0.02, close=True)
+    assert border_edge_count(closed.triangles) == 0
+    assert closed.vertices[:, 2].max() > 0.3  # the cap's opening is spanned
+    off = meshflow.reconstruct(cloud, voxel=0.02, outlier_cluster=0, outlier_radius=3.0)
+    assert len(off.triangles) > 1000
+    with pytest.raises(ValueError, match="outlier_radius"):
+        meshflow.reconstruct(cloud, outlier_radius=0.0)

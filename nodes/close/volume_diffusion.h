@@ -1,0 +1,48 @@
+#pragma once
+// Volumetric diffusion (Davis, Marschner, Garr and Levoy, "Filling holes in complex surfaces
+// using volumetric diffusion", 3DPVT 2002) on a dense lattice: nodes without data take the
+// values of a discrete Laplace equation whose boundary values are the nodes with data, held
+// fixed. Solved coarse to fine: each level's held nodes are restricted to a lattice of half the
+// resolution until it is small, solved there, then interpolated back and smoothed level by
+// level, so a gap many nodes wide fills in a few sweeps per level.
+
+#include <Eigen/Core>
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+namespace meshflow {
+
+/// A dense lattice of values, x fastest. `fixed` nodes keep their values; the others are solved.
+struct DiffusionLattice {
+  Eigen::Vector3i size = Eigen::Vector3i::Zero();  ///< nodes per axis
+  std::vector<float> values;                       ///< one per node
+  std::vector<std::uint8_t> fixed;                 ///< 1 = held (data), 0 = free (to fill)
+
+  /// Index of node (x, y, z); each in [0, size).
+  std::size_t index(int x, int y, int z) const {
+    return (static_cast<std::size_t>(z) * static_cast<std::size_t>(size.y()) +
+            static_cast<std::size_t>(y)) *
+               static_cast<std::size_t>(size.x()) +
+           static_cast<std::size_t>(x);
+  }
+  std::size_t node_count() const {
+    return static_cast<std::size_t>(size.x()) * static_cast<std::size_t>(size.y()) *
+           static_cast<std::size_t>(size.z());
+  }
+};
+
+struct DiffusionConfig {
+  int sweeps_per_level = 40;  ///< red-black Gauss-Seidel sweeps on each level after prolongation
+  int coarsest_sweeps = 500;  ///< sweeps on the coarsest level (from zero)
+  int coarsest_size = 8;      ///< a level with no axis longer than this many nodes is the last
+};
+
+/// Replaces the value of every free node of `lattice` by the diffusion of the fixed ones
+/// (each free node the mean of its 6 neighbours, at convergence). A lattice without fixed nodes
+/// is left at zero. Returns the number of levels used. Parallel over z planes, one colour of
+/// the red-black order at a time: the result does not depend on the thread count.
+/// O(nodes x sweeps_per_level) time, O(nodes) extra memory.
+int diffuse_free_nodes(DiffusionLattice& lattice, const DiffusionConfig& config = {});
+
+}  // namespace meshflow

@@ -1,0 +1,47 @@
+#pragma once
+// Outliers that cannot make surfaces: points whose cluster — the points linked to them through
+// nearest-neighbour links no longer than a radius — is too small to carry a surface (isolated
+// points and sparse clusters, e.g. a scanner's mixed pixels or stray returns scattered in a
+// scan's bounding box). Works on the kd-tree the pipeline already built for normals.
+
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+#include "nodes/search/spatial_index.h"
+#include "runtime/point_cloud.h"
+
+namespace meshflow {
+
+/// What surface_cluster_indices() dropped.
+struct ClusterCounts {
+  std::size_t isolated = 0;  ///< points without any neighbour within the link radius
+  std::size_t sparse = 0;    ///< points in clusters of 2 .. min_points - 1 points
+  std::size_t clusters = 0;  ///< clusters of at least min_points points (kept)
+};
+
+struct ClusterConfig {
+  /// Clusters with fewer points are dropped; 0 or 1 = keep every point.
+  std::size_t min_points = 20;
+  /// Longest link between two points of one cluster, metres (> 0).
+  float link_radius = 0.0f;
+  /// Nearest neighbours each point links to first (when within link_radius): enough to join a
+  /// densely sampled surface, a thin wall or a pole without a radius query per point.
+  int k = 8;
+};
+
+/// Indices (ascending) of the points in clusters of at least config.min_points points, where a
+/// cluster is a connected component of the graph linking every two points at most
+/// config.link_radius apart. Found by linking each point to its k nearest neighbours within the
+/// radius, then the points of clusters still too small to all their neighbours within it (exact:
+/// see the .cpp). `index` must be built over cloud.positions. A thin structure sampled at the
+/// surface's spacing stays one cluster; a point farther than link_radius from every other is
+/// isolated. Parallel queries, then a serial union-find in index order: the result does not
+/// depend on the thread count. O(n k log n) time plus a radius query per point of a small
+/// cluster; O(n k) memory. Thread-safe (reads only).
+std::vector<std::uint32_t> surface_cluster_indices(const PointCloud& cloud,
+                                                   const SpatialIndex& index,
+                                                   const ClusterConfig& config,
+                                                   ClusterCounts* counts = nullptr);
+
+}  // namespace meshflow

@@ -1,0 +1,93 @@
+#include "nodes/close/volume_diffusion.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "test_support.h"
+
+namespace meshflow {
+namespace {
+
+// A lattice whose faces and a few interior nodes hold a linear function (harmonic, so also
+// the discrete Laplace equation's solution everywhere).
+DiffusionLattice linear_lattice(const Eigen::Vector3i& size) {
+  DiffusionLattice l;
+  l.size = size;
+  l.values.assign(l.node_count(), 0.0f);
+  l.fixed.assign(l.node_count(), 0);
+  for (int z = 0; z < size.z(); ++z)
+    for (int y = 0; y < size.y(); ++y)
+      for (int x = 0; x < size.x(); ++x) {
+        const bool face = x == 0 || y == 0 || z == 0 || x + 1 == size.x() || y + 1 == size.y() ||
+                          z + 1 == size.z();
+        const bool inner = x == size.x() / 3 && y == size.y() / 2 && z == size.z() / 2;
+        if (!face && !inner) continue;
+        const std::size_t i = l.index(x, y, z);
+        l.fixed[i] = 1;
+        l.values[i] = 0.5f * static_cast<float>(x) - 0.25f * static_cast<float>(y) +
+                      0.125f * static_cast<float>(z) - 3.0f;
+      }
+  return l;
+}
+
+TEST(VolumeDiffusion, FillsFreeNodesWithTheHarmonicSolution) {
+  DiffusionLattice l = linear_lattice({65, 41, 23});
+  const int levels = diffuse_free_nodes(l);
+  EXPECT_GE(levels, 3);
+  double worst = 0.0;
+  for (int z = 0; z < l.size.z(); ++z)
+    for (int y = 0; y < l.size.y(); ++y)
+      for (int x = 0; x < l.size.x(); ++x) {
+        const double exact = 0.5 * x - 0.25 * y + 0.125 * z - 3.0;
+        worst = std::max(worst, std::abs(l.values[l.index(x, y, z)] - exact));
+      }
+  // The values span 0.5 * 64 + 0.25 * 40 + 0.125 * 22 = 44.75.
+  EXPECT_LT(worst, 0.01 * 44.75) << "largest deviation from the harmonic solution";
+}
+
+TEST(VolumeDiffusion, HeldNodesKeepTheirValuesAndTheSignSeparatesTwoSources) {
+  // An inside node (-1) in a box held at +1: the free nodes near it are negative, those near the
+  // faces positive, and no held value changes.
+  DiffusionLattice l;
+  l.size = {21, 21, 21};
+  l.values.assign(l.node_count(), 0.0f);
+  l.fixed.assign(l.node_count(), 0);
+  for (int z = 0; z < 21; ++z)
+    for (int y = 0; y < 21; ++y)
+      for (int x = 0; x < 21; ++x)
+        if (x == 0 || y == 0 || z == 0 || x == 20 || y == 20 || z == 20) {
+          l.fixed[l.index(x, y, z)] = 1;
+          l.values[l.index(x, y, z)] = 1.0f;
+        }
+  for (int dz = -2; dz <= 2; ++dz)
+    for (int dy = -2; dy <= 2; ++dy)
+      for (int dx = -2; dx <= 2; ++dx) {
+        l.fixed[l.index(10 + dx, 10 + dy, 10 + dz)] = 1;
+        l.values[l.index(10 + dx, 10 + dy, 10 + dz)] = -1.0f;
+      }
+  const DiffusionLattice before = l;
+  diffuse_free_nodes(l);
+  for (std::size_t i = 0; i < l.node_count(); ++i)
+    if (before.fixed[i]) {
+      ASSERT_EQ(l.values[i], before.values[i]);
+    }
+  EXPECT_LT(l.values[l.index(13, 10, 10)], 0.0f);
+  EXPECT_GT(l.values[l.index(18, 10, 10)], 0.0f);
+  // Symmetric in the six directions.
+  EXPECT_NEAR(l.values[l.index(14, 10, 10)], l.values[l.index(10, 6, 10)], 1e-3f);
+}
+
+TEST(VolumeDiffusion, SameValuesForOneAndTwoThreads) {
+  const auto run = [] {
+    DiffusionLattice l = linear_lattice({40, 33, 27});
+    l.values[l.index(5, 5, 5)] = 7.0f;  // a second source makes the solution non-linear
+    l.fixed[l.index(5, 5, 5)] = 1;
+    diffuse_free_nodes(l);
+    return l.values;
+  };
+  EXPECT_EQ(test::with_threads(1, run), test::with_threads(2, run));
+}
+
+}  // namespace
+}  // namespace meshflow

@@ -41,6 +41,7 @@ struct PipelineOptions {
   float plane_tolerance = ReconstructionConfig{}.plane_tolerance_voxels;
   float max_rim = ReconstructionConfig{}.max_rim_voxels;
   float remesh_tolerance = 0.0f;
+  float feature_angle = kDefaultFeatureAngleDeg;  ///< degrees; 180: no sharp edges kept
   bool organized_as_depth = false;
   std::string normals = "auto";  ///< auto | input | estimate
   std::string orient = "auto";   ///< see parse_orientation()

@@ -46,6 +46,7 @@ struct QemReport {
   std::size_t rejected_topology = 0;  ///< would make the mesh non-manifold
   std::size_t rejected_normal = 0;    ///< would turn or degenerate a face
   std::size_t rejected_border = 0;    ///< would move a border off itself
+  std::size_t rejected_feature = 0;   ///< would move a corner or a feature vertex off its line
   /// With QemConfig::record_collapses: each collapse u -> v as {u, v} (input vertex numbers),
   /// in the order applied.
   std::vector<std::array<std::uint32_t, 2>> collapse_sequence;
@@ -68,5 +69,17 @@ struct QemReport {
 /// vertex.
 TriangleMesh qem_decimate(const TriangleMesh& mesh, const QemConfig& config = {},
                           QemReport* report = nullptr);
+
+/// The same, keeping the sharp edges `feature_edges` ({a, b} vertex pairs of `mesh`, any order;
+/// nodes/optimize/features.h finds them): a vertex with one or more than two of them (a corner)
+/// never moves; a vertex with two (on a feature line) collapses only onto one of those two
+/// neighbours, where the line turns by less than max_border_turn_deg, and the line then runs
+/// through the kept vertex; every feature edge adds the planes through it perpendicular to its
+/// faces, weighted by penalty x its length^2, to its ends' quadrics (as boundary constraints
+/// are in Garland & Heckbert), so the cost counts leaving the line. Feature edges of the output
+/// are the input's, or chords of a feature line. An empty list: as above, same output.
+TriangleMesh qem_decimate(const TriangleMesh& mesh,
+                          const std::vector<std::array<std::uint32_t, 2>>& feature_edges,
+                          const QemConfig& config, QemReport* report = nullptr);
 
 }  // namespace meshflow

@@ -119,10 +119,13 @@ TriangleMesh remesh_step(const TriangleMesh& mesh, const OptimizeConfig& config,
 TriangleMesh decimate_step(const TriangleMesh& mesh, const OptimizeConfig& config,
                            OptimizeStepReport& step) {
   QemReport r;
-  TriangleMesh out = qem_decimate(mesh, config.decimate, &r);
+  const MeshFeatures features = detect_features(mesh, config.feature_angle_deg);
+  TriangleMesh out = qem_decimate(mesh, features.edges, config.decimate, &r);
   step.detail = format("%zu collapses in %zu passes", r.collapses, r.passes) +
                 format("; refused %zu topology, %zu normal, %zu border", r.rejected_topology,
-                       r.rejected_normal, r.rejected_border);
+                       r.rejected_normal, r.rejected_border) +
+                format(", %zu feature; %zu sharp edges, %zu corners kept", r.rejected_feature,
+                       features.edges.size(), features.count(MeshFeatures::VertexKind::kCorner));
   return out;
 }
 

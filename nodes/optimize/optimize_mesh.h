@@ -13,6 +13,7 @@
 #include "nodes/decimate/qem_decimation.h"
 #include "nodes/optimize/cleanup/hole_filling.h"
 #include "nodes/optimize/cleanup/mesh_cleanup.h"
+#include "nodes/optimize/features.h"
 #include "nodes/optimize/planar/planar_regions.h"
 #include "nodes/optimize/planar/retriangulate_regions.h"
 #include "nodes/optimize/planar/sharp_edges.h"
@@ -31,6 +32,9 @@ std::vector<OptimizeStep> parse_optimize_steps(const std::string& list);
 
 struct OptimizeConfig {
   std::vector<OptimizeStep> steps{OptimizeStep::kClean, OptimizeStep::kHoles};
+  /// Sharp edges: faces meeting at more than this many degrees (detect_features(), on the mesh
+  /// each reducing step receives); the steps keep them. 180: no features.
+  float feature_angle_deg = kDefaultFeatureAngleDeg;
   CleanupConfig cleanup;
   HoleFillingConfig holes;
   PlanarRegionConfig planes;  ///< planes, sharpen and retriangulate

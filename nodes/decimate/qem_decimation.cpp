@@ -463,7 +463,8 @@ class Decimator {
     std::uint32_t border[2] = {0, 0};  ///< u's neighbours along its border, if it is on one
     std::size_t border_count = 0;      ///< 2 on a border, else 0
     std::uint32_t line[2] = {0, 0};    ///< u's neighbours along its feature line, if on one
-    bool on_line = false;              ///< u is an inner vertex of a feature line
+    bool on_line = false;              ///< u is an inner vertex or a loose end of a feature line
+    std::size_t line_count = 0;        ///< 2 for an inner vertex, 1 for a loose end
     std::vector<Target> candidates;    ///< u's targets by quadric cost
     std::vector<double> costs;         ///< quadric_costs() of u's targets
     CollapseFan fan;                   ///< u's faces
@@ -493,21 +494,31 @@ class Decimator {
     scratch.neighbour_count = 0;
     scratch.border_count = 0;
     scratch.on_line = false;
+    scratch.line_count = 0;
     if (rings_.face_count(u) == 0 || rings_.locked(u)) return 0;
     const std::uint32_t* const ring = rings_.begin(u);
     const std::size_t n = rings_.size(u);
     scratch.neighbours = ring;
     scratch.neighbour_count = n;
     targets = ring;
-    if (on_feature(u)) {  // a corner stays; a line vertex moves along a nearly straight line
-      if (feature_degree_[u] != 2 || rings_.kind(u) != VertexRings::Kind::kClosed ||
-          !border_straight(u, line_[u][0], line_[u][1])) {
+    if (on_feature(u)) {  // a corner stays; a line vertex moves along its line
+      if (feature_degree_[u] == 1 && rings_.kind(u) == VertexRings::Kind::kClosed) {
+        scratch.line[0] = line_[u][0];  // a loose end (noise, not a corner) shortens its line
+        scratch.on_line = true;
+        scratch.line_count = 1;
+        targets = scratch.line;
+        return 1;
+      }
+      // (A bend is priced by the feature quadrics, not refused: a scanned room's junction
+      // lines zigzag by more than the border limit and must still simplify.)
+      if (feature_degree_[u] != 2 || rings_.kind(u) != VertexRings::Kind::kClosed) {
         ++scratch.rejected.rejected_feature;
         return 0;
       }
       scratch.line[0] = line_[u][0];
       scratch.line[1] = line_[u][1];
       scratch.on_line = true;
+      scratch.line_count = 2;
       targets = scratch.line;
       return 2;
     }
@@ -680,7 +691,7 @@ class Decimator {
     }
     // A feature line of three vertices would close into two: u's other line neighbour must
     // not already be v's.
-    if (scratch.on_line && feature_degree_[v] == 2) {
+    if (scratch.on_line && scratch.line_count == 2 && feature_degree_[v] == 2) {
       const std::uint32_t w = scratch.line[0] == v ? scratch.line[1] : scratch.line[0];
       if (line_[v][0] == w || line_[v][1] == w) {
         ++rejected.rejected_feature;
@@ -730,7 +741,10 @@ class Decimator {
     pass[u].changed = number;
     for (const std::uint32_t* x = rings_.begin(u); x != rings_.end(u); ++x)
       pass[*x].changed = number;
-    if (on_feature(u)) {  // u -> v along the line w - u - v: the line runs w - v now
+    if (on_feature(u) && feature_degree_[u] == 1) {  // a loose end: v loses that edge
+      if (feature_degree_[v] == 2 && line_[v][0] == u) line_[v][0] = line_[v][1];
+      if (feature_degree_[v] <= 2) --feature_degree_[v];
+    } else if (on_feature(u)) {  // u -> v along the line w - u - v: the line runs w - v now
       const std::uint32_t w = line_[u][0] == v ? line_[u][1] : line_[u][0];
       const std::array<std::uint32_t, 3> moves[2] = {{v, u, w}, {w, u, v}};
       for (const auto& [x, from, to] : moves)

@@ -71,10 +71,11 @@ TriangleMesh qem_decimate(const TriangleMesh& mesh, const QemConfig& config = {}
                           QemReport* report = nullptr);
 
 /// The same, keeping the sharp edges `feature_edges` ({a, b} vertex pairs of `mesh`, any order;
-/// nodes/optimize/features.h finds them): a vertex with one or more than two of them (a corner)
-/// never moves; a vertex with two (on a feature line) collapses only onto one of those two
-/// neighbours, where the line turns by less than max_border_turn_deg, and the line then runs
-/// through the kept vertex; every feature edge adds the planes through it perpendicular to its
+/// nodes/optimize/features.h finds them): a vertex with three or more of them (a corner) never
+/// moves; one with one (a loose end: noise, closed CAD lines have none) moves only onto that
+/// neighbour, shortening its line; one with two (on a feature line) collapses only onto one of
+/// those two neighbours (the line then runs through the kept vertex; its feature quadrics
+/// price a bend); every feature edge adds the planes through it perpendicular to its
 /// faces, weighted by penalty x its length^2, to its ends' quadrics (as boundary constraints
 /// are in Garland & Heckbert), so the cost counts leaving the line. Feature edges of the output
 /// are the input's, or chords of a feature line. An empty list: as above, same output.

@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "runtime/angles.h"
+#include "runtime/disjoint_sets.h"
 
 namespace meshflow {
 
@@ -42,6 +43,16 @@ MeshFeatures detect_features(const TriangleMesh& mesh, float angle_deg) {
     }
     i = j;
   }
+  // Short connected sets of sharp edges are noise (kMinFeatureEdges).
+  DisjointSets sets(n);
+  for (const auto& e : f.edges) sets.unite(e[0], e[1]);
+  std::vector<std::uint32_t> edges_in_set(n, 0);
+  for (const auto& e : f.edges) ++edges_in_set[sets.find(e[0])];
+  f.edges.erase(std::remove_if(f.edges.begin(), f.edges.end(),
+                               [&](const std::array<std::uint32_t, 2>& e) {
+                                 return edges_in_set[sets.find(e[0])] < kMinFeatureEdges;
+                               }),
+                f.edges.end());
   // Vertex kinds from their sharp edges (edges are sorted, so each vertex's first two
   // neighbours are found in one sweep).
   std::vector<std::uint32_t> degree(n, 0);

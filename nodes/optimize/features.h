@@ -17,6 +17,11 @@ namespace meshflow {
 /// diagonal; CAD edges, even a 45-degree chamfer, are above it).
 constexpr float kDefaultFeatureAngleDeg = 40.0f;
 
+/// Sharp edges connected to fewer than this many others (by shared vertices) are dropped as
+/// noise: on a scanned room the 40-degree test also fires on short runs of bumpy faces, whose
+/// locked ends would stop decimation; a CAD edge spans many edges of the mesh.
+constexpr std::size_t kMinFeatureEdges = 10;
+
 struct MeshFeatures {
   enum class VertexKind : std::uint8_t { kFree, kLine, kCorner };
   /// Sharp edges as {a, b} with a < b, ascending.
@@ -33,7 +38,8 @@ struct MeshFeatures {
 };
 
 /// Sharp edges of `mesh` (an edge with exactly two faces whose normals differ by more than
-/// `angle_deg` degrees; border and non-manifold edges are never sharp) and the vertex kinds
+/// `angle_deg` degrees, in a connected set of at least kMinFeatureEdges of them; border and
+/// non-manifold edges are never sharp) and the vertex kinds
 /// (see MeshFeatures). angle_deg >= 180: no features. Serial, deterministic; O(T log T).
 MeshFeatures detect_features(const TriangleMesh& mesh, float angle_deg = kDefaultFeatureAngleDeg);
 

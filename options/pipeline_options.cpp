@@ -183,6 +183,11 @@ std::vector<OptionSpec> make_specs() {
        "remesh step: largest deviation of an edge from the surface, metres (auto, 0: a quarter "
        "of the median edge)",
        "auto", in_range(&O::remesh_tolerance, 0, 1000)},
+      {"feature-angle", &O::feature_angle,
+       "Reducing optimize steps: edges whose faces meet at more than this many degrees are "
+       "sharp and kept (corners fixed, feature vertices moved only along their line); 180 = "
+       "none",
+       nullptr, in_range(&O::feature_angle, 0, 180)},
       {"decimate-to", &O::decimate_to, "decimate step: share of the triangles to keep", nullptr,
        in_range(&O::decimate_to, 0, 1)},
       {"normals", &O::normals,
@@ -292,6 +297,7 @@ ReconstructionConfig PipelineOptions::config() const {
   c.plane_tolerance_voxels = plane_tolerance;
   c.max_rim_voxels = max_rim;
   c.optimize.remesh.tolerance = remesh_tolerance;
+  c.optimize.feature_angle_deg = feature_angle;
   c.organized_as_depth = organized_as_depth;
   c.close.enabled = close;
   c.normals.source = normals == "input"      ? NormalSource::kInput

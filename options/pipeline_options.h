@@ -43,6 +43,7 @@ struct PipelineOptions {
   float plane_tolerance = ReconstructionConfig{}.plane_tolerance_voxels;
   float max_rim = ReconstructionConfig{}.max_rim_voxels;
   float remesh_tolerance = 0.0f;
+  float feature_angle = kDefaultFeatureAngleDeg;  ///< degrees; 180: no sharp edges kept
   bool organized_as_depth = false;
   bool close = false;  ///< --close: a watertight surface (volumetric diffusion of the distance)
   std::string normals = "auto";  ///< auto | input | estimate

@@ -146,7 +146,8 @@ int bits_for(std::size_t count) {
 // changed the ends once more. The next pass bounds again only the vertices next to a change.
 class Decimator {
  public:
-  Decimator(const TriangleMesh& mesh, const QemConfig& config)
+  Decimator(const TriangleMesh& mesh, const QemConfig& config,
+            const std::vector<std::array<std::uint32_t, 2>>& feature_edges)
       : in_(mesh),
         cfg_(config),
         rings_(mesh.triangles, mesh.vertices.size()),
@@ -177,6 +178,7 @@ class Decimator {
       const Quadric k = Quadric::plane(unit, -unit.dot(a), 0.5 * area2);
       for (std::uint32_t v : t) q_[v].add(k);
     }
+    if (!feature_edges.empty()) add_feature_constraints(feature_edges);
     for (std::size_t v = 0; v < mesh.vertices.size(); ++v) terms_[v].own_error = q_[v].error(p(v));
   }
 
@@ -214,6 +216,53 @@ class Decimator {
   }
 
  private:
+  // The feature lines (line_, feature_degree_) and, at both ends of every feature edge, its
+  // constraint planes: through the edge, perpendicular to each of its faces, weighted by
+  // penalty x length^2 (serial, in face order: the sums must not depend on the thread count).
+  void add_feature_constraints(const std::vector<std::array<std::uint32_t, 2>>& edges) {
+    const std::size_t n = in_.vertices.size();
+    feature_degree_.assign(n, 0);
+    line_.assign(n, {0, 0});
+    std::vector<std::uint64_t> keys;
+    keys.reserve(edges.size());
+    for (const auto& e : edges) {
+      if (e[0] >= n || e[1] >= n || e[0] == e[1]) continue;
+      keys.push_back(undirected_edge_key(e[0], e[1]));
+    }
+    std::sort(keys.begin(), keys.end());
+    keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
+    for (std::uint64_t key : keys) {
+      const auto a = static_cast<std::uint32_t>(key >> 32), b = static_cast<std::uint32_t>(key);
+      const std::array<std::uint32_t, 2> ends[2] = {{a, b}, {b, a}};
+      for (const auto& [x, y] : ends) {
+        if (feature_degree_[x] < 2) line_[x][feature_degree_[x]] = y;
+        if (feature_degree_[x] < 255) ++feature_degree_[x];
+      }
+    }
+    for (const Triangle& t : in_.triangles) {
+      const Eigen::Vector3d a = p(t[0]).cast<double>();
+      const Eigen::Vector3d normal =
+          (p(t[1]).cast<double>() - a).cross(p(t[2]).cast<double>() - a).normalized();
+      for (int k = 0; k < 3; ++k) {
+        const std::uint32_t x = t[k], y = t[(k + 1) % 3];
+        if (!std::binary_search(keys.begin(), keys.end(), undirected_edge_key(x, y))) continue;
+        const Eigen::Vector3d px = p(x).cast<double>(), along = p(y).cast<double>() - px;
+        const Eigen::Vector3d side = along.cross(normal);
+        const double length2 = along.squaredNorm();
+        if (!(side.squaredNorm() > 0.0) || !normal.allFinite()) continue;
+        const Eigen::Vector3d unit = side.normalized();
+        const Quadric k2 = Quadric::plane(unit, -unit.dot(px), cfg_.penalty * length2);
+        q_[x].add(k2);
+        q_[y].add(k2);
+      }
+    }
+  }
+
+  // Whether u lies on a feature edge (with features given).
+  bool on_feature(std::uint32_t u) const {
+    return !feature_degree_.empty() && feature_degree_[u] != 0;
+  }
+
   // Phase 0: the run's state, every vertex marked for a bound.
   void start(std::size_t target) {
     const std::size_t n = in_.vertices.size();
@@ -400,6 +449,7 @@ class Decimator {
       report.rejected_topology += scratch.rejected.rejected_topology;
       report.rejected_normal += scratch.rejected.rejected_normal;
       report.rejected_border += scratch.rejected.rejected_border;
+      report.rejected_feature += scratch.rejected.rejected_feature;
     }
   }
 
@@ -412,6 +462,9 @@ class Decimator {
     std::size_t neighbour_count = 0;
     std::uint32_t border[2] = {0, 0};  ///< u's neighbours along its border, if it is on one
     std::size_t border_count = 0;      ///< 2 on a border, else 0
+    std::uint32_t line[2] = {0, 0};    ///< u's neighbours along its feature line, if on one
+    bool on_line = false;              ///< u is an inner vertex or a loose end of a feature line
+    std::size_t line_count = 0;        ///< 2 for an inner vertex, 1 for a loose end
     std::vector<Target> candidates;    ///< u's targets by quadric cost
     std::vector<double> costs;         ///< quadric_costs() of u's targets
     CollapseFan fan;                   ///< u's faces
@@ -440,12 +493,35 @@ class Decimator {
                               const std::uint32_t*& targets) const {
     scratch.neighbour_count = 0;
     scratch.border_count = 0;
+    scratch.on_line = false;
+    scratch.line_count = 0;
     if (rings_.face_count(u) == 0 || rings_.locked(u)) return 0;
     const std::uint32_t* const ring = rings_.begin(u);
     const std::size_t n = rings_.size(u);
     scratch.neighbours = ring;
     scratch.neighbour_count = n;
     targets = ring;
+    if (on_feature(u)) {  // a corner stays; a line vertex moves along its line
+      if (feature_degree_[u] == 1 && rings_.kind(u) == VertexRings::Kind::kClosed) {
+        scratch.line[0] = line_[u][0];  // a loose end (noise, not a corner) shortens its line
+        scratch.on_line = true;
+        scratch.line_count = 1;
+        targets = scratch.line;
+        return 1;
+      }
+      // (A bend is priced by the feature quadrics, not refused: a scanned room's junction
+      // lines zigzag by more than the border limit and must still simplify.)
+      if (feature_degree_[u] != 2 || rings_.kind(u) != VertexRings::Kind::kClosed) {
+        ++scratch.rejected.rejected_feature;
+        return 0;
+      }
+      scratch.line[0] = line_[u][0];
+      scratch.line[1] = line_[u][1];
+      scratch.on_line = true;
+      scratch.line_count = 2;
+      targets = scratch.line;
+      return 2;
+    }
     if (rings_.kind(u) != VertexRings::Kind::kOpen) return n;
     scratch.border[0] = ring[0];
     scratch.border[1] = ring[n - 1];
@@ -524,7 +600,8 @@ class Decimator {
         ++scratch.rejected.rejected_normal;
         continue;
       }
-      const double cost = penalised(fan, n, at, verdict, quadric);
+      const double cost = scratch.on_line ? (verdict.needle ? quadric * cfg_.penalty : quadric)
+                                          : penalised(fan, n, at, verdict, quadric);
       if (!(cost < best.cost)) continue;
       if (!valid(v, verdict, scratch)) continue;
       best.cost = cost;
@@ -612,6 +689,15 @@ class Decimator {
         return false;
       }
     }
+    // A feature line of three vertices would close into two: u's other line neighbour must
+    // not already be v's.
+    if (scratch.on_line && scratch.line_count == 2 && feature_degree_[v] == 2) {
+      const std::uint32_t w = scratch.line[0] == v ? scratch.line[1] : scratch.line[0];
+      if (line_[v][0] == w || line_[v][1] == w) {
+        ++rejected.rejected_feature;
+        return false;
+      }
+    }
     // A border u of one face (an ear: only with max_border_turn_deg above 90) takes that face
     // along; its other two corners must keep a face each, or they would be left with none.
     if (scratch.neighbour_count == 2) {
@@ -655,6 +741,15 @@ class Decimator {
     pass[u].changed = number;
     for (const std::uint32_t* x = rings_.begin(u); x != rings_.end(u); ++x)
       pass[*x].changed = number;
+    if (on_feature(u) && feature_degree_[u] == 1) {  // a loose end: v loses that edge
+      if (feature_degree_[v] == 2 && line_[v][0] == u) line_[v][0] = line_[v][1];
+      if (feature_degree_[v] <= 2) --feature_degree_[v];
+    } else if (on_feature(u)) {  // u -> v along the line w - u - v: the line runs w - v now
+      const std::uint32_t w = line_[u][0] == v ? line_[u][1] : line_[u][0];
+      const std::array<std::uint32_t, 3> moves[2] = {{v, u, w}, {w, u, v}};
+      for (const auto& [x, from, to] : moves)
+        if (feature_degree_[x] == 2) (line_[x][0] == from ? line_[x][0] : line_[x][1]) = to;
+    }
     const std::size_t removed = rings_.collapse(u, v);
     if (cfg_.record_collapses) sequence_.push_back({u, v});
     q_[v].add(q_[u]);
@@ -668,6 +763,10 @@ class Decimator {
   std::vector<std::array<std::uint32_t, 2>> sequence_;  ///< collapses applied, if recorded
   std::vector<Quadric> q_;
   std::vector<VertexTerms> terms_;
+  /// With feature edges: per vertex their number (saturating at 255; empty without features),
+  /// and for a vertex with two, its two neighbours along the line (kept current by collapse()).
+  std::vector<std::uint8_t> feature_degree_;
+  std::vector<std::array<std::uint32_t, 2>> line_;
   float cos_turn_, cos_border_, cos_sharp_, cos2_min_angle_;
   mutable tbb::enumerable_thread_specific<Scratch> scratch_;  ///< best_collapse()'s memory
 
@@ -690,11 +789,17 @@ class Decimator {
 }  // namespace
 
 TriangleMesh qem_decimate(const TriangleMesh& mesh, const QemConfig& config, QemReport* report) {
+  return qem_decimate(mesh, {}, config, report);
+}
+
+TriangleMesh qem_decimate(const TriangleMesh& mesh,
+                          const std::vector<std::array<std::uint32_t, 2>>& feature_edges,
+                          const QemConfig& config, QemReport* report) {
   require_corners_in_range(mesh.triangles, mesh.vertices.size(), "QEM decimation");
   QemReport r;
   const auto target = static_cast<std::size_t>(std::ceil(
       static_cast<double>(mesh.triangles.size()) * static_cast<double>(config.target_ratio)));
-  TriangleMesh out = Decimator(mesh, config).run(target, r);
+  TriangleMesh out = Decimator(mesh, config, feature_edges).run(target, r);
   if (report != nullptr) *report = r;
   return out;
 }

@@ -46,6 +46,7 @@ struct QemReport {
   std::size_t rejected_topology = 0;  ///< would make the mesh non-manifold
   std::size_t rejected_normal = 0;    ///< would turn or degenerate a face
   std::size_t rejected_border = 0;    ///< would move a border off itself
+  std::size_t rejected_feature = 0;   ///< would move a corner or a feature vertex off its line
   /// With QemConfig::record_collapses: each collapse u -> v as {u, v} (input vertex numbers),
   /// in the order applied.
   std::vector<std::array<std::uint32_t, 2>> collapse_sequence;
@@ -68,5 +69,18 @@ struct QemReport {
 /// vertex.
 TriangleMesh qem_decimate(const TriangleMesh& mesh, const QemConfig& config = {},
                           QemReport* report = nullptr);
+
+/// The same, keeping the sharp edges `feature_edges` ({a, b} vertex pairs of `mesh`, any order;
+/// nodes/optimize/features.h finds them): a vertex with three or more of them (a corner) never
+/// moves; one with one (a loose end: noise, closed CAD lines have none) moves only onto that
+/// neighbour, shortening its line; one with two (on a feature line) collapses only onto one of
+/// those two neighbours (the line then runs through the kept vertex; its feature quadrics
+/// price a bend); every feature edge adds the planes through it perpendicular to its
+/// faces, weighted by penalty x its length^2, to its ends' quadrics (as boundary constraints
+/// are in Garland & Heckbert), so the cost counts leaving the line. Feature edges of the output
+/// are the input's, or chords of a feature line. An empty list: as above, same output.
+TriangleMesh qem_decimate(const TriangleMesh& mesh,
+                          const std::vector<std::array<std::uint32_t, 2>>& feature_edges,
+                          const QemConfig& config, QemReport* report = nullptr);
 
 }  // namespace meshflow

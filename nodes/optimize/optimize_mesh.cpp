@@ -105,10 +105,13 @@ TriangleMesh retriangulate_step(const TriangleMesh& mesh, const OptimizeConfig& 
 TriangleMesh remesh_step(const TriangleMesh& mesh, const OptimizeConfig& config,
                          OptimizeStepReport& step) {
   AdaptiveRemeshReport r;
-  TriangleMesh out = adaptive_remesh(mesh, config.remesh, &r);
+  AdaptiveRemeshConfig remesh = config.remesh;
+  remesh.feature_angle_deg = config.feature_angle_deg;
+  TriangleMesh out = adaptive_remesh(mesh, remesh, &r);
   step.detail = format("%zu -> %zu vertices (%zu splits, %zu collapses", r.vertices_in,
                        r.vertices_out, r.splits, r.collapses) +
-                format(", %zu flips)", r.flips);
+                format(", %zu flips; %zu sharp edges, %zu corners kept)", r.flips, r.sharp_edges_in,
+                       r.corners);
   char lengths[120];
   std::snprintf(lengths, sizeof lengths, ", target edges %.4f-%.4f m at tolerance %.4f m",
                 r.min_target, r.max_target, r.tolerance);
@@ -119,10 +122,14 @@ TriangleMesh remesh_step(const TriangleMesh& mesh, const OptimizeConfig& config,
 TriangleMesh decimate_step(const TriangleMesh& mesh, const OptimizeConfig& config,
                            OptimizeStepReport& step) {
   QemReport r;
-  TriangleMesh out = qem_decimate(mesh, config.decimate, &r);
+  const MeshFeatures features =
+      detect_features(mesh, config.decimate_keeps_features ? config.feature_angle_deg : 180.0f);
+  TriangleMesh out = qem_decimate(mesh, features.edges, config.decimate, &r);
   step.detail = format("%zu collapses in %zu passes", r.collapses, r.passes) +
                 format("; refused %zu topology, %zu normal, %zu border", r.rejected_topology,
-                       r.rejected_normal, r.rejected_border);
+                       r.rejected_normal, r.rejected_border) +
+                format(", %zu feature; %zu sharp edges, %zu corners kept", r.rejected_feature,
+                       features.edges.size(), features.count(MeshFeatures::VertexKind::kCorner));
   return out;
 }
 

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <unordered_set>
 
 #include "nodes/search/closest_point.h"
 #include "nodes/search/mesh_distance_index.h"
@@ -31,6 +32,15 @@ struct Remesher {
   float tolerance = 0.0f;
   float min_turn_cos = 0.0f;
   float max_border_turn_sin = 0.0f;
+  /// Feature graph: kind of every vertex (MeshFeatures::VertexKind) and the sharp edges as
+  /// undirected_edge_key()s, kept current through splits and collapses.
+  std::vector<MeshFeatures::VertexKind> kind;
+  std::unordered_set<std::uint64_t> sharp;
+
+  bool is_free(std::uint32_t v) const { return kind[v] == MeshFeatures::VertexKind::kFree; }
+  bool is_sharp(std::uint32_t a, std::uint32_t b) const {
+    return !sharp.empty() && sharp.count(undirected_edge_key(a, b)) != 0;
+  }
 };
 
 bool removed(const HalfEdgeMesh& h, std::uint32_t v) { return h.outgoing(v) == kNone; }
@@ -99,15 +109,19 @@ Adjacency adjacency(const HalfEdgeMesh& h) {
   return a;
 }
 
-/// The vertices within `rings` edges of v, v excluded.
-std::vector<std::uint32_t> neighbourhood(const Adjacency& adj, std::uint32_t v, int rings) {
+/// The vertices within `rings` edges of v, v excluded, not reaching past a vertex that is not
+/// free (`kind`; empty: no features): a sharp edge's vertices lie on both of its sides.
+std::vector<std::uint32_t> neighbourhood(const Adjacency& adj, std::uint32_t v, int rings,
+                                         const std::vector<MeshFeatures::VertexKind>& kind) {
   std::vector<std::uint32_t> found{v};
   std::size_t begin = 0;
   for (int r = 0; r < rings; ++r) {
     const std::size_t end = found.size();
-    for (std::size_t i = begin; i < end; ++i)
+    for (std::size_t i = begin; i < end; ++i) {
+      if (i > 0 && !kind.empty() && kind[found[i]] != MeshFeatures::VertexKind::kFree) continue;
       for (const std::uint32_t* w = adj.begin(found[i]); w != adj.end(found[i]); ++w)
         if (std::find(found.begin(), found.end(), *w) == found.end()) found.push_back(*w);
+    }
     begin = end;
   }
   found.erase(found.begin());
@@ -118,9 +132,10 @@ std::vector<std::uint32_t> neighbourhood(const Adjacency& adj, std::uint32_t v, 
 /// z = a x^2 + b xy + c y^2 + d x + e y + f over its neighbourhood, in the frame of v's normal
 /// (the constant and linear terms absorb noise and a tilted normal). 0 with fewer than six
 /// neighbours or without a normal.
-float fitted_curvature(const HalfEdgeMesh& h, const Adjacency& adj, std::uint32_t v, int rings) {
+float fitted_curvature(const HalfEdgeMesh& h, const Adjacency& adj, std::uint32_t v, int rings,
+                       const std::vector<MeshFeatures::VertexKind>& kind) {
   const Vec3 n = vertex_normal(h, v);
-  const std::vector<std::uint32_t> near = neighbourhood(adj, v, rings);
+  const std::vector<std::uint32_t> near = neighbourhood(adj, v, rings, kind);
   if (n.squaredNorm() == 0.0f || near.size() < 6) return 0.0f;
   const Vec3 t1 = n.unitOrthogonal(), t2 = n.cross(t1);
   const Vec3& p = h.position(v);
@@ -234,9 +249,18 @@ std::size_t split_long_edges(Remesher& r) {
       continue;
     Vec3 normal = face_cross(h, HalfEdgeMesh::face(e));
     if (!h.is_border(e)) normal += face_cross(h, HalfEdgeMesh::face(h.twin(e)));
-    const Vec3 at = onto_input(r, 0.5f * (h.position(a) + h.position(b)), normal.normalized());
+    const bool sharp = r.is_sharp(a, b);  // split on the line itself, not projected off it
+    const Vec3 middle = 0.5f * (h.position(a) + h.position(b));
+    const Vec3 at = sharp ? middle : onto_input(r, middle, normal.normalized());
     if (!split_keeps_area(h, e, at)) continue;
     h.split(e, at);  // the new vertex is the last one
+    const auto m = static_cast<std::uint32_t>(h.vertex_count() - 1);
+    r.kind.push_back(sharp ? MeshFeatures::VertexKind::kLine : MeshFeatures::VertexKind::kFree);
+    if (sharp) {
+      r.sharp.erase(undirected_edge_key(a, b));
+      r.sharp.insert(undirected_edge_key(a, m));
+      r.sharp.insert(undirected_edge_key(m, b));
+    }
     r.target.push_back(0.5f * (r.target[a] + r.target[b]));
     r.curvature.push_back(0.5f * (r.curvature[a] + r.curvature[b]));
     if (!r.colors.empty()) r.colors.push_back(midpoint_color(r.colors[a], r.colors[b]));
@@ -260,9 +284,33 @@ float border_turn_sin(const HalfEdgeMesh& h, std::uint32_t v) {
 /// edge v gains is short enough, every face that moves with u keeps its orientation within
 /// the allowed turn, u lies within the tolerance of the faces that replace its own, and a
 /// border vertex only slides along a nearly straight border. The topology is HalfEdgeMesh's.
+/// The other end of u's second sharp edge, for u on a feature line and (u, v) one of its
+/// sharp edges; kNone if there is none.
+std::uint32_t line_neighbour(const Remesher& r, std::uint32_t u, std::uint32_t v) {
+  for (std::uint32_t w : neighbour_vertices(r.mesh, u))
+    if (w != v && r.is_sharp(u, w)) return w;
+  return kNone;
+}
+
+/// Whether u -> v keeps the feature graph: corners stay; a vertex on a feature line moves only
+/// onto a line neighbour, where the line w - u - v turns by less than the border limit, and
+/// not when w and v are already joined by a sharp edge (a line of three would close).
+bool keeps_features(const Remesher& r, std::uint32_t u, std::uint32_t v) {
+  if (r.is_free(u)) return true;
+  if (r.kind[u] != MeshFeatures::VertexKind::kLine || !r.is_sharp(u, v)) return false;
+  const HalfEdgeMesh& h = r.mesh;
+  if (h.is_border_vertex(u)) return false;
+  const std::uint32_t w = line_neighbour(r, u, v);
+  if (w == kNone || r.is_sharp(w, v)) return false;
+  const Vec3 d1 = (h.position(u) - h.position(w)).normalized();
+  const Vec3 d2 = (h.position(v) - h.position(u)).normalized();
+  return d1.dot(d2) > 0.0f && d1.cross(d2).norm() <= r.max_border_turn_sin;
+}
+
 bool collapse_allowed(const Remesher& r, std::uint32_t e) {
   const HalfEdgeMesh& h = r.mesh;
   const std::uint32_t u = h.from(e), v = h.to(e);
+  if (!keeps_features(r, u, v)) return false;
   if (h.is_border_vertex(u)) {
     const bool along_border = h.is_border(e) || h.is_border(h.twin(e));
     if (!along_border || border_turn_sin(h, u) > r.max_border_turn_sin) return false;
@@ -298,10 +346,17 @@ std::size_t collapse_short_edges(Remesher& r) {
     if (r.curvature[b] < r.curvature[a] || (r.curvature[b] == r.curvature[a] && b < a))
       std::swap(first, second);
     for (std::uint32_t c : {first, second}) {  // a border edge has one direction only
-      if (c != kNone && collapse_allowed(r, c) && h.collapse(c)) {
-        ++collapses;
-        break;
+      if (c == kNone || !collapse_allowed(r, c)) continue;
+      const std::uint32_t u = h.from(c), v = h.to(c);
+      const std::uint32_t w = r.is_free(u) ? kNone : line_neighbour(r, u, v);
+      if (!h.collapse(c)) continue;
+      if (w != kNone) {  // the line w - u - v runs w - v now
+        r.sharp.erase(undirected_edge_key(u, v));
+        r.sharp.erase(undirected_edge_key(u, w));
+        r.sharp.insert(undirected_edge_key(w, v));
       }
+      ++collapses;
+      break;
     }
   }
   return collapses;
@@ -327,6 +382,7 @@ std::size_t flip_towards_regular_valence(Remesher& r) {
     if (h.is_border(e)) continue;
     const std::uint32_t t = h.twin(e);
     const std::uint32_t a = h.from(e), b = h.to(e);
+    if (r.is_sharp(a, b)) continue;  // a sharp edge stays
     const std::uint32_t c = h.to(HalfEdgeMesh::next(e)), d = h.to(HalfEdgeMesh::next(t));
     const int before = valence_deviation(h, valence, a, 0) + valence_deviation(h, valence, b, 0) +
                        valence_deviation(h, valence, c, 0) + valence_deviation(h, valence, d, 0);
@@ -360,7 +416,7 @@ void relax_tangentially(Remesher& r) {
   tbb::parallel_for(std::size_t{0}, n, [&](std::size_t i) {
     const auto v = static_cast<std::uint32_t>(i);
     moved[i] = h.position(v);
-    if (removed(h, v) || h.is_border_vertex(v)) return;
+    if (removed(h, v) || h.is_border_vertex(v) || !r.is_free(v)) return;  // feature vertices stay
     const std::vector<std::uint32_t> around = neighbour_vertices(h, v);
     Vec3 centroid = Vec3::Zero();
     for (std::uint32_t w : around) centroid += h.position(w);
@@ -416,7 +472,14 @@ TriangleMesh adaptive_remesh(const TriangleMesh& mesh, const AdaptiveRemeshConfi
   }
   const float median = median_edge_length(mesh);
   const MeshDistanceIndex surface(mesh);
-  Remesher r{mesh, surface, HalfEdgeMesh(mesh), {}, {}, {}, 0.0f, 0.0f, 0.0f};
+  Remesher r{mesh, surface, HalfEdgeMesh(mesh), {}, {}, {}, 0.0f, 0.0f, 0.0f, {}, {}};
+  {
+    const MeshFeatures features = detect_features(mesh, config.feature_angle_deg);
+    r.kind = features.vertex_kind;
+    for (const auto& e : features.edges) r.sharp.insert(undirected_edge_key(e[0], e[1]));
+    rep.sharp_edges_in = features.edges.size();
+    rep.corners = features.count(MeshFeatures::VertexKind::kCorner);
+  }
   r.tolerance = config.tolerance > 0.0f ? config.tolerance : 0.25f * median;
   r.min_turn_cos = std::cos(config.max_normal_turn_deg * static_cast<float>(M_PI) / 180.0f);
   r.max_border_turn_sin = std::sin(config.max_border_turn_deg * static_cast<float>(M_PI) / 180.0f);
@@ -430,8 +493,10 @@ TriangleMesh adaptive_remesh(const TriangleMesh& mesh, const AdaptiveRemeshConfi
   const Adjacency adj = adjacency(r.mesh);
   tbb::parallel_for(std::size_t{0}, n, [&](std::size_t v) {
     if (!removed(r.mesh, static_cast<std::uint32_t>(v)))
-      r.curvature[v] =
-          fitted_curvature(r.mesh, adj, static_cast<std::uint32_t>(v), config.curvature_rings);
+      r.curvature[v] = r.is_free(static_cast<std::uint32_t>(v))
+                           ? fitted_curvature(r.mesh, adj, static_cast<std::uint32_t>(v),
+                                              config.curvature_rings, r.kind)
+                           : 0.0f;  // along its line; its free neighbours set the lengths
   });
   r.target =
       target_lengths(r.mesh, adj, r.curvature, r.tolerance, min_edge, max_edge, config.gradation);

@@ -9,6 +9,7 @@
 
 #include <cstddef>
 
+#include "nodes/optimize/features.h"
 #include "runtime/triangle_mesh.h"
 
 namespace meshflow {
@@ -32,13 +33,19 @@ struct AdaptiveRemeshConfig {
   float max_normal_turn_deg = 20.0f;
   /// A border vertex is removed only where its two border edges turn by less than this.
   float max_border_turn_deg = 10.0f;
+  /// Sharp edges (detect_features() with this angle, degrees; 180: none) are kept: they are
+  /// split at their midpoints and collapsed only along themselves, never flipped; a vertex on a
+  /// feature line is removed only where the line turns by less than max_border_turn_deg, and
+  /// corners never are; feature vertices do not relax; curvature is fitted on one side of them.
+  float feature_angle_deg = kDefaultFeatureAngleDeg;
 };
 
 struct AdaptiveRemeshReport {
   std::size_t vertices_in = 0, vertices_out = 0;
   std::size_t splits = 0, collapses = 0, flips = 0;
-  float tolerance = 0.0f;                      ///< the one used (metres)
-  float min_target = 0.0f, max_target = 0.0f;  ///< range of the vertices' target lengths
+  std::size_t sharp_edges_in = 0, corners = 0;  ///< the input's feature graph
+  float tolerance = 0.0f;                       ///< the one used (metres)
+  float min_target = 0.0f, max_target = 0.0f;   ///< range of the vertices' target lengths
 };
 
 /// Remeshes `mesh` (a 2-manifold; throws meshflow::Error otherwise, as HalfEdgeMesh does)

@@ -1,0 +1,144 @@
+// Sharp edges through the reducing optimize lists (issue 59): CAD-like closed objects scanned
+// without a sensor (voxel = 1 % of the diagonal, extended marching cubes), then each list with
+// the feature graph (--feature-angle 40, the default) and without (180). Truth: the objects'
+// exact distance, their true edges and corners.
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cstdio>
+#include <limits>
+
+#include "graph/pipeline.h"
+#include "nodes/eval/truth_eval.h"
+#include "nodes/optimize/features.h"
+#include "nodes/synthetic/closed_objects.h"
+
+namespace meshflow {
+namespace {
+
+struct FeatureScore {
+  std::size_t triangles = 0;
+  double mean = 0.0, p95 = 0.0;  ///< area-sampled distance to the true surface, metres
+  /// Points every quarter voxel along the true edges: the share within 0.25 voxel of a sharp
+  /// mesh edge, and the 95th percentile of that distance (voxels).
+  double covered = 0.0, edge_p95 = 0.0;
+  double corner_max = 0.0;  ///< largest distance of a true corner to a mesh vertex, voxels
+};
+
+float segment_distance(const Eigen::Vector3f& p, const Eigen::Vector3f& a,
+                       const Eigen::Vector3f& b) {
+  const Eigen::Vector3f ab = b - a;
+  const float t = std::clamp((p - a).dot(ab) / std::max(ab.squaredNorm(), 1e-30f), 0.0f, 1.0f);
+  return (a + t * ab - p).norm();
+}
+
+FeatureScore score(const TriangleMesh& mesh, const synthetic::ClosedObject& object, float voxel) {
+  FeatureScore s;
+  s.triangles = mesh.triangles.size();
+  const TruthEvaluation e = evaluate_against_truth(
+      mesh, [&object](const Eigen::Vector3f& p) { return object.distance(p); }, 50000);
+  s.mean = e.area.mean;
+  s.p95 = e.area.p95;
+  const MeshFeatures f = detect_features(mesh);
+  std::vector<float> d;
+  for (const auto& [a, b] : object.feature_edges) {
+    const int steps = std::max(1, static_cast<int>((b - a).norm() / (0.25f * voxel)));
+    for (int i = 0; i <= steps; ++i) {
+      const Eigen::Vector3f p = a + (b - a) * (static_cast<float>(i) / static_cast<float>(steps));
+      float best = std::numeric_limits<float>::infinity();
+      for (const auto& edge : f.edges)
+        best = std::min(best, segment_distance(p, mesh.vertices[edge[0]], mesh.vertices[edge[1]]));
+      d.push_back(best / voxel);
+    }
+  }
+  if (!d.empty()) {
+    s.covered =
+        static_cast<double>(std::count_if(d.begin(), d.end(), [](float x) { return x <= 0.25f; })) /
+        static_cast<double>(d.size());
+    std::sort(d.begin(), d.end());
+    s.edge_p95 = d[d.size() * 95 / 100];
+  }
+  for (const Eigen::Vector3f& c : object.corners) {
+    float best = std::numeric_limits<float>::infinity();
+    for (const Eigen::Vector3f& v : mesh.vertices) best = std::min(best, (v - c).norm());
+    s.corner_max = std::max(s.corner_max, static_cast<double>(best / voxel));
+  }
+  return s;
+}
+
+TriangleMesh raw_mesh(const synthetic::ClosedObject& object, float voxel) {
+  ReconstructionConfig c;
+  c.voxelize.voxel_size = voxel;
+  c.optimize.steps.clear();
+  PointCloud cloud = object.sample(100000, 0.0f, 59);
+  cloud.normals.clear();
+  FramePtr f = ReconstructionPipeline(c).reconstruct(std::move(cloud));
+  EXPECT_TRUE(f->ok()) << f->error;
+  return f->mesh;
+}
+
+TriangleMesh optimized(const TriangleMesh& mesh, const std::string& list, float voxel,
+                       float feature_angle) {
+  ReconstructionConfig c;
+  c.voxelize.voxel_size = voxel;
+  c.optimize.steps = parse_optimize_steps(list);
+  c.optimize.feature_angle_deg = feature_angle;
+  return optimize_mesh(mesh, optimize_config_for_voxel(c, voxel));
+}
+
+void print(const char* what, const FeatureScore& s) {
+  std::printf(
+      "[ features ] %-40s %7zu triangles, mean %.2e p95 %.2e m, edges covered %5.1f %% (p95 "
+      "%.3f voxel), corners max %.3f voxel\n",
+      what, s.triangles, s.mean, s.p95, 100.0 * s.covered, s.edge_p95, s.corner_max);
+}
+
+class FeaturePreservation : public ::testing::TestWithParam<const char*> {};
+
+TEST_P(FeaturePreservation, ReducingListsKeepEdgesCornersAndAccuracy) {
+  const synthetic::ClosedObject object = *synthetic::closed_test_object(GetParam());
+  const float voxel = 0.01f * object.diagonal();
+  const TriangleMesh raw = raw_mesh(object, voxel);
+  const FeatureScore before = score(raw, object, voxel);
+  print((object.name + " raw").c_str(), before);
+  for (const char* list : {"clean,holes,remesh", "clean,holes,planes,retriangulate", "decimate"}) {
+    SCOPED_TRACE(list);
+    const FeatureScore with =
+        score(optimized(raw, list, voxel, kDefaultFeatureAngleDeg), object, voxel);
+    const FeatureScore without = score(optimized(raw, list, voxel, 180.0f), object, voxel);
+    print((object.name + " " + list).c_str(), with);
+    print((object.name + " " + list + " (no features)").c_str(), without);
+    const bool planar_list = std::string(list).find("planes") != std::string::npos;
+    const bool cad = object.name != "torus";
+    if (!object.feature_edges.empty()) {
+      // Every true edge still on sharp mesh edges, the corners where the extraction put them
+      // (EMC itself leaves them up to 0.37 voxel off on the L-shape and the chamfered cube).
+      EXPECT_GE(with.covered, std::min(0.95, before.covered));  // plain QEM: 96.6 %
+      EXPECT_LE(with.edge_p95, 0.25);
+      EXPECT_LE(with.corner_max, before.corner_max + 0.05);
+    }
+    if (!planar_list) {
+      // Accuracy within 1.25 x the unreduced mesh, or within 0.002 voxel where EMC's faces
+      // are exact to 1e-7 m (a ratio to nearly zero measures nothing); the planar list's
+      // contour simplification is not held to this (see bench/RESULTS.md).
+      if (cad && object.name != "box-with-hole") {
+        EXPECT_LE(with.mean, std::max(1.25 * before.mean, 0.002 * voxel));
+      }
+      // Features cost no accuracy worth measuring (at most 0.001 voxel of mean error).
+      EXPECT_LE(with.mean, std::max(1.05 * without.mean, without.mean + 0.001 * voxel));
+    }
+    if (cad) {
+      EXPECT_LE(with.triangles, before.triangles / 2);
+    } else {  // smooth: the same reduction as without features
+      EXPECT_LE(with.triangles, without.triangles + without.triangles / 100);
+    }
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(Objects, FeaturePreservation,
+                         ::testing::Values("box", "l-shape", "chamfered-cube", "box-with-hole",
+                                           "torus"));
+
+}  // namespace
+}  // namespace meshflow

@@ -180,7 +180,7 @@ Candidates candidates(std::uint32_t k, const VertexPredictors& p, const Parallel
 
 // The trust subsets the encoder tries when n parallelograms are offered: none, all, each one
 // alone and all but one (every subset up to 3; 10 of the 16 for 4), each once. Trying all 16
-// saved under 0.1 % of the position bytes and cost a third of the encoding time.
+// saved under 0.1 % of the position bytes and cost up to a third of the encoding time.
 struct TrustChoices {
   unsigned count = 0;
   std::array<unsigned, 1u << kMaxParallelograms> mask{};

@@ -178,6 +178,34 @@ Candidates candidates(std::uint32_t k, const VertexPredictors& p, const Parallel
   return c;
 }
 
+// The trust subsets the encoder tries when n parallelograms are offered: none, all, each one
+// alone and all but one (every subset up to 3; 10 of the 16 for 4), each once. Trying all 16
+// saved under 0.1 % of the position bytes and cost up to a third of the encoding time.
+struct TrustChoices {
+  unsigned count = 0;
+  std::array<unsigned, 1u << kMaxParallelograms> mask{};
+};
+
+constexpr TrustChoices trust_choices(unsigned n) {
+  TrustChoices t;
+  if (n == 0) return t;
+  const unsigned all = (1u << n) - 1;
+  const auto add = [&t](unsigned mask) {
+    for (unsigned i = 0; i < t.count; ++i)
+      if (t.mask[i] == mask) return;
+    t.mask[t.count++] = mask;
+  };
+  add(0);
+  add(all);
+  for (unsigned i = 0; i < n; ++i) add(1u << i);
+  for (unsigned i = 0; i < n; ++i) add(all & ~(1u << i));
+  return t;
+}
+
+constexpr std::array<TrustChoices, kMaxParallelograms + 1> kTrustChoices = {
+    trust_choices(0), trust_choices(1), trust_choices(2), trust_choices(3), trust_choices(4)};
+static_assert(kMaxParallelograms == 4, "kTrustChoices lists one entry per offer size");
+
 // The prediction from the parallelograms `trusted` selects (bit i: parallelogram i), their
 // rounded mean, or the fallback when none; sets each axis's residual context.
 std::array<std::int32_t, 3> predict(const Candidates& c, unsigned trusted,
@@ -349,7 +377,9 @@ BodyStats encode_body(const TriangleMesh& mesh, const Quantizer& quantizer, Attr
       unsigned best = 0;
       std::uint32_t best_cost = ~0u;
       std::array<std::size_t, 3> context;
-      for (unsigned trusted = 0; offer.n > 0 && trusted < (1u << offer.n); ++trusted) {
+      const TrustChoices& choices = kTrustChoices[offer.n];
+      for (unsigned choice = 0; choice < choices.count; ++choice) {
+        const unsigned trusted = choices.mask[choice];
         const std::array<std::int32_t, 3> predicted = predict(offer, trusted, context);
         std::uint32_t cost = 0;
         for (unsigned i = 0; i < offer.n; ++i)

@@ -37,10 +37,14 @@ class ParallelogramRing {
   // The vertex opposite the directed edge from -> to in a triangle holding to -> from, or kNone.
   std::uint32_t across(std::uint32_t from, std::uint32_t to) const;
 
-  const std::vector<Triangle>& triangles_;
+  // One triangle at a vertex v: its corners after v, in the triangle's order (v, next, prev).
+  struct RingEdge {
+    std::uint32_t next, prev;
+  };
+
   const std::vector<char>& hole_;
-  std::vector<std::uint32_t> first_;     // per vertex + 1: offsets into incident_
-  std::vector<std::uint32_t> incident_;  // corners (3 triangle + j), grouped by vertex
+  std::vector<std::uint32_t> first_;  // per vertex + 1: offsets into incident_
+  std::vector<RingEdge> incident_;    // grouped by vertex, in triangle order (contiguous scans)
 };
 
 }  // namespace meshflow::compress

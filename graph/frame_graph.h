@@ -35,12 +35,15 @@ class StageNodeBody {
 using StageNode = tbb::flow::function_node<FramePtr, FramePtr>;
 
 /// One unlimited node per stage of stages::frame_stages(triangulate_depth_maps,
-/// config.compression) (frames overlap in every stage), each joined to the next; the caller
-/// connects front() and back(). `config` must outlive the chain.
+/// config.compression, config.close.enabled) (frames overlap in every stage), each joined to the
+/// next; the caller connects front() and back(). `config` must outlive the chain.
 class StageChain {
  public:
   StageChain(tbb::flow::graph& g, bool triangulate_depth_maps, const ReconstructionConfig& config)
-      : StageChain(g, stages::frame_stages(triangulate_depth_maps, config.compression), config) {}
+      : StageChain(
+            g,
+            stages::frame_stages(triangulate_depth_maps, config.compression, config.close.enabled),
+            config) {}
   /// The same over any non-empty list of stages.
   StageChain(tbb::flow::graph& g, const std::vector<stages::NamedStage>& stage_list,
              const ReconstructionConfig& config) {

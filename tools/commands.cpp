@@ -305,7 +305,8 @@ void add_reconstruct_options(CLI::App* cmd) {
                   "Out of core: stream the input into chunks of this edge (metres) on disk and "
                   "mesh them a few at a time, seams welded exactly; 'auto': the edge that lets "
                   "the chunks in flight fit half of --max-memory (default: whole cloud in memory)")
-      ->check(CLI::IsMember({"auto"}) | number_in(0, 1e6));
+      ->check(CLI::IsMember({"auto"}) | number_in(0, 1e6))
+      ->excludes("--close");  // the diffusion needs the whole object's grid
   cmd->add_option("--chunk-overlap", opts->chunking.overlap_voxels,
                   "Voxels of points each chunk sees beyond its own cells")
       ->check(number_in(1, 64))

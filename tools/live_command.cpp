@@ -175,6 +175,7 @@ void add_live_options(CLI::App* cmd) {
   cmd->add_option("--loops", o->loops, "Replay the frames this many times")
       ->check(CLI::Range(1, 100000));
   add_pipeline_options(cmd, o->pipeline);
+  cmd->get_option("--close")->excludes("--triangulate");  // no distance field to fill
   add_serve_options(cmd, o->serve);
   add_console_flags(cmd, false);
   cmd->callback([o] { run_live(*o); });

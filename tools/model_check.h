@@ -7,6 +7,7 @@
 
 #include <cmath>
 #include <cstdlib>
+#include <limits>
 #include <string>
 #include <type_traits>
 
@@ -37,9 +38,14 @@ CLI::Validator model_check(const Spec& spec, T Options::*member) {
           if (!std::isfinite(value)) return options::check_number(value, 0, 0);
           if (!std::is_floating_point_v<T> && value != std::floor(value))
             return "expected a whole number, got '" + text + "'";
+          if constexpr (!std::is_floating_point_v<T>) {
+            // Compared before the cast: converting an out-of-range double is undefined.
+            // 2^digits is exact in a double and one past the type's largest value.
+            const double past_max = std::ldexp(1.0, std::numeric_limits<T>::digits);
+            if (value < static_cast<double>(std::numeric_limits<T>::min()) || value >= past_max)
+              return "expected a whole number in range, got '" + text + "'";
+          }
           probe.*member = static_cast<T>(value);
-          if (static_cast<double>(probe.*member) != value && !std::is_floating_point_v<T>)
-            return "expected a whole number in range, got '" + text + "'";
         }
         return spec.check(probe);
       },

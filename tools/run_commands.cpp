@@ -576,6 +576,10 @@ void add_run_options(CLI::App* cmd) {
   quality->excludes("--triangulate");
   merged->excludes("--triangulate");
   add_pipeline_options(cmd, o->pipeline);
+  // --close fills the distance field of per-frame and merged reconstructions; fused maps and
+  // triangulated depth images have none of their own.
+  fuse->excludes("--close");
+  cmd->get_option("--close")->excludes("--triangulate");
   add_serve_options(cmd, o->serve);
   add_console_flags(cmd, true);
   cmd->callback([o] { run_run(*o); });

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
+#include <cstdint>
 #include <iterator>
 #include <string>
 
@@ -53,7 +54,11 @@ std::vector<std::uint8_t> seen_empty_nodes(const PointCloud& cloud, const Eigen:
     float t0 = 0.0f, t1 = 0.0f;
     if (!clip_segment(o, d, length - stop, box_lo, box_hi, t0, t1)) return;
     const float step = 0.5f * voxel;
-    for (float t = t0; t <= t1; t += step) {
+    // Counted steps: `t += step` stops moving once t / step passes 2^24 (a sensor tens of
+    // kilometres away at centimetre voxels). The clipped segment is at most the box's diagonal.
+    const auto steps = static_cast<std::int64_t>(std::floor((t1 - t0) / step));
+    for (std::int64_t k = 0; k <= steps; ++k) {
+      const float t = t0 + static_cast<float>(k) * step;
       const Eigen::Vector3f q = (o + t * d) / voxel;
       const Eigen::Vector3i c(static_cast<int>(std::lround(q.x())) - lo.x(),
                               static_cast<int>(std::lround(q.y())) - lo.y(),

@@ -20,10 +20,6 @@ struct VertexSupport {
   std::vector<float> observations;  ///< points within the radius (a count, as a float)
 };
 
-/// For each of `queries`: the distance to the nearest finite point of `points` and how many
-/// finite points lie within `radius` metres (> 0; e.g. the reconstruction's voxel size): the
-/// measurements that support the vertex. One kd-tree for both. Parallel over queries,
-/// deterministic. O((Q + P) log P + Q k), k the points found per query.
 /// Statistics of per-vertex observation counts, the low end first (where data is thin).
 struct ObservationStats {
   double mean = 0.0;
@@ -34,6 +30,11 @@ struct ObservationStats {
 /// ObservationStats of `counts`. O(n) (two selections).
 ObservationStats observation_stats(std::vector<float> counts);
 
+/// For each of `queries`: the distance to the nearest finite point of `points` and how many
+/// finite points lie within `radius` metres (> 0; e.g. the reconstruction's voxel size): the
+/// measurements that support the vertex. One kd-tree for both. Parallel over queries,
+/// deterministic. Throws meshflow::Error for a radius that is not positive and finite.
+/// O((Q + P) log P + Q k), k the points found per query.
 VertexSupport vertex_support(const std::vector<Eigen::Vector3f>& queries,
                              const std::vector<Eigen::Vector3f>& points, float radius);
 

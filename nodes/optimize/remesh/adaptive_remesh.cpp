@@ -280,10 +280,6 @@ float border_turn_sin(const HalfEdgeMesh& h, std::uint32_t v) {
   return d1.dot(d2) <= 0.0f ? 1.0f : d1.cross(d2).norm();
 }
 
-/// Whether removing u by collapsing u -> v keeps the mesh within the remesher's limits: every
-/// edge v gains is short enough, every face that moves with u keeps its orientation within
-/// the allowed turn, u lies within the tolerance of the faces that replace its own, and a
-/// border vertex only slides along a nearly straight border. The topology is HalfEdgeMesh's.
 /// The other end of u's second sharp edge, for u on a feature line and (u, v) one of its
 /// sharp edges; kNone if there is none.
 std::uint32_t line_neighbour(const Remesher& r, std::uint32_t u, std::uint32_t v) {
@@ -307,6 +303,11 @@ bool keeps_features(const Remesher& r, std::uint32_t u, std::uint32_t v) {
   return d1.dot(d2) > 0.0f && d1.cross(d2).norm() <= r.max_border_turn_sin;
 }
 
+/// Whether removing u by collapsing u -> v keeps the mesh within the remesher's limits: every
+/// edge v gains is short enough, every face that moves with u keeps its orientation within
+/// the allowed turn, u lies within the tolerance of the faces that replace its own, and a
+/// border vertex only slides along a nearly straight border; keeps_features() holds. The topology
+/// is HalfEdgeMesh's.
 bool collapse_allowed(const Remesher& r, std::uint32_t e) {
   const HalfEdgeMesh& h = r.mesh;
   const std::uint32_t u = h.from(e), v = h.to(e);

@@ -26,6 +26,7 @@ struct DiffusionLattice {
                static_cast<std::size_t>(size.x()) +
            static_cast<std::size_t>(x);
   }
+  /// Number of nodes: size.x() * size.y() * size.z().
   std::size_t node_count() const {
     return static_cast<std::size_t>(size.x()) * static_cast<std::size_t>(size.y()) *
            static_cast<std::size_t>(size.z());

@@ -18,6 +18,10 @@
 #include "runtime/point_cloud.h"
 #include "runtime/triangle_mesh.h"
 
+namespace meshflow {
+struct LiveResult;  // graph/live_pipeline.h
+}  // namespace meshflow
+
 namespace meshflow::python {
 
 namespace py = pybind11;
@@ -136,5 +140,28 @@ void bind_compress(py::module_& m);
 
 /// Binds serve and ServedView, when built with the serving layer (python/serve.cpp).
 void bind_serve(py::module_& m);
+
+/// A Pipeline's viewer (meshflow.Pipeline(serve=...)): each finished frame's stats and newest
+/// mesh go to the browsers as `meshflow live --serve` sends them; never waits on the network.
+class LiveView {
+ public:
+  virtual ~LiveView() = default;
+  /// A finished frame, from a pipeline thread (one call at a time, no GIL needed); copies the
+  /// mesh into the encoder's one-mesh slot. O(mesh).
+  virtual void frame(const LiveResult& result) = 0;
+  /// Publishes the newest mesh (viewers or not) and the end of the run, then stops serving
+  /// (closes every connection). Blocks for that one encoding; idempotent.
+  virtual void close() = 0;
+  /// The page's URL, http://HOST:PORT/.
+  virtual std::string url() const = 0;
+};
+
+/// Starts a Pipeline's viewer: `address` an int port (on 127.0.0.1; 0 = any free port) or a
+/// "[HOST:]PORT" string as the CLI's --serve takes it, `serve_rate` Mbit/s per viewer (0: no
+/// cap), `max_viewers` browsers at once. TypeError / ValueError with the option model's
+/// messages; meshflow.Error for a port in use, or when the module was built without the
+/// serving layer (python/serve.cpp, python/serve_off.cpp).
+std::unique_ptr<LiveView> start_live_view(const py::object& address, const py::object& serve_rate,
+                                          const py::object& max_viewers);
 
 }  // namespace meshflow::python

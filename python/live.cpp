@@ -39,10 +39,13 @@ class Pipeline {
  public:
   /// `wait_for_room`: the 'offline' policy (a kQueue pipeline whose push() waits instead of
   /// refusing a frame).
-  Pipeline(py::function callback, const LiveConfig& config, bool wait_for_room)
+  /// `view`: the browsers' viewer (Pipeline(serve=...)), or nullptr.
+  Pipeline(py::function callback, const LiveConfig& config, bool wait_for_room,
+           std::unique_ptr<LiveView> view)
       : callback_(std::move(callback)),
         wait_for_room_(wait_for_room),
-        max_waiting_(config.max_waiting) {
+        max_waiting_(config.max_waiting),
+        view_(std::move(view)) {
     live_ = std::make_unique<LivePipeline>(config, [this](LiveResult& r) { deliver(r); });
   }
   ~Pipeline() { close(); }
@@ -74,12 +77,17 @@ class Pipeline {
     return live_->stats();
   }
 
-  /// Stops the pipeline (waiting frames are discarded; flush() first to keep them).
+  /// Stops the pipeline (waiting frames are discarded; flush() first to keep them), then the
+  /// viewer: the newest mesh and the end go out, and the server stops.
   void close() {
     if (!live_) return;
     py::gil_scoped_release no_gil;
     live_.reset();
+    if (view_) view_->close();
   }
+
+  /// The viewer page's URL, or None without serve=.
+  py::object url() const { return view_ ? py::cast(view_->url()) : py::none(); }
 
  private:
   LivePipeline& open() {
@@ -141,6 +149,7 @@ class Pipeline {
   // On a pipeline thread: takes the GIL for the Python call only. An exception in the callback
   // is printed as Python prints one from a thread, and counted (stats()["callback_exceptions"]).
   void deliver(LiveResult& r) {
+    if (view_) view_->frame(r);  // copies the mesh; before the GIL, which it does not need
     py::gil_scoped_acquire gil;
     Result result;
     result.seq = r.seq;
@@ -169,6 +178,7 @@ class Pipeline {
   bool wait_for_room_ = false;
   std::size_t max_waiting_ = 1;
   static thread_local bool delivering_;  ///< this thread is in the Python callback
+  std::unique_ptr<LiveView> view_;       ///< outlives live_ (whose threads call it)
   std::unique_ptr<LivePipeline> live_;
 };
 
@@ -222,10 +232,15 @@ a meshflow.FrameDroppedWarning when they do. 'offline' (files, a script's loop) 
 refuses: push() waits until the queue has room. threads: the
 pipeline's own threads (0 = every core); triangulate: per-frame depth-map meshes (method 'naive'
 or 'rqt', decimate in [0, 1)) instead of the volumetric stages, whose settings are the other
-keywords, as reconstruct()'s.)")
+keywords, as reconstruct()'s. serve: show the meshes in browsers while they are made, as
+`meshflow live --serve` does: a port (on 127.0.0.1; 0 = any free port) or '[HOST:]PORT'; url
+gives the page, serve_rate (Mbit/s per viewer, 0: no cap) and max_viewers as meshflow.serve();
+the viewer never slows the pipeline, and close() publishes the last mesh and stops serving.)")
       .def(py::init([](py::function callback, const std::string& policy, int threads,
                        std::size_t frames_in_flight, std::size_t max_waiting, bool triangulate,
-                       const std::string& method, float decimate, const py::kwargs& options) {
+                       const std::string& method, float decimate, const py::object& serve,
+                       const py::object& serve_rate, const py::object& max_viewers,
+                       const py::kwargs& options) {
              LiveConfig c;
              if (policy == "realtime") {
                c.policy = LivePolicy::kRealtime;
@@ -248,12 +263,16 @@ keywords, as reconstruct()'s.)")
              c.frames_in_flight = frames_in_flight;
              c.max_waiting = max_waiting;
              c.triangulate_depth_maps = triangulate;
-             return std::make_unique<Pipeline>(std::move(callback), c, policy == "offline");
+             std::unique_ptr<LiveView> view =
+                 serve.is_none() ? nullptr : start_live_view(serve, serve_rate, max_viewers);
+             return std::make_unique<Pipeline>(std::move(callback), c, policy == "offline",
+                                               std::move(view));
            }),
            py::arg("callback"), py::kw_only(), py::arg("policy") = "realtime",
            py::arg("threads") = 0, py::arg("frames_in_flight") = LiveConfig{}.frames_in_flight,
            py::arg("max_waiting") = LiveConfig{}.max_waiting, py::arg("triangulate") = false,
-           py::arg("method") = "naive", py::arg("decimate") = 0.0f)
+           py::arg("method") = "naive", py::arg("decimate") = 0.0f, py::arg("serve") = py::none(),
+           py::arg("serve_rate") = 0.0, py::arg("max_viewers") = 8)
       .def("push", &Pipeline::push_cloud, py::arg("cloud"), py::arg("timestamp") = 0.0,
            "Hands over a Cloud or (n, 3) points; returns (seq, 'accepted' | 'dropped_oldest' | "
            "'rejected').")
@@ -271,6 +290,7 @@ keywords, as reconstruct()'s.)")
       .def("flush", &Pipeline::flush,
            "Waits until every accepted, undropped frame has reached the callback.")
       .def("stats", [](const Pipeline& p) { return stats_dict(p.stats()); })
+      .def_property_readonly("url", &Pipeline::url, "The viewer page's URL (serve=), or None")
       .def("close", &Pipeline::close, "Stops the pipeline; waiting frames are discarded.")
       .def("__enter__", [](py::object self) { return self; })
       .def("__exit__", [](Pipeline& p, const py::args&) {

@@ -24,9 +24,9 @@
 #include "nodes/io/mesh_writers.h"
 #include "nodes/io/parse_util.h"
 #include "nodes/io/read_point_cloud.h"
+#include "options/eval_report.h"
 #include "runtime/error.h"
 #include "runtime/threads.h"
-#include "tools/eval_report.h"
 
 namespace meshflow::python {
 
@@ -164,7 +164,7 @@ TriangleMesh reference_mesh(const py::object& reference, std::string& name) {
   }
   if (py::isinstance<py::str>(reference)) {
     name = reference.cast<std::string>();
-    return cli::read_reference(name);
+    return options::read_reference(name);
   }
   throw py::value_error("reference: expected a Mesh, a Cloud or a file path");
 }
@@ -371,8 +371,8 @@ size as the radius. Exact (kd-tree); parallel, the GIL released. meshflow.Error 
         std::string json;
         {
           py::gil_scoped_release no_gil;
-          json = cli::reference_evaluation_json(
-                     cli::evaluate_reference(*mesh.data, ref, wall_radius), "mesh", name)
+          json = options::reference_evaluation_json(
+                     options::evaluate_reference(*mesh.data, ref, wall_radius), "mesh", name)
                      .dump();
         }
         return py::module_::import("json").attr("loads")(json);

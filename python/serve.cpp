@@ -4,14 +4,17 @@
 
 #include <pybind11/stl.h>
 
+#include <climits>
 #include <memory>
 #include <string>
 #include <variant>
 
 #include "bindings.h"
+#include "graph/live_pipeline.h"
 #include "options/serve_options.h"
 #include "runtime/error.h"
-#include "tools/viewer_server.h"
+#include "serve/run_publisher.h"
+#include "serve/viewer_server.h"
 
 namespace meshflow::python {
 namespace {
@@ -53,6 +56,16 @@ class ServedView {
   int port_ = 0;
 };
 
+// A Python int as a long long, saturated (10**30 becomes LLONG_MAX) so that the model's range
+// check names it rather than pybind11 failing the conversion.
+long long saturated_int(const py::handle& value) {
+  int overflow = 0;
+  const long long v = PyLong_AsLongLongAndOverflow(value.ptr(), &overflow);
+  if (overflow != 0) return overflow > 0 ? LLONG_MAX : LLONG_MIN;
+  if (v == -1 && PyErr_Occurred()) throw py::error_already_set();
+  return v;
+}
+
 // Sets the serving option named `name` (CLI spelling) in `o` from a Python value and runs the
 // model's check: TypeError for a value of another type, ValueError with the model's message.
 void set_serve_option(options::ServeOptions& o, const std::string& name, const py::handle& value,
@@ -70,7 +83,7 @@ void set_serve_option(options::ServeOptions& o, const std::string& name, const p
             throw py::type_error(python_name + ": expected a number, got " +
                                  std::string(py::repr(value)));
           if constexpr (std::is_unsigned_v<T>) {
-            const auto wide = value.cast<long long>();
+            const long long wide = saturated_int(value);
             if (wide < 0)
               throw py::value_error(python_name + ": " +
                                     options::check_number(static_cast<double>(wide), 0, 0));
@@ -87,7 +100,69 @@ void set_serve_option(options::ServeOptions& o, const std::string& name, const p
   throw std::logic_error("serve option '" + name + "' is not in the option model");
 }
 
+// Serving options from Python's spelling: the address as the CLI's --serve takes it, checked by
+// the model's parser (ValueError naming `address_name`), then the rate and the viewer limit.
+options::ServeOptions python_serve_options(const std::string& address,
+                                           const std::string& address_name,
+                                           const py::object& serve_rate,
+                                           const py::object& max_viewers) {
+  options::ServeOptions o;
+  o.address = address;
+  try {
+    options::parse_serve_address(o.address);
+  } catch (const Error& e) {
+    throw py::value_error(address_name + ": " + e.problem());
+  }
+  set_serve_option(o, "serve-rate", serve_rate, "serve_rate");
+  set_serve_option(o, "max-viewers", max_viewers, "max_viewers");
+  return o;
+}
+
+// An int port as "PORT" (saturated: the parser names a port out of range).
+std::string port_text(const py::object& port, const char* name) {
+  if (!py::isinstance<py::int_>(port) || py::isinstance<py::bool_>(port))
+    throw py::type_error(std::string(name) + ": expected an int, got " +
+                         std::string(py::repr(port)));
+  return std::to_string(saturated_int(port));
+}
+
+// A Pipeline's viewer: the server with the page and the run's publisher (serve/run_publisher.h).
+class ServedLiveView final : public LiveView {
+ public:
+  explicit ServedLiveView(const options::ServeOptions& o)
+      : server_(serve::start_viewer_server(o)),
+        publisher_(std::make_unique<serve::RunPublisher>(*server_, "meshflow.Pipeline")) {
+    url_ = server_->url();
+  }
+  ~ServedLiveView() override { close(); }
+
+  void frame(const LiveResult& result) override {
+    if (publisher_) publisher_->frame(result);
+  }
+  void close() override {
+    if (!publisher_) return;
+    publisher_->finish();
+    publisher_.reset();
+    server_.reset();
+  }
+  std::string url() const override { return url_; }
+
+ private:
+  std::unique_ptr<serve::Server> server_;
+  std::unique_ptr<serve::RunPublisher> publisher_;
+  std::string url_;
+};
+
 }  // namespace
+
+std::unique_ptr<LiveView> start_live_view(const py::object& address, const py::object& serve_rate,
+                                          const py::object& max_viewers) {
+  const std::string text =
+      py::isinstance<py::str>(address) ? address.cast<std::string>() : port_text(address, "serve");
+  const options::ServeOptions o = python_serve_options(text, "serve", serve_rate, max_viewers);
+  py::gil_scoped_release no_gil;
+  return std::make_unique<ServedLiveView>(o);
+}
 
 void bind_serve(py::module_& m) {
   py::class_<ServedView>(m, "ServedView",
@@ -108,41 +183,33 @@ void bind_serve(py::module_& m) {
       [](const py::object& mesh_or_path, const py::object& port, const std::string& host,
          const py::object& serve_rate, const py::object& max_viewers) {
         // The address as the CLI's --serve takes it, checked by the model's parser.
-        if (!py::isinstance<py::int_>(port) || py::isinstance<py::bool_>(port))
-          throw py::type_error("port: expected an int, got " + std::string(py::repr(port)));
-        options::ServeOptions o;
-        const std::string port_text = std::to_string(port.cast<long long>());
-        o.address = host.find(':') != std::string::npos ? "[" + host + "]:" + port_text
-                                                        : host + ":" + port_text;
-        try {
-          options::parse_serve_address(o.address);
-        } catch (const Error& e) {
-          throw py::value_error("host, port: " + e.problem());
-        }
-        set_serve_option(o, "serve-rate", serve_rate, "serve_rate");
-        set_serve_option(o, "max-viewers", max_viewers, "max_viewers");
+        const std::string port_part = port_text(port, "port");
+        const options::ServeOptions o =
+            python_serve_options(host.find(':') != std::string::npos ? "[" + host + "]:" + port_part
+                                                                     : host + ":" + port_part,
+                                 "host, port", serve_rate, max_viewers);
 
-        cli::ViewImage image;
+        serve::ViewImage image;
         std::string name;
         if (py::isinstance<Mesh>(mesh_or_path)) {
           const Mesh& mesh = mesh_or_path.cast<const Mesh&>();
           name = "mesh";
-          compress::CompressConfig config = cli::view_compress_config();
+          compress::CompressConfig config = serve::view_compress_config();
           config.origin_offset = mesh.origin;
           py::gil_scoped_release no_gil;
-          image = cli::view_image_of_mesh(*mesh.data, config, name);
+          image = serve::view_image_of_mesh(*mesh.data, config, name);
         } else {
           name = py::str(py::module_::import("os").attr("fspath")(mesh_or_path));
           py::gil_scoped_release no_gil;
-          image = cli::view_image_of_file(name, cli::view_compress_config());
+          image = serve::view_image_of_file(name, serve::view_compress_config());
         }
         const auto mfc = std::make_shared<const std::string>(image.mfc.begin(), image.mfc.end());
         std::unique_ptr<serve::Server> server;
         {
           py::gil_scoped_release no_gil;
-          server = cli::start_viewer_server(o, 64 * 1024,
-                                            {{"/mesh.mfc", {"application/octet-stream", mfc}}});
-          cli::publish_view(*server, image, "meshflow.serve", name);
+          server = serve::start_viewer_server(o, 64 * 1024,
+                                              {{"/mesh.mfc", {"application/octet-stream", mfc}}});
+          serve::publish_view(*server, image, "meshflow.serve", name);
         }
         return std::make_unique<ServedView>(std::move(server));
       },

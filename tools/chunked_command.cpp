@@ -7,11 +7,11 @@
 
 #include "graph/chunked_reconstruction.h"
 #include "nodes/io/mesh_writers.h"
+#include "options/json_report.h"
 #include "runtime/error.h"
 #include "runtime/tracing.h"
 #include "tools/commands.h"
 #include "tools/console.h"
-#include "tools/json_report.h"
 #include "tools/progress.h"
 
 namespace meshflow::cli {
@@ -59,8 +59,8 @@ void run_chunked_reconstruct(const std::string& input, const std::string& column
           {"mesh", r.mesh_s},
           {"stitch", r.stitch_s},
           {"optimize", r.optimize_s}}},
-        {"optimize", optimize_json(r.optimize)},
-        {"stages", stages_json(summarize_stages(r.timings))}};
+        {"optimize", options::optimize_json(r.optimize)},
+        {"stages", options::stages_json(summarize_stages(r.timings))}};
     return print_json(doc);
   }
   report("input      %s: %llu points (%llu NaN/Inf dropped)\n", input.c_str(),

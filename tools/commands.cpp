@@ -15,13 +15,13 @@
 #include "nodes/io/read_point_cloud.h"
 #include "nodes/io/textured_obj.h"
 #include "nodes/texture/region_textures.h"
+#include "options/json_report.h"
 #include "runtime/error.h"
 #include "runtime/half_edge_mesh.h"
 #include "runtime/threads.h"
 #include "tools/cli_checks.h"
 #include "tools/commands.h"
 #include "tools/console.h"
-#include "tools/json_report.h"
 #include "tools/pipeline_options.h"
 #include "tools/progress.h"
 #include "tools/report.h"
@@ -171,13 +171,13 @@ void run_reconstruct(const ReconstructOptions& o) {
                  o.input.c_str(), frame->filter_counts.non_finite);
   }
   if (console().json) {
-    nlohmann::json doc = frame_json(*frame, wall, limit.threads());
+    nlohmann::json doc = options::frame_json(*frame, wall, limit.threads());
     doc["output"] = o.output;
     if (o.texture) doc["textures"] = textures;
     if (compressed) doc["compressed_bytes"] = frame->compressed.size();
     if (o.quality) {
-      doc["quality"] = distance_json(distance_stats(support.distances));
-      doc["observations"] = observations_json(support.observations);
+      doc["quality"] = options::distance_json(distance_stats(support.distances));
+      doc["observations"] = options::observations_json(support.observations);
     }
     return print_json(doc);
   }

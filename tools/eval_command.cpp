@@ -11,12 +11,12 @@
 #include "nodes/io/mesh_readers.h"
 #include "nodes/io/read_point_cloud.h"
 #include "nodes/synthetic/closed_objects.h"
+#include "options/eval_report.h"
+#include "options/json_report.h"
 #include "runtime/error.h"
 #include "tools/cli_checks.h"
 #include "tools/commands.h"
 #include "tools/console.h"
-#include "tools/eval_report.h"
-#include "tools/json_report.h"
 
 namespace meshflow::cli {
 namespace {
@@ -35,7 +35,7 @@ void print_topology(const MeshTopology& t) {
       t.edges.closed() && t.edges.inconsistent_edges == 0 ? " (watertight)" : "");
 }
 
-void print_double_walls(const DoubleWalls& w) {
+void print_double_walls(const options::DoubleWalls& w) {
   report("double walls       %.2f %% of the area within %.4g m of another sheet\n", 100.0 * w.share,
          w.radius);
 }
@@ -43,26 +43,26 @@ void print_double_walls(const DoubleWalls& w) {
 // Distances to the exact surface of a built-in object, also relative to its diagonal.
 void evaluate_object(const std::string& path, const TriangleMesh& mesh,
                      const synthetic::ClosedObject& object, float wall_radius) {
-  const DoubleWalls walls = double_walls(mesh, wall_radius);
+  const options::DoubleWalls walls = options::double_walls(mesh, wall_radius);
   const TruthEvaluation e = evaluate_against_truth(
       mesh, [&object](const Eigen::Vector3f& p) { return object.distance(p); });
   const double diagonal = object.diagonal();
-  const char* orientation = closed_orientation(e.topology, signed_volume(mesh));
+  const char* orientation = options::closed_orientation(e.topology, signed_volume(mesh));
   if (console().json) {
     nlohmann::json doc = {{"mesh", path},
                           {"vertices", mesh.vertices.size()},
                           {"triangles", mesh.triangles.size()},
                           {"reference", {{"object", object.name}, {"diagonal", diagonal}}},
-                          {"vertices_to_truth", distance_json(e.vertices)},
-                          {"surface_to_truth", distance_json(e.area)},
+                          {"vertices_to_truth", options::distance_json(e.vertices)},
+                          {"surface_to_truth", options::distance_json(e.area)},
                           {"relative_to_diagonal",
                            {{"surface_mean", e.area.mean / diagonal},
                             {"surface_p95", e.area.p95 / diagonal},
                             {"vertices_mean", e.vertices.mean / diagonal},
                             {"vertices_p95", e.vertices.p95 / diagonal}}},
-                          {"topology", topology_json(e.topology)}};
+                          {"topology", options::topology_json(e.topology)}};
     doc["orientation"] = orientation != nullptr ? nlohmann::json(orientation) : nlohmann::json();
-    doc["double_walls"] = double_walls_json(walls);
+    doc["double_walls"] = options::double_walls_json(walls);
     return print_json(doc);
   }
   report("mesh               %s: %zu vertices, %zu triangles\n", path.c_str(), mesh.vertices.size(),
@@ -81,9 +81,10 @@ void evaluate_object(const std::string& path, const TriangleMesh& mesh,
 
 void print_reference_evaluation(const std::string& mesh_path, const TriangleMesh& mesh,
                                 const std::string& reference_path, float wall_radius) {
-  const TriangleMesh reference = read_reference(reference_path);
-  const ReferenceEvaluation r = evaluate_reference(mesh, reference, wall_radius);
-  if (console().json) return print_json(reference_evaluation_json(r, mesh_path, reference_path));
+  const TriangleMesh reference = options::read_reference(reference_path);
+  const options::ReferenceEvaluation r = options::evaluate_reference(mesh, reference, wall_radius);
+  if (console().json)
+    return print_json(options::reference_evaluation_json(r, mesh_path, reference_path));
   const SurfaceEvaluation& e = r.surface;
   report("mesh               %s: %zu vertices, %zu triangles\n", mesh_path.c_str(), e.vertices,
          e.triangles);

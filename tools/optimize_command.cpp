@@ -6,12 +6,12 @@
 #include "graph/frame.h"
 #include "nodes/io/mesh_readers.h"
 #include "nodes/io/mesh_writers.h"
+#include "options/json_report.h"
 #include "runtime/error.h"
 #include "runtime/threads.h"
 #include "tools/cli_checks.h"
 #include "tools/commands.h"
 #include "tools/console.h"
-#include "tools/json_report.h"
 #include "tools/pipeline_options.h"
 #include "tools/progress.h"
 
@@ -48,7 +48,7 @@ void run_optimize(const OptimizeOptions& o) {
                        {"triangles_in", mesh.triangles.size()},
                        {"vertices", out.vertices.size()},
                        {"triangles", out.triangles.size()},
-                       {"optimize", optimize_json(steps)},
+                       {"optimize", options::optimize_json(steps)},
                        {"time_ms", 1e3 * wall}});
   }
   report("input      %s: %zu vertices, %zu triangles\n", o.input.c_str(), mesh.vertices.size(),

@@ -19,13 +19,13 @@
 #include "nodes/io/byte_buffer.h"
 #include "nodes/io/mesh_writers.h"
 #include "nodes/io/parse_util.h"
+#include "options/json_report.h"
 #include "runtime/error.h"
 #include "runtime/threads.h"
 #include "tools/cli_checks.h"
 #include "tools/commands.h"
 #include "tools/console.h"
 #include "tools/fusion_breakdown.h"
-#include "tools/json_report.h"
 #include "tools/pipeline_options.h"
 #include "tools/progress.h"
 #include "tools/report.h"
@@ -115,7 +115,7 @@ void print_run_summary(const io::Sequence& seq, const SequenceRunStats& stats, i
                        std::size_t in_flight, const FailedFrames& failed,
                        const nlohmann::json& extra = {}) {
   if (console().json) {
-    nlohmann::json doc = run_json(seq.description(), stats, threads, in_flight);
+    nlohmann::json doc = options::run_json(seq.description(), stats, threads, in_flight);
     doc["failed_frames"] = failed.json();
     if (extra.is_object()) doc.update(extra);
     return print_json(doc);
@@ -308,7 +308,7 @@ void run_fusion(const RunOptions& o) {
       {"completeness", breakdown.json(extraction.cells)},
       {"files_written", written},
       {"output", o.output_dir}};
-  if (o.quality) summary["observations"] = observations_json(observations);
+  if (o.quality) summary["observations"] = options::observations_json(observations);
   print_run_summary(*sequence, stats, limit.threads(), o.sequence.in_flight, failed, summary);
   breakdown.print(extraction.cells);
   report("map        %zu blocks of 8^3 voxels at %.4f m, %.1f MB%s%s\n", map.block_count(),
@@ -387,7 +387,7 @@ void run_merged(const RunOptions& o) {
   write_run_mesh(o, "merged", frame->mesh, frame->origin, &frame->compressed);
   const double wall = monotonic_seconds() - t0;
   print_run_summary(*sequence, stats, limit.threads(), o.sequence.in_flight, failed,
-                    {{"merged", frame_json(*frame, wall, limit.threads())},
+                    {{"merged", options::frame_json(*frame, wall, limit.threads())},
                      {"files_written", 1},
                      {"output", output}});
   report("merged     %zu points of %zu frames -> %zu vertices, %zu triangles in %.1f ms\n",

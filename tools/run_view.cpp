@@ -1,5 +1,5 @@
 // The viewer of a run (tools/run_view.h) with the serving layer, and serve_until_stopped()
-// (tools/viewer_server.h).
+// (tools/serve_until_stopped.h).
 
 #include <atomic>
 #include <chrono>
@@ -13,8 +13,9 @@
 #include "runtime/tracing.h"
 #include "serve/map_publisher.h"
 #include "serve/run_publisher.h"
+#include "serve/viewer_server.h"
 #include "tools/run_view.h"
-#include "tools/viewer_server.h"
+#include "tools/serve_until_stopped.h"
 
 namespace meshflow::cli {
 namespace {
@@ -26,7 +27,9 @@ extern "C" void on_stop_signal(int) { g_stop = true; }
 class ServedRunView final : public RunView {
  public:
   ServedRunView(const ServeOptions& options, const std::string& source)
-      : options_(options), server_(start_viewer_server(options)), publisher_(*server_, source) {
+      : options_(options),
+        server_(serve::start_viewer_server(options)),
+        publisher_(*server_, source) {
     std::fprintf(stderr, "url %s\n", server_->url().c_str());
     std::fflush(stderr);
   }

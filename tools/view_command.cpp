@@ -10,10 +10,11 @@
 
 #include "nodes/compress/progressive_mesh.h"
 #include "serve/server.h"
+#include "serve/viewer_server.h"
 #include "tools/commands.h"
 #include "tools/console.h"
 #include "tools/run_view.h"
-#include "tools/viewer_server.h"
+#include "tools/serve_until_stopped.h"
 
 namespace meshflow::cli {
 namespace {
@@ -21,21 +22,21 @@ namespace {
 struct ViewOptions {
   std::string input;
   ServeOptions serve;
-  float base_ratio = view_compress_config().base_ratio;
-  std::uint32_t splits_per_packet = view_compress_config().splits_per_packet;
+  float base_ratio = serve::view_compress_config().base_ratio;
+  std::uint32_t splits_per_packet = serve::view_compress_config().splits_per_packet;
   std::size_t chunk_kb = 64;
 };
 
 void run_view(const ViewOptions& o) {
-  compress::CompressConfig config = view_compress_config();
+  compress::CompressConfig config = serve::view_compress_config();
   config.base_ratio = o.base_ratio;
   config.splits_per_packet = o.splits_per_packet;
-  const ViewImage image = view_image_of_file(o.input, config);
+  const serve::ViewImage image = serve::view_image_of_file(o.input, config);
   const auto mfc = std::make_shared<const std::string>(image.mfc.begin(), image.mfc.end());
-  const std::unique_ptr<serve::Server> served = start_viewer_server(
+  const std::unique_ptr<serve::Server> served = serve::start_viewer_server(
       o.serve, o.chunk_kb * 1024, {{"/mesh.mfc", {"application/octet-stream", mfc}}});
   serve::Server& server = *served;
-  publish_view(server, image, "meshflow view", o.input);
+  serve::publish_view(server, image, "meshflow view", o.input);
 
   std::printf("meshflow view: %s, %llu vertices, %llu triangles, %zu bytes progressive .mfc",
               o.input.c_str(), static_cast<unsigned long long>(image.info.vertices),

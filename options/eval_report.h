@@ -9,7 +9,7 @@
 #include "nodes/eval/surface_eval.h"
 #include "runtime/triangle_mesh.h"
 
-namespace meshflow::cli {
+namespace meshflow::options {
 
 /// Double walls within `radius` metres (the radius used: the median edge length when 0 was
 /// asked for) and the share of the mesh's area (0..1) they cover.
@@ -54,4 +54,4 @@ ReferenceEvaluation evaluate_reference(const TriangleMesh& mesh, const TriangleM
 nlohmann::json reference_evaluation_json(const ReferenceEvaluation& r, const std::string& mesh_name,
                                          const std::string& reference_name);
 
-}  // namespace meshflow::cli
+}  // namespace meshflow::options

@@ -1,4 +1,4 @@
-#include "tools/json_report.h"
+#include "options/json_report.h"
 
 #include <cmath>
 
@@ -6,7 +6,7 @@
 #include "nodes/extract/extract_surface.h"
 #include "nodes/normals/normals.h"
 
-namespace meshflow::cli {
+namespace meshflow::options {
 
 nlohmann::json distance_json(const DistanceStats& s) {
   return {{"mean", s.mean}, {"rms", s.rms}, {"median", s.median},
@@ -139,4 +139,4 @@ nlohmann::json run_json(const std::string& sequence, const SequenceRunStats& sta
           {"stages", stages_json(stats.stages.summaries())}};
 }
 
-}  // namespace meshflow::cli
+}  // namespace meshflow::options

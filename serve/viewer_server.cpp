@@ -1,8 +1,9 @@
-// The viewer's server (tools/viewer_server.h): the page's files, the server on the serving
+// The viewer's server (serve/viewer_server.h): the page's files, the server on the serving
 // options, and a finished mesh published as `meshflow view` shows it.
 
-#include "tools/viewer_server.h"
+#include "serve/viewer_server.h"
 
+#include <cstdlib>
 #include <fstream>
 #include <iterator>
 #include <nlohmann/json.hpp>
@@ -18,18 +19,20 @@
 #ifndef MESHFLOW_WEB_DIR
 #define MESHFLOW_WEB_DIR ""
 #endif
+#ifndef MESHFLOW_WEB_INSTALL_DIR
+#define MESHFLOW_WEB_INSTALL_DIR ""
+#endif
 #ifndef MESHFLOW_THREE_DIR
 #define MESHFLOW_THREE_DIR "/usr/share/javascript/three"
 #endif
 
-namespace meshflow::cli {
+namespace meshflow::serve {
 namespace {
 
-/// The page's files: the fixed set the server answers, read once at start from the folders
-/// fixed when meshflow was configured (the build's web/ output and Debian's libjs-three). A
-/// request path is only ever a key of this map.
-std::map<std::string, serve::StaticResource> viewer_page_resources() {
-  const std::string web = MESHFLOW_WEB_DIR, three = MESHFLOW_THREE_DIR;
+/// The page's files: the fixed set the server answers, read once at start from
+/// viewer_page_folder() and Debian's libjs-three. A request path is only ever a key of this map.
+std::map<std::string, StaticResource> viewer_page_resources() {
+  const std::string web = viewer_page_folder(), three = MESHFLOW_THREE_DIR;
   struct File {
     const char* path;
     std::string file;
@@ -45,13 +48,14 @@ std::map<std::string, serve::StaticResource> viewer_page_resources() {
       {"/three/examples/jsm/controls/OrbitControls.js",
        three + "/examples/jsm/controls/OrbitControls.js", "text/javascript; charset=utf-8"},
   };
-  std::map<std::string, serve::StaticResource> resources;
+  std::map<std::string, StaticResource> resources;
   for (const File& f : files) {
     std::ifstream in(f.file, std::ios::binary);
     if (!in)
       throw Error(f.file, "viewer page",
-                  "a readable file (the page is built into " + web +
-                      "; three.js comes from Debian's libjs-three)");
+                  "a readable file (the page's folder is $MESHFLOW_WEB_DIR when set, else the "
+                  "build's " MESHFLOW_WEB_DIR " or the installed " MESHFLOW_WEB_INSTALL_DIR
+                  "; three.js comes from Debian's libjs-three)");
     resources[f.path] = {f.type,
                          std::make_shared<const std::string>(std::istreambuf_iterator<char>(in),
                                                              std::istreambuf_iterator<char>())};
@@ -59,14 +63,24 @@ std::map<std::string, serve::StaticResource> viewer_page_resources() {
   return resources;
 }
 
+bool has_viewer_page(const std::string& folder) {
+  return !folder.empty() && std::ifstream(folder + "/index.html").good();
+}
+
 }  // namespace
 
-std::unique_ptr<serve::Server> start_viewer_server(
-    const options::ServeOptions& o, std::size_t chunk_bytes,
-    std::map<std::string, serve::StaticResource> extra) {
+std::string viewer_page_folder() {
+  if (const char* env = std::getenv("MESHFLOW_WEB_DIR"); env != nullptr && *env != '\0') return env;
+  if (has_viewer_page(MESHFLOW_WEB_DIR)) return MESHFLOW_WEB_DIR;
+  if (has_viewer_page(MESHFLOW_WEB_INSTALL_DIR)) return MESHFLOW_WEB_INSTALL_DIR;
+  return MESHFLOW_WEB_DIR;  // named in the error when nothing is found
+}
+
+std::unique_ptr<Server> start_viewer_server(const options::ServeOptions& o, std::size_t chunk_bytes,
+                                            std::map<std::string, StaticResource> extra) {
   options::validate(o);
   const options::ServeAddress address = options::parse_serve_address(o.address);
-  serve::ServerConfig config;
+  ServerConfig config;
   config.host = address.host;
   config.port = address.port;
   config.max_clients = o.max_viewers;
@@ -74,7 +88,7 @@ std::unique_ptr<serve::Server> start_viewer_server(
   config.chunk_bytes = chunk_bytes;
   config.resources = viewer_page_resources();
   for (auto& [path, resource] : extra) config.resources[path] = std::move(resource);
-  return std::make_unique<serve::Server>(std::move(config));
+  return std::make_unique<Server>(std::move(config));
 }
 
 compress::CompressConfig view_compress_config() {
@@ -122,7 +136,7 @@ ViewImage view_image_of_file(const std::string& path, const compress::CompressCo
   return image;
 }
 
-void publish_view(serve::Server& server, const ViewImage& image, const std::string& source,
+void publish_view(Server& server, const ViewImage& image, const std::string& source,
                   const std::string& file) {
   server.publish_mesh(image.mfc);
   server.publish_stats(nlohmann::json{
@@ -137,4 +151,4 @@ void publish_view(serve::Server& server, const ViewImage& image, const std::stri
   server.finish();
 }
 
-}  // namespace meshflow::cli
+}  // namespace meshflow::serve

@@ -1,13 +1,13 @@
-#include "tools/eval_report.h"
+#include "options/eval_report.h"
 
 #include <cmath>
 
 #include "nodes/eval/double_walls.h"
 #include "nodes/io/mesh_readers.h"
 #include "nodes/io/read_point_cloud.h"
-#include "tools/json_report.h"
+#include "options/json_report.h"
 
-namespace meshflow::cli {
+namespace meshflow::options {
 
 DoubleWalls double_walls(const TriangleMesh& mesh, float radius) {
   const float r = radius > 0.0f ? radius : median_edge_length(mesh);
@@ -70,4 +70,4 @@ nlohmann::json reference_evaluation_json(const ReferenceEvaluation& r, const std
   return doc;
 }
 
-}  // namespace meshflow::cli
+}  // namespace meshflow::options

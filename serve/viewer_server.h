@@ -1,11 +1,9 @@
 #pragma once
-// The viewer's server for the front ends (built with the serving layer only; the CLI and the
-// Python module compile it): the page's fixed files, the server on the option model's serving
-// options (options/serve_options.h), a finished mesh encoded and published the way
-// `meshflow view` shows it, and (CLI) serving until Ctrl-C or --exit-after.
+// The viewer's server for the front ends (`meshflow view`, --serve, meshflow.serve): the page's
+// fixed files, the server on the option model's serving options (options/serve_options.h), and a
+// finished mesh encoded and published the way `meshflow view` shows it.
 
 #include <cstddef>
-#include <cstdio>
 #include <map>
 #include <memory>
 #include <string>
@@ -16,16 +14,22 @@
 #include "runtime/triangle_mesh.h"
 #include "serve/server.h"
 
-namespace meshflow::cli {
+namespace meshflow::serve {
 
-/// Starts the server with the viewer page (web/ and Debian's libjs-three, read once) on
+/// The folder the viewer page is read from: $MESHFLOW_WEB_DIR when set, else the build's web/
+/// output when it holds index.html (a build tree), else the installed copy
+/// (<prefix>/share/meshflow/web). Thread-safe.
+std::string viewer_page_folder();
+
+/// Starts the server with the viewer page (viewer_page_folder() and Debian's libjs-three, read
+/// once) on
 /// `options`' address (validated by the option model first), rate cap and viewer limit, cutting
 /// meshes into `chunk_bytes` messages; `extra` resources (e.g. "/mesh.mfc") are served beside
 /// the page. Throws meshflow::Error for a bad address ("--serve"), one that cannot be bound
 /// (naming it), or a missing page file.
-std::unique_ptr<serve::Server> start_viewer_server(
-    const options::ServeOptions& options, std::size_t chunk_bytes = 64 * 1024,
-    std::map<std::string, serve::StaticResource> extra = {});
+std::unique_ptr<Server> start_viewer_server(const options::ServeOptions& options,
+                                            std::size_t chunk_bytes = 64 * 1024,
+                                            std::map<std::string, StaticResource> extra = {});
 
 /// The codec settings a finished mesh is shown with (`meshflow view`, meshflow.serve): a base
 /// mesh of 2 % of the triangles, 1024 vertex splits per packet (the finest step the page shows).
@@ -52,11 +56,7 @@ ViewImage view_image_of_mesh(const TriangleMesh& mesh, const compress::CompressC
 
 /// Publishes `image` on `server` as `meshflow view` does: the mesh, the panel's stats (`source`
 /// e.g. "meshflow view", `file` the name shown), then the end. Does not wait for the network.
-void publish_view(serve::Server& server, const ViewImage& image, const std::string& source,
+void publish_view(Server& server, const ViewImage& image, const std::string& source,
                   const std::string& file);
 
-/// Returns at Ctrl-C (SIGINT, SIGTERM) or after `exit_after` seconds (0: only at Ctrl-C), then
-/// prints what `server` sent on `out` (CLI only: tools/run_view.cpp).
-void serve_until_stopped(const serve::Server& server, double exit_after, std::FILE* out);
-
-}  // namespace meshflow::cli
+}  // namespace meshflow::serve

@@ -13,7 +13,7 @@
 #include "nodes/eval/surface_eval.h"
 #include "runtime/tracing.h"
 
-namespace meshflow::cli {
+namespace meshflow::options {
 
 /// {"mean", "rms", "median", "p95", "max", "samples"} in metres.
 nlohmann::json distance_json(const DistanceStats& s);
@@ -44,4 +44,4 @@ nlohmann::json frame_json(const Frame& frame, double wall_s, int threads);
 nlohmann::json run_json(const std::string& sequence, const SequenceRunStats& stats, int threads,
                         std::size_t in_flight);
 
-}  // namespace meshflow::cli
+}  // namespace meshflow::options

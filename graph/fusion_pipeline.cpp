@@ -10,25 +10,30 @@
 namespace meshflow {
 namespace flow = tbb::flow;
 
-FusionPipeline::FusionPipeline(const FusionConfig& config, std::size_t max_in_flight)
-    : FusionPipeline(config, max_in_flight, TsdfVolume(config.tsdf)) {}
+namespace {
 
-FusionPipeline::FusionPipeline(FusionConfig config, std::size_t max_in_flight, TsdfVolume map)
+// `map`, when its voxel size is the run's (`tsdf`); throws naming both otherwise.
+TsdfMap map_of_the_run(TsdfMap map, const TsdfConfig& tsdf) {
+  if (map.config().voxel_size != tsdf.voxel_size) {
+    throw Error("fusion", "voxel size",
+                "the map has " + std::to_string(map.config().voxel_size) + " m voxels, the run " +
+                    std::to_string(tsdf.voxel_size) + " m");
+  }
+  return map;
+}
+
+}  // namespace
+
+FusionPipeline::FusionPipeline(const FusionConfig& config, std::size_t max_in_flight)
+    : FusionPipeline(config, max_in_flight, TsdfMap(config.tsdf)) {}
+
+FusionPipeline::FusionPipeline(FusionConfig config, std::size_t max_in_flight, TsdfMap map)
     : config_(std::move(config)),
       max_in_flight_(std::max<std::size_t>(1, max_in_flight)),
-      map_(std::move(map)),
+      map_(map_of_the_run(std::move(map), config_.tsdf), config_.tsdf),
       mesher_(config_.min_weight) {
   config_.frames.organized_as_depth = true;  // fusion integrates depth images only
   if (config_.keep_occlusion_edges) config_.frames.depth_filter.edge_high = 0.0f;
-  map_.set_max_memory_bytes(config_.tsdf.max_memory_bytes);
-  map_.set_behind_voxels(config_.tsdf.behind_voxels);
-  map_.set_integrator(config_.tsdf.integrator);
-  map_.set_carve_free_space(config_.tsdf.carve_free_space);
-  if (map_.config().voxel_size != config_.tsdf.voxel_size) {
-    throw Error("fusion", "voxel size",
-                "the map has " + std::to_string(map_.config().voxel_size) + " m voxels, the run " +
-                    std::to_string(config_.tsdf.voxel_size) + " m");
-  }
 }
 
 std::uint64_t FusionPipeline::integrate(Frame& f) {

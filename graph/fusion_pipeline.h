@@ -37,9 +37,10 @@ class FusionPipeline : public FramePipeline {
  public:
   /// A pipeline fusing into a new empty map.
   FusionPipeline(const FusionConfig& config, std::size_t max_in_flight = 2);
-  /// A pipeline that goes on fusing into `map` (e.g. read from a map file to resume a run).
-  /// Throws meshflow::Error when the map's voxel size differs from config.tsdf's.
-  FusionPipeline(FusionConfig config, std::size_t max_in_flight, TsdfVolume map);
+  /// A pipeline that goes on fusing into `map` (e.g. read from a map file to resume a run) with
+  /// config.tsdf's integration settings (the map keeps its own voxel size, truncation, weights
+  /// and colour). Throws meshflow::Error when the map's voxel size differs from config.tsdf's.
+  FusionPipeline(FusionConfig config, std::size_t max_in_flight, TsdfMap map);
 
   void run(const std::function<FramePtr()>& next,
            const std::function<void(const FramePtr&)>& sink) override;
@@ -56,7 +57,7 @@ class FusionPipeline : public FramePipeline {
   /// blocks to viewers nearest the sensor first (serve/map_publisher.h). It must not keep the
   /// reference, and whatever time it takes holds up the next integration. Set before run().
   void set_integration_observer(
-      std::function<void(const TsdfVolume& map, const Eigen::Vector3f& sensor)> observer) {
+      std::function<void(const TsdfMap& map, const Eigen::Vector3f& sensor)> observer) {
     observer_ = std::move(observer);
   }
   /// The configuration the pipeline was made with.
@@ -71,7 +72,7 @@ class FusionPipeline : public FramePipeline {
   TsdfMesher mesher_;
   std::size_t integrated_ = 0;
   Eigen::Vector3f last_sensor_ = Eigen::Vector3f::Zero();  // the integrated frame's camera
-  std::function<void(const TsdfVolume&, const Eigen::Vector3f&)> observer_;
+  std::function<void(const TsdfMap&, const Eigen::Vector3f&)> observer_;
 };
 
 }  // namespace meshflow

@@ -75,7 +75,7 @@ BlockPoint MapPublisher::block_point(const Eigen::Vector3f& sensor) const {
           static_cast<double>(sensor.z() / block_side_m_)};
 }
 
-void MapPublisher::integrated(const TsdfVolume& map, const Eigen::Vector3f& sensor) {
+void MapPublisher::integrated(const TsdfMap& map, const Eigen::Vector3f& sensor) {
   if (sensor.allFinite()) focus_ = block_point(sensor);
   const double now = monotonic_seconds();
   {
@@ -90,7 +90,7 @@ void MapPublisher::integrated(const TsdfVolume& map, const Eigen::Vector3f& sens
   update(map);
 }
 
-void MapPublisher::finish(const TsdfVolume& map) {
+void MapPublisher::finish(const TsdfMap& map) {
   {
     std::unique_lock<std::mutex> lock(mutex_);
     changed_.wait(lock, [this] { return batch_.empty() && !coding_; });
@@ -100,7 +100,7 @@ void MapPublisher::finish(const TsdfVolume& map) {
   changed_.wait(lock, [this] { return batch_.empty() && !coding_; });
 }
 
-void MapPublisher::update(const TsdfVolume& map) {
+void MapPublisher::update(const TsdfMap& map) {
   std::vector<Piece> pieces;
   for (const VoxelKey key : mesher_.update(map)) {
     const TsdfMesher::BlockMesh* piece = mesher_.block_mesh(key);

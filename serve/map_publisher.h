@@ -57,11 +57,11 @@ class MapPublisher {
   /// of their pieces to the coder; otherwise returns at once. The blocks go to each viewer
   /// nearest the newest `sensor` first (Server::publish_blocks). Its cost, held against the
   /// next integration: O(blocks) to find the changed ones + O(their cells).
-  void integrated(const TsdfVolume& map, const Eigen::Vector3f& sensor);
+  void integrated(const TsdfMap& map, const Eigen::Vector3f& sensor);
   /// After the run (no integration running): publishes every block changed since the last
   /// update, viewers or not (nearest the last sensor position first), and returns when they are
   /// published.
-  void finish(const TsdfVolume& map);
+  void finish(const TsdfMap& map);
 
   MapPublisherCounts counts() const;
 
@@ -72,7 +72,7 @@ class MapPublisher {
   };
   /// `sensor` (world metres) in block units (serve/block_order.h).
   BlockPoint block_point(const Eigen::Vector3f& sensor) const;
-  void update(const TsdfVolume& map);
+  void update(const TsdfMap& map);
   void coder_loop();
 
   Server& server_;

@@ -40,14 +40,14 @@ class ServedRunView final : public RunView {
               const std::vector<unsigned char>& encoded) override {
     publisher_.result(mesh, origin, serve::MeshCoding::kProgressive, encoded);
   }
-  std::function<void(const TsdfVolume&, const Eigen::Vector3f&)> map_observer(
+  std::function<void(const TsdfMap&, const Eigen::Vector3f&)> map_observer(
       float voxel_size, float min_weight) override {
     map_ = std::make_unique<serve::MapPublisher>(*server_, voxel_size, min_weight);
-    return [map = map_.get()](const TsdfVolume& volume, const Eigen::Vector3f& sensor) {
+    return [map = map_.get()](const TsdfMap& volume, const Eigen::Vector3f& sensor) {
       map->integrated(volume, sensor);
     };
   }
-  void map_result(const TsdfVolume& map) override {
+  void map_result(const TsdfMap& map) override {
     if (map_) map_->finish(map);
   }
   void finish_and_serve() override {

@@ -45,10 +45,10 @@ class RunView {
   /// A fused run: the observer for FusionPipeline::set_integration_observer, which sends the
   /// map's changed blocks as it grows (serve/map_publisher.h), for a map of `voxel_size` metres
   /// meshed with `min_weight`.
-  virtual std::function<void(const TsdfVolume&, const Eigen::Vector3f&)> map_observer(
+  virtual std::function<void(const TsdfMap&, const Eigen::Vector3f&)> map_observer(
       float voxel_size, float min_weight) = 0;
   /// After a fused run (map_observer() given): the map's blocks changed since the last update.
-  virtual void map_result(const TsdfVolume& map) = 0;
+  virtual void map_result(const TsdfMap& map) = 0;
   /// After the run's files and report: publishes the last mesh and the end of the run, then
   /// serves until Ctrl-C or --exit-after seconds, and prints what was served (stderr).
   virtual void finish_and_serve() = 0;

@@ -130,14 +130,15 @@ std::size_t carve_block(TsdfBlock& block, const BlockUpdate& frame,
 
 }  // namespace
 
-void TsdfVolume::carve_free_blocks(const DepthFrame& frame, const Image& depth,
-                                   const std::vector<std::uint32_t>& touched,
-                                   IntegrationStats& stats) {
+void TsdfFrameIntegrator::carve_free_blocks(TsdfMap& map, const DepthFrame& frame,
+                                            const Image& depth,
+                                            const std::vector<std::uint32_t>& touched,
+                                            IntegrationStats& stats) {
   depth_bounds_.build(band_pixels_.data(), 2, depth.cols(), depth.rows());
   const float deepest = depth_bounds_.whole_image().max;
   if (!(deepest > 0.0f)) return;  // nothing measured: nothing seen free
   const BlockBox frustum = frustum_blocks(frame, deepest, config_.voxel_size);
-  touched_mark_.assign(blocks_.size(), 0);
+  touched_mark_.assign(map.block_count(), 0);
   for (std::uint32_t b : touched) touched_mark_[b] = 1;
   const BlockUpdate view{band_pixels_.data(),
                          depth.cols(),
@@ -149,13 +150,14 @@ void TsdfVolume::carve_free_blocks(const DepthFrame& frame, const Image& depth,
                          config_};
   const float voxel = config_.voxel_size, truncation = config_.truncation();
   const float block_radius = kHalfDiagonal * static_cast<float>(kTsdfBlockSide - 1) * voxel;
+  const std::uint64_t generation = map.generation();   // the frame's (its band's update began it)
   using Counts = std::pair<std::size_t, std::size_t>;  // blocks carved, voxels carved
   const Counts counts = tbb::parallel_reduce(
-      tbb::blocked_range<std::size_t>(0, blocks_.size()), Counts{0, 0},
+      tbb::blocked_range<std::size_t>(0, map.block_count()), Counts{0, 0},
       [&](const tbb::blocked_range<std::size_t>& range, Counts sum) {
         for (std::size_t b = range.begin(); b != range.end(); ++b) {
           if (touched_mark_[b]) continue;
-          TsdfBlock& block = *blocks_[b];
+          TsdfBlock& block = map.block_for_update(b);
           if ((block.coords.array() < frustum.lo.array()).any() ||
               (block.coords.array() > frustum.hi.array()).any())
             continue;
@@ -173,7 +175,7 @@ void TsdfVolume::carve_free_blocks(const DepthFrame& frame, const Image& depth,
             continue;
           const std::size_t voxels = carve_block(block, view, depth_bounds_);
           if (voxels == 0) continue;
-          block.modified = generation_;
+          block.modified = generation;
           ++sum.first;
           sum.second += voxels;
         }

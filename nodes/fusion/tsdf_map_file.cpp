@@ -18,7 +18,7 @@ constexpr std::size_t kBlockBytes = 12 + kTsdfBlockVoxels * kVoxelBytes;
 
 }  // namespace
 
-void write_tsdf_map(const std::string& path, const TsdfVolume& volume) {
+void write_tsdf_map(const std::string& path, const TsdfMap& volume) {
   const TsdfConfig& c = volume.config();
   io::ByteWriter w;
   w.out.reserve(kHeaderBytes + volume.block_count() * kBlockBytes + 8);
@@ -46,7 +46,7 @@ void write_tsdf_map(const std::string& path, const TsdfVolume& volume) {
 
 void reseal_tsdf_map(std::uint8_t* bytes, std::size_t size) { io::reseal_fnv1a64(bytes, size); }
 
-TsdfVolume read_tsdf_map(const std::string& path) {
+TsdfMap read_tsdf_map(const std::string& path) {
   const std::vector<unsigned char> data = io::read_file_bytes(path);
   io::ByteReader r(path, data);
   if (data.size() < sizeof kMagic || std::memcmp(data.data(), kMagic, sizeof kMagic) != 0) {
@@ -86,9 +86,9 @@ TsdfVolume read_tsdf_map(const std::string& path) {
   if (stored_hash != io::fnv1a64(data.data(), data.size() - 8)) {
     throw Error(path, "checksum", "does not match the contents (corrupt file)");
   }
-  TsdfVolume volume = [&] {
+  TsdfMap volume = [&] {
     try {
-      return TsdfVolume(config);
+      return TsdfMap(config);
     } catch (const Error& e) {
       throw Error(path, "header field " + e.location(), e.problem());
     }

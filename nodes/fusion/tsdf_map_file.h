@@ -1,5 +1,5 @@
 #pragma once
-// Saving and loading a TsdfVolume, so a fusion run can resume. The format ("meshflow TSDF map",
+// Saving and loading a TsdfMap, so a fusion run can resume. The format ("meshflow TSDF map",
 // version 1), all numbers little-endian:
 //
 //   bytes 0-7    magic "MFTSDF\r\n"
@@ -20,17 +20,17 @@
 #include <cstdint>
 #include <string>
 
-#include "nodes/fusion/tsdf_volume.h"
+#include "nodes/fusion/tsdf_map.h"
 
 namespace meshflow {
 
 /// Writes `volume` to `path` atomically (complete file or none). Throws meshflow::Error.
-void write_tsdf_map(const std::string& path, const TsdfVolume& volume);
+void write_tsdf_map(const std::string& path, const TsdfMap& volume);
 
 /// Reads a map written by write_tsdf_map(). Throws meshflow::Error naming the file and the
 /// field on a wrong magic or version, a size that does not match the block count (truncated or
 /// padded file), a checksum mismatch, non-finite values, negative weights or a block stored twice.
-TsdfVolume read_tsdf_map(const std::string& path);
+TsdfMap read_tsdf_map(const std::string& path);
 
 /// Rewrites the checksum of a map file's image in memory (its last 8 bytes) to match the bytes
 /// before it, for programs that edit maps on purpose (the fuzzers and the reader tests, so that

@@ -20,7 +20,7 @@ constexpr int kLattice = kSide + 1;  // a block's cells reach one voxel into its
 // offsets {0, 1}^3 (nullptr where a neighbour block does not exist).
 class BlockLattice {
  public:
-  BlockLattice(const TsdfVolume& volume, const TsdfBlock& block) : origin_(block.coords * kSide) {
+  BlockLattice(const TsdfMap& volume, const TsdfBlock& block) : origin_(block.coords * kSide) {
     for (int o = 0; o < 8; ++o) {
       const Eigen::Vector3i offset(o & 1, (o >> 1) & 1, (o >> 2) & 1);
       neighbours_[static_cast<std::size_t>(o)] =
@@ -41,8 +41,7 @@ class BlockLattice {
   std::array<const TsdfBlock*, 8> neighbours_{};
 };
 
-TsdfMesher::BlockMesh mesh_block(const TsdfVolume& volume, const TsdfBlock& block,
-                                 float min_weight) {
+TsdfMesher::BlockMesh mesh_block(const TsdfMap& volume, const TsdfBlock& block, float min_weight) {
   const auto& cases = cube_cases();
   const float voxel = volume.config().voxel_size;
   const float truncation = volume.config().truncation();
@@ -200,7 +199,7 @@ TsdfMesher::TsdfMesher(float min_weight) : min_weight_(min_weight) {
     throw Error("tsdf mesher", "min_weight", "must be a non-negative number");
 }
 
-TriangleMesh TsdfMesher::extract(const TsdfVolume& volume, TsdfExtractStats* stats) {
+TriangleMesh TsdfMesher::extract(const TsdfMap& volume, TsdfExtractStats* stats) {
   if (volume_ != &volume) {  // another volume: nothing cached applies
     cache_.clear();
     meshed_generation_ = 0;
@@ -218,7 +217,7 @@ TriangleMesh TsdfMesher::extract(const TsdfVolume& volume, TsdfExtractStats* sta
   return mesh;
 }
 
-std::vector<std::uint8_t> TsdfMesher::dirty_blocks(const TsdfVolume& volume,
+std::vector<std::uint8_t> TsdfMesher::dirty_blocks(const TsdfMap& volume,
                                                    const std::vector<std::uint32_t>& order) const {
   // Changed since the last call, or reading a changed neighbour's voxels.
   std::vector<std::uint8_t> dirty(order.size(), 0);
@@ -234,7 +233,7 @@ std::vector<std::uint8_t> TsdfMesher::dirty_blocks(const TsdfVolume& volume,
   return dirty;
 }
 
-std::vector<VoxelKey> TsdfMesher::update(const TsdfVolume& volume, TsdfExtractStats* stats) {
+std::vector<VoxelKey> TsdfMesher::update(const TsdfMap& volume, TsdfExtractStats* stats) {
   if (volume_ != &volume) {
     cache_.clear();
     meshed_generation_ = 0;
@@ -260,7 +259,7 @@ const TsdfMesher::BlockMesh* TsdfMesher::block_mesh(VoxelKey key) const {
 }
 
 std::vector<const TsdfMesher::BlockMesh*> TsdfMesher::remesh(
-    const TsdfVolume& volume, const std::vector<std::uint32_t>& order,
+    const TsdfMap& volume, const std::vector<std::uint32_t>& order,
     const std::vector<std::uint8_t>& dirty, TsdfExtractStats& stats,
     std::vector<std::uint8_t>* changed) {
   // Cache entries are made first, serially, so the map never rehashes while tasks write into it.

@@ -1,5 +1,5 @@
 #pragma once
-// Incremental marching cubes over a TsdfVolume: each block is meshed on its own (its 8^3 cells,
+// Incremental marching cubes over a TsdfMap: each block is meshed on its own (its 8^3 cells,
 // reading the face voxels of its +x / +y / +z neighbours), the per-block meshes are cached, and
 // only blocks whose voxels or neighbours changed since the last extraction are meshed again.
 // Vertices on grid edges shared between blocks are welded, so the mesh has no cracks.
@@ -8,7 +8,7 @@
 #include <unordered_map>
 #include <vector>
 
-#include "nodes/fusion/tsdf_volume.h"
+#include "nodes/fusion/tsdf_map.h"
 #include "runtime/triangle_mesh.h"
 
 namespace meshflow {
@@ -48,7 +48,7 @@ class TsdfMesher {
   /// blocks changed since this mesher's last call (per-block work in parallel); the output is
   /// identical to a fresh mesher's and does not depend on the thread count. Not thread-safe against
   /// integration into `volume` at the same time.
-  TriangleMesh extract(const TsdfVolume& volume, TsdfExtractStats* stats = nullptr);
+  TriangleMesh extract(const TsdfMap& volume, TsdfExtractStats* stats = nullptr);
 
   /// One block's piece of the surface: vertices with the global key of their grid edge.
   struct BlockMesh {
@@ -64,7 +64,7 @@ class TsdfMesher {
   /// surface (vertices, colours, triangles) differs from what this mesher held before (a block
   /// new to the mesher counts when its piece is not empty), in the volume's key order. For
   /// sending a growing map's changes (serve/map_publisher.h). Same thread-safety as extract().
-  std::vector<VoxelKey> update(const TsdfVolume& volume, TsdfExtractStats* stats = nullptr);
+  std::vector<VoxelKey> update(const TsdfMap& volume, TsdfExtractStats* stats = nullptr);
   /// The piece of block `key` (pack_key of its coordinates) as of the last update() or
   /// extract(), or nullptr. Valid until the next call of either.
   const BlockMesh* block_mesh(VoxelKey key) const;
@@ -72,9 +72,9 @@ class TsdfMesher {
  private:
   // extract()'s phases: which blocks to mesh again, then their meshes (cached ones reused), in
   // the volume's key order.
-  std::vector<std::uint8_t> dirty_blocks(const TsdfVolume& volume,
+  std::vector<std::uint8_t> dirty_blocks(const TsdfMap& volume,
                                          const std::vector<std::uint32_t>& order) const;
-  std::vector<const BlockMesh*> remesh(const TsdfVolume& volume,
+  std::vector<const BlockMesh*> remesh(const TsdfMap& volume,
                                        const std::vector<std::uint32_t>& order,
                                        const std::vector<std::uint8_t>& dirty,
                                        TsdfExtractStats& stats,
@@ -83,7 +83,7 @@ class TsdfMesher {
   float min_weight_ = 0.0f;
   std::unordered_map<VoxelKey, BlockMesh> cache_;  // by pack_key(block coords)
   std::uint64_t meshed_generation_ = 0;            // volume generation at the last call
-  const TsdfVolume* volume_ = nullptr;             // the volume the cache belongs to
+  const TsdfMap* volume_ = nullptr;                // the volume the cache belongs to
 };
 
 }  // namespace meshflow

@@ -1,6 +1,6 @@
 #pragma once
 // The projective TSDF update of one block (KinectFusion's and Open3D's rule, with each voxel's
-// depth read at its exact projection): the kernel of TsdfVolume's projective integration.
+// depth read at its exact projection): the kernel of TsdfFrameIntegrator's projective integration.
 // Internal to nodes/fusion.
 
 #include <cstddef>

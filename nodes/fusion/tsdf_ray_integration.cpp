@@ -224,8 +224,8 @@ void blend(TsdfVoxel& voxel, float sdf_metres, float truncation, const MergedRay
 
 }  // namespace
 
-void TsdfVolume::integrate_along_rays(const DepthFrame& frame, const Image& depth,
-                                      IntegrationStats& stats) {
+void TsdfFrameIntegrator::integrate_along_rays(TsdfMap& map, const DepthFrame& frame,
+                                               const Image& depth, IntegrationStats& stats) {
   RayScratch& x = ray_scratch_;
   const bool color = fuses_color_of(frame, depth);
   merged_rays(depth, band_pixels_.data(), frame, color ? &frame.color : nullptr, config_,
@@ -244,7 +244,8 @@ void TsdfVolume::integrate_along_rays(const DepthFrame& frame, const Image& dept
   keys.resize(pairs.size());
   for (std::size_t i = 0; i < pairs.size(); ++i) keys[i] = pairs[i].block;
   radix_sort_unique(keys);
-  find_or_allocate(keys, stats.blocks_allocated, touched_);
+  map.find_or_allocate(keys, config_.max_new_blocks_per_frame, config_.max_memory_bytes,
+                       stats.blocks_allocated, touched_);
   const std::vector<std::uint32_t>& blocks = touched_;
 
   // (position of the block among the keys, ray): sorted, the rays of each block in pixel order.
@@ -262,10 +263,10 @@ void TsdfVolume::integrate_along_rays(const DepthFrame& frame, const Image& dept
     if (i == 0 || (block_rays[i - 1] >> 32) != b) starts[b] = i;
   }
 
-  ++generation_;
+  const std::uint64_t generation = map.begin_change();
   // Applies block b's rays in pixel order; returns the voxels it updated.
   const auto apply_rays = [&](std::size_t b) {
-    TsdfBlock& block = *blocks_[blocks[b]];
+    TsdfBlock& block = map.block_for_update(blocks[b]);
     const Eigen::Vector3i origin = block.coords * kTsdfBlockSide;
     std::size_t count = 0;
     for (std::size_t i = starts[b]; i < starts[b + 1]; ++i) {
@@ -285,7 +286,7 @@ void TsdfVolume::integrate_along_rays(const DepthFrame& frame, const Image& dept
         ++count;
       });
     }
-    if (count > 0) block.modified = generation_;
+    if (count > 0) block.modified = generation;
     return count;
   };
   stats.voxels_updated += tbb::parallel_reduce(

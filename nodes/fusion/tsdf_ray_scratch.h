@@ -1,7 +1,7 @@
 #pragma once
-// The along-ray integrator's rays and per-frame lists (tsdf_ray_integration.cpp); TsdfVolume
-// keeps a RayScratch across frames so that the lists' capacity is reused. Internal to
-// nodes/fusion.
+// The along-ray integrator's rays and per-frame lists (tsdf_ray_integration.cpp);
+// TsdfFrameIntegrator keeps a RayScratch across frames so that the lists' capacity is reused.
+// Internal to nodes/fusion.
 
 #include <Eigen/Core>
 #include <array>

@@ -9,7 +9,7 @@ namespace meshflow {
 namespace {
 
 // The weight of voxel (i, j, k), 0 when its block was never allocated or is out of range.
-float voxel_weight(const TsdfVolume& map, const Eigen::Vector3i& voxel) {
+float voxel_weight(const TsdfMap& map, const Eigen::Vector3i& voxel) {
   const Eigen::Vector3i block = tsdf_block_of_voxel(voxel);
   if (!tsdf_block_in_range(block)) return 0.0f;
   const TsdfBlock* found = map.find(block);
@@ -23,8 +23,7 @@ float voxel_weight(const TsdfVolume& map, const Eigen::Vector3i& voxel) {
 
 }  // namespace
 
-std::vector<float> tsdf_weights_at(const TsdfVolume& map,
-                                   const std::vector<Eigen::Vector3f>& points) {
+std::vector<float> tsdf_weights_at(const TsdfMap& map, const std::vector<Eigen::Vector3f>& points) {
   std::vector<float> weights(points.size(), 0.0f);
   const double voxel = static_cast<double>(map.config().voxel_size);
   const double limit = static_cast<double>(kMaxTsdfBlockIndex) * kTsdfBlockSide;

@@ -4,7 +4,7 @@
 #include <Eigen/Core>
 #include <vector>
 
-#include "nodes/fusion/tsdf_volume.h"
+#include "nodes/fusion/tsdf_map.h"
 
 namespace meshflow {
 
@@ -13,7 +13,6 @@ namespace meshflow {
 /// the map's range or not finite get 0). Under the default constant weighting this is how many
 /// frames observed the surface there, capped at config().max_weight. Parallel over points,
 /// deterministic; not thread-safe against integrate() on the same map. O(points).
-std::vector<float> tsdf_weights_at(const TsdfVolume& map,
-                                   const std::vector<Eigen::Vector3f>& points);
+std::vector<float> tsdf_weights_at(const TsdfMap& map, const std::vector<Eigen::Vector3f>& points);
 
 }  // namespace meshflow

@@ -127,155 +127,72 @@ void touched_block_keys(int width, int height, const BandGeometry& band,
 
 }  // namespace
 
-// Larger voxels are a unit error; they would also put far vertices beyond float's range.
-constexpr float kMaxVoxelSize = 1000.0f;  // metres
-
-TsdfVolume::TsdfVolume(const TsdfConfig& config) : config_(config) {
-  if (!(config.voxel_size > 0.0f && config.voxel_size <= kMaxVoxelSize)) {
-    throw Error("tsdf", "voxel_size", "must be a positive number of metres, at most 1000");
-  }
-  if (!(config.truncation_voxels > 0.0f) || !std::isfinite(config.truncation_voxels)) {
-    throw Error("tsdf", "truncation_voxels", "must be a positive number of voxels");
-  }
-  if (!(config.max_weight > 0.0f) || !std::isfinite(config.max_weight))
-    throw Error("tsdf", "max_weight", "must be a positive finite number");
-  set_behind_voxels(config.behind_voxels);
-}
-
-void TsdfVolume::set_behind_voxels(float voxels) {
-  if (!(voxels > 0.0f) || !std::isfinite(voxels))
+TsdfFrameIntegrator::TsdfFrameIntegrator(const TsdfConfig& config) : config_(config) {
+  if (!(config.behind_voxels > 0.0f) || !std::isfinite(config.behind_voxels))
     throw Error("tsdf", "behind_voxels", "must be a positive number of voxels");
-  config_.behind_voxels = voxels;
 }
 
-std::size_t TsdfVolume::memory_bytes() const { return blocks_.size() * kBytesPerBlock; }
+namespace {
 
-const TsdfBlock* TsdfVolume::find(const Eigen::Vector3i& block_coords) const {
-  if (!tsdf_block_in_range(block_coords)) return nullptr;
-  const auto it = index_.find(pack_key(block_coords));
-  return it == index_.end() ? nullptr : blocks_[it->second];
+// `config` with the settings `map` records (voxel size, truncation, weights, colour).
+TsdfConfig with_settings_of(const TsdfMap& map, TsdfConfig config) {
+  const TsdfConfig& m = map.config();
+  config.voxel_size = m.voxel_size;
+  config.truncation_voxels = m.truncation_voxels;
+  config.max_weight = m.max_weight;
+  config.weighting = m.weighting;
+  config.fuse_color = m.fuse_color;
+  return config;
 }
 
-std::vector<std::uint32_t> TsdfVolume::blocks_in_key_order() const {
-  std::vector<std::uint64_t> keyed(blocks_.size());
-  for (std::size_t i = 0; i < blocks_.size(); ++i) {
-    // Block keys use 57 bits; the index is recovered through the map after sorting.
-    keyed[i] = pack_key(blocks_[i]->coords);
+}  // namespace
+
+TsdfVolume::TsdfVolume(const TsdfConfig& config) : TsdfMap(config), integrator_(config) {}
+
+TsdfVolume::TsdfVolume(TsdfMap map, const TsdfConfig& config)
+    : TsdfMap(std::move(map)), integrator_(with_settings_of(*this, config)) {}
+
+IntegrationStats TsdfFrameIntegrator::integrate(TsdfMap& map, const DepthFrame& frame) {
+  if (map.config().voxel_size != config_.voxel_size ||
+      map.config().truncation_voxels != config_.truncation_voxels) {
+    throw Error("tsdf", "map",
+                "a map of " + std::to_string(config_.voxel_size) +
+                    " m voxels and a truncation of " + std::to_string(config_.truncation_voxels) +
+                    " voxels, as the integrator's; it has " +
+                    std::to_string(map.config().voxel_size) + " m and " +
+                    std::to_string(map.config().truncation_voxels));
   }
-  radix_sort(keyed);
-  std::vector<std::uint32_t> order(keyed.size());
-  for (std::size_t i = 0; i < keyed.size(); ++i) order[i] = index_.at(keyed[i]);
-  return order;
-}
-
-std::uint32_t TsdfVolume::allocate(const std::vector<Eigen::Vector3i>& coords) {
-  const auto first = static_cast<std::uint32_t>(blocks_.size());
-  // One slab for the batch, left uninitialised here (new[] of bytes is aligned for any
-  // fundamental type); the blocks are constructed (voxels zeroed, 6 KiB each) in parallel.
-  // TsdfBlock needs no destructor.
-  static_assert(std::is_trivially_destructible_v<TsdfBlock>);
-  slabs_.emplace_back(new unsigned char[coords.size() * sizeof(TsdfBlock)]);
-  unsigned char* const slab = slabs_.back().get();
-  blocks_.resize(blocks_.size() + coords.size());
-  tbb::parallel_for(std::size_t{0}, coords.size(), [&](std::size_t i) {
-    auto* block = new (slab + i * sizeof(TsdfBlock)) TsdfBlock();
-    block->coords = coords[i];
-    blocks_[first + i] = block;
-  });
-  for (std::size_t i = 0; i < coords.size(); ++i)
-    index_.emplace(pack_key(coords[i]), first + static_cast<std::uint32_t>(i));
-  return first;
-}
-
-void TsdfVolume::insert_block(const Eigen::Vector3i& coords,
-                              const std::array<TsdfVoxel, kTsdfBlockVoxels>& voxels) {
-  if (!tsdf_block_in_range(coords)) {
-    throw Error("tsdf", "block coordinates",
-                "outside +-" + std::to_string(kMaxTsdfBlockIndex) + " blocks (the volume's range)");
-  }
-  if (index_.count(pack_key(coords)) != 0) {
-    throw Error("tsdf",
-                "block (" + std::to_string(coords.x()) + ", " + std::to_string(coords.y()) + ", " +
-                    std::to_string(coords.z()) + ")",
-                "appears twice");
-  }
-  TsdfBlock& block = *blocks_[allocate({coords})];
-  block.voxels = voxels;
-  block.modified = ++generation_;
-}
-
-IntegrationStats TsdfVolume::integrate(const DepthFrame& frame) {
   IntegrationStats stats;
   depth_in_metres(frame, depth_m_);  // checks the frame (intrinsics, pose)
   const Image& depth = depth_m_;
   stats.noise_per_depth2 = estimate_noise_per_depth2(depth);
   band_pixels(depth, frame.intrinsics, config_, stats.noise_per_depth2, band_pixels_);
   if (config_.integrator == TsdfIntegrator::kAlongRay) {
-    integrate_along_rays(frame, depth, stats);  // fills touched_
+    integrate_along_rays(map, frame, depth, stats);  // fills touched_
   } else {
     const BandGeometry band{frame.intrinsics, config_, band_pixels_.data()};
     touched_block_keys(depth.cols(), depth.rows(), band, frame.T_world_camera, row_keys_, keys_,
                        stats.pixels_used);
-    find_or_allocate(keys_, stats.blocks_allocated, touched_);
-    stats.voxels_updated = update_blocks(touched_, depth, frame);
+    map.find_or_allocate(keys_, config_.max_new_blocks_per_frame, config_.max_memory_bytes,
+                         stats.blocks_allocated, touched_);
+    stats.voxels_updated = update_blocks(map, touched_, depth, frame);
   }
   stats.blocks_touched = touched_.size();
-  if (config_.carve_free_space) carve_free_blocks(frame, depth, touched_, stats);
+  if (config_.carve_free_space) carve_free_blocks(map, frame, depth, touched_, stats);
   return stats;
 }
 
-void TsdfVolume::find_or_allocate(const std::vector<VoxelKey>& keys, std::size_t& allocated,
-                                  std::vector<std::uint32_t>& blocks) {
-  // Existing blocks are looked up in parallel (the index is only read); kNewBlock marks the rest.
-  constexpr std::uint32_t kNewBlock = ~std::uint32_t{0};
-  blocks.resize(keys.size());
-  tbb::parallel_for(std::size_t{0}, keys.size(), [&](std::size_t i) {
-    const auto it = index_.find(keys[i]);
-    blocks[i] = it != index_.end() ? it->second : kNewBlock;
-  });
-  const auto new_blocks =
-      static_cast<std::size_t>(std::count(blocks.begin(), blocks.end(), kNewBlock));
-  if (config_.max_new_blocks_per_frame > 0 && new_blocks > config_.max_new_blocks_per_frame) {
-    throw Error("tsdf map", "new blocks",
-                "this frame would add " + std::to_string(new_blocks) + " blocks, more than the " +
-                    std::to_string(config_.max_new_blocks_per_frame) +
-                    " allowed per frame (a pose that jumps, or depth in the wrong unit?); the map "
-                    "keeps its " +
-                    std::to_string(blocks_.size()) + " blocks");
-  }
-  if (config_.max_memory_bytes > 0) {
-    const std::size_t after = memory_bytes() + new_blocks * kBytesPerBlock;
-    if (after > config_.max_memory_bytes) {
-      const auto mib = [](std::size_t bytes) { return std::to_string(bytes >> 20) + " MiB"; };
-      throw Error("tsdf map", "memory",
-                  "this frame's " + std::to_string(new_blocks) +
-                      " new blocks would grow the map to " + mib(after) + ", past the limit of " +
-                      mib(config_.max_memory_bytes) + " (--max-memory); the map keeps its " +
-                      std::to_string(blocks_.size()) + " blocks");
-    }
-  }
-  // The new blocks in key order: deterministic block numbering.
-  std::vector<Eigen::Vector3i> fresh;
-  fresh.reserve(new_blocks);
-  for (std::size_t i = 0; i < keys.size(); ++i)
-    if (blocks[i] == kNewBlock) fresh.push_back(unpack_key(keys[i]));
-  if (fresh.empty()) return;
-  std::uint32_t next = allocate(fresh);
-  for (std::uint32_t& b : blocks)
-    if (b == kNewBlock) b = next++;
-  allocated += fresh.size();
-}
-
-bool TsdfVolume::fuses_color_of(const DepthFrame& frame, const Image& depth) const {
+bool TsdfFrameIntegrator::fuses_color_of(const DepthFrame& frame, const Image& depth) const {
   return config_.fuse_color && !frame.color.empty() && frame.color.same_size(depth) &&
          frame.color.format() == PixelFormat::RGB8;
 }
 
-std::size_t TsdfVolume::update_blocks(const std::vector<std::uint32_t>& touched, const Image& depth,
-                                      const DepthFrame& frame) {
+std::size_t TsdfFrameIntegrator::update_blocks(TsdfMap& map,
+                                               const std::vector<std::uint32_t>& touched,
+                                               const Image& depth, const DepthFrame& frame) {
   // One task per block; a voxel's new state depends only on its old state and the frame, so the
   // order of blocks does not matter.
-  ++generation_;
+  const std::uint64_t generation = map.begin_change();
   const bool color = fuses_color_of(frame, depth);
   if (config_.subpixel_depth)
     depth_slopes(band_pixels_, depth.cols(), depth.rows(), kSlopeFootprints / frame.intrinsics.fx,
@@ -292,9 +209,9 @@ std::size_t TsdfVolume::update_blocks(const std::vector<std::uint32_t>& touched,
       tbb::blocked_range<std::size_t>(0, touched.size()), std::size_t{0},
       [&](const tbb::blocked_range<std::size_t>& range, std::size_t sum) {
         for (std::size_t t = range.begin(); t != range.end(); ++t) {
-          TsdfBlock& block = *blocks_[touched[t]];
+          TsdfBlock& block = map.block_for_update(touched[t]);
           const std::size_t updated = update_block(block, update);
-          if (updated > 0) block.modified = generation_;
+          if (updated > 0) block.modified = generation;
           sum += updated;
         }
         return sum;

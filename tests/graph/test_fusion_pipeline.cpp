@@ -35,7 +35,7 @@ TsdfVolume integrated_in_order(const io::Sequence& seq, const FusionConfig& conf
 }
 
 // Same blocks, and bit for bit the same voxels.
-void expect_same_map(const TsdfVolume& expected, const TsdfVolume& map) {
+void expect_same_map(const TsdfMap& expected, const TsdfMap& map) {
   ASSERT_EQ(expected.block_count(), map.block_count());
   const auto a = expected.blocks_in_key_order(), b = map.blocks_in_key_order();
   for (std::size_t i = 0; i < a.size(); ++i) {
@@ -148,7 +148,7 @@ TEST(FusionPipeline, FusesOrganizedCloudsAsTheirDepthImages) {
 TEST(FusionPipeline, ResumingFromAMapNeedsTheSameVoxelSize) {
   FusionConfig config;
   config.tsdf.voxel_size = 0.02f;
-  EXPECT_THROW(FusionPipeline(config, 2, TsdfVolume(TsdfConfig{0.01f})), Error);
+  EXPECT_THROW(FusionPipeline(config, 2, TsdfMap(TsdfConfig{0.01f})), Error);
 }
 
 }  // namespace

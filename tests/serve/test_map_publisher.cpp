@@ -161,7 +161,7 @@ TEST(MapPublisher, TheBlocksAViewerWasSentAssembleToTheFusedMesh) {
   const FusionConfig config = fusion_config();
   FusionPipeline pipeline(config, 2);
   MapPublisher publisher(server, kVoxel, config.min_weight, /*min_interval_s=*/0.0);
-  pipeline.set_integration_observer([&](const TsdfVolume& map, const Eigen::Vector3f& sensor) {
+  pipeline.set_integration_observer([&](const TsdfMap& map, const Eigen::Vector3f& sensor) {
     publisher.integrated(map, sensor);
   });
   const auto sequence = small_depth_sequence();
@@ -195,7 +195,7 @@ TEST(MapPublisher, AViewerThatNeverReadsWaitsForEachBlockAtMostOnce) {
   const FusionConfig config = fusion_config();
   FusionPipeline pipeline(config, 2);
   MapPublisher publisher(server, kVoxel, config.min_weight, 0.0);
-  pipeline.set_integration_observer([&](const TsdfVolume& map, const Eigen::Vector3f& sensor) {
+  pipeline.set_integration_observer([&](const TsdfMap& map, const Eigen::Vector3f& sensor) {
     publisher.integrated(map, sensor);
   });
   run_sequence(pipeline, *small_depth_sequence(), {}, [](const Frame&) {});

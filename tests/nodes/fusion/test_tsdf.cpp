@@ -53,7 +53,7 @@ TsdfVolume fuse(const std::vector<DepthFrame>& frames, std::size_t first = 0,
   return volume;
 }
 
-void expect_same_volume(const TsdfVolume& a, const TsdfVolume& b) {
+void expect_same_volume(const TsdfMap& a, const TsdfMap& b) {
   ASSERT_EQ(a.block_count(), b.block_count());
   const auto oa = a.blocks_in_key_order(), ob = b.blocks_in_key_order();
   for (std::size_t i = 0; i < oa.size(); ++i) {
@@ -239,9 +239,50 @@ TEST(Tsdf, AFramePastTheMemoryLimitIsRefusedAndTheMapIsUnchanged) {
   }
   expect_same_volume(limited, reference);
   EXPECT_LE(limited.memory_bytes(), config.max_memory_bytes);
-  limited.set_max_memory_bytes(0);  // no limit
-  limited.integrate(frames[2]);
-  EXPECT_GT(limited.block_count(), reference.block_count());
+  TsdfConfig unlimited_config = config;
+  unlimited_config.max_memory_bytes = 0;  // no limit: the same map, integrated without one
+  TsdfVolume unlimited(std::move(limited), unlimited_config);
+  unlimited.integrate(frames[2]);
+  EXPECT_GT(unlimited.block_count(), reference.block_count());
+}
+
+// The map and its integrator apart (voxblox's layer and integrator): the same map as a volume's;
+// an integrator refuses a map of another voxel size or truncation, leaving it unchanged.
+TEST(Tsdf, AMapAndAnIntegratorApartFuseAsAVolume) {
+  const std::vector<DepthFrame> frames = room_frames(2);
+  const TsdfVolume volume = fuse(frames);
+  TsdfConfig config{kTsdfVoxel};
+  TsdfMap map(config);
+  TsdfFrameIntegrator integrator(config);
+  for (const DepthFrame& f : frames) integrator.integrate(map, f);
+  ASSERT_GT(map.block_count(), 0u);
+  expect_same_volume(map, volume);
+
+  TsdfConfig coarser = config;
+  coarser.voxel_size = 2 * kTsdfVoxel;
+  TsdfFrameIntegrator other(coarser);
+  EXPECT_THROW(other.integrate(map, frames[0]), Error);
+  expect_same_volume(map, volume);
+}
+
+// A map adopted by a volume keeps the settings it records (as one read from a file) and takes
+// the new integration settings; behind_voxels is checked at construction.
+TEST(Tsdf, AnAdoptedMapKeepsItsSettingsAndTakesTheIntegrationOnes) {
+  TsdfConfig recorded{kTsdfVoxel};
+  recorded.max_weight = 64.0f;
+  recorded.fuse_color = false;
+  TsdfConfig run{kTsdfVoxel};
+  run.integrator = TsdfIntegrator::kAlongRay;
+  run.carve_free_space = false;
+  const TsdfVolume volume(TsdfMap(recorded), run);
+  EXPECT_EQ(volume.config().max_weight, 64.0f);
+  EXPECT_FALSE(volume.config().fuse_color);
+  EXPECT_EQ(volume.config().integrator, TsdfIntegrator::kAlongRay);
+  EXPECT_FALSE(volume.config().carve_free_space);
+  TsdfConfig bad = run;
+  bad.behind_voxels = 0.0f;
+  EXPECT_THROW(TsdfVolume(TsdfMap(recorded), bad), Error);
+  EXPECT_THROW(TsdfVolume{bad}, Error);
 }
 
 // Bad frames leave the map as it was: depth with no valid pixel adds nothing, a NaN pose and a
@@ -508,7 +549,7 @@ TEST(TsdfMapFile, SaveLoadExtractGivesTheSameMesh) {
   const TsdfVolume volume = fuse(room_frames(2));
   const std::string path = test::temp_dir() + "/room.tsdf";
   write_tsdf_map(path, volume);
-  const TsdfVolume loaded = read_tsdf_map(path);
+  const TsdfMap loaded = read_tsdf_map(path);
   expect_same_volume(volume, loaded);
   EXPECT_EQ(loaded.config().voxel_size, kTsdfVoxel);
   const TriangleMesh a = TsdfMesher().extract(volume), b = TsdfMesher().extract(loaded);

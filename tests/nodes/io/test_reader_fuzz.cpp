@@ -190,7 +190,7 @@ TEST(ReaderFuzz, TsdfMapsBehindAValidChecksumOnlyEverThrowMeshflowErrors) {
     if (text.size() >= 16) text = test::resealed_tsdf_map(std::move(text));
     test::write_file(dir + "/case.tsdf", text);
     try {
-      const TsdfVolume map = read_tsdf_map(dir + "/case.tsdf");
+      const TsdfMap map = read_tsdf_map(dir + "/case.tsdf");
       for (const Eigen::Vector3f& p : TsdfMesher().extract(map).vertices)
         ASSERT_TRUE(p.allFinite()) << "mutation " << i;
       ++loaded;

@@ -87,7 +87,7 @@ std::string ply_header(const char* format, const char* element, const char* prop
 }
 
 std::string empty_map_claiming(std::uint64_t blocks, const std::string& dir) {
-  write_tsdf_map(dir + "/empty.map", TsdfVolume{});
+  write_tsdf_map(dir + "/empty.map", TsdfMap{});
   std::string bytes = test::read_file(dir + "/empty.map");
   std::memcpy(&bytes[bytes.size() - 16], &blocks, 8);  // the count before the checksum
   return test::resealed_tsdf_map(bytes);

@@ -167,7 +167,7 @@ TEST(ReaderFuzz, SequenceFilesOnlyEverThrowMeshflowErrorsOrReadFiniteValues) {
 TEST(ReaderFuzz, TsdfMapsBehindAValidChecksumOnlyEverThrowMeshflowErrors) {
   TsdfConfig config;
   config.voxel_size = 0.05f;
-  TsdfVolume volume(config);
+  TsdfMap volume(config);
   std::array<TsdfVoxel, kTsdfBlockVoxels> voxels;
   for (int b = 0; b < 2; ++b) {
     for (int i = 0; i < kTsdfBlockVoxels; ++i) {

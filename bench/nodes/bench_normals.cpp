@@ -1,5 +1,6 @@
 #include "bench_support.h"
 #include "nodes/normals/normals.h"
+#include "nodes/search/spatial_index.h"
 #include "runtime/threads.h"
 
 namespace meshflow::bench {
@@ -19,6 +20,21 @@ void BM_Normals(benchmark::State& state) {
                                                   benchmark::Counter::kIsIterationInvariantRate);
 }
 BENCHMARK(BM_Normals)->Apply(thread_and_input_args);
+
+// The same with the kd-tree built inside the timed region, as a caller with a bare cloud pays
+// it (and as Open3D's EstimateNormals does, the peer of BM_Open3dNormals).
+void BM_NormalsWithIndex(benchmark::State& state) {
+  if (require(state, static_cast<Input>(state.range(1))) == nullptr) return;
+  const PointCloud& cloud = prepared_frame(static_cast<Input>(state.range(1)), "normals")->cloud;
+  ThreadLimit limit(static_cast<int>(state.range(0)));
+  for (auto _ : state) {
+    const KdTreeIndex index(cloud.positions);
+    benchmark::DoNotOptimize(estimate_normals(cloud, index, NormalsConfig{}).data());
+  }
+  state.counters["points/s"] = benchmark::Counter(static_cast<double>(cloud.size()),
+                                                  benchmark::Counter::kIsIterationInvariantRate);
+}
+BENCHMARK(BM_NormalsWithIndex)->Apply(thread_and_input_args);
 
 }  // namespace
 }  // namespace meshflow::bench

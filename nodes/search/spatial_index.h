@@ -26,11 +26,20 @@ class SpatialIndex {
   virtual std::vector<std::uint32_t> radius_search(const Eigen::Vector3f& q,
                                                    float radius) const = 0;
 
+  /// knn() of every point of `queries` (finite, metres): row q, indices[q k ...], holds
+  /// counts[q] indices exactly as knn(queries[q], k) writes them (squared distances dropped).
+  /// `indices` holds queries.size() * k entries, `counts` queries.size(). Parallel over the
+  /// queries; the result does not depend on the thread count. This implementation calls knn();
+  /// the kd-tree answers the indexed points themselves faster (see KdTreeIndex). O(m knn()).
+  virtual void knn_rows(const std::vector<Eigen::Vector3f>& queries, std::size_t k,
+                        std::uint32_t* indices, std::uint32_t* counts) const;
+
   /// Number of indexed points.
   virtual std::size_t size() const = 0;
 };
 
-/// FLANN single kd-tree (exact search). Build O(n log n), single-threaded.
+/// nanoflann kd-trees (exact search): from 16 384 points on two, over the points either side of
+/// the median of the longest axis, built in parallel. Build O(n log n).
 class KdTreeIndex final : public SpatialIndex {
  public:
   /// Builds the tree over `points` (finite, metres), which must outlive the index unchanged.
@@ -39,6 +48,10 @@ class KdTreeIndex final : public SpatialIndex {
   std::size_t knn(const Eigen::Vector3f& q, std::size_t k, std::uint32_t* indices,
                   float* squared_distances) const override;
   std::vector<std::uint32_t> radius_search(const Eigen::Vector3f& q, float radius) const override;
+  /// SpatialIndex::knn_rows(); the indexed points themselves (the same vector) are taken in
+  /// the trees' leaf order, so that consecutive searches walk the same nodes and leaves.
+  void knn_rows(const std::vector<Eigen::Vector3f>& queries, std::size_t k, std::uint32_t* indices,
+                std::uint32_t* counts) const override;
   /// Number of indexed points.
   std::size_t size() const override { return size_; }
 

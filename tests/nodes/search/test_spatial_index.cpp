@@ -4,6 +4,10 @@
 
 #include <algorithm>
 #include <random>
+#include <utility>
+#include <vector>
+
+#include "test_support.h"
 
 namespace meshflow {
 namespace {
@@ -57,6 +61,91 @@ TEST(SpatialIndex, TiesBreakBySmallerIndexLikeBruteForce) {
             }
           }
         }
+}
+
+// knn_rows() of `tree` over `pts` for `queries` on 1 and 2 threads, every `stride`-th row
+// compared with brute force's knn() (rank by rank: the same ties).
+void expect_brute_force_rows(const std::vector<Eigen::Vector3f>& pts, const KdTreeIndex& tree,
+                             const std::vector<Eigen::Vector3f>& queries, std::size_t k,
+                             std::size_t stride) {
+  const BruteForceIndex brute(pts);
+  std::vector<std::uint32_t> want(k);
+  std::vector<float> d2(k);
+  for (const int threads : {1, 2}) {
+    std::vector<std::uint32_t> rows(queries.size() * k, 0), counts(queries.size());
+    test::with_threads(threads, [&] {
+      tree.knn_rows(queries, k, rows.data(), counts.data());
+      return 0;
+    });
+    for (std::size_t q = 0; q < queries.size(); q += stride) {
+      const std::size_t found = brute.knn(queries[q], k, want.data(), d2.data());
+      ASSERT_EQ(counts[q], found) << "query " << q;
+      for (std::size_t j = 0; j < found; ++j)
+        ASSERT_EQ(rows[q * k + j], want[j])
+            << "query " << q << " rank " << j << ", k " << k << ", " << threads << " threads";
+    }
+  }
+}
+
+// knn_rows() is exact: the rows are brute force's, ties included, for the indexed points
+// themselves (taken in leaf order) and for other queries, on 1 and 2 threads, with one tree and
+// with two (from 16 384 points on). Lattice points tie everywhere, also on the plane that
+// splits the set in two; random points on a noisy plane have neighbours across it.
+TEST(SpatialIndex, KnnRowsAreBruteForceRows) {
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<float> u(-5.0f, 5.0f);
+  for (const int side : {10, 27}) {  // 1 000 points: one tree; 19 683: two
+    std::vector<Eigen::Vector3f> lattice;
+    for (int z = 0; z < side; ++z)
+      for (int y = 0; y < side; ++y)
+        for (int x = 0; x < side; ++x) lattice.emplace_back(float(x), float(y), float(z));
+    std::shuffle(lattice.begin(), lattice.end(), rng);
+    std::vector<Eigen::Vector3f> scattered(lattice.size());
+    for (auto& p : scattered) p = {u(rng), u(rng), u(rng) * 0.01f};
+    for (const std::vector<Eigen::Vector3f>* pts : {&lattice, &scattered}) {
+      const KdTreeIndex tree(*pts);
+      std::vector<Eigen::Vector3f> others(300);
+      for (auto& p : others) p = {u(rng) + 5.0f, u(rng) + 5.0f, u(rng)};
+      const std::size_t stride = pts->size() / 400 + 1;
+      for (const std::size_t k : {std::size_t{1}, std::size_t{10}, std::size_t{27}}) {
+        SCOPED_TRACE(testing::Message() << pts->size() << " points, k " << k);
+        expect_brute_force_rows(*pts, tree, *pts, k, stride);
+        expect_brute_force_rows(*pts, tree, others, k, 1);
+      }
+    }
+  }
+}
+
+// knn() and radius_search() over two trees (from 16 384 points on) against brute force, with
+// queries either side of the plane that splits the set and outside the set's box.
+TEST(SpatialIndex, TwoTreesMatchBruteForce) {
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<float> u(-5.0f, 5.0f);
+  std::vector<Eigen::Vector3f> pts(20000);
+  for (auto& p : pts) p = {u(rng), u(rng) * 0.5f, u(rng) * 0.2f};
+  const KdTreeIndex tree(pts);
+  const BruteForceIndex brute(pts);
+  std::uint32_t ia[12], ib[12];
+  float da[12], db[12];
+  for (int q = 0; q < 300; ++q) {
+    const Eigen::Vector3f query(u(rng) * 1.5f, u(rng), u(rng));
+    ASSERT_EQ(tree.knn(query, 12, ia, da), 12u);
+    ASSERT_EQ(brute.knn(query, 12, ib, db), 12u);
+    for (int k = 0; k < 12; ++k) EXPECT_EQ(ia[k], ib[k]) << "query " << q << " rank " << k;
+    EXPECT_EQ(tree.radius_search(query, 0.3f), brute.radius_search(query, 0.3f));
+  }
+}
+
+TEST(SpatialIndex, KnnRowsWithFewerPointsThanK) {
+  const std::vector<Eigen::Vector3f> pts = {{0, 0, 0}, {1, 0, 0}};
+  const KdTreeIndex tree(pts);
+  std::vector<std::uint32_t> rows(2 * 5, 99), counts(2);
+  tree.knn_rows(pts, 5, rows.data(), counts.data());
+  EXPECT_EQ(counts, (std::vector<std::uint32_t>{2, 2}));
+  EXPECT_EQ(rows[0], 0u);
+  EXPECT_EQ(rows[1], 1u);
+  EXPECT_EQ(rows[5], 1u);  // row 1 starts k = 5 entries in
+  EXPECT_EQ(rows[6], 0u);
 }
 
 TEST(SpatialIndex, FewerPointsThanK) {

@@ -17,18 +17,19 @@ namespace meshflow {
 /// diagonal; CAD edges, even a 45-degree chamfer, are above it).
 constexpr float kDefaultFeatureAngleDeg = 40.0f;
 
-/// Sharp edges connected to fewer than this many others (by shared vertices) are dropped as
-/// noise: on a scanned room the 40-degree test also fires on short runs of bumpy faces, whose
-/// locked ends would stop decimation; a CAD edge spans many edges of the mesh.
-constexpr std::size_t kMinFeatureEdges = 10;
+/// The default shortest feature line, in median edge lengths of the mesh (see detect_features):
+/// on a scanned room the 40-degree test also fires on bumps, whose sharp edges form short,
+/// zigzagging, branching runs; a CAD edge or a wall's corner runs straight over many edges.
+constexpr float kMinFeatureLineEdges = 5.0f;
 
 struct MeshFeatures {
   enum class VertexKind : std::uint8_t { kFree, kLine, kCorner };
   /// Sharp edges as {a, b} with a < b, ascending.
   std::vector<std::array<std::uint32_t, 2>> edges;
-  /// Per vertex: kFree (no sharp edge), kLine (two sharp edges turning by less than the feature
-  /// angle: an inner vertex of a feature line), kCorner (one, three or more sharp edges, or two
-  /// that turn by more than the feature angle).
+  /// Per vertex: kFree (no sharp edge), kLine (two sharp edges that continue one another: the
+  /// line turns by less than the feature angle and the faces on each side by less than twice
+  /// it, at most 90 degrees), kCorner (one, three or more sharp edges, or two that do not continue
+  /// one another).
   std::vector<VertexKind> vertex_kind;
 
   /// Whether {a, b} is a sharp edge. O(log edges).
@@ -37,10 +38,17 @@ struct MeshFeatures {
   std::size_t count(VertexKind kind) const;
 };
 
-/// Sharp edges of `mesh` (an edge with exactly two faces whose normals differ by more than
-/// `angle_deg` degrees, in a connected set of at least kMinFeatureEdges of them; border and
-/// non-manifold edges are never sharp) and the vertex kinds
-/// (see MeshFeatures). angle_deg >= 180: no features. Serial, deterministic; O(T log T).
-MeshFeatures detect_features(const TriangleMesh& mesh, float angle_deg = kDefaultFeatureAngleDeg);
+/// Sharp edges of `mesh` and the vertex kinds (see MeshFeatures).
+/// Candidates: edges with exactly two faces whose normals differ by more than `angle_deg`
+/// degrees (border and non-manifold edges are never sharp). They form feature lines, runs of
+/// candidates broken at corners (see VertexKind). A line shorter than `min_line_length` metres
+/// is noise and dropped, unless it joins two corners where two longer lines each meet it (a
+/// chamfer's short edge): short lines with a loose end (spurs) and short loops first, the
+/// others once no spur is left; the lines left then join anew and the test repeats until
+/// nothing changes. min_line_length 0: kMinFeatureLineEdges x the mesh's median edge length;
+/// negative: no line is dropped. angle_deg >= 180: no features. Serial, deterministic; O(T log T +
+/// rounds x (V + candidates)), rounds about the depth of the noise's branching.
+MeshFeatures detect_features(const TriangleMesh& mesh, float angle_deg = kDefaultFeatureAngleDeg,
+                             float min_line_length = 0.0f);
 
 }  // namespace meshflow

@@ -107,11 +107,14 @@ TriangleMesh remesh_step(const TriangleMesh& mesh, const OptimizeConfig& config,
   AdaptiveRemeshReport r;
   AdaptiveRemeshConfig remesh = config.remesh;
   remesh.feature_angle_deg = config.feature_angle_deg;
+  remesh.feature_min_length = config.feature_min_length;
   TriangleMesh out = adaptive_remesh(mesh, remesh, &r);
   step.detail = format("%zu -> %zu vertices (%zu splits, %zu collapses", r.vertices_in,
                        r.vertices_out, r.splits, r.collapses) +
-                format(", %zu flips; %zu sharp edges, %zu corners kept)", r.flips, r.sharp_edges_in,
-                       r.corners);
+                format(
+                    ", %zu flips; %zu sharp edges, %zu corners kept, %zu feature vertices "
+                    "snapped)",
+                    r.flips, r.sharp_edges_in, r.corners, r.snapped);
   char lengths[120];
   std::snprintf(lengths, sizeof lengths, ", target edges %.4f-%.4f m at tolerance %.4f m",
                 r.min_target, r.max_target, r.tolerance);
@@ -123,7 +126,8 @@ TriangleMesh decimate_step(const TriangleMesh& mesh, const OptimizeConfig& confi
                            OptimizeStepReport& step) {
   QemReport r;
   const MeshFeatures features =
-      detect_features(mesh, config.decimate_keeps_features ? config.feature_angle_deg : 180.0f);
+      detect_features(mesh, config.decimate_keeps_features ? config.feature_angle_deg : 180.0f,
+                      config.feature_min_length);
   TriangleMesh out = qem_decimate(mesh, features.edges, config.decimate, &r);
   step.detail = format("%zu collapses in %zu passes", r.collapses, r.passes) +
                 format("; refused %zu topology, %zu normal, %zu border", r.rejected_topology,
@@ -176,8 +180,11 @@ std::vector<OptimizeStep> parse_optimize_steps(const std::string& list) {
   return steps;
 }
 
-TriangleMesh optimize_mesh(const TriangleMesh& mesh, const OptimizeConfig& config,
+TriangleMesh optimize_mesh(const TriangleMesh& mesh, const OptimizeConfig& given,
                            OptimizeReport* report) {
+  OptimizeConfig config = given;
+  if (config.feature_min_length == 0.0f)  // one scale for every step: the input's
+    config.feature_min_length = kMinFeatureLineEdges * median_edge_length(mesh);
   OptimizeReport r;
   TriangleMesh current = mesh;
   const bool had_normals = !mesh.normals.empty() && mesh.normals.size() == mesh.vertices.size();

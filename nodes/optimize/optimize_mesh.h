@@ -35,12 +35,13 @@ struct OptimizeConfig {
   /// Sharp edges: faces meeting at more than this many degrees (detect_features(), on the mesh
   /// each reducing step receives); the steps keep them. 180: no features.
   float feature_angle_deg = kDefaultFeatureAngleDeg;
+  /// Feature lines shorter than this are noise (metres; detect_features()). 0:
+  /// kMinFeatureLineEdges x the median edge length of the mesh optimize_mesh() receives, the
+  /// same for every step.
+  float feature_min_length = 0.0f;
   /// Whether the decimate step passes the feature graph to QEM (qem_decimate with feature
-  /// edges). Off by default: on kurt3d scan 000 after clean,holes,sharpen,planes,retriangulate,
-  /// remesh the 40-degree graph has ~4500 corners of noise and decimation keeps 16759 of 32487
-  /// triangles instead of 11369; on the CAD test objects plain QEM already keeps every edge and
-  /// corner (tests/graph/test_feature_preservation.cpp). The remesh step always uses it.
-  bool decimate_keeps_features = false;
+  /// edges: corners stay, feature-line vertices collapse only along their line).
+  bool decimate_keeps_features = true;
   CleanupConfig cleanup;
   HoleFillingConfig holes;
   PlanarRegionConfig planes;  ///< planes, sharpen and retriangulate

@@ -40,7 +40,9 @@ FeatureScore score(const TriangleMesh& mesh, const synthetic::ClosedObject& obje
       mesh, [&object](const Eigen::Vector3f& p) { return object.distance(p); }, 50000);
   s.mean = e.area.mean;
   s.p95 = e.area.p95;
-  const MeshFeatures f = detect_features(mesh);
+  // Every sharp edge counts (no line dropped as noise: these meshes have none, and a reduced
+  // mesh's few long edges make short lines).
+  const MeshFeatures f = detect_features(mesh, kDefaultFeatureAngleDeg, -1.0f);
   std::vector<float> d;
   for (const auto& [a, b] : object.feature_edges) {
     const int steps = std::max(1, static_cast<int>((b - a).norm() / (0.25f * voxel)));

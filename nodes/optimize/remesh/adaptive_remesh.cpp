@@ -8,6 +8,7 @@
 #include <limits>
 #include <unordered_set>
 
+#include "nodes/optimize/feature_snap.h"
 #include "nodes/search/closest_point.h"
 #include "nodes/search/mesh_distance_index.h"
 #include "runtime/half_edge_mesh.h"
@@ -20,6 +21,10 @@ constexpr std::uint32_t kNone = HalfEdgeMesh::kNone;
 constexpr float kSplitAbove = 4.0f / 3.0f;  // Botsch & Kobbelt's thresholds around the target
 constexpr float kCollapseBelow = 4.0f / 5.0f;
 constexpr float kSmallestMove = 0.05f;  // relaxation leaves vertices this close (x target) alone
+// snap_feature_vertices() moves a feature vertex by up to 2 median edges, onto sides flat to
+// within 0.05 of one (a noisy scan's sides are not: its feature vertices stay).
+constexpr float kSnapMoveEdges = 2.0f;
+constexpr float kSnapFlatnessEdges = 0.05f;
 
 /// The remesher's state: the mesh and what each vertex carries alongside it.
 struct Remesher {
@@ -472,15 +477,24 @@ TriangleMesh adaptive_remesh(const TriangleMesh& mesh, const AdaptiveRemeshConfi
     return mesh;
   }
   const float median = median_edge_length(mesh);
-  const MeshDistanceIndex surface(mesh);
-  Remesher r{mesh, surface, HalfEdgeMesh(mesh), {}, {}, {}, 0.0f, 0.0f, 0.0f, {}, {}};
-  {
-    const MeshFeatures features = detect_features(mesh, config.feature_angle_deg);
-    r.kind = features.vertex_kind;
-    for (const auto& e : features.edges) r.sharp.insert(undirected_edge_key(e[0], e[1]));
-    rep.sharp_edges_in = features.edges.size();
-    rep.corners = features.count(MeshFeatures::VertexKind::kCorner);
+  const MeshFeatures features =
+      detect_features(mesh, config.feature_angle_deg, config.feature_min_length);
+  // Feature vertices onto their sides' planes first: the remesh keeps them and enlarges their
+  // faces, so an extraction's stray edge vertex would spread its error.
+  TriangleMesh snapped;
+  if (!features.edges.empty()) {
+    snapped = mesh;
+    rep.snapped = snap_feature_vertices(snapped, features, kSnapMoveEdges * median,
+                                        kSnapFlatnessEdges * median)
+                      .moved;
   }
+  const TriangleMesh& source = features.edges.empty() ? mesh : snapped;
+  const MeshDistanceIndex surface(source);
+  Remesher r{source, surface, HalfEdgeMesh(source), {}, {}, {}, 0.0f, 0.0f, 0.0f, {}, {}};
+  r.kind = features.vertex_kind;
+  for (const auto& e : features.edges) r.sharp.insert(undirected_edge_key(e[0], e[1]));
+  rep.sharp_edges_in = features.edges.size();
+  rep.corners = features.count(MeshFeatures::VertexKind::kCorner);
   r.tolerance = config.tolerance > 0.0f ? config.tolerance : 0.25f * median;
   r.min_turn_cos = std::cos(config.max_normal_turn_deg * static_cast<float>(M_PI) / 180.0f);
   r.max_border_turn_sin = std::sin(config.max_border_turn_deg * static_cast<float>(M_PI) / 180.0f);

@@ -37,15 +37,20 @@ struct AdaptiveRemeshConfig {
   /// split at their midpoints and collapsed only along themselves, never flipped; a vertex on a
   /// feature line is removed only where the line turns by less than max_border_turn_deg, and
   /// corners never are; feature vertices do not relax; curvature is fitted on one side of them.
+  /// Before remeshing, feature vertices move onto the planes of their sides
+  /// (snap_feature_vertices(): up to 2 median edge lengths, sides flat within 0.05 of one).
   float feature_angle_deg = kDefaultFeatureAngleDeg;
+  /// Feature lines shorter than this are noise (metres; detect_features(): 0 = from the mesh).
+  float feature_min_length = 0.0f;
 };
 
 struct AdaptiveRemeshReport {
   std::size_t vertices_in = 0, vertices_out = 0;
   std::size_t splits = 0, collapses = 0, flips = 0;
   std::size_t sharp_edges_in = 0, corners = 0;  ///< the input's feature graph
-  float tolerance = 0.0f;                       ///< the one used (metres)
-  float min_target = 0.0f, max_target = 0.0f;   ///< range of the vertices' target lengths
+  std::size_t snapped = 0;  ///< feature vertices moved onto their sides' planes first
+  float tolerance = 0.0f;   ///< the one used (metres)
+  float min_target = 0.0f, max_target = 0.0f;  ///< range of the vertices' target lengths
 };
 
 /// Remeshes `mesh` (a 2-manifold; throws meshflow::Error otherwise, as HalfEdgeMesh does)

@@ -2,9 +2,13 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
 #include <map>
 
 #include "nodes/decimate/qem_decimation.h"
+#include "nodes/optimize/feature_snap.h"
 
 namespace meshflow {
 namespace {
@@ -80,6 +84,77 @@ TEST(Features, ACubesTwelveEdgesAndEightCorners) {
   EXPECT_TRUE(detect_features(cube, 180.0f).edges.empty());
 }
 
+// The cube with its face-interior vertices pushed along the face normal by up to `amplitude`
+// grid steps (a fixed pseudo-random pattern): bumps that the dihedral test alone fires on, the
+// cube's edges and corners exactly where they were.
+TriangleMesh bumpy_cube(int n, float amplitude) {
+  TriangleMesh m = tessellated_cube(n);
+  for (std::size_t v = 0; v < m.vertices.size(); ++v) {
+    Eigen::Vector3f& p = m.vertices[v];
+    int axis = -1, extremes = 0;
+    for (int k = 0; k < 3; ++k)
+      if (p[k] == 0.0f || p[k] == 1.0f) axis = k, ++extremes;
+    if (extremes != 1) continue;  // on an edge or a corner
+    const double hash = std::sin(12.9898 * static_cast<double>(v) + 78.233) * 43758.5453;
+    const float unit = static_cast<float>(2.0 * (hash - std::floor(hash)) - 1.0);  // [-1, 1)
+    p[axis] += (p[axis] == 0.0f ? -1.0f : 1.0f) * amplitude * unit / static_cast<float>(n);
+  }
+  return m;
+}
+
+TEST(Features, BumpsAreNoiseTheCubesLinesStay) {
+  const int n = 16;
+  const TriangleMesh tessellated = tessellated_cube(n);
+  const TriangleMesh cube = bumpy_cube(n, 0.35f);
+  // Every candidate kept (min_line_length < 0): the bumps fire the 40-degree test.
+  const MeshFeatures all = detect_features(cube, kDefaultFeatureAngleDeg, -1.0f);
+  std::size_t off_edges = 0;
+  for (const auto& e : all.edges)
+    off_edges +=
+        on_cube_edge(tessellated.vertices[e[0]]) && on_cube_edge(tessellated.vertices[e[1]]) ? 0
+                                                                                             : 1;
+  EXPECT_GT(off_edges, 100u);
+  // Short, branching, zigzagging lines dropped: nothing off the cube's edges is kept, most of
+  // the 12 edges are (where bumps beside an edge turn its side's faces by more than twice the
+  // feature angle the line breaks there, and a piece may fall below the minimum length).
+  const MeshFeatures f = detect_features(cube);
+  std::printf(
+      "[ features ] bumpy cube: %zu candidates (%zu off the edges), %zu kept, %zu corners\n",
+      all.edges.size(), off_edges, f.edges.size(), f.count(MeshFeatures::VertexKind::kCorner));
+  EXPECT_GE(f.edges.size(), 12u * n * 3 / 4);
+  for (const auto& e : f.edges)
+    EXPECT_TRUE(on_cube_edge(tessellated.vertices[e[0]]) &&
+                on_cube_edge(tessellated.vertices[e[1]]));
+  EXPECT_LE(f.count(MeshFeatures::VertexKind::kCorner), 16u);
+}
+
+TEST(Features, SnapPutsAStrayEdgeVertexBackOnTheEdge) {
+  // A vertex in the middle of an edge pushed off it by 0.3 grid steps goes back onto the edge
+  // (the intersection of its two sides' planes) at the same place along it.
+  const int n = 10;
+  const TriangleMesh exact = tessellated_cube(n);
+  TriangleMesh cube = exact;
+  const auto stray = static_cast<std::uint32_t>(
+      std::find(exact.vertices.begin(), exact.vertices.end(), Eigen::Vector3f(0.5f, 0.0f, 0.0f)) -
+      exact.vertices.begin());
+  ASSERT_LT(stray, exact.vertices.size());
+  cube.vertices[stray] += 0.3f / n * Eigen::Vector3f(0.0f, -1.0f, -1.0f).normalized();
+  const MeshFeatures f = detect_features(cube);
+  ASSERT_EQ(f.edges.size(), 12u * n);  // the stray vertex bends the faces, not the graph
+  const FeatureSnapReport r = snap_feature_vertices(cube, f, 0.5f / n, 0.01f / n);
+  EXPECT_EQ(r.moved, 1u);
+  EXPECT_LT((cube.vertices[stray] - exact.vertices[stray]).norm(), 1e-5f);
+  EXPECT_EQ(cube.vertices, [&] {
+    TriangleMesh m = exact;  // nothing else moved
+    m.vertices[stray] = cube.vertices[stray];
+    return m.vertices;
+  }());
+  // Not that far: it stays.
+  TriangleMesh again = exact;
+  again.vertices[stray] += 0.3f / n * Eigen::Vector3f(0.0f, -1.0f, -1.0f).normalized();
+  EXPECT_EQ(snap_feature_vertices(again, detect_features(again), 0.01f / n, 0.01f / n).moved, 0u);
+}
+
 TEST(Features, DecimationKeepsCornersAndCollapsesEdgesOnlyAlongThemselves) {
   const TriangleMesh cube = tessellated_cube(12);
   const MeshFeatures f = detect_features(cube);
@@ -99,7 +174,9 @@ TEST(Features, DecimationKeepsCornersAndCollapsesEdgesOnlyAlongThemselves) {
   EXPECT_EQ(corners, 8u);
   // Every sharp edge of the output joins two points of one cube edge (a chord of a feature
   // line), and the 12 lines are all still there: 12 sharp edges at least.
-  const MeshFeatures kept = detect_features(out);
+  // (Every candidate: one mesh edge per cube edge is a line far shorter than the default
+  // minimum, 5 of the coarse mesh's median edges.)
+  const MeshFeatures kept = detect_features(out, kDefaultFeatureAngleDeg, -1.0f);
   EXPECT_GE(kept.edges.size(), 12u);
   for (const auto& e : kept.edges) {
     const Eigen::Vector3f a = out.vertices[e[0]], b = out.vertices[e[1]];

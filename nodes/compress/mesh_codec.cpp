@@ -1,6 +1,7 @@
 #include "nodes/compress/mesh_codec.h"
 
 #include <algorithm>
+#include <optional>
 
 #include "nodes/compress/attribute_coder.h"
 #include "nodes/compress/closed_surface.h"
@@ -53,24 +54,30 @@ ReplayedSurface decode_symbols(std::uint32_t components, std::size_t symbols, st
                                const std::string& source) {
   ReverseReplay replay(components, symbols, vertices, handles, source);
   SymbolModels m;
-  for (;;) {
-    switch (replay.next()) {
-      case ReverseReplay::Step::kSymbol: {
-        const unsigned v = m.symbol[replay.context()].decode(dec);
-        if (v >= kOpCount)
-          throw Error(source, "connectivity symbol " + std::to_string(replay.symbols_left() - 1),
-                      "unknown symbol " + std::to_string(v));
-        replay.apply(static_cast<Op>(v));
-        break;
+  {
+    RangeDecoder::Session session(dec);  // the decoder's state in registers for the whole loop
+    RangeDecoderCore& core = session.core;
+    for (bool done = false; !done;) {
+      switch (replay.next()) {
+        case ReverseReplay::Step::kSymbol: {
+          const unsigned v = m.symbol[replay.context()].decode(core);
+          if (v >= kOpCount)
+            throw Error(source, "connectivity symbol " + std::to_string(replay.symbols_left() - 1),
+                        "unknown symbol " + std::to_string(v));
+          replay.apply(static_cast<Op>(v));
+          break;
+        }
+        case ReverseReplay::Step::kComponentStart:
+          replay.answer(core.decode(m.starts) != 0);
+          break;
+        case ReverseReplay::Step::kDone:
+          done = true;
+          break;
       }
-      case ReverseReplay::Step::kComponentStart:
-        replay.answer(dec.decode(m.starts) != 0);
-        break;
-      case ReverseReplay::Step::kDone:
-        dec.check();
-        return replay.finish();
     }
-  }
+  }  // the session stores the state back
+  dec.check();
+  return replay.finish();
 }
 
 // The side data's integer fields, each with its own model.
@@ -206,6 +213,24 @@ constexpr std::array<TrustChoices, kMaxParallelograms + 1> kTrustChoices = {
     trust_choices(0), trust_choices(1), trust_choices(2), trust_choices(3), trust_choices(4)};
 static_assert(kMaxParallelograms == 4, "kTrustChoices lists one entry per offer size");
 
+// sum / n rounded half away from zero, n in 1 .. kMaxParallelograms: a division by a constant
+// per case (a multiply and shifts; a 64-bit division by a variable takes tens of cycles, three
+// per vertex and up to 30 per vertex in the encoder's trials).
+std::int64_t rounded_mean(std::int64_t sum, std::int64_t n) {
+  static_assert(kMaxParallelograms == 4, "rounded_mean() has a case per count");
+  const std::int64_t half = n / 2, biased = sum >= 0 ? sum + half : sum - half;
+  switch (n) {
+    case 1:
+      return sum;
+    case 2:
+      return biased / 2;
+    case 3:
+      return biased / 3;
+    default:
+      return biased / 4;
+  }
+}
+
 // The prediction from the parallelograms `trusted` selects (bit i: parallelogram i), their
 // rounded mean, or the fallback when none; sets each axis's residual context.
 std::array<std::int32_t, 3> predict(const Candidates& c, unsigned trusted,
@@ -224,9 +249,8 @@ std::array<std::int32_t, 3> predict(const Candidates& c, unsigned trusted,
   }
   const Prediction kind = n == 1 ? kParallelogram : n == 2 ? kMean2 : kMean3;
   std::array<std::int32_t, 3> out;
-  const std::int64_t half = n / 2;
   for (std::size_t a = 0; a < 3; ++a) {
-    out[a] = static_cast<std::int32_t>((sum[a] >= 0 ? sum[a] + half : sum[a] - half) / n);
+    out[a] = static_cast<std::int32_t>(rounded_mean(sum[a], n));
     context[a] = spread_context(kind, c.spread[a], c.extent[a]);
   }
   return out;
@@ -536,11 +560,16 @@ TriangleMesh decode_body(io::ByteReader& in, const Quantizer& quantizer, Attribu
     PositionModels m;
     Grid grid(static_cast<std::size_t>(decoded));
     std::array<std::int32_t, 3> last{};
+    // The three decoders' states stay in registers for the whole loop (stored back, and then
+    // checked, when the sessions end).
+    std::optional<RangeDecoder::Session> sx(std::in_place, dec[0]), sy(std::in_place, dec[1]),
+        sz(std::in_place, dec[2]);
+    RangeDecoderCore &cx = sx->core, &cy = sy->core, &cz = sz->core;
     const auto read = [&](const std::array<std::int32_t, 3>& predicted,
                           const std::array<std::size_t, 3>& context) {
       const std::array<std::int32_t, 3> residual =
           IntegerModel::decode_three(m.residual[context[0]][0], m.residual[context[1]][1],
-                                     m.residual[context[2]][2], dec[0], dec[1], dec[2]);
+                                     m.residual[context[2]][2], cx, cy, cz);
       std::array<std::int32_t, 3> q{};
       for (std::size_t a = 0; a < 3; ++a)
         q[a] = static_cast<std::int32_t>(static_cast<std::uint32_t>(predicted[a]) +
@@ -556,8 +585,7 @@ TriangleMesh decode_body(io::ByteReader& in, const Quantizer& quantizer, Attribu
       }
       const Candidates offer = candidates(k, replayed.predictors[k], ring, roles.hole, grid, last);
       unsigned trusted = 0;
-      for (unsigned i = 0; i < offer.n; ++i)
-        trusted |= dec[0].decode(m.trusted[offer.n - 1][i]) << i;
+      for (unsigned i = 0; i < offer.n; ++i) trusted |= cx.decode(m.trusted[offer.n - 1][i]) << i;
       std::array<std::size_t, 3> context;
       const std::array<std::int32_t, 3> predicted = predict(offer, trusted, context);
       grid[k] = read(predicted, context);
@@ -569,6 +597,9 @@ TriangleMesh decode_body(io::ByteReader& in, const Quantizer& quantizer, Attribu
       mesh.vertices[i] = quantizer.position(q);
       grid_out[i] = q;
     }
+    sx.reset();
+    sy.reset();
+    sz.reset();
     for (const RangeDecoder& d : dec) d.check();
   }
   mesh.triangles.reserve(replayed.triangles.size() + degenerate.size() / 3);

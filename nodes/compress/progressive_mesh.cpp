@@ -304,6 +304,53 @@ std::uint64_t chain_header(std::uint64_t chain, std::uint32_t count, std::uint64
 
 }  // namespace
 
+void reseal_progressive_mesh(std::vector<unsigned char>& bytes) {
+  // Little-endian field reads and writes that give up (false) past the data.
+  const auto get = [&](std::size_t at, std::size_t width, std::uint64_t& v) {
+    if (at > bytes.size() || width > bytes.size() - at) return false;
+    v = 0;
+    for (std::size_t i = 0; i < width; ++i) v |= std::uint64_t{bytes[at + i]} << (8 * i);
+    return true;
+  };
+  const auto put = [&](std::size_t at, std::uint64_t v) {
+    for (std::size_t i = 0; i < 8; ++i) bytes[at + i] = static_cast<unsigned char>(v >> (8 * i));
+  };
+  const auto resealed_file = [&] { reseal_compressed_mesh(bytes); };
+  // Header: magic 8, version 4, kind 4, flags 4, counts 16, quantiser 36, prefix checksum 8.
+  constexpr std::size_t kKindOffset = 12, kBodyOffset = detail::kPrefixChecksumOffset + 8;
+  std::uint64_t kind = 0;
+  if (bytes.size() < kBodyOffset + 8 || !get(kKindOffset, 4, kind) ||
+      kind != static_cast<std::uint64_t>(CompressionKind::kProgressive))
+    return resealed_file();
+  // The base body (mesh_codec.h): u32, u64, u64, five sections, u8, one section.
+  std::size_t at = kBodyOffset + 20;
+  std::uint64_t n = 0;
+  for (int section = 0; section < 6; ++section) {
+    if (section == 5) ++at;  // the normal bits
+    if (!get(at, 8, n) || n > bytes.size()) return resealed_file();
+    at += 8 + static_cast<std::size_t>(n);
+  }
+  std::uint64_t packets = 0;
+  if (!get(at + 8, 4, packets)) return resealed_file();
+  at += 12;
+  const std::size_t data_end = bytes.size() - 8;  // before the file checksum
+  if (at > data_end) return resealed_file();
+  std::uint64_t chain = detail::prefix_checksum(bytes.data(), at);
+  put(detail::kPrefixChecksumOffset, chain);
+  for (std::uint64_t p = 0; p < packets; ++p) {
+    std::uint64_t count = 0, size = 0;
+    if (!get(at, 4, count) || !get(at + 4, 8, size) || size < 8 ||
+        size > data_end - std::min(data_end, at + 12))
+      break;
+    const std::size_t stream = static_cast<std::size_t>(size - 8);
+    chain = detail::fnv1a64_continue(chain_header(chain, static_cast<std::uint32_t>(count), size),
+                                     bytes.data() + at + 12, stream);
+    put(at + 12 + stream, chain);
+    at += 12 + static_cast<std::size_t>(size);
+  }
+  resealed_file();
+}
+
 TriangleMesh decode_progressive(io::ByteReader& in, const CompressedMeshInfo& info,
                                 const std::string& source, const ProgressiveLevel& level,
                                 PrefixState* prefix) {

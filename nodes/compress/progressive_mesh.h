@@ -78,6 +78,13 @@ PrefixDecode decompress_progressive_prefix(const std::vector<unsigned char>& byt
                                            const std::string& source,
                                            const ProgressiveLevel& level = {});
 
+/// For fuzzers and tests that corrupt fields on purpose: rewrites every checksum of a
+/// progressive image (the prefix checksum, each packet's, the file's) to match the bytes, as
+/// far as the image's lengths can be followed (stops at the first length that leaves the data).
+/// Single-rate or unreadable images get the file checksum only (reseal_compressed_mesh()).
+/// O(size); changes nothing but checksum fields.
+void reseal_progressive_mesh(std::vector<unsigned char>& bytes);
+
 /// Decodes a level of a progressive file image (checksum checked). Throws Error.
 TriangleMesh decompress_progressive_level(const std::vector<unsigned char>& bytes,
                                           const std::string& source, const ProgressiveLevel& level);

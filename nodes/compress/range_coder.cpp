@@ -11,32 +11,26 @@ namespace {
 // was cut or corrupt.
 constexpr std::size_t kAllowedOverrun = 4;
 
+// The number of significant bits of v (0 for 0).
 unsigned bit_length(std::uint32_t v) {
-  unsigned n = 0;
-  while (v != 0) {
-    ++n;
-    v >>= 1;
-  }
-  return n;
+  return v == 0 ? 0u : 32u - static_cast<unsigned>(__builtin_clz(v));
 }
 
-// -16 log2(p / 2048) for p = 1 .. 2048 (index p - 1).
-std::array<std::uint16_t, RangeEncoder::kOne> make_cost_table() {
-  std::array<std::uint16_t, RangeEncoder::kOne> t{};
+// -16 log2(p / 2048) for p = 0 .. 2048 (p = 0, which the models never reach, as p = 1).
+std::array<std::uint16_t, RangeEncoder::kOne + 1> make_cost_table() {
+  std::array<std::uint16_t, RangeEncoder::kOne + 1> t{};
   for (std::uint32_t p = 1; p <= RangeEncoder::kOne; ++p)
-    t[p - 1] = static_cast<std::uint16_t>(
+    t[p] = static_cast<std::uint16_t>(
         std::lround(-16.0 * std::log2(static_cast<double>(p) / RangeEncoder::kOne)));
+  t[0] = t[1];
   return t;
 }
 
-const std::array<std::uint16_t, RangeEncoder::kOne> kBitCost = make_cost_table();
-
 }  // namespace
 
-std::uint32_t bit_cost(const BitModel& model, unsigned bit) {
-  const std::uint32_t p = bit != 0 ? RangeEncoder::kOne - model.p0 : model.p0;
-  return kBitCost[(p > 0 ? p : 1) - 1];
-}
+namespace detail {
+const std::array<std::uint16_t, RangeEncoder::kOne + 1> kBitCost = make_cost_table();
+}  // namespace detail
 
 void RangeEncoder::encode_direct(std::uint32_t value, unsigned count) {
   // Up to eight bits per step: the range splits into 2^k equal parts (it stays >= 2^16).
@@ -153,18 +147,16 @@ std::int32_t IntegerModel::decode(RangeDecoder& decoder) {
 }
 
 std::array<std::int32_t, 3> IntegerModel::decode_three(IntegerModel& mx, IntegerModel& my,
-                                                       IntegerModel& mz, RangeDecoder& dx,
-                                                       RangeDecoder& dy, RangeDecoder& dz) {
-  RangeDecoder::Session sx(dx), sy(dy), sz(dz);
+                                                       IntegerModel& mz, RangeDecoderCore& dx,
+                                                       RangeDecoderCore& dy, RangeDecoderCore& dz) {
   unsigned nx = 1, ny = 1, nz = 1;
   for (int level = 0; level < SymbolModel<16>::kLevels; ++level) {
-    nx = mx.length_low_.step(sx.core, nx);
-    ny = my.length_low_.step(sy.core, ny);
-    nz = mz.length_low_.step(sz.core, nz);
+    nx = mx.length_low_.step(dx, nx);
+    ny = my.length_low_.step(dy, ny);
+    nz = mz.length_low_.step(dz, nz);
   }
-  return {mx.finish(sx.core, SymbolModel<16>::symbol(nx)),
-          my.finish(sy.core, SymbolModel<16>::symbol(ny)),
-          mz.finish(sz.core, SymbolModel<16>::symbol(nz))};
+  return {mx.finish(dx, SymbolModel<16>::symbol(nx)), my.finish(dy, SymbolModel<16>::symbol(ny)),
+          mz.finish(dz, SymbolModel<16>::symbol(nz))};
 }
 
 }  // namespace meshflow::compress

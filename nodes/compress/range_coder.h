@@ -19,9 +19,18 @@ struct BitModel {
   std::uint16_t p0 = 1024;
 };
 
+namespace detail {
+/// -16 log2(p / 2048) for p = 0 .. 2048 (p = 0 costs as p = 1); filled before main().
+extern const std::array<std::uint16_t, 2049> kBitCost;
+}  // namespace detail
+
 /// The cost of coding `bit` with `model` as it stands, in 1/16ths of a bit (-16 log2 p), for
-/// encoders that choose between codings. O(1) (a table); thread-safe.
-std::uint32_t bit_cost(const BitModel& model, unsigned bit);
+/// encoders that choose between codings. O(1) (a table lookup, inline: encoders call it in
+/// their inner loops); thread-safe.
+inline std::uint32_t bit_cost(const BitModel& model, unsigned bit) {
+  const std::uint32_t p0 = model.p0;
+  return detail::kBitCost[bit != 0 ? 2048u - p0 : p0];
+}
 
 class RangeEncoder {
  public:
@@ -47,6 +56,7 @@ class RangeEncoder {
   static constexpr std::uint32_t kOne = 1u << kProbabilityBits;
   static constexpr unsigned kAdaptShift = 5;
   static constexpr std::uint32_t kTop = 1u << 24;
+  static_assert(kOne == 2048, "bit_cost()'s table is in 2048ths");
 
  private:
   void shift_low();
@@ -207,10 +217,11 @@ class IntegerModel {
   /// The next value.
   std::int32_t decode(RangeDecoder& dec);
   /// Three values from three streams (one per model), their steps interleaved so that the three
-  /// decoders' dependency chains overlap: about twice as fast as three decode() calls.
+  /// decoders' dependency chains overlap: about twice as fast as three decode() calls. The cores
+  /// are those of RangeDecoder::Session objects the caller holds over its whole loop.
   static std::array<std::int32_t, 3> decode_three(IntegerModel& mx, IntegerModel& my,
-                                                  IntegerModel& mz, RangeDecoder& dx,
-                                                  RangeDecoder& dy, RangeDecoder& dz);
+                                                  IntegerModel& mz, RangeDecoderCore& dx,
+                                                  RangeDecoderCore& dy, RangeDecoderCore& dz);
 
  private:
   std::int32_t finish(RangeDecoderCore& dec, unsigned length_symbol);

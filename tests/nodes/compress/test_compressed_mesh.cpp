@@ -554,6 +554,46 @@ TEST(ProgressiveMesh, EveryPacketPrefixDecodesAndEveryFlippedByteIsReported) {
   }
 }
 
+// The fuzzer's helper: reseal_progressive_mesh() rewrites the prefix checksum, every packet's and
+// the file's (all zeroed here) to the encoder's, so a mutated stream reaches the decoder.
+TEST(ProgressiveMesh, ResealingRewritesEveryChecksum) {
+  CompressConfig config;
+  config.splits_per_packet = 40;
+  const std::vector<unsigned char> bytes =
+      compress::compress_progressive(with_face_normals(sphere(14, 18)), config);
+  const std::vector<std::size_t> ends = packet_boundaries(bytes);
+  ASSERT_GT(ends.size(), 3u);
+  std::vector<unsigned char> zeroed = bytes;
+  const auto zero = [&](std::size_t at) { std::fill_n(zeroed.begin() + at, 8, 0); };
+  zero(compress::detail::kPrefixChecksumOffset);
+  for (std::size_t i = 1; i < ends.size(); ++i) zero(ends[i] - 8);
+  zero(bytes.size() - 8);
+  ASSERT_NE(zeroed, bytes);
+  compress::reseal_progressive_mesh(zeroed);
+  EXPECT_EQ(zeroed, bytes);
+  // A flipped byte in the last packet's stream: refused by its checksum, then (resealed) no
+  // checksum complains.
+  std::vector<unsigned char> flipped = bytes;
+  flipped[ends[ends.size() - 2] + 13] ^= 0x10;
+  const auto error = [](const std::vector<unsigned char>& b) {
+    try {
+      compress::decompress_progressive_prefix(b, "stream");
+    } catch (const Error& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  EXPECT_NE(error(flipped).find("checksum"), std::string::npos) << error(flipped);
+  compress::reseal_progressive_mesh(flipped);
+  EXPECT_EQ(error(flipped).find("checksum"), std::string::npos) << error(flipped);
+  // Single-rate files: the file checksum only.
+  std::vector<unsigned char> single = compress::compress_mesh(torus(8, 6));
+  const std::vector<unsigned char> good = single;
+  std::fill_n(single.end() - 8, 8, 0);
+  compress::reseal_progressive_mesh(single);
+  EXPECT_EQ(single, good);
+}
+
 // Files of version 2 (before the prefix checksums and the new attribute coders) are refused
 // with the versions named.
 TEST(CompressedMeshFile, OldVersionsAreRefusedByName) {

@@ -1,0 +1,26 @@
+#pragma once
+// --close on a fused TSDF map (run --fuse --close): the map's observed voxels are the data the
+// close stage holds; its unseen parts (an object's underside, the inside of a closed shape) are
+// filled by the same diffusion as a merged cloud's distance field.
+
+#include "nodes/close/close_surface.h"
+#include "nodes/fusion/tsdf_volume.h"
+
+namespace meshflow {
+
+/// The voxels of `map` whose accumulated weight is above `min_weight` (TsdfMesher's observed
+/// voxels), as a grid and distance field: voxel (i, j, k) is corner (i, j, k), at (i, j, k) x
+/// the map's voxel size; `distance` holds their fused distances (metres, positive in front of
+/// the surface, clipped to the truncation), all valid; the grid has no cells. Parallel over
+/// blocks, deterministic; not thread-safe against integrate() on the map. O(voxels log voxels).
+ClosedDistance tsdf_map_distances(const TsdfVolume& map, float min_weight);
+
+/// The map's closed surface: close_distance_field() over tsdf_map_distances(). The observed
+/// voxels keep their distances; the map's free space (voxels fused at +truncation, carved ones)
+/// is observed and so held outside, as a line of sight holds a cloud's seen-empty corners. The
+/// grid holds the cells the closed zero set crosses, with a value at each of their corners;
+/// marching cubes over it give a watertight surface. Throws as close_distance_field() does.
+ClosedDistance close_tsdf_map(const TsdfVolume& map, float min_weight, const CloseConfig& config,
+                              CloseReport* report = nullptr);
+
+}  // namespace meshflow

@@ -5,7 +5,7 @@
 #include <algorithm>
 
 #include "graph/frame_graph.h"
-#include "nodes/close/close_tsdf_map.h"
+#include "graph/close_tsdf_map.h"
 #include "nodes/extract/extract_surface.h"
 #include "runtime/error.h"
 

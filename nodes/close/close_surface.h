@@ -70,8 +70,7 @@ struct ClosedDistance {
 /// lattice's faces are held outside. Lines of sight from cloud.sensor_origin to each of
 /// cloud.positions mark seen-empty corners when cloud.has_sensor_origin. The zero set of the
 /// result is closed and bounds the negative region; marching cubes over the returned grid give
-/// a watertight mesh. Any lattice size (see the file comment for large ones); throws
-/// meshflow::Error("close", ...) only when a tile's axis would overflow an int. Parallel
+/// a watertight mesh. Any lattice size (see the file comment for large ones). Parallel
 /// (tiles, planes of a lattice, points, cells); the output does not depend on the thread count.
 /// Time O(lattice x sweeps + points x range / voxel) for a dense lattice; a tiled one costs
 /// the coarse lattice plus O(points) per tile solved (its lines of sight are clipped to it).

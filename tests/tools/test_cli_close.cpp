@@ -71,5 +71,27 @@ TEST(CliClose, FusedAndMergedDepthSequencesCloseWatertight) {
   }
 }
 
+// `sample OBJECT --scan N --outliers F`: the turntable scan of the tests as a PLY (points
+// without normals, outliers last), meshed watertight by `reconstruct --close`.
+TEST(CliClose, SampledTurntableScanClosesWatertight) {
+  const std::string dir = test::temp_dir();
+  const CliRun sampled = run_cli("sample torus --scan 4 --outliers 0.01 -o " + dir + "/scan.ply");
+  ASSERT_EQ(sampled.exit_code, 0) << sampled.err;
+  EXPECT_NE(sampled.out.find("4 views on one ring"), std::string::npos) << sampled.out;
+  const nlohmann::json cloud = close_test_json("info " + dir + "/scan.ply --json");
+  EXPECT_GT(cloud["points"].get<std::size_t>(), 5000u);
+  EXPECT_FALSE(cloud["fields"]["normals"].get<bool>());
+  ASSERT_EQ(run_cli("reconstruct " + dir + "/scan.ply -o " + dir + "/m.ply --voxel 0.0158 --close")
+                .exit_code,
+            0);
+  const nlohmann::json mesh = close_test_json("info " + dir + "/m.ply --json");
+  EXPECT_TRUE(mesh["closed"].get<bool>()) << mesh.dump();
+  EXPECT_EQ(mesh["components"], 1);
+  EXPECT_EQ(mesh["genus"], 1) << "the torus keeps its hole";
+  // --outliers only with --scan; the city has no views.
+  EXPECT_EQ(run_cli("sample torus --outliers 0.01 -o " + dir + "/x.ply").exit_code, 2);
+  EXPECT_NE(run_cli("sample city --scan 2 -o " + dir + "/c.ply").exit_code, 0);
+}
+
 }  // namespace
 }  // namespace meshflow

@@ -1,7 +1,8 @@
 #pragma once
-// --close on a fused TSDF map (run --fuse --close): the map's observed voxels are the data the
-// close stage holds; its unseen parts (an object's underside, the inside of a closed shape) are
-// filled by the same diffusion as a merged cloud's distance field.
+// The close stage on a fused TSDF map (run --fuse --close): the map's observed voxels are the
+// data the close stage holds; its unseen parts (an object's underside, the inside of a closed
+// shape) are filled by the same diffusion as a merged cloud's distance field. In graph/: it
+// joins two stages' kernels (nodes/fusion, nodes/close), which nodes/ may not.
 
 #include "nodes/close/close_surface.h"
 #include "nodes/fusion/tsdf_volume.h"
@@ -19,7 +20,8 @@ ClosedDistance tsdf_map_distances(const TsdfVolume& map, float min_weight);
 /// voxels keep their distances; the map's free space (voxels fused at +truncation, carved ones)
 /// is observed and so held outside, as a line of sight holds a cloud's seen-empty corners. The
 /// grid holds the cells the closed zero set crosses, with a value at each of their corners;
-/// marching cubes over it give a watertight surface. Throws as close_distance_field() does.
+/// marching cubes over it give a watertight surface. Same cost and threading as
+/// close_distance_field() after O(voxels log voxels) to gather the map's voxels.
 ClosedDistance close_tsdf_map(const TsdfVolume& map, float min_weight, const CloseConfig& config,
                               CloseReport* report = nullptr);
 

@@ -1,4 +1,4 @@
-#include "nodes/close/close_tsdf_map.h"
+#include "graph/close_tsdf_map.h"
 
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_sort.h>

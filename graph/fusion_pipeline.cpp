@@ -4,8 +4,8 @@
 
 #include <algorithm>
 
-#include "graph/frame_graph.h"
 #include "graph/close_tsdf_map.h"
+#include "graph/frame_graph.h"
 #include "nodes/extract/extract_surface.h"
 #include "runtime/error.h"
 

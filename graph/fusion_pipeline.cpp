@@ -4,7 +4,9 @@
 
 #include <algorithm>
 
+#include "graph/close_tsdf_map.h"
 #include "graph/frame_graph.h"
+#include "nodes/extract/extract_surface.h"
 #include "runtime/error.h"
 
 namespace meshflow {
@@ -88,8 +90,17 @@ void FusionPipeline::run(const std::function<FramePtr()>& next,
 }
 
 TriangleMesh FusionPipeline::extract_mesh(TsdfExtractStats* stats) {
-  return optimize_mesh(mesher_.extract(map_, stats),
-                       optimize_config_for_voxel(config_.frames, config_.tsdf.voxel_size));
+  const OptimizeConfig optimize =
+      optimize_config_for_voxel(config_.frames, config_.tsdf.voxel_size);
+  if (!config_.frames.close.enabled) return optimize_mesh(mesher_.extract(map_, stats), optimize);
+  if (stats != nullptr) mesher_.update(map_, stats);  // the open map's cell counts
+  const ClosedDistance closed =
+      close_tsdf_map(map_, config_.min_weight, config_.frames.close, &closing_);
+  ExtractConfig extract = config_.frames.extract;
+  // A map has no points for the methods that read them (planar, extended marching cubes).
+  if (extract.method == ExtractMethod::kAuto) extract.method = ExtractMethod::kMarchingCubes;
+  return optimize_mesh(
+      extract_surface(closed.grid, closed.distance, PointCloud{}, nullptr, extract), optimize);
 }
 
 }  // namespace meshflow

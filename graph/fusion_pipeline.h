@@ -11,6 +11,7 @@
 #include <functional>
 
 #include "graph/pipeline.h"
+#include "nodes/close/close_surface.h"
 #include "nodes/fusion/tsdf_mesher.h"
 #include "nodes/fusion/tsdf_volume.h"
 
@@ -46,8 +47,14 @@ class FusionPipeline : public FramePipeline {
            const std::function<void(const FramePtr&)>& sink) override;
 
   /// The map's surface (incremental marching cubes, then the configured optimisation steps);
-  /// with `stats`, where the surface went (TsdfExtractStats, cells of the whole map).
+  /// with `stats`, where the surface went (TsdfExtractStats, cells of the whole map). With
+  /// config().frames.close.enabled (--close), the map's unseen parts are filled first
+  /// (close_tsdf_map()) and the closed field is meshed by config().frames.extract's method
+  /// (marching cubes for kAuto; no colours): a watertight surface; `stats` still describes the
+  /// open map and closing() what the fill did. Intermediate meshes (mesh_every) stay open.
   TriangleMesh extract_mesh(TsdfExtractStats* stats = nullptr);
+  /// What the last extract_mesh() with --close did (closing().ran: it closed the map).
+  const CloseReport& closing() const { return closing_; }
 
   /// The TSDF map fused so far.
   const TsdfVolume& map() const { return map_; }
@@ -71,6 +78,7 @@ class FusionPipeline : public FramePipeline {
   TsdfVolume map_;
   TsdfMesher mesher_;
   std::size_t integrated_ = 0;
+  CloseReport closing_;
   Eigen::Vector3f last_sensor_ = Eigen::Vector3f::Zero();  // the integrated frame's camera
   std::function<void(const TsdfMap&, const Eigen::Vector3f&)> observer_;
 };

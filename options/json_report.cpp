@@ -86,6 +86,17 @@ nlohmann::json optimize_json(const OptimizeReport& report) {
   return steps;
 }
 
+nlohmann::json close_json(const CloseReport& c) {
+  return {{"ran", c.ran},
+          {"filled", c.filled},
+          {"observed", c.observed},
+          {"seen_empty", c.seen_empty},
+          {"cells_added", c.cells_added},
+          {"levels", c.levels},
+          {"coarse_step", c.coarse_step},
+          {"tiles", c.tiles}};
+}
+
 nlohmann::json frame_json(const Frame& f, double wall_s, int threads) {
   const FilterCounts& c = f.filter_counts;
   return {{"input", f.name},
@@ -107,13 +118,7 @@ nlohmann::json frame_json(const Frame& f, double wall_s, int threads) {
             {"valid_corners", f.distance.valid_count()},
             {"disagreeing", f.distance.disagreeing},
             {"extrapolated", f.distance.extrapolated}}},
-          {"close",
-           {{"ran", f.closing.ran},
-            {"filled", f.closing.filled},
-            {"observed", f.closing.observed},
-            {"seen_empty", f.closing.seen_empty},
-            {"cells_added", f.closing.cells_added},
-            {"levels", f.closing.levels}}},
+          {"close", close_json(f.closing)},
           {"mesh",
            {{"vertices", f.mesh.vertices.size()},
             {"triangles", f.mesh.triangles.size()},

@@ -100,6 +100,20 @@ const char* extraction_name(ExtractMethod method, bool sharp_normals) {
   return "marching cubes";
 }
 
+void report_closing(const CloseReport& c) {
+  if (!c.ran) return;
+  report(
+      "close      %zu corners filled by diffusion (%d levels on %d x %d x %d), %zu held by data, "
+      "%zu seen empty; %zu cells added\n",
+      c.filled, c.levels, c.lattice.x(), c.lattice.y(), c.lattice.z(), c.observed, c.seen_empty,
+      c.cells_added);
+  if (c.coarse_step > 1)
+    report(
+        "           tiled: a coarse lattice of every %d-th corner, %zu tiles solved at full "
+        "resolution\n",
+        c.coarse_step, c.tiles);
+}
+
 void print_frame_report(const Frame& f, double wall_s, int threads) {
   const FilterCounts& c = f.filter_counts;
   report("input      %s: %zu points\n", f.name.c_str(), c.input);
@@ -123,12 +137,7 @@ void print_frame_report(const Frame& f, double wall_s, int threads) {
     report("; invalid: %zu where tangent planes disagree, %zu past the data's border",
            f.distance.disagreeing, f.distance.extrapolated);
   report(")\n");
-  if (f.closing.ran)
-    report(
-        "close      %zu corners filled by diffusion (%d levels on %d x %d x %d), %zu held by data, "
-        "%zu seen empty; %zu cells added\n",
-        f.closing.filled, f.closing.levels, f.closing.lattice.x(), f.closing.lattice.y(),
-        f.closing.lattice.z(), f.closing.observed, f.closing.seen_empty, f.closing.cells_added);
+  report_closing(f.closing);
   if (f.rim_trimmed > 0)
     report("rim        %zu border triangles more than --max-rim voxels from the data peeled off\n",
            f.rim_trimmed);

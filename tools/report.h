@@ -24,6 +24,9 @@ const char* scene_rule(SceneKind kind);
 /// one voxel"): median, 5th percentile, minimum, and the PLY property that holds them.
 void report_observations(const std::vector<float>& counts, const char* what);
 
+/// Prints the close stage's line ("close      N corners filled by diffusion ...") when it ran.
+void report_closing(const CloseReport& closing);
+
 /// Throws meshflow::Error carrying the frame's error if it failed.
 void throw_if_failed(const Frame& frame);
 

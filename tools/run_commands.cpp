@@ -309,11 +309,13 @@ void run_fusion(const RunOptions& o) {
       {"files_written", written},
       {"output", o.output_dir}};
   if (o.quality) summary["observations"] = options::observations_json(observations);
+  if (pipeline->closing().ran) summary["close"] = options::close_json(pipeline->closing());
   print_run_summary(*sequence, stats, limit.threads(), o.sequence.in_flight, failed, summary);
   breakdown.print(extraction.cells);
   report("map        %zu blocks of 8^3 voxels at %.4f m, %.1f MB%s%s\n", map.block_count(),
          map.config().voxel_size, static_cast<double>(map.memory_bytes()) / 1e6,
          o.save_map.empty() ? "" : ", saved to ", o.save_map.c_str());
+  report_closing(pipeline->closing());
   report("mesh       %zu vertices, %zu triangles, extracted in %.1f ms\n", mesh.vertices.size(),
          mesh.triangles.size(), extract_s * 1e3);
   if (o.quality) report_observations(observations, "the map's weight (frames) at each vertex");
@@ -390,6 +392,7 @@ void run_merged(const RunOptions& o) {
                     {{"merged", options::frame_json(*frame, wall, limit.threads())},
                      {"files_written", 1},
                      {"output", output}});
+  report_closing(frame->closing);
   report("merged     %zu points of %zu frames -> %zu vertices, %zu triangles in %.1f ms\n",
          frame->filter_counts.input, stats.frames_ok, frame->mesh.vertices.size(),
          frame->mesh.triangles.size(), 1e3 * wall);
@@ -576,9 +579,8 @@ void add_run_options(CLI::App* cmd) {
   quality->excludes("--triangulate");
   merged->excludes("--triangulate");
   add_pipeline_options(cmd, o->pipeline);
-  // --close fills the distance field of per-frame and merged reconstructions; fused maps and
-  // triangulated depth images have none of their own.
-  fuse->excludes("--close");
+  // --close fills the distance field of per-frame and merged reconstructions and the fused
+  // map's (its final mesh); triangulated depth images have none.
   cmd->get_option("--close")->excludes("--triangulate");
   add_serve_options(cmd, o->serve);
   add_console_flags(cmd, true);

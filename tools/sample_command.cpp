@@ -2,7 +2,9 @@
 // objects (nodes/synthetic/closed_objects.h), for trying and measuring object reconstruction
 // without a scanner; `meshflow eval MESH --object OBJECT` measures against its exact surface.
 // With --orbit N: N depth frames of a camera circling the object, written as a TUM RGB-D
-// directory (for `meshflow run DIR --fuse`, and for other tools on the same frames).
+// directory (for `meshflow run DIR --fuse`, and for other tools on the same frames). With
+// --scan N: N views from one ring merged into one cloud without normals (a turntable scan,
+// --outliers added), the input of `reconstruct --close`.
 // `sample city`: a large scanned site (terrain and buildings) streamed to PLY, for the
 // out-of-core path (`reconstruct --chunk`).
 
@@ -18,6 +20,7 @@
 #include "nodes/synthetic/closed_objects.h"
 #include "nodes/synthetic/depth_sequence.h"
 #include "nodes/synthetic/object_orbit.h"
+#include "nodes/synthetic/object_scan.h"
 #include "runtime/error.h"
 #include "tools/cli_checks.h"
 #include "tools/commands.h"
@@ -34,6 +37,8 @@ struct SampleOptions {
   bool normals = false;
   std::uint32_t seed = 1;
   int orbit = 0;                 ///< > 0: depth frames of a camera circling the object
+  int scan = 0;                  ///< > 0: views on one ring merged into one cloud (object_scan.h)
+  float outliers = 0.0f;         ///< --scan: uniform outliers, fraction of the surface points
   std::string size = "640x480";  ///< their image size
   float depth_noise = 0.001f;    ///< their range noise, metres
   float site = synthetic::CitySceneConfig{}.size;  ///< city: side of the site, metres
@@ -82,9 +87,31 @@ void write_orbit(const SampleOptions& o, const synthetic::ClosedObject& object) 
          o.output.c_str());
 }
 
+// A turntable-like scan: o.scan views on one ring, merged without normals or sensor, plus
+// o.outliers x the points scattered in the bounding box (written after the surface points).
+void write_scan(const SampleOptions& o, const synthetic::ClosedObject& object) {
+  synthetic::ObjectScanConfig config;
+  config.views = o.scan;
+  config.noise_sigma = o.depth_noise;
+  config.outlier_fraction = o.outliers;
+  config.seed = o.seed;
+  const synthetic::ObjectScan scan = synthetic::scan_object(object, config);
+  TriangleMesh points;
+  points.vertices = scan.cloud.positions;
+  io::write_ply(o.output, points);
+  report("object     %s: diagonal %.4f m; 1 %% of the diagonal is %.4f m\n", object.name.c_str(),
+         object.diagonal(), 0.01 * object.diagonal());
+  report(
+      "scan       %d views on one ring, range noise %.3g m: %zu surface points, %zu outliers "
+      "(the last ones)\n",
+      o.scan, o.depth_noise, scan.cloud.size() - scan.outliers, scan.outliers);
+  report("output     %s\n", o.output.c_str());
+}
+
 void run_sample(const SampleOptions& o) {
   if (o.object == "city") {
-    if (o.orbit > 0) throw Error("--orbit", "city", "the city is sampled as points only");
+    if (o.orbit > 0 || o.scan > 0)
+      throw Error(o.orbit > 0 ? "--orbit" : "--scan", "city", "the city is sampled as points only");
     return write_city(o);
   }
   const synthetic::ClosedObject object = *synthetic::closed_test_object(o.object);
@@ -92,6 +119,7 @@ void run_sample(const SampleOptions& o) {
     write_orbit(o, object);
     return;
   }
+  if (o.scan > 0) return write_scan(o, object);
   const PointCloud cloud = object.sample(o.points, o.noise * object.diagonal(), o.seed);
   TriangleMesh points;  // a PLY of vertices only
   points.vertices = cloud.positions;
@@ -142,9 +170,21 @@ void add_sample_options(CLI::App* cmd) {
                   "Instead of points: this many depth frames of a camera circling the object, "
                   "written as a TUM RGB-D directory")
       ->check(number_in(0, 100000));
+  auto* scan = cmd->add_option("--scan", opts->scan,
+                               "Instead of uniform points: this many depth views from one ring "
+                               "25 degrees above the object (200 x 150 pixels), merged into one "
+                               "cloud without normals or sensor (as a turntable scanner's; the "
+                               "underside unseen)")
+                   ->check(number_in(0, 1000))
+                   ->excludes("--orbit");
+  cmd->add_option("--outliers", opts->outliers,
+                  "With --scan: points scattered uniformly in the bounding box, as a fraction "
+                  "of the surface points (e.g. 0.005)")
+      ->check(number_in(0, 1))
+      ->needs(scan);
   cmd->add_option("--size", opts->size, "Image size of the --orbit frames (WIDTHxHEIGHT)");
   cmd->add_option("--depth-noise", opts->depth_noise,
-                  "Range noise of the --orbit frames, metres (Gaussian sigma)")
+                  "Range noise of the --orbit and --scan views, metres (Gaussian sigma)")
       ->check(number_in(0, 1));
   cmd->add_option("--site", opts->site, "city: side of the square site, metres")
       ->check(number_in(10, 20000));

@@ -8,7 +8,9 @@
 #include <cmath>
 #include <cstdint>
 #include <iterator>
+#include <memory>
 #include <string>
+#include <utility>
 
 #include "runtime/error.h"
 #include "runtime/voxel_key.h"
@@ -18,8 +20,9 @@ namespace {
 
 // The [t0, t1] part of the segment o + t d (t in [0, t_end]) inside the box [lo, hi]; false
 // when it misses.
-bool clip_segment(const Eigen::Vector3f& o, const Eigen::Vector3f& d, float t_end,
-                  const Eigen::Vector3f& lo, const Eigen::Vector3f& hi, float& t0, float& t1) {
+bool close_clip_segment(const Eigen::Vector3f& o, const Eigen::Vector3f& d, float t_end,
+                        const Eigen::Vector3f& lo, const Eigen::Vector3f& hi, float& t0,
+                        float& t1) {
   t0 = 0.0f;
   t1 = t_end;
   for (int a = 0; a < 3; ++a) {
@@ -35,72 +38,251 @@ bool clip_segment(const Eigen::Vector3f& o, const Eigen::Vector3f& d, float t_en
   return t0 <= t1;
 }
 
-// Marks the lattice nodes nearest to the samples (half a voxel apart) of each line of sight,
-// from the sensor to `stop` metres before its point. Idempotent stores: any thread order
-// marks the same nodes.
-std::vector<std::uint8_t> seen_empty_nodes(const PointCloud& cloud, const Eigen::Vector3i& lo,
-                                           const Eigen::Vector3i& size, float voxel, float stop) {
-  const std::size_t nodes = static_cast<std::size_t>(size.x()) * size.y() * size.z();
-  std::vector<std::atomic<std::uint8_t>> marks(nodes);
-  for (auto& m : marks) m.store(0, std::memory_order_relaxed);
-  const Eigen::Vector3f box_lo = lo.cast<float>() * voxel;
-  const Eigen::Vector3f box_hi = (lo + size - Eigen::Vector3i::Ones()).cast<float>() * voxel;
+// A box of lattice nodes: node i stands for the grid corner origin + step * i (corner indices
+// as in SparseGrid::corners), i in [0, size).
+struct NodeBox {
+  Eigen::Vector3i origin = Eigen::Vector3i::Zero();
+  int step = 1;
+  Eigen::Vector3i size = Eigen::Vector3i::Zero();
+};
+
+// Seen-empty marks of `box`'s nodes: each line of sight is sampled at t = k x (step / 2)
+// voxels from the sensor (the same samples whichever box is marked, so tiles sharing a face
+// mark it alike), up to `stop` metres before its point; a sample marks its nearest node.
+// Idempotent stores: any thread order marks the same nodes.
+std::unique_ptr<std::atomic<std::uint8_t>[]> close_sight_marks(const PointCloud& cloud,
+                                                               const NodeBox& box, float voxel,
+                                                               float stop) {
+  const std::size_t nodes = static_cast<std::size_t>(box.size.x()) * box.size.y() * box.size.z();
+  std::unique_ptr<std::atomic<std::uint8_t>[]> marks(new std::atomic<std::uint8_t>[nodes]);
+  for (std::size_t n = 0; n < nodes; ++n) marks[n].store(0, std::memory_order_relaxed);
+  const float spacing = static_cast<float>(box.step) * voxel;
+  // Samples that round to a node of the box lie within half a spacing of it.
+  const Eigen::Vector3f half = Eigen::Vector3f::Constant(0.5f * spacing);
+  const Eigen::Vector3f box_lo = box.origin.cast<float>() * voxel - half;
+  const Eigen::Vector3f box_hi =
+      (box.origin + box.step * (box.size - Eigen::Vector3i::Ones())).cast<float>() * voxel + half;
   const Eigen::Vector3f o = cloud.sensor_origin;
+  const float step = 0.5f * spacing;
   tbb::parallel_for(std::size_t{0}, cloud.size(), [&](std::size_t i) {
     const Eigen::Vector3f ray = cloud.positions[i] - o;
     const float length = ray.norm();
     if (!(length > stop)) return;
     const Eigen::Vector3f d = ray / length;
     float t0 = 0.0f, t1 = 0.0f;
-    if (!clip_segment(o, d, length - stop, box_lo, box_hi, t0, t1)) return;
-    const float step = 0.5f * voxel;
+    if (!close_clip_segment(o, d, length - stop, box_lo, box_hi, t0, t1)) return;
     // Counted steps: `t += step` stops moving once t / step passes 2^24 (a sensor tens of
     // kilometres away at centimetre voxels). The clipped segment is at most the box's diagonal.
-    const auto steps = static_cast<std::int64_t>(std::floor((t1 - t0) / step));
-    for (std::int64_t k = 0; k <= steps; ++k) {
-      const float t = t0 + static_cast<float>(k) * step;
-      const Eigen::Vector3f q = (o + t * d) / voxel;
-      const Eigen::Vector3i c(static_cast<int>(std::lround(q.x())) - lo.x(),
-                              static_cast<int>(std::lround(q.y())) - lo.y(),
-                              static_cast<int>(std::lround(q.z())) - lo.z());
-      if ((c.array() < 0).any() || (c.array() >= size.array()).any()) continue;
-      marks[(static_cast<std::size_t>(c.z()) * size.y() + c.y()) * size.x() + c.x()].store(
+    const auto first = static_cast<std::int64_t>(std::ceil(t0 / step));
+    const auto last = static_cast<std::int64_t>(std::floor(t1 / step));
+    for (std::int64_t k = first; k <= last; ++k) {
+      const Eigen::Vector3f q =
+          ((o + (static_cast<float>(k) * step) * d) / voxel - box.origin.cast<float>()) /
+          static_cast<float>(box.step);
+      const Eigen::Vector3i c(static_cast<int>(std::lround(q.x())),
+                              static_cast<int>(std::lround(q.y())),
+                              static_cast<int>(std::lround(q.z())));
+      if ((c.array() < 0).any() || (c.array() >= box.size.array()).any()) continue;
+      marks[(static_cast<std::size_t>(c.z()) * box.size.y() + c.y()) * box.size.x() + c.x()].store(
           1, std::memory_order_relaxed);
     }
   });
-  std::vector<std::uint8_t> out(nodes);
-  for (std::size_t n = 0; n < nodes; ++n) out[n] = marks[n].load(std::memory_order_relaxed);
-  return out;
+  return marks;
 }
 
-// Cells of the lattice (lower corner key) whose 8 corners do not all have one sign, and that
-// `existing` (sorted) lacks; sorted.
-std::vector<VoxelKey> crossed_cells(const DiffusionLattice& l, const Eigen::Vector3i& lo,
-                                    const std::vector<VoxelKey>& existing) {
+// Trilinear interpolation of a solved coarse lattice (node i at fine node step x i) at fine
+// node p (relative to the same origin).
+float close_coarse_value(const DiffusionLattice& coarse, int step, const Eigen::Vector3i& p) {
+  int lo[3], hi[3];
+  float w[3];
+  for (int a = 0; a < 3; ++a) {
+    lo[a] = std::min(p[a] / step, coarse.size[a] - 1);
+    hi[a] = std::min(lo[a] + 1, coarse.size[a] - 1);
+    w[a] =
+        hi[a] == lo[a] ? 0.0f : static_cast<float>(p[a] - lo[a] * step) / static_cast<float>(step);
+  }
+  float v = 0.0f;
+  for (int corner = 0; corner < 8; ++corner) {
+    float weight = 1.0f;
+    int q[3];
+    for (int a = 0; a < 3; ++a) {
+      const bool upper = (corner >> a) & 1;
+      q[a] = upper ? hi[a] : lo[a];
+      weight *= upper ? w[a] : 1.0f - w[a];
+    }
+    if (weight > 0.0f) v += weight * coarse.values[coarse.index(q[0], q[1], q[2])];
+  }
+  return v;
+}
+
+// Everything a tile's solve reads: the data, the whole lattice's box, and the coarse solution
+// that holds the faces of tiles inside the lattice (none when the lattice is one tile).
+struct CloseProblem {
+  const SparseGrid* grid = nullptr;
+  const DistanceField* field = nullptr;
+  const PointCloud* cloud = nullptr;
+  const CloseConfig* config = nullptr;
+  Eigen::Vector3i lo = Eigen::Vector3i::Zero();  // the lattice's first corner
+  Eigen::Vector3i size = Eigen::Vector3i::Zero();
+  float outside = 0.0f;  // the value held at the lattice's faces
+  const DiffusionLattice* coarse = nullptr;
+  int coarse_step = 1;
+};
+
+// What one tile gives back: its crossed cells, the values of their corners and of the grid's
+// corners in the tile (sorted by key), and its counts. A skipped tile gives its grid corners
+// the coarse solution's values in `fallback` instead.
+struct TileResult {
+  std::vector<VoxelKey> cells;
+  std::vector<std::pair<VoxelKey, float>> values;
+  std::vector<std::pair<VoxelKey, float>> fallback;
+  CloseReport counts;
+};
+
+// Solves the tile of lattice nodes [a, b] (inclusive, relative to the lattice): held nodes are
+// the lattice's faces, the tile's other faces (at the coarse solution), the data's corners
+// (`corners`: indices into the grid, those in the tile) and the seen-empty nodes; free ones are
+// diffused. Counts nodes of [a, b) only (b too on the lattice's last face), so that tiles
+// sharing a face count it once.
+TileResult close_solve_tile(const CloseProblem& p, const Eigen::Vector3i& a,
+                            const Eigen::Vector3i& b, const std::vector<std::uint32_t>& corners) {
+  TileResult out;
+  DiffusionLattice l;
+  l.size = b - a + Eigen::Vector3i::Ones();
+  l.values.assign(l.node_count(), 0.0f);
+  l.fixed.assign(l.node_count(), 0);
   const Eigen::Vector3i n = l.size;
-  std::vector<std::vector<VoxelKey>> per_plane(static_cast<std::size_t>(std::max(0, n.z() - 1)));
+  const auto owned = [&](int x, int y, int z) {
+    const Eigen::Vector3i q = a + Eigen::Vector3i(x, y, z);
+    for (int k = 0; k < 3; ++k)
+      if (q[k] == b[k] && b[k] + 1 != p.size[k]) return false;
+    return true;
+  };
+  // Faces: the lattice's are outside, a tile's inner ones take the coarse solution.
+  tbb::parallel_for(0, n.z(), [&](int z) {
+    for (int y = 0; y < n.y(); ++y)
+      for (int x = 0; x < n.x(); ++x) {
+        if (x > 0 && y > 0 && z > 0 && x + 1 < n.x() && y + 1 < n.y() && z + 1 < n.z()) continue;
+        const Eigen::Vector3i q = a + Eigen::Vector3i(x, y, z);
+        const bool lattice_face = (q.array() == 0).any() || (q.array() + 1 == p.size.array()).any();
+        const std::size_t i = l.index(x, y, z);
+        l.fixed[i] = 1;
+        l.values[i] = lattice_face || p.coarse == nullptr
+                          ? p.outside
+                          : close_coarse_value(*p.coarse, p.coarse_step, q);
+      }
+  });
+  const auto node_of = [&](VoxelKey key) {
+    const Eigen::Vector3i c = unpack_key(key) - p.lo - a;
+    return l.index(c.x(), c.y(), c.z());
+  };
+  for (std::uint32_t c : corners) {
+    if (!p.field->valid[c]) continue;
+    const Eigen::Vector3i q = unpack_key(p.grid->corners[c]) - p.lo - a;
+    const std::size_t i = l.index(q.x(), q.y(), q.z());
+    l.fixed[i] = 1;
+    l.values[i] = p.field->values[c];
+    if (owned(q.x(), q.y(), q.z())) ++out.counts.observed;
+  }
+  if (p.cloud->has_sensor_origin && !p.cloud->empty()) {  // data wins over a grazing sight line
+    const float voxel = p.grid->voxel_size;
+    const float stop = p.config->free_space_stop_voxels * voxel;
+    const auto marks = close_sight_marks(*p.cloud, NodeBox{p.lo + a, 1, n}, voxel, stop);
+    for (int z = 0; z < n.z(); ++z)
+      for (int y = 0; y < n.y(); ++y)
+        for (int x = 0; x < n.x(); ++x) {
+          const std::size_t i = l.index(x, y, z);
+          if (!marks[i].load(std::memory_order_relaxed) || l.fixed[i]) continue;
+          l.fixed[i] = 1;
+          l.values[i] = stop;
+          if (owned(x, y, z)) ++out.counts.seen_empty;
+        }
+  }
+  out.counts.levels = diffuse_free_nodes(l, p.config->diffusion);
+  for (int z = 0; z < n.z(); ++z)
+    for (int y = 0; y < n.y(); ++y)
+      for (int x = 0; x < n.x(); ++x)
+        out.counts.filled += !l.fixed[l.index(x, y, z)] && owned(x, y, z) ? 1 : 0;
+
+  // Crossed cells with all corners in the tile, that the grid lacks; their corners' values.
+  const std::vector<VoxelKey>& existing = p.grid->cells;
+  std::vector<std::vector<VoxelKey>> per_plane(static_cast<std::size_t>(n.z() - 1));
   tbb::parallel_for(0, n.z() - 1, [&](int z) {
-    std::vector<VoxelKey>& out = per_plane[static_cast<std::size_t>(z)];
-    for (int y = 0; y + 1 < n.y(); ++y) {
+    std::vector<VoxelKey>& plane = per_plane[static_cast<std::size_t>(z)];
+    for (int y = 0; y + 1 < n.y(); ++y)
       for (int x = 0; x + 1 < n.x(); ++x) {
         int inside = 0;
         for (int c = 0; c < 8; ++c)
           inside += l.values[l.index(x + (c & 1), y + ((c >> 1) & 1), z + ((c >> 2) & 1))] < 0.0f;
         if (inside == 0 || inside == 8) continue;
-        const VoxelKey key = pack_key(lo + Eigen::Vector3i(x, y, z));
-        if (!std::binary_search(existing.begin(), existing.end(), key)) out.push_back(key);
+        const VoxelKey key = pack_key(p.lo + a + Eigen::Vector3i(x, y, z));
+        if (!std::binary_search(existing.begin(), existing.end(), key)) plane.push_back(key);
       }
-    }
   });
-  std::vector<VoxelKey> cells;
-  for (const auto& plane : per_plane) cells.insert(cells.end(), plane.begin(), plane.end());
-  tbb::parallel_sort(cells.begin(), cells.end());
-  return cells;
+  for (const auto& plane : per_plane) out.cells.insert(out.cells.end(), plane.begin(), plane.end());
+  std::vector<VoxelKey> keys;
+  keys.reserve(out.cells.size() * 8 + corners.size());
+  for (VoxelKey cell : out.cells) {
+    const Eigen::Vector3i c = unpack_key(cell);
+    for (int k = 0; k < 8; ++k)
+      keys.push_back(pack_key(c + Eigen::Vector3i(k & 1, (k >> 1) & 1, (k >> 2) & 1)));
+  }
+  for (std::uint32_t c : corners) keys.push_back(p.grid->corners[c]);
+  std::sort(keys.begin(), keys.end());
+  keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
+  out.values.reserve(keys.size());
+  for (VoxelKey key : keys) out.values.emplace_back(key, l.values[node_of(key)]);
+  return out;
+}
+
+// The coarse lattice of a large problem: node i at lattice node step x i; held where a data
+// corner rounds to it (the mean of their values), on the lattice's faces, and on lines of sight
+// (stopping a coarse spacing earlier). Solved.
+DiffusionLattice close_coarse_solution(const CloseProblem& p, int step, int& levels) {
+  DiffusionLattice coarse;
+  coarse.size = (p.size.array() - 1 + step - 1) / step + 1;
+  coarse.values.assign(coarse.node_count(), 0.0f);
+  coarse.fixed.assign(coarse.node_count(), 0);
+  std::vector<std::uint32_t> count(coarse.node_count(), 0);
+  for (std::size_t c = 0; c < p.grid->corners.size(); ++c) {
+    if (!p.field->valid[c]) continue;
+    const Eigen::Vector3i q = unpack_key(p.grid->corners[c]) - p.lo;
+    const Eigen::Vector3i r =
+        ((q.array() + step / 2) / step).matrix().cwiseMin(coarse.size - Eigen::Vector3i::Ones());
+    const std::size_t i = coarse.index(r.x(), r.y(), r.z());
+    coarse.values[i] += p.field->values[c];
+    ++count[i];
+  }
+  for (std::size_t i = 0; i < count.size(); ++i)
+    if (count[i] > 0) {
+      coarse.fixed[i] = 1;
+      coarse.values[i] /= static_cast<float>(count[i]);
+    }
+  const Eigen::Vector3i n = coarse.size;
+  for (int z = 0; z < n.z(); ++z)
+    for (int y = 0; y < n.y(); ++y)
+      for (int x = 0; x < n.x(); ++x) {
+        if (x > 0 && y > 0 && z > 0 && x + 1 < n.x() && y + 1 < n.y() && z + 1 < n.z()) continue;
+        coarse.fixed[coarse.index(x, y, z)] = 1;
+        coarse.values[coarse.index(x, y, z)] = p.outside;
+      }
+  if (p.cloud->has_sensor_origin && !p.cloud->empty()) {
+    const float voxel = p.grid->voxel_size;
+    const float stop = (p.config->free_space_stop_voxels + static_cast<float>(step)) * voxel;
+    const auto marks = close_sight_marks(*p.cloud, NodeBox{p.lo, step, n}, voxel, stop);
+    for (std::size_t i = 0; i < coarse.node_count(); ++i)
+      if (marks[i].load(std::memory_order_relaxed) && !coarse.fixed[i]) {
+        coarse.fixed[i] = 1;
+        coarse.values[i] = stop;
+      }
+  }
+  levels = diffuse_free_nodes(coarse, p.config->diffusion);
+  return coarse;
 }
 
 // A grid of the given sorted cells: their corners (sorted, unique) and each cell's corner
 // indices.
-SparseGrid grid_of_cells(std::vector<VoxelKey> cells, float voxel) {
+SparseGrid close_grid_of_cells(std::vector<VoxelKey> cells, float voxel) {
   SparseGrid grid;
   grid.voxel_size = voxel;
   grid.cells = std::move(cells);
@@ -123,6 +305,10 @@ SparseGrid grid_of_cells(std::vector<VoxelKey> cells, float voxel) {
   });
   return grid;
 }
+
+// The tiles of side `cells` along one axis of `nodes` nodes: tile t spans nodes
+// [t cells, min((t + 1) cells, nodes - 1)]; neighbours share a face.
+int close_tile_count(int nodes, int cells) { return std::max(1, (nodes - 2) / cells + 1); }
 
 }  // namespace
 
@@ -148,72 +334,134 @@ ClosedDistance close_distance_field(const SparseGrid& grid, const DistanceField&
   const int margin = std::max(1, static_cast<int>(std::ceil(config.margin_voxels)));
   lo.array() -= margin;
   hi.array() += margin;
-  DiffusionLattice lattice;
-  lattice.size = hi - lo + Eigen::Vector3i::Ones();
-  const double corners =
-      static_cast<double>(lattice.size.x()) * lattice.size.y() * lattice.size.z();
-  if (corners > static_cast<double>(config.max_lattice_corners))
-    throw Error("close", "lattice",
-                std::to_string(lattice.size.x()) + " x " + std::to_string(lattice.size.y()) +
-                    " x " + std::to_string(lattice.size.z()) + " corners of " +
-                    std::to_string(voxel) + " m exceed the limit of " +
-                    std::to_string(config.max_lattice_corners) +
-                    " for --close; expected a bounded object: use a larger --voxel or --crop");
-  r.lattice = lattice.size;
-  const float outside = static_cast<float>(margin) * voxel;
-  lattice.values.assign(lattice.node_count(), 0.0f);
-  lattice.fixed.assign(lattice.node_count(), 0);
-  const auto node_of = [&](VoxelKey key) {
-    const Eigen::Vector3i c = unpack_key(key) - lo;
-    return lattice.index(c.x(), c.y(), c.z());
+  CloseProblem p;
+  p.grid = &grid;
+  p.field = &field;
+  p.cloud = &cloud;
+  p.config = &config;
+  p.lo = lo;
+  p.size = hi - lo + Eigen::Vector3i::Ones();
+  p.outside = static_cast<float>(margin) * voxel;
+  r.lattice = p.size;
+  const auto nodes_of = [](const Eigen::Vector3i& s) {
+    return static_cast<double>(s.x()) * s.y() * s.z();
   };
+  const double limit = static_cast<double>(std::max<std::size_t>(config.max_dense_corners, 64));
 
-  // 2. Held nodes: the lattice's faces (outside), seen-empty nodes, then the data's corners.
-  const Eigen::Vector3i n = lattice.size;
-  tbb::parallel_for(0, n.z(), [&](int z) {
-    for (int y = 0; y < n.y(); ++y)
-      for (int x = 0; x < n.x(); ++x) {
-        if (x > 0 && y > 0 && z > 0 && x + 1 < n.x() && y + 1 < n.y() && z + 1 < n.z()) continue;
-        const std::size_t i = lattice.index(x, y, z);
-        lattice.fixed[i] = 1;
-        lattice.values[i] = outside;
-      }
-  });
-  for (std::size_t c = 0; c < grid.corners.size(); ++c) {
-    if (!field.valid[c]) continue;
-    const std::size_t i = node_of(grid.corners[c]);
-    lattice.fixed[i] = 1;
-    lattice.values[i] = field.values[c];
-    ++r.observed;
+  // 2. A large lattice: the coarse solution over the whole box, and tiles of tile_cells.
+  int cells = std::max(p.size.maxCoeff(), 2);
+  DiffusionLattice coarse;
+  if (nodes_of(p.size) > limit) {
+    int step = 2;
+    while (nodes_of(((p.size.array() - 2 + step) / step + 1).matrix()) > limit) step *= 2;
+    p.coarse_step = step;
+    coarse = close_coarse_solution(p, step, r.levels);
+    p.coarse = &coarse;
+    cells = std::max(2, config.tile_cells);
   }
-  if (cloud.has_sensor_origin && !cloud.empty()) {  // data wins over a grazing line of sight
-    const float stop = config.free_space_stop_voxels * voxel;
-    const std::vector<std::uint8_t> empty = seen_empty_nodes(cloud, lo, n, voxel, stop);
-    for (std::size_t i = 0; i < empty.size(); ++i) {
-      if (!empty[i] || lattice.fixed[i]) continue;
-      lattice.fixed[i] = 1;
-      lattice.values[i] = stop;
-      ++r.seen_empty;
+  r.coarse_step = p.coarse_step;
+  const Eigen::Vector3i tiles(close_tile_count(p.size.x(), cells),
+                              close_tile_count(p.size.y(), cells),
+                              close_tile_count(p.size.z(), cells));
+  // The grid's corners per tile (a corner on a shared face goes to both tiles).
+  const std::size_t tile_count = static_cast<std::size_t>(tiles.x()) * tiles.y() * tiles.z();
+  const auto tile_index = [&](const Eigen::Vector3i& t) {
+    return (static_cast<std::size_t>(t.z()) * tiles.y() + t.y()) * tiles.x() + t.x();
+  };
+  std::vector<std::vector<std::uint32_t>> tile_corners(tile_count);
+  for (std::uint32_t c = 0; c < grid.corners.size(); ++c) {
+    const Eigen::Vector3i q = unpack_key(grid.corners[c]) - lo;
+    Eigen::Vector3i first, last;
+    for (int a = 0; a < 3; ++a) {
+      last[a] = std::min(q[a] / cells, tiles[a] - 1);
+      first[a] = q[a] % cells == 0 && q[a] > 0 ? q[a] / cells - 1 : last[a];
     }
+    for (int z = first.z(); z <= last.z(); ++z)
+      for (int y = first.y(); y <= last.y(); ++y)
+        for (int x = first.x(); x <= last.x(); ++x)
+          tile_corners[tile_index({x, y, z})].push_back(c);
   }
 
-  // 3. Diffusion into the free nodes.
-  r.levels = diffuse_free_nodes(lattice, config.diffusion);
-  r.filled = lattice.node_count() -
-             static_cast<std::size_t>(std::count(lattice.fixed.begin(), lattice.fixed.end(), 1));
+  // 3. Each tile: skipped when it holds no data and the coarse solution is outside all over it
+  // (its fine solution, bounded by its faces' values, is then outside too), else solved.
+  std::vector<TileResult> results(tile_count);
+  std::atomic<std::size_t> solved{0};
+  tbb::parallel_for(std::size_t{0}, tile_count, [&](std::size_t t) {
+    const Eigen::Vector3i ti(
+        static_cast<int>(t % static_cast<std::size_t>(tiles.x())),
+        static_cast<int>(t / tiles.x() % static_cast<std::size_t>(tiles.y())),
+        static_cast<int>(t / (static_cast<std::size_t>(tiles.x()) * tiles.y())));
+    const Eigen::Vector3i a = ti * cells;
+    const Eigen::Vector3i b =
+        (a.array() + cells).matrix().cwiseMin(p.size - Eigen::Vector3i::Ones());
+    const std::vector<std::uint32_t>& corners = tile_corners[t];
+    if (p.coarse != nullptr && std::none_of(corners.begin(), corners.end(),
+                                            [&](std::uint32_t c) { return field.valid[c]; })) {
+      bool outside = true;
+      const Eigen::Vector3i c0 = a / p.coarse_step;
+      const Eigen::Vector3i c1 = ((b.array() + p.coarse_step - 1) / p.coarse_step)
+                                     .matrix()
+                                     .cwiseMin(coarse.size - Eigen::Vector3i::Ones());
+      for (int z = c0.z(); z <= c1.z() && outside; ++z)
+        for (int y = c0.y(); y <= c1.y() && outside; ++y)
+          for (int x = c0.x(); x <= c1.x() && outside; ++x)
+            outside = coarse.values[coarse.index(x, y, z)] > 0.0f;
+      if (outside) {
+        for (std::uint32_t c : corners)  // the grid's corners without data, if any
+          results[t].fallback.emplace_back(
+              grid.corners[c],
+              close_coarse_value(coarse, p.coarse_step, unpack_key(grid.corners[c]) - lo));
+        return;
+      }
+    }
+    results[t] = close_solve_tile(p, a, b, corners);
+    solved.fetch_add(1, std::memory_order_relaxed);
+  });
+  r.tiles = solved.load();
 
   // 4. The grid's cells and those the filled surface crosses, and a value at every corner.
-  const std::vector<VoxelKey> added = crossed_cells(lattice, lo, grid.cells);
+  std::vector<VoxelKey> added;
+  std::vector<std::pair<VoxelKey, float>> values, fallback;
+  for (TileResult& t : results) {
+    added.insert(added.end(), t.cells.begin(), t.cells.end());
+    values.insert(values.end(), t.values.begin(), t.values.end());
+    fallback.insert(fallback.end(), t.fallback.begin(), t.fallback.end());
+    r.observed += t.counts.observed;
+    r.seen_empty += t.counts.seen_empty;
+    r.filled += t.counts.filled;
+    r.levels = std::max(r.levels, t.counts.levels);
+    t = TileResult{};
+  }
+  tbb::parallel_sort(added.begin(), added.end());
+  // Tiles sharing a face hold its nodes at the same values (data, or the coarse solution, which
+  // a skipped tile's corners take too): any one of them does, a solved tile's first.
+  const auto by_key = [](const auto& x, const auto& y) { return x.first < y.first; };
+  const auto same_key = [](const auto& x, const auto& y) { return x.first == y.first; };
+  for (auto* v : {&values, &fallback}) {
+    tbb::parallel_sort(v->begin(), v->end(), by_key);
+    v->erase(std::unique(v->begin(), v->end(), same_key), v->end());
+  }
   r.cells_added = added.size();
-  std::vector<VoxelKey> cells;
-  cells.reserve(grid.cells.size() + added.size());
+  std::vector<VoxelKey> all_cells;
+  all_cells.reserve(grid.cells.size() + added.size());
   std::merge(grid.cells.begin(), grid.cells.end(), added.begin(), added.end(),
-             std::back_inserter(cells));
-  out.grid = grid_of_cells(std::move(cells), voxel);
+             std::back_inserter(all_cells));
+  out.grid = close_grid_of_cells(std::move(all_cells), voxel);
   out.distance.values.resize(out.grid.corners.size());
   out.distance.valid.assign(out.grid.corners.size(), 1);
   tbb::parallel_for(std::size_t{0}, out.grid.corners.size(), [&](std::size_t c) {
-    out.distance.values[c] = lattice.values[node_of(out.grid.corners[c])];
+    const VoxelKey key = out.grid.corners[c];
+    const auto find = [key](const std::vector<std::pair<VoxelKey, float>>& v, float& value) {
+      const auto at = std::lower_bound(v.begin(), v.end(), key,
+                                       [](const auto& x, VoxelKey k) { return x.first < k; });
+      if (at == v.end() || at->first != key) return false;
+      value = at->second;
+      return true;
+    };
+    // Every corner is one of the grid's or of a crossed cell's: one of the two has it.
+    float value = p.outside;
+    if (!find(values, value)) find(fallback, value);
+    out.distance.values[c] = value;
   });
   out.distance.disagreeing = field.disagreeing;
   out.distance.extrapolated = field.extrapolated;

@@ -2,10 +2,18 @@
 // The close stage (--close): a watertight surface from a scan with unseen parts. Between the
 // distance and extract stages, the signed distance of the corners without data (the unseen
 // undersides, holes, the inside and outside away from the data) is filled by volumetric
-// diffusion (volume_diffusion.h) over a dense lattice of the grid's corners around the data;
-// corners with data keep their distances exactly, so the surface where there is data is the one
-// the open reconstruction extracts. Where the cloud knows its sensor, corners its lines of sight
+// diffusion (volume_diffusion.h) over a lattice of the grid's corners around the data; corners
+// with data keep their distances exactly, so the surface where there is data is the one the
+// open reconstruction extracts. Where the cloud knows its sensor, corners its lines of sight
 // crossed before reaching their points are seen empty: held outside, never filled.
+//
+// A lattice of up to max_dense_corners is solved at once. A larger one (a building, a street)
+// is solved in two passes: a coarse lattice (every 2^k-th corner, as few as fit the limit)
+// over the whole box, then cubic tiles of tile_cells cells solved one by one at full
+// resolution, each holding its faces at the coarse solution: neighbouring tiles share their
+// face values, so the surface is crack-free across tiles; tiles without data whose coarse
+// values are all outside are skipped (nothing crosses them). Memory stays that of one lattice
+// of max_dense_corners plus a tile per thread, whatever the scene's size.
 
 #include <Eigen/Core>
 #include <cstddef>
@@ -26,9 +34,14 @@ struct CloseConfig {
   /// A line of sight marks the corners it passes as seen empty up to this many voxels before
   /// its point (the noise and the distance band stay data's).
   float free_space_stop_voxels = 2.0f;
-  /// Lattices with more corners are refused (memory: 5 bytes per corner); a larger voxel, or
-  /// crop, brings a scene under it.
-  std::size_t max_lattice_corners = std::size_t{1} << 26;
+  /// A lattice of up to this many corners is solved at once; a larger one as a coarse lattice
+  /// of at most this many corners plus tiles. Memory of a lattice: about 6.7 bytes a corner
+  /// (value 4, held flag 1, sight mark 1, coarser levels 5/7), 7.7 when flat (volume_diffusion.h),
+  /// so 225-260 MB at the default.
+  std::size_t max_dense_corners = std::size_t{1} << 25;
+  /// Cells along each side of a tile of a large lattice (its faces are held at the coarse
+  /// solution; larger tiles follow the fine data farther, at 6.7 bytes a corner per thread).
+  int tile_cells = 128;
   DiffusionConfig diffusion;
 };
 
@@ -36,7 +49,9 @@ struct CloseConfig {
 struct CloseReport {
   bool ran = false;
   Eigen::Vector3i lattice = Eigen::Vector3i::Zero();  ///< corners per axis
-  int levels = 0;                                     ///< resolution levels of the solve
+  int levels = 0;                                     ///< resolution levels of the (finest) solve
+  int coarse_step = 1;          ///< > 1: a tiled solve over a coarse lattice of every n-th corner
+  std::size_t tiles = 0;        ///< lattices solved at full resolution (1: the whole one at once)
   std::size_t observed = 0;     ///< corners with data, held at their distances
   std::size_t seen_empty = 0;   ///< corners on lines of sight, held outside
   std::size_t filled = 0;       ///< corners whose distance came from the diffusion
@@ -55,9 +70,10 @@ struct ClosedDistance {
 /// lattice's faces are held outside. Lines of sight from cloud.sensor_origin to each of
 /// cloud.positions mark seen-empty corners when cloud.has_sensor_origin. The zero set of the
 /// result is closed and bounds the negative region; marching cubes over the returned grid give
-/// a watertight mesh. Throws meshflow::Error("close", ...) when the lattice would exceed
-/// config.max_lattice_corners. Parallel (planes of the lattice, points, cells); the output does
-/// not depend on the thread count. O(lattice x sweeps + points x range / voxel).
+/// a watertight mesh. Any lattice size (see the file comment for large ones). Parallel
+/// (tiles, planes of a lattice, points, cells); the output does not depend on the thread count.
+/// Time O(lattice x sweeps + points x range / voxel) for a dense lattice; a tiled one costs
+/// the coarse lattice plus O(points) per tile solved (its lines of sight are clipped to it).
 ClosedDistance close_distance_field(const SparseGrid& grid, const DistanceField& field,
                                     const PointCloud& cloud, const CloseConfig& config = {},
                                     CloseReport* report = nullptr);

@@ -35,22 +35,40 @@ void diffusion_sweeps(DiffusionLattice& l, int sweeps) {
   }
 }
 
-// The lattice of half the resolution: node c stands for fine node 2c; it is held when a fine
-// node within one step of 2c is, at the mean of those nodes' values.
-DiffusionLattice restrict_fixed(const DiffusionLattice& fine) {
+// Which axes the next coarser level halves: those of at least 3 nodes (a flat lattice keeps
+// coarsening along its long axes; its short one stays as it is).
+Eigen::Vector3i coarsening_steps(const Eigen::Vector3i& size) {
+  return Eigen::Vector3i(size.x() >= 3 ? 2 : 1, size.y() >= 3 ? 2 : 1, size.z() >= 3 ? 2 : 1);
+}
+
+// The lattice of half the resolution along the axes `step` halves: node c stands for fine node
+// step * c; it is held when a fine node within one step of it (along the halved axes) is, at the
+// mean of those nodes' values.
+DiffusionLattice restrict_fixed(const DiffusionLattice& fine, const Eigen::Vector3i& step) {
   DiffusionLattice coarse;
-  coarse.size = (fine.size.array() + 1) / 2;
+  coarse.size = (fine.size.array() + step.array() - 1) / step.array();
   coarse.values.assign(coarse.node_count(), 0.0f);
   coarse.fixed.assign(coarse.node_count(), 0);
   const Eigen::Vector3i n = fine.size;
+  const auto range = [&](int c, int a, int& from, int& to) {
+    const int reach = step[a] - 1;  // 1 on a halved axis, 0 on a kept one
+    from = std::max(0, step[a] * c - reach);
+    to = std::min(n[a] - 1, step[a] * c + reach);
+  };
   tbb::parallel_for(0, coarse.size.z(), [&](int z) {
+    int z0, z1;
+    range(z, 2, z0, z1);
     for (int y = 0; y < coarse.size.y(); ++y) {
+      int y0, y1;
+      range(y, 1, y0, y1);
       for (int x = 0; x < coarse.size.x(); ++x) {
+        int x0, x1;
+        range(x, 0, x0, x1);
         float sum = 0.0f;
         int count = 0;
-        for (int fz = std::max(0, 2 * z - 1); fz <= std::min(n.z() - 1, 2 * z + 1); ++fz)
-          for (int fy = std::max(0, 2 * y - 1); fy <= std::min(n.y() - 1, 2 * y + 1); ++fy)
-            for (int fx = std::max(0, 2 * x - 1); fx <= std::min(n.x() - 1, 2 * x + 1); ++fx) {
+        for (int fz = z0; fz <= z1; ++fz)
+          for (int fy = y0; fy <= y1; ++fy)
+            for (int fx = x0; fx <= x1; ++fx) {
               const std::size_t i = fine.index(fx, fy, fz);
               if (!fine.fixed[i]) continue;
               sum += fine.values[i];
@@ -66,8 +84,10 @@ DiffusionLattice restrict_fixed(const DiffusionLattice& fine) {
   return coarse;
 }
 
-// Free nodes of `fine` take the trilinear interpolation of `coarse` at half their position.
-void prolong_free(const DiffusionLattice& coarse, DiffusionLattice& fine) {
+// Free nodes of `fine` take the trilinear interpolation of `coarse` at their position divided
+// by `step` (restrict_fixed()'s).
+void prolong_free(const DiffusionLattice& coarse, DiffusionLattice& fine,
+                  const Eigen::Vector3i& step) {
   const Eigen::Vector3i m = coarse.size;
   tbb::parallel_for(0, fine.size.z(), [&](int z) {
     for (int y = 0; y < fine.size.y(); ++y) {
@@ -78,9 +98,9 @@ void prolong_free(const DiffusionLattice& coarse, DiffusionLattice& fine) {
         int lo[3], hi[3];
         float w[3];
         for (int a = 0; a < 3; ++a) {
-          lo[a] = std::min(p[a] / 2, m[a] - 1);
+          lo[a] = std::min(p[a] / step[a], m[a] - 1);
           hi[a] = std::min(lo[a] + 1, m[a] - 1);
-          w[a] = (p[a] & 1) && hi[a] != lo[a] ? 0.5f : 0.0f;
+          w[a] = step[a] == 2 && (p[a] & 1) && hi[a] != lo[a] ? 0.5f : 0.0f;
         }
         float v = 0.0f;
         for (int corner = 0; corner < 8; ++corner) {
@@ -100,17 +120,18 @@ void prolong_free(const DiffusionLattice& coarse, DiffusionLattice& fine) {
 }
 
 int diffuse_levels(DiffusionLattice& lattice, const DiffusionConfig& config) {
-  const bool coarsest =
-      lattice.size.maxCoeff() <= std::max(2, config.coarsest_size) || lattice.size.minCoeff() < 3;
-  if (coarsest) {
+  // Short axes stop halving, long ones go on: a flat lattice still reaches a coarsest level
+  // of few nodes along every long axis, where its sweeps span the whole gap.
+  const Eigen::Vector3i step = coarsening_steps(lattice.size);
+  if (lattice.size.maxCoeff() <= std::max(2, config.coarsest_size) || step.maxCoeff() == 1) {
     for (std::size_t i = 0; i < lattice.values.size(); ++i)
       if (!lattice.fixed[i]) lattice.values[i] = 0.0f;
     diffusion_sweeps(lattice, config.coarsest_sweeps);
     return 1;
   }
-  DiffusionLattice coarse = restrict_fixed(lattice);
+  DiffusionLattice coarse = restrict_fixed(lattice, step);
   const int levels = diffuse_levels(coarse, config) + 1;
-  prolong_free(coarse, lattice);
+  prolong_free(coarse, lattice, step);
   diffusion_sweeps(lattice, config.sweeps_per_level);
   return levels;
 }

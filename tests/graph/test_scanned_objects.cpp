@@ -177,6 +177,8 @@ SplitErrors split_errors(const TriangleMesh& mesh, const synthetic::ClosedObject
   return e;
 }
 
+// Also with the lattice forced into the tiled solve (a coarse lattice of every 4th-8th corner,
+// tiles of 32 cells: the path of scenes over CloseConfig::max_dense_corners).
 TEST_P(ScannedObject, CloseGivesOneWatertightOutwardSurfaceExactWhereObserved) {
   const synthetic::ClosedObject object = this->object();
   const synthetic::ObjectScan scan = scan_with_outliers(object, 33);
@@ -184,26 +186,7 @@ TEST_P(ScannedObject, CloseGivesOneWatertightOutwardSurfaceExactWhereObserved) {
   const float voxel = config.voxelize.voxel_size;
   const FramePtr open = ReconstructionPipeline(config).reconstruct(scan.cloud);
   ASSERT_TRUE(open->ok()) << open->error;
-  config.close.enabled = true;
-  const FramePtr closed = ReconstructionPipeline(config).reconstruct(scan.cloud);
-  ASSERT_TRUE(closed->ok()) << closed->error;
-  EXPECT_TRUE(closed->closing.ran);
-  EXPECT_GT(closed->closing.filled, 0u);
-
   const EdgeStatistics open_edges = edge_statistics(open->mesh);
-  const EdgeStatistics stats = edge_statistics(closed->mesh);
-  EXPECT_EQ(stats.boundary_edges, 0u);
-  EXPECT_EQ(stats.non_manifold_edges, 0u);
-  EXPECT_EQ(stats.inconsistent_edges, 0u);
-  EXPECT_EQ(mesh_components(closed->mesh).size(), 1u);
-  const MeshStatistics info = mesh_statistics(closed->mesh);
-  EXPECT_GT(info.volume.value_or(0.0), 0.0) << "faces wind inward";
-  EXPECT_EQ(info.non_manifold_vertices, 0u);
-  // The torus and the box with a hole keep their (observed) through-hole: genus 1.
-  const long long genus = object.name == "torus" || object.name == "box-with-hole" ? 1 : 0;
-  ASSERT_TRUE(info.genus.has_value());
-  EXPECT_EQ(*info.genus, genus);
-
   const PointCloud surface = [&] {
     PointCloud c;
     c.positions.assign(scan.cloud.positions.begin(),
@@ -212,16 +195,43 @@ TEST_P(ScannedObject, CloseGivesOneWatertightOutwardSurfaceExactWhereObserved) {
   }();
   const KdTreeIndex index(surface.positions);
   const SplitErrors e_open = split_errors(open->mesh, object, index, voxel);
-  const SplitErrors e_closed = split_errors(closed->mesh, object, index, voxel);
-  std::printf(
-      "[ close ] %s: open %zu border edges; closed: observed mean %.3e (open %.3e) of the "
-      "diagonal, filled %zu vertices mean %.3e max %.3e, genus %lld\n",
-      object.name.c_str(), open_edges.boundary_edges, e_closed.observed_mean / object.diagonal(),
-      e_open.observed_mean / object.diagonal(), e_closed.filled,
-      e_closed.filled_mean / object.diagonal(), e_closed.filled_max / object.diagonal(),
-      info.genus.value_or(-1));
-  EXPECT_LE(e_closed.observed_mean, 1.05 * e_open.observed_mean + 1e-6)
-      << "the observed surface must stay as exact as the open reconstruction's";
+  config.close.enabled = true;
+  for (const bool tiled : {false, true}) {
+    SCOPED_TRACE(tiled ? "tiled" : "dense");
+    if (tiled) {
+      config.close.max_dense_corners = std::size_t{1} << 16;
+      config.close.tile_cells = 32;
+    }
+    const FramePtr closed = ReconstructionPipeline(config).reconstruct(scan.cloud);
+    ASSERT_TRUE(closed->ok()) << closed->error;
+    EXPECT_TRUE(closed->closing.ran);
+    EXPECT_GT(closed->closing.filled, 0u);
+    EXPECT_EQ(closed->closing.tiles > 1, tiled);
+
+    const EdgeStatistics stats = edge_statistics(closed->mesh);
+    EXPECT_EQ(stats.boundary_edges, 0u);
+    EXPECT_EQ(stats.non_manifold_edges, 0u);
+    EXPECT_EQ(stats.inconsistent_edges, 0u);
+    EXPECT_EQ(mesh_components(closed->mesh).size(), 1u);
+    const MeshStatistics info = mesh_statistics(closed->mesh);
+    EXPECT_GT(info.volume.value_or(0.0), 0.0) << "faces wind inward";
+    EXPECT_EQ(info.non_manifold_vertices, 0u);
+    // The torus and the box with a hole keep their (observed) through-hole: genus 1.
+    const long long genus = object.name == "torus" || object.name == "box-with-hole" ? 1 : 0;
+    ASSERT_TRUE(info.genus.has_value());
+    EXPECT_EQ(*info.genus, genus);
+
+    const SplitErrors e_closed = split_errors(closed->mesh, object, index, voxel);
+    std::printf(
+        "[ close ] %s %s: open %zu border edges; closed: observed mean %.3e (open %.3e) of the "
+        "diagonal, filled %zu vertices mean %.3e max %.3e, genus %lld, %zu tiles\n",
+        object.name.c_str(), tiled ? "tiled" : "dense", open_edges.boundary_edges,
+        e_closed.observed_mean / object.diagonal(), e_open.observed_mean / object.diagonal(),
+        e_closed.filled, e_closed.filled_mean / object.diagonal(),
+        e_closed.filled_max / object.diagonal(), info.genus.value_or(-1), closed->closing.tiles);
+    EXPECT_LE(e_closed.observed_mean, 1.05 * e_open.observed_mean + 1e-6)
+        << "the observed surface must stay as exact as the open reconstruction's";
+  }
 }
 
 TEST(ScannedObjects, CloseSameMeshWithOneAndTwoThreads) {

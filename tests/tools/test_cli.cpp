@@ -426,12 +426,11 @@ TEST(Cli, RunMergedAndUsageErrors) {
 }
 
 // --close where there is no distance field of the whole object to fill is a usage error, not
-// a flag silently ignored (fused maps, triangulated depth images) or a failure after the input
+// a flag silently ignored (triangulated depth images) or a failure after the input
 // was partitioned (--chunk); a whole number out of any integer's range is refused before it is
 // converted.
 TEST(Cli, CloseWhereItCannotWorkAndOutOfRangeNumbersAreUsageErrors) {
   const std::string out = test::temp_dir();
-  EXPECT_EQ(run_cli("run --synthetic-depth -o " + out + " --fuse --close").exit_code, 2);
   EXPECT_EQ(run_cli("run --synthetic-depth -o " + out + " --triangulate rqt --close").exit_code, 2);
   EXPECT_EQ(run_cli("live --synthetic-depth --triangulate rqt --close").exit_code, 2);
   EXPECT_EQ(run_cli("reconstruct a.ply -o b.ply --chunk 2 --close").exit_code, 2);

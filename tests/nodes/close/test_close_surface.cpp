@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include <cstdio>
+
 #include "nodes/extract/marching_cubes.h"
 #include "nodes/synthetic/closed_objects.h"
 #include "nodes/voxelize/voxelize.h"
@@ -39,17 +41,40 @@ CappedSphere capped_sphere(float voxel) {
   return s;
 }
 
-TEST(CloseSurface, KeepsObservedDistancesAndGivesAWatertightSurface) {
+// A lattice small enough to solve at once, and the same forced into a coarse lattice (every
+// 4th corner) and tiles of 16 cells: both keep the data, close the cap near the sphere.
+CloseConfig tiled_config() {
+  CloseConfig config;
+  config.max_dense_corners = 20000;
+  config.tile_cells = 16;
+  return config;
+}
+
+class CloseSurfaceModes : public ::testing::TestWithParam<bool> {};
+
+TEST_P(CloseSurfaceModes, KeepsObservedDistancesAndGivesAWatertightSurface) {
+  const bool tiled = GetParam();
   const float voxel = 0.02f;
   const CappedSphere s = capped_sphere(voxel);
   const TriangleMesh open = marching_cubes(s.grid, s.field);
   ASSERT_GT(edge_statistics(open).boundary_edges, 0u) << "the cap is open before closing";
   CloseReport report;
-  const ClosedDistance closed = close_distance_field(s.grid, s.field, s.cloud, {}, &report);
+  const ClosedDistance closed = close_distance_field(
+      s.grid, s.field, s.cloud, tiled ? tiled_config() : CloseConfig{}, &report);
   EXPECT_TRUE(report.ran);
   EXPECT_GT(report.filled, 0u);
   EXPECT_GT(report.cells_added, 0u);
   EXPECT_EQ(report.seen_empty, 0u) << "no sensor";
+  EXPECT_EQ(report.observed, s.field.valid_count()) << "each data corner counted once";
+  if (tiled) {
+    EXPECT_GE(report.coarse_step, 2);
+    EXPECT_GT(report.tiles, 8u);
+    // 60 x 60 x 60 corners in tiles of 16 cells: 4 x 4 x 4, the corner tiles outside skipped.
+    EXPECT_LT(report.tiles, 64u);
+  } else {
+    EXPECT_EQ(report.coarse_step, 1);
+    EXPECT_EQ(report.tiles, 1u);
+  }
   // Every corner with data keeps its value exactly.
   for (std::size_t c = 0; c < s.grid.corners.size(); ++c) {
     if (!s.field.valid[c]) continue;
@@ -69,7 +94,7 @@ TEST(CloseSurface, KeepsObservedDistancesAndGivesAWatertightSurface) {
   EXPECT_LT(top, 0.5f + voxel);
 }
 
-TEST(CloseSurface, LinesOfSightStayEmpty) {
+TEST_P(CloseSurfaceModes, LinesOfSightStayEmpty) {
   // The capped sphere seen from above through its opening: the sensor's rays to the inner
   // bottom cross the missing cap, so nothing may close it; the inside stays open to the sensor.
   const float voxel = 0.02f;
@@ -82,7 +107,8 @@ TEST(CloseSurface, LinesOfSightStayEmpty) {
     if (s.cloud.positions[i].z() < -0.1f) seen.push_back(i);  // the bottom, visible inside
   const PointCloud rays = select_points(s.cloud, seen);
   CloseReport report;
-  const ClosedDistance closed = close_distance_field(s.grid, s.field, rays, {}, &report);
+  const ClosedDistance closed = close_distance_field(
+      s.grid, s.field, rays, GetParam() ? tiled_config() : CloseConfig{}, &report);
   EXPECT_GT(report.seen_empty, 0u);
   for (std::size_t c = 0; c < closed.grid.corners.size(); ++c) {
     const Eigen::Vector3f q = closed.grid.corner_position(c);
@@ -97,19 +123,43 @@ TEST(CloseSurface, LinesOfSightStayEmpty) {
         << "a fill across the seen opening at " << v.transpose();
 }
 
+INSTANTIATE_TEST_SUITE_P(DenseAndTiled, CloseSurfaceModes, ::testing::Bool(),
+                         [](const ::testing::TestParamInfo<bool>& p) {
+                           return p.param ? "Tiled" : "Dense";
+                         });
+
 TEST(CloseSurface, SameResultForOneAndTwoThreads) {
   const CappedSphere s = capped_sphere(0.025f);
-  const auto run = [&] { return close_distance_field(s.grid, s.field, s.cloud); };
-  const ClosedDistance one = test::with_threads(1, run), two = test::with_threads(2, run);
-  EXPECT_EQ(one.grid.cells, two.grid.cells);
-  EXPECT_EQ(one.distance.values, two.distance.values);
+  for (const CloseConfig& config : {CloseConfig{}, tiled_config()}) {
+    const auto run = [&] { return close_distance_field(s.grid, s.field, s.cloud, config); };
+    const ClosedDistance one = test::with_threads(1, run), two = test::with_threads(2, run);
+    EXPECT_EQ(one.grid.cells, two.grid.cells);
+    EXPECT_EQ(one.distance.values, two.distance.values);
+  }
 }
 
-TEST(CloseSurface, RefusesALatticeOverTheLimit) {
-  const CappedSphere s = capped_sphere(0.02f);
-  CloseConfig config;
-  config.max_lattice_corners = 1000;
-  EXPECT_THROW(close_distance_field(s.grid, s.field, s.cloud, config), Error);
+// The tiled solve follows the dense one: the filled cap's corners differ by little (its tile
+// faces hold the coarse solution of every 4th corner).
+TEST(CloseSurface, TiledFillFollowsTheDenseOne) {
+  const float voxel = 0.02f;
+  const CappedSphere s = capped_sphere(voxel);
+  const ClosedDistance dense = close_distance_field(s.grid, s.field, s.cloud);
+  const ClosedDistance tiled = close_distance_field(s.grid, s.field, s.cloud, tiled_config());
+  double worst = 0.0, sum = 0.0;
+  std::size_t compared = 0;
+  for (std::size_t c = 0; c < dense.grid.corners.size(); ++c) {
+    const std::uint32_t at = tiled.grid.find_corner(unpack_key(dense.grid.corners[c]));
+    if (at == UINT32_MAX) continue;
+    const double d = std::abs(dense.distance.values[c] - tiled.distance.values[at]);
+    worst = std::max(worst, d);
+    sum += d;
+    ++compared;
+  }
+  ASSERT_GT(compared, dense.grid.corners.size() / 2);
+  std::printf("[ tiled ] corners both grids have: mean difference %.4f, largest %.4f m\n",
+              sum / static_cast<double>(compared), worst);
+  EXPECT_LT(sum / static_cast<double>(compared), 0.1 * voxel) << "mean difference";
+  EXPECT_LT(worst, 2.0 * voxel) << "largest difference at a corner both grids have";
 }
 
 }  // namespace

@@ -150,7 +150,8 @@ class LiveView {
   /// mesh into the encoder's one-mesh slot. O(mesh).
   virtual void frame(const LiveResult& result) = 0;
   /// Publishes the newest mesh (viewers or not) and the end of the run, then stops serving
-  /// (closes every connection). Blocks for that one encoding; idempotent.
+  /// once every connected viewer was sent the end (at most 5 s; closes every connection).
+  /// Blocks for that one encoding and the wait; idempotent.
   virtual void close() = 0;
   /// The page's URL, http://HOST:PORT/.
   virtual std::string url() const = 0;

@@ -4,9 +4,11 @@
 
 #include <pybind11/stl.h>
 
+#include <chrono>
 #include <climits>
 #include <memory>
 #include <string>
+#include <thread>
 #include <variant>
 
 #include "bindings.h"
@@ -143,6 +145,14 @@ class ServedLiveView final : public LiveView {
     if (!publisher_) return;
     publisher_->finish();
     publisher_.reset();
+    // The viewers connected now get what was queued for them and the end before the server
+    // stops (at most 5 s: a stalled viewer does not hold up the program).
+    const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(5);
+    while (std::chrono::steady_clock::now() < deadline) {
+      const serve::ServerStats s = server_->stats();
+      if (s.ends_sent >= s.clients) break;
+      std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    }
     server_.reset();
   }
   std::string url() const override { return url_; }

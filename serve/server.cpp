@@ -143,7 +143,7 @@ class Server::Impl {
     std::atomic<std::uint64_t> clients_accepted{0}, clients_refused{0}, clients_closed_bad{0},
         frames_sent{0}, frames_dropped{0}, bytes_sent{0}, http_requests{0}, meshes{0},
         publications_replaced{0}, max_client_queue{0}, blocks_published{0}, blocks_sent{0},
-        blocks_superseded{0}, max_pending_blocks{0};
+        blocks_superseded{0}, max_pending_blocks{0}, ends_sent{0};
   } counters_;
 };
 
@@ -326,6 +326,7 @@ class WsSession : public std::enable_shared_from_this<WsSession> {
     if (ec) return finish();
     ++server_.counters_.frames_sent;
     server_.counters_.bytes_sent += bytes;
+    if (in_flight_.kind == Outgoing::Kind::kEnd) ++server_.counters_.ends_sent;
     const double rate = server_.config_.client_megabits_per_second;
     if (rate > 0.0)
       next_send_ =
@@ -625,6 +626,7 @@ ServerStats Server::stats() const {
   s.blocks_sent = c.blocks_sent;
   s.blocks_superseded = c.blocks_superseded;
   s.max_client_pending_blocks = c.max_pending_blocks;
+  s.ends_sent = c.ends_sent;
   return s;
 }
 

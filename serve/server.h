@@ -89,6 +89,7 @@ struct ServerStats {
   std::uint64_t clients_refused = 0;             ///< upgrades refused (client limit)
   std::uint64_t clients_closed_bad_message = 0;  ///< closed for a malformed/oversized/fast message
   std::uint64_t frames_sent = 0;                 ///< WebSocket frames written
+  std::uint64_t ends_sent = 0;  ///< {"type":"end"} messages written (one per client after finish())
   std::uint64_t frames_dropped = 0;  ///< frames replaced by newer ones before they were sent
   std::uint64_t bytes_sent = 0;      ///< WebSocket payload bytes written
   std::uint64_t http_requests = 0;   ///< HTTP requests answered

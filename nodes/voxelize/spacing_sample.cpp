@@ -51,9 +51,13 @@ float spacing_variation(const std::vector<std::pair<float, Eigen::Vector3f>>& po
 }  // namespace
 
 std::uint64_t spacing_sample_rank(const Eigen::Vector3f& p) {
-  std::uint32_t bits[3];
-  std::memcpy(bits, p.data(), 12);
-  return spacing_mix(spacing_mix((static_cast<std::uint64_t>(bits[0]) << 32) | bits[1]) ^ bits[2]);
+  // The coordinates on a 1/1024 m lattice, not their bits: two readers of one file that differ
+  // in the last bit (a georeferenced file read in a local frame, or near the world origin)
+  // rank its points alike (equal ranks are ordered by the points' bits).
+  std::uint64_t q[3];
+  for (int k = 0; k < 3; ++k)
+    q[k] = static_cast<std::uint64_t>(std::llround(static_cast<double>(p[k]) * 1024.0));
+  return spacing_mix(spacing_mix(spacing_mix(q[0]) ^ q[1]) ^ q[2]);
 }
 
 SpacingSample::SpacingSample(std::size_t neighbours)

@@ -19,8 +19,8 @@ namespace meshflow {
 /// Points of the sample (at most; all points when the cloud has fewer).
 constexpr std::size_t kSpacingSamples = 2000;
 
-/// The sample's order among points: a 64-bit mix of the coordinates' bit patterns (equal
-/// points share it). Pure; O(1).
+/// The sample's order among points: a 64-bit mix of the coordinates rounded to 1/1024 m
+/// (points that close share it; a last-bit difference rarely changes it). Pure; O(1).
 std::uint64_t spacing_sample_rank(const Eigen::Vector3f& p);
 
 /// Streams points in any order and split (finite points only; call offer() on every batch,

@@ -1,42 +1,40 @@
 #include "graph/chunked_reconstruction.h"
 
+#include <tbb/global_control.h>
+#include <tbb/parallel_for.h>
+
 #include <algorithm>
 #include <cmath>
 
 #include "graph/pipeline.h"
 #include "nodes/chunk/mesh_stitch.h"
+#include "nodes/extract/feature_edge_flips.h"
 #include "nodes/extract/rim_trim.h"
+#include "nodes/filter/filter.h"
 #include "nodes/io/read_point_cloud.h"
 #include "nodes/normals/scene_side.h"
 #include "nodes/search/spatial_index.h"
+#include "nodes/voxelize/spacing_sample.h"
 #include "runtime/error.h"
 #include "runtime/tracing.h"
 
 namespace meshflow {
 namespace {
 
-// The voxel (unless given) and the chunk grid from the first batch of the input: the voxel as
-// suggest_voxel_size() gives it, the chunk edge as given or as auto_chunk_size() gives it.
-// Throws meshflow::Error naming `path` when the batch has too few distinct finite points.
-chunk::ChunkGrid grid_from_first_batch(const PointCloud& batch, float voxel_size,
-                                       ChunkingConfig chunking, const std::string& path) {
-  PointCloud finite;
-  for (const Eigen::Vector3f& p : batch.positions)
-    if (p.allFinite()) finite.positions.push_back(p);
-  std::unique_ptr<KdTreeIndex> index;
-  if (finite.size() >= 2) index = std::make_unique<KdTreeIndex>(finite.positions);
-  if (!(voxel_size > 0.0f) && index) voxel_size = suggest_voxel_size(finite, *index);
-  if (!(voxel_size > 0.0f)) {
-    throw Error(path, "voxel size",
-                "cannot be chosen from the first points (fewer than 2 finite, or all "
-                "coincide); give --voxel");
-  }
-  if (!(chunking.chunk_size > 0.0f)) {
-    chunking.chunk_size = index ? auto_chunk_size(finite, *index, voxel_size,
-                                                  chunking.memory_budget, chunking.in_flight)
-                                : 4.0f * voxel_size;
-  }
-  return make_chunk_grid(voxel_size, chunking);
+// Whether `config`'s normals stage would take sharp-feature normals for an input whose median
+// plane-fit variation is `variation` (NormalsConfig::Sharp, with the pipeline's kWhenClean for
+// --extract auto), given whether the input carries normals and a sensor position.
+bool sharp_for_input(const ReconstructionConfig& config, float variation, bool input_normals,
+                     bool sensor) {
+  const NormalsConfig& n = config.normals;
+  if (n.sharp == NormalsConfig::Sharp::kOn) return true;
+  const bool clean = variation < n.clean_variation;
+  const bool from_input = input_normals && n.source != NormalSource::kEstimate;
+  if (from_input) return clean;
+  NormalOrientation orientation = n.orientation;
+  if (orientation == NormalOrientation::kAuto)
+    orientation = sensor ? NormalOrientation::kTowardSensor : NormalOrientation::kPropagate;
+  return orientation == NormalOrientation::kPropagate && clean;
 }
 
 std::string chunk_label(const chunk::ChunkFile& file) {
@@ -46,13 +44,141 @@ std::string chunk_label(const chunk::ChunkFile& file) {
 
 }  // namespace
 
-ReconstructionConfig chunk_stage_config(const ReconstructionConfig& config, float voxel_size) {
+std::vector<Eigen::Vector3f> points_to_sample(const PointCloud& batch, const FilterConfig& filter) {
+  FilterConfig crop = filter;  // the per-point part of the filters
+  crop.voxel_size = 0.0f;
+  crop.outlier_k = 0;
+  std::vector<Eigen::Vector3f> kept;
+  if (crop.keeps_every_finite_point()) {
+    kept.reserve(batch.size());
+    for (const Eigen::Vector3f& p : batch.positions)
+      if (p.allFinite()) kept.push_back(p);
+    return kept;
+  }
+  crop.crop_min = (filter.crop_min.cast<double>() - batch.origin).cast<float>();
+  crop.crop_max = (filter.crop_max.cast<double>() - batch.origin).cast<float>();
+  for (const std::uint32_t i : crop_indices(batch, crop))
+    if (batch.positions[i].allFinite()) kept.push_back(batch.positions[i]);
+  return kept;
+}
+
+ReconstructionConfig chunk_stage_config(const ReconstructionConfig& config,
+                                        const InputDecisions& decided) {
   ReconstructionConfig c = config;
-  c.voxelize.voxel_size = voxel_size;
+  c.voxelize.voxel_size = decided.voxel_size;
+  c.voxel_from_whole_input = decided.voxel_automatic;
+  if (c.extract.method == ExtractMethod::kAuto) c.extract.method = decided.method;
+  c.extract.defer_feature_flips = true;  // flipped once the chunks are stitched
+  if (decided.noisy) c.normals.kn = 2 * std::max(c.normals.kn, 3);
+  c.normals.noisy_variation = 0.0f;  // decided for the whole input, not per chunk
   c.optimize.steps.clear();
   c.compression = MeshCompression::kNone;
   c.normals.whole_scene = false;  // a chunk is a piece of a larger cloud: no view, no terrain
   return c;
+}
+
+InputParts input_parts(const std::string& path, const std::string& columns, std::size_t parts) {
+  InputParts out;
+  const io::PointRanges ranges = io::point_ranges(path, columns);
+  out.why_not = ranges.why_not;
+  if (!ranges.by_byte_range) return out;
+  out.by_byte_range = true;
+  constexpr std::uint64_t kMinPartPoints = 4096;
+  const std::uint64_t n = ranges.points;
+  const std::uint64_t count =
+      std::clamp<std::uint64_t>(n / kMinPartPoints, 1, std::max<std::size_t>(parts, 1));
+  for (std::uint64_t p = 0; p < count; ++p) {
+    const std::uint64_t first = n * p / count, end = n * (p + 1) / count;
+    out.ranges.emplace_back(first, end - first);
+  }
+  return out;
+}
+
+void for_each_input_part(const std::string& path, const std::string& columns,
+                         const InputParts& parts, std::size_t batch_points,
+                         const std::function<void(std::size_t, const PointCloud&)>& sink) {
+  if (!parts.by_byte_range) {
+    io::for_each_point_batch(path, columns, batch_points,
+                             [&](const PointCloud& batch) { sink(0, batch); });
+    return;
+  }
+  tbb::parallel_for(std::size_t{0}, parts.ranges.size(), [&](std::size_t p) {
+    io::for_each_point_batch_in_range(path, columns, parts.ranges[p].first, parts.ranges[p].second,
+                                      batch_points,
+                                      [&](const PointCloud& batch) { sink(p, batch); });
+  });
+}
+
+InputDecisions decide_from_input(const std::string& path, const std::string& columns,
+                                 const ReconstructionConfig& config, std::size_t batch_points,
+                                 const InputParts& given_parts) {
+  if (!decisions_need_sample(config)) {
+    InputDecisions decided;
+    decided.voxel_size = config.voxelize.voxel_size;
+    decided.method = config.extract.method;
+    return decided;
+  }
+  const InputParts& parts = given_parts;
+  const std::size_t count = std::max<std::size_t>(parts.ranges.size(), 1);
+  // Pass 1: the sample (the lowest-ranked points) and the bounds; pass 2: their neighbours.
+  // Each part samples and measures its own points; the parts are joined in order.
+  const SpacingSample empty = empty_input_sample(config);
+  std::vector<SpacingSample> samples(count, empty);
+  bool normals = false, sensor = false, first = true;
+  for_each_input_part(path, columns, parts, batch_points,
+                      [&](std::size_t part, const PointCloud& batch) {
+                        if (part == 0 && first) {  // the file's first batch
+                          normals = batch.has_normals();
+                          sensor = batch.has_sensor_origin;
+                          first = false;
+                        }
+                        samples[part].offer(points_to_sample(batch, config.filter));
+                      });
+  SpacingSample sample = empty;
+  for (const SpacingSample& s : samples) sample.merge_offered(s);
+  std::fill(samples.begin(), samples.end(), sample);
+  for_each_input_part(
+      path, columns, parts, batch_points, [&](std::size_t part, const PointCloud& batch) {
+        const std::vector<Eigen::Vector3f> points = points_to_sample(batch, config.filter);
+        if (points.empty()) return;
+        const KdTreeIndex index(points);
+        samples[part].measure(points, index);
+      });
+  for (std::size_t part = 1; part < count; ++part) samples[0].merge_measured(samples[part]);
+  return decisions_from_sample(samples[0], config, normals, sensor, path);
+}
+
+SpacingSample empty_input_sample(const ReconstructionConfig& config) {
+  return SpacingSample(static_cast<std::size_t>(std::max(config.normals.kn, 3)));
+}
+
+bool decisions_need_sample(const ReconstructionConfig& config) {
+  return !(config.voxelize.voxel_size > 0.0f) || config.extract.method == ExtractMethod::kAuto;
+}
+
+InputDecisions decisions_from_sample(const SpacingSample& sample,
+                                     const ReconstructionConfig& config, bool input_normals,
+                                     bool sensor, const std::string& path) {
+  InputDecisions decided;
+  decided.voxel_size = config.voxelize.voxel_size;
+  decided.voxel_automatic = !(decided.voxel_size > 0.0f);
+  decided.method = config.extract.method;
+  if (decided.voxel_automatic) {
+    decided.voxel_size = sample.voxel_size();
+    if (!(decided.voxel_size > 0.0f))
+      throw Error(path, "voxel size",
+                  "cannot be chosen from the points (fewer than 2 finite, or all coincide); "
+                  "give --voxel");
+  }
+  decided.median_variation = sample.median_variation();
+  if (config.extract.method == ExtractMethod::kAuto)
+    decided.method = sharp_for_input(config, decided.median_variation, input_normals, sensor)
+                         ? ExtractMethod::kExtendedMarchingCubes
+                         : ExtractMethod::kMarchingCubes;
+  const bool estimated = !input_normals || config.normals.source == NormalSource::kEstimate;
+  decided.noisy = estimated && config.normals.noisy_variation > 0.0f &&
+                  decided.median_variation > config.normals.noisy_variation;
+  return decided;
 }
 
 float auto_chunk_size(const PointCloud& sample, const SpatialIndex& index, float voxel_size,
@@ -80,37 +206,75 @@ chunk::ChunkGrid make_chunk_grid(float voxel_size, const ChunkingConfig& chunkin
   return grid;
 }
 
+chunk::ChunkGrid grid_from_first_batch(const PointCloud& batch, float voxel_size,
+                                       ChunkingConfig chunking) {
+  if (!(chunking.chunk_size > 0.0f)) {
+    PointCloud finite;
+    for (const Eigen::Vector3f& p : batch.positions)
+      if (p.allFinite()) finite.positions.push_back(p);
+    chunking.chunk_size = 4.0f * voxel_size;
+    if (finite.size() >= 2) {
+      const KdTreeIndex index(finite.positions);
+      chunking.chunk_size =
+          auto_chunk_size(finite, index, voxel_size, chunking.memory_budget, chunking.in_flight);
+    }
+  }
+  return make_chunk_grid(voxel_size, chunking);
+}
+
 std::unique_ptr<chunk::ChunkStore> partition_input(
     const std::string& path, const std::string& columns, const ReconstructionConfig& config,
-    const ChunkingConfig& chunking, std::vector<chunk::ChunkFile>& files, float& voxel_size) {
+    const ChunkingConfig& chunking, std::vector<chunk::ChunkFile>& files, InputDecisions& decided) {
+  const std::size_t threads = static_cast<std::size_t>(
+      tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism));
+  const InputParts parts =
+      input_parts(path, columns, chunking.read_parts > 0 ? chunking.read_parts : threads);
+  decided = decide_from_input(path, columns, config, chunking.batch_points, parts);
+  // The grid from the first batch (the first part's), made before the parts are read at once.
   std::unique_ptr<chunk::ChunkStore> store;
-  voxel_size = config.voxelize.voxel_size;
-  io::for_each_point_batch(path, columns, chunking.batch_points, [&](const PointCloud& batch) {
-    if (!store) {
-      const chunk::ChunkGrid grid = grid_from_first_batch(batch, voxel_size, chunking, path);
-      voxel_size = grid.voxel_size;
-      store = std::make_unique<chunk::ChunkStore>(grid, chunking.directory);
+  bool z_up = false;
+  const auto first_batch = [&](const PointCloud& batch) {
+    if (store) return;
+    const chunk::ChunkGrid grid = grid_from_first_batch(batch, decided.voxel_size, chunking);
+    store = std::make_unique<chunk::ChunkStore>(grid, chunking.directory);
+    // A chunk cannot tell a terrain from an object by itself (whole_scene is off for chunks):
+    // the first batch decides for all, as one process decides for the whole cloud.
+    z_up = !batch.has_normals() && classify_scene(batch) == SceneKind::kHeightField;
+  };
+  if (parts.by_byte_range) {
+    io::for_each_point_batch_in_range(
+        path, columns, 0, std::min<std::uint64_t>(parts.ranges[0].second, chunking.batch_points),
+        chunking.batch_points, first_batch);
+  } else {
+    io::for_each_point_batch(path, columns, chunking.batch_points, [&](const PointCloud& batch) {
+      first_batch(batch);
       store->add(batch);
-      // A chunk cannot tell a terrain from an object by itself (whole_scene is off for chunks):
-      // the first batch decides for all, as one process decides for the whole cloud.
-      if (!batch.has_normals() && classify_scene(batch) == SceneKind::kHeightField)
-        store->set_z_up();
-      return;
-    }
-    store->add(batch);
-  });
-  if (!store || store->points_read() == 0)
-    throw Error(path, "points", "no finite points to reconstruct");
-  files = store->finish();
+    });
+  }
+  if (!store) throw Error(path, "points", "no finite points to reconstruct");
+  if (parts.by_byte_range) {
+    std::vector<chunk::ChunkWriter> writers;
+    for (std::size_t p = 0; p < parts.ranges.size(); ++p)
+      writers.push_back(store->writer(static_cast<long>(p)));
+    for_each_input_part(path, columns, parts, chunking.batch_points,
+                        [&](std::size_t p, const PointCloud& batch) { writers[p].add(batch); });
+    std::vector<chunk::WrittenPart> written;
+    for (chunk::ChunkWriter& w : writers) written.push_back(w.finish());
+    files = store->finish(written);
+  } else {
+    files = store->finish();
+  }
+  if (z_up) store->set_z_up();
+  if (store->points_read() == 0) throw Error(path, "points", "no finite points to reconstruct");
   return store;
 }
 
 void mesh_chunk_files(const std::vector<chunk::ChunkFile>& files,
                       const std::function<long long()>& next, const chunk::ChunkGrid& grid,
                       const chunk::ChunkRows& rows, const ReconstructionConfig& config,
-                      std::size_t in_flight, const std::string& name,
+                      const InputDecisions& decided, std::size_t in_flight, const std::string& name,
                       const std::function<void(const FramePtr&)>& sink) {
-  ReconstructionPipeline pipeline(chunk_stage_config(config, grid.voxel_size), in_flight);
+  ReconstructionPipeline pipeline(chunk_stage_config(config, decided), in_flight);
   pipeline.run(
       [&]() -> FramePtr {
         const long long position = next();
@@ -132,13 +296,13 @@ void mesh_chunk_files(const std::vector<chunk::ChunkFile>& files,
 
 void mesh_chunk_files(const std::vector<chunk::ChunkFile>& files, const chunk::ChunkGrid& grid,
                       const chunk::ChunkRows& rows, const ReconstructionConfig& config,
-                      std::size_t in_flight, const std::string& name,
+                      const InputDecisions& decided, std::size_t in_flight, const std::string& name,
                       const std::function<void(const FramePtr&)>& sink) {
   long long position = 0;
   const auto n = static_cast<long long>(files.size());
   mesh_chunk_files(
-      files, [&] { return position < n ? position++ : -1LL; }, grid, rows, config, in_flight, name,
-      sink);
+      files, [&] { return position < n ? position++ : -1LL; }, grid, rows, config, decided,
+      in_flight, name, sink);
 }
 
 void collect_chunk_frame(Frame& frame, chunk::MeshStitcher& stitcher, ChunkedReport& report) {
@@ -147,18 +311,47 @@ void collect_chunk_frame(Frame& frame, chunk::MeshStitcher& stitcher, ChunkedRep
     report.failed.push_back(frame.name + ": " + frame.error);
     return;
   }
-  stitcher.add(frame.mesh, frame.beyond_data);
+  stitcher.add(frame.mesh, chunk_vertex_flags(frame));
   frame.mesh = TriangleMesh{};
   frame.beyond_data.clear();
+  frame.feature_vertices.clear();
+}
+
+chunk::MeshStitcher chunk_stitcher(float voxel_size, int chunk_cells) {
+  return chunk::MeshStitcher(voxel_size, chunk_cells, kFeatureFlag);
+}
+
+std::vector<std::uint8_t> chunk_vertex_flags(const Frame& frame) {
+  const std::size_t n = frame.mesh.vertices.size();
+  const bool beyond = frame.beyond_data.size() == n, features = frame.feature_vertices.size() == n;
+  if (!beyond && !features) return {};
+  std::vector<std::uint8_t> flags(n, 0);
+  for (std::size_t v = 0; v < n; ++v)
+    flags[v] =
+        static_cast<std::uint8_t>((beyond && frame.beyond_data[v] ? kBeyondDataFlag : 0) |
+                                  (features && frame.feature_vertices[v] ? kFeatureFlag : 0));
+  return flags;
 }
 
 TriangleMesh finish_chunked_mesh(chunk::MeshStitcher& stitcher, const ReconstructionConfig& config,
                                  float voxel_size, ChunkedReport& report,
                                  const std::function<void(const std::string&)>& on_step) {
   double t = monotonic_seconds();
-  std::vector<std::uint8_t> beyond;
-  TriangleMesh joined = stitcher.stitch(&report.seam_vertices, &beyond);
-  if (!beyond.empty()) joined = trim_rim(joined, beyond, &report.rim_trimmed);
+  std::vector<std::uint8_t> flags;
+  TriangleMesh joined = stitcher.stitch(&report.seam_vertices, &flags);
+  std::vector<std::uint8_t> beyond(flags.size()), features(flags.size());
+  for (std::size_t v = 0; v < flags.size(); ++v) {
+    beyond[v] = (flags[v] & kBeyondDataFlag) ? 1 : 0;
+    features[v] = (flags[v] & kFeatureFlag) ? 1 : 0;
+  }
+  if (std::find(features.begin(), features.end(), 1) != features.end()) {
+    // Extended marching cubes' flips, as one process makes them over its whole mesh; the
+    // vertex normals then follow the flipped fans, as extraction computes them after its flips.
+    flip_edges_between_features(joined, features);
+    if (!joined.normals.empty()) compute_vertex_normals(joined);
+  }
+  if (!beyond.empty() && config.max_rim_voxels > 0.0f)
+    joined = trim_rim(joined, beyond, &report.rim_trimmed);
   report.stitch_s = monotonic_seconds() - t;
   t = monotonic_seconds();
   OptimizeConfig optimize = optimize_config_for_voxel(config, voxel_size);
@@ -180,9 +373,9 @@ ChunkedResult reconstruct_chunked(const std::string& path, const std::string& co
   double t = monotonic_seconds();
   tell("partition");
   std::vector<chunk::ChunkFile> files;
-  float voxel = 0.0f;
   const std::unique_ptr<chunk::ChunkStore> store =
-      partition_input(path, columns, config, chunking, files, voxel);
+      partition_input(path, columns, config, chunking, files, report.decided);
+  const float voxel = report.decided.voxel_size;
   report.voxel_size = voxel;
   report.chunk_cells = store->grid().chunk_cells;
   report.chunks = files.size();
@@ -195,10 +388,10 @@ ChunkedResult reconstruct_chunked(const std::string& path, const std::string& co
   report.partition_s = monotonic_seconds() - t;
 
   t = monotonic_seconds();
-  chunk::MeshStitcher stitcher(voxel, report.chunk_cells);
+  chunk::MeshStitcher stitcher = chunk_stitcher(voxel, report.chunk_cells);
   std::size_t done = 0;
-  mesh_chunk_files(files, store->grid(), store->rows(), config, chunking.in_flight, path,
-                   [&](const FramePtr& frame) {
+  mesh_chunk_files(files, store->grid(), store->rows(), config, report.decided, chunking.in_flight,
+                   path, [&](const FramePtr& frame) {
                      ++done;
                      tell("chunk " + std::to_string(done) + "/" + std::to_string(files.size()));
                      collect_chunk_frame(*frame, stitcher, report);

@@ -11,14 +11,17 @@
 // cells tile the single-process grid and their seam vertices coincide.
 
 #include <cstddef>
+#include <cstdint>
 #include <functional>
 #include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "graph/frame.h"
 #include "nodes/chunk/chunk_store.h"
 #include "nodes/chunk/mesh_stitch.h"
+#include "nodes/voxelize/spacing_sample.h"
 
 namespace meshflow {
 
@@ -34,11 +37,50 @@ struct ChunkingConfig {
   std::string directory;                ///< parent of the chunk files; "" = the system's temp dir
   std::size_t in_flight = 2;            ///< chunks inside the flow graph at once (bounds memory)
   std::size_t batch_points = 1u << 20;  ///< points read from the input at a time
+  /// Byte ranges of the input read at once, each by its own thread into its own part of the
+  /// chunk files (io::point_ranges: binary PLY); 0 = one per thread. Inputs that cannot be
+  /// read by byte range are streamed by one thread.
+  std::size_t read_parts = 0;
+};
+
+/// The parts a partition reads: the input's byte ranges [first, first + count), or, when it
+/// cannot be read by byte range (`why_not`), one part streamed whole.
+struct InputParts {
+  bool by_byte_range = false;
+  std::vector<std::pair<std::uint64_t, std::uint64_t>> ranges;  ///< (first, count) per part
+  std::string why_not;
+};
+
+/// `parts` (>= 1) ranges of about equal point counts over `path` when io::point_ranges()
+/// allows it (fewer when a range would hold under 4096 points), else one part. O(header).
+InputParts input_parts(const std::string& path, const std::string& columns, std::size_t parts);
+
+/// Hands every batch of `parts` to `sink(part, batch)`, the parts read at once (one task each;
+/// batches of one part in file order, from one thread at a time). Throws the first reader's
+/// meshflow::Error.
+void for_each_input_part(const std::string& path, const std::string& columns,
+                         const InputParts& parts, std::size_t batch_points,
+                         const std::function<void(std::size_t, const PointCloud&)>& sink);
+
+/// What the whole input decides once for every chunk, as one process decides it for the whole
+/// cloud (the statistics pass of partition_input(), over spacing_sample.h's sample).
+struct InputDecisions {
+  float voxel_size = 0.0f;       ///< metres: given, or auto_voxel_size()'s rule
+  bool voxel_automatic = false;  ///< chosen from the points, not given
+  /// The extraction method: the configured one, or for kAuto extended marching cubes when the
+  /// sample's median plane-fit variation is below NormalsConfig::clean_variation (and the
+  /// normals would be estimated without a sensor, or come from the input), else marching cubes.
+  ExtractMethod method = ExtractMethod::kMarchingCubes;
+  /// Estimated normals fit over 2 kn neighbours: the sample's median variation exceeds
+  /// NormalsConfig::noisy_variation.
+  bool noisy = false;
+  float median_variation = 0.0f;  ///< of the sample's kn-neighbourhoods (0: not measured)
 };
 
 /// What a chunked reconstruction did.
 struct ChunkedReport {
-  float voxel_size = 0.0f;         ///< metres (given, or chosen from the first batch)
+  float voxel_size = 0.0f;         ///< metres (given, or decided from the whole input)
+  InputDecisions decided;          ///< what the whole input decided for every chunk
   int chunk_cells = 0;             ///< chunk edge in cells
   std::size_t chunks = 0;          ///< chunks meshed
   std::uint64_t points = 0;        ///< finite points read
@@ -59,9 +101,24 @@ struct ChunkedResult {
   ChunkedReport report;
 };
 
-/// The configuration each chunk runs with: `config` with the voxel fixed, no optimisation (it
-/// runs once on the stitched mesh) and no compression.
-ReconstructionConfig chunk_stage_config(const ReconstructionConfig& config, float voxel_size);
+/// The configuration each chunk runs with: `config` with the voxel, the extraction method and
+/// the normals' neighbourhood size as `decided` (no chunk decides them on its own), extended
+/// marching cubes' edge flips left to the stitched mesh, no optimisation (it runs once on the
+/// stitched mesh) and no compression.
+ReconstructionConfig chunk_stage_config(const ReconstructionConfig& config,
+                                        const InputDecisions& decided);
+
+/// The decisions of `config` for a cloud streamed from `path` in batches of `batch_points`:
+/// when the voxel or the extraction method is automatic, two passes over the input (the
+/// sample and its nearest neighbours; memory: one batch and its kd-tree per part, the `parts`
+/// read at once; no parts: the input streamed whole). Points outside the
+/// crop box are left out as the filter stage leaves them; voxel-grid downsampling and
+/// statistical outlier removal (--filter-voxel, --outlier-k) are not applied to the sample,
+/// so with them the automatic voxel can differ from one process's. Throws meshflow::Error
+/// naming `path` when no voxel can be chosen.
+InputDecisions decide_from_input(const std::string& path, const std::string& columns,
+                                 const ReconstructionConfig& config, std::size_t batch_points,
+                                 const InputParts& parts = {});
 
 /// Bytes a chunk holds per point while in the graph (points, normals, kd-tree, grid, distances,
 /// mesh; measured on the synthetic city at 3-6 points per voxel, with margin).
@@ -77,24 +134,50 @@ float auto_chunk_size(const PointCloud& sample, const SpatialIndex& index, float
 /// The chunk grid for `voxel_size` and `chunking` (chunk edge rounded to whole cells, >= 1).
 chunk::ChunkGrid make_chunk_grid(float voxel_size, const ChunkingConfig& chunking);
 
-/// Streams `path` (columns as io::read_point_cloud) into chunk files. The voxel size is
-/// config.voxelize.voxel_size, or when that is 0 chosen from the first batch of points (3x its
-/// median spacing, as suggest_voxel_size); the chunk edge is chunking.chunk_size or, when that
-/// is <= 0, auto_chunk_size() of the same batch (the store's grid() holds the one used).
-/// Returns the store; `files` receives the chunks to mesh in Morton order. Throws meshflow::Error
-/// for unreadable input or a cloud without finite points.
+/// Whether `config` leaves the voxel or the extraction method to decide_from_input() (then it
+/// needs the sample of the whole input). O(1).
+bool decisions_need_sample(const ReconstructionConfig& config);
+
+/// An empty sample keeping the neighbourhood size `config`'s normals fit over (kn, at least 3),
+/// for callers that read the parts of the input themselves (MPI ranks). O(1).
+SpacingSample empty_input_sample(const ReconstructionConfig& config);
+
+/// The points of `batch` that go into the sample: finite, inside the crop box and range of
+/// `filter` (the filter stage's per-point part, in the batch's local frame). O(batch).
+std::vector<Eigen::Vector3f> points_to_sample(const PointCloud& batch, const FilterConfig& filter);
+
+/// decide_from_input()'s decisions from the joined, measured `sample`, given whether the input
+/// carries normals and a sensor position (its first batch). Throws meshflow::Error naming
+/// `path` when the voxel is automatic and cannot be chosen. O(samples x neighbours).
+InputDecisions decisions_from_sample(const SpacingSample& sample,
+                                     const ReconstructionConfig& config, bool input_normals,
+                                     bool sensor, const std::string& path);
+
+/// The chunk grid at `voxel_size`: chunking.chunk_size, or when that is <= 0 auto_chunk_size()
+/// of the input's first batch `batch` (its finite points). O(batch log batch).
+chunk::ChunkGrid grid_from_first_batch(const PointCloud& batch, float voxel_size,
+                                       ChunkingConfig chunking);
+
+/// Streams `path` (columns as io::read_point_cloud) into chunk files, its byte ranges
+/// (input_parts(), chunking.read_parts) each read by a thread of its own into its own part of
+/// the chunk files (ChunkWriter; a chunk's points stay in file order), after decide_from_input()
+/// (`decided` receives its result; the voxel is one process's automatic voxel when none is
+/// given); the chunk edge is chunking.chunk_size or, when that is <= 0, auto_chunk_size() of
+/// the first batch (the store's grid() holds the one used). Returns the store; `files`
+/// receives the chunks to mesh in Morton order. Throws meshflow::Error for unreadable input or
+/// a cloud without finite points.
 std::unique_ptr<chunk::ChunkStore> partition_input(
     const std::string& path, const std::string& columns, const ReconstructionConfig& config,
-    const ChunkingConfig& chunking, std::vector<chunk::ChunkFile>& files, float& voxel_size);
+    const ChunkingConfig& chunking, std::vector<chunk::ChunkFile>& files, InputDecisions& decided);
 
-/// Meshes `files` (chunk files of `grid` with rows `rows`) through one flow graph, `in_flight`
-/// at a time; hands each finished chunk frame (failed ones with `error` set; the mesh in the
-/// input's local frame, with Frame::beyond_data for the rim trim; Frame::source_index = its
-/// position in `files`) to `sink` in the order of `files`, from one thread at a time. Each
-/// chunk's file is deleted once read.
+/// Meshes `files` (chunk files of `grid` with rows `rows`) through one flow graph with
+/// chunk_stage_config(config, decided), `in_flight` at a time; hands each finished chunk frame
+/// (failed ones with `error` set; the mesh in the input's local frame, with Frame::beyond_data for
+/// the rim trim; Frame::source_index = its position in `files`) to `sink` in the order of `files`,
+/// from one thread at a time. Each chunk's file is deleted once read.
 void mesh_chunk_files(const std::vector<chunk::ChunkFile>& files, const chunk::ChunkGrid& grid,
                       const chunk::ChunkRows& rows, const ReconstructionConfig& config,
-                      std::size_t in_flight, const std::string& name,
+                      const InputDecisions& decided, std::size_t in_flight, const std::string& name,
                       const std::function<void(const FramePtr&)>& sink);
 
 /// The same with the chunks taken as the graph asks for them: `next()` returns the position in
@@ -104,16 +187,30 @@ void mesh_chunk_files(const std::vector<chunk::ChunkFile>& files, const chunk::C
 void mesh_chunk_files(const std::vector<chunk::ChunkFile>& files,
                       const std::function<long long()>& next, const chunk::ChunkGrid& grid,
                       const chunk::ChunkRows& rows, const ReconstructionConfig& config,
-                      std::size_t in_flight, const std::string& name,
+                      const InputDecisions& decided, std::size_t in_flight, const std::string& name,
                       const std::function<void(const FramePtr&)>& sink);
+
+/// Bits of the byte per vertex a chunk hands the stitcher (chunk_vertex_flags()).
+constexpr std::uint8_t kBeyondDataFlag = 1;  ///< its rim verdict (Frame::beyond_data)
+constexpr std::uint8_t kFeatureFlag = 2;     ///< a feature vertex (Frame::feature_vertices)
+
+/// The stitcher for chunk meshes at `voxel_size` in chunks of `chunk_cells` (feature vertices
+/// kept apart: kFeatureFlag). O(1).
+chunk::MeshStitcher chunk_stitcher(float voxel_size, int chunk_cells);
+
+/// The byte per vertex a chunk hands the stitcher: kBeyondDataFlag and kFeatureFlag; empty
+/// when it has neither.
+std::vector<std::uint8_t> chunk_vertex_flags(const Frame& frame);
 
 /// What a chunk's sink does: its stage records into `report`, its mesh (and rim verdicts) into
 /// `stitcher`, or its error into report.failed; frees the frame's mesh.
 void collect_chunk_frame(Frame& frame, chunk::MeshStitcher& stitcher, ChunkedReport& report);
 
-/// Welds chunk meshes delivered in order (MeshStitcher), then trims the rim over the stitched
-/// mesh (config.max_rim_voxels) and runs config's optimize steps once; fills the report's
-/// seam, rim, stitch and optimize fields. `on_step` (optional) is told each optimize step.
+/// Welds chunk meshes delivered in order (MeshStitcher, with chunk_vertex_flags()), flips the
+/// edges between feature vertices (extended marching cubes' pass, on the stitched mesh so that
+/// seams flip as inside one process), trims the rim over the stitched mesh
+/// (config.max_rim_voxels) and runs config's optimize steps once; fills the report's seam,
+/// rim, stitch and optimize fields. `on_step` (optional) is told each optimize step.
 TriangleMesh finish_chunked_mesh(chunk::MeshStitcher& stitcher, const ReconstructionConfig& config,
                                  float voxel_size, ChunkedReport& report,
                                  const std::function<void(const std::string&)>& on_step = {});

@@ -32,14 +32,19 @@ namespace meshflow {
 enum class MeshCompression { kNone, kEdgebreaker, kProgressive };
 
 /// Configuration of every stage; defaults are the thesis's published ones.
-/// voxelize.voxel_size <= 0 means "choose from the point spacing" (suggest_voxel_size).
+/// voxelize.voxel_size <= 0 means "choose from the point spacing" (auto_voxel_size).
 struct ReconstructionConfig {
   DepthFilterConfig depth_filter;  ///< depth-image inputs only
   FilterConfig filter;
   NormalsConfig normals;
   /// Voxel size 0 (the default, as in the CLI): chosen per frame, 3x the median point spacing
-  /// of a cloud (suggest_voxel_size) or from the depth and focal length of a depth frame.
+  /// of a cloud (auto_voxel_size, before the outlier clusters are removed) or from the depth
+  /// and focal length of a depth frame.
   VoxelizeConfig voxelize = VoxelizeConfig{0.0f};
+  /// voxelize.voxel_size was chosen by meshflow from the whole input (the out-of-core path's
+  /// statistics pass), not given: the outlier clusters are then linked at exactly that voxel,
+  /// as one process links them at its own automatic choice.
+  bool voxel_from_whole_input = false;
   DistanceConfig distance;              ///< clouds (Hoppe)
   CloseConfig close;                    ///< --close: the close stage (off by default)
   ProjectiveDistanceConfig projective;  ///< depth frames
@@ -119,6 +124,9 @@ struct Frame {
   /// judges (vertices_beyond_data); the rim is trimmed after stitching, where chunk cuts are
   /// no border.
   std::vector<std::uint8_t> beyond_data;
+  /// Chunks with ExtractConfig::defer_feature_flips: per mesh vertex, 1 for extended marching
+  /// cubes' feature vertices (their edge flips run once the chunks are stitched).
+  std::vector<std::uint8_t> feature_vertices;
   /// Per-frame depth-map triangulation ("triangulate"): what its filter, occlusion tests and
   /// component filter dropped.
   TriangulationCounts triangulation;

@@ -16,6 +16,7 @@
 #include "nodes/filter/point_clusters.h"
 #include "nodes/filter/spatial_order.h"
 #include "nodes/normals/organized_normals.h"
+#include "nodes/voxelize/spacing_sample.h"
 #include "runtime/error.h"
 
 namespace meshflow {
@@ -52,7 +53,11 @@ std::string short_number(float value) {
 
 // The scale of the outlier links: the configured voxel, but never below the one the points'
 // spacing suggests (a voxel chosen far smaller than the spacing must not isolate every point).
+// An automatic voxel (f.voxel_size, chosen by "index" from the whole cloud, or decided from the
+// whole input for a chunk) is the scale itself.
 float outlier_link_voxel(const Frame& f, const ReconstructionConfig& c) {
+  if (c.voxel_from_whole_input) return c.voxelize.voxel_size;
+  if (!(c.voxelize.voxel_size > 0.0f) && f.voxel_size > 0.0f) return f.voxel_size;
   return std::max(c.voxelize.voxel_size, suggest_voxel_size(f.cloud, *f.index));
 }
 
@@ -170,6 +175,10 @@ std::uint64_t index(Frame& f, const ReconstructionConfig& c) {
   // Neighbours in space become neighbours in memory for every pass that follows.
   if (!f.cloud.is_organized()) f.cloud = in_morton_order(f.cloud);
   f.index = std::make_shared<KdTreeIndex>(f.cloud.positions);
+  // The automatic voxel from the whole filtered cloud, before any cluster is dropped: the
+  // statistic the out-of-core path measures while streaming its input (spacing_sample.h).
+  if (!(c.voxelize.voxel_size > 0.0f) && !f.cloud.is_organized())
+    f.voxel_size = auto_voxel_size(f.cloud, *f.index);
   if (c.filter.outlier_cluster > 1 && !f.cloud.is_organized()) remove_point_clusters(f, c);
   return f.cloud.size();
 }
@@ -191,7 +200,8 @@ std::uint64_t voxelize(Frame& f, const ReconstructionConfig& c) {
   VoxelizeConfig vc = c.voxelize;
   if (!(vc.voxel_size > 0.0f)) {
     vc.voxel_size = f.depth ? suggest_voxel_size_for_depth(f.cloud, f.depth->intrinsics.fx)
-                            : suggest_voxel_size(f.cloud, *f.index);
+                    : f.voxel_size > 0.0f ? f.voxel_size  // chosen by "index"
+                                          : suggest_voxel_size(f.cloud, *f.index);
     if (!(vc.voxel_size > 0.0f))
       throw Error("voxelize", "voxel_size",
                   "cannot be chosen from the points: their spacing and extent are 0 (do they all "
@@ -243,7 +253,8 @@ std::uint64_t extract(Frame& f, const ReconstructionConfig& c) {
     config.method =
         f.normals.sharp ? ExtractMethod::kExtendedMarchingCubes : ExtractMethod::kMarchingCubes;
   f.extract_method = config.method;
-  f.mesh = extract_surface(f.grid, f.distance, f.cloud, f.index.get(), config);
+  f.mesh = extract_surface(f.grid, f.distance, f.cloud, f.index.get(), config,
+                           config.defer_feature_flips ? &f.feature_vertices : nullptr);
   const std::size_t extracted = f.mesh.triangles.size();
   if (f.index && c.max_rim_voxels > 0.0f) {
     const float limit = c.max_rim_voxels * f.voxel_size;

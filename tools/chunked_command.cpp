@@ -6,6 +6,7 @@
 #include <string>
 
 #include "graph/chunked_reconstruction.h"
+#include "nodes/extract/extract_surface.h"
 #include "nodes/io/mesh_writers.h"
 #include "options/json_report.h"
 #include "runtime/error.h"
@@ -53,7 +54,13 @@ void run_chunked_reconstruct(const std::string& input, const std::string& column
         {"max_chunk_points", r.max_chunk_points},
         {"seam_vertices", r.seam_vertices},
         {"mesh",
-         {{"vertices", result.mesh.vertices.size()}, {"triangles", result.mesh.triangles.size()}}},
+         {{"vertices", result.mesh.vertices.size()},
+          {"triangles", result.mesh.triangles.size()},
+          {"extract", extract_method_name(r.decided.method)}}},
+        {"decided",  // once, from the whole input, for every chunk
+         {{"voxel_automatic", r.decided.voxel_automatic},
+          {"median_variation", r.decided.median_variation},
+          {"noisy", r.decided.noisy}}},
         {"phases_s",
          {{"partition", r.partition_s},
           {"mesh", r.mesh_s},
@@ -66,9 +73,10 @@ void run_chunked_reconstruct(const std::string& input, const std::string& column
   report("input      %s: %llu points (%llu NaN/Inf dropped)\n", input.c_str(),
          static_cast<unsigned long long>(r.points), static_cast<unsigned long long>(r.dropped));
   report(
-      "chunks     %zu of %d cells (%.2f m) at voxel %.4f m; %.2fx the points spilled with "
-      "overlap, at most %llu per chunk\n",
+      "chunks     %zu of %d cells (%.2f m) at voxel %.4f m, extract %s; %.2fx the points "
+      "spilled with overlap, at most %llu per chunk\n",
       r.chunks, r.chunk_cells, r.chunk_cells * r.voxel_size, r.voxel_size,
+      extract_method_name(r.decided.method),
       static_cast<double>(r.rows_written) / static_cast<double>(r.points),
       static_cast<unsigned long long>(r.max_chunk_points));
   report("mesh       %zu vertices, %zu triangles; %zu seam vertices welded\n",

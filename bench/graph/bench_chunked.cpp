@@ -53,8 +53,8 @@ void BM_ChunkPartition(benchmark::State& state) {
   std::size_t chunks = 0;
   for (auto _ : state) {
     std::vector<chunk::ChunkFile> files;
-    float voxel = 0.0f;
-    auto store = partition_input(path, "", config(), chunking(), files, voxel);
+    InputDecisions decided;
+    auto store = partition_input(path, "", config(), chunking(), files, decided);
     chunks = files.size();
   }
   state.counters["points/s"] =

@@ -29,11 +29,16 @@ using File = std::unique_ptr<std::FILE, FileCloser>;
 
 PointCloud read_chunk_file(const ChunkFile& chunk, const ChunkRows& rows) {
   const std::size_t row = rows.bytes();
-  const std::vector<unsigned char> bytes = io::read_file_bytes(chunk.path);
+  std::vector<unsigned char> bytes = io::read_file_bytes(chunk.path);
+  for (const std::string& part : chunk.parts) {
+    const std::vector<unsigned char> more = io::read_file_bytes(part);
+    bytes.insert(bytes.end(), more.begin(), more.end());
+  }
   if (bytes.size() != chunk.points * row) {
     throw Error(chunk.path, "chunk file",
                 "expected " + std::to_string(chunk.points) + " points of " + std::to_string(row) +
-                    " bytes, found " + std::to_string(bytes.size()) + " bytes");
+                    " bytes" + (chunk.parts.empty() ? "" : " in its parts") + ", found " +
+                    std::to_string(bytes.size()) + " bytes");
   }
   PointCloud cloud;
   cloud.origin = rows.origin;
@@ -53,28 +58,14 @@ PointCloud read_chunk_file(const ChunkFile& chunk, const ChunkRows& rows) {
   return cloud;
 }
 
-ChunkStore::ChunkStore(const ChunkGrid& grid, const std::string& parent, std::size_t buffer_bytes)
-    : grid_(grid), buffer_bytes_(std::max<std::size_t>(buffer_bytes, 4096)) {
-  if (!(grid.voxel_size > 0.0f) || grid.chunk_cells < 1 || grid.overlap_cells < 1)
-    throw Error("chunks", "grid", "voxel size, chunk size and overlap must be positive");
-  std::error_code ec;
-  const std::filesystem::path base =
-      parent.empty() ? std::filesystem::temp_directory_path(ec) : std::filesystem::path(parent);
-  std::string pattern = (base / "meshflow-chunks-XXXXXX").string();
-  if (ec || ::mkdtemp(pattern.data()) == nullptr) {
-    throw Error(
-        base.string(), "chunk directory",
-        std::string("cannot create a directory for the chunk files: ") + std::strerror(errno));
-  }
-  directory_ = pattern;
-}
+ChunkWriter::ChunkWriter(const ChunkGrid& grid, std::string directory, long part,
+                         std::size_t buffer_bytes)
+    : grid_(grid),
+      directory_(std::move(directory)),
+      suffix_(part < 0 ? "" : ".p" + std::to_string(part)),
+      buffer_bytes_(std::max<std::size_t>(buffer_bytes, 4096)) {}
 
-ChunkStore::~ChunkStore() {
-  std::error_code ec;
-  std::filesystem::remove_all(directory_, ec);
-}
-
-void ChunkStore::spill(Pending& chunk) {
+void ChunkWriter::spill(Pending& chunk) {
   if (chunk.buffer.empty()) return;
   File f(std::fopen(chunk.file.path.c_str(), "ab"));
   if (!f ||
@@ -88,31 +79,32 @@ void ChunkStore::spill(Pending& chunk) {
   chunk.buffer.clear();
 }
 
-void ChunkStore::add(const PointCloud& batch) {
+void ChunkWriter::add(const PointCloud& batch) {
   const bool normals = batch.has_normals(), colors = batch.has_colors();
-  if (first_) {
-    first_ = false;
-    rows_.normals = normals;
-    rows_.colors = colors;
-    rows_.origin = batch.origin;
-    rows_.z_up = batch.z_up;
-  } else if (normals != rows_.normals || colors != rows_.colors || batch.origin != rows_.origin) {
+  ChunkRows& rows = written_.rows;
+  if (!written_.has_rows) {
+    written_.has_rows = true;
+    rows.normals = normals;
+    rows.colors = colors;
+    rows.origin = batch.origin;
+    rows.z_up = batch.z_up;
+  } else if (normals != rows.normals || colors != rows.colors || batch.origin != rows.origin) {
     throw Error("chunks", "point batch",
                 "a batch of the input differs from the first in its normals, colours or origin");
   }
-  const std::size_t row = rows_.bytes();
+  const std::size_t row = rows.bytes();
   std::vector<Eigen::Vector3i> seeing;
   std::vector<Pending*> targets;
   Eigen::Vector3i cached_lo(1, 0, 0), cached_hi(0, 0, 0);  // empty: no cache yet
   for (std::size_t i = 0; i < batch.size(); ++i) {
     const Eigen::Vector3f& p = batch.positions[i];
     if (!p.allFinite()) {
-      ++dropped_;
+      ++written_.dropped;
       continue;
     }
     const Eigen::Vector3i cell = cell_of(p, grid_.voxel_size);
     if (!cell_index_in_range(cell)) {
-      throw Error("chunks", "point " + std::to_string(points_read_ + dropped_),
+      throw Error("chunks", "point " + std::to_string(written_.points_read + written_.dropped),
                   "lies outside the grid's range at a voxel of " +
                       std::to_string(grid_.voxel_size) + " m (about +-" +
                       std::to_string(kMaxCellIndex) + " cells from the origin)");
@@ -130,7 +122,7 @@ void ChunkStore::add(const PointCloud& batch) {
         Pending& chunk = chunks_[pack_key(k)];
         if (chunk.file.path.empty()) {
           chunk.file.index = k;
-          chunk.file.path = directory_ + "/" + chunk_name(k);
+          chunk.file.path = directory_ + "/" + chunk_name(k) + suffix_;
         }
         targets.push_back(&chunk);
       }
@@ -144,8 +136,8 @@ void ChunkStore::add(const PointCloud& batch) {
       chunk->buffer.resize(at + row);
       char* out = chunk->buffer.data() + at;
       std::memcpy(out, p.data(), 12);
-      if (rows_.normals) std::memcpy(out + 12, batch.normals[i].data(), 12);
-      if (rows_.colors) {
+      if (rows.normals) std::memcpy(out + 12, batch.normals[i].data(), 12);
+      if (rows.colors) {
         const Rgb8& c = batch.colors[i];
         out[row - 3] = static_cast<char>(c.r);
         out[row - 2] = static_cast<char>(c.g);
@@ -157,26 +149,97 @@ void ChunkStore::add(const PointCloud& batch) {
         ++chunk->file.core_points;
       if (chunk->buffer.size() + row > buffer_bytes_) spill(*chunk);
     }
-    rows_written_ += targets.size();
-    bounds_.extend(p);
-    ++points_read_;
+    written_.rows_written += targets.size();
+    written_.bounds.extend(p);
+    ++written_.points_read;
   }
 }
 
-std::vector<ChunkFile> ChunkStore::finish() {
-  std::vector<ChunkFile> files;
+WrittenPart ChunkWriter::finish() {
   for (auto& [key, chunk] : chunks_) {
-    if (chunk.file.core_points == 0) {  // only far overlap: no surface of its own
-      chunk.buffer = std::vector<char>();
-      std::error_code ec;
-      std::filesystem::remove(chunk.file.path, ec);
-      continue;
-    }
     spill(chunk);
     chunk.buffer = std::vector<char>();
-    files.push_back(chunk.file);
+    written_.files.push_back(chunk.file);
   }
   chunks_.clear();
+  return std::move(written_);
+}
+
+ChunkStore::ChunkStore(const ChunkGrid& grid, const std::string& parent, std::size_t buffer_bytes)
+    : grid_(grid), buffer_bytes_(buffer_bytes) {
+  if (!(grid.voxel_size > 0.0f) || grid.chunk_cells < 1 || grid.overlap_cells < 1)
+    throw Error("chunks", "grid", "voxel size, chunk size and overlap must be positive");
+  std::error_code ec;
+  const std::filesystem::path base =
+      parent.empty() ? std::filesystem::temp_directory_path(ec) : std::filesystem::path(parent);
+  std::string pattern = (base / "meshflow-chunks-XXXXXX").string();
+  if (ec || ::mkdtemp(pattern.data()) == nullptr) {
+    throw Error(
+        base.string(), "chunk directory",
+        std::string("cannot create a directory for the chunk files: ") + std::strerror(errno));
+  }
+  directory_ = pattern;
+  own_ = std::make_unique<ChunkWriter>(grid_, directory_, -1, buffer_bytes_);
+}
+
+ChunkStore::~ChunkStore() {
+  std::error_code ec;
+  std::filesystem::remove_all(directory_, ec);
+}
+
+void ChunkStore::add(const PointCloud& batch) { own_->add(batch); }
+
+ChunkWriter ChunkStore::writer(long part) const {
+  return ChunkWriter(grid_, directory_, std::max(part, 0L), buffer_bytes_);
+}
+
+std::vector<ChunkFile> ChunkStore::finish() {
+  std::vector<WrittenPart> parts;
+  parts.push_back(own_->finish());
+  return finish(parts);
+}
+
+std::vector<ChunkFile> ChunkStore::finish(const std::vector<WrittenPart>& parts) {
+  const bool z_up = rows_.z_up;
+  bool first = true;
+  std::map<std::uint64_t, ChunkFile> joined;  // by packed chunk index
+  for (const WrittenPart& part : parts) {
+    points_read_ += part.points_read;
+    dropped_ += part.dropped;
+    rows_written_ += part.rows_written;
+    bounds_.extend(part.bounds);
+    if (part.has_rows) {
+      if (first) {
+        rows_ = part.rows;
+        first = false;
+      } else if (part.rows.normals != rows_.normals || part.rows.colors != rows_.colors ||
+                 part.rows.origin != rows_.origin) {
+        throw Error("chunks", "parts",
+                    "a part of the input differs from the first in its normals, colours or "
+                    "origin");
+      }
+    }
+    for (const ChunkFile& f : part.files) {
+      ChunkFile& chunk = joined[pack_key(f.index)];
+      if (chunk.path.empty()) {
+        chunk = f;
+        continue;
+      }
+      chunk.parts.push_back(f.path);
+      chunk.parts.insert(chunk.parts.end(), f.parts.begin(), f.parts.end());
+      chunk.points += f.points;
+      chunk.core_points += f.core_points;
+    }
+  }
+  rows_.z_up = rows_.z_up || z_up;
+  std::vector<ChunkFile> files;
+  for (auto& [key, chunk] : joined) {
+    if (chunk.core_points == 0) {  // only far overlap: no surface of its own
+      remove_chunk_file(chunk);
+      continue;
+    }
+    files.push_back(std::move(chunk));
+  }
   std::sort(files.begin(), files.end(), [](const ChunkFile& a, const ChunkFile& b) {
     return morton_code(a.index) < morton_code(b.index);
   });
@@ -190,6 +253,7 @@ void ChunkStore::remove(const ChunkFile& chunk) const { remove_chunk_file(chunk)
 void remove_chunk_file(const ChunkFile& chunk) {
   std::error_code ec;
   std::filesystem::remove(chunk.path, ec);
+  for (const std::string& part : chunk.parts) std::filesystem::remove(part, ec);
 }
 
 }  // namespace meshflow::chunk

@@ -176,7 +176,11 @@ void MeshStitcher::add(const TriangleMesh& mesh, const std::vector<std::uint8_t>
   if (colors_) joined_.colors.insert(joined_.colors.end(), mesh.colors.begin(), mesh.colors.end());
   flags_given_ = flags_given_ && vertex_flags.size() == mesh.vertices.size();
   if (flags_given_) flags_.insert(flags_.end(), vertex_flags.begin(), vertex_flags.end());
-  for (const Eigen::Vector3f& v : mesh.vertices) keys_.push_back(lattice_edge_key(v, voxel_size_));
+  const bool flagged = vertex_flags.size() == mesh.vertices.size();
+  for (std::size_t v = 0; v < mesh.vertices.size(); ++v)
+    keys_.push_back(flagged && (vertex_flags[v] & apart_flags_)
+                        ? kNoKey
+                        : lattice_edge_key(mesh.vertices[v], voxel_size_));
   const std::size_t first_triangle = joined_.triangles.size();
   for (const Triangle& t : mesh.triangles)
     joined_.triangles.push_back({t[0] + base, t[1] + base, t[2] + base});

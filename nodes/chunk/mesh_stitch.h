@@ -37,8 +37,11 @@ class MeshStitcher {
  public:
   /// `voxel_size` of the grid every chunk mesh was extracted on, metres; `chunk_cells` the
   /// chunk edge in cells (0: no orientation relations).
-  explicit MeshStitcher(float voxel_size, int chunk_cells = 0)
-      : voxel_size_(voxel_size), chunk_cells_(chunk_cells) {}
+  /// `apart_flags`: vertices whose flag byte (add()'s vertex_flags) has any of these bits are
+  /// never merged, even when they lie on a lattice edge (extended marching cubes' feature
+  /// vertices, clamped to their cell's box, can sit on one beside the edge's own vertex).
+  explicit MeshStitcher(float voxel_size, int chunk_cells = 0, std::uint8_t apart_flags = 0)
+      : voxel_size_(voxel_size), chunk_cells_(chunk_cells), apart_flags_(apart_flags) {}
 
   /// Appends a chunk's mesh (vertices in the common local frame; normals and colours kept when
   /// every chunk has them) and optionally a byte per vertex (`vertex_flags`, e.g. Frame::
@@ -73,6 +76,7 @@ class MeshStitcher {
 
   float voxel_size_;
   int chunk_cells_;
+  std::uint8_t apart_flags_;
   TriangleMesh joined_;
   std::vector<std::uint64_t> keys_;
   std::vector<std::uint8_t> flags_;

@@ -132,7 +132,8 @@ void emit_triangles(const ActiveCells& at, const CellLayout& layout, std::uint32
 
 TriangleMesh extended_marching_cubes(const SparseGrid& grid, const DistanceField& field,
                                      const PointCloud& cloud, const SpatialIndex& index,
-                                     const ExtractConfig& config, const ExtendedMcConfig& emc) {
+                                     const ExtractConfig& config, const ExtendedMcConfig& emc,
+                                     std::vector<std::uint8_t>* feature_vertices) {
   if (cloud.normals.size() != cloud.positions.size())
     throw Error("extract", "method emc", "needs point normals");
   const CellPatterns cells = cell_patterns(grid, field, config.iso);
@@ -147,12 +148,11 @@ TriangleMesh extended_marching_cubes(const SparseGrid& grid, const DistanceField
   mesh.vertices.resize(edge_vertices + layout.feature_vertices);
   mesh.triangles.resize(layout.triangles);
   emit_triangles(active, layout, edge_vertices, mesh);
-  if (emc.flip_edges) {
-    std::vector<std::uint8_t> is_feature(mesh.vertices.size(), 0);
-    std::fill(is_feature.begin() + static_cast<std::ptrdiff_t>(edge_vertices), is_feature.end(),
-              std::uint8_t{1});
-    flip_edges_between_features(mesh, is_feature);
-  }
+  std::vector<std::uint8_t> is_feature(mesh.vertices.size(), 0);
+  std::fill(is_feature.begin() + static_cast<std::ptrdiff_t>(edge_vertices), is_feature.end(),
+            std::uint8_t{1});
+  if (emc.flip_edges) flip_edges_between_features(mesh, is_feature);
+  if (feature_vertices) *feature_vertices = std::move(is_feature);
   if (config.vertex_normals) compute_vertex_normals(mesh);
   return mesh;
 }

@@ -5,6 +5,9 @@
 // planes of a sharp cell meet, fans around it, and edge flips along the features. Plain
 // marching cubes rounds a box's edges and corners off by a fraction of a voxel; EMC keeps them.
 
+#include <cstdint>
+#include <vector>
+
 #include "nodes/extract/directed_distance.h"
 #include "nodes/extract/marching_cubes.h"
 #include "nodes/extract/sharp_feature.h"
@@ -25,10 +28,12 @@ struct ExtendedMcConfig {
 /// Then flip_edges_between_features. `cloud` needs normals and `index` must be built over
 /// cloud.positions. Closed, consistently oriented output on closed input (as marching_cubes);
 /// edge vertices first (edge order), then feature vertices in cell order. Parallel and
-/// deterministic; O(cells + crossings (log n + neighbours)).
+/// deterministic; O(cells + crossings (log n + neighbours)). `feature_vertices` (optional)
+/// receives one byte per output vertex, 1 for the feature vertices (what the flip pass takes).
 TriangleMesh extended_marching_cubes(const SparseGrid& grid, const DistanceField& field,
                                      const PointCloud& cloud, const SpatialIndex& index,
                                      const ExtractConfig& config = {},
-                                     const ExtendedMcConfig& emc = {});
+                                     const ExtendedMcConfig& emc = {},
+                                     std::vector<std::uint8_t>* feature_vertices = nullptr);
 
 }  // namespace meshflow

@@ -8,10 +8,12 @@
 #include "runtime/error.h"
 
 namespace meshflow {
+namespace {
 
-TriangleMesh extract_surface(const SparseGrid& grid, const DistanceField& field,
-                             const PointCloud& cloud, const SpatialIndex* index,
-                             const ExtractConfig& config) {
+TriangleMesh extract_by_method(const SparseGrid& grid, const DistanceField& field,
+                               const PointCloud& cloud, const SpatialIndex* index,
+                               const ExtractConfig& config,
+                               std::vector<std::uint8_t>* feature_vertices) {
   switch (config.method) {
     case ExtractMethod::kMarchingTetrahedra:
       return marching_tetrahedra(grid, field, config);
@@ -19,15 +21,30 @@ TriangleMesh extract_surface(const SparseGrid& grid, const DistanceField& field,
       if (index == nullptr)
         throw Error("extract", "method pmc", "needs a point index (point-cloud input)");
       return planar_marching_cubes(grid, field, cloud, *index, config);
-    case ExtractMethod::kExtendedMarchingCubes:
+    case ExtractMethod::kExtendedMarchingCubes: {
       if (index == nullptr)
         throw Error("extract", "method emc", "needs a point index (point-cloud input)");
-      return extended_marching_cubes(grid, field, cloud, *index, config);
+      ExtendedMcConfig emc;
+      emc.flip_edges = !config.defer_feature_flips;
+      return extended_marching_cubes(grid, field, cloud, *index, config, emc, feature_vertices);
+    }
     case ExtractMethod::kAuto:
     case ExtractMethod::kMarchingCubes:
       break;
   }
   return marching_cubes(grid, field, config);
+}
+
+}  // namespace
+
+TriangleMesh extract_surface(const SparseGrid& grid, const DistanceField& field,
+                             const PointCloud& cloud, const SpatialIndex* index,
+                             const ExtractConfig& config,
+                             std::vector<std::uint8_t>* feature_vertices) {
+  TriangleMesh mesh = extract_by_method(grid, field, cloud, index, config, feature_vertices);
+  if (feature_vertices && feature_vertices->size() != mesh.vertices.size())
+    feature_vertices->assign(mesh.vertices.size(), 0);
+  return mesh;
 }
 
 ExtractMethod parse_extract_method(const std::string& name) {

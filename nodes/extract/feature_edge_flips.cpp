@@ -4,6 +4,7 @@
 #include <tbb/parallel_sort.h>
 
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <memory>
 #include <unordered_set>
@@ -28,6 +29,24 @@ int lone_feature_corner(const Triangle& t, const std::vector<std::uint8_t>& is_f
 Triangle feature_last(const Triangle& t, int j) {
   return {t[static_cast<std::size_t>((j + 1) % 3)], t[static_cast<std::size_t>((j + 2) % 3)],
           t[static_cast<std::size_t>(j)]};
+}
+
+// An edge's place in the flip order: its end points' coordinates, lower end first (then the
+// candidate's index, for coinciding end points only).
+struct FlipEdgeKey {
+  std::array<float, 6> ends;
+  std::size_t pair;
+  bool operator<(const FlipEdgeKey& o) const {
+    return ends != o.ends ? ends < o.ends : pair < o.pair;
+  }
+};
+
+FlipEdgeKey flip_edge_key(const Eigen::Vector3f& a, const Eigen::Vector3f& b, std::size_t pair) {
+  const std::array<float, 3> x{a.x(), a.y(), a.z()}, y{b.x(), b.y(), b.z()};
+  const bool a_first = x < y;
+  const std::array<float, 3>& lo = a_first ? x : y;
+  const std::array<float, 3>& hi = a_first ? y : x;
+  return {{lo[0], lo[1], lo[2], hi[0], hi[1], hi[2]}, pair};
 }
 
 }  // namespace
@@ -57,9 +76,24 @@ std::size_t flip_edges_between_features(TriangleMesh& mesh,
   std::unordered_set<std::uint32_t> flipped;
   std::unordered_set<std::uint64_t> joined;  // feature-feature edges made so far
   std::size_t flips = 0;
+  // Edges met by exactly two fan triangles, taken in the order of their end points' positions
+  // (not their indices): a mesh numbered otherwise (chunks stitched) makes the same flips.
+  std::vector<std::size_t> pairs;
   for (std::size_t i = 0; i + 1 < opposite.size(); ++i) {
     if (opposite[i].first != opposite[i + 1].first) continue;
+    if (i > 0 && opposite[i - 1].first == opposite[i].first) continue;
     if (i + 2 < opposite.size() && opposite[i + 2].first == opposite[i].first) continue;
+    pairs.push_back(i);
+  }
+  std::vector<FlipEdgeKey> keys(pairs.size());
+  tbb::parallel_for(std::size_t{0}, pairs.size(), [&](std::size_t p) {
+    const std::uint32_t t = opposite[pairs[p]].second;
+    const Triangle x = feature_last(tris[t], lone_feature_corner(tris[t], is_feature));
+    keys[p] = flip_edge_key(mesh.vertices[x[0]], mesh.vertices[x[1]], p);
+  });
+  tbb::parallel_sort(keys.begin(), keys.end());
+  for (const FlipEdgeKey& key : keys) {
+    const std::size_t i = pairs[key.pair];
     const std::uint32_t t1 = opposite[i].second, t2 = opposite[i + 1].second;
     if (flipped.count(t1) || flipped.count(t2)) continue;
     const Triangle x = feature_last(tris[t1], lone_feature_corner(tris[t1], is_feature));

@@ -23,6 +23,10 @@ struct ExtractConfig {
   float iso = 0.0f;            ///< iso-value of the surface (metres of signed distance)
   bool vertex_normals = true;  ///< compute area-weighted vertex normals
   ExtractMethod method = ExtractMethod::kAuto;  ///< used by extract_surface
+  /// Extended marching cubes leaves its edge-flip pass (flip_edges_between_features) to the
+  /// caller and extract_surface() reports the feature vertices: the out-of-core path flips
+  /// once its chunks are stitched, where a seam's two sides are one mesh.
+  bool defer_feature_flips = false;
 };
 
 /// Extracts the iso-surface of `field` over every cell of `grid` whose 8 corners are valid.

@@ -439,7 +439,119 @@ void read_ply_elements(const std::string& path, PointCloud& cloud, std::vector<T
   }
 }
 
+// The vertex element, its field map, and the byte where its rows start (fixed-size rows before
+// it), or why its rows cannot be read by byte range.
+struct PlyVertexPlace {
+  PlyHeader header;
+  std::size_t vertex = 0;  // element index
+  std::uint64_t start = 0;
+  std::string why_not;
+};
+
+PlyVertexPlace place_vertex_rows(std::ifstream& in, const std::string& path) {
+  PlyVertexPlace place;
+  place.header = parse_ply_header(in, path);
+  const auto& elements = place.header.elements;
+  const auto it = std::find_if(elements.begin(), elements.end(),
+                               [](const PlyElement& e) { return e.name == "vertex"; });
+  if (it == elements.end()) throw Error(path, "header", "no 'vertex' element");
+  place.vertex = static_cast<std::size_t>(it - elements.begin());
+  place.start = static_cast<std::uint64_t>(in.tellg());
+  if (place.header.format == PlyFormat::kAscii) {
+    place.why_not =
+        "ASCII PLY: rows have no fixed size, so a row's byte is known only by "
+        "reading every line before it";
+    return place;
+  }
+  for (std::size_t e = 0; e <= place.vertex; ++e) {
+    if (elements[e].has_lists()) {
+      place.why_not =
+          "element '" + elements[e].name + "' has list properties: its rows have no fixed size";
+      return place;
+    }
+    if (e < place.vertex) place.start += elements[e].count * elements[e].row_bytes();
+  }
+  return place;
+}
+
 }  // namespace
+
+PlyVertexRows ply_vertex_rows(const std::string& path) {
+  std::ifstream in = open_input(path);
+  const PlyVertexPlace place = place_vertex_rows(in, path);
+  PlyVertexRows rows;
+  rows.count = place.header.elements[place.vertex].count;
+  rows.by_byte_range = place.why_not.empty();
+  rows.why_not = place.why_not;
+  return rows;
+}
+
+void read_ply_vertex_range(const std::string& path, std::uint64_t first, std::uint64_t count,
+                           std::size_t batch, const std::function<void(const PointCloud&)>& sink) {
+  std::ifstream in = open_input(path);
+  const PlyVertexPlace place = place_vertex_rows(in, path);
+  if (!place.why_not.empty()) throw Error(path, "byte ranges", place.why_not);
+  const PlyElement& e = place.header.elements[place.vertex];
+  const FieldMap map(e);
+  map.check_normals(path);
+  for (int s : {FieldMap::kX, FieldMap::kY, FieldMap::kZ})
+    if (map.prop[static_cast<std::size_t>(s)] < 0)
+      throw Error(path, "header", std::string("vertex element lacks property '") + "xyz"[s] + "'");
+  if (first > e.count || count > e.count - first)
+    throw Error(path, "vertex " + std::to_string(first) + " + " + std::to_string(count),
+                "range past the " + std::to_string(e.count) + " vertices the header declares");
+  const std::size_t row_bytes = e.row_bytes();
+  if (file_size(path) < place.start + e.count * row_bytes)
+    throw Error(path, "vertex rows",
+                "file ends early: the header declares " + std::to_string(e.count) + " rows of " +
+                    std::to_string(row_bytes) + " bytes");
+  const bool swap = place.header.format == PlyFormat::kBinaryBig;
+  std::vector<double> values(e.properties.size());
+  const auto decode = [&](const unsigned char* p) {
+    for (std::size_t i = 0; i < e.properties.size(); ++i) {
+      values[i] = decode_scalar(p, e.properties[i].type, swap);
+      p += scalar_size(e.properties[i].type);
+    }
+  };
+  std::vector<unsigned char> buffer(row_bytes);
+  const auto read_rows = [&](std::uint64_t row, std::uint64_t rows) {
+    buffer.resize(static_cast<std::size_t>(rows) * row_bytes);
+    in.seekg(static_cast<std::streamoff>(place.start + row * row_bytes));
+    in.read(reinterpret_cast<char*>(buffer.data()), static_cast<std::streamsize>(buffer.size()));
+    if (static_cast<std::size_t>(in.gcount()) != buffer.size())
+      throw Error(path, "vertex " + std::to_string(row), "cannot read the row's bytes");
+  };
+  PointCloud cloud;
+  if (count == 0) return;
+  read_rows(0, 1);  // the first vertex sets the local frame, as in read_ply()
+  decode(buffer.data());
+  append_vertex(values, map, cloud, path, 0);
+  const Eigen::Vector3d origin = cloud.origin;
+  const bool z_up = cloud.z_up;
+  const std::size_t size = std::max<std::size_t>(batch, 1);
+  cloud = PointCloud{};
+  cloud.origin = origin;
+  cloud.z_up = z_up;
+  const auto hand_over = [&] {
+    sink(cloud);
+    cloud.positions.clear();
+    cloud.normals.clear();
+    cloud.colors.clear();
+    cloud.intensities.clear();
+  };
+  constexpr std::uint64_t kRowsPerRead = 16384;
+  for (std::uint64_t row = first; row < first + count;) {
+    const std::uint64_t rows = std::min(kRowsPerRead, first + count - row);
+    read_rows(row, rows);
+    for (std::uint64_t r = 0; r < rows; ++r) {
+      decode(buffer.data() + r * row_bytes);
+      append_vertex(values, map, cloud, path, row + r);
+      if (cloud.size() >= size) hand_over();
+    }
+    row += rows;
+  }
+  if (!cloud.empty()) hand_over();
+}
 
 PointCloud read_ply(const std::string& path) {
   PointCloud cloud;

@@ -1,6 +1,7 @@
 #pragma once
 // PLY point reader: ascii, binary_little_endian and binary_big_endian.
 
+#include <cstdint>
 #include <functional>
 #include <string>
 
@@ -24,6 +25,29 @@ PointCloud read_ply(const std::string& path);
 /// `sink` is reused after it returns. Throws as read_ply() does, possibly after some batches.
 void read_ply_batches(const std::string& path, std::size_t batch,
                       const std::function<void(const PointCloud&)>& sink);
+
+/// How the vertex rows of a PLY file can be read by byte range (read_ply_vertex_range).
+struct PlyVertexRows {
+  std::uint64_t count = 0;  ///< vertices the header declares
+  /// Binary, and the vertex rows and every row before them of fixed size (no list
+  /// properties), so row i starts at a byte computed from the header. ASCII rows have no
+  /// fixed size: row i's place is known only by reading every line before it.
+  bool by_byte_range = false;
+  std::string why_not;  ///< when !by_byte_range: the reason, for messages
+};
+
+/// The vertex rows' layout from the header. Throws as read_ply() does on a bad header.
+/// O(header).
+PlyVertexRows ply_vertex_rows(const std::string& path);
+
+/// Vertices [first, first + count) of a PLY whose rows can be read by byte range, handed to
+/// `sink` `batch` (>= 1) at a time, in file order and in the local frame of the file's first
+/// vertex (the one read_ply() gives every point), so ranges read apart (threads, MPI ranks)
+/// together give read_ply()'s points. Reads the header, the first row and the range only.
+/// Throws meshflow::Error when the file is not splittable (ply_vertex_rows().why_not), the
+/// range lies past the declared count, or the file ends early. Thread-safe (own stream).
+void read_ply_vertex_range(const std::string& path, std::uint64_t first, std::uint64_t count,
+                           std::size_t batch, const std::function<void(const PointCloud&)>& sink);
 
 /// Reads a PLY mesh: the vertex element as in read_ply (positions, normals, colours; in world
 /// coordinates, refused beyond +-1e6 m as floats hold them no better: a TriangleMesh has no

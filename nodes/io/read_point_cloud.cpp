@@ -65,4 +65,30 @@ void for_each_point_batch(const std::string& path, const std::string& columns, s
   }
 }
 
+PointRanges point_ranges(const std::string& path, const std::string& columns) {
+  PointRanges ranges;
+  const std::string ext = lower_extension(path);
+  if (!columns.empty() || ext != ".ply") {
+    ranges.why_not =
+        ext == ".las" ? "LAS: its colours' scale (8 or 16 bits) is decided over the whole file"
+        : is_text_cloud(ext)
+            ? "a text cloud: a line's byte is known only by reading the lines before it"
+            : "the " + ext + " reader reads the file whole";
+    return ranges;
+  }
+  const PlyVertexRows rows = ply_vertex_rows(path);
+  ranges.points = rows.count;
+  ranges.by_byte_range = rows.by_byte_range;
+  ranges.why_not = rows.why_not;
+  return ranges;
+}
+
+void for_each_point_batch_in_range(const std::string& path, const std::string& columns,
+                                   std::uint64_t first, std::uint64_t count, std::size_t batch,
+                                   const std::function<void(const PointCloud&)>& sink) {
+  const PointRanges ranges = point_ranges(path, columns);
+  if (!ranges.by_byte_range) throw Error(path, "byte ranges", ranges.why_not);
+  read_ply_vertex_range(path, first, count, batch, sink);
+}
+
 }  // namespace meshflow::io

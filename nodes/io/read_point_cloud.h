@@ -2,6 +2,7 @@
 // One entry point for every point-cloud format meshflow reads.
 
 #include <cstddef>
+#include <cstdint>
 #include <functional>
 #include <string>
 
@@ -25,5 +26,27 @@ PointCloud read_point_cloud(const std::string& path, const std::string& columns)
 /// is reused after it returns. Throws as read_point_cloud() does.
 void for_each_point_batch(const std::string& path, const std::string& columns, std::size_t batch,
                           const std::function<void(const PointCloud&)>& sink);
+
+/// Whether the points of `path` can be read by byte range (for_each_point_batch_in_range), so
+/// threads or MPI ranks each read their own part of the file and none reads it whole.
+struct PointRanges {
+  std::uint64_t points = 0;  ///< points the file declares (when by_byte_range)
+  bool by_byte_range = false;
+  /// Why not: ASCII PLY and the text formats (.xyz .txt ...: a line's byte is known only by
+  /// reading the lines before it), PCD and 3DTK (read whole), PLY with list properties in or
+  /// before its vertex rows, LAS (its colours' scale is decided over the whole file).
+  std::string why_not;
+};
+
+/// PointRanges of `path` (columns as read_point_cloud). O(header).
+PointRanges point_ranges(const std::string& path, const std::string& columns);
+
+/// Points [first, first + count) of a file that point_ranges() says can be read by byte range,
+/// handed to `sink` at most `batch` at a time in file order, in the local frame
+/// for_each_point_batch() gives (the file's first point's). Thread-safe (each call its own
+/// stream). Throws meshflow::Error as read_ply_vertex_range() does.
+void for_each_point_batch_in_range(const std::string& path, const std::string& columns,
+                                   std::uint64_t first, std::uint64_t count, std::size_t batch,
+                                   const std::function<void(const PointCloud&)>& sink);
 
 }  // namespace meshflow::io

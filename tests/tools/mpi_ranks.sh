@@ -25,6 +25,31 @@ for cloud in normals plain; do
     echo "$cloud, $n ranks: $(grep '^mesh' "$work/log_$n.txt")"
   done
 done
+# The defaults (automatic voxel and method, decided once from the whole input; every rank reads
+# its own byte range of the binary PLY): `--chunk` in one process and over 1 and 2 ranks give
+# the same file, with the whole cloud's triangle count (input normals: without them chunks
+# orient their own estimates; the holes step may pick another diagonal, not another count);
+# `--chunk auto` is taken by both.
+"$meshflow" sample city --site 60 --points 60000 --normals -o "$work/defaults.ply" -q
+triangles() { /usr/bin/python3 -c 'import json,sys; print(json.load(sys.stdin)["mesh"]["triangles"])'; }
+whole=$("$meshflow" reconstruct "$work/defaults.ply" -o "$work/whole.ply" --threads 1 --json | triangles)
+"$meshflow" reconstruct "$work/defaults.ply" -o "$work/chunked.ply" --chunk 12 --threads 1 \
+  --chunk-dir "$work" -q
+for n in 1 2; do
+  mpirun --bind-to none -n $n "$meshflow_mpi" reconstruct "$work/defaults.ply" \
+    -o "$work/defaults_$n.ply" --chunk 12 --threads 1 --chunk-dir "$work" > "$work/dlog_$n.txt"
+  cmp "$work/chunked.ply" "$work/defaults_$n.ply" || {
+    echo "FAIL: defaults: $n ranks give another mesh than --chunk in one process"; cat "$work/dlog_$n.txt"; exit 1; }
+  got=$(sed -n 's/^mesh *[0-9]* vertices, \([0-9]*\) triangles.*/\1/p' "$work/dlog_$n.txt")
+  [ "$got" = "$whole" ] || { echo "FAIL: defaults: $n ranks: $got triangles, the whole cloud $whole"; exit 1; }
+  echo "defaults, $n ranks: $got triangles, as the whole cloud in one process"
+done
+"$meshflow" reconstruct "$work/defaults.ply" -o "$work/auto.ply" --chunk auto --threads 1 \
+  --chunk-dir "$work" -q
+mpirun --bind-to none -n 2 "$meshflow_mpi" reconstruct "$work/defaults.ply" -o "$work/auto_2.ply" \
+  --chunk auto --threads 1 --chunk-dir "$work" > "$work/alog.txt"
+cmp "$work/auto.ply" "$work/auto_2.ply" || { echo "FAIL: --chunk auto over 2 ranks"; cat "$work/alog.txt"; exit 1; }
+echo "--chunk auto, 2 ranks: $(grep '^mesh' "$work/alog.txt")"
 # Per-frame meshing of a sequence with its frames dealt to the ranks: the files `meshflow run`
 # writes, byte for byte.
 "$meshflow" run --synthetic --synthetic-frames 5 -o "$work/run_one" -q

@@ -3,8 +3,11 @@
 //
 //   mpirun -n N meshflow-mpi reconstruct IN -o OUT --chunk S [--voxel V] [--chunk-dir DIR] ...
 //
-// Rank 0 streams the input into chunk files under --chunk-dir (a directory every rank sees: a
-// shared file system on a cluster) and broadcasts the chunk list. The chunks go out from a queue
+// A binary PLY is partitioned by every rank at once, each reading only its own byte range (for
+// its part of the whole-input sample that decides the voxel and the method, and for its part of
+// the chunk files; tools/mpi/mpi_partition.h); other formats are streamed by rank 0 alone. The
+// chunk files go under --chunk-dir (a directory every rank sees: a shared file system on a
+// cluster); rank 0 broadcasts the chunk list. The chunks go out from a queue
 // on rank 0 in Morton order, each to the rank that asks first (rank 0's own graph included); each
 // rank meshes what it gets through its own flow graph and sends the chunk meshes to rank 0,
 // which welds every chunk in Morton order, trims the rim, optimizes and writes OUT. Welding and
@@ -19,6 +22,7 @@
 
 #include <algorithm>
 #include <atomic>
+#include <cmath>
 #include <cstdint>
 #include <cstdio>
 #include <cstring>
@@ -35,6 +39,7 @@
 #include "runtime/tracing.h"
 #include "tools/mpi/mpi_bytes.h"
 #include "tools/mpi/mpi_commands.h"
+#include "tools/mpi/mpi_partition.h"
 #include "tools/pipeline_options.h"
 
 namespace meshflow::cli {
@@ -45,6 +50,7 @@ struct Plan {
   std::string error;
   chunk::ChunkGrid grid;
   chunk::ChunkRows rows;
+  InputDecisions decided;
   std::vector<chunk::ChunkFile> files;
 };
 
@@ -56,13 +62,8 @@ std::vector<unsigned char> encode(const Plan& plan) {
   put(w, plan.rows.colors);
   put(w, plan.rows.origin);
   put(w, plan.rows.z_up);
-  w.u64(plan.files.size());
-  for (const chunk::ChunkFile& f : plan.files) {
-    put(w, f.index);
-    w.u64(f.core_points);
-    w.u64(f.points);
-    put_string(w, f.path);
-  }
+  put(w, plan.decided);
+  put_chunk_files(w, plan.files);
   return std::move(w.out);
 }
 
@@ -76,13 +77,8 @@ Plan decode_plan(const std::vector<unsigned char>& message) {
   plan.rows.colors = get<bool>(r, "colors");
   plan.rows.origin = get<Eigen::Vector3d>(r, "origin");
   plan.rows.z_up = get<bool>(r, "z_up");
-  plan.files.resize(r.u64("chunks"));
-  for (chunk::ChunkFile& f : plan.files) {
-    f.index = get<Eigen::Vector3i>(r, "chunk index");
-    f.core_points = r.u64("core points");
-    f.points = r.u64("points");
-    f.path = get_string(r, "path");
-  }
+  plan.decided = get<InputDecisions>(r, "decisions");
+  plan.files = get_chunk_files(r);
   return plan;
 }
 
@@ -93,8 +89,8 @@ constexpr int kAnswerTag = 3;   // rank 0 answers with its position in the plan,
 struct ChunkResult {
   std::uint64_t position = 0;
   TriangleMesh mesh;
-  std::vector<std::uint8_t> beyond;  // Frame::beyond_data
-  std::string error;                 // non-empty: the chunk failed
+  std::vector<std::uint8_t> flags;  // chunk_vertex_flags()
+  std::string error;                // non-empty: the chunk failed
 };
 
 std::vector<unsigned char> encode(const std::vector<ChunkResult>& results) {
@@ -107,7 +103,7 @@ std::vector<unsigned char> encode(const std::vector<ChunkResult>& results) {
     put_vector(w, r.mesh.normals);
     put_vector(w, r.mesh.colors);
     put_vector(w, r.mesh.triangles);
-    put_vector(w, r.beyond);
+    put_vector(w, r.flags);
   }
   return std::move(w.out);
 }
@@ -125,7 +121,7 @@ void decode_into(const std::vector<unsigned char>& message, int from,
     c.mesh.normals = get_vector<Eigen::Vector3f>(r, "normals");
     c.mesh.colors = get_vector<Rgb8>(r, "colors");
     c.mesh.triangles = get_vector<Triangle>(r, "triangles");
-    c.beyond = get_vector<std::uint8_t>(r, "rim verdicts");
+    c.flags = get_vector<std::uint8_t>(r, "vertex flags");
     results.push_back(std::move(c));
   }
 }
@@ -145,9 +141,19 @@ void serve_chunk_queue(const std::function<long long()>& take, int ranks) {
 
 struct Options {
   std::string input, columns, output;
+  std::string chunk;  ///< --chunk: "auto" or metres
   PipelineOptions pipeline;
   ChunkingConfig chunking;
 };
+
+// --chunk as `reconstruct --chunk` takes it: "auto" lets the chunks in flight have half of
+// --max-memory (the rest: the welded mesh).
+ChunkingConfig chunking_of(const Options& o, const ReconstructionConfig& config) {
+  ChunkingConfig chunking = o.chunking;
+  chunking.chunk_size = o.chunk == "auto" ? 0.0f : std::stof(o.chunk);
+  chunking.memory_budget = config.max_memory_bytes / 2;
+  return chunking;
+}
 
 int run(const Options& o, int rank, int ranks) {
   ThreadLimit limit(o.pipeline.threads);
@@ -155,11 +161,40 @@ int run(const Options& o, int rank, int ranks) {
   const double t0 = monotonic_seconds();
   Plan plan;
   std::unique_ptr<chunk::ChunkStore> store;  // rank 0: owns the directory until the end
-  if (rank == 0) {
+  const ChunkingConfig chunking = chunking_of(o, config);
+  InputParts parts;
+  try {
+    parts = input_parts(o.input, o.columns, static_cast<std::size_t>(ranks));
+  } catch (const std::exception&) {
+    parts = InputParts{};  // rank 0's partition names the problem
+  }
+  if (parts.by_byte_range) {  // every rank reads its own byte range
+    if (rank == 0) {
+      try {
+        io::check_mesh_output_format(o.output);
+      } catch (const std::exception& e) {
+        plan.error = e.what();
+      }
+    }
+    std::vector<unsigned char> verdict = rank == 0 ? encode(plan) : std::vector<unsigned char>();
+    broadcast_bytes(verdict);
+    if (rank != 0) plan = decode_plan(verdict);
+    if (!plan.error.empty()) {
+      if (rank == 0) std::fprintf(stderr, "meshflow-mpi: error: %s\n", plan.error.c_str());
+      return 1;
+    }
+    RankedPartition partition =
+        partition_by_ranks(o.input, o.columns, config, chunking, parts, rank, ranks);
+    plan.error = partition.error;
+    plan.grid = partition.grid;
+    plan.rows = partition.rows;
+    plan.decided = partition.decided;
+    plan.files = std::move(partition.files);
+    store = std::move(partition.store);
+  } else if (rank == 0) {  // a format read whole: rank 0 partitions alone
     try {
       io::check_mesh_output_format(o.output);
-      float voxel = 0.0f;
-      store = partition_input(o.input, o.columns, config, o.chunking, plan.files, voxel);
+      store = partition_input(o.input, o.columns, config, chunking, plan.files, plan.decided);
       plan.grid = store->grid();
       plan.rows = store->rows();
     } catch (const std::exception& e) {
@@ -189,8 +224,8 @@ int run(const Options& o, int rank, int ranks) {
     ChunkResult r;
     r.position = frame->source_index;
     if (frame->ok()) {
+      r.flags = chunk_vertex_flags(*frame);
       r.mesh = std::move(frame->mesh);
-      r.beyond = std::move(frame->beyond_data);
     } else {
       r.error = frame->name + ": " + frame->error;
     }
@@ -205,8 +240,8 @@ int run(const Options& o, int rank, int ranks) {
     std::exception_ptr failure;
     std::thread own([&] {
       try {
-        mesh_chunk_files(plan.files, take, plan.grid, plan.rows, config, o.chunking.in_flight,
-                         o.input, collect);
+        mesh_chunk_files(plan.files, take, plan.grid, plan.rows, config, plan.decided,
+                         o.chunking.in_flight, o.input, collect);
       } catch (...) {
         failure = std::current_exception();
       }
@@ -225,8 +260,8 @@ int run(const Options& o, int rank, int ranks) {
       exhausted = position < 0;
       return position;
     };
-    mesh_chunk_files(plan.files, ask, plan.grid, plan.rows, config, o.chunking.in_flight, o.input,
-                     collect);
+    mesh_chunk_files(plan.files, ask, plan.grid, plan.rows, config, plan.decided,
+                     o.chunking.in_flight, o.input, collect);
   }
   report.mesh_s = monotonic_seconds() - t;
   std::fprintf(stderr, "meshflow-mpi: rank %d/%d: %zu chunks meshed in %.2f s\n", rank, ranks,
@@ -244,14 +279,14 @@ int run(const Options& o, int rank, int ranks) {
   }
   std::sort(results.begin(), results.end(),
             [](const ChunkResult& a, const ChunkResult& b) { return a.position < b.position; });
-  chunk::MeshStitcher stitcher(plan.grid.voxel_size, plan.grid.chunk_cells);
+  chunk::MeshStitcher stitcher = chunk_stitcher(plan.grid.voxel_size, plan.grid.chunk_cells);
   for (ChunkResult& r : results) {
     if (!r.error.empty()) {
       std::fprintf(stderr, "meshflow-mpi: chunk failed, its cells are missing: %s\n",
                    r.error.c_str());
       continue;
     }
-    stitcher.add(r.mesh, r.beyond);
+    stitcher.add(r.mesh, r.flags);
     r = ChunkResult{};
   }
   const double gather_s = monotonic_seconds() - t;
@@ -286,7 +321,20 @@ void add_mpi_reconstruct(CLI::App* cmd, const MpiWorld& world, int& status) {
       ->required();
   cmd->add_option("-o,--output", o->output, "Output mesh: .ply .obj .stl .off .glb")->required();
   cmd->add_option("--columns", o->columns, "Text clouds: the columns' meaning");
-  cmd->add_option("--chunk", o->chunking.chunk_size, "Chunk edge, metres")->required();
+  cmd->add_option("--chunk", o->chunk,
+                  "Chunk edge, metres, or \"auto\": chosen so the chunks in flight fit half of "
+                  "--max-memory (1 GiB when none is given)")
+      ->required()
+      ->check([](const std::string& v) -> std::string {
+        if (v == "auto") return "";
+        try {
+          std::size_t used = 0;
+          const float metres = std::stof(v, &used);
+          if (used == v.size() && metres > 0.0f && std::isfinite(metres)) return "";
+        } catch (const std::exception&) {
+        }
+        return "expected \"auto\" or a positive size in metres, got \"" + v + "\"";
+      });
   cmd->add_option("--chunk-overlap", o->chunking.overlap_voxels,
                   "Voxels of points each chunk sees beyond its own cells");
   cmd->add_option("--chunk-dir", o->chunking.directory,

@@ -5,9 +5,11 @@
 #include <algorithm>
 #include <array>
 #include <cstdio>
+#include <set>
 
 #include "fixtures/solid_fixture.h"
 #include "nodes/eval/surface_eval.h"
+#include "nodes/extract/feature_edge_flips.h"
 #include "nodes/search/mesh_distance_index.h"
 #include "runtime/threads.h"
 #include "test_support.h"
@@ -176,6 +178,59 @@ TEST(ExtendedMarchingCubes, SameOutputWithOneAndTwoThreads) {
   EXPECT_GT(one.triangles.size(), 100u);
   EXPECT_EQ(one.vertices, two.vertices);
   EXPECT_EQ(one.triangles, two.triangles);
+}
+
+// The out-of-core path flips on the welded mesh, numbered otherwise than one process's: the
+// flips must not depend on the vertex numbers. The deferred pass on a renumbered mesh gives
+// the triangles of the pass inside extraction, and the feature vertices reported are the
+// ones it flipped between.
+TEST(ExtendedMarchingCubes, EdgeFlipsDoNotDependOnTheVertexNumbering) {
+  const auto s = test::sampled_solid(test::test_solids(kEmcVoxel)[0].solid, kEmcVoxel);
+  std::vector<std::uint8_t> features;
+  const TriangleMesh flipped = extended_marching_cubes(s.grid, s.field, s.solid.samples, *s.index,
+                                                       ExtractConfig{}, {}, &features);
+  ExtendedMcConfig deferred;
+  deferred.flip_edges = false;
+  std::vector<std::uint8_t> deferred_features;
+  const TriangleMesh fans = extended_marching_cubes(s.grid, s.field, s.solid.samples, *s.index,
+                                                    ExtractConfig{}, deferred, &deferred_features);
+  ASSERT_EQ(features, deferred_features);
+  ASSERT_GT(std::count(features.begin(), features.end(), 1), 10);
+  // Renumber: vertices reversed, triangles reversed.
+  const std::size_t n = fans.vertices.size();
+  TriangleMesh renumbered;
+  std::vector<std::uint8_t> renumbered_features(n);
+  for (std::size_t v = 0; v < n; ++v) {
+    renumbered.vertices.push_back(fans.vertices[n - 1 - v]);
+    renumbered_features[v] = features[n - 1 - v];
+  }
+  for (auto t = fans.triangles.rbegin(); t != fans.triangles.rend(); ++t)
+    renumbered.triangles.push_back({static_cast<std::uint32_t>(n - 1 - (*t)[0]),
+                                    static_cast<std::uint32_t>(n - 1 - (*t)[1]),
+                                    static_cast<std::uint32_t>(n - 1 - (*t)[2])});
+  const std::size_t flips = flip_edges_between_features(renumbered, renumbered_features);
+  EXPECT_GT(flips, 10u);
+  const auto corners = [](const TriangleMesh& m) {
+    std::multiset<std::array<float, 9>> out;
+    for (const Triangle& t : m.triangles) {
+      std::array<std::size_t, 3> order{0, 1, 2};
+      const std::size_t first = static_cast<std::size_t>(
+          std::min_element(t.begin(), t.end(),
+                           [&](std::uint32_t a, std::uint32_t b) {
+                             const auto& p = m.vertices[a];
+                             const auto& q = m.vertices[b];
+                             return std::lexicographical_compare(p.data(), p.data() + 3, q.data(),
+                                                                 q.data() + 3);
+                           }) -
+          t.begin());
+      std::array<float, 9> key;
+      for (std::size_t k = 0; k < 3; ++k)
+        for (int a = 0; a < 3; ++a) key[3 * k + a] = m.vertices[t[(first + order[k]) % 3]][a];
+      out.insert(key);
+    }
+    return out;
+  };
+  EXPECT_EQ(corners(renumbered), corners(flipped));
 }
 
 }  // namespace

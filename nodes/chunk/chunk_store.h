@@ -57,6 +57,8 @@ struct WrittenPart {
 /// thread-safe.
 class ChunkWriter {
  public:
+  /// A writer of part `part` (< 0: the only one) of `grid`'s chunk files under `directory`
+  /// (which must exist), buffering up to `buffer_bytes` per chunk. Opens no file yet.
   ChunkWriter(const ChunkGrid& grid, std::string directory, long part,
               std::size_t buffer_bytes = std::size_t{1} << 18);
 

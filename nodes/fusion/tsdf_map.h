@@ -129,8 +129,10 @@ class TsdfMap {
   /// non-finite truncation or maximum weight. `config`'s integration settings (behind_voxels,
   /// integrator, carving, limits) are kept as given but are the integrator's to use.
   explicit TsdfMap(const TsdfConfig& config = {});
-  TsdfMap(TsdfMap&&) = default;
-  TsdfMap& operator=(TsdfMap&&) = default;
+  /// Takes `other`'s blocks and settings (other is left empty). O(1).
+  TsdfMap(TsdfMap&& other) = default;
+  /// Takes `other`'s blocks and settings (other is left empty). O(1).
+  TsdfMap& operator=(TsdfMap&& other) = default;
   TsdfMap(const TsdfMap&) = delete;
   TsdfMap& operator=(const TsdfMap&) = delete;
   ~TsdfMap() = default;

@@ -51,6 +51,7 @@ class SpacingSample {
   /// join their parts' samples (MPI ranks). from_bytes() throws meshflow::Error naming
   /// `source` on a short or inconsistent message. O(samples x neighbours).
   std::vector<unsigned char> to_bytes() const;
+  /// The sample to_bytes() gave (see above).
   static SpacingSample from_bytes(const std::vector<unsigned char>& bytes,
                                   const std::string& source);
 
@@ -64,6 +65,7 @@ class SpacingSample {
   float median_variation() const;
 
   std::size_t size() const { return samples_.size(); }  ///< samples kept
+  /// The bounds of every point offered so far (metres).
   const Eigen::AlignedBox3f& bounds() const { return bounds_; }
 
  private:

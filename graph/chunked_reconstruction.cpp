@@ -254,11 +254,13 @@ std::unique_ptr<chunk::ChunkStore> partition_input(
   if (!store) throw Error(path, "points", "no finite points to reconstruct");
   if (parts.by_byte_range) {
     std::vector<chunk::ChunkWriter> writers;
+    writers.reserve(parts.ranges.size());
     for (std::size_t p = 0; p < parts.ranges.size(); ++p)
       writers.push_back(store->writer(static_cast<long>(p)));
     for_each_input_part(path, columns, parts, chunking.batch_points,
                         [&](std::size_t p, const PointCloud& batch) { writers[p].add(batch); });
     std::vector<chunk::WrittenPart> written;
+    written.reserve(writers.size());
     for (chunk::ChunkWriter& w : writers) written.push_back(w.finish());
     files = store->finish(written);
   } else {

@@ -82,7 +82,7 @@ bool snap_fit_plane(const TriangleMesh& mesh, const std::vector<std::uint32_t>& 
   }
   scatter /= static_cast<double>(points.size());
   const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eigen(scatter);
-  const Eigen::Vector3d lambda = eigen.eigenvalues();  // ascending
+  const Eigen::Vector3d& lambda = eigen.eigenvalues();  // ascending
   if (!(lambda[0] <= flatness * flatness) || !(lambda[1] > 16.0 * lambda[0]) || !(lambda[1] > 0.0))
     return false;
   plane.normal = eigen.eigenvectors().col(0);

@@ -1,7 +1,8 @@
 #pragma once
 // Flow-graph parts every frame pipeline shares (internal to graph/): the numbered source feeding
 // a limiter of K frames in flight, the serial delivery to the sink that releases the limiter,
-// and the node body that runs one stateless stage.
+// the node body that runs one stateless stage, and the routes that send each frame only
+// through the stages of its kind.
 
 #include <oneapi/tbb/flow_graph.h>
 
@@ -9,6 +10,7 @@
 #include <cstdint>
 #include <functional>
 #include <memory>
+#include <tuple>
 #include <vector>
 
 #include "graph/frame.h"
@@ -34,30 +36,72 @@ class StageNodeBody {
 
 using StageNode = tbb::flow::function_node<FramePtr, FramePtr>;
 
-/// One unlimited node per stage of stages::frame_stages(triangulate_depth_maps,
-/// config.compression, config.close.enabled) (frames overlap in every stage), each joined to the
-/// next; the caller connects front() and back(). `config` must outlive the chain.
-class StageChain {
+/// A flow-graph node that runs one stage and routes the frame by what the stage left: port 0
+/// takes a healthy frame to the next stage (after the routing stage: a point cloud), port 1 a
+/// healthy depth frame after the routing stage, port 2 a failed frame straight to the end.
+using RoutedStageNode =
+    tbb::flow::multifunction_node<FramePtr, std::tuple<FramePtr, FramePtr, FramePtr>>;
+
+/// The body of a RoutedStageNode. `routes_by_kind`: the stage that decides a frame's kind (it
+/// reads the input) sends depth frames to port 1.
+class RoutedStageBody {
  public:
-  StageChain(tbb::flow::graph& g, bool triangulate_depth_maps, const ReconstructionConfig& config)
-      : StageChain(
-            g,
-            stages::frame_stages(triangulate_depth_maps, config.compression, config.close.enabled),
-            config) {}
-  /// The same over any non-empty list of stages.
-  StageChain(tbb::flow::graph& g, const std::vector<stages::NamedStage>& stage_list,
-             const ReconstructionConfig& config) {
-    for (const stages::NamedStage& stage : stage_list)
-      nodes_.push_back(std::make_unique<StageNode>(g, tbb::flow::unlimited,
-                                                   StageNodeBody(stage.name, stage.body, config)));
-    for (std::size_t i = 1; i < nodes_.size(); ++i)
-      tbb::flow::make_edge(*nodes_[i - 1], *nodes_[i]);
+  RoutedStageBody(const char* name, stages::StageFunction fn, const ReconstructionConfig& config,
+                  bool routes_by_kind)
+      : name_(name), fn_(fn), config_(&config), routes_by_kind_(routes_by_kind) {}
+  void operator()(const FramePtr& frame, RoutedStageNode::output_ports_type& ports) const {
+    stages::run_stage(name_, fn_, *frame, *config_);
+    if (!frame->ok())
+      std::get<2>(ports).try_put(frame);
+    else if (routes_by_kind_ && frame->depth)
+      std::get<1>(ports).try_put(frame);
+    else
+      std::get<0>(ports).try_put(frame);
   }
-  StageNode& front() { return *nodes_.front(); }
-  StageNode& back() { return *nodes_.back(); }
 
  private:
-  std::vector<std::unique_ptr<StageNode>> nodes_;
+  const char* name_;
+  stages::StageFunction fn_;
+  const ReconstructionConfig* config_;
+  bool routes_by_kind_;
+};
+
+/// The stages of a stages::FrameRoutes as flow-graph nodes, one unlimited node per stage (frames
+/// overlap in every stage): the first stage for every frame, then the cloud route or the depth
+/// route by the frame's kind, every route's end and every failed frame into `end` (a sequencer
+/// on Frame::seq). A frame visits only the stages of its own route, and none after it failed.
+/// The caller puts frames into entry(); `config` and `end` must outlive the graph.
+class StageRoutes {
+ public:
+  StageRoutes(tbb::flow::graph& g, const stages::FrameRoutes& routes,
+              const ReconstructionConfig& config, tbb::flow::receiver<FramePtr>& end)
+      : first_(g, tbb::flow::unlimited,
+               RoutedStageBody(routes.first.name, routes.first.body, config, true)) {
+    tbb::flow::make_edge(tbb::flow::output_port<2>(first_), end);
+    chain(g, tbb::flow::output_port<0>(first_), routes.cloud, config, end);
+    chain(g, tbb::flow::output_port<1>(first_), routes.depth, config, end);
+  }
+  RoutedStageNode& entry() { return first_; }
+
+ private:
+  // Wires `route` one stage after the other behind `from`, the last one (or `from` itself when
+  // the route is empty) into `end`, and each stage's failed frames into `end`.
+  void chain(tbb::flow::graph& g, tbb::flow::sender<FramePtr>& from,
+             const std::vector<stages::NamedStage>& route, const ReconstructionConfig& config,
+             tbb::flow::receiver<FramePtr>& end) {
+    tbb::flow::sender<FramePtr>* previous = &from;
+    for (const stages::NamedStage& stage : route) {
+      nodes_.push_back(std::make_unique<RoutedStageNode>(
+          g, tbb::flow::unlimited, RoutedStageBody(stage.name, stage.body, config, false)));
+      tbb::flow::make_edge(*previous, *nodes_.back());
+      tbb::flow::make_edge(tbb::flow::output_port<2>(*nodes_.back()), end);
+      previous = &tbb::flow::output_port<0>(*nodes_.back());
+    }
+    tbb::flow::make_edge(*previous, end);
+  }
+
+  RoutedStageNode first_;
+  std::vector<std::unique_ptr<RoutedStageNode>> nodes_;
 };
 
 /// A serial node that takes frames one at a time in the order its predecessor, a buffering node
@@ -112,19 +156,17 @@ class FrameGraphEnds {
   InOrderNode<tbb::flow::continue_msg> deliver_;
 };
 
-/// The stateless frame pipeline: source -> limiter(K) -> `stage_list` -> sequencer -> sink,
-/// frames delivered in input order. Blocks until every frame is delivered (FramePipeline::run).
-inline void run_stage_chain(std::size_t max_in_flight,
-                            const std::vector<stages::NamedStage>& stage_list,
-                            const ReconstructionConfig& config,
-                            const std::function<FramePtr()>& next,
-                            const std::function<void(const FramePtr&)>& sink) {
+/// The stateless frame pipeline: source -> limiter(K) -> `routes` -> sequencer -> sink, frames
+/// delivered in input order. Blocks until every frame is delivered (FramePipeline::run).
+inline void run_stage_routes(std::size_t max_in_flight, const stages::FrameRoutes& routes,
+                             const ReconstructionConfig& config,
+                             const std::function<FramePtr()>& next,
+                             const std::function<void(const FramePtr&)>& sink) {
   tbb::flow::graph g;
   FrameGraphEnds ends(g, max_in_flight, next, sink);
-  StageChain chain(g, stage_list, config);
   tbb::flow::sequencer_node<FramePtr> in_order(g, [](const FramePtr& f) { return f->seq; });
-  tbb::flow::make_edge(ends.entry(), chain.front());
-  tbb::flow::make_edge(chain.back(), in_order);
+  StageRoutes stage_routes(g, routes, config, in_order);
+  tbb::flow::make_edge(ends.entry(), stage_routes.entry());
   tbb::flow::make_edge(in_order, ends.exit());
   ends.run(g);
 }

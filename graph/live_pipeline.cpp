@@ -53,9 +53,10 @@ struct LivePipeline::Impl {
   std::vector<double> latencies;  // ring of the last kLatencyWindow
   std::size_t latency_at = 0;
 
-  // The graph: stages -> in-order -> deliver. Built inside the arena so its tasks run there.
-  std::unique_ptr<detail::StageChain> stages;
+  // The graph: stage routes -> in-order -> deliver. Built inside the arena so its tasks run
+  // there.
   std::unique_ptr<flow::sequencer_node<FramePtr>> in_order;
+  std::unique_ptr<detail::StageRoutes> routes;
   std::unique_ptr<detail::InOrderNode<flow::continue_msg>> deliver;
 
   Impl(LiveConfig c, Callback cb)
@@ -73,16 +74,18 @@ struct LivePipeline::Impl {
   }
 
   void build_graph() {
-    stages = std::make_unique<detail::StageChain>(*graph, config.triangulate_depth_maps,
-                                                  config.reconstruction);
     in_order = std::make_unique<flow::sequencer_node<FramePtr>>(
         *graph, [](const FramePtr& f) { return f->seq; });
+    const ReconstructionConfig& rc = config.reconstruction;
+    routes = std::make_unique<detail::StageRoutes>(
+        *graph,
+        stages::frame_routes(config.triangulate_depth_maps, rc.compression, rc.close.enabled), rc,
+        *in_order);
     deliver = std::make_unique<detail::InOrderNode<flow::continue_msg>>(
         *graph, flow::serial, [this](const FramePtr& f) {
           finish(f);
           return flow::continue_msg();
         });
-    flow::make_edge(stages->back(), *in_order);
     flow::make_edge(*in_order, *deliver);
   }
 
@@ -95,7 +98,7 @@ struct LivePipeline::Impl {
   // Hands f to the first stage. From a thread outside the arena, try_put submits the node's
   // task into the graph's arena and returns at once (arena.execute would wait for a free slot
   // while the workers are busy, blocking push()).
-  void start(const FramePtr& f) { stages->front().try_put(f); }
+  void start(const FramePtr& f) { routes->entry().try_put(f); }
 
   Push push(const FramePtr& f) {
     f->submitted_s = monotonic_seconds();
@@ -176,7 +179,7 @@ struct LivePipeline::Impl {
       }
       if (in_flight == 0 && waiting.empty()) settled.notify_all();
     }
-    if (next) stages->front().try_put(next);  // already on a graph thread
+    if (next) routes->entry().try_put(next);  // already on a graph thread
   }
 
   void wait_settled() {

@@ -1,6 +1,7 @@
 #include "graph/merged_scans.h"
 
 #include <algorithm>
+#include <iterator>
 #include <vector>
 
 #include "graph/frame_graph.h"
@@ -13,9 +14,12 @@ ScanPreparationPipeline::ScanPreparationPipeline(ReconstructionConfig config,
 
 void ScanPreparationPipeline::run(const std::function<FramePtr()>& next,
                                   const std::function<void(const FramePtr&)>& sink) {
-  const std::vector<stages::NamedStage> preparation(std::begin(stages::kPointCloudStages),
-                                                    std::begin(stages::kPointCloudStages) + 4);
-  detail::run_stage_chain(max_in_flight_, preparation, config_, next, sink);
+  // Clouds: read, filter, index, normals; depth images: read, filter (with image normals).
+  const stages::FrameRoutes preparation{
+      stages::kPointCloudStages[0],
+      {std::begin(stages::kPointCloudStages) + 1, std::begin(stages::kPointCloudStages) + 4},
+      {std::begin(stages::kDepthImageStages) + 1, std::begin(stages::kDepthImageStages) + 2}};
+  detail::run_stage_routes(max_in_flight_, preparation, config_, next, sink);
 }
 
 void append_scan(PointCloud& into, const PointCloud& scan) {

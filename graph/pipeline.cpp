@@ -14,9 +14,9 @@ ReconstructionPipeline::ReconstructionPipeline(ReconstructionConfig config,
 
 void ReconstructionPipeline::run(const std::function<FramePtr()>& next,
                                  const std::function<void(const FramePtr&)>& sink) {
-  detail::run_stage_chain(
+  detail::run_stage_routes(
       max_in_flight_,
-      stages::frame_stages(triangulate_depth_maps_, config_.compression, config_.close.enabled),
+      stages::frame_routes(triangulate_depth_maps_, config_.compression, config_.close.enabled),
       config_, next, sink);
 }
 

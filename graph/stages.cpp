@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <cstdio>
 #include <exception>
-#include <iterator>
 #include <optional>
 #include <string>
 
@@ -107,24 +106,12 @@ std::uint64_t read(Frame& f, const ReconstructionConfig& c) {
   return f.cloud.size();
 }
 
-std::uint64_t filter(Frame& f, const ReconstructionConfig& c) {
-  if (f.depth) {  // depth image -> filtered depth -> organized cloud with image normals
-    const Image depth_m = filter_depth(*f.depth, c.depth_filter, &f.depth_counts);
-    if (f.depth_counts.valid == 0) {
-      throw Error(f.name, "depth",
-                  "no valid depth pixel (" + std::to_string(f.depth_counts.invalid) +
-                      " without measurement, " + std::to_string(f.depth_counts.out_of_range) +
-                      " out of range)");
-    }
-    f.cloud = back_project_valid(*f.depth, depth_m);  // finite points with normals only
-    f.normals_from_image = true;
-    f.depth->depth = depth_m;     // keep only the filtered metric depth for the distance stage
-    f.depth->depth_scale = 1.0f;  // the colour stays for the mesh's vertex colours
-  }
-  if (f.depth && c.filter.keeps_every_finite_point()) {  // nothing left to filter: no copy
-    f.filter_counts = FilterCounts{};
-    f.filter_counts.input = f.filter_counts.output = f.cloud.size();
-  } else if (f.cloud.origin.isZero()) {
+namespace {
+
+// c.filter on the frame's cloud (a georeferenced cloud's crop box moved into its local frame);
+// fails when fewer than 3 points remain.
+void filter_points(Frame& f, const ReconstructionConfig& c) {
+  if (f.cloud.origin.isZero()) {
     f.cloud = filter_cloud(f.cloud, c.filter, &f.filter_counts);
   } else {  // a georeferenced cloud is in its local frame; the crop box in the file's world one
     FilterConfig local = c.filter;
@@ -132,26 +119,57 @@ std::uint64_t filter(Frame& f, const ReconstructionConfig& c) {
     local.crop_max = (c.filter.crop_max.cast<double>() - f.cloud.origin).cast<float>();
     f.cloud = filter_cloud(f.cloud, local, &f.filter_counts);
   }
-  if (f.cloud.size() < 3) {
-    throw Error(f.name, "filter",
-                "only " + std::to_string(f.cloud.size()) + " finite points remain of " +
-                    std::to_string(f.filter_counts.input) + " (" +
-                    std::to_string(f.filter_counts.non_finite) + " NaN/Inf, " +
-                    std::to_string(f.filter_counts.cropped) +
-                    " outside the crop box or range); need at least 3");
+}
+
+// Fails a frame left with fewer than 3 points, saying what the filter took.
+void expect_three_points(const Frame& f) {
+  if (f.cloud.size() >= 3) return;
+  throw Error(f.name, "filter",
+              "only " + std::to_string(f.cloud.size()) + " finite points remain of " +
+                  std::to_string(f.filter_counts.input) + " (" +
+                  std::to_string(f.filter_counts.non_finite) + " NaN/Inf, " +
+                  std::to_string(f.filter_counts.cropped) +
+                  " outside the crop box or range); need at least 3");
+}
+
+}  // namespace
+
+std::uint64_t filter(Frame& f, const ReconstructionConfig& c) {
+  filter_points(f, c);
+  expect_three_points(f);
+  // A point or a line has no surface: say so instead of meshing a ribbon.
+  const Eigen::Vector3d extents = principal_extents(f.cloud);
+  if (!(extents[2] > 0.0))
+    throw Error(f.name, "points",
+                "all " + std::to_string(f.cloud.size()) +
+                    " points coincide; there is no surface to extract");
+  if (extents[1] <= 1e-4 * extents[2])
+    throw Error(f.name, "points",
+                "all " + std::to_string(f.cloud.size()) + " points lie on a line (spread " +
+                    std::to_string(extents[2]) + " m along it, " + std::to_string(extents[1]) +
+                    " m across); a surface needs points spread in two directions");
+  return f.cloud.size();
+}
+
+std::uint64_t depth_to_cloud(Frame& f, const ReconstructionConfig& c) {
+  const Image depth_m = filter_depth(*f.depth, c.depth_filter, &f.depth_counts);
+  if (f.depth_counts.valid == 0) {
+    throw Error(f.name, "depth",
+                "no valid depth pixel (" + std::to_string(f.depth_counts.invalid) +
+                    " without measurement, " + std::to_string(f.depth_counts.out_of_range) +
+                    " out of range)");
   }
-  if (!f.depth) {  // a point or a line has no surface: say so instead of meshing a ribbon
-    const Eigen::Vector3d extents = principal_extents(f.cloud);
-    if (!(extents[2] > 0.0))
-      throw Error(f.name, "points",
-                  "all " + std::to_string(f.cloud.size()) +
-                      " points coincide; there is no surface to extract");
-    if (extents[1] <= 1e-4 * extents[2])
-      throw Error(f.name, "points",
-                  "all " + std::to_string(f.cloud.size()) + " points lie on a line (spread " +
-                      std::to_string(extents[2]) + " m along it, " + std::to_string(extents[1]) +
-                      " m across); a surface needs points spread in two directions");
+  f.cloud = back_project_valid(*f.depth, depth_m);  // finite points with normals only
+  f.normals_from_image = true;
+  f.depth->depth = depth_m;     // keep only the filtered metric depth for the distance stage
+  f.depth->depth_scale = 1.0f;  // the colour stays for the mesh's vertex colours
+  if (c.filter.keeps_every_finite_point()) {  // nothing left to filter: no copy
+    f.filter_counts = FilterCounts{};
+    f.filter_counts.input = f.filter_counts.output = f.cloud.size();
+  } else {
+    filter_points(f, c);
   }
+  expect_three_points(f);
   return f.cloud.size();
 }
 
@@ -171,7 +189,6 @@ std::uint64_t filter_depth_image(Frame& f, const ReconstructionConfig& c) {
 }
 
 std::uint64_t index(Frame& f, const ReconstructionConfig& c) {
-  if (f.depth) return 0;  // depth frames need no search: image normals, projective distance
   // Neighbours in space become neighbours in memory for every pass that follows.
   if (!f.cloud.is_organized()) f.cloud = in_morton_order(f.cloud);
   f.index = std::make_shared<KdTreeIndex>(f.cloud.positions);
@@ -184,7 +201,6 @@ std::uint64_t index(Frame& f, const ReconstructionConfig& c) {
 }
 
 std::uint64_t normals(Frame& f, const ReconstructionConfig& c) {
-  if (f.normals_from_image) return 0;  // already estimated from image neighbours
   NormalsConfig config = c.normals;
   if (c.extract.method == ExtractMethod::kExtendedMarchingCubes)
     config.sharp = NormalsConfig::Sharp::kOn;
@@ -227,13 +243,14 @@ std::uint64_t voxelize(Frame& f, const ReconstructionConfig& c) {
 }
 
 std::uint64_t distance(Frame& f, const ReconstructionConfig& c) {
-  if (f.depth) {
-    f.distance = projective_distance(f.grid, f.depth->depth, f.depth->intrinsics,
-                                     f.depth->T_world_camera, c.projective);
-    f.depth->depth = Image();  // keep frames in flight small; the colour waits for "extract"
-    return f.grid.corners.size();
-  }
   f.distance = hoppe_distance(f.grid, f.cloud, *f.index, c.distance);
+  return f.grid.corners.size();
+}
+
+std::uint64_t depth_distance(Frame& f, const ReconstructionConfig& c) {
+  f.distance = projective_distance(f.grid, f.depth->depth, f.depth->intrinsics,
+                                   f.depth->T_world_camera, c.projective);
+  f.depth->depth = Image();  // keep frames in flight small; the colour waits for "extract"
   return f.grid.corners.size();
 }
 
@@ -358,6 +375,10 @@ const NamedStage kPointCloudStages[8] = {
     {"read", read},         {"filter", filter},     {"index", index},     {"normals", normals},
     {"voxelize", voxelize}, {"distance", distance}, {"extract", extract}, {"optimize", optimize}};
 
+const NamedStage kDepthImageStages[6] = {{"read", read},         {"filter", depth_to_cloud},
+                                         {"voxelize", voxelize}, {"distance", depth_distance},
+                                         {"extract", extract},   {"optimize", optimize}};
+
 std::uint64_t compress(Frame& f, const ReconstructionConfig& c) {
   compress::CompressConfig config = c.compress;
   config.origin_offset += f.origin;
@@ -367,20 +388,36 @@ std::uint64_t compress(Frame& f, const ReconstructionConfig& c) {
   return f.compressed.size();
 }
 
-std::vector<NamedStage> frame_stages(bool triangulate_depth_maps, MeshCompression compression,
-                                     bool close_surfaces) {
-  std::vector<NamedStage> out;
-  if (triangulate_depth_maps) {
-    out.assign(std::begin(kDepthTriangulationStages), std::end(kDepthTriangulationStages));
-  } else {
-    for (const NamedStage& stage : kPointCloudStages) {
-      if (close_surfaces && std::string(stage.name) == "extract")
-        out.push_back({"close", stages::close});
-      out.push_back(stage);
-    }
+namespace {
+
+// The stages of `stages` after "read", with "close" before "extract" when `close_surfaces`.
+template <std::size_t N>
+std::vector<NamedStage> route_after_read(const NamedStage (&stages)[N], bool close_surfaces) {
+  std::vector<NamedStage> route;
+  for (std::size_t i = 1; i < N; ++i) {
+    if (close_surfaces && std::string(stages[i].name) == "extract")
+      route.push_back({"close", stages::close});
+    route.push_back(stages[i]);
   }
-  if (compression != MeshCompression::kNone) out.push_back({"compress", compress});
-  return out;
+  return route;
+}
+
+}  // namespace
+
+FrameRoutes frame_routes(bool triangulate_depth_maps, MeshCompression compression,
+                         bool close_surfaces) {
+  FrameRoutes routes{{"read", read}, {}, {}};
+  if (triangulate_depth_maps) {
+    routes.cloud = routes.depth = route_after_read(kDepthTriangulationStages, false);
+  } else {
+    routes.cloud = route_after_read(kPointCloudStages, close_surfaces);
+    routes.depth = route_after_read(kDepthImageStages, close_surfaces);
+  }
+  if (compression != MeshCompression::kNone) {
+    routes.cloud.push_back({"compress", compress});
+    routes.depth.push_back({"compress", compress});
+  }
+  return routes;
 }
 
 void run_stage(const char* name, StageFunction body, Frame& f, const ReconstructionConfig& c) {

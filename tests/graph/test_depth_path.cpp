@@ -2,6 +2,10 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <string>
+#include <vector>
+
 #include "graph/fusion_pipeline.h"
 #include "graph/sequence_runner.h"
 #include "nodes/normals/organized_normals.h"
@@ -171,6 +175,53 @@ TEST(DepthPath, OrganizedCloudsTakeTheDepthPathWhenAsked) {
   const FramePtr cloud_path = ReconstructionPipeline(config, 1).reconstruct(cloud);
   ASSERT_TRUE(cloud_path->ok()) << cloud_path->error;
   EXPECT_FALSE(cloud_path->normals_from_image);
+}
+
+// The stage names a frame's timings record, in order.
+std::vector<std::string> visited_stages(const Frame& f) {
+  std::vector<std::string> names;
+  for (const StageRecord& r : f.timings) names.push_back(r.stage);
+  return names;
+}
+
+// The graph routes each frame by its kind after "read": a depth frame never enters the kd-tree
+// and normals stages a cloud needs, and a frame that failed enters no stage after its failure.
+TEST(DepthPath, EachKindOfFrameVisitsOnlyItsOwnStages) {
+  const synthetic::Scene scene = synthetic::demo_room_scene();
+  const DepthFrame camera =
+      synthetic::make_depth_sequence(scene, small_camera(1))->frame(0).load_depth();
+  const PointCloud cloud = test::camera_frame_cloud(camera);
+  ReconstructionConfig config;
+  config.voxelize.voxel_size = 0.04f;
+  config.organized_as_depth = true;
+  const FramePtr depth = ReconstructionPipeline(config, 1).reconstruct(cloud);
+  ASSERT_TRUE(depth->ok()) << depth->error;
+  EXPECT_GT(depth->mesh.triangles.size(), 1000u);
+  EXPECT_EQ(visited_stages(*depth), (std::vector<std::string>{"read", "filter", "voxelize",
+                                                              "distance", "extract", "optimize"}));
+
+  config.organized_as_depth = false;
+  const FramePtr points = ReconstructionPipeline(config, 1).reconstruct(cloud);
+  ASSERT_TRUE(points->ok()) << points->error;
+  EXPECT_GT(points->mesh.triangles.size(), 1000u);
+  EXPECT_EQ(visited_stages(*points),
+            (std::vector<std::string>{"read", "filter", "index", "normals", "voxelize", "distance",
+                                      "extract", "optimize"}));
+
+  config.compression = MeshCompression::kEdgebreaker;
+  config.organized_as_depth = true;
+  const FramePtr compressed = ReconstructionPipeline(config, 1).reconstruct(cloud);
+  ASSERT_TRUE(compressed->ok()) << compressed->error;
+  EXPECT_FALSE(compressed->compressed.empty());
+  EXPECT_EQ(visited_stages(*compressed).back(), "compress");
+
+  PointCloud nothing_valid = cloud;
+  for (Eigen::Vector3f& p : nothing_valid.positions) p.setConstant(std::nanf(""));
+  config.organized_as_depth = false;
+  const FramePtr failed = ReconstructionPipeline(config, 1).reconstruct(nothing_valid);
+  EXPECT_FALSE(failed->ok());
+  EXPECT_EQ(failed->failed_stage, "filter");
+  EXPECT_EQ(visited_stages(*failed), (std::vector<std::string>{"read", "filter"}));
 }
 
 TEST(DepthPath, RealKinectPcdFramesFuseIntoOneMap) {

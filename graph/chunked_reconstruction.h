@@ -19,6 +19,7 @@
 #include <vector>
 
 #include "graph/frame.h"
+#include "graph/reconstruction_config.h"
 #include "nodes/chunk/chunk_store.h"
 #include "nodes/chunk/mesh_stitch.h"
 #include "nodes/voxelize/spacing_sample.h"

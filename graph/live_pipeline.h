@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "graph/frame.h"
+#include "graph/reconstruction_config.h"
 
 namespace meshflow {
 

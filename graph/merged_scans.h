@@ -12,6 +12,7 @@
 
 #include "graph/frame.h"
 #include "graph/pipeline.h"
+#include "graph/reconstruction_config.h"
 #include "graph/sequence_runner.h"
 
 namespace meshflow {

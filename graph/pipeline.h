@@ -11,6 +11,7 @@
 #include <functional>
 
 #include "graph/frame.h"
+#include "graph/reconstruction_config.h"
 
 namespace meshflow {
 

@@ -12,7 +12,7 @@
 #include <variant>
 #include <vector>
 
-#include "graph/frame.h"
+#include "graph/reconstruction_config.h"
 
 namespace meshflow::options {
 

@@ -7,7 +7,7 @@
 #include <CLI/CLI.hpp>
 
 #include "graph/chunked_reconstruction.h"
-#include "graph/frame.h"
+#include "graph/reconstruction_config.h"
 
 #include <string>
 #include <vector>

@@ -3,7 +3,7 @@
 #include <memory>
 #include <string>
 
-#include "graph/frame.h"
+#include "graph/reconstruction_config.h"
 #include "nodes/io/mesh_readers.h"
 #include "nodes/io/mesh_writers.h"
 #include "options/json_report.h"

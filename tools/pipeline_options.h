@@ -9,7 +9,7 @@
 #include <memory>
 #include <string>
 
-#include "graph/frame.h"
+#include "graph/reconstruction_config.h"
 #include "nodes/io/sequence.h"
 #include "options/pipeline_options.h"
 

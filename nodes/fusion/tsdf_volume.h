@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "nodes/depth/depth_bounds_pyramid.h"
+#include "nodes/fusion/integration_stats.h"
 #include "nodes/fusion/tsdf_map.h"
 #include "nodes/fusion/tsdf_ray_scratch.h"
 #include "runtime/depth_frame.h"
@@ -17,15 +18,6 @@ namespace meshflow {
 
 /// The estimator's 90th percentile is about 2 sigma of the noise; 1.5 x that is about 3 sigma.
 constexpr float kBehindNoiseMultiple = 1.5f;
-
-struct IntegrationStats {
-  float noise_per_depth2 = 0.0f;     ///< the frame's depth noise estimate (1/m), for the band
-  std::size_t pixels_used = 0;       ///< valid depth pixels
-  std::size_t blocks_touched = 0;    ///< blocks the truncation band passes through
-  std::size_t blocks_allocated = 0;  ///< of which new
-  std::size_t voxels_updated = 0;    ///< voxels whose distance was fused (carved ones too)
-  std::size_t blocks_carved = 0;     ///< untouched blocks updated as free space
-};
 
 /// Fuses depth frames into a TsdfMap with its settings (TsdfConfig: the map's voxel size and
 /// truncation, and the integration's band, integrator, carving and limits), fixed at

@@ -151,8 +151,17 @@ TEST(DepthPath, OrganizedCloudsTriangulatePerFrameUnorganizedOnesFail) {
   EXPECT_NE(failed->error.find("organized point cloud"), std::string::npos) << failed->error;
 }
 
+// The stage names a frame's timings record, in order.
+std::vector<std::string> visited_stages(const Frame& f) {
+  std::vector<std::string> names;
+  for (const StageRecord& r : f.timings) names.push_back(r.stage);
+  return names;
+}
+
 // With organized_as_depth a pinhole cloud takes the depth path (image normals, projective
 // distance) and meshes as accurately as the depth frame it came from; without, the cloud path.
+// The graph routes each frame by its kind after "read": a depth frame never enters the kd-tree
+// and normals stages a cloud needs, and a frame that failed enters no stage after its failure.
 TEST(DepthPath, OrganizedCloudsTakeTheDepthPathWhenAsked) {
   const synthetic::Scene scene = synthetic::demo_room_scene();
   const DepthFrame camera =
@@ -164,6 +173,9 @@ TEST(DepthPath, OrganizedCloudsTakeTheDepthPathWhenAsked) {
   const FramePtr depth_path = ReconstructionPipeline(config, 1).reconstruct(cloud);
   ASSERT_TRUE(depth_path->ok()) << depth_path->error;
   EXPECT_TRUE(depth_path->normals_from_image);
+  EXPECT_EQ(
+      visited_stages(*depth_path),
+      (std::vector<std::string>{"read", "filter", "voxelize", "distance", "extract", "optimize"}));
   TriangleMesh mesh = depth_path->mesh;
   for (Eigen::Vector3f& v : mesh.vertices) v = camera.T_world_camera * v;
   const auto err = test::vertex_errors(
@@ -175,36 +187,8 @@ TEST(DepthPath, OrganizedCloudsTakeTheDepthPathWhenAsked) {
   const FramePtr cloud_path = ReconstructionPipeline(config, 1).reconstruct(cloud);
   ASSERT_TRUE(cloud_path->ok()) << cloud_path->error;
   EXPECT_FALSE(cloud_path->normals_from_image);
-}
-
-// The stage names a frame's timings record, in order.
-std::vector<std::string> visited_stages(const Frame& f) {
-  std::vector<std::string> names;
-  for (const StageRecord& r : f.timings) names.push_back(r.stage);
-  return names;
-}
-
-// The graph routes each frame by its kind after "read": a depth frame never enters the kd-tree
-// and normals stages a cloud needs, and a frame that failed enters no stage after its failure.
-TEST(DepthPath, EachKindOfFrameVisitsOnlyItsOwnStages) {
-  const synthetic::Scene scene = synthetic::demo_room_scene();
-  const DepthFrame camera =
-      synthetic::make_depth_sequence(scene, small_camera(1))->frame(0).load_depth();
-  const PointCloud cloud = test::camera_frame_cloud(camera);
-  ReconstructionConfig config;
-  config.voxelize.voxel_size = 0.04f;
-  config.organized_as_depth = true;
-  const FramePtr depth = ReconstructionPipeline(config, 1).reconstruct(cloud);
-  ASSERT_TRUE(depth->ok()) << depth->error;
-  EXPECT_GT(depth->mesh.triangles.size(), 1000u);
-  EXPECT_EQ(visited_stages(*depth), (std::vector<std::string>{"read", "filter", "voxelize",
-                                                              "distance", "extract", "optimize"}));
-
-  config.organized_as_depth = false;
-  const FramePtr points = ReconstructionPipeline(config, 1).reconstruct(cloud);
-  ASSERT_TRUE(points->ok()) << points->error;
-  EXPECT_GT(points->mesh.triangles.size(), 1000u);
-  EXPECT_EQ(visited_stages(*points),
+  EXPECT_GT(cloud_path->mesh.triangles.size(), 1000u);
+  EXPECT_EQ(visited_stages(*cloud_path),
             (std::vector<std::string>{"read", "filter", "index", "normals", "voxelize", "distance",
                                       "extract", "optimize"}));
 

@@ -83,11 +83,17 @@ window.addEventListener('resize', () => {
 $('wireframe').addEventListener('change', (e) => { material.wireframe = e.target.checked; render(); });
 $('colors').addEventListener('change', () => { applyColors(); render(); });
 
+// Only a change of the colour mode marks the material for an update: each update recompiles its
+// shaders, which a software renderer takes a second or more for (a fused map's every batch of
+// blocks, or a run's every mesh, used to pay it).
 function applyColors() {
   const has = (mesh && mesh.geometry.getAttribute('color') !== undefined) || blocks.size > 0;
-  material.vertexColors = has && $('colors').checked ? THREE.VertexColors : THREE.NoColors;
-  material.color.set(material.vertexColors === THREE.VertexColors ? 0xffffff : 0xb8c4d0);
+  const mode = has && $('colors').checked ? THREE.VertexColors : THREE.NoColors;
+  material.color.set(mode === THREE.VertexColors ? 0xffffff : 0xb8c4d0);
+  if (material.vertexColors === mode) return;
+  material.vertexColors = mode;
   material.needsUpdate = true;
+  document.body.dataset.materialUpdates = Number(document.body.dataset.materialUpdates || 0) + 1;
 }
 
 // --- the decoder (WebAssembly) ---------------------------------------------------------------

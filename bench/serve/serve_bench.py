@@ -30,7 +30,7 @@ import time
 
 build = sys.argv[1]
 runs = int(sys.argv[2]) if len(sys.argv) > 2 else 3
-parts = sys.argv[3] if len(sys.argv) > 3 else "view,map,viewers"  # which measurements
+parts = set((sys.argv[3] if len(sys.argv) > 3 else "view,map,viewers").split(","))
 RATES = (10, 100)
 here = os.path.dirname(os.path.abspath(__file__))
 source = os.path.dirname(os.path.dirname(here))
@@ -104,8 +104,8 @@ def timing_table(name, server_args, ply, extra_sizes):
         f", {k} {v} B" for k, v in extra_sizes.items())
     print(f"{name}: {sizes}")
     print("| cap | first picture (ms) | full (ms) | bytes sent | full decode + draw (ms) "
-          "| PLY at the cap | Draco at the cap | " + " | ".join(f"{k} at the cap" for k in extra_sizes)
-          + " |")
+          "| PLY at the cap | Draco at the cap |"
+          + "".join(f" {k} at the cap |" for k in extra_sizes))
     print("|---:|---:|---:|---:|---:|---:|---:|" + "---:|" * len(extra_sizes))
     for rate in RATES:
         rows = []
@@ -118,8 +118,8 @@ def timing_table(name, server_args, ply, extra_sizes):
         med = lambda key: statistics.median(float(d.get(key, "nan")) for d in rows)
         shown = med("fullDecodeMs") + med("fullShowMs") if "fullDecodeMs" in rows[0] else float("nan")
         print(f"| {rate} Mbit/s | {med('firstMs'):.0f} | {med('fullMs'):.0f} | {med('bytes'):.0f} | "
-              f"{shown:.0f} | {at_cap(ply_bytes, rate)} | {at_cap(draco_size, rate)} | "
-              + " | ".join(at_cap(v, rate) for v in extra_sizes.values()) + " |")
+              f"{shown:.0f} | {at_cap(ply_bytes, rate)} | {at_cap(draco_size, rate)} |"
+              + "".join(f" {at_cap(v, rate)} |" for v in extra_sizes.values()))
         print("  page:", json.dumps({k: rows[-1].get(k) for k in (
             "warmMs", "firstByteMs", "lastByteMs", "decodes", "decodeMs", "renders", "renderMs",
             "levels")}))

@@ -1,5 +1,6 @@
 #include "serve/run_publisher.h"
 
+#include <algorithm>
 #include <chrono>
 #include <exception>
 #include <map>
@@ -12,10 +13,12 @@
 
 namespace meshflow::serve {
 
-RunPublisher::RunPublisher(Server& server, std::string source, compress::CompressConfig compress)
+RunPublisher::RunPublisher(Server& server, std::string source, compress::CompressConfig compress,
+                           double encoder_duty)
     : server_(server),
       source_(std::move(source)),
       compress_(std::move(compress)),
+      encoder_duty_(std::clamp(encoder_duty, 0.01, 1.0)),
       started_s_(monotonic_seconds()) {
   encoder_ = std::thread([this] { encoder_loop(); });
 }
@@ -129,35 +132,46 @@ RunPublisherCounts RunPublisher::counts() const {
   return counts_;
 }
 
+bool RunPublisher::viewer_wants_mesh() const { return server_.stats().clients_ready_for_mesh > 0; }
+
 void RunPublisher::encoder_loop() {
   std::unique_lock<std::mutex> lock(mutex_);
   for (;;) {
-    // Re-checked every 100 ms while nobody watches: a viewer that connects gets the newest mesh.
-    changed_.wait_for(lock, std::chrono::milliseconds(100), [this] {
-      return stop_ || (slot_ && (flushing_ || server_.stats().clients > 0));
-    });
+    // A viewer's readiness (Server::stats()) and the duty cycle's pause are polled every 20 ms:
+    // a viewer that connects, or finishes taking a mesh, gets the newest one.
+    const auto ready = [this] {
+      return slot_ && (flushing_ || (monotonic_seconds() >= next_encode_s_ && viewer_wants_mesh()));
+    };
+    changed_.wait_for(lock, std::chrono::milliseconds(20), [&] { return stop_ || ready(); });
     if (stop_) return;
-    if (!slot_ || !(flushing_ || server_.stats().clients > 0)) continue;
+    if (!ready()) continue;
     Offer o = std::move(*slot_);
     slot_.reset();
     encoding_ = true;
     lock.unlock();
+    const double t0 = monotonic_seconds();
     bool published = false;
     try {
-      if (o.encoded.empty()) {
-        compress::CompressConfig config = compress_;
-        config.origin_offset = o.origin;
-        o.encoded = o.coding == MeshCoding::kProgressive
-                        ? compress::compress_progressive(o.mesh, config)
-                        : compress::compress_mesh(o.mesh, config);
-      }
-      server_.publish_mesh(std::move(o.encoded));
+      compress::CompressConfig config = compress_;
+      config.origin_offset = o.origin;
+      const bool progressive = o.coding == MeshCoding::kProgressive;
+      if (o.encoded.empty())
+        o.encoded = progressive ? compress::compress_progressive(o.mesh, config)
+                                : compress::compress_mesh(o.mesh, config);
+      // A progressive mesh goes with its single-rate image: a fast link gets the whole mesh
+      // sooner that way (Server::publish_mesh()).
+      std::vector<unsigned char> single;
+      if (progressive && !o.mesh.triangles.empty())
+        single = compress::compress_mesh(o.mesh, config);
+      server_.publish_mesh(std::move(o.encoded), std::move(single));
       published = true;
     } catch (const std::exception&) {
       // A mesh the codec refuses (or memory for it) is not shown; the run goes on (counted).
     }
+    const double t1 = monotonic_seconds();
     lock.lock();
     encoding_ = false;
+    next_encode_s_ = t1 + (t1 - t0) * (1.0 / encoder_duty_ - 1.0);
     (published ? counts_.meshes_encoded : counts_.encode_errors) += 1;
     changed_.notify_all();
   }

@@ -4,7 +4,10 @@
 // codec. Encoding runs on a thread of its own with a slot for the newest mesh only: the graph's
 // sink thread only copies a mesh into the slot (replacing one not yet encoded, counted), so a
 // run never waits on the encoder or the network. Meshes are encoded only while a viewer is
-// connected, except the last one (finish()), so a viewer that comes later sees the result.
+// ready for one (connected, its last mesh sent: a viewer that stopped reading costs no encoding)
+// and the encoder has kept to its duty cycle (busy at most `encoder_duty` of the time, so that it
+// takes at most that share of one core from the pipeline), except the last one (finish()), so a
+// viewer that comes later sees the result.
 //
 // Stats message: {"type":"stats","source":S,"frame":I,"ok":B,"frames":N,
 //   "frames_per_second":R,"stages_ms":{stage:ms},"vertices":V,"triangles":T,
@@ -44,8 +47,11 @@ class RunPublisher {
  public:
   /// Publishes to `server` (which must outlive this), naming the run `source` in the stats
   /// ("meshflow run", ...). `compress` sets the codec's quantisation and progressive settings
-  /// (origin_offset is set per mesh). Starts the encoder thread.
-  RunPublisher(Server& server, std::string source, compress::CompressConfig compress = {});
+  /// (origin_offset is set per mesh). After an encoding of t seconds the next starts no sooner
+  /// than t * (1 / encoder_duty - 1) later (`encoder_duty` in [0.01, 1]). Starts the encoder
+  /// thread.
+  RunPublisher(Server& server, std::string source, compress::CompressConfig compress = {},
+               double encoder_duty = 0.25);
   /// Stops the encoder thread; a mesh not yet encoded is dropped.
   ~RunPublisher();
   RunPublisher(const RunPublisher&) = delete;
@@ -79,12 +85,15 @@ class RunPublisher {
   void publish_frame_stats(std::uint64_t index, bool ok, const std::vector<StageRecord>& timings,
                            std::size_t vertices, std::size_t triangles);
   void encoder_loop();
+  bool viewer_wants_mesh() const;
 
   Server& server_;
   std::string source_;
   compress::CompressConfig compress_;
+  double encoder_duty_;
   double started_s_ = 0.0;
-  double last_frame_s_ = 0.0;  // when the last frame was reported (under mutex_)
+  double next_encode_s_ = 0.0;  // the duty cycle: no encoding before (under mutex_)
+  double last_frame_s_ = 0.0;   // when the last frame was reported (under mutex_)
 
   mutable std::mutex mutex_;
   std::condition_variable changed_;

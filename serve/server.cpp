@@ -144,6 +144,7 @@ class Server::Impl {
         frames_sent{0}, frames_dropped{0}, bytes_sent{0}, http_requests{0}, meshes{0},
         publications_replaced{0}, max_client_queue{0}, blocks_published{0}, blocks_sent{0},
         blocks_superseded{0}, max_pending_blocks{0}, ends_sent{0};
+    std::atomic<std::size_t> clients_waiting_for_mesh{0};  // with a mesh frame queued or in flight
   } counters_;
 };
 
@@ -158,6 +159,10 @@ class WsSession : public std::enable_shared_from_this<WsSession> {
         last_refill_(std::chrono::steady_clock::now()) {}
 
   void run(http::request<http::string_body> request) {
+    // Frames are written whole: Nagle's algorithm would only hold a mesh's last, short chunk
+    // back until the previous one is acknowledged.
+    error_code ignored;
+    beast::get_lowest_layer(ws_).socket().set_option(tcp::no_delay(true), ignored);
     ws_.set_option(websocket::stream_base::timeout::suggested(beast::role_type::server));
     ws_.read_message_max(server_.config_.max_client_message_bytes);
     ws_.set_option(websocket::stream_base::decorator(
@@ -179,6 +184,7 @@ class WsSession : public std::enable_shared_from_this<WsSession> {
     const std::size_t queued = queue_.size() + (writing_ ? 1 : 0);
     if (queued > server_.counters_.max_client_queue) server_.counters_.max_client_queue = queued;
     if (!writing_) write_next();
+    note_mesh_pending();
   }
 
   /// The client is to be sent these blocks (their newest payloads, taken when a batch is cut),
@@ -231,6 +237,23 @@ class WsSession : public std::enable_shared_from_this<WsSession> {
     return frame.kind == Outgoing::Kind::kMesh && !frame.binary;
   }
 
+  /// Keeps Impl's count of clients with a mesh frame queued or being written up to date
+  /// (ServerStats::clients_ready_for_mesh). O(queue).
+  void note_mesh_pending() {
+    const auto is_mesh = [](const Outgoing& o) { return o.kind == Outgoing::Kind::kMesh; };
+    set_mesh_pending(!closing_ && ((writing_ && is_mesh(in_flight_)) ||
+                                   std::any_of(queue_.begin(), queue_.end(), is_mesh)));
+  }
+
+  void set_mesh_pending(bool pending) {
+    if (pending == mesh_pending_) return;
+    mesh_pending_ = pending;
+    if (pending)
+      ++server_.counters_.clients_waiting_for_mesh;
+    else
+      --server_.counters_.clients_waiting_for_mesh;
+  }
+
   void on_accept(error_code ec) {
     if (ec) return;
     if (!server_.add_client(shared_from_this())) return;
@@ -278,6 +301,7 @@ class WsSession : public std::enable_shared_from_this<WsSession> {
   void finish() {
     closing_ = true;
     queue_.clear();
+    set_mesh_pending(false);
     pace_.cancel();
     server_.remove_client(shared_from_this());
     error_code ec;
@@ -324,6 +348,8 @@ class WsSession : public std::enable_shared_from_this<WsSession> {
 
   void on_write(error_code ec, std::size_t bytes) {
     if (ec) return finish();
+    writing_ = false;
+    note_mesh_pending();
     ++server_.counters_.frames_sent;
     server_.counters_.bytes_sent += bytes;
     if (in_flight_.kind == Outgoing::Kind::kEnd) ++server_.counters_.ends_sent;
@@ -346,6 +372,7 @@ class WsSession : public std::enable_shared_from_this<WsSession> {
   std::chrono::steady_clock::time_point write_started_, next_send_;
   bool writing_ = false;
   bool closing_ = false;
+  bool mesh_pending_ = false;  // counted in Impl::Counters::clients_waiting_for_mesh
   double tokens_;
   std::chrono::steady_clock::time_point last_refill_;
 };
@@ -481,6 +508,7 @@ void Server::Impl::shut_down() {
   clients_.clear();
   connections_.clear();
   counters_.clients = 0;
+  counters_.clients_waiting_for_mesh = 0;
   ioc_.stop();
 }
 
@@ -566,32 +594,80 @@ std::string Server::url() const {
          std::to_string(impl_->port_) + "/";
 }
 
-void Server::publish_mesh(std::vector<unsigned char> mfc) {
+namespace {
+
+/// A binary mesh frame: u32 id, u32 offset (little-endian), then image[begin, end).
+Outgoing mesh_chunk(std::uint32_t id, const std::vector<unsigned char>& image, std::size_t begin,
+                    std::size_t end) {
+  std::string frame(8 + (end - begin), '\0');
+  const std::uint32_t fields[2] = {id, static_cast<std::uint32_t>(begin)};
+  for (int f = 0; f < 2; ++f)
+    for (int b = 0; b < 4; ++b)
+      frame[static_cast<std::size_t>(4 * f + b)] = static_cast<char>(fields[f] >> (8 * b));
+  std::memcpy(frame.data() + 8, image.data() + begin, end - begin);
+  return {Outgoing::Kind::kMesh, true, std::make_shared<const std::string>(std::move(frame))};
+}
+
+/// Whether a progressive image is refined by its single-rate image of `single_bytes` rather
+/// than by its packets (`packet_bytes`): ServerConfig::single_rate_within_s.
+bool refine_with_single_rate(const ServerConfig& config, std::size_t single_bytes,
+                             std::size_t packet_bytes) {
+  if (single_bytes == 0 || single_bytes >= packet_bytes || config.single_rate_within_s <= 0.0)
+    return false;
+  const double rate = config.client_megabits_per_second;
+  return rate <= 0.0 ||
+         8.0 * static_cast<double>(single_bytes) / (rate * 1e6) <= config.single_rate_within_s;
+}
+
+}  // namespace
+
+void Server::publish_mesh(std::vector<unsigned char> mfc, std::vector<unsigned char> single_rate) {
   const MeshStreamPlan plan = plan_mesh_stream(mfc, impl_->config_.chunk_bytes);
-  const std::uint32_t id = static_cast<std::uint32_t>(++impl_->mesh_id_);
+  MeshStreamPlan single_plan;
+  if (!single_rate.empty()) {
+    single_plan = plan_mesh_stream(single_rate, impl_->config_.chunk_bytes, "single-rate image");
+    if (single_plan.progressive || single_plan.vertices != plan.vertices ||
+        single_plan.triangles != plan.triangles)
+      throw Error("single-rate image", "header",
+                  "a single-rate image of the published mesh's " + std::to_string(plan.vertices) +
+                      " vertices and " + std::to_string(plan.triangles) + " triangles");
+  }
+  const bool single =
+      plan.progressive &&
+      refine_with_single_rate(impl_->config_, single_rate.size(), mfc.size() - plan.base_end);
+  const std::uint32_t id = static_cast<std::uint32_t>(++impl_->mesh_id_) & 0x7fffffffu;
   auto message = std::make_shared<MeshMessage>();
-  const nlohmann::json header = {{"type", "mesh"},
-                                 {"id", id},
-                                 {"kind", plan.progressive ? "progressive" : "edgebreaker"},
-                                 {"bytes", mfc.size()},
-                                 {"base_end", plan.base_end},
-                                 {"packet_ends", plan.packet_ends},
-                                 {"vertices", plan.vertices},
-                                 {"triangles", plan.triangles},
-                                 {"chunks", plan.chunk_ends.size()}};
-  message->frames.push_back(
-      {Outgoing::Kind::kMesh, false, std::make_shared<const std::string>(header.dump())});
-  std::size_t begin = 0;
-  for (std::size_t end : plan.chunk_ends) {
-    std::string frame(8 + (end - begin), '\0');
-    const std::uint32_t fields[2] = {id, static_cast<std::uint32_t>(begin)};
-    for (int f = 0; f < 2; ++f)
-      for (int b = 0; b < 4; ++b)
-        frame[static_cast<std::size_t>(4 * f + b)] = static_cast<char>(fields[f] >> (8 * b));
-    std::memcpy(frame.data() + 8, mfc.data() + begin, end - begin);
+  nlohmann::json header = {{"type", "mesh"},
+                           {"id", id},
+                           {"kind", plan.progressive ? "progressive" : "edgebreaker"},
+                           {"bytes", mfc.size()},
+                           {"base_end", plan.base_end},
+                           {"packet_ends", plan.packet_ends},
+                           {"vertices", plan.vertices},
+                           {"triangles", plan.triangles},
+                           {"refine", single ? "single_rate" : "packets"}};
+  if (single) {
+    // The base, then the single-rate image in chunks of its own (cut anywhere: it decodes
+    // only whole).
+    header["single_rate_bytes"] = single_rate.size();
+    header["chunks"] = 1 + (single_rate.size() + impl_->config_.chunk_bytes - 1) /
+                               std::max<std::size_t>(impl_->config_.chunk_bytes, 1);
     message->frames.push_back(
-        {Outgoing::Kind::kMesh, true, std::make_shared<const std::string>(std::move(frame))});
-    begin = end;
+        {Outgoing::Kind::kMesh, false, std::make_shared<const std::string>(header.dump())});
+    message->frames.push_back(mesh_chunk(id, mfc, 0, plan.base_end));
+    const std::size_t step = std::max<std::size_t>(impl_->config_.chunk_bytes, 1);
+    for (std::size_t begin = 0; begin < single_rate.size(); begin += step)
+      message->frames.push_back(mesh_chunk(id | 0x80000000u, single_rate, begin,
+                                           std::min(single_rate.size(), begin + step)));
+  } else {
+    header["chunks"] = plan.chunk_ends.size();
+    message->frames.push_back(
+        {Outgoing::Kind::kMesh, false, std::make_shared<const std::string>(header.dump())});
+    std::size_t begin = 0;
+    for (std::size_t end : plan.chunk_ends) {
+      message->frames.push_back(mesh_chunk(id, mfc, begin, end));
+      begin = end;
+    }
   }
   ++impl_->counters_.meshes;
   impl_->publish(std::move(message), nullptr);
@@ -627,6 +703,8 @@ ServerStats Server::stats() const {
   s.blocks_superseded = c.blocks_superseded;
   s.max_client_pending_blocks = c.max_pending_blocks;
   s.ends_sent = c.ends_sent;
+  const std::size_t waiting = c.clients_waiting_for_mesh;
+  s.clients_ready_for_mesh = s.clients > waiting ? s.clients - waiting : 0;
   return s;
 }
 

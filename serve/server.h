@@ -17,9 +17,12 @@
 //
 // Wire protocol, server to client (see web/viewer.js):
 //   text   {"type":"mesh","id":N,"kind":"progressive"|"edgebreaker","bytes":B,
-//           "base_end":E,"packet_ends":[...],"vertices":V,"triangles":T,"chunks":C}
+//           "base_end":E,"packet_ends":[...],"vertices":V,"triangles":T,"chunks":C,
+//           "refine":"packets"|"single_rate","single_rate_bytes":S}
 //   binary u32 id, u32 offset (little-endian), then bytes [offset, offset + n) of mesh N's .mfc
-//          image; chunks of one mesh arrive in order, the first holds the base mesh
+//          image; chunks of one mesh arrive in order, the first holds the base mesh. With
+//          "refine":"single_rate" only the base chunk of the progressive image comes, then
+//          the mesh's single-rate image (S bytes) in chunks whose id is N | 0x80000000
 //   binary u32 0 (a block batch: mesh ids start at 1), u32 count, then count blocks of a fused
 //          map, each i32 x, y, z (block coordinates), u32 n and n bytes of its payload
 //          (publish_blocks(); serve/map_publisher.h says what a payload holds; n = 0: the block
@@ -73,6 +76,11 @@ struct ServerConfig {
   double client_megabits_per_second = 0.0;
   /// Bytes of one mesh per binary frame (cut at progressive packet boundaries when possible).
   std::size_t chunk_bytes = 64 * 1024;
+  /// A progressive mesh published with its single-rate image (publish_mesh()) is refined by
+  /// that image instead of the vertex-split packets when the image is the smaller and takes at
+  /// most this long at the bandwidth cap (always without a cap; 0: never): the whole mesh
+  /// arrives sooner and decodes faster, but nothing between the base and the full mesh is shown.
+  double single_rate_within_s = 1.0;
 };
 
 /// One block of a fused map as published: its block coordinates and payload (empty: the block
@@ -90,6 +98,9 @@ struct ServerStats {
   std::uint64_t clients_closed_bad_message = 0;  ///< closed for a malformed/oversized/fast message
   std::uint64_t frames_sent = 0;                 ///< WebSocket frames written
   std::uint64_t ends_sent = 0;  ///< {"type":"end"} messages written (one per client after finish())
+  /// Clients connected now with no mesh frame waiting or being written: those a new mesh
+  /// would reach now (a stalled client keeps its last mesh's frame and is not counted).
+  std::size_t clients_ready_for_mesh = 0;
   std::uint64_t frames_dropped = 0;  ///< frames replaced by newer ones before they were sent
   std::uint64_t bytes_sent = 0;      ///< WebSocket payload bytes written
   std::uint64_t http_requests = 0;   ///< HTTP requests answered
@@ -124,10 +135,13 @@ class Server {
 
   /// Publishes a mesh as a .mfc image (compressed_mesh.h; progressive images are cut into a
   /// base chunk and chunks of whole split packets). Every client gets it, new clients too;
-  /// frames of older meshes not yet sent are dropped. Throws meshflow::Error if `mfc` is not a
-  /// valid .mfc image (its header and, when progressive, its packet layout are read here, on
-  /// the caller's thread: O(base mesh)). Does not wait for the network.
-  void publish_mesh(std::vector<unsigned char> mfc);
+  /// frames of older meshes not yet sent are dropped. `single_rate`, when given with a
+  /// progressive `mfc`, is the same mesh's single-rate image: it follows the base instead of
+  /// the packets when ServerConfig::single_rate_within_s says so. Throws meshflow::Error if
+  /// `mfc` is not a valid .mfc image, or `single_rate` not a single-rate image of as many
+  /// vertices and triangles (headers and, when progressive, the packet layout are read here,
+  /// on the caller's thread: O(base mesh)). Does not wait for the network.
+  void publish_mesh(std::vector<unsigned char> mfc, std::vector<unsigned char> single_rate = {});
   /// Publishes a JSON object text (sent as is; give it a "type"). The newest replaces unsent
   /// older ones; new clients get the newest. Does not wait for the network.
   void publish_stats(std::string json);

@@ -105,6 +105,7 @@ ViewImage view_image_of_mesh(const TriangleMesh& mesh, const compress::CompressC
   const double t0 = monotonic_seconds();
   compress::CompressReport report;
   image.mfc = compress::compress_progressive(mesh, config, &report);
+  image.single_rate = compress::compress_mesh(mesh, config);
   image.base_bytes = report.base_bytes;
   image.encode_s = monotonic_seconds() - t0;
   image.info = compress::compressed_mesh_info(image.mfc, name);
@@ -119,12 +120,18 @@ ViewImage view_image_of_file(const std::string& path, const compress::CompressCo
     const compress::CompressedMeshInfo info = compress::compressed_mesh_info(mfc, path);
     const double read_s = monotonic_seconds() - t0;
     if (info.kind == compress::CompressionKind::kProgressive) {
+      const double t1 = monotonic_seconds();
+      compress::CompressConfig same = config;
+      same.step = info.quantizer.step;  // the file's quantisation: no second rounding
+      image.single_rate = compress::compress_mesh(compress::decompress_mesh(mfc, path), same);
+      image.encode_s = monotonic_seconds() - t1;
       image.mfc = std::move(mfc);
       image.info = info;
     } else {
       // A single-rate file is decoded and re-encoded progressively, so the page sees a picture
-      // from the first bytes.
+      // from the first bytes; the file itself follows the base on a fast link.
       image = view_image_of_mesh(compress::decompress_mesh(mfc, path), config, path);
+      image.single_rate = std::move(mfc);
     }
     image.read_s = read_s;
     return image;
@@ -138,7 +145,7 @@ ViewImage view_image_of_file(const std::string& path, const compress::CompressCo
 
 void publish_view(Server& server, const ViewImage& image, const std::string& source,
                   const std::string& file) {
-  server.publish_mesh(image.mfc);
+  server.publish_mesh(image.mfc, image.single_rate);
   server.publish_stats(nlohmann::json{
       {"type", "stats"},
       {"source", source},

@@ -35,22 +35,26 @@ std::unique_ptr<Server> start_viewer_server(const options::ServeOptions& options
 /// mesh of 2 % of the triangles, 1024 vertex splits per packet (the finest step the page shows).
 compress::CompressConfig view_compress_config();
 
-/// A finished mesh ready for the page: its progressive .mfc image and the panel's figures.
+/// A finished mesh ready for the page: its progressive .mfc image, the same mesh single-rate
+/// (what follows the base on a fast link: Server::publish_mesh()) and the panel's figures.
 struct ViewImage {
-  std::vector<unsigned char> mfc;  ///< progressive .mfc image (base mesh first)
+  std::vector<unsigned char> mfc;          ///< progressive .mfc image (base mesh first)
+  std::vector<unsigned char> single_rate;  ///< single-rate .mfc image of the same mesh
   compress::CompressedMeshInfo info;
   std::size_t base_bytes = 0;  ///< bytes of the base mesh when encoded here (0: taken as given)
   double read_s = 0.0, encode_s = 0.0;
 };
 
 /// `path` (a mesh read_mesh() reads, or a .mfc file) as a progressive image: a progressive
-/// .mfc is taken as it is, a single-rate one decoded and re-encoded (a picture from the first
-/// bytes), a mesh encoded with `config`. Throws meshflow::Error naming the file for one that
+/// .mfc is taken as it is (and decoded to encode its single-rate image), a single-rate one
+/// decoded and re-encoded progressively (a picture from the first bytes), a mesh encoded with
+/// `config`, both ways. Throws meshflow::Error naming the file for one that
 /// cannot be read or has no triangles.
 ViewImage view_image_of_file(const std::string& path, const compress::CompressConfig& config);
 
-/// `mesh` (with triangles) as a progressive image encoded with `config` (positions plus
-/// `origin`, world coordinates). Throws meshflow::Error for a mesh without triangles.
+/// `mesh` (with triangles) as a progressive and a single-rate image encoded with `config`
+/// (positions plus config.origin_offset, world coordinates). Throws meshflow::Error for a mesh
+/// without triangles.
 ViewImage view_image_of_mesh(const TriangleMesh& mesh, const compress::CompressConfig& config,
                              const std::string& name);
 

@@ -63,7 +63,12 @@ let blockInterior = 0;
 let blockTriangles = 0;
 
 function render() {
-  if (renderer) renderer.render(scene, camera);
+  if (!renderer) return;
+  const t0 = performance.now();
+  renderer.render(scene, camera);
+  const d = document.body.dataset;
+  d.renders = Number(d.renders || 0) + 1;
+  d.renderMs = (Number(d.renderMs || 0) + performance.now() - t0).toFixed(1);
 }
 if (controls) {
   controls.addEventListener('change', render);
@@ -78,15 +83,44 @@ window.addEventListener('resize', () => {
 $('wireframe').addEventListener('change', (e) => { material.wireframe = e.target.checked; render(); });
 $('colors').addEventListener('change', () => { applyColors(); render(); });
 
+// Only a change of the colour mode marks the material for an update: each update recompiles its
+// shaders, which a software renderer takes a second or more for (a fused map's every batch of
+// blocks, or a run's every mesh, used to pay it).
 function applyColors() {
   const has = (mesh && mesh.geometry.getAttribute('color') !== undefined) || blocks.size > 0;
-  material.vertexColors = has && $('colors').checked ? THREE.VertexColors : THREE.NoColors;
-  material.color.set(material.vertexColors === THREE.VertexColors ? 0xffffff : 0xb8c4d0);
+  const mode = has && $('colors').checked ? THREE.VertexColors : THREE.NoColors;
+  material.color.set(mode === THREE.VertexColors ? 0xffffff : 0xb8c4d0);
+  if (material.vertexColors === mode) return;
+  material.vertexColors = mode;
   material.needsUpdate = true;
+  document.body.dataset.materialUpdates = Number(document.body.dataset.materialUpdates || 0) + 1;
 }
 
 // --- the decoder (WebAssembly) ---------------------------------------------------------------
 const decoder = await createDecoder();
+
+// The material's shader programs, with and without vertex colours, are compiled now, before the
+// stream starts: a first draw compiles them, which takes a software renderer (a GPU-less
+// machine, the headless tests) a second or more that would otherwise delay the first picture.
+if (renderer) {
+  const t0 = performance.now();
+  const warm = new THREE.BufferGeometry();
+  warm.setAttribute('position', new THREE.BufferAttribute(new Float32Array(9), 3));
+  warm.setAttribute('normal', new THREE.BufferAttribute(new Float32Array(9), 3));
+  warm.setAttribute('color', new THREE.BufferAttribute(new Uint8Array(9), 3, true));
+  const warmMesh = new THREE.Mesh(warm, material);
+  scene.add(warmMesh);
+  for (const colors of [THREE.NoColors, THREE.VertexColors]) {
+    material.vertexColors = colors;
+    material.needsUpdate = true;
+    renderer.compile(scene, camera);
+  }
+  material.vertexColors = THREE.NoColors;
+  material.needsUpdate = true;
+  scene.remove(warmMesh);
+  warm.dispose();
+  document.body.dataset.warmMs = (performance.now() - t0).toFixed(1);
+}
 
 // Decodes data[0, size) (a complete image when packets < 0, else a progressive prefix holding
 // the base and `packets` split packets) into a BufferGeometry, or throws.
@@ -97,6 +131,9 @@ function decode(data, size, baseEnd, packets) {
   const rc = decoder._mf_decode(ptr, size, baseEnd, packets);
   const ms = performance.now() - t0;
   decoder._free(ptr);
+  // The page's own profile (bench/serve/serve_bench.py reads it): decodes and their time.
+  document.body.dataset.decodes = Number(document.body.dataset.decodes || 0) + 1;
+  document.body.dataset.decodeMs = (Number(document.body.dataset.decodeMs || 0) + ms).toFixed(1);
   if (rc !== 0) throw new Error(decoder.UTF8ToString(decoder._mf_error()));
   const nv = decoder._mf_vertex_count();
   const nt = decoder._mf_triangle_count();
@@ -122,7 +159,9 @@ function decode(data, size, baseEnd, packets) {
 }
 
 // --- the stream --------------------------------------------------------------------------------
-let current = null;  // { header, data: Uint8Array, received, shownPrefix }
+// { header, data: Uint8Array, received, shownPrefix, complete, and with "refine":"single_rate"
+//   single: Uint8Array, singleReceived }
+let current = null;
 let bytesReceived = 0;
 let openedAt = 0;
 let decodeQueued = false;
@@ -256,16 +295,28 @@ function onBlocks(buffer) {
   render();
 }
 
+// The whole mesh: its progressive image complete, or its single-rate image (after the base).
+function fullImage(c) {
+  if (c.single) return c.singleReceived === c.single.length ? c.single : null;
+  return c.received === c.header.bytes ? c.data : null;
+}
+
 function decodeLatest() {
   decodeQueued = false;
   const c = current;
   if (!c) return;
   const h = c.header;
   try {
-    if (c.received === h.bytes) {
-      if (c.shownPrefix === h.bytes) return;
-      c.shownPrefix = h.bytes;
-      show(decode(c.data, h.bytes, 0, -1), h, 'full');
+    const whole = fullImage(c);
+    if (whole) {
+      if (c.complete) return;
+      c.complete = true;
+      const t0 = performance.now();
+      const result = decode(whole, whole.length, 0, -1);
+      const t1 = performance.now();
+      show(result, h, 'full');
+      document.body.dataset.fullDecodeMs = (t1 - t0).toFixed(1);
+      document.body.dataset.fullShowMs = (performance.now() - t1).toFixed(1);
       const full = performance.now() - openedAt;
       $('full-ms').textContent = full.toFixed(0) + ' ms';
       document.body.dataset.fullMs = full.toFixed(1);
@@ -274,6 +325,7 @@ function decodeLatest() {
       return;
     }
     if (h.kind !== 'progressive' || c.received < h.base_end) return;
+    if (c.single && c.shownPrefix > 0) return;  // the base is shown; the full mesh comes whole
     let packets = 0;
     while (packets < h.packet_ends.length && h.packet_ends[packets] <= c.received) ++packets;
     const prefix = packets === 0 ? h.base_end : h.packet_ends[packets - 1];
@@ -297,7 +349,13 @@ function decodeLatest() {
 function onText(text) {
   const message = JSON.parse(text);
   if (message.type === 'mesh') {
-    current = { header: message, data: new Uint8Array(message.bytes), received: 0, shownPrefix: 0 };
+    current = { header: message, data: new Uint8Array(message.bytes), received: 0, shownPrefix: 0,
+                complete: false };
+    document.body.dataset.refine = message.refine || 'packets';
+    if (message.refine === 'single_rate') {
+      current.single = new Uint8Array(message.single_rate_bytes);
+      current.singleReceived = 0;
+    }
     setState('streaming');
   } else if (message.type === 'stats') {
     const rows = [];
@@ -318,26 +376,44 @@ function onText(text) {
     ended = true;
     const c = current;
     if (document.body.dataset.state === 'error') return;
-    if (!c || (c.received === c.header.bytes && c.shownPrefix === c.header.bytes)) {
+    if (!c || c.complete) {
+      if (!c && blocks.size > 0) {  // a fused map's blocks, all of them here
+        document.body.dataset.fullMs = (performance.now() - openedAt).toFixed(1);
+      }
       setState('complete');
     }
   }
 }
 
 function onBinary(buffer) {
+  if (bytesReceived === 0) document.body.dataset.firstByteMs = (performance.now() - openedAt).toFixed(1);
   bytesReceived += buffer.byteLength;
   $('bytes').textContent = bytesReceived.toLocaleString('en');
+  document.body.dataset.bytes = bytesReceived;
   const view = new DataView(buffer);
   const id = view.getUint32(0, true);
   if (id === 0) return onBlocks(buffer);
   const offset = view.getUint32(4, true);
   const c = current;
-  if (!c || c.header.id !== id || c.received !== offset) return;  // a stale mesh's chunk
   const chunk = new Uint8Array(buffer, 8);
+  if (c && c.single && id === (c.header.id | 0x80000000) >>> 0) {
+    // A chunk of the single-rate image that follows the base.
+    if (c.singleReceived !== offset) return;
+    if (offset + chunk.length > c.single.length) return fail('a chunk past the image\'s end');
+    c.single.set(chunk, offset);
+    c.singleReceived += chunk.length;
+    if (c.singleReceived === c.single.length) {
+      document.body.dataset.lastByteMs = (performance.now() - openedAt).toFixed(1);
+      setTimeout(decodeLatest, 0);
+    }
+    return;
+  }
+  if (!c || c.header.id !== id || c.received !== offset) return;  // a stale mesh's chunk
   if (offset + chunk.length > c.header.bytes) return fail('a chunk past the mesh\'s end');
   c.data.set(chunk, offset);
   c.received += chunk.length;
   if (c.received === c.header.bytes) {
+    document.body.dataset.lastByteMs = (performance.now() - openedAt).toFixed(1);
     setTimeout(decodeLatest, 0);  // the full mesh at once (a waiting level's timer then returns)
   } else if (!decodeQueued) {
     decodeQueued = true;

@@ -1,15 +1,19 @@
 #!/usr/bin/env python3
 """What watching costs and how fast a picture comes, measured on this machine (bench/RESULTS.md,
-"Viewing"). Release build; kurt3d from MESHFLOW_DATA (default ../shared/data).
+"Viewing"). Release build; kurt3d and rgbd_redwood from MESHFLOW_DATA (default ../shared/data).
 
-1. Time to the first picture and to the full mesh in headless Chromium for `meshflow view` of
-   kurt3d scan000 meshed at 5 cm, at --serve-rate 10 and 100 Mbit/s (the page's own numbers from
-   the WebSocket's opening), beside the time the same cap needs for the PLY file and for the
+1. view: time to the first picture and to the full mesh in headless Chromium for `meshflow view`
+   of kurt3d scan000 meshed at 5 cm, at --serve-rate 10 and 100 Mbit/s (the page's own numbers
+   from the WebSocket's opening; the page's decode and draw times beside them), next to the time
+   the same cap needs for the PLY file, a Draco file (draco_encoder -qp 14 -cl 7) and the
    single-rate .mfc (size x 8 / rate: nothing can be drawn before they are complete).
-2. Frames/s of `meshflow run --synthetic-depth --triangulate rqt` (640 x 480) with 0, 1 and 4
-   viewers that read everything (plain WebSocket clients: a handshake, then reading the socket).
+2. map: the same for the fused Redwood map (`meshflow run rgbd_redwood --fuse --optimize none
+   --serve`, 1 cm voxels, its blocks once the run is over) against fused.ply and its Draco file.
+3. viewers: frames/s of `meshflow run --synthetic-depth --triangulate rqt` (640 x 480) with no
+   viewer, one that stopped reading (a handshake, then nothing read: a 4 kB receive buffer), and
+   1 and 4 viewers that read everything (plain WebSocket clients), interleaved run by run.
 
-usage: serve_bench.py BUILD_DIR [RUNS] [view,viewers]
+usage: serve_bench.py BUILD_DIR [RUNS] [view,map,viewers]
 """
 import base64
 import json
@@ -26,7 +30,7 @@ import time
 
 build = sys.argv[1]
 runs = int(sys.argv[2]) if len(sys.argv) > 2 else 3
-parts = sys.argv[3] if len(sys.argv) > 3 else "view,viewers"  # which measurements
+parts = set((sys.argv[3] if len(sys.argv) > 3 else "view,map,viewers").split(","))
 RATES = (10, 100)
 here = os.path.dirname(os.path.abspath(__file__))
 source = os.path.dirname(os.path.dirname(here))
@@ -34,6 +38,7 @@ meshflow = os.path.join(build, "meshflow")
 data = os.environ.get("MESHFLOW_DATA", os.path.join(source, "..", "shared", "data"))
 check = os.path.join(source, "tests", "serve", "browser_check.py")
 chromium = shutil.which("chromium") or shutil.which("chromium-browser")
+draco = shutil.which("draco_encoder")
 work = tempfile.mkdtemp(prefix="meshflow-serve-bench-")
 
 
@@ -53,16 +58,90 @@ def start(args):
     raise RuntimeError("no url: " + open(err.name).read())
 
 
-def viewer(url, stop):
-    """A WebSocket client that completes the handshake and then reads everything."""
+def wait_json(p, log):
+    """Waits until a run started with --json has printed its summary (then it serves)."""
+    for _ in range(6000):
+        log.seek(0)
+        text = log.read()
+        try:
+            return json.loads(text)
+        except ValueError:
+            if p.poll() is not None:
+                raise RuntimeError("the run ended without its summary: " + text)
+        time.sleep(0.05)
+    raise RuntimeError("no summary")
+
+
+def page(url):
+    """Loads the page in headless Chromium until it is complete; its data attributes."""
+    out = os.path.join(work, "page.json")
+    subprocess.run([sys.executable, check, chromium, url, out, out + ".png", "120"], check=True,
+                   stdout=subprocess.DEVNULL)
+    d = json.load(open(out))
+    if d.get("state") != "complete":
+        raise RuntimeError("the page did not complete: " + json.dumps(d))
+    return d
+
+
+def draco_bytes(ply):
+    if not draco:
+        return None
+    out = os.path.join(work, "mesh.drc")
+    subprocess.run([draco, "-i", ply, "-o", out, "-qp", "14", "-cl", "7"], check=True,
+                   stdout=subprocess.DEVNULL)
+    return os.path.getsize(out)
+
+
+def at_cap(size, rate):
+    return "-" if size is None else f"{size * 8 / (rate * 1e3):.0f}"
+
+
+def timing_table(name, server_args, ply, extra_sizes):
+    """Per cap: medians of the page's first picture, full mesh, bytes received and the full
+    mesh's decode + draw, beside the files at the cap."""
+    ply_bytes, draco_size = os.path.getsize(ply), draco_bytes(ply)
+    sizes = f"PLY {ply_bytes} B, Draco {draco_size} B" + "".join(
+        f", {k} {v} B" for k, v in extra_sizes.items())
+    print(f"{name}: {sizes}")
+    print("| cap | first picture (ms) | full (ms) | bytes sent | full decode + draw (ms) "
+          "| PLY at the cap | Draco at the cap |"
+          + "".join(f" {k} at the cap |" for k in extra_sizes))
+    print("|---:|---:|---:|---:|---:|---:|---:|" + "---:|" * len(extra_sizes))
+    for rate in RATES:
+        rows = []
+        for _ in range(runs):
+            p, url, log = server_args(rate)
+            d = page(url)
+            p.terminate()
+            p.wait()
+            rows.append(d)
+        med = lambda key: statistics.median(float(d.get(key, "nan")) for d in rows)
+        shown = med("fullDecodeMs") + med("fullShowMs") if "fullDecodeMs" in rows[0] else float("nan")
+        print(f"| {rate} Mbit/s | {med('firstMs'):.0f} | {med('fullMs'):.0f} | {med('bytes'):.0f} | "
+              f"{shown:.0f} | {at_cap(ply_bytes, rate)} | {at_cap(draco_size, rate)} |"
+              + "".join(f" {at_cap(v, rate)} |" for v in extra_sizes.values()))
+        print("  page:", json.dumps({k: rows[-1].get(k) for k in (
+            "warmMs", "firstByteMs", "lastByteMs", "decodes", "decodeMs", "renders", "renderMs",
+            "levels")}))
+
+
+def viewer(url, stop, read=True):
+    """A WebSocket client that completes the handshake and then reads everything (or, with
+    read=False, nothing: a 4 kB receive buffer, never read)."""
     host, port = url.split("//")[1].rstrip("/").split(":")
-    s = socket.create_connection((host, int(port)))
+    s = socket.socket()
+    if not read:
+        s.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, 4096)
+    s.connect((host, int(port)))
     key = base64.b64encode(os.urandom(16)).decode()
     s.sendall((f"GET /ws HTTP/1.1\r\nHost: {host}\r\nUpgrade: websocket\r\n"
                f"Connection: Upgrade\r\nSec-WebSocket-Key: {key}\r\n"
                "Sec-WebSocket-Version: 13\r\n\r\n").encode())
     s.settimeout(0.2)
     while not stop.is_set():
+        if not read:
+            time.sleep(0.05)
+            continue
         try:
             if not s.recv(1 << 16):
                 break
@@ -71,60 +150,62 @@ def viewer(url, stop):
     s.close()
 
 
-# 1. first picture / full mesh
-if "view" not in parts:
-    RATES = ()
-scan = os.path.join(data, "kurt3d", "scan000.3d")
-mesh = os.path.join(work, "kurt3d.ply")
-subprocess.run([meshflow, "reconstruct", scan, "--voxel", "0.05", "-o", mesh], check=True,
-               stdout=subprocess.DEVNULL)
-mfc = os.path.join(work, "kurt3d.mfc")
-subprocess.run([meshflow, "reconstruct", scan, "--voxel", "0.05", "-o", mfc], check=True,
-               stdout=subprocess.DEVNULL)
-ply_bytes, mfc_bytes = os.path.getsize(mesh), os.path.getsize(mfc)
-print(f"kurt3d scan000 at 5 cm: PLY {ply_bytes} bytes, single-rate .mfc {mfc_bytes} bytes")
-print("| cap | first picture (ms) | full mesh (ms) | progressive bytes | PLY at the cap | .mfc at the cap |")
-print("|---:|---:|---:|---:|---:|---:|")
-for rate in RATES:
-    first, full = [], []
-    for _ in range(runs):
-        p, url, log = start(["view", mesh, "--serve", "0", "--serve-rate", str(rate),
-                             "--chunk-kb", "16", "--exit-after", "120"])
-        out = os.path.join(work, "page.json")
-        subprocess.run([sys.executable, check, chromium, url, out, out + ".png", "60"],
-                       check=True, stdout=subprocess.DEVNULL)
-        d = json.load(open(out))
-        first.append(float(d["firstMs"]))
-        full.append(float(d["fullMs"]))
-        p.terminate()
-        p.wait()
-        log.seek(0)
-        stdout = log.read()
-    progressive = int(re.search(r"(\d+) bytes progressive", stdout).group(1))
-    print(f"| {rate} Mbit/s | {statistics.median(first):.0f} | {statistics.median(full):.0f} | "
-          f"{progressive} | {ply_bytes * 8 / (rate * 1e3):.0f} ms | "
-          f"{mfc_bytes * 8 / (rate * 1e3):.0f} ms |")
+# 1. kurt3d in meshflow view
+if "view" in parts:
+    scan = os.path.join(data, "kurt3d", "scan000.3d")
+    mesh = os.path.join(work, "kurt3d.ply")
+    subprocess.run([meshflow, "reconstruct", scan, "--voxel", "0.05", "-o", mesh], check=True,
+                   stdout=subprocess.DEVNULL)
+    mfc = os.path.join(work, "kurt3d.mfc")
+    subprocess.run([meshflow, "reconstruct", scan, "--voxel", "0.05", "-o", mfc], check=True,
+                   stdout=subprocess.DEVNULL)
+    timing_table("kurt3d scan000 at 5 cm (meshflow view)",
+                 lambda rate: start(["view", mesh, "--serve", "0", "--serve-rate", str(rate),
+                                     "--chunk-kb", "16", "--exit-after", "120"]),
+                 mesh, {".mfc": os.path.getsize(mfc)})
 
-# 2. frames/s with 0, 1, 4 viewers
-print("| viewers | frames/s (median of runs) | runs |")
-print("|---:|---:|---|")
-for viewers in (0, 1, 4) if "viewers" in parts else ():
-    rates = []
+# 2. the fused Redwood map, after the run
+if "map" in parts:
+    redwood = os.path.join(data, "rgbd_redwood")
+    fused = os.path.join(work, "fused")
+
+    def run_map(rate):
+        p, url, log = start(["run", redwood, "--fuse", "--optimize", "none", "-o", fused,
+                             "--json", "--serve", "0", "--serve-rate", str(rate),
+                             "--exit-after", "300"])
+        wait_json(p, log)
+        return p, url, log
+
+    p, _, _ = run_map(100)  # fused.ply for the sizes
+    p.terminate()
+    p.wait()
+    timing_table("fused Redwood map, 1 cm (run --fuse --optimize none --serve)", run_map,
+                 os.path.join(fused, "fused.ply"), {})
+
+# 3. frames/s with no viewer, a stalled one, 1 and 4 reading viewers (interleaved)
+if "viewers" in parts:
+    cases = (("none", 0, True), ("1 stalled", 1, False), ("1", 1, True), ("4", 4, True))
+    rates = {c[0]: [] for c in cases}
     for _ in range(runs):
-        p, url, log = start(["run", "--synthetic-depth", "--synthetic-frames", "120",
-                             "--triangulate", "rqt", "-o", os.path.join(work, "run"), "--json",
-                             "--serve", "0", "--exit-after", "0.01"])
-        stop = threading.Event()
-        threads = [threading.Thread(target=viewer, args=(url, stop)) for _ in range(viewers)]
-        for t in threads:
-            t.start()
-        p.wait()
-        log.seek(0)
-        doc = json.loads(log.read())
-        stop.set()
-        for t in threads:
-            t.join()
-        rates.append(doc["frames_per_second"])
-    print(f"| {viewers} | {statistics.median(rates):.1f} | "
-          f"{', '.join(f'{r:.1f}' for r in rates)} |")
+        for label, viewers, read in cases:
+            p, url, log = start(["run", "--synthetic-depth", "--synthetic-frames", "120",
+                                 "--triangulate", "rqt", "-o", os.path.join(work, "run"), "--json",
+                                 "--serve", "0", "--exit-after", "0.01"])
+            stop = threading.Event()
+            threads = [threading.Thread(target=viewer, args=(url, stop, read))
+                       for _ in range(viewers)]
+            for t in threads:
+                t.start()
+            p.wait()
+            log.seek(0)
+            doc = json.loads(log.read())
+            stop.set()
+            for t in threads:
+                t.join()
+            rates[label].append(doc["frames_per_second"])
+    print("| viewers | frames/s (median of runs) | runs |")
+    print("|---|---:|---|")
+    for label, _, _ in cases:
+        r = rates[label]
+        print(f"| {label} | {statistics.median(r):.1f} | {', '.join(f'{x:.1f}' for x in r)} |")
 shutil.rmtree(work, ignore_errors=True)

@@ -38,8 +38,8 @@ Frame frame_with_mesh(std::size_t index, const TriangleMesh& mesh) {
 /// Reads until the end message; the last mesh header, stats and the bytes of that mesh.
 struct Stream {
   nlohmann::json header, stats;
-  std::size_t bytes = 0;
-  std::vector<unsigned char> data;  ///< the last mesh's image
+  std::size_t bytes = 0;            ///< of the image that came whole
+  std::vector<unsigned char> data;  ///< the last mesh's whole image (single-rate after a base)
 };
 Stream read_to_end(Client& client) {
   Stream s;
@@ -51,6 +51,13 @@ Stream read_to_end(Client& client) {
       return s;
     }
     if (binary) {
+      // With "refine":"single_rate" the base of the progressive image comes first, then the
+      // single-rate image (ids with the high bit): that one is the whole mesh.
+      const bool single = (static_cast<unsigned char>(message[3]) & 0x80u) != 0;
+      if (single && s.header["refine"] == "single_rate" && s.bytes == s.header["base_end"]) {
+        s.bytes = 0;
+        s.data.clear();
+      }
       s.bytes += message.size() - 8;
       s.data.insert(s.data.end(), message.begin() + 8, message.end());
       continue;
@@ -99,12 +106,44 @@ TEST(RunPublisher, TheResultIsProgressiveInWorldCoordinates) {
   ASSERT_FALSE(client.connect(server.port()));
   const Stream s = read_to_end(client);
   EXPECT_EQ(s.header["kind"], "progressive");
+  EXPECT_EQ(s.header["refine"], "single_rate") << "no cap: the base, then the single-rate image";
+  EXPECT_EQ(s.bytes, s.header["single_rate_bytes"].get<std::size_t>());
   EXPECT_EQ(s.header["vertices"], 30 * 30);
   const TriangleMesh decoded = compress::decompress_mesh(s.data, "stream");
   ASSERT_EQ(decoded.vertices.size(), 30u * 30u);
   float min_x = 1e9f;
   for (const Eigen::Vector3f& v : decoded.vertices) min_x = std::min(min_x, v.x());
   EXPECT_NEAR(min_x, 100.0f, 1e-3f) << "the origin was added";
+}
+
+TEST(RunPublisher, NothingIsEncodedForAViewerThatStoppedReading) {
+  // A viewer that stopped reading holds its last mesh's frames (ServerStats::
+  // clients_ready_for_mesh is 0): the encoder then takes no core from the run, only the last
+  // mesh is encoded at the end.
+  const TriangleMesh mesh = wavy_grid(240, 0.05f);
+  const std::vector<unsigned char> mfc = compress::compress_mesh(mesh);
+  Server server{config_with_page()};
+  Client stalled(4096);
+  ASSERT_FALSE(stalled.connect(server.port()));
+  for (int i = 0; i < 1000 && server.stats().clients < 1; ++i) std::this_thread::sleep_for(10ms);
+  // 10 MB of meshes, published apart (not replaced by each other before they are written):
+  // more than the kernel's buffers take with a 4 kB receive buffer.
+  for (int i = 0; i < 200; ++i) {
+    server.publish_mesh(mfc);
+    std::this_thread::sleep_for(2ms);
+  }
+  std::this_thread::sleep_for(200ms);
+  ASSERT_EQ(server.stats().clients_ready_for_mesh, 0u);
+  RunPublisher publisher(server, "test");
+  const Frame f = frame_with_mesh(0, mesh);
+  for (int i = 0; i < 30; ++i) {
+    publisher.frame(f, true);
+    std::this_thread::sleep_for(10ms);  // the encoder looks every 20 ms
+  }
+  EXPECT_EQ(publisher.counts().meshes_encoded, 0u);
+  EXPECT_EQ(publisher.counts().meshes_replaced, 29u);
+  publisher.finish();
+  EXPECT_EQ(publisher.counts().meshes_encoded, 1u);
 }
 
 TEST(RunPublisher, AViewerThatNeverReadsCostsTheSinkOnlyDroppedFrames) {

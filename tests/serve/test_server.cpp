@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <boost/asio/connect.hpp>
 #include <boost/asio/ip/tcp.hpp>
 #include <boost/beast/core.hpp>
@@ -166,6 +167,136 @@ TEST(Server, StreamsAProgressiveMeshBaseFirstAndEveryPrefixDecodes) {
   EXPECT_EQ(0, std::memcmp(mf_indices(), full.triangles[0].data(),
                            full.triangles.size() * sizeof(full.triangles[0])));
   EXPECT_NE(mf_decode(received.data(), received.size() - 1, 0, -1), 0) << "checksum checked";
+}
+
+/// What a client read of one mesh: its header, the progressive bytes and the single-rate bytes
+/// (chunks whose id has the high bit), each checked to arrive in order.
+struct ReadMesh {
+  nlohmann::json header;
+  std::vector<unsigned char> progressive, single_rate;
+};
+ReadMesh read_one_mesh(Client& client) {
+  ReadMesh r;
+  const auto done = [&r] {
+    if (r.header.is_null()) return false;
+    if (r.header["refine"] == "single_rate")
+      return r.single_rate.size() == r.header["single_rate_bytes"].get<std::size_t>();
+    return r.progressive.size() == r.header["bytes"].get<std::size_t>();
+  };
+  while (!done()) {
+    std::string message;
+    bool binary = false;
+    if (client.read(message, binary)) {
+      ADD_FAILURE() << "the stream ended before the mesh";
+      return r;
+    }
+    if (!binary) {
+      const nlohmann::json doc = nlohmann::json::parse(message);
+      if (doc["type"] == "mesh") r.header = doc;
+      continue;
+    }
+    std::uint32_t id = 0, offset = 0;
+    std::memcpy(&id, message.data(), 4);
+    std::memcpy(&offset, message.data() + 4, 4);
+    const bool single = (id & 0x80000000u) != 0;
+    EXPECT_EQ(id & 0x7fffffffu, r.header["id"].get<std::uint32_t>());
+    std::vector<unsigned char>& to = single ? r.single_rate : r.progressive;
+    EXPECT_EQ(offset, to.size()) << "chunks arrive in order";
+    to.insert(to.end(), message.begin() + 8, message.end());
+  }
+  return r;
+}
+
+TEST(Server, AFastLinkGetsTheBaseThenTheSingleRateImage) {
+  // The single-rate image is far smaller than the split packets: after the base (a level of
+  // its own), it is sent instead of them, and decodes to the whole mesh.
+  const TriangleMesh mesh = wavy_grid(60, 0.02f);
+  compress::CompressConfig cc;
+  cc.splits_per_packet = 64;
+  const std::vector<unsigned char> progressive = compress::compress_progressive(mesh, cc);
+  const std::vector<unsigned char> single = compress::compress_mesh(mesh, cc);
+  const std::size_t base_end = plan_mesh_stream(progressive, 1).base_end;
+  ASSERT_LT(single.size(), progressive.size() - base_end);
+  ServerConfig config = config_with_page();
+  config.chunk_bytes = 2048;
+  Server server{config};
+  Client client;
+  ASSERT_FALSE(client.connect(server.port()));
+  server.publish_mesh(progressive, single);
+  const ReadMesh r = read_one_mesh(client);
+  EXPECT_EQ(r.header["refine"], "single_rate");
+  EXPECT_EQ(r.header["kind"], "progressive");
+  ASSERT_EQ(r.progressive.size(), base_end) << "only the base of the progressive image";
+  EXPECT_TRUE(std::equal(r.progressive.begin(), r.progressive.end(), progressive.begin()));
+  ASSERT_EQ(mf_decode(r.progressive.data(), r.progressive.size(), base_end, 0), 0) << mf_error();
+  EXPECT_LT(mf_triangle_count(), mesh.triangles.size() / 2) << "the base is coarse";
+  EXPECT_EQ(r.single_rate, single);
+  ASSERT_EQ(mf_decode(r.single_rate.data(), r.single_rate.size(), 0, -1), 0) << mf_error();
+  EXPECT_EQ(mf_triangle_count(), mesh.triangles.size());
+  EXPECT_EQ(mf_vertex_count(), mesh.vertices.size());
+}
+
+TEST(Server, ANarrowLinkGetsTheSplitPackets) {
+  // At 0.02 Mbit/s the single-rate image would take over a second: the packets refine the base
+  // level by level instead (ServerConfig::single_rate_within_s).
+  const TriangleMesh mesh = wavy_grid(60, 0.02f);
+  compress::CompressConfig cc;
+  cc.splits_per_packet = 64;
+  const std::vector<unsigned char> progressive = compress::compress_progressive(mesh, cc);
+  const std::vector<unsigned char> single = compress::compress_mesh(mesh, cc);
+  ASSERT_GT(8.0 * static_cast<double>(single.size()) / 0.02e6, 1.0);
+  ServerConfig config = config_with_page();
+  config.client_megabits_per_second = 0.02;
+  config.chunk_bytes = 1 << 20;  // few frames: the cap's wait is per frame
+  config.single_rate_within_s = 1.0;
+  Server server{config};
+  Client client;
+  ASSERT_FALSE(client.connect(server.port()));
+  server.publish_mesh(progressive, single);
+  const ReadMesh r = read_one_mesh(client);
+  EXPECT_EQ(r.header["refine"], "packets");
+  EXPECT_EQ(r.progressive, progressive);
+  EXPECT_TRUE(r.single_rate.empty());
+}
+
+TEST(Server, RefusesASingleRateImageOfAnotherMesh) {
+  Server server{config_with_page()};
+  const std::vector<unsigned char> progressive = compress::compress_progressive(wavy_grid(20));
+  EXPECT_THROW(server.publish_mesh(progressive, compress::compress_mesh(wavy_grid(21))), Error);
+  EXPECT_THROW(server.publish_mesh(progressive, progressive), Error);
+}
+
+TEST(Server, AClientThatStopsReadingIsNotReadyForAMesh) {
+  // ServerStats::clients_ready_for_mesh, what a run's encoder waits for: a client that reads is
+  // ready again once a mesh is written; one that never reads keeps its mesh's frames queued.
+  const std::vector<unsigned char> mfc = compress::compress_mesh(wavy_grid(240, 0.05f));
+  ASSERT_GT(mfc.size(), 50'000u);
+  ServerConfig config = config_with_page();
+  config.chunk_bytes = 4096;
+  Server server{config};
+  Client stalled(4096);
+  ASSERT_FALSE(stalled.connect(server.port()));
+  for (int i = 0; i < 1000 && server.stats().clients < 1; ++i) std::this_thread::sleep_for(10ms);
+  EXPECT_EQ(server.stats().clients_ready_for_mesh, 1u) << "nothing queued yet";
+  // 5 MB of meshes: more than the kernel's buffers take with a 4 kB receive buffer; from then
+  // on the client keeps its newest mesh's frames queued.
+  for (int i = 0; i < 100; ++i) {
+    server.publish_mesh(mfc);
+    std::this_thread::sleep_for(2ms);
+  }
+  std::this_thread::sleep_for(200ms);
+  EXPECT_EQ(server.stats().clients_ready_for_mesh, 0u);
+
+  Client reader;
+  ASSERT_FALSE(reader.connect(server.port()));
+  for (int i = 0; i < 1000 && server.stats().clients < 2; ++i) std::this_thread::sleep_for(10ms);
+  const ReadMesh r = read_one_mesh(reader);
+  EXPECT_EQ(r.progressive, mfc);
+  for (int i = 0; i < 500 && server.stats().clients_ready_for_mesh < 1; ++i)
+    std::this_thread::sleep_for(10ms);
+  const ServerStats s = server.stats();
+  EXPECT_EQ(s.clients, 2u);
+  EXPECT_EQ(s.clients_ready_for_mesh, 1u) << "the reader is ready, the stalled client is not";
 }
 
 TEST(Server, CapsEachClientsBandwidth) {

@@ -2,9 +2,13 @@
 // with it and without it (--feature-angle 180), on the cleaned 5 cm mesh. Issue 59's bar: the
 // features cost at most 15 % of a step's time.
 
+#include <map>
+
 #include "bench_support.h"
+#include "graph/pipeline.h"
 #include "nodes/optimize/features.h"
 #include "nodes/optimize/optimize_mesh.h"
+#include "nodes/synthetic/closed_objects.h"
 #include "runtime/threads.h"
 
 namespace meshflow::bench {
@@ -40,6 +44,60 @@ void BM_OptimizeWithFeatures(benchmark::State& state) {
 BENCHMARK(BM_OptimizeWithFeatures)
     ->ArgsProduct({{1, 2}, {kSynthetic, kKurt3d}, {0, 1}, {0, 1}})
     ->ArgNames({"threads", "input", "step", "features"})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
+
+// A CAD-like input besides the scans: the box with a hole (sharp edges, a cylinder) sampled
+// without a sensor (100 000 points) and extracted at 1 % of its diagonal (extended marching
+// cubes), as tests/graph/test_feature_preservation.cpp makes it. Cached.
+constexpr int kBoxWithHole = 9;
+constexpr float kBoxWithHoleVoxelShare = 0.01f;
+
+const TriangleMesh& box_with_hole_mesh(float& voxel) {
+  static float cached_voxel = 0.0f;
+  static const TriangleMesh mesh = [] {
+    const synthetic::ClosedObject object = *synthetic::closed_test_object("box-with-hole");
+    cached_voxel = kBoxWithHoleVoxelShare * object.diagonal();
+    ReconstructionConfig c;
+    c.voxelize.voxel_size = cached_voxel;
+    c.optimize.steps.clear();
+    PointCloud cloud = object.sample(100000, 0.0f, 59);
+    cloud.normals.clear();
+    return ReconstructionPipeline(c).reconstruct(std::move(cloud))->mesh;
+  }();
+  voxel = cached_voxel;
+  return mesh;
+}
+
+// A reducing list as a user runs it (reconstruct's settings at the input's voxel), with the
+// feature graph (features 1) and without (0, --feature-angle 180): list 0 clean,holes,remesh,
+// 1 clean,holes,planes,retriangulate, 2 decimate. Input 0 the synthetic scan, 1 kurt3d (5 cm,
+// raw extraction), 9 the box with a hole. Issue 59's bar: features cost at most 15 %.
+void BM_OptimizeChainWithFeatures(benchmark::State& state) {
+  static const char* const kLists[] = {"clean,holes,remesh", "clean,holes,planes,retriangulate",
+                                       "decimate"};
+  const TriangleMesh* mesh = nullptr;
+  float voxel = 0.05f;
+  if (state.range(1) == kBoxWithHole)
+    mesh = &box_with_hole_mesh(voxel);
+  else
+    mesh = extracted_mesh(state);
+  if (mesh == nullptr) return;
+  ReconstructionConfig c;
+  c.optimize.steps = parse_optimize_steps(kLists[state.range(2)]);
+  c.optimize.feature_angle_deg = state.range(3) == 1 ? kDefaultFeatureAngleDeg : 180.0f;
+  const OptimizeConfig config = optimize_config_for_voxel(c, voxel);
+  state.SetLabel(std::string(kLists[state.range(2)]) +
+                 (state.range(3) == 1 ? " features" : " no features"));
+  ThreadLimit limit(static_cast<int>(state.range(0)));
+  std::size_t out = 0;
+  for (auto _ : state)
+    benchmark::DoNotOptimize(out = optimize_mesh(*mesh, config).triangles.size());
+  count_triangles(state, *mesh, out);
+}
+BENCHMARK(BM_OptimizeChainWithFeatures)
+    ->ArgsProduct({{1}, {kSynthetic, kKurt3d, kBoxWithHole}, {0, 1, 2}, {0, 1}})
+    ->ArgNames({"threads", "input", "list", "features"})
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
 

@@ -62,15 +62,10 @@ std::vector<std::uint32_t> snap_side_vertices(const TriangleMesh& mesh,
   return found;
 }
 
-struct SnapPlane {
-  Eigen::Vector3d normal;
-  double offset = 0.0;  ///< normal . x = offset on the plane
-};
-
 /// The least-squares plane of `points` when at least 5 of them spread in two directions and
 /// their RMS deviation is at most `flatness`.
 bool snap_fit_plane(const TriangleMesh& mesh, const std::vector<std::uint32_t>& points,
-                    double flatness, SnapPlane& plane) {
+                    double flatness, FeaturePlane& plane) {
   if (points.size() < 5) return false;
   Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
   for (std::uint32_t p : points) centroid += mesh.vertices[p].cast<double>();
@@ -107,49 +102,56 @@ bool snap_keeps_faces(const TriangleMesh& mesh, const VertexTriangles& around, s
 
 }  // namespace
 
+bool planes_meet(const std::vector<FeaturePlane>& planes) {
+  const double min_sin = std::sin(20.0 * M_PI / 180.0);
+  for (std::size_t i = 0; i < planes.size(); ++i)
+    for (std::size_t j = 0; j < i; ++j)
+      if (planes[i].normal.cross(planes[j].normal).norm() > min_sin) return true;
+  return false;
+}
+
+Eigen::Vector3d move_onto_planes(const Eigen::Vector3d& point,
+                                 const std::vector<FeaturePlane>& planes) {
+  constexpr double kSpan = 0.02;  // smallest eigenvalue of the normals' sum counted as a direction
+  Eigen::Matrix3d a = Eigen::Matrix3d::Zero();
+  Eigen::Vector3d residual = Eigen::Vector3d::Zero();
+  for (const FeaturePlane& p : planes) {
+    a += p.normal * p.normal.transpose();
+    residual += (p.offset - p.normal.dot(point)) * p.normal;
+  }
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eigen(a);
+  Eigen::Vector3d step = Eigen::Vector3d::Zero();
+  for (int k = 0; k < 3; ++k)
+    if (eigen.eigenvalues()[k] > kSpan) {
+      const Eigen::Vector3d u = eigen.eigenvectors().col(k);
+      step += u * (u.dot(residual) / eigen.eigenvalues()[k]);
+    }
+  return step;
+}
+
 FeatureSnapReport snap_feature_vertices(TriangleMesh& mesh, const MeshFeatures& features,
                                         float max_move, float flatness) {
   FeatureSnapReport report;
   if (features.edges.empty()) return report;
   const VertexTriangles around = vertex_triangles(mesh);
-  const double min_sin = std::sin(20.0 * M_PI / 180.0);
-  constexpr double kSpan = 0.02;  // smallest eigenvalue of the normals' sum counted as a direction
   for (std::uint32_t v = 0; v < mesh.vertices.size(); ++v) {
     if (features.vertex_kind[v] == SnapKind::kFree) continue;
     ++report.feature_vertices;
     const std::vector<std::size_t> side = snap_sides(mesh, around, features, v);
-    std::vector<SnapPlane> planes;
+    std::vector<FeaturePlane> planes;
     std::vector<std::uint8_t> done(side.size(), 0);
     for (std::size_t i = 0; i < side.size(); ++i) {
       if (done[i]) continue;
       std::vector<std::uint32_t> fan;
       for (std::size_t j = i; j < side.size(); ++j)
         if (side[j] == side[i]) fan.push_back(around.begin(v)[j]), done[j] = 1;
-      SnapPlane plane;
+      FeaturePlane plane;
       if (snap_fit_plane(mesh, snap_side_vertices(mesh, around, features, v, fan), flatness, plane))
         planes.push_back(plane);
     }
-    bool apart = false;
-    for (std::size_t i = 0; i < planes.size(); ++i)
-      for (std::size_t j = 0; j < i; ++j)
-        apart |= planes[i].normal.cross(planes[j].normal).norm() > min_sin;
-    if (!apart) continue;
-    // The smallest move onto the planes' least-squares point: only across the directions the
-    // normals span (along a line the vertex stays where it was).
+    if (!planes_meet(planes)) continue;
     const Eigen::Vector3d here = mesh.vertices[v].cast<double>();
-    Eigen::Matrix3d a = Eigen::Matrix3d::Zero();
-    Eigen::Vector3d residual = Eigen::Vector3d::Zero();
-    for (const SnapPlane& p : planes) {
-      a += p.normal * p.normal.transpose();
-      residual += (p.offset - p.normal.dot(here)) * p.normal;
-    }
-    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eigen(a);
-    Eigen::Vector3d step = Eigen::Vector3d::Zero();
-    for (int k = 0; k < 3; ++k)
-      if (eigen.eigenvalues()[k] > kSpan) {
-        const Eigen::Vector3d u = eigen.eigenvectors().col(k);
-        step += u * (u.dot(residual) / eigen.eigenvalues()[k]);
-      }
+    const Eigen::Vector3d step = move_onto_planes(here, planes);
     const Eigen::Vector3f to = (here + step).cast<float>();
     const float move = (to - mesh.vertices[v]).norm();
     if (!to.allFinite() || move > max_move || move == 0.0f ||

@@ -6,12 +6,30 @@
 // outside it at a few cells near the edges); the reducing steps keep feature vertices where
 // they are and give them larger faces, so their error spreads over more area.
 
+#include <Eigen/Core>
 #include <cstddef>
+#include <vector>
 
 #include "nodes/optimize/features.h"
 #include "runtime/triangle_mesh.h"
 
 namespace meshflow {
+
+/// A plane normal . x = offset (unit normal, metres).
+struct FeaturePlane {
+  Eigen::Vector3d normal;
+  double offset = 0.0;
+};
+
+/// Whether two of `planes` have normals more than 20 degrees apart (they meet in a line).
+/// O(planes^2).
+bool planes_meet(const std::vector<FeaturePlane>& planes);
+
+/// The smallest move of `point` onto the least-squares point of `planes`: only across the
+/// directions their normals span (two planes: onto their line, the point keeps its place along
+/// it; three independent ones: onto their common point). Zero without planes. O(planes).
+Eigen::Vector3d move_onto_planes(const Eigen::Vector3d& point,
+                                 const std::vector<FeaturePlane>& planes);
 
 struct FeatureSnapReport {
   std::size_t feature_vertices = 0;  ///< line and corner vertices looked at

@@ -21,6 +21,9 @@ constexpr float kDefaultFeatureAngleDeg = 40.0f;
 /// on a scanned room the 40-degree test also fires on bumps, whose sharp edges form short,
 /// zigzagging, branching runs; a CAD edge or a wall's corner runs straight over many edges.
 constexpr float kMinFeatureLineEdges = 5.0f;
+/// Where the voxel is known (the pipelines, `meshflow optimize --voxel`), the same count of
+/// voxels: an extracted mesh's median edge is about one voxel, and a mesh reduced before, whose
+/// median edge is many voxels long, keeps its lines (optimize_config_for_voxel()).
 
 struct MeshFeatures {
   enum class VertexKind : std::uint8_t { kFree, kLine, kCorner };

@@ -4,6 +4,7 @@
 #include <cstdio>
 #include <sstream>
 
+#include "nodes/optimize/planar/plane_intersections.h"
 #include "runtime/error.h"
 #include "runtime/half_edge_mesh.h"
 #include "runtime/tracing.h"
@@ -50,12 +51,16 @@ TriangleMesh clean_step(const TriangleMesh& mesh, const OptimizeConfig& config,
 TriangleMesh holes_step(const TriangleMesh& mesh, const OptimizeConfig& config,
                         OptimizeStepReport& step) {
   HoleFillingReport r;
-  TriangleMesh out = fill_holes(mesh, config.holes, &r);
+  HoleFillingConfig holes = config.holes;
+  holes.feature_angle_deg = config.feature_angle_deg;
+  holes.feature_min_length = config.feature_min_length;
+  TriangleMesh out = fill_holes(mesh, holes, &r);
   step.detail = format("%zu holes filled (+%zu triangles), %zu larger than allowed, %zu outlines",
                        r.filled, r.added_triangles, r.too_large, r.outer_borders);
   if (r.not_fillable > 0) step.detail += format(", %zu not fillable", r.not_fillable);
   if (r.centre_vertices > 0)
     step.detail += format(", %zu fanned from a new centre vertex", r.centre_vertices);
+  if (r.along_features > 0) step.detail += format(", %zu along feature lines", r.along_features);
   return out;
 }
 
@@ -64,11 +69,22 @@ TriangleMesh planes_step(const TriangleMesh& mesh, const OptimizeConfig& config,
   HalfEdgeMesh h(mesh);
   const PlanarSegmentation s = grow_planar_regions(h, config.planes);
   const std::size_t moved = project_onto_planes(h, s, config.planes.max_projection);
+  // Feature vertices onto the lines and corners where their regions' planes meet, no farther
+  // than a few plane tolerances (an edge's vertices lie within one of each plane).
+  const MeshFeatures features =
+      detect_features(mesh, config.feature_angle_deg, config.feature_min_length);
+  float limit = s.tolerance > 0.0f ? 4.0f * s.tolerance : 0.0f;
+  if (config.planes.max_projection > 0.0f)
+    limit =
+        limit > 0.0f ? std::min(limit, config.planes.max_projection) : config.planes.max_projection;
+  const PlaneIntersectionReport meet = project_onto_plane_intersections(h, s, features, limit);
   std::size_t counts[4] = {0, 0, 0, 0};
   for (const PlanarRegion& r : s.regions) ++counts[static_cast<int>(r.kind)];
-  step.detail = format("%zu planar regions (%zu floor, %zu ceiling, %zu wall)", s.regions.size(),
-                       counts[0], counts[1], counts[2]) +
-                format(", %zu vertices projected", moved);
+  step.detail =
+      format("%zu planar regions (%zu floor, %zu ceiling, %zu wall)", s.regions.size(), counts[0],
+             counts[1], counts[2]) +
+      format(", %zu vertices projected, %zu feature vertices onto lines, %zu onto corners", moved,
+             meet.to_line, meet.to_corner);
   step.detail += not_planar_note(s);
   TriangleMesh out = mesh;  // same topology: only positions change
   for (std::uint32_t v = 0; v < out.vertices.size(); ++v) out.vertices[v] = h.position(v);
@@ -90,7 +106,10 @@ TriangleMesh retriangulate_step(const TriangleMesh& mesh, const OptimizeConfig& 
                                 OptimizeStepReport& step) {
   const PlanarSegmentation s = grow_planar_regions(HalfEdgeMesh(mesh), config.planes);
   RetriangulationReport r;
-  TriangleMesh out = retriangulate_regions(mesh, s, config.retriangulation, &r);
+  RetriangulationConfig retriangulation = config.retriangulation;
+  retriangulation.feature_angle_deg = config.feature_angle_deg;
+  retriangulation.feature_min_length = config.feature_min_length;
+  TriangleMesh out = retriangulate_regions(mesh, s, retriangulation, &r);
   step.detail = format("%zu of %zu regions retriangulated (-%zu +%zu triangles)", r.retriangulated,
                        r.regions, r.removed_faces, r.added_faces) +
                 not_planar_note(s) +

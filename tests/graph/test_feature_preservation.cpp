@@ -104,6 +104,14 @@ TEST_P(FeaturePreservation, ReducingListsKeepEdgesCornersAndAccuracy) {
   const TriangleMesh raw = raw_mesh(object, voxel);
   const FeatureScore before = score(raw, object, voxel);
   print((object.name + " raw").c_str(), before);
+  {  // clean and holes alone reduce nothing and keep every feature where it was
+    const FeatureScore kept =
+        score(optimized(raw, "clean,holes", voxel, kDefaultFeatureAngleDeg), object, voxel);
+    print((object.name + " clean,holes").c_str(), kept);
+    EXPECT_GE(kept.covered, before.covered);
+    EXPECT_LE(kept.corner_max, before.corner_max);
+    EXPECT_LE(kept.mean, 1.1 * before.mean);  // a few small holes filled: other samples
+  }
   for (const char* list : {"clean,holes,remesh", "clean,holes,planes,retriangulate", "decimate"}) {
     SCOPED_TRACE(list);
     const FeatureScore with =
@@ -120,13 +128,19 @@ TEST_P(FeaturePreservation, ReducingListsKeepEdgesCornersAndAccuracy) {
       EXPECT_LE(with.edge_p95, 0.25);
       EXPECT_LE(with.corner_max, before.corner_max + 0.05);
     }
+    // Accuracy within 1.25 x the unreduced mesh (issue 59's bar; the remesh keeps a clean
+    // extraction's accuracy on the cylinder too), or within 0.0002 voxel of it: EMC's faces
+    // are exact to 1e-7 m, the mean is a few stray spots, and 50 000 samples measure it to
+    // about 15 %. The planar list is not there yet (measured 2.5x the box, 3.8x the L-shape,
+    // 3.0x the chamfered cube; the box with a hole's cylinder becomes facets within
+    // --plane-tolerance, 11x): held to 5x on the polyhedra against regressions.
+    const bool curved = object.name == "box-with-hole" || !cad;
+    if (cad && !planar_list) {
+      EXPECT_LE(with.mean, std::max(1.25 * before.mean, before.mean + 0.0002 * voxel));
+    } else if (planar_list && !curved) {
+      EXPECT_LE(with.mean, 5.0 * before.mean);
+    }
     if (!planar_list) {
-      // Accuracy within 1.25 x the unreduced mesh, or within 0.002 voxel where EMC's faces
-      // are exact to 1e-7 m (a ratio to nearly zero measures nothing); the planar list's
-      // contour simplification is not held to this (see bench/RESULTS.md).
-      if (cad && object.name != "box-with-hole") {
-        EXPECT_LE(with.mean, std::max(1.25 * before.mean, 0.002 * voxel));
-      }
       // Features cost no accuracy worth measuring (at most 0.001 voxel of mean error).
       EXPECT_LE(with.mean, std::max(1.05 * without.mean, without.mean + 0.001 * voxel));
     }

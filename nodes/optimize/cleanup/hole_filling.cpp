@@ -2,11 +2,14 @@
 
 #include <tbb/parallel_for.h>
 
+#include <Eigen/Cholesky>
+#include <Eigen/Eigenvalues>
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
 #include <limits>
 #include <numeric>
+#include <optional>
 #include <vector>
 
 #include "runtime/disjoint_sets.h"
@@ -80,11 +83,15 @@ std::vector<std::uint32_t> vertex_components(const TriangleMesh& mesh) {
   return sets.labels();
 }
 
-// Minimum-weight triangulation of the polygon `loop` (vertex indices in border order) by
-// dynamic programming over its diagonals; triangles come out reversed against the border so
-// they face like the surrounding mesh. Empty when every triangulation needs an existing edge.
+// Stands for a vertex a hole's fill adds (a lost corner) until it has its index.
+constexpr std::uint32_t kAddedVertex = UINT32_MAX;
+
+// Minimum-weight triangulation of the polygon `loop` (vertex indices in border order, at
+// `points`) by dynamic programming over its diagonals; triangles come out reversed against the
+// border so they face like the surrounding mesh. Empty when every triangulation needs an
+// existing edge.
 std::vector<Triangle> triangulate_loop(const std::vector<std::uint32_t>& loop,
-                                       const std::vector<Eigen::Vector3f>& positions,
+                                       const std::vector<Eigen::Vector3f>& points,
                                        const std::vector<std::uint64_t>& edges) {
   if (loop.size() < 3) return {};
   const std::size_t n = loop.size();
@@ -97,9 +104,8 @@ std::vector<Triangle> triangulate_loop(const std::vector<std::uint32_t>& loop,
     return !std::binary_search(edges.begin(), edges.end(), undirected_edge_key(loop[i], loop[j]));
   };
   auto triangle_weight = [&](std::size_t i, std::size_t m, std::size_t j) -> double {
-    const Eigen::Vector3d a = positions[loop[i]].cast<double>(),
-                          b = positions[loop[m]].cast<double>(),
-                          c = positions[loop[j]].cast<double>();
+    const Eigen::Vector3d a = points[i].cast<double>(), b = points[m].cast<double>(),
+                          c = points[j].cast<double>();
     const double area = 0.5 * (b - a).cross(c - a).norm();
     const double squares = (b - a).squaredNorm() + (c - b).squaredNorm() + (a - c).squaredNorm();
     // Collinear corners (a straight stretch of border) would make a triangle without area.
@@ -136,29 +142,228 @@ std::vector<Triangle> triangulate_loop(const std::vector<std::uint32_t>& loop,
   return triangles;
 }
 
-// The loop closed by a fan around a vertex added at its centroid (normal and colour averaged
-// over the loop, when the mesh has them): its edges are all new, so it is always possible.
-// Each triangle runs its loop edge in the loop's direction, against the face beyond that edge,
-// so the fan is oriented like the faces around the hole.
-std::vector<Triangle> fan_from_centre(const std::vector<std::uint32_t>& loop, TriangleMesh& mesh) {
-  Eigen::Vector3f centre = Eigen::Vector3f::Zero(), normal = Eigen::Vector3f::Zero();
-  Eigen::Vector3f colour = Eigen::Vector3f::Zero();
+std::vector<Eigen::Vector3f> loop_points(const std::vector<std::uint32_t>& loop,
+                                         const std::vector<Eigen::Vector3f>& positions) {
+  std::vector<Eigen::Vector3f> points;
+  points.reserve(loop.size());
+  for (std::uint32_t v : loop) points.push_back(positions[v]);
+  return points;
+}
+
+// The sharp edges around each vertex: how many, and the other ends of the first two.
+struct HoleFeatureLinks {
+  std::vector<std::uint32_t> degree;
+  std::vector<std::array<std::uint32_t, 2>> ends;
+};
+
+HoleFeatureLinks hole_feature_links(std::size_t vertices, const MeshFeatures& features) {
+  HoleFeatureLinks links;
+  links.degree.assign(vertices, 0);
+  links.ends.assign(vertices, {0, 0});
+  for (const auto& e : features.edges)
+    for (int k = 0; k < 2; ++k) {
+      std::uint32_t& d = links.degree[e[k]];
+      if (d < 2) links.ends[e[k]][d] = e[1 - k];
+      ++d;
+    }
+  return links;
+}
+
+// A feature line ending on a hole's border: where on the loop, and the line's direction there
+// (unit, into the hole), from its last few edges.
+struct HoleEntry {
+  std::size_t at;
+  Eigen::Vector3f direction;
+};
+
+std::vector<HoleEntry> hole_entries(const std::vector<std::uint32_t>& loop,
+                                    const std::vector<Eigen::Vector3f>& positions,
+                                    const HoleFeatureLinks& links) {
+  constexpr int kDirectionEdges = 4;
+  std::vector<HoleEntry> entries;
+  for (std::size_t i = 0; i < loop.size(); ++i) {
+    const std::uint32_t v = loop[i];
+    if (links.degree[v] != 1) continue;  // no line, or one that goes on (or branches) here
+    std::uint32_t previous = v, current = links.ends[v][0];
+    for (int step = 1; step < kDirectionEdges && links.degree[current] == 2; ++step) {
+      const std::uint32_t next =
+          links.ends[current][0] == previous ? links.ends[current][1] : links.ends[current][0];
+      previous = current;
+      current = next;
+    }
+    const Eigen::Vector3f d = positions[v] - positions[current];
+    if (d.squaredNorm() > 0.0f) entries.push_back({i, d.normalized()});
+  }
+  return entries;
+}
+
+// Whether entries a and b are the two ends of one straight line through the hole: opposite
+// directions, each pointing at the other (within about 11 degrees).
+bool one_line_through(const HoleEntry& a, const HoleEntry& b, const Eigen::Vector3f& pa,
+                      const Eigen::Vector3f& pb) {
+  constexpr float kCos = 0.98f;
+  const Eigen::Vector3f ab = pb - pa;
+  const float length = ab.norm();
+  return length > 0.0f && a.direction.dot(b.direction) < -kCos &&
+         a.direction.dot(ab) > kCos * length && -b.direction.dot(ab) > kCos * length;
+}
+
+// The point nearest (least squares) to the lines of `entries`, ahead of each of them (where
+// lines meeting at a lost corner meet); false when they are nearly parallel or meet behind one.
+bool lost_corner(const std::vector<std::uint32_t>& loop,
+                 const std::vector<Eigen::Vector3f>& positions,
+                 const std::vector<HoleEntry>& entries, Eigen::Vector3f& corner) {
+  Eigen::Matrix3d a = Eigen::Matrix3d::Zero();
+  Eigen::Vector3d b = Eigen::Vector3d::Zero();
+  for (const HoleEntry& e : entries) {
+    const Eigen::Vector3d d = e.direction.cast<double>();
+    const Eigen::Matrix3d across = Eigen::Matrix3d::Identity() - d * d.transpose();
+    a += across;
+    b += across * positions[loop[e.at]].cast<double>();
+  }
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eigen(a);
+  if (!(eigen.eigenvalues()[0] > 0.05 * static_cast<double>(entries.size()))) return false;
+  corner = a.ldlt().solve(b).cast<float>();
+  double perimeter = 0.0;
+  for (std::size_t i = 0; i < loop.size(); ++i)
+    perimeter +=
+        static_cast<double>((positions[loop[(i + 1) % loop.size()]] - positions[loop[i]]).norm());
+  for (const HoleEntry& e : entries) {
+    const Eigen::Vector3f to = corner - positions[loop[e.at]];
+    // Ahead along the line (within about 26 degrees) and no farther than the hole is long.
+    if (!corner.allFinite() || e.direction.dot(to) < 0.9f * to.norm() ||
+        static_cast<double>(to.norm()) > 0.5 * perimeter)
+      return false;
+  }
+  return true;
+}
+
+// The polygons that continue the feature lines across a hole (see fill_holes), in mesh vertex
+// indices (kAddedVertex: the lost corner); empty when the lines give no such plan.
+std::vector<std::vector<std::uint32_t>> feature_polygons(
+    const std::vector<std::uint32_t>& loop, const std::vector<Eigen::Vector3f>& positions,
+    const std::vector<HoleEntry>& entries, const std::vector<std::uint64_t>& edges,
+    Eigen::Vector3f& corner) {
+  if (entries.size() < 2) return {};
+  const std::size_t n = loop.size();
+  std::vector<std::size_t> partner(entries.size(), SIZE_MAX);
+  for (std::size_t i = 0; i < entries.size(); ++i)
+    for (std::size_t j = i + 1; j < entries.size() && partner[i] == SIZE_MAX; ++j)
+      if (partner[j] == SIZE_MAX &&
+          one_line_through(entries[i], entries[j], positions[loop[entries[i].at]],
+                           positions[loop[entries[j].at]]))
+        partner[i] = j, partner[j] = i;
+  const auto paired = static_cast<std::size_t>(
+      std::count_if(partner.begin(), partner.end(), [](std::size_t p) { return p != SIZE_MAX; }));
+  std::vector<std::vector<std::uint32_t>> polygons;
+  if (paired == entries.size()) {  // lines through the hole: split it along each
+    polygons.push_back(loop);
+    for (std::size_t i = 0; i < entries.size(); ++i) {
+      if (partner[i] < i) continue;
+      const std::uint32_t a = loop[entries[i].at], b = loop[entries[partner[i]].at];
+      if (std::binary_search(edges.begin(), edges.end(), undirected_edge_key(a, b))) return {};
+      bool split = false;
+      for (std::size_t p = 0; p < polygons.size() && !split; ++p) {
+        const std::vector<std::uint32_t>& poly = polygons[p];
+        const auto ia =
+            static_cast<std::size_t>(std::find(poly.begin(), poly.end(), a) - poly.begin());
+        const auto ib =
+            static_cast<std::size_t>(std::find(poly.begin(), poly.end(), b) - poly.begin());
+        if (ia == poly.size() || ib == poly.size()) continue;
+        const std::size_t lo = std::min(ia, ib), hi = std::max(ia, ib);
+        if (hi == lo + 1 || (lo == 0 && hi == poly.size() - 1)) {  // already an edge of it
+          split = true;
+          continue;
+        }
+        std::vector<std::uint32_t> first(poly.begin() + static_cast<std::ptrdiff_t>(lo),
+                                         poly.begin() + static_cast<std::ptrdiff_t>(hi) + 1);
+        std::vector<std::uint32_t> second(poly.begin() + static_cast<std::ptrdiff_t>(hi),
+                                          poly.end());
+        second.insert(second.end(), poly.begin(),
+                      poly.begin() + static_cast<std::ptrdiff_t>(lo) + 1);
+        polygons[p] = std::move(first);
+        polygons.push_back(std::move(second));
+        split = true;
+      }
+      if (!split) return {};  // crossing lines
+    }
+    return polygons;
+  }
+  if (paired > 0 || !lost_corner(loop, positions, entries, corner)) return {};
+  for (std::size_t k = 0; k < entries.size(); ++k) {  // one polygon per arc and the corner
+    const std::size_t from = entries[k].at;
+    const std::size_t to = entries[(k + 1) % entries.size()].at + (k + 1 == entries.size() ? n : 0);
+    std::vector<std::uint32_t>& poly = polygons.emplace_back();
+    for (std::size_t i = from; i <= to; ++i) poly.push_back(loop[i % n]);
+    poly.push_back(kAddedVertex);
+  }
+  return polygons;
+}
+
+// A hole's triangles (kAddedVertex standing for `corner` where it needs one): along the
+// feature lines ending on it when they give a plan that triangulates, else the plain fill.
+struct HoleFill {
+  std::vector<Triangle> triangles;  ///< empty: every triangulation repeats an edge
+  bool along_features = false;
+  bool corner = false;
+  Eigen::Vector3f corner_point = Eigen::Vector3f::Zero();
+};
+
+HoleFill fill_hole(const std::vector<std::uint32_t>& loop,
+                   const std::vector<Eigen::Vector3f>& positions,
+                   const std::vector<std::uint64_t>& edges, const HoleFeatureLinks* links) {
+  HoleFill fill;
+  if (links != nullptr) {
+    const std::vector<HoleEntry> entries = hole_entries(loop, positions, *links);
+    const std::vector<std::vector<std::uint32_t>> polygons =
+        feature_polygons(loop, positions, entries, edges, fill.corner_point);
+    for (const std::vector<std::uint32_t>& poly : polygons) {
+      std::vector<Eigen::Vector3f> points;
+      for (std::uint32_t v : poly)
+        points.push_back(v == kAddedVertex ? fill.corner_point : positions[v]);
+      const std::vector<Triangle> part = triangulate_loop(poly, points, edges);
+      if (part.empty()) {
+        fill.triangles.clear();
+        break;
+      }
+      fill.corner |= poly.back() == kAddedVertex;
+      fill.triangles.insert(fill.triangles.end(), part.begin(), part.end());
+    }
+    fill.along_features = !fill.triangles.empty();
+    if (fill.along_features) return fill;
+    fill.corner = false;
+  }
+  fill.triangles = triangulate_loop(loop, loop_points(loop, positions), edges);
+  return fill;
+}
+
+// Appends a vertex at `point` with the loop's mean normal and colour, when the mesh has them.
+void append_vertex(TriangleMesh& mesh, const Eigen::Vector3f& point,
+                   const std::vector<std::uint32_t>& loop) {
+  Eigen::Vector3f normal = Eigen::Vector3f::Zero(), colour = Eigen::Vector3f::Zero();
   for (std::uint32_t v : loop) {
-    centre += mesh.vertices[v];
     if (!mesh.normals.empty()) normal += mesh.normals[v];
     if (!mesh.colors.empty())
       colour += Eigen::Vector3f(mesh.colors[v].r, mesh.colors[v].g, mesh.colors[v].b);
   }
-  const float count = static_cast<float>(loop.size());
-  const auto c = static_cast<std::uint32_t>(mesh.vertices.size());
-  mesh.vertices.push_back(centre / count);
+  mesh.vertices.push_back(point);
   if (!mesh.normals.empty()) mesh.normals.push_back(normal.normalized());
   if (!mesh.colors.empty()) {
-    const Eigen::Vector3f rgb = colour / count;
+    const Eigen::Vector3f rgb = colour / static_cast<float>(loop.size());
     mesh.colors.push_back(Rgb8{static_cast<std::uint8_t>(std::lround(rgb.x())),
                                static_cast<std::uint8_t>(std::lround(rgb.y())),
                                static_cast<std::uint8_t>(std::lround(rgb.z()))});
   }
+}
+
+// The loop closed by a fan around a vertex added at its centroid: its edges are all new, so it
+// is always possible. Each triangle runs its loop edge in the loop's direction, against the
+// face beyond that edge, so the fan is oriented like the faces around the hole.
+std::vector<Triangle> fan_from_centre(const std::vector<std::uint32_t>& loop, TriangleMesh& mesh) {
+  Eigen::Vector3f centre = Eigen::Vector3f::Zero();
+  for (std::uint32_t v : loop) centre += mesh.vertices[v];
+  const auto c = static_cast<std::uint32_t>(mesh.vertices.size());
+  append_vertex(mesh, centre / static_cast<float>(loop.size()), loop);
   std::vector<Triangle> fan;
   for (std::size_t k = 0; k < loop.size(); ++k)
     fan.push_back(Triangle{loop[k], c, loop[(k + 1) % loop.size()]});
@@ -233,21 +438,34 @@ TriangleMesh fill_holes(const TriangleMesh& mesh, const HoleFillingConfig& confi
   std::vector<std::uint8_t> in_hole(mesh.vertices.size(), 0);
   for (const auto* hole : holes)
     for (std::uint32_t v : *hole) in_hole[v] = 1;
-  std::vector<std::vector<Triangle>> fills(holes.size());
+  std::optional<HoleFeatureLinks> links;
+  if (!holes.empty() && config.feature_angle_deg < 180.0f) {
+    const MeshFeatures features =
+        detect_features(mesh, config.feature_angle_deg, config.feature_min_length);
+    if (!features.edges.empty()) links = hole_feature_links(mesh.vertices.size(), features);
+  }
+  std::vector<HoleFill> fills(holes.size());
   tbb::parallel_for(std::size_t{0}, holes.size(), [&](std::size_t i) {
-    fills[i] =
-        triangulate_loop(*holes[i], mesh.vertices, edges_within(mesh, around, *holes[i], in_hole));
+    fills[i] = fill_hole(*holes[i], mesh.vertices, edges_within(mesh, around, *holes[i], in_hole),
+                         links ? &*links : nullptr);
   });
 
   TriangleMesh out = mesh;
   for (std::size_t i = 0; i < fills.size(); ++i) {
-    if (fills[i].empty()) {  // every triangulation repeats an edge: fan from a new centre
-      fills[i] = fan_from_centre(*holes[i], out);
+    std::vector<Triangle>& fill = fills[i].triangles;
+    if (fill.empty()) {  // every triangulation repeats an edge: fan from a new centre
+      fill = fan_from_centre(*holes[i], out);
       ++r.centre_vertices;
+    } else if (fills[i].corner) {  // the lost corner becomes a vertex
+      const auto corner = static_cast<std::uint32_t>(out.vertices.size());
+      append_vertex(out, fills[i].corner_point, *holes[i]);
+      for (Triangle& t : fill)
+        for (std::uint32_t& v : t) v = v == kAddedVertex ? corner : v;
     }
     ++r.filled;
-    r.added_triangles += fills[i].size();
-    out.triangles.insert(out.triangles.end(), fills[i].begin(), fills[i].end());
+    r.along_features += fills[i].along_features ? 1 : 0;
+    r.added_triangles += fill.size();
+    out.triangles.insert(out.triangles.end(), fill.begin(), fill.end());
   }
   if (report != nullptr) *report = r;
   return out;

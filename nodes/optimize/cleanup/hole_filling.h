@@ -6,6 +6,7 @@
 
 #include <cstddef>
 
+#include "nodes/optimize/features.h"
 #include "runtime/triangle_mesh.h"
 
 namespace meshflow {
@@ -19,6 +20,11 @@ struct HoleFillingConfig {
   /// has 100 %): then the component is a closed surface and the loop a hole. Off: every loop up
   /// to max_edges is a hole.
   bool keep_outer_border = true;
+  /// Sharp edges (detect_features() with this angle, degrees, and feature_min_length metres:
+  /// 0 = from the mesh) are not filled across: where feature lines end on a hole's border, the
+  /// fill continues them (see fill_holes). 180: no features.
+  float feature_angle_deg = kDefaultFeatureAngleDeg;
+  float feature_min_length = 0.0f;
 };
 
 struct HoleFillingReport {
@@ -28,6 +34,7 @@ struct HoleFillingReport {
   std::size_t filled = 0;           ///< closed
   std::size_t not_fillable = 0;     ///< ambiguous loops (through a non-manifold vertex), left open
   std::size_t centre_vertices = 0;  ///< holes fanned from an added centre vertex (see below)
+  std::size_t along_features = 0;   ///< holes filled along the feature lines ending on them
   std::size_t added_triangles = 0;
 };
 
@@ -41,9 +48,17 @@ struct HoleFillingReport {
 /// the faces around it; no vertices are added, so edges elsewhere are untouched. A hole that
 /// every such triangulation would close with an edge the mesh already has (a pinched loop,
 /// whose diagonals exist on the other side) is fanned from a vertex added at its centroid.
+/// Feature lines (config.feature_angle_deg) that end on a hole's border are continued across
+/// it, so no fill cuts an edge or a corner off (a minimum-area fill would: a chamfer has less
+/// area than the two faces it replaces): two lines running into the hole from opposite sides
+/// along one straight line are joined by a diagonal, and a hole where three or more lines end
+/// that do not pair up so gets a vertex at their lines' least-squares meeting point (a lost
+/// corner), joined to each; the parts between are filled as above. When that is not possible
+/// (the diagonal exists, the corner lies off the hole) the plain fill is used.
 /// Vertices, normals and colours are kept as they are; new triangles follow the old ones, holes in
 /// the order of their first border edge. Loops are triangulated in parallel; the output does not
-/// depend on the thread count. O(T + sum of n^3 over holes).
+/// depend on the thread count. O(T + sum of n^3 over holes), plus detect_features() when a
+/// hole is to be filled and features are on.
 TriangleMesh fill_holes(const TriangleMesh& mesh, const HoleFillingConfig& config = {},
                         HoleFillingReport* report = nullptr);
 

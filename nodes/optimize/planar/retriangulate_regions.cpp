@@ -130,13 +130,15 @@ enum RegionState : std::uint8_t { kSimplified = 0, kFullContour = 1, kKept = 2 }
 
 // Which contour vertices may go: those whose faces all lie in regions with simplified
 // contours, in one region on the mesh border or in two regions inside. 1 = fixed.
+// Feature corners (`pinned`, empty: none) are fixed too.
 std::vector<std::uint8_t> fixed_vertices(const HalfEdgeMesh& h,
                                          const std::vector<std::int32_t>& region_of_face,
-                                         const std::vector<std::uint8_t>& state) {
+                                         const std::vector<std::uint8_t>& state,
+                                         const std::vector<std::uint8_t>& pinned) {
   std::vector<std::uint8_t> fixed(h.vertex_count(), 1);
   tbb::parallel_for(std::size_t{0}, h.vertex_count(), [&](std::size_t i) {
     const auto v = static_cast<std::uint32_t>(i);
-    if (h.outgoing(v) == HalfEdgeMesh::kNone) return;
+    if (h.outgoing(v) == HalfEdgeMesh::kNone || (!pinned.empty() && pinned[v])) return;
     std::int32_t first = -1, second = -1;
     bool movable = true;
     for (std::uint32_t e : h.ring(v)) {
@@ -433,7 +435,30 @@ struct RegionWork {
 
 // Every region's contours, region by region (serial: giving up faces at pinches edits
 // region_of_face); a region without faces is kept.
-RegionWork start_regions(const HalfEdgeMesh& h, const PlanarSegmentation& segmentation) {
+// A contour vertex off its region's plane would become a corner of the region's new, large
+// triangles and tilt them (an extraction's stray vertex beside a sharp edge, up to a voxel off:
+// its faces join no region). The region gives up its faces around such vertices, a ring per
+// round, so its contour runs on the plane and the stray vertex keeps its own small faces.
+// Off: farther than twice the region's 95th-percentile deviation, and than `least` metres.
+void give_up_off_plane_contour(const HalfEdgeMesh& h, const PlanarRegion& region, float least,
+                               std::int32_t id, RegionWork& work) {
+  constexpr int kRounds = 4;
+  const float limit = std::max(2.0f * region.deviation, least);
+  const std::size_t r = static_cast<std::size_t>(id);
+  for (int round = 0; round < kRounds && !work.faces[r].empty(); ++round) {
+    std::vector<std::uint32_t> off;
+    for (const Loop& loop : work.contours[r])
+      for (std::uint32_t v : loop)
+        if (std::abs(region.normal.dot(h.position(v)) - region.offset) > limit) off.push_back(v);
+    if (off.empty()) return;
+    give_up_faces(h, off, id, work.region_of_face, work.faces[r]);
+    region_contours(h, work.region_of_face, work.faces[r], id, work.contours[r]);
+  }
+}
+
+// `least`: see give_up_off_plane_contour.
+RegionWork start_regions(const HalfEdgeMesh& h, const PlanarSegmentation& segmentation,
+                         float least) {
   const std::size_t regions = segmentation.regions.size();
   RegionWork work;
   work.region_of_face = segmentation.region_of_face;
@@ -442,9 +467,10 @@ RegionWork start_regions(const HalfEdgeMesh& h, const PlanarSegmentation& segmen
   work.state.assign(regions, kSimplified);
   work.results.resize(regions);
   for (std::size_t i = 0; i < regions; ++i) {
+    const auto id = static_cast<std::int32_t>(i);
     work.faces[i] = segmentation.regions[i].faces;
-    region_contours(h, work.region_of_face, work.faces[i], static_cast<std::int32_t>(i),
-                    work.contours[i]);
+    region_contours(h, work.region_of_face, work.faces[i], id, work.contours[i]);
+    give_up_off_plane_contour(h, segmentation.regions[i], least, id, work);
     if (work.faces[i].empty()) work.state[i] = kKept;
   }
   return work;
@@ -456,12 +482,14 @@ RegionWork start_regions(const HalfEdgeMesh& h, const PlanarSegmentation& segmen
 // neighbours, and one that still fails is kept as it was. Repeat until nothing fails.
 void triangulate_with_repairs(const TriangleMesh& mesh, const HalfEdgeMesh& h,
                               const PlanarSegmentation& segmentation,
-                              const RetriangulationConfig& config, RegionWork& work,
+                              const RetriangulationConfig& config,
+                              const std::vector<std::uint8_t>& pinned, RegionWork& work,
                               RetriangulationReport& r) {
   constexpr int kRepairRounds = 8;
   const std::size_t regions = work.state.size();
   for (int round = 0, changed = 1; changed; ++round) {
-    const std::vector<std::uint8_t> fixed = fixed_vertices(h, work.region_of_face, work.state);
+    const std::vector<std::uint8_t> fixed =
+        fixed_vertices(h, work.region_of_face, work.state, pinned);
     work.keep.assign(mesh.vertices.size(), 1);
     r.max_contour_deviation = 0.0;
     for (std::size_t i = 0; i < regions; ++i)
@@ -533,8 +561,19 @@ TriangleMesh retriangulate_regions(const TriangleMesh& mesh, const PlanarSegment
   RetriangulationReport r;
   r.regions = segmentation.regions.size();
   const HalfEdgeMesh h(mesh);
-  RegionWork work = start_regions(h, segmentation);
-  triangulate_with_repairs(mesh, h, segmentation, config, work, r);
+  // A contour vertex may lie off its plane by a twentieth of the contour tolerance at least.
+  RegionWork work = start_regions(h, segmentation, 0.05f * config.contour_tolerance);
+  std::vector<std::uint8_t> pinned;  // the feature graph's corners
+  if (config.feature_angle_deg < 180.0f && !segmentation.regions.empty()) {
+    const MeshFeatures features =
+        detect_features(mesh, config.feature_angle_deg, config.feature_min_length);
+    if (!features.edges.empty()) {
+      pinned.resize(mesh.vertices.size());
+      for (std::size_t v = 0; v < pinned.size(); ++v)
+        pinned[v] = features.vertex_kind[v] == MeshFeatures::VertexKind::kCorner ? 1 : 0;
+    }
+  }
+  triangulate_with_repairs(mesh, h, segmentation, config, pinned, work, r);
   TriangleMesh out = replace_regions(mesh, work, r);
   if (report != nullptr) *report = r;
   return out;

@@ -16,7 +16,11 @@ namespace meshflow {
 
 struct AdaptiveRemeshConfig {
   /// Largest allowed deviation of a chord from the surface (metres); sets the target lengths.
-  /// 0: a quarter of the input's median edge length.
+  /// 0: six times the input's roughness (the robust spread of its free vertices about their
+  /// neighbours' mean, along the normal: noise, not curvature), at least 0.01 and at most a
+  /// quarter of its median edge length: a noisy scan is remeshed within its noise, a clean
+  /// extraction (a CAD-like part's curved faces, exact to 1e-5 of its diagonal) within its own
+  /// accuracy, so its curved parts keep their edge lengths and only flat parts grow.
   float tolerance = 0.0f;
   /// Target lengths are clamped to [min_edge, max_edge] (metres). 0: the input's median edge
   /// length (the input carries no detail finer than its own sampling), and eight times it.

@@ -7,49 +7,14 @@
 #include <cstdio>
 #include <map>
 
+#include "fixtures/mesh_fixtures.h"
 #include "nodes/decimate/qem_decimation.h"
 #include "nodes/optimize/feature_snap.h"
 
 namespace meshflow {
 namespace {
 
-// The unit cube [0, 1]^3 with each face an n x n grid of squares cut into two triangles
-// (alternating diagonals), vertices shared, faces wound outward.
-TriangleMesh tessellated_cube(int n) {
-  TriangleMesh m;
-  std::map<std::array<int, 3>, std::uint32_t> index;
-  auto vertex = [&](const std::array<int, 3>& g) {
-    const auto [it, added] = index.emplace(g, static_cast<std::uint32_t>(m.vertices.size()));
-    if (added)
-      m.vertices.emplace_back(static_cast<float>(g[0]) / static_cast<float>(n),
-                              static_cast<float>(g[1]) / static_cast<float>(n),
-                              static_cast<float>(g[2]) / static_cast<float>(n));
-    return it->second;
-  };
-  for (int axis = 0; axis < 3; ++axis)
-    for (int side = 0; side < 2; ++side) {
-      const int u = (axis + 1) % 3, w = (axis + 2) % 3;
-      for (int i = 0; i < n; ++i)
-        for (int j = 0; j < n; ++j) {
-          std::array<std::uint32_t, 4> q;
-          const int di[4] = {0, 1, 1, 0}, dj[4] = {0, 0, 1, 1};
-          for (int k = 0; k < 4; ++k) {
-            std::array<int, 3> g;
-            g[axis] = side * n;
-            g[u] = i + di[k];
-            g[w] = j + dj[k];
-            q[k] = vertex(g);
-          }
-          // (u, w, axis) is right-handed: counter-clockwise in (u, w) faces +axis.
-          Triangle a{q[0], q[1], q[2]}, b{q[0], q[2], q[3]};
-          if ((i + j) % 2 == 1) a = {q[0], q[1], q[3]}, b = {q[1], q[2], q[3]};
-          if (side == 0) std::swap(a[1], a[2]), std::swap(b[1], b[2]);
-          m.triangles.push_back(a);
-          m.triangles.push_back(b);
-        }
-    }
-  return m;
-}
+using test::tessellated_cube;
 
 bool is_cube_corner(const Eigen::Vector3f& p) {
   for (int k = 0; k < 3; ++k)

@@ -3,9 +3,12 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
+#include <cstdio>
 #include <set>
 
 #include "fixtures/mesh_fixtures.h"
+#include "nodes/optimize/features.h"
 #include "runtime/half_edge_mesh.h"
 #include "test_support.h"
 
@@ -111,6 +114,84 @@ TEST(HoleFilling, StraightBordersGetNoTrianglesWithoutArea) {
   }
   EXPECT_NEAR(added, 6.0, 1e-4);
   EXPECT_EQ(HalfEdgeMesh(out).check(), "");
+}
+
+// Whether the triangle lies in one face of the unit cube (its corners share a coordinate at 0
+// or 1, within `tolerance`).
+bool in_one_cube_face(const TriangleMesh& m, const Triangle& t, float tolerance) {
+  for (int k = 0; k < 3; ++k)
+    for (float side : {0.0f, 1.0f}) {
+      bool all = true;
+      for (std::uint32_t v : t) all &= std::abs(m.vertices[v][k] - side) <= tolerance;
+      if (all) return true;
+    }
+  return false;
+}
+
+// The cube (20 x 20 squares a face) without its faces within `radius` of `centre`.
+TriangleMesh cube_with_hole(const Eigen::Vector3f& centre, float radius) {
+  return test::without_faces(test::tessellated_cube(20), [&](const Eigen::Vector3f& c) {
+    return (c - centre).norm() < radius;
+  });
+}
+
+// Fills the cube's one hole with (feature_angle 40) or without (180) features; every new
+// triangle must lie in a face of the cube.
+std::size_t triangles_off_the_cube(const TriangleMesh& holed, float feature_angle,
+                                   HoleFillingReport& report, TriangleMesh& out) {
+  HoleFillingConfig config;
+  config.feature_angle_deg = feature_angle;
+  config.feature_min_length = 0.1f;  // the lines cut by the hole stay lines
+  out = fill_holes(holed, config, &report);
+  EXPECT_EQ(report.filled, 1u);
+  EXPECT_EQ(test::half_edge_problem(out), "");
+  EXPECT_EQ(edge_statistics(out).boundary_edges, 0u);
+  std::size_t off = 0;
+  for (std::size_t t = holed.triangles.size(); t < out.triangles.size(); ++t)
+    off += in_one_cube_face(out, out.triangles[t], 1e-5f) ? 0 : 1;
+  return off;
+}
+
+TEST(HoleFilling, AHoleAcrossAnEdgeIsFilledAlongTheEdge) {
+  // A hole on the cube's edge y = z = 0: the smallest fill cuts the edge off (a chamfer has
+  // less area); along the feature line it is the two faces again, and the edge is whole.
+  const TriangleMesh holed = cube_with_hole({0.5f, 0.0f, 0.0f}, 0.15f);
+  HoleFillingReport report;
+  TriangleMesh out;
+  const std::size_t plain_off = triangles_off_the_cube(holed, 180.0f, report, out);
+  EXPECT_GT(plain_off, 0u);
+  EXPECT_EQ(report.along_features, 0u);
+  EXPECT_EQ(triangles_off_the_cube(holed, kDefaultFeatureAngleDeg, report, out), 0u);
+  EXPECT_EQ(report.along_features, 1u);
+  EXPECT_EQ(report.centre_vertices, 0u);
+  EXPECT_EQ(out.vertices, holed.vertices);
+  // The edge is one feature line again: its sharp edges cover it end to end.
+  const MeshFeatures f = detect_features(out);
+  float covered = 0.0f;
+  for (const auto& e : f.edges) {
+    const Eigen::Vector3f a = out.vertices[e[0]], b = out.vertices[e[1]];
+    if (a.y() == 0.0f && a.z() == 0.0f && b.y() == 0.0f && b.z() == 0.0f) covered += (b - a).norm();
+  }
+  EXPECT_NEAR(covered, 1.0f, 1e-5f);
+  std::printf("[ holes ] edge hole: %zu of %zu fill triangles off the cube without features\n",
+              plain_off, out.triangles.size() - holed.triangles.size());
+}
+
+TEST(HoleFilling, AHoleOverACornerGetsTheCornerBack) {
+  // Three feature lines end on the hole around the corner (1, 1, 1): the fill adds a vertex
+  // where they meet and joins each arc of the border to it.
+  const TriangleMesh holed = cube_with_hole({1.0f, 1.0f, 1.0f}, 0.15f);
+  HoleFillingReport report;
+  TriangleMesh out;
+  const std::size_t plain_off = triangles_off_the_cube(holed, 180.0f, report, out);
+  EXPECT_GT(plain_off, 0u);
+  EXPECT_EQ(triangles_off_the_cube(holed, kDefaultFeatureAngleDeg, report, out), 0u);
+  EXPECT_EQ(report.along_features, 1u);
+  ASSERT_EQ(out.vertices.size(), holed.vertices.size() + 1);
+  EXPECT_LT((out.vertices.back() - Eigen::Vector3f(1, 1, 1)).norm(), 1e-5f);
+  const MeshFeatures f = detect_features(out);
+  EXPECT_EQ(f.vertex_kind.back(), MeshFeatures::VertexKind::kCorner);
+  EXPECT_EQ(f.count(MeshFeatures::VertexKind::kCorner), 8u);
 }
 
 TEST(HoleFilling, SameTrianglesWithOneAndTwoThreads) {

@@ -80,7 +80,9 @@ TEST(RetriangulateRegions, RoomRegionsShrinkWithinTheContourTolerance) {
   EXPECT_GE(report.retriangulated, report.regions * 3 / 4);
   EXPECT_LT(out.triangles.size(), in.triangles.size() / 2);
   EXPECT_LE(report.max_contour_deviation, config.contour_tolerance);
-  EXPECT_GT(report.dropped_contour_vertices, report.contour_vertices / 4);
+  // (Feature corners stay, and contour vertices off their region's plane keep their faces:
+  // 2 069 of 9 860 dropped, 2 762 of 10 912 before.)
+  EXPECT_GT(report.dropped_contour_vertices, report.contour_vertices / 5);
   EXPECT_LT(hausdorff, 2.0 * config.contour_tolerance);
   EXPECT_EQ(test::half_edge_problem(out), "");
   EXPECT_EQ(edge_statistics(out).non_manifold_edges, 0u);

@@ -224,12 +224,16 @@ chunk::ChunkGrid grid_from_first_batch(const PointCloud& batch, float voxel_size
 
 std::unique_ptr<chunk::ChunkStore> partition_input(
     const std::string& path, const std::string& columns, const ReconstructionConfig& config,
-    const ChunkingConfig& chunking, std::vector<chunk::ChunkFile>& files, InputDecisions& decided) {
+    const ChunkingConfig& chunking, std::vector<chunk::ChunkFile>& files, InputDecisions& decided,
+    chunk::PhaseClock* clock) {
   const std::size_t threads = static_cast<std::size_t>(
       tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism));
   const InputParts parts =
       input_parts(path, columns, chunking.read_parts > 0 ? chunking.read_parts : threads);
+  const bool serial = !parts.by_byte_range;  // else as many parts as workers
+  if (clock) clock->begin("decide", serial);
   decided = decide_from_input(path, columns, config, chunking.batch_points, parts);
+  if (clock) clock->begin("partition", serial);
   // The grid from the first batch (the first part's), made before the parts are read at once.
   std::unique_ptr<chunk::ChunkStore> store;
   bool z_up = false;
@@ -268,6 +272,7 @@ std::unique_ptr<chunk::ChunkStore> partition_input(
   }
   if (z_up) store->set_z_up();
   if (store->points_read() == 0) throw Error(path, "points", "no finite points to reconstruct");
+  if (clock) clock->end();
   return store;
 }
 
@@ -338,7 +343,7 @@ std::vector<std::uint8_t> chunk_vertex_flags(const Frame& frame) {
 TriangleMesh finish_chunked_mesh(chunk::MeshStitcher& stitcher, const ReconstructionConfig& config,
                                  float voxel_size, ChunkedReport& report,
                                  const std::function<void(const std::string&)>& on_step) {
-  double t = monotonic_seconds();
+  report.clock.begin("stitch", true);
   std::vector<std::uint8_t> flags;
   TriangleMesh joined = stitcher.stitch(&report.seam_vertices, &flags);
   std::vector<std::uint8_t> beyond(flags.size()), features(flags.size());
@@ -354,12 +359,11 @@ TriangleMesh finish_chunked_mesh(chunk::MeshStitcher& stitcher, const Reconstruc
   }
   if (!beyond.empty() && config.max_rim_voxels > 0.0f)
     joined = trim_rim(joined, beyond, &report.rim_trimmed);
-  report.stitch_s = monotonic_seconds() - t;
-  t = monotonic_seconds();
+  report.clock.begin("finish", true);
   OptimizeConfig optimize = optimize_config_for_voxel(config, voxel_size);
   if (on_step) optimize.on_step = [&](OptimizeStep step) { on_step(optimize_step_name(step)); };
   TriangleMesh mesh = optimize_mesh(joined, optimize, &report.optimize);
-  report.optimize_s = monotonic_seconds() - t;
+  report.clock.end();
   return mesh;
 }
 
@@ -372,11 +376,10 @@ ChunkedResult reconstruct_chunked(const std::string& path, const std::string& co
   };
   ChunkedResult result;
   ChunkedReport& report = result.report;
-  double t = monotonic_seconds();
   tell("partition");
   std::vector<chunk::ChunkFile> files;
   const std::unique_ptr<chunk::ChunkStore> store =
-      partition_input(path, columns, config, chunking, files, report.decided);
+      partition_input(path, columns, config, chunking, files, report.decided, &report.clock);
   const float voxel = report.decided.voxel_size;
   report.voxel_size = voxel;
   report.chunk_cells = store->grid().chunk_cells;
@@ -387,9 +390,8 @@ ChunkedResult reconstruct_chunked(const std::string& path, const std::string& co
   for (const chunk::ChunkFile& f : files)
     report.max_chunk_points = std::max(report.max_chunk_points, f.points);
   result.origin = store->rows().origin;
-  report.partition_s = monotonic_seconds() - t;
 
-  t = monotonic_seconds();
+  report.clock.begin("chunks", false);
   chunk::MeshStitcher stitcher = chunk_stitcher(voxel, report.chunk_cells);
   std::size_t done = 0;
   mesh_chunk_files(files, store->grid(), store->rows(), config, report.decided, chunking.in_flight,
@@ -398,7 +400,7 @@ ChunkedResult reconstruct_chunked(const std::string& path, const std::string& co
                      tell("chunk " + std::to_string(done) + "/" + std::to_string(files.size()));
                      collect_chunk_frame(*frame, stitcher, report);
                    });
-  report.mesh_s = monotonic_seconds() - t;
+  report.clock.end();
 
   tell("stitch");
   result.mesh = finish_chunked_mesh(stitcher, config, voxel, report, tell);

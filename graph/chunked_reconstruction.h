@@ -22,6 +22,7 @@
 #include "graph/reconstruction_config.h"
 #include "nodes/chunk/chunk_store.h"
 #include "nodes/chunk/mesh_stitch.h"
+#include "nodes/chunk/phase_times.h"
 #include "nodes/voxelize/spacing_sample.h"
 
 namespace meshflow {
@@ -92,7 +93,10 @@ struct ChunkedReport {
   std::size_t rim_trimmed = 0;       ///< triangles peeled off the rim (max_rim_voxels), stitched
   std::vector<std::string> failed;   ///< "chunk name: error" of chunks that failed (skipped)
   std::vector<StageRecord> timings;  ///< every stage record of every chunk
-  double partition_s = 0.0, mesh_s = 0.0, stitch_s = 0.0, optimize_s = 0.0;
+  /// The phases of this process: "decide" (the whole-input sample), "partition" (spilling to
+  /// chunk files), "chunks", then "stitch" (welding, feature flips, rim trim) and "finish"
+  /// (optimize), serial; the caller adds "write".
+  chunk::PhaseClock clock;
   OptimizeReport optimize;
 };
 
@@ -165,11 +169,13 @@ chunk::ChunkGrid grid_from_first_batch(const PointCloud& batch, float voxel_size
 /// (`decided` receives its result; the voxel is one process's automatic voxel when none is
 /// given); the chunk edge is chunking.chunk_size or, when that is <= 0, auto_chunk_size() of
 /// the first batch (the store's grid() holds the one used). Returns the store; `files`
-/// receives the chunks to mesh in Morton order. Throws meshflow::Error for unreadable input or
-/// a cloud without finite points.
+/// receives the chunks to mesh in Morton order. `clock` (optional) times the phases "decide"
+/// and "partition" (serial when the input cannot be read by byte range: one thread streams
+/// it). Throws meshflow::Error for unreadable input or a cloud without finite points.
 std::unique_ptr<chunk::ChunkStore> partition_input(
     const std::string& path, const std::string& columns, const ReconstructionConfig& config,
-    const ChunkingConfig& chunking, std::vector<chunk::ChunkFile>& files, InputDecisions& decided);
+    const ChunkingConfig& chunking, std::vector<chunk::ChunkFile>& files, InputDecisions& decided,
+    chunk::PhaseClock* clock = nullptr);
 
 /// Meshes `files` (chunk files of `grid` with rows `rows`) through one flow graph with
 /// chunk_stage_config(config, decided), `in_flight` at a time; hands each finished chunk frame
@@ -211,7 +217,8 @@ void collect_chunk_frame(Frame& frame, chunk::MeshStitcher& stitcher, ChunkedRep
 /// edges between feature vertices (extended marching cubes' pass, on the stitched mesh so that
 /// seams flip as inside one process), trims the rim over the stitched mesh
 /// (config.max_rim_voxels) and runs config's optimize steps once; fills the report's seam,
-/// rim, stitch and optimize fields. `on_step` (optional) is told each optimize step.
+/// rim and optimize fields and times the serial phases "stitch" and "finish" on report.clock
+/// (ending "finish"). `on_step` (optional) is told each optimize step.
 TriangleMesh finish_chunked_mesh(chunk::MeshStitcher& stitcher, const ReconstructionConfig& config,
                                  float voxel_size, ChunkedReport& report,
                                  const std::function<void(const std::string&)>& on_step = {});

@@ -144,4 +144,32 @@ nlohmann::json run_json(const std::string& sequence, const SequenceRunStats& sta
           {"stages", stages_json(stats.stages.summaries())}};
 }
 
+nlohmann::json chunked_timing_json(const std::vector<chunk::RankTimes>& ranks, double wall_s) {
+  nlohmann::json per_rank = nlohmann::json::array();
+  for (const chunk::RankTimes& r : ranks) {
+    nlohmann::json phases = nlohmann::json::array();
+    for (const chunk::PhaseTime& p : r.phases)
+      phases.push_back({{"phase", p.name},
+                        {"wall_s", p.wall_s},
+                        {"cpu_s", p.cpu_s},
+                        {"work_s", p.work_s},
+                        {"serial", p.serial}});
+    per_rank.push_back({{"rank", r.rank},
+                        {"chunks", r.chunks},
+                        {"peak_rss_mib", static_cast<double>(r.peak_bytes) / (1024.0 * 1024.0)},
+                        {"phases", phases}});
+  }
+  const chunk::SerialFraction f = chunk::serial_fraction(ranks, wall_s);
+  nlohmann::json speedup = nlohmann::json::object();
+  for (int workers : {2, 8, 32, 128}) speedup[std::to_string(workers)] = f.speedup(workers);
+  return {{"ranks", per_rank},
+          {"serial",
+           {{"serial_s", f.serial_s},
+            {"parallel_work_s", f.parallel_work_s},
+            {"fraction", f.fraction},
+            {"max_speedup", f.max_speedup},
+            {"wall_share", f.wall_share},
+            {"speedup", speedup}}}};
+}
+
 }  // namespace meshflow::options

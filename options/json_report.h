@@ -10,6 +10,7 @@
 
 #include "graph/frame.h"
 #include "graph/sequence_runner.h"
+#include "nodes/chunk/phase_times.h"
 #include "nodes/eval/surface_eval.h"
 #include "runtime/tracing.h"
 
@@ -47,5 +48,11 @@ nlohmann::json frame_json(const Frame& frame, double wall_s, int threads);
 /// index, file, stage and message of each failed frame; tools/run_commands.cpp).
 nlohmann::json run_json(const std::string& sequence, const SequenceRunStats& stats, int threads,
                         std::size_t in_flight);
+
+/// A chunked run's timing (reconstruct --chunk, meshflow-mpi reconstruct): {"ranks": one object
+/// per process {"rank", "chunks", "peak_rss_mib", "phases": [{"phase", "wall_s", "cpu_s",
+/// "work_s", "serial"}]}, "serial": {"serial_s", "parallel_work_s", "fraction", "max_speedup",
+/// "wall_share", "speedup": {"2", "8", "32", "128"} workers by Amdahl's law}}.
+nlohmann::json chunked_timing_json(const std::vector<chunk::RankTimes>& ranks, double wall_s);
 
 }  // namespace meshflow::options

@@ -4,8 +4,11 @@
 #include <cstdio>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "graph/chunked_reconstruction.h"
+#include "nodes/chunk/mesh_tiles.h"
+#include "nodes/chunk/phase_times.h"
 #include "nodes/extract/extract_surface.h"
 #include "nodes/io/mesh_writers.h"
 #include "options/json_report.h"
@@ -18,14 +21,15 @@
 namespace meshflow::cli {
 
 void run_chunked_reconstruct(const std::string& input, const std::string& columns,
-                             const std::string& output, const ReconstructionConfig& config,
-                             const ChunkingConfig& chunking, int threads) {
+                             const std::string& output, const std::string& tiles_dir,
+                             const ReconstructionConfig& config, const ChunkingConfig& chunking,
+                             int threads) {
   io::check_mesh_output_format(output);
   auto progress = std::make_unique<StepProgress>();
   const double t0 = monotonic_seconds();
   ChunkedResult result = reconstruct_chunked(
       input, columns, config, chunking, [&](const std::string& what) { progress->begin(what); });
-  const ChunkedReport& r = result.report;
+  ChunkedReport& r = result.report;
   if (result.mesh.empty()) {
     throw Error(input, "",
                 "no surface was extracted from " + std::to_string(r.chunks) +
@@ -33,9 +37,25 @@ void run_chunked_reconstruct(const std::string& input, const std::string& column
                     " m too small or too large?)");
   }
   progress->begin("write");
+  r.clock.begin("write", true);
   io::write_mesh(output, result.mesh, result.origin);
+  std::size_t tiles = 0;
+  if (!tiles_dir.empty()) {
+    progress->begin("tiles");
+    r.clock.begin("tiles", true);
+    const chunk::ChunkGrid grid{r.voxel_size, r.chunk_cells, 0};
+    const std::vector<chunk::MeshTile> split = chunk::split_into_tiles(result.mesh, grid);
+    chunk::write_tiles(tiles_dir, split, grid, result.origin);
+    tiles = split.size();
+  }
+  r.clock.end();
   progress.reset();
   const double wall = monotonic_seconds() - t0;
+  // One process: its phases are the only rank's.
+  const std::vector<chunk::RankTimes> ranks = {
+      {0, r.chunks, chunk::peak_resident_bytes(), r.clock.phases()}};
+  const chunk::SerialFraction serial = chunk::serial_fraction(ranks, wall);
+  const auto phase = [&](const char* name) { return chunk::phase_wall(r.clock.phases(), name); };
   for (const std::string& failure : r.failed)
     std::fprintf(stderr, "meshflow: chunk failed, its cells are missing: %s\n", failure.c_str());
   if (console().json) {
@@ -61,11 +81,8 @@ void run_chunked_reconstruct(const std::string& input, const std::string& column
          {{"voxel_automatic", r.decided.voxel_automatic},
           {"median_variation", r.decided.median_variation},
           {"noisy", r.decided.noisy}}},
-        {"phases_s",
-         {{"partition", r.partition_s},
-          {"mesh", r.mesh_s},
-          {"stitch", r.stitch_s},
-          {"optimize", r.optimize_s}}},
+        {"tiles", tiles},
+        {"timing", options::chunked_timing_json(ranks, wall)},
         {"optimize", options::optimize_json(r.optimize)},
         {"stages", options::stages_json(summarize_stages(r.timings))}};
     return print_json(doc);
@@ -83,11 +100,16 @@ void run_chunked_reconstruct(const std::string& input, const std::string& column
          result.mesh.vertices.size(), result.mesh.triangles.size(), r.seam_vertices);
   detail("%s", format_optimize_report(r.optimize).c_str());
   report(
-      "time       %.1f s on %d thread%s: partition %.1f s, chunks %.1f s, stitch %.1f s, "
-      "optimize %.1f s\n",
-      wall, threads, threads == 1 ? "" : "s", r.partition_s, r.mesh_s, r.stitch_s, r.optimize_s);
-  detail("%s", format_stage_table(summarize_stages(r.timings), r.mesh_s).c_str());
+      "time       %.1f s on %d thread%s: decide %.1f s, partition %.1f s, chunks %.1f s, "
+      "stitch %.1f s, finish %.1f s, write %.1f s\n",
+      wall, threads, threads == 1 ? "" : "s", phase("decide"), phase("partition"), phase("chunks"),
+      phase("stitch"), phase("finish"), phase("write"));
+  report("serial     %.1f s of %.1f s on one core (Amdahl: f = %.3f, at most %.1fx faster)\n",
+         serial.serial_s, serial.serial_s + serial.parallel_work_s, serial.fraction,
+         serial.max_speedup);
+  detail("%s", format_stage_table(summarize_stages(r.timings), phase("chunks")).c_str());
   report("output     %s\n", output.c_str());
+  if (tiles > 0) report("tiles      %zu in %s (tiles.json)\n", tiles, tiles_dir.c_str());
 }
 
 }  // namespace meshflow::cli

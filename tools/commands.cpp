@@ -41,6 +41,7 @@ struct ReconstructOptions {
   std::string compress;     ///< --compress method, "" = none (a .mfc output: edgebreaker)
   std::string chunk;        ///< --chunk: "" (whole cloud), "auto" or metres
   ChunkingConfig chunking;  ///< the other --chunk* options
+  std::string tiles;        ///< --tiles DIR: the mesh also as one file per chunk and an index
   ServeOptions serve;       ///< --serve: show the result in a browser
 };
 
@@ -110,7 +111,8 @@ void run_reconstruct(const ReconstructOptions& o) {
     chunking.memory_budget = config.max_memory_bytes / 2;
     if (o.serve.enabled()) throw Error("--serve", "", "a reconstruction without --chunk");
     print_settings(config);
-    return run_chunked_reconstruct(o.input, o.columns, o.output, config, chunking, limit.threads());
+    return run_chunked_reconstruct(o.input, o.columns, o.output, o.tiles, config, chunking,
+                                   limit.threads());
   }
   config.compression = compression_for(o.compress, o.output);
   const bool compressed = config.compression != MeshCompression::kNone;
@@ -316,6 +318,11 @@ void add_reconstruct_options(CLI::App* cmd) {
   cmd->add_option("--chunks-in-flight", opts->chunking.in_flight, "Chunks meshed at once")
       ->check(number_in(1, 64))
       ->capture_default_str();
+  cmd->add_option(
+         "--tiles", opts->tiles,
+         "With --chunk: also write the mesh as one glTF file per chunk (DIR/tile_I_J_K.glb) "
+         "and their index DIR/tiles.json, for viewers that load what they look at")
+      ->needs("--chunk");
   cmd->callback([opts] { run_reconstruct(*opts); });
 }
 

@@ -43,10 +43,12 @@ void run_mesh_info(const std::string& path);
 void run_compressed_info(const std::string& path);
 
 /// `reconstruct --chunk`: the out-of-core path (graph/chunked_reconstruction.h) from `input` to
-/// the mesh file `output`, with its report (or --json document). Throws meshflow::Error.
+/// the mesh file `output` and, when `tiles_dir` is not empty, its tiles there
+/// (nodes/chunk/mesh_tiles.h), with its report (or --json document). Throws meshflow::Error.
 void run_chunked_reconstruct(const std::string& input, const std::string& columns,
-                             const std::string& output, const ReconstructionConfig& config,
-                             const ChunkingConfig& chunking, int threads);
+                             const std::string& output, const std::string& tiles_dir,
+                             const ReconstructionConfig& config, const ChunkingConfig& chunking,
+                             int threads);
 
 struct Command {
   const char* name;

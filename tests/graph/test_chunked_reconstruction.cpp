@@ -6,21 +6,27 @@
 
 #include <gtest/gtest.h>
 
+#include <nlohmann/json.hpp>
+
 #include <algorithm>
 #include <array>
 #include <cmath>
 #include <filesystem>
+#include <fstream>
 #include <map>
 #include <set>
 
 #include "graph/pipeline.h"
 #include "nodes/chunk/mesh_stitch.h"
+#include "nodes/chunk/mesh_tiles.h"
+#include "nodes/io/glb_reader.h"
 #include "nodes/io/ply_point_writer.h"
 #include "nodes/io/read_point_cloud.h"
 #include "nodes/search/spatial_index.h"
 #include "nodes/synthetic/city_scene.h"
 #include "nodes/voxelize/spacing_sample.h"
 #include "runtime/error.h"
+#include "runtime/tracing.h"
 #include "runtime/voxel_key.h"
 #include "test_support.h"
 
@@ -285,6 +291,91 @@ TEST(ChunkedReconstruction, PartitionByByteRangesHoldsTheWholeReadsPoints) {
   std::multiset<std::array<float, 3>> expected;
   for (const Eigen::Vector3f& p : whole.positions) expected.insert({p.x(), p.y(), p.z()});
   EXPECT_EQ(owned, expected) << "every point once, in the chunk owning its cell";
+}
+
+// The report times every phase of the run in order, the partition's as parallel when the
+// input is read by byte ranges (as many as workers) and as serial when one thread streams it
+// (a text cloud).
+TEST(ChunkedReconstruction, TimesEveryPhaseSerialOnlyWhereOneCoreWorks) {
+  const CityInput input(30000, false);
+  const std::string text = test::temp_dir() + "/chunk_city.xyz";
+  {
+    std::ofstream out(text);
+    for (const Eigen::Vector3f& p : io::read_point_cloud(input.path).positions)
+      out << p.x() << ' ' << p.y() << ' ' << p.z() << '\n';
+  }
+  for (const std::string& path : {input.path, text}) {
+    const bool streamed = path == text;
+    const double t0 = monotonic_seconds();
+    const ChunkedResult r = test::with_threads(
+        2, [&] { return reconstruct_chunked(path, "", raw_config(1.0f), chunks_of(15.0f)); });
+    const double wall = monotonic_seconds() - t0;
+    const std::vector<chunk::PhaseTime>& p = r.report.clock.phases();
+    const std::vector<std::string> names = {"decide", "partition", "chunks", "stitch", "finish"};
+    ASSERT_EQ(p.size(), names.size()) << path;
+    double sum = 0.0;
+    for (std::size_t i = 0; i < p.size(); ++i) {
+      EXPECT_EQ(p[i].name, names[i]);
+      EXPECT_GE(p[i].wall_s, 0.0);
+      EXPECT_FALSE(p[i].waiting);
+      sum += p[i].wall_s;
+    }
+    EXPECT_LE(sum, wall) << "phases do not overlap";
+    EXPECT_EQ(p[0].serial, streamed) << path;
+    EXPECT_EQ(p[1].serial, streamed) << path;
+    EXPECT_FALSE(p[2].serial);
+    EXPECT_TRUE(p[3].serial);
+    EXPECT_TRUE(p[4].serial);
+    EXPECT_GT(p[2].cpu_s, 0.0) << "the chunks were meshed";
+    EXPECT_GT(r.mesh.triangles.size(), 1000u) << path;
+  }
+  std::filesystem::remove(text);
+}
+
+// --tiles: every triangle of the mesh in exactly one tile, the one of the chunk holding its
+// centroid; the tiles written as glTF files and an index read back to the whole mesh (issue 61:
+// the tiles' union equals the whole mesh).
+TEST(MeshTiles, TheTilesUnionIsTheWholeMesh) {
+  const CityInput input(30000, true);
+  const ChunkedResult r = reconstruct_chunked(input.path, "", raw_config(1.0f), chunks_of(15.0f));
+  const chunk::ChunkGrid grid{r.report.voxel_size, r.report.chunk_cells, 0};
+  const std::vector<chunk::MeshTile> tiles = chunk::split_into_tiles(r.mesh, grid);
+  EXPECT_GT(tiles.size(), 4u);
+  const std::string dir = test::temp_dir() + "/tiles";
+  const Eigen::Vector3d origin(100.5, -200.25, 3.0);
+  chunk::write_tiles(dir, tiles, grid, origin);
+  std::ifstream index_file(dir + "/tiles.json");
+  const nlohmann::json index = nlohmann::json::parse(index_file);
+  EXPECT_EQ(index["format"], "meshflow-tiles-1");
+  EXPECT_EQ(index["origin"][0].get<double>(), origin.x());
+  EXPECT_EQ(index["origin"][1].get<double>(), origin.y());
+  EXPECT_EQ(index["voxel"].get<float>(), grid.voxel_size);
+  ASSERT_EQ(index["tiles"].size(), tiles.size());
+  std::set<TriangleKey> joined;
+  std::size_t keys = 0, triangles = 0;
+  for (std::size_t i = 0; i < tiles.size(); ++i) {
+    const nlohmann::json& entry = index["tiles"][i];
+    EXPECT_EQ(entry["file"], chunk::tile_file_name(tiles[i].chunk));
+    // The glb reader does not apply the node's translation: the tile's own coordinates.
+    const TriangleMesh m = io::read_glb_mesh(dir + "/" + entry["file"].get<std::string>());
+    EXPECT_EQ(entry["triangles"].get<std::size_t>(), m.triangles.size());
+    EXPECT_EQ(entry["vertices"].get<std::size_t>(), m.vertices.size());
+    std::vector<bool> used(m.vertices.size(), false);
+    for (const Triangle& t : m.triangles) {
+      const Eigen::Vector3f c = (m.vertices[t[0]] + m.vertices[t[1]] + m.vertices[t[2]]) / 3.0f;
+      EXPECT_EQ(grid.chunk_of_cell(cell_of(c, grid.voxel_size)), tiles[i].chunk);
+      for (std::uint32_t v : t) used[v] = true;
+    }
+    EXPECT_EQ(std::count(used.begin(), used.end(), false), 0) << "no unused vertex";
+    const std::set<TriangleKey> own = triangle_keys(m);
+    keys += own.size();
+    triangles += m.triangles.size();
+    joined.insert(own.begin(), own.end());
+  }
+  EXPECT_EQ(triangles, r.mesh.triangles.size());
+  EXPECT_EQ(keys, joined.size()) << "no triangle in two tiles";
+  EXPECT_EQ(joined, triangle_keys(r.mesh));
+  std::filesystem::remove_all(dir);
 }
 
 TEST(MeshStitch, TurnsAChunkWoundAgainstItsNeighbourOver) {

@@ -2,7 +2,7 @@
 # meshflow-mpi on 1, 2 and 4 ranks of this machine gives the same meshes, byte for byte, as
 # meshflow in one process: `reconstruct --chunk` on a cloud with normals and on one without
 # (normals estimated and oriented per chunk, then made to agree across seams), and `run` per
-# frame on the synthetic sequence.
+# frame on the synthetic sequence; `reconstruct --json` reports every rank's phases.
 # Usage: mpi_ranks.sh MESHFLOW MESHFLOW_MPI
 set -euo pipefail
 meshflow=$1
@@ -25,6 +25,31 @@ for cloud in normals plain; do
     echo "$cloud, $n ranks: $(grep '^mesh' "$work/log_$n.txt")"
   done
 done
+# --json (the mesh as without it): every rank's phases in order, the chunks they meshed adding
+# up to all, and the serial fraction those phases imply; --tiles: the tiles of one process.
+mpirun --bind-to none -n 2 "$meshflow_mpi" reconstruct "$work/normals.ply" -o "$work/json_2.ply" \
+  "${args[@]}" --json --tiles "$work/tiles_2" > "$work/json_2.txt"
+"$meshflow" reconstruct "$work/normals.ply" -o "$work/one_process.ply" "${args[@]}" -q \
+  --tiles "$work/tiles_1"
+cmp "$work/one_process.ply" "$work/json_2.ply" || { echo "FAIL: --json changed the mesh"; exit 1; }
+diff -r "$work/tiles_1" "$work/tiles_2" || { echo "FAIL: 2 ranks wrote other tiles"; exit 1; }
+echo "--tiles, 2 ranks: $(ls "$work/tiles_2" | wc -l) files, as one process's"
+/usr/bin/python3 - "$work/json_2.txt" <<'PY'
+import json, sys
+d = json.load(open(sys.argv[1]))
+ranks = d["timing"]["ranks"]
+assert [r["rank"] for r in ranks] == [0, 1], ranks
+assert sum(r["chunks"] for r in ranks) == d["chunks"], (ranks, d["chunks"])
+names = [[p["phase"] for p in r["phases"]] for r in ranks]
+assert names[0] == ["decide", "setup", "partition", "join", "chunks", "gather", "stitch",
+                    "finish", "write", "tiles"], names[0]
+assert names[1] == ["decide", "setup", "partition", "plan", "chunks"], names[1]
+assert all(p["work_s"] == 0 for p in ranks[1]["phases"] if p["phase"] in ("setup", "plan"))
+s = d["timing"]["serial"]
+assert 0 < s["fraction"] < 1 and s["max_speedup"] > 1, s
+print(f"--json, 2 ranks: serial {s['serial_s']:.2f} s of {s['serial_s'] + s['parallel_work_s']:.2f} s, "
+      f"f = {s['fraction']:.3f}")
+PY
 # The defaults (automatic voxel and method, decided once from the whole input; every rank reads
 # its own byte range of the binary PLY): `--chunk` in one process and over 1 and 2 ranks give
 # the same file, with the whole cloud's triangle count (input normals: without them chunks

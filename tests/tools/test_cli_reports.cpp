@@ -5,6 +5,8 @@
 #include <nlohmann/json.hpp>
 
 #include <filesystem>
+#include <string>
+#include <vector>
 
 #include "cli_runner.h"
 
@@ -29,6 +31,26 @@ TEST(CliReports, ChunkedRunsReportTheKeysOfOneProcess) {
   }
   EXPECT_FALSE(chunked.contains("voxel_size"));
   EXPECT_NEAR(chunked["voxel"].get<double>(), whole["voxel"].get<double>(), 1e-6);
+  // Every phase of the one process timed, and the serial fraction they imply (issue 61).
+  const nlohmann::json& timing = chunked["timing"];
+  ASSERT_EQ(timing["ranks"].size(), 1u) << chunked.dump();
+  const nlohmann::json& rank = timing["ranks"][0];
+  EXPECT_EQ(rank["chunks"], chunked["chunks"]);
+  EXPECT_GT(rank["peak_rss_mib"].get<double>(), 1.0);
+  std::vector<std::string> names;
+  double serial = 0.0, work = 0.0;
+  for (const nlohmann::json& p : rank["phases"]) {
+    names.push_back(p["phase"].get<std::string>());
+    if (p["serial"].get<bool>())
+      serial += p["wall_s"].get<double>();
+    else
+      work += p["work_s"].get<double>();
+  }
+  EXPECT_EQ(names, (std::vector<std::string>{"decide", "partition", "chunks", "stitch", "finish",
+                                             "write"}));
+  EXPECT_NEAR(timing["serial"]["serial_s"].get<double>(), serial, 1e-9);
+  EXPECT_NEAR(timing["serial"]["fraction"].get<double>(), serial / (serial + work), 1e-9);
+  EXPECT_LE(serial, chunked["wall_s"].get<double>());
 }
 
 // run --json names each failed frame with its file, stage and reason (issue 55 item 6).

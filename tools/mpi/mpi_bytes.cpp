@@ -10,6 +10,56 @@ constexpr std::size_t kMessagePiece = std::size_t{1} << 30;  // MPI counts are i
 
 }  // namespace
 
+void put_rows(io::ByteWriter& w, const chunk::ChunkRows& rows) {
+  put(w, rows.normals);
+  put(w, rows.colors);
+  put(w, rows.origin);
+  put(w, rows.z_up);
+}
+
+chunk::ChunkRows get_rows(io::ByteReader& r) {
+  chunk::ChunkRows rows;
+  rows.normals = get<bool>(r, "normals");
+  rows.colors = get<bool>(r, "colors");
+  rows.origin = get<Eigen::Vector3d>(r, "origin");
+  rows.z_up = get<bool>(r, "z_up");
+  return rows;
+}
+
+void put_rank_times(io::ByteWriter& w, const chunk::RankTimes& times) {
+  put(w, times.rank);
+  w.u64(times.chunks);
+  w.u64(times.peak_bytes);
+  w.u64(times.phases.size());
+  for (const chunk::PhaseTime& p : times.phases) {
+    put_string(w, p.name);
+    put(w, p.wall_s);
+    put(w, p.cpu_s);
+    put(w, p.work_s);
+    put(w, p.serial);
+    put(w, p.waiting);
+  }
+}
+
+chunk::RankTimes get_rank_times(io::ByteReader& r) {
+  chunk::RankTimes times;
+  times.rank = get<int>(r, "rank");
+  times.chunks = r.u64("chunks");
+  times.peak_bytes = r.u64("peak memory");
+  const std::uint64_t n = r.u64("phases");
+  if (n > r.remaining()) r.fail("phases", "more phases than the message holds");
+  times.phases.resize(n);
+  for (chunk::PhaseTime& p : times.phases) {
+    p.name = get_string(r, "phase name");
+    p.wall_s = get<double>(r, "phase wall time");
+    p.cpu_s = get<double>(r, "phase CPU time");
+    p.work_s = get<double>(r, "phase work");
+    p.serial = get<bool>(r, "phase serial");
+    p.waiting = get<bool>(r, "phase waiting");
+  }
+  return times;
+}
+
 void send_bytes(const std::vector<unsigned char>& data, int to) {
   std::uint64_t size = data.size();
   MPI_Send(&size, 1, MPI_UINT64_T, to, 0, MPI_COMM_WORLD);

@@ -8,6 +8,8 @@
 #include <string>
 #include <vector>
 
+#include "nodes/chunk/chunk_store.h"
+#include "nodes/chunk/phase_times.h"
 #include "nodes/io/byte_buffer.h"
 
 namespace meshflow::cli {
@@ -54,6 +56,17 @@ inline std::string get_string(io::ByteReader& r, const char* field) {
   const unsigned char* at = r.bytes(n, field);
   return std::string(reinterpret_cast<const char*>(at), n);
 }
+
+/// Appends what a chunk file's rows hold (normals, colours) and their frame (origin, z_up),
+/// field by field. O(1).
+void put_rows(io::ByteWriter& w, const chunk::ChunkRows& rows);
+/// Reads rows written by put_rows(); errors name the field. O(1).
+chunk::ChunkRows get_rows(io::ByteReader& r);
+
+/// Appends one rank's timing: rank, chunks, peak memory and its phases. O(phases).
+void put_rank_times(io::ByteWriter& w, const chunk::RankTimes& times);
+/// Reads a timing written by put_rank_times(); errors name the field. O(phases).
+chunk::RankTimes get_rank_times(io::ByteReader& r);
 
 /// Sends `data` (its size first) to rank `to`. Blocks until sent.
 void send_bytes(const std::vector<unsigned char>& data, int to);

@@ -64,10 +64,7 @@ std::vector<unsigned char> encode_written(const chunk::WrittenPart& part) {
   io::ByteWriter w;
   put_chunk_files(w, part.files);
   put(w, part.has_rows);
-  put(w, part.rows.normals);
-  put(w, part.rows.colors);
-  put(w, part.rows.origin);
-  put(w, part.rows.z_up);
+  put_rows(w, part.rows);
   put(w, part.bounds);
   w.u64(part.points_read);
   w.u64(part.dropped);
@@ -81,10 +78,7 @@ chunk::WrittenPart decode_written(const std::vector<unsigned char>& bytes, int f
   chunk::WrittenPart part;
   part.files = get_chunk_files(r);
   part.has_rows = get<bool>(r, "has rows");
-  part.rows.normals = get<bool>(r, "normals");
-  part.rows.colors = get<bool>(r, "colors");
-  part.rows.origin = get<Eigen::Vector3d>(r, "origin");
-  part.rows.z_up = get<bool>(r, "z_up");
+  part.rows = get_rows(r);
   part.bounds = get<Eigen::AlignedBox3f>(r, "bounds");
   part.points_read = r.u64("points read");
   part.dropped = r.u64("dropped");
@@ -170,9 +164,10 @@ std::vector<chunk::ChunkFile> get_chunk_files(io::ByteReader& r) {
 RankedPartition partition_by_ranks(const std::string& input, const std::string& columns,
                                    const ReconstructionConfig& config,
                                    const ChunkingConfig& chunking, const InputParts& parts,
-                                   int rank, int ranks) {
+                                   int rank, int ranks, chunk::PhaseClock& clock) {
   RankedPartition out;
   SpacingSample sample = empty_input_sample(config);
+  clock.begin("decide", false);
   if (decisions_need_sample(config)) {
     out.error = decide_by_ranks(input, columns, config, chunking, parts, rank, ranks, sample);
     if (!out.error.empty()) return out;
@@ -180,6 +175,10 @@ RankedPartition partition_by_ranks(const std::string& input, const std::string& 
   // Rank 0: the decisions, the grid from the file's first batch, the directory.
   std::vector<unsigned char> setup;
   bool z_up = false;
+  if (rank == 0)
+    clock.begin("setup", true);
+  else
+    clock.wait("setup");
   if (rank == 0) {
     std::string error;
     try {
@@ -223,6 +222,7 @@ RankedPartition partition_by_ranks(const std::string& input, const std::string& 
   if (!out.error.empty()) return out;
 
   // Every rank spills its own range into its own part of the chunk files.
+  clock.begin("partition", false);
   std::vector<std::vector<unsigned char>> gathered;
   out.error = gather_step(
       [&] {
@@ -233,6 +233,7 @@ RankedPartition partition_by_ranks(const std::string& input, const std::string& 
       },
       rank, ranks, gathered);
   if (!out.error.empty() || rank != 0) return out;
+  clock.begin("join", true);
   try {
     std::vector<chunk::WrittenPart> written;
     for (std::size_t from = 0; from < gathered.size(); ++from)

@@ -26,11 +26,12 @@ struct RankedPartition {
 /// parts.ranges[r] when it exists) into chunk files under chunking.directory, which every rank
 /// must see. Collective: every rank calls it with the same arguments. The chunks equal those
 /// of partition_input() on one process (same points, same order). Errors of any rank come back
-/// in `error` on every rank.
+/// in `error` on every rank. `clock` times this rank's phases: "decide", "setup" (rank 0 alone:
+/// the grid; the others wait), "partition" and on rank 0 "join" (left running).
 RankedPartition partition_by_ranks(const std::string& input, const std::string& columns,
                                    const ReconstructionConfig& config,
                                    const ChunkingConfig& chunking, const InputParts& parts,
-                                   int rank, int ranks);
+                                   int rank, int ranks, chunk::PhaseClock& clock);
 
 /// The chunk list as bytes and back (files, their parts and counts).
 void put_chunk_files(io::ByteWriter& w, const std::vector<chunk::ChunkFile>& files);

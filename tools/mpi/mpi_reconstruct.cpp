@@ -22,6 +22,7 @@
 
 #include <algorithm>
 #include <atomic>
+#include <chrono>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
@@ -33,7 +34,11 @@
 #include <vector>
 
 #include "graph/chunked_reconstruction.h"
+#include "nodes/chunk/mesh_tiles.h"
+#include "nodes/chunk/phase_times.h"
+#include "nodes/extract/extract_surface.h"
 #include "nodes/io/mesh_writers.h"
+#include "options/json_report.h"
 #include "runtime/error.h"
 #include "runtime/threads.h"
 #include "runtime/tracing.h"
@@ -58,10 +63,7 @@ std::vector<unsigned char> encode(const Plan& plan) {
   io::ByteWriter w;
   put_string(w, plan.error);
   put(w, plan.grid);
-  put(w, plan.rows.normals);
-  put(w, plan.rows.colors);
-  put(w, plan.rows.origin);
-  put(w, plan.rows.z_up);
+  put_rows(w, plan.rows);
   put(w, plan.decided);
   put_chunk_files(w, plan.files);
   return std::move(w.out);
@@ -73,10 +75,7 @@ Plan decode_plan(const std::vector<unsigned char>& message) {
   Plan plan;
   plan.error = get_string(r, "error");
   plan.grid = get<chunk::ChunkGrid>(r, "grid");
-  plan.rows.normals = get<bool>(r, "normals");
-  plan.rows.colors = get<bool>(r, "colors");
-  plan.rows.origin = get<Eigen::Vector3d>(r, "origin");
-  plan.rows.z_up = get<bool>(r, "z_up");
+  plan.rows = get_rows(r);
   plan.decided = get<InputDecisions>(r, "decisions");
   plan.files = get_chunk_files(r);
   return plan;
@@ -93,8 +92,11 @@ struct ChunkResult {
   std::string error;                // non-empty: the chunk failed
 };
 
-std::vector<unsigned char> encode(const std::vector<ChunkResult>& results) {
+// A rank's chunk meshes and its timing, for rank 0.
+std::vector<unsigned char> encode(const std::vector<ChunkResult>& results,
+                                  const chunk::RankTimes& times) {
   io::ByteWriter w;
+  put_rank_times(w, times);
   w.u64(results.size());
   for (const ChunkResult& r : results) {
     w.u64(r.position);
@@ -108,10 +110,13 @@ std::vector<unsigned char> encode(const std::vector<ChunkResult>& results) {
   return std::move(w.out);
 }
 
-void decode_into(const std::vector<unsigned char>& message, int from,
-                 std::vector<ChunkResult>& results) {
+// Appends the chunk meshes of what encode() sent from rank `from` to `results`; returns its
+// timing.
+chunk::RankTimes decode_into(const std::vector<unsigned char>& message, int from,
+                             std::vector<ChunkResult>& results) {
   const std::string source = "chunk meshes from rank " + std::to_string(from);
   io::ByteReader r(source, message);
+  chunk::RankTimes times = get_rank_times(r);
   const std::uint64_t count = r.u64("chunks");
   for (std::uint64_t i = 0; i < count; ++i) {
     ChunkResult c;
@@ -124,15 +129,23 @@ void decode_into(const std::vector<unsigned char>& message, int from,
     c.flags = get_vector<std::uint8_t>(r, "vertex flags");
     results.push_back(std::move(c));
   }
+  return times;
 }
 
 // Rank 0's main thread: answers every other rank's requests for a chunk with take()'s next one
-// until each has been told there is none left.
+// until each has been told there is none left. Polls every kQueuePoll instead of blocking in
+// MPI_Recv, which in Open MPI spins on a core that rank 0's own graph needs.
 void serve_chunk_queue(const std::function<long long()>& take, int ranks) {
+  constexpr auto kQueuePoll = std::chrono::microseconds(500);
   for (int finished = 0; finished < ranks - 1;) {
-    int request = 0;
+    int request = 0, arrived = 0;
     MPI_Status status;
-    MPI_Recv(&request, 1, MPI_INT, MPI_ANY_SOURCE, kRequestTag, MPI_COMM_WORLD, &status);
+    MPI_Iprobe(MPI_ANY_SOURCE, kRequestTag, MPI_COMM_WORLD, &arrived, &status);
+    if (!arrived) {
+      std::this_thread::sleep_for(kQueuePoll);
+      continue;
+    }
+    MPI_Recv(&request, 1, MPI_INT, status.MPI_SOURCE, kRequestTag, MPI_COMM_WORLD, &status);
     const long long position = take();
     MPI_Send(&position, 1, MPI_LONG_LONG, status.MPI_SOURCE, kAnswerTag, MPI_COMM_WORLD);
     if (position < 0) ++finished;
@@ -144,6 +157,8 @@ struct Options {
   std::string chunk;  ///< --chunk: "auto" or metres
   PipelineOptions pipeline;
   ChunkingConfig chunking;
+  bool json = false;  ///< --json: rank 0 prints one JSON document instead of the text report
+  std::string tiles;  ///< --tiles DIR: the mesh also as one file per chunk and an index
 };
 
 // --chunk as `reconstruct --chunk` takes it: "auto" lets the chunks in flight have half of
@@ -155,10 +170,61 @@ ChunkingConfig chunking_of(const Options& o, const ReconstructionConfig& config)
   return chunking;
 }
 
+// Rank 0's report: the text lines, or with --json one document (the keys of `reconstruct
+// --chunk --json` where they mean the same, plus every rank's timing).
+void print_report(const Options& o, const Plan& plan, const ChunkedReport& report,
+                  const TriangleMesh& mesh, const std::vector<chunk::RankTimes>& times,
+                  std::size_t gathered_bytes, std::size_t tiles, double wall, int threads) {
+  const chunk::SerialFraction serial = chunk::serial_fraction(times, wall);
+  const float voxel = plan.grid.voxel_size;
+  if (o.json) {
+    const nlohmann::json doc = {
+        {"input", o.input},
+        {"output", o.output},
+        {"processes", times.size()},
+        {"threads", threads},
+        {"wall_s", wall},
+        {"voxel", voxel},
+        {"chunk", {{"cells", plan.grid.chunk_cells}, {"metres", plan.grid.chunk_cells * voxel}}},
+        {"chunks", plan.files.size()},
+        {"failed_chunks", report.failed},
+        {"seam_vertices", report.seam_vertices},
+        {"gathered_bytes", gathered_bytes},
+        {"tiles", tiles},
+        {"mesh",
+         {{"vertices", mesh.vertices.size()},
+          {"triangles", mesh.triangles.size()},
+          {"extract", extract_method_name(plan.decided.method)}}},
+        {"optimize", options::optimize_json(report.optimize)},
+        {"timing", options::chunked_timing_json(times, wall)}};
+    std::printf("%s\n", doc.dump(2).c_str());
+    return;
+  }
+  std::printf("input      %s: %zu chunks of %d cells at voxel %.4f m over %zu ranks\n",
+              o.input.c_str(), plan.files.size(), plan.grid.chunk_cells, voxel, times.size());
+  std::printf("mesh       %zu vertices, %zu triangles\n", mesh.vertices.size(),
+              mesh.triangles.size());
+  const std::vector<chunk::PhaseTime>& own = times.front().phases;
+  const auto phase = [&](const char* name) { return chunk::phase_wall(own, name); };
+  std::printf(
+      "time       %.1f s: decide %.1f s, partition %.1f s, chunks %.1f s, gather %.1f s "
+      "(%.1f MB), stitch %.1f s, finish %.1f s, write %.1f s\n",
+      wall, phase("decide"), phase("setup") + phase("partition") + phase("join"), phase("chunks"),
+      phase("gather"), static_cast<double>(gathered_bytes) / 1e6, phase("stitch"), phase("finish"),
+      phase("write"));
+  std::printf("serial     %.1f s of %.1f s on one core (Amdahl: f = %.3f, at most %.1fx faster)\n",
+              serial.serial_s, serial.serial_s + serial.parallel_work_s, serial.fraction,
+              serial.max_speedup);
+  std::printf("output     %s\n", o.output.c_str());
+  if (tiles > 0) std::printf("tiles      %zu in %s (tiles.json)\n", tiles, o.tiles.c_str());
+}
+
 int run(const Options& o, int rank, int ranks) {
   ThreadLimit limit(o.pipeline.threads);
   const ReconstructionConfig config = o.pipeline.config();
   const double t0 = monotonic_seconds();
+  ChunkedReport report;  // its clock times this rank's phases
+  chunk::PhaseClock& clock = report.clock;
   Plan plan;
   std::unique_ptr<chunk::ChunkStore> store;  // rank 0: owns the directory until the end
   const ChunkingConfig chunking = chunking_of(o, config);
@@ -184,7 +250,7 @@ int run(const Options& o, int rank, int ranks) {
       return 1;
     }
     RankedPartition partition =
-        partition_by_ranks(o.input, o.columns, config, chunking, parts, rank, ranks);
+        partition_by_ranks(o.input, o.columns, config, chunking, parts, rank, ranks, clock);
     plan.error = partition.error;
     plan.grid = partition.grid;
     plan.rows = partition.rows;
@@ -194,13 +260,16 @@ int run(const Options& o, int rank, int ranks) {
   } else if (rank == 0) {  // a format read whole: rank 0 partitions alone
     try {
       io::check_mesh_output_format(o.output);
-      store = partition_input(o.input, o.columns, config, chunking, plan.files, plan.decided);
+      store =
+          partition_input(o.input, o.columns, config, chunking, plan.files, plan.decided, &clock);
       plan.grid = store->grid();
       plan.rows = store->rows();
     } catch (const std::exception& e) {
       plan.error = e.what();
     }
+    clock.begin("join", true);  // the plan's broadcast
   }
+  if (rank != 0) clock.wait("plan");
   std::vector<unsigned char> message = rank == 0 ? encode(plan) : std::vector<unsigned char>();
   broadcast_bytes(message);
   if (rank != 0) plan = decode_plan(message);
@@ -208,16 +277,14 @@ int run(const Options& o, int rank, int ranks) {
     if (rank == 0) std::fprintf(stderr, "meshflow-mpi: error: %s\n", plan.error.c_str());
     return 1;
   }
-  const double partition_s = monotonic_seconds() - t0;
 
   // The chunks go out from a queue on rank 0 in Morton order, each to whichever rank asks first
   // (rank 0's own graph included), so a rank with cheap chunks takes more. Rank 0 then welds
   // every chunk in Morton order, as in one process, so welding and orientation give the same
   // mesh for any number of ranks and any assignment.
+  clock.begin("chunks", false);
   const std::size_t n = plan.files.size();
   const auto chunks = static_cast<long long>(n);
-  double t = monotonic_seconds();
-  ChunkedReport report;
   std::vector<ChunkResult> results;
   const auto collect = [&](const FramePtr& frame) {
     report.timings.insert(report.timings.end(), frame->timings.begin(), frame->timings.end());
@@ -263,19 +330,22 @@ int run(const Options& o, int rank, int ranks) {
     mesh_chunk_files(plan.files, ask, plan.grid, plan.rows, config, plan.decided,
                      o.chunking.in_flight, o.input, collect);
   }
-  report.mesh_s = monotonic_seconds() - t;
+  clock.end();
+  const double mesh_s = chunk::phase_wall(clock.phases(), "chunks");
   std::fprintf(stderr, "meshflow-mpi: rank %d/%d: %zu chunks meshed in %.2f s\n", rank, ranks,
-               results.size(), report.mesh_s);
+               results.size(), mesh_s);
+  std::vector<chunk::RankTimes> times = {
+      {rank, results.size(), chunk::peak_resident_bytes(), clock.phases()}};
   if (rank != 0) {
-    send_bytes(encode(results), 0);
+    send_bytes(encode(results, times.front()), 0);
     return 0;
   }
-  t = monotonic_seconds();
+  clock.begin("gather", true);
   std::size_t gathered_bytes = 0;
   for (int from = 1; from < ranks; ++from) {
     const std::vector<unsigned char> received = receive_bytes(from);
     gathered_bytes += received.size();
-    decode_into(received, from, results);
+    times.push_back(decode_into(received, from, results));
   }
   std::sort(results.begin(), results.end(),
             [](const ChunkResult& a, const ChunkResult& b) { return a.position < b.position; });
@@ -284,29 +354,31 @@ int run(const Options& o, int rank, int ranks) {
     if (!r.error.empty()) {
       std::fprintf(stderr, "meshflow-mpi: chunk failed, its cells are missing: %s\n",
                    r.error.c_str());
+      report.failed.push_back(r.error);
       continue;
     }
     stitcher.add(r.mesh, r.flags);
     r = ChunkResult{};
   }
-  const double gather_s = monotonic_seconds() - t;
-  ChunkedReport total;
-  const TriangleMesh mesh = finish_chunked_mesh(stitcher, config, plan.grid.voxel_size, total);
+  const TriangleMesh mesh = finish_chunked_mesh(stitcher, config, plan.grid.voxel_size, report);
   if (mesh.empty()) {
     std::fprintf(stderr, "meshflow-mpi: error: %s: no surface was extracted\n", o.input.c_str());
     return 1;
   }
+  clock.begin("write", true);
   io::write_mesh(o.output, mesh, plan.rows.origin);
-  std::printf("input      %s: %zu chunks of %d cells at voxel %.4f m over %d ranks\n",
-              o.input.c_str(), n, plan.grid.chunk_cells, plan.grid.voxel_size, ranks);
-  std::printf("mesh       %zu vertices, %zu triangles\n", mesh.vertices.size(),
-              mesh.triangles.size());
-  std::printf(
-      "time       %.1f s: partition %.1f s, chunks %.1f s, gather %.1f s (%.1f MB), "
-      "stitch %.1f s, optimize %.1f s\n",
-      monotonic_seconds() - t0, partition_s, report.mesh_s, gather_s,
-      static_cast<double>(gathered_bytes) / 1e6, total.stitch_s, total.optimize_s);
-  std::printf("output     %s\n", o.output.c_str());
+  std::size_t tiles = 0;
+  if (!o.tiles.empty()) {
+    clock.begin("tiles", true);
+    const std::vector<chunk::MeshTile> split = chunk::split_into_tiles(mesh, plan.grid);
+    chunk::write_tiles(o.tiles, split, plan.grid, plan.rows.origin);
+    tiles = split.size();
+  }
+  clock.end();
+  times.front().phases = clock.phases();
+  times.front().peak_bytes = chunk::peak_resident_bytes();
+  print_report(o, plan, report, mesh, times, gathered_bytes, tiles, monotonic_seconds() - t0,
+               limit.threads());
   return 0;
 }
 
@@ -341,6 +413,12 @@ void add_mpi_reconstruct(CLI::App* cmd, const MpiWorld& world, int& status) {
                   "Where rank 0 writes the chunk files; every rank must see it (a shared file "
                   "system on a cluster)");
   cmd->add_option("--chunks-in-flight", o->chunking.in_flight, "Chunks meshed at once per rank");
+  cmd->add_option("--tiles", o->tiles,
+                  "Rank 0 also writes the mesh as one glTF file per chunk (DIR/tile_I_J_K.glb) and "
+                  "their index DIR/tiles.json");
+  cmd->add_flag("--json", o->json,
+                "Rank 0 prints one JSON document: the mesh, and every rank's phases (wall, CPU "
+                "and work seconds, peak memory) with the serial fraction they imply");
   add_pipeline_options(cmd, o->pipeline);
   cmd->callback([o, world, &status] { status = run(*o, world.rank, world.ranks); });
 }

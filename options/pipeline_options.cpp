@@ -180,8 +180,8 @@ std::vector<OptionSpec> make_specs() {
        "within this many voxels of its plane (0 = no check)",
        nullptr, in_range(&O::plane_tolerance, 0, 1000)},
       {"remesh-tolerance", &O::remesh_tolerance,
-       "remesh step: largest deviation of an edge from the surface, metres (auto, 0: a quarter "
-       "of the median edge)",
+       "remesh step: largest deviation of an edge from the surface, metres (auto, 0: six times "
+       "the mesh's roughness, within 0.01-0.25 of the median edge)",
        "auto", in_range(&O::remesh_tolerance, 0, 1000)},
       {"feature-angle", &O::feature_angle,
        "Reducing optimize steps: edges whose faces meet at more than this many degrees are "

@@ -36,6 +36,7 @@ ReverseReplay::ReverseReplay(std::uint32_t components, std::size_t symbols, std:
   nodes_.reserve(nodes);
   parent_.reserve(nodes);
   number_.reserve(nodes);
+  diamonds_.reserve(3 * (symbols + components) / 2 + 3);  // a closed surface's edges
   update_step();
 }
 
@@ -47,15 +48,17 @@ void ReverseReplay::fail(const std::string& problem) const {
 
 inline std::uint32_t ReverseReplay::add_node() {
   const auto n = static_cast<std::uint32_t>(nodes_.size());
-  nodes_.push_back({kNone, kNone, kNone, 0});
+  nodes_.push_back({kNone, kNone, kNone, 0, kNone});
   parent_.push_back(n);
   number_.push_back(kNone);
   return n;
 }
 
 inline void ReverseReplay::resolve(std::uint32_t n, std::uint32_t w) {
-  if (nodes_[n].waiting != kNone) predictors_[nodes_[n].waiting].w = w;
-  nodes_[n].waiting = kNone;
+  LoopNode& node = nodes_[n];
+  if (node.waiting != kNone) predictors_[node.waiting].w = w;
+  node.waiting = kNone;
+  if (node.opposite != kNone) diamonds_.push_back({n, node.next, node.opposite, w});
 }
 
 inline void ReverseReplay::triangle(std::uint32_t b, std::uint32_t a, std::uint32_t x) {
@@ -82,6 +85,9 @@ inline void ReverseReplay::undo_e() {
   link(a, b);
   link(b, p);
   triangle(b, a, p);
+  nodes_[p].opposite = b;
+  nodes_[a].opposite = p;
+  nodes_[b].opposite = a;
   gate_ = a;
   length_ = 3;
   open_ = true;
@@ -101,6 +107,7 @@ inline void ReverseReplay::undo_c() {
   resolve(an, bn);
   resolve(xn, an);
   link(an, bn);
+  nodes_[an].opposite = xn;
   nodes_[an].waiting = static_cast<std::uint32_t>(k);
   gate_ = an;
   --length_;
@@ -114,6 +121,8 @@ inline void ReverseReplay::undo_l() {
   resolve(pn, an);
   link(pn, an);
   link(an, bn);
+  nodes_[pn].opposite = bn;
+  nodes_[an].opposite = pn;
   gate_ = an;
   ++length_;
 }
@@ -126,6 +135,8 @@ inline void ReverseReplay::undo_r() {
   resolve(an, bn);
   link(an, bn);
   link(bn, qn);
+  nodes_[an].opposite = qn;
+  nodes_[bn].opposite = an;
   ++length_;
 }
 
@@ -148,7 +159,9 @@ inline void ReverseReplay::unsplit(std::uint32_t an, std::uint32_t xn) {
   resolve(an, bn);
   resolve(xn, an);
   nodes_[xn].waiting = nodes_[xc].waiting;  // xn takes over x' -> y
+  nodes_[xn].opposite = nodes_[xc].opposite;
   link(an, bn);
+  nodes_[an].opposite = xn;
   link(last, xn);
   link(xn, yn);
 }
@@ -291,6 +304,9 @@ ReplayedSurface ReverseReplay::finish() {
       throw Error(source_, "connectivity triangle " + std::to_string(t), "has a repeated vertex");
   }
   out.predictors = std::move(predictors_);
+  out.diamonds = std::move(diamonds_);
+  for (EdgeDiamond& d : out.diamonds)
+    for (std::uint32_t* v : {&d.x, &d.y, &d.left, &d.right}) *v = number_[*v];
   for (VertexPredictors& p : out.predictors)
     for (std::uint32_t* v : {&p.a, &p.b, &p.w})
       if (*v != kNone) *v = number_[*v];

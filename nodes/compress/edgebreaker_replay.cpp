@@ -34,8 +34,7 @@ ReverseReplay::ReverseReplay(std::uint32_t components, std::size_t symbols, std:
   // more only grows the vectors).
   const std::size_t nodes = symbols + symbols / 4 + 3 * std::size_t{components} + 16;
   nodes_.reserve(nodes);
-  parent_.reserve(nodes);
-  number_.reserve(nodes);
+  grow_copies(nodes);
   diamonds_.reserve(3 * (symbols + components) / 2 + 3);  // a closed surface's edges
   update_step();
 }
@@ -46,11 +45,17 @@ void ReverseReplay::fail(const std::string& problem) const {
               problem);
 }
 
+void ReverseReplay::grow_copies(std::size_t copies) {
+  const std::size_t old = parent_.size();
+  number_.resize(copies, kNone);
+  parent_.resize(copies);
+  for (std::size_t id = old; id < copies; ++id) parent_[id] = static_cast<std::uint32_t>(id);
+}
+
 inline std::uint32_t ReverseReplay::add_node() {
   const auto n = static_cast<std::uint32_t>(nodes_.size());
   nodes_.push_back({kNone, kNone, kNone, 0, kNone});
-  parent_.push_back(n);
-  number_.push_back(kNone);
+  if (n >= parent_.size()) grow_copies(2 * std::size_t{n} + 16);
   return n;
 }
 
@@ -215,6 +220,12 @@ void ReverseReplay::apply(Op op) {
   --index_;
   after_ = op;
   asked_ = false;
+  // The common case of update_step(): a component open (an undo leaves it so), symbols left
+  // and no component start possible here.
+  if (index_ != 0 && (length_ != 3 || !stack_.empty())) {
+    step_ = Step::kSymbol;
+    return;
+  }
   update_step();
 }
 
@@ -288,7 +299,7 @@ ReplayedSurface ReverseReplay::finish() {
     }
     return number_[r];
   };
-  for (std::uint32_t id = 0; id < parent_.size(); ++id) number_[id] = root_number(id);
+  for (std::uint32_t id = 0; id < nodes_.size(); ++id) number_[id] = root_number(id);
   ReplayedSurface out;
   out.vertex_count = static_cast<std::uint32_t>(vertices_);
   out.triangles = std::move(triangles_);

@@ -76,6 +76,7 @@ class ReverseReplay {
 
   [[noreturn]] void fail(const std::string& problem) const;
   std::uint32_t add_node();  // a new node, its copy on no triangle yet
+  void grow_copies(std::size_t copies);  // parent_ and number_ for `copies` nodes
   void link(std::uint32_t a, std::uint32_t b) {
     nodes_[a].next = b;
     nodes_[b].prev = a;
@@ -113,7 +114,8 @@ class ReverseReplay {
   std::vector<LoopNode> nodes_;
   std::uint32_t gate_ = 0, length_ = 0;
   std::vector<Stacked> stack_;
-  // Per node (vertex copy): its parent in the merge forest, its number once completed.
+  // Per node (vertex copy; sized ahead of nodes_): its parent in the merge forest, its number
+  // once completed.
   std::vector<std::uint32_t> parent_, number_;
   std::vector<Triangle> triangles_;           // per walk triangle, in copies
   std::vector<VertexPredictors> predictors_;  // per vertex number, in copies

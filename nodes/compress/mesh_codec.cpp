@@ -15,10 +15,14 @@ namespace {
 
 // The symbol section: the symbols last first, each by an adaptive choice of 6 (of 8) per replay
 // context (nodes/compress/edgebreaker_replay.h), and where a component may start a bit saying
-// whether it does.
+// whether it does. Each symbol holds at least 24 of the 2^15 parts: a symbol costs at least
+// -log2(1 - 7 x 24 / 2^15) = 0.0074 bits, so a section of B bytes holds at most 1079 B symbols
+// (decode_body() refuses more before allocating for them).
+constexpr std::uint32_t kSymbolFloor = 24;
+constexpr std::uint64_t kSymbolsPerByte = 1200;
+using OpModel = FrequencyModel<8, kSymbolFloor>;
 struct SymbolModels {
-  std::vector<FrequencyModel<8>> symbol =
-      std::vector<FrequencyModel<8>>(ReverseReplay::kContexts);
+  std::vector<OpModel> symbol = std::vector<OpModel>(ReverseReplay::kContexts);
   BitModel starts;
 };
 
@@ -110,11 +114,16 @@ constexpr std::size_t kPositionContexts = kPredictions * kSpreads * kExtents;
 constexpr std::array<std::size_t, 3> kPreviousContext = {0, 0, 0};  // kPrevious, no spread
 constexpr unsigned kMaxParallelograms = ParallelogramRing::kMaxParallelograms;
 
-// The spread and extent part of one axis's residual context (kind_context() adds the kind).
+// The number of significant bits of v >= 0 (0 for 0).
+unsigned bit_length64(std::int64_t v) {
+  return v == 0 ? 0u : 64u - static_cast<unsigned>(__builtin_clzll(static_cast<std::uint64_t>(v)));
+}
+
+// The spread and extent part of one axis's residual context (kind_context() adds the kind):
+// spread 0, 1, 2-3, 4-7, 8+ and extent 0, 1-3, 4-15, 16-63, 64+ by their bit lengths.
 std::size_t shape_context(std::int64_t spread, std::int64_t extent) {
-  std::size_t s = 0;
-  while (s + 1 < kSpreads && spread >= (std::int64_t{1} << s)) ++s;
-  const std::size_t e = extent == 0 ? 0 : extent < 4 ? 1 : extent < 16 ? 2 : extent < 64 ? 3 : 4;
+  const unsigned s = std::min(bit_length64(spread), 4u);
+  const unsigned e = std::min((bit_length64(extent) + 1) / 2, 4u);
   return s * kExtents + e;
 }
 
@@ -152,39 +161,47 @@ Candidates candidates(std::uint32_t k, const VertexPredictors& p, const Parallel
   Candidates c;
   c.n = ring.gather(k, grid, c.parallelogram);
   std::array<std::int64_t, 3> spread{};  // how much the parallelograms disagree, per axis
-  for (std::size_t a = 0; a < 3 && c.n > 1; ++a) {
-    std::int64_t low = c.parallelogram[0][a], high = low;
-    for (unsigned i = 1; i < c.n; ++i) {
-      low = std::min(low, c.parallelogram[i][a]);
-      high = std::max(high, c.parallelogram[i][a]);
-    }
-    spread[a] = high - low;
-  }
-  const auto real = [&](std::uint32_t v) { return v != kNone && !hole[v]; };
-  bool any = false;
-  std::array<std::int64_t, 3> low{}, high{};
-  for (std::uint32_t v : {p.a, p.b, p.w}) {
-    if (!real(v)) continue;
+  if (c.n > 1)
     for (std::size_t a = 0; a < 3; ++a) {
-      low[a] = any ? std::min<std::int64_t>(low[a], grid[v][a]) : grid[v][a];
-      high[a] = any ? std::max<std::int64_t>(high[a], grid[v][a]) : grid[v][a];
+      std::int64_t low = c.parallelogram[0][a], high = low;
+      for (unsigned i = 1; i < c.n; ++i) {
+        low = std::min(low, c.parallelogram[i][a]);
+        high = std::max(high, c.parallelogram[i][a]);
+      }
+      spread[a] = high - low;
     }
-    any = true;
+  const auto real = [&](std::uint32_t v) { return v != kNone && !hole[v]; };
+  const bool ra = real(p.a), rb = real(p.b), rw = real(p.w);
+  // The extent of the gate's decoded corners per axis.
+  std::array<const std::array<std::int32_t, 3>*, 3> corner{};
+  unsigned corners = 0;
+  if (ra) corner[corners++] = &grid[p.a];
+  if (rb) corner[corners++] = &grid[p.b];
+  if (rw) corner[corners++] = &grid[p.w];
+  for (std::size_t a = 0; a < 3; ++a) {
+    std::int64_t low = 0, high = 0;
+    if (corners > 0) {
+      low = high = (*corner[0])[a];
+      for (unsigned i = 1; i < corners; ++i) {
+        low = std::min<std::int64_t>(low, (*corner[i])[a]);
+        high = std::max<std::int64_t>(high, (*corner[i])[a]);
+      }
+    }
+    c.shape[a] = shape_context(spread[a], high - low);
   }
-  for (std::size_t a = 0; a < 3; ++a) c.shape[a] = shape_context(spread[a], high[a] - low[a]);
   c.fallback = last;
-  if (c.n == 0 && real(p.a) && real(p.b) && real(p.w)) {
+  if (c.n == 0 && ra && rb && rw) {
     c.fallback_kind = kParallelogram;
     for (std::size_t i = 0; i < 3; ++i)
       c.fallback[i] =
           static_cast<std::int32_t>(std::int64_t{grid[p.a][i]} + grid[p.b][i] - grid[p.w][i]);
-  } else if (real(p.a) && real(p.b)) {
+  } else if (ra && rb) {
     c.fallback_kind = kMidpoint;
     for (std::size_t i = 0; i < 3; ++i)
       c.fallback[i] = static_cast<std::int32_t>((std::int64_t{grid[p.a][i]} + grid[p.b][i]) / 2);
-  } else if (real(p.a) || real(p.b)) {
+  } else if (ra || rb) {
     c.fallback_kind = kOne;
-    c.fallback = grid[real(p.a) ? p.a : p.b];
+    c.fallback = grid[ra ? p.a : p.b];
   }
   if (c.n > 0) c.fallback_kind = kRefused;
   return c;
@@ -334,13 +351,13 @@ std::vector<unsigned char> encode_side(const Connectivity& c, std::uint32_t hole
 // The three position sections: the surface vertices (decoded vertex k is input vertex
 // input_of_decoded[k]) in decoding order, then `off_surface`. The encoder flags the subset of
 // the offered parallelograms whose residuals and choice cost least under the models as they
-// stand. Adds to `stats`.
-void encode_positions(const TriangleMesh& mesh, const Quantizer& quantizer,
-                      const ReplayedSurface& replayed, const VertexRoles& roles,
-                      const std::vector<std::uint32_t>& input_of_decoded,
-                      const std::vector<std::uint32_t>& off_surface, io::ByteWriter& out,
-                      BodyStats& stats) {
+// stand. Adds to `stats`; returns the grid positions per output vertex.
+std::vector<std::array<std::int32_t, 3>> encode_positions(
+    const TriangleMesh& mesh, const Quantizer& quantizer, const ReplayedSurface& replayed,
+    const VertexRoles& roles, const std::vector<std::uint32_t>& input_of_decoded,
+    const std::vector<std::uint32_t>& off_surface, io::ByteWriter& out, BodyStats& stats) {
   const auto decoded = static_cast<std::uint32_t>(roles.hole.size());
+  std::vector<std::array<std::int32_t, 3>> grid_out(roles.surface_outputs + off_surface.size());
   const ParallelogramRing ring(replayed.diamonds, roles.hole, decoded);
   RangeEncoder enc[3];
   PositionModels m;
@@ -381,25 +398,29 @@ void encode_positions(const TriangleMesh& mesh, const Quantizer& quantizer,
     stats.offered_parallelograms += offer.n;
     const std::array<std::int32_t, 3> predicted = predict(offer, best, context);
     grid[k] = q;
+    grid_out[roles.output[k]] = q;
     code(q, predicted, context);
   }
-  for (std::uint32_t v : off_surface)
-    code(quantizer.quantize(mesh.vertices[v]), last, kPreviousContext);
+  for (std::size_t j = 0; j < off_surface.size(); ++j) {
+    const std::array<std::int32_t, 3> q = quantizer.quantize(mesh.vertices[off_surface[j]]);
+    grid_out[roles.surface_outputs + j] = q;
+    code(q, last, kPreviousContext);
+  }
   for (RangeEncoder& e : enc) {
     const std::vector<unsigned char> bytes = e.finish();
     stats.position_bytes += bytes.size();
     write_section(out, bytes);
   }
+  return grid_out;
 }
 
 // The normal bits and the attribute section (nodes/compress/attribute_coder.h), predicted from
-// the geometry the decoder will have (output order `o`). Sets `codes` if given.
-void encode_attributes(const TriangleMesh& mesh, const Quantizer& quantizer, AttributeFlags flags,
-                       const BodyOrder& o, const std::vector<std::uint32_t>& output_of_input,
-                       io::ByteWriter& out, BodyStats& stats, BodyCodes* codes) {
-  std::vector<std::array<std::int32_t, 3>> grid(o.vertex.size());
-  for (std::size_t i = 0; i < o.vertex.size(); ++i)
-    grid[i] = quantizer.quantize(mesh.vertices[o.vertex[i]]);
+// the geometry the decoder will have (output order `o`, grid positions `grid`). Sets `codes` if
+// given.
+void encode_attributes(const TriangleMesh& mesh, std::vector<std::array<std::int32_t, 3>> grid,
+                       AttributeFlags flags, const BodyOrder& o,
+                       const std::vector<std::uint32_t>& output_of_input, io::ByteWriter& out,
+                       BodyStats& stats, BodyCodes* codes) {
   std::vector<Triangle> triangles(o.triangle.size());
   for (std::size_t k = 0; k < o.triangle.size(); ++k)
     for (std::size_t j = 0; j < 3; ++j)
@@ -489,8 +510,9 @@ BodyStats encode_body(const TriangleMesh& mesh, const Quantizer& quantizer, Attr
   stats.connectivity_bytes = side.size() + symbols.size();
   write_section(out, side);
   write_section(out, symbols);
-  encode_positions(mesh, quantizer, replayed, roles, input_of_decoded, off_surface, out, stats);
-  encode_attributes(mesh, quantizer, flags, o, output_of_input, out, stats, codes);
+  std::vector<std::array<std::int32_t, 3>> grid =
+      encode_positions(mesh, quantizer, replayed, roles, input_of_decoded, off_surface, out, stats);
+  encode_attributes(mesh, std::move(grid), flags, o, output_of_input, out, stats, codes);
   return stats;
 }
 
@@ -563,14 +585,14 @@ SideData decode_side(Section section, std::uint64_t symbols, std::uint64_t decod
     side.merged[k] = static_cast<std::uint32_t>(k - back);
     previous = static_cast<std::uint32_t>(k);
   }
-  // An integer costs at least -log2(1 - 31 x 2 / 2^15) = 0.0027 bits (IntegerModel): at most
-  // 4096 per byte of a position stream, 1024 degenerate triangles (3 corners) per byte here.
+  // An integer costs at least -log2(1 - 63 x 2 / 2^15) = 0.0056 bits (IntegerModel): at most
+  // 1440 per byte of a position stream, 480 degenerate triangles (3 corners) per byte here.
   side.off_surface = get(m.count, "vertices off the surface", 0x7FFFFFFF);
-  if (side.off_surface > 4096 * std::uint64_t{remaining} + 64)
+  if (side.off_surface > 1536 * std::uint64_t{remaining} + 64)
     throw Error(source, "side section: vertices off the surface",
                 std::to_string(side.off_surface) + " do not fit the rest of the file");
   const std::uint32_t degenerates = get(m.count, "degenerate triangles", 0x7FFFFFFF);
-  if (degenerates > 1024 * std::uint64_t{section.size} + 64)
+  if (degenerates > 512 * std::uint64_t{section.size} + 64)
     throw Error(source, "side section: degenerate triangles", "more than the section holds");
   side.degenerate.resize(3 * std::size_t{degenerates});
   for (std::uint32_t& v : side.degenerate)
@@ -693,10 +715,9 @@ TriangleMesh decode_body(io::ByteReader& in, const Quantizer& quantizer, Attribu
   const std::uint64_t decoded = in.u64("surface vertex count");
   const Section side_section = read_section(in, "side section");
   const Section symbol_section = read_section(in, "symbol section");
-  // A symbol costs at least -log2(1 - 7 x 2 / 2^15) = 0.0006 bits (the other seven symbols'
-  // floors, FrequencyModel); more symbols than the section can hold is corrupt (and would
-  // allocate without bound).
-  if (symbols > 16384 * std::uint64_t{symbol_section.size} + 64 ||
+  // More symbols than the section can hold (SymbolModels) is corrupt, and would allocate
+  // without bound.
+  if (symbols > kSymbolsPerByte * symbol_section.size + 64 ||
       decoded > 3 * symbols + 3 * components + 3 || components > symbols + 1)
     in.fail("symbol count", std::to_string(symbols) + " symbols, " + std::to_string(decoded) +
                                 " vertices and " + std::to_string(components) +

@@ -21,7 +21,7 @@ class ParallelogramRing {
  public:
   /// `diamonds`: every edge of the replayed surface once (corners are decoded vertex numbers <
   /// `vertices`); `hole[v]` != 0 marks vertices that carry no position (they never predict).
-  /// O(V + E) time and memory.
+  /// O(V + E) time and memory (48 bytes per vertex).
   ParallelogramRing(const std::vector<EdgeDiamond>& diamonds, const std::vector<char>& hole,
                     std::size_t vertices);
 
@@ -34,12 +34,11 @@ class ParallelogramRing {
   /// kMaxParallelograms). O(n).
   unsigned gather(std::uint32_t k, const std::vector<std::array<std::int32_t, 3>>& grid,
                   Parallelograms& out) const {
-    const std::uint32_t end = first_[k + 1];
-    unsigned count = 0;
-    for (std::uint32_t i = first_[k]; i < end; ++i, ++count) {
-      const Corners& c = corners_[i];
-      const auto &x = grid[c.x], &y = grid[c.y], &w = grid[c.w];
-      for (std::size_t a = 0; a < 3; ++a) out[count][a] = std::int64_t{x[a]} + y[a] - w[a];
+    const unsigned count = count_[k];
+    const Corners* c = &corners_[std::size_t{k} * kMaxParallelograms];
+    for (unsigned i = 0; i < count; ++i) {
+      const auto &x = grid[c[i].x], &y = grid[c[i].y], &w = grid[c[i].w];
+      for (std::size_t a = 0; a < 3; ++a) out[i][a] = std::int64_t{x[a]} + y[a] - w[a];
     }
     return count;
   }
@@ -48,8 +47,8 @@ class ParallelogramRing {
   struct Corners {
     std::uint32_t x, y, w;
   };
-  std::vector<std::uint32_t> first_;  // per vertex + 1: offsets into corners_
-  std::vector<Corners> corners_;      // grouped by predicted vertex, at most 4 each
+  std::vector<std::uint8_t> count_;  // per vertex: parallelograms offered (<= 4)
+  std::vector<Corners> corners_;     // kMaxParallelograms slots per vertex
 };
 
 }  // namespace meshflow::compress

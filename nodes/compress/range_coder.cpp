@@ -87,38 +87,21 @@ void IntegerModel::encode(RangeEncoder& enc, std::int32_t value) {
   const bool negative = value < 0;
   const std::uint32_t magnitude =
       negative ? 0u - static_cast<std::uint32_t>(value) : static_cast<std::uint32_t>(value);
-  const unsigned n = bit_length(magnitude);  // 0 .. 32 (32 only for INT32_MIN)
-  if (n <= 1) {
-    head_.encode(enc, n == 0 ? 0u : 1u + negative);
+  if (magnitude < 16) {
+    head_.encode(enc, magnitude == 0 ? 0u : 2 * magnitude - 1 + negative);
     return;
   }
+  const unsigned n = bit_length(magnitude);  // 5 .. 32 (32 only for INT32_MIN)
   if (n <= kShortLengths) {
-    const unsigned top = (magnitude >> (n - 2)) & 1u;
-    head_.encode(enc, 3 + 4 * (n - 2) + 2 * top + negative);
-    if (n >= 3) {
-      enc.encode(second_[n][top], (magnitude >> (n - 3)) & 1u);
-      if (n >= 4) enc.encode_direct(magnitude & ((1u << (n - 3)) - 1u), n - 3);
-    }
+    const unsigned t = (magnitude >> (n - 3)) & 3u;
+    head_.encode(enc, 31 + 8 * (n - 5) + 2 * t + negative);
+    enc.encode_direct(magnitude & ((1u << (n - 3)) - 1u), n - 3);
     return;
   }
   head_.encode(enc, kEscape);
   long_length_.encode(enc, n - (kShortLengths + 1));
   enc.encode_direct(magnitude & ((1u << (n - 1)) - 1u), n - 1);
   enc.encode_direct(negative, 1);
-}
-
-std::uint32_t IntegerModel::cost(std::int32_t value) const {
-  const bool negative = value < 0;
-  const std::uint32_t magnitude =
-      negative ? 0u - static_cast<std::uint32_t>(value) : static_cast<std::uint32_t>(value);
-  const unsigned n = bit_length(magnitude);
-  if (n <= 1) return head_.cost(n == 0 ? 0u : 1u + negative);
-  if (n > kShortLengths)
-    return head_.cost(kEscape) + long_length_.cost(n - (kShortLengths + 1)) + 16 * n;
-  const unsigned top = (magnitude >> (n - 2)) & 1u;
-  std::uint32_t total = head_.cost(3 + 4 * (n - 2) + 2 * top + negative);
-  if (n >= 3) total += bit_cost(second_[n][top], (magnitude >> (n - 3)) & 1u) + 16 * (n - 3);
-  return total;
 }
 
 std::int32_t IntegerModel::decode_long(RangeDecoderCore& dec) {

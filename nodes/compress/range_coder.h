@@ -194,24 +194,33 @@ class RangeDecoder {
 };
 
 /// An adaptive distribution over N symbols (N a power of two, 2 .. 64), coded in one step: the
-/// coder's range is split into 2^15 parts, each symbol holding at least kFloor of them and the
-/// rest in proportion to its count (each symbol seen adds kIncrement; the counts halve past
+/// coder's range is split into 2^15 parts, each symbol holding at least Floor of them (so a
+/// symbol costs at least -log2(1 - (N - 1) Floor / 2^15) bits: a decoder can bound how many
+/// symbols a stream holds) and the rest in proportion to its count (each symbol seen adds kIncrement; the counts halve past
 /// kLimit). The parts are recomputed from the counts after 1, 2, 4, ... symbols, then every
 /// kMaxInterval; a decoder finds its symbol by a branch-free binary search. Replaces
 /// log2(N) binary decisions (one range step and one model update each) by one range step and
 /// a counter increment.
-template <unsigned N>
+template <unsigned N, std::uint32_t Floor = 2>
 class FrequencyModel {
  public:
   static_assert(N >= 2 && N <= 64 && (N & (N - 1)) == 0, "N is a power of two");
+  static_assert(Floor >= 1 && Floor * N < (1u << 14), "the floors leave most parts to counts");
   static constexpr unsigned kPartBits = 15;
   static constexpr std::uint32_t kParts = 1u << kPartBits;
-  static constexpr std::uint32_t kFloor = 2, kIncrement = 32, kLimit = 1u << 15;
+  static constexpr std::uint32_t kFloor = Floor, kIncrement = 32, kLimit = 1u << 15;
   static constexpr std::uint16_t kMaxInterval = 32;
 
+  /// Every symbol counted once.
   FrequencyModel() {
     count_.fill(1);
     total_ = N;
+    rebuild();
+  }
+  /// Starting from `counts` (each >= 1, summing to at most kLimit): a prior that makes the
+  /// first occurrences of likely symbols cheap.
+  explicit FrequencyModel(const std::array<std::uint16_t, N>& counts) : count_(counts) {
+    for (std::uint16_t c : count_) total_ += c;
     rebuild();
   }
 
@@ -276,41 +285,64 @@ class FrequencyModel {
 };
 
 namespace detail {
-/// IntegerModel's head symbols below kIntegerEscape: the bit length of |v|, the bit below the
-/// leading one, the sign, and the magnitude's bits known from them (shifted into place).
+/// IntegerModel's head symbols below kIntegerEscape: the magnitude's bits they give (shifted
+/// into place), the count of bits below them (at even odds) and the sign.
 struct IntegerHead {
-  std::uint8_t length, top, negative;
   std::uint32_t magnitude;
+  std::uint8_t below, negative;
 };
-inline constexpr unsigned kIntegerEscape = 31;
-/// Head symbol 0: 0; 1, 2: +1, -1; 3 + 4 (n - 2) + 2 top + negative for lengths n = 2 .. 8.
+inline constexpr unsigned kIntegerHeads = 64, kIntegerEscape = 63;
+/// Head symbol 0: 0; 2 m - 1 + negative: +-m for m = 1 .. 15; 31 + 8 (n - 5) + 2 t + negative
+/// for bit lengths n = 5 .. 8 of |v| whose two bits below the leading one are t.
 constexpr std::array<IntegerHead, kIntegerEscape> integer_heads() {
   std::array<IntegerHead, kIntegerEscape> h{};
-  h[0] = {0, 0, 0, 0};
-  h[1] = {1, 0, 0, 1};
-  h[2] = {1, 0, 1, 1};
-  for (unsigned n = 2; n <= 8; ++n)
-    for (unsigned top = 0; top < 2; ++top)
+  h[0] = {0, 0, 0};
+  for (unsigned m = 1; m < 16; ++m)
+    for (unsigned negative = 0; negative < 2; ++negative)
+      h[2 * m - 1 + negative] = {m, 0, static_cast<std::uint8_t>(negative)};
+  for (unsigned n = 5; n <= 8; ++n)
+    for (unsigned t = 0; t < 4; ++t)
       for (unsigned negative = 0; negative < 2; ++negative)
-        h[3 + 4 * (n - 2) + 2 * top + negative] = {static_cast<std::uint8_t>(n),
-                                                   static_cast<std::uint8_t>(top),
-                                                   static_cast<std::uint8_t>(negative),
-                                                   (2u | top) << (n - 2)};
+        h[31 + 8 * (n - 5) + 2 * t + negative] = {(4u | t) << (n - 3),
+                                                  static_cast<std::uint8_t>(n - 3),
+                                                  static_cast<std::uint8_t>(negative)};
   return h;
+}
+/// IntegerModel's prior counts per head symbol: small magnitudes likelier (a residual's
+/// distribution before its context has seen any).
+constexpr std::array<std::uint16_t, kIntegerHeads> integer_prior() {
+  std::array<std::uint16_t, kIntegerHeads> c{};
+  c[0] = 24;
+  for (unsigned m = 1; m < 16; ++m)
+    c[2 * m - 1] = c[2 * m] = static_cast<std::uint16_t>(m < 2 ? 20 : m < 4 ? 12 : m < 8 ? 6 : 3);
+  for (unsigned s = 31; s < kIntegerHeads; ++s)
+    c[s] = static_cast<std::uint16_t>(s < 39 ? 3 : s < 47 ? 2 : 1);
+  return c;
 }
 }  // namespace detail
 
-/// Signed integers (|v| < 2^31) in one adaptive choice of 32 (FrequencyModel): 0, +-1, and for
-/// bit lengths n = 2 .. 8 of |v| the sign and the bit below the leading one (4 choices each);
-/// then for n >= 3 the next bit adaptively (per length and bit above), the rest at even odds.
-/// Lengths 9 .. 32 escape to a second choice of length, their bits and sign at even odds. Small
-/// residuals cost one step; any 32-bit value round-trips.
+/// Signed integers (|v| < 2^31) by one adaptive choice of 64 (FrequencyModel): the values
+/// -15 .. 15 exactly, and for bit lengths n = 5 .. 8 of |v| the sign and the two bits below the
+/// leading one (the rest at even odds). Lengths 9 .. 32 escape to a second choice of length,
+/// their bits and sign at even odds. Residuals within +-15 cost one step; any 32-bit value
+/// round-trips.
 class IntegerModel {
  public:
   /// Codes `value`.
   void encode(RangeEncoder& enc, std::int32_t value);
   /// What encode(value) would cost now, in 1/16ths of a bit (bit_cost()); changes nothing.
-  std::uint32_t cost(std::int32_t value) const;
+  /// Inline: encoders price several candidate residuals per value.
+  std::uint32_t cost(std::int32_t value) const {
+    const bool negative = value < 0;
+    const std::uint32_t magnitude =
+        negative ? 0u - static_cast<std::uint32_t>(value) : static_cast<std::uint32_t>(value);
+    if (magnitude < 16) return head_.cost(magnitude == 0 ? 0u : 2 * magnitude - 1 + negative);
+    const unsigned n = 32u - static_cast<unsigned>(__builtin_clz(magnitude));
+    if (n > kShortLengths)
+      return head_.cost(kEscape) + long_length_.cost(n - (kShortLengths + 1)) + 16 * n;
+    const unsigned t = (magnitude >> (n - 3)) & 3u;
+    return head_.cost(31 + 8 * (n - 5) + 2 * t + negative) + 16 * (n - 3);
+  }
   /// The next value.
   std::int32_t decode(RangeDecoder& dec) {
     RangeDecoder::Session s(dec);
@@ -322,10 +354,7 @@ class IntegerModel {
     if (s < kEscape) {
       const Head h = kHeads[s];
       std::uint32_t magnitude = h.magnitude;
-      if (h.length >= 3) {
-        magnitude |= dec.decode(second_[h.length][h.top]) << (h.length - 3);
-        if (h.length >= 4) magnitude |= dec.decode_direct(h.length - 3u);
-      }
+      if (h.below > 0) magnitude |= dec.decode_direct(h.below);
       return static_cast<std::int32_t>(h.negative ? 0u - magnitude : magnitude);
     }
     return decode_long(dec);
@@ -345,9 +374,8 @@ class IntegerModel {
   static constexpr std::array<Head, kEscape> kHeads = detail::integer_heads();
 
   std::int32_t decode_long(RangeDecoderCore& dec);
-  FrequencyModel<32> head_;
+  FrequencyModel<detail::kIntegerHeads> head_{detail::integer_prior()};
   FrequencyModel<32> long_length_;  // lengths 9 .. 32 as 0 .. 23
-  std::array<std::array<BitModel, 2>, kShortLengths + 1> second_{};
 };
 
 }  // namespace meshflow::compress

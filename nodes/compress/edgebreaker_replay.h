@@ -75,7 +75,7 @@ class ReverseReplay {
   };
 
   [[noreturn]] void fail(const std::string& problem) const;
-  std::uint32_t add_node();  // a new node, its copy on no triangle yet
+  std::uint32_t add_node();              // a new node, its copy on no triangle yet
   void grow_copies(std::size_t copies);  // parent_ and number_ for `copies` nodes
   void link(std::uint32_t a, std::uint32_t b) {
     nodes_[a].next = b;

@@ -258,8 +258,7 @@ std::int64_t rounded_mean(std::int64_t sum, std::int64_t n) {
 std::array<std::int32_t, 3> predict(const Candidates& c, unsigned trusted,
                                     std::array<std::size_t, 3>& context) {
   if (trusted == 0) {
-    for (std::size_t a = 0; a < 3; ++a)
-      context[a] = kind_context(c.fallback_kind, c.shape[a]);
+    for (std::size_t a = 0; a < 3; ++a) context[a] = kind_context(c.fallback_kind, c.shape[a]);
     return c.fallback;
   }
   std::array<std::int64_t, 3> sum{};
@@ -528,17 +527,17 @@ struct Section {
 Section read_section(io::ByteReader& in, const char* field) {
   const std::uint64_t n = in.u64(field);
   if (n > in.remaining())
-    in.fail(field, "section of " + std::to_string(n) + " bytes, " +
-                       std::to_string(in.remaining()) + " left (truncated)");
+    in.fail(field, "section of " + std::to_string(n) + " bytes, " + std::to_string(in.remaining()) +
+                       " left (truncated)");
   return {in.bytes(static_cast<std::size_t>(n), field), static_cast<std::size_t>(n)};
 }
 
 // What the side section holds.
 struct SideData {
   std::vector<HandleRecord> handles;
-  std::vector<char> hole;             // per decoded vertex
-  std::vector<std::uint32_t> merged;  // per decoded vertex: the earlier one it is, or kNone
-  std::uint64_t off_surface = 0;      // vertices on no triangle
+  std::vector<char> hole;                 // per decoded vertex
+  std::vector<std::uint32_t> merged;      // per decoded vertex: the earlier one it is, or kNone
+  std::uint64_t off_surface = 0;          // vertices on no triangle
   std::vector<std::uint32_t> degenerate;  // three output corners per triangle
 };
 
@@ -688,8 +687,8 @@ std::vector<Triangle> output_triangles(const ReplayedSurface& replayed, const Ve
 // Reads the normal bits and the attribute section into `mesh` (whose vertices, grid positions
 // `grid` and triangles are decoded); returns the normal bits.
 unsigned decode_attributes(io::ByteReader& in, AttributeFlags flags,
-                           const std::vector<std::array<std::int32_t, 3>>& grid,
-                           TriangleMesh& mesh, const std::string& source) {
+                           const std::vector<std::array<std::int32_t, 3>>& grid, TriangleMesh& mesh,
+                           const std::string& source) {
   const unsigned normal_bits = in.u8("normal bits");
   if (flags.normals && (normal_bits < kMinNormalBits || normal_bits > kMaxNormalBits))
     in.fail("normal bits", std::to_string(normal_bits) + " is not " +
@@ -724,8 +723,7 @@ TriangleMesh decode_body(io::ByteReader& in, const Quantizer& quantizer, Attribu
                                 " components do not fit a section of " +
                                 std::to_string(symbol_section.size) + " bytes");
   SideData side = decode_side(side_section, symbols, decoded, in.remaining(), source);
-  RangeDecoder symbol_decoder(symbol_section.bytes, symbol_section.size, source,
-                              "symbol section");
+  RangeDecoder symbol_decoder(symbol_section.bytes, symbol_section.size, source, "symbol section");
   const ReplayedSurface replayed =
       decode_symbols(components, static_cast<std::size_t>(symbols),
                      static_cast<std::size_t>(decoded), side.handles, symbol_decoder, source);

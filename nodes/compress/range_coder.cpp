@@ -79,8 +79,7 @@ RangeDecoder::RangeDecoder(const unsigned char* data, std::size_t size, std::str
 }
 
 void RangeDecoder::check() const {
-  if (core_.overran())
-    throw Error(source_, what_, "stream ends early (truncated or corrupt)");
+  if (core_.overran()) throw Error(source_, what_, "stream ends early (truncated or corrupt)");
 }
 
 void IntegerModel::encode(RangeEncoder& enc, std::int32_t value) {

@@ -3,8 +3,9 @@
 // byte) and the models built on it that meshflow's mesh compression uses: adaptive bits (11-bit
 // probabilities that adapt by 1/32 per bit), symbols of a small alphabet in one step from
 // adaptive counts (FrequencyModel), and signed integers by one such symbol (their bit length,
-// sign and top bit) and a mantissa (the next bit adaptive, the rest at even odds). Encoder and decoder must make the same calls in the same
-// order with equally fresh models. Not thread-safe: one coder and one set of models per stream.
+// sign and top bit) and a mantissa (the next bit adaptive, the rest at even odds). Encoder and
+// decoder must make the same calls in the same order with equally fresh models. Not thread-safe:
+// one coder and one set of models per stream.
 
 #include <array>
 #include <cstddef>
@@ -196,11 +197,11 @@ class RangeDecoder {
 /// An adaptive distribution over N symbols (N a power of two, 2 .. 64), coded in one step: the
 /// coder's range is split into 2^15 parts, each symbol holding at least Floor of them (so a
 /// symbol costs at least -log2(1 - (N - 1) Floor / 2^15) bits: a decoder can bound how many
-/// symbols a stream holds) and the rest in proportion to its count (each symbol seen adds kIncrement; the counts halve past
-/// kLimit). The parts are recomputed from the counts after 1, 2, 4, ... symbols, then every
-/// kMaxInterval; a decoder finds its symbol by a branch-free binary search. Replaces
-/// log2(N) binary decisions (one range step and one model update each) by one range step and
-/// a counter increment.
+/// symbols a stream holds) and the rest in proportion to its count (each symbol seen adds
+/// kIncrement; the counts halve past kLimit). The parts are recomputed from the counts after 1, 2,
+/// 4, ... symbols, then every kMaxInterval; a decoder finds its symbol by a branch-free binary
+/// search. Replaces log2(N) binary decisions (one range step and one model update each) by one
+/// range step and a counter increment.
 template <unsigned N, std::uint32_t Floor = 2>
 class FrequencyModel {
  public:
@@ -241,8 +242,7 @@ class FrequencyModel {
     const std::uint32_t top = r * kParts - 1u;
     const std::uint32_t code = dec.code < top ? dec.code : top;
     unsigned s = 0;
-    for (unsigned step = N / 2; step > 0; step /= 2)
-      s += r * part_[s + step] <= code ? step : 0u;
+    for (unsigned step = N / 2; step > 0; step /= 2) s += r * part_[s + step] <= code ? step : 0u;
     dec.take_part(r, part_[s], part_[s + 1], s == N - 1);
     update(s);
     return s;

@@ -6,9 +6,9 @@ namespace meshflow::compress {
 namespace {
 
 // Pairs the half-edges of edges used by exactly two faces in opposite directions: half-edges
-// listed by origin with their ends beside them (a counting sort), then each a -> b looks for
-// b -> a among b's and counts the a -> b among a's, reading two short runs of the list.
-// O(T x valence).
+// listed by origin with their ends beside them (a counting sort); per origin a, how many a -> b
+// there are for each end b (a counter per vertex, cleared after a); then each single a -> b
+// looks for b -> a among b's, reading one short run of the list. O(T x valence).
 void pair_twins(const std::vector<std::uint32_t>& corners, std::size_t vertices,
                 std::vector<std::uint32_t>& twin) {
   const auto halves = static_cast<std::uint32_t>(corners.size());
@@ -17,27 +17,36 @@ void pair_twins(const std::vector<std::uint32_t>& corners, std::size_t vertices,
   for (std::size_t v = 0; v < vertices; ++v) first[v + 1] += first[v];
   {
     std::vector<std::uint32_t> fill(first.begin(), first.end() - 1);
-    for (std::uint32_t h = 0; h < halves; ++h) {
-      const std::uint32_t i = fill[corners[h]]++;
-      by_origin[i] = h;
-      end[i] = corners[next_half(h)];
+    for (std::uint32_t t = 0; t < halves; t += 3)
+      for (std::uint32_t j = 0; j < 3; ++j) {
+        const std::uint32_t i = fill[corners[t + j]]++;
+        by_origin[i] = t + j;
+        end[i] = corners[t + (j == 2 ? 0 : j + 1)];
+      }
+  }
+  // single[i]: list entry i is its origin's only half-edge to its end.
+  std::vector<std::uint8_t> single(halves);
+  {
+    std::vector<std::uint32_t> count(vertices, 0);
+    for (std::uint32_t a = 0; a < vertices; ++a) {
+      for (std::uint32_t j = first[a]; j < first[a + 1]; ++j) ++count[end[j]];
+      for (std::uint32_t j = first[a]; j < first[a + 1]; ++j) single[j] = count[end[j]] == 1;
+      for (std::uint32_t j = first[a]; j < first[a + 1]; ++j) count[end[j]] = 0;
     }
   }
   twin.assign(halves, kNone);
   for (std::uint32_t a = 0; a < vertices; ++a)
     for (std::uint32_t j = first[a]; j < first[a + 1]; ++j) {
       const std::uint32_t h = by_origin[j];
-      if (twin[h] != kNone) continue;
+      if (twin[h] != kNone || !single[j]) continue;
       const std::uint32_t b = end[j];
-      std::uint32_t reverse = kNone, reverse_count = 0, forward_count = 0;
+      std::uint32_t reverse = kNone, reverse_count = 0;
       for (std::uint32_t i = first[b]; i < first[b + 1]; ++i)
         if (end[i] == a) {
           reverse = by_origin[i];
           ++reverse_count;
         }
-      if (reverse_count != 1) continue;
-      for (std::uint32_t i = first[a]; i < first[a + 1]; ++i) forward_count += end[i] == b;
-      if (forward_count == 1) {
+      if (reverse_count == 1) {
         twin[h] = reverse;
         twin[reverse] = h;
       }
@@ -48,17 +57,20 @@ void pair_twins(const std::vector<std::uint32_t>& corners, std::size_t vertices,
 
 ClosedSurface build_closed_surface(const std::vector<Triangle>& triangles) {
   ClosedSurface s;
-  std::vector<std::uint32_t> input_corners;  // input vertex per corner
-  input_corners.reserve(3 * triangles.size());
+  std::vector<std::uint32_t> input_corners(3 * triangles.size());  // input vertex per corner
+  s.input_triangle.reserve(triangles.size());
+  std::size_t kept = 0;
   for (std::uint32_t t = 0; t < triangles.size(); ++t) {
     const Triangle& f = triangles[t];
     if (f[0] == f[1] || f[1] == f[2] || f[0] == f[2]) {
       s.degenerate_triangles.push_back(t);
       continue;
     }
-    input_corners.insert(input_corners.end(), f.begin(), f.end());
+    for (std::size_t j = 0; j < 3; ++j) input_corners[3 * kept + j] = f[j];
+    ++kept;
     s.input_triangle.push_back(t);
   }
+  input_corners.resize(3 * kept);
   std::size_t vertices = 0;
   for (std::uint32_t v : input_corners) vertices = std::max<std::size_t>(vertices, v + 1);
   pair_twins(input_corners, vertices, s.twin);

@@ -1,9 +1,10 @@
 #pragma once
 // meshflow's compressed mesh files (".mfc"): one triangle mesh, coded single-rate (Edgebreaker)
-// or progressively (a base mesh and vertex splits). Format, version 5, little-endian:
+// or progressively (a base mesh and vertex splits). Format, version 6, little-endian:
 //
 //   bytes 0-7   magic "MFMESH\r\n"
-//   u32         version (5; 4 had a position mode byte and no trust flags, 3 no position mode
+//   u32         version (6; 5 coded symbols, residual lengths and trust flags bit by bit, 4
+//               had a position mode byte and no trust flags, 3 no position mode
 //               byte, 2 no prefix checksums and coded
 //               attributes from one neighbour)
 //   u32         kind: 1 = Edgebreaker, 2 = progressive

@@ -41,11 +41,19 @@ struct VertexPredictors {
   std::uint32_t a = kNone, b = kNone, w = kNone;
 };
 
+/// An edge (x, y) of a replayed surface and the third vertices `left` and `right` of its two
+/// triangles (decoded vertex numbers): the parallelogram x + y - left predicts right and
+/// x + y - right predicts left.
+struct EdgeDiamond {
+  std::uint32_t x, y, left, right;
+};
+
 /// What replaying the connectivity gives (the walk's vertex numbers and triangle order).
 struct ReplayedSurface {
   std::uint32_t vertex_count = 0;            ///< decoded vertices, numbered in order of creation
   std::vector<Triangle> triangles;           ///< in decoding order
   std::vector<VertexPredictors> predictors;  ///< per decoded vertex
+  std::vector<EdgeDiamond> diamonds;         ///< every edge once, in replay order
 };
 
 /// The encoder's walk.

@@ -34,8 +34,8 @@ ReverseReplay::ReverseReplay(std::uint32_t components, std::size_t symbols, std:
   // more only grows the vectors).
   const std::size_t nodes = symbols + symbols / 4 + 3 * std::size_t{components} + 16;
   nodes_.reserve(nodes);
-  parent_.reserve(nodes);
-  number_.reserve(nodes);
+  grow_copies(nodes);
+  diamonds_.reserve(3 * (symbols + components) / 2 + 3);  // a closed surface's edges
   update_step();
 }
 
@@ -45,17 +45,25 @@ void ReverseReplay::fail(const std::string& problem) const {
               problem);
 }
 
+void ReverseReplay::grow_copies(std::size_t copies) {
+  const std::size_t old = parent_.size();
+  number_.resize(copies, kNone);
+  parent_.resize(copies);
+  for (std::size_t id = old; id < copies; ++id) parent_[id] = static_cast<std::uint32_t>(id);
+}
+
 inline std::uint32_t ReverseReplay::add_node() {
   const auto n = static_cast<std::uint32_t>(nodes_.size());
-  nodes_.push_back({kNone, kNone, kNone, 0});
-  parent_.push_back(n);
-  number_.push_back(kNone);
+  nodes_.push_back({kNone, kNone, kNone, 0, kNone});
+  if (n >= parent_.size()) grow_copies(2 * std::size_t{n} + 16);
   return n;
 }
 
 inline void ReverseReplay::resolve(std::uint32_t n, std::uint32_t w) {
-  if (nodes_[n].waiting != kNone) predictors_[nodes_[n].waiting].w = w;
-  nodes_[n].waiting = kNone;
+  LoopNode& node = nodes_[n];
+  if (node.waiting != kNone) predictors_[node.waiting].w = w;
+  node.waiting = kNone;
+  if (node.opposite != kNone) diamonds_.push_back({n, node.next, node.opposite, w});
 }
 
 inline void ReverseReplay::triangle(std::uint32_t b, std::uint32_t a, std::uint32_t x) {
@@ -82,6 +90,9 @@ inline void ReverseReplay::undo_e() {
   link(a, b);
   link(b, p);
   triangle(b, a, p);
+  nodes_[p].opposite = b;
+  nodes_[a].opposite = p;
+  nodes_[b].opposite = a;
   gate_ = a;
   length_ = 3;
   open_ = true;
@@ -101,6 +112,7 @@ inline void ReverseReplay::undo_c() {
   resolve(an, bn);
   resolve(xn, an);
   link(an, bn);
+  nodes_[an].opposite = xn;
   nodes_[an].waiting = static_cast<std::uint32_t>(k);
   gate_ = an;
   --length_;
@@ -114,6 +126,8 @@ inline void ReverseReplay::undo_l() {
   resolve(pn, an);
   link(pn, an);
   link(an, bn);
+  nodes_[pn].opposite = bn;
+  nodes_[an].opposite = pn;
   gate_ = an;
   ++length_;
 }
@@ -126,6 +140,8 @@ inline void ReverseReplay::undo_r() {
   resolve(an, bn);
   link(an, bn);
   link(bn, qn);
+  nodes_[an].opposite = qn;
+  nodes_[bn].opposite = an;
   ++length_;
 }
 
@@ -148,7 +164,9 @@ inline void ReverseReplay::unsplit(std::uint32_t an, std::uint32_t xn) {
   resolve(an, bn);
   resolve(xn, an);
   nodes_[xn].waiting = nodes_[xc].waiting;  // xn takes over x' -> y
+  nodes_[xn].opposite = nodes_[xc].opposite;
   link(an, bn);
+  nodes_[an].opposite = xn;
   link(last, xn);
   link(xn, yn);
 }
@@ -202,6 +220,12 @@ void ReverseReplay::apply(Op op) {
   --index_;
   after_ = op;
   asked_ = false;
+  // The common case of update_step(): a component open (an undo leaves it so), symbols left
+  // and no component start possible here.
+  if (index_ != 0 && (length_ != 3 || !stack_.empty())) {
+    step_ = Step::kSymbol;
+    return;
+  }
   update_step();
 }
 
@@ -275,7 +299,7 @@ ReplayedSurface ReverseReplay::finish() {
     }
     return number_[r];
   };
-  for (std::uint32_t id = 0; id < parent_.size(); ++id) number_[id] = root_number(id);
+  for (std::uint32_t id = 0; id < nodes_.size(); ++id) number_[id] = root_number(id);
   ReplayedSurface out;
   out.vertex_count = static_cast<std::uint32_t>(vertices_);
   out.triangles = std::move(triangles_);
@@ -291,6 +315,9 @@ ReplayedSurface ReverseReplay::finish() {
       throw Error(source_, "connectivity triangle " + std::to_string(t), "has a repeated vertex");
   }
   out.predictors = std::move(predictors_);
+  out.diamonds = std::move(diamonds_);
+  for (EdgeDiamond& d : out.diamonds)
+    for (std::uint32_t* v : {&d.x, &d.y, &d.left, &d.right}) *v = number_[*v];
   for (VertexPredictors& p : out.predictors)
     for (std::uint32_t* v : {&p.a, &p.b, &p.w})
       if (*v != kNone) *v = number_[*v];

@@ -68,18 +68,21 @@ class ReverseReplay {
     std::uint32_t next, prev;
     std::uint32_t waiting;   // a C vertex whose predictor w is this edge's walked-side vertex
     std::uint32_t incident;  // rebuilt triangles at the copy (merged copies: all of them)
+    std::uint32_t opposite;  // the third vertex (copy) of the edge's rebuilt-side triangle
   };
   struct Stacked {
     std::uint32_t node, length;
   };
 
   [[noreturn]] void fail(const std::string& problem) const;
-  std::uint32_t add_node();  // a new node, its copy on no triangle yet
+  std::uint32_t add_node();              // a new node, its copy on no triangle yet
+  void grow_copies(std::size_t copies);  // parent_ and number_ for `copies` nodes
   void link(std::uint32_t a, std::uint32_t b) {
     nodes_[a].next = b;
     nodes_[b].prev = a;
   }
-  // The edge of node n loses its walked-side triangle, whose third vertex is `w`.
+  // The edge of node n loses its walked-side triangle, whose third vertex is `w`: the edge is
+  // inside the rebuilt surface now (a diamond).
   void resolve(std::uint32_t n, std::uint32_t w);
   void triangle(std::uint32_t b, std::uint32_t a, std::uint32_t x);
   // Makes copy `gone` (its node leaving the loops) the same vertex as `kept`.
@@ -111,10 +114,12 @@ class ReverseReplay {
   std::vector<LoopNode> nodes_;
   std::uint32_t gate_ = 0, length_ = 0;
   std::vector<Stacked> stack_;
-  // Per node (vertex copy): its parent in the merge forest, its number once completed.
+  // Per node (vertex copy; sized ahead of nodes_): its parent in the merge forest, its number
+  // once completed.
   std::vector<std::uint32_t> parent_, number_;
   std::vector<Triangle> triangles_;           // per walk triangle, in copies
   std::vector<VertexPredictors> predictors_;  // per vertex number, in copies
+  std::vector<EdgeDiamond> diamonds_;         // in copies
 };
 
 }  // namespace meshflow::compress

@@ -1,7 +1,6 @@
 #include "nodes/compress/mesh_codec.h"
 
 #include <algorithm>
-#include <optional>
 
 #include "nodes/compress/attribute_coder.h"
 #include "nodes/compress/closed_surface.h"
@@ -14,11 +13,16 @@
 namespace meshflow::compress {
 namespace {
 
-// The symbol section: the symbols last first, each by a 6-symbol tree per replay context
-// (nodes/compress/edgebreaker_replay.h), and where a component may start a bit saying whether it
-// does.
+// The symbol section: the symbols last first, each by an adaptive choice of 6 (of 8) per replay
+// context (nodes/compress/edgebreaker_replay.h), and where a component may start a bit saying
+// whether it does. Each symbol holds at least 24 of the 2^15 parts: a symbol costs at least
+// -log2(1 - 7 x 24 / 2^15) = 0.0074 bits, so a section of B bytes holds at most 1079 B symbols
+// (decode_body() refuses more before allocating for them).
+constexpr std::uint32_t kSymbolFloor = 24;
+constexpr std::uint64_t kSymbolsPerByte = 1200;
+using OpModel = FrequencyModel<8, kSymbolFloor>;
 struct SymbolModels {
-  std::vector<SymbolModel<8>> symbol = std::vector<SymbolModel<8>>(ReverseReplay::kContexts);
+  std::vector<OpModel> symbol = std::vector<OpModel>(ReverseReplay::kContexts);
   BitModel starts;
 };
 
@@ -110,23 +114,33 @@ constexpr std::size_t kPositionContexts = kPredictions * kSpreads * kExtents;
 constexpr std::array<std::size_t, 3> kPreviousContext = {0, 0, 0};  // kPrevious, no spread
 constexpr unsigned kMaxParallelograms = ParallelogramRing::kMaxParallelograms;
 
-// The residual context of one axis.
-std::size_t spread_context(Prediction kind, std::int64_t spread, std::int64_t extent) {
-  std::size_t s = 0;
-  while (s + 1 < kSpreads && spread >= (std::int64_t{1} << s)) ++s;
-  const std::size_t e = extent == 0 ? 0 : extent < 4 ? 1 : extent < 16 ? 2 : extent < 64 ? 3 : 4;
-  return (static_cast<std::size_t>(kind) * kSpreads + s) * kExtents + e;
+// The number of significant bits of v >= 0 (0 for 0).
+unsigned bit_length64(std::int64_t v) {
+  return v == 0 ? 0u : 64u - static_cast<unsigned>(__builtin_clzll(static_cast<std::uint64_t>(v)));
+}
+
+// The spread and extent part of one axis's residual context (kind_context() adds the kind):
+// spread 0, 1, 2-3, 4-7, 8+ and extent 0, 1-3, 4-15, 16-63, 64+ by their bit lengths.
+std::size_t shape_context(std::int64_t spread, std::int64_t extent) {
+  const unsigned s = std::min(bit_length64(spread), 4u);
+  const unsigned e = std::min((bit_length64(extent) + 1) / 2, 4u);
+  return s * kExtents + e;
+}
+
+// The residual context of one axis from its shape_context().
+std::size_t kind_context(Prediction kind, std::size_t shape) {
+  return static_cast<std::size_t>(kind) * kSpreads * kExtents + shape;
 }
 
 // Grid positions of decoded vertices (only those already coded are read).
 using Grid = std::vector<std::array<std::int32_t, 3>>;
 
-// The position section's models: residuals per axis and context, and the flags that say which
-// parallelograms a vertex trusts (per count offered and position in the offer).
+// The position section's models: residuals per axis and context, and which parallelograms a
+// vertex trusts (the subset as one choice, per count offered).
 struct PositionModels {
   std::vector<std::array<IntegerModel, 3>> residual =
       std::vector<std::array<IntegerModel, 3>>(kPositionContexts);
-  std::array<std::array<BitModel, kMaxParallelograms>, kMaxParallelograms> trusted{};
+  std::array<FrequencyModel<1u << kMaxParallelograms>, kMaxParallelograms> trusted{};
 };
 
 // What predicts decoded vertex k before its flags are read: the ring's parallelograms, their
@@ -134,8 +148,7 @@ struct PositionModels {
 struct Candidates {
   unsigned n = 0;
   ParallelogramRing::Parallelograms parallelogram;
-  std::array<std::int64_t, 3> spread{};
-  std::array<std::int64_t, 3> extent{};  // of the gate's decoded corners, per axis
+  std::array<std::size_t, 3> shape{};  // shape_context() per axis
   std::array<std::int32_t, 3> fallback{};
   Prediction fallback_kind = kPrevious;
 };
@@ -147,39 +160,48 @@ Candidates candidates(std::uint32_t k, const VertexPredictors& p, const Parallel
                       const std::array<std::int32_t, 3>& last) {
   Candidates c;
   c.n = ring.gather(k, grid, c.parallelogram);
-  for (std::size_t a = 0; a < 3 && c.n > 1; ++a) {
-    std::int64_t low = c.parallelogram[0][a], high = low;
-    for (unsigned i = 1; i < c.n; ++i) {
-      low = std::min(low, c.parallelogram[i][a]);
-      high = std::max(high, c.parallelogram[i][a]);
-    }
-    c.spread[a] = high - low;
-  }
-  const auto real = [&](std::uint32_t v) { return v != kNone && !hole[v]; };
-  bool any = false;
-  std::array<std::int64_t, 3> low{}, high{};
-  for (std::uint32_t v : {p.a, p.b, p.w}) {
-    if (!real(v)) continue;
+  std::array<std::int64_t, 3> spread{};  // how much the parallelograms disagree, per axis
+  if (c.n > 1)
     for (std::size_t a = 0; a < 3; ++a) {
-      low[a] = any ? std::min<std::int64_t>(low[a], grid[v][a]) : grid[v][a];
-      high[a] = any ? std::max<std::int64_t>(high[a], grid[v][a]) : grid[v][a];
+      std::int64_t low = c.parallelogram[0][a], high = low;
+      for (unsigned i = 1; i < c.n; ++i) {
+        low = std::min(low, c.parallelogram[i][a]);
+        high = std::max(high, c.parallelogram[i][a]);
+      }
+      spread[a] = high - low;
     }
-    any = true;
+  const auto real = [&](std::uint32_t v) { return v != kNone && !hole[v]; };
+  const bool ra = real(p.a), rb = real(p.b), rw = real(p.w);
+  // The extent of the gate's decoded corners per axis.
+  std::array<const std::array<std::int32_t, 3>*, 3> corner{};
+  unsigned corners = 0;
+  if (ra) corner[corners++] = &grid[p.a];
+  if (rb) corner[corners++] = &grid[p.b];
+  if (rw) corner[corners++] = &grid[p.w];
+  for (std::size_t a = 0; a < 3; ++a) {
+    std::int64_t low = 0, high = 0;
+    if (corners > 0) {
+      low = high = (*corner[0])[a];
+      for (unsigned i = 1; i < corners; ++i) {
+        low = std::min<std::int64_t>(low, (*corner[i])[a]);
+        high = std::max<std::int64_t>(high, (*corner[i])[a]);
+      }
+    }
+    c.shape[a] = shape_context(spread[a], high - low);
   }
-  for (std::size_t a = 0; a < 3; ++a) c.extent[a] = high[a] - low[a];
   c.fallback = last;
-  if (c.n == 0 && real(p.a) && real(p.b) && real(p.w)) {
+  if (c.n == 0 && ra && rb && rw) {
     c.fallback_kind = kParallelogram;
     for (std::size_t i = 0; i < 3; ++i)
       c.fallback[i] =
           static_cast<std::int32_t>(std::int64_t{grid[p.a][i]} + grid[p.b][i] - grid[p.w][i]);
-  } else if (real(p.a) && real(p.b)) {
+  } else if (ra && rb) {
     c.fallback_kind = kMidpoint;
     for (std::size_t i = 0; i < 3; ++i)
       c.fallback[i] = static_cast<std::int32_t>((std::int64_t{grid[p.a][i]} + grid[p.b][i]) / 2);
-  } else if (real(p.a) || real(p.b)) {
+  } else if (ra || rb) {
     c.fallback_kind = kOne;
-    c.fallback = grid[real(p.a) ? p.a : p.b];
+    c.fallback = grid[ra ? p.a : p.b];
   }
   if (c.n > 0) c.fallback_kind = kRefused;
   return c;
@@ -236,8 +258,7 @@ std::int64_t rounded_mean(std::int64_t sum, std::int64_t n) {
 std::array<std::int32_t, 3> predict(const Candidates& c, unsigned trusted,
                                     std::array<std::size_t, 3>& context) {
   if (trusted == 0) {
-    for (std::size_t a = 0; a < 3; ++a)
-      context[a] = spread_context(c.fallback_kind, c.spread[a], c.extent[a]);
+    for (std::size_t a = 0; a < 3; ++a) context[a] = kind_context(c.fallback_kind, c.shape[a]);
     return c.fallback;
   }
   std::array<std::int64_t, 3> sum{};
@@ -251,7 +272,7 @@ std::array<std::int32_t, 3> predict(const Candidates& c, unsigned trusted,
   std::array<std::int32_t, 3> out;
   for (std::size_t a = 0; a < 3; ++a) {
     out[a] = static_cast<std::int32_t>(rounded_mean(sum[a], n));
-    context[a] = spread_context(kind, c.spread[a], c.extent[a]);
+    context[a] = kind_context(kind, c.shape[a]);
   }
   return out;
 }
@@ -281,6 +302,154 @@ VertexRoles assign_outputs(std::vector<char> hole, std::vector<std::uint32_t> me
 
 }  // namespace
 
+namespace {
+
+// The side section: handles, hole and merged vertices (per decoded vertex), the count of
+// vertices off the surface, the degenerate triangles (`mesh`'s, in output vertex numbers).
+std::vector<unsigned char> encode_side(const Connectivity& c, std::uint32_t hole_count,
+                                       const VertexRoles& roles, std::size_t off_surface,
+                                       const TriangleMesh& mesh,
+                                       const std::vector<std::uint32_t>& degenerate_triangles,
+                                       const std::vector<std::uint32_t>& output_of_input) {
+  RangeEncoder enc;
+  SideModels m;
+  const auto put = [&](IntegerModel& model, std::uint64_t v) {
+    model.encode(enc, static_cast<std::int32_t>(v));
+  };
+  const auto decoded = static_cast<std::uint32_t>(roles.hole.size());
+  put(m.count, c.handles.size());
+  for (const HandleRecord& h : c.handles) {
+    put(m.depth, h.depth);
+    put(m.offset, h.offset);
+    put(m.offset, h.length);
+  }
+  put(m.count, hole_count);
+  std::uint32_t previous = 0;
+  for (std::uint32_t k = 0; k < decoded; ++k)
+    if (roles.hole[k]) {
+      put(m.index, k - previous);
+      previous = k;
+    }
+  std::size_t merges = 0;
+  for (std::uint32_t k = 0; k < decoded; ++k) merges += roles.merged[k] != kNone;
+  put(m.count, merges);
+  previous = 0;
+  for (std::uint32_t k = 0; k < decoded; ++k)
+    if (roles.merged[k] != kNone) {
+      put(m.index, k - previous);
+      put(m.offset, k - roles.merged[k]);
+      previous = k;
+    }
+  put(m.count, off_surface);
+  put(m.count, degenerate_triangles.size());
+  for (std::uint32_t t : degenerate_triangles)
+    for (std::uint32_t v : mesh.triangles[t]) put(m.corner, output_of_input[v]);
+  return enc.finish();
+}
+
+// The three position sections: the surface vertices (decoded vertex k is input vertex
+// input_of_decoded[k]) in decoding order, then `off_surface`. The encoder flags the subset of
+// the offered parallelograms whose residuals and choice cost least under the models as they
+// stand. Adds to `stats`; returns the grid positions per output vertex.
+std::vector<std::array<std::int32_t, 3>> encode_positions(
+    const TriangleMesh& mesh, const Quantizer& quantizer, const ReplayedSurface& replayed,
+    const VertexRoles& roles, const std::vector<std::uint32_t>& input_of_decoded,
+    const std::vector<std::uint32_t>& off_surface, io::ByteWriter& out, BodyStats& stats) {
+  const auto decoded = static_cast<std::uint32_t>(roles.hole.size());
+  std::vector<std::array<std::int32_t, 3>> grid_out(roles.surface_outputs + off_surface.size());
+  const ParallelogramRing ring(replayed.diamonds, roles.hole, decoded);
+  RangeEncoder enc[3];
+  PositionModels m;
+  Grid grid(decoded);
+  std::array<std::int32_t, 3> last{};
+  const auto code = [&](const std::array<std::int32_t, 3>& q,
+                        const std::array<std::int32_t, 3>& predicted,
+                        const std::array<std::size_t, 3>& context) {
+    for (std::size_t a = 0; a < 3; ++a)
+      m.residual[context[a]][a].encode(enc[a], q[a] - predicted[a]);
+    last = q;
+  };
+  for (std::uint32_t k = 0; k < decoded; ++k) {
+    if (roles.hole[k]) continue;
+    if (roles.merged[k] != kNone) {
+      grid[k] = grid[roles.merged[k]];
+      continue;
+    }
+    const std::array<std::int32_t, 3> q = quantizer.quantize(mesh.vertices[input_of_decoded[k]]);
+    const Candidates offer = candidates(k, replayed.predictors[k], ring, roles.hole, grid, last);
+    unsigned best = 0;
+    std::uint32_t best_cost = ~0u;
+    std::array<std::size_t, 3> context;
+    const TrustChoices& choices = kTrustChoices[offer.n];
+    for (unsigned choice = 0; choice < choices.count; ++choice) {
+      const unsigned trusted = choices.mask[choice];
+      const std::array<std::int32_t, 3> predicted = predict(offer, trusted, context);
+      std::uint32_t cost = m.trusted[offer.n - 1].cost(trusted);  // n > 0: there are choices
+      for (std::size_t a = 0; a < 3; ++a)
+        cost += m.residual[context[a]][a].cost(q[a] - predicted[a]);
+      if (cost < best_cost) {
+        best_cost = cost;
+        best = trusted;
+      }
+    }
+    if (offer.n > 0) m.trusted[offer.n - 1].encode(enc[0], best);
+    stats.trusted_parallelograms += static_cast<std::size_t>(__builtin_popcount(best));
+    stats.offered_parallelograms += offer.n;
+    const std::array<std::int32_t, 3> predicted = predict(offer, best, context);
+    grid[k] = q;
+    grid_out[roles.output[k]] = q;
+    code(q, predicted, context);
+  }
+  for (std::size_t j = 0; j < off_surface.size(); ++j) {
+    const std::array<std::int32_t, 3> q = quantizer.quantize(mesh.vertices[off_surface[j]]);
+    grid_out[roles.surface_outputs + j] = q;
+    code(q, last, kPreviousContext);
+  }
+  for (RangeEncoder& e : enc) {
+    const std::vector<unsigned char> bytes = e.finish();
+    stats.position_bytes += bytes.size();
+    write_section(out, bytes);
+  }
+  return grid_out;
+}
+
+// The normal bits and the attribute section (nodes/compress/attribute_coder.h), predicted from
+// the geometry the decoder will have (output order `o`, grid positions `grid`). Sets `codes` if
+// given.
+void encode_attributes(const TriangleMesh& mesh, std::vector<std::array<std::int32_t, 3>> grid,
+                       AttributeFlags flags, const BodyOrder& o,
+                       const std::vector<std::uint32_t>& output_of_input, io::ByteWriter& out,
+                       BodyStats& stats, BodyCodes* codes) {
+  std::vector<Triangle> triangles(o.triangle.size());
+  for (std::size_t k = 0; k < o.triangle.size(); ++k)
+    for (std::size_t j = 0; j < 3; ++j)
+      triangles[k][j] = output_of_input[mesh.triangles[o.triangle[k]][j]];
+  const DecodedGeometry geometry{grid, triangles};
+  RangeEncoder enc;
+  out.u8(static_cast<std::uint8_t>(flags.normals ? flags.normal_bits : 0));
+  std::vector<Eigen::Vector3f> decoded_normals;
+  if (flags.normals) {
+    std::vector<Eigen::Vector3f> normals(o.vertex.size());
+    for (std::size_t i = 0; i < o.vertex.size(); ++i) normals[i] = mesh.normals[o.vertex[i]];
+    decoded_normals = encode_normals(geometry, normals, flags.normal_bits, enc);
+  }
+  if (flags.colors) {
+    std::vector<Rgb8> colors(o.vertex.size());
+    for (std::size_t i = 0; i < o.vertex.size(); ++i) colors[i] = mesh.colors[o.vertex[i]];
+    encode_colors(geometry, colors, enc);
+  }
+  const std::vector<unsigned char> bytes = enc.finish();
+  stats.attribute_bytes = bytes.size();
+  write_section(out, bytes);
+  if (codes != nullptr) {
+    codes->positions = std::move(grid);
+    codes->normals = std::move(decoded_normals);
+    codes->normal_bits = flags.normals ? flags.normal_bits : 0;
+  }
+}
+
+}  // namespace
+
 BodyStats encode_body(const TriangleMesh& mesh, const Quantizer& quantizer, AttributeFlags flags,
                       io::ByteWriter& out, BodyOrder* order, BodyCodes* codes) {
   const ClosedSurface surface = build_closed_surface(mesh.triangles);
@@ -291,11 +460,13 @@ BodyStats encode_body(const TriangleMesh& mesh, const Quantizer& quantizer, Attr
   const ReplayedSurface replayed = encode_symbols(walk, decoded, symbol_encoder);
 
   // Roles: holes, further fans of a vertex already met, outputs.
+  std::vector<std::uint32_t> input_of_decoded(decoded);
   std::vector<char> hole(decoded, 0);
   std::vector<std::uint32_t> merged(decoded, kNone);
   std::vector<std::uint32_t> first(mesh.vertices.size(), kNone);
   for (std::uint32_t k = 0; k < decoded; ++k) {
     const std::uint32_t v = surface.input_vertex[walk.surface_vertex[k]];
+    input_of_decoded[k] = v;
     if (v == kNone) {
       hole[k] = 1;
     } else if (first[v] != kNone) {
@@ -304,7 +475,7 @@ BodyStats encode_body(const TriangleMesh& mesh, const Quantizer& quantizer, Attr
       first[v] = k;
     }
   }
-  const VertexRoles roles = assign_outputs(hole, merged);
+  const VertexRoles roles = assign_outputs(std::move(hole), std::move(merged));
   std::vector<std::uint32_t> off_surface;
   for (std::uint32_t v = 0; v < mesh.vertices.size(); ++v)
     if (first[v] == kNone) off_surface.push_back(v);
@@ -313,8 +484,7 @@ BodyStats encode_body(const TriangleMesh& mesh, const Quantizer& quantizer, Attr
   BodyOrder& o = order != nullptr ? *order : local;
   o.vertex.clear();
   for (std::uint32_t k = 0; k < decoded; ++k)
-    if (!hole[k] && merged[k] == kNone)
-      o.vertex.push_back(surface.input_vertex[walk.surface_vertex[k]]);
+    if (!roles.hole[k] && roles.merged[k] == kNone) o.vertex.push_back(input_of_decoded[k]);
   o.vertex.insert(o.vertex.end(), off_surface.begin(), off_surface.end());
   for (std::uint32_t i = 0; i < o.vertex.size(); ++i) output_of_input[o.vertex[i]] = i;
   o.triangle.clear();
@@ -327,244 +497,130 @@ BodyStats encode_body(const TriangleMesh& mesh, const Quantizer& quantizer, Attr
   stats.symbols = c.ops.size();
   stats.holes = surface.hole_count;
   stats.handles = c.handles.size();
+  for (std::uint32_t m : roles.merged) stats.merged_fans += m != kNone;
   out.u32(c.components);
   out.u64(c.ops.size());
   out.u64(decoded);
-
-  {  // Side data (the decoder needs the handles before the symbols).
-    RangeEncoder enc;
-    SideModels m;
-    const auto put = [&](IntegerModel& model, std::uint64_t v) {
-      model.encode(enc, static_cast<std::int32_t>(v));
-    };
-    put(m.count, c.handles.size());
-    for (const HandleRecord& h : c.handles) {
-      put(m.depth, h.depth);
-      put(m.offset, h.offset);
-      put(m.offset, h.length);
-    }
-    put(m.count, surface.hole_count);
-    std::uint32_t previous = 0;
-    for (std::uint32_t k = 0; k < decoded; ++k)
-      if (hole[k]) {
-        put(m.index, k - previous);
-        previous = k;
-      }
-    std::size_t merges = 0;
-    for (std::uint32_t k = 0; k < decoded; ++k) merges += merged[k] != kNone;
-    stats.merged_fans = merges;
-    put(m.count, merges);
-    previous = 0;
-    for (std::uint32_t k = 0; k < decoded; ++k)
-      if (merged[k] != kNone) {
-        put(m.index, k - previous);
-        put(m.offset, k - merged[k]);
-        previous = k;
-      }
-    put(m.count, off_surface.size());
-    put(m.count, surface.degenerate_triangles.size());
-    for (std::uint32_t t : surface.degenerate_triangles)
-      for (std::uint32_t v : mesh.triangles[t]) put(m.corner, output_of_input[v]);
-    const std::vector<unsigned char> bytes = enc.finish();
-    stats.connectivity_bytes += bytes.size();
-    write_section(out, bytes);
-  }
-  {  // Symbols.
-    const std::vector<unsigned char> bytes = symbol_encoder.finish();
-    stats.connectivity_bytes += bytes.size();
-    write_section(out, bytes);
-  }
-  {  // Positions: one stream per axis (the decoder's three chains then overlap); a vertex's
-     // trust flags go first on the x stream. The encoder flags the subset of the offered
-     // parallelograms whose residuals and flags cost least under the models as they stand.
-    const ParallelogramRing ring(replayed.triangles, hole, decoded);
-    RangeEncoder enc[3];
-    PositionModels m;
-    Grid grid(decoded);
-    std::array<std::int32_t, 3> last{};
-    const auto code = [&](const std::array<std::int32_t, 3>& q,
-                          const std::array<std::int32_t, 3>& predicted,
-                          const std::array<std::size_t, 3>& context) {
-      for (std::size_t a = 0; a < 3; ++a)
-        m.residual[context[a]][a].encode(enc[a], q[a] - predicted[a]);
-      last = q;
-    };
-    for (std::uint32_t k = 0; k < decoded; ++k) {
-      if (hole[k]) continue;
-      if (merged[k] != kNone) {
-        grid[k] = grid[merged[k]];
-        continue;
-      }
-      const std::array<std::int32_t, 3> q =
-          quantizer.quantize(mesh.vertices[surface.input_vertex[walk.surface_vertex[k]]]);
-      const Candidates offer = candidates(k, replayed.predictors[k], ring, hole, grid, last);
-      unsigned best = 0;
-      std::uint32_t best_cost = ~0u;
-      std::array<std::size_t, 3> context;
-      const TrustChoices& choices = kTrustChoices[offer.n];
-      for (unsigned choice = 0; choice < choices.count; ++choice) {
-        const unsigned trusted = choices.mask[choice];
-        const std::array<std::int32_t, 3> predicted = predict(offer, trusted, context);
-        std::uint32_t cost = 0;
-        for (unsigned i = 0; i < offer.n; ++i)
-          cost += bit_cost(m.trusted[offer.n - 1][i], (trusted >> i) & 1u);
-        for (std::size_t a = 0; a < 3; ++a)
-          cost += m.residual[context[a]][a].cost(q[a] - predicted[a]);
-        if (cost < best_cost) {
-          best_cost = cost;
-          best = trusted;
-        }
-      }
-      for (unsigned i = 0; i < offer.n; ++i)
-        enc[0].encode(m.trusted[offer.n - 1][i], (best >> i) & 1u);
-      stats.trusted_parallelograms += static_cast<std::size_t>(__builtin_popcount(best));
-      stats.offered_parallelograms += offer.n;
-      const std::array<std::int32_t, 3> predicted = predict(offer, best, context);
-      grid[k] = q;
-      code(q, predicted, context);
-    }
-    for (std::uint32_t v : off_surface)
-      code(quantizer.quantize(mesh.vertices[v]), last, kPreviousContext);
-    for (RangeEncoder& e : enc) {
-      const std::vector<unsigned char> bytes = e.finish();
-      stats.position_bytes += bytes.size();
-      write_section(out, bytes);
-    }
-  }
-  {  // Attributes (nodes/compress/attribute_coder.h), predicted from the decoded geometry.
-    std::vector<std::array<std::int32_t, 3>> grid(o.vertex.size());
-    for (std::size_t i = 0; i < o.vertex.size(); ++i)
-      grid[i] = quantizer.quantize(mesh.vertices[o.vertex[i]]);
-    std::vector<Triangle> triangles(o.triangle.size());
-    for (std::size_t k = 0; k < o.triangle.size(); ++k)
-      for (std::size_t j = 0; j < 3; ++j)
-        triangles[k][j] = output_of_input[mesh.triangles[o.triangle[k]][j]];
-    const DecodedGeometry geometry{grid, triangles};
-    RangeEncoder enc;
-    out.u8(static_cast<std::uint8_t>(flags.normals ? flags.normal_bits : 0));
-    std::vector<Eigen::Vector3f> decoded_normals;
-    if (flags.normals) {
-      std::vector<Eigen::Vector3f> normals(o.vertex.size());
-      for (std::size_t i = 0; i < o.vertex.size(); ++i) normals[i] = mesh.normals[o.vertex[i]];
-      decoded_normals = encode_normals(geometry, normals, flags.normal_bits, enc);
-    }
-    if (flags.colors) {
-      std::vector<Rgb8> colors(o.vertex.size());
-      for (std::size_t i = 0; i < o.vertex.size(); ++i) colors[i] = mesh.colors[o.vertex[i]];
-      encode_colors(geometry, colors, enc);
-    }
-    const std::vector<unsigned char> bytes = enc.finish();
-    stats.attribute_bytes = bytes.size();
-    write_section(out, bytes);
-    if (codes != nullptr) {
-      codes->positions = std::move(grid);
-      codes->normals = std::move(decoded_normals);
-      codes->normal_bits = flags.normals ? flags.normal_bits : 0;
-    }
-  }
+  // Side data first (the decoder needs the handles before the symbols).
+  const std::vector<unsigned char> side =
+      encode_side(c, surface.hole_count, roles, off_surface.size(), mesh,
+                  surface.degenerate_triangles, output_of_input);
+  const std::vector<unsigned char> symbols = symbol_encoder.finish();
+  stats.connectivity_bytes = side.size() + symbols.size();
+  write_section(out, side);
+  write_section(out, symbols);
+  std::vector<std::array<std::int32_t, 3>> grid =
+      encode_positions(mesh, quantizer, replayed, roles, input_of_decoded, off_surface, out, stats);
+  encode_attributes(mesh, std::move(grid), flags, o, output_of_input, out, stats, codes);
   return stats;
 }
 
-TriangleMesh decode_body(io::ByteReader& in, const Quantizer& quantizer, AttributeFlags flags,
-                         const std::string& source, BodyCodes* codes) {
-  Connectivity c;
-  c.components = in.u32("components");
-  const std::uint64_t symbols = in.u64("symbol count");
-  const std::uint64_t decoded = in.u64("surface vertex count");
-  const auto section = [&](const char* field) {
-    const std::uint64_t n = in.u64(field);
-    if (n > in.remaining())
-      in.fail(field, "section of " + std::to_string(n) + " bytes, " +
-                         std::to_string(in.remaining()) + " left (truncated)");
-    return std::make_pair(in.bytes(static_cast<std::size_t>(n), field),
-                          static_cast<std::size_t>(n));
+namespace {
+
+// A section of a body: its bytes (in the reader's data) and size.
+struct Section {
+  const unsigned char* bytes;
+  std::size_t size;
+};
+
+// Reads a section's u64 byte count and its bytes; `field` names it in errors.
+Section read_section(io::ByteReader& in, const char* field) {
+  const std::uint64_t n = in.u64(field);
+  if (n > in.remaining())
+    in.fail(field, "section of " + std::to_string(n) + " bytes, " + std::to_string(in.remaining()) +
+                       " left (truncated)");
+  return {in.bytes(static_cast<std::size_t>(n), field), static_cast<std::size_t>(n)};
+}
+
+// What the side section holds.
+struct SideData {
+  std::vector<HandleRecord> handles;
+  std::vector<char> hole;                 // per decoded vertex
+  std::vector<std::uint32_t> merged;      // per decoded vertex: the earlier one it is, or kNone
+  std::uint64_t off_surface = 0;          // vertices on no triangle
+  std::vector<std::uint32_t> degenerate;  // three output corners per triangle
+};
+
+// Reads the side section of a body of `symbols` symbols and `decoded` surface vertices;
+// `remaining`: the bytes of the body after it (which must hold the vertices off the surface).
+SideData decode_side(Section section, std::uint64_t symbols, std::uint64_t decoded,
+                     std::size_t remaining, const std::string& source) {
+  SideData side;
+  side.hole.assign(static_cast<std::size_t>(decoded), 0);
+  side.merged.assign(static_cast<std::size_t>(decoded), kNone);
+  RangeDecoder dec(section.bytes, section.size, source, "side section");
+  SideModels m;
+  const auto get = [&](IntegerModel& model, const char* field, std::uint64_t limit) {
+    const std::int32_t v = model.decode(dec);
+    dec.check();
+    if (v < 0 || static_cast<std::uint64_t>(v) > limit)
+      throw Error(source, std::string("side section: ") + field,
+                  std::to_string(v) + " is outside 0 .. " + std::to_string(limit));
+    return static_cast<std::uint32_t>(v);
   };
-  const auto [side_bytes, side_size] = section("side section");
-  const auto [symbol_bytes, symbol_size] = section("symbol section");
-  // A symbol costs at least 3 x 0.022 bits; more symbols than the section can hold is corrupt
-  // (and would allocate without bound).
-  if (symbols > 128 * std::uint64_t{symbol_size} + 64 ||
-      decoded > 3 * symbols + 3 * c.components + 3 || c.components > symbols + 1)
-    in.fail("symbol count", std::to_string(symbols) + " symbols, " + std::to_string(decoded) +
-                                " vertices and " + std::to_string(c.components) +
-                                " components do not fit a section of " +
-                                std::to_string(symbol_size) + " bytes");
-  std::vector<char> hole(static_cast<std::size_t>(decoded), 0);
-  std::vector<std::uint32_t> merged(static_cast<std::size_t>(decoded), kNone);
-  std::uint64_t off_surface = 0;
-  std::vector<std::uint32_t> degenerate;
-  {
-    RangeDecoder dec(side_bytes, side_size, source, "side section");
-    SideModels m;
-    const auto get = [&](IntegerModel& model, const char* field, std::uint64_t limit) {
-      const std::int32_t v = model.decode(dec);
-      dec.check();
-      if (v < 0 || static_cast<std::uint64_t>(v) > limit)
-        throw Error(source, std::string("side section: ") + field,
-                    std::to_string(v) + " is outside 0 .. " + std::to_string(limit));
-      return static_cast<std::uint32_t>(v);
-    };
-    c.handles.resize(get(m.count, "handle count", symbols));
-    for (HandleRecord& h : c.handles) {
-      h.depth = get(m.depth, "handle depth", symbols);
-      h.offset = get(m.offset, "handle offset", 3 * symbols + 3);
-      h.length = get(m.offset, "handle loop length", 3 * symbols + 3);
-    }
-    const std::uint32_t holes = get(m.count, "hole count", decoded);
-    std::uint32_t previous = 0;
-    for (std::uint32_t i = 0; i < holes; ++i) {
-      const std::uint64_t k = std::uint64_t{previous} + get(m.index, "hole vertex", decoded);
-      if (k >= decoded || (i > 0 && k == previous))
-        throw Error(source, "side section: hole vertex", "out of order or range");
-      hole[k] = 1;
-      previous = static_cast<std::uint32_t>(k);
-    }
-    const std::uint32_t merges = get(m.count, "merge count", decoded);
-    previous = 0;
-    for (std::uint32_t i = 0; i < merges; ++i) {
-      const std::uint64_t k = std::uint64_t{previous} + get(m.index, "merged vertex", decoded);
-      const std::uint32_t back = get(m.offset, "merge target", decoded);
-      if (k >= decoded || back == 0 || back > k || hole[k] || hole[k - back] ||
-          merged[k - back] != kNone || (i > 0 && k == previous))
-        throw Error(source, "side section: merged vertex", "out of order or range");
-      merged[k] = static_cast<std::uint32_t>(k - back);
-      previous = static_cast<std::uint32_t>(k);
-    }
-    off_surface = get(m.count, "vertices off the surface", 0x7FFFFFFF);
-    if (off_surface > 3 * in.remaining() + 64)
-      throw Error(source, "side section: vertices off the surface",
-                  std::to_string(off_surface) + " do not fit the rest of the file");
-    const std::uint32_t degenerates = get(m.count, "degenerate triangles", 0x7FFFFFFF);
-    if (degenerates > 8 * side_size + 64)
-      throw Error(source, "side section: degenerate triangles", "more than the section holds");
-    degenerate.resize(3 * std::size_t{degenerates});
-    for (std::uint32_t& v : degenerate) v = get(m.corner, "degenerate triangle corner", 0x7FFFFFFF);
+  side.handles.resize(get(m.count, "handle count", symbols));
+  for (HandleRecord& h : side.handles) {
+    h.depth = get(m.depth, "handle depth", symbols);
+    h.offset = get(m.offset, "handle offset", 3 * symbols + 3);
+    h.length = get(m.offset, "handle loop length", 3 * symbols + 3);
   }
-  RangeDecoder symbol_decoder(symbol_bytes, symbol_size, source, "symbol section");
-  const ReplayedSurface replayed =
-      decode_symbols(c.components, static_cast<std::size_t>(symbols),
-                     static_cast<std::size_t>(decoded), c.handles, symbol_decoder, source);
-  const VertexRoles roles = assign_outputs(std::move(hole), std::move(merged));
-  const std::size_t outputs = roles.surface_outputs + static_cast<std::size_t>(off_surface);
-  TriangleMesh mesh;
-  mesh.vertices.resize(outputs);
-  std::vector<std::array<std::int32_t, 3>> grid_out(outputs);  // per output vertex
+  const std::uint32_t holes = get(m.count, "hole count", decoded);
+  std::uint32_t previous = 0;
+  for (std::uint32_t i = 0; i < holes; ++i) {
+    const std::uint64_t k = std::uint64_t{previous} + get(m.index, "hole vertex", decoded);
+    if (k >= decoded || (i > 0 && k == previous))
+      throw Error(source, "side section: hole vertex", "out of order or range");
+    side.hole[k] = 1;
+    previous = static_cast<std::uint32_t>(k);
+  }
+  const std::uint32_t merges = get(m.count, "merge count", decoded);
+  previous = 0;
+  for (std::uint32_t i = 0; i < merges; ++i) {
+    const std::uint64_t k = std::uint64_t{previous} + get(m.index, "merged vertex", decoded);
+    const std::uint32_t back = get(m.offset, "merge target", decoded);
+    if (k >= decoded || back == 0 || back > k || side.hole[k] || side.hole[k - back] ||
+        side.merged[k - back] != kNone || (i > 0 && k == previous))
+      throw Error(source, "side section: merged vertex", "out of order or range");
+    side.merged[k] = static_cast<std::uint32_t>(k - back);
+    previous = static_cast<std::uint32_t>(k);
+  }
+  // An integer costs at least -log2(1 - 63 x 2 / 2^15) = 0.0056 bits (IntegerModel): at most
+  // 1440 per byte of a position stream, 480 degenerate triangles (3 corners) per byte here.
+  side.off_surface = get(m.count, "vertices off the surface", 0x7FFFFFFF);
+  if (side.off_surface > 1536 * std::uint64_t{remaining} + 64)
+    throw Error(source, "side section: vertices off the surface",
+                std::to_string(side.off_surface) + " do not fit the rest of the file");
+  const std::uint32_t degenerates = get(m.count, "degenerate triangles", 0x7FFFFFFF);
+  if (degenerates > 512 * std::uint64_t{section.size} + 64)
+    throw Error(source, "side section: degenerate triangles", "more than the section holds");
+  side.degenerate.resize(3 * std::size_t{degenerates});
+  for (std::uint32_t& v : side.degenerate)
+    v = get(m.corner, "degenerate triangle corner", 0x7FFFFFFF);
+  return side;
+}
+
+// Reads the three position sections: sets `vertices` (output order) and returns each output
+// vertex's grid position.
+std::vector<std::array<std::int32_t, 3>> decode_positions(
+    io::ByteReader& in, const ReplayedSurface& replayed, const VertexRoles& roles,
+    const Quantizer& quantizer, const std::string& source, std::vector<Eigen::Vector3f>& vertices) {
+  const std::size_t decoded = roles.hole.size(), outputs = vertices.size();
+  std::vector<std::array<std::int32_t, 3>> grid_out(outputs);
+  const ParallelogramRing ring(replayed.diamonds, roles.hole, decoded);
+  const Section x = read_section(in, "position section x");
+  const Section y = read_section(in, "position section y");
+  const Section z = read_section(in, "position section z");
+  RangeDecoder dec[3] = {RangeDecoder(x.bytes, x.size, source, "position section x"),
+                         RangeDecoder(y.bytes, y.size, source, "position section y"),
+                         RangeDecoder(z.bytes, z.size, source, "position section z")};
+  PositionModels m;
+  Grid grid(decoded);
+  std::array<std::int32_t, 3> last{};
   {
-    const ParallelogramRing ring(replayed.triangles, roles.hole, static_cast<std::size_t>(decoded));
-    const auto [x_bytes, x_size] = section("position section x");
-    const auto [y_bytes, y_size] = section("position section y");
-    const auto [z_bytes, z_size] = section("position section z");
-    RangeDecoder dec[3] = {RangeDecoder(x_bytes, x_size, source, "position section x"),
-                           RangeDecoder(y_bytes, y_size, source, "position section y"),
-                           RangeDecoder(z_bytes, z_size, source, "position section z")};
-    PositionModels m;
-    Grid grid(static_cast<std::size_t>(decoded));
-    std::array<std::int32_t, 3> last{};
-    // The three decoders' states stay in registers for the whole loop (stored back, and then
-    // checked, when the sessions end).
-    std::optional<RangeDecoder::Session> sx(std::in_place, dec[0]), sy(std::in_place, dec[1]),
-        sz(std::in_place, dec[2]);
-    RangeDecoderCore &cx = sx->core, &cy = sy->core, &cz = sz->core;
+    // The three decoders' states stay in registers for the whole loop (stored back when the
+    // sessions end, then checked).
+    RangeDecoder::Session sx(dec[0]), sy(dec[1]), sz(dec[2]);
+    RangeDecoderCore &cx = sx.core, &cy = sy.core, &cz = sz.core;
     const auto read = [&](const std::array<std::int32_t, 3>& predicted,
                           const std::array<std::size_t, 3>& context) {
       const std::array<std::int32_t, 3> residual =
@@ -584,28 +640,38 @@ TriangleMesh decode_body(io::ByteReader& in, const Quantizer& quantizer, Attribu
         continue;
       }
       const Candidates offer = candidates(k, replayed.predictors[k], ring, roles.hole, grid, last);
-      unsigned trusted = 0;
-      for (unsigned i = 0; i < offer.n; ++i) trusted |= cx.decode(m.trusted[offer.n - 1][i]) << i;
+      // A corrupt stream can name parallelograms past the offer: they are ignored.
+      const unsigned trusted =
+          offer.n > 0 ? m.trusted[offer.n - 1].decode(cx) & ((1u << offer.n) - 1u) : 0u;
       std::array<std::size_t, 3> context;
       const std::array<std::int32_t, 3> predicted = predict(offer, trusted, context);
       grid[k] = read(predicted, context);
-      mesh.vertices[roles.output[k]] = quantizer.position(grid[k]);
+      vertices[roles.output[k]] = quantizer.position(grid[k]);
       grid_out[roles.output[k]] = grid[k];
     }
     for (std::size_t i = roles.surface_outputs; i < outputs; ++i) {
+      // A corrupt count can ask for millions of vertices past the streams' end: stop there
+      // (the checks below report it).
+      if ((i & 4095u) == 0 && (cx.overran() || cy.overran() || cz.overran())) break;
       const std::array<std::int32_t, 3> q = read(last, kPreviousContext);
-      mesh.vertices[i] = quantizer.position(q);
+      vertices[i] = quantizer.position(q);
       grid_out[i] = q;
     }
-    sx.reset();
-    sy.reset();
-    sz.reset();
-    for (const RangeDecoder& d : dec) d.check();
   }
-  mesh.triangles.reserve(replayed.triangles.size() + degenerate.size() / 3);
+  for (const RangeDecoder& d : dec) d.check();
+  return grid_out;
+}
+
+// The output triangles: the replayed ones without a hole vertex (in output vertex numbers), then
+// the degenerate ones (checked against the `outputs` vertices).
+std::vector<Triangle> output_triangles(const ReplayedSurface& replayed, const VertexRoles& roles,
+                                       const std::vector<std::uint32_t>& degenerate,
+                                       std::size_t outputs, const std::string& source) {
+  std::vector<Triangle> triangles;
+  triangles.reserve(replayed.triangles.size() + degenerate.size() / 3);
   for (const Triangle& t : replayed.triangles) {
     if (roles.hole[t[0]] || roles.hole[t[1]] || roles.hole[t[2]]) continue;
-    mesh.triangles.push_back({roles.output[t[0]], roles.output[t[1]], roles.output[t[2]]});
+    triangles.push_back({roles.output[t[0]], roles.output[t[1]], roles.output[t[2]]});
   }
   for (std::size_t i = 0; i < degenerate.size(); i += 3) {
     for (std::size_t j = 0; j < 3; ++j)
@@ -613,25 +679,64 @@ TriangleMesh decode_body(io::ByteReader& in, const Quantizer& quantizer, Attribu
         throw Error(source, "side section: degenerate triangle corner",
                     std::to_string(degenerate[i + j]) + " is not below the " +
                         std::to_string(outputs) + " vertices");
-    mesh.triangles.push_back({degenerate[i], degenerate[i + 1], degenerate[i + 2]});
+    triangles.push_back({degenerate[i], degenerate[i + 1], degenerate[i + 2]});
   }
+  return triangles;
+}
+
+// Reads the normal bits and the attribute section into `mesh` (whose vertices, grid positions
+// `grid` and triangles are decoded); returns the normal bits.
+unsigned decode_attributes(io::ByteReader& in, AttributeFlags flags,
+                           const std::vector<std::array<std::int32_t, 3>>& grid, TriangleMesh& mesh,
+                           const std::string& source) {
   const unsigned normal_bits = in.u8("normal bits");
-  {
-    if (flags.normals && (normal_bits < kMinNormalBits || normal_bits > kMaxNormalBits))
-      in.fail("normal bits", std::to_string(normal_bits) + " is not " +
-                                 std::to_string(kMinNormalBits) + " .. " +
-                                 std::to_string(kMaxNormalBits));
-    if (!flags.normals && normal_bits != 0)
-      in.fail("normal bits", std::to_string(normal_bits) + " but the header flags no normals");
-    const auto [bytes, size] = section("attribute section");
-    RangeDecoder dec(bytes, size, source, "attribute section");
-    const DecodedGeometry geometry{grid_out, mesh.triangles};
-    if (flags.normals) mesh.normals = decode_normals(geometry, normal_bits, dec);
-    if (flags.colors) mesh.colors = decode_colors(geometry, dec);
-    dec.check();
-  }
+  if (flags.normals && (normal_bits < kMinNormalBits || normal_bits > kMaxNormalBits))
+    in.fail("normal bits", std::to_string(normal_bits) + " is not " +
+                               std::to_string(kMinNormalBits) + " .. " +
+                               std::to_string(kMaxNormalBits));
+  if (!flags.normals && normal_bits != 0)
+    in.fail("normal bits", std::to_string(normal_bits) + " but the header flags no normals");
+  const Section section = read_section(in, "attribute section");
+  RangeDecoder dec(section.bytes, section.size, source, "attribute section");
+  const DecodedGeometry geometry{grid, mesh.triangles};
+  if (flags.normals) mesh.normals = decode_normals(geometry, normal_bits, dec);
+  if (flags.colors) mesh.colors = decode_colors(geometry, dec);
+  dec.check();
+  return normal_bits;
+}
+
+}  // namespace
+
+TriangleMesh decode_body(io::ByteReader& in, const Quantizer& quantizer, AttributeFlags flags,
+                         const std::string& source, BodyCodes* codes) {
+  const std::uint32_t components = in.u32("components");
+  const std::uint64_t symbols = in.u64("symbol count");
+  const std::uint64_t decoded = in.u64("surface vertex count");
+  const Section side_section = read_section(in, "side section");
+  const Section symbol_section = read_section(in, "symbol section");
+  // More symbols than the section can hold (SymbolModels) is corrupt, and would allocate
+  // without bound.
+  if (symbols > kSymbolsPerByte * symbol_section.size + 64 ||
+      decoded > 3 * symbols + 3 * components + 3 || components > symbols + 1)
+    in.fail("symbol count", std::to_string(symbols) + " symbols, " + std::to_string(decoded) +
+                                " vertices and " + std::to_string(components) +
+                                " components do not fit a section of " +
+                                std::to_string(symbol_section.size) + " bytes");
+  SideData side = decode_side(side_section, symbols, decoded, in.remaining(), source);
+  RangeDecoder symbol_decoder(symbol_section.bytes, symbol_section.size, source, "symbol section");
+  const ReplayedSurface replayed =
+      decode_symbols(components, static_cast<std::size_t>(symbols),
+                     static_cast<std::size_t>(decoded), side.handles, symbol_decoder, source);
+  const VertexRoles roles = assign_outputs(std::move(side.hole), std::move(side.merged));
+  const std::size_t outputs = roles.surface_outputs + static_cast<std::size_t>(side.off_surface);
+  TriangleMesh mesh;
+  mesh.vertices.resize(outputs);
+  std::vector<std::array<std::int32_t, 3>> grid =
+      decode_positions(in, replayed, roles, quantizer, source, mesh.vertices);
+  mesh.triangles = output_triangles(replayed, roles, side.degenerate, outputs, source);
+  const unsigned normal_bits = decode_attributes(in, flags, grid, mesh, source);
   if (codes != nullptr) {
-    codes->positions = std::move(grid_out);
+    codes->positions = std::move(grid);
     codes->normals = mesh.normals;
     codes->normal_bits = normal_bits;
   }

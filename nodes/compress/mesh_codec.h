@@ -12,9 +12,9 @@
 // merged fans, degenerate triangles, vertices off the surface), symbols (CLERS + M, last first,
 // context: the rebuilt triangles at the gate's vertices and the symbol after; see
 // nodes/compress/edgebreaker_replay.h), positions x, y and z (one stream per axis, so that a
-// decoder's three dependency chains overlap; each vertex's trust flags, one per offered
-// parallelogram, precede its x residual); then a u8 of octahedral normal bits (0 without
-// normals) and the attribute section (normals, then colours).
+// decoder's three dependency chains overlap; each vertex's trusted subset of the offered
+// parallelograms, one choice, precedes its x residual); then a u8 of octahedral normal bits (0
+// without normals) and the attribute section (normals, then colours).
 
 #include <array>
 #include <cstdint>

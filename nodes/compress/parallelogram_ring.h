@@ -1,50 +1,54 @@
 #pragma once
 // The parallelograms a decoder can form for a vertex (the idea of Draco's constrained
-// multi-parallelogram scheme, written afresh): one parallelogram x + y - w per triangle (k, x, y)
-// at the vertex whose far edge (x, y) is shared with a triangle (y, x, w) and whose x, y and w
-// were all decoded before k. The codec (nodes/compress/mesh_codec.cpp) predicts a vertex by the
-// mean of the ones the encoder flags as trusted. Built from the replayed connectivity, which the
-// decoder holds in full before it reads any position.
+// multi-parallelogram scheme, written afresh): one parallelogram x + y - w per edge (x, y) whose
+// two triangles' third vertices are the vertex k and a vertex w, with x, y and w all decoded
+// before k. The codec (nodes/compress/mesh_codec.cpp) predicts a vertex by the mean of the ones
+// the encoder flags as trusted. Built from the replay's edge diamonds
+// (nodes/compress/edgebreaker_replay.h), which the decoder holds in full before it reads any
+// position: no adjacency search.
 
 #include <array>
 #include <cstdint>
 #include <vector>
 
-#include "runtime/triangle_mesh.h"
+#include "nodes/compress/edgebreaker_connectivity.h"
 
 namespace meshflow::compress {
 
-/// Vertex-to-triangle incidence of a replayed surface, for multi-parallelogram prediction.
-/// Immutable after construction: safe to share between threads.
+/// Per decoded vertex, the edges that offer it a parallelogram. Immutable after construction:
+/// safe to share between threads.
 class ParallelogramRing {
  public:
-  /// `triangles`: corners are decoded vertex numbers < `vertices`; `hole[v]` != 0 marks vertices
-  /// that carry no position (they never predict). O(V + T) time and memory.
-  ParallelogramRing(const std::vector<Triangle>& triangles, const std::vector<char>& hole,
+  /// `diamonds`: every edge of the replayed surface once (corners are decoded vertex numbers <
+  /// `vertices`); `hole[v]` != 0 marks vertices that carry no position (they never predict).
+  /// O(V + E) time and memory (48 bytes per vertex).
+  ParallelogramRing(const std::vector<EdgeDiamond>& diamonds, const std::vector<char>& hole,
                     std::size_t vertices);
 
-  /// At most this many parallelograms per vertex are offered (the first in incidence order).
+  /// At most this many parallelograms per vertex are offered (the first in replay order).
   static constexpr unsigned kMaxParallelograms = 4;
   using Parallelograms = std::array<std::array<std::int64_t, 3>, kMaxParallelograms>;
 
-  /// Writes to out[0 .. n) the parallelograms available to vertex `k` (corners below k and not
+  /// Writes to out[0 .. n) the parallelograms available to vertex `k` (x, y, w below k and not
   /// holes, read from `grid`), in an order both coder sides share, and returns n (<=
-  /// kMaxParallelograms). O(valence^2).
+  /// kMaxParallelograms). O(n).
   unsigned gather(std::uint32_t k, const std::vector<std::array<std::int32_t, 3>>& grid,
-                  Parallelograms& out) const;
+                  Parallelograms& out) const {
+    const unsigned count = count_[k];
+    const Corners* c = &corners_[std::size_t{k} * kMaxParallelograms];
+    for (unsigned i = 0; i < count; ++i) {
+      const auto &x = grid[c[i].x], &y = grid[c[i].y], &w = grid[c[i].w];
+      for (std::size_t a = 0; a < 3; ++a) out[i][a] = std::int64_t{x[a]} + y[a] - w[a];
+    }
+    return count;
+  }
 
  private:
-  // The vertex opposite the directed edge from -> to in a triangle holding to -> from, or kNone.
-  std::uint32_t across(std::uint32_t from, std::uint32_t to) const;
-
-  // One triangle at a vertex v: its corners after v, in the triangle's order (v, next, prev).
-  struct RingEdge {
-    std::uint32_t next, prev;
+  struct Corners {
+    std::uint32_t x, y, w;
   };
-
-  const std::vector<char>& hole_;
-  std::vector<std::uint32_t> first_;  // per vertex + 1: offsets into incident_
-  std::vector<RingEdge> incident_;    // grouped by vertex, in triangle order (contiguous scans)
+  std::vector<std::uint8_t> count_;  // per vertex: parallelograms offered (<= 4)
+  std::vector<Corners> corners_;     // kMaxParallelograms slots per vertex
 };
 
 }  // namespace meshflow::compress

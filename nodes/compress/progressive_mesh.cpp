@@ -41,8 +41,8 @@ std::vector<std::uint32_t> neighbours_of(const std::vector<Triangle>& around, st
 // The models of one packet.
 struct SplitModels {
   IntegerModel position[3], normal[2], color[3], rank;
-  SymbolModel<16> removed;
-  SymbolModel<8> order;
+  FrequencyModel<16> removed;
+  FrequencyModel<8> order;
   BitModel moved[3];
 };
 

@@ -7,10 +7,6 @@
 namespace meshflow::compress {
 namespace {
 
-// A decoder reads up to four bytes ahead of what the encoder flushed; more means the stream
-// was cut or corrupt.
-constexpr std::size_t kAllowedOverrun = 4;
-
 // The number of significant bits of v (0 for 0).
 unsigned bit_length(std::uint32_t v) {
   return v == 0 ? 0u : 32u - static_cast<unsigned>(__builtin_clz(v));
@@ -26,10 +22,19 @@ std::array<std::uint16_t, RangeEncoder::kOne + 1> make_cost_table() {
   return t;
 }
 
+// 16 log2(1 + m / 256) for m = 0 .. 255.
+std::array<std::uint8_t, 256> make_fraction_table() {
+  std::array<std::uint8_t, 256> t{};
+  for (unsigned m = 0; m < 256; ++m)
+    t[m] = static_cast<std::uint8_t>(std::lround(16.0 * std::log2(1.0 + m / 256.0)));
+  return t;
+}
+
 }  // namespace
 
 namespace detail {
 const std::array<std::uint16_t, RangeEncoder::kOne + 1> kBitCost = make_cost_table();
+const std::array<std::uint8_t, 256> kLog2Fraction = make_fraction_table();
 }  // namespace detail
 
 void RangeEncoder::encode_direct(std::uint32_t value, unsigned count) {
@@ -74,89 +79,38 @@ RangeDecoder::RangeDecoder(const unsigned char* data, std::size_t size, std::str
 }
 
 void RangeDecoder::check() const {
-  if (core_.overrun > kAllowedOverrun)
-    throw Error(source_, what_, "stream ends early (truncated or corrupt)");
+  if (core_.overran()) throw Error(source_, what_, "stream ends early (truncated or corrupt)");
 }
 
 void IntegerModel::encode(RangeEncoder& enc, std::int32_t value) {
+  const bool negative = value < 0;
   const std::uint32_t magnitude =
-      value < 0 ? 0u - static_cast<std::uint32_t>(value) : static_cast<std::uint32_t>(value);
-  const unsigned n = bit_length(magnitude);  // 0 .. 32 (32 only for INT32_MIN)
-  if (n < 15) {
-    length_low_.encode(enc, n);
-  } else {
-    length_low_.encode(enc, 15);
-    length_high_.encode(enc, n - 15);
+      negative ? 0u - static_cast<std::uint32_t>(value) : static_cast<std::uint32_t>(value);
+  if (magnitude < 16) {
+    head_.encode(enc, magnitude == 0 ? 0u : 2 * magnitude - 1 + negative);
+    return;
   }
-  if (n == 0) return;
-  // Bits below the leading one: the top two adaptive, the rest direct.
-  unsigned below = n - 1;
-  unsigned node = 1;
-  for (unsigned k = 0; k < 2 && below > 0; ++k) {
-    --below;
-    const unsigned b = (magnitude >> below) & 1u;
-    enc.encode(top_[n - 1][node], b);
-    node = node * 2 + b;
+  const unsigned n = bit_length(magnitude);  // 5 .. 32 (32 only for INT32_MIN)
+  if (n <= kShortLengths) {
+    const unsigned t = (magnitude >> (n - 3)) & 3u;
+    head_.encode(enc, 31 + 8 * (n - 5) + 2 * t + negative);
+    enc.encode_direct(magnitude & ((1u << (n - 3)) - 1u), n - 3);
+    return;
   }
-  if (below > 0) enc.encode_direct(magnitude & ((1u << below) - 1u), below);
-  enc.encode(sign_[n - 1], value < 0 ? 1u : 0u);
+  head_.encode(enc, kEscape);
+  long_length_.encode(enc, n - (kShortLengths + 1));
+  enc.encode_direct(magnitude & ((1u << (n - 1)) - 1u), n - 1);
+  enc.encode_direct(negative, 1);
 }
 
-std::uint32_t IntegerModel::cost(std::int32_t value) const {
-  const std::uint32_t magnitude =
-      value < 0 ? 0u - static_cast<std::uint32_t>(value) : static_cast<std::uint32_t>(value);
-  const unsigned n = bit_length(magnitude);
-  std::uint32_t total =
-      n < 15 ? length_low_.cost(n) : length_low_.cost(15) + length_high_.cost(n - 15);
-  if (n == 0) return total;
-  unsigned below = n - 1;
-  unsigned node = 1;
-  for (unsigned k = 0; k < 2 && below > 0; ++k) {
-    --below;
-    const unsigned b = (magnitude >> below) & 1u;
-    total += bit_cost(top_[n - 1][node], b);
-    node = node * 2 + b;
-  }
-  return total + 16 * below + bit_cost(sign_[n - 1], value < 0 ? 1u : 0u);
-}
-
-std::int32_t IntegerModel::decode(RangeDecoder& decoder) {
-  RangeDecoder::Session session(decoder);
-  return finish(session.core, length_low_.decode(session.core));
-}
-
-// Inlined into decode_three(), where the three calls then overlap.
-[[gnu::always_inline]] inline std::int32_t IntegerModel::finish(RangeDecoderCore& dec,
-                                                                unsigned length_symbol) {
-  unsigned n = length_symbol;
-  if (n == 15) n = 15 + length_high_.decode(dec);
-  if (n == 0) return 0;
-  if (n > 32) n = 32;  // a corrupt stream; the value is garbage, the caller's checks catch it
-  std::uint32_t magnitude = 1;
-  unsigned below = n - 1;
-  unsigned node = 1;
-  for (unsigned k = 0; k < 2 && below > 0; ++k) {
-    --below;
-    const unsigned b = dec.decode(top_[n - 1][node]);
-    node = node * 2 + b;
-    magnitude = (magnitude << 1) | b;
-  }
-  if (below > 0) magnitude = (magnitude << below) | dec.decode_direct(below);
-  const bool negative = dec.decode(sign_[n - 1]) != 0;
+std::int32_t IntegerModel::decode_long(RangeDecoderCore& dec) {
+  // A corrupt stream can name a length past 32 (the value is then garbage; the caller's checks
+  // or the checksum catch it).
+  unsigned n = long_length_.decode(dec) + kShortLengths + 1;
+  if (n > 32) n = 32;
+  const std::uint32_t magnitude = (1u << (n - 1)) | dec.decode_direct(n - 1);
+  const bool negative = dec.decode_direct(1) != 0;
   return static_cast<std::int32_t>(negative ? 0u - magnitude : magnitude);
-}
-
-std::array<std::int32_t, 3> IntegerModel::decode_three(IntegerModel& mx, IntegerModel& my,
-                                                       IntegerModel& mz, RangeDecoderCore& dx,
-                                                       RangeDecoderCore& dy, RangeDecoderCore& dz) {
-  unsigned nx = 1, ny = 1, nz = 1;
-  for (int level = 0; level < SymbolModel<16>::kLevels; ++level) {
-    nx = mx.length_low_.step(dx, nx);
-    ny = my.length_low_.step(dy, ny);
-    nz = mz.length_low_.step(dz, nz);
-  }
-  return {mx.finish(dx, SymbolModel<16>::symbol(nx)), my.finish(dy, SymbolModel<16>::symbol(ny)),
-          mz.finish(dz, SymbolModel<16>::symbol(nz))};
 }
 
 }  // namespace meshflow::compress

@@ -86,7 +86,8 @@ TEST(TsdfBand, BandPixelsMatchTheRuleOnePixelAtATime) {
               std::min(config.truncation(), std::max(along, kBehindNoiseMultiple * noise * d * d));
         }
         const std::size_t p = static_cast<std::size_t>(v * width + u);
-        ASSERT_TRUE(band_same_bits(pixels[2 * p], want_d) && band_same_bits(pixels[2 * p + 1], want_band))
+        ASSERT_TRUE(band_same_bits(pixels[2 * p], want_d) &&
+                    band_same_bits(pixels[2 * p + 1], want_band))
             << "width " << width << " pixel (" << u << ", " << v << "): " << pixels[2 * p + 1]
             << " vs " << want_band;
       }

@@ -124,8 +124,8 @@ TEST(TsdfProjectiveUpdate, BlendsEightVoxelsExactlyAsOneAtATime) {
               updated += want;
               for (std::size_t i = 0; i < kTsdfBlockVoxels; ++i) {
                 const TsdfVoxel &a = block.voxels[i], &b = expected.voxels[i];
-                ASSERT_TRUE(voxel_same_bits(a.distance, b.distance) && voxel_same_bits(a.weight, b.weight) &&
-                            a.color == b.color)
+                ASSERT_TRUE(voxel_same_bits(a.distance, b.distance) &&
+                            voxel_same_bits(a.weight, b.weight) && a.color == b.color)
                     << "block (" << x << ", " << y << ", " << z << ") voxel " << i;
               }
             }

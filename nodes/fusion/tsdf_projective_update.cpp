@@ -79,48 +79,122 @@ void project_block(const Eigen::Vector3i& origin, const BlockUpdate& frame, Bloc
   project_voxel_rows(origin, frame, out);
 }
 
-std::size_t update_block(TsdfBlock& block, const BlockUpdate& frame) {
-  const std::size_t width = static_cast<std::size_t>(frame.width);
-  const float max_u = static_cast<float>(frame.width) - 0.5f;
-  const float max_v = static_cast<float>(frame.height) - 0.5f;
+namespace {
+
+using simd::Floats8;
+using simd::Ints8;
+
+// Whether any lane of `mask` is set.
+inline bool any_lane(const Ints8& mask) {
+  std::int32_t any = 0;
+  for (int j = 0; j < 8; ++j) any |= mask[j];
+  return any != 0;
+}
+
+// update_block()'s voxel loop, eight voxels (one voxel row) at a time: the tests as lane masks,
+// the blend in vectors, each lane exactly the arithmetic of one voxel alone (plain IEEE products,
+// sums and quotients in the same order, no FMA contraction), so every CPU and either build gives
+// the same floats. Pixels and voxels are read and written lane by lane (gathers: the voxels are
+// 12-byte records, the pixels anywhere in the image).
+MESHFLOW_AVX2_CLONES std::size_t blend_voxel_rows(TsdfBlock& block, const BlockUpdate& frame,
+                                                  const BlockProjection& projection) {
+  const auto width = static_cast<std::int32_t>(frame.width);
+  const Floats8 max_u = Floats8{} + (static_cast<float>(frame.width) - 0.5f);
+  const Floats8 max_v = Floats8{} + (static_cast<float>(frame.height) - 0.5f);
   const float truncation = frame.config.truncation();
-  BlockProjection projection;
-  project_block(block.coords * kTsdfBlockSide, frame, projection);
+  const float max_weight = frame.config.max_weight;
+  const bool inverse_depth = frame.config.weighting == TsdfWeighting::kInverseDepth;
+  const Rgb8* const colors =
+      frame.color != nullptr ? reinterpret_cast<const Rgb8*>(frame.color->data()) : nullptr;
   std::size_t count = 0;
-  for (std::size_t i = 0; i < kTsdfBlockVoxels; ++i) {
-    const float pz = projection.z[i];
-    if (!(pz > 0.0f)) continue;
-    const float uf = projection.u[i], vf = projection.v[i];
-    if (!(uf > -0.5f && vf > -0.5f && uf < max_u && vf < max_v)) {
-      continue;  // outside the image (or NaN)
+  for (std::size_t i = 0; i < kTsdfBlockVoxels; i += 8) {
+    Floats8 pz, uf, vf;
+    __builtin_memcpy(&pz, projection.z + i, sizeof pz);
+    __builtin_memcpy(&uf, projection.u + i, sizeof uf);
+    __builtin_memcpy(&vf, projection.v + i, sizeof vf);
+    // In front of the camera and inside the image (false for NaN).
+    Ints8 valid = (pz > 0.0f) & (uf > -0.5f) & (vf > -0.5f) & (uf < max_u) & (vf < max_v);
+    if (!any_lane(valid)) continue;
+    // Nearest pixels (0 in lanes left out, whose projections may not convert).
+    const Ints8 u = __builtin_convertvector((valid ? uf + 0.5f : Floats8{}), Ints8);
+    const Ints8 v = __builtin_convertvector((valid ? vf + 0.5f : Floats8{}), Ints8);
+    const Ints8 pixel = v * width + u;
+    // Gathered in every lane (lanes left out read pixel 0 and their own voxels: in bounds),
+    // without branches.
+    Floats8 d{}, band{}, slope_u{}, slope_v{};
+    for (int j = 0; j < 8; ++j) {
+      const auto at = 2 * static_cast<std::size_t>(pixel[j]);
+      d[j] = frame.pixels[at];  // 0 when invalid
+      band[j] = frame.pixels[at + 1];
     }
-    const int u = static_cast<int>(uf + 0.5f), v = static_cast<int>(vf + 0.5f);
-    const std::size_t pixel = static_cast<std::size_t>(v) * width + static_cast<std::size_t>(u);
-    float d = frame.pixels[2 * pixel];  // 0 when invalid
-    if (!(d > 0.0f)) continue;
-    if (frame.slopes != nullptr)
-      d += frame.slopes[2 * pixel] * (uf - static_cast<float>(u)) +
-           frame.slopes[2 * pixel + 1] * (vf - static_cast<float>(v));
-    const float sdf = d - pz;
-    if (sdf < -frame.pixels[2 * pixel + 1]) continue;  // hidden behind the surface: unknown
-    TsdfVoxel& vox = block.voxels[i];
-    const float w = observation_weight(frame.config.weighting, d);
-    const float total = vox.weight + w;
-    const float inv_total = 1.0f / total;
-    vox.distance = (vox.distance * vox.weight + std::min(sdf, truncation) * w) * inv_total;
-    if (frame.color != nullptr) {
-      const Rgb8 c = frame.color->at<Rgb8>(v, u);
-      auto blend = [&](std::uint8_t old, std::uint8_t now) {
-        return static_cast<std::uint8_t>(
-            (static_cast<float>(old) * vox.weight + static_cast<float>(now) * w) * inv_total +
-            0.5f);  // round to nearest: the value is >= 0
-      };
-      vox.color = Rgb8{blend(vox.color.r, c.r), blend(vox.color.g, c.g), blend(vox.color.b, c.b)};
+    valid &= d > 0.0f;
+    if (frame.slopes != nullptr) {
+      for (int j = 0; j < 8; ++j) {
+        const auto at = 2 * static_cast<std::size_t>(pixel[j]);
+        slope_u[j] = frame.slopes[at];
+        slope_v[j] = frame.slopes[at + 1];
+      }
+      d = d + (slope_u * (uf - __builtin_convertvector(u, Floats8)) +
+               slope_v * (vf - __builtin_convertvector(v, Floats8)));
     }
-    vox.weight = std::min(total, frame.config.max_weight);
-    ++count;
+    const Floats8 sdf = d - pz;
+    valid &= ~(sdf < -band);  // hidden behind the surface: unknown
+    if (!any_lane(valid)) continue;
+    TsdfVoxel* const row = block.voxels.data() + i;
+    Floats8 distance{}, weight{};
+    for (int j = 0; j < 8; ++j) {
+      distance[j] = row[j].distance;
+      weight[j] = row[j].weight;
+    }
+    // (Lanes left out divide by 1, never by 0, and store their voxel's own values.)
+    const Floats8 one = Floats8{} + 1.0f;
+    const Floats8 w = inverse_depth ? 1.0f / ((valid ? d : one) * (valid ? d : one)) : one;
+    const Floats8 total = weight + w;
+    const Floats8 inv_total = 1.0f / (valid ? total : one);
+    const Floats8 clipped = (truncation < sdf ? Floats8{} + truncation : sdf);
+    const Floats8 blended = valid ? (distance * weight + clipped * w) * inv_total : distance;
+    const Floats8 capped = valid ? (max_weight < total ? Floats8{} + max_weight : total) : weight;
+    if (colors != nullptr) {
+      Floats8 old_r{}, old_g{}, old_b{}, new_r{}, new_g{}, new_b{};
+      for (int j = 0; j < 8; ++j) {
+        const Rgb8 o = row[j].color;
+        const Rgb8 c = colors[pixel[j]];
+        old_r[j] = o.r;
+        old_g[j] = o.g;
+        old_b[j] = o.b;
+        new_r[j] = c.r;
+        new_g[j] = c.g;
+        new_b[j] = c.b;
+      }
+      // Rounded to nearest (the values are >= 0); lanes left out keep their colour.
+      const Ints8 r =
+          valid ? __builtin_convertvector((old_r * weight + new_r * w) * inv_total + 0.5f, Ints8)
+                : __builtin_convertvector(old_r, Ints8);
+      const Ints8 g =
+          valid ? __builtin_convertvector((old_g * weight + new_g * w) * inv_total + 0.5f, Ints8)
+                : __builtin_convertvector(old_g, Ints8);
+      const Ints8 b =
+          valid ? __builtin_convertvector((old_b * weight + new_b * w) * inv_total + 0.5f, Ints8)
+                : __builtin_convertvector(old_b, Ints8);
+      for (int j = 0; j < 8; ++j)
+        row[j].color = Rgb8{static_cast<std::uint8_t>(r[j]), static_cast<std::uint8_t>(g[j]),
+                            static_cast<std::uint8_t>(b[j])};
+    }
+    for (int j = 0; j < 8; ++j) {
+      row[j].distance = blended[j];
+      row[j].weight = capped[j];
+      count += static_cast<std::size_t>(valid[j] & 1);
+    }
   }
   return count;
+}
+
+}  // namespace
+
+std::size_t update_block(TsdfBlock& block, const BlockUpdate& frame) {
+  BlockProjection projection;
+  project_block(block.coords * kTsdfBlockSide, frame, projection);
+  return blend_voxel_rows(block, frame, projection);
 }
 
 }  // namespace meshflow

@@ -128,6 +128,35 @@ INSTANTIATE_TEST_SUITE_P(DenseAndTiled, CloseSurfaceModes, ::testing::Bool(),
                            return p.param ? "Tiled" : "Dense";
                          });
 
+// The fill follows the shape: the missing cap of the sphere (z > 0.3 m, a quarter of its
+// radius high) comes back curved, within a fraction of a voxel of the exact sphere, not as
+// the flat disc across its rim (0.2 m = 10 voxels below the pole).
+TEST(CloseSurface, FilledCapFollowsTheSphere) {
+  const float voxel = 0.02f;
+  const CappedSphere s = capped_sphere(voxel);
+  CloseReport report;
+  const ClosedDistance closed = close_distance_field(s.grid, s.field, s.cloud, {}, &report);
+  const TriangleMesh mesh = marching_cubes(closed.grid, closed.distance);
+  ASSERT_TRUE(edge_statistics(mesh).closed());
+  double sum = 0.0, worst = 0.0, top = -1.0;
+  std::size_t filled = 0;
+  for (const Eigen::Vector3f& v : mesh.vertices) {
+    top = std::max(top, static_cast<double>(v.z()));
+    if (v.z() < 0.3f + 2.0f * voxel) continue;  // the seen part and the rim's band
+    const double error = std::abs(static_cast<double>(v.norm()) - 0.5);
+    sum += error;
+    worst = std::max(worst, error);
+    ++filled;
+  }
+  ASSERT_GT(filled, 100u);
+  std::printf(
+      "[ cap ] %zu filled vertices: mean %.4f, largest %.4f m from the sphere; top %.3f m\n",
+      filled, sum / static_cast<double>(filled), worst, top);
+  EXPECT_LT(sum / static_cast<double>(filled), 0.25 * voxel) << "mean distance to the sphere";
+  EXPECT_LT(worst, 1.0 * voxel) << "largest distance to the sphere";
+  EXPECT_GT(top, 0.5 - voxel) << "the pole comes back";
+}
+
 TEST(CloseSurface, SameResultForOneAndTwoThreads) {
   const CappedSphere s = capped_sphere(0.025f);
   for (const CloseConfig& config : {CloseConfig{}, tiled_config()}) {

@@ -108,6 +108,52 @@ struct CloseProblem {
   int coarse_step = 1;
 };
 
+// Free nodes on one side of zero that no held node on that side reaches through free nodes
+// of the same side (6-neighbours) flip to the other side: pockets of the fill, which would be
+// extra components inside or beside the object (the double layer wobbles near the band's
+// ends). Inside first (a pocket inside joins the outside next to it), then outside. Serial
+// breadth-first fills; the set reached does not depend on the order. O(nodes).
+void close_drop_pockets(DiffusionLattice& l) {
+  const Eigen::Vector3i n = l.size;
+  const std::size_t nodes = l.node_count();
+  std::vector<std::uint8_t> reached(nodes);
+  std::vector<std::size_t> queue;
+  for (const bool inside : {true, false}) {
+    const auto side = [&](std::size_t i) { return (l.values[i] < 0.0f) == inside; };
+    std::fill(reached.begin(), reached.end(), 0);
+    queue.clear();
+    for (std::size_t i = 0; i < nodes; ++i)
+      if (l.fixed[i] && side(i)) {
+        reached[i] = 1;
+        queue.push_back(i);
+      }
+    for (std::size_t head = 0; head < queue.size(); ++head) {
+      const std::size_t i = queue[head];
+      const int x = static_cast<int>(i % static_cast<std::size_t>(n.x()));
+      const int y =
+          static_cast<int>(i / static_cast<std::size_t>(n.x()) % static_cast<std::size_t>(n.y()));
+      const int z = static_cast<int>(i / (static_cast<std::size_t>(n.x()) * n.y()));
+      const auto visit = [&](std::size_t j) {
+        if (reached[j] || l.fixed[j] || !side(j)) return;
+        reached[j] = 1;
+        queue.push_back(j);
+      };
+      if (x > 0) visit(i - 1);
+      if (x + 1 < n.x()) visit(i + 1);
+      if (y > 0) visit(l.index(x, y - 1, z));
+      if (y + 1 < n.y()) visit(l.index(x, y + 1, z));
+      if (z > 0) visit(l.index(x, y, z - 1));
+      if (z + 1 < n.z()) visit(l.index(x, y, z + 1));
+    }
+    // A flipped node keeps its magnitude (at least a little), so that the surface around the
+    // pocket's former place stays where its neighbours put it.
+    for (std::size_t i = 0; i < nodes; ++i)
+      if (!l.fixed[i] && !reached[i] && side(i))
+        l.values[i] = inside ? std::max(std::abs(l.values[i]), 1e-6f)
+                             : -std::max(std::abs(l.values[i]), 1e-6f);
+  }
+}
+
 // The free nodes of `l` from the inside indicator the observed nodes' distances imply, spread
 // as a double layer: w solves the Poisson equation whose source is the divergence of the
 // indicator's jumps between observed neighbours (a discrete generalized winding number of the
@@ -187,6 +233,7 @@ int close_fill_by_indicator(DiffusionLattice& l, const std::vector<std::uint8_t>
   tbb::parallel_for(std::size_t{0}, nodes, [&](std::size_t i) {
     if (!l.fixed[i]) l.values[i] = static_cast<float>(alpha + beta * w.values[i]);
   });
+  close_drop_pockets(l);
   grow_below = static_cast<float>(0.5 * alpha);
   return levels;
 }
@@ -281,10 +328,13 @@ TileResult close_solve_tile(const CloseProblem& p, const Eigen::Vector3i& a,
         },
         std::plus<>());
   }
-  // A whole lattice: the indicator's fill; a tile: diffusion between its faces, which hold
-  // the coarse solution (the double layer needs the whole surface).
+  // A whole lattice of a cloud's distances: the indicator's fill; a tile: diffusion between
+  // its faces, which hold the coarse solution (the double layer needs the whole surface). A
+  // fused map (no points) is diffused too: its observed voxels fill the truncation band on
+  // both sides, and the double layer of its ragged band's ends left small extra shells
+  // (CliClose.FusedAndMergedDepthSequencesCloseWatertight).
   float grow_below = 0.0f;  // a free node on the data's box below this: the lattice is too small
-  if (p.coarse == nullptr)
+  if (p.coarse == nullptr && !p.cloud->empty())
     out.counts.levels =
         close_fill_by_indicator(l, observed, p.grid->voxel_size, p.config->diffusion, grow_below);
   else

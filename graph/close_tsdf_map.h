@@ -4,8 +4,12 @@
 // shape) are filled by the same diffusion as a merged cloud's distance field. In graph/: it
 // joins two stages' kernels (nodes/fusion, nodes/close), which nodes/ may not.
 
+#include <Eigen/Core>
+#include <vector>
+
 #include "nodes/close/close_surface.h"
 #include "nodes/fusion/tsdf_map.h"
+#include "runtime/rgb8.h"
 
 namespace meshflow {
 
@@ -24,5 +28,14 @@ ClosedDistance tsdf_map_distances(const TsdfMap& map, float min_weight);
 /// close_distance_field() after O(voxels log voxels) to gather the map's voxels.
 ClosedDistance close_tsdf_map(const TsdfMap& map, float min_weight, const CloseConfig& config,
                               CloseReport* report = nullptr);
+
+/// Colours for the `vertices` (metres, the map's frame) of a mesh of the map's closed surface:
+/// each the inverse-distance blend of the colours of its 4 nearest surface voxels (weight above
+/// `min_weight`, fused distance within one voxel of zero, at their centres), so an observed part
+/// takes the colours the open mesh would and a filled part those of the nearest observed
+/// surface. Empty when the map has no surface voxel. Parallel, deterministic; not thread-safe
+/// against integrate() on the map. O((S + V) log S) for S surface voxels and V vertices.
+std::vector<Rgb8> tsdf_map_vertex_colors(const TsdfMap& map, float min_weight,
+                                         const std::vector<Eigen::Vector3f>& vertices);
 
 }  // namespace meshflow

@@ -3,6 +3,7 @@
 #include <oneapi/tbb/flow_graph.h>
 
 #include <algorithm>
+#include <utility>
 
 #include "graph/close_tsdf_map.h"
 #include "graph/frame_graph.h"
@@ -99,8 +100,11 @@ TriangleMesh FusionPipeline::extract_mesh(TsdfExtractStats* stats) {
   ExtractConfig extract = config_.frames.extract;
   // A map has no points for the methods that read them (planar, extended marching cubes).
   if (extract.method == ExtractMethod::kAuto) extract.method = ExtractMethod::kMarchingCubes;
-  return optimize_mesh(
-      extract_surface(closed.grid, closed.distance, PointCloud{}, nullptr, extract), optimize);
+  TriangleMesh mesh = extract_surface(closed.grid, closed.distance, PointCloud{}, nullptr, extract);
+  // The open mesher blends the map's colours along each edge; the closed grid has none: the
+  // nearest observed surface voxels' colours (the filled parts take the nearest seen colour).
+  mesh.colors = tsdf_map_vertex_colors(map_, config_.min_weight, mesh.vertices);
+  return optimize_mesh(std::move(mesh), optimize);
 }
 
 }  // namespace meshflow

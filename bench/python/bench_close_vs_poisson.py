@@ -100,6 +100,8 @@ def main():
     parser.add_argument("--meshflow", default="build/meshflow")
     parser.add_argument("--objects", default=",".join(OBJECTS))
     parser.add_argument("--threads", type=int, default=2)
+    parser.add_argument("--depths", default="8,9",
+                        help="Open3D Poisson depths, comma-separated; empty: meshflow only")
     parser.add_argument("--json", help="write every figure to this file")
     args = parser.parse_args()
     o3d.utility.set_verbosity_level(o3d.utility.VerbosityLevel.Error)
@@ -127,7 +129,9 @@ def main():
                                       f"{voxel:.6g}", "--threads", str(args.threads), "--json"]
                                      + extra))
                 meshes[label] = (path, doc["time_ms"] / 1e3)
-            meshes.update(open3d_poisson(scan, directory, (8, 9)))
+            depths = [int(d) for d in args.depths.split(",") if d]
+            if depths:
+                meshes.update(open3d_poisson(scan, directory, depths))
             results[name] = {}
             for label, (path, seconds) in meshes.items():
                 figures = measure(path, truth, truth_normals, scan_surface, voxel, diagonal,

@@ -1,15 +1,18 @@
 #include "nodes/close/close_surface.h"
 
+#include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_reduce.h>
 #include <tbb/parallel_sort.h>
 
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <cmath>
 #include <cstdint>
+#include <functional>
 #include <iterator>
 #include <memory>
-#include <string>
 #include <utility>
 
 #include "runtime/error.h"
@@ -90,31 +93,6 @@ std::unique_ptr<std::atomic<std::uint8_t>[]> close_sight_marks(const PointCloud&
   return marks;
 }
 
-// Trilinear interpolation of a solved coarse lattice (node i at fine node step x i) at fine
-// node p (relative to the same origin).
-float close_coarse_value(const DiffusionLattice& coarse, int step, const Eigen::Vector3i& p) {
-  int lo[3], hi[3];
-  float w[3];
-  for (int a = 0; a < 3; ++a) {
-    lo[a] = std::min(p[a] / step, coarse.size[a] - 1);
-    hi[a] = std::min(lo[a] + 1, coarse.size[a] - 1);
-    w[a] =
-        hi[a] == lo[a] ? 0.0f : static_cast<float>(p[a] - lo[a] * step) / static_cast<float>(step);
-  }
-  float v = 0.0f;
-  for (int corner = 0; corner < 8; ++corner) {
-    float weight = 1.0f;
-    int q[3];
-    for (int a = 0; a < 3; ++a) {
-      const bool upper = (corner >> a) & 1;
-      q[a] = upper ? hi[a] : lo[a];
-      weight *= upper ? w[a] : 1.0f - w[a];
-    }
-    if (weight > 0.0f) v += weight * coarse.values[coarse.index(q[0], q[1], q[2])];
-  }
-  return v;
-}
-
 // Everything a tile's solve reads: the data, the whole lattice's box, and the coarse solution
 // that holds the faces of tiles inside the lattice (none when the lattice is one tile).
 struct CloseProblem {
@@ -125,6 +103,7 @@ struct CloseProblem {
   Eigen::Vector3i lo = Eigen::Vector3i::Zero();  // the lattice's first corner
   Eigen::Vector3i size = Eigen::Vector3i::Zero();
   float outside = 0.0f;  // the value held at the lattice's faces
+  int margin = 1;        // nodes between the lattice's faces and the data's box
   const DiffusionLattice* coarse = nullptr;
   int coarse_step = 1;
 };
@@ -137,6 +116,10 @@ struct TileResult {
   std::vector<std::pair<VoxelKey, float>> values;
   std::vector<std::pair<VoxelKey, float>> fallback;
   CloseReport counts;
+  /// Per side (-x, +x, -y, +y, -z, +z): a filled node on the data's box there (the margin
+  /// from the lattice's face) is inside or near it, so the fill would go on past the lattice
+  /// or feels the face (a solve of the whole lattice only).
+  std::array<bool, 6> cut{};
 };
 
 // Solves the tile of lattice nodes [a, b] (inclusive, relative to the lattice): held nodes are
@@ -167,42 +150,78 @@ TileResult close_solve_tile(const CloseProblem& p, const Eigen::Vector3i& a,
         const bool lattice_face = (q.array() == 0).any() || (q.array() + 1 == p.size.array()).any();
         const std::size_t i = l.index(x, y, z);
         l.fixed[i] = 1;
-        l.values[i] = lattice_face || p.coarse == nullptr
-                          ? p.outside
-                          : close_coarse_value(*p.coarse, p.coarse_step, q);
+        l.values[i] =
+            lattice_face || p.coarse == nullptr
+                ? p.outside
+                : interpolate_coarse(*p.coarse, Eigen::Vector3i::Constant(p.coarse_step), q);
       }
   });
   const auto node_of = [&](VoxelKey key) {
     const Eigen::Vector3i c = unpack_key(key) - p.lo - a;
     return l.index(c.x(), c.y(), c.z());
   };
-  for (std::uint32_t c : corners) {
-    if (!p.field->valid[c]) continue;
-    const Eigen::Vector3i q = unpack_key(p.grid->corners[c]) - p.lo - a;
-    const std::size_t i = l.index(q.x(), q.y(), q.z());
-    l.fixed[i] = 1;
-    l.values[i] = p.field->values[c];
-    if (owned(q.x(), q.y(), q.z())) ++out.counts.observed;
-  }
+  // The data's corners (each a distinct node: any order writes the same).
+  out.counts.observed = tbb::parallel_reduce(
+      tbb::blocked_range<std::size_t>(0, corners.size(), 4096), std::size_t{0},
+      [&](const tbb::blocked_range<std::size_t>& r, std::size_t count) {
+        for (std::size_t k = r.begin(); k != r.end(); ++k) {
+          const std::uint32_t c = corners[k];
+          if (!p.field->valid[c]) continue;
+          const Eigen::Vector3i q = unpack_key(p.grid->corners[c]) - p.lo - a;
+          const std::size_t i = l.index(q.x(), q.y(), q.z());
+          l.fixed[i] = 1;
+          l.values[i] = p.field->values[c];
+          count += owned(q.x(), q.y(), q.z()) ? 1 : 0;
+        }
+        return count;
+      },
+      std::plus<>());
   if (p.cloud->has_sensor_origin && !p.cloud->empty()) {  // data wins over a grazing sight line
     const float voxel = p.grid->voxel_size;
     const float stop = p.config->free_space_stop_voxels * voxel;
     const auto marks = close_sight_marks(*p.cloud, NodeBox{p.lo + a, 1, n}, voxel, stop);
-    for (int z = 0; z < n.z(); ++z)
-      for (int y = 0; y < n.y(); ++y)
-        for (int x = 0; x < n.x(); ++x) {
-          const std::size_t i = l.index(x, y, z);
-          if (!marks[i].load(std::memory_order_relaxed) || l.fixed[i]) continue;
-          l.fixed[i] = 1;
-          l.values[i] = stop;
-          if (owned(x, y, z)) ++out.counts.seen_empty;
-        }
+    out.counts.seen_empty = tbb::parallel_reduce(
+        tbb::blocked_range<int>(0, n.z()), std::size_t{0},
+        [&](const tbb::blocked_range<int>& r, std::size_t count) {
+          for (int z = r.begin(); z != r.end(); ++z)
+            for (int y = 0; y < n.y(); ++y)
+              for (int x = 0; x < n.x(); ++x) {
+                const std::size_t i = l.index(x, y, z);
+                if (!marks[i].load(std::memory_order_relaxed) || l.fixed[i]) continue;
+                l.fixed[i] = 1;
+                l.values[i] = stop;
+                count += owned(x, y, z) ? 1 : 0;
+              }
+          return count;
+        },
+        std::plus<>());
   }
   out.counts.levels = diffuse_free_nodes(l, p.config->diffusion);
-  for (int z = 0; z < n.z(); ++z)
+  const float grow_below = 0.0f;  // a filled node on the data's box inside: the lattice is small
+  // Filled nodes, and the sides where one next to the lattice's face is inside (per plane,
+  // joined in plane order).
+  std::vector<std::size_t> filled(static_cast<std::size_t>(n.z()), 0);
+  std::vector<std::array<bool, 6>> cut(static_cast<std::size_t>(n.z()), std::array<bool, 6>{});
+  tbb::parallel_for(0, n.z(), [&](int z) {
     for (int y = 0; y < n.y(); ++y)
-      for (int x = 0; x < n.x(); ++x)
-        out.counts.filled += !l.fixed[l.index(x, y, z)] && owned(x, y, z) ? 1 : 0;
+      for (int x = 0; x < n.x(); ++x) {
+        const std::size_t i = l.index(x, y, z);
+        if (l.fixed[i]) continue;
+        filled[static_cast<std::size_t>(z)] += owned(x, y, z) ? 1 : 0;
+        if (!(l.values[i] < grow_below) || p.coarse != nullptr) continue;
+        const Eigen::Vector3i q(x, y, z);
+        for (int k = 0; k < 3; ++k) {
+          if (q[k] == p.margin)
+            cut[static_cast<std::size_t>(z)][static_cast<std::size_t>(2 * k)] = true;
+          if (q[k] + 1 + p.margin == n[k])
+            cut[static_cast<std::size_t>(z)][static_cast<std::size_t>(2 * k + 1)] = true;
+        }
+      }
+  });
+  for (std::size_t z = 0; z < filled.size(); ++z) {
+    out.counts.filled += filled[z];
+    for (std::size_t k = 0; k < 6; ++k) out.cut[k] = out.cut[k] || cut[z][k];
+  }
 
   // Crossed cells with all corners in the tile, that the grid lacks; their corners' values.
   const std::vector<VoxelKey>& existing = p.grid->cells;
@@ -220,18 +239,22 @@ TileResult close_solve_tile(const CloseProblem& p, const Eigen::Vector3i& a,
       }
   });
   for (const auto& plane : per_plane) out.cells.insert(out.cells.end(), plane.begin(), plane.end());
-  std::vector<VoxelKey> keys;
-  keys.reserve(out.cells.size() * 8 + corners.size());
-  for (VoxelKey cell : out.cells) {
-    const Eigen::Vector3i c = unpack_key(cell);
+  std::vector<VoxelKey> keys(out.cells.size() * 8 + corners.size());
+  tbb::parallel_for(std::size_t{0}, out.cells.size(), [&](std::size_t i) {
+    const Eigen::Vector3i c = unpack_key(out.cells[i]);
     for (int k = 0; k < 8; ++k)
-      keys.push_back(pack_key(c + Eigen::Vector3i(k & 1, (k >> 1) & 1, (k >> 2) & 1)));
-  }
-  for (std::uint32_t c : corners) keys.push_back(p.grid->corners[c]);
-  std::sort(keys.begin(), keys.end());
+      keys[8 * i + static_cast<std::size_t>(k)] =
+          pack_key(c + Eigen::Vector3i(k & 1, (k >> 1) & 1, (k >> 2) & 1));
+  });
+  tbb::parallel_for(std::size_t{0}, corners.size(), [&](std::size_t i) {
+    keys[8 * out.cells.size() + i] = p.grid->corners[corners[i]];
+  });
+  tbb::parallel_sort(keys.begin(), keys.end());
   keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
-  out.values.reserve(keys.size());
-  for (VoxelKey key : keys) out.values.emplace_back(key, l.values[node_of(key)]);
+  out.values.resize(keys.size());
+  tbb::parallel_for(std::size_t{0}, keys.size(), [&](std::size_t i) {
+    out.values[i] = {keys[i], l.values[node_of(keys[i])]};
+  });
   return out;
 }
 
@@ -342,82 +365,103 @@ ClosedDistance close_distance_field(const SparseGrid& grid, const DistanceField&
   p.lo = lo;
   p.size = hi - lo + Eigen::Vector3i::Ones();
   p.outside = static_cast<float>(margin) * voxel;
+  p.margin = margin;
   r.lattice = p.size;
   const auto nodes_of = [](const Eigen::Vector3i& s) {
     return static_cast<double>(s.x()) * s.y() * s.z();
   };
   const double limit = static_cast<double>(std::max<std::size_t>(config.max_dense_corners, 64));
 
-  // 2. A large lattice: the coarse solution over the whole box, and tiles of tile_cells.
-  int cells = std::max(p.size.maxCoeff(), 2);
+  std::vector<TileResult> results;
   DiffusionLattice coarse;
-  if (nodes_of(p.size) > limit) {
-    int step = 2;
-    while (nodes_of(((p.size.array() - 2 + step) / step + 1).matrix()) > limit) step *= 2;
-    p.coarse_step = step;
-    coarse = close_coarse_solution(p, step, r.levels);
-    p.coarse = &coarse;
-    cells = std::max(2, config.tile_cells);
-  }
-  r.coarse_step = p.coarse_step;
-  const Eigen::Vector3i tiles(close_tile_count(p.size.x(), cells),
-                              close_tile_count(p.size.y(), cells),
-                              close_tile_count(p.size.z(), cells));
-  // The grid's corners per tile (a corner on a shared face goes to both tiles).
-  const std::size_t tile_count = static_cast<std::size_t>(tiles.x()) * tiles.y() * tiles.z();
-  const auto tile_index = [&](const Eigen::Vector3i& t) {
-    return (static_cast<std::size_t>(t.z()) * tiles.y() + t.y()) * tiles.x() + t.x();
-  };
-  std::vector<std::vector<std::uint32_t>> tile_corners(tile_count);
-  for (std::uint32_t c = 0; c < grid.corners.size(); ++c) {
-    const Eigen::Vector3i q = unpack_key(grid.corners[c]) - lo;
-    Eigen::Vector3i first, last;
-    for (int a = 0; a < 3; ++a) {
-      last[a] = std::min(q[a] / cells, tiles[a] - 1);
-      first[a] = q[a] % cells == 0 && q[a] > 0 ? q[a] / cells - 1 : last[a];
+  for (int round = 0;; ++round) {
+    // 2. A large lattice: the coarse solution over the whole box, and tiles of tile_cells.
+    int cells = std::max(p.size.maxCoeff(), 2);
+    if (nodes_of(p.size) > limit) {
+      int step = 2;
+      while (nodes_of(((p.size.array() - 2 + step) / step + 1).matrix()) > limit) step *= 2;
+      p.coarse_step = step;
+      coarse = close_coarse_solution(p, step, r.levels);
+      p.coarse = &coarse;
+      cells = std::max(2, config.tile_cells);
     }
-    for (int z = first.z(); z <= last.z(); ++z)
-      for (int y = first.y(); y <= last.y(); ++y)
-        for (int x = first.x(); x <= last.x(); ++x)
-          tile_corners[tile_index({x, y, z})].push_back(c);
-  }
-
-  // 3. Each tile: skipped when it holds no data and the coarse solution is outside all over it
-  // (its fine solution, bounded by its faces' values, is then outside too), else solved.
-  std::vector<TileResult> results(tile_count);
-  std::atomic<std::size_t> solved{0};
-  tbb::parallel_for(std::size_t{0}, tile_count, [&](std::size_t t) {
-    const Eigen::Vector3i ti(
-        static_cast<int>(t % static_cast<std::size_t>(tiles.x())),
-        static_cast<int>(t / tiles.x() % static_cast<std::size_t>(tiles.y())),
-        static_cast<int>(t / (static_cast<std::size_t>(tiles.x()) * tiles.y())));
-    const Eigen::Vector3i a = ti * cells;
-    const Eigen::Vector3i b =
-        (a.array() + cells).matrix().cwiseMin(p.size - Eigen::Vector3i::Ones());
-    const std::vector<std::uint32_t>& corners = tile_corners[t];
-    if (p.coarse != nullptr && std::none_of(corners.begin(), corners.end(),
-                                            [&](std::uint32_t c) { return field.valid[c]; })) {
-      bool outside = true;
-      const Eigen::Vector3i c0 = a / p.coarse_step;
-      const Eigen::Vector3i c1 = ((b.array() + p.coarse_step - 1) / p.coarse_step)
-                                     .matrix()
-                                     .cwiseMin(coarse.size - Eigen::Vector3i::Ones());
-      for (int z = c0.z(); z <= c1.z() && outside; ++z)
-        for (int y = c0.y(); y <= c1.y() && outside; ++y)
-          for (int x = c0.x(); x <= c1.x() && outside; ++x)
-            outside = coarse.values[coarse.index(x, y, z)] > 0.0f;
-      if (outside) {
-        for (std::uint32_t c : corners)  // the grid's corners without data, if any
-          results[t].fallback.emplace_back(
-              grid.corners[c],
-              close_coarse_value(coarse, p.coarse_step, unpack_key(grid.corners[c]) - lo));
-        return;
+    r.coarse_step = p.coarse_step;
+    const Eigen::Vector3i tiles(close_tile_count(p.size.x(), cells),
+                                close_tile_count(p.size.y(), cells),
+                                close_tile_count(p.size.z(), cells));
+    // The grid's corners per tile (a corner on a shared face goes to both tiles).
+    const std::size_t tile_count = static_cast<std::size_t>(tiles.x()) * tiles.y() * tiles.z();
+    const auto tile_index = [&](const Eigen::Vector3i& t) {
+      return (static_cast<std::size_t>(t.z()) * tiles.y() + t.y()) * tiles.x() + t.x();
+    };
+    std::vector<std::vector<std::uint32_t>> tile_corners(tile_count);
+    for (std::uint32_t c = 0; c < grid.corners.size(); ++c) {
+      const Eigen::Vector3i q = unpack_key(grid.corners[c]) - lo;
+      Eigen::Vector3i first, last;
+      for (int a = 0; a < 3; ++a) {
+        last[a] = std::min(q[a] / cells, tiles[a] - 1);
+        first[a] = q[a] % cells == 0 && q[a] > 0 ? q[a] / cells - 1 : last[a];
       }
+      for (int z = first.z(); z <= last.z(); ++z)
+        for (int y = first.y(); y <= last.y(); ++y)
+          for (int x = first.x(); x <= last.x(); ++x)
+            tile_corners[tile_index({x, y, z})].push_back(c);
     }
-    results[t] = close_solve_tile(p, a, b, corners);
-    solved.fetch_add(1, std::memory_order_relaxed);
-  });
-  r.tiles = solved.load();
+
+    // 3. Each tile: skipped when it holds no data and the coarse solution is outside all over it
+    // (its fine solution, bounded by its faces' values, is then outside too), else solved.
+    results.assign(tile_count, TileResult{});
+    std::atomic<std::size_t> solved{0};
+    tbb::parallel_for(std::size_t{0}, tile_count, [&](std::size_t t) {
+      const Eigen::Vector3i ti(
+          static_cast<int>(t % static_cast<std::size_t>(tiles.x())),
+          static_cast<int>(t / tiles.x() % static_cast<std::size_t>(tiles.y())),
+          static_cast<int>(t / (static_cast<std::size_t>(tiles.x()) * tiles.y())));
+      const Eigen::Vector3i a = ti * cells;
+      const Eigen::Vector3i b =
+          (a.array() + cells).matrix().cwiseMin(p.size - Eigen::Vector3i::Ones());
+      const std::vector<std::uint32_t>& corners = tile_corners[t];
+      if (p.coarse != nullptr && std::none_of(corners.begin(), corners.end(),
+                                              [&](std::uint32_t c) { return field.valid[c]; })) {
+        bool outside = true;
+        const Eigen::Vector3i c0 = a / p.coarse_step;
+        const Eigen::Vector3i c1 = ((b.array() + p.coarse_step - 1) / p.coarse_step)
+                                       .matrix()
+                                       .cwiseMin(coarse.size - Eigen::Vector3i::Ones());
+        for (int z = c0.z(); z <= c1.z() && outside; ++z)
+          for (int y = c0.y(); y <= c1.y() && outside; ++y)
+            for (int x = c0.x(); x <= c1.x() && outside; ++x)
+              outside = coarse.values[coarse.index(x, y, z)] > 0.0f;
+        if (outside) {
+          for (std::uint32_t c : corners)  // the grid's corners without data, if any
+            results[t].fallback.emplace_back(
+                grid.corners[c],
+                interpolate_coarse(coarse, Eigen::Vector3i::Constant(p.coarse_step),
+                                   unpack_key(grid.corners[c]) - lo));
+          return;
+        }
+      }
+      results[t] = close_solve_tile(p, a, b, corners);
+      solved.fetch_add(1, std::memory_order_relaxed);
+    });
+    r.tiles = solved.load();
+    // A whole lattice whose fill reaches one of its faces: that side grows (a quarter of the
+    // lattice's extent there, at least the margin) and the lattice is solved again, at most
+    // twice and while it stays under the dense limit.
+    if (p.coarse != nullptr || round == 2) break;
+    Eigen::Vector3i grow_lo = Eigen::Vector3i::Zero(), grow_hi = Eigen::Vector3i::Zero();
+    for (int k = 0; k < 3; ++k) {
+      const int g = std::max(margin, p.size[k] / 4);
+      if (results.front().cut[static_cast<std::size_t>(2 * k)]) grow_lo[k] = g;
+      if (results.front().cut[static_cast<std::size_t>(2 * k + 1)]) grow_hi[k] = g;
+    }
+    if ((grow_lo + grow_hi).maxCoeff() == 0 || nodes_of(p.size + grow_lo + grow_hi) > limit) break;
+    lo -= grow_lo;
+    p.lo = lo;
+    p.size += grow_lo + grow_hi;
+    r.lattice = p.size;
+    r.grown = true;
+  }
 
   // 4. The grid's cells and those the filled surface crosses, and a value at every corner.
   std::vector<VoxelKey> added;

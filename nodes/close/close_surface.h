@@ -4,8 +4,10 @@
 // undersides, holes, the inside and outside away from the data) is filled by volumetric
 // diffusion (volume_diffusion.h) over a lattice of the grid's corners around the data; corners
 // with data keep their distances exactly, so the surface where there is data is the one the
-// open reconstruction extracts. Where the cloud knows its sensor, corners its lines of sight
-// crossed before reaching their points are seen empty: held outside, never filled.
+// open reconstruction extracts. A lattice whose fill is inside on the data's box (the fill
+// would go on past the lattice) grows on that side by a quarter of its extent, twice at most,
+// and is solved again. Where the cloud knows its sensor, corners its lines of sight crossed
+// before reaching their points are seen empty: held outside, never filled.
 //
 // A lattice of up to max_dense_corners is solved at once. A larger one (a building, a street)
 // is solved in two passes: a coarse lattice (every 2^k-th corner, as few as fit the limit)
@@ -36,8 +38,8 @@ struct CloseConfig {
   float free_space_stop_voxels = 2.0f;
   /// A lattice of up to this many corners is solved at once; a larger one as a coarse lattice
   /// of at most this many corners plus tiles. Memory of a lattice: about 6.7 bytes a corner
-  /// (value 4, held flag 1, sight mark 1, coarser levels 5/7), 7.7 when flat (volume_diffusion.h),
-  /// so 225-260 MB at the default.
+  /// (value 4, held flag 1, sight mark 1, coarser levels 5/7), 7.7 when flat
+  /// (volume_diffusion.h), so 225-260 MB at the default.
   std::size_t max_dense_corners = std::size_t{1} << 25;
   /// Cells along each side of a tile of a large lattice (its faces are held at the coarse
   /// solution; larger tiles follow the fine data farther, at 6.7 bytes a corner per thread).
@@ -56,6 +58,7 @@ struct CloseReport {
   std::size_t seen_empty = 0;   ///< corners on lines of sight, held outside
   std::size_t filled = 0;       ///< corners whose distance came from the diffusion
   std::size_t cells_added = 0;  ///< cells the closed surface crosses that the grid lacked
+  bool grown = false;           ///< the fill reached the lattice's faces: it grew beyond the margin
 };
 
 /// The grid and distances the extract stage meshes into a closed surface.

@@ -12,25 +12,34 @@ namespace {
 // of the other, so the planes of one colour may run in any order.
 void diffusion_sweeps(DiffusionLattice& l, int sweeps) {
   const Eigen::Vector3i n = l.size;
+  const bool poisson = !l.source.empty();
+  const auto plane = [&](int z, int colour) {
+    for (int y = 0; y < n.y(); ++y) {
+      for (int x = (y + z + colour) & 1; x < n.x(); x += 2) {
+        const std::size_t i = l.index(x, y, z);
+        if (l.fixed[i]) continue;
+        float sum = 0.0f;
+        int count = 0;
+        if (x > 0) sum += l.values[i - 1], ++count;
+        if (x + 1 < n.x()) sum += l.values[i + 1], ++count;
+        if (y > 0) sum += l.values[l.index(x, y - 1, z)], ++count;
+        if (y + 1 < n.y()) sum += l.values[l.index(x, y + 1, z)], ++count;
+        if (z > 0) sum += l.values[l.index(x, y, z - 1)], ++count;
+        if (z + 1 < n.z()) sum += l.values[l.index(x, y, z + 1)], ++count;
+        if (poisson) sum += l.source[i];
+        l.values[i] = sum / static_cast<float>(count);
+      }
+    }
+  };
+  // A small level's planes are too short to share out: the tasks would cost more than the
+  // sweep (the coarsest level's hundreds of sweeps over a few hundred nodes).
+  const bool parallel = l.node_count() >= (std::size_t{1} << 15);
   for (int s = 0; s < sweeps; ++s) {
     for (int colour = 0; colour < 2; ++colour) {
-      tbb::parallel_for(0, n.z(), [&](int z) {
-        for (int y = 0; y < n.y(); ++y) {
-          for (int x = (y + z + colour) & 1; x < n.x(); x += 2) {
-            const std::size_t i = l.index(x, y, z);
-            if (l.fixed[i]) continue;
-            float sum = 0.0f;
-            int count = 0;
-            if (x > 0) sum += l.values[i - 1], ++count;
-            if (x + 1 < n.x()) sum += l.values[i + 1], ++count;
-            if (y > 0) sum += l.values[l.index(x, y - 1, z)], ++count;
-            if (y + 1 < n.y()) sum += l.values[l.index(x, y + 1, z)], ++count;
-            if (z > 0) sum += l.values[l.index(x, y, z - 1)], ++count;
-            if (z + 1 < n.z()) sum += l.values[l.index(x, y, z + 1)], ++count;
-            l.values[i] = sum / static_cast<float>(count);
-          }
-        }
-      });
+      if (parallel)
+        tbb::parallel_for(0, n.z(), [&](int z) { plane(z, colour); });
+      else
+        for (int z = 0; z < n.z(); ++z) plane(z, colour);
     }
   }
 }
@@ -41,6 +50,56 @@ Eigen::Vector3i coarsening_steps(const Eigen::Vector3i& size) {
   return Eigen::Vector3i(size.x() >= 3 ? 2 : 1, size.y() >= 3 ? 2 : 1, size.z() >= 3 ? 2 : 1);
 }
 
+// The coarse level's source (the Poisson equation's right-hand side): each fine node's source
+// shared among the coarse nodes around it by the trilinear weights of prolong_free() (so the
+// sum is kept), halved as the spacing doubles (the equation is scaled by the spacing squared,
+// the source by its volume: 2^2 / 2^3).
+std::vector<float> restrict_source(const DiffusionLattice& fine, const Eigen::Vector3i& step,
+                                   const Eigen::Vector3i& coarse_size) {
+  const auto index = [&](int x, int y, int z) {
+    return (static_cast<std::size_t>(z) * static_cast<std::size_t>(coarse_size.y()) +
+            static_cast<std::size_t>(y)) *
+               static_cast<std::size_t>(coarse_size.x()) +
+           static_cast<std::size_t>(x);
+  };
+  std::vector<float> coarse(static_cast<std::size_t>(coarse_size.prod()), 0.0f);
+  // Coarse plane z gathers from fine planes within one step of step.z() * z: each coarse node
+  // sums its own contributions, so the planes run in parallel and the sums in a fixed order.
+  tbb::parallel_for(0, coarse_size.z(), [&](int cz) {
+    for (int cy = 0; cy < coarse_size.y(); ++cy)
+      for (int cx = 0; cx < coarse_size.x(); ++cx) {
+        const int c[3] = {cx, cy, cz};
+        int from[3], to[3];
+        for (int a = 0; a < 3; ++a) {
+          from[a] = std::max(0, step[a] * c[a] - (step[a] - 1));
+          to[a] = std::min(fine.size[a] - 1, step[a] * c[a] + (step[a] - 1));
+        }
+        float sum = 0.0f;
+        for (int fz = from[2]; fz <= to[2]; ++fz)
+          for (int fy = from[1]; fy <= to[1]; ++fy)
+            for (int fx = from[0]; fx <= to[0]; ++fx) {
+              const float s = fine.source[fine.index(fx, fy, fz)];
+              if (s == 0.0f) continue;
+              // The weight prolong_free() gives coarse node c at fine node f.
+              const int f[3] = {fx, fy, fz};
+              float weight = 1.0f;
+              for (int a = 0; a < 3; ++a) {
+                if (f[a] == step[a] * c[a]) continue;
+                const int lo = std::min(f[a] / step[a], coarse_size[a] - 1);
+                const int hi = std::min(lo + 1, coarse_size[a] - 1);
+                // Past the last coarse node the fine node takes the last one's value.
+                weight *= hi == lo ? (c[a] == lo ? 1.0f : 0.0f) : 0.5f;
+              }
+              sum += weight * s;
+            }
+        coarse[index(cx, cy, cz)] = sum;
+      }
+  });
+  const float scale = step.maxCoeff() > 1 ? 0.5f : 1.0f;
+  for (float& v : coarse) v *= scale;
+  return coarse;
+}
+
 // The lattice of half the resolution along the axes `step` halves: node c stands for fine node
 // step * c; it is held when a fine node within one step of it (along the halved axes) is, at the
 // mean of those nodes' values.
@@ -49,6 +108,7 @@ DiffusionLattice restrict_fixed(const DiffusionLattice& fine, const Eigen::Vecto
   coarse.size = (fine.size.array() + step.array() - 1) / step.array();
   coarse.values.assign(coarse.node_count(), 0.0f);
   coarse.fixed.assign(coarse.node_count(), 0);
+  if (!fine.source.empty()) coarse.source = restrict_source(fine, step, coarse.size);
   const Eigen::Vector3i n = fine.size;
   const auto range = [&](int c, int a, int& from, int& to) {
     const int reach = step[a] - 1;  // 1 on a halved axis, 0 on a kept one
@@ -88,32 +148,11 @@ DiffusionLattice restrict_fixed(const DiffusionLattice& fine, const Eigen::Vecto
 // by `step` (restrict_fixed()'s).
 void prolong_free(const DiffusionLattice& coarse, DiffusionLattice& fine,
                   const Eigen::Vector3i& step) {
-  const Eigen::Vector3i m = coarse.size;
   tbb::parallel_for(0, fine.size.z(), [&](int z) {
     for (int y = 0; y < fine.size.y(); ++y) {
       for (int x = 0; x < fine.size.x(); ++x) {
         const std::size_t i = fine.index(x, y, z);
-        if (fine.fixed[i]) continue;
-        const int p[3] = {x, y, z};
-        int lo[3], hi[3];
-        float w[3];
-        for (int a = 0; a < 3; ++a) {
-          lo[a] = std::min(p[a] / step[a], m[a] - 1);
-          hi[a] = std::min(lo[a] + 1, m[a] - 1);
-          w[a] = step[a] == 2 && (p[a] & 1) && hi[a] != lo[a] ? 0.5f : 0.0f;
-        }
-        float v = 0.0f;
-        for (int corner = 0; corner < 8; ++corner) {
-          float weight = 1.0f;
-          int q[3];
-          for (int a = 0; a < 3; ++a) {
-            const bool upper = (corner >> a) & 1;
-            q[a] = upper ? hi[a] : lo[a];
-            weight *= upper ? w[a] : 1.0f - w[a];
-          }
-          if (weight > 0.0f) v += weight * coarse.values[coarse.index(q[0], q[1], q[2])];
-        }
-        fine.values[i] = v;
+        if (!fine.fixed[i]) fine.values[i] = interpolate_coarse(coarse, step, {x, y, z});
       }
     }
   });
@@ -138,9 +177,35 @@ int diffuse_levels(DiffusionLattice& lattice, const DiffusionConfig& config) {
 
 }  // namespace
 
+float interpolate_coarse(const DiffusionLattice& coarse, const Eigen::Vector3i& step,
+                         const Eigen::Vector3i& fine_node) {
+  int lo[3], hi[3];
+  float w[3];
+  for (int a = 0; a < 3; ++a) {
+    lo[a] = std::min(fine_node[a] / step[a], coarse.size[a] - 1);
+    hi[a] = std::min(lo[a] + 1, coarse.size[a] - 1);
+    w[a] = hi[a] == lo[a]
+               ? 0.0f
+               : static_cast<float>(fine_node[a] - lo[a] * step[a]) / static_cast<float>(step[a]);
+  }
+  float v = 0.0f;
+  for (int corner = 0; corner < 8; ++corner) {
+    float weight = 1.0f;
+    int q[3];
+    for (int a = 0; a < 3; ++a) {
+      const bool upper = (corner >> a) & 1;
+      q[a] = upper ? hi[a] : lo[a];
+      weight *= upper ? w[a] : 1.0f - w[a];
+    }
+    if (weight > 0.0f) v += weight * coarse.values[coarse.index(q[0], q[1], q[2])];
+  }
+  return v;
+}
+
 int diffuse_free_nodes(DiffusionLattice& lattice, const DiffusionConfig& config) {
   if (lattice.node_count() == 0) return 0;
-  if (std::none_of(lattice.fixed.begin(), lattice.fixed.end(), [](std::uint8_t f) { return f; })) {
+  if (lattice.source.empty() &&
+      std::none_of(lattice.fixed.begin(), lattice.fixed.end(), [](std::uint8_t f) { return f; })) {
     std::fill(lattice.values.begin(), lattice.values.end(), 0.0f);
     return 0;
   }

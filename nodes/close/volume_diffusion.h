@@ -18,6 +18,9 @@ struct DiffusionLattice {
   Eigen::Vector3i size = Eigen::Vector3i::Zero();  ///< nodes per axis
   std::vector<float> values;                       ///< one per node
   std::vector<std::uint8_t> fixed;                 ///< 1 = held (data), 0 = free (to fill)
+  /// Empty (the Laplace equation), or one per node: free node i then solves the Poisson
+  /// equation sum over its lattice neighbours j of (value_i - value_j) = source_i.
+  std::vector<float> source;
 
   /// Index of node (x, y, z); each in [0, size).
   std::size_t index(int x, int y, int z) const {
@@ -42,12 +45,20 @@ struct DiffusionConfig {
 };
 
 /// Replaces the value of every free node of `lattice` by the diffusion of the fixed ones
-/// (each free node the mean of its 6 neighbours, at convergence). A lattice without fixed nodes
-/// is left at zero. Returns the number of levels used. Parallel over z planes, one colour of
-/// the red-black order at a time: the result does not depend on the thread count.
-/// O(nodes x sweeps_per_level) time. Extra memory: the coarser levels, 5 bytes a node, with
-/// 1/7 as many nodes as the lattice when all three axes halve, 1/3 when two do (a flat
-/// lattice), at most as many when one does.
+/// (each free node the mean of its 6 neighbours, at convergence; plus source_i / neighbours
+/// with a source). A lattice without fixed nodes is left at zero. Returns the number of levels
+/// used. Parallel over z planes, one colour of the red-black order at a time: the result does not
+/// depend on the thread count. O(nodes x sweeps_per_level) time. Extra memory: the coarser levels,
+/// 5 bytes a node, with 1/7 as many nodes as the lattice when all three axes halve, 1/3 when two do
+/// (a flat lattice), at most as many when one does.
 int diffuse_free_nodes(DiffusionLattice& lattice, const DiffusionConfig& config = {});
+
+/// Trilinear interpolation of a coarse lattice at a node of a finer one: coarse node c stands
+/// for fine node step * c (componentwise, each step >= 1), so fine node `fine_node` (>= 0) lies
+/// between coarse nodes fine_node / step and the next, clamped to the coarse lattice's last
+/// node. The 8-corner blend the coarse-to-fine levels and the close stage's tiles share.
+/// Thread-safe (reads only); O(1).
+float interpolate_coarse(const DiffusionLattice& coarse, const Eigen::Vector3i& step,
+                         const Eigen::Vector3i& fine_node);
 
 }  // namespace meshflow

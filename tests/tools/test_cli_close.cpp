@@ -60,6 +60,9 @@ TEST(CliClose, FusedAndMergedDepthSequencesCloseWatertight) {
     EXPECT_EQ(closed.info["components"], 1);
     EXPECT_EQ(closed.info["non_manifold_edges"], 0);
     EXPECT_EQ(closed.info["orientation"], "outward") << closed.info.dump();
+    // The orbit's colour images colour the open mesh; the closed one keeps them.
+    EXPECT_TRUE(open.info["fields"]["colors"].get<bool>()) << open.info.dump();
+    EXPECT_TRUE(closed.info["fields"]["colors"].get<bool>()) << closed.info.dump();
     // Where seen the surface is the open one's (median); the fill stays near the sphere.
     const double open_median = open.eval["vertices_to_truth"]["median"].get<double>();
     const double closed_median = closed.eval["vertices_to_truth"]["median"].get<double>();

@@ -103,6 +103,63 @@ TEST(VolumeDiffusion, HeldNodesKeepTheirValuesAndTheSignSeparatesTwoSources) {
   EXPECT_NEAR(l.values[l.index(14, 10, 10)], l.values[l.index(10, 6, 10)], 1e-3f);
 }
 
+// The Poisson equation: faces held at x^2 + y^2 + z^2, whose discrete Laplacian is 6
+// everywhere (sum over neighbours of (value_i - value_j) = -6): the free nodes take the
+// quadratic (the coarser levels' sources must scale with their spacing for this).
+TEST(VolumeDiffusion, SolvesThePoissonEquationWithASource) {
+  DiffusionLattice l;
+  l.size = {49, 41, 33};
+  l.values.assign(l.node_count(), 0.0f);
+  l.fixed.assign(l.node_count(), 0);
+  l.source.assign(l.node_count(), -6.0f);
+  const Eigen::Vector3d centre(24.0, 20.0, 16.0);
+  const auto exact = [&](int x, int y, int z) {
+    return (Eigen::Vector3d(x, y, z) - centre).squaredNorm();
+  };
+  for (int z = 0; z < l.size.z(); ++z)
+    for (int y = 0; y < l.size.y(); ++y)
+      for (int x = 0; x < l.size.x(); ++x)
+        if (x == 0 || y == 0 || z == 0 || x + 1 == l.size.x() || y + 1 == l.size.y() ||
+            z + 1 == l.size.z()) {
+          l.fixed[l.index(x, y, z)] = 1;
+          l.values[l.index(x, y, z)] = static_cast<float>(exact(x, y, z));
+        }
+  EXPECT_GE(diffuse_free_nodes(l), 3);
+  double worst = 0.0;
+  for (int z = 0; z < l.size.z(); ++z)
+    for (int y = 0; y < l.size.y(); ++y)
+      for (int x = 0; x < l.size.x(); ++x)
+        worst = std::max(worst, std::abs(l.values[l.index(x, y, z)] - exact(x, y, z)));
+  // The faces' values span 24^2 + 20^2 + 16^2 = 1232 down to 256 (a face's middle).
+  EXPECT_LT(worst, 0.01 * 1232) << "largest deviation from the quadratic";
+}
+
+// The trilinear blend reproduces a linear function wherever it samples (steps 1 and 2 mixed),
+// and clamps past the coarse lattice's last node.
+TEST(VolumeDiffusion, InterpolateCoarseIsExactForLinearFunctions) {
+  DiffusionLattice coarse;
+  coarse.size = {5, 4, 3};
+  coarse.values.resize(coarse.node_count());
+  coarse.fixed.assign(coarse.node_count(), 1);
+  const Eigen::Vector3i step(2, 1, 2);
+  const auto f = [](const Eigen::Vector3f& p) { return 0.5f * p.x() - 2.0f * p.y() + p.z() + 1; };
+  for (int z = 0; z < 3; ++z)
+    for (int y = 0; y < 4; ++y)
+      for (int x = 0; x < 5; ++x)
+        coarse.values[coarse.index(x, y, z)] = f(Eigen::Vector3f(
+            2.0f * static_cast<float>(x), static_cast<float>(y), 2.0f * static_cast<float>(z)));
+  for (int z = 0; z <= 4; ++z)
+    for (int y = 0; y <= 3; ++y)
+      for (int x = 0; x <= 8; ++x)
+        ASSERT_NEAR(
+            interpolate_coarse(coarse, step, {x, y, z}),
+            f(Eigen::Vector3f(static_cast<float>(x), static_cast<float>(y), static_cast<float>(z))),
+            1e-5f)
+            << x << " " << y << " " << z;
+  // Past the last node (x = 9 > 8): the last node's value.
+  EXPECT_NEAR(interpolate_coarse(coarse, step, {9, 0, 0}), f(Eigen::Vector3f(8, 0, 0)), 1e-5f);
+}
+
 TEST(VolumeDiffusion, SameValuesForOneAndTwoThreads) {
   const auto run = [] {
     DiffusionLattice l = linear_lattice({40, 33, 27});

@@ -11,6 +11,7 @@
 #include "nodes/optimize/cleanup/mesh_cleanup.h"
 #include "nodes/synthetic/depth_sequence.h"
 #include "nodes/synthetic/scan_simulator.h"
+#include "runtime/threads.h"
 
 namespace meshflow::bench {
 
@@ -79,6 +80,14 @@ void count_triangles(benchmark::State& state, const TriangleMesh& in, std::size_
                                                      benchmark::Counter::kIsIterationInvariantRate);
   state.counters["in"] = static_cast<double>(in.triangles.size());
   state.counters["out"] = static_cast<double>(out);
+}
+
+void time_optimize(benchmark::State& state, const TriangleMesh& mesh,
+                   const OptimizeConfig& config) {
+  ThreadLimit limit(static_cast<int>(state.range(0)));
+  std::size_t out = 0;
+  for (auto _ : state) benchmark::DoNotOptimize(out = optimize_mesh(mesh, config).triangles.size());
+  count_triangles(state, mesh, out);
 }
 
 void thread_and_input_args(benchmark::internal::Benchmark* b) {

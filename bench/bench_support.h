@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "graph/frame.h"
+#include "nodes/optimize/optimize_mesh.h"
 #include "runtime/point_cloud.h"
 #include "runtime/triangle_mesh.h"
 
@@ -47,6 +48,9 @@ const TriangleMesh* cleaned_mesh(benchmark::State& state);
 
 /// Counters of a mesh-to-mesh step: triangles/s over the input, input and output triangles.
 void count_triangles(benchmark::State& state, const TriangleMesh& in, std::size_t out);
+
+/// Times optimize_mesh(mesh, config) on state.range(0) threads, then count_triangles().
+void time_optimize(benchmark::State& state, const TriangleMesh& mesh, const OptimizeConfig& config);
 
 /// Registers the standard argument grid: threads {1, 2} x inputs {synthetic, kurt3d}.
 void thread_and_input_args(benchmark::internal::Benchmark* b);

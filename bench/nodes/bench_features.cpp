@@ -35,11 +35,7 @@ void BM_OptimizeWithFeatures(benchmark::State& state) {
   config.feature_angle_deg = state.range(3) == 1 ? kDefaultFeatureAngleDeg : 180.0f;
   state.SetLabel(std::string(optimize_step_name(config.steps[0])) +
                  (state.range(3) == 1 ? " features" : " no features"));
-  ThreadLimit limit(static_cast<int>(state.range(0)));
-  std::size_t out = 0;
-  for (auto _ : state)
-    benchmark::DoNotOptimize(out = optimize_mesh(*mesh, config).triangles.size());
-  count_triangles(state, *mesh, out);
+  time_optimize(state, *mesh, config);
 }
 BENCHMARK(BM_OptimizeWithFeatures)
     ->ArgsProduct({{1, 2}, {kSynthetic, kKurt3d}, {0, 1}, {0, 1}})
@@ -89,11 +85,7 @@ void BM_OptimizeChainWithFeatures(benchmark::State& state) {
   const OptimizeConfig config = optimize_config_for_voxel(c, voxel);
   state.SetLabel(std::string(kLists[state.range(2)]) +
                  (state.range(3) == 1 ? " features" : " no features"));
-  ThreadLimit limit(static_cast<int>(state.range(0)));
-  std::size_t out = 0;
-  for (auto _ : state)
-    benchmark::DoNotOptimize(out = optimize_mesh(*mesh, config).triangles.size());
-  count_triangles(state, *mesh, out);
+  time_optimize(state, *mesh, config);
 }
 BENCHMARK(BM_OptimizeChainWithFeatures)
     ->ArgsProduct({{1}, {kSynthetic, kKurt3d, kBoxWithHole}, {0, 1, 2}, {0, 1}})

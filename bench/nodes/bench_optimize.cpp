@@ -30,11 +30,7 @@ void BM_OptimizeStep(benchmark::State& state) {
   OptimizeConfig config;
   config.steps = {steps[state.range(2)]};
   state.SetLabel(optimize_step_name(config.steps[0]));
-  ThreadLimit limit(static_cast<int>(state.range(0)));
-  std::size_t out = 0;
-  for (auto _ : state)
-    benchmark::DoNotOptimize(out = optimize_mesh(*mesh, config).triangles.size());
-  count_triangles(state, *mesh, out);
+  time_optimize(state, *mesh, config);
 }
 BENCHMARK(BM_OptimizeStep)
     ->ArgsProduct({{1, 2}, {kSynthetic, kKurt3d}, {0, 1, 2, 3, 4, 5}})

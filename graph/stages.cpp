@@ -115,7 +115,7 @@ std::uint64_t read(Frame& f, const ReconstructionConfig& c) {
 namespace {
 
 // c.filter on the frame's cloud (a georeferenced cloud's crop box moved into its local frame);
-// fails when fewer than 3 points remain.
+// expect_three_points() checks what remains.
 void filter_points(Frame& f, const ReconstructionConfig& c) {
   if (f.cloud.origin.isZero()) {
     f.cloud = filter_cloud(f.cloud, c.filter, &f.filter_counts);
@@ -396,14 +396,15 @@ std::uint64_t compress(Frame& f, const ReconstructionConfig& c) {
 
 namespace {
 
-// The stages of `stages` after "read", with "close" before "extract" when `close_surfaces`.
+// The stages of `table` after "read", with "close" before "extract" when `close_surfaces`.
 template <std::size_t N>
-std::vector<NamedStage> route_after_read(const NamedStage (&stages)[N], bool close_surfaces) {
+std::vector<NamedStage> route_after_read(const NamedStage (&table)[N], bool close_surfaces) {
   std::vector<NamedStage> route;
+  route.reserve(N);  // the stages after "read", and "close"
   for (std::size_t i = 1; i < N; ++i) {
-    if (close_surfaces && std::string(stages[i].name) == "extract")
+    if (close_surfaces && std::string(table[i].name) == "extract")
       route.push_back({"close", stages::close});
-    route.push_back(stages[i]);
+    route.push_back(table[i]);
   }
   return route;
 }

@@ -154,6 +154,7 @@ TEST(DepthPath, OrganizedCloudsTriangulatePerFrameUnorganizedOnesFail) {
 // The stage names a frame's timings record, in order.
 std::vector<std::string> visited_stages(const Frame& f) {
   std::vector<std::string> names;
+  names.reserve(f.timings.size());
   for (const StageRecord& r : f.timings) names.push_back(r.stage);
   return names;
 }

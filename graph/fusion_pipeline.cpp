@@ -104,7 +104,7 @@ TriangleMesh FusionPipeline::extract_mesh(TsdfExtractStats* stats) {
   // The open mesher blends the map's colours along each edge; the closed grid has none: the
   // nearest observed surface voxels' colours (the filled parts take the nearest seen colour).
   mesh.colors = tsdf_map_vertex_colors(map_, config_.min_weight, mesh.vertices);
-  return optimize_mesh(std::move(mesh), optimize);
+  return optimize_mesh(mesh, optimize);
 }
 
 }  // namespace meshflow

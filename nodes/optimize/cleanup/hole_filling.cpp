@@ -319,6 +319,7 @@ HoleFill fill_hole(const std::vector<std::uint32_t>& loop,
         feature_polygons(loop, positions, entries, edges, fill.corner_point);
     for (const std::vector<std::uint32_t>& poly : polygons) {
       std::vector<Eigen::Vector3f> points;
+      points.reserve(poly.size());
       for (std::uint32_t v : poly)
         points.push_back(v == kAddedVertex ? fill.corner_point : positions[v]);
       const std::vector<Triangle> part = triangulate_loop(poly, points, edges);

@@ -328,6 +328,9 @@ function decodeLatest() {
     if (c.single && c.shownPrefix > 0) return;  // the base is shown; the full mesh comes whole
     let packets = 0;
     while (packets < h.packet_ends.length && h.packet_ends[packets] <= c.received) ++packets;
+    // Every packet in but not the file's end (its last bytes in a later chunk): the decoder would
+    // read the missing end; the whole image is decoded once it arrives.
+    if (packets === h.packet_ends.length) return;
     const prefix = packets === 0 ? h.base_end : h.packet_ends[packets - 1];
     if (prefix <= c.shownPrefix) return;
     const wait = lastDecodeEnd + 2 * lastDecodeMs - performance.now();

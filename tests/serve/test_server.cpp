@@ -17,6 +17,7 @@
 #include <nlohmann/json.hpp>
 #include <string>
 #include <thread>
+#include <utility>
 #include <vector>
 
 #include "nodes/compress/compressed_mesh.h"
@@ -207,14 +208,19 @@ ReadMesh read_one_mesh(Client& client) {
   return r;
 }
 
+// A mesh's progressive image (64 splits per packet) and its single-rate image.
+std::pair<std::vector<unsigned char>, std::vector<unsigned char>> progressive_and_single_rate(
+    const TriangleMesh& mesh) {
+  compress::CompressConfig cc;
+  cc.splits_per_packet = 64;
+  return {compress::compress_progressive(mesh, cc), compress::compress_mesh(mesh, cc)};
+}
+
 TEST(Server, AFastLinkGetsTheBaseThenTheSingleRateImage) {
   // The single-rate image is far smaller than the split packets: after the base (a level of
   // its own), it is sent instead of them, and decodes to the whole mesh.
   const TriangleMesh mesh = wavy_grid(60, 0.02f);
-  compress::CompressConfig cc;
-  cc.splits_per_packet = 64;
-  const std::vector<unsigned char> progressive = compress::compress_progressive(mesh, cc);
-  const std::vector<unsigned char> single = compress::compress_mesh(mesh, cc);
+  const auto [progressive, single] = progressive_and_single_rate(mesh);
   const std::size_t base_end = plan_mesh_stream(progressive, 1).base_end;
   ASSERT_LT(single.size(), progressive.size() - base_end);
   ServerConfig config = config_with_page();
@@ -240,10 +246,7 @@ TEST(Server, ANarrowLinkGetsTheSplitPackets) {
   // At 0.02 Mbit/s the single-rate image would take over a second: the packets refine the base
   // level by level instead (ServerConfig::single_rate_within_s).
   const TriangleMesh mesh = wavy_grid(60, 0.02f);
-  compress::CompressConfig cc;
-  cc.splits_per_packet = 64;
-  const std::vector<unsigned char> progressive = compress::compress_progressive(mesh, cc);
-  const std::vector<unsigned char> single = compress::compress_mesh(mesh, cc);
+  const auto [progressive, single] = progressive_and_single_rate(mesh);
   ASSERT_GT(8.0 * static_cast<double>(single.size()) / 0.02e6, 1.0);
   ServerConfig config = config_with_page();
   config.client_megabits_per_second = 0.02;

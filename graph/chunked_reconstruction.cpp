@@ -290,7 +290,7 @@ void mesh_chunk_files(const std::vector<chunk::ChunkFile>& files,
         auto frame = std::make_shared<Frame>();
         frame->name = name + " " + chunk_label(file);
         frame->source_index = static_cast<std::size_t>(position);
-        frame->owned_cells = grid.owned_cells(file.index);
+        frame->chunk = ChunkPart{grid.owned_cells(file.index), {}, {}};
         frame->load = [file, rows] {
           PointCloud cloud = chunk::read_chunk_file(file, rows);
           chunk::remove_chunk_file(file);
@@ -320,8 +320,7 @@ void collect_chunk_frame(Frame& frame, chunk::MeshStitcher& stitcher, ChunkedRep
   }
   stitcher.add(frame.mesh, chunk_vertex_flags(frame));
   frame.mesh = TriangleMesh{};
-  frame.beyond_data.clear();
-  frame.feature_vertices.clear();
+  frame.chunk.reset();
 }
 
 chunk::MeshStitcher chunk_stitcher(float voxel_size, int chunk_cells) {
@@ -329,14 +328,16 @@ chunk::MeshStitcher chunk_stitcher(float voxel_size, int chunk_cells) {
 }
 
 std::vector<std::uint8_t> chunk_vertex_flags(const Frame& frame) {
+  if (!frame.chunk) return {};
+  const ChunkPart& chunk = *frame.chunk;
   const std::size_t n = frame.mesh.vertices.size();
-  const bool beyond = frame.beyond_data.size() == n, features = frame.feature_vertices.size() == n;
+  const bool beyond = chunk.beyond_data.size() == n, features = chunk.feature_vertices.size() == n;
   if (!beyond && !features) return {};
   std::vector<std::uint8_t> flags(n, 0);
   for (std::size_t v = 0; v < n; ++v)
     flags[v] =
-        static_cast<std::uint8_t>((beyond && frame.beyond_data[v] ? kBeyondDataFlag : 0) |
-                                  (features && frame.feature_vertices[v] ? kFeatureFlag : 0));
+        static_cast<std::uint8_t>((beyond && chunk.beyond_data[v] ? kBeyondDataFlag : 0) |
+                                  (features && chunk.feature_vertices[v] ? kFeatureFlag : 0));
   return flags;
 }
 

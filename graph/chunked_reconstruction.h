@@ -3,7 +3,7 @@
 //
 //   input --stream--> chunk files (one pass, nodes/chunk/chunk_store.h)
 //         --> flow graph over chunks, K in flight: read -> ... -> extract, each chunk keeping
-//             the cells it owns on the global grid (Frame::owned_cells)
+//             the cells it owns on the global grid (Frame::chunk)
 //         --> stitch (seam vertices welded by their lattice edge) --> rim trim, optimize once
 //
 // Every chunk sees its points plus an overlap of a few voxels, so the normals, distances and

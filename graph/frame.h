@@ -28,17 +28,47 @@ namespace meshflow {
 
 class SpatialIndex;  // nodes/search/spatial_index.h
 
+/// What a frame's input is, as "read" found it; it chooses the frame's route (stages::FrameRoutes).
+enum class FrameKind {
+  kCloud,       ///< a point cloud: the cloud route
+  kDepthImage,  ///< a depth image, or an organized cloud read as one: the depth-image route
+};
+
+/// The depth-image route's part of a frame, set by "read" for a depth input.
+struct DepthImagePart {
+  /// The input. After "filter" its depth is the filtered depth in metres (F32), kept for the
+  /// projective distance, which releases it; the colour waits for "extract" (vertex colours),
+  /// which releases the rest.
+  DepthFrame image;
+  DepthFilterCounts counts;  ///< what the depth filter kept and dropped
+};
+
+/// A chunk's part of a frame: the out-of-core path (graph/chunked_reconstruction.h).
+struct ChunkPart {
+  /// "voxelize" keeps only these cells, the ones this chunk owns, so each cell's surface comes
+  /// from one chunk.
+  CellRange owned_cells;
+  /// Per mesh vertex, whether it lies beyond the data as trim_rim judges
+  /// (vertices_beyond_data); the rim is trimmed after stitching, where chunk cuts are no border.
+  std::vector<std::uint8_t> beyond_data;
+  /// With ExtractConfig::defer_feature_flips: per mesh vertex, 1 for extended marching cubes'
+  /// feature vertices (their edge flips run once the chunks are stitched).
+  std::vector<std::uint8_t> feature_vertices;
+};
+
 /// One input (a point cloud or a depth image) and everything the stages made of it. A frame that
 /// fails a stage goes straight to the pipeline's end with `error` set, so ordering and
-/// accounting stay exact. Who writes what (the routes: stages::FrameRoutes):
-/// - every frame: seq to load_depth, error, failed_stage, timings, mesh;
+/// accounting stay exact. Three parts: the header every frame carries (identity, kind, outcome,
+/// timings), the surface every route builds stage by stage, and each route's own part. Who
+/// writes what (the routes: stages::FrameRoutes):
 /// - the cloud route: cloud, origin, filter_counts, index, normals, then grid to optimize;
-/// - the depth-image route: depth, depth_counts, normals_from_image, then cloud (back-projected)
-///   and grid to optimize, as a cloud's;
-/// - a chunk of the out-of-core path: owned_cells (given), beyond_data, feature_vertices;
-/// - per-frame triangulation: triangulation and mesh only; fusion: depth_counts, integration;
+/// - the depth-image route: `depth` (DepthImagePart), then cloud (back-projected, normals from
+///   the image) and grid to optimize, as a cloud's;
+/// - a chunk of the out-of-core path: `chunk` (owned cells given, vertex flags made);
+/// - per-frame triangulation: triangulation and mesh only; fusion: depth, integration;
 /// - the compress stage on any route: compressed.
 struct Frame {
+  // The header.
   std::uint64_t seq = 0;             ///< gapless, assigned by the pipeline in input order
   std::string name;                  ///< where the input came from (a path, "synthetic", ...)
   std::size_t source_index = 0;      ///< position in the source sequence (seq counts fed frames)
@@ -46,55 +76,49 @@ struct Frame {
   double submitted_s = 0.0;          ///< monotonic_seconds() when it was handed in (live API)
   std::function<PointCloud()> load;  ///< produces a cloud input; called by the "read" stage
   std::function<DepthFrame()> load_depth;  ///< or a depth-image input (set one of the two)
-
-  /// The depth input; after "filter" its image is the filtered depth in metres (F32), kept
-  /// for the projective distance and released by "distance".
-  std::shared_ptr<DepthFrame> depth;
-  DepthFilterCounts depth_counts;
-  bool normals_from_image = false;  ///< normals came from image neighbours (depth input)
-  NormalsReport normals;            ///< where the cloud's normals came from (cloud path)
-
-  PointCloud cloud;  ///< after read: raw; after filter: filtered, with normals
-  /// The input's PointCloud::origin (set by "read"): the mesh is in the same local frame;
-  /// writers add it back (io::write_mesh).
-  Eigen::Vector3d origin = Eigen::Vector3d::Zero();
-  FilterCounts filter_counts;
-  std::shared_ptr<const SpatialIndex> index;  ///< over cloud.positions, built by "index"
-  float voxel_size = 0.0f;
-  /// Chunked (out-of-core) reconstruction: "voxelize" keeps only these cells, the ones this
-  /// chunk owns, so each cell's surface comes from one chunk (graph/chunked_reconstruction.h).
-  std::optional<CellRange> owned_cells;
-  SparseGrid grid;
-  DistanceField distance;
-  CloseReport closing;  ///< what the close stage did (closing.ran: it ran)
-  ExtractMethod extract_method = ExtractMethod::kAuto;  ///< the method "extract" used
-  std::size_t rim_trimmed = 0;  ///< triangles "extract" peeled off the rim (max_rim_voxels)
-  /// Chunks (owned_cells set): per mesh vertex, whether it lies beyond the data as trim_rim
-  /// judges (vertices_beyond_data); the rim is trimmed after stitching, where chunk cuts are
-  /// no border.
-  std::vector<std::uint8_t> beyond_data;
-  /// Chunks with ExtractConfig::defer_feature_flips: per mesh vertex, 1 for extended marching
-  /// cubes' feature vertices (their edge flips run once the chunks are stitched).
-  std::vector<std::uint8_t> feature_vertices;
-  /// Per-frame depth-map triangulation ("triangulate"): what its filter, occlusion tests and
-  /// component filter dropped.
-  TriangulationCounts triangulation;
-  TriangleMesh mesh;  ///< after extract: raw; after optimize: optimised (fusion: the map so far)
-  OptimizeReport optimize;       ///< what each optimisation step did
-  IntegrationStats integration;  ///< fusion: what integrating this frame did
-  /// With ReconstructionConfig::compression: the mesh as a compressed mesh file's bytes (.mfc,
-  /// positions in world coordinates: origin added), for sending over a link.
-  std::vector<unsigned char> compressed;
-
-  std::string error;  ///< empty while the frame is healthy
+  FrameKind kind = FrameKind::kCloud;      ///< set by "read"
+  std::string error;                       ///< empty while the frame is healthy
   std::string failed_stage;
   std::vector<StageRecord> timings;  ///< one record per stage that ran
   /// Called (from the graph thread running it) as each stage begins, with the stage's name and,
   /// inside "optimize", each step's name (else nullptr): for progress lines. Optional.
   std::function<void(const char* stage, const char* step)> on_stage;
 
+  // The surface, stage by stage, with what each stage reports.
+  PointCloud cloud;  ///< after read: raw; after filter: filtered, with normals
+  /// The input's PointCloud::origin (set by "read"): the mesh is in the same local frame;
+  /// writers add it back (io::write_mesh).
+  Eigen::Vector3d origin = Eigen::Vector3d::Zero();
+  FilterCounts filter_counts;
+  std::shared_ptr<const SpatialIndex> index;  ///< over cloud.positions (cloud route: "index")
+  NormalsReport normals;                      ///< where the cloud's normals came from
+  float voxel_size = 0.0f;
+  SparseGrid grid;
+  DistanceField distance;
+  CloseReport closing;  ///< what the close stage did (closing.ran: it ran)
+  ExtractMethod extract_method = ExtractMethod::kAuto;  ///< the method "extract" used
+  std::size_t rim_trimmed = 0;  ///< triangles "extract" peeled off the rim (max_rim_voxels)
+  TriangleMesh mesh;  ///< after extract: raw; after optimize: optimised (fusion: the map so far)
+  OptimizeReport optimize;  ///< what each optimisation step did
+  /// With ReconstructionConfig::compression: the mesh as a compressed mesh file's bytes (.mfc,
+  /// positions in world coordinates: origin added), for sending over a link.
+  std::vector<unsigned char> compressed;
+
+  // Each route's own part.
+  std::optional<DepthImagePart> depth;  ///< the depth-image route's input (kind kDepthImage)
+  std::optional<ChunkPart> chunk;       ///< a chunk of the out-of-core path
+  /// Per-frame depth-map triangulation ("triangulate"): what its filter, occlusion tests and
+  /// component filter dropped.
+  TriangulationCounts triangulation;
+  IntegrationStats integration;  ///< fusion: what integrating this frame did
+
   /// Whether every stage so far succeeded (error is empty).
   bool ok() const { return error.empty(); }
+  /// Makes this a depth-image frame holding `image` (kind kDepthImage, `depth` set).
+  void set_depth_image(DepthFrame image) {
+    kind = FrameKind::kDepthImage;
+    depth = DepthImagePart{std::move(image), DepthFilterCounts{}};
+  }
 };
 
 using FramePtr = std::shared_ptr<Frame>;

@@ -53,7 +53,7 @@ class RoutedStageBody {
     stages::run_stage(name_, fn_, *frame, *config_);
     if (!frame->ok())
       std::get<2>(ports).try_put(frame);
-    else if (routes_by_kind_ && frame->depth)
+    else if (routes_by_kind_ && frame->kind == FrameKind::kDepthImage)
       std::get<1>(ports).try_put(frame);
     else
       std::get<0>(ports).try_put(frame);

@@ -40,9 +40,9 @@ FusionPipeline::FusionPipeline(FusionConfig config, std::size_t max_in_flight, T
 }
 
 std::uint64_t FusionPipeline::integrate(Frame& f) {
-  f.integration = map_.integrate(*f.depth);
-  last_sensor_ = f.depth->T_world_camera.translation();
-  f.depth.reset();
+  f.integration = map_.integrate(f.depth->image);
+  last_sensor_ = f.depth->image.T_world_camera.translation();
+  f.depth->image = DepthFrame{};  // the filter's counts stay for the report
   ++integrated_;
   return f.integration.voxels_updated;
 }

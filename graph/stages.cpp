@@ -97,16 +97,16 @@ void remove_point_clusters(Frame& f, const ReconstructionConfig& c) {
 
 std::uint64_t read(Frame& f, const ReconstructionConfig& c) {
   if (f.load_depth) {
-    f.depth = std::make_shared<DepthFrame>(f.load_depth());
-    return f.depth->depth.pixels();
+    f.set_depth_image(f.load_depth());
+    return f.depth->image.depth.pixels();
   }
   if (f.load) f.cloud = f.load();
   f.origin = f.cloud.origin;
   if (c.organized_as_depth && f.cloud.is_organized()) {
     if (std::optional<DepthFrame> depth = depth_frame_from_organized(f.cloud)) {
-      f.depth = std::make_shared<DepthFrame>(std::move(*depth));
+      f.set_depth_image(std::move(*depth));
       f.cloud = PointCloud{};
-      return f.depth->depth.pixels();
+      return f.depth->image.depth.pixels();
     }
   }
   return f.cloud.size();
@@ -158,17 +158,17 @@ std::uint64_t filter(Frame& f, const ReconstructionConfig& c) {
 }
 
 std::uint64_t depth_to_cloud(Frame& f, const ReconstructionConfig& c) {
-  const Image depth_m = filter_depth(*f.depth, c.depth_filter, &f.depth_counts);
-  if (f.depth_counts.valid == 0) {
+  DepthImagePart& input = *f.depth;
+  const Image depth_m = filter_depth(input.image, c.depth_filter, &input.counts);
+  if (input.counts.valid == 0) {
     throw Error(f.name, "depth",
-                "no valid depth pixel (" + std::to_string(f.depth_counts.invalid) +
-                    " without measurement, " + std::to_string(f.depth_counts.out_of_range) +
+                "no valid depth pixel (" + std::to_string(input.counts.invalid) +
+                    " without measurement, " + std::to_string(input.counts.out_of_range) +
                     " out of range)");
   }
-  f.cloud = back_project_valid(*f.depth, depth_m);  // finite points with normals only
-  f.normals_from_image = true;
-  f.depth->depth = depth_m;     // keep only the filtered metric depth for the distance stage
-  f.depth->depth_scale = 1.0f;  // the colour stays for the mesh's vertex colours
+  f.cloud = back_project_valid(input.image, depth_m);  // finite points with normals only
+  input.image.depth = depth_m;     // keep only the filtered metric depth for the distance stage
+  input.image.depth_scale = 1.0f;  // the colour stays for the mesh's vertex colours
   if (c.filter.keeps_every_finite_point()) {  // nothing left to filter: no copy
     f.filter_counts = FilterCounts{};
     f.filter_counts.input = f.filter_counts.output = f.cloud.size();
@@ -186,12 +186,13 @@ std::uint64_t filter_depth_image(Frame& f, const ReconstructionConfig& c) {
                 "back-projection; got " +
                     std::string(f.cloud.is_organized() ? "an organized cloud that is not"
                                                        : "an unorganized cloud"));
-  f.depth->depth = filter_depth(*f.depth, c.depth_filter, &f.depth_counts);
-  f.depth->depth_scale = 1.0f;
-  if (f.depth_counts.valid == 0) {
+  DepthImagePart& input = *f.depth;
+  input.image.depth = filter_depth(input.image, c.depth_filter, &input.counts);
+  input.image.depth_scale = 1.0f;
+  if (input.counts.valid == 0) {
     throw Error(f.name, "depth", "no valid depth pixel");
   }
-  return f.depth_counts.valid;
+  return input.counts.valid;
 }
 
 std::uint64_t index(Frame& f, const ReconstructionConfig& c) {
@@ -221,7 +222,7 @@ std::uint64_t normals(Frame& f, const ReconstructionConfig& c) {
 std::uint64_t voxelize(Frame& f, const ReconstructionConfig& c) {
   VoxelizeConfig vc = c.voxelize;
   if (!(vc.voxel_size > 0.0f)) {
-    vc.voxel_size = f.depth ? suggest_voxel_size_for_depth(f.cloud, f.depth->intrinsics.fx)
+    vc.voxel_size = f.depth ? suggest_voxel_size_for_depth(f.cloud, f.depth->image.intrinsics.fx)
                     : f.voxel_size > 0.0f ? f.voxel_size  // chosen by "index"
                                           : suggest_voxel_size(f.cloud, *f.index);
     if (!(vc.voxel_size > 0.0f))
@@ -231,7 +232,7 @@ std::uint64_t voxelize(Frame& f, const ReconstructionConfig& c) {
   }
   f.voxel_size = vc.voxel_size;
   f.grid = meshflow::voxelize(f.cloud, vc);
-  if (f.owned_cells) keep_cells_in(f.grid, *f.owned_cells);
+  if (f.chunk) keep_cells_in(f.grid, f.chunk->owned_cells);
   const std::size_t bytes = frame_memory_estimate(f.cloud, f.grid);
   if (c.max_memory_bytes > 0 && bytes > c.max_memory_bytes) {
     const auto mib = [](std::size_t b) { return std::to_string(b >> 20) + " MiB"; };
@@ -254,14 +255,15 @@ std::uint64_t distance(Frame& f, const ReconstructionConfig& c) {
 }
 
 std::uint64_t depth_distance(Frame& f, const ReconstructionConfig& c) {
-  f.distance = projective_distance(f.grid, f.depth->depth, f.depth->intrinsics,
-                                   f.depth->T_world_camera, c.projective);
-  f.depth->depth = Image();  // keep frames in flight small; the colour waits for "extract"
+  DepthFrame& image = f.depth->image;
+  f.distance = projective_distance(f.grid, image.depth, image.intrinsics, image.T_world_camera,
+                                   c.projective);
+  image.depth = Image();  // keep frames in flight small; the colour waits for "extract"
   return f.grid.corners.size();
 }
 
 std::uint64_t close(Frame& f, const ReconstructionConfig& c) {
-  if (f.owned_cells)
+  if (f.chunk)
     throw Error(f.name, "close",
                 "--close needs the whole cloud in one piece; it cannot close chunks (--chunk)");
   ClosedDistance closed = close_distance_field(f.grid, f.distance, f.cloud, c.close, &f.closing);
@@ -276,19 +278,21 @@ std::uint64_t extract(Frame& f, const ReconstructionConfig& c) {
     config.method =
         f.normals.sharp ? ExtractMethod::kExtendedMarchingCubes : ExtractMethod::kMarchingCubes;
   f.extract_method = config.method;
-  f.mesh = extract_surface(f.grid, f.distance, f.cloud, f.index.get(), config,
-                           config.defer_feature_flips ? &f.feature_vertices : nullptr);
+  f.mesh =
+      extract_surface(f.grid, f.distance, f.cloud, f.index.get(), config,
+                      config.defer_feature_flips && f.chunk ? &f.chunk->feature_vertices : nullptr);
   const std::size_t extracted = f.mesh.triangles.size();
   if (f.index && c.max_rim_voxels > 0.0f) {
     const float limit = c.max_rim_voxels * f.voxel_size;
-    if (f.owned_cells)  // a chunk: the rim is trimmed once the chunks are stitched
-      f.beyond_data = vertices_beyond_data(f.mesh.vertices, f.cloud.positions, *f.index, limit);
+    if (f.chunk)  // a chunk: the rim is trimmed once the chunks are stitched
+      f.chunk->beyond_data =
+          vertices_beyond_data(f.mesh.vertices, f.cloud.positions, *f.index, limit);
     else
       f.mesh = trim_rim(f.mesh, f.cloud.positions, *f.index, limit, &f.rim_trimmed);
   }
   // A frame without a surface fails here, on every path (reconstruct, run, the embedding API),
   // rather than passing on as an "ok" frame with an empty mesh. A chunk may own no surface.
-  if (f.mesh.triangles.empty() && !f.owned_cells) {
+  if (f.mesh.triangles.empty() && !f.chunk) {
     const std::string grid = std::to_string(f.grid.cells.size()) + " cells of " +
                              short_number(f.voxel_size) + " m from " +
                              std::to_string(f.cloud.size()) + " points";
@@ -303,8 +307,8 @@ std::uint64_t extract(Frame& f, const ReconstructionConfig& c) {
                           "); expected a surface within reach of the points");
   }
   if (f.depth) {  // a depth frame with a colour image gives a coloured mesh
-    f.mesh.colors = vertex_colors_from_image(f.mesh.vertices, *f.depth);
-    f.depth.reset();
+    f.mesh.colors = vertex_colors_from_image(f.mesh.vertices, f.depth->image);
+    f.depth->image = DepthFrame{};             // the counts stay for the report
   } else if (f.cloud.has_colors() && f.index)  // so does a coloured cloud
     f.mesh.colors = vertex_colors(f.mesh.vertices, f.cloud, *f.index);
   return f.mesh.triangles.size();
@@ -316,7 +320,7 @@ std::uint64_t optimize(Frame& f, const ReconstructionConfig& c) {
     config.on_step = [&f](OptimizeStep step) { f.on_stage("optimize", optimize_step_name(step)); };
   const std::size_t before = f.mesh.triangles.size();
   f.mesh = optimize_mesh(f.mesh, config, &f.optimize);
-  if (f.mesh.triangles.empty() && before > 0 && !f.owned_cells) {  // nothing left: a failed frame
+  if (f.mesh.triangles.empty() && before > 0 && !f.chunk) {  // nothing left: a failed frame
     std::string why = "the steps removed all " + std::to_string(before) + " triangles";
     for (const OptimizeStepReport& step : f.optimize.steps) {
       if (step.triangles_in == 0 || step.triangles_out > 0) continue;
@@ -354,9 +358,9 @@ void complete_vertex_normals(TriangleMesh& mesh) {
 
 std::uint64_t triangulate(Frame& f, const ReconstructionConfig& c) {
   if (f.depth) {
-    f.mesh = triangulate_depth(*f.depth, c.triangulation, &f.triangulation);
-    f.mesh.colors = vertex_colors_from_image(f.mesh.vertices, *f.depth);
-    f.depth.reset();
+    f.mesh = triangulate_depth(f.depth->image, c.triangulation, &f.triangulation);
+    f.mesh.colors = vertex_colors_from_image(f.mesh.vertices, f.depth->image);
+    f.depth->image = DepthFrame{};
   } else if (f.cloud.is_organized()) {
     // The cloud's colours and normals stay on the vertices (each vertex is one of its points).
     f.mesh = triangulate_organized(f.cloud, c.triangulation, &f.triangulation);

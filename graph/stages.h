@@ -18,7 +18,7 @@ std::uint64_t read(Frame& f, const ReconstructionConfig& c);  ///< points / pixe
 /// points coincide or lie on a line.
 std::uint64_t filter(Frame& f, const ReconstructionConfig& c);  ///< points kept
 /// A depth frame's filter: the depth filter (c.depth_filter), then the back-projection to an
-/// organized cloud with normals from image neighbours (f.normals_from_image) and c.filter on it;
+/// organized cloud with normals from image neighbours and c.filter on it (f.depth: DepthImagePart);
 /// keeps the filtered metric depth and the colour for "distance" and "extract". Depth frames
 /// take no "index" or "normals" stage.
 std::uint64_t depth_to_cloud(Frame& f, const ReconstructionConfig& c);  ///< points kept
@@ -33,10 +33,10 @@ std::uint64_t distance(Frame& f, const ReconstructionConfig& c);  ///< corners e
 std::uint64_t depth_distance(Frame& f, const ReconstructionConfig& c);  ///< corners evaluated
 /// --close (c.close): fills the distance of the corners without data by volumetric diffusion
 /// and adds the cells the closed surface crosses (close_distance_field(), f.closing). Fails a
-/// chunk (owned_cells set): closing needs the whole cloud.
+/// chunk (f.chunk set): closing needs the whole cloud.
 std::uint64_t close(Frame& f, const ReconstructionConfig& c);  ///< corners filled
 /// Fails a frame left without triangles (nothing extracted, or the rim trim took them all),
-/// saying why, so no path passes on an "ok" frame with an empty mesh; a chunk (owned_cells
+/// saying why, so no path passes on an "ok" frame with an empty mesh; a chunk (f.chunk
 /// set) may be empty.
 std::uint64_t extract(Frame& f, const ReconstructionConfig& c);  ///< triangles
 /// Fails a frame (not a chunk) whose steps removed every triangle, naming the step.

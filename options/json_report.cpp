@@ -50,7 +50,7 @@ nlohmann::json stages_json(const std::vector<StageSummary>& summaries) {
 namespace {
 
 nlohmann::json normals_json(const Frame& f) {
-  if (f.normals_from_image) return {{"source", "image"}};
+  if (f.kind == FrameKind::kDepthImage) return {{"source", "image"}};
   const NormalsReport& r = f.normals;
   nlohmann::json n = {{"source", r.source == NormalSource::kInput ? "input" : "estimate"},
                       {"estimated", r.estimated}};

@@ -113,8 +113,7 @@ void bind_depth(py::module_& m) {
         // The pipeline's own triangulate stage: vertex colours from the image, vertex normals.
         Frame frame;
         frame.name = "depth";
-        frame.depth = std::make_shared<DepthFrame>(
-            make_depth_frame(depth, intrinsics, pose, depth_scale, color));
+        frame.set_depth_image(make_depth_frame(depth, intrinsics, pose, depth_scale, color));
         ReconstructionConfig reconstruction;
         reconstruction.triangulation = config;
         py::gil_scoped_release no_gil;

@@ -12,12 +12,13 @@ double share(std::size_t part, std::size_t whole) {
 }  // namespace
 
 void FusionBreakdown::add(const Frame& f) {
-  pixels_.pixels += f.depth_counts.pixels;
-  pixels_.invalid += f.depth_counts.invalid;
-  pixels_.out_of_range += f.depth_counts.out_of_range;
-  pixels_.edges += f.depth_counts.edges;
-  pixels_.valid += f.depth_counts.valid;
-  pixels_.smoothed += f.depth_counts.smoothed;
+  const DepthFilterCounts c = f.depth ? f.depth->counts : DepthFilterCounts{};
+  pixels_.pixels += c.pixels;
+  pixels_.invalid += c.invalid;
+  pixels_.out_of_range += c.out_of_range;
+  pixels_.edges += c.edges;
+  pixels_.valid += c.valid;
+  pixels_.smoothed += c.smoothed;
   ++frames_;
   blocks_touched_ += f.integration.blocks_touched;
   blocks_carved_ += f.integration.blocks_carved;
@@ -27,8 +28,7 @@ void FusionBreakdown::add(const Frame& f) {
       "frame      %s: %zu of %zu pixels fused (%zu unmeasured, %zu out of range, %zu "
       "occlusion edges); noise %.2e x depth^2; %zu blocks touched, %zu new, %zu carved; %zu "
       "voxels updated\n",
-      f.name.c_str(), f.depth_counts.valid, f.depth_counts.pixels, f.depth_counts.invalid,
-      f.depth_counts.out_of_range, f.depth_counts.edges,
+      f.name.c_str(), c.valid, c.pixels, c.invalid, c.out_of_range, c.edges,
       static_cast<double>(f.integration.noise_per_depth2), f.integration.blocks_touched,
       f.integration.blocks_allocated, f.integration.blocks_carved, f.integration.voxels_updated);
 }

@@ -130,7 +130,7 @@ void print_frame_report(const Frame& f, double wall_s, int threads) {
     report(
         "outliers   dropped %zu isolated points and %zu in sparse clusters (--outlier-cluster)\n",
         c.isolated, c.sparse_clusters);
-  if (!f.normals_from_image) report("normals    %s\n", describe_normals(f.normals).c_str());
+  if (f.kind == FrameKind::kCloud) report("normals    %s\n", describe_normals(f.normals).c_str());
   report("grid       voxel %.4g m, %zu cells, %zu corners (%zu valid", f.voxel_size,
          f.grid.cells.size(), f.grid.corners.size(), f.distance.valid_count());
   if (f.distance.disagreeing + f.distance.extrapolated > 0)

@@ -369,7 +369,8 @@ void run_merged(const RunOptions& o) {
         if (!f.ok()) return failed.add(f);
         detail("frame %zu   %s: %zu points, normals %s\n", f.source_index, f.name.c_str(),
                f.cloud.size(),
-               f.normals_from_image ? "from the image" : describe_normals(f.normals).c_str());
+               f.kind == FrameKind::kDepthImage ? "from the image"
+                                                : describe_normals(f.normals).c_str());
         append_scan(joined, f.cloud);
       });
   finish_run(stats);

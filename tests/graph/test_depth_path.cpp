@@ -45,8 +45,10 @@ TEST(DepthPath, SyntheticDepthFramesWithinAQuarterVoxel) {
   ReconstructionPipeline pipeline(config, 2);
   const SequenceRunStats stats = run_sequence(pipeline, *seq, {}, [&](const Frame& f) {
     ASSERT_TRUE(f.ok()) << f.error;
-    EXPECT_TRUE(f.normals_from_image);
-    EXPECT_GT(f.depth_counts.valid, 10000u);
+    EXPECT_EQ(f.kind, FrameKind::kDepthImage);
+    ASSERT_TRUE(f.depth.has_value());
+    EXPECT_GT(f.depth->counts.valid, 10000u);
+    EXPECT_TRUE(f.depth->image.depth.empty()) << "the image is released once meshed";
     const auto err = test::vertex_errors(
         f.mesh, [&](const Eigen::Vector3f& p) { return synthetic::surface_distance(scene, p); });
     std::printf("[ accuracy ] depth frame %zu: mean %.4f voxel, %zu triangles\n", f.source_index,
@@ -173,7 +175,7 @@ TEST(DepthPath, OrganizedCloudsTakeTheDepthPathWhenAsked) {
   config.organized_as_depth = true;
   const FramePtr depth_path = ReconstructionPipeline(config, 1).reconstruct(cloud);
   ASSERT_TRUE(depth_path->ok()) << depth_path->error;
-  EXPECT_TRUE(depth_path->normals_from_image);
+  EXPECT_EQ(depth_path->kind, FrameKind::kDepthImage);
   EXPECT_EQ(
       visited_stages(*depth_path),
       (std::vector<std::string>{"read", "filter", "voxelize", "distance", "extract", "optimize"}));
@@ -187,7 +189,8 @@ TEST(DepthPath, OrganizedCloudsTakeTheDepthPathWhenAsked) {
   config.organized_as_depth = false;
   const FramePtr cloud_path = ReconstructionPipeline(config, 1).reconstruct(cloud);
   ASSERT_TRUE(cloud_path->ok()) << cloud_path->error;
-  EXPECT_FALSE(cloud_path->normals_from_image);
+  EXPECT_EQ(cloud_path->kind, FrameKind::kCloud);
+  EXPECT_FALSE(cloud_path->depth.has_value());
   EXPECT_GT(cloud_path->mesh.triangles.size(), 1000u);
   EXPECT_EQ(visited_stages(*cloud_path),
             (std::vector<std::string>{"read", "filter", "index", "normals", "voxelize", "distance",

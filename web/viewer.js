@@ -155,33 +155,28 @@ function applyColors() {
 // --- the decoder (WebAssembly) ---------------------------------------------------------------
 const decoder = await createDecoder();
 
-// The material is drawn now, with and without vertex colours, before the stream starts: a
-// software renderer (a GPU-less machine, the headless tests) compiles a shader program when it is
-// first used and, in the GPU process, its drawing routines when it first draws with it. Both
-// took a second or more, which otherwise came after the first picture and held back the rest of
-// the stream (Chromium hands the page its WebSocket messages as the page takes them). A
-// triangle like the meshes' (indexed, normals, 8-bit colours) is drawn and waited for (finish()),
-// then cleared.
+// The material's shader programs, with and without vertex colours, are compiled now, before the
+// stream starts: a first draw compiles them, which takes a software renderer (a GPU-less
+// machine, the headless tests) a second or more that would otherwise delay the first picture.
+// (Drawing here instead, to have the GPU process build its routines too, made it worse: after
+// a draw headless Chromium holds the page's WebSocket messages back for a second or more, so the
+// stream arrived before the page could show its base.)
 if (renderer) {
   const t0 = performance.now();
   const warm = new THREE.BufferGeometry();
-  warm.setAttribute('position', new THREE.BufferAttribute(
-      new Float32Array([-0.5, -0.5, 0, 0.5, -0.5, 0, 0, 0.5, 0]), 3));
-  warm.setAttribute('normal', new THREE.BufferAttribute(new Float32Array([0, 0, 1, 0, 0, 1, 0, 0, 1]), 3));
-  warm.setAttribute('color', new THREE.BufferAttribute(new Uint8Array(9).fill(200), 3, true));
-  warm.setIndex(new THREE.BufferAttribute(new Uint32Array([0, 1, 2]), 1));
+  warm.setAttribute('position', new THREE.BufferAttribute(new Float32Array(9), 3));
+  warm.setAttribute('normal', new THREE.BufferAttribute(new Float32Array(9), 3));
+  warm.setAttribute('color', new THREE.BufferAttribute(new Uint8Array(9), 3, true));
   const warmMesh = new THREE.Mesh(warm, material);
   scene.add(warmMesh);
   for (const colors of [THREE.NoColors, THREE.VertexColors]) {
     material.vertexColors = colors;
     material.needsUpdate = true;
-    renderer.render(scene, camera);
+    renderer.compile(scene, camera);
   }
   material.vertexColors = THREE.NoColors;
   material.needsUpdate = true;
   scene.remove(warmMesh);
-  renderer.render(scene, camera);
-  renderer.getContext().finish();
   warm.dispose();
   document.body.dataset.warmMs = (performance.now() - t0).toFixed(1);
 }

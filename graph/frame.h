@@ -73,7 +73,7 @@ struct Frame {
   std::string name;                  ///< where the input came from (a path, "synthetic", ...)
   std::size_t source_index = 0;      ///< position in the source sequence (seq counts fed frames)
   double timestamp_s = 0.0;          ///< capture time from the sequence, seconds
-  double submitted_s = 0.0;          ///< monotonic_seconds() when it was handed in (live API)
+  double submitted_s = 0.0;          ///< monotonic_seconds() when it was handed in (its release)
   std::function<PointCloud()> load;  ///< produces a cloud input; called by the "read" stage
   std::function<DepthFrame()> load_depth;  ///< or a depth-image input (set one of the two)
   FrameKind kind = FrameKind::kCloud;      ///< set by "read"

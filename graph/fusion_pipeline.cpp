@@ -65,8 +65,8 @@ void FusionPipeline::run(const std::function<FramePtr()>& next,
     if (f->ok() && observer_)  // (a viewer's: its time and failure are the frame's)
       stages::run_stage(
           "publish",
-          [this](Frame&) {
-            observer_(map_, last_sensor_);
+          [this](Frame& frame) {
+            observer_(map_, last_sensor_, frame);
             return std::uint64_t{0};
           },
           *f);

@@ -59,12 +59,14 @@ class FusionPipeline : public FramePipeline {
   /// The TSDF map fused so far.
   const TsdfVolume& map() const { return map_; }
   /// Called in the integration node after each frame is integrated (frames in input order, one
-  /// at a time, never during another integration) with the map and that frame's camera centre
-  /// (world metres): the one place a run may read the growing map, e.g. to send its changed
-  /// blocks to viewers nearest the sensor first (serve/map_publisher.h). It must not keep the
-  /// reference, and whatever time it takes holds up the next integration. Set before run().
+  /// at a time, never during another integration) with the map, that frame's camera centre
+  /// (world metres) and the frame (its seq and submitted_s: when it entered the graph): the one
+  /// place a run may read the growing map, e.g. to send its changed blocks to viewers nearest
+  /// the sensor first (serve/map_publisher.h). It must not keep the references, and whatever
+  /// time it takes holds up the next integration. Set before run().
   void set_integration_observer(
-      std::function<void(const TsdfMap& map, const Eigen::Vector3f& sensor)> observer) {
+      std::function<void(const TsdfMap& map, const Eigen::Vector3f& sensor, const Frame& frame)>
+          observer) {
     observer_ = std::move(observer);
   }
   /// The configuration the pipeline was made with.
@@ -80,7 +82,7 @@ class FusionPipeline : public FramePipeline {
   std::size_t integrated_ = 0;
   CloseReport closing_;
   Eigen::Vector3f last_sensor_ = Eigen::Vector3f::Zero();  // the integrated frame's camera
-  std::function<void(const TsdfMap&, const Eigen::Vector3f&)> observer_;
+  std::function<void(const TsdfMap&, const Eigen::Vector3f&, const Frame&)> observer_;
 };
 
 }  // namespace meshflow

@@ -1,6 +1,9 @@
 #include "serve/map_publisher.h"
 
+#include <chrono>
+#include <cstdio>
 #include <exception>
+#include <nlohmann/json.hpp>
 #include <utility>
 
 #include "runtime/error.h"
@@ -75,13 +78,32 @@ BlockPoint MapPublisher::block_point(const Eigen::Vector3f& sensor) const {
           static_cast<double>(sensor.z() / block_side_m_)};
 }
 
-void MapPublisher::integrated(const TsdfMap& map, const Eigen::Vector3f& sensor) {
+namespace {
+
+// Milliseconds since the Unix epoch of `monotonic_s` (monotonic_seconds()), by this machine's
+// clock now.
+double map_epoch_ms(double monotonic_s) {
+  const double epoch_now_s =
+      std::chrono::duration<double>(std::chrono::system_clock::now().time_since_epoch()).count();
+  return 1e3 * (epoch_now_s - monotonic_seconds() + monotonic_s);
+}
+
+}  // namespace
+
+void MapPublisher::integrated(const TsdfMap& map, const Eigen::Vector3f& sensor,
+                              std::optional<IntegratedFrame> frame) {
   if (sensor.allFinite()) focus_ = block_point(sensor);
   const double now = monotonic_seconds();
+  if (server_.stats().clients == 0) {  // nobody to show it to
+    frames_.clear();
+    std::lock_guard<std::mutex> lock(mutex_);
+    ++counts_.updates_skipped;
+    return;
+  }
+  if (frame) frames_.push_back(*frame);
   {
     std::lock_guard<std::mutex> lock(mutex_);
-    if (coding_ || !batch_.empty() || now - last_update_s_ < min_interval_s_ ||
-        server_.stats().clients == 0) {
+    if (coding_ || batch_ready_ || now - last_update_s_ < min_interval_s_) {
       ++counts_.updates_skipped;
       return;
     }
@@ -93,24 +115,40 @@ void MapPublisher::integrated(const TsdfMap& map, const Eigen::Vector3f& sensor)
 void MapPublisher::finish(const TsdfMap& map) {
   {
     std::unique_lock<std::mutex> lock(mutex_);
-    changed_.wait(lock, [this] { return batch_.empty() && !coding_; });
+    changed_.wait(lock, [this] { return !batch_ready_ && !coding_; });
   }
   update(map);
   std::unique_lock<std::mutex> lock(mutex_);
-  changed_.wait(lock, [this] { return batch_.empty() && !coding_; });
+  changed_.wait(lock, [this] { return !batch_ready_ && !coding_; });
+}
+
+std::string MapPublisher::shown_message_start(const std::vector<IntegratedFrame>& frames,
+                                              double now_s) {
+  nlohmann::json list = nlohmann::json::array();
+  for (const IntegratedFrame& f : frames) list.push_back({f.seq, map_epoch_ms(f.entered_s)});
+  std::string text = nlohmann::json{{"type", "map_shown"}, {"frames", list}}.dump();
+  text.pop_back();  // the coder adds the published time and the closing brace
+  char meshed[64];
+  std::snprintf(meshed, sizeof meshed, ",\"meshed_ms\":%.3f", map_epoch_ms(now_s));
+  return text + meshed;
 }
 
 void MapPublisher::update(const TsdfMap& map) {
+  const double now = monotonic_seconds();
   std::vector<Piece> pieces;
   for (const VoxelKey key : mesher_.update(map)) {
     const TsdfMesher::BlockMesh* piece = mesher_.block_mesh(key);
     pieces.push_back({unpack_key(key), piece != nullptr ? *piece : TsdfMesher::BlockMesh{}});
   }
+  std::string shown = frames_.empty() ? std::string() : shown_message_start(frames_, now);
+  frames_.clear();
   std::lock_guard<std::mutex> lock(mutex_);
   ++counts_.updates;
-  if (pieces.empty()) return;
+  if (pieces.empty() && shown.empty()) return;
   batch_ = std::move(pieces);
+  batch_shown_ = std::move(shown);
   batch_focus_ = focus_;
+  batch_ready_ = true;
   changed_.notify_all();
 }
 
@@ -122,10 +160,13 @@ MapPublisherCounts MapPublisher::counts() const {
 void MapPublisher::coder_loop() {
   std::unique_lock<std::mutex> lock(mutex_);
   for (;;) {
-    changed_.wait(lock, [this] { return stop_ || !batch_.empty(); });
+    changed_.wait(lock, [this] { return stop_ || batch_ready_; });
     if (stop_) return;
     std::vector<Piece> pieces = std::move(batch_);
     batch_.clear();
+    std::string shown = std::move(batch_shown_);
+    batch_shown_.clear();
+    batch_ready_ = false;
     const BlockPoint focus = batch_focus_;
     coding_ = true;
     lock.unlock();
@@ -143,7 +184,13 @@ void MapPublisher::coder_loop() {
       blocks.push_back(std::move(b));
     }
     const std::size_t published = blocks.size();
-    server_.publish_blocks(std::move(blocks), focus);
+    if (!shown.empty()) {
+      char published_at[64];
+      std::snprintf(published_at, sizeof published_at, ",\"published_ms\":%.3f}",
+                    map_epoch_ms(monotonic_seconds()));
+      shown += published_at;
+    }
+    server_.publish_blocks(std::move(blocks), focus, std::move(shown));
     lock.lock();
     coding_ = false;
     counts_.blocks += published;

@@ -16,6 +16,7 @@
 #include <condition_variable>
 #include <cstdint>
 #include <mutex>
+#include <optional>
 #include <string>
 #include <thread>
 #include <vector>
@@ -26,6 +27,13 @@
 #include "serve/server.h"
 
 namespace meshflow::serve {
+
+/// A frame integrated into the map: its number and when it entered the graph
+/// (Frame::seq, Frame::submitted_s: monotonic_seconds()).
+struct IntegratedFrame {
+  std::uint64_t seq = 0;
+  double entered_s = 0.0;
+};
 
 struct MapPublisherCounts {
   std::uint64_t updates = 0;          ///< re-meshings of the changed blocks
@@ -57,7 +65,16 @@ class MapPublisher {
   /// of their pieces to the coder; otherwise returns at once. The blocks go to each viewer
   /// nearest the newest `sensor` first (Server::publish_blocks). Its cost, held against the
   /// next integration: O(blocks) to find the changed ones + O(their cells).
-  void integrated(const TsdfMap& map, const Eigen::Vector3f& sensor);
+  ///
+  /// The live map's latency: `frame`, when given, is listed in the `shown` message
+  /// (Server::publish_blocks) of the first update after it, which each viewer gets once it has
+  /// been sent that update's blocks: {"type":"map_shown","frames":[[seq, entered_ms], ...],
+  /// "meshed_ms":M,"published_ms":P}, times in milliseconds since the Unix epoch (this machine's
+  /// clock, as a browser's performance.timeOrigin + now()): entered = Frame::submitted_s, meshed
+  /// = when the update began re-meshing, published = when its blocks were coded. Frames
+  /// integrated while no viewer is connected are listed nowhere.
+  void integrated(const TsdfMap& map, const Eigen::Vector3f& sensor,
+                  std::optional<IntegratedFrame> frame = std::nullopt);
   /// After the run (no integration running): publishes every block changed since the last
   /// update, viewers or not (nearest the last sensor position first), and returns when they are
   /// published.
@@ -73,6 +90,9 @@ class MapPublisher {
   /// `sensor` (world metres) in block units (serve/block_order.h).
   BlockPoint block_point(const Eigen::Vector3f& sensor) const;
   void update(const TsdfMap& map);
+  /// The "frames" of a map_shown message for `frames`, and its meshed_ms (epoch ms of `now_s`,
+  /// monotonic_seconds()).
+  static std::string shown_message_start(const std::vector<IntegratedFrame>& frames, double now_s);
   void coder_loop();
 
   Server& server_;
@@ -80,13 +100,16 @@ class MapPublisher {
   compress::CompressConfig config_;
   double min_interval_s_;
   double last_update_s_ = -1e300;
-  TsdfMesher mesher_;                // the integration node's (or finish()'s) only
-  BlockPoint focus_{0.0, 0.0, 0.0};  // the newest sensor position (integration node only)
+  TsdfMesher mesher_;                    // the integration node's (or finish()'s) only
+  BlockPoint focus_{0.0, 0.0, 0.0};      // the newest sensor position (integration node only)
+  std::vector<IntegratedFrame> frames_;  // integrated since the last update (integration node)
 
   mutable std::mutex mutex_;
   std::condition_variable changed_;
   std::vector<Piece> batch_;               // handed to the coder
   BlockPoint batch_focus_{0.0, 0.0, 0.0};  // the sensor position when the batch was made
+  std::string batch_shown_;                // the start of the batch's map_shown message ("": none)
+  bool batch_ready_ = false;               // batch_ and batch_shown_ wait for the coder
   bool coding_ = false;
   bool stop_ = false;
   MapPublisherCounts counts_;

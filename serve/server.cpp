@@ -36,7 +36,7 @@ namespace {
 
 /// One frame queued for a client; its bytes are shared by every client.
 struct Outgoing {
-  enum class Kind { kMesh, kStats, kEnd, kBlocks } kind = Kind::kMesh;
+  enum class Kind { kMesh, kStats, kEnd, kBlocks, kShown } kind = Kind::kMesh;
   bool binary = false;
   std::shared_ptr<const std::string> data;
 };
@@ -96,9 +96,11 @@ class Server::Impl {
 
   void publish(std::shared_ptr<const MeshMessage> mesh, std::shared_ptr<const std::string> stats,
                bool finish = false, std::vector<MapBlock> blocks = {},
-               std::optional<BlockPoint> focus = std::nullopt) {
+               std::optional<BlockPoint> focus = std::nullopt, std::string shown = {}) {
     std::lock_guard<std::mutex> lock(pending_mutex_);
     if (finish) pending_finish_ = true;
+    if (!shown.empty())
+      pending_shown_.push_back(std::make_shared<const std::string>(std::move(shown)));
     if (focus) pending_focus_ = focus;
     for (MapBlock& b : blocks) pending_blocks_[BlockKey{b.x, b.y, b.z}] = std::move(b.payload);
     if (mesh && pending_mesh_) ++counters_.publications_replaced;
@@ -135,6 +137,7 @@ class Server::Impl {
   bool pending_finish_ = false;
   std::map<BlockKey, std::shared_ptr<const std::string>> pending_blocks_;
   std::optional<BlockPoint> pending_focus_;
+  std::vector<std::shared_ptr<const std::string>> pending_shown_;  // publish_blocks()' `shown`
   bool drain_posted_ = false;
 
   std::atomic<std::uint64_t> mesh_id_{0};
@@ -189,13 +192,26 @@ class WsSession : public std::enable_shared_from_this<WsSession> {
 
   /// The client is to be sent these blocks (their newest payloads, taken when a batch is cut),
   /// with those it waits for already, nearest to `focus` (block units) first.
-  void mark_blocks(const std::vector<BlockKey>& keys, const BlockPoint& focus) {
+  /// `shown`: messages to send once these blocks and those waiting already have been sent.
+  void mark_blocks(const std::vector<BlockKey>& keys, const BlockPoint& focus,
+                   const std::vector<std::shared_ptr<const std::string>>& shown = {}) {
     if (closing_) return;
     blocks_waiting_.set_focus(focus);
-    for (const BlockKey& key : keys)
-      if (!blocks_waiting_.push(key)) ++server_.counters_.blocks_superseded;
+    for (const BlockKey& key : keys) {
+      if (!blocks_waiting_.push(key)) {
+        ++server_.counters_.blocks_superseded;  // it keeps the earliest generation waiting
+        continue;
+      }
+      block_generation_[key] = generation_;
+      ++waiting_by_generation_[generation_];
+    }
     if (blocks_waiting_.size() > server_.counters_.max_pending_blocks)
       server_.counters_.max_pending_blocks = blocks_waiting_.size();
+    if (!shown.empty()) {
+      for (const auto& text : shown) shown_.emplace_back(generation_, text);
+      ++generation_;
+      queue_shown();
+    }
     if (!writing_) write_next();
   }
 
@@ -218,6 +234,7 @@ class WsSession : public std::enable_shared_from_this<WsSession> {
     };
     while (!blocks_waiting_.empty() && (count == 0 || frame.size() < server_.config_.chunk_bytes)) {
       const BlockKey key = blocks_waiting_.pop();
+      sent_block(key);
       const auto found = server_.blocks_.find(key);
       const std::string empty;
       const std::string& payload =
@@ -230,7 +247,34 @@ class WsSession : public std::enable_shared_from_this<WsSession> {
     for (int b = 0; b < 4; ++b)
       frame[static_cast<std::size_t>(4 + b)] = static_cast<char>(count >> (8 * b));
     server_.counters_.blocks_sent += count;
-    return {Outgoing::Kind::kBlocks, true, std::make_shared<const std::string>(std::move(frame))};
+    Outgoing batch{Outgoing::Kind::kBlocks, true,
+                   std::make_shared<const std::string>(std::move(frame))};
+    queue_shown();  // behind this batch in the queue
+    return batch;
+  }
+
+  /// The bookkeeping of the `shown` messages for a block taken from the waiting ones. O(log n).
+  void sent_block(const BlockKey& key) {
+    const auto found = block_generation_.find(key);
+    if (found == block_generation_.end()) return;
+    const auto count = waiting_by_generation_.find(found->second);
+    if (count != waiting_by_generation_.end() && --count->second == 0)
+      waiting_by_generation_.erase(count);
+    block_generation_.erase(found);
+  }
+
+  /// Queues the `shown` messages whose publications' blocks have all been taken: those of a
+  /// generation below every waiting block's, in order.
+  void queue_shown() {
+    while (!shown_.empty() && (waiting_by_generation_.empty() ||
+                               shown_.front().first < waiting_by_generation_.begin()->first)) {
+      // Before the end message, which stays last.
+      const auto end = std::find_if(queue_.begin(), queue_.end(), [](const Outgoing& o) {
+        return o.kind == Outgoing::Kind::kEnd;
+      });
+      queue_.insert(end, {Outgoing::Kind::kShown, false, shown_.front().second});
+      shown_.pop_front();
+    }
   }
 
   static bool starts_mesh(const Outgoing& frame) {
@@ -367,7 +411,14 @@ class WsSession : public std::enable_shared_from_this<WsSession> {
   Server::Impl& server_;
   std::deque<Outgoing> queue_;        // not yet started
   NearestBlockQueue blocks_waiting_;  // blocks to send, nearest the sensor first
-  Outgoing in_flight_;                // being written (its bytes must live until the write ends)
+  // publish_blocks()' `shown` messages: each waiting block has the generation (a count of the
+  // publications with one) at which it began to wait; a message goes once no block of its
+  // generation or an earlier one waits.
+  std::uint64_t generation_ = 0;
+  std::map<BlockKey, std::uint64_t> block_generation_;
+  std::map<std::uint64_t, std::size_t> waiting_by_generation_;
+  std::deque<std::pair<std::uint64_t, std::shared_ptr<const std::string>>> shown_;
+  Outgoing in_flight_;  // being written (its bytes must live until the write ends)
   asio::steady_timer pace_{ws_.get_executor()};
   std::chrono::steady_clock::time_point write_started_, next_send_;
   bool writing_ = false;
@@ -517,9 +568,11 @@ void Server::Impl::drain() {
   std::shared_ptr<const std::string> stats;
   bool finish = false;
   std::map<BlockKey, std::shared_ptr<const std::string>> blocks;
+  std::vector<std::shared_ptr<const std::string>> shown;
   {
     std::lock_guard<std::mutex> lock(pending_mutex_);
     blocks.swap(pending_blocks_);
+    shown.swap(pending_shown_);
     if (pending_focus_) focus_ = *std::exchange(pending_focus_, std::nullopt);
     mesh = std::move(pending_mesh_);
     stats = std::move(pending_stats_);
@@ -539,14 +592,14 @@ void Server::Impl::drain() {
     for (const auto& client : clients_)
       for (const Outgoing& frame : mesh->frames) client->enqueue(frame);
   }
-  if (!blocks.empty()) {
+  if (!blocks.empty() || !shown.empty()) {
     std::vector<BlockKey> keys;
     keys.reserve(blocks.size());
     for (auto& [key, payload] : blocks) {
       blocks_[key] = std::move(payload);
       keys.push_back(key);
     }
-    for (const auto& client : clients_) client->mark_blocks(keys, focus_);
+    for (const auto& client : clients_) client->mark_blocks(keys, focus_, shown);
   }
   if (finish && !finished_) {
     finished_ = true;
@@ -679,9 +732,10 @@ void Server::publish_stats(std::string json) {
 
 void Server::finish() { impl_->publish(nullptr, nullptr, true); }
 
-void Server::publish_blocks(std::vector<MapBlock> blocks, std::optional<BlockPoint> focus) {
+void Server::publish_blocks(std::vector<MapBlock> blocks, std::optional<BlockPoint> focus,
+                            std::string shown) {
   impl_->counters_.blocks_published += blocks.size();
-  impl_->publish(nullptr, nullptr, false, std::move(blocks), focus);
+  impl_->publish(nullptr, nullptr, false, std::move(blocks), focus, std::move(shown));
 }
 
 ServerStats Server::stats() const {

@@ -28,6 +28,7 @@
 //          (publish_blocks(); serve/map_publisher.h says what a payload holds; n = 0: the block
 //          has no surface any more)
 //   text   the JSON objects given to publish_stats() (they carry their own "type")
+//   text   a publish_blocks() publication's `shown` message, after its last block
 //   text   {"type":"end"} after finish(): the producer is done and the client holds everything
 //          it published (sent last, after the client's queue has drained)
 //
@@ -153,7 +154,15 @@ class Server {
   /// given stays, the origin until one is), ties by block coordinates. Memory: the newest
   /// payload per block (shared by all clients) and per client the keys of the blocks it waits
   /// for. Does not wait for the network; O(b log b) per client for b waiting blocks.
-  void publish_blocks(std::vector<MapBlock> blocks, std::optional<BlockPoint> focus = std::nullopt);
+  ///
+  /// `shown`, when not empty, is a text message (a JSON object with its own "type") sent to each
+  /// client connected now once it has been sent every block of this publication (or a newer
+  /// payload of it), and the `shown` messages of earlier publications: right after the batch
+  /// that held the last of them, so a client that has applied the frames before it holds what
+  /// the publication describes (the live map's latency: serve/map_publisher.h). Never dropped;
+  /// O(log b) per block sent for the bookkeeping.
+  void publish_blocks(std::vector<MapBlock> blocks, std::optional<BlockPoint> focus = std::nullopt,
+                      std::string shown = {});
   /// Tells the server nothing more will be published (a run is over): each client, present or
   /// future, gets {"type":"end"} after what is queued for it. Does not wait for the network.
   void finish();

@@ -145,9 +145,41 @@ struct RunOptions {
   bool no_carve = false;                  ///< --no-carve
   float min_weight = 0.0f;
   std::string save_map, load_map;
-  std::string compress;  ///< --compress method ("" = PLY outputs)
-  ServeOptions serve;    ///< --serve: show the run in a browser
+  std::string compress;          ///< --compress method ("" = PLY outputs)
+  ServeOptions serve;            ///< --serve: show the run in a browser
+  double rate_hz = 0.0;          ///< --rate: paced replay (SequenceRunOptions::rate_hz)
+  std::string policy = "queue";  ///< --policy: queue or realtime (drop_late) with --rate
+  std::size_t loops = 1;         ///< --loops
 };
+
+// With --rate: the replay's settings and what it dropped, for the summary (--json), and a line
+// of the text report.
+nlohmann::json replay_json(const RunOptions& o, const SequenceRunStats& stats) {
+  if (o.rate_hz <= 0.0) return nullptr;
+  report("replay     %.1f Hz, policy %s, %zu loop%s: %zu frames dropped\n", o.rate_hz,
+         o.policy.c_str(), o.loops, o.loops == 1 ? "" : "s", stats.frames_dropped);
+  return {{"rate_hz", o.rate_hz},
+          {"policy", o.policy},
+          {"loops", o.loops},
+          {"frames_dropped", stats.frames_dropped}};
+}
+
+// The frame feeding of run's per-frame and fused modes (--every, --max-frames, --strict,
+// --rate, --loops).
+SequenceRunOptions sequence_run_options(const RunOptions& o) {
+  SequenceRunOptions r{o.sequence.every, o.sequence.max_frames, o.strict};
+  r.rate_hz = o.rate_hz;
+  r.drop_late = o.policy == "realtime";
+  r.loops = o.loops;
+  return r;
+}
+
+// The graph's threads: --threads (every core when 0), one more with --rate, whose source sleeps
+// on one of them until each frame's release.
+int run_threads(const RunOptions& o) {
+  if (o.rate_hz <= 0.0) return o.pipeline.threads;
+  return (o.pipeline.threads > 0 ? o.pipeline.threads : hardware_threads()) + 1;
+}
 
 // -o of run names a directory; a mesh file's name there is a usage error, not a directory
 // called "out.ply".
@@ -243,7 +275,7 @@ void finish_run(const SequenceRunStats& stats) {
 // `meshflow run --fuse`: every frame into one TSDF map, fused.ply at the end (and
 // fused_NNNNNN.ply after every --mesh-every frames).
 void run_fusion(const RunOptions& o) {
-  ThreadLimit limit(o.pipeline.threads);
+  ThreadLimit limit(run_threads(o));
   const auto opened = open_output(o);
   const std::unique_ptr<io::Sequence>& sequence = opened.first;
   if (!o.save_map.empty()) io::check_output_writable(o.save_map);
@@ -266,10 +298,10 @@ void run_fusion(const RunOptions& o) {
   if (view)
     pipeline->set_integration_observer(
         view->map_observer(config.tsdf.voxel_size, config.min_weight));
-  FrameProgress progress(selected_frames(*sequence, o.sequence));
+  FrameProgress progress(selected_frames(*sequence, o.sequence) * o.loops);
   std::size_t done = 0, written = 0;
   const std::filesystem::path dir(o.output_dir);
-  const SequenceRunOptions run_options{o.sequence.every, o.sequence.max_frames, o.strict};
+  const SequenceRunOptions run_options = sequence_run_options(o);
   FusionBreakdown breakdown;
   FailedFrames failed;
   const SequenceRunStats stats =
@@ -309,6 +341,7 @@ void run_fusion(const RunOptions& o) {
       {"files_written", written},
       {"output", o.output_dir}};
   if (o.quality) summary["observations"] = options::observations_json(observations);
+  if (o.rate_hz > 0.0) summary["replay"] = replay_json(o, stats);
   if (pipeline->closing().ran) summary["close"] = options::close_json(pipeline->closing());
   print_run_summary(*sequence, stats, limit.threads(), o.sequence.in_flight, failed, summary);
   breakdown.print(extraction.cells);
@@ -357,7 +390,7 @@ void run_merged(const RunOptions& o) {
   config.compression = compression_for(o.compress, "");
   ScanPreparationPipeline preparation(config, o.sequence.in_flight);
   const std::unique_ptr<RunView> view = start_run_view(o.serve, "meshflow run --merged");
-  FrameProgress progress(selected_frames(*sequence, o.sequence));
+  FrameProgress progress(selected_frames(*sequence, o.sequence) * o.loops);
   PointCloud joined;
   std::size_t done = 0;
   const SequenceRunOptions run_options{o.sequence.every, o.sequence.max_frames, o.strict};
@@ -411,18 +444,18 @@ void run_merged(const RunOptions& o) {
 void run_run(const RunOptions& o) {
   if (o.fuse) return run_fusion(o);
   if (o.merged) return run_merged(o);
-  ThreadLimit limit(o.pipeline.threads);
+  ThreadLimit limit(run_threads(o));
   const auto opened = open_output(o);
   const std::unique_ptr<io::Sequence>& sequence = opened.first;
   ReconstructionConfig config = pipeline_config(o.pipeline, o.triangulation);
   if (!o.concatenate) config.compression = compression_for(o.compress, "");
   ReconstructionPipeline pipeline(config, o.sequence.in_flight, o.triangulation.enabled());
   const std::unique_ptr<RunView> view = start_run_view(o.serve, "meshflow run");
-  FrameProgress progress(selected_frames(*sequence, o.sequence));
+  FrameProgress progress(selected_frames(*sequence, o.sequence) * o.loops);
   TriangleMesh merged;
   std::size_t done = 0, written = 0;
   RemovedComponents removed;
-  const SequenceRunOptions run_options{o.sequence.every, o.sequence.max_frames, o.strict};
+  const SequenceRunOptions run_options = sequence_run_options(o);
   FailedFrames failed;
   const SequenceRunStats stats =
       run_sequence(pipeline, *sequence, run_options, [&](const Frame& f) {
@@ -448,6 +481,7 @@ void run_run(const RunOptions& o) {
     written = 1;
   }
   nlohmann::json extra = {{"files_written", written}, {"output", o.output_dir}};
+  if (o.rate_hz > 0.0) extra["replay"] = replay_json(o, stats);
   const std::size_t min_component = config.triangulation.min_component_triangles;
   if (o.triangulation.enabled()) extra["components"] = removed.json(min_component);
   print_run_summary(*sequence, stats, limit.threads(), o.sequence.in_flight, failed, extra);
@@ -524,6 +558,27 @@ void add_run_options(CLI::App* cmd) {
           ->excludes(per_frame)
           ->excludes(merged);
   cmd->add_flag("--strict", o->strict, "Stop at the first bad frame (exit code 1)");
+  cmd->add_option("--rate", o->rate_hz,
+                  "Paced replay, frames per second: the n-th frame enters the graph no sooner "
+                  "than n / HZ s after the start, as from a sensor; a slower graph queues the "
+                  "frames (none dropped: the files are the same), and a frame's latency counts "
+                  "from its scheduled release. The source waits on a graph thread of its own (one "
+                  "more than --threads)")
+      ->check(number_in(0.1, 10000))
+      ->excludes(merged)
+      ->excludes(concatenate);
+  cmd->add_option("--policy", o->policy,
+                  "With --rate: queue (every frame, late when the graph is slower than the rate) "
+                  "or realtime (a late source skips to the newest frame due, dropping the older "
+                  "ones: bounded latency, fewer frames in the result)")
+      ->check(CLI::IsMember({"queue", "realtime"}))
+      ->needs("--rate");
+  cmd->add_option("--loops", o->loops,
+                  "Feed the selected frames this many times over (per-frame files are "
+                  "rewritten; a fused map integrates them again)")
+      ->check(CLI::Range(std::size_t{1}, std::size_t{100000}))
+      ->excludes(merged)
+      ->excludes(concatenate);
   auto* quality =
       cmd->add_flag("--quality", o->quality,
                     "Per-frame PLYs: each vertex's distance to the frame's nearest point "

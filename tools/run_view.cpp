@@ -40,11 +40,12 @@ class ServedRunView final : public RunView {
               const std::vector<unsigned char>& encoded) override {
     publisher_.result(mesh, origin, serve::MeshCoding::kProgressive, encoded);
   }
-  std::function<void(const TsdfMap&, const Eigen::Vector3f&)> map_observer(
+  std::function<void(const TsdfMap&, const Eigen::Vector3f&, const Frame&)> map_observer(
       float voxel_size, float min_weight) override {
     map_ = std::make_unique<serve::MapPublisher>(*server_, voxel_size, min_weight);
-    return [map = map_.get()](const TsdfMap& volume, const Eigen::Vector3f& sensor) {
-      map->integrated(volume, sensor);
+    return [map = map_.get()](const TsdfMap& volume, const Eigen::Vector3f& sensor,
+                              const Frame& frame) {
+      map->integrated(volume, sensor, serve::IntegratedFrame{frame.seq, frame.submitted_s});
     };
   }
   void map_result(const TsdfMap& map) override {
@@ -65,6 +66,7 @@ class ServedRunView final : public RunView {
 }  // namespace
 
 void serve_until_stopped(const serve::Server& server, double exit_after, std::FILE* out) {
+  std::fflush(stdout);  // the run's report (--json's summary) readable while it serves
   g_stop = false;
   std::signal(SIGINT, on_stop_signal);
   std::signal(SIGTERM, on_stop_signal);

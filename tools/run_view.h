@@ -45,7 +45,7 @@ class RunView {
   /// A fused run: the observer for FusionPipeline::set_integration_observer, which sends the
   /// map's changed blocks as it grows (serve/map_publisher.h), for a map of `voxel_size` metres
   /// meshed with `min_weight`.
-  virtual std::function<void(const TsdfMap&, const Eigen::Vector3f&)> map_observer(
+  virtual std::function<void(const TsdfMap&, const Eigen::Vector3f&, const Frame&)> map_observer(
       float voxel_size, float min_weight) = 0;
   /// After a fused run (map_observer() given): the map's blocks changed since the last update.
   virtual void map_result(const TsdfMap& map) = 0;

@@ -13,6 +13,17 @@ import createDecoder from '/mfc_decoder.js';
 
 const $ = (id) => document.getElementById(id);
 
+// The page's own timeline (data-timeline, for bench/serve/serve_bench.py): "ms event" entries,
+// milliseconds since the WebSocket opened, the first 400 of them: each message's arrival and
+// size, each decode and draw with its duration.
+const timeline = [];
+let timelineStart = performance.now();
+function note(event) {
+  if (timeline.length >= 400) return;
+  timeline.push(`${(performance.now() - timelineStart).toFixed(1)} ${event}`);
+  document.body.dataset.timeline = timeline.join(';');
+}
+
 function setState(state) {
   document.body.dataset.state = state;
   $('state').textContent = state;
@@ -37,7 +48,7 @@ headlight.position.set(0.3, 0.5, 1);
 camera.add(headlight);
 let controls = null;
 try {
-  renderer = new THREE.WebGLRenderer({ antialias: true, preserveDrawingBuffer: true });
+  renderer = new THREE.WebGLRenderer({ antialias: false, preserveDrawingBuffer: true });
   renderer.setPixelRatio(window.devicePixelRatio);
   renderer.setSize(window.innerWidth, window.innerHeight);
   $('view').appendChild(renderer.domElement);
@@ -47,9 +58,10 @@ try {
   document.body.dataset.webgl = 'no';
   $('error').textContent = 'no WebGL: ' + e.message;
 }
-const material = new THREE.MeshStandardMaterial({
-  color: 0xb8c4d0, roughness: 0.7, metalness: 0.0, side: THREE.DoubleSide,
-});
+// Lambert (lit per vertex) and no multisampling: a software renderer (a GPU-less machine, the
+// headless tests) drew a whole fused Redwood map's 1408 blocks faster than with the physically
+// based material and 4x MSAA (bench/RESULTS.md, "Viewing").
+const material = new THREE.MeshLambertMaterial({ color: 0xb8c4d0, side: THREE.DoubleSide });
 let mesh = null;
 let fitted = false;  // the camera is fitted to the first mesh only (a run's frames keep the view)
 let ended = false;   // the server said nothing more will come
@@ -61,17 +73,61 @@ const blocks = new Map();       // "x,y,z" -> { object, interior, shared: [edge]
 const sharedEdges = new Map();  // global edge "gx,gy,gz,axis" -> blocks that list it
 let blockInterior = 0;
 let blockTriangles = 0;
+const blockBox = new THREE.Box3();  // every block's box so far (grows only)
+
+// Drawing: render() draws now; requestRender() draws soon, at most a quarter of the time. A
+// fused map arrives as many batches of blocks, and with a software renderer (a GPU-less
+// machine, the headless tests) one draw of a whole Redwood map took 0.1-0.3 s: drawing after
+// every batch spent most of the map's load drawing pictures nobody saw.
+let renderTimer = null;
+let lastRenderEnd = 0;
+let lastRenderMs = 0;
+const shownWaiting = [];  // map_shown messages whose blocks are in the scene, not yet drawn
 
 function render() {
+  if (renderTimer !== null) {
+    clearTimeout(renderTimer);
+    renderTimer = null;
+  }
   if (!renderer) return;
   const t0 = performance.now();
   renderer.render(scene, camera);
+  const t1 = performance.now();
+  note(`draw ${(t1 - t0).toFixed(1)}`);
+  lastRenderEnd = t1;
+  lastRenderMs = t1 - t0;
   const d = document.body.dataset;
   d.renders = Number(d.renders || 0) + 1;
-  d.renderMs = (Number(d.renderMs || 0) + performance.now() - t0).toFixed(1);
+  d.renderMs = (Number(d.renderMs || 0) + lastRenderMs).toFixed(1);
+  if (shownWaiting.length > 0) recordShown(performance.timeOrigin + t1);
+}
+
+function requestRender() {
+  if (renderTimer !== null) return;
+  const wait = Math.max(0, lastRenderEnd + 3 * lastRenderMs - performance.now());
+  renderTimer = setTimeout(render, wait);
+}
+
+// The live map's latency (serve/map_publisher.h: map_shown): for each frame a drawn update
+// holds, the time from the frame entering the run's graph to this page having drawn it, both
+// in milliseconds of this machine's clock (performance.timeOrigin + now(): the Unix epoch).
+// data-map-latencies lists "seq:entered:total:server" per frame (ms): entered (epoch), total =
+// entered to drawn, server = entered to published (meshed and coded), the rest being the link
+// and this page; bench/serve/serve_bench.py reads it.
+function recordShown(drawnEpochMs) {
+  const d = document.body.dataset;
+  const rows = d.mapLatencies ? [d.mapLatencies] : [];
+  for (const m of shownWaiting) {
+    for (const [seq, entered] of m.frames) {
+      rows.push(`${seq}:${entered.toFixed(1)}:${(drawnEpochMs - entered).toFixed(1)}:` +
+                `${(m.published_ms - entered).toFixed(1)}`);
+    }
+  }
+  shownWaiting.length = 0;
+  d.mapLatencies = rows.join(',');
 }
 if (controls) {
-  controls.addEventListener('change', render);
+  controls.addEventListener('change', requestRender);
   controls.addEventListener('start', () => { userMoved = true; });
 }
 window.addEventListener('resize', () => {
@@ -102,6 +158,9 @@ const decoder = await createDecoder();
 // The material's shader programs, with and without vertex colours, are compiled now, before the
 // stream starts: a first draw compiles them, which takes a software renderer (a GPU-less
 // machine, the headless tests) a second or more that would otherwise delay the first picture.
+// (Drawing here instead, to have the GPU process build its routines too, made it worse: after
+// a draw headless Chromium holds the page's WebSocket messages back for a second or more, so the
+// stream arrived before the page could show its base.)
 if (renderer) {
   const t0 = performance.now();
   const warm = new THREE.BufferGeometry();
@@ -130,6 +189,7 @@ function decode(data, size, baseEnd, packets) {
   const t0 = performance.now();
   const rc = decoder._mf_decode(ptr, size, baseEnd, packets);
   const ms = performance.now() - t0;
+  if (packets >= 0 || size > 65536) note(`decode ${size} B ${ms.toFixed(1)}`);
   decoder._free(ptr);
   // The page's own profile (bench/serve/serve_bench.py reads it): decodes and their time.
   document.body.dataset.decodes = Number(document.body.dataset.decodes || 0) + 1;
@@ -272,7 +332,10 @@ function onBlocks(buffer) {
           shared.push(globalEdge(x, y, z, view.getUint16(at + 2 + 4 * k + 2, true)));
         }
         for (const e of shared) sharedEdges.set(e, (sharedEdges.get(e) || 0) + 1);
+        result.geometry.computeBoundingBox();
+        blockBox.union(result.geometry.boundingBox);
         const object = new THREE.Mesh(result.geometry, material);
+        object.matrixAutoUpdate = false;  // blocks stay where they are (world coordinates)
         blockGroup.add(object);
         blocks.set(key, { object, interior: result.vertices - s, shared, triangles: result.triangles });
         blockInterior += result.vertices - s;
@@ -285,14 +348,12 @@ function onBlocks(buffer) {
   }
   document.body.dataset.blocks = blocks.size;
   if (mesh) return;  // a whole mesh is shown: the blocks stay hidden
-  if (!userMoved && blocks.size > 0) {
-    fitCamera(new THREE.Box3().setFromObject(blockGroup).getBoundingSphere(new THREE.Sphere()));
-  }
+  if (!userMoved && blocks.size > 0) fitCamera(blockBox.getBoundingSphere(new THREE.Sphere()));
   applyColors();
   showCounts(blockInterior + sharedEdges.size, blockTriangles, `map: ${blocks.size} blocks`);
   $('decode-ms').textContent = ms.toFixed(1) + ' ms';
   if (document.body.dataset.state !== 'complete') setState('shown');
-  render();
+  requestRender();
 }
 
 // The whole mesh: its progressive image complete, or its single-rate image (after the base).
@@ -375,11 +436,16 @@ function onText(text) {
       $('fps').textContent = Number(message.frames_per_second).toFixed(1);
     }
     if (message.state === 'finished') document.body.dataset.run = 'finished';
+  } else if (message.type === 'map_shown') {
+    // Its blocks came before it and are in the scene: the next draw shows them.
+    shownWaiting.push(message);
+    requestRender();
   } else if (message.type === 'end') {
     ended = true;
     const c = current;
     if (document.body.dataset.state === 'error') return;
     if (!c || c.complete) {
+      if (renderTimer !== null) render();  // the last blocks drawn before saying so
       if (!c && blocks.size > 0) {  // a fused map's blocks, all of them here
         document.body.dataset.fullMs = (performance.now() - openedAt).toFixed(1);
       }
@@ -391,7 +457,7 @@ function onText(text) {
 function onBinary(buffer) {
   if (bytesReceived === 0) document.body.dataset.firstByteMs = (performance.now() - openedAt).toFixed(1);
   bytesReceived += buffer.byteLength;
-  $('bytes').textContent = bytesReceived.toLocaleString('en');
+  $('bytes').textContent = String(bytesReceived);  // (toLocaleString's first call took 0.25 s)
   document.body.dataset.bytes = bytesReceived;
   const view = new DataView(buffer);
   const id = view.getUint32(0, true);
@@ -428,12 +494,18 @@ const socket = new WebSocket(`ws://${location.host}/ws`);
 socket.binaryType = 'arraybuffer';
 socket.addEventListener('open', () => {
   openedAt = performance.now();
+  timelineStart = openedAt;
+  document.body.dataset.openedEpochMs = (performance.timeOrigin + openedAt).toFixed(1);
+  note('open');
   setState('waiting');
   socket.send(JSON.stringify({ type: 'hello' }));
 });
 socket.addEventListener('message', (event) => {
-  if (typeof event.data === 'string') onText(event.data);
+  const t0 = performance.now();
+  const text = typeof event.data === 'string';
+  if (text) onText(event.data);
   else onBinary(event.data);
+  note(`${text ? 'text' : 'binary'} ${text ? event.data.length : event.data.byteLength} B handled in ${(performance.now() - t0).toFixed(1)}`);
 });
 socket.addEventListener('close', () => {
   if (document.body.dataset.state !== 'complete') fail('connection closed');

@@ -13,7 +13,17 @@
    viewer, one that stopped reading (a handshake, then nothing read: a 4 kB receive buffer), and
    1 and 4 viewers that read everything (plain WebSocket clients), interleaved run by run.
 
-usage: serve_bench.py BUILD_DIR [RUNS] [view,map,viewers]
+4. latency: the live map's latency on the Redwood sequence replayed at 30 Hz (`meshflow run
+   rgbd_redwood --fuse --optimize none --rate 30 --loops L --policy P --serve`, 1 cm voxels;
+   L = 150 with realtime, 30 with queue: runs of 25 s or more, the page connects early on):
+   for each frame, from its release into the graph to the page having drawn the update that
+   holds it (serve/map_publisher.h: map_shown; the page's data-map-latencies), both on this
+   machine's clock, p50 / p99, and the server's share (release to the update's blocks coded).
+   Frames released in the page's first second are left out (they wait for the whole map the
+   page is sent when it connects). Policy realtime (a late source skips to the newest frame)
+   and queue (every frame, late).
+
+usage: serve_bench.py BUILD_DIR [RUNS] [view,map,viewers,latency]
 """
 import base64
 import json
@@ -30,7 +40,7 @@ import time
 
 build = sys.argv[1]
 runs = int(sys.argv[2]) if len(sys.argv) > 2 else 3
-parts = set((sys.argv[3] if len(sys.argv) > 3 else "view,map,viewers").split(","))
+parts = set((sys.argv[3] if len(sys.argv) > 3 else "view,map,viewers,latency").split(","))
 RATES = (10, 100)
 here = os.path.dirname(os.path.abspath(__file__))
 source = os.path.dirname(os.path.dirname(here))
@@ -208,4 +218,37 @@ if "viewers" in parts:
     for label, _, _ in cases:
         r = rates[label]
         print(f"| {label} | {statistics.median(r):.1f} | {', '.join(f'{x:.1f}' for x in r)} |")
+
+def percentile(values, q):
+    s = sorted(values)
+    return s[min(len(s) - 1, int(q * len(s)))] if s else float("nan")
+
+
+# 4. the live map's latency at 30 Hz
+if "latency" in parts:
+    redwood = os.path.join(data, "rgbd_redwood")
+    print("| policy | frames released / integrated / shown (after 1 s) | latency p50 / p99 (ms) "
+          "| server's share p50 / p99 (ms) | runs |")
+    print("|---|---|---:|---:|---|")
+    for policy in ("realtime", "queue"):
+        totals, servers, counts = [], [], []
+        loops = 150 if policy == "realtime" else 30
+        for _ in range(runs):
+            p, url, log = start(["run", redwood, "--fuse", "--optimize", "none", "-o",
+                                 os.path.join(work, "live"), "--json", "--serve", "0", "--rate",
+                                 "30", "--loops", str(loops), "--policy", policy,
+                                 "--exit-after", "1"])
+            d = page(url)
+            doc = wait_json(p, log)
+            p.wait()
+            since = float(d["openedEpochMs"]) + 1000.0
+            rows = [[float(x) for x in r.split(":")]
+                    for r in d.get("mapLatencies", "").split(",") if r]
+            steady = [(total, server) for _, entered, total, server in rows if entered >= since]
+            totals += [t for t, _ in steady]
+            servers += [s for _, s in steady]
+            counts.append(f"{5 * loops} / {doc['frames_ok']} / {len(steady)}")
+        print(f"| {policy} | {'; '.join(counts)} | {percentile(totals, 0.5):.0f} / "
+              f"{percentile(totals, 0.99):.0f} | {percentile(servers, 0.5):.0f} / "
+              f"{percentile(servers, 0.99):.0f} | {runs} |")
 shutil.rmtree(work, ignore_errors=True)

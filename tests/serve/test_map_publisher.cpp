@@ -3,11 +3,13 @@
 // it takes them) assembles, from the blocks it was sent, the mesh TsdfMesher::extract() gives:
 // the same vertex and triangle counts (shared vertices welded by their grid edge) and every
 // vertex within the quantisation of one of the fused mesh's. A viewer that never reads waits
-// for at most one copy of each block.
+// for at most one copy of each block. The live map's latency: a publication's `shown` message
+// comes after every block of it, and a paced run lists each frame once, with times that agree.
 
 #include <gtest/gtest.h>
 
 #include <array>
+#include <chrono>
 #include <cmath>
 #include <cstring>
 #include <map>
@@ -161,9 +163,8 @@ TEST(MapPublisher, TheBlocksAViewerWasSentAssembleToTheFusedMesh) {
   const FusionConfig config = fusion_config();
   FusionPipeline pipeline(config, 2);
   MapPublisher publisher(server, kVoxel, config.min_weight, /*min_interval_s=*/0.0);
-  pipeline.set_integration_observer([&](const TsdfMap& map, const Eigen::Vector3f& sensor) {
-    publisher.integrated(map, sensor);
-  });
+  pipeline.set_integration_observer([&](const TsdfMap& map, const Eigen::Vector3f& sensor,
+                                        const Frame&) { publisher.integrated(map, sensor); });
   const auto sequence = small_depth_sequence();
   run_sequence(pipeline, *sequence, {}, [](const Frame& f) { ASSERT_TRUE(f.ok()) << f.error; });
   publisher.finish(pipeline.map());
@@ -195,9 +196,8 @@ TEST(MapPublisher, AViewerThatNeverReadsWaitsForEachBlockAtMostOnce) {
   const FusionConfig config = fusion_config();
   FusionPipeline pipeline(config, 2);
   MapPublisher publisher(server, kVoxel, config.min_weight, 0.0);
-  pipeline.set_integration_observer([&](const TsdfMap& map, const Eigen::Vector3f& sensor) {
-    publisher.integrated(map, sensor);
-  });
+  pipeline.set_integration_observer([&](const TsdfMap& map, const Eigen::Vector3f& sensor,
+                                        const Frame&) { publisher.integrated(map, sensor); });
   run_sequence(pipeline, *small_depth_sequence(), {}, [](const Frame&) {});
   publisher.finish(pipeline.map());
   std::this_thread::sleep_for(100ms);
@@ -206,6 +206,108 @@ TEST(MapPublisher, AViewerThatNeverReadsWaitsForEachBlockAtMostOnce) {
   EXPECT_LE(s.max_client_pending_blocks, pipeline.map().block_count());
   EXPECT_LE(s.blocks_sent, s.blocks_published);
   EXPECT_LE(s.max_client_queue_frames, 3u);
+}
+
+std::shared_ptr<const std::string> filled(std::size_t n, char c) {
+  return std::make_shared<const std::string>(n, c);
+}
+
+TEST(Server, AShownMessageComesAfterEveryBlockOfItsPublication) {
+  ServerConfig config = config_with_page();
+  config.chunk_bytes = 256;  // a block or two per batch
+  Server server{config};
+  Client viewer;
+  ASSERT_FALSE(viewer.connect(server.port()));
+  for (int i = 0; i < 1000 && server.stats().clients < 1; ++i) std::this_thread::sleep_for(10ms);
+  std::vector<MapBlock> first;
+  for (std::int32_t x = 0; x < 10; ++x) first.push_back({x, 0, 0, filled(200, 'a')});
+  server.publish_blocks(std::move(first), BlockPoint{0, 0, 0}, R"({"type":"map_shown","n":1})");
+  // Block 5 again (a newer payload), one more, then a publication without blocks.
+  server.publish_blocks({{5, 0, 0, filled(200, 'b')}, {20, 0, 0, filled(200, 'c')}},
+                        BlockPoint{0, 0, 0}, R"({"type":"map_shown","n":2})");
+  server.publish_blocks({}, std::nullopt, R"({"type":"map_shown","n":3})");
+  server.finish();
+
+  std::map<std::array<std::int32_t, 3>, char> held;  // block -> its payload's fill
+  std::vector<int> shown;
+  std::string message;
+  bool binary = false;
+  for (;;) {
+    ASSERT_FALSE(viewer.read(message, binary)) << "the stream ended without the end message";
+    if (binary) {
+      ASSERT_EQ(u32_at(message, 0), 0u);
+      std::size_t at = 8;
+      for (std::uint32_t i = 0; i < u32_at(message, 4); ++i) {
+        std::array<std::int32_t, 3> key{};
+        std::memcpy(key.data(), message.data() + at, 12);
+        held[key] = message[at + 16];
+        at += 16 + u32_at(message, at + 12);
+      }
+      continue;
+    }
+    const nlohmann::json m = nlohmann::json::parse(message);
+    if (m["type"] == "end") break;
+    const int n = m["n"];
+    shown.push_back(n);
+    using Key = std::array<std::int32_t, 3>;
+    if (n == 1) {
+      for (std::int32_t x = 0; x < 10; ++x) EXPECT_EQ(held.count(Key{x, 0, 0}), 1u) << x;
+    } else {
+      EXPECT_EQ((held[Key{5, 0, 0}]), 'b') << "publication " << n << " before its block 5";
+      EXPECT_EQ(held.count(Key{20, 0, 0}), 1u) << "publication " << n << " before its block 20";
+    }
+  }
+  EXPECT_EQ(shown, (std::vector<int>{1, 2, 3}));
+}
+
+TEST(MapPublisher, APacedRunListsEachFrameOnceAfterItsBlocksWithTimesInOrder) {
+  Server server{config_with_page()};
+  Client viewer;
+  ASSERT_FALSE(viewer.connect(server.port()));
+  for (int i = 0; i < 1000 && server.stats().clients < 1; ++i) std::this_thread::sleep_for(10ms);
+  const FusionConfig config = fusion_config();
+  FusionPipeline pipeline(config, 2);
+  MapPublisher publisher(server, kVoxel, config.min_weight, 0.0);
+  pipeline.set_integration_observer(
+      [&](const TsdfMap& map, const Eigen::Vector3f& sensor, const Frame& frame) {
+        publisher.integrated(map, sensor, IntegratedFrame{frame.seq, frame.submitted_s});
+      });
+  SequenceRunOptions paced;
+  paced.rate_hz = 20.0;
+  paced.loops = 2;
+  const auto sequence = small_depth_sequence();  // 6 frames, twice
+  run_sequence(pipeline, *sequence, paced, [](const Frame& f) { ASSERT_TRUE(f.ok()) << f.error; });
+  publisher.finish(pipeline.map());
+  server.finish();
+
+  std::vector<std::uint64_t> seqs;
+  std::vector<double> entered;
+  std::string message;
+  bool binary = false;
+  for (;;) {
+    ASSERT_FALSE(viewer.read(message, binary)) << "the stream ended without the end message";
+    if (binary) continue;
+    const double received_ms =
+        1e3 *
+        std::chrono::duration<double>(std::chrono::system_clock::now().time_since_epoch()).count();
+    const nlohmann::json m = nlohmann::json::parse(message);
+    if (m["type"] == "end") break;
+    if (m["type"] != "map_shown") continue;
+    const double meshed = m["meshed_ms"], published = m["published_ms"];
+    EXPECT_LE(meshed, published + 1.0);
+    EXPECT_LE(published, received_ms + 1.0);
+    for (const auto& f : m["frames"]) {
+      seqs.push_back(f[0]);
+      entered.push_back(f[1]);
+      EXPECT_LE(entered.back(), meshed + 1.0) << "frame " << seqs.back();
+    }
+  }
+  std::vector<std::uint64_t> all(12);
+  for (std::uint64_t i = 0; i < all.size(); ++i) all[i] = i;
+  ASSERT_EQ(seqs, all) << "every frame once, in order";
+  // Entry times are the paced schedule's (1 / 20 Hz apart), on the same clock as the others.
+  for (std::size_t i = 0; i < entered.size(); ++i)
+    EXPECT_NEAR(entered[i] - entered[0], 50.0 * static_cast<double>(i), 1.0) << i;
 }
 
 }  // namespace

@@ -382,7 +382,6 @@ class Decimator {
         [&](const tbb::blocked_range<std::size_t>& range) {
           Scratch& local = local_scratch();
           for (std::size_t i = range.begin(); i != range.end(); ++i) {
-            prefetch_evaluation(i);
             const Candidate& c = candidate(i);
             if (c.cost > walk.limit ||
                 (validated_[c.from] && !pass_[c.from].changed && !pass_[c.to].changed))
@@ -404,20 +403,12 @@ class Decimator {
       if (i + kLookAhead < n) prefetch(candidate(i + kLookAhead), false);
       return;
     }
-    prefetch_evaluation(i);
-    if (i + kLookAhead / 4 < n) prefetch_neighbour_rings(candidate(i + kLookAhead / 4));
-  }
-
-  // What evaluating candidate i a few steps ahead reads, requested in three stages, each from
-  // addresses the previous one brought in: its candidate, the slots of its ends, their rings
-  // and quadrics, then the terms and slots of u's neighbours (their costs' inputs).
-  void prefetch_evaluation(std::size_t i) const {
-    const std::size_t n = order_.size();
     if (i + 3 * kLookAhead < n)
       __builtin_prefetch(&best_[order_[i + 3 * kLookAhead] & vertex_mask_]);
     if (i + 2 * kLookAhead < n) prefetch_slots(candidate(i + 2 * kLookAhead));
     if (i + kLookAhead < n) prefetch(candidate(i + kLookAhead), true);
     if (i + kLookAhead / 2 < n) prefetch_corners(candidate(i + kLookAhead / 2));
+    if (i + kLookAhead / 4 < n) prefetch_neighbour_rings(candidate(i + kLookAhead / 4));
   }
 
   // Walks candidates [first, last): each is taken, if it is still valid and within the limit

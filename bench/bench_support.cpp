@@ -6,6 +6,7 @@
 #include <memory>
 
 #include "graph/stages.h"
+#include "nodes/eval/surface_eval.h"
 #include "nodes/io/scan3d_reader.h"
 #include "nodes/io/sequence.h"
 #include "nodes/optimize/cleanup/mesh_cleanup.h"
@@ -80,6 +81,13 @@ void count_triangles(benchmark::State& state, const TriangleMesh& in, std::size_
                                                      benchmark::Counter::kIsIterationInvariantRate);
   state.counters["in"] = static_cast<double>(in.triangles.size());
   state.counters["out"] = static_cast<double>(out);
+}
+
+void count_distance_to_input(benchmark::State& state, const TriangleMesh& input,
+                             const TriangleMesh& output) {
+  const DistanceStats d = evaluate_surface(output, input).reference_to_mesh;
+  state.counters["dist_mean_mm"] = 1e3 * d.mean;
+  state.counters["dist_p95_mm"] = 1e3 * d.p95;
 }
 
 void time_optimize(benchmark::State& state, const TriangleMesh& mesh,

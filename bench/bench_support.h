@@ -49,6 +49,12 @@ const TriangleMesh* cleaned_mesh(benchmark::State& state);
 /// Counters of a mesh-to-mesh step: triangles/s over the input, input and output triangles.
 void count_triangles(benchmark::State& state, const TriangleMesh& in, std::size_t out);
 
+/// Counters of a simplification's accuracy: the mean and 95th percentile (millimetres) of the
+/// distances from the vertices of `input` to the surface of `output` (evaluate_surface()'s
+/// reference_to_mesh). Run once after the timing loop; O((V + T) log T).
+void count_distance_to_input(benchmark::State& state, const TriangleMesh& input,
+                             const TriangleMesh& output);
+
 /// Times optimize_mesh(mesh, config) on state.range(0) threads, then count_triangles().
 void time_optimize(benchmark::State& state, const TriangleMesh& mesh, const OptimizeConfig& config);
 

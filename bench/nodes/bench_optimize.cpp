@@ -31,6 +31,8 @@ void BM_OptimizeStep(benchmark::State& state) {
   config.steps = {steps[state.range(2)]};
   state.SetLabel(optimize_step_name(config.steps[0]));
   time_optimize(state, *mesh, config);
+  if (config.steps[0] == OptimizeStep::kDecimate)  // beside BM_MeshoptSimplify's
+    count_distance_to_input(state, *mesh, optimize_mesh(*mesh, config));
 }
 BENCHMARK(BM_OptimizeStep)
     ->ArgsProduct({{1, 2}, {kSynthetic, kKurt3d}, {0, 1, 2, 3, 4, 5}})

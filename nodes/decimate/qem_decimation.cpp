@@ -240,12 +240,18 @@ class Decimator {
       }
     }
     for (const Triangle& t : in_.triangles) {
+      // Most faces touch no feature edge: a corner off every line rules all three edges out.
+      const int on_lines = (feature_degree_[t[0]] != 0) + (feature_degree_[t[1]] != 0) +
+                           (feature_degree_[t[2]] != 0);
+      if (on_lines < 2) continue;
       const Eigen::Vector3d a = p(t[0]).cast<double>();
       const Eigen::Vector3d normal =
           (p(t[1]).cast<double>() - a).cross(p(t[2]).cast<double>() - a).normalized();
       for (int k = 0; k < 3; ++k) {
         const std::uint32_t x = t[k], y = t[(k + 1) % 3];
-        if (!std::binary_search(keys.begin(), keys.end(), undirected_edge_key(x, y))) continue;
+        if (feature_degree_[x] == 0 || feature_degree_[y] == 0 ||
+            !std::binary_search(keys.begin(), keys.end(), undirected_edge_key(x, y)))
+          continue;
         const Eigen::Vector3d px = p(x).cast<double>(), along = p(y).cast<double>() - px;
         const Eigen::Vector3d side = along.cross(normal);
         const double length2 = along.squaredNorm();
@@ -565,19 +571,9 @@ class Decimator {
     const std::size_t n = rings_.size(u), faces = rings_.face_count(u);
     if (scratch.candidates.size() < n) scratch.candidates.resize(2 * n);
     Target* const queue = scratch.candidates.data();
-    // In order of (quadric cost, vertex): each target goes to its rank, the number of targets
-    // before it, counted branch-free (a handful of targets; an insertion sort's branches on
-    // these costs are coin tosses, and mispredicted cost more than the extra comparisons). The
-    // targets are distinct and no cost is NaN (quadric_costs() maps NaN to 0): the ranks are a
-    // permutation.
     const double* const costs = scratch.target_costs(*this, u, targets, count);
-    for (std::size_t j = 0; j < count; ++j) {
-      const Target entry{costs[j], targets[j], static_cast<std::uint32_t>(j)};
-      std::size_t rank = 0;
-      for (std::size_t k = 0; k < count; ++k)
-        rank += static_cast<std::size_t>(Target{costs[k], targets[k], 0}.before(entry));
-      queue[rank] = entry;
-    }
+    for (std::size_t j = 0; j < count; ++j)
+      queue[j] = Target{costs[j], targets[j], static_cast<std::uint32_t>(j)};
     // u's faces (u, r[k], r[k + 1]), each neighbour's position read once (after the border
     // test: a bent border needs no fan).
     CollapseFan& fan = scratch.fan;
@@ -590,10 +586,17 @@ class Decimator {
       pa = pb;
     }
     fan.finish(faces);
-    // Penalties only multiply the quadric cost, so candidates are tried in its order until it
-    // alone exceeds the best penalised cost found.
-    for (std::size_t j = 0; j < count; ++j) {
-      const auto [quadric, v, at] = queue[j];
+    // Penalties only multiply the quadric cost, so candidates are tried in the order of
+    // (quadric cost, vertex) until it alone exceeds the best penalised cost found. Most
+    // evaluations stop after one or two, so each is picked when needed, the cheapest of those
+    // left (branch-free), rather than all sorted first. The targets are distinct and no cost is
+    // NaN (quadric_costs() maps NaN to 0): the order is total.
+    for (std::size_t left = count; left != 0;) {
+      std::size_t cheapest = 0;
+      for (std::size_t k = 1; k < left; ++k)
+        cheapest = queue[k].before(queue[cheapest]) ? k : cheapest;
+      const auto [quadric, v, at] = queue[cheapest];
+      queue[cheapest] = queue[--left];
       if (!(quadric < best.cost)) break;
       const FanVerdict verdict = fan.check(v, p(v));
       if (verdict.turned) {  // invalid whatever the cost: refused before anything else

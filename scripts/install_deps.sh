@@ -7,7 +7,7 @@ export DEBIAN_FRONTEND=noninteractive
 $SUDO apt-get update
 $SUDO apt-get install -y --no-install-recommends \
   g++ cmake ninja-build pkg-config \
-  libtbb-dev libeigen3-dev libnanoflann-dev liblzf-dev \
+  libtbb-dev libeigen3-dev liblzf-dev \
   libspng-dev libjpeg-dev libtiff-dev \
   libcli11-dev libgtest-dev libgmock-dev libbenchmark-dev nlohmann-json3-dev \
   libcgal-dev libmeshoptimizer-dev libdraco-dev libopenmpi-dev openmpi-bin \

@@ -1,6 +1,6 @@
 #pragma once
-// Spatial search over a point set: one small interface, FLANN's kd-tree behind it, and a
-// brute-force implementation that serves as the test oracle.
+// Spatial search over a point set: one small interface, a bucket kd-tree behind it
+// (kd_tree::BucketTree), and a brute-force implementation that serves as the test oracle.
 
 #include <Eigen/Core>
 #include <cstdint>
@@ -38,8 +38,8 @@ class SpatialIndex {
   virtual std::size_t size() const = 0;
 };
 
-/// nanoflann kd-trees (exact search): from 16 384 points on two, over the points either side of
-/// the median of the longest axis, built in parallel. Build O(n log n).
+/// Exact search over a kd-tree (kd_tree::BucketTree: median splits, tight node boxes, leaves of up
+/// to 32 points searched 8 at a time), built in parallel over subtrees. Build O(n log n).
 class KdTreeIndex final : public SpatialIndex {
  public:
   /// Builds the tree over `points` (finite, metres), which must outlive the index unchanged.
@@ -48,8 +48,9 @@ class KdTreeIndex final : public SpatialIndex {
   std::size_t knn(const Eigen::Vector3f& q, std::size_t k, std::uint32_t* indices,
                   float* squared_distances) const override;
   std::vector<std::uint32_t> radius_search(const Eigen::Vector3f& q, float radius) const override;
-  /// SpatialIndex::knn_rows(); the indexed points themselves (the same vector) are taken in
-  /// the trees' leaf order, so that consecutive searches walk the same nodes and leaves.
+  /// SpatialIndex::knn_rows(); for the indexed points themselves (the same vector) each search
+  /// starts in the point's own leaf, bounded by the previous point's neighbours
+  /// (BucketTree::knn_of_points()).
   void knn_rows(const std::vector<Eigen::Vector3f>& queries, std::size_t k, std::uint32_t* indices,
                 std::uint32_t* counts) const override;
   /// Number of indexed points.

@@ -88,9 +88,9 @@ void expect_brute_force_rows(const std::vector<Eigen::Vector3f>& pts, const KdTr
 }
 
 // knn_rows() is exact: the rows are brute force's, ties included, for the indexed points
-// themselves (taken in leaf order) and for other queries, on 1 and 2 threads, with one tree and
-// with two (from 16 384 points on). Lattice points tie everywhere, also on the plane that
-// splits the set in two; random points on a noisy plane have neighbours across it.
+// themselves (searched leaf by leaf) and for other queries, on 1 and 2 threads, with a small and
+// a deep tree. Lattice points tie everywhere, also on the planes that split the set; random
+// points on a noisy plane have neighbours across them.
 TEST(SpatialIndex, KnnRowsAreBruteForceRows) {
   std::mt19937 rng(11);
   std::uniform_real_distribution<float> u(-5.0f, 5.0f);
@@ -116,8 +116,8 @@ TEST(SpatialIndex, KnnRowsAreBruteForceRows) {
   }
 }
 
-// knn() and radius_search() over two trees (from 16 384 points on) against brute force, with
-// queries either side of the plane that splits the set and outside the set's box.
+// knn() and radius_search() over a deep tree against brute force, with queries either side of
+// the plane that splits the set first and outside the set's box.
 TEST(SpatialIndex, TwoTreesMatchBruteForce) {
   std::mt19937 rng(5);
   std::uniform_real_distribution<float> u(-5.0f, 5.0f);
@@ -146,6 +146,29 @@ TEST(SpatialIndex, KnnRowsWithFewerPointsThanK) {
   EXPECT_EQ(rows[1], 1u);
   EXPECT_EQ(rows[5], 1u);  // row 1 starts k = 5 entries in
   EXPECT_EQ(rows[6], 0u);
+}
+
+// The indexed points' rows start each search bounded by the previous point's neighbours: exact
+// also where that bound is zero (stacks of identical points, more or fewer than k), where the
+// previous point is far away (clusters far apart, so a leaf spans two), and where a leaf holds
+// fewer points than k.
+TEST(SpatialIndex, KnnRowsOfDuplicatesAndFarClusters) {
+  std::mt19937 rng(13);
+  std::uniform_real_distribution<float> u(-1.0f, 1.0f);
+  std::vector<Eigen::Vector3f> pts;
+  for (int cluster = 0; cluster < 40; ++cluster) {
+    const Eigen::Vector3f centre(1000.0f * float(cluster % 7), 50.0f * float(cluster), 0.0f);
+    const int stack = cluster % 3 == 0 ? 25 : cluster % 3 == 1 ? 4 : 0;  // identical points
+    for (int i = 0; i < stack; ++i) pts.push_back(centre);
+    for (int i = 0; i < 30 + cluster; ++i)
+      pts.push_back(centre + Eigen::Vector3f(u(rng), u(rng), u(rng)));
+  }
+  std::shuffle(pts.begin(), pts.end(), rng);
+  const KdTreeIndex tree(pts);
+  for (const std::size_t k : {std::size_t{3}, std::size_t{10}, std::size_t{40}}) {
+    SCOPED_TRACE(testing::Message() << "k " << k);
+    expect_brute_force_rows(pts, tree, pts, k, 1);
+  }
 }
 
 TEST(SpatialIndex, FewerPointsThanK) {

@@ -1,0 +1,373 @@
+#include "nodes/search/bucket_kd_tree.h"
+
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_invoke.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <limits>
+
+#include "runtime/simd.h"
+
+namespace meshflow::kd_tree {
+
+struct BucketTree::Item {
+  float p[3];
+  std::uint32_t id;
+};
+
+namespace {
+
+using simd::Floats8;
+using Floats4 = float __attribute__((vector_size(16)));  // x, y, z, 0
+
+// Subtrees of at least this many points are built in parallel.
+constexpr std::uint32_t kBucketParallelBuild = 4096;
+
+// What a search reads: the tree's arrays.
+struct BucketView {
+  const BucketTree::Node* nodes;
+  const float* xs;
+  const float* ys;
+  const float* zs;
+  const std::uint32_t* ids;
+};
+
+// Squared distance from q to the node's box (0 inside). Rounding is monotone, so for every point
+// p of the box each axis term is at most p's and the sum, taken in the same order as a point's,
+// never exceeds p's computed squared distance: a box is skipped only when all of its points lie
+// beyond the bound.
+inline float bucket_box_distance2(const BucketTree::Node& n, const Floats4& q) {
+  Floats4 lo, hi;
+  std::memcpy(&lo, n.lo, sizeof lo);
+  std::memcpy(&hi, n.hi, sizeof hi);
+  Floats4 below = lo - q, above = q - hi;
+  Floats4 d = below > above ? below : above;
+  d = d > 0.0f ? d : Floats4{};
+  d *= d;
+  float s = d[0] + d[1];
+  s += d[2];
+  return s;
+}
+
+// The k smallest (squared distance, index) pairs, ties by the smaller index, so the result is
+// the brute-force one. Each pair is kept as one 64-bit key, the distance's bits above the index:
+// non-negative floats order as their bits, so one integer comparison orders pairs by distance,
+// then index. The keys stay unsorted while searching (a closer point replaces the largest, which
+// is then found again without branches: cheaper than keeping them sorted, whose shifts end
+// unpredictably) and are sorted once by finish(). `keys` is the caller's scratch of k entries.
+class BucketKnn {
+ public:
+  // Only points within squared distance `cap` (inclusive) are taken: for a search known to have
+  // at least k points there the result is unchanged, and the tree is pruned from the start.
+  BucketKnn(std::size_t k, std::uint64_t* keys, float cap = std::numeric_limits<float>::infinity())
+      : k_(k), keys_(keys), worst_(cap) {}
+  // Candidates farther than this cannot enter (equal ones can, with a smaller index).
+  float worst() const { return worst_; }
+  void add(float dist, std::uint32_t idx) {
+    std::uint32_t bits = 0;
+    std::memcpy(&bits, &dist, sizeof bits);
+    const std::uint64_t key = static_cast<std::uint64_t>(bits) << 32 | idx;
+    if (count_ < k_) {
+      keys_[count_++] = key;
+      if (count_ < k_) return;
+    } else {
+      if (key >= keys_[top_]) return;
+      keys_[top_] = key;
+    }
+    std::size_t top = 0;
+    std::uint64_t m = keys_[0];
+    for (std::size_t i = 1; i < k_; ++i) {
+      const bool bigger = keys_[i] > m;
+      m = bigger ? keys_[i] : m;
+      top = bigger ? i : top;
+    }
+    top_ = top;
+    const auto hi = static_cast<std::uint32_t>(m >> 32);
+    std::memcpy(&worst_, &hi, sizeof worst_);
+  }
+  std::size_t size() const { return count_; }
+  // Writes the pairs found, closest first (`dists` may be null); returns how many. Once.
+  std::size_t finish(std::uint32_t* indices, float* dists) {
+    std::sort(keys_, keys_ + count_);
+    for (std::size_t i = 0; i < count_; ++i) {
+      indices[i] = static_cast<std::uint32_t>(keys_[i]);
+      if (dists != nullptr) {
+        const auto top = static_cast<std::uint32_t>(keys_[i] >> 32);
+        std::memcpy(dists + i, &top, sizeof top);
+      }
+    }
+    return count_;
+  }
+
+ private:
+  std::size_t k_;
+  std::uint64_t* keys_;
+  float worst_;
+  std::size_t count_ = 0;
+  std::size_t top_ = 0;  // where the largest key is, once full
+};
+
+// Every point within a fixed squared radius (inclusive).
+class BucketRadius {
+ public:
+  BucketRadius(float squared_radius, std::vector<std::pair<std::uint32_t, float>>& hits)
+      : squared_radius_(squared_radius), hits_(hits) {}
+  float worst() const { return squared_radius_; }
+  void add(float dist, std::uint32_t idx) { hits_.emplace_back(idx, dist); }
+
+ private:
+  float squared_radius_;
+  std::vector<std::pair<std::uint32_t, float>>& hits_;
+};
+
+// Offers the leaf's points to `sink`, 8 squared distances at a time: ((dx dx + dy dy) + dz dz),
+// the brute-force oracle's order (no FMA: the AVX2 clones do not enable it). Blocks with no lane
+// within the bound are passed over whole.
+template <class Sink>
+inline __attribute__((always_inline)) void bucket_scan_leaf(const BucketView& v,
+                                                            const BucketTree::Node& leaf,
+                                                            const float* q, Sink& sink) {
+  const simd::Ints8 lane = {0, 1, 2, 3, 4, 5, 6, 7};
+  for (std::uint32_t b = 0; b < leaf.count; b += 8) {
+    const std::uint32_t at = leaf.begin + b;
+    Floats8 x, y, z;
+    std::memcpy(&x, v.xs + at, sizeof x);
+    std::memcpy(&y, v.ys + at, sizeof y);
+    std::memcpy(&z, v.zs + at, sizeof z);
+    const Floats8 dx = x - q[0], dy = y - q[1], dz = z - q[2];
+    Floats8 d = dx * dx;
+    d += dy * dy;
+    d += dz * dz;
+    const simd::Ints8 in = (d <= sink.worst()) & (lane < static_cast<int>(leaf.count - b));
+    std::uint64_t words[4];
+    std::memcpy(words, &in, sizeof words);
+    if ((words[0] | words[1] | words[2] | words[3]) == 0) continue;
+    const simd::Ints8 flags = in & simd::Ints8{1, 2, 4, 8, 16, 32, 64, 128};
+    unsigned mask = 0;
+    for (int j = 0; j < 8; ++j) mask |= static_cast<unsigned>(flags[j]);
+    float dd[8];
+    std::memcpy(dd, &d, sizeof dd);
+    for (; mask != 0; mask &= mask - 1) {
+      const int j = __builtin_ctz(mask);
+      if (dd[j] <= sink.worst()) sink.add(dd[j], v.ids[at + j]);
+    }
+  }
+}
+
+// Depth-first search from the root, the nearer child first; a node is entered only while its
+// box is within the sink's bound.
+template <class Sink>
+inline __attribute__((always_inline)) void bucket_search(const BucketView& v, const float* q,
+                                                         Sink& sink, std::uint32_t root = 0) {
+  struct Pending {
+    std::uint32_t node;
+    float distance;
+  };
+  Pending stack[64];  // one entry per level at most: the tree is balanced, < 2^32 points
+  int top = 0;
+  std::uint32_t node = root;
+  const Floats4 q4 = {q[0], q[1], q[2], 0.0f};
+  if (!(bucket_box_distance2(v.nodes[root], q4) <= sink.worst())) return;
+  for (;;) {
+    const BucketTree::Node& n = v.nodes[node];
+    if (n.count == 0) {  // inner: both children exist
+      const std::uint32_t left = 2 * node + 1;
+      const float dl = bucket_box_distance2(v.nodes[left], q4);
+      const float dr = bucket_box_distance2(v.nodes[left + 1], q4);
+      const bool left_first = dl <= dr;
+      const std::uint32_t near = left_first ? left : left + 1;
+      const float dnear = left_first ? dl : dr, dfar = left_first ? dr : dl;
+      if (dfar <= sink.worst()) stack[top++] = {left_first ? left + 1 : left, dfar};
+      if (dnear <= sink.worst()) {
+        node = near;
+        continue;
+      }
+    } else {
+      bucket_scan_leaf(v, n, q, sink);
+    }
+    for (;;) {
+      if (top == 0) return;
+      const Pending p = stack[--top];
+      if (p.distance <= sink.worst()) {
+        node = p.node;
+        break;
+      }
+    }
+  }
+}
+
+MESHFLOW_AVX2_CLONES std::size_t bucket_knn_one(const BucketView& v, const float* q, std::size_t k,
+                                                std::uint32_t* indices, float* squared_distances) {
+  std::uint64_t local[64];
+  std::vector<std::uint64_t> heap(k > 64 ? k : 0);
+  BucketKnn best(k, k > 64 ? heap.data() : local);
+  bucket_search(v, q, best);
+  return best.finish(indices, squared_distances);
+}
+
+// Squared distance as the leaf scan computes it (the same rounding): ((dx dx + dy dy) + dz dz).
+inline float bucket_distance2(const float* q, const Eigen::Vector3f& p) {
+  const float dx = p.x() - q[0], dy = p.y() - q[1], dz = p.z() - q[2];
+  float d = dx * dx;
+  d += dy * dy;
+  d += dz * dz;
+  return d;
+}
+
+// The rows of the points of leaves [first, last) (of `leaves`, in leaf order). Each point's
+// search starts in its own leaf and climbs: at every ancestor the sibling subtree is searched
+// when its box is within the bound (no walk down from the root). The bound starts at the
+// farthest of the previous point's k neighbours from this point: k points lie within it, so
+// its k nearest do too (the previous point is usually beside it).
+MESHFLOW_AVX2_CLONES void bucket_knn_leaves(const BucketView& v, const Eigen::Vector3f* points,
+                                            const std::uint32_t* leaves, std::size_t first,
+                                            std::size_t last, std::size_t k, std::size_t stride,
+                                            std::uint32_t* indices, std::uint32_t* counts,
+                                            std::uint64_t* scratch) {
+  const std::uint32_t* previous = nullptr;  // the last full row
+  for (std::size_t l = first; l != last; ++l) {
+    const std::uint32_t leaf = leaves[l];
+    const BucketTree::Node& own = v.nodes[leaf];
+    for (std::uint32_t j = own.begin; j != own.begin + own.count; ++j) {
+      const float q[3] = {v.xs[j], v.ys[j], v.zs[j]};
+      const std::uint32_t id = v.ids[j];
+      std::uint32_t* row = indices + static_cast<std::size_t>(id) * stride;
+      float cap = std::numeric_limits<float>::infinity();
+      if (previous != nullptr) {
+        cap = 0.0f;
+        for (std::size_t a = 0; a < k; ++a)
+          cap = std::max(cap, bucket_distance2(q, points[previous[a]]));
+      }
+      BucketKnn best(k, scratch, cap);
+      bucket_scan_leaf(v, own, q, best);
+      for (std::uint32_t node = leaf; node != 0; node = (node - 1) / 2) {
+        const std::uint32_t sibling = node % 2 == 1 ? node + 1 : node - 1;
+        bucket_search(v, q, best, sibling);
+      }
+      counts[id] = static_cast<std::uint32_t>(best.finish(row, nullptr));
+      previous = best.size() == k ? row : nullptr;
+    }
+  }
+}
+
+MESHFLOW_AVX2_CLONES void bucket_radius(const BucketView& v, const float* q, float squared_radius,
+                                        std::vector<std::pair<std::uint32_t, float>>& hits) {
+  BucketRadius sink(squared_radius, hits);
+  bucket_search(v, q, sink);
+}
+
+}  // namespace
+
+BucketTree::BucketTree(const std::vector<Eigen::Vector3f>& points) {
+  const auto n = static_cast<std::uint32_t>(points.size());
+  if (n == 0) return;
+  int depth = 0;  // of the deepest leaf: the larger half is taken at every split
+  for (std::uint32_t s = n; s > kLeafSize; s -= s / 2) ++depth;
+  nodes_.resize((std::size_t{2} << depth) - 1);
+  std::vector<Item> items(n);
+  tbb::parallel_for(tbb::blocked_range<std::uint32_t>(0, n, 8192),
+                    [&](const tbb::blocked_range<std::uint32_t>& r) {
+                      for (std::uint32_t i = r.begin(); i != r.end(); ++i)
+                        items[i] = {{points[i].x(), points[i].y(), points[i].z()}, i};
+                    });
+  build(0, 0, n, items.data());
+  std::vector<std::uint32_t> stack = {0};  // the leaves in leaf order (depth first, left first)
+  while (!stack.empty()) {
+    const std::uint32_t node = stack.back();
+    stack.pop_back();
+    if (nodes_[node].count != 0) {
+      leaves_.push_back(node);
+    } else {
+      stack.push_back(2 * node + 2);
+      stack.push_back(2 * node + 1);
+    }
+  }
+  const float pad = std::numeric_limits<float>::quiet_NaN();  // never within any bound
+  xs_.assign(n + 8, pad);
+  ys_.assign(n + 8, pad);
+  zs_.assign(n + 8, pad);
+  ids_.resize(n);
+  tbb::parallel_for(tbb::blocked_range<std::uint32_t>(0, n, 8192),
+                    [&](const tbb::blocked_range<std::uint32_t>& r) {
+                      for (std::uint32_t i = r.begin(); i != r.end(); ++i) {
+                        xs_[i] = items[i].p[0];
+                        ys_[i] = items[i].p[1];
+                        zs_[i] = items[i].p[2];
+                        ids_[i] = items[i].id;
+                      }
+                    });
+}
+
+void BucketTree::build(std::size_t node, std::uint32_t begin, std::uint32_t end, Item* items) {
+  static_assert(sizeof(Item) == 16, "an item is read as four floats");
+  Node& nd = nodes_[node];
+  // The box, the four floats of each item at once (the fourth, the index's bits, ignored).
+  Floats4 lo = Floats4{} + std::numeric_limits<float>::infinity(), hi = -lo;
+  for (std::uint32_t i = begin; i != end; ++i) {
+    Floats4 p;
+    std::memcpy(&p, &items[i], sizeof p);
+    lo = p < lo ? p : lo;
+    hi = p > hi ? p : hi;
+  }
+  for (int a = 0; a < 3; ++a) {
+    nd.lo[a] = lo[a];
+    nd.hi[a] = hi[a];
+  }
+  nd.lo[3] = nd.hi[3] = 0.0f;
+  const std::uint32_t size = end - begin;
+  if (size <= kLeafSize) {
+    nd.begin = begin;
+    nd.count = size;
+    return;
+  }
+  int axis = 0;
+  for (int a = 1; a < 3; ++a)
+    if (nd.hi[a] - nd.lo[a] > nd.hi[axis] - nd.lo[axis]) axis = a;
+  const std::uint32_t middle = begin + size / 2;
+  std::nth_element(items + begin, items + middle, items + end,
+                   [axis](const Item& a, const Item& b) { return a.p[axis] < b.p[axis]; });
+  const auto left = [&] { build(2 * node + 1, begin, middle, items); };
+  const auto right = [&] { build(2 * node + 2, middle, end, items); };
+  if (size >= kBucketParallelBuild) {
+    tbb::parallel_invoke(left, right);
+  } else {
+    left();
+    right();
+  }
+}
+
+std::size_t BucketTree::knn(const Eigen::Vector3f& q, std::size_t k, std::uint32_t* indices,
+                            float* squared_distances) const {
+  k = std::min(k, size());
+  if (k == 0) return 0;
+  const BucketView v{nodes_.data(), xs_.data(), ys_.data(), zs_.data(), ids_.data()};
+  return bucket_knn_one(v, q.data(), k, indices, squared_distances);
+}
+
+void BucketTree::radius(const Eigen::Vector3f& q, float squared_radius,
+                        std::vector<std::pair<std::uint32_t, float>>& hits) const {
+  if (size() == 0) return;
+  const BucketView v{nodes_.data(), xs_.data(), ys_.data(), zs_.data(), ids_.data()};
+  bucket_radius(v, q.data(), squared_radius, hits);
+}
+
+void BucketTree::knn_of_points(const std::vector<Eigen::Vector3f>& points, std::size_t k,
+                               std::size_t stride, std::uint32_t* indices,
+                               std::uint32_t* counts) const {
+  k = std::min(k, size());
+  if (k == 0) {
+    std::fill(counts, counts + size(), 0u);
+    return;
+  }
+  const BucketView v{nodes_.data(), xs_.data(), ys_.data(), zs_.data(), ids_.data()};
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, leaves_.size(), 16),
+                    [&](const tbb::blocked_range<std::size_t>& r) {
+                      std::vector<std::uint64_t> scratch(k);
+                      bucket_knn_leaves(v, points.data(), leaves_.data(), r.begin(), r.end(), k,
+                                        stride, indices, counts, scratch.data());
+                    });
+}
+
+}  // namespace meshflow::kd_tree

@@ -2,8 +2,11 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
+#include <string>
 
 #include "nodes/compress/quantizer.h"
+#include "runtime/error.h"
 
 namespace meshflow::compress {
 namespace {
@@ -45,32 +48,30 @@ std::array<std::int32_t, 2> clamped_code(const std::array<std::int32_t, 2>& pred
   return q;
 }
 
-// Contexts of a normal's residual: no prediction, then flatter to rougher rings.
-constexpr std::size_t kNormalContexts = 5;
+// The single-rate normal coder's residual contexts: how flat the vertex's ring of decoded faces
+// is (no ring, then flatter to rougher: the faces' normals agreeing or not) times how large the
+// position grid's noise on the ring's normal is against the step (kNoiseClasses, from the ring's
+// mean face size: small faces on a fine grid give noisy predictions).
+constexpr std::size_t kFlatnessClasses = 5, kNoiseClasses = 10;
+constexpr std::size_t kNormalContexts = kFlatnessClasses * kNoiseClasses;
 
 struct NormalModels {
   IntegerModel first[kNormalContexts];
   IntegerModel second[kNormalContexts][2];  // [context][first residual was 0]
 };
 
-// What both sides know of vertex i's normal before its residual: the context, the frame and
-// the predicted code.
-struct NormalPrediction {
-  std::size_t context = 0;
-  Frame frame;
-  std::array<std::int32_t, 2> code{};
-};
-
-// Per vertex: the ring sums and the sum of the faces' cross product lengths.
+// Per vertex: the ring sums, the sum of the faces' cross product lengths and the face count.
 struct RingSums {
   std::vector<std::array<double, 3>> sum;
   std::vector<double> length;
+  std::vector<std::uint32_t> faces;
 };
 
 RingSums ring_sums(const DecodedGeometry& g) {
   RingSums r;
   r.sum.assign(g.grid.size(), {0.0, 0.0, 0.0});
   r.length.assign(g.grid.size(), 0.0);
+  r.faces.assign(g.grid.size(), 0);
   for (const Triangle& t : g.triangles) {
     const auto& a = g.grid[t[0]];
     const auto& b = g.grid[t[1]];
@@ -89,22 +90,85 @@ RingSums ring_sums(const DecodedGeometry& g) {
     for (std::uint32_t v : t) {
       for (std::size_t k = 0; k < 3; ++k) r.sum[v][k] += n[k];
       r.length[v] += length;
+      ++r.faces[v];
     }
   }
   return r;
 }
 
-NormalPrediction predict_normal(const RingSums& r, std::size_t i, unsigned bits) {
+// A unit normal's frame: the normal and two unit tangents.
+struct TangentFrame {
+  Eigen::Vector3d normal, t1, t2;
+  static TangentFrame of(const Eigen::Vector3d& n) {
+    TangentFrame f;
+    f.normal = n;
+    const Eigen::Vector3d helper =
+        std::abs(n.x()) < 0.9 ? Eigen::Vector3d::UnitX() : Eigen::Vector3d::UnitY();
+    f.t1 = n.cross(helper).normalized();
+    f.t2 = n.cross(f.t1);
+    return f;
+  }
+};
+
+// The residual of unit normal `n` around the prediction: its azimuthal equidistant coordinates in
+// the frame (the angle from the prediction along the direction towards n) in steps, rounded.
+// The projection's inverse moves no two points further apart than in the plane, so the decoded
+// normal is within step / sqrt(2) of n.
+std::array<std::int32_t, 2> tangent_code(const TangentFrame& f, const Eigen::Vector3f& input,
+                                         double step) {
+  const Eigen::Vector3d n = input.cast<double>();
+  const double norm = n.norm();
+  if (!(norm > 0.0) || !std::isfinite(norm)) return {0, 0};  // no direction: the prediction
+  const double x = f.t1.dot(n), y = f.t2.dot(n), z = f.normal.dot(n);
+  const double r = std::hypot(x, y), angle = std::atan2(r, z);
+  // Straight opposite the prediction (r = 0, angle = pi) any direction will do.
+  const double ux = r > 0.0 ? x / r : 1.0, uy = r > 0.0 ? y / r : 0.0;
+  return {static_cast<std::int32_t>(std::lround(angle * ux / step)),
+          static_cast<std::int32_t>(std::lround(angle * uy / step))};
+}
+
+// The unit normal of a residual from tangent_code() (any code: a corrupt stream's too).
+Eigen::Vector3f tangent_normal(const TangentFrame& f, const std::array<std::int32_t, 2>& code,
+                               double step) {
+  const double a = code[0] * step, b = code[1] * step, angle = std::hypot(a, b);
+  if (!(angle > 0.0)) return f.normal.cast<float>();
+  const Eigen::Vector3d n =
+      std::cos(angle) * f.normal + (std::sin(angle) / angle) * (a * f.t1 + b * f.t2);
+  return n.normalized().cast<float>();
+}
+
+// What both sides know of vertex i's normal before its residual: the context and the predicted
+// unit normal (the ring's area-weighted normal; without a ring the previous vertex's decoded
+// normal, +z for the first). The context comes from exactly rounded operations on the ring sums
+// and the step (no library functions), so encoder and decoder agree on every platform; the
+// prediction itself may differ in its last bits between platforms, which moves a decoded
+// normal by as much and desynchronises nothing.
+struct NormalPrediction {
+  std::size_t context = 0;
+  Eigen::Vector3d normal = Eigen::Vector3d::UnitZ();
+};
+
+NormalPrediction predict_normal(const RingSums& r, std::size_t i, double step,
+                                const Eigen::Vector3f& previous) {
   NormalPrediction p;
   const auto& s = r.sum[i];
   const double norm = std::sqrt(s[0] * s[0] + s[1] * s[1] + s[2] * s[2]);
-  if (!(norm > 0.0)) return p;  // context 0, +z
+  if (!(norm > 0.0) || !std::isfinite(norm)) {
+    const Eigen::Vector3d prev = previous.cast<double>();
+    if (prev.norm() > 0.5) p.normal = prev.normalized();
+    return p;  // context 0
+  }
   const double flat = norm / r.length[i];
-  p.context = flat >= 0.999 ? 1 : flat >= 0.99 ? 2 : flat >= 0.95 ? 3 : 4;
-  p.frame = Frame::of(s);
-  const Eigen::Vector3f pf(static_cast<float>(s[0] / norm), static_cast<float>(s[1] / norm),
-                           static_cast<float>(s[2] / norm));
-  p.code = octahedral_encode(p.frame.to(pf), bits);
+  const std::size_t flatness = flat >= 0.999 ? 1 : flat >= 0.99 ? 2 : flat >= 0.95 ? 3 : 4;
+  // The ring normal's noise from positions within half a grid step is about 1 / edge, the edge
+  // about sqrt(mean cross product length): in steps, 1 / (step^2 mean length) is its square.
+  // Classes by the binary exponent of that (exact), two per factor of 2 in the noise.
+  const double inverse_noise = step * step * (r.length[i] / r.faces[i]);
+  int exponent = 0;
+  std::frexp(inverse_noise, &exponent);
+  const int noise = std::clamp(6 - exponent, 0, static_cast<int>(kNoiseClasses) - 1);
+  p.context = flatness * kNoiseClasses + static_cast<std::size_t>(noise);
+  p.normal = Eigen::Vector3d(s[0] / norm, s[1] / norm, s[2] / norm);
   return p;
 }
 
@@ -195,31 +259,45 @@ std::vector<Eigen::Vector3f> recomputed_normals(const DecodedGeometry& g) {
 
 std::vector<Eigen::Vector3f> encode_normals(const DecodedGeometry& g,
                                             const std::vector<Eigen::Vector3f>& normals,
-                                            unsigned bits, RangeEncoder& enc) {
+                                            float step, RangeEncoder& enc) {
+  std::uint32_t step_bits = 0;
+  std::memcpy(&step_bits, &step, sizeof step);
+  enc.encode_direct(step_bits, 32);
   const RingSums r = ring_sums(g);
   NormalModels m;
   std::vector<Eigen::Vector3f> decoded(g.grid.size());
+  Eigen::Vector3f previous = Eigen::Vector3f::Zero();
   for (std::size_t i = 0; i < g.grid.size(); ++i) {
-    const NormalPrediction p = predict_normal(r, i, bits);
-    const std::array<std::int32_t, 2> q = octahedral_encode(p.frame.to(normals[i]), bits);
-    const std::int32_t d0 = q[0] - p.code[0], d1 = q[1] - p.code[1];
-    m.first[p.context].encode(enc, d0);
-    m.second[p.context][d0 == 0 ? 1 : 0].encode(enc, d1);
-    decoded[i] = p.frame.from(octahedral_decode(q, bits));
+    const NormalPrediction p = predict_normal(r, i, step, previous);
+    const TangentFrame f = TangentFrame::of(p.normal);
+    const std::array<std::int32_t, 2> q = tangent_code(f, normals[i], step);
+    m.first[p.context].encode(enc, q[0]);
+    m.second[p.context][q[0] == 0 ? 1 : 0].encode(enc, q[1]);
+    decoded[i] = previous = tangent_normal(f, q, step);
   }
   return decoded;
 }
 
-std::vector<Eigen::Vector3f> decode_normals(const DecodedGeometry& g, unsigned bits,
-                                            RangeDecoder& dec) {
+std::vector<Eigen::Vector3f> decode_normals(const DecodedGeometry& g, RangeDecoder& dec,
+                                            const std::string& source) {
+  const std::uint32_t step_bits = dec.decode_direct(32);
+  float step = 0.0f;
+  std::memcpy(&step, &step_bits, sizeof step);
+  if (!(step >= kMinNormalStep && step <= kMaxNormalStep))
+    throw Error(source, "attribute section: normal step",
+                std::to_string(step) + " radians is outside " + std::to_string(kMinNormalStep) +
+                    " .. " + std::to_string(kMaxNormalStep));
   const RingSums r = ring_sums(g);
   NormalModels m;
   std::vector<Eigen::Vector3f> decoded(g.grid.size());
+  Eigen::Vector3f previous = Eigen::Vector3f::Zero();
+  RangeDecoder::Session session(dec);
   for (std::size_t i = 0; i < g.grid.size(); ++i) {
-    const NormalPrediction p = predict_normal(r, i, bits);
-    const std::int32_t d0 = m.first[p.context].decode(dec);
-    const std::int32_t d1 = m.second[p.context][d0 == 0 ? 1 : 0].decode(dec);
-    decoded[i] = p.frame.from(octahedral_decode(clamped_code(p.code, {d0, d1}, bits), bits));
+    const NormalPrediction p = predict_normal(r, i, step, previous);
+    std::array<std::int32_t, 2> q{};
+    q[0] = m.first[p.context].decode(session.core);
+    q[1] = m.second[p.context][q[0] == 0 ? 1 : 0].decode(session.core);
+    decoded[i] = previous = tangent_normal(TangentFrame::of(p.normal), q, step);
   }
   return decoded;
 }

@@ -209,22 +209,53 @@ std::array<std::int32_t, 3> from_ycocg(const std::array<std::int32_t, 3>& y) {
   return {b + y[1], g, b};
 }
 
-// Colour contexts: Y by how many decoded neighbours predicted (0 .. 3+), Co and Cg by |dY|.
+// Colour contexts (LOCO-I style: the neighbourhood's activity predicts the residual's size).
+// Y by how much the decoded neighbours' Y differ from the prediction (kActivityClasses) and how
+// many there are (0 .. 3+); Co by the neighbours' chroma activity and |dY| (kLumaClasses); Cg by
+// those and |dCo| (kCoClasses): a residual at an edge is large on every channel.
+constexpr std::size_t kActivityClasses = 10, kLumaClasses = 7, kCoClasses = 4;
+// Activity class k: the mean absolute difference is above kActivityEdge[k - 1].
+constexpr std::array<std::int32_t, kActivityClasses - 1> kActivityEdge = {1,  2,  3,  5, 8,
+                                                                        12, 20, 32, 50};
+
 struct ColorModels {
-  IntegerModel y[4], co[4], cg[4];
-  static std::size_t chroma_context(std::int32_t dy) {
-    const std::int32_t a = dy < 0 ? -dy : dy;
-    return a == 0 ? 0 : a <= 2 ? 1 : a <= 8 ? 2 : 3;
-  }
+  std::vector<IntegerModel> y = std::vector<IntegerModel>(kActivityClasses * 4);
+  std::vector<IntegerModel> co = std::vector<IntegerModel>(kActivityClasses * kLumaClasses);
+  std::vector<IntegerModel> cg =
+      std::vector<IntegerModel>(kActivityClasses * kLumaClasses * kCoClasses);
 };
 
-// The predicted colour of vertex i (mean of its neighbours below i, else vertex i - 1's).
-std::array<std::int32_t, 3> predict_color(const Adjacency& adj, const std::vector<Rgb8>& colors,
-                                          std::uint32_t i, std::size_t& count) {
+// The class of a sum of absolute differences over `count` neighbours (integers only).
+std::size_t activity_class(std::int64_t sum, std::int64_t count) {
+  std::size_t k = 0;
+  while (k < kActivityEdge.size() && kActivityEdge[k] * count < sum) ++k;
+  return k;
+}
+
+// The class of |v| for the chroma contexts: 0, 1, 2-3, 4-7, 8-15, 16-31, 32+ (capped at `n`).
+std::size_t magnitude_class(std::int32_t v, std::size_t n) {
+  const std::uint32_t a = static_cast<std::uint32_t>(v < 0 ? -std::int64_t{v} : v);
+  const std::size_t bits = a == 0 ? 0 : 32u - static_cast<std::size_t>(__builtin_clz(a));
+  return std::min(bits, n - 1);
+}
+
+// What both sides know of vertex i's colour: the prediction (the mean of its neighbours below
+// i, else vertex i - 1's) and the contexts of its Y residual and chroma activity.
+struct ColorPrediction {
+  std::array<std::int32_t, 3> rgb{};
+  std::size_t y_context = 0, chroma_activity = 0;
+};
+
+ColorPrediction predict_color(const Adjacency& adj, const std::vector<Rgb8>& colors,
+                              const std::vector<std::array<std::int32_t, 3>>& ycocg,
+                              std::uint32_t i) {
+  ColorPrediction p;
   std::int32_t sum[3] = {0, 0, 0};
-  count = 0;
-  for (std::uint32_t k = adj.first[i]; k < adj.first[i + 1]; ++k) {
-    const std::uint32_t n = adj.neighbour[k];
+  std::uint32_t count = 0;
+  const std::uint32_t begin = adj.first[i];
+  std::uint32_t end = begin;
+  for (; end < adj.first[i + 1]; ++end) {
+    const std::uint32_t n = adj.neighbour[end];
     if (n >= i) break;  // sorted: the rest are decoded later
     sum[0] += colors[n].r;
     sum[1] += colors[n].g;
@@ -232,12 +263,29 @@ std::array<std::int32_t, 3> predict_color(const Adjacency& adj, const std::vecto
     ++count;
   }
   if (count == 0) {
-    if (i == 0) return {0, 0, 0};
-    const Rgb8 c = colors[i - 1];
-    return {c.r, c.g, c.b};
+    if (i > 0) p.rgb = {colors[i - 1].r, colors[i - 1].g, colors[i - 1].b};
+    return p;
   }
-  const auto n = static_cast<std::int32_t>(count);
-  return {(sum[0] + n / 2) / n, (sum[1] + n / 2) / n, (sum[2] + n / 2) / n};
+  const auto c = static_cast<std::int32_t>(count);
+  p.rgb = {(sum[0] + c / 2) / c, (sum[1] + c / 2) / c, (sum[2] + c / 2) / c};
+  const std::array<std::int32_t, 3> q = to_ycocg(p.rgb[0], p.rgb[1], p.rgb[2]);
+  std::int64_t luma = 0, chroma = 0;
+  for (std::uint32_t k = begin; k < end; ++k) {
+    const std::array<std::int32_t, 3>& n = ycocg[adj.neighbour[k]];
+    luma += std::abs(n[0] - q[0]);
+    chroma += std::abs(n[1] - q[1]) + std::abs(n[2] - q[2]);
+  }
+  p.y_context = activity_class(luma, c) * 4 + std::min<std::size_t>(count, 3);
+  p.chroma_activity = activity_class(chroma, c);
+  return p;
+}
+
+// The Co and Cg model indices of a vertex from its prediction and the residuals before them.
+std::size_t co_context(const ColorPrediction& p, std::int32_t dy) {
+  return p.chroma_activity * kLumaClasses + magnitude_class(dy, kLumaClasses);
+}
+std::size_t cg_context(const ColorPrediction& p, std::int32_t dy, std::int32_t dco) {
+  return co_context(p, dy) * kCoClasses + magnitude_class(dco, kCoClasses);
 }
 
 }  // namespace
@@ -322,15 +370,15 @@ Eigen::Vector3f apply_normal_residual(const Eigen::Vector3f& predicted,
 void encode_colors(const DecodedGeometry& g, const std::vector<Rgb8>& colors, RangeEncoder& enc) {
   const Adjacency adj = adjacency(g);
   ColorModels m;
+  std::vector<std::array<std::int32_t, 3>> ycocg(g.grid.size());
   for (std::uint32_t i = 0; i < g.grid.size(); ++i) {
-    std::size_t count = 0;
-    const std::array<std::int32_t, 3> p = predict_color(adj, colors, i, count);
+    const ColorPrediction p = predict_color(adj, colors, ycocg, i);
     const Rgb8 c = colors[i];
-    const std::array<std::int32_t, 3> d = to_ycocg(c.r - p[0], c.g - p[1], c.b - p[2]);
-    m.y[std::min<std::size_t>(count, 3)].encode(enc, d[0]);
-    const std::size_t ctx = ColorModels::chroma_context(d[0]);
-    m.co[ctx].encode(enc, d[1]);
-    m.cg[ctx].encode(enc, d[2]);
+    const std::array<std::int32_t, 3> d = to_ycocg(c.r - p.rgb[0], c.g - p.rgb[1], c.b - p.rgb[2]);
+    m.y[p.y_context].encode(enc, d[0]);
+    m.co[co_context(p, d[0])].encode(enc, d[1]);
+    m.cg[cg_context(p, d[0], d[1])].encode(enc, d[2]);
+    ycocg[i] = to_ycocg(c.r, c.g, c.b);
   }
 }
 
@@ -338,22 +386,23 @@ std::vector<Rgb8> decode_colors(const DecodedGeometry& g, RangeDecoder& dec) {
   const Adjacency adj = adjacency(g);
   ColorModels m;
   std::vector<Rgb8> colors(g.grid.size());
+  std::vector<std::array<std::int32_t, 3>> ycocg(g.grid.size());
+  RangeDecoder::Session session(dec);
   for (std::uint32_t i = 0; i < g.grid.size(); ++i) {
-    std::size_t count = 0;
-    const std::array<std::int32_t, 3> p = predict_color(adj, colors, i, count);
+    const ColorPrediction p = predict_color(adj, colors, ycocg, i);
     std::array<std::int32_t, 3> d{};
     // Residuals of a valid stream are within +-1020; clamping keeps corrupt ones from
-    // overflowing (the checksum reports the corruption), Y's before its context negates it.
-    d[0] = std::clamp(m.y[std::min<std::size_t>(count, 3)].decode(dec), -4096, 4096);
-    const std::size_t ctx = ColorModels::chroma_context(d[0]);
-    d[1] = m.co[ctx].decode(dec);
-    d[2] = m.cg[ctx].decode(dec);
-    for (std::int32_t& x : d) x = std::clamp(x, -4096, 4096);
+    // overflowing (the checksum reports the corruption), each before a context uses it.
+    d[0] = std::clamp(m.y[p.y_context].decode(session.core), -4096, 4096);
+    d[1] = std::clamp(m.co[co_context(p, d[0])].decode(session.core), -4096, 4096);
+    d[2] = std::clamp(m.cg[cg_context(p, d[0], d[1])].decode(session.core), -4096, 4096);
     const std::array<std::int32_t, 3> rgb = from_ycocg(d);
     const auto channel = [](std::int32_t v) {
       return static_cast<std::uint8_t>(std::clamp(v, 0, 255));
     };
-    colors[i] = Rgb8{channel(p[0] + rgb[0]), channel(p[1] + rgb[1]), channel(p[2] + rgb[2])};
+    const Rgb8 c{channel(p.rgb[0] + rgb[0]), channel(p.rgb[1] + rgb[1]), channel(p.rgb[2] + rgb[2])};
+    colors[i] = c;
+    ycocg[i] = to_ycocg(c.r, c.g, c.b);
   }
   return colors;
 }

@@ -13,9 +13,10 @@
 //    area-weighted face normals (the extractors') cost well under a bit per normal at 0.5
 //    degrees.
 //  - colours: predicted by the mean of the vertex's one-ring neighbours decoded before it (the
-//    previous vertex's colour without any), both mapped to YCoCg-R (reversible on integers), and
-//    the three differences range-coded, Co and Cg in contexts of the size of Y's difference.
-//    Exact at 8 bits.
+//    previous vertex's colour without any), the difference mapped to YCoCg-R (reversible on
+//    integers) and range-coded in contexts of the neighbourhood's activity (how far those
+//    neighbours are from the prediction) and, for Co and Cg, the size of the residuals coded
+//    before them. Exact at 8 bits.
 // Not thread-safe per coder; O(V + T).
 
 #include <array>

@@ -195,7 +195,8 @@ std::vector<OptionSpec> make_specs() {
        nullptr, one_of<std::string>(&O::normals, {"auto", "input", "estimate"})},
       {"normal-bits", &O::normal_bits,
        "Compressed meshes (.mfc): normal precision in bits, 4..20 (10: within 0.25 degrees, "
-       "doubling per bit fewer; Draco's default grid is within 0.26); 0 stores no normals and the decoder recomputes them from "
+       "doubling per bit fewer; Draco's default grid is within 0.26); 0 stores no normals and the "
+       "decoder recomputes them from "
        "the decoded geometry",
        nullptr,
        [](const O& o) -> std::string {

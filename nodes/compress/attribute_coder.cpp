@@ -216,7 +216,7 @@ std::array<std::int32_t, 3> from_ycocg(const std::array<std::int32_t, 3>& y) {
 constexpr std::size_t kActivityClasses = 10, kLumaClasses = 7, kCoClasses = 4;
 // Activity class k: the mean absolute difference is above kActivityEdge[k - 1].
 constexpr std::array<std::int32_t, kActivityClasses - 1> kActivityEdge = {1,  2,  3,  5, 8,
-                                                                        12, 20, 32, 50};
+                                                                          12, 20, 32, 50};
 
 struct ColorModels {
   std::vector<IntegerModel> y = std::vector<IntegerModel>(kActivityClasses * 4);
@@ -306,8 +306,8 @@ std::vector<Eigen::Vector3f> recomputed_normals(const DecodedGeometry& g) {
 }
 
 std::vector<Eigen::Vector3f> encode_normals(const DecodedGeometry& g,
-                                            const std::vector<Eigen::Vector3f>& normals,
-                                            float step, RangeEncoder& enc) {
+                                            const std::vector<Eigen::Vector3f>& normals, float step,
+                                            RangeEncoder& enc) {
   std::uint32_t step_bits = 0;
   std::memcpy(&step_bits, &step, sizeof step);
   enc.encode_direct(step_bits, 32);
@@ -400,7 +400,8 @@ std::vector<Rgb8> decode_colors(const DecodedGeometry& g, RangeDecoder& dec) {
     const auto channel = [](std::int32_t v) {
       return static_cast<std::uint8_t>(std::clamp(v, 0, 255));
     };
-    const Rgb8 c{channel(p.rgb[0] + rgb[0]), channel(p.rgb[1] + rgb[1]), channel(p.rgb[2] + rgb[2])};
+    const Rgb8 c{channel(p.rgb[0] + rgb[0]), channel(p.rgb[1] + rgb[1]),
+                 channel(p.rgb[2] + rgb[2])};
     colors[i] = c;
     ycocg[i] = to_ycocg(c.r, c.g, c.b);
   }

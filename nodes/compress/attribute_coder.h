@@ -50,8 +50,8 @@ std::vector<Eigen::Vector3f> recomputed_normals(const DecodedGeometry& g);
 /// decoded normal is within step / sqrt(2) of its input's direction. Writes the step first.
 /// Returns the normals the decoder will produce. O(V + T).
 std::vector<Eigen::Vector3f> encode_normals(const DecodedGeometry& g,
-                                            const std::vector<Eigen::Vector3f>& normals,
-                                            float step, RangeEncoder& enc);
+                                            const std::vector<Eigen::Vector3f>& normals, float step,
+                                            RangeEncoder& enc);
 
 /// Reads what encode_normals() wrote for the same geometry. Throws Error naming `source` for a
 /// step out of range. O(V + T).

@@ -77,9 +77,8 @@ AttributeFlags attribute_flags(const TriangleMesh& mesh, const CompressConfig& c
            normal_error_degrees(flags.normal_bits) > config.normal_error)
       ++flags.normal_bits;
   }
-  flags.normal_step = normal_step_for(config.normal_error != 0.0
-                                      ? config.normal_error
-                                      : normal_error_degrees(flags.normal_bits));
+  flags.normal_step = normal_step_for(
+      config.normal_error != 0.0 ? config.normal_error : normal_error_degrees(flags.normal_bits));
   return flags;
 }
 

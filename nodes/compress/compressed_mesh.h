@@ -3,7 +3,8 @@
 // or progressively (a base mesh and vertex splits). Format, version 7, little-endian:
 //
 //   bytes 0-7   magic "MFMESH\r\n"
-//   u32         version (7; 6 coded normals on an octahedral grid, 5 coded symbols, residual lengths and trust flags bit by bit, 4
+//   u32         version (7; 6 coded normals on an octahedral grid, 5 coded symbols, residual
+//   lengths and trust flags bit by bit, 4
 //               had a position mode byte and no trust flags, 3 no position mode
 //               byte, 2 no prefix checksums and coded
 //               attributes from one neighbour)

@@ -47,7 +47,8 @@ inline double normal_error_degrees(unsigned bits) {
 /// The residual grid step (radians) of the single-rate normal coder for a largest error of
 /// `error_degrees` (step / sqrt(2), less a thousandth for float rounding).
 inline float normal_step_for(double error_degrees) {
-  return static_cast<float>(std::sqrt(2.0) * error_degrees * (3.14159265358979323846 / 180.0) * 0.999);
+  return static_cast<float>(std::sqrt(2.0) * error_degrees * (3.14159265358979323846 / 180.0) *
+                            0.999);
 }
 /// The steps a file may state (radians): largest errors of about 0.0004 .. 40 degrees.
 inline constexpr float kMinNormalStep = 1e-5f, kMaxNormalStep = 1.0f;

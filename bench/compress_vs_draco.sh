@@ -3,9 +3,10 @@
 # meshflow writes them: the demo room and kurt3d scan000 at 5 cm (normals), a coloured Kinect
 # cloud reconstructed and the fused Redwood map (normals and colours), made here from
 # $MESHFLOW_DATA (the room alone without it). Positions at 14 bits on both sides; normals at
-# equal error: Draco at its default (-qn 10), meshflow at the fewest --normal-bits whose 99th
-# percentile angle (measured after decoding both, bench/mesh_error.py) is no larger than
-# Draco's; colours exact on both. Then positions only (the same positions: meshflow's decode).
+# equal error: Draco at its default (-qn 10), meshflow at the largest --normal-error (degrees)
+# whose mean and 99th percentile angle (measured after decoding both, bench/mesh_error.py) are
+# both no larger than Draco's; colours exact on both. Then positions only (the same positions:
+# meshflow's decode).
 # Prints markdown table rows. Speed: bench/nodes/bench_compress.cpp (in-process).
 #   bench/compress_vs_draco.sh [BUILD_DIR]     (needs the `draco` package: draco_encoder)
 set -euo pipefail
@@ -40,7 +41,7 @@ json() { $py -c "import json,sys; print(json.load(sys.stdin)$1)"; }
 size() { stat -c %s "$1"; }
 echo "As written (normals; colours on kinect and redwood), equal error:"
 echo
-echo "| mesh | triangles | meshflow bytes (normal bits) | Draco -cl 7 | Draco -cl 10 | meshflow / Draco 10 | normal angle mean / p99, meshflow / Draco (deg) | position error max, mm |"
+echo "| mesh | triangles | meshflow bytes (--normal-error) | Draco -cl 7 | Draco -cl 10 | meshflow / Draco 10 | normal angle mean / p99, meshflow / Draco (deg) | position error max, mm |"
 echo "|---|---:|---:|---:|---:|---:|---:|---:|"
 for m in "${meshes[@]}"; do
   in="$work/$m.ply"
@@ -49,23 +50,24 @@ for m in "${meshes[@]}"; do
   draco_decoder -i "$work/$m.10.drc" -o "$work/$m.d.ply" > /dev/null
   de=$($err "$in" "$work/$m.d.ply")
   dp99=$(json "['normal_p99_deg']" <<<"$de")
-  # The fewest normal bits at Draco's error or better.
-  for nb in 7 8 9 10 11 12; do
-    "$tool" compress "$in" "$work/$m.mfc" --bits 14 --normal-bits "$nb" -q
+  dmean=$(json "['normal_mean_deg']" <<<"$de")
+  # The largest stated normal error at Draco's mean and p99 angle or better.
+  for ne in 1.5 1.2 1.0 0.9 0.8 0.7 0.6 0.5 0.45 0.4 0.35 0.3 0.25 0.2 0.15 0.1; do
+    "$tool" compress "$in" "$work/$m.mfc" --bits 14 --normal-error "$ne" -q
     "$tool" decompress "$work/$m.mfc" "$work/$m.m.ply" -q
     me=$($err "$in" "$work/$m.m.ply")
-    ok=$($py -c "import sys; print(int(float(sys.argv[1]) <= float(sys.argv[2])))" \
-      "$(json "['normal_p99_deg']" <<<"$me")" "$dp99")
+    ok=$($py -c "import sys; a = [float(x) for x in sys.argv[1:]]; print(int(a[0] <= a[1] and a[2] <= a[3]))" \
+      "$(json "['normal_p99_deg']" <<<"$me")" "$dp99" "$(json "['normal_mean_deg']" <<<"$me")" "$dmean")
     [ "$ok" = 1 ] && break
   done
-  tri=$("$tool" compress "$in" "$work/$m.mfc" --bits 14 --normal-bits "$nb" --json | json "['triangles']")
-  $py - "$m" "$tri" "$(size "$work/$m.mfc")" "$nb" "$(size "$work/$m.7.drc")" \
+  tri=$("$tool" compress "$in" "$work/$m.mfc" --bits 14 --normal-error "$ne" --json | json "['triangles']")
+  $py - "$m" "$tri" "$(size "$work/$m.mfc")" "$ne" "$(size "$work/$m.7.drc")" \
     "$(size "$work/$m.10.drc")" "$me" "$de" <<'PY'
 import json, sys
-m, tri, b, nb, d7, d10 = sys.argv[1:7]
+m, tri, b, ne, d7, d10 = sys.argv[1:7]
 me, de = json.loads(sys.argv[7]), json.loads(sys.argv[8])
 tri, b, d7, d10 = int(tri), int(b), int(d7), int(d10)
-print(f"| {m} | {tri:,} | {b:,} ({nb}) | {d7:,} | {d10:,} | {b / d10:.3f} | "
+print(f"| {m} | {tri:,} | {b:,} ({ne}°) | {d7:,} | {d10:,} | {b / d10:.3f} | "
       f"{me['normal_mean_deg']:.2f} / {me['normal_p99_deg']:.2f}, "
       f"{de['normal_mean_deg']:.2f} / {de['normal_p99_deg']:.2f} | "
       f"{me['max_position_error_mm']:.2f} / {de['max_position_error_mm']:.2f} |")

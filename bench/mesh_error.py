@@ -1,7 +1,8 @@
 #!/usr/bin/env python3
 """Errors of a decoded mesh against the mesh that was compressed: each decoded vertex matched to
 the nearest input vertex (coders renumber vertices), then the largest position error (mm, per
-axis) and the angle between decoded and input normals (degrees: mean, 99th percentile, max).
+axis) and the angle between decoded and input normals (degrees: mean, 99th percentile, max). Input
+vertices within two 14-bit grid steps of a decoded one are told apart by normals and colours.
 Prints one JSON object. Used by bench/compress_vs_draco.sh on meshflow's and Draco's decodes.
   mesh_error.py INPUT.ply DECODED.ply"""
 import json
@@ -35,22 +36,32 @@ def read_ply(path):
     return {name: v[name].astype(np.float64) for name, _ in props}
 
 
-def nearest(src, dst, cell):
-    """For each dst point, the index of the nearest src point within 1.5 cells (else -1)."""
+def nearest(src, dst, cell, fa, fb, tie):
+    """For each dst point, the index of the nearest src point within 1.5 cells (else -1). Input
+    vertices within `tie` of a decoded one (a reconstruction's near-coincident vertices, which
+    quantisation makes coincident for both coders) are told apart (the second array; the first
+    is the plain nearest, for position errors) by their attribute rows (fa
+    input, fb decoded: normals and colours) when there are any."""
     keys = {}
     for i, k in enumerate(map(tuple, np.floor(src / cell).astype(np.int64))):
         keys.setdefault(k, []).append(i)
     out = np.full(len(dst), -1, dtype=np.int64)
+    plain = np.full(len(dst), -1, dtype=np.int64)
     offsets = [(a, b, c) for a in (-1, 0, 1) for b in (-1, 0, 1) for c in (-1, 0, 1)]
     for j, (p, k) in enumerate(zip(dst, np.floor(dst / cell).astype(np.int64))):
-        best, d_best = -1, np.inf
+        best, d_best, close = -1, np.inf, []
         for o in offsets:
             for i in keys.get((k[0] + o[0], k[1] + o[1], k[2] + o[2]), ()):
                 d = ((src[i] - p) ** 2).sum()
                 if d < d_best:
                     best, d_best = i, d
+                if d <= tie * tie:
+                    close.append(i)
+        plain[j] = best
+        if len(close) > 1 and fa is not None:
+            best = close[int(np.argmin(((fa[close] - fb[j]) ** 2).sum(1)))]
         out[j] = best
-    return out
+    return plain, out
 
 
 def main():
@@ -58,10 +69,15 @@ def main():
     pa = np.stack([a["x"], a["y"], a["z"]], 1)
     pb = np.stack([b["x"], b["y"], b["z"]], 1)
     extent = (pa.max(0) - pa.min(0)).max()
-    match = nearest(pa, pb, extent / 2**12)
+    cols = [c for c in ("nx", "ny", "nz", "red", "green", "blue") if c in a and c in b]
+    scale = np.array([1.0 if c[0] == "n" else 1.0 / 255 for c in cols])
+    fa = np.stack([a[c] for c in cols], 1) * scale if cols else None
+    fb = np.stack([b[c] for c in cols], 1) * scale if cols else None
+    # Ties: within two steps of a 14-bit grid over the box.
+    plain, match = nearest(pa, pb, extent / 2**12, fa, fb, extent / 2**13)
     ok = match >= 0
     out = {"vertices": len(pb), "unmatched": int((~ok).sum()),
-           "max_position_error_mm": float(np.abs(pa[match[ok]] - pb[ok]).max() * 1e3)}
+           "max_position_error_mm": float(np.abs(pa[plain[ok]] - pb[ok]).max() * 1e3)}
     if "nx" in a and "nx" in b:
         na = np.stack([a["nx"], a["ny"], a["nz"]], 1)[match[ok]]
         nb = np.stack([b["nx"], b["ny"], b["nz"]], 1)[ok]

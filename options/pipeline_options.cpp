@@ -194,8 +194,9 @@ std::vector<OptionSpec> make_specs() {
        "Point normals: auto (the input's when it has them, else estimated), input, estimate",
        nullptr, one_of<std::string>(&O::normals, {"auto", "input", "estimate"})},
       {"normal-bits", &O::normal_bits,
-       "Compressed meshes (.mfc): octahedral bits per normal coordinate, 4..20 (10: within 0.26 "
-       "degrees, Draco's default grid); 0 stores no normals and the decoder recomputes them from "
+       "Compressed meshes (.mfc): normal precision in bits, 4..20 (10: within 0.25 degrees, "
+       "doubling per bit fewer; Draco's default grid is within 0.26); 0 stores no normals and the "
+       "decoder recomputes them from "
        "the decoded geometry",
        nullptr,
        [](const O& o) -> std::string {

@@ -13,13 +13,14 @@ void bind_compress(py::module_& m) {
   m.def(
       "compress",
       [](const Mesh& mesh, bool progressive, unsigned bits, double step, bool normals, bool colors,
-         int normal_bits) {
+         int normal_bits, double normal_error) {
         options::PipelineOptions model;
         model.normal_bits = normal_bits;
         const std::string problem = options::option_spec("normal-bits").check(model);
         if (!problem.empty()) throw py::value_error("normal_bits: " + problem);
         compress::CompressConfig config;
         config.normal_bits = static_cast<unsigned>(normal_bits);
+        config.normal_error = normal_error;
         config.position_bits = bits;
         config.step = step;
         config.normals = normals;
@@ -37,11 +38,13 @@ void bind_compress(py::module_& m) {
       py::arg("mesh"), py::arg("progressive") = false, py::arg("bits") = 0u, py::arg("step") = 0.0,
       py::arg("normals") = true, py::arg("colors") = true,
       py::arg("normal_bits") = static_cast<int>(compress::kDefaultNormalBits),
+      py::arg("normal_error") = 0.0,
       R"(The mesh as compressed-mesh bytes (the .mfc format): Edgebreaker, or with
 progressive=True a base mesh and vertex splits. bits (1..30) or step (metres) set the position
-quantisation (default: 1/64 of the median edge). normal_bits (4..20, default 10: within 0.26
-degrees) sets the normals' octahedral precision; 0 stores none and the decoder recomputes them
-from the decoded geometry. Positions are stored in world coordinates (the mesh's origin
+quantisation (default: 1/64 of the median edge). normal_bits (4..20, default 10: within 0.25
+degrees, doubling per bit fewer) sets the normals' precision, or normal_error (degrees, 0.001..30)
+the largest angle between an input normal and its decoded one; normal_bits=0 stores none and the
+decoder recomputes them from the decoded geometry. Positions are stored in world coordinates (the mesh's origin
 added).)");
 
   m.def(

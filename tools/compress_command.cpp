@@ -24,6 +24,7 @@ struct CompressOptions {
   double step = 0.0;
   bool no_normals = false, no_colors = false;
   options::PipelineOptions model;  // the option model's settings (--normal-bits)
+  double normal_error = 0.0;       // degrees; 0: from --normal-bits
   float base_ratio = 0.02f;
 };
 
@@ -38,6 +39,7 @@ void run_compress(const CompressOptions& o) {
   config.normals = !o.no_normals;
   config.colors = !o.no_colors;
   config.normal_bits = static_cast<unsigned>(o.model.normal_bits);
+  config.normal_error = o.normal_error;
   config.base_ratio = o.base_ratio;
   const TriangleMesh mesh = io::read_mesh(o.input);
   const double t0 = monotonic_seconds();
@@ -214,6 +216,12 @@ void add_compress_options(CLI::App* cmd) {
         }
         return options::option_spec("normal-bits").check(value);
       });
+  cmd->add_option("--normal-error", o->normal_error,
+                  "Compressed meshes (.mfc): the largest angle, degrees, between an input normal "
+                  "and its decoded normal, in place of --normal-bits' bound (0.25 at 10 bits, "
+                  "doubling per bit fewer)")
+      ->check(CLI::Range(0.001, 30.0))
+      ->default_str("from --normal-bits");
   cmd->add_flag("--no-colors", o->no_colors, "Leave the mesh's colours out");
   cmd->add_option("--base-ratio", o->base_ratio,
                   "Progressive: share of the triangles in the base mesh")

@@ -12,7 +12,7 @@ namespace meshflow::compress {
 namespace {
 
 constexpr char kMagic[8] = {'M', 'F', 'M', 'E', 'S', 'H', '\r', '\n'};
-constexpr std::uint32_t kVersion = 6;
+constexpr std::uint32_t kVersion = 7;
 
 }  // namespace
 
@@ -67,6 +67,18 @@ AttributeFlags attribute_flags(const TriangleMesh& mesh, const CompressConfig& c
   flags.colors =
       config.colors && !mesh.colors.empty() && mesh.colors.size() == mesh.vertices.size();
   flags.normal_bits = flags.normals ? config.normal_bits : kDefaultNormalBits;
+  if (config.normal_error != 0.0) {
+    if (!(config.normal_error >= 0.001 && config.normal_error <= 30.0))
+      throw Error("compression", "normal error",
+                  "must be 0.001 .. 30 degrees, not " + std::to_string(config.normal_error));
+    // The progressive splits' octahedral grid: the fewest bits within the angle.
+    flags.normal_bits = kMinNormalBits;
+    while (flags.normal_bits < kMaxNormalBits &&
+           normal_error_degrees(flags.normal_bits) > config.normal_error)
+      ++flags.normal_bits;
+  }
+  flags.normal_step = normal_step_for(
+      config.normal_error != 0.0 ? config.normal_error : normal_error_degrees(flags.normal_bits));
   return flags;
 }
 

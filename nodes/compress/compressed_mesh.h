@@ -1,9 +1,10 @@
 #pragma once
 // meshflow's compressed mesh files (".mfc"): one triangle mesh, coded single-rate (Edgebreaker)
-// or progressively (a base mesh and vertex splits). Format, version 6, little-endian:
+// or progressively (a base mesh and vertex splits). Format, version 7, little-endian:
 //
 //   bytes 0-7   magic "MFMESH\r\n"
-//   u32         version (6; 5 coded symbols, residual lengths and trust flags bit by bit, 4
+//   u32         version (7; 6 coded normals on an octahedral grid, 5 coded symbols, residual
+//   lengths and trust flags bit by bit, 4
 //               had a position mode byte and no trust flags, 3 no position mode
 //               byte, 2 no prefix checksums and coded
 //               attributes from one neighbour)
@@ -21,8 +22,8 @@
 //
 // So every prefix of a progressive file that ends at a packet boundary is checked and decodes to
 // the levels it holds (decompress_progressive_prefix()). A decoded position is within step / 2
-// of the input's on each axis; normals within the octahedral grid's bound (0.26 degrees at the
-// default 10 bits; CompressConfig::normal_bits); colours exact; triangles exactly the input's
+// of the input's on each axis; normals within the stated angle (0.25 degrees at the default 10
+// bits; CompressConfig::normal_bits, normal_error); colours exact; triangles exactly the input's
 // (each may start at another corner), vertices and triangles reordered (the encoder reports the
 // order).
 
@@ -49,6 +50,10 @@ struct CompressConfig {
   /// them as area-weighted face normals of the decoded geometry (exact for meshes whose normals
   /// were made that way, the extractors'; any other normals come back as the surface's).
   unsigned normal_bits = kDefaultNormalBits;
+  /// If > 0: the largest angle (degrees, 0.001 .. 30) between an input normal and its decoded
+  /// normal, overriding normal_bits' bound (normal_error_degrees()); the progressive splits take
+  /// the fewest octahedral bits whose bound is within it. Ignored when normal_bits is 0.
+  double normal_error = 0.0;
   bool colors = true;  ///< store the mesh's colours if it has them
   /// Progressive only: the base mesh is decimated to this share of the triangles (QEM; it may
   /// stop above it where no valid collapse is left).

@@ -431,7 +431,7 @@ void encode_attributes(const TriangleMesh& mesh, std::vector<std::array<std::int
   if (flags.normals) {
     std::vector<Eigen::Vector3f> normals(o.vertex.size());
     for (std::size_t i = 0; i < o.vertex.size(); ++i) normals[i] = mesh.normals[o.vertex[i]];
-    decoded_normals = encode_normals(geometry, normals, flags.normal_bits, enc);
+    decoded_normals = encode_normals(geometry, normals, flags.normal_step, enc);
   }
   if (flags.colors) {
     std::vector<Rgb8> colors(o.vertex.size());
@@ -699,7 +699,7 @@ unsigned decode_attributes(io::ByteReader& in, AttributeFlags flags,
   const Section section = read_section(in, "attribute section");
   RangeDecoder dec(section.bytes, section.size, source, "attribute section");
   const DecodedGeometry geometry{grid, mesh.triangles};
-  if (flags.normals) mesh.normals = decode_normals(geometry, normal_bits, dec);
+  if (flags.normals) mesh.normals = decode_normals(geometry, dec, source);
   if (flags.colors) mesh.colors = decode_colors(geometry, dec);
   dec.check();
   return normal_bits;

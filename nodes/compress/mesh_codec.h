@@ -14,7 +14,8 @@
 // nodes/compress/edgebreaker_replay.h), positions x, y and z (one stream per axis, so that a
 // decoder's three dependency chains overlap; each vertex's trusted subset of the offered
 // parallelograms, one choice, precedes its x residual); then a u8 of octahedral normal bits (0
-// without normals) and the attribute section (normals, then colours).
+// without normals; the progressive splits' grid) and the attribute section (with normals their
+// residual step, a float's 32 bits at even odds, and the normals; then colours).
 
 #include <array>
 #include <cstdint>
@@ -34,6 +35,9 @@ struct AttributeFlags {
   /// Encoding only: octahedral bits per normal coordinate (kMinNormalBits .. kMaxNormalBits);
   /// a decoder reads them from the body.
   unsigned normal_bits = kDefaultNormalBits;
+  /// Encoding only: the single-rate normal coder's residual step, radians (kMinNormalStep ..
+  /// kMaxNormalStep; normal_step_for()); a decoder reads it from the attribute section.
+  float normal_step = normal_step_for(normal_error_degrees(kDefaultNormalBits));
   /// File level: the body stores no normals and the decoder recomputes them (header flag bit 2).
   bool recomputed_normals = false;
 };

@@ -37,6 +37,21 @@ struct Quantizer {
 /// steps across [-1, 1]); decoded normals are within 0.26 degrees of the input's (measured over
 /// 2 x 10^6 random directions: 0.237; tests/nodes/compress).
 inline constexpr unsigned kDefaultNormalBits = 10;
+/// The largest angle (degrees) between a unit input normal and its decoded normal at `bits`
+/// (kMinNormalBits .. kMaxNormalBits): 0.25 degrees at 10 bits, doubling per bit fewer. The
+/// single-rate coder meets it exactly (normal_step_for()); the octahedral grid of the progressive
+/// splits at these bits stays within it (0.237 degrees measured at 10 bits).
+inline double normal_error_degrees(unsigned bits) {
+  return std::ldexp(0.25, 10 - static_cast<int>(bits));
+}
+/// The residual grid step (radians) of the single-rate normal coder for a largest error of
+/// `error_degrees` (step / sqrt(2), less a thousandth for float rounding).
+inline float normal_step_for(double error_degrees) {
+  return static_cast<float>(std::sqrt(2.0) * error_degrees * (3.14159265358979323846 / 180.0) *
+                            0.999);
+}
+/// The steps a file may state (radians): largest errors of about 0.0004 .. 40 degrees.
+inline constexpr float kMinNormalStep = 1e-5f, kMaxNormalStep = 1.0f;
 /// The range of octahedral bits a file may state.
 inline constexpr unsigned kMinNormalBits = 4, kMaxNormalBits = 20;
 

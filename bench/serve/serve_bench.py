@@ -237,9 +237,12 @@ if "latency" in parts:
             p, url, log = start(["run", redwood, "--fuse", "--optimize", "none", "-o",
                                  os.path.join(work, "live"), "--json", "--serve", "0", "--rate",
                                  "30", "--loops", str(loops), "--policy", policy,
-                                 "--exit-after", "1"])
+                                 "--exit-after", "120"])
+            # The page completes once it has acknowledged the map's rounds (flow control:
+            # serve/server.h) and has the end; then the server is stopped.
             d = page(url)
             doc = wait_json(p, log)
+            p.terminate()
             p.wait()
             since = float(d["openedEpochMs"]) + 1000.0
             rows = [[float(x) for x in r.split(":")]

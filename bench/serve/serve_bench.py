@@ -20,7 +20,9 @@
    holds it (serve/map_publisher.h: map_shown; the page's data-map-latencies), both on this
    machine's clock, p50 / p99, and the server's share (release to the update's blocks coded).
    Frames released in the page's first second are left out (they wait for the whole map the
-   page is sent when it connects). Policy realtime (a late source skips to the newest frame)
+   page is sent when it connects). The page acknowledges each round of blocks once drawn and
+   the next round waits for that (serve/server.h: map_round), so frames merged into a round
+   list only the newest update's. Policy realtime (a late source skips to the newest frame)
    and queue (every frame, late).
 
 usage: serve_bench.py BUILD_DIR [RUNS] [view,map,viewers,latency]

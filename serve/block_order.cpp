@@ -34,4 +34,8 @@ BlockKey NearestBlockQueue::pop() {
   return key;
 }
 
+bool NearestBlockQueue::contains(const BlockKey& block) const {
+  return order_.count({block_distance2(block, focus_), block}) > 0;
+}
+
 }  // namespace meshflow::serve

@@ -37,6 +37,8 @@ class NearestBlockQueue {
   /// Removes and returns the waiting block nearest the focus (ties: the smallest key). The
   /// queue must not be empty. O(log n).
   BlockKey pop();
+  /// Whether `block` is waiting. O(log n).
+  bool contains(const BlockKey& block) const;
 
   bool empty() const { return order_.empty(); }
   std::size_t size() const { return order_.size(); }

@@ -36,7 +36,7 @@ namespace {
 
 /// One frame queued for a client; its bytes are shared by every client.
 struct Outgoing {
-  enum class Kind { kMesh, kStats, kEnd, kBlocks, kShown } kind = Kind::kMesh;
+  enum class Kind { kMesh, kStats, kEnd, kBlocks, kShown, kRound } kind = Kind::kMesh;
   bool binary = false;
   std::shared_ptr<const std::string> data;
 };
@@ -146,7 +146,8 @@ class Server::Impl {
     std::atomic<std::uint64_t> clients_accepted{0}, clients_refused{0}, clients_closed_bad{0},
         frames_sent{0}, frames_dropped{0}, bytes_sent{0}, http_requests{0}, meshes{0},
         publications_replaced{0}, max_client_queue{0}, blocks_published{0}, blocks_sent{0},
-        blocks_superseded{0}, max_pending_blocks{0}, ends_sent{0};
+        blocks_superseded{0}, max_pending_blocks{0}, ends_sent{0}, map_rounds{0}, map_acks{0},
+        shown_superseded{0};
     std::atomic<std::size_t> clients_waiting_for_mesh{0};  // with a mesh frame queued or in flight
   } counters_;
 };
@@ -197,18 +198,30 @@ class WsSession : public std::enable_shared_from_this<WsSession> {
                    const std::vector<std::shared_ptr<const std::string>>& shown = {}) {
     if (closing_) return;
     blocks_waiting_.set_focus(focus);
+    blocks_later_.set_focus(focus);
     for (const BlockKey& key : keys) {
-      if (!blocks_waiting_.push(key)) {
+      if (blocks_waiting_.contains(key) || blocks_later_.contains(key)) {
         ++server_.counters_.blocks_superseded;  // it keeps the earliest generation waiting
         continue;
       }
+      // A round being sent keeps its blocks: a block it has sent already waits for the next.
+      (round_open_ ? blocks_later_ : blocks_waiting_).push(key);
       block_generation_[key] = generation_;
       ++waiting_by_generation_[generation_];
     }
-    if (blocks_waiting_.size() > server_.counters_.max_pending_blocks)
-      server_.counters_.max_pending_blocks = blocks_waiting_.size();
+    const std::size_t pending = blocks_waiting_.size() + blocks_later_.size();
+    if (pending > server_.counters_.max_pending_blocks)
+      server_.counters_.max_pending_blocks = pending;
     if (!shown.empty()) {
-      for (const auto& text : shown) shown_.emplace_back(generation_, text);
+      // The newest message of these publications stands for them all; of those still waiting
+      // for blocks, the oldest (due first) and the newest stay: at most two, however far
+      // behind the viewer is.
+      server_.counters_.shown_superseded += shown.size() - 1;
+      shown_.emplace_back(generation_, shown.back());
+      if (shown_.size() > 2) {
+        shown_.erase(shown_.end() - 2);
+        ++server_.counters_.shown_superseded;
+      }
       ++generation_;
       queue_shown();
     }
@@ -225,8 +238,11 @@ class WsSession : public std::enable_shared_from_this<WsSession> {
 
  private:
   /// The next batch of pending blocks, about chunk_bytes (at least one block), as one frame:
-  /// u32 0, u32 count, then per block i32 x, y, z, u32 n, n payload bytes.
+  /// u32 0, u32 count, then per block i32 x, y, z, u32 n, n payload bytes. The batch that
+  /// empties the round's blocks closes it: its due `shown` message and {"type":"map_round"}
+  /// follow it, and the blocks marked meanwhile make the next round.
   Outgoing block_batch() {
+    round_open_ = true;
     std::string frame(8, '\0');
     std::uint32_t count = 0;
     const auto put = [&frame](std::uint32_t v) {
@@ -250,6 +266,15 @@ class WsSession : public std::enable_shared_from_this<WsSession> {
     Outgoing batch{Outgoing::Kind::kBlocks, true,
                    std::make_shared<const std::string>(std::move(frame))};
     queue_shown();  // behind this batch in the queue
+    if (blocks_waiting_.empty()) {
+      round_open_ = false;
+      ++rounds_sent_;
+      ++server_.counters_.map_rounds;
+      insert_before_end({Outgoing::Kind::kRound, false,
+                         std::make_shared<const std::string>(R"({"type":"map_round","round":)" +
+                                                             std::to_string(rounds_sent_) + "}")});
+      while (!blocks_later_.empty()) blocks_waiting_.push(blocks_later_.pop());
+    }
     return batch;
   }
 
@@ -263,18 +288,31 @@ class WsSession : public std::enable_shared_from_this<WsSession> {
     block_generation_.erase(found);
   }
 
-  /// Queues the `shown` messages whose publications' blocks have all been taken: those of a
-  /// generation below every waiting block's, in order.
+  /// Queues the newest `shown` message whose publication's blocks have all been taken (a
+  /// generation below every waiting block's); it replaces older due ones, queued or not (the
+  /// newest frame merged into what was sent stands for them).
   void queue_shown() {
+    std::shared_ptr<const std::string> due;
     while (!shown_.empty() && (waiting_by_generation_.empty() ||
                                shown_.front().first < waiting_by_generation_.begin()->first)) {
-      // Before the end message, which stays last.
-      const auto end = std::find_if(queue_.begin(), queue_.end(), [](const Outgoing& o) {
-        return o.kind == Outgoing::Kind::kEnd;
-      });
-      queue_.insert(end, {Outgoing::Kind::kShown, false, shown_.front().second});
+      if (due) ++server_.counters_.shown_superseded;
+      due = shown_.front().second;
       shown_.pop_front();
     }
+    if (!due) return;
+    const auto stale = std::remove_if(queue_.begin(), queue_.end(), [](const Outgoing& o) {
+      return o.kind == Outgoing::Kind::kShown;
+    });
+    server_.counters_.shown_superseded += static_cast<std::uint64_t>(queue_.end() - stale);
+    queue_.erase(stale, queue_.end());
+    insert_before_end({Outgoing::Kind::kShown, false, due});
+  }
+
+  /// Queues `frame` before the end message, which stays last.
+  void insert_before_end(Outgoing frame) {
+    const auto end = std::find_if(queue_.begin(), queue_.end(),
+                                  [](const Outgoing& o) { return o.kind == Outgoing::Kind::kEnd; });
+    queue_.insert(end, std::move(frame));
   }
 
   static bool starts_mesh(const Outgoing& frame) {
@@ -317,8 +355,19 @@ class WsSession : public std::enable_shared_from_this<WsSession> {
     const std::string text = beast::buffers_to_string(in_.data());
     in_.consume(in_.size());
     if (!ws_.got_text()) return refuse(websocket::close_code::unknown_data);
-    if (!take_token() || !valid_client_message(text))
+    const std::optional<ClientMessage> message = parse_client_message(text);
+    if (!message) return refuse(websocket::close_code::policy_error);
+    if (message->type == ClientMessage::Type::kMapAck) {
+      // The next round sent and not yet acknowledged, or the connection goes. Bounded by the
+      // rounds sent, so not held against the message rate.
+      if (message->round != rounds_acked_ + 1 || rounds_acked_ == rounds_sent_)
+        return refuse(websocket::close_code::policy_error);
+      ++rounds_acked_;
+      ++server_.counters_.map_acks;
+      if (!writing_) write_next();
+    } else if (!take_token()) {
       return refuse(websocket::close_code::policy_error);
+    }
     do_read();
   }
 
@@ -353,14 +402,21 @@ class WsSession : public std::enable_shared_from_this<WsSession> {
   }
 
   void write_next() {
-    // Stats and mesh frames first, then map blocks, the end message last.
+    // Stats and mesh frames first, then map blocks, the end message last. A new round of
+    // blocks starts only while fewer than map_rounds_in_flight rounds wait for the viewer's
+    // acknowledgement (ServerConfig).
     const bool frame_first = !queue_.empty() && queue_.front().kind != Outgoing::Kind::kEnd;
-    if (closing_ || (queue_.empty() && blocks_waiting_.empty())) {
+    const std::uint32_t window =
+        static_cast<std::uint32_t>(std::max<std::size_t>(server_.config_.map_rounds_in_flight, 1));
+    const bool blocks_now =
+        !blocks_waiting_.empty() && (round_open_ || rounds_sent_ - rounds_acked_ < window);
+    const bool end_now = !queue_.empty() && blocks_waiting_.empty() && blocks_later_.empty();
+    if (closing_ || !(frame_first || blocks_now || end_now)) {
       writing_ = false;
       return;
     }
     writing_ = true;
-    if (frame_first || blocks_waiting_.empty()) {
+    if (frame_first || !blocks_now) {
       in_flight_ = std::move(queue_.front());
       queue_.pop_front();
     } else {
@@ -410,7 +466,11 @@ class WsSession : public std::enable_shared_from_this<WsSession> {
   beast::flat_buffer in_;
   Server::Impl& server_;
   std::deque<Outgoing> queue_;        // not yet started
-  NearestBlockQueue blocks_waiting_;  // blocks to send, nearest the sensor first
+  NearestBlockQueue blocks_waiting_;  // the round's blocks to send, nearest the sensor first
+  NearestBlockQueue blocks_later_;    // marked while a round is sent and sent in it already
+  bool round_open_ = false;           // a round's first batch is cut, its last not yet
+  std::uint32_t rounds_sent_ = 0;     // map rounds closed ({"type":"map_round"} queued)
+  std::uint32_t rounds_acked_ = 0;    // rounds the viewer has acknowledged
   // publish_blocks()' `shown` messages: each waiting block has the generation (a count of the
   // publications with one) at which it began to wait; a message goes once no block of its
   // generation or an earlier one waits.
@@ -757,6 +817,9 @@ ServerStats Server::stats() const {
   s.blocks_superseded = c.blocks_superseded;
   s.max_client_pending_blocks = c.max_pending_blocks;
   s.ends_sent = c.ends_sent;
+  s.map_rounds_sent = c.map_rounds;
+  s.map_rounds_acknowledged = c.map_acks;
+  s.shown_superseded = c.shown_superseded;
   const std::size_t waiting = c.clients_waiting_for_mesh;
   s.clients_ready_for_mesh = s.clients > waiting ? s.clients - waiting : 0;
   return s;

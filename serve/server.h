@@ -10,10 +10,13 @@
 //   - a bounded number of WebSocket clients (others get HTTP 503) and of HTTP connections;
 //   - each client's send queue holds only the newest mesh and the newest stats: a published
 //     mesh replaces the unsent frames of older ones (counted as dropped), so a slow or stalled
-//     client costs memory for one mesh (shared by all clients), never a blocked producer;
+//     client costs memory for one mesh (shared by all clients), never a blocked producer; a
+//     fused map's blocks wait for the client's acknowledgement (flow control), each block at
+//     most once, so a client behind costs at most the map's block keys;
 //   - every client message is checked: larger than `max_client_message_bytes` (Beast closes
 //     with 1009), faster than the rate limit, binary, or not a JSON object {"type": "hello" |
-//     "ping"} closes the connection (1008 policy / 1003 unsupported data).
+//     "ping"} or a valid {"type": "map_ack"} (serve/client_message.h) closes the connection
+//     (1008 policy / 1003 unsupported data).
 //
 // Wire protocol, server to client (see web/viewer.js):
 //   text   {"type":"mesh","id":N,"kind":"progressive"|"edgebreaker","bytes":B,
@@ -28,7 +31,13 @@
 //          (publish_blocks(); serve/map_publisher.h says what a payload holds; n = 0: the block
 //          has no surface any more)
 //   text   the JSON objects given to publish_stats() (they carry their own "type")
-//   text   a publish_blocks() publication's `shown` message, after its last block
+//   text   a publish_blocks() publication's `shown` message, after its last block (only the
+//          newest of those due at once: it stands for the older ones)
+//   text   {"type":"map_round","round":N} (N = 1, 2, ...) after the last block batch of a round:
+//          the blocks that waited when the round began. The client answers
+//          {"type":"map_ack","round":N} once it has applied and drawn them; the next round waits
+//          for that (ServerConfig::map_rounds_in_flight). An acknowledgement out of order or of
+//          a round not sent closes the connection (1008)
 //   text   {"type":"end"} after finish(): the producer is done and the client holds everything
 //          it published (sent last, after the client's queue has drained)
 //
@@ -82,6 +91,11 @@ struct ServerConfig {
   /// most this long at the bandwidth cap (always without a cap; 0: never): the whole mesh
   /// arrives sooner and decodes faster, but nothing between the base and the full mesh is shown.
   double single_rate_within_s = 1.0;
+  /// Flow control of a fused map's blocks: a viewer is sent the blocks waiting for it in
+  /// rounds, each closed by {"type":"map_round","round":N}; a new round starts only while
+  /// fewer than this many rounds wait for the viewer's {"type":"map_ack","round":N} (at least
+  /// 1). Meanwhile changed blocks wait, each once with its newest payload.
+  std::size_t map_rounds_in_flight = 1;
 };
 
 /// One block of a fused map as published: its block coordinates and payload (empty: the block
@@ -117,6 +131,10 @@ struct ServerStats {
   std::uint64_t blocks_superseded = 0;
   /// The most blocks any client has waited for at once (at most the map's blocks).
   std::size_t max_client_pending_blocks = 0;
+  std::uint64_t map_rounds_sent = 0;          ///< {"type":"map_round"} messages queued
+  std::uint64_t map_rounds_acknowledged = 0;  ///< valid {"type":"map_ack"} messages received
+  /// publish_blocks()' `shown` messages a newer one stood for (a viewer behind), never sent.
+  std::uint64_t shown_superseded = 0;
 };
 
 /// The server. Construction binds and starts the I/O thread (throws meshflow::Error when the

@@ -83,13 +83,24 @@ let renderTimer = null;
 let lastRenderEnd = 0;
 let lastRenderMs = 0;
 const shownWaiting = [];  // map_shown messages whose blocks are in the scene, not yet drawn
+const roundsWaiting = [];  // map rounds applied, to acknowledge once drawn
+
+// Flow control (serve/server.h: map_round): the server sends the next round of blocks only
+// after this page says it has applied and drawn the last, so nothing piles up in the socket
+// and a map update waits for at most about one decode and draw.
+function acknowledgeRounds() {
+  for (const round of roundsWaiting) {
+    if (socket.readyState === WebSocket.OPEN) socket.send(JSON.stringify({ type: 'map_ack', round }));
+  }
+  roundsWaiting.length = 0;
+}
 
 function render() {
   if (renderTimer !== null) {
     clearTimeout(renderTimer);
     renderTimer = null;
   }
-  if (!renderer) return;
+  if (!renderer) return acknowledgeRounds();
   const t0 = performance.now();
   renderer.render(scene, camera);
   const t1 = performance.now();
@@ -100,6 +111,7 @@ function render() {
   d.renders = Number(d.renders || 0) + 1;
   d.renderMs = (Number(d.renderMs || 0) + lastRenderMs).toFixed(1);
   if (shownWaiting.length > 0) recordShown(performance.timeOrigin + t1);
+  acknowledgeRounds();
 }
 
 function requestRender() {
@@ -439,6 +451,11 @@ function onText(text) {
   } else if (message.type === 'map_shown') {
     // Its blocks came before it and are in the scene: the next draw shows them.
     shownWaiting.push(message);
+    requestRender();
+  } else if (message.type === 'map_round') {
+    // Its blocks are in the scene: acknowledged after the next draw.
+    roundsWaiting.push(message.round);
+    document.body.dataset.mapRounds = message.round;
     requestRender();
   } else if (message.type === 'end') {
     ended = true;

@@ -20,7 +20,9 @@
    holds it (serve/map_publisher.h: map_shown; the page's data-map-latencies), both on this
    machine's clock, p50 / p99, and the server's share (release to the update's blocks coded).
    Frames released in the page's first second are left out (they wait for the whole map the
-   page is sent when it connects). Policy realtime (a late source skips to the newest frame)
+   page is sent when it connects). The page acknowledges each round of blocks once drawn and
+   the next round waits for that (serve/server.h: map_round), so frames merged into a round
+   list only the newest update's. Policy realtime (a late source skips to the newest frame)
    and queue (every frame, late).
 
 usage: serve_bench.py BUILD_DIR [RUNS] [view,map,viewers,latency]
@@ -237,9 +239,12 @@ if "latency" in parts:
             p, url, log = start(["run", redwood, "--fuse", "--optimize", "none", "-o",
                                  os.path.join(work, "live"), "--json", "--serve", "0", "--rate",
                                  "30", "--loops", str(loops), "--policy", policy,
-                                 "--exit-after", "1"])
+                                 "--exit-after", "120"])
+            # The page completes once it has acknowledged the map's rounds (flow control:
+            # serve/server.h) and has the end; then the server is stopped.
             d = page(url)
             doc = wait_json(p, log)
+            p.terminate()
             p.wait()
             since = float(d["openedEpochMs"]) + 1000.0
             rows = [[float(x) for x in r.split(":")]

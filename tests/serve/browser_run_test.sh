@@ -8,7 +8,7 @@
 # optimisation the final mesh comes as a whole after the blocks. The first case replays its
 # frames 60 times, paced at 20 Hz with --serve only (--rate's queue policy must leave fused.ply
 # as it is), and the page must have recorded the live map's latency (serve/map_publisher.h:
-# map_shown) for frames it saw: each frame once, in order, its total from entering the graph to
+# map_shown) for frames it saw: each frame at most once, in order, its total from entering the graph to
 # the page's draw no less than the server's share, both non-negative, and under a minute.
 #
 # usage: browser_run_test.sh MESHFLOW_BINARY WORK_DIR

@@ -9,6 +9,7 @@
 #include <cmath>
 #include <cstdint>
 #include <memory>
+#include <nlohmann/json.hpp>
 #include <string>
 
 #include "runtime/triangle_mesh.h"
@@ -44,10 +45,13 @@ inline TriangleMesh wavy_grid(std::uint32_t n, float roughness = 0.0f) {
   return mesh;
 }
 
-/// A WebSocket client on its own io_context; every operation waits at most `timeout`.
+/// A WebSocket client on its own io_context; every operation waits at most `timeout`. Like the
+/// page, it acknowledges each map round it reads ({"type":"map_round"}: serve/server.h) unless
+/// made with `acknowledge` false.
 class Client {
  public:
-  explicit Client(std::size_t receive_buffer = 0) : receive_buffer_(receive_buffer) {}
+  explicit Client(std::size_t receive_buffer = 0, bool acknowledge = true)
+      : receive_buffer_(receive_buffer), acknowledge_(acknowledge) {}
 
   error_code connect(std::uint16_t port, const std::string& target = "/ws") {
     error_code result;
@@ -82,6 +86,11 @@ class Client {
     wait(done, result);
     message = beast::buffers_to_string(buffer_.data());
     binary = ws_.got_binary();
+    if (!result && !binary && acknowledge_) {
+      const nlohmann::json m = nlohmann::json::parse(message, nullptr, false);
+      if (m.is_object() && m.value("type", "") == "map_round")
+        return write(R"({"type":"map_ack","round":)" + std::to_string(m["round"].get<int>()) + "}");
+    }
     return result;
   }
 
@@ -123,6 +132,7 @@ class Client {
   }
 
   std::size_t receive_buffer_;
+  bool acknowledge_;
   asio::io_context ioc_;
   websocket::stream<beast::tcp_stream> ws_{ioc_};
   beast::flat_buffer buffer_;

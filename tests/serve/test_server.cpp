@@ -60,11 +60,21 @@ http::response<http::string_body> http_request(std::uint16_t port, http::verb ve
   return response;
 }
 
-TEST(ClientMessage, OnlyHelloAndPingObjects) {
+TEST(ClientMessage, OnlyHelloPingAndMapAcknowledgementObjects) {
   EXPECT_TRUE(valid_client_message(R"({"type":"hello"})"));
   EXPECT_TRUE(valid_client_message(R"({"type":"ping","t":1})"));
-  for (const char* bad : {"", "hello", "[]", "{}", R"({"type":1})", R"({"type":"get"})",
-                          R"({"type":"hello")", "\xff\xfe", R"("type")"})
+  const auto ack = parse_client_message(R"({"type":"map_ack","round":4294967295})");
+  ASSERT_TRUE(ack);
+  EXPECT_EQ(ack->type, ClientMessage::Type::kMapAck);
+  EXPECT_EQ(ack->round, 4294967295u);
+  EXPECT_EQ(parse_client_message(R"({"round":7,"type":"map_ack"})")->round, 7u);
+  for (const char* bad :
+       {"", "hello", "[]", "{}", R"({"type":1})", R"({"type":"get"})", R"({"type":"hello")",
+        "\xff\xfe", R"("type")", R"({"type":"map_ack"})", R"({"type":"map_ack","round":0})",
+        R"({"type":"map_ack","round":-1})", R"({"type":"map_ack","round":1.0})",
+        R"({"type":"map_ack","round":1e3})", R"({"type":"map_ack","round":"1"})",
+        R"({"type":"map_ack","round":null})", R"({"type":"map_ack","round":4294967296})",
+        R"({"type":"MAP_ACK","round":1})"})
     EXPECT_FALSE(valid_client_message(bad)) << bad;
 }
 

@@ -33,8 +33,13 @@ struct PlanarRegionConfig {
   /// tolerance is `max_deviation` (metres), or 3 x the mesh's roughness inside the regions where
   /// that is larger (a noisy scan's walls are flat only to within its noise; curvature does not
   /// count as roughness). 0: no check (the thesis). The reconstruction pipeline sets it from the
-  /// voxel (ReconstructionConfig::plane_tolerance_voxels).
+  /// voxel (ReconstructionConfig::plane_tolerance_voxels). A mesh far smoother than that (an
+  /// exact extraction) is held to a tighter tolerance: see grow_planar_regions.
   float max_deviation = 0.0f;
+  /// When > 0 (with max_deviation > 0), the tolerance the regions are held to, instead of one
+  /// from this mesh's roughness: the planes step's, carried to the retriangulate or sharpen step
+  /// after it (the flattened mesh's roughness is not the surface's). Metres.
+  float fixed_tolerance = 0.0f;
 };
 
 /// Grows regions from seeds in face order (breadth-first across edges to faces within the

@@ -48,7 +48,13 @@ struct PlanarRegionConfig {
 /// oriented like the faces), shrinks it to the part the plane explains or drops it
 /// (max_deviation; faces shed belong to no region), and classifies the rest: floor / ceiling
 /// when the normal is within about 25 degrees of up / down, wall when within about 12 degrees
-/// of horizontal. Serial growth, plane fits parallel per region; deterministic. O(F log F).
+/// of horizontal. With max_deviation, a mesh far smoother than it (roughness x 100 below it: an
+/// exact extraction) is held to a tighter tolerance, 100 x its roughness and at least 1/1000 of
+/// max_deviation (the segmentation's `tolerance`): regions shrink first within max_deviation, then
+/// within that, and their planes are trimmed least squares (vertices within that tolerance or 3
+/// robust deviations), so an extraction's stray vertices neither tilt an exact plane nor let a
+/// cylinder pass for facets. Serial growth, plane fits parallel per region; deterministic.
+/// O(F log F).
 PlanarSegmentation grow_planar_regions(const HalfEdgeMesh& mesh,
                                        const PlanarRegionConfig& config = {});
 

@@ -18,32 +18,79 @@ Eigen::Vector3f unit_face_normal(const HalfEdgeMesh& m, std::uint32_t f) {
   return len > 0.0f ? Eigen::Vector3f(n / len) : Eigen::Vector3f::Zero();
 }
 
-// Least-squares plane through the region's vertices, oriented like `side`.
-void fit_plane(const HalfEdgeMesh& m, PlanarRegion& r, const Eigen::Vector3f& side) {
+// A mesh whose roughness is far below the plane tolerance asked for (see grow_planar_regions).
+constexpr float kSmoothRoughnessFactor = 100.0f;
+constexpr float kSmoothToleranceShare = 1e-3f;
+
+// Rounds of the trimmed plane refit (fit_plane): each keeps the vertices within 3 robust
+// deviations of the last plane; a plane tilted by a few far vertices comes back in 3-5.
+constexpr int kPlaneTrimRounds = 8;
+
+// The vertices of region r's faces, ascending.
+std::vector<std::uint32_t> planar_region_vertices(const HalfEdgeMesh& m, const PlanarRegion& r) {
   std::vector<std::uint32_t> vertices;
   for (std::uint32_t f : r.faces)
     for (std::uint32_t k = 0; k < 3; ++k) vertices.push_back(m.from(3 * f + k));
   std::sort(vertices.begin(), vertices.end());
   vertices.erase(std::unique(vertices.begin(), vertices.end()), vertices.end());
+  return vertices;
+}
+
+// The 95th percentile of `distances` (reordered).
+float planar_percentile95(std::vector<float>& distances) {
+  if (distances.empty()) return 0.0f;
+  const auto p95 = distances.begin() + static_cast<std::ptrdiff_t>(distances.size() * 95 / 100);
+  std::nth_element(distances.begin(), p95, distances.end());
+  return *p95;
+}
+
+// Least-squares plane through `points` (centroid and smallest principal axis), oriented like
+// `side`: normal and offset.
+void least_squares_plane(const HalfEdgeMesh& m, const std::vector<std::uint32_t>& points,
+                         const Eigen::Vector3f& side, Eigen::Vector3f& normal, float& offset) {
   Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
-  for (std::uint32_t v : vertices) centroid += m.position(v).cast<double>();
-  centroid /= static_cast<double>(vertices.size());
+  for (std::uint32_t v : points) centroid += m.position(v).cast<double>();
+  centroid /= static_cast<double>(points.size());
   Eigen::Matrix3d covariance = Eigen::Matrix3d::Zero();
-  for (std::uint32_t v : vertices) {
+  for (std::uint32_t v : points) {
     const Eigen::Vector3d d = m.position(v).cast<double>() - centroid;
     covariance += d * d.transpose();
   }
   const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eigen(covariance);
-  Eigen::Vector3f n = eigen.eigenvectors().col(0).cast<float>().normalized();
-  if (n.dot(side) < 0.0f) n = -n;
-  r.normal = n;
-  r.offset = n.dot(centroid.cast<float>());
-  std::vector<float> distances(vertices.size());
-  for (std::size_t i = 0; i < vertices.size(); ++i)
-    distances[i] = std::abs(n.dot(m.position(vertices[i])) - r.offset);
-  const auto p95 = distances.begin() + static_cast<std::ptrdiff_t>(distances.size() * 95 / 100);
-  std::nth_element(distances.begin(), p95, distances.end());
-  r.deviation = *p95;
+  Eigen::Vector3d n = eigen.eigenvectors().col(0).normalized();
+  if (n.cast<float>().dot(side) < 0.0f) n = -n;
+  normal = n.cast<float>();
+  offset = static_cast<float>(n.dot(centroid));
+}
+
+// The plane of region r: least squares through its vertices; with `trim` >= 0, refitted (up to
+// kPlaneTrimRounds times) through those within max(trim, 3 robust deviations: 1.4826 x the
+// median distance) of the last plane, so a few vertices off an exact plane (an extraction's
+// stray spots) do not tilt it, while a noisy plane keeps everything within `trim`. Also sets
+// r.deviation, the 95th percentile distance of all its vertices.
+void fit_plane(const HalfEdgeMesh& m, PlanarRegion& r, const Eigen::Vector3f& side,
+               float trim = -1.0f) {
+  const std::vector<std::uint32_t> vertices = planar_region_vertices(m, r);
+  least_squares_plane(m, vertices, side, r.normal, r.offset);
+  std::vector<float> distances(vertices.size()), sorted;
+  std::vector<std::uint32_t> trimmed;
+  std::size_t kept = vertices.size();
+  for (int round = 0;; ++round) {
+    for (std::size_t i = 0; i < vertices.size(); ++i)
+      distances[i] = std::abs(r.normal.dot(m.position(vertices[i])) - r.offset);
+    if (trim < 0.0f || round == kPlaneTrimRounds) break;
+    sorted = distances;
+    const auto middle = sorted.begin() + static_cast<std::ptrdiff_t>(sorted.size() / 2);
+    std::nth_element(sorted.begin(), middle, sorted.end());
+    const float limit = std::max(trim, 3.0f * 1.4826f * *middle);
+    trimmed.clear();
+    for (std::size_t i = 0; i < vertices.size(); ++i)
+      if (distances[i] <= limit) trimmed.push_back(vertices[i]);
+    if (trimmed.size() == kept || trimmed.size() < 3) break;  // converged
+    kept = trimmed.size();
+    least_squares_plane(m, trimmed, side, r.normal, r.offset);
+  }
+  r.deviation = planar_percentile95(distances);
 }
 
 // A face is an inlier of region r when its three corners lie within `tolerance` of r's plane.
@@ -58,8 +105,10 @@ bool inlier(const HalfEdgeMesh& m, const PlanarRegion& r, std::uint32_t f, float
 // plane refitted to that. Returns false when fewer than `min_faces` remain or the plane's
 // 95th-percentile deviation still exceeds the tolerance. A cluttered wall keeps its wall; a
 // curved surface keeps at most a band within the tolerance of a plane, usually too small.
+// The planes are fitted with fit_plane(..., trim).
 bool keep_explained_part(const HalfEdgeMesh& m, PlanarRegion& r, const Eigen::Vector3f& side,
-                         float tolerance, std::size_t min_faces) {
+                         float tolerance, float trim, std::size_t min_faces) {
+  fit_plane(m, r, side, trim);
   for (int round = 0; round < 3 && r.deviation > 0.0f; ++round) {
     std::vector<std::uint32_t> inliers;
     for (std::uint32_t f : r.faces)
@@ -92,7 +141,7 @@ bool keep_explained_part(const HalfEdgeMesh& m, PlanarRegion& r, const Eigen::Ve
     if (best.size() < min_faces) return false;
     std::sort(best.begin(), best.end());
     r.faces = std::move(best);
-    fit_plane(m, r, side);
+    fit_plane(m, r, side, trim);
   }
   return r.deviation <= tolerance;
 }
@@ -201,11 +250,28 @@ PlanarSegmentation grow_planar_regions(const HalfEdgeMesh& m, const PlanarRegion
   tbb::parallel_for(std::size_t{0}, out.regions.size(),
                     [&](std::size_t i) { fit_plane(m, out.regions[i], sides[i]); });
   if (config.max_deviation > 0.0f) {
-    out.tolerance = std::max(config.max_deviation, 3.0f * roughness(m, out));
+    // Loose: the tolerance asked for, or the noise's. Tight: a mesh far smoother than that (an
+    // exact extraction: roughness 1e-6 voxel) is held to kSmoothRoughnessFactor x its
+    // roughness, at least kSmoothToleranceShare x the tolerance asked for: its planes are exact,
+    // and a curved part (a cylinder) is flat only in bands too narrow for a region.
+    const float rough = config.fixed_tolerance > 0.0f ? 0.0f : roughness(m, out);
+    const float loose = std::max({config.max_deviation, 3.0f * rough, config.fixed_tolerance});
+    const float tight =
+        config.fixed_tolerance > 0.0f
+            ? config.fixed_tolerance
+            : std::max(3.0f * rough, std::min(config.max_deviation,
+                                              kSmoothRoughnessFactor * rough +
+                                                  kSmoothToleranceShare * config.max_deviation));
+    out.tolerance = tight;
+    // Only a smooth mesh's planes are trimmed: a scan's are least squares through its noise.
+    const float trim = tight < loose ? tight : -1.0f;
     std::vector<std::uint8_t> explained(out.regions.size(), 1);
     tbb::parallel_for(std::size_t{0}, out.regions.size(), [&](std::size_t i) {
+      PlanarRegion& r = out.regions[i];
+      const std::size_t least = config.min_region_faces;
       explained[i] =
-          keep_explained_part(m, out.regions[i], sides[i], out.tolerance, config.min_region_faces);
+          keep_explained_part(m, r, sides[i], loose, trim, least) &&
+          (r.deviation <= tight || keep_explained_part(m, r, sides[i], tight, trim, least));
     });
     keep_explained_regions(out, explained);
   }

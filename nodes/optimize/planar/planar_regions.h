@@ -33,8 +33,13 @@ struct PlanarRegionConfig {
   /// tolerance is `max_deviation` (metres), or 3 x the mesh's roughness inside the regions where
   /// that is larger (a noisy scan's walls are flat only to within its noise; curvature does not
   /// count as roughness). 0: no check (the thesis). The reconstruction pipeline sets it from the
-  /// voxel (ReconstructionConfig::plane_tolerance_voxels).
+  /// voxel (ReconstructionConfig::plane_tolerance_voxels). A mesh far smoother than that (an
+  /// exact extraction) is held to a tighter tolerance: see grow_planar_regions.
   float max_deviation = 0.0f;
+  /// When > 0 (with max_deviation > 0), the tolerance the regions are held to, instead of one
+  /// from this mesh's roughness: the planes step's, carried to the retriangulate or sharpen step
+  /// after it (the flattened mesh's roughness is not the surface's). Metres.
+  float fixed_tolerance = 0.0f;
 };
 
 /// Grows regions from seeds in face order (breadth-first across edges to faces within the
@@ -43,7 +48,13 @@ struct PlanarRegionConfig {
 /// oriented like the faces), shrinks it to the part the plane explains or drops it
 /// (max_deviation; faces shed belong to no region), and classifies the rest: floor / ceiling
 /// when the normal is within about 25 degrees of up / down, wall when within about 12 degrees
-/// of horizontal. Serial growth, plane fits parallel per region; deterministic. O(F log F).
+/// of horizontal. With max_deviation, a mesh far smoother than it (roughness x 100 below it: an
+/// exact extraction) is held to a tighter tolerance, 100 x its roughness and at least 1/1000 of
+/// max_deviation (the segmentation's `tolerance`): regions shrink first within max_deviation, then
+/// within that, and their planes are trimmed least squares (vertices within that tolerance or 3
+/// robust deviations), so an extraction's stray vertices neither tilt an exact plane nor let a
+/// cylinder pass for facets. Serial growth, plane fits parallel per region; deterministic.
+/// O(F log F).
 PlanarSegmentation grow_planar_regions(const HalfEdgeMesh& mesh,
                                        const PlanarRegionConfig& config = {});
 

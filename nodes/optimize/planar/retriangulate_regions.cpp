@@ -557,20 +557,27 @@ TriangleMesh replace_regions(const TriangleMesh& mesh, const RegionWork& work,
 
 TriangleMesh retriangulate_regions(const TriangleMesh& mesh, const PlanarSegmentation& segmentation,
                                    const RetriangulationConfig& config,
-                                   RetriangulationReport* report) {
+                                   RetriangulationReport* report, const MeshFeatures* features) {
   RetriangulationReport r;
   r.regions = segmentation.regions.size();
   const HalfEdgeMesh h(mesh);
-  // A contour vertex may lie off its plane by a twentieth of the contour tolerance at least.
-  RegionWork work = start_regions(h, segmentation, 0.05f * config.contour_tolerance);
+  // A contour vertex may lie off its plane by a twentieth of the contour tolerance at least, or
+  // by the segmentation's tolerance where that is smaller (a smooth mesh's exact planes: a
+  // vertex off them by a twentieth would tilt the new triangles by that).
+  float least = 0.05f * config.contour_tolerance;
+  if (segmentation.tolerance > 0.0f) least = std::min(least, segmentation.tolerance);
+  RegionWork work = start_regions(h, segmentation, least);
   std::vector<std::uint8_t> pinned;  // the feature graph's corners
   if (config.feature_angle_deg < 180.0f && !segmentation.regions.empty()) {
-    const MeshFeatures features =
-        detect_features(mesh, config.feature_angle_deg, config.feature_min_length);
-    if (!features.edges.empty()) {
+    MeshFeatures detected;
+    if (features == nullptr) {
+      detected = detect_features(mesh, config.feature_angle_deg, config.feature_min_length);
+      features = &detected;
+    }
+    if (!features->edges.empty()) {
       pinned.resize(mesh.vertices.size());
       for (std::size_t v = 0; v < pinned.size(); ++v)
-        pinned[v] = features.vertex_kind[v] == MeshFeatures::VertexKind::kCorner ? 1 : 0;
+        pinned[v] = features->vertex_kind[v] == MeshFeatures::VertexKind::kCorner ? 1 : 0;
     }
   }
   triangulate_with_repairs(mesh, h, segmentation, config, pinned, work, r);

@@ -50,10 +50,13 @@ struct RetriangulationReport {
 /// contours unsimplified. Vertices no longer used (region interiors, dropped contour vertices) are
 /// removed; normals and colours follow the rest. Regions are processed in parallel; deterministic.
 /// O(F + sum over regions of c log c). `segmentation` must come from grow_planar_regions on
-/// HalfEdgeMesh(mesh) (face f of the half-edge mesh is mesh.triangles[f]). Throws meshflow::Error
-/// for non-manifold input.
+/// HalfEdgeMesh(mesh) (face f of the half-edge mesh is mesh.triangles[f]). `features`: the feature
+/// graph of `mesh` when the caller has it (detect_features() with config's angle and length, or
+/// one carried from an earlier step on the same topology); null: detected here. Throws
+/// meshflow::Error for non-manifold input.
 TriangleMesh retriangulate_regions(const TriangleMesh& mesh, const PlanarSegmentation& segmentation,
                                    const RetriangulationConfig& config = {},
-                                   RetriangulationReport* report = nullptr);
+                                   RetriangulationReport* report = nullptr,
+                                   const MeshFeatures* features = nullptr);
 
 }  // namespace meshflow

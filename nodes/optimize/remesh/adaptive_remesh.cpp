@@ -499,7 +499,7 @@ TriangleMesh output_mesh(const Remesher& r) {
 }  // namespace
 
 TriangleMesh adaptive_remesh(const TriangleMesh& mesh, const AdaptiveRemeshConfig& config,
-                             AdaptiveRemeshReport* report) {
+                             AdaptiveRemeshReport* report, const MeshFeatures* given) {
   AdaptiveRemeshReport rep;
   rep.vertices_in = mesh.vertices.size();
   if (mesh.triangles.empty()) {
@@ -508,7 +508,8 @@ TriangleMesh adaptive_remesh(const TriangleMesh& mesh, const AdaptiveRemeshConfi
   }
   const float median = median_edge_length(mesh);
   const MeshFeatures features =
-      detect_features(mesh, config.feature_angle_deg, config.feature_min_length);
+      given != nullptr ? *given
+                       : detect_features(mesh, config.feature_angle_deg, config.feature_min_length);
   // Feature vertices onto their sides' planes first: the remesh keeps them and enlarges their
   // faces, so an extraction's stray edge vertex would spread its error.
   TriangleMesh snapped;

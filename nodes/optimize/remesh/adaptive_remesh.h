@@ -67,7 +67,11 @@ struct AdaptiveRemeshReport {
 /// their shape. Colours follow their vertices (new vertices: the edge's mean); normals are
 /// dropped (the caller recomputes them). Curvature and relaxation are parallel over
 /// vertices, the topological edits serial; deterministic. O(iterations x (V + F) x valence).
+/// `features`: the feature graph of `mesh` when the caller has it (detect_features() with the
+/// config's angle and length, or carried from an earlier step on the same topology); null:
+/// detected here.
 TriangleMesh adaptive_remesh(const TriangleMesh& mesh, const AdaptiveRemeshConfig& config = {},
-                             AdaptiveRemeshReport* report = nullptr);
+                             AdaptiveRemeshReport* report = nullptr,
+                             const MeshFeatures* features = nullptr);
 
 }  // namespace meshflow

@@ -1,19 +1,23 @@
 #pragma once
 // The close stage (--close): a watertight surface from a scan with unseen parts. Between the
 // distance and extract stages, the signed distance of the corners without data (the unseen
-// undersides, holes, the inside and outside away from the data) is filled by volumetric
-// diffusion (volume_diffusion.h) over a lattice of the grid's corners around the data; corners
-// with data keep their distances exactly, so the surface where there is data is the one the
-// open reconstruction extracts. A lattice whose fill is inside on the data's box (the fill
-// would go on past the lattice) grows on that side by a quarter of its extent, twice at most,
-// and is solved again. Where the cloud knows its sensor, corners its lines of sight crossed
-// before reaching their points are seen empty: held outside, never filled.
+// undersides, holes, the inside and outside away from the data) is filled over a lattice of
+// the grid's corners around the data; corners with data keep their distances exactly, so the
+// surface where there is data is the one the open reconstruction extracts. The fill is the
+// observed surface's inside indicator spread as a double layer (a Poisson solve with
+// volume_diffusion.h, the field of Poisson surface reconstruction: an unseen box bottom closes
+// flat at its rim, not domed into the box), scaled to the observed distances; a lattice whose
+// fill reaches the data's box grows on that side (a quarter of its extent, twice at most) and
+// is solved again. Where the cloud knows its sensor, corners its lines of sight crossed before
+// reaching their points are seen empty: held outside, never filled.
 //
 // A lattice of up to max_dense_corners is solved at once. A larger one (a building, a street)
 // is solved in two passes: a coarse lattice (every 2^k-th corner, as few as fit the limit)
 // over the whole box, then cubic tiles of tile_cells cells solved one by one at full
-// resolution, each holding its faces at the coarse solution: neighbouring tiles share their
-// face values, so the surface is crack-free across tiles; tiles without data whose coarse
+// resolution, both by diffusion of the distance (Davis, Marschner, Garr and Levoy 2002; the
+// double layer needs the whole surface at once), each tile holding its faces at the coarse
+// solution: neighbouring tiles share their face values, so the surface is crack-free across
+// tiles; tiles without data whose coarse
 // values are all outside are skipped (nothing crosses them). Memory stays that of one lattice
 // of max_dense_corners plus a tile per thread, whatever the scene's size.
 
@@ -37,10 +41,11 @@ struct CloseConfig {
   /// its point (the noise and the distance band stay data's).
   float free_space_stop_voxels = 2.0f;
   /// A lattice of up to this many corners is solved at once; a larger one as a coarse lattice
-  /// of at most this many corners plus tiles. Memory of a lattice: about 6.7 bytes a corner
-  /// (value 4, held flag 1, sight mark 1, coarser levels 5/7), 7.7 when flat
-  /// (volume_diffusion.h), so 225-260 MB at the default.
-  std::size_t max_dense_corners = std::size_t{1} << 25;
+  /// of at most this many corners plus tiles. Memory of a whole lattice's solve: about 23 bytes
+  /// a corner (distance 4, held 1, observed 1, indicator 4; the double layer's value, held
+  /// flag and source 9, its coarser levels 1.3, the seen-empty marks 1), so about 190 MB at
+  /// the default; a tile's diffusion about 7.
+  std::size_t max_dense_corners = std::size_t{1} << 23;
   /// Cells along each side of a tile of a large lattice (its faces are held at the coarse
   /// solution; larger tiles follow the fine data farther, at 6.7 bytes a corner per thread).
   int tile_cells = 128;

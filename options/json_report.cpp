@@ -91,6 +91,7 @@ nlohmann::json close_json(const CloseReport& c) {
           {"filled", c.filled},
           {"observed", c.observed},
           {"seen_empty", c.seen_empty},
+          {"through", c.through},
           {"cells_added", c.cells_added},
           {"levels", c.levels},
           {"coarse_step", c.coarse_step},

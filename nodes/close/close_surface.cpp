@@ -15,6 +15,7 @@
 #include <memory>
 #include <utility>
 
+#include "nodes/close/through_lines.h"
 #include "runtime/error.h"
 #include "runtime/voxel_key.h"
 
@@ -334,7 +335,29 @@ TileResult close_solve_tile(const CloseProblem& p, const Eigen::Vector3i& a,
   // both sides, and the double layer of its ragged band's ends left small extra shells
   // (CliClose.FusedAndMergedDepthSequencesCloseWatertight).
   float grow_below = 0.0f;  // a free node on the data's box below this: the lattice is too small
-  if (p.coarse == nullptr && !p.cloud->empty())
+  const bool indicator = p.coarse == nullptr && !p.cloud->empty();
+  if (indicator) {
+    // Lines through observed tunnels are held outside like lines of sight: the double layer
+    // of an open tunnel's upper part would cap it where its walls were unseen.
+    const float stop = p.config->free_space_stop_voxels * p.grid->voxel_size;
+    const std::vector<std::uint8_t> through = through_line_nodes(n, observed);
+    out.counts.through = tbb::parallel_reduce(
+        tbb::blocked_range<int>(0, n.z()), std::size_t{0},
+        [&](const tbb::blocked_range<int>& r, std::size_t count) {
+          for (int z = r.begin(); z != r.end(); ++z)
+            for (int y = 0; y < n.y(); ++y)
+              for (int x = 0; x < n.x(); ++x) {
+                const std::size_t i = l.index(x, y, z);
+                if (!through[i] || l.fixed[i]) continue;
+                l.fixed[i] = 1;
+                l.values[i] = stop;
+                count += owned(x, y, z) ? 1 : 0;
+              }
+          return count;
+        },
+        std::plus<>());
+  }
+  if (indicator)
     out.counts.levels =
         close_fill_by_indicator(l, observed, p.grid->voxel_size, p.config->diffusion, grow_below);
   else
@@ -408,21 +431,40 @@ DiffusionLattice close_coarse_solution(const CloseProblem& p, int step, int& lev
   coarse.values.assign(coarse.node_count(), 0.0f);
   coarse.fixed.assign(coarse.node_count(), 0);
   std::vector<std::uint32_t> count(coarse.node_count(), 0);
-  for (std::size_t c = 0; c < p.grid->corners.size(); ++c) {
-    if (!p.field->valid[c]) continue;
-    const Eigen::Vector3i q = unpack_key(p.grid->corners[c]) - p.lo;
-    const Eigen::Vector3i r =
-        ((q.array() + step / 2) / step).matrix().cwiseMin(coarse.size - Eigen::Vector3i::Ones());
-    const std::size_t i = coarse.index(r.x(), r.y(), r.z());
-    coarse.values[i] += p.field->values[c];
-    ++count[i];
-  }
-  for (std::size_t i = 0; i < count.size(); ++i)
-    if (count[i] > 0) {
-      coarse.fixed[i] = 1;
-      coarse.values[i] /= static_cast<float>(count[i]);
-    }
   const Eigen::Vector3i n = coarse.size;
+  // The grid's corners are sorted by key, z first: those of coarse plane z (rounding to it) are
+  // one range, and each plane sums its own nodes' corners in the corners' order (the serial
+  // loop's sums, whatever the thread count).
+  const std::vector<VoxelKey>& keys = p.grid->corners;
+  const auto first_at_z = [&](int z) {  // the first corner whose lattice z is at least z
+    return static_cast<std::size_t>(std::lower_bound(keys.begin(), keys.end(), z,
+                                                     [&](VoxelKey k, int value) {
+                                                       return unpack_key(k).z() - p.lo.z() < value;
+                                                     }) -
+                                    keys.begin());
+  };
+  tbb::parallel_for(0, n.z(), [&](int cz) {
+    // Coarse plane cz gathers lattice planes [cz step - step / 2, cz step + step - step / 2),
+    // the last one everything above.
+    const std::size_t begin = cz == 0 ? 0 : first_at_z(cz * step - step / 2);
+    const std::size_t end = cz + 1 == n.z() ? keys.size() : first_at_z((cz + 1) * step - step / 2);
+    for (std::size_t c = begin; c < end; ++c) {
+      if (!p.field->valid[c]) continue;
+      const Eigen::Vector3i q = unpack_key(keys[c]) - p.lo;
+      const Eigen::Vector3i r =
+          ((q.array() + step / 2) / step).matrix().cwiseMin(n - Eigen::Vector3i::Ones());
+      const std::size_t i = coarse.index(r.x(), r.y(), r.z());
+      coarse.values[i] += p.field->values[c];
+      ++count[i];
+    }
+    for (int y = 0; y < n.y(); ++y)
+      for (int x = 0; x < n.x(); ++x) {
+        const std::size_t i = coarse.index(x, y, cz);
+        if (count[i] == 0) continue;
+        coarse.fixed[i] = 1;
+        coarse.values[i] /= static_cast<float>(count[i]);
+      }
+  });
   for (int z = 0; z < n.z(); ++z)
     for (int y = 0; y < n.y(); ++y)
       for (int x = 0; x < n.x(); ++x) {
@@ -613,6 +655,7 @@ ClosedDistance close_distance_field(const SparseGrid& grid, const DistanceField&
     fallback.insert(fallback.end(), t.fallback.begin(), t.fallback.end());
     r.observed += t.counts.observed;
     r.seen_empty += t.counts.seen_empty;
+    r.through += t.counts.through;
     r.filled += t.counts.filled;
     r.levels = std::max(r.levels, t.counts.levels);
     t = TileResult{};

@@ -40,6 +40,12 @@ struct CloseConfig {
   /// A line of sight marks the corners it passes as seen empty up to this many voxels before
   /// its point (the noise and the distance band stay data's).
   float free_space_stop_voxels = 2.0f;
+  /// With the close stage on, a cloud's distance stage takes this extrapolation guard
+  /// (DistanceConfig::max_extrapolation_voxels) when that is off: the corners past the border
+  /// of the data are left to the fill, which then closes an unseen side at the data's last
+  /// rows, not past the skirt the tangent planes continue beyond them (an L-shape's unseen
+  /// bottom closed 2-3 voxels low; the guard's holes at sharp edges are filled). 0 = off.
+  float rim_extrapolation_voxels = 0.5f;
   /// A lattice of up to this many corners is solved at once; a larger one as a coarse lattice
   /// of at most this many corners plus tiles. Memory of a whole lattice's solve: about 23 bytes
   /// a corner (distance 4, held 1, observed 1, indicator 4; the double layer's value, held
@@ -57,10 +63,12 @@ struct CloseReport {
   bool ran = false;
   Eigen::Vector3i lattice = Eigen::Vector3i::Zero();  ///< corners per axis
   int levels = 0;                                     ///< resolution levels of the (finest) solve
-  int coarse_step = 1;          ///< > 1: a tiled solve over a coarse lattice of every n-th corner
-  std::size_t tiles = 0;        ///< lattices solved at full resolution (1: the whole one at once)
-  std::size_t observed = 0;     ///< corners with data, held at their distances
-  std::size_t seen_empty = 0;   ///< corners on lines of sight, held outside
+  int coarse_step = 1;         ///< > 1: a tiled solve over a coarse lattice of every n-th corner
+  std::size_t tiles = 0;       ///< lattices solved at full resolution (1: the whole one at once)
+  std::size_t observed = 0;    ///< corners with data, held at their distances
+  std::size_t seen_empty = 0;  ///< corners on lines of sight, held outside
+  /// Corners on lines through observed tunnels (through_lines.h), held outside.
+  std::size_t through = 0;
   std::size_t filled = 0;       ///< corners whose distance came from the diffusion
   std::size_t cells_added = 0;  ///< cells the closed surface crosses that the grid lacked
   bool grown = false;           ///< the fill reached the lattice's faces: it grew beyond the margin

@@ -249,10 +249,7 @@ std::uint64_t voxelize(Frame& f, const ReconstructionConfig& c) {
 }
 
 std::uint64_t distance(Frame& f, const ReconstructionConfig& c) {
-  DistanceConfig config = c.distance;
-  if (c.close.enabled && config.max_extrapolation_voxels == 0.0f)
-    config.max_extrapolation_voxels = c.close.rim_extrapolation_voxels;
-  f.distance = hoppe_distance(f.grid, f.cloud, *f.index, config);
+  f.distance = hoppe_distance(f.grid, f.cloud, *f.index, c.distance);
   return f.grid.corners.size();
 }
 

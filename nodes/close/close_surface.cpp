@@ -335,12 +335,16 @@ TileResult close_solve_tile(const CloseProblem& p, const Eigen::Vector3i& a,
   // both sides, and the double layer of its ragged band's ends left small extra shells
   // (CliClose.FusedAndMergedDepthSequencesCloseWatertight).
   float grow_below = 0.0f;  // a free node on the data's box below this: the lattice is too small
-  const bool indicator = p.coarse == nullptr && !p.cloud->empty();
+  const bool indicator = p.config->indicator_fill && p.coarse == nullptr && !p.cloud->empty();
   if (indicator) {
     // Lines through observed tunnels are held outside like lines of sight: the double layer
     // of an open tunnel's upper part would cap it where its walls were unseen.
     const float stop = p.config->free_space_stop_voxels * p.grid->voxel_size;
-    const std::vector<std::uint8_t> through = through_line_nodes(n, observed);
+    std::vector<std::uint8_t> side(l.node_count(), 0);
+    tbb::parallel_for(std::size_t{0}, side.size(), [&](std::size_t i) {
+      if (observed[i]) side[i] = l.values[i] > 0.0f ? 1 : 2;
+    });
+    const std::vector<std::uint8_t> through = through_line_nodes(n, side);
     out.counts.through = tbb::parallel_reduce(
         tbb::blocked_range<int>(0, n.z()), std::size_t{0},
         [&](const tbb::blocked_range<int>& r, std::size_t count) {

@@ -1,25 +1,29 @@
 #pragma once
 // The close stage (--close): a watertight surface from a scan with unseen parts. Between the
 // distance and extract stages, the signed distance of the corners without data (the unseen
-// undersides, holes, the inside and outside away from the data) is filled over a lattice of
-// the grid's corners around the data; corners with data keep their distances exactly, so the
-// surface where there is data is the one the open reconstruction extracts. The fill is the
-// observed surface's inside indicator spread as a double layer (a Poisson solve with
-// volume_diffusion.h, the field of Poisson surface reconstruction: an unseen box bottom closes
-// flat at its rim, not domed into the box), scaled to the observed distances; a lattice whose
-// fill reaches the data's box grows on that side (a quarter of its extent, twice at most) and
-// is solved again. Where the cloud knows its sensor, corners its lines of sight crossed before
-// reaching their points are seen empty: held outside, never filled.
+// undersides, holes, the inside and outside away from the data) is filled by volumetric
+// diffusion (volume_diffusion.h) over a lattice of the grid's corners around the data; corners
+// with data keep their distances exactly, so the surface where there is data is the one the
+// open reconstruction extracts. A lattice whose fill is inside on the data's box (the fill
+// would go on past the lattice) grows on that side by a quarter of its extent, twice at most,
+// and is solved again. Where the cloud knows its sensor, corners its lines of sight crossed
+// before reaching their points are seen empty: held outside, never filled.
 //
 // A lattice of up to max_dense_corners is solved at once. A larger one (a building, a street)
 // is solved in two passes: a coarse lattice (every 2^k-th corner, as few as fit the limit)
 // over the whole box, then cubic tiles of tile_cells cells solved one by one at full
-// resolution, both by diffusion of the distance (Davis, Marschner, Garr and Levoy 2002; the
-// double layer needs the whole surface at once), each tile holding its faces at the coarse
-// solution: neighbouring tiles share their face values, so the surface is crack-free across
-// tiles; tiles without data whose coarse
+// resolution, each holding its faces at the coarse solution: neighbouring tiles share their
+// face values, so the surface is crack-free across tiles; tiles without data whose coarse
 // values are all outside are skipped (nothing crosses them). Memory stays that of one lattice
 // of max_dense_corners plus a tile per thread, whatever the scene's size.
+//
+// With CloseConfig::indicator_fill, a whole lattice of a cloud's distances is filled instead
+// from the observed surface's inside indicator spread as a double layer (a Poisson solve, the
+// field Poisson surface reconstruction solves for: an unseen box bottom closes flat at its rim),
+// and the corners on lattice lines through observed tunnels (through_lines.h) are held outside
+// like lines of sight, so a through-hole seen from above stays open where its lower part was
+// unseen. Not the default: a sphere seen by three views 120 degrees apart (CliClose) gets an
+// inner surface from the double layer of its patches.
 
 #include <Eigen/Core>
 #include <cstddef>
@@ -40,21 +44,18 @@ struct CloseConfig {
   /// A line of sight marks the corners it passes as seen empty up to this many voxels before
   /// its point (the noise and the distance band stay data's).
   float free_space_stop_voxels = 2.0f;
-  /// With the close stage on, a cloud's distance stage takes this extrapolation guard
-  /// (DistanceConfig::max_extrapolation_voxels) when that is off: the corners past the border
-  /// of the data are left to the fill, which then closes an unseen side at the data's last
-  /// rows, not past the skirt the tangent planes continue beyond them (an L-shape's unseen
-  /// bottom closed 2-3 voxels low; the guard's holes at sharp edges are filled). 0 = off.
-  float rim_extrapolation_voxels = 0.5f;
   /// A lattice of up to this many corners is solved at once; a larger one as a coarse lattice
-  /// of at most this many corners plus tiles. Memory of a whole lattice's solve: about 23 bytes
-  /// a corner (distance 4, held 1, observed 1, indicator 4; the double layer's value, held
-  /// flag and source 9, its coarser levels 1.3, the seen-empty marks 1), so about 190 MB at
-  /// the default; a tile's diffusion about 7.
-  std::size_t max_dense_corners = std::size_t{1} << 23;
+  /// of at most this many corners plus tiles. Memory of a lattice: about 6.7 bytes a corner
+  /// (value 4, held flag 1, sight mark 1, coarser levels 5/7), 7.7 when flat
+  /// (volume_diffusion.h), so 225-260 MB at the default.
+  std::size_t max_dense_corners = std::size_t{1} << 25;
   /// Cells along each side of a tile of a large lattice (its faces are held at the coarse
   /// solution; larger tiles follow the fine data farther, at 6.7 bytes a corner per thread).
   int tile_cells = 128;
+  /// Fill a whole lattice of a cloud from the observed surface's indicator (file comment)
+  /// rather than by diffusion of the distance; its solve takes about 23 bytes a corner (set
+  /// max_dense_corners to 2^23 for about 190 MB). Large lattices and fused maps keep diffusion.
+  bool indicator_fill = false;
   DiffusionConfig diffusion;
 };
 

@@ -20,7 +20,8 @@ std::array<Eigen::Vector3i, 26> through_directions() {
   return d;
 }
 
-// ahead[i] = 1 when some node i + t d (t >= 1) inside the lattice has hit[] set. Each node reads
+// ahead[i] = hit[] of the first node i + t d (t >= 1) inside the lattice where it is not 0, else
+// 0. Each node reads
 // the next one along d, so the nodes run from the far end: planes in order when d leaves the
 // plane (each plane's rows in parallel), else planes in parallel and rows, then nodes, in order.
 void through_rays(const Eigen::Vector3i& n, const Eigen::Vector3i& d,
@@ -48,12 +49,13 @@ void through_rays(const Eigen::Vector3i& n, const Eigen::Vector3i& d,
     for (int x = x1; x < n.x(); ++x) out[x] = 0;
     if (d.y() == 0 && d.z() == 0) {  // along the row: from its far end
       if (d.x() > 0)
-        for (int x = x1 - 1; x >= x0; --x) out[x] = h[x + dx] | a[x + dx];
+        for (int x = x1 - 1; x >= x0; --x) out[x] = h[x + dx] != 0 ? h[x + dx] : a[x + dx];
       else
-        for (int x = x0; x < x1; ++x) out[x] = h[x + dx] | a[x + dx];
+        for (int x = x0; x < x1; ++x) out[x] = h[x + dx] != 0 ? h[x + dx] : a[x + dx];
       return;
     }
-    for (int x = x0; x < x1; ++x) out[x] = h[x + dx] | a[x + dx];  // from another row: any order
+    for (int x = x0; x < x1; ++x)
+      out[x] = h[x + dx] != 0 ? h[x + dx] : a[x + dx];  // from another row: any order
   };
   if (d.z() == 0) {
     tbb::parallel_for(0, n.z(), [&](int z) {
@@ -70,17 +72,19 @@ void through_rays(const Eigen::Vector3i& n, const Eigen::Vector3i& d,
 }  // namespace
 
 std::vector<std::uint8_t> through_line_nodes(const Eigen::Vector3i& size,
-                                             const std::vector<std::uint8_t>& observed) {
+                                             const std::vector<std::uint8_t>& side) {
   const std::size_t nodes = static_cast<std::size_t>(size.x()) *
                             static_cast<std::size_t>(size.y()) * static_cast<std::size_t>(size.z());
   const std::array<Eigen::Vector3i, 26> dirs = through_directions();
-  // Bit k of blocked[i]: the ray from node i along dirs[k] meets an observed node.
-  std::vector<std::uint32_t> blocked(nodes, 0);
+  // Bit k of blocked[i]: the ray from node i along dirs[k] meets a node with data; of
+  // outward[i]: the first it meets is on the outside of the surface.
+  std::vector<std::uint32_t> blocked(nodes, 0), outward(nodes, 0);
   std::vector<std::uint8_t> ahead(nodes), behind(nodes), walled(nodes);
   for (std::size_t k = 0; k < dirs.size(); ++k) {
-    through_rays(size, dirs[k], observed, ahead);
+    through_rays(size, dirs[k], side, ahead);
     tbb::parallel_for(std::size_t{0}, nodes, [&](std::size_t i) {
-      blocked[i] |= static_cast<std::uint32_t>(ahead[i]) << k;
+      blocked[i] |= static_cast<std::uint32_t>(ahead[i] != 0) << k;
+      outward[i] |= static_cast<std::uint32_t>(ahead[i] == 1) << k;
     });
   }
   std::vector<std::uint8_t> out(nodes, 0);
@@ -95,12 +99,12 @@ std::vector<std::uint8_t> through_line_nodes(const Eigen::Vector3i& size,
       if (dirs[e] == d || dirs[e] == -d) along |= std::uint32_t{1} << e;
     }
     tbb::parallel_for(std::size_t{0}, nodes, [&](std::size_t i) {
-      walled[i] = !observed[i] && (blocked[i] & across) == across ? 1 : 0;
+      walled[i] = side[i] == 0 && (outward[i] & across) == across ? 1 : 0;
     });
     through_rays(size, d, walled, ahead);
     through_rays(size, -d, walled, behind);
     tbb::parallel_for(std::size_t{0}, nodes, [&](std::size_t i) {
-      if (observed[i] || (blocked[i] & along) != 0) return;
+      if (side[i] != 0 || (blocked[i] & along) != 0) return;
       if (walled[i] || ahead[i] || behind[i]) out[i] = 1;
     });
   }

@@ -15,14 +15,16 @@
 
 namespace meshflow {
 
-/// For a lattice of `size` nodes (x fastest, as DiffusionLattice) and `observed` (one per node,
-/// 1 = a node with data): 1 for each node that is not observed and lies on a line along one of
-/// the 13 lattice directions (axes, face and body diagonals) with no observed node anywhere
-/// on it, and that line holds a walled-in node: one from which every ray along the lattice
-/// directions perpendicular to the line (6 or 8 of the 26) meets an observed node. Else 0.
-/// Parallel over lattice planes or rows; the result does not depend on the thread count.
-/// O(26 x nodes) time, 6 bytes a node of extra memory.
+/// For a lattice of `size` nodes (x fastest, as DiffusionLattice) and `side` (one per node: 0
+/// no data, 1 data outside the surface (distance > 0), 2 data inside): 1 for each node without
+/// data that lies on a line along one of the 13 lattice directions (axes, face and body
+/// diagonals) with no data anywhere on it, where that line holds a walled-in node: one from
+/// which every ray along the lattice directions perpendicular to the line (6 or 8 of the 26)
+/// meets data, the first it meets outside (the walls face the node with their outside: inside
+/// a sphere seen in patches, the rays meet its inside first). Else 0. Parallel over lattice
+/// planes or rows; the result does not depend on the thread count. O(52 x nodes) time, 12 bytes
+/// a node of extra memory.
 std::vector<std::uint8_t> through_line_nodes(const Eigen::Vector3i& size,
-                                             const std::vector<std::uint8_t>& observed);
+                                             const std::vector<std::uint8_t>& side);
 
 }  // namespace meshflow

@@ -157,7 +157,9 @@ TEST(CloseSurface, UnseenBoxBottomClosesFlatAtItsRim) {
     field.values[c] = d.cwiseMax(0.0f).norm() + std::min(d.maxCoeff(), 0.0f);
     field.valid[c] = q.z() > -half.z() + voxel ? 1 : 0;  // the bottom unseen
   }
-  const ClosedDistance closed = close_distance_field(grid, field, cloud);
+  CloseConfig config;
+  config.indicator_fill = true;
+  const ClosedDistance closed = close_distance_field(grid, field, cloud, config);
   const TriangleMesh mesh = marching_cubes(closed.grid, closed.distance);
   ASSERT_TRUE(edge_statistics(mesh).closed());
   double sum = 0.0, worst = 0.0;

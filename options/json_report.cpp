@@ -87,13 +87,10 @@ nlohmann::json optimize_json(const OptimizeReport& report) {
 }
 
 nlohmann::json close_json(const CloseReport& c) {
-  return {{"ran", c.ran},
-          {"filled", c.filled},
-          {"observed", c.observed},
-          {"seen_empty", c.seen_empty},
-          {"cells_added", c.cells_added},
-          {"levels", c.levels},
-          {"coarse_step", c.coarse_step},
+  return {{"ran", c.ran},           {"filled", c.filled},
+          {"observed", c.observed}, {"seen_empty", c.seen_empty},
+          {"through", c.through},   {"cells_added", c.cells_added},
+          {"levels", c.levels},     {"coarse_step", c.coarse_step},
           {"tiles", c.tiles}};
 }
 

@@ -34,8 +34,8 @@ nlohmann::json stages_json(const std::vector<StageSummary>& summaries);
 /// "detail"}.
 nlohmann::json optimize_json(const OptimizeReport& report);
 
-/// What the close stage did: {"ran", "filled", "observed", "seen_empty", "cells_added",
-/// "levels", "coarse_step", "tiles"}.
+/// What the close stage did: {"ran", "filled", "observed", "seen_empty", "through",
+/// "cells_added", "levels", "coarse_step", "tiles"}.
 nlohmann::json close_json(const CloseReport& closing);
 
 /// What the pipeline did to one frame: "input", "points", "filter", "normals", "voxel",

@@ -103,10 +103,10 @@ const char* extraction_name(ExtractMethod method, bool sharp_normals) {
 void report_closing(const CloseReport& c) {
   if (!c.ran) return;
   report(
-      "close      %zu corners filled by diffusion (%d levels on %d x %d x %d), %zu held by data, "
-      "%zu seen empty; %zu cells added\n",
+      "close      %zu corners filled (%d levels on %d x %d x %d), %zu held by data, "
+      "%zu seen empty, %zu on lines through observed tunnels; %zu cells added\n",
       c.filled, c.levels, c.lattice.x(), c.lattice.y(), c.lattice.z(), c.observed, c.seen_empty,
-      c.cells_added);
+      c.through, c.cells_added);
   if (c.coarse_step > 1)
     report(
         "           tiled: a coarse lattice of every %d-th corner, %zu tiles solved at full "

@@ -15,6 +15,7 @@
 #include <memory>
 #include <utility>
 
+#include "nodes/close/through_lines.h"
 #include "runtime/error.h"
 #include "runtime/voxel_key.h"
 
@@ -108,6 +109,136 @@ struct CloseProblem {
   int coarse_step = 1;
 };
 
+// Free nodes on one side of zero that no held node on that side reaches through free nodes
+// of the same side (6-neighbours) flip to the other side: pockets of the fill, which would be
+// extra components inside or beside the object (the double layer wobbles near the band's
+// ends). Inside first (a pocket inside joins the outside next to it), then outside. Serial
+// breadth-first fills; the set reached does not depend on the order. O(nodes).
+void close_drop_pockets(DiffusionLattice& l) {
+  const Eigen::Vector3i n = l.size;
+  const std::size_t nodes = l.node_count();
+  std::vector<std::uint8_t> reached(nodes);
+  std::vector<std::size_t> queue;
+  for (const bool inside : {true, false}) {
+    const auto side = [&](std::size_t i) { return (l.values[i] < 0.0f) == inside; };
+    std::fill(reached.begin(), reached.end(), 0);
+    queue.clear();
+    for (std::size_t i = 0; i < nodes; ++i)
+      if (l.fixed[i] && side(i)) {
+        reached[i] = 1;
+        queue.push_back(i);
+      }
+    for (std::size_t head = 0; head < queue.size(); ++head) {
+      const std::size_t i = queue[head];
+      const int x = static_cast<int>(i % static_cast<std::size_t>(n.x()));
+      const int y =
+          static_cast<int>(i / static_cast<std::size_t>(n.x()) % static_cast<std::size_t>(n.y()));
+      const int z = static_cast<int>(i / (static_cast<std::size_t>(n.x()) * n.y()));
+      const auto visit = [&](std::size_t j) {
+        if (reached[j] || l.fixed[j] || !side(j)) return;
+        reached[j] = 1;
+        queue.push_back(j);
+      };
+      if (x > 0) visit(i - 1);
+      if (x + 1 < n.x()) visit(i + 1);
+      if (y > 0) visit(l.index(x, y - 1, z));
+      if (y + 1 < n.y()) visit(l.index(x, y + 1, z));
+      if (z > 0) visit(l.index(x, y, z - 1));
+      if (z + 1 < n.z()) visit(l.index(x, y, z + 1));
+    }
+    // A flipped node keeps its magnitude (at least a little), so that the surface around the
+    // pocket's former place stays where its neighbours put it.
+    for (std::size_t i = 0; i < nodes; ++i)
+      if (!l.fixed[i] && !reached[i] && side(i))
+        l.values[i] = inside ? std::max(std::abs(l.values[i]), 1e-6f)
+                             : -std::max(std::abs(l.values[i]), 1e-6f);
+  }
+}
+
+// The free nodes of `l` from the inside indicator the observed nodes' distances imply, spread
+// as a double layer: w solves the Poisson equation whose source is the divergence of the
+// indicator's jumps between observed neighbours (a discrete generalized winding number of the
+// observed surface, the field Poisson surface reconstruction solves for), held at 0 on the
+// other held nodes (the faces, lines of sight). Where the observed surface is open, the level
+// of w through it spans the opening following the surface's turn, not harmonically between
+// the band's few held values (which domed a box's unseen bottom deep into the box). Free nodes
+// take alpha + beta w, fitted by least squares to the observed distances within a voxel of the
+// surface (as Poisson reconstruction takes its iso-value from the samples); without a fit
+// (beta >= 0) they are diffused instead. Sets `grow_below` to alpha / 2: a free node on the
+// data's box with a value below it has w above half the level there, so the faces' zero is
+// near enough to flatten the fill. Returns the levels of the solve.
+int close_fill_by_indicator(DiffusionLattice& l, const std::vector<std::uint8_t>& observed,
+                            float voxel, const DiffusionConfig& config, float& grow_below) {
+  const std::size_t nodes = l.node_count();
+  const Eigen::Vector3i n = l.size;
+  std::vector<float> h(nodes, 0.0f);
+  tbb::parallel_for(std::size_t{0}, nodes, [&](std::size_t i) {
+    if (observed[i]) h[i] = std::clamp(0.5f - l.values[i] / (2.0f * voxel), 0.0f, 1.0f);
+  });
+  DiffusionLattice w;
+  w.size = n;
+  w.values.assign(nodes, 0.0f);
+  w.fixed.assign(nodes, 0);
+  w.source.assign(nodes, 0.0f);
+  tbb::parallel_for(0, n.z(), [&](int z) {
+    for (int y = 0; y < n.y(); ++y)
+      for (int x = 0; x < n.x(); ++x) {
+        const std::size_t i = l.index(x, y, z);
+        if (l.fixed[i] && !observed[i]) {
+          w.fixed[i] = 1;
+          continue;
+        }
+        if (!observed[i]) continue;
+        float s = 0.0f;
+        const auto edge = [&](std::size_t j) {
+          if (observed[j]) s += h[i] - h[j];
+        };
+        if (x > 0) edge(i - 1);
+        if (x + 1 < n.x()) edge(i + 1);
+        if (y > 0) edge(l.index(x, y - 1, z));
+        if (y + 1 < n.y()) edge(l.index(x, y + 1, z));
+        if (z > 0) edge(l.index(x, y, z - 1));
+        if (z + 1 < n.z()) edge(l.index(x, y, z + 1));
+        w.source[i] = s;
+      }
+  });
+  const int levels = diffuse_free_nodes(w, config);
+  // u = alpha + beta w by least squares over the observed nodes within a voxel of the surface
+  // (sums per plane, added in plane order).
+  std::vector<std::array<double, 5>> sums(static_cast<std::size_t>(n.z()), std::array<double, 5>{});
+  tbb::parallel_for(0, n.z(), [&](int z) {
+    std::array<double, 5>& s = sums[static_cast<std::size_t>(z)];
+    for (std::size_t i = l.index(0, 0, z), end = i + static_cast<std::size_t>(n.x()) * n.y();
+         i < end; ++i) {
+      if (!observed[i] || std::abs(l.values[i]) > voxel) continue;
+      const double wi = w.values[i], ui = l.values[i];
+      s[0] += 1.0;
+      s[1] += wi;
+      s[2] += ui;
+      s[3] += wi * wi;
+      s[4] += wi * ui;
+    }
+  });
+  double count = 0, sw = 0, su = 0, sww = 0, swu = 0;
+  for (const auto& s : sums) {
+    count += s[0];
+    sw += s[1];
+    su += s[2];
+    sww += s[3];
+    swu += s[4];
+  }
+  const double det = count * sww - sw * sw;
+  const double beta = det > 0 ? (count * swu - sw * su) / det : 0.0;
+  if (!(beta < 0.0)) return diffuse_free_nodes(l, config);
+  const double alpha = (su - beta * sw) / count;
+  tbb::parallel_for(std::size_t{0}, nodes, [&](std::size_t i) {
+    if (!l.fixed[i]) l.values[i] = static_cast<float>(alpha + beta * w.values[i]);
+  });
+  close_drop_pockets(l);
+  grow_below = static_cast<float>(0.5 * alpha);
+  return levels;
+}
+
 // What one tile gives back: its crossed cells, the values of their corners and of the grid's
 // corners in the tile (sorted by key), and its counts. A skipped tile gives its grid corners
 // the coarse solution's values in `fallback` instead.
@@ -161,6 +292,7 @@ TileResult close_solve_tile(const CloseProblem& p, const Eigen::Vector3i& a,
     return l.index(c.x(), c.y(), c.z());
   };
   // The data's corners (each a distinct node: any order writes the same).
+  std::vector<std::uint8_t> observed(l.node_count(), 0);
   out.counts.observed = tbb::parallel_reduce(
       tbb::blocked_range<std::size_t>(0, corners.size(), 4096), std::size_t{0},
       [&](const tbb::blocked_range<std::size_t>& r, std::size_t count) {
@@ -170,6 +302,7 @@ TileResult close_solve_tile(const CloseProblem& p, const Eigen::Vector3i& a,
           const Eigen::Vector3i q = unpack_key(p.grid->corners[c]) - p.lo - a;
           const std::size_t i = l.index(q.x(), q.y(), q.z());
           l.fixed[i] = 1;
+          observed[i] = 1;
           l.values[i] = p.field->values[c];
           count += owned(q.x(), q.y(), q.z()) ? 1 : 0;
         }
@@ -196,8 +329,43 @@ TileResult close_solve_tile(const CloseProblem& p, const Eigen::Vector3i& a,
         },
         std::plus<>());
   }
-  out.counts.levels = diffuse_free_nodes(l, p.config->diffusion);
-  const float grow_below = 0.0f;  // a filled node on the data's box inside: the lattice is small
+  // A whole lattice of a cloud's distances: the indicator's fill; a tile: diffusion between
+  // its faces, which hold the coarse solution (the double layer needs the whole surface). A
+  // fused map (no points) is diffused too: its observed voxels fill the truncation band on
+  // both sides, and the double layer of its ragged band's ends left small extra shells
+  // (CliClose.FusedAndMergedDepthSequencesCloseWatertight).
+  float grow_below = 0.0f;  // a free node on the data's box below this: the lattice is too small
+  const bool indicator = p.config->indicator_fill && p.coarse == nullptr && !p.cloud->empty();
+  if (indicator) {
+    // Lines through observed tunnels are held outside like lines of sight: the double layer
+    // of an open tunnel's upper part would cap it where its walls were unseen.
+    const float stop = p.config->free_space_stop_voxels * p.grid->voxel_size;
+    std::vector<std::uint8_t> side(l.node_count(), 0);
+    tbb::parallel_for(std::size_t{0}, side.size(), [&](std::size_t i) {
+      if (observed[i]) side[i] = l.values[i] > 0.0f ? 1 : 2;
+    });
+    const std::vector<std::uint8_t> through = through_line_nodes(n, side);
+    out.counts.through = tbb::parallel_reduce(
+        tbb::blocked_range<int>(0, n.z()), std::size_t{0},
+        [&](const tbb::blocked_range<int>& r, std::size_t count) {
+          for (int z = r.begin(); z != r.end(); ++z)
+            for (int y = 0; y < n.y(); ++y)
+              for (int x = 0; x < n.x(); ++x) {
+                const std::size_t i = l.index(x, y, z);
+                if (!through[i] || l.fixed[i]) continue;
+                l.fixed[i] = 1;
+                l.values[i] = stop;
+                count += owned(x, y, z) ? 1 : 0;
+              }
+          return count;
+        },
+        std::plus<>());
+  }
+  if (indicator)
+    out.counts.levels =
+        close_fill_by_indicator(l, observed, p.grid->voxel_size, p.config->diffusion, grow_below);
+  else
+    out.counts.levels = diffuse_free_nodes(l, p.config->diffusion);
   // Filled nodes, and the sides where one next to the lattice's face is inside (per plane,
   // joined in plane order).
   std::vector<std::size_t> filled(static_cast<std::size_t>(n.z()), 0);
@@ -267,21 +435,40 @@ DiffusionLattice close_coarse_solution(const CloseProblem& p, int step, int& lev
   coarse.values.assign(coarse.node_count(), 0.0f);
   coarse.fixed.assign(coarse.node_count(), 0);
   std::vector<std::uint32_t> count(coarse.node_count(), 0);
-  for (std::size_t c = 0; c < p.grid->corners.size(); ++c) {
-    if (!p.field->valid[c]) continue;
-    const Eigen::Vector3i q = unpack_key(p.grid->corners[c]) - p.lo;
-    const Eigen::Vector3i r =
-        ((q.array() + step / 2) / step).matrix().cwiseMin(coarse.size - Eigen::Vector3i::Ones());
-    const std::size_t i = coarse.index(r.x(), r.y(), r.z());
-    coarse.values[i] += p.field->values[c];
-    ++count[i];
-  }
-  for (std::size_t i = 0; i < count.size(); ++i)
-    if (count[i] > 0) {
-      coarse.fixed[i] = 1;
-      coarse.values[i] /= static_cast<float>(count[i]);
-    }
   const Eigen::Vector3i n = coarse.size;
+  // The grid's corners are sorted by key, z first: those of coarse plane z (rounding to it) are
+  // one range, and each plane sums its own nodes' corners in the corners' order (the serial
+  // loop's sums, whatever the thread count).
+  const std::vector<VoxelKey>& keys = p.grid->corners;
+  const auto first_at_z = [&](int z) {  // the first corner whose lattice z is at least z
+    return static_cast<std::size_t>(std::lower_bound(keys.begin(), keys.end(), z,
+                                                     [&](VoxelKey k, int value) {
+                                                       return unpack_key(k).z() - p.lo.z() < value;
+                                                     }) -
+                                    keys.begin());
+  };
+  tbb::parallel_for(0, n.z(), [&](int cz) {
+    // Coarse plane cz gathers lattice planes [cz step - step / 2, cz step + step - step / 2),
+    // the last one everything above.
+    const std::size_t begin = cz == 0 ? 0 : first_at_z(cz * step - step / 2);
+    const std::size_t end = cz + 1 == n.z() ? keys.size() : first_at_z((cz + 1) * step - step / 2);
+    for (std::size_t c = begin; c < end; ++c) {
+      if (!p.field->valid[c]) continue;
+      const Eigen::Vector3i q = unpack_key(keys[c]) - p.lo;
+      const Eigen::Vector3i r =
+          ((q.array() + step / 2) / step).matrix().cwiseMin(n - Eigen::Vector3i::Ones());
+      const std::size_t i = coarse.index(r.x(), r.y(), r.z());
+      coarse.values[i] += p.field->values[c];
+      ++count[i];
+    }
+    for (int y = 0; y < n.y(); ++y)
+      for (int x = 0; x < n.x(); ++x) {
+        const std::size_t i = coarse.index(x, y, cz);
+        if (count[i] == 0) continue;
+        coarse.fixed[i] = 1;
+        coarse.values[i] /= static_cast<float>(count[i]);
+      }
+  });
   for (int z = 0; z < n.z(); ++z)
     for (int y = 0; y < n.y(); ++y)
       for (int x = 0; x < n.x(); ++x) {
@@ -472,6 +659,7 @@ ClosedDistance close_distance_field(const SparseGrid& grid, const DistanceField&
     fallback.insert(fallback.end(), t.fallback.begin(), t.fallback.end());
     r.observed += t.counts.observed;
     r.seen_empty += t.counts.seen_empty;
+    r.through += t.counts.through;
     r.filled += t.counts.filled;
     r.levels = std::max(r.levels, t.counts.levels);
     t = TileResult{};

@@ -16,6 +16,14 @@
 // face values, so the surface is crack-free across tiles; tiles without data whose coarse
 // values are all outside are skipped (nothing crosses them). Memory stays that of one lattice
 // of max_dense_corners plus a tile per thread, whatever the scene's size.
+//
+// With CloseConfig::indicator_fill, a whole lattice of a cloud's distances is filled instead
+// from the observed surface's inside indicator spread as a double layer (a Poisson solve, the
+// field Poisson surface reconstruction solves for: an unseen box bottom closes flat at its rim),
+// and the corners on lattice lines through observed tunnels (through_lines.h) are held outside
+// like lines of sight, so a through-hole seen from above stays open where its lower part was
+// unseen. Not the default: a sphere seen by three views 120 degrees apart (CliClose) gets an
+// inner surface from the double layer of its patches.
 
 #include <Eigen/Core>
 #include <cstddef>
@@ -44,6 +52,10 @@ struct CloseConfig {
   /// Cells along each side of a tile of a large lattice (its faces are held at the coarse
   /// solution; larger tiles follow the fine data farther, at 6.7 bytes a corner per thread).
   int tile_cells = 128;
+  /// Fill a whole lattice of a cloud from the observed surface's indicator (file comment)
+  /// rather than by diffusion of the distance; its solve takes about 23 bytes a corner (set
+  /// max_dense_corners to 2^23 for about 190 MB). Large lattices and fused maps keep diffusion.
+  bool indicator_fill = false;
   DiffusionConfig diffusion;
 };
 
@@ -52,10 +64,12 @@ struct CloseReport {
   bool ran = false;
   Eigen::Vector3i lattice = Eigen::Vector3i::Zero();  ///< corners per axis
   int levels = 0;                                     ///< resolution levels of the (finest) solve
-  int coarse_step = 1;          ///< > 1: a tiled solve over a coarse lattice of every n-th corner
-  std::size_t tiles = 0;        ///< lattices solved at full resolution (1: the whole one at once)
-  std::size_t observed = 0;     ///< corners with data, held at their distances
-  std::size_t seen_empty = 0;   ///< corners on lines of sight, held outside
+  int coarse_step = 1;         ///< > 1: a tiled solve over a coarse lattice of every n-th corner
+  std::size_t tiles = 0;       ///< lattices solved at full resolution (1: the whole one at once)
+  std::size_t observed = 0;    ///< corners with data, held at their distances
+  std::size_t seen_empty = 0;  ///< corners on lines of sight, held outside
+  /// Corners on lines through observed tunnels (through_lines.h), held outside.
+  std::size_t through = 0;
   std::size_t filled = 0;       ///< corners whose distance came from the diffusion
   std::size_t cells_added = 0;  ///< cells the closed surface crosses that the grid lacked
   bool grown = false;           ///< the fill reached the lattice's faces: it grew beyond the margin

@@ -128,6 +128,59 @@ INSTANTIATE_TEST_SUITE_P(DenseAndTiled, CloseSurfaceModes, ::testing::Bool(),
                            return p.param ? "Tiled" : "Dense";
                          });
 
+// An unseen box bottom closes flat at its rim: the box (0.8 x 0.6 x 0.5 m) seen on its sides
+// and top only, with the exact signed distance at the grid's corners away from the bottom.
+// Diffusing the distance between the band's few held values domed the bottom deep into the
+// box (the harmonic fill of a cavity takes the value of its nearest held wall); the double
+// layer spans the planar rim with the plane.
+TEST(CloseSurface, UnseenBoxBottomClosesFlatAtItsRim) {
+  const float voxel = 0.02f;
+  const Eigen::Vector3f half(0.4f, 0.3f, 0.25f);
+  PointCloud cloud;
+  const float spacing = 0.5f * voxel;
+  for (float u = -1.0f; u <= 1.0f; u += spacing / 0.4f)
+    for (float v = -1.0f; v <= 1.0f; v += spacing / 0.4f) {
+      cloud.positions.emplace_back(u * half.x(), v * half.y(), half.z());  // top
+      for (const float side : {-1.0f, 1.0f}) {
+        const float z = 0.5f * (v + 1.0f) * 2.0f * half.z() - half.z();
+        cloud.positions.emplace_back(side * half.x(), u * half.y(), z);
+        cloud.positions.emplace_back(u * half.x(), side * half.y(), z);
+      }
+    }
+  const SparseGrid grid = voxelize(cloud, VoxelizeConfig{voxel});
+  DistanceField field;
+  field.values.resize(grid.corners.size());
+  field.valid.resize(grid.corners.size());
+  for (std::size_t c = 0; c < grid.corners.size(); ++c) {
+    const Eigen::Vector3f q = grid.corner_position(c);
+    const Eigen::Vector3f d = q.cwiseAbs() - half;
+    field.values[c] = d.cwiseMax(0.0f).norm() + std::min(d.maxCoeff(), 0.0f);
+    field.valid[c] = q.z() > -half.z() + voxel ? 1 : 0;  // the bottom unseen
+  }
+  CloseConfig config;
+  config.indicator_fill = true;
+  const ClosedDistance closed = close_distance_field(grid, field, cloud, config);
+  const TriangleMesh mesh = marching_cubes(closed.grid, closed.distance);
+  ASSERT_TRUE(edge_statistics(mesh).closed());
+  double sum = 0.0, worst = 0.0;
+  std::size_t bottom = 0;
+  for (const Eigen::Vector3f& v : mesh.vertices) {
+    // The bottom's inner part, seen from below (away from the walls' bands).
+    if (std::abs(v.x()) > half.x() - 3.0f * voxel || std::abs(v.y()) > half.y() - 3.0f * voxel ||
+        v.z() > 0.0f)
+      continue;
+    const double error = std::abs(static_cast<double>(v.z()) + half.z());
+    sum += error;
+    worst = std::max(worst, error);
+    ++bottom;
+  }
+  ASSERT_GT(bottom, 100u);
+  std::printf("[ bottom ] %zu vertices: mean %.4f, largest %.4f m from the box's bottom\n", bottom,
+              sum / static_cast<double>(bottom), worst);
+  EXPECT_LT(sum / static_cast<double>(bottom), 2.0 * voxel) << "mean distance to the bottom";
+  EXPECT_LT(worst, 3.0 * voxel) << "largest distance to the bottom";
+}
+
 TEST(CloseSurface, SameResultForOneAndTwoThreads) {
   const CappedSphere s = capped_sphere(0.025f);
   for (const CloseConfig& config : {CloseConfig{}, tiled_config()}) {

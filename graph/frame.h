@@ -64,6 +64,10 @@ struct Frame {
   /// Chunked (out-of-core) reconstruction: "voxelize" keeps only these cells, the ones this
   /// chunk owns, so each cell's surface comes from one chunk (graph/chunked_reconstruction.h).
   std::optional<CellRange> owned_cells;
+  /// Chunks finished where they are meshed (nodes/chunk/chunk_finish.h): the chunk edge in
+  /// cells, whose seam vertices "optimize" holds fixed while it flips, trims the rim and runs
+  /// the clean and holes steps on the chunk. 0: all of that waits for the stitched mesh.
+  int finish_chunk_cells = 0;
   SparseGrid grid;
   DistanceField distance;
   CloseReport closing;  ///< what the close stage did (closing.ran: it ran)

@@ -21,6 +21,19 @@ namespace meshflow::chunk {
 /// marching tetrahedra, a moved vertex). O(1).
 std::uint64_t lattice_edge_key(const Eigen::Vector3f& p, float voxel_size);
 
+/// Whether the vertex of lattice edge `key` (lattice_edge_key(); UINT64_MAX: none) lies on a
+/// boundary plane of chunks of `chunk_cells` cells (a coordinate of the edge's lower corner,
+/// other than along the edge, divisible by chunk_cells): a seam vertex, which the chunks on both
+/// sides of the plane make. O(1).
+bool on_chunk_seam(std::uint64_t key, int chunk_cells);
+
+/// One byte per vertex of `vertices`: 1 for a seam vertex (on_chunk_seam() of its lattice edge
+/// key at `voxel_size`) whose `apart` byte (optional, one per vertex: feature vertices) is 0.
+/// Parallel; O(V).
+std::vector<std::uint8_t> seam_vertices(const std::vector<Eigen::Vector3f>& vertices,
+                                        float voxel_size, int chunk_cells,
+                                        const std::vector<std::uint8_t>& apart = {});
+
 /// Collects chunk meshes and welds them (not thread-safe; add in a fixed order for a
 /// deterministic result).
 ///

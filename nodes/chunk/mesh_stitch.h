@@ -63,11 +63,13 @@ class MeshStitcher {
   void add(const TriangleMesh& mesh, const std::vector<std::uint8_t>& vertex_flags = {});
 
   /// The joined mesh: pieces turned as the relations say, vertices with one lattice edge key
-  /// merged (the first chunk's copy kept), vertices on no lattice edge kept apart, unused
-  /// vertices dropped, triangles in the order added. `merged` (optional) receives the number of
-  /// seam vertices merged, `vertex_flags` (optional) the kept vertices' flags (empty unless
-  /// every chunk gave them), `turned` (optional) the number of triangles turned over.
-  /// O(V log V + T + R log R) for R relations.
+  /// merged (the first chunk's copy kept; with `chunk_cells`, only seam vertices, on_chunk_seam(),
+  /// are looked at: a chunk's own mesh has one vertex per lattice edge), vertices on no lattice
+  /// edge kept apart, unused vertices dropped, triangles in the order added. The mesh is
+  /// compacted in place and the bookkeeping freed first, so the stitcher holds it once. `merged`
+  /// (optional) receives the number of seam vertices merged, `vertex_flags` (optional) the kept
+  /// vertices' flags (empty unless every chunk gave them), `turned` (optional) the number of
+  /// triangles turned over. O(V + T + S log S + R log R) for S seam vertices and R relations.
   TriangleMesh stitch(std::size_t* merged = nullptr,
                       std::vector<std::uint8_t>* vertex_flags = nullptr,
                       std::size_t* turned = nullptr);

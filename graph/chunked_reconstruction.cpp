@@ -6,8 +6,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "graph/chunk_finish.h"
 #include "graph/pipeline.h"
-#include "nodes/chunk/chunk_finish.h"
 #include "nodes/chunk/mesh_stitch.h"
 #include "nodes/extract/feature_edge_flips.h"
 #include "nodes/extract/rim_trim.h"

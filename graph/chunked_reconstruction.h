@@ -43,7 +43,7 @@ struct ChunkingConfig {
   /// chunk files (io::point_ranges: binary PLY); 0 = one per thread. Inputs that cannot be
   /// read by byte range are streamed by one thread.
   std::size_t read_parts = 0;
-  /// Each chunk is finished where it is meshed (nodes/chunk/chunk_finish.h: flips, rim trim,
+  /// Each chunk is finished where it is meshed (graph/chunk_finish.h: flips, rim trim,
   /// clean and holes with its seam vertices held fixed), leaving the stitched mesh only its
   /// seams: no serial pass over the whole mesh. False, or optimize steps other than clean and
   /// holes: finished once on the stitched mesh (the single-process mesh but for a few

@@ -6,7 +6,7 @@
 #include <optional>
 #include <string>
 
-#include "nodes/chunk/chunk_finish.h"
+#include "graph/chunk_finish.h"
 #include "nodes/close/close_surface.h"
 #include "nodes/compress/progressive_mesh.h"
 #include "nodes/depth/organized_depth.h"

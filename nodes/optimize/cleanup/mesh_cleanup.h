@@ -50,7 +50,7 @@ struct CleanupReport {
 /// components the split separated that are too small are removed as well.
 /// `held` (optional, one byte per vertex; kRemoveSmallerFans or kNone only): vertices whose
 /// byte is non-zero keep all their fans, and components holding one stay whatever their size (a
-/// chunk's seam, finished in place: nodes/chunk/chunk_finish.h). `kept` (optional) receives
+/// chunk's seam, finished in place: graph/chunk_finish.h). `kept` (optional) receives
 /// the input index of each output vertex (ascending), for per-vertex data to follow.
 /// Parallel; deterministic. O(V + T) (a few passes for the fans).
 TriangleMesh clean_mesh(const TriangleMesh& mesh, const CleanupConfig& config,

@@ -1,4 +1,4 @@
-#include "nodes/chunk/chunk_finish.h"
+#include "graph/chunk_finish.h"
 
 #include <tbb/parallel_for.h>
 

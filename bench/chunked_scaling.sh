@@ -3,7 +3,8 @@
 # grows at constant density (2, 5, 10, 20 M points; the site's side grows with the square root),
 # whole process, measured with /usr/bin/time (wall time, peak resident memory) and with the run's
 # own --json timing (Amdahl's serial fraction f from its phases); then 20 M points on 1 against
-# 2 threads and at the default voxel; then meshflow-mpi on 1, 2 and 4 ranks of this machine
+# 2 threads, finished once after stitching (--finish-after-stitch) and at the default voxel; then
+# meshflow-mpi on 1, 2 and 4 ranks of this machine
 # (every rank's phases and peak memory from --json). Markdown rows.
 #   bench/chunked_scaling.sh [BUILD_DIR] [WORK_DIR] [MILLIONS...]   (WORK_DIR: ~1.5 GB scratch;
 #   MILLIONS: the sizes, default "2 5 10 20"; the last one is the one the later tables use)
@@ -54,6 +55,9 @@ for threads in 1 2; do
     --chunk $chunk --voxel $voxel --threads $threads --json)
   echo "| $threads thread(s) | $s | $mib | $(phases) | $(serial) |"
 done
+read -r s mib < <(measure "$tool" reconstruct "$work/city_$big.ply" -o "$work/mesh_f.ply" \
+  --chunk $chunk --voxel $voxel --json --finish-after-stitch)
+echo "| 2 threads, --finish-after-stitch (serial finish) | $s | $mib | $(phases) | $(serial) |"
 read -r s mib < <(measure "$tool" reconstruct "$work/city_$big.ply" -o "$work/mesh_d.ply" \
   --chunk $chunk --json)
 echo "| default voxel ($(field "'%.3f' % d['voxel']") m), 2 threads: $(field "d['mesh']['triangles']") triangles | $s | $mib | $(phases) | $(serial) |"

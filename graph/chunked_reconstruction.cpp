@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "graph/chunk_finish.h"
 #include "graph/pipeline.h"
 #include "nodes/chunk/mesh_stitch.h"
 #include "nodes/extract/feature_edge_flips.h"
@@ -37,6 +38,33 @@ bool sharp_for_input(const ReconstructionConfig& config, float variation, bool i
   return orientation == NormalOrientation::kPropagate && clean;
 }
 
+// Adds a chunk's optimize report to the sum over chunks: step by step, triangles and seconds
+// summed, the clean counts summed, the details of the first chunk that did something.
+void chunked_add_optimize(OptimizeReport& total, const OptimizeReport& chunk) {
+  for (std::size_t i = 0; i < chunk.steps.size(); ++i) {
+    const OptimizeStepReport& s = chunk.steps[i];
+    if (i >= total.steps.size()) {
+      total.steps.push_back(s);
+      total.steps.back().detail = "summed over the chunks";
+      continue;
+    }
+    OptimizeStepReport& t = total.steps[i];
+    t.triangles_in += s.triangles_in;
+    t.triangles_out += s.triangles_out;
+    t.seconds += s.seconds;
+  }
+  CleanupReport& c = total.cleanup;
+  const CleanupReport& d = chunk.cleanup;
+  c.degenerate_triangles += d.degenerate_triangles;
+  c.duplicate_triangles += d.duplicate_triangles;
+  c.components += d.components;
+  c.removed_components += d.removed_components;
+  c.removed_component_triangles += d.removed_component_triangles;
+  c.removed_vertices += d.removed_vertices;
+  c.non_manifold_vertices += d.non_manifold_vertices;
+  c.removed_fan_triangles += d.removed_fan_triangles;
+}
+
 std::string chunk_label(const chunk::ChunkFile& file) {
   return "chunk (" + std::to_string(file.index.x()) + "," + std::to_string(file.index.y()) + "," +
          std::to_string(file.index.z()) + ")";
@@ -62,8 +90,17 @@ std::vector<Eigen::Vector3f> points_to_sample(const PointCloud& batch, const Fil
   return kept;
 }
 
+bool finishes_in_place(const ReconstructionConfig& config, const ChunkingConfig& chunking) {
+  if (!chunking.finish_in_place) return false;
+  if (config.optimize.cleanup.non_manifold_vertices == NonManifoldVertexRepair::kSplit)
+    return false;
+  return std::all_of(
+      config.optimize.steps.begin(), config.optimize.steps.end(),
+      [](OptimizeStep s) { return s == OptimizeStep::kClean || s == OptimizeStep::kHoles; });
+}
+
 ReconstructionConfig chunk_stage_config(const ReconstructionConfig& config,
-                                        const InputDecisions& decided) {
+                                        const InputDecisions& decided, bool finish_in_place) {
   ReconstructionConfig c = config;
   c.voxelize.voxel_size = decided.voxel_size;
   c.voxel_from_whole_input = decided.voxel_automatic;
@@ -71,7 +108,7 @@ ReconstructionConfig chunk_stage_config(const ReconstructionConfig& config,
   c.extract.defer_feature_flips = true;  // flipped once the chunks are stitched
   if (decided.noisy) c.normals.kn = 2 * std::max(c.normals.kn, 3);
   c.normals.noisy_variation = 0.0f;  // decided for the whole input, not per chunk
-  c.optimize.steps.clear();
+  if (!finish_in_place) c.optimize.steps.clear();
   c.compression = MeshCompression::kNone;
   c.normals.whole_scene = false;  // a chunk is a piece of a larger cloud: no view, no terrain
   return c;
@@ -279,9 +316,9 @@ std::unique_ptr<chunk::ChunkStore> partition_input(
 void mesh_chunk_files(const std::vector<chunk::ChunkFile>& files,
                       const std::function<long long()>& next, const chunk::ChunkGrid& grid,
                       const chunk::ChunkRows& rows, const ReconstructionConfig& config,
-                      const InputDecisions& decided, std::size_t in_flight, const std::string& name,
-                      const std::function<void(const FramePtr&)>& sink) {
-  ReconstructionPipeline pipeline(chunk_stage_config(config, decided), in_flight);
+                      const InputDecisions& decided, std::size_t in_flight, bool finish_in_place,
+                      const std::string& name, const std::function<void(const FramePtr&)>& sink) {
+  ReconstructionPipeline pipeline(chunk_stage_config(config, decided, finish_in_place), in_flight);
   pipeline.run(
       [&]() -> FramePtr {
         const long long position = next();
@@ -290,7 +327,10 @@ void mesh_chunk_files(const std::vector<chunk::ChunkFile>& files,
         auto frame = std::make_shared<Frame>();
         frame->name = name + " " + chunk_label(file);
         frame->source_index = static_cast<std::size_t>(position);
-        frame->chunk = ChunkPart{grid.owned_cells(file.index), {}, {}};
+        ChunkPart chunk;
+        chunk.owned_cells = grid.owned_cells(file.index);
+        chunk.finish_cells = finish_in_place ? grid.chunk_cells : 0;
+        frame->chunk = std::move(chunk);
         frame->load = [file, rows] {
           PointCloud cloud = chunk::read_chunk_file(file, rows);
           chunk::remove_chunk_file(file);
@@ -303,13 +343,13 @@ void mesh_chunk_files(const std::vector<chunk::ChunkFile>& files,
 
 void mesh_chunk_files(const std::vector<chunk::ChunkFile>& files, const chunk::ChunkGrid& grid,
                       const chunk::ChunkRows& rows, const ReconstructionConfig& config,
-                      const InputDecisions& decided, std::size_t in_flight, const std::string& name,
-                      const std::function<void(const FramePtr&)>& sink) {
+                      const InputDecisions& decided, std::size_t in_flight, bool finish_in_place,
+                      const std::string& name, const std::function<void(const FramePtr&)>& sink) {
   long long position = 0;
   const auto n = static_cast<long long>(files.size());
   mesh_chunk_files(
       files, [&] { return position < n ? position++ : -1LL; }, grid, rows, config, decided,
-      in_flight, name, sink);
+      in_flight, finish_in_place, name, sink);
 }
 
 void collect_chunk_frame(Frame& frame, chunk::MeshStitcher& stitcher, ChunkedReport& report) {
@@ -317,6 +357,10 @@ void collect_chunk_frame(Frame& frame, chunk::MeshStitcher& stitcher, ChunkedRep
   if (!frame.ok()) {
     report.failed.push_back(frame.name + ": " + frame.error);
     return;
+  }
+  if (frame.chunk && frame.chunk->finish_cells > 0) {
+    report.rim_trimmed += frame.rim_trimmed;
+    chunked_add_optimize(report.optimize, frame.optimize);
   }
   stitcher.add(frame.mesh, chunk_vertex_flags(frame));
   frame.mesh = TriangleMesh{};
@@ -343,7 +387,8 @@ std::vector<std::uint8_t> chunk_vertex_flags(const Frame& frame) {
 
 TriangleMesh finish_chunked_mesh(chunk::MeshStitcher& stitcher, const ReconstructionConfig& config,
                                  float voxel_size, ChunkedReport& report,
-                                 const std::function<void(const std::string&)>& on_step) {
+                                 const std::function<void(const std::string&)>& on_step,
+                                 bool finished_in_place, int chunk_cells) {
   report.clock.begin("stitch", true);
   std::vector<std::uint8_t> flags;
   TriangleMesh joined = stitcher.stitch(&report.seam_vertices, &flags);
@@ -351,6 +396,12 @@ TriangleMesh finish_chunked_mesh(chunk::MeshStitcher& stitcher, const Reconstruc
   for (std::size_t v = 0; v < flags.size(); ++v) {
     beyond[v] = (flags[v] & kBeyondDataFlag) ? 1 : 0;
     features[v] = (flags[v] & kFeatureFlag) ? 1 : 0;
+  }
+  if (finished_in_place) {  // the chunks did the rest; what spans a seam is done here
+    report.clock.begin("finish", true);
+    chunk::finish_seams(joined, features, voxel_size, chunk_cells);
+    report.clock.end();
+    return joined;
   }
   if (std::find(features.begin(), features.end(), 1) != features.end()) {
     // Extended marching cubes' flips, as one process makes them over its whole mesh; the
@@ -395,8 +446,9 @@ ChunkedResult reconstruct_chunked(const std::string& path, const std::string& co
   report.clock.begin("chunks", false);
   chunk::MeshStitcher stitcher = chunk_stitcher(voxel, report.chunk_cells);
   std::size_t done = 0;
+  const bool in_place = finishes_in_place(config, chunking);
   mesh_chunk_files(files, store->grid(), store->rows(), config, report.decided, chunking.in_flight,
-                   path, [&](const FramePtr& frame) {
+                   in_place, path, [&](const FramePtr& frame) {
                      ++done;
                      tell("chunk " + std::to_string(done) + "/" + std::to_string(files.size()));
                      collect_chunk_frame(*frame, stitcher, report);
@@ -404,7 +456,8 @@ ChunkedResult reconstruct_chunked(const std::string& path, const std::string& co
   report.clock.end();
 
   tell("stitch");
-  result.mesh = finish_chunked_mesh(stitcher, config, voxel, report, tell);
+  result.mesh =
+      finish_chunked_mesh(stitcher, config, voxel, report, tell, in_place, report.chunk_cells);
   return result;
 }
 

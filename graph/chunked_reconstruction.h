@@ -43,7 +43,17 @@ struct ChunkingConfig {
   /// chunk files (io::point_ranges: binary PLY); 0 = one per thread. Inputs that cannot be
   /// read by byte range are streamed by one thread.
   std::size_t read_parts = 0;
+  /// Each chunk is finished where it is meshed (graph/chunk_finish.h: flips, rim trim,
+  /// clean and holes with its seam vertices held fixed), leaving the stitched mesh only its
+  /// seams: no serial pass over the whole mesh. False, or optimize steps other than clean and
+  /// holes: finished once on the stitched mesh (the single-process mesh but for a few
+  /// triangles; slower, serial, and the whole mesh several times in memory).
+  bool finish_in_place = true;
 };
+
+/// Whether `chunking` and `config` finish the chunks in place (finish_in_place, and config's
+/// optimize steps are among clean and holes, without splitting non-manifold vertices). O(1).
+bool finishes_in_place(const ReconstructionConfig& config, const ChunkingConfig& chunking);
 
 /// The parts a partition reads: the input's byte ranges [first, first + count), or, when it
 /// cannot be read by byte range (`why_not`), one part streamed whole.
@@ -108,10 +118,12 @@ struct ChunkedResult {
 
 /// The configuration each chunk runs with: `config` with the voxel, the extraction method and
 /// the normals' neighbourhood size as `decided` (no chunk decides them on its own), extended
-/// marching cubes' edge flips left to the stitched mesh, no optimisation (it runs once on the
-/// stitched mesh) and no compression.
+/// marching cubes' edge flips left to the "optimize" stage or the stitched mesh, no
+/// optimisation unless `finish_in_place` (then config's clean and holes steps run per chunk,
+/// seams held: ChunkPart::finish_cells) and no compression.
 ReconstructionConfig chunk_stage_config(const ReconstructionConfig& config,
-                                        const InputDecisions& decided);
+                                        const InputDecisions& decided,
+                                        bool finish_in_place = false);
 
 /// The decisions of `config` for a cloud streamed from `path` in batches of `batch_points`:
 /// when the voxel or the extraction method is automatic, two passes over the input (the
@@ -178,14 +190,16 @@ std::unique_ptr<chunk::ChunkStore> partition_input(
     chunk::PhaseClock* clock = nullptr);
 
 /// Meshes `files` (chunk files of `grid` with rows `rows`) through one flow graph with
-/// chunk_stage_config(config, decided), `in_flight` at a time; hands each finished chunk frame
-/// (failed ones with `error` set; the mesh in the input's local frame, with Frame::beyond_data for
-/// the rim trim; Frame::source_index = its position in `files`) to `sink` in the order of `files`,
-/// from one thread at a time. Each chunk's file is deleted once read.
+/// chunk_stage_config(config, decided, finish_in_place), `in_flight` at a time (with
+/// `finish_in_place` each chunk is finished in its graph: finishes_in_place()); hands each
+/// finished chunk frame
+/// (failed ones with `error` set; the mesh in the input's local frame, with ChunkPart::beyond_data
+/// for the rim trim; Frame::source_index = its position in `files`) to `sink` in the order of
+/// `files`, from one thread at a time. Each chunk's file is deleted once read.
 void mesh_chunk_files(const std::vector<chunk::ChunkFile>& files, const chunk::ChunkGrid& grid,
                       const chunk::ChunkRows& rows, const ReconstructionConfig& config,
-                      const InputDecisions& decided, std::size_t in_flight, const std::string& name,
-                      const std::function<void(const FramePtr&)>& sink);
+                      const InputDecisions& decided, std::size_t in_flight, bool finish_in_place,
+                      const std::string& name, const std::function<void(const FramePtr&)>& sink);
 
 /// The same with the chunks taken as the graph asks for them: `next()` returns the position in
 /// `files` of the next chunk to mesh, or a negative value when there is none left (a work
@@ -194,12 +208,12 @@ void mesh_chunk_files(const std::vector<chunk::ChunkFile>& files, const chunk::C
 void mesh_chunk_files(const std::vector<chunk::ChunkFile>& files,
                       const std::function<long long()>& next, const chunk::ChunkGrid& grid,
                       const chunk::ChunkRows& rows, const ReconstructionConfig& config,
-                      const InputDecisions& decided, std::size_t in_flight, const std::string& name,
-                      const std::function<void(const FramePtr&)>& sink);
+                      const InputDecisions& decided, std::size_t in_flight, bool finish_in_place,
+                      const std::string& name, const std::function<void(const FramePtr&)>& sink);
 
 /// Bits of the byte per vertex a chunk hands the stitcher (chunk_vertex_flags()).
-constexpr std::uint8_t kBeyondDataFlag = 1;  ///< its rim verdict (Frame::beyond_data)
-constexpr std::uint8_t kFeatureFlag = 2;     ///< a feature vertex (Frame::feature_vertices)
+constexpr std::uint8_t kBeyondDataFlag = 1;  ///< its rim verdict (ChunkPart::beyond_data)
+constexpr std::uint8_t kFeatureFlag = 2;     ///< a feature vertex (ChunkPart::feature_vertices)
 
 /// The stitcher for chunk meshes at `voxel_size` in chunks of `chunk_cells` (feature vertices
 /// kept apart: kFeatureFlag). O(1).
@@ -209,8 +223,9 @@ chunk::MeshStitcher chunk_stitcher(float voxel_size, int chunk_cells);
 /// when it has neither.
 std::vector<std::uint8_t> chunk_vertex_flags(const Frame& frame);
 
-/// What a chunk's sink does: its stage records into `report`, its mesh (and rim verdicts) into
-/// `stitcher`, or its error into report.failed; frees the frame's mesh.
+/// What a chunk's sink does: its stage records (and, finished in place, its rim trim and
+/// optimize counts) into `report`, its mesh (and rim verdicts) into `stitcher`, or its error
+/// into report.failed; frees the frame's mesh.
 void collect_chunk_frame(Frame& frame, chunk::MeshStitcher& stitcher, ChunkedReport& report);
 
 /// Welds chunk meshes delivered in order (MeshStitcher, with chunk_vertex_flags()), flips the
@@ -218,10 +233,13 @@ void collect_chunk_frame(Frame& frame, chunk::MeshStitcher& stitcher, ChunkedRep
 /// seams flip as inside one process), trims the rim over the stitched mesh
 /// (config.max_rim_voxels) and runs config's optimize steps once; fills the report's seam,
 /// rim and optimize fields and times the serial phases "stitch" and "finish" on report.clock
-/// (ending "finish"). `on_step` (optional) is told each optimize step.
+/// (ending "finish"). `on_step` (optional) is told each optimize step. With
+/// `finished_in_place` (the chunks were: mesh_chunk_files()), only the seams are finished
+/// (chunk::finish_seams(), chunk edge `chunk_cells`): no pass over the whole mesh but the weld.
 TriangleMesh finish_chunked_mesh(chunk::MeshStitcher& stitcher, const ReconstructionConfig& config,
                                  float voxel_size, ChunkedReport& report,
-                                 const std::function<void(const std::string&)>& on_step = {});
+                                 const std::function<void(const std::string&)>& on_step = {},
+                                 bool finished_in_place = false, int chunk_cells = 0);
 
 /// The whole path in one process: partition, mesh the chunks, stitch, optimise (config's
 /// steps, on the stitched mesh). `on_stage` (optional) is told each phase ("partition",

@@ -48,6 +48,10 @@ struct ChunkPart {
   /// "voxelize" keeps only these cells, the ones this chunk owns, so each cell's surface comes
   /// from one chunk.
   CellRange owned_cells;
+  /// Chunks finished where they are meshed (graph/chunk_finish.h): the chunk edge in cells,
+  /// whose seam vertices "optimize" holds fixed while it flips, trims the rim and runs the clean
+  /// and holes steps on the chunk. 0: all of that waits for the stitched mesh.
+  int finish_cells = 0;
   /// Per mesh vertex, whether it lies beyond the data as trim_rim judges
   /// (vertices_beyond_data); the rim is trimmed after stitching, where chunk cuts are no border.
   std::vector<std::uint8_t> beyond_data;

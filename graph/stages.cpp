@@ -6,6 +6,7 @@
 #include <optional>
 #include <string>
 
+#include "graph/chunk_finish.h"
 #include "nodes/close/close_surface.h"
 #include "nodes/compress/progressive_mesh.h"
 #include "nodes/depth/organized_depth.h"
@@ -318,6 +319,20 @@ std::uint64_t optimize(Frame& f, const ReconstructionConfig& c) {
   OptimizeConfig config = optimize_config_for_voxel(c, f.voxel_size);
   if (f.on_stage)
     config.on_step = [&f](OptimizeStep step) { f.on_stage("optimize", optimize_step_name(step)); };
+  if (f.chunk && f.chunk->finish_cells > 0) {  // a chunk finished here, its seams held
+    chunk::ChunkFinishConfig finish;
+    finish.voxel_size = f.voxel_size;
+    finish.chunk_cells = f.chunk->finish_cells;
+    finish.trim_rim = c.max_rim_voxels > 0.0f;
+    finish.optimize = std::move(config);
+    chunk::ChunkFinishReport report;
+    f.mesh = chunk::finish_chunk_mesh(f.mesh, f.chunk->beyond_data, f.chunk->feature_vertices,
+                                      finish, &report);
+    f.chunk->beyond_data.clear();
+    f.rim_trimmed = report.rim_trimmed;
+    f.optimize = std::move(report.optimize);
+    return f.mesh.triangles.size();
+  }
   const std::size_t before = f.mesh.triangles.size();
   f.mesh = optimize_mesh(f.mesh, config, &f.optimize);
   if (f.mesh.triangles.empty() && before > 0 && !f.chunk) {  // nothing left: a failed frame

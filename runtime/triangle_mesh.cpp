@@ -140,7 +140,8 @@ float median_edge_length(const TriangleMesh& mesh) {
   return *middle;
 }
 
-TriangleMesh compact_vertices(const TriangleMesh& source, const std::vector<Triangle>& triangles) {
+TriangleMesh compact_vertices(const TriangleMesh& source, const std::vector<Triangle>& triangles,
+                              std::vector<std::uint32_t>* original) {
   const std::size_t n = source.vertices.size();
   std::vector<std::uint32_t> id(n, UINT32_MAX);
   for (const Triangle& t : triangles)
@@ -148,8 +149,10 @@ TriangleMesh compact_vertices(const TriangleMesh& source, const std::vector<Tria
   const bool normals = source.normals.size() == n;
   const bool colors = source.colors.size() == n;
   TriangleMesh out;
+  if (original != nullptr) original->clear();
   for (std::size_t v = 0; v < n; ++v) {
     if (id[v] == UINT32_MAX) continue;
+    if (original != nullptr) original->push_back(static_cast<std::uint32_t>(v));
     id[v] = static_cast<std::uint32_t>(out.vertices.size());
     out.vertices.push_back(source.vertices[v]);
     if (normals) out.normals.push_back(source.normals[v]);
@@ -182,7 +185,8 @@ std::vector<std::uint32_t> renumber_used_vertices(std::vector<Triangle>& triangl
 }
 
 void remove_small_components(std::vector<Triangle>& triangles, std::size_t vertex_count,
-                             std::size_t min_triangles, ComponentCounts* counts) {
+                             std::size_t min_triangles, ComponentCounts* counts,
+                             const std::vector<std::uint8_t>* held) {
   DisjointSets sets(vertex_count);
   for (const Triangle& t : triangles) {
     sets.unite(t[0], t[1]);
@@ -190,6 +194,13 @@ void remove_small_components(std::vector<Triangle>& triangles, std::size_t verte
   }
   std::vector<std::uint32_t> component_size(vertex_count, 0);
   for (const Triangle& t : triangles) ++component_size[sets.find(t[0])];
+  if (held != nullptr)  // a component with a held vertex stays: counted as large enough
+    for (const Triangle& t : triangles)
+      for (const std::uint32_t v : t)
+        if (v < held->size() && (*held)[v] != 0) {
+          std::uint32_t& size = component_size[sets.find(v)];
+          size = std::max<std::uint32_t>(size, static_cast<std::uint32_t>(min_triangles));
+        }
   ComponentCounts c;
   for (std::uint32_t s : component_size) {
     if (s == 0) continue;

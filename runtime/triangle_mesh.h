@@ -88,9 +88,12 @@ struct ComponentCounts {
 /// than `min_triangles` triangles, keeping the others in order (min_triangles 0: keeps all, only
 /// counts); corners index `vertex_count` vertices. The one component filter of meshflow: the
 /// clean step and the per-frame triangulations both use it. Adds to `counts` when given.
-/// Serial, deterministic; O(V + T).
+/// `held` (optional, one byte per vertex): a component with a vertex whose byte is non-zero is
+/// kept whatever its size (a piece of a chunk that goes on across a seam). Serial,
+/// deterministic; O(V + T).
 void remove_small_components(std::vector<Triangle>& triangles, std::size_t vertex_count,
-                             std::size_t min_triangles, ComponentCounts* counts = nullptr);
+                             std::size_t min_triangles, ComponentCounts* counts = nullptr,
+                             const std::vector<std::uint8_t>* held = nullptr);
 
 /// Throws Error(source, "face F", "vertex index I out of range (N vertices)") for the first
 /// corner of `triangles` that is not below `vertex_count`. O(T).
@@ -99,8 +102,10 @@ void require_corners_in_range(const std::vector<Triangle>& triangles, std::size_
 
 /// A mesh of `triangles` (indices into source.vertices) that keeps only the referenced vertices,
 /// in their original order, with their normals and colours; triangles are renumbered, their
-/// order kept. O(V + T); not parallel.
-TriangleMesh compact_vertices(const TriangleMesh& source, const std::vector<Triangle>& triangles);
+/// order kept. `original` (optional) receives the source index of each kept vertex (ascending).
+/// O(V + T); not parallel.
+TriangleMesh compact_vertices(const TriangleMesh& source, const std::vector<Triangle>& triangles,
+                              std::vector<std::uint32_t>* original = nullptr);
 
 /// Renumbers the corners of `triangles` (indices below `vertex_count`) in place to 0 .. U-1, the
 /// U used vertices in their original order, and returns the original index of each (ascending).

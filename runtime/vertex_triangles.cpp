@@ -258,7 +258,10 @@ std::vector<std::uint32_t> vertices_with_several_fans(const std::vector<Triangle
 }  // namespace
 
 void remove_smaller_fans(std::vector<Triangle>& triangles, std::size_t vertex_count,
-                         FanRemovalCounts* counts) {
+                         FanRemovalCounts* counts, const std::vector<std::uint8_t>* held) {
+  const auto is_held = [held](std::uint32_t v) {
+    return held != nullptr && v < held->size() && (*held)[v] != 0;
+  };
   FanRemovalCounts c;
   // The first pass looks at the vertices with several fans (found in parallel); a later one at
   // the corners of the triangles the pass before removed, the only vertices whose fans can have
@@ -273,6 +276,7 @@ void remove_smaller_fans(std::vector<Triangle>& triangles, std::size_t vertex_co
     // in vertex order, serially: nothing depends on the thread count.
     marks.clear();
     for (const std::uint32_t v : candidates) {
+      if (is_held(v)) continue;
       alive.clear();
       for (const std::uint32_t* t = around.begin(v); t != around.end(v); ++t)
         if (removed[*t] == 0) alive.push_back(*t);

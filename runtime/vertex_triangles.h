@@ -70,10 +70,13 @@ struct FanRemovalCounts {
 /// corners with two fans, so passes repeat, each over the corners of the triangles the previous
 /// one removed, until every vertex has one fan (two or three passes on scanned meshes).
 /// Vertices are not touched: no position moves and none is added. Adds to `counts` when given.
+/// `held` (optional, one byte per vertex): vertices whose byte is non-zero are left with all
+/// their fans (a chunk's seam vertex, whose other fans lie in the neighbouring chunk).
 /// Deterministic. O(V + T) for the first pass (fans counted in parallel per vertex; O(V) memory
 /// per worker thread only where a vertex has more than 16 triangles), then O(triangles around the
 /// vertices looked at) per pass, serial.
 void remove_smaller_fans(std::vector<Triangle>& triangles, std::size_t vertex_count,
-                         FanRemovalCounts* counts = nullptr);
+                         FanRemovalCounts* counts = nullptr,
+                         const std::vector<std::uint8_t>* held = nullptr);
 
 }  // namespace meshflow

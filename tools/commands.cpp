@@ -318,6 +318,10 @@ void add_reconstruct_options(CLI::App* cmd) {
   cmd->add_option("--chunks-in-flight", opts->chunking.in_flight, "Chunks meshed at once")
       ->check(number_in(1, 64))
       ->capture_default_str();
+  cmd->add_flag("--finish-after-stitch{false}", opts->chunking.finish_in_place,
+                "Flip, trim the rim, clean and fill holes once on the stitched mesh instead "
+                "of per chunk with seams held fixed (the single-process mesh but for a few "
+                "triangles; serial, and the whole mesh several times in memory)");
   cmd->add_option(
          "--tiles", opts->tiles,
          "With --chunk: also write the mesh as one glTF file per chunk (DIR/tile_I_J_K.glb) "

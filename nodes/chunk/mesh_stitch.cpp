@@ -1,5 +1,7 @@
 #include "nodes/chunk/mesh_stitch.h"
 
+#include <tbb/parallel_for.h>
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -56,6 +58,22 @@ bool on_one_seam_plane(std::uint64_t a, std::uint64_t b, unsigned axes_a, unsign
 }
 
 }  // namespace
+
+bool on_chunk_seam(std::uint64_t key, int chunk_cells) {
+  return chunk_cells > 0 && seam_axes(key, chunk_cells) != 0;
+}
+
+std::vector<std::uint8_t> seam_vertices(const std::vector<Eigen::Vector3f>& vertices,
+                                        float voxel_size, int chunk_cells,
+                                        const std::vector<std::uint8_t>& apart) {
+  std::vector<std::uint8_t> seam(vertices.size(), 0);
+  const bool with_apart = apart.size() == vertices.size();
+  tbb::parallel_for(std::size_t{0}, vertices.size(), [&](std::size_t v) {
+    if (with_apart && apart[v] != 0) return;
+    seam[v] = on_chunk_seam(lattice_edge_key(vertices[v], voxel_size), chunk_cells) ? 1 : 0;
+  });
+  return seam;
+}
 
 void MeshStitcher::relate_pieces(std::size_t first_vertex, std::size_t first_triangle) {
   const std::size_t vertices = joined_.vertices.size() - first_vertex;
@@ -177,10 +195,18 @@ void MeshStitcher::add(const TriangleMesh& mesh, const std::vector<std::uint8_t>
   flags_given_ = flags_given_ && vertex_flags.size() == mesh.vertices.size();
   if (flags_given_) flags_.insert(flags_.end(), vertex_flags.begin(), vertex_flags.end());
   const bool flagged = vertex_flags.size() == mesh.vertices.size();
-  for (std::size_t v = 0; v < mesh.vertices.size(); ++v)
-    keys_.push_back(flagged && (vertex_flags[v] & apart_flags_)
-                        ? kNoKey
-                        : lattice_edge_key(mesh.vertices[v], voxel_size_));
+  // With the chunk edge known, only seam vertices can have a copy in another chunk (a chunk's
+  // own mesh has one vertex per lattice edge): the others are never merged, so only the seam's
+  // keys are sorted.
+  const std::size_t first = keys_.size();
+  keys_.resize(first + mesh.vertices.size());
+  tbb::parallel_for(std::size_t{0}, mesh.vertices.size(), [&](std::size_t v) {
+    std::uint64_t key = flagged && (vertex_flags[v] & apart_flags_)
+                            ? kNoKey
+                            : lattice_edge_key(mesh.vertices[v], voxel_size_);
+    if (chunk_cells_ > 0 && !on_chunk_seam(key, chunk_cells_)) key = kNoKey;
+    keys_[first + v] = key;
+  });
   const std::size_t first_triangle = joined_.triangles.size();
   for (const Triangle& t : mesh.triangles)
     joined_.triangles.push_back({t[0] + base, t[1] + base, t[2] + base});
@@ -202,52 +228,74 @@ TriangleMesh MeshStitcher::stitch(std::size_t* merged, std::vector<std::uint8_t>
     for (std::size_t v = 0; v < n; ++v)
       if (turn[vertex_piece_[v]]) joined_.normals[v] *= -1.0f;
   if (turned) *turned = turned_triangles;
-  // Order the vertices by (key, index): the first copy of each key is the representative.
-  std::vector<std::uint32_t> order(n);
-  for (std::size_t i = 0; i < n; ++i) order[i] = static_cast<std::uint32_t>(i);
+  // Order the vertices with a key by (key, index): the first copy of each key is the
+  // representative; a vertex without a key is its own.
+  std::vector<std::uint32_t> order;
+  for (std::size_t i = 0; i < n; ++i)
+    if (keys_[i] != kNoKey) order.push_back(static_cast<std::uint32_t>(i));
   std::sort(order.begin(), order.end(), [&](std::uint32_t a, std::uint32_t b) {
     return keys_[a] != keys_[b] ? keys_[a] < keys_[b] : a < b;
   });
   std::vector<std::uint32_t> representative(n);
+  for (std::size_t v = 0; v < n; ++v) representative[v] = static_cast<std::uint32_t>(v);
   std::size_t welded = 0;
-  for (std::size_t i = 0; i < n; ++i) {
+  for (std::size_t i = 1; i < order.size(); ++i) {
     const std::uint32_t v = order[i];
-    const bool same = i > 0 && keys_[v] != kNoKey && keys_[order[i - 1]] == keys_[v];
-    representative[v] = same ? representative[order[i - 1]] : v;
-    welded += same ? 1 : 0;
+    if (keys_[order[i - 1]] != keys_[v]) continue;
+    representative[v] = representative[order[i - 1]];
+    ++welded;
   }
   if (merged) *merged = welded;
-  // Keep representatives that a triangle uses, in their original order.
+  // The per-chunk bookkeeping is no longer needed: free it before the mesh is compacted.
+  keys_ = {};
+  triangle_piece_ = {};
+  vertex_piece_ = {};
+  piece_triangles_ = {};
+  seam_edges_ = {};
+  relations_ = {};
+  // Keep representatives that a triangle uses, in their original order, compacted in place
+  // (a kept vertex only moves down): the whole mesh is held once, not twice.
   std::vector<std::uint32_t> new_index(n, std::numeric_limits<std::uint32_t>::max());
   for (Triangle& t : joined_.triangles)
     for (std::uint32_t& v : t) {
       v = representative[v];
       new_index[v] = 0;
     }
-  TriangleMesh out;
-  std::vector<std::uint8_t> flags;
+  representative = {};
+  const bool with_normals = normals_ && joined_.normals.size() == n;
+  const bool with_colors = colors_ && joined_.colors.size() == n;
   const bool with_flags = flags_given_ && flags_.size() == n;
   std::uint32_t next = 0;
   for (std::size_t v = 0; v < n; ++v) {
     if (new_index[v] != 0) continue;
-    new_index[v] = next++;
-    out.vertices.push_back(joined_.vertices[v]);
-    if (normals_ && !joined_.normals.empty()) out.normals.push_back(joined_.normals[v]);
-    if (colors_ && !joined_.colors.empty()) out.colors.push_back(joined_.colors[v]);
-    if (with_flags) flags.push_back(flags_[v]);
+    new_index[v] = next;
+    joined_.vertices[next] = joined_.vertices[v];
+    if (with_normals) joined_.normals[next] = joined_.normals[v];
+    if (with_colors) joined_.colors[next] = joined_.colors[v];
+    if (with_flags) flags_[next] = flags_[v];
+    ++next;
   }
-  if (vertex_flags) *vertex_flags = std::move(flags);
-  out.triangles.reserve(joined_.triangles.size());
-  for (const Triangle& t : joined_.triangles)
-    out.triangles.push_back({new_index[t[0]], new_index[t[1]], new_index[t[2]]});
+  joined_.vertices.resize(next);
+  joined_.vertices.shrink_to_fit();
+  if (with_normals) {
+    joined_.normals.resize(next);
+    joined_.normals.shrink_to_fit();
+  } else {
+    joined_.normals = {};
+  }
+  if (with_colors) {
+    joined_.colors.resize(next);
+    joined_.colors.shrink_to_fit();
+  } else {
+    joined_.colors = {};
+  }
+  flags_.resize(with_flags ? next : 0);
+  if (vertex_flags) *vertex_flags = std::move(flags_);
+  flags_ = {};
+  for (Triangle& t : joined_.triangles)
+    for (std::uint32_t& v : t) v = new_index[v];
+  TriangleMesh out = std::move(joined_);
   joined_ = TriangleMesh{};
-  keys_.clear();
-  flags_.clear();
-  triangle_piece_.clear();
-  vertex_piece_.clear();
-  piece_triangles_.clear();
-  seam_edges_.clear();
-  relations_.clear();
   return out;
 }
 

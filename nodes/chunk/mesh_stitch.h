@@ -21,6 +21,19 @@ namespace meshflow::chunk {
 /// marching tetrahedra, a moved vertex). O(1).
 std::uint64_t lattice_edge_key(const Eigen::Vector3f& p, float voxel_size);
 
+/// Whether the vertex of lattice edge `key` (lattice_edge_key(); UINT64_MAX: none) lies on a
+/// boundary plane of chunks of `chunk_cells` cells (a coordinate of the edge's lower corner,
+/// other than along the edge, divisible by chunk_cells): a seam vertex, which the chunks on both
+/// sides of the plane make. O(1).
+bool on_chunk_seam(std::uint64_t key, int chunk_cells);
+
+/// One byte per vertex of `vertices`: 1 for a seam vertex (on_chunk_seam() of its lattice edge
+/// key at `voxel_size`) whose `apart` byte (optional, one per vertex: feature vertices) is 0.
+/// Parallel; O(V).
+std::vector<std::uint8_t> seam_vertices(const std::vector<Eigen::Vector3f>& vertices,
+                                        float voxel_size, int chunk_cells,
+                                        const std::vector<std::uint8_t>& apart = {});
+
 /// Collects chunk meshes and welds them (not thread-safe; add in a fixed order for a
 /// deterministic result).
 ///
@@ -50,11 +63,13 @@ class MeshStitcher {
   void add(const TriangleMesh& mesh, const std::vector<std::uint8_t>& vertex_flags = {});
 
   /// The joined mesh: pieces turned as the relations say, vertices with one lattice edge key
-  /// merged (the first chunk's copy kept), vertices on no lattice edge kept apart, unused
-  /// vertices dropped, triangles in the order added. `merged` (optional) receives the number of
-  /// seam vertices merged, `vertex_flags` (optional) the kept vertices' flags (empty unless
-  /// every chunk gave them), `turned` (optional) the number of triangles turned over.
-  /// O(V log V + T + R log R) for R relations.
+  /// merged (the first chunk's copy kept; with `chunk_cells`, only seam vertices, on_chunk_seam(),
+  /// are looked at: a chunk's own mesh has one vertex per lattice edge), vertices on no lattice
+  /// edge kept apart, unused vertices dropped, triangles in the order added. The mesh is
+  /// compacted in place and the bookkeeping freed first, so the stitcher holds it once. `merged`
+  /// (optional) receives the number of seam vertices merged, `vertex_flags` (optional) the kept
+  /// vertices' flags (empty unless every chunk gave them), `turned` (optional) the number of
+  /// triangles turned over. O(V + T + S log S + R log R) for S seam vertices and R relations.
   TriangleMesh stitch(std::size_t* merged = nullptr,
                       std::vector<std::uint8_t>* vertex_flags = nullptr,
                       std::size_t* turned = nullptr);

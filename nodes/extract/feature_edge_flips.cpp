@@ -52,7 +52,8 @@ FlipEdgeKey flip_edge_key(const Eigen::Vector3f& a, const Eigen::Vector3f& b, st
 }  // namespace
 
 std::size_t flip_edges_between_features(TriangleMesh& mesh,
-                                        const std::vector<std::uint8_t>& is_feature) {
+                                        const std::vector<std::uint8_t>& is_feature,
+                                        const std::vector<std::uint8_t>* only_between) {
   auto& tris = mesh.triangles;
   const std::vector<std::uint32_t> fans = parallel_select_indices(
       tris.size(), [&](std::size_t t) { return lone_feature_corner(tris[t], is_feature) >= 0; });
@@ -83,6 +84,11 @@ std::size_t flip_edges_between_features(TriangleMesh& mesh,
     if (opposite[i].first != opposite[i + 1].first) continue;
     if (i > 0 && opposite[i - 1].first == opposite[i].first) continue;
     if (i + 2 < opposite.size() && opposite[i + 2].first == opposite[i].first) continue;
+    if (only_between != nullptr) {
+      const auto a = static_cast<std::uint32_t>(opposite[i].first >> 32);
+      const auto b = static_cast<std::uint32_t>(opposite[i].first & 0xffffffffu);
+      if (!(*only_between)[a] || !(*only_between)[b]) continue;
+    }
     pairs.push_back(i);
   }
   std::vector<FlipEdgeKey> keys(pairs.size());

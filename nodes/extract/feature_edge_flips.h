@@ -17,7 +17,10 @@ namespace meshflow {
 /// not exist yet, and both new triangles have area and face the way the old pair faced.
 /// Manifoldness and orientation are kept. Candidates are found in parallel and accepted in
 /// edge order: deterministic. Returns the number of flips. O(T) plus a sort of the fan edges.
+/// `only_between` (optional, one byte per vertex): only edges whose two ends both have a
+/// non-zero byte are flipped (a stitched mesh's seam edges, the chunks having flipped theirs).
 std::size_t flip_edges_between_features(TriangleMesh& mesh,
-                                        const std::vector<std::uint8_t>& is_feature);
+                                        const std::vector<std::uint8_t>& is_feature,
+                                        const std::vector<std::uint8_t>* only_between = nullptr);
 
 }  // namespace meshflow

@@ -28,7 +28,8 @@ bool beyond_data(const Eigen::Vector3f& v, const std::vector<Eigen::Vector3f>& p
 // The peeling rounds of trim_rim(); measure(v) tells whether vertex v lies beyond the data
 // (called in parallel, at most once per vertex).
 template <typename Measure>
-TriangleMesh peel_rim(const TriangleMesh& mesh, const Measure& measure, std::size_t* removed) {
+TriangleMesh peel_rim(const TriangleMesh& mesh, const Measure& measure, std::size_t* removed,
+                      std::vector<std::uint32_t>* kept_vertices = nullptr) {
   constexpr int kMaxRounds = 16;
   const VertexTriangles around = vertex_triangles(mesh);
   std::vector<std::uint8_t> alive(mesh.triangles.size(), 1);
@@ -96,12 +97,19 @@ TriangleMesh peel_rim(const TriangleMesh& mesh, const Measure& measure, std::siz
     candidates.erase(std::unique(candidates.begin(), candidates.end()), candidates.end());
   }
   if (removed != nullptr) *removed = total;
-  if (total == 0) return mesh;
+  if (total == 0) {  // unchanged, unused vertices included
+    if (kept_vertices != nullptr) {
+      kept_vertices->resize(mesh.vertices.size());
+      for (std::size_t v = 0; v < mesh.vertices.size(); ++v)
+        (*kept_vertices)[v] = static_cast<std::uint32_t>(v);
+    }
+    return mesh;
+  }
   std::vector<Triangle> kept;
   kept.reserve(mesh.triangles.size() - total);
   for (std::size_t t = 0; t < mesh.triangles.size(); ++t)
     if (alive[t]) kept.push_back(mesh.triangles[t]);
-  return compact_vertices(mesh, kept);
+  return compact_vertices(mesh, kept, kept_vertices);
 }
 
 }  // namespace
@@ -117,9 +125,9 @@ TriangleMesh trim_rim(const TriangleMesh& mesh, const std::vector<Eigen::Vector3
 }
 
 TriangleMesh trim_rim(const TriangleMesh& mesh, const std::vector<std::uint8_t>& beyond,
-                      std::size_t* removed) {
+                      std::size_t* removed, std::vector<std::uint32_t>* kept) {
   return peel_rim(
-      mesh, [&](std::uint32_t v) { return beyond[v] != 0; }, removed);
+      mesh, [&](std::uint32_t v) { return beyond[v] != 0; }, removed, kept);
 }
 
 std::vector<std::uint8_t> vertices_beyond_data(const std::vector<Eigen::Vector3f>& vertices,

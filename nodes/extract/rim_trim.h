@@ -36,8 +36,9 @@ std::vector<std::uint8_t> vertices_beyond_data(const std::vector<Eigen::Vector3f
                                                const SpatialIndex& points, float max_distance);
 
 /// trim_rim() with every vertex's verdict given (`beyond`, one per vertex, from
-/// vertices_beyond_data()) instead of measured. Same rounds, same result.
+/// vertices_beyond_data()) instead of measured. Same rounds, same result. `kept` (optional)
+/// receives the input index of each output vertex (ascending), for per-vertex data to follow.
 TriangleMesh trim_rim(const TriangleMesh& mesh, const std::vector<std::uint8_t>& beyond,
-                      std::size_t* removed = nullptr);
+                      std::size_t* removed = nullptr, std::vector<std::uint32_t>* kept = nullptr);
 
 }  // namespace meshflow

@@ -93,9 +93,18 @@ void write_ply(const std::string& path, const TriangleMesh& mesh, PlyEncoding en
   } else {
     const std::size_t vertex_bytes =
         (world ? 24 : 12) + (normals ? 12 : 0) + (colors ? 3 : 0) + 4 * scalars.size();
-    std::vector<char> buf(mesh.vertices.size() * vertex_bytes + mesh.triangles.size() * 13);
+    // Written in blocks of 4 MiB: a mesh of millions of triangles is not held a second time
+    // as its file.
+    constexpr std::size_t kBlock = std::size_t{4} << 20;
+    std::vector<char> buf(kBlock + std::max<std::size_t>(vertex_bytes, 13));
     char* at = buf.data();
+    const auto flush_full = [&](bool always) {
+      if (!always && static_cast<std::size_t>(at - buf.data()) < kBlock) return;
+      out.write(buf.data(), static_cast<std::streamsize>(at - buf.data()));
+      at = buf.data();
+    };
     for (std::size_t i = 0; i < mesh.vertices.size(); ++i) {
+      flush_full(false);
       for (int k = 0; k < 3; ++k)
         at = world ? put(at, static_cast<double>(mesh.vertices[i][k]) + origin[k])
                    : put(at, mesh.vertices[i][k]);
@@ -108,10 +117,11 @@ void write_ply(const std::string& path, const TriangleMesh& mesh, PlyEncoding en
       for (const VertexScalar& scalar : scalars) at = put(at, scalar.values[i]);
     }
     for (const Triangle& t : mesh.triangles) {
+      flush_full(false);
       at = put(at, std::uint8_t{3});
       for (std::uint32_t v : t) at = put(at, v);
     }
-    out.write(buf.data(), static_cast<std::streamsize>(at - buf.data()));
+    flush_full(true);
   }
   file.commit();
 }

@@ -59,9 +59,28 @@ PlanarSegmentation carried_segmentation(const TriangleMesh& mesh, const Optimize
   return grow_planar_regions(HalfEdgeMesh(mesh), planes);
 }
 
+// The bytes of `held` that apply: one per held vertex, or none without `held`.
+std::vector<std::uint8_t> held_mask(const HeldVertices* held) {
+  std::vector<std::uint8_t> mask;
+  if (held == nullptr) return mask;
+  mask.resize(held->flags.size());
+  for (std::size_t v = 0; v < mask.size(); ++v)
+    mask[v] = (held->flags[v] & held->held_bits) != 0 ? 1 : 0;
+  return mask;
+}
+
 TriangleMesh clean_step(const TriangleMesh& mesh, const OptimizeConfig& config,
-                        OptimizeReport& report, OptimizeStepReport& step) {
-  TriangleMesh out = clean_mesh(mesh, config.cleanup, &report.cleanup);
+                        OptimizeReport& report, OptimizeStepReport& step,
+                        HeldVertices* held = nullptr) {
+  const std::vector<std::uint8_t> mask = held_mask(held);
+  std::vector<std::uint32_t> kept;
+  TriangleMesh out = clean_mesh(mesh, config.cleanup, &report.cleanup, held ? &mask : nullptr,
+                                held ? &kept : nullptr);
+  if (held != nullptr) {
+    std::vector<std::uint8_t> flags(kept.size());
+    for (std::size_t v = 0; v < kept.size(); ++v) flags[v] = held->flags[kept[v]];
+    held->flags = std::move(flags);
+  }
   const CleanupReport& c = report.cleanup;
   step.detail =
       format("removed %zu degenerate/duplicate, %zu in %zu small components",
@@ -75,18 +94,21 @@ TriangleMesh clean_step(const TriangleMesh& mesh, const OptimizeConfig& config,
 }
 
 TriangleMesh holes_step(const TriangleMesh& mesh, const OptimizeConfig& config,
-                        OptimizeStepReport& step) {
+                        OptimizeStepReport& step, HeldVertices* held = nullptr) {
   HoleFillingReport r;
   HoleFillingConfig holes = config.holes;
   holes.feature_angle_deg = config.feature_angle_deg;
   holes.feature_min_length = config.feature_min_length;
-  TriangleMesh out = fill_holes(mesh, holes, &r);
+  const std::vector<std::uint8_t> mask = held_mask(held);
+  TriangleMesh out = fill_holes(mesh, holes, &r, held ? &mask : nullptr);
+  if (held != nullptr) held->flags.resize(out.vertices.size(), 0);  // added vertices: none
   step.detail = format("%zu holes filled (+%zu triangles), %zu larger than allowed, %zu outlines",
                        r.filled, r.added_triangles, r.too_large, r.outer_borders);
   if (r.not_fillable > 0) step.detail += format(", %zu not fillable", r.not_fillable);
   if (r.centre_vertices > 0)
     step.detail += format(", %zu fanned from a new centre vertex", r.centre_vertices);
   if (r.along_features > 0) step.detail += format(", %zu along feature lines", r.along_features);
+  if (r.held_open > 0) step.detail += format(", %zu through held (seam) vertices", r.held_open);
   return out;
 }
 
@@ -234,8 +256,10 @@ std::vector<OptimizeStep> parse_optimize_steps(const std::string& list) {
   return steps;
 }
 
-TriangleMesh optimize_mesh(const TriangleMesh& mesh, const OptimizeConfig& given,
-                           OptimizeReport* report) {
+namespace {
+
+TriangleMesh run_steps(const TriangleMesh& mesh, const OptimizeConfig& given,
+                       OptimizeReport* report, HeldVertices* held) {
   OptimizeConfig config = given;
   if (config.feature_min_length == 0.0f)  // one scale for every step: the input's
     config.feature_min_length = kMinFeatureLineEdges * median_edge_length(mesh);
@@ -257,10 +281,10 @@ TriangleMesh optimize_mesh(const TriangleMesh& mesh, const OptimizeConfig& given
     try {
       switch (s) {
         case OptimizeStep::kClean:
-          current = clean_step(current, config, r, step);
+          current = clean_step(current, config, r, step, held);
           break;
         case OptimizeStep::kHoles:
-          current = holes_step(current, config, step);
+          current = holes_step(current, config, step, held);
           break;
         case OptimizeStep::kPlanes:
           current = planes_step(current, config, carried, step);
@@ -302,6 +326,30 @@ TriangleMesh optimize_mesh(const TriangleMesh& mesh, const OptimizeConfig& given
     compute_vertex_normals(current);
   if (report != nullptr) *report = std::move(r);
   return current;
+}
+
+}  // namespace
+
+TriangleMesh optimize_mesh(const TriangleMesh& mesh, const OptimizeConfig& config,
+                           OptimizeReport* report) {
+  return run_steps(mesh, config, report, nullptr);
+}
+
+TriangleMesh optimize_mesh(const TriangleMesh& mesh, const OptimizeConfig& config,
+                           OptimizeReport* report, HeldVertices& held) {
+  if (held.flags.size() != mesh.vertices.size())
+    throw Error("optimize", "held",
+                std::to_string(held.flags.size()) + " vertex flags for " +
+                    std::to_string(mesh.vertices.size()) + " vertices; expected one per vertex");
+  for (const OptimizeStep s : config.steps)
+    if (s != OptimizeStep::kClean && s != OptimizeStep::kHoles)
+      throw Error("optimize", optimize_step_name(s),
+                  "cannot hold seam vertices fixed; only the clean and holes steps can (finish "
+                  "such chunks after stitching)");
+  if (config.cleanup.non_manifold_vertices == NonManifoldVertexRepair::kSplit)
+    throw Error("optimize", "clean",
+                "splitting non-manifold vertices cannot hold seam vertices fixed");
+  return run_steps(mesh, config, report, &held);
 }
 
 std::string format_optimize_report(const OptimizeReport& report) {

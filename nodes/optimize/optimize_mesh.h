@@ -6,6 +6,7 @@
 // triangulated anew from their simplified contours), remesh (curvature-aware: large triangles
 // where the surface is flat, small ones where it bends), decimate (constrained QEM).
 
+#include <cstdint>
 #include <functional>
 #include <string>
 #include <vector>
@@ -83,6 +84,22 @@ struct OptimizeReport {
 /// kernel is and deterministic; see the kernels for costs.
 TriangleMesh optimize_mesh(const TriangleMesh& mesh, const OptimizeConfig& config,
                            OptimizeReport* report = nullptr);
+
+/// A byte per vertex that follows the vertices through the steps (0 on vertices a step adds);
+/// vertices with any of `held_bits` set are held fixed: the clean step keeps all their fans and
+/// the components holding them, the holes step leaves loops through them open (a chunk's seam,
+/// finished where the chunk was meshed: the neighbouring chunk holds the rest of those fans,
+/// components and loops).
+struct HeldVertices {
+  std::vector<std::uint8_t> flags;  ///< one per vertex of the mesh
+  std::uint8_t held_bits = 1;
+};
+
+/// optimize_mesh() with `held` (flags one per vertex of `mesh`; on return one per vertex of the
+/// result). Only the clean and holes steps can hold vertices (and the clean step not with
+/// kSplit): any other step throws meshflow::Error naming it. Same costs.
+TriangleMesh optimize_mesh(const TriangleMesh& mesh, const OptimizeConfig& config,
+                           OptimizeReport* report, HeldVertices& held);
 
 /// One line per step: "clean  120345 -> 120001 triangles  3.1 ms  removed ...".
 std::string format_optimize_report(const OptimizeReport& report);

@@ -283,11 +283,13 @@ int run(const Options& o, int rank, int ranks) {
   // every chunk in Morton order, as in one process, so welding and orientation give the same
   // mesh for any number of ranks and any assignment.
   clock.begin("chunks", false);
+  const bool in_place = finishes_in_place(config, chunking);
   const std::size_t n = plan.files.size();
   const auto chunks = static_cast<long long>(n);
   std::vector<ChunkResult> results;
   const auto collect = [&](const FramePtr& frame) {
     report.timings.insert(report.timings.end(), frame->timings.begin(), frame->timings.end());
+    report.rim_trimmed += frame->rim_trimmed;  // this rank's chunks (finished in place)
     ChunkResult r;
     r.position = frame->source_index;
     if (frame->ok()) {
@@ -308,7 +310,7 @@ int run(const Options& o, int rank, int ranks) {
     std::thread own([&] {
       try {
         mesh_chunk_files(plan.files, take, plan.grid, plan.rows, config, plan.decided,
-                         o.chunking.in_flight, o.input, collect);
+                         o.chunking.in_flight, in_place, o.input, collect);
       } catch (...) {
         failure = std::current_exception();
       }
@@ -328,7 +330,7 @@ int run(const Options& o, int rank, int ranks) {
       return position;
     };
     mesh_chunk_files(plan.files, ask, plan.grid, plan.rows, config, plan.decided,
-                     o.chunking.in_flight, o.input, collect);
+                     o.chunking.in_flight, in_place, o.input, collect);
   }
   clock.end();
   const double mesh_s = chunk::phase_wall(clock.phases(), "chunks");
@@ -360,7 +362,8 @@ int run(const Options& o, int rank, int ranks) {
     stitcher.add(r.mesh, r.flags);
     r = ChunkResult{};
   }
-  const TriangleMesh mesh = finish_chunked_mesh(stitcher, config, plan.grid.voxel_size, report);
+  const TriangleMesh mesh = finish_chunked_mesh(stitcher, config, plan.grid.voxel_size, report, {},
+                                                in_place, plan.grid.chunk_cells);
   if (mesh.empty()) {
     std::fprintf(stderr, "meshflow-mpi: error: %s: no surface was extracted\n", o.input.c_str());
     return 1;
@@ -413,6 +416,11 @@ void add_mpi_reconstruct(CLI::App* cmd, const MpiWorld& world, int& status) {
                   "Where rank 0 writes the chunk files; every rank must see it (a shared file "
                   "system on a cluster)");
   cmd->add_option("--chunks-in-flight", o->chunking.in_flight, "Chunks meshed at once per rank");
+  cmd->add_flag(
+      "--finish-after-stitch{false}", o->chunking.finish_in_place,
+      "Flip, trim the rim, clean and fill holes once on the stitched mesh (rank 0) instead "
+      "of per chunk with seams held fixed (the single-process mesh but for a few "
+      "triangles; serial, and the whole mesh several times in memory)");
   cmd->add_option("--tiles", o->tiles,
                   "Rank 0 also writes the mesh as one glTF file per chunk (DIR/tile_I_J_K.glb) and "
                   "their index DIR/tiles.json");

@@ -395,7 +395,7 @@ bool could_be_outline(double length, double area) {
 }  // namespace
 
 TriangleMesh fill_holes(const TriangleMesh& mesh, const HoleFillingConfig& config,
-                        HoleFillingReport* report) {
+                        HoleFillingReport* report, const std::vector<std::uint8_t>* held) {
   HoleFillingReport r;
   std::size_t ambiguous = 0;
   const VertexTriangles around = vertex_triangles(mesh);
@@ -424,10 +424,17 @@ TriangleMesh fill_holes(const TriangleMesh& mesh, const HoleFillingConfig& confi
     }
   }
 
+  const auto through_held = [held](const std::vector<std::uint32_t>& loop) {
+    return held != nullptr && std::any_of(loop.begin(), loop.end(), [held](std::uint32_t v) {
+             return v < held->size() && (*held)[v] != 0;
+           });
+  };
   std::vector<const std::vector<std::uint32_t>*> holes;
   for (std::size_t l = 0; l < loops.size(); ++l) {
     if (outer[l])
       ++r.outer_borders;
+    else if (through_held(loops[l]))
+      ++r.held_open;
     else if (loops[l].size() > config.max_edges)
       ++r.too_large;
     else

@@ -5,6 +5,8 @@
 // the loop is far too short to bound the component (a closed object's surface with a hole).
 
 #include <cstddef>
+#include <cstdint>
+#include <vector>
 
 #include "nodes/optimize/features.h"
 #include "runtime/triangle_mesh.h"
@@ -31,6 +33,7 @@ struct HoleFillingReport {
   std::size_t loops = 0;            ///< border loops found
   std::size_t outer_borders = 0;    ///< kept as the outline of their component
   std::size_t too_large = 0;        ///< more than max_edges edges
+  std::size_t held_open = 0;        ///< through a held vertex (fill_holes' `held`), left open
   std::size_t filled = 0;           ///< closed
   std::size_t not_fillable = 0;     ///< ambiguous loops (through a non-manifold vertex), left open
   std::size_t centre_vertices = 0;  ///< holes fanned from an added centre vertex (see below)
@@ -59,7 +62,10 @@ struct HoleFillingReport {
 /// the order of their first border edge. Loops are triangulated in parallel; the output does not
 /// depend on the thread count. O(T + sum of n^3 over holes), plus detect_features() when a
 /// hole is to be filled and features are on.
+/// `held` (optional, one byte per vertex): loops through a vertex whose byte is non-zero stay
+/// open (a chunk's seam, finished in place: its loops go on in the neighbouring chunk).
 TriangleMesh fill_holes(const TriangleMesh& mesh, const HoleFillingConfig& config = {},
-                        HoleFillingReport* report = nullptr);
+                        HoleFillingReport* report = nullptr,
+                        const std::vector<std::uint8_t>* held = nullptr);
 
 }  // namespace meshflow

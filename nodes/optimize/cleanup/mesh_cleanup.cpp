@@ -6,6 +6,7 @@
 #include <algorithm>
 
 #include "nodes/optimize/cleanup/manifold_repair.h"
+#include "runtime/error.h"
 
 namespace meshflow {
 namespace {
@@ -64,9 +65,10 @@ namespace {
 
 // remove_small_components() (runtime/triangle_mesh.h), counted into the report.
 void remove_small_components(std::vector<Triangle>& triangles, std::size_t vertex_count,
-                             std::size_t min_triangles, CleanupReport& r) {
+                             std::size_t min_triangles, CleanupReport& r,
+                             const std::vector<std::uint8_t>* held = nullptr) {
   ComponentCounts counts;
-  meshflow::remove_small_components(triangles, vertex_count, min_triangles, &counts);
+  meshflow::remove_small_components(triangles, vertex_count, min_triangles, &counts, held);
   r.components += counts.components;
   r.removed_components += counts.removed_components;
   r.removed_component_triangles += counts.removed_triangles;
@@ -75,7 +77,11 @@ void remove_small_components(std::vector<Triangle>& triangles, std::size_t verte
 }  // namespace
 
 TriangleMesh clean_mesh(const TriangleMesh& mesh, const CleanupConfig& config,
-                        CleanupReport* report) {
+                        CleanupReport* report, const std::vector<std::uint8_t>* held,
+                        std::vector<std::uint32_t>* kept_vertices) {
+  if (held != nullptr && config.non_manifold_vertices == NonManifoldVertexRepair::kSplit)
+    throw Error("clean", "held",
+                "seam vertices cannot be held fixed while non-manifold vertices are split");
   CleanupReport r;
   std::vector<Triangle> kept;
   kept.reserve(mesh.triangles.size());
@@ -100,13 +106,13 @@ TriangleMesh clean_mesh(const TriangleMesh& mesh, const CleanupConfig& config,
 
   if (config.non_manifold_vertices == NonManifoldVertexRepair::kRemoveSmallerFans) {
     FanRemovalCounts fans;
-    remove_smaller_fans(kept, mesh.vertices.size(), &fans);
+    remove_smaller_fans(kept, mesh.vertices.size(), &fans, held);
     r.non_manifold_vertices = fans.vertices;
     r.removed_fan_triangles = fans.triangles;
   }
   // After the fans: a piece that hung on the rest by a vertex is a component of its own now.
-  remove_small_components(kept, mesh.vertices.size(), config.min_component_triangles, r);
-  TriangleMesh out = compact_vertices(mesh, kept);
+  remove_small_components(kept, mesh.vertices.size(), config.min_component_triangles, r, held);
+  TriangleMesh out = compact_vertices(mesh, kept, kept_vertices);
   r.removed_vertices = mesh.vertices.size() - out.vertices.size();
   if (config.non_manifold_vertices == NonManifoldVertexRepair::kSplit) {
     r.split_vertices = split_non_manifold_vertices(out);

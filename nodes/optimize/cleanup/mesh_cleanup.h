@@ -2,6 +2,8 @@
 // First optimization step: remove degenerate triangles and small disconnected components.
 
 #include <cstddef>
+#include <cstdint>
+#include <vector>
 
 #include "runtime/triangle_mesh.h"
 
@@ -46,8 +48,14 @@ struct CleanupReport {
 /// order, unreferenced vertices dropped and the rest renumbered in their order (normals and
 /// colours follow). With kSplit, copies of non-manifold vertices are appended instead, and the
 /// components the split separated that are too small are removed as well.
+/// `held` (optional, one byte per vertex; kRemoveSmallerFans or kNone only): vertices whose
+/// byte is non-zero keep all their fans, and components holding one stay whatever their size (a
+/// chunk's seam, finished in place: graph/chunk_finish.h). `kept` (optional) receives
+/// the input index of each output vertex (ascending), for per-vertex data to follow.
 /// Parallel; deterministic. O(V + T) (a few passes for the fans).
 TriangleMesh clean_mesh(const TriangleMesh& mesh, const CleanupConfig& config,
-                        CleanupReport* report = nullptr);
+                        CleanupReport* report = nullptr,
+                        const std::vector<std::uint8_t>* held = nullptr,
+                        std::vector<std::uint32_t>* kept = nullptr);
 
 }  // namespace meshflow

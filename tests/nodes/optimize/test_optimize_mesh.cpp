@@ -118,3 +118,72 @@ TEST(OptimizeMesh, SameMeshWithOneAndTwoThreads) {
 
 }  // namespace
 }  // namespace meshflow
+
+namespace meshflow {
+namespace {
+
+// A flat 6 x 6 grid of unit quads with the quad at (2, 2) missing (a 4-edge hole), plus a lone
+// triangle far off (a component of 1) and a second fan at grid vertex (5, 5) (a bow tie).
+TriangleMesh grid_with_hole_and_debris() {
+  TriangleMesh m;
+  const auto id = [](int x, int y) { return static_cast<std::uint32_t>(y * 7 + x); };
+  for (int y = 0; y <= 6; ++y)
+    for (int x = 0; x <= 6; ++x) m.vertices.emplace_back(x, y, 0.0f);
+  for (int y = 0; y < 6; ++y)
+    for (int x = 0; x < 6; ++x) {
+      if (x == 2 && y == 2) continue;
+      m.triangles.push_back({id(x, y), id(x + 1, y), id(x + 1, y + 1)});
+      m.triangles.push_back({id(x, y), id(x + 1, y + 1), id(x, y + 1)});
+    }
+  const auto lone = static_cast<std::uint32_t>(m.vertices.size());
+  m.vertices.insert(m.vertices.end(), {{20, 20, 0}, {21, 20, 0}, {20, 21, 0}});
+  m.triangles.push_back({lone, lone + 1, lone + 2});
+  const auto fan = static_cast<std::uint32_t>(m.vertices.size());  // touches (6, 6) only
+  m.vertices.insert(m.vertices.end(), {{7, 6, 1}, {6, 7, 1}});
+  m.triangles.push_back({id(6, 6), fan, fan + 1});
+  return m;
+}
+
+// Held vertices (a chunk's seam) keep what goes on beyond them: the hole through one stays
+// open, the component holding one stays, the vertex keeps its second fan. Without them the
+// steps do what they always do; the flags follow the vertices.
+TEST(OptimizeMesh, HeldVerticesKeepTheirLoopsComponentsAndFans) {
+  const TriangleMesh m = grid_with_hole_and_debris();
+  OptimizeConfig config;  // clean, holes
+  config.feature_angle_deg = 180.0f;
+  const TriangleMesh free = optimize_mesh(m, config);
+  EXPECT_EQ(free.triangles.size(), 72u) << "70 of the grid + 2 filling the hole";
+  EXPECT_EQ(free.vertices.size(), 49u) << "the lone triangle and the second fan removed";
+
+  HeldVertices held;
+  held.flags.assign(m.vertices.size(), 0);
+  held.flags[2 * 7 + 2] = 1;              // a corner of the hole
+  held.flags[m.vertices.size() - 5] = 1;  // the lone triangle's first corner
+  held.flags[6 * 7 + 6] = 1;              // the bow tie's vertex
+  held.flags[m.vertices.size() - 1] = 4;  // an unheld flag that must follow its vertex
+  OptimizeReport report;
+  const TriangleMesh kept = optimize_mesh(m, config, &report, held);
+  EXPECT_EQ(kept.triangles, m.triangles) << "nothing removed, nothing filled";
+  EXPECT_EQ(kept.vertices.size(), m.vertices.size());
+  ASSERT_EQ(held.flags.size(), kept.vertices.size());
+  for (std::size_t v = 0; v < kept.vertices.size(); ++v) {
+    const Eigen::Vector3f& p = kept.vertices[v];
+    const std::uint8_t expected = p == Eigen::Vector3f(2, 2, 0)     ? 1
+                                  : p == Eigen::Vector3f(20, 20, 0) ? 1
+                                  : p == Eigen::Vector3f(6, 6, 0)   ? 1
+                                  : p == Eigen::Vector3f(6, 7, 1)   ? 4
+                                                                    : 0;
+    EXPECT_EQ(held.flags[v], expected) << v;
+  }
+  ASSERT_EQ(report.steps.size(), 2u);
+  EXPECT_NE(report.steps[1].detail.find("1 through held"), std::string::npos)
+      << report.steps[1].detail;
+
+  OptimizeConfig decimate = config;
+  decimate.steps.push_back(OptimizeStep::kDecimate);
+  HeldVertices again{std::vector<std::uint8_t>(m.vertices.size(), 0), 1};
+  EXPECT_THROW(optimize_mesh(m, decimate, nullptr, again), Error) << "decimation cannot hold";
+}
+
+}  // namespace
+}  // namespace meshflow

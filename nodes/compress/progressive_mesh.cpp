@@ -110,24 +110,32 @@ void finish_levels(LevelState& s, const CompressedMeshInfo& info) {
 
 }  // namespace
 
-std::vector<unsigned char> compress_progressive(const TriangleMesh& mesh,
-                                                const CompressConfig& config,
-                                                CompressReport* report) {
-  require_corners_in_range(mesh.triangles, mesh.vertices.size(), "mesh");
-  const Quantizer quantizer = choose_quantizer(mesh, config);
-  const AttributeFlags flags = detail::attribute_flags(mesh, config);
-  const std::size_t n = mesh.vertices.size();
+namespace {
 
-  // Decimate the triangles without a repeated corner, recording the collapses.
+// The collapses that make the base level, and the base mesh itself.
+struct BaseLevel {
+  std::vector<std::uint32_t> kept;           // input triangles the decimation took
+  std::vector<std::uint32_t> degenerate;     // input triangles with a repeated corner: stored last
+  std::vector<Collapse> collapses;           // in the order the decimation made them
+  TriangleMesh base;                         // every vertex no collapse removed, the triangles left
+  std::vector<std::uint32_t> base_vertex;    // per base vertex: its input vertex
+  std::vector<std::uint32_t> base_triangle;  // per base triangle: its index in `kept` order
+};
+
+// Decimates the triangles without a repeated corner to config.base_ratio, recording the
+// collapses, and keeps what is left (with the attributes `flags` names) as the base mesh.
+BaseLevel decimate_to_base(const TriangleMesh& mesh, const CompressConfig& config,
+                           AttributeFlags flags) {
+  const std::size_t n = mesh.vertices.size();
+  BaseLevel level;
   TriangleMesh work;
   work.vertices = mesh.vertices;
-  std::vector<std::uint32_t> kept, degenerate;
   for (std::uint32_t t = 0; t < mesh.triangles.size(); ++t) {
     const Triangle& f = mesh.triangles[t];
     if (f[0] == f[1] || f[1] == f[2] || f[0] == f[2]) {
-      degenerate.push_back(t);
+      level.degenerate.push_back(t);
     } else {
-      kept.push_back(t);
+      level.kept.push_back(t);
       work.triangles.push_back(f);
     }
   }
@@ -143,61 +151,145 @@ std::vector<unsigned char> compress_progressive(const TriangleMesh& mesh,
   qem_decimate(work, qem, &decimation);
   std::vector<Triangle> triangles = work.triangles;
   std::vector<std::uint8_t> alive;
-  const std::vector<Collapse> collapses =
-      replay_collapses(triangles, alive, n, decimation.collapse_sequence);
+  level.collapses = replay_collapses(triangles, alive, n, decimation.collapse_sequence);
 
-  // The base mesh: every vertex no collapse removed, the triangles left.
   std::vector<char> removed_vertex(n, 0);
-  for (const Collapse& c : collapses) removed_vertex[c.u] = 1;
-  TriangleMesh base;
-  std::vector<std::uint32_t> base_vertex, base_triangle, local(n, kNone);
+  for (const Collapse& c : level.collapses) removed_vertex[c.u] = 1;
+  std::vector<std::uint32_t> local(n, kNone);
   for (std::uint32_t v = 0; v < n; ++v)
     if (!removed_vertex[v]) {
-      local[v] = static_cast<std::uint32_t>(base_vertex.size());
-      base_vertex.push_back(v);
-      base.vertices.push_back(mesh.vertices[v]);
-      if (flags.normals) base.normals.push_back(mesh.normals[v]);
-      if (flags.colors) base.colors.push_back(mesh.colors[v]);
+      local[v] = static_cast<std::uint32_t>(level.base_vertex.size());
+      level.base_vertex.push_back(v);
+      level.base.vertices.push_back(mesh.vertices[v]);
+      if (flags.normals) level.base.normals.push_back(mesh.normals[v]);
+      if (flags.colors) level.base.colors.push_back(mesh.colors[v]);
     }
   for (std::uint32_t t = 0; t < triangles.size(); ++t)
     if (alive[t]) {
-      base_triangle.push_back(t);
-      base.triangles.push_back(
+      level.base_triangle.push_back(t);
+      level.base.triangles.push_back(
           {local[triangles[t][0]], local[triangles[t][1]], local[triangles[t][2]]});
     }
+  return level;
+}
 
-  io::ByteWriter out;
-  detail::write_header(out, CompressionKind::kProgressive, flags, n, mesh.triangles.size(),
-                       quantizer, config.origin_offset);
-  BodyOrder order;
-  BodyCodes codes;
-  const BodyStats stats = encode_body(base, quantizer, flags, out, &order, &codes);
-  const std::size_t base_bytes = out.out.size();
-  std::vector<Eigen::Vector3f> decoded_normals = std::move(codes.normals);  // per decoded id
+// The decoder's numbers: the base's vertices in their decoded order, then each split's u.
+struct DecodedNumbers {
+  std::vector<std::uint32_t> id;              // per input vertex: its decoded number
+  std::vector<std::uint32_t> vertex_order;    // per decoded vertex: its input vertex
+  std::vector<std::uint32_t> triangle_order;  // per decoded triangle: its input triangle
+};
 
-  // Decoded numbers: the base's in its decoded order, then each split's u.
-  std::vector<std::uint32_t> id(n, kNone), vertex_order, triangle_order;
+DecodedNumbers number_as_decoded(const BaseLevel& level, const BodyOrder& order, std::size_t n) {
+  DecodedNumbers numbers;
+  numbers.id.assign(n, kNone);
   for (std::uint32_t k = 0; k < order.vertex.size(); ++k) {
-    id[base_vertex[order.vertex[k]]] = k;
-    vertex_order.push_back(base_vertex[order.vertex[k]]);
+    numbers.id[level.base_vertex[order.vertex[k]]] = k;
+    numbers.vertex_order.push_back(level.base_vertex[order.vertex[k]]);
   }
-  for (std::uint32_t t : order.triangle) triangle_order.push_back(kept[base_triangle[t]]);
-  const std::size_t splits = collapses.size();
+  for (std::uint32_t t : order.triangle)
+    numbers.triangle_order.push_back(level.kept[level.base_triangle[t]]);
+  const std::size_t splits = level.collapses.size();
   for (std::size_t j = 0; j < splits; ++j) {
-    const std::uint32_t u = collapses[splits - 1 - j].u;
-    id[u] = static_cast<std::uint32_t>(order.vertex.size() + j);
-    vertex_order.push_back(u);
+    const std::uint32_t u = level.collapses[splits - 1 - j].u;
+    numbers.id[u] = static_cast<std::uint32_t>(order.vertex.size() + j);
+    numbers.vertex_order.push_back(u);
   }
-  const auto mapped = [&](const Triangle& t) { return Triangle{id[t[0]], id[t[1]], id[t[2]]}; };
+  return numbers;
+}
 
+// What encoding a split needs beside its collapse. `numbers.triangle_order` and
+// `decoded_normals` (the decoder's normals, per decoded vertex) grow as splits are encoded.
+struct SplitEncoding {
+  const TriangleMesh& mesh;
+  const Quantizer& quantizer;
+  AttributeFlags flags;
+  const std::vector<std::uint32_t>& kept;
+  DecodedNumbers& numbers;
+  std::vector<Eigen::Vector3f>& decoded_normals;
+};
+
+// u's position, normal and colour as differences from v's (decoded number v).
+void encode_split_attributes(const Collapse& c, std::uint32_t v, SplitEncoding& e,
+                             RangeEncoder& enc, SplitModels& m) {
+  const auto gu = e.quantizer.quantize(e.mesh.vertices[c.u]);
+  const auto gv = e.quantizer.quantize(e.mesh.vertices[c.v]);
+  for (std::size_t a = 0; a < 3; ++a) m.position[a].encode(enc, gu[a] - gv[a]);
+  if (e.flags.normals) {
+    Eigen::Vector3f decoded;
+    const auto d =
+        normal_residual(e.decoded_normals[v], e.mesh.normals[c.u], e.flags.normal_bits, decoded);
+    for (std::size_t a = 0; a < 2; ++a) m.normal[a].encode(enc, d[a]);
+    e.decoded_normals.push_back(decoded);
+  }
+  if (e.flags.colors) {
+    const Rgb8 cu = e.mesh.colors[c.u], cv = e.mesh.colors[c.v];
+    const std::uint8_t du[3] = {cu.r, cu.g, cu.b}, dv[3] = {cv.r, cv.g, cv.b};
+    for (std::size_t a = 0; a < 3; ++a)
+      m.color[a].encode(enc, static_cast<std::int8_t>(du[a] - dv[a]));
+  }
+}
+
+// Which of v's triangles go to u (in the decoder's key order), then the triangles the split
+// adds: each third corner by its rank among v's neighbours (or its number), and its corner
+// order.
+void encode_split_connectivity(const Collapse& c, std::uint32_t v, std::size_t vertex_count,
+                               SplitEncoding& e, RangeEncoder& enc, SplitModels& m) {
+  const std::vector<std::uint32_t>& id = e.numbers.id;
+  const auto mapped = [&](const Triangle& t) { return Triangle{id[t[0]], id[t[1]], id[t[2]]}; };
+  std::vector<Triangle> around(c.around.size());
+  std::vector<std::pair<std::uint64_t, std::uint8_t>> keyed(c.around.size());
+  for (std::size_t k = 0; k < c.around.size(); ++k) {
+    around[k] = mapped(c.around[k]);
+    keyed[k] = {key_around(around[k], v), c.moved[k]};
+  }
+  std::sort(keyed.begin(), keyed.end());
+  unsigned previous = 2;
+  for (const auto& [key, moved] : keyed) {
+    enc.encode(m.moved[previous], moved);
+    previous = moved;
+  }
+  if (c.removed.size() > 15)
+    throw Error("progressive mesh", "collapse", "removes more than 15 triangles");
+  m.removed.encode(enc, static_cast<unsigned>(c.removed.size()));
+  const std::vector<std::uint32_t> neighbours = neighbours_of(around, v);
+  const std::uint32_t u = id[c.u];
+  for (std::size_t k = 0; k < c.removed.size(); ++k) {
+    const Triangle t = mapped(c.removed[k]);
+    std::uint32_t w = kNone;
+    std::uint8_t role[3];
+    for (std::size_t i = 0; i < 3; ++i) {
+      role[i] = t[i] == u ? 0 : t[i] == v ? 1 : 2;
+      if (role[i] == 2) w = t[i];
+    }
+    const auto it = std::lower_bound(neighbours.begin(), neighbours.end(), w);
+    if (it != neighbours.end() && *it == w) {
+      m.rank.encode(enc, static_cast<std::int32_t>(it - neighbours.begin()) + 1);
+    } else {
+      m.rank.encode(enc, 0);
+      enc.encode_direct(w, bits_for_count(vertex_count + 1));
+    }
+    unsigned k6 = 0;
+    while (!(kOrders[k6][0] == role[0] && kOrders[k6][1] == role[1])) ++k6;
+    m.order.encode(enc, k6);
+    e.numbers.triangle_order.push_back(e.kept[c.removed_ids[k]]);
+  }
+}
+
+// The split records, finest collapse last undone, in packets of `per_packet`: each packet its
+// own range-coded stream with fresh models, its split count, size and a checksum chained from
+// the header and base mesh (so any prefix cut at a packet boundary verifies). Writes the
+// split and packet counts first and the prefix checksum into the header.
+void write_split_packets(io::ByteWriter& out, const std::vector<Collapse>& collapses,
+                         std::uint32_t per_packet, std::size_t base_vertices, SplitEncoding& e) {
+  const std::size_t splits = collapses.size();
   out.u64(splits);
-  const std::uint32_t per_packet = std::max<std::uint32_t>(1, config.splits_per_packet);
   const auto packets = static_cast<std::uint32_t>((splits + per_packet - 1) / per_packet);
   out.u32(packets);
   std::uint64_t chain = detail::prefix_checksum(out.out.data(), out.out.size());
   for (std::size_t i = 0; i < 8; ++i)
     out.out[detail::kPrefixChecksumOffset + i] = static_cast<unsigned char>(chain >> (8 * i));
-  std::size_t vertex_count = order.vertex.size();
+  std::size_t vertex_count = base_vertices;
   for (std::uint32_t p = 0; p < packets; ++p) {
     const std::size_t first = std::size_t{p} * per_packet;
     const std::size_t last = std::min(splits, first + per_packet);
@@ -205,62 +297,10 @@ std::vector<unsigned char> compress_progressive(const TriangleMesh& mesh,
     SplitModels m;
     for (std::size_t j = first; j < last; ++j) {
       const Collapse& c = collapses[splits - 1 - j];
-      const std::uint32_t v = id[c.v];
+      const std::uint32_t v = e.numbers.id[c.v];
       enc.encode_direct(v, bits_for_count(vertex_count));
-      const auto gu = quantizer.quantize(mesh.vertices[c.u]);
-      const auto gv = quantizer.quantize(mesh.vertices[c.v]);
-      for (std::size_t a = 0; a < 3; ++a) m.position[a].encode(enc, gu[a] - gv[a]);
-      if (flags.normals) {
-        Eigen::Vector3f decoded;
-        const auto d =
-            normal_residual(decoded_normals[v], mesh.normals[c.u], flags.normal_bits, decoded);
-        for (std::size_t a = 0; a < 2; ++a) m.normal[a].encode(enc, d[a]);
-        decoded_normals.push_back(decoded);
-      }
-      if (flags.colors) {
-        const Rgb8 cu = mesh.colors[c.u], cv = mesh.colors[c.v];
-        const std::uint8_t du[3] = {cu.r, cu.g, cu.b}, dv[3] = {cv.r, cv.g, cv.b};
-        for (std::size_t a = 0; a < 3; ++a)
-          m.color[a].encode(enc, static_cast<std::int8_t>(du[a] - dv[a]));
-      }
-      // Which of v's triangles go to u, in the decoder's order.
-      std::vector<Triangle> around(c.around.size());
-      std::vector<std::pair<std::uint64_t, std::uint8_t>> keyed(c.around.size());
-      for (std::size_t k = 0; k < c.around.size(); ++k) {
-        around[k] = mapped(c.around[k]);
-        keyed[k] = {key_around(around[k], v), c.moved[k]};
-      }
-      std::sort(keyed.begin(), keyed.end());
-      unsigned previous = 2;
-      for (const auto& [key, moved] : keyed) {
-        enc.encode(m.moved[previous], moved);
-        previous = moved;
-      }
-      if (c.removed.size() > 15)
-        throw Error("progressive mesh", "collapse", "removes more than 15 triangles");
-      m.removed.encode(enc, static_cast<unsigned>(c.removed.size()));
-      const std::vector<std::uint32_t> neighbours = neighbours_of(around, v);
-      const std::uint32_t u = id[c.u];
-      for (std::size_t k = 0; k < c.removed.size(); ++k) {
-        const Triangle t = mapped(c.removed[k]);
-        std::uint32_t w = kNone;
-        std::uint8_t role[3];
-        for (std::size_t i = 0; i < 3; ++i) {
-          role[i] = t[i] == u ? 0 : t[i] == v ? 1 : 2;
-          if (role[i] == 2) w = t[i];
-        }
-        const auto it = std::lower_bound(neighbours.begin(), neighbours.end(), w);
-        if (it != neighbours.end() && *it == w) {
-          m.rank.encode(enc, static_cast<std::int32_t>(it - neighbours.begin()) + 1);
-        } else {
-          m.rank.encode(enc, 0);
-          enc.encode_direct(w, bits_for_count(vertex_count + 1));
-        }
-        unsigned k6 = 0;
-        while (!(kOrders[k6][0] == role[0] && kOrders[k6][1] == role[1])) ++k6;
-        m.order.encode(enc, k6);
-        triangle_order.push_back(kept[c.removed_ids[k]]);
-      }
+      encode_split_attributes(c, v, e, enc, m);
+      encode_split_connectivity(c, v, vertex_count, e, enc, m);
       ++vertex_count;
     }
     const std::vector<unsigned char> bytes = enc.finish();
@@ -271,10 +311,38 @@ std::vector<unsigned char> compress_progressive(const TriangleMesh& mesh,
     chain = detail::fnv1a64_continue(chain, out.out.data() + start, out.out.size() - start);
     out.u64(chain);
   }
-  out.u64(degenerate.size());
-  for (std::uint32_t t : degenerate) {
-    for (std::uint32_t c : mesh.triangles[t]) out.u32(id[c]);
-    triangle_order.push_back(t);
+}
+
+}  // namespace
+
+std::vector<unsigned char> compress_progressive(const TriangleMesh& mesh,
+                                                const CompressConfig& config,
+                                                CompressReport* report) {
+  require_corners_in_range(mesh.triangles, mesh.vertices.size(), "mesh");
+  const Quantizer quantizer = choose_quantizer(mesh, config);
+  const AttributeFlags flags = detail::attribute_flags(mesh, config);
+  const std::size_t n = mesh.vertices.size();
+
+  BaseLevel level = decimate_to_base(mesh, config, flags);
+
+  io::ByteWriter out;
+  detail::write_header(out, CompressionKind::kProgressive, flags, n, mesh.triangles.size(),
+                       quantizer, config.origin_offset);
+  BodyOrder order;
+  BodyCodes codes;
+  const BodyStats stats = encode_body(level.base, quantizer, flags, out, &order, &codes);
+  const std::size_t base_bytes = out.out.size();
+
+  DecodedNumbers numbers = number_as_decoded(level, order, n);
+  std::vector<Eigen::Vector3f> decoded_normals = std::move(codes.normals);  // per decoded id
+  SplitEncoding encoding{mesh, quantizer, flags, level.kept, numbers, decoded_normals};
+  write_split_packets(out, level.collapses, std::max<std::uint32_t>(1, config.splits_per_packet),
+                      order.vertex.size(), encoding);
+
+  out.u64(level.degenerate.size());
+  for (std::uint32_t t : level.degenerate) {
+    for (std::uint32_t c : mesh.triangles[t]) out.u32(numbers.id[c]);
+    numbers.triangle_order.push_back(t);
   }
   detail::seal(out);
   if (report != nullptr) {
@@ -283,11 +351,11 @@ std::vector<unsigned char> compress_progressive(const TriangleMesh& mesh,
     report->total_bytes = out.out.size();
     report->body = stats;
     report->quantizer = quantizer;
-    report->base_triangles = base.triangles.size();
+    report->base_triangles = level.base.triangles.size();
     report->base_bytes = base_bytes;
-    report->splits = splits;
-    report->vertex_order = std::move(vertex_order);
-    report->triangle_order = std::move(triangle_order);
+    report->splits = level.collapses.size();
+    report->vertex_order = std::move(numbers.vertex_order);
+    report->triangle_order = std::move(numbers.triangle_order);
   }
   return std::move(out.out);
 }
@@ -351,6 +419,132 @@ void reseal_progressive_mesh(std::vector<unsigned char>& bytes) {
   resealed_file();
 }
 
+namespace {
+
+// One split packet, its checksum verified: how many splits it holds and its range-coded bytes.
+struct SplitPacket {
+  std::uint32_t count = 0;
+  const unsigned char* bytes = nullptr;
+  std::size_t size = 0;
+};
+
+// Reads packet p's header and bytes and checks its checksum, chained on from `chain` (updated).
+// `splits_left`: how many splits the file still states.
+SplitPacket read_split_packet(io::ByteReader& in, std::uint32_t p, std::uint64_t splits_left,
+                              std::uint64_t& chain) {
+  SplitPacket packet;
+  packet.count = in.u32("packet split count");
+  const std::uint64_t size = in.u64("packet size");
+  if (packet.count > splits_left) in.fail("packet split count", "more splits than stated");
+  if (size < 8) in.fail("packet size", std::to_string(size) + " bytes hold no checksum");
+  if (size > in.remaining())
+    in.fail("packet size", "packet " + std::to_string(p) + " needs " + std::to_string(size) +
+                               " bytes, " + std::to_string(in.remaining()) +
+                               " left (truncated inside a packet, or corrupt)");
+  packet.size = static_cast<std::size_t>(size - 8);
+  packet.bytes = in.bytes(packet.size, "packet");
+  chain =
+      detail::fnv1a64_continue(chain_header(chain, packet.count, size), packet.bytes, packet.size);
+  if (in.u64("packet checksum") != chain)
+    in.fail("packet checksum", "packet " + std::to_string(p) + " does not match its contents");
+  return packet;
+}
+
+// The new vertex u's position, normal and colour from v's and the coded differences.
+void decode_split_attributes(LevelState& s, std::uint32_t v, const CompressedMeshInfo& info,
+                             unsigned normal_bits, RangeDecoder& dec, SplitModels& m) {
+  std::array<std::int32_t, 3> gu{};
+  for (std::size_t a = 0; a < 3; ++a)
+    gu[a] = static_cast<std::int32_t>(static_cast<std::uint32_t>(s.grid[v][a]) +
+                                      static_cast<std::uint32_t>(m.position[a].decode(dec)));
+  s.grid.push_back(gu);
+  s.mesh.vertices.push_back(info.quantizer.position(gu));
+  if (info.normals) {
+    std::array<std::int32_t, 2> d{};
+    for (std::size_t a = 0; a < 2; ++a) d[a] = m.normal[a].decode(dec);
+    s.mesh.normals.push_back(apply_normal_residual(s.mesh.normals[v], d, normal_bits));
+  }
+  if (info.colors) {
+    const Rgb8 cv = s.mesh.colors[v];
+    const std::uint8_t dv[3] = {cv.r, cv.g, cv.b};
+    std::uint8_t du[3];
+    for (std::size_t a = 0; a < 3; ++a)
+      du[a] = static_cast<std::uint8_t>(dv[a] + static_cast<std::uint8_t>(m.color[a].decode(dec)));
+    s.mesh.colors.push_back(Rgb8{du[0], du[1], du[2]});
+  }
+}
+
+// Moves the marked triangles of v to u (in key order) and adds the triangles the split made;
+// `fail` reports a record that names no valid vertex or corner order.
+template <typename Fail>
+void decode_split_connectivity(LevelState& s, std::uint32_t u, std::uint32_t v, RangeDecoder& dec,
+                               SplitModels& m, const Fail& fail) {
+  s.around.emplace_back();
+  std::vector<std::uint32_t>& av = s.around[v];
+  std::vector<Triangle> around;
+  std::vector<std::pair<std::uint64_t, std::uint32_t>> keyed;
+  around.reserve(av.size());
+  keyed.reserve(av.size());
+  for (std::uint32_t t : av) {
+    around.push_back(s.mesh.triangles[t]);
+    keyed.push_back({key_around(s.mesh.triangles[t], v), t});
+  }
+  const std::vector<std::uint32_t> neighbours = neighbours_of(around, v);
+  std::sort(keyed.begin(), keyed.end());
+  unsigned previous = 2;
+  std::vector<std::uint32_t> stay;
+  for (const auto& [key, t] : keyed) {
+    const unsigned moved = dec.decode(m.moved[previous]);
+    previous = moved;
+    if (moved) {
+      for (std::uint32_t& x : s.mesh.triangles[t])
+        if (x == v) x = u;
+      s.around[u].push_back(t);
+    } else {
+      stay.push_back(t);
+    }
+  }
+  s.around[v] = std::move(stay);
+  const unsigned removed = m.removed.decode(dec);
+  for (unsigned k = 0; k < removed; ++k) {
+    const std::int32_t rank = m.rank.decode(dec);
+    std::uint32_t w = kNone;
+    if (rank == 0) {
+      w = dec.decode_direct(bits_for_count(std::size_t{u} + 1));
+    } else if (rank > 0 && static_cast<std::size_t>(rank) <= neighbours.size()) {
+      w = neighbours[static_cast<std::size_t>(rank) - 1];
+    } else {
+      fail("third vertex rank " + std::to_string(rank) + " of " +
+           std::to_string(neighbours.size()) + " neighbours");
+    }
+    if (w >= u || w == v) fail("third vertex " + std::to_string(w) + " is not valid");
+    const unsigned k6 = m.order.decode(dec);
+    if (k6 >= 6) fail("corner order " + std::to_string(k6));
+    const std::uint32_t roles[3] = {u, v, w};
+    const Triangle t{roles[kOrders[k6][0]], roles[kOrders[k6][1]], roles[kOrders[k6][2]]};
+    const auto index = static_cast<std::uint32_t>(s.mesh.triangles.size());
+    s.mesh.triangles.push_back(t);
+    for (std::uint32_t c : t) s.around[c].push_back(index);
+  }
+}
+
+// The triangles with a repeated corner, stored after the last packet.
+void read_degenerate_triangles(io::ByteReader& in, TriangleMesh& mesh) {
+  const std::uint64_t degenerate = in.u64("degenerate triangle count");
+  if (degenerate > in.remaining() / 12)
+    in.fail("degenerate triangle count", std::to_string(degenerate) + " do not fit the file");
+  for (std::uint64_t i = 0; i < degenerate; ++i) {
+    Triangle t;
+    for (std::uint32_t& c : t) {
+      c = in.u32("degenerate triangle corner");
+      if (c >= mesh.vertices.size()) in.fail("degenerate triangle corner", "out of range");
+    }
+    mesh.triangles.push_back(t);
+  }
+}
+
+}  // namespace
+
 TriangleMesh decode_progressive(io::ByteReader& in, const CompressedMeshInfo& info,
                                 const std::string& source, const ProgressiveLevel& level,
                                 PrefixState* prefix) {
@@ -385,23 +579,11 @@ TriangleMesh decode_progressive(io::ByteReader& in, const CompressedMeshInfo& in
       finish_levels(s, info);
       return std::move(s.mesh);
     }
-    const std::uint32_t count = in.u32("packet split count");
-    const std::uint64_t size = in.u64("packet size");
-    if (count > splits - applied) in.fail("packet split count", "more splits than stated");
-    if (size < 8) in.fail("packet size", std::to_string(size) + " bytes hold no checksum");
-    if (size > in.remaining())
-      in.fail("packet size", "packet " + std::to_string(p) + " needs " + std::to_string(size) +
-                                 " bytes, " + std::to_string(in.remaining()) +
-                                 " left (truncated inside a packet, or corrupt)");
-    const auto stream = static_cast<std::size_t>(size - 8);
-    const unsigned char* bytes = in.bytes(stream, "packet");
-    chain = detail::fnv1a64_continue(chain_header(chain, count, size), bytes, stream);
-    if (in.u64("packet checksum") != chain)
-      in.fail("packet checksum", "packet " + std::to_string(p) + " does not match its contents");
+    const SplitPacket packet = read_split_packet(in, p, splits - applied, chain);
     if (prefix != nullptr) ++prefix->packets_read;
-    RangeDecoder dec(bytes, stream, source, "split packet " + std::to_string(p));
+    RangeDecoder dec(packet.bytes, packet.size, source, "split packet " + std::to_string(p));
     SplitModels m;
-    for (std::uint32_t j = 0; j < count; ++j) {
+    for (std::uint32_t j = 0; j < packet.count; ++j) {
       if (applied >= level.splits || s.mesh.triangles.size() >= level.triangles) {
         full = false;
         if (prefix != nullptr) prefix->stopped_at_level = true;
@@ -414,96 +596,18 @@ TriangleMesh decode_progressive(io::ByteReader& in, const CompressedMeshInfo& in
       const std::uint32_t v = dec.decode_direct(bits_for_count(vertex_count));
       if (v >= vertex_count)
         fail("names vertex " + std::to_string(v) + " of " + std::to_string(vertex_count));
-      const auto u = static_cast<std::uint32_t>(vertex_count);
-      std::array<std::int32_t, 3> gu{};
-      for (std::size_t a = 0; a < 3; ++a)
-        gu[a] = static_cast<std::int32_t>(static_cast<std::uint32_t>(s.grid[v][a]) +
-                                          static_cast<std::uint32_t>(m.position[a].decode(dec)));
-      s.grid.push_back(gu);
-      s.mesh.vertices.push_back(info.quantizer.position(gu));
-      if (flags.normals) {
-        std::array<std::int32_t, 2> d{};
-        for (std::size_t a = 0; a < 2; ++a) d[a] = m.normal[a].decode(dec);
-        s.mesh.normals.push_back(apply_normal_residual(s.mesh.normals[v], d, normal_bits));
-      }
-      if (flags.colors) {
-        const Rgb8 cv = s.mesh.colors[v];
-        const std::uint8_t dv[3] = {cv.r, cv.g, cv.b};
-        std::uint8_t du[3];
-        for (std::size_t a = 0; a < 3; ++a)
-          du[a] =
-              static_cast<std::uint8_t>(dv[a] + static_cast<std::uint8_t>(m.color[a].decode(dec)));
-        s.mesh.colors.push_back(Rgb8{du[0], du[1], du[2]});
-      }
-      s.around.emplace_back();
-      // v's triangles in key order; those marked go to u.
-      std::vector<std::uint32_t>& av = s.around[v];
-      std::vector<Triangle> around;
-      std::vector<std::pair<std::uint64_t, std::uint32_t>> keyed;
-      for (std::uint32_t t : av) {
-        around.push_back(s.mesh.triangles[t]);
-        keyed.push_back({key_around(s.mesh.triangles[t], v), t});
-      }
-      const std::vector<std::uint32_t> neighbours = neighbours_of(around, v);
-      std::sort(keyed.begin(), keyed.end());
-      unsigned previous = 2;
-      std::vector<std::uint32_t> stay;
-      for (const auto& [key, t] : keyed) {
-        const unsigned moved = dec.decode(m.moved[previous]);
-        previous = moved;
-        if (moved) {
-          for (std::uint32_t& x : s.mesh.triangles[t])
-            if (x == v) x = u;
-          s.around[u].push_back(t);
-        } else {
-          stay.push_back(t);
-        }
-      }
-      s.around[v] = std::move(stay);
-      const unsigned removed = m.removed.decode(dec);
-      for (unsigned k = 0; k < removed; ++k) {
-        const std::int32_t rank = m.rank.decode(dec);
-        std::uint32_t w = kNone;
-        if (rank == 0) {
-          w = dec.decode_direct(bits_for_count(vertex_count + 1));
-        } else if (rank > 0 && static_cast<std::size_t>(rank) <= neighbours.size()) {
-          w = neighbours[static_cast<std::size_t>(rank) - 1];
-        } else {
-          fail("third vertex rank " + std::to_string(rank) + " of " +
-               std::to_string(neighbours.size()) + " neighbours");
-        }
-        if (w >= u || w == v) fail("third vertex " + std::to_string(w) + " is not valid");
-        const unsigned k6 = m.order.decode(dec);
-        if (k6 >= 6) fail("corner order " + std::to_string(k6));
-        const std::uint32_t roles[3] = {u, v, w};
-        const Triangle t{roles[kOrders[k6][0]], roles[kOrders[k6][1]], roles[kOrders[k6][2]]};
-        const auto index = static_cast<std::uint32_t>(s.mesh.triangles.size());
-        s.mesh.triangles.push_back(t);
-        for (std::uint32_t c : t) s.around[c].push_back(index);
-      }
+      decode_split_attributes(s, v, info, normal_bits, dec, m);
+      decode_split_connectivity(s, static_cast<std::uint32_t>(vertex_count), v, dec, m, fail);
       dec.check();
       ++applied;
     }
   }
-  if (!full || applied < splits) {
+  // A level short of the full mesh, or a prefix holding every packet but not the file's end.
+  if (!full || applied < splits || (prefix != nullptr && in.remaining() == 0)) {
     finish_levels(s, info);
     return std::move(s.mesh);
   }
-  if (prefix != nullptr && in.remaining() == 0) {  // every packet, not the end of the file
-    finish_levels(s, info);
-    return std::move(s.mesh);
-  }
-  const std::uint64_t degenerate = in.u64("degenerate triangle count");
-  if (degenerate > in.remaining() / 12)
-    in.fail("degenerate triangle count", std::to_string(degenerate) + " do not fit the file");
-  for (std::uint64_t i = 0; i < degenerate; ++i) {
-    Triangle t;
-    for (std::uint32_t& c : t) {
-      c = in.u32("degenerate triangle corner");
-      if (c >= s.mesh.vertices.size()) in.fail("degenerate triangle corner", "out of range");
-    }
-    s.mesh.triangles.push_back(t);
-  }
+  read_degenerate_triangles(in, s.mesh);
   if (prefix != nullptr) prefix->complete = true;
   finish_levels(s, info);
   return std::move(s.mesh);

@@ -151,7 +151,9 @@ TEST(PlanarRegions, StraySpotsDoNotTiltAnExactPlane) {
 TEST(PlanarRegions, AClutteredWallKeepsTheWallAndLeavesTheClutter) {
   // A flat 0.6 m square with a smooth 2 cm bump (something on the wall, slopes within 15
   // degrees, so the whole square grows as one region): the region shrinks to the flat part and
-  // the bump keeps its shape.
+  // the bump keeps its shape. The mesh is exact, so the region is held to the tight tolerance
+  // of a smooth mesh: the bump's skirt down to a few micrometres stays out (about a quarter of
+  // the square), where 2 mm would flatten it by up to 2 mm.
   const TriangleMesh wall = sampled_height_field(61, [](float x, float y) {
     const float r2 = (x - 0.45f) * (x - 0.45f) + (y - 0.45f) * (y - 0.45f);
     return 0.02f * std::exp(-r2 / (2.0f * 0.04f * 0.04f));
@@ -162,7 +164,7 @@ TEST(PlanarRegions, AClutteredWallKeepsTheWallAndLeavesTheClutter) {
   HalfEdgeMesh h(wall);
   const PlanarSegmentation s = grow_planar_regions(h, config);
   ASSERT_EQ(s.regions.size(), 1u);
-  EXPECT_GT(s.regions[0].faces.size(), wall.triangles.size() * 3 / 4);
+  EXPECT_GT(s.regions[0].faces.size(), wall.triangles.size() * 2 / 3);
   EXPECT_LT(s.regions[0].faces.size(), wall.triangles.size());
   for (std::uint32_t f : s.regions[0].faces)
     for (int k = 0; k < 3; ++k) EXPECT_LT(wall.vertices[wall.triangles[f][k]].z(), 0.0025f);

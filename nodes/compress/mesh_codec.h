@@ -35,8 +35,8 @@ struct AttributeFlags {
   /// Encoding only: octahedral bits per normal coordinate (kMinNormalBits .. kMaxNormalBits);
   /// a decoder reads them from the body.
   unsigned normal_bits = kDefaultNormalBits;
-  /// Encoding only: the single-rate normal coder's residual step, radians (kMinNormalStep ..
-  /// kMaxNormalStep; normal_step_for()); a decoder reads it from the attribute section.
+  /// Encoding only: the single-rate normal coder's residual step, radians (from kMinNormalStep
+  /// to kMaxNormalStep; normal_step_for()); a decoder reads it from the attribute section.
   float normal_step = normal_step_for(normal_error_degrees(kDefaultNormalBits));
   /// File level: the body stores no normals and the decoder recomputes them (header flag bit 2).
   bool recomputed_normals = false;

@@ -205,6 +205,11 @@ std::vector<OptionSpec> make_specs() {
            return "";
          return "expected 0 or an integer in [4, 20], got " + std::to_string(o.normal_bits);
        }},
+      {"normal-error", &O::normal_error,
+       "Compressed meshes (.mfc): the largest angle, degrees, between an input normal and its "
+       "decoded normal, 0.001..30, in place of --normal-bits' bound (0.25 at 10 bits, doubling "
+       "per bit fewer)",
+       "from --normal-bits", in_range_or(&O::normal_error, 0.0f, 0.001, 30.0)},
       {"orient", &O::orient,
        "Orientation of estimated normals: auto (the input normals' signs, else the sensor where "
        "the data has one, else propagate), sensor, propagate (consistent over neighbours, then up "
@@ -306,6 +311,7 @@ ReconstructionConfig PipelineOptions::config() const {
                                              : NormalSource::kAuto;
   parse_orientation(orient, c.normals);
   c.compress.normal_bits = static_cast<unsigned>(normal_bits);
+  c.compress.normal_error = static_cast<double>(normal_error);
   c.max_memory_bytes =
       max_memory.empty() ? default_memory_limit() : parse_byte_size(max_memory, "--max-memory");
   return c;

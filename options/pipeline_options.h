@@ -51,6 +51,9 @@ struct PipelineOptions {
   std::string max_memory;        ///< "512M", "4G", "0"; empty: default_memory_limit()
   /// Compressed meshes (--compress): octahedral bits per normal coordinate, 0 = recomputed.
   int normal_bits = static_cast<int>(compress::kDefaultNormalBits);
+  /// Compressed meshes: the largest angle, degrees, between an input normal and its decoded
+  /// one, in place of normal_bits' bound; 0: from normal_bits.
+  float normal_error = 0.0f;
 
   /// The stages' configuration. Throws meshflow::Error (source "--NAME") for the first option
   /// that fails its check (validate()). O(options).

@@ -16,11 +16,15 @@ void bind_compress(py::module_& m) {
          int normal_bits, double normal_error) {
         options::PipelineOptions model;
         model.normal_bits = normal_bits;
-        const std::string problem = options::option_spec("normal-bits").check(model);
-        if (!problem.empty()) throw py::value_error("normal_bits: " + problem);
+        model.normal_error = static_cast<float>(normal_error);
+        for (const char* name : {"normal-bits", "normal-error"}) {
+          const options::OptionSpec& spec = options::option_spec(name);
+          const std::string problem = spec.check(model);
+          if (!problem.empty()) throw py::value_error(options::python_name(spec) + ": " + problem);
+        }
         compress::CompressConfig config;
         config.normal_bits = static_cast<unsigned>(normal_bits);
-        config.normal_error = normal_error;
+        config.normal_error = static_cast<double>(model.normal_error);
         config.position_bits = bits;
         config.step = step;
         config.normals = normals;

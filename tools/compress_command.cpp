@@ -13,6 +13,7 @@
 #include "runtime/threads.h"
 #include "tools/commands.h"
 #include "tools/console.h"
+#include "tools/model_check.h"
 
 namespace meshflow::cli {
 namespace {
@@ -23,8 +24,7 @@ struct CompressOptions {
   unsigned bits = 0;
   double step = 0.0;
   bool no_normals = false, no_colors = false;
-  options::PipelineOptions model;  // the option model's settings (--normal-bits)
-  double normal_error = 0.0;       // degrees; 0: from --normal-bits
+  options::PipelineOptions model;  // the option model's settings (--normal-bits, --normal-error)
   float base_ratio = 0.02f;
 };
 
@@ -39,7 +39,7 @@ void run_compress(const CompressOptions& o) {
   config.normals = !o.no_normals;
   config.colors = !o.no_colors;
   config.normal_bits = static_cast<unsigned>(o.model.normal_bits);
-  config.normal_error = o.normal_error;
+  config.normal_error = static_cast<double>(o.model.normal_error);
   config.base_ratio = o.base_ratio;
   const TriangleMesh mesh = io::read_mesh(o.input);
   const double t0 = monotonic_seconds();
@@ -205,23 +205,14 @@ void add_compress_options(CLI::App* cmd) {
       ->check(CLI::PositiveNumber)
       ->default_str("auto");
   cmd->add_flag("--no-normals", o->no_normals, "Leave the mesh's normals out");
-  cmd->add_option("--normal-bits", o->model.normal_bits, options::option_spec("normal-bits").help)
+  const options::OptionSpec& bits = options::option_spec("normal-bits");
+  cmd->add_option("--normal-bits", o->model.normal_bits, bits.help)
       ->capture_default_str()
-      ->check([](const std::string& text) -> std::string {
-        options::PipelineOptions value;
-        try {
-          value.normal_bits = std::stoi(text);
-        } catch (const std::exception&) {
-          return "expected an integer, got '" + text + "'";
-        }
-        return options::option_spec("normal-bits").check(value);
-      });
-  cmd->add_option("--normal-error", o->normal_error,
-                  "Compressed meshes (.mfc): the largest angle, degrees, between an input normal "
-                  "and its decoded normal, in place of --normal-bits' bound (0.25 at 10 bits, "
-                  "doubling per bit fewer)")
-      ->check(CLI::Range(0.001, 30.0))
-      ->default_str("from --normal-bits");
+      ->check(model_check(bits, &options::PipelineOptions::normal_bits));
+  const options::OptionSpec& error = options::option_spec("normal-error");
+  cmd->add_option("--normal-error", o->model.normal_error, error.help)
+      ->check(model_check(error, &options::PipelineOptions::normal_error))
+      ->default_str(error.default_text);
   cmd->add_flag("--no-colors", o->no_colors, "Leave the mesh's colours out");
   cmd->add_option("--base-ratio", o->base_ratio,
                   "Progressive: share of the triangles in the base mesh")

@@ -89,7 +89,7 @@ std::vector<std::uint8_t> through_line_nodes(const Eigen::Vector3i& size,
   }
   std::vector<std::uint8_t> out(nodes, 0);
   for (std::size_t k = 0; k < dirs.size(); ++k) {
-    const Eigen::Vector3i d = dirs[k];
+    const Eigen::Vector3i& d = dirs[k];
     // One of each opposite pair: the first non-zero component positive.
     const int lead = d.x() != 0 ? d.x() : d.y() != 0 ? d.y() : d.z();
     if (lead < 0) continue;

@@ -77,6 +77,14 @@ TEST(PipelineOptions, OutOfRangeValuesAreRefusedWithTheOptionAndTheRange) {
   EXPECT_EQ(problem_of(o), "");
   o.voxel = -5.0f;
   EXPECT_THROW(o.config(), Error);
+  o = {};
+  o.normal_error = 45.0f;  // 0 (from --normal-bits) or 0.001..30 degrees
+  const std::string normal_error = problem_of(o);
+  EXPECT_EQ(normal_error.rfind("--normal-error: expected a number in [", 0), 0u) << normal_error;
+  EXPECT_NE(normal_error.find("got 45"), std::string::npos) << normal_error;
+  o.normal_error = 0.5f;
+  EXPECT_EQ(problem_of(o), "");
+  EXPECT_DOUBLE_EQ(o.config().compress.normal_error, 0.5);
 }
 
 TEST(PipelineOptions, OrientationsParse) {

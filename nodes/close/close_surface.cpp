@@ -253,6 +253,29 @@ struct TileResult {
   std::array<bool, 6> cut{};
 };
 
+// Holds the free nodes `marked` (by lattice index) outside at distance `stop`, in parallel over
+// z-planes; returns how many of them the tile owns (`owned(x, y, z)`). O(nodes).
+template <typename Marked, typename Owned>
+std::size_t hold_outside(DiffusionLattice& l, float stop, const Marked& marked,
+                         const Owned& owned) {
+  const Eigen::Vector3i n = l.size;
+  return tbb::parallel_reduce(
+      tbb::blocked_range<int>(0, n.z()), std::size_t{0},
+      [&](const tbb::blocked_range<int>& r, std::size_t count) {
+        for (int z = r.begin(); z != r.end(); ++z)
+          for (int y = 0; y < n.y(); ++y)
+            for (int x = 0; x < n.x(); ++x) {
+              const std::size_t i = l.index(x, y, z);
+              if (!marked(i) || l.fixed[i]) continue;
+              l.fixed[i] = 1;
+              l.values[i] = stop;
+              count += owned(x, y, z) ? 1 : 0;
+            }
+        return count;
+      },
+      std::plus<>());
+}
+
 // Solves the tile of lattice nodes [a, b] (inclusive, relative to the lattice): held nodes are
 // the lattice's faces, the tile's other faces (at the coarse solution), the data's corners
 // (`corners`: indices into the grid, those in the tile) and the seen-empty nodes; free ones are
@@ -313,21 +336,9 @@ TileResult close_solve_tile(const CloseProblem& p, const Eigen::Vector3i& a,
     const float voxel = p.grid->voxel_size;
     const float stop = p.config->free_space_stop_voxels * voxel;
     const auto marks = close_sight_marks(*p.cloud, NodeBox{p.lo + a, 1, n}, voxel, stop);
-    out.counts.seen_empty = tbb::parallel_reduce(
-        tbb::blocked_range<int>(0, n.z()), std::size_t{0},
-        [&](const tbb::blocked_range<int>& r, std::size_t count) {
-          for (int z = r.begin(); z != r.end(); ++z)
-            for (int y = 0; y < n.y(); ++y)
-              for (int x = 0; x < n.x(); ++x) {
-                const std::size_t i = l.index(x, y, z);
-                if (!marks[i].load(std::memory_order_relaxed) || l.fixed[i]) continue;
-                l.fixed[i] = 1;
-                l.values[i] = stop;
-                count += owned(x, y, z) ? 1 : 0;
-              }
-          return count;
-        },
-        std::plus<>());
+    out.counts.seen_empty = hold_outside(
+        l, stop, [&](std::size_t i) { return marks[i].load(std::memory_order_relaxed) != 0; },
+        owned);
   }
   // A whole lattice of a cloud's distances: the indicator's fill; a tile: diffusion between
   // its faces, which hold the coarse solution (the double layer needs the whole surface). A
@@ -345,21 +356,8 @@ TileResult close_solve_tile(const CloseProblem& p, const Eigen::Vector3i& a,
       if (observed[i]) side[i] = l.values[i] > 0.0f ? 1 : 2;
     });
     const std::vector<std::uint8_t> through = through_line_nodes(n, side);
-    out.counts.through = tbb::parallel_reduce(
-        tbb::blocked_range<int>(0, n.z()), std::size_t{0},
-        [&](const tbb::blocked_range<int>& r, std::size_t count) {
-          for (int z = r.begin(); z != r.end(); ++z)
-            for (int y = 0; y < n.y(); ++y)
-              for (int x = 0; x < n.x(); ++x) {
-                const std::size_t i = l.index(x, y, z);
-                if (!through[i] || l.fixed[i]) continue;
-                l.fixed[i] = 1;
-                l.values[i] = stop;
-                count += owned(x, y, z) ? 1 : 0;
-              }
-          return count;
-        },
-        std::plus<>());
+    out.counts.through = hold_outside(
+        l, stop, [&](std::size_t i) { return through[i] != 0; }, owned);
   }
   if (indicator)
     out.counts.levels =

@@ -268,6 +268,18 @@ TEST(Server, AShownMessageComesAfterEveryBlockOfItsPublication) {
   EXPECT_EQ(shown.back(), 3);
 }
 
+// Appends each block of a binary map batch as (its x, its first payload byte).
+void append_batch_blocks(const std::string& message,
+                         std::vector<std::pair<std::int32_t, char>>& blocks) {
+  std::size_t at = 8;
+  for (std::uint32_t i = 0; i < u32_at(message, 4); ++i) {
+    std::int32_t x = 0;
+    std::memcpy(&x, message.data() + at, 4);
+    blocks.emplace_back(x, message[at + 16]);
+    at += 16 + u32_at(message, at + 12);
+  }
+}
+
 /// Reads `client`'s messages until a map round ends; returns the blocks read (fill character of
 /// each payload by block x) and the round's number. Fails on anything but blocks, shown
 /// messages and the round's end.
@@ -281,13 +293,7 @@ std::pair<std::vector<std::pair<std::int32_t, char>>, int> read_round(Client& cl
       return {blocks, 0};
     }
     if (binary) {
-      std::size_t at = 8;
-      for (std::uint32_t i = 0; i < u32_at(message, 4); ++i) {
-        std::int32_t x = 0;
-        std::memcpy(&x, message.data() + at, 4);
-        blocks.emplace_back(x, message[at + 16]);
-        at += 16 + u32_at(message, at + 12);
-      }
+      append_batch_blocks(message, blocks);
       continue;
     }
     const nlohmann::json m = nlohmann::json::parse(message);
@@ -340,13 +346,7 @@ TEST(Server, AViewerThatDoesNotAcknowledgeGetsOneRoundThenTheNewestBlocksOnce) {
   for (;;) {
     ASSERT_FALSE(viewer.read(message, binary));
     if (binary) {
-      std::size_t at = 8;
-      for (std::uint32_t i = 0; i < u32_at(message, 4); ++i) {
-        std::int32_t x = 0;
-        std::memcpy(&x, message.data() + at, 4);
-        blocks.emplace_back(x, message[at + 16]);
-        at += 16 + u32_at(message, at + 12);
-      }
+      append_batch_blocks(message, blocks);
       continue;
     }
     const nlohmann::json m = nlohmann::json::parse(message);

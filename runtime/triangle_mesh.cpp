@@ -6,6 +6,7 @@
 #include <tbb/parallel_sort.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cstdint>
 #include <memory>
 
@@ -129,12 +130,13 @@ std::vector<BorderEdge> border_edges(const TriangleMesh& mesh, const VertexTrian
 }
 
 float median_edge_length(const TriangleMesh& mesh) {
-  std::vector<float> lengths;
-  lengths.reserve(3 * mesh.triangles.size());
-  for (const Triangle& t : mesh.triangles)
+  if (mesh.triangles.empty()) return 0.0f;
+  std::vector<float> lengths(3 * mesh.triangles.size());
+  tbb::parallel_for(std::size_t{0}, mesh.triangles.size(), [&](std::size_t i) {
+    const Triangle& t = mesh.triangles[i];
     for (std::size_t k = 0; k < 3; ++k)
-      lengths.push_back((mesh.vertices[t[(k + 1) % 3]] - mesh.vertices[t[k]]).norm());
-  if (lengths.empty()) return 0.0f;
+      lengths[3 * i + k] = (mesh.vertices[t[(k + 1) % 3]] - mesh.vertices[t[k]]).norm();
+  });
   const auto middle = lengths.begin() + static_cast<std::ptrdiff_t>(lengths.size() / 2);
   std::nth_element(lengths.begin(), middle, lengths.end());
   return *middle;
@@ -143,24 +145,33 @@ float median_edge_length(const TriangleMesh& mesh) {
 TriangleMesh compact_vertices(const TriangleMesh& source, const std::vector<Triangle>& triangles,
                               std::vector<std::uint32_t>* original) {
   const std::size_t n = source.vertices.size();
-  std::vector<std::uint32_t> id(n, UINT32_MAX);
-  for (const Triangle& t : triangles)
-    for (std::uint32_t v : t) id[v] = 0;
+  // Which vertices the triangles use (relaxed stores of the same value: no order needed).
+  std::vector<std::atomic<std::uint8_t>> used(n);
+  tbb::parallel_for(std::size_t{0}, triangles.size(), [&](std::size_t i) {
+    for (std::uint32_t v : triangles[i]) used[v].store(1, std::memory_order_relaxed);
+  });
+  const std::vector<std::uint32_t> kept = parallel_select_indices(
+      n, [&](std::size_t v) { return used[v].load(std::memory_order_relaxed) != 0; });
   const bool normals = source.normals.size() == n;
   const bool colors = source.colors.size() == n;
   TriangleMesh out;
-  if (original != nullptr) original->clear();
-  for (std::size_t v = 0; v < n; ++v) {
-    if (id[v] == UINT32_MAX) continue;
-    if (original != nullptr) original->push_back(static_cast<std::uint32_t>(v));
-    id[v] = static_cast<std::uint32_t>(out.vertices.size());
-    out.vertices.push_back(source.vertices[v]);
-    if (normals) out.normals.push_back(source.normals[v]);
-    if (colors) out.colors.push_back(source.colors[v]);
-  }
-  out.triangles.reserve(triangles.size());
-  for (const Triangle& t : triangles)
-    out.triangles.push_back(Triangle{id[t[0]], id[t[1]], id[t[2]]});
+  out.vertices.resize(kept.size());
+  if (normals) out.normals.resize(kept.size());
+  if (colors) out.colors.resize(kept.size());
+  std::vector<std::uint32_t> id(n);
+  tbb::parallel_for(std::size_t{0}, kept.size(), [&](std::size_t i) {
+    const std::uint32_t v = kept[i];
+    id[v] = static_cast<std::uint32_t>(i);
+    out.vertices[i] = source.vertices[v];
+    if (normals) out.normals[i] = source.normals[v];
+    if (colors) out.colors[i] = source.colors[v];
+  });
+  out.triangles.resize(triangles.size());
+  tbb::parallel_for(std::size_t{0}, triangles.size(), [&](std::size_t i) {
+    const Triangle& t = triangles[i];
+    out.triangles[i] = Triangle{id[t[0]], id[t[1]], id[t[2]]};
+  });
+  if (original != nullptr) *original = kept;
   return out;
 }
 

@@ -3,6 +3,9 @@
 #include <algorithm>
 #include <cmath>
 
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_sort.h>
+
 #include "runtime/angles.h"
 
 namespace meshflow {
@@ -15,27 +18,43 @@ struct FeatureCandidate {
   Eigen::Vector3f left, right;
 };
 
+/// One side of a face: its edge's undirected key and the face. The empty default constructor
+/// leaves a vector of them unwritten (no serial zeroing of 16 bytes per side).
+struct FaceSide {
+  std::uint64_t key;
+  std::uint32_t face;
+  FaceSide() {}  // not `= default`, which would zero a vector of them
+  FaceSide(std::uint64_t k, std::uint32_t f) : key(k), face(f) {}
+  bool operator<(const FaceSide& o) const { return key != o.key ? key < o.key : face < o.face; }
+};
+
 /// Edges with two faces meeting at a normal angle whose cosine is below cos_limit, sorted.
+/// Parallel: the sort and the face normals; the scan over the sorted sides is linear.
 std::vector<FeatureCandidate> sharp_candidates(const TriangleMesh& mesh, float cos_limit) {
-  // Every face's edges as (undirected key, face), sorted: an edge's faces are neighbours.
-  std::vector<std::pair<std::uint64_t, std::uint32_t>> sides;
-  sides.reserve(3 * mesh.triangles.size());
-  for (std::uint32_t t = 0; t < mesh.triangles.size(); ++t)
-    for (int k = 0; k < 3; ++k)
-      sides.emplace_back(undirected_edge_key(mesh.triangles[t][k], mesh.triangles[t][(k + 1) % 3]),
-                         t);
-  std::sort(sides.begin(), sides.end());
+  // Every face's edges as (undirected key, face), sorted: an edge's faces are neighbours. The
+  // pairs are unique, so the parallel sort's order is the only one.
+  const std::size_t faces = mesh.triangles.size();
+  std::vector<FaceSide> sides(3 * faces);  // left uninitialised: the parallel loop writes all
+  std::vector<Eigen::Vector3f> normal(faces);
+  tbb::parallel_for(std::size_t{0}, faces, [&](std::size_t t) {
+    const Triangle& tri = mesh.triangles[t];
+    for (std::size_t k = 0; k < 3; ++k)
+      sides[3 * t + k] =
+          FaceSide(undirected_edge_key(tri[k], tri[(k + 1) % 3]), static_cast<std::uint32_t>(t));
+    normal[t] = face_normal(mesh, tri);
+  });
+  tbb::parallel_sort(sides.begin(), sides.end());
   std::vector<FeatureCandidate> out;
   for (std::size_t i = 0; i < sides.size();) {
     std::size_t j = i;
-    while (j < sides.size() && sides[j].first == sides[i].first) ++j;
+    while (j < sides.size() && sides[j].key == sides[i].key) ++j;
     if (j - i == 2) {
-      const Triangle& t0 = mesh.triangles[sides[i].second];
-      const Eigen::Vector3f n0 = face_normal(mesh, t0);
-      const Eigen::Vector3f n1 = face_normal(mesh, mesh.triangles[sides[i + 1].second]);
+      const Triangle& t0 = mesh.triangles[sides[i].face];
+      const Eigen::Vector3f& n0 = normal[sides[i].face];
+      const Eigen::Vector3f& n1 = normal[sides[i + 1].face];
       if (n0.squaredNorm() > 0.0f && n1.squaredNorm() > 0.0f && n0.dot(n1) < cos_limit) {
-        const auto a = static_cast<std::uint32_t>(sides[i].first >> 32);
-        const auto b = static_cast<std::uint32_t>(sides[i].first & 0xFFFFFFFFu);
+        const auto a = static_cast<std::uint32_t>(sides[i].key >> 32);
+        const auto b = static_cast<std::uint32_t>(sides[i].key & 0xFFFFFFFFu);
         bool t0_runs_a_to_b = false;
         for (int k = 0; k < 3; ++k) t0_runs_a_to_b |= t0[k] == a && t0[(k + 1) % 3] == b;
         out.push_back({{a, b}, t0_runs_a_to_b ? n0 : n1, t0_runs_a_to_b ? n1 : n0});
@@ -46,26 +65,59 @@ std::vector<FeatureCandidate> sharp_candidates(const TriangleMesh& mesh, float c
   return out;
 }
 
-/// The live candidates around every vertex (compressed rows of candidate indices).
-struct FeatureIncidence {
-  std::vector<std::uint32_t> offsets, edges;
-  std::uint32_t degree(std::uint32_t v) const { return offsets[v + 1] - offsets[v]; }
-  std::uint32_t edge(std::uint32_t v, std::uint32_t k) const { return edges[offsets[v] + k]; }
+constexpr std::uint32_t kNoRow = 0xFFFFFFFFu;
+
+/// The vertices that candidates touch, ascending, and each mesh vertex's row among them
+/// (kNoRow for the others): the rounds of detect_features() visit only these.
+struct TouchedVertices {
+  std::vector<std::uint32_t> vertices;
+  std::vector<std::uint32_t> row;
 };
 
-FeatureIncidence feature_incidence(std::size_t n, const std::vector<FeatureCandidate>& c,
+TouchedVertices touched_vertices(std::size_t n, const std::vector<FeatureCandidate>& c) {
+  TouchedVertices t;
+  t.row.assign(n, kNoRow);
+  for (const FeatureCandidate& e : c)
+    for (std::uint32_t v : e.ends) t.row[v] = 0;
+  for (std::uint32_t v = 0; v < n; ++v)
+    if (t.row[v] != kNoRow) {
+      t.row[v] = static_cast<std::uint32_t>(t.vertices.size());
+      t.vertices.push_back(v);
+    }
+  return t;
+}
+
+/// The live candidates around every touched vertex (compressed rows of candidate indices).
+struct FeatureIncidence {
+  const TouchedVertices* touched = nullptr;
+  std::vector<std::uint32_t> offsets, edges;
+  std::uint32_t degree(std::uint32_t v) const {
+    const std::uint32_t r = touched->row[v];
+    return r == kNoRow ? 0 : offsets[r + 1] - offsets[r];
+  }
+  std::uint32_t edge(std::uint32_t v, std::uint32_t k) const {
+    return edges[offsets[touched->row[v]] + k];
+  }
+};
+
+/// O(candidates + touched vertices).
+FeatureIncidence feature_incidence(const TouchedVertices& touched,
+                                   const std::vector<FeatureCandidate>& c,
                                    const std::vector<std::uint8_t>& alive) {
   FeatureIncidence inc;
-  inc.offsets.assign(n + 1, 0);
+  inc.touched = &touched;
+  const std::size_t m = touched.vertices.size();
+  inc.offsets.assign(m + 1, 0);
   for (std::size_t i = 0; i < c.size(); ++i)
     if (alive[i])
-      for (std::uint32_t v : c[i].ends) ++inc.offsets[v + 1];
-  for (std::size_t v = 0; v < n; ++v) inc.offsets[v + 1] += inc.offsets[v];
-  inc.edges.resize(inc.offsets[n]);
+      for (std::uint32_t v : c[i].ends) ++inc.offsets[touched.row[v] + 1];
+  for (std::size_t r = 0; r < m; ++r) inc.offsets[r + 1] += inc.offsets[r];
+  inc.edges.resize(inc.offsets[m]);
   std::vector<std::uint32_t> fill(inc.offsets.begin(), inc.offsets.end() - 1);
   for (std::size_t i = 0; i < c.size(); ++i)
     if (alive[i])
-      for (std::uint32_t v : c[i].ends) inc.edges[fill[v]++] = static_cast<std::uint32_t>(i);
+      for (std::uint32_t v : c[i].ends)
+        inc.edges[fill[touched.row[v]]++] = static_cast<std::uint32_t>(i);
   return inc;
 }
 
@@ -90,23 +142,18 @@ bool continues_line(const TriangleMesh& mesh, const FeatureCandidate& in,
   return left_in.dot(left_out) >= cos_side && right_in.dot(right_out) >= cos_side;
 }
 
-/// Per vertex: whether it ends, branches or breaks a line (has candidates and is no line
-/// vertex).
-std::vector<std::uint8_t> line_breaks(const TriangleMesh& mesh,
-                                      const std::vector<FeatureCandidate>& c,
-                                      const FeatureIncidence& inc, float angle_deg) {
+/// Per vertex (entries of touched vertices rewritten, the others left 0): whether it ends,
+/// branches or breaks a line (has candidates and is no line vertex). O(touched vertices).
+void line_breaks(const TriangleMesh& mesh, const std::vector<FeatureCandidate>& c,
+                 const FeatureIncidence& inc, float angle_deg, std::vector<std::uint8_t>& breaks) {
   const float cos_limit = static_cast<float>(std::cos(radians(static_cast<double>(angle_deg))));
   const float cos_side =
       static_cast<float>(std::cos(radians(std::min(90.0, 2.0 * static_cast<double>(angle_deg)))));
-  const std::size_t n = mesh.vertices.size();
-  std::vector<std::uint8_t> breaks(n, 0);
-  for (std::uint32_t v = 0; v < n; ++v) {
+  for (std::uint32_t v : inc.touched->vertices) {
     const std::uint32_t d = inc.degree(v);
-    if (d == 0) continue;
-    breaks[v] = d != 2 ||
-                !continues_line(mesh, c[inc.edge(v, 0)], c[inc.edge(v, 1)], v, cos_limit, cos_side);
+    breaks[v] = d != 0 && (d != 2 || !continues_line(mesh, c[inc.edge(v, 0)], c[inc.edge(v, 1)], v,
+                                                     cos_limit, cos_side));
   }
-  return breaks;
 }
 
 /// The lines: runs of candidates between breaks (or closed loops without one).
@@ -177,11 +224,12 @@ MeshFeatures detect_features(const TriangleMesh& mesh, float angle_deg, float mi
   const std::vector<FeatureCandidate> c = sharp_candidates(mesh, cos_limit);
   if (min_line_length == 0.0f) min_line_length = kMinFeatureLineEdges * median_edge_length(mesh);
   std::vector<std::uint8_t> alive(c.size(), 1);
+  const TouchedVertices touched = touched_vertices(n, c);
   FeatureIncidence inc;
-  std::vector<std::uint8_t> breaks;
+  std::vector<std::uint8_t> breaks(n, 0);
   for (;;) {  // drop short lines until every line left is long or a bridge between long ones
-    inc = feature_incidence(n, c, alive);
-    breaks = line_breaks(mesh, c, inc, angle_deg);
+    inc = feature_incidence(touched, c, alive);
+    line_breaks(mesh, c, inc, angle_deg, breaks);
     if (min_line_length < 0.0f) break;
     const FeatureLines lines = trace_lines(mesh, c, alive, inc, breaks);
     std::vector<std::uint8_t> long_line(lines.length.size());
@@ -211,7 +259,7 @@ MeshFeatures detect_features(const TriangleMesh& mesh, float angle_deg, float mi
   }
   for (std::size_t i = 0; i < c.size(); ++i)
     if (alive[i]) f.edges.push_back(c[i].ends);
-  for (std::uint32_t v = 0; v < n; ++v)
+  for (std::uint32_t v : touched.vertices)
     if (inc.degree(v) > 0)
       f.vertex_kind[v] =
           breaks[v] ? MeshFeatures::VertexKind::kCorner : MeshFeatures::VertexKind::kLine;

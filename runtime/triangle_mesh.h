@@ -103,7 +103,7 @@ void require_corners_in_range(const std::vector<Triangle>& triangles, std::size_
 /// A mesh of `triangles` (indices into source.vertices) that keeps only the referenced vertices,
 /// in their original order, with their normals and colours; triangles are renumbered, their
 /// order kept. `original` (optional) receives the source index of each kept vertex (ascending).
-/// O(V + T); not parallel.
+/// O(V + T), parallel; the result does not depend on the thread count.
 TriangleMesh compact_vertices(const TriangleMesh& source, const std::vector<Triangle>& triangles,
                               std::vector<std::uint32_t>* original = nullptr);
 

@@ -4,6 +4,11 @@
 
 namespace meshflow::compress {
 
+namespace {
+// Rows with more entries than this (repeats included) are sorted by std::sort, not insertion.
+constexpr std::uint32_t kAdjacencyLongRow = 64;
+}  // namespace
+
 VertexAdjacency vertex_adjacency(std::size_t vertices, const std::vector<Triangle>& triangles) {
   // Rows with repeats first (each triangle edge in both directions), then each row sorted and
   // its repeats squeezed out in place, the rows moved down over the gaps.
@@ -26,25 +31,28 @@ VertexAdjacency vertex_adjacency(std::size_t vertices, const std::vector<Triangl
       adj.neighbour[next[a]++] = b;
       adj.neighbour[next[b]++] = a;
     }
+  // Each row in place: its first copy of each neighbour (a stamp per vertex marks those met in
+  // the row) inserted into the row's sorted prefix; the rows move down over the repeats' gaps.
   adj.first.resize(vertices + 1);
   std::uint32_t* const n = adj.neighbour.data();
+  std::vector<std::uint32_t> stamp(vertices, ~0u);
   std::uint32_t out = 0;
   for (std::size_t v = 0; v < vertices; ++v) {
-    std::uint32_t* const begin = n + slot[v];
-    std::uint32_t* const end = n + slot[v + 1];
-    if (end - begin > 32) {
-      std::sort(begin, end);
-    } else {
-      for (std::uint32_t* i = begin + (begin != end); i < end; ++i) {
-        const std::uint32_t x = *i;
-        std::uint32_t* j = i;
-        for (; j > begin && *(j - 1) > x; --j) *j = *(j - 1);
-        *j = x;
-      }
+    const auto row = static_cast<std::uint32_t>(v);
+    const std::uint32_t begin = out;
+    adj.first[v] = begin;
+    // A long row (a vertex on very many triangles) is sorted once its repeats are out.
+    const bool insert = slot[v + 1] - slot[v] <= kAdjacencyLongRow;
+    for (std::uint32_t i = slot[v]; i < slot[v + 1]; ++i) {
+      const std::uint32_t x = n[i];
+      if (stamp[x] == row) continue;
+      stamp[x] = row;
+      std::uint32_t j = out++;
+      if (insert)
+        for (; j > begin && n[j - 1] > x; --j) n[j] = n[j - 1];
+      n[j] = x;
     }
-    adj.first[v] = out;
-    for (std::uint32_t* i = begin; i < end; ++i)
-      if (out == adj.first[v] || n[out - 1] != *i) n[out++] = *i;
+    if (!insert) std::sort(n + begin, n + out);
   }
   adj.first[vertices] = out;
   adj.neighbour.resize(out);

@@ -20,8 +20,9 @@ struct VertexAdjacency {
 /// The adjacency of `triangles` over `vertices` vertices: u and v are neighbours when some
 /// triangle has the edge u-v (either direction) with u != v. Every corner must be below
 /// `vertices` (the decoders' triangles are). Serial (the codecs run one thread per mesh);
-/// O(V + T) time and O(V + T) memory (rows are sorted by insertion: a vertex's valence is
-/// small; a row longer than 32 falls back to std::sort).
+/// O(V + T x valence) time (each row sorted by insertion, its repeats skipped first: a vertex's
+/// valence is small; rows past 64 entries by std::sort, so O(T log T) at worst) and O(V + T)
+/// memory.
 VertexAdjacency vertex_adjacency(std::size_t vertices, const std::vector<Triangle>& triangles);
 
 }  // namespace meshflow::compress

@@ -39,7 +39,7 @@ compress::VertexAdjacency sorted_adjacency(std::size_t vertices,
 TEST(VertexAdjacency, MatchesASortOfAllEdges) {
   std::mt19937 rng(57);
   // Random triangles over few vertices (repeated edges, degenerate corners, one vertex with a
-  // row past the insertion sort's 32), unused vertices, and the empty mesh.
+  // row past the insertion sort's 64 entries), unused vertices, and the empty mesh.
   for (std::size_t vertices : {0u, 1u, 5u, 40u, 3000u}) {
     for (std::size_t triangles : {0u, 1u, 17u, 4000u}) {
       if (vertices == 0 && triangles > 0) continue;

@@ -1,8 +1,10 @@
 // Mesh compression: meshflow's Edgebreaker and progressive coders beside Google's Draco
 // (Debian's libdraco, optional: MESHFLOW_HAVE_DRACO) on the same cleaned meshes, positions at
-// 14 bits (Draco's default compression level 7), and with the `normals` argument 1 also the
-// mesh's normals at 8 octahedral bits on both sides (the Draco tool's default -qn; equal error,
-// bench/compress_vs_draco.sh). Threads: that many meshes coded at once (frames in flight), one
+// 14 bits (Draco at its default compression level 7 and at its best, 10: the `level` argument),
+// and with the `normals` argument 1 also the mesh's normals as each writes them at equal error:
+// Draco at its default quantisation (-qn 10), meshflow at the largest --normal-error whose mean
+// and p99 angle after decoding are no larger (bench/compress_vs_draco.sh: 0.6 degrees on the
+// room, 0.8 on kurt3d). Threads: that many meshes coded at once (frames in flight), one
 // coder each. Counters: bytes, bits per triangle (all, and connectivity alone), and MB/s of
 // the raw mesh (12 bytes per vertex, per normal and per triangle) per thread count.
 
@@ -25,7 +27,7 @@ namespace meshflow::bench {
 namespace {
 
 constexpr unsigned kBits = 14;
-constexpr unsigned kNormalBits = 8;
+constexpr int kDracoNormalBits = 10;  // draco_encoder's default -qn
 
 compress::CompressConfig positions_only() {
   compress::CompressConfig c;
@@ -34,11 +36,12 @@ compress::CompressConfig positions_only() {
   return c;
 }
 
-// The coded attributes of the Edgebreaker benchmarks: positions, and normals with `normals`.
-compress::CompressConfig codec_config(bool normals) {
+// The coded attributes of the Edgebreaker benchmarks: positions, and normals with `normals` at
+// Draco's default error on `input` (bench/compress_vs_draco.sh).
+compress::CompressConfig codec_config(bool normals, std::int64_t input) {
   compress::CompressConfig c = positions_only();
   c.normals = normals;
-  c.normal_bits = kNormalBits;
+  c.normal_error = input == kKurt3d ? 0.8 : 0.6;
   return c;
 }
 
@@ -57,6 +60,16 @@ void codec_args(benchmark::internal::Benchmark* b) {
   for (int input : {kSynthetic, kKurt3d})
     for (int normals : {0, 1})
       for (int threads : {1, 2}) b->Args({threads, input, normals});
+  b->Unit(benchmark::kMillisecond)->UseRealTime();
+}
+
+// codec_args with Draco's compression level (7, its default, and 10, its best) as a fourth.
+void draco_args(benchmark::internal::Benchmark* b) {
+  b->ArgNames({"threads", "input", "normals", "level"});
+  for (int input : {kSynthetic, kKurt3d})
+    for (int normals : {0, 1})
+      for (int threads : {1, 2})
+        for (int level : {7, 10}) b->Args({threads, input, normals, level});
   b->Unit(benchmark::kMillisecond)->UseRealTime();
 }
 
@@ -88,7 +101,8 @@ void BM_EdgebreakerEncode(benchmark::State& state) {
   for (auto _ : state)
     in_flight(threads, [&](int k) {
       compress::CompressReport r;
-      const std::size_t n = compress::compress_mesh(*mesh, codec_config(normals), &r).size();
+      const std::size_t n =
+          compress::compress_mesh(*mesh, codec_config(normals, state.range(1)), &r).size();
       if (k == 0) {
         bytes = n;
         report = r;
@@ -107,7 +121,7 @@ void BM_EdgebreakerDecode(benchmark::State& state) {
   ThreadLimit limit(threads);
   compress::CompressReport report;
   const std::vector<unsigned char> bytes =
-      compress::compress_mesh(*mesh, codec_config(normals), &report);
+      compress::compress_mesh(*mesh, codec_config(normals, state.range(1)), &report);
   for (auto _ : state)
     in_flight(threads, [&](int) {
       benchmark::DoNotOptimize(compress::decompress_mesh(bytes, "bench").triangles.size());
@@ -170,21 +184,22 @@ std::unique_ptr<draco::Mesh> to_draco(const TriangleMesh& m, bool normals = fals
   return owned;
 }
 
-std::size_t draco_encode(const draco::Mesh& d, int bits, draco::EncoderBuffer& out) {
+// Encodes at compression `level` (0 .. 10: speed 10 - level, as draco_encoder -cl).
+std::size_t draco_encode(const draco::Mesh& d, int bits, int level, draco::EncoderBuffer& out) {
   draco::Encoder encoder;
   encoder.SetAttributeQuantization(draco::GeometryAttribute::POSITION, bits);
-  encoder.SetAttributeQuantization(draco::GeometryAttribute::NORMAL, kNormalBits);
+  encoder.SetAttributeQuantization(draco::GeometryAttribute::NORMAL, kDracoNormalBits);
   encoder.SetEncodingMethod(draco::MESH_EDGEBREAKER_ENCODING);
-  encoder.SetSpeedOptions(3, 3);  // compression level 7, Draco's default
+  encoder.SetSpeedOptions(10 - level, 10 - level);
   out.Clear();
   if (!encoder.EncodeMeshToBuffer(d, &out).ok()) return 0;
   return out.size();
 }
 
 // Draco's connectivity alone: the file with 1-bit positions (which then cost next to nothing).
-double draco_connectivity_bytes(const draco::Mesh& d) {
+double draco_connectivity_bytes(const draco::Mesh& d, int level) {
   draco::EncoderBuffer b;
-  return static_cast<double>(draco_encode(d, 1, b));
+  return static_cast<double>(draco_encode(d, 1, level, b));
 }
 
 void BM_DracoEncode(benchmark::State& state) {
@@ -192,29 +207,31 @@ void BM_DracoEncode(benchmark::State& state) {
   if (mesh == nullptr) return;
   const int threads = static_cast<int>(state.range(0));
   const bool normals = with_normals(state, *mesh);
+  const int level = static_cast<int>(state.range(3));
   ThreadLimit limit(threads);
   const std::unique_ptr<draco::Mesh> d = to_draco(*mesh, normals);
   std::size_t bytes = 0;
   for (auto _ : state)
     in_flight(threads, [&](int k) {
       draco::EncoderBuffer out;
-      const std::size_t n = draco_encode(*d, kBits, out);
+      const std::size_t n = draco_encode(*d, kBits, level, out);
       if (k == 0) bytes = n;
     });
   if (bytes == 0) return state.SkipWithError("Draco failed to encode");
-  count_coding(state, *mesh, bytes, draco_connectivity_bytes(*d), threads, normals);
+  count_coding(state, *mesh, bytes, draco_connectivity_bytes(*d, level), threads, normals);
 }
-BENCHMARK(BM_DracoEncode)->Apply(codec_args);
+BENCHMARK(BM_DracoEncode)->Apply(draco_args);
 
 void BM_DracoDecode(benchmark::State& state) {
   const TriangleMesh* mesh = cleaned_mesh(state);
   if (mesh == nullptr) return;
   const int threads = static_cast<int>(state.range(0));
   const bool normals = with_normals(state, *mesh);
+  const int level = static_cast<int>(state.range(3));
   ThreadLimit limit(threads);
   const std::unique_ptr<draco::Mesh> d = to_draco(*mesh, normals);
   draco::EncoderBuffer encoded;
-  const std::size_t bytes = draco_encode(*d, kBits, encoded);
+  const std::size_t bytes = draco_encode(*d, kBits, level, encoded);
   if (bytes == 0) return state.SkipWithError("Draco failed to encode");
   bool ok = true;
   for (auto _ : state)
@@ -227,9 +244,9 @@ void BM_DracoDecode(benchmark::State& state) {
       benchmark::DoNotOptimize(result);
     });
   if (!ok) return state.SkipWithError("Draco failed to decode");
-  count_coding(state, *mesh, bytes, draco_connectivity_bytes(*d), threads, normals);
+  count_coding(state, *mesh, bytes, draco_connectivity_bytes(*d, level), threads, normals);
 }
-BENCHMARK(BM_DracoDecode)->Apply(codec_args);
+BENCHMARK(BM_DracoDecode)->Apply(draco_args);
 #endif
 
 }  // namespace

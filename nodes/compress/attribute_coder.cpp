@@ -6,6 +6,7 @@
 #include <string>
 
 #include "nodes/compress/quantizer.h"
+#include "nodes/compress/vertex_adjacency.h"
 #include "runtime/error.h"
 
 namespace meshflow::compress {
@@ -173,30 +174,10 @@ NormalPrediction predict_normal(const RingSums& r, std::size_t i, double step,
 }
 
 // Vertex adjacency (both directions, sorted, unique) in compressed rows.
-struct Adjacency {
-  std::vector<std::uint32_t> first, neighbour;
-};
+using Adjacency = VertexAdjacency;
 
 Adjacency adjacency(const DecodedGeometry& g) {
-  std::vector<std::uint64_t> edges;
-  edges.reserve(6 * g.triangles.size());
-  for (const Triangle& t : g.triangles)
-    for (std::size_t k = 0; k < 3; ++k) {
-      const std::uint32_t a = t[k], b = t[(k + 1) % 3];
-      if (a == b) continue;
-      edges.push_back(std::uint64_t{a} << 32 | b);
-      edges.push_back(std::uint64_t{b} << 32 | a);
-    }
-  std::sort(edges.begin(), edges.end());
-  edges.erase(std::unique(edges.begin(), edges.end()), edges.end());
-  Adjacency adj;
-  adj.first.assign(g.grid.size() + 1, 0);
-  for (std::uint64_t e : edges) ++adj.first[(e >> 32) + 1];
-  for (std::size_t v = 0; v < g.grid.size(); ++v) adj.first[v + 1] += adj.first[v];
-  adj.neighbour.resize(edges.size());
-  for (std::size_t k = 0; k < edges.size(); ++k)
-    adj.neighbour[k] = static_cast<std::uint32_t>(edges[k] & 0xFFFFFFFFu);
-  return adj;
+  return vertex_adjacency(g.grid.size(), g.triangles);
 }
 
 // Reversible YCoCg-R lifting on integers (any range).

@@ -40,7 +40,8 @@ SnapCandidates snap_candidates(const SnapNeighbours& nb,
 }
 
 bool SnapModels::encode(RangeEncoder& enc, std::size_t axis, const SnapCandidates& c,
-                        std::int32_t value) {
+                        std::int32_t predicted, std::int32_t value) {
+  if (axis == 0) earlier_ = 0;
   if (c.n == 0) return false;
   unsigned symbol = 0;
   for (unsigned j = 0; j < c.n; ++j)
@@ -48,17 +49,18 @@ bool SnapModels::encode(RangeEncoder& enc, std::size_t axis, const SnapCandidate
       symbol = j + 1;
       break;
     }
-  symbol_[axis][context(axis, c.n)].encode(enc, symbol);
-  last_[axis] = symbol != 0;
+  model(axis, c, predicted).encode(enc, symbol);
+  record(axis, symbol != 0);
   return symbol != 0;
 }
 
 bool SnapModels::decode(RangeDecoderCore& dec, std::size_t axis, const SnapCandidates& c,
-                        std::int32_t& value) {
+                        std::int32_t predicted, std::int32_t& value) {
+  if (axis == 0) earlier_ = 0;
   if (c.n == 0) return false;
-  const unsigned symbol = symbol_[axis][context(axis, c.n)].decode(dec);
+  const unsigned symbol = model(axis, c, predicted).decode(dec);
   const bool snapped = symbol != 0 && symbol <= c.n;
-  last_[axis] = snapped;
+  record(axis, snapped);
   if (snapped) value = c.value[symbol - 1];
   return snapped;
 }

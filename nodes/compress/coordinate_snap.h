@@ -44,24 +44,46 @@ SnapCandidates snap_candidates(const SnapNeighbours& nb,
                                const std::vector<std::array<std::int32_t, 3>>& grid,
                                std::size_t axis, std::int32_t predicted);
 
-/// The snap symbols' adaptive models, per axis and context (the candidate count and whether the
-/// previous vertex snapped on the axis). Not thread-safe; one per position section.
+/// Whether some neighbour's grid coordinate on `axis` is `value` (the encoder's guess that the
+/// coordinate will snap). O(count).
+inline bool shares_value(const SnapNeighbours& nb,
+                         const std::vector<std::array<std::int32_t, 3>>& grid, std::size_t axis,
+                         std::int32_t value) {
+  bool shared = false;
+  for (unsigned i = 0; i < nb.count; ++i) shared |= grid[nb.id[i]][axis] == value;
+  return shared;
+}
+
+/// The snap symbols' adaptive models, per axis and context: the candidate count, whether the
+/// nearest candidate is the prediction itself, how many of the vertex's earlier axes snapped (a
+/// lattice vertex has one free coordinate) and whether the previous vertex snapped on the axis.
+/// Axes are coded 0, 1, 2 for each vertex. Not thread-safe; one per position section.
 class SnapModels {
  public:
-  /// Codes which candidate `value` equals (or none) on `axis`; returns true if one did (the
-  /// coordinate is then coded), false if the caller must code its residual. Nothing is coded
-  /// without candidates. O(1).
-  bool encode(RangeEncoder& enc, std::size_t axis, const SnapCandidates& c, std::int32_t value);
+  /// Codes which candidate `value` equals (or none) on `axis` for a coordinate predicted at
+  /// `predicted`; returns true if one did (the coordinate is then coded), false if the caller
+  /// must code its residual. Nothing is coded without candidates. O(1).
+  bool encode(RangeEncoder& enc, std::size_t axis, const SnapCandidates& c, std::int32_t predicted,
+              std::int32_t value);
   /// The decoder's side: sets `value` and returns true when the stream names a candidate; false
   /// when the residual follows. A corrupt symbol past the candidates reads as none. O(1).
   bool decode(RangeDecoderCore& dec, std::size_t axis, const SnapCandidates& c,
-              std::int32_t& value);
+              std::int32_t predicted, std::int32_t& value);
 
  private:
-  static constexpr unsigned kContexts = 2 * kSnapCandidates;
-  std::size_t context(std::size_t axis, unsigned n) const { return (n - 1) * 2 + last_[axis]; }
+  static constexpr unsigned kContexts = kSnapCandidates * 2 * 3 * 2;
+  // The model of `axis` with c.n > 0 candidates.
+  FrequencyModel<8>& model(std::size_t axis, const SnapCandidates& c, std::int32_t predicted) {
+    const unsigned exact = c.value[0] == predicted;
+    return symbol_[axis][(((c.n - 1) * 2 + exact) * 3 + earlier_) * 2 + last_[axis]];
+  }
+  void record(std::size_t axis, bool snapped) {
+    last_[axis] = snapped;
+    earlier_ += snapped;
+  }
   std::array<std::array<FrequencyModel<8>, kContexts>, 3> symbol_{};
   std::array<unsigned, 3> last_{};  // per axis: the previous coded vertex snapped (1) or not
+  unsigned earlier_ = 0;            // this vertex's axes before the current one that snapped
 };
 
 }  // namespace meshflow::compress

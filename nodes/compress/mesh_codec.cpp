@@ -379,6 +379,11 @@ std::vector<std::array<std::int32_t, 3>> encode_positions(
     }
     const std::array<std::int32_t, 3> q = quantizer.quantize(mesh.vertices[input_of_decoded[k]]);
     const Candidates offer = candidates(k, replayed.predictors[k], ring, roles.hole, grid, last);
+    const SnapNeighbours nb = gather_snap_neighbours(k, replayed.predictors[k], ring, roles.hole);
+    // Only the coordinates no neighbour shares pay a residual; one that does costs least when
+    // predicted exactly (about a bit more otherwise).
+    std::array<bool, 3> free{};
+    for (std::size_t a = 0; a < 3; ++a) free[a] = !shares_value(nb, grid, a, q[a]);
     unsigned best = 0;
     std::uint32_t best_cost = ~0u;
     std::array<std::size_t, 3> context;
@@ -388,7 +393,9 @@ std::vector<std::array<std::int32_t, 3>> encode_positions(
       const std::array<std::int32_t, 3> predicted = predict(offer, trusted, context);
       std::uint32_t cost = m.trusted[offer.n - 1].cost(trusted);  // n > 0: there are choices
       for (std::size_t a = 0; a < 3; ++a)
-        cost += m.residual[context[a]][a].cost(q[a] - predicted[a]);
+        cost += free[a]                ? m.residual[context[a]][a].cost(q[a] - predicted[a])
+                : q[a] == predicted[a] ? 0u
+                                       : 16u;
       if (cost < best_cost) {
         best_cost = cost;
         best = trusted;
@@ -398,9 +405,8 @@ std::vector<std::array<std::int32_t, 3>> encode_positions(
     stats.trusted_parallelograms += static_cast<std::size_t>(__builtin_popcount(best));
     stats.offered_parallelograms += offer.n;
     const std::array<std::int32_t, 3> predicted = predict(offer, best, context);
-    const SnapNeighbours nb = gather_snap_neighbours(k, replayed.predictors[k], ring, roles.hole);
     for (std::size_t a = 0; a < 3; ++a) {
-      if (snap.encode(enc[a], a, snap_candidates(nb, grid, a, predicted[a]), q[a])) {
+      if (snap.encode(enc[a], a, snap_candidates(nb, grid, a, predicted[a]), predicted[a], q[a])) {
         ++stats.snapped_coordinates;
         continue;
       }
@@ -660,7 +666,9 @@ std::vector<std::array<std::int32_t, 3>> decode_positions(
       RangeDecoderCore* core[3] = {&cx, &cy, &cz};
       std::array<std::int32_t, 3> q{};
       for (std::size_t a = 0; a < 3; ++a) {
-        if (snap.decode(*core[a], a, snap_candidates(nb, grid, a, predicted[a]), q[a])) continue;
+        if (snap.decode(*core[a], a, snap_candidates(nb, grid, a, predicted[a]), predicted[a],
+                        q[a]))
+          continue;
         q[a] = static_cast<std::int32_t>(
             static_cast<std::uint32_t>(predicted[a]) +
             static_cast<std::uint32_t>(m.residual[context[a]][a].decode(*core[a])));

@@ -4,6 +4,7 @@
 
 #include "nodes/compress/attribute_coder.h"
 #include "nodes/compress/closed_surface.h"
+#include "nodes/compress/coordinate_snap.h"
 #include "nodes/compress/edgebreaker_connectivity.h"
 #include "nodes/compress/edgebreaker_replay.h"
 #include "nodes/compress/parallelogram_ring.h"
@@ -360,6 +361,7 @@ std::vector<std::array<std::int32_t, 3>> encode_positions(
   const ParallelogramRing ring(replayed.diamonds, roles.hole, decoded);
   RangeEncoder enc[3];
   PositionModels m;
+  SnapModels snap;
   Grid grid(decoded);
   std::array<std::int32_t, 3> last{};
   const auto code = [&](const std::array<std::int32_t, 3>& q,
@@ -377,6 +379,11 @@ std::vector<std::array<std::int32_t, 3>> encode_positions(
     }
     const std::array<std::int32_t, 3> q = quantizer.quantize(mesh.vertices[input_of_decoded[k]]);
     const Candidates offer = candidates(k, replayed.predictors[k], ring, roles.hole, grid, last);
+    const SnapNeighbours nb = gather_snap_neighbours(k, replayed.predictors[k], ring, roles.hole);
+    // Only the coordinates no neighbour shares pay a residual; one that does costs least when
+    // predicted exactly (about a bit more otherwise).
+    std::array<bool, 3> free{};
+    for (std::size_t a = 0; a < 3; ++a) free[a] = !shares_value(nb, grid, a, q[a]);
     unsigned best = 0;
     std::uint32_t best_cost = ~0u;
     std::array<std::size_t, 3> context;
@@ -386,7 +393,9 @@ std::vector<std::array<std::int32_t, 3>> encode_positions(
       const std::array<std::int32_t, 3> predicted = predict(offer, trusted, context);
       std::uint32_t cost = m.trusted[offer.n - 1].cost(trusted);  // n > 0: there are choices
       for (std::size_t a = 0; a < 3; ++a)
-        cost += m.residual[context[a]][a].cost(q[a] - predicted[a]);
+        cost += free[a]                ? m.residual[context[a]][a].cost(q[a] - predicted[a])
+                : q[a] == predicted[a] ? 0u
+                                       : 16u;
       if (cost < best_cost) {
         best_cost = cost;
         best = trusted;
@@ -396,9 +405,16 @@ std::vector<std::array<std::int32_t, 3>> encode_positions(
     stats.trusted_parallelograms += static_cast<std::size_t>(__builtin_popcount(best));
     stats.offered_parallelograms += offer.n;
     const std::array<std::int32_t, 3> predicted = predict(offer, best, context);
+    for (std::size_t a = 0; a < 3; ++a) {
+      if (snap.encode(enc[a], a, snap_candidates(nb, grid, a, predicted[a]), predicted[a], q[a])) {
+        ++stats.snapped_coordinates;
+        continue;
+      }
+      m.residual[context[a]][a].encode(enc[a], q[a] - predicted[a]);
+    }
+    last = q;
     grid[k] = q;
     grid_out[roles.output[k]] = q;
-    code(q, predicted, context);
   }
   for (std::size_t j = 0; j < off_surface.size(); ++j) {
     const std::array<std::int32_t, 3> q = quantizer.quantize(mesh.vertices[off_surface[j]]);
@@ -614,6 +630,7 @@ std::vector<std::array<std::int32_t, 3>> decode_positions(
                          RangeDecoder(y.bytes, y.size, source, "position section y"),
                          RangeDecoder(z.bytes, z.size, source, "position section z")};
   PositionModels m;
+  SnapModels snap;
   Grid grid(decoded);
   std::array<std::int32_t, 3> last{};
   {
@@ -645,7 +662,19 @@ std::vector<std::array<std::int32_t, 3>> decode_positions(
           offer.n > 0 ? m.trusted[offer.n - 1].decode(cx) & ((1u << offer.n) - 1u) : 0u;
       std::array<std::size_t, 3> context;
       const std::array<std::int32_t, 3> predicted = predict(offer, trusted, context);
-      grid[k] = read(predicted, context);
+      const SnapNeighbours nb = gather_snap_neighbours(k, replayed.predictors[k], ring, roles.hole);
+      RangeDecoderCore* core[3] = {&cx, &cy, &cz};
+      std::array<std::int32_t, 3> q{};
+      for (std::size_t a = 0; a < 3; ++a) {
+        if (snap.decode(*core[a], a, snap_candidates(nb, grid, a, predicted[a]), predicted[a],
+                        q[a]))
+          continue;
+        q[a] = static_cast<std::int32_t>(
+            static_cast<std::uint32_t>(predicted[a]) +
+            static_cast<std::uint32_t>(m.residual[context[a]][a].decode(*core[a])));
+      }
+      last = q;
+      grid[k] = q;
       vertices[roles.output[k]] = quantizer.position(grid[k]);
       grid_out[roles.output[k]] = grid[k];
     }

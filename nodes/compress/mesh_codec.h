@@ -53,6 +53,7 @@ struct BodyStats {
   std::size_t merged_fans = 0;             ///< extra fans of non-manifold vertices
   std::size_t offered_parallelograms = 0;  ///< parallelograms the ring offered, all vertices
   std::size_t trusted_parallelograms = 0;  ///< of which the encoder flagged as trusted
+  std::size_t snapped_coordinates = 0;  ///< coordinates coded as a neighbour's (coordinate_snap.h)
 };
 
 /// Where each output vertex and triangle of a decoded body came from.

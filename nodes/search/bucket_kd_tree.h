@@ -34,8 +34,10 @@ class BucketTree {
 
   /// knn() of every indexed point (`points`: the ones the tree was built over, unchanged): row
   /// i (indices + i * stride) gets the k nearest points of point i, counts[i] how many.
-  /// Queries run leaf by leaf, each starting in its own leaf; parallel over blocks of leaves;
-  /// the result does not depend on the thread count. O(n (log n + k)).
+  /// Queries run leaf by leaf: the leaves near each leaf are listed once and each of its
+  /// points scans its own and those within its current k-th distance (searched again from the
+  /// root when that ends beyond the list's reach); parallel over blocks of leaves; the result
+  /// does not depend on the thread count. O(n (log n + k)).
   void knn_of_points(const std::vector<Eigen::Vector3f>& points, std::size_t k, std::size_t stride,
                      std::uint32_t* indices, std::uint32_t* counts) const;
 

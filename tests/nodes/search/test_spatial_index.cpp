@@ -171,6 +171,28 @@ TEST(SpatialIndex, KnnRowsOfDuplicatesAndFarClusters) {
   }
 }
 
+// The indexed points' rows list the leaves near each leaf once, within a reach taken from the
+// previous leaf's neighbour distances: exact also where the density jumps between neighbouring
+// leaves (dense patches beside sparse ones, so the reach falls short and points are searched
+// again) and where whole leaves lie farther apart than any neighbour distance before them.
+TEST(SpatialIndex, KnnRowsAcrossDensityJumps) {
+  std::mt19937 rng(17);
+  std::uniform_real_distribution<float> u(0.0f, 1.0f);
+  std::vector<Eigen::Vector3f> pts;
+  for (int patch = 0; patch < 36; ++patch) {
+    const float x0 = float(patch % 6), y0 = float(patch / 6);
+    const int count = patch % 2 == 0 ? 600 : 6;  // 100 times denser
+    for (int i = 0; i < count; ++i) pts.emplace_back(x0 + u(rng), y0 + u(rng), 0.001f * u(rng));
+  }
+  for (int i = 0; i < 20; ++i) pts.emplace_back(100.0f + 10.0f * float(i), 0.0f, 0.0f);
+  std::shuffle(pts.begin(), pts.end(), rng);
+  const KdTreeIndex tree(pts);
+  for (const std::size_t k : {std::size_t{2}, std::size_t{10}, std::size_t{33}}) {
+    SCOPED_TRACE(testing::Message() << "k " << k);
+    expect_brute_force_rows(pts, tree, pts, k, 1);
+  }
+}
+
 TEST(SpatialIndex, FewerPointsThanK) {
   const std::vector<Eigen::Vector3f> pts = {{0, 0, 0}, {1, 0, 0}};
   const KdTreeIndex tree(pts);

@@ -289,6 +289,7 @@ int run(const Options& o, int rank, int ranks) {
     if (frame->ok()) {
       r.flags = chunk_vertex_flags(*frame);
       r.mesh = std::move(frame->mesh);
+      summarize_result(r, plan.grid.voxel_size, plan.grid.chunk_cells);
     } else {
       r.error = frame->name + ": " + frame->error;
     }
@@ -332,8 +333,7 @@ int run(const Options& o, int rank, int ranks) {
                results.size(), mesh_s);
   // Every rank welds its own chunks (seam summaries exchanged through rank 0); rank 0 then
   // only concatenates the welded parts in Morton order, finishes the seams and writes.
-  report.seam_vertices =
-      weld_on_ranks(results, plan.grid.voxel_size, plan.grid.chunk_cells, clock, rank, ranks);
+  report.seam_vertices = weld_on_ranks(results, clock, rank, ranks);
   std::vector<chunk::RankTimes> times = {
       {rank, results.size(), chunk::peak_resident_bytes(), clock.phases()}};
   if (rank != 0) {

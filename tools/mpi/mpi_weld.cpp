@@ -47,27 +47,23 @@ chunk::ChunkSeams get_seams(io::ByteReader& r) {
 
 }  // namespace
 
-std::size_t weld_on_ranks(std::vector<ChunkResult>& results, float voxel_size, int chunk_cells,
-                          chunk::PhaseClock& clock, int rank, int ranks) {
-  if (rank == 0)
-    clock.begin("seams", true);
-  else
-    clock.wait("seams");
-  // This rank's summaries, in the order of `results`.
-  std::vector<chunk::ChunkSeams> own(results.size());
-  tbb::parallel_for(std::size_t{0}, results.size(), [&](std::size_t i) {
-    if (results[i].error.empty())
-      own[i] = chunk::summarize_seams(results[i].mesh, results[i].flags, voxel_size, chunk_cells,
-                                      kFeatureFlag);
-  });
+void summarize_result(ChunkResult& result, float voxel_size, int chunk_cells) {
+  if (result.error.empty())
+    result.seams =
+        chunk::summarize_seams(result.mesh, result.flags, voxel_size, chunk_cells, kFeatureFlag);
+}
+
+std::size_t weld_on_ranks(std::vector<ChunkResult>& results, chunk::PhaseClock& clock, int rank,
+                          int ranks) {
+  clock.wait("exchange");  // the slowest rank's chunks, then every rank's summaries
   io::ByteWriter w;
   std::uint64_t ok = 0;
-  for (std::size_t i = 0; i < results.size(); ++i) ok += results[i].error.empty() ? 1 : 0;
+  for (const ChunkResult& r : results) ok += r.error.empty() ? 1 : 0;
   w.u64(ok);
-  for (std::size_t i = 0; i < results.size(); ++i)
-    if (results[i].error.empty()) {
-      w.u64(results[i].position);
-      put_seams(w, own[i]);
+  for (const ChunkResult& r : results)
+    if (r.error.empty()) {
+      w.u64(r.position);
+      put_seams(w, r.seams);
     }
   // Rank 0 joins every rank's summaries and hands them to all.
   std::vector<unsigned char> all;
@@ -81,6 +77,10 @@ std::size_t weld_on_ranks(std::vector<ChunkResult>& results, float voxel_size, i
     send_bytes(w.out, 0);
   }
   broadcast_bytes(all);
+  if (rank == 0)
+    clock.begin("seams", true);
+  else
+    clock.wait("seams");  // the same plan as rank 0's, made at the same time
   std::map<std::uint64_t, chunk::ChunkSeams> by_position;  // every chunk meshed, in order
   {
     const std::string source = "seam summaries";
@@ -106,9 +106,9 @@ std::size_t weld_on_ranks(std::vector<ChunkResult>& results, float voxel_size, i
     ChunkResult& r = results[i];
     if (!r.error.empty()) return;
     std::vector<std::uint8_t> kept;
-    r.mesh = chunk::weld_chunk(r.mesh, r.flags, own[i], plan, index.at(r.position), &kept);
+    r.mesh = chunk::weld_chunk(r.mesh, r.flags, r.seams, plan, index.at(r.position), &kept);
     r.flags = std::move(kept);
-    own[i] = chunk::ChunkSeams{};
+    r.seams = chunk::ChunkSeams{};
   });
   clock.end();
   return plan.merged;

@@ -4,8 +4,9 @@
 # whole process, measured with /usr/bin/time (wall time, peak resident memory) and with the run's
 # own --json timing (Amdahl's serial fraction f from its phases); then 20 M points on 1 against
 # 2 threads, finished once after stitching (--finish-after-stitch) and at the default voxel; then
-# meshflow-mpi on 1, 2 and 4 ranks of this machine
-# (every rank's phases and peak memory from --json). Markdown rows.
+# meshflow-mpi on 1, 2 and 4 ranks of this machine, one thread each (every rank's phases and peak
+# memory from --json), with Amdahl's model for 8, 32 and 128 nodes from the phases of the 4-rank
+# run (bench/amdahl_model.py). Markdown rows.
 #   bench/chunked_scaling.sh [BUILD_DIR] [WORK_DIR] [MILLIONS...]   (WORK_DIR: ~1.5 GB scratch;
 #   MILLIONS: the sizes, default "2 5 10 20"; the last one is the one the later tables use)
 set -euo pipefail
@@ -64,9 +65,9 @@ echo "| default voxel ($(field "'%.3f' % d['voxel']") m), 2 threads: $(field "d[
 
 if [ -x "$build/meshflow-mpi" ] && command -v mpirun > /dev/null; then
   echo
-  echo "| meshflow-mpi, ${big} M points, voxel $voxel m | wall s | peak MiB per rank | rank 0: decide / setup / partition / join / chunks / gather / stitch / finish / write s | chunks per rank | serial s / f / max speedup |"
+  echo "| meshflow-mpi, ${big} M points, voxel $voxel m | wall s | peak MiB per rank | rank 0: $(echo decide setup partition join chunks exchange seams weld gather stitch finish write | sed 's/ / \/ /g') s | chunks per rank | serial s / f / max speedup |"
   echo "|---|---:|---|---|---|---|"
-  for spec in "1 2" "2 1" "4 1"; do
+  for spec in "1 1" "2 1" "4 1"; do
     read -r ranks threads <<< "$spec"
     read -r s mib < <(measure mpirun --bind-to none -n "$ranks" "$build/meshflow-mpi" reconstruct \
       "$work/city_$big.ply" -o "$work/mesh_mpi.ply" --chunk $chunk --voxel $voxel \
@@ -74,5 +75,8 @@ if [ -x "$build/meshflow-mpi" ] && command -v mpirun > /dev/null; then
     peaks=$(field "', '.join('%.0f' % r['peak_rss_mib'] for r in d['timing']['ranks'])")
     per=$(field "', '.join(str(r['chunks']) for r in d['timing']['ranks'])")
     echo "| $ranks rank(s) × $threads thread(s) | $s | $peaks | $(phases) | $per | $(serial) |"
+    cp "$work/out.txt" "$work/mpi_$ranks.json"
   done
+  echo
+  /usr/bin/python3 bench/amdahl_model.py "$work/mpi_4.json"
 fi

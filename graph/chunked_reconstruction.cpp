@@ -362,7 +362,8 @@ void collect_chunk_frame(Frame& frame, chunk::MeshStitcher& stitcher, ChunkedRep
     report.rim_trimmed += frame.rim_trimmed;
     chunked_add_optimize(report.optimize, frame.optimize);
   }
-  stitcher.add(frame.mesh, chunk_vertex_flags(frame));
+  std::vector<std::uint8_t> flags = chunk_vertex_flags(frame);
+  stitcher.add(std::move(frame.mesh), std::move(flags));
   frame.mesh = TriangleMesh{};
   frame.chunk.reset();
 }
@@ -392,6 +393,15 @@ TriangleMesh finish_chunked_mesh(chunk::MeshStitcher& stitcher, const Reconstruc
   report.clock.begin("stitch", true);
   std::vector<std::uint8_t> flags;
   TriangleMesh joined = stitcher.stitch(&report.seam_vertices, &flags);
+  return finish_joined_mesh(std::move(joined), flags, config, voxel_size, report, on_step,
+                            finished_in_place, chunk_cells);
+}
+
+TriangleMesh finish_joined_mesh(TriangleMesh joined, const std::vector<std::uint8_t>& flags,
+                                const ReconstructionConfig& config, float voxel_size,
+                                ChunkedReport& report,
+                                const std::function<void(const std::string&)>& on_step,
+                                bool finished_in_place, int chunk_cells) {
   std::vector<std::uint8_t> beyond(flags.size()), features(flags.size());
   for (std::size_t v = 0; v < flags.size(); ++v) {
     beyond[v] = (flags[v] & kBeyondDataFlag) ? 1 : 0;

@@ -241,6 +241,17 @@ TriangleMesh finish_chunked_mesh(chunk::MeshStitcher& stitcher, const Reconstruc
                                  const std::function<void(const std::string&)>& on_step = {},
                                  bool finished_in_place = false, int chunk_cells = 0);
 
+/// finish_chunked_mesh() after the weld: `joined` is the welded mesh (MeshStitcher::stitch(), or
+/// seam_weld.h's parts concatenated in chunk order by MPI rank 0) with `flags` its vertices'
+/// chunk_vertex_flags() bytes (or empty). Flips, trims and optimizes in the phase running on
+/// report.clock, then "finish"; with `finished_in_place` only chunk::finish_seams(). Not
+/// thread-safe on one report. O(V + T) plus the optimize steps.
+TriangleMesh finish_joined_mesh(TriangleMesh joined, const std::vector<std::uint8_t>& flags,
+                                const ReconstructionConfig& config, float voxel_size,
+                                ChunkedReport& report,
+                                const std::function<void(const std::string&)>& on_step = {},
+                                bool finished_in_place = false, int chunk_cells = 0);
+
 /// The whole path in one process: partition, mesh the chunks, stitch, optimise (config's
 /// steps, on the stitched mesh). `on_stage` (optional) is told each phase ("partition",
 /// "chunk i/n", "stitch", optimize steps) for progress lines. Memory: the chunks in flight

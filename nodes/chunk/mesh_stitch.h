@@ -5,10 +5,9 @@
 
 #include <Eigen/Core>
 #include <cstdint>
-#include <unordered_map>
-#include <utility>
 #include <vector>
 
+#include "nodes/chunk/seam_weld.h"
 #include "runtime/triangle_mesh.h"
 
 namespace meshflow::chunk {
@@ -26,6 +25,11 @@ std::uint64_t lattice_edge_key(const Eigen::Vector3f& p, float voxel_size);
 /// other than along the edge, divisible by chunk_cells): a seam vertex, which the chunks on both
 /// sides of the plane make. O(1).
 bool on_chunk_seam(std::uint64_t key, int chunk_cells);
+
+/// Bit a set when the vertex of lattice edge `key` (UINT64_MAX: none, 0) lies on a chunk
+/// boundary plane across axis a (a coordinate of its lower corner, other than along the edge,
+/// divisible by `chunk_cells` > 0). O(1).
+unsigned seam_plane_axes(std::uint64_t key, int chunk_cells);
 
 /// One byte per vertex of `vertices`: 1 for a seam vertex (on_chunk_seam() of its lattice edge
 /// key at `voxel_size`) whose `apart` byte (optional, one per vertex: feature vertices) is 0.
@@ -58,54 +62,30 @@ class MeshStitcher {
 
   /// Appends a chunk's mesh (vertices in the common local frame; normals and colours kept when
   /// every chunk has them) and optionally a byte per vertex (`vertex_flags`, e.g. Frame::
-  /// beyond_data; kept when every chunk gives them); with `chunk_cells`, records its pieces and
-  /// their seam relations (see the class comment). O(V + T), plus O(S) hashing for S seam edges.
-  void add(const TriangleMesh& mesh, const std::vector<std::uint8_t>& vertex_flags = {});
+  /// beyond_data; kept when every chunk gives them); summarizes its seam (summarize_seams(),
+  /// seam_weld.h: with `chunk_cells`, its pieces and their seam edges). The mesh is held until
+  /// stitch(). O(V + T).
+  void add(TriangleMesh mesh, std::vector<std::uint8_t> vertex_flags = {});
 
   /// The joined mesh: pieces turned as the relations say, vertices with one lattice edge key
   /// merged (the first chunk's copy kept; with `chunk_cells`, only seam vertices, on_chunk_seam(),
   /// are looked at: a chunk's own mesh has one vertex per lattice edge), vertices on no lattice
-  /// edge kept apart, unused vertices dropped, triangles in the order added. The mesh is
-  /// compacted in place and the bookkeeping freed first, so the stitcher holds it once. `merged`
-  /// (optional) receives the number of seam vertices merged, `vertex_flags` (optional) the kept
-  /// vertices' flags (empty unless every chunk gave them), `turned` (optional) the number of
-  /// triangles turned over. O(V + T + S log S + R log R) for S seam vertices and R relations.
+  /// edge kept apart, unused vertices dropped, triangles in the order added (plan_weld() and
+  /// weld_chunk() of seam_weld.h; each chunk freed once welded). `merged` (optional) receives
+  /// the number of seam vertices merged, `vertex_flags` (optional) the kept vertices' flags
+  /// (empty unless every chunk gave them), `turned` (optional) the number of triangles turned
+  /// over. O(V + T + S log S + R log R) for S seam vertices and R relations.
   TriangleMesh stitch(std::size_t* merged = nullptr,
                       std::vector<std::uint8_t>* vertex_flags = nullptr,
                       std::size_t* turned = nullptr);
 
  private:
-  // Records the pieces of the mesh just appended (vertices from `first_vertex`, triangles from
-  // `first_triangle`) and their relations to earlier pieces through shared seam edges.
-  void relate_pieces(std::size_t first_vertex, std::size_t first_triangle);
-  // Which pieces to turn over (one byte per piece), from the recorded relations.
-  std::vector<std::uint8_t> pieces_to_turn() const;
-
-  struct SeamSide {
-    std::uint32_t piece;
-    std::uint8_t direction;  // 1: the triangle runs from the lower vertex key to the higher
-  };
-  struct Relation {
-    std::uint32_t agree = 0, disagree = 0;  // shared seam edges run opposite / the same way
-  };
-
   float voxel_size_;
   int chunk_cells_;
   std::uint8_t apart_flags_;
-  TriangleMesh joined_;
-  std::vector<std::uint64_t> keys_;
-  std::vector<std::uint8_t> flags_;
-  bool normals_ = true, colors_ = true, flags_given_ = true;
-  std::vector<std::uint32_t> triangle_piece_, vertex_piece_;
-  std::vector<std::uint64_t> piece_triangles_;
-  struct KeyPairHash {
-    std::size_t operator()(const std::pair<std::uint64_t, std::uint64_t>& k) const {
-      return std::hash<std::uint64_t>()(k.first * 0x9e3779b97f4a7c15ULL ^ k.second);
-    }
-  };
-  // Seam edges seen so far, by their vertices' lattice keys (lower, higher).
-  std::unordered_map<std::pair<std::uint64_t, std::uint64_t>, SeamSide, KeyPairHash> seam_edges_;
-  std::unordered_map<std::uint64_t, Relation> relations_;  // by piece pair (lower << 32 | higher)
+  std::vector<TriangleMesh> meshes_;
+  std::vector<std::vector<std::uint8_t>> flags_;
+  std::vector<ChunkSeams> seams_;
 };
 
 }  // namespace meshflow::chunk

@@ -9,10 +9,11 @@
 // chunk files go under --chunk-dir (a directory every rank sees: a shared file system on a
 // cluster); rank 0 broadcasts the chunk list. The chunks go out from a queue
 // on rank 0 in Morton order, each to the rank that asks first (rank 0's own graph included); each
-// rank meshes what it gets through its own flow graph and sends the chunk meshes to rank 0,
-// which welds every chunk in Morton order, trims the rim, optimizes and writes OUT. Welding and
-// the seam orientation see the chunks in the one-process order, so the mesh is the same for any
-// N and any assignment (and equals `meshflow reconstruct --chunk`).
+// rank meshes what it gets through its own flow graph (each chunk finished in place) and welds
+// its own chunks once every rank's seam summaries are known (tools/mpi/mpi_weld.h); rank 0
+// gathers the welded parts, concatenates them, finishes the seams and writes OUT. The weld and
+// the seam orientation are planned over the chunks in the one-process order, so the mesh is
+// the same for any N and any assignment (and equals `meshflow reconstruct --chunk`).
 
 #include <mpi.h>
 
@@ -45,6 +46,7 @@
 #include "tools/mpi/mpi_bytes.h"
 #include "tools/mpi/mpi_commands.h"
 #include "tools/mpi/mpi_partition.h"
+#include "tools/mpi/mpi_weld.h"
 #include "tools/pipeline_options.h"
 
 namespace meshflow::cli {
@@ -83,14 +85,6 @@ Plan decode_plan(const std::vector<unsigned char>& message) {
 
 constexpr int kRequestTag = 2;  // a rank asks rank 0 for a chunk
 constexpr int kAnswerTag = 3;   // rank 0 answers with its position in the plan, or -1
-
-// One chunk meshed by some rank: its position in the plan and its mesh, or its error.
-struct ChunkResult {
-  std::uint64_t position = 0;
-  TriangleMesh mesh;
-  std::vector<std::uint8_t> flags;  // chunk_vertex_flags()
-  std::string error;                // non-empty: the chunk failed
-};
 
 // A rank's chunk meshes and its timing, for rank 0.
 std::vector<unsigned char> encode(const std::vector<ChunkResult>& results,
@@ -207,11 +201,11 @@ void print_report(const Options& o, const Plan& plan, const ChunkedReport& repor
   const std::vector<chunk::PhaseTime>& own = times.front().phases;
   const auto phase = [&](const char* name) { return chunk::phase_wall(own, name); };
   std::printf(
-      "time       %.1f s: decide %.1f s, partition %.1f s, chunks %.1f s, gather %.1f s "
-      "(%.1f MB), stitch %.1f s, finish %.1f s, write %.1f s\n",
+      "time       %.1f s: decide %.1f s, partition %.1f s, chunks %.1f s, seams %.1f s, weld "
+      "%.1f s, gather %.1f s (%.1f MB), stitch %.1f s, finish %.1f s, write %.1f s\n",
       wall, phase("decide"), phase("setup") + phase("partition") + phase("join"), phase("chunks"),
-      phase("gather"), static_cast<double>(gathered_bytes) / 1e6, phase("stitch"), phase("finish"),
-      phase("write"));
+      phase("seams"), phase("weld"), phase("gather"), static_cast<double>(gathered_bytes) / 1e6,
+      phase("stitch"), phase("finish"), phase("write"));
   std::printf("serial     %.1f s of %.1f s on one core (Amdahl: f = %.3f, at most %.1fx faster)\n",
               serial.serial_s, serial.serial_s + serial.parallel_work_s, serial.fraction,
               serial.max_speedup);
@@ -279,9 +273,9 @@ int run(const Options& o, int rank, int ranks) {
   }
 
   // The chunks go out from a queue on rank 0 in Morton order, each to whichever rank asks first
-  // (rank 0's own graph included), so a rank with cheap chunks takes more. Rank 0 then welds
-  // every chunk in Morton order, as in one process, so welding and orientation give the same
-  // mesh for any number of ranks and any assignment.
+  // (rank 0's own graph included), so a rank with cheap chunks takes more. The weld is planned
+  // over every chunk in Morton order, as in one process, so welding and orientation give the
+  // same mesh for any number of ranks and any assignment.
   clock.begin("chunks", false);
   const bool in_place = finishes_in_place(config, chunking);
   const std::size_t n = plan.files.size();
@@ -295,6 +289,7 @@ int run(const Options& o, int rank, int ranks) {
     if (frame->ok()) {
       r.flags = chunk_vertex_flags(*frame);
       r.mesh = std::move(frame->mesh);
+      summarize_result(r, plan.grid.voxel_size, plan.grid.chunk_cells);
     } else {
       r.error = frame->name + ": " + frame->error;
     }
@@ -336,6 +331,9 @@ int run(const Options& o, int rank, int ranks) {
   const double mesh_s = chunk::phase_wall(clock.phases(), "chunks");
   std::fprintf(stderr, "meshflow-mpi: rank %d/%d: %zu chunks meshed in %.2f s\n", rank, ranks,
                results.size(), mesh_s);
+  // Every rank welds its own chunks (seam summaries exchanged through rank 0); rank 0 then
+  // only concatenates the welded parts in Morton order, finishes the seams and writes.
+  report.seam_vertices = weld_on_ranks(results, clock, rank, ranks);
   std::vector<chunk::RankTimes> times = {
       {rank, results.size(), chunk::peak_resident_bytes(), clock.phases()}};
   if (rank != 0) {
@@ -351,7 +349,15 @@ int run(const Options& o, int rank, int ranks) {
   }
   std::sort(results.begin(), results.end(),
             [](const ChunkResult& a, const ChunkResult& b) { return a.position < b.position; });
-  chunk::MeshStitcher stitcher = chunk_stitcher(plan.grid.voxel_size, plan.grid.chunk_cells);
+  TriangleMesh joined;
+  std::vector<std::uint8_t> flags;
+  std::size_t vertices = 0, triangles = 0;
+  for (const ChunkResult& r : results) {
+    vertices += r.mesh.vertices.size();
+    triangles += r.mesh.triangles.size();
+  }
+  joined.vertices.reserve(vertices);
+  joined.triangles.reserve(triangles);
   for (ChunkResult& r : results) {
     if (!r.error.empty()) {
       std::fprintf(stderr, "meshflow-mpi: chunk failed, its cells are missing: %s\n",
@@ -359,11 +365,15 @@ int run(const Options& o, int rank, int ranks) {
       report.failed.push_back(r.error);
       continue;
     }
-    stitcher.add(r.mesh, r.flags);
+    chunk::append_welded(joined, r.mesh);
+    flags.insert(flags.end(), r.flags.begin(), r.flags.end());
     r = ChunkResult{};
   }
-  const TriangleMesh mesh = finish_chunked_mesh(stitcher, config, plan.grid.voxel_size, report, {},
-                                                in_place, plan.grid.chunk_cells);
+  if (flags.size() != joined.vertices.size()) flags.clear();  // some chunk gave none
+  clock.begin("stitch", true);  // with --finish-after-stitch: flips and rim trim
+  const TriangleMesh mesh =
+      finish_joined_mesh(std::move(joined), flags, config, plan.grid.voxel_size, report, {},
+                         in_place, plan.grid.chunk_cells);
   if (mesh.empty()) {
     std::fprintf(stderr, "meshflow-mpi: error: %s: no surface was extracted\n", o.input.c_str());
     return 1;

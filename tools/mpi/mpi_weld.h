@@ -1,0 +1,43 @@
+#pragma once
+// meshflow-mpi's weld: every rank welds the chunks it meshed (nodes/chunk/seam_weld.h), so
+// rank 0 only concatenates the welded parts and writes.
+
+#include <cstddef>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "nodes/chunk/phase_times.h"
+#include "nodes/chunk/seam_weld.h"
+#include "runtime/triangle_mesh.h"
+
+namespace meshflow::cli {
+
+/// One chunk meshed by some rank: its position in the plan and its mesh, or its error.
+struct ChunkResult {
+  std::uint64_t position = 0;
+  TriangleMesh mesh;
+  std::vector<std::uint8_t> flags;  ///< chunk_vertex_flags()
+  std::string error;                ///< non-empty: the chunk failed
+  chunk::ChunkSeams seams;          ///< summarize_result()'s, on the rank that meshed it
+};
+
+/// Fills `result.seams` (summarize_seams() of its mesh and flags, feature vertices apart) when
+/// the chunk did not fail: called where the chunk was meshed, as it arrives. O(V + T).
+void summarize_result(ChunkResult& result, float voxel_size, int chunk_cells);
+
+/// Welds this rank's chunk meshes `results` (each summarized: summarize_result()) where they
+/// are (collective: every rank calls it once its chunks are meshed). The summaries (seam
+/// vertices and edges, a few counts: no mesh) go to rank 0 and from it to every rank; every rank
+/// plans the weld of all chunks in position order from them (plan_weld(), seam-sized), then welds
+/// its own chunks in parallel (weld_chunk()): each result's mesh becomes its part of the welded
+/// mesh (the vertices kept in it, triangles in output indices), its flags the kept vertices' bytes.
+/// Failed chunks are left out. Concatenating every rank's parts in position order (append_welded())
+/// gives MeshStitcher::stitch()'s mesh of all chunks. Times "exchange" (waiting for every rank's
+/// summaries), "seams" (the plan: serial on rank 0; the others, making the same plan, count as
+/// waiting) and "weld" (parallel) on `clock`. Returns the seam vertices merged. Throws
+/// meshflow::Error for a malformed message.
+std::size_t weld_on_ranks(std::vector<ChunkResult>& results, chunk::PhaseClock& clock, int rank,
+                          int ranks);
+
+}  // namespace meshflow::cli

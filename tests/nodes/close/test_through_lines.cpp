@@ -109,7 +109,9 @@ TEST(ThroughLines, MatchesTheBruteForceWalkOnRandomLattices) {
     }
     std::printf("[ through ] density %.2f: %zu of %zu nodes on through lines\n", density, marked,
                 fast.size());
-    if (density < 0.05) EXPECT_GT(marked, 0u) << "the tube's lines";
+    if (density < 0.05) {
+      EXPECT_GT(marked, 0u) << "the tube's lines";
+    }
   }
 }
 

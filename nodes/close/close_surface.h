@@ -22,8 +22,8 @@
 // field Poisson surface reconstruction solves for: an unseen box bottom closes flat at its rim),
 // and the corners on lattice lines through observed tunnels (through_lines.h) are held outside
 // like lines of sight, so a through-hole seen from above stays open where its lower part was
-// unseen. Not the default: a sphere seen by three views 120 degrees apart (CliClose) gets an
-// inner surface from the double layer of its patches.
+// unseen. Not the default: it closes a sphere's unseen cap flat, and on the scanned L-shape and
+// box with a hole its fill is less accurate than diffusion's (bench/RESULTS.md).
 
 #include <Eigen/Core>
 #include <cstddef>

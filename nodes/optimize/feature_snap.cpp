@@ -65,7 +65,7 @@ std::vector<std::uint32_t> snap_side_vertices(const TriangleMesh& mesh,
 // Rounds of the trimmed refit in snap_fit_plane (each keeps the points within 3 robust
 // deviations of the last plane; converged when none is dropped).
 constexpr int kSnapTrimRounds = 8;
-// A vertex moves only farther than this many RMS deviations of its sides from their planes:
+// A vertex moves only farther than this many robust deviations of its sides from their planes:
 // where the planes are known better than the vertex lies on them.
 constexpr double kSnapSpreads = 3.0;
 
@@ -90,28 +90,33 @@ bool snap_least_squares(const TriangleMesh& mesh, const std::vector<std::uint32_
   return true;
 }
 
-/// The plane of `points` when at least 5 of them spread in two directions and their RMS
-/// deviation is at most `flatness`: least squares, refitted through the points within 3 robust
-/// deviations (1.4826 x the median distance) until none is dropped, so that a few stray points
-/// (an extraction's misplaced vertex next to an edge, a vertex across a gap in the feature line)
-/// do not tilt an exact side.
+/// 1.4826 x the median distance of `points` from `plane` (the standard deviation of Gaussian
+/// noise about it; a few strays do not count).
+double snap_robust_deviation(const TriangleMesh& mesh, const std::vector<std::uint32_t>& points,
+                             const FeaturePlane& plane, std::vector<double>& distances) {
+  distances.clear();
+  for (std::uint32_t p : points)
+    distances.push_back(std::abs(plane.normal.dot(mesh.vertices[p].cast<double>()) - plane.offset));
+  std::vector<double> sorted = distances;
+  const auto middle = sorted.begin() + static_cast<std::ptrdiff_t>(sorted.size() / 2);
+  std::nth_element(sorted.begin(), middle, sorted.end());
+  return 1.4826 * *middle;
+}
+
+/// The plane of `points` (at least 5 of them, spread in two directions): least squares,
+/// refitted through the points within 3 robust deviations of it until none is dropped, so that
+/// a few stray points (an extraction's misplaced vertex next to an edge, a vertex across a gap
+/// in the feature line) do not tilt an exact side. `deviation`: the robust deviation of all the
+/// points from it; false when that exceeds `flatness` (a curved or noisy side).
 bool snap_fit_plane(const TriangleMesh& mesh, const std::vector<std::uint32_t>& points,
-                    double flatness, FeaturePlane& plane, double& rms) {
+                    double flatness, FeaturePlane& plane, double& deviation) {
   if (points.size() < 5) return false;
   Eigen::Vector2d lambda;
   snap_least_squares(mesh, points, plane, lambda);
-  if (!(lambda[0] <= flatness * flatness)) return false;
   std::vector<std::uint32_t> kept = points, trimmed;
   std::vector<double> distances;
   for (int round = 0; round < kSnapTrimRounds; ++round) {
-    distances.clear();
-    for (std::uint32_t p : kept)
-      distances.push_back(
-          std::abs(plane.normal.dot(mesh.vertices[p].cast<double>()) - plane.offset));
-    std::vector<double> sorted = distances;
-    const auto middle = sorted.begin() + static_cast<std::ptrdiff_t>(sorted.size() / 2);
-    std::nth_element(sorted.begin(), middle, sorted.end());
-    const double limit = 3.0 * 1.4826 * *middle;
+    const double limit = 3.0 * snap_robust_deviation(mesh, kept, plane, distances);
     trimmed.clear();
     for (std::size_t i = 0; i < kept.size(); ++i)
       if (distances[i] <= limit) trimmed.push_back(kept[i]);
@@ -119,8 +124,8 @@ bool snap_fit_plane(const TriangleMesh& mesh, const std::vector<std::uint32_t>& 
     kept.swap(trimmed);
     snap_least_squares(mesh, kept, plane, lambda);
   }
-  rms = std::sqrt(std::max(0.0, lambda[0]));
-  return lambda[1] > 16.0 * lambda[0] && lambda[1] > 0.0;
+  deviation = snap_robust_deviation(mesh, points, plane, distances);
+  return deviation <= flatness && lambda[1] > 16.0 * lambda[0] && lambda[1] > 0.0;
 }
 
 /// Whether moving v to `to` keeps every face around it with area and within 90 degrees of its
@@ -177,7 +182,7 @@ FeatureSnapReport snap_feature_vertices(TriangleMesh& mesh, const MeshFeatures& 
     ++report.feature_vertices;
     const std::vector<std::size_t> side = snap_sides(mesh, around, features, v);
     std::vector<FeaturePlane> planes;
-    double spread = 0.0;  // the largest RMS deviation of a side from its plane
+    double spread = 0.0;  // the largest robust deviation of a side from its plane
     std::vector<std::uint8_t> done(side.size(), 0);
     for (std::size_t i = 0; i < side.size(); ++i) {
       if (done[i]) continue;
@@ -185,11 +190,11 @@ FeatureSnapReport snap_feature_vertices(TriangleMesh& mesh, const MeshFeatures& 
       for (std::size_t j = i; j < side.size(); ++j)
         if (side[j] == side[i]) fan.push_back(around.begin(v)[j]), done[j] = 1;
       FeaturePlane plane;
-      double rms = 0.0;
+      double deviation = 0.0;
       if (snap_fit_plane(mesh, snap_side_vertices(mesh, around, features, v, fan), flatness, plane,
-                         rms)) {
+                         deviation)) {
         planes.push_back(plane);
-        spread = std::max(spread, rms);
+        spread = std::max(spread, deviation);
       }
     }
     if (!planes_meet(planes)) continue;

@@ -62,11 +62,18 @@ std::vector<std::uint32_t> snap_side_vertices(const TriangleMesh& mesh,
   return found;
 }
 
-/// The least-squares plane of `points` when at least 5 of them spread in two directions and
-/// their RMS deviation is at most `flatness`.
-bool snap_fit_plane(const TriangleMesh& mesh, const std::vector<std::uint32_t>& points,
-                    double flatness, FeaturePlane& plane) {
-  if (points.size() < 5) return false;
+// Rounds of the trimmed refit in snap_fit_plane (each keeps the points within 3 robust
+// deviations of the last plane; converged when none is dropped).
+constexpr int kSnapTrimRounds = 8;
+// A vertex moves only farther than this many robust deviations of its sides from their planes:
+// where the planes are known better than the vertex lies on them.
+constexpr double kSnapSpreads = 3.0;
+
+/// The least-squares plane of `points`, with its smallest two scatter eigenvalues (ascending):
+/// false when fewer than 3 points.
+bool snap_least_squares(const TriangleMesh& mesh, const std::vector<std::uint32_t>& points,
+                        FeaturePlane& plane, Eigen::Vector2d& lambda) {
+  if (points.size() < 3) return false;
   Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
   for (std::uint32_t p : points) centroid += mesh.vertices[p].cast<double>();
   centroid /= static_cast<double>(points.size());
@@ -77,12 +84,48 @@ bool snap_fit_plane(const TriangleMesh& mesh, const std::vector<std::uint32_t>& 
   }
   scatter /= static_cast<double>(points.size());
   const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eigen(scatter);
-  const Eigen::Vector3d& lambda = eigen.eigenvalues();  // ascending
-  if (!(lambda[0] <= flatness * flatness) || !(lambda[1] > 16.0 * lambda[0]) || !(lambda[1] > 0.0))
-    return false;
+  lambda = eigen.eigenvalues().head<2>();  // ascending
   plane.normal = eigen.eigenvectors().col(0);
   plane.offset = plane.normal.dot(centroid);
   return true;
+}
+
+/// 1.4826 x the median distance of `points` from `plane` (the standard deviation of Gaussian
+/// noise about it; a few strays do not count).
+double snap_robust_deviation(const TriangleMesh& mesh, const std::vector<std::uint32_t>& points,
+                             const FeaturePlane& plane, std::vector<double>& distances) {
+  distances.clear();
+  for (std::uint32_t p : points)
+    distances.push_back(std::abs(plane.normal.dot(mesh.vertices[p].cast<double>()) - plane.offset));
+  std::vector<double> sorted = distances;
+  const auto middle = sorted.begin() + static_cast<std::ptrdiff_t>(sorted.size() / 2);
+  std::nth_element(sorted.begin(), middle, sorted.end());
+  return 1.4826 * *middle;
+}
+
+/// The plane of `points` (at least 5 of them, spread in two directions): least squares,
+/// refitted through the points within 3 robust deviations of it until none is dropped, so that
+/// a few stray points (an extraction's misplaced vertex next to an edge, a vertex across a gap
+/// in the feature line) do not tilt an exact side. `deviation`: the robust deviation of all the
+/// points from it; false when that exceeds `flatness` (a curved or noisy side).
+bool snap_fit_plane(const TriangleMesh& mesh, const std::vector<std::uint32_t>& points,
+                    double flatness, FeaturePlane& plane, double& deviation) {
+  if (points.size() < 5) return false;
+  Eigen::Vector2d lambda;
+  snap_least_squares(mesh, points, plane, lambda);
+  std::vector<std::uint32_t> kept = points, trimmed;
+  std::vector<double> distances;
+  for (int round = 0; round < kSnapTrimRounds; ++round) {
+    const double limit = 3.0 * snap_robust_deviation(mesh, kept, plane, distances);
+    trimmed.clear();
+    for (std::size_t i = 0; i < kept.size(); ++i)
+      if (distances[i] <= limit) trimmed.push_back(kept[i]);
+    if (trimmed.size() == kept.size() || trimmed.size() < 5) break;
+    kept.swap(trimmed);
+    snap_least_squares(mesh, kept, plane, lambda);
+  }
+  deviation = snap_robust_deviation(mesh, points, plane, distances);
+  return deviation <= flatness && lambda[1] > 16.0 * lambda[0] && lambda[1] > 0.0;
 }
 
 /// Whether moving v to `to` keeps every face around it with area and within 90 degrees of its
@@ -139,6 +182,7 @@ FeatureSnapReport snap_feature_vertices(TriangleMesh& mesh, const MeshFeatures& 
     ++report.feature_vertices;
     const std::vector<std::size_t> side = snap_sides(mesh, around, features, v);
     std::vector<FeaturePlane> planes;
+    double spread = 0.0;  // the largest robust deviation of a side from its plane
     std::vector<std::uint8_t> done(side.size(), 0);
     for (std::size_t i = 0; i < side.size(); ++i) {
       if (done[i]) continue;
@@ -146,8 +190,12 @@ FeatureSnapReport snap_feature_vertices(TriangleMesh& mesh, const MeshFeatures& 
       for (std::size_t j = i; j < side.size(); ++j)
         if (side[j] == side[i]) fan.push_back(around.begin(v)[j]), done[j] = 1;
       FeaturePlane plane;
-      if (snap_fit_plane(mesh, snap_side_vertices(mesh, around, features, v, fan), flatness, plane))
+      double deviation = 0.0;
+      if (snap_fit_plane(mesh, snap_side_vertices(mesh, around, features, v, fan), flatness, plane,
+                         deviation)) {
         planes.push_back(plane);
+        spread = std::max(spread, deviation);
+      }
     }
     if (!planes_meet(planes)) continue;
     const Eigen::Vector3d here = mesh.vertices[v].cast<double>();
@@ -155,6 +203,7 @@ FeatureSnapReport snap_feature_vertices(TriangleMesh& mesh, const MeshFeatures& 
     const Eigen::Vector3f to = (here + step).cast<float>();
     const float move = (to - mesh.vertices[v]).norm();
     if (!to.allFinite() || move > max_move || move == 0.0f ||
+        static_cast<double>(move) <= kSnapSpreads * spread ||
         !snap_keeps_faces(mesh, around, v, to))
       continue;
     mesh.vertices[v] = to;

@@ -39,13 +39,18 @@ struct FeatureSnapReport {
 
 /// Moves the feature vertices of `mesh` (`features` = detect_features() of it) onto the planes
 /// of their sides. A side is the fan of faces between two sharp edges at the vertex; its plane
-/// is the least-squares plane of the free vertices within two rings of it on that side (at
-/// least 5 of them, RMS deviation at most `flatness` metres: a curved or noisy side gives no
-/// plane, nor does a side without free vertices next to it, e.g. a corner's single triangle
-/// between two feature edges, so such a corner stays). With planes on at least two sides whose
-/// normals differ by more than 20 degrees the vertex takes the smallest move onto the least-squares
-/// point of the planes (along a line it stays where it was), when that is at most `max_move` metres
-/// away and turns none of its faces by more than 90 degrees. Serial, deterministic; O(F x
+/// is fitted to the free vertices within two rings of it on that side (at least 5 of them, their
+/// robust deviation from it, 1.4826 x the median distance, at most `flatness` metres: a curved
+/// or noisy side gives no plane, nor does a side without free vertices next to it, e.g. a
+/// corner's single triangle between two feature edges, so such a corner stays), by least
+/// squares refitted through the vertices within 3 robust deviations of it (stray vertices next
+/// to an edge do not tilt an exact side). With planes on at least two sides whose normals
+/// differ by more than 20 degrees the vertex takes the smallest move onto the least-squares
+/// point of the planes (along a line it stays where it was), when that is at most `max_move`
+/// metres away, more than 3 times the largest robust deviation of its sides (the planes are
+/// known better than the vertex lies on them: an exact edge between rough sides stays), and
+/// turns none of its faces by
+/// more than 90 degrees. Serial, deterministic; O(F x
 /// valence^2).
 FeatureSnapReport snap_feature_vertices(TriangleMesh& mesh, const MeshFeatures& features,
                                         float max_move, float flatness);

@@ -3,10 +3,12 @@
 #include <algorithm>
 #include <cmath>
 
+#include <tbb/blocked_range.h>
+#include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
-#include <tbb/parallel_sort.h>
 
 #include "runtime/angles.h"
+#include "runtime/vertex_triangles.h"
 
 namespace meshflow {
 namespace {
@@ -18,106 +20,91 @@ struct FeatureCandidate {
   Eigen::Vector3f left, right;
 };
 
-/// One side of a face: its edge's undirected key and the face. The empty default constructor
-/// leaves a vector of them unwritten (no serial zeroing of 16 bytes per side).
-struct FaceSide {
-  std::uint64_t key;
-  std::uint32_t face;
-  FaceSide() {}  // not `= default`, which would zero a vector of them
-  FaceSide(std::uint64_t k, std::uint32_t f) : key(k), face(f) {}
-  bool operator<(const FaceSide& o) const { return key != o.key ? key < o.key : face < o.face; }
+/// The sides of edge {a, b} (a != b) among the triangles around a: how many there are, and the
+/// two lowest triangles holding one.
+struct FeatureEdgeSides {
+  int count = 0;
+  std::uint32_t first = 0, second = 0;
 };
 
-/// Edges with two faces meeting at a normal angle whose cosine is below cos_limit, sorted.
-/// Parallel: the sort and the face normals; the scan over the sorted sides is linear.
-std::vector<FeatureCandidate> sharp_candidates(const TriangleMesh& mesh, float cos_limit) {
-  // Every face's edges as (undirected key, face), sorted: an edge's faces are neighbours. The
-  // pairs are unique, so the parallel sort's order is the only one.
-  const std::size_t faces = mesh.triangles.size();
-  std::vector<FaceSide> sides(3 * faces);  // left uninitialised: the parallel loop writes all
-  std::vector<Eigen::Vector3f> normal(faces);
-  tbb::parallel_for(std::size_t{0}, faces, [&](std::size_t t) {
-    const Triangle& tri = mesh.triangles[t];
-    for (std::size_t k = 0; k < 3; ++k)
-      sides[3 * t + k] =
-          FaceSide(undirected_edge_key(tri[k], tri[(k + 1) % 3]), static_cast<std::uint32_t>(t));
-    normal[t] = face_normal(mesh, tri);
-  });
-  tbb::parallel_sort(sides.begin(), sides.end());
-  std::vector<FeatureCandidate> out;
-  for (std::size_t i = 0; i < sides.size();) {
-    std::size_t j = i;
-    while (j < sides.size() && sides[j].key == sides[i].key) ++j;
-    if (j - i == 2) {
-      const Triangle& t0 = mesh.triangles[sides[i].face];
-      const Eigen::Vector3f& n0 = normal[sides[i].face];
-      const Eigen::Vector3f& n1 = normal[sides[i + 1].face];
-      if (n0.squaredNorm() > 0.0f && n1.squaredNorm() > 0.0f && n0.dot(n1) < cos_limit) {
-        const auto a = static_cast<std::uint32_t>(sides[i].key >> 32);
-        const auto b = static_cast<std::uint32_t>(sides[i].key & 0xFFFFFFFFu);
-        bool t0_runs_a_to_b = false;
-        for (int k = 0; k < 3; ++k) t0_runs_a_to_b |= t0[k] == a && t0[(k + 1) % 3] == b;
-        out.push_back({{a, b}, t0_runs_a_to_b ? n0 : n1, t0_runs_a_to_b ? n1 : n0});
+FeatureEdgeSides feature_edge_sides(const TriangleMesh& mesh, const VertexTriangles& around,
+                                    std::uint32_t a, std::uint32_t b) {
+  FeatureEdgeSides s;
+  std::uint32_t previous = 0xFFFFFFFFu;
+  for (const std::uint32_t* it = around.begin(a); it != around.end(a); ++it) {
+    if (*it == previous) continue;  // a triangle repeating a is listed once per repetition
+    previous = *it;
+    const Triangle& t = mesh.triangles[*it];
+    for (int k = 0; k < 3; ++k) {
+      const std::uint32_t p = t[k], q = t[(k + 1) % 3];
+      if ((p == a && q == b) || (p == b && q == a)) {
+        if (s.count == 0) s.first = *it;
+        if (s.count == 1) s.second = *it;
+        ++s.count;
       }
     }
-    i = j;
   }
-  return out;
+  return s;
 }
 
-constexpr std::uint32_t kNoRow = 0xFFFFFFFFu;
-
-/// The vertices that candidates touch, ascending, and each mesh vertex's row among them
-/// (kNoRow for the others): the rounds of detect_features() visit only these.
-struct TouchedVertices {
-  std::vector<std::uint32_t> vertices;
-  std::vector<std::uint32_t> row;
-};
-
-TouchedVertices touched_vertices(std::size_t n, const std::vector<FeatureCandidate>& c) {
-  TouchedVertices t;
-  t.row.assign(n, kNoRow);
-  for (const FeatureCandidate& e : c)
-    for (std::uint32_t v : e.ends) t.row[v] = 0;
-  for (std::uint32_t v = 0; v < n; ++v)
-    if (t.row[v] != kNoRow) {
-      t.row[v] = static_cast<std::uint32_t>(t.vertices.size());
-      t.vertices.push_back(v);
+/// Edges with two faces meeting at a normal angle whose cosine is below cos_limit, sorted.
+/// Face normals once, then one parallel pass over the faces: each edge is looked at from the
+/// lowest face holding it, through the triangles around its first end. O(T x valence).
+std::vector<FeatureCandidate> sharp_candidates(const TriangleMesh& mesh, float cos_limit) {
+  const std::size_t t_count = mesh.triangles.size();
+  std::vector<Eigen::Vector3f> normals(t_count);
+  tbb::parallel_for(std::size_t{0}, t_count,
+                    [&](std::size_t t) { normals[t] = face_normal(mesh, mesh.triangles[t]); });
+  const VertexTriangles around = vertex_triangles(mesh);
+  tbb::enumerable_thread_specific<std::vector<FeatureCandidate>> found;
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, t_count), [&](const auto& range) {
+    std::vector<FeatureCandidate>& out = found.local();
+    for (std::size_t i = range.begin(); i != range.end(); ++i) {
+      const auto t = static_cast<std::uint32_t>(i);
+      const Triangle& tri = mesh.triangles[t];
+      for (int k = 0; k < 3; ++k) {
+        const std::uint32_t a = tri[k], b = tri[(k + 1) % 3];
+        if (a == b || a >= mesh.vertices.size() || b >= mesh.vertices.size()) continue;
+        const FeatureEdgeSides s = feature_edge_sides(mesh, around, a, b);
+        if (s.count != 2 || s.first != t || s.second == t) continue;
+        const Eigen::Vector3f& n0 = normals[s.first];
+        const Eigen::Vector3f& n1 = normals[s.second];
+        if (!(n0.squaredNorm() > 0.0f && n1.squaredNorm() > 0.0f && n0.dot(n1) < cos_limit))
+          continue;
+        // t runs a -> b: its normal is on the left of {min, max} when a < b.
+        const bool forward = a < b;
+        out.push_back({{std::min(a, b), std::max(a, b)}, forward ? n0 : n1, forward ? n1 : n0});
+      }
     }
-  return t;
+  });
+  std::vector<FeatureCandidate> all;
+  for (const std::vector<FeatureCandidate>& part : found)
+    all.insert(all.end(), part.begin(), part.end());
+  std::sort(all.begin(), all.end(),
+            [](const FeatureCandidate& x, const FeatureCandidate& y) { return x.ends < y.ends; });
+  return all;
 }
 
-/// The live candidates around every touched vertex (compressed rows of candidate indices).
+/// The live candidates around every vertex (compressed rows of candidate indices).
 struct FeatureIncidence {
-  const TouchedVertices* touched = nullptr;
   std::vector<std::uint32_t> offsets, edges;
-  std::uint32_t degree(std::uint32_t v) const {
-    const std::uint32_t r = touched->row[v];
-    return r == kNoRow ? 0 : offsets[r + 1] - offsets[r];
-  }
-  std::uint32_t edge(std::uint32_t v, std::uint32_t k) const {
-    return edges[offsets[touched->row[v]] + k];
-  }
+  std::uint32_t degree(std::uint32_t v) const { return offsets[v + 1] - offsets[v]; }
+  std::uint32_t edge(std::uint32_t v, std::uint32_t k) const { return edges[offsets[v] + k]; }
 };
 
-/// O(candidates + touched vertices).
-FeatureIncidence feature_incidence(const TouchedVertices& touched,
-                                   const std::vector<FeatureCandidate>& c,
+FeatureIncidence feature_incidence(std::size_t n, const std::vector<FeatureCandidate>& c,
                                    const std::vector<std::uint8_t>& alive) {
   FeatureIncidence inc;
-  inc.touched = &touched;
-  const std::size_t m = touched.vertices.size();
-  inc.offsets.assign(m + 1, 0);
+  inc.offsets.assign(n + 1, 0);
   for (std::size_t i = 0; i < c.size(); ++i)
     if (alive[i])
-      for (std::uint32_t v : c[i].ends) ++inc.offsets[touched.row[v] + 1];
-  for (std::size_t r = 0; r < m; ++r) inc.offsets[r + 1] += inc.offsets[r];
-  inc.edges.resize(inc.offsets[m]);
+      for (std::uint32_t v : c[i].ends) ++inc.offsets[v + 1];
+  for (std::size_t v = 0; v < n; ++v) inc.offsets[v + 1] += inc.offsets[v];
+  inc.edges.resize(inc.offsets[n]);
   std::vector<std::uint32_t> fill(inc.offsets.begin(), inc.offsets.end() - 1);
   for (std::size_t i = 0; i < c.size(); ++i)
     if (alive[i])
-      for (std::uint32_t v : c[i].ends)
-        inc.edges[fill[touched.row[v]]++] = static_cast<std::uint32_t>(i);
+      for (std::uint32_t v : c[i].ends) inc.edges[fill[v]++] = static_cast<std::uint32_t>(i);
   return inc;
 }
 
@@ -128,11 +115,11 @@ std::uint32_t other_end(const FeatureCandidate& e, std::uint32_t v) {
 /// Whether the two candidates at v (v has exactly two) continue one another: the line
 /// a - v - b turns by less than the feature angle (cos_limit), and the faces on either side of
 /// it by less than twice that (cos_side: a bumpy side of a true edge turns too).
-bool continues_line(const TriangleMesh& mesh, const FeatureCandidate& in,
+bool continues_line(const std::vector<Eigen::Vector3f>& points, const FeatureCandidate& in,
                     const FeatureCandidate& out, std::uint32_t v, float cos_limit, float cos_side) {
   const std::uint32_t a = other_end(in, v), b = other_end(out, v);
-  const Eigen::Vector3f d_in = (mesh.vertices[v] - mesh.vertices[a]).normalized();
-  const Eigen::Vector3f d_out = (mesh.vertices[b] - mesh.vertices[v]).normalized();
+  const Eigen::Vector3f d_in = (points[v] - points[a]).normalized();
+  const Eigen::Vector3f d_out = (points[b] - points[v]).normalized();
   if (d_in.dot(d_out) < cos_limit) return false;
   // Walking a -> v -> b, the face on the left of `in` runs a -> v.
   const Eigen::Vector3f& left_in = in.ends[0] == a ? in.left : in.right;
@@ -142,18 +129,23 @@ bool continues_line(const TriangleMesh& mesh, const FeatureCandidate& in,
   return left_in.dot(left_out) >= cos_side && right_in.dot(right_out) >= cos_side;
 }
 
-/// Per vertex (entries of touched vertices rewritten, the others left 0): whether it ends,
-/// branches or breaks a line (has candidates and is no line vertex). O(touched vertices).
-void line_breaks(const TriangleMesh& mesh, const std::vector<FeatureCandidate>& c,
-                 const FeatureIncidence& inc, float angle_deg, std::vector<std::uint8_t>& breaks) {
+/// Per vertex: whether it ends, branches or breaks a line (has candidates and is no line
+/// vertex).
+std::vector<std::uint8_t> line_breaks(const std::vector<Eigen::Vector3f>& points,
+                                      const std::vector<FeatureCandidate>& c,
+                                      const FeatureIncidence& inc, float angle_deg) {
   const float cos_limit = static_cast<float>(std::cos(radians(static_cast<double>(angle_deg))));
   const float cos_side =
       static_cast<float>(std::cos(radians(std::min(90.0, 2.0 * static_cast<double>(angle_deg)))));
-  for (std::uint32_t v : inc.touched->vertices) {
+  const std::size_t n = points.size();
+  std::vector<std::uint8_t> breaks(n, 0);
+  for (std::uint32_t v = 0; v < n; ++v) {
     const std::uint32_t d = inc.degree(v);
-    breaks[v] = d != 0 && (d != 2 || !continues_line(mesh, c[inc.edge(v, 0)], c[inc.edge(v, 1)], v,
-                                                     cos_limit, cos_side));
+    if (d == 0) continue;
+    breaks[v] = d != 2 || !continues_line(points, c[inc.edge(v, 0)], c[inc.edge(v, 1)], v,
+                                          cos_limit, cos_side);
   }
+  return breaks;
 }
 
 /// The lines: runs of candidates between breaks (or closed loops without one).
@@ -164,7 +156,8 @@ struct FeatureLines {
 };
 constexpr std::uint32_t kNoEnd = 0xFFFFFFFFu;
 
-FeatureLines trace_lines(const TriangleMesh& mesh, const std::vector<FeatureCandidate>& c,
+FeatureLines trace_lines(const std::vector<Eigen::Vector3f>& points,
+                         const std::vector<FeatureCandidate>& c,
                          const std::vector<std::uint8_t>& alive, const FeatureIncidence& inc,
                          const std::vector<std::uint8_t>& breaks) {
   FeatureLines lines;
@@ -173,7 +166,7 @@ FeatureLines trace_lines(const TriangleMesh& mesh, const std::vector<FeatureCand
     if (!alive[start] || lines.line_of[start] != kNoEnd) continue;
     const auto id = static_cast<std::uint32_t>(lines.length.size());
     lines.line_of[start] = id;
-    float length = (mesh.vertices[c[start].ends[0]] - mesh.vertices[c[start].ends[1]]).norm();
+    float length = (points[c[start].ends[0]] - points[c[start].ends[1]]).norm();
     std::array<std::uint32_t, 2> ends{kNoEnd, kNoEnd};
     for (int side = 0; side < 2; ++side) {  // walk away from start through both of its ends
       std::uint32_t edge = start, v = c[start].ends[side];
@@ -181,7 +174,7 @@ FeatureLines trace_lines(const TriangleMesh& mesh, const std::vector<FeatureCand
         edge = inc.edge(v, 0) == edge ? inc.edge(v, 1) : inc.edge(v, 0);
         if (lines.line_of[edge] == id) break;  // a closed loop
         lines.line_of[edge] = id;
-        length += (mesh.vertices[c[edge].ends[0]] - mesh.vertices[c[edge].ends[1]]).norm();
+        length += (points[c[edge].ends[0]] - points[c[edge].ends[1]]).norm();
         v = other_end(c[edge], v);
       }
       if (breaks[v]) ends[side] = v;
@@ -217,21 +210,34 @@ std::size_t MeshFeatures::count(VertexKind kind) const {
 
 MeshFeatures detect_features(const TriangleMesh& mesh, float angle_deg, float min_line_length) {
   MeshFeatures f;
-  const std::size_t n = mesh.vertices.size();
-  f.vertex_kind.assign(n, MeshFeatures::VertexKind::kFree);
+  f.vertex_kind.assign(mesh.vertices.size(), MeshFeatures::VertexKind::kFree);
   if (!(angle_deg < 180.0f)) return f;
   const float cos_limit = static_cast<float>(std::cos(radians(static_cast<double>(angle_deg))));
-  const std::vector<FeatureCandidate> c = sharp_candidates(mesh, cos_limit);
+  std::vector<FeatureCandidate> c = sharp_candidates(mesh, cos_limit);
+  if (c.empty()) return f;
   if (min_line_length == 0.0f) min_line_length = kMinFeatureLineEdges * median_edge_length(mesh);
+  // The lines are traced on the candidates' own vertices only (numbered in mesh order, so the
+  // candidates stay sorted): each round costs O(candidates), not O(V).
+  std::vector<std::uint32_t> global;
+  global.reserve(2 * c.size());
+  for (const FeatureCandidate& e : c) global.insert(global.end(), e.ends.begin(), e.ends.end());
+  std::sort(global.begin(), global.end());
+  global.erase(std::unique(global.begin(), global.end()), global.end());
+  for (FeatureCandidate& e : c)
+    for (std::uint32_t& v : e.ends)
+      v = static_cast<std::uint32_t>(std::lower_bound(global.begin(), global.end(), v) -
+                                     global.begin());
+  const std::size_t n = global.size();
+  std::vector<Eigen::Vector3f> points(n);
+  for (std::size_t v = 0; v < n; ++v) points[v] = mesh.vertices[global[v]];
   std::vector<std::uint8_t> alive(c.size(), 1);
-  const TouchedVertices touched = touched_vertices(n, c);
   FeatureIncidence inc;
-  std::vector<std::uint8_t> breaks(n, 0);
+  std::vector<std::uint8_t> breaks;
   for (;;) {  // drop short lines until every line left is long or a bridge between long ones
-    inc = feature_incidence(touched, c, alive);
-    line_breaks(mesh, c, inc, angle_deg, breaks);
+    inc = feature_incidence(n, c, alive);
+    breaks = line_breaks(points, c, inc, angle_deg);
     if (min_line_length < 0.0f) break;
-    const FeatureLines lines = trace_lines(mesh, c, alive, inc, breaks);
+    const FeatureLines lines = trace_lines(points, c, alive, inc, breaks);
     std::vector<std::uint8_t> long_line(lines.length.size());
     for (std::size_t l = 0; l < long_line.size(); ++l)
       long_line[l] = lines.length[l] >= min_line_length;
@@ -258,10 +264,10 @@ MeshFeatures detect_features(const TriangleMesh& mesh, float angle_deg, float mi
     if (!dropped) break;
   }
   for (std::size_t i = 0; i < c.size(); ++i)
-    if (alive[i]) f.edges.push_back(c[i].ends);
-  for (std::uint32_t v : touched.vertices)
+    if (alive[i]) f.edges.push_back({global[c[i].ends[0]], global[c[i].ends[1]]});
+  for (std::uint32_t v = 0; v < n; ++v)
     if (inc.degree(v) > 0)
-      f.vertex_kind[v] =
+      f.vertex_kind[global[v]] =
           breaks[v] ? MeshFeatures::VertexKind::kCorner : MeshFeatures::VertexKind::kLine;
   return f;
 }

@@ -49,10 +49,11 @@ struct MeshFeatures {
 /// chamfer's short edge): short lines with a loose end (spurs) and short loops first, the
 /// others once no spur is left; the lines left then join anew and the test repeats until
 /// nothing changes. min_line_length 0: kMinFeatureLineEdges x the mesh's median edge length;
-/// negative: no line is dropped. angle_deg >= 180: no features. Deterministic: the candidates
-/// are found in parallel (a parallel sort of the faces' edges), the line rounds run serially over
-/// the candidates only; O(T log T + V + rounds x candidates), rounds about the depth of the
-/// noise's branching.
+/// negative: no line is dropped. angle_deg >= 180: no features. Candidates in one pass over the
+/// faces, parallel (face normals once, each edge looked at from its lowest face through the
+/// triangles around its first end), the lines on the candidates' vertices only; deterministic,
+/// the same for any thread count. O(T x valence + V + rounds x candidates log candidates),
+/// rounds about the depth of the noise's branching.
 MeshFeatures detect_features(const TriangleMesh& mesh, float angle_deg = kDefaultFeatureAngleDeg,
                              float min_line_length = 0.0f);
 

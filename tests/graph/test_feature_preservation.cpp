@@ -137,6 +137,14 @@ TEST_P(FeaturePreservation, ReducingListsKeepEdgesCornersAndAccuracy) {
     const bool curved = !cad;
     if (cad && !planar_list) {
       EXPECT_LE(with.mean, std::max(1.25 * before.mean, before.mean + 0.0002 * voxel));
+    }
+    if (cad && list == std::string("clean,holes,remesh")) {
+      // The remesh holds the p95 too once feature vertices move onto their sides' planes only
+      // where those planes are known better than the vertex lies on them (measured 1.00-1.14x;
+      // the L-shape 1.76x: lines of its extraction lie 0.03 voxel off an edge whose narrow side
+      // gives no plane, and the remesh widens their faces; was 18x, the chamfered cube 1.96x).
+      const double p95_bar = object.name == "l-shape" ? 2.0 : 1.25;
+      EXPECT_LE(with.p95, p95_bar * before.p95);  // no floor: 0.0002 voxel would pass 18x
     } else if (planar_list && !curved) {
       EXPECT_LE(with.mean, std::max(1.25 * before.mean, before.mean + 0.0002 * voxel));
       EXPECT_LE(with.p95, std::max(1.25 * before.p95, before.p95 + 0.0002 * voxel));

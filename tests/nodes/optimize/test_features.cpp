@@ -10,6 +10,7 @@
 #include "fixtures/mesh_fixtures.h"
 #include "nodes/decimate/qem_decimation.h"
 #include "nodes/optimize/feature_snap.h"
+#include "runtime/threads.h"
 
 namespace meshflow {
 namespace {
@@ -118,6 +119,54 @@ TEST(Features, SnapPutsAStrayEdgeVertexBackOnTheEdge) {
   TriangleMesh again = exact;
   again.vertices[stray] += 0.3f / n * Eigen::Vector3f(0.0f, -1.0f, -1.0f).normalized();
   EXPECT_EQ(snap_feature_vertices(again, detect_features(again), 0.01f / n, 0.01f / n).moved, 0u);
+}
+
+// Brute force: every undirected edge with exactly two faces whose unit normals meet at more
+// than `angle_deg`, from a map of every face's sides.
+std::vector<std::array<std::uint32_t, 2>> brute_force_sharp_edges(const TriangleMesh& m,
+                                                                  float angle_deg) {
+  std::map<std::array<std::uint32_t, 2>, std::vector<std::uint32_t>> sides;
+  for (std::uint32_t t = 0; t < m.triangles.size(); ++t)
+    for (int k = 0; k < 3; ++k) {
+      const std::uint32_t a = m.triangles[t][k], b = m.triangles[t][(k + 1) % 3];
+      sides[{std::min(a, b), std::max(a, b)}].push_back(t);
+    }
+  const double cos_limit = std::cos(angle_deg * M_PI / 180.0);
+  std::vector<std::array<std::uint32_t, 2>> out;
+  for (const auto& [edge, faces] : sides) {
+    if (faces.size() != 2 || faces[0] == faces[1]) continue;
+    const Eigen::Vector3f n0 = face_normal(m, m.triangles[faces[0]]);
+    const Eigen::Vector3f n1 = face_normal(m, m.triangles[faces[1]]);
+    if (n0.squaredNorm() > 0.0f && n1.squaredNorm() > 0.0f && n0.dot(n1) < cos_limit)
+      out.push_back(edge);
+  }
+  return out;
+}
+
+TEST(Features, SharpEdgesAreTheBruteForceOnesForAnyThreadCount) {
+  // The bumpy cube (many candidates) with a border (two faces removed) and a non-manifold edge
+  // (a fin on one of its edges: three faces there, never sharp).
+  TriangleMesh m = bumpy_cube(12, 0.35f);
+  m.triangles.erase(m.triangles.begin() + 40, m.triangles.begin() + 42);
+  const Triangle fin_base = m.triangles[100];
+  m.vertices.push_back(m.vertices[fin_base[0]] + Eigen::Vector3f(0.3f, 0.2f, 0.1f));
+  m.triangles.push_back(
+      {fin_base[1], fin_base[0], static_cast<std::uint32_t>(m.vertices.size() - 1)});
+  const auto expected = brute_force_sharp_edges(m, kDefaultFeatureAngleDeg);
+  ASSERT_GT(expected.size(), 100u);
+  MeshFeatures one, two;
+  {
+    ThreadLimit limit(1);
+    one = detect_features(m, kDefaultFeatureAngleDeg, -1.0f);
+  }
+  {
+    ThreadLimit limit(2);
+    two = detect_features(m, kDefaultFeatureAngleDeg, -1.0f);
+  }
+  EXPECT_EQ(one.edges, expected);
+  EXPECT_EQ(two.edges, expected);
+  EXPECT_EQ(one.vertex_kind, two.vertex_kind);
+  EXPECT_FALSE(one.has_edge(fin_base[0], fin_base[1]));
 }
 
 TEST(Features, DecimationKeepsCornersAndCollapsesEdgesOnlyAlongThemselves) {

@@ -6,6 +6,7 @@
 #include <tbb/parallel_sort.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <memory>
 
@@ -129,15 +130,17 @@ std::vector<BorderEdge> border_edges(const TriangleMesh& mesh, const VertexTrian
 }
 
 float median_edge_length(const TriangleMesh& mesh) {
-  std::vector<float> lengths;
-  lengths.reserve(3 * mesh.triangles.size());
+  // Squared lengths: the square root is monotonic, so the median's root is the median of the
+  // roots (the same float), for one root instead of one per edge.
+  std::vector<float> squared;
+  squared.reserve(3 * mesh.triangles.size());
   for (const Triangle& t : mesh.triangles)
     for (std::size_t k = 0; k < 3; ++k)
-      lengths.push_back((mesh.vertices[t[(k + 1) % 3]] - mesh.vertices[t[k]]).norm());
-  if (lengths.empty()) return 0.0f;
-  const auto middle = lengths.begin() + static_cast<std::ptrdiff_t>(lengths.size() / 2);
-  std::nth_element(lengths.begin(), middle, lengths.end());
-  return *middle;
+      squared.push_back((mesh.vertices[t[(k + 1) % 3]] - mesh.vertices[t[k]]).squaredNorm());
+  if (squared.empty()) return 0.0f;
+  const auto middle = squared.begin() + static_cast<std::ptrdiff_t>(squared.size() / 2);
+  std::nth_element(squared.begin(), middle, squared.end());
+  return std::sqrt(*middle);
 }
 
 TriangleMesh compact_vertices(const TriangleMesh& source, const std::vector<Triangle>& triangles,

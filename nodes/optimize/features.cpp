@@ -1,5 +1,8 @@
 #include "nodes/optimize/features.h"
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
 #include <algorithm>
 #include <cmath>
 
@@ -15,34 +18,82 @@ struct FeatureCandidate {
   Eigen::Vector3f left, right;
 };
 
-/// Edges with two faces meeting at a normal angle whose cosine is below cos_limit, sorted.
-std::vector<FeatureCandidate> sharp_candidates(const TriangleMesh& mesh, float cos_limit) {
-  // Every face's edges as (undirected key, face), sorted: an edge's faces are neighbours.
-  std::vector<std::pair<std::uint64_t, std::uint32_t>> sides;
-  sides.reserve(3 * mesh.triangles.size());
-  for (std::uint32_t t = 0; t < mesh.triangles.size(); ++t)
-    for (int k = 0; k < 3; ++k)
-      sides.emplace_back(undirected_edge_key(mesh.triangles[t][k], mesh.triangles[t][(k + 1) % 3]),
-                         t);
-  std::sort(sides.begin(), sides.end());
-  std::vector<FeatureCandidate> out;
-  for (std::size_t i = 0; i < sides.size();) {
-    std::size_t j = i;
-    while (j < sides.size() && sides[j].first == sides[i].first) ++j;
-    if (j - i == 2) {
-      const Triangle& t0 = mesh.triangles[sides[i].second];
-      const Eigen::Vector3f n0 = face_normal(mesh, t0);
-      const Eigen::Vector3f n1 = face_normal(mesh, mesh.triangles[sides[i + 1].second]);
-      if (n0.squaredNorm() > 0.0f && n1.squaredNorm() > 0.0f && n0.dot(n1) < cos_limit) {
-        const auto a = static_cast<std::uint32_t>(sides[i].first >> 32);
-        const auto b = static_cast<std::uint32_t>(sides[i].first & 0xFFFFFFFFu);
-        bool t0_runs_a_to_b = false;
-        for (int k = 0; k < 3; ++k) t0_runs_a_to_b |= t0[k] == a && t0[(k + 1) % 3] == b;
-        out.push_back({{a, b}, t0_runs_a_to_b ? n0 : n1, t0_runs_a_to_b ? n1 : n0});
+/// One side of a face filed under its edge's smaller end: the larger end and the face.
+struct FeatureSide {
+  std::uint32_t other, face;
+};
+
+/// Every face's three sides filed under their edges' smaller ends (compressed rows, each row
+/// in face order, then stably by the larger end): an edge's faces lie side by side, in face
+/// order, and the rows list the edges in undirected_edge_key() order. Serial: O(V + T) and a
+/// row's few entries sorted by insertion.
+struct FeatureSideRows {
+  std::vector<std::uint32_t> offsets;
+  std::vector<FeatureSide> sides;
+
+  explicit FeatureSideRows(const TriangleMesh& mesh) : offsets(mesh.vertices.size() + 1, 0) {
+    const std::size_t n = mesh.vertices.size();
+    for (const Triangle& t : mesh.triangles)
+      for (int k = 0; k < 3; ++k) ++offsets[std::min(t[k], t[(k + 1) % 3]) + 1];
+    for (std::size_t v = 0; v < n; ++v) offsets[v + 1] += offsets[v];
+    sides.resize(offsets[n]);
+    std::vector<std::uint32_t> fill(offsets.begin(), offsets.end() - 1);
+    for (std::uint32_t f = 0; f < mesh.triangles.size(); ++f) {
+      const Triangle& t = mesh.triangles[f];
+      for (int k = 0; k < 3; ++k) {
+        const std::uint32_t a = t[k], b = t[(k + 1) % 3];
+        sides[fill[std::min(a, b)]++] = {std::max(a, b), f};
       }
     }
-    i = j;
+    for (std::size_t v = 0; v < n; ++v)  // stable: equal ends keep face order
+      for (std::uint32_t i = offsets[v] + 1; i < offsets[v + 1]; ++i)
+        for (std::uint32_t j = i; j > offsets[v] && sides[j - 1].other > sides[j].other; --j)
+          std::swap(sides[j - 1], sides[j]);
   }
+};
+
+/// Edges with two faces meeting at a normal angle whose cosine is below cos_limit, sorted.
+/// Face normals once per face, rows in parallel over fixed blocks joined in order: the same
+/// for any thread count.
+std::vector<FeatureCandidate> sharp_candidates(const TriangleMesh& mesh, float cos_limit) {
+  const std::size_t n = mesh.vertices.size(), faces = mesh.triangles.size();
+  std::vector<Eigen::Vector3f> normals(faces);
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, faces),
+                    [&](const tbb::blocked_range<std::size_t>& range) {
+                      for (std::size_t f = range.begin(); f != range.end(); ++f)
+                        normals[f] = face_normal(mesh, mesh.triangles[f]);
+                    });
+  const FeatureSideRows rows(mesh);
+  constexpr std::size_t kRowsPerBlock = 4096;
+  const std::size_t blocks = (n + kRowsPerBlock - 1) / kRowsPerBlock;
+  std::vector<std::vector<FeatureCandidate>> found(blocks);
+  tbb::parallel_for(std::size_t{0}, blocks, [&](std::size_t block) {
+    std::vector<FeatureCandidate>& out = found[block];
+    const auto end = static_cast<std::uint32_t>(std::min(n, (block + 1) * kRowsPerBlock));
+    for (auto a = static_cast<std::uint32_t>(block * kRowsPerBlock); a < end; ++a) {
+      const FeatureSide* row = rows.sides.data() + rows.offsets[a];
+      const std::size_t size = rows.offsets[a + 1] - rows.offsets[a];
+      for (std::size_t i = 0; i < size;) {
+        std::size_t j = i;
+        while (j < size && row[j].other == row[i].other) ++j;
+        if (j - i == 2) {
+          const Triangle& t0 = mesh.triangles[row[i].face];
+          const Eigen::Vector3f& n0 = normals[row[i].face];
+          const Eigen::Vector3f& n1 = normals[row[i + 1].face];
+          if (n0.squaredNorm() > 0.0f && n1.squaredNorm() > 0.0f && n0.dot(n1) < cos_limit) {
+            const std::uint32_t b = row[i].other;
+            bool t0_runs_a_to_b = false;
+            for (int k = 0; k < 3; ++k) t0_runs_a_to_b |= t0[k] == a && t0[(k + 1) % 3] == b;
+            out.push_back({{a, b}, t0_runs_a_to_b ? n0 : n1, t0_runs_a_to_b ? n1 : n0});
+          }
+        }
+        i = j;
+      }
+    }
+  });
+  std::vector<FeatureCandidate> out;
+  for (const std::vector<FeatureCandidate>& part : found)
+    out.insert(out.end(), part.begin(), part.end());
   return out;
 }
 

@@ -49,8 +49,9 @@ struct MeshFeatures {
 /// chamfer's short edge): short lines with a loose end (spurs) and short loops first, the
 /// others once no spur is left; the lines left then join anew and the test repeats until
 /// nothing changes. min_line_length 0: kMinFeatureLineEdges x the mesh's median edge length;
-/// negative: no line is dropped. angle_deg >= 180: no features. Serial, deterministic; O(T log T +
-/// rounds x (V + candidates)), rounds about the depth of the noise's branching.
+/// negative: no line is dropped. angle_deg >= 180: no features. The candidates in parallel, the
+/// rest serial; the same for any thread count. O(V + T + rounds x (V + candidates)), rounds about
+/// the depth of the noise's branching.
 MeshFeatures detect_features(const TriangleMesh& mesh, float angle_deg = kDefaultFeatureAngleDeg,
                              float min_line_length = 0.0f);
 

@@ -10,6 +10,8 @@
 #include "fixtures/mesh_fixtures.h"
 #include "nodes/decimate/qem_decimation.h"
 #include "nodes/optimize/feature_snap.h"
+#include "runtime/angles.h"
+#include "runtime/threads.h"
 
 namespace meshflow {
 namespace {
@@ -168,6 +170,39 @@ TEST(Features, NoFeaturesGivesThePlainDecimation) {
   const TriangleMesh b = qem_decimate(cube, {}, config);
   EXPECT_EQ(a.vertices, b.vertices);
   EXPECT_EQ(a.triangles, b.triangles);
+}
+
+// Every sharp edge with no line dropped is exactly what a brute-force edge map finds: edges with
+// exactly two faces (not a third face's, a repeated face's or a repeated corner's) whose unit
+// normals meet below the angle's cosine; the same with one and two threads.
+TEST(Features, SharpEdgesMatchABruteForceEdgeMap) {
+  TriangleMesh mesh = bumpy_cube(9, 0.35f);
+  const auto n = static_cast<std::uint32_t>(mesh.vertices.size());
+  const Triangle first = mesh.triangles[0], last = mesh.triangles.back();
+  mesh.vertices.push_back({0.5f, 0.5f, 2.0f});
+  mesh.triangles.push_back({first[0], first[1], n});  // a third face on an edge
+  mesh.triangles.push_back(last);                     // a face given twice
+  mesh.triangles.push_back({first[2], first[2], n});  // a repeated corner
+  std::map<std::array<std::uint32_t, 2>, std::vector<std::uint32_t>> faces_of;
+  for (std::uint32_t f = 0; f < mesh.triangles.size(); ++f)
+    for (int k = 0; k < 3; ++k) {
+      const std::uint32_t a = mesh.triangles[f][k], b = mesh.triangles[f][(k + 1) % 3];
+      faces_of[{std::min(a, b), std::max(a, b)}].push_back(f);
+    }
+  const float cos_limit = static_cast<float>(std::cos(radians(40.0)));
+  std::vector<std::array<std::uint32_t, 2>> expected;
+  for (const auto& [edge, faces] : faces_of) {
+    if (faces.size() != 2) continue;
+    const Eigen::Vector3f n0 = face_normal(mesh, mesh.triangles[faces[0]]);
+    const Eigen::Vector3f n1 = face_normal(mesh, mesh.triangles[faces[1]]);
+    if (n0.squaredNorm() > 0.0f && n1.squaredNorm() > 0.0f && n0.dot(n1) < cos_limit)
+      expected.push_back(edge);
+  }
+  ASSERT_GT(expected.size(), 12u * 9u);  // the cube's edges and the bumps'
+  for (int threads : {1, 2}) {
+    ThreadLimit limit(threads);
+    EXPECT_EQ(detect_features(mesh, 40.0f, -1.0f).edges, expected) << threads << " threads";
+  }
 }
 
 }  // namespace

@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <atomic>
+#include <cmath>
 #include <cstdint>
 #include <memory>
 
@@ -130,16 +131,18 @@ std::vector<BorderEdge> border_edges(const TriangleMesh& mesh, const VertexTrian
 }
 
 float median_edge_length(const TriangleMesh& mesh) {
+  // Squared lengths: the square root is monotonic, so the median's root is the median of the
+  // roots (the same float), for one root instead of one per edge.
   if (mesh.triangles.empty()) return 0.0f;
-  std::vector<float> lengths(3 * mesh.triangles.size());
+  std::vector<float> squared(3 * mesh.triangles.size());
   tbb::parallel_for(std::size_t{0}, mesh.triangles.size(), [&](std::size_t i) {
     const Triangle& t = mesh.triangles[i];
     for (std::size_t k = 0; k < 3; ++k)
-      lengths[3 * i + k] = (mesh.vertices[t[(k + 1) % 3]] - mesh.vertices[t[k]]).norm();
+      squared[3 * i + k] = (mesh.vertices[t[(k + 1) % 3]] - mesh.vertices[t[k]]).squaredNorm();
   });
-  const auto middle = lengths.begin() + static_cast<std::ptrdiff_t>(lengths.size() / 2);
-  std::nth_element(lengths.begin(), middle, lengths.end());
-  return *middle;
+  const auto middle = squared.begin() + static_cast<std::ptrdiff_t>(squared.size() / 2);
+  std::nth_element(squared.begin(), middle, squared.end());
+  return std::sqrt(*middle);
 }
 
 TriangleMesh compact_vertices(const TriangleMesh& source, const std::vector<Triangle>& triangles,

@@ -185,17 +185,6 @@ void CollapseFan::finish(std::size_t count) {
   derive_blocks(lanes_.data(), blocks_, pu_.x(), pu_.y(), pu_.z());
 }
 
-bool CollapseFan::bent_between(std::size_t first, std::size_t second, float min_cos) const {
-  return area_vector(first).dot(area_vector(second)) <
-         min_cos * area_vector_norm(first) * area_vector_norm(second);
-}
-
-Eigen::Vector3f CollapseFan::area_vector(std::size_t k) const {
-  return {lane(kNx, k), lane(kNy, k), lane(kNz, k)};
-}
-
-float CollapseFan::area_vector_norm(std::size_t k) const { return std::sqrt(lane(kN2, k)); }
-
 FanVerdict CollapseFan::check(std::uint32_t v, const Eigen::Vector3f& pv) const {
   return check_blocks(lanes_.data(), ends_.data(), blocks_, v, pv.x(), pv.y(), pv.z(),
                       max_turn_cos_, min_angle_cos2_);

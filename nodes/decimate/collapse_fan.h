@@ -6,6 +6,7 @@
 // qem_decimation.cpp.
 
 #include <Eigen/Core>
+#include <cmath>
 #include <cstddef>
 #include <cstdint>
 #include <vector>
@@ -71,11 +72,16 @@ class CollapseFan {
   FanVerdict check(std::uint32_t v, const Eigen::Vector3f& pv) const;
   /// Whether faces `first` < `second` (an edge's two faces around u) differ by more than the
   /// angle whose cosine is `min_cos`: the cosine between their area vectors is below it. O(1).
-  bool bent_between(std::size_t first, std::size_t second, float min_cos) const;
+  bool bent_between(std::size_t first, std::size_t second, float min_cos) const {
+    return area_vector(first).dot(area_vector(second)) <
+           min_cos * area_vector_norm(first) * area_vector_norm(second);
+  }
   /// Face k's area vector (a - u) x (b - u) (twice its area, along its normal) and its length.
-  Eigen::Vector3f area_vector(std::size_t k) const;
+  Eigen::Vector3f area_vector(std::size_t k) const {
+    return {lane(kNx, k), lane(kNy, k), lane(kNz, k)};
+  }
   /// The length of area_vector(k).
-  float area_vector_norm(std::size_t k) const;
+  float area_vector_norm(std::size_t k) const { return std::sqrt(lane(kN2, k)); }
 
  private:
   // Where face k's entry of row `row` is in an array of blocks of `rows` rows.

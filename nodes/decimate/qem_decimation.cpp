@@ -3,15 +3,18 @@
 #include <tbb/blocked_range.h>
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_invoke.h>
 
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <limits>
+#include <optional>
 #include <vector>
 
 #include "nodes/decimate/collapse_fan.h"
+#include "nodes/decimate/qem_finding_features.h"
 #include "nodes/decimate/vertex_rings.h"
 #include "runtime/angles.h"
 #include "runtime/radix_sort.h"
@@ -146,8 +149,9 @@ int bits_for(std::size_t count) {
 // changed the ends once more. The next pass bounds again only the vertices next to a change.
 class Decimator {
  public:
-  Decimator(const TriangleMesh& mesh, const QemConfig& config,
-            const std::vector<std::array<std::uint32_t, 2>>& feature_edges)
+  // The setup that needs no feature edges: rings, positions, scales, face quadrics. constrain()
+  // must follow before run().
+  Decimator(const TriangleMesh& mesh, const QemConfig& config)
       : in_(mesh),
         cfg_(config),
         rings_(mesh.triangles, mesh.vertices.size()),
@@ -178,8 +182,13 @@ class Decimator {
       const Quadric k = Quadric::plane(unit, -unit.dot(a), 0.5 * area2);
       for (std::uint32_t v : t) q_[v].add(k);
     }
+  }
+
+  // The rest of the setup: the feature edges' lines and constraint quadrics (none when empty),
+  // then every vertex's own error.
+  void constrain(const std::vector<std::array<std::uint32_t, 2>>& feature_edges) {
     if (!feature_edges.empty()) add_feature_constraints(feature_edges);
-    for (std::size_t v = 0; v < mesh.vertices.size(); ++v) terms_[v].own_error = q_[v].error(p(v));
+    for (std::size_t v = 0; v < in_.vertices.size(); ++v) terms_[v].own_error = q_[v].error(p(v));
   }
 
   // Decimates to at most `target` faces, or until no collapse is valid, in passes (see the
@@ -798,11 +807,23 @@ TriangleMesh qem_decimate(const TriangleMesh& mesh, const QemConfig& config, Qem
 TriangleMesh qem_decimate(const TriangleMesh& mesh,
                           const std::vector<std::array<std::uint32_t, 2>>& feature_edges,
                           const QemConfig& config, QemReport* report) {
+  return qem_decimate_finding_features(
+      mesh, [&feature_edges]() -> const QemFeatureEdges& { return feature_edges; }, config, report);
+}
+
+TriangleMesh qem_decimate_finding_features(
+    const TriangleMesh& mesh, const std::function<const QemFeatureEdges&()>& find_features,
+    const QemConfig& config, QemReport* report) {
   require_corners_in_range(mesh.triangles, mesh.vertices.size(), "QEM decimation");
   QemReport r;
   const auto target = static_cast<std::size_t>(std::ceil(
       static_cast<double>(mesh.triangles.size()) * static_cast<double>(config.target_ratio)));
-  TriangleMesh out = Decimator(mesh, config, feature_edges).run(target, r);
+  std::optional<Decimator> decimator;
+  const QemFeatureEdges* feature_edges = nullptr;
+  tbb::parallel_invoke([&] { decimator.emplace(mesh, config); },
+                       [&] { feature_edges = &find_features(); });
+  decimator->constrain(*feature_edges);
+  TriangleMesh out = decimator->run(target, r);
   if (report != nullptr) *report = r;
   return out;
 }

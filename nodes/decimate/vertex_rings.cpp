@@ -111,6 +111,73 @@ VertexRings::Kind order_fan(bool gathered, FanIndex& fan, std::size_t& fans) {
   return a == first ? Kind::kClosed : Kind::kComplex;
 }
 
+// Faces around a vertex up to which order_small_fan() orders its fan (nearly every vertex);
+// larger fans go through FanIndex's per-vertex stamps.
+constexpr std::size_t kSmallFan = 16;
+
+// gather() and order_fan() for a vertex u of at most kSmallFan faces, the triangles listed in
+// [first, last), with the same result: linear scans over its few faces stand in for the stamps
+// (no memory of the vertex count touched). Writes the ring to `entries` (room for 3 x
+// kSmallFan), its length to `count` and the fan count to `fans`. O(faces^2).
+VertexRings::Kind order_small_fan(std::uint32_t u, const std::uint32_t* first,
+                                  const std::uint32_t* last, const std::vector<Triangle>& triangles,
+                                  std::uint32_t* entries, std::size_t& count, std::size_t& fans) {
+  using Kind = VertexRings::Kind;
+  const auto k = static_cast<std::size_t>(last - first);
+  count = 0;
+  fans = 1;
+  if (k == 0) return Kind::kClosed;
+  std::uint32_t as[kSmallFan], bs[kSmallFan];  // face j is (u, as[j], bs[j])
+  bool manifold = true;
+  for (std::size_t j = 0; j < k; ++j) {
+    const Triangle& t = triangles[first[j]];
+    const int i = t[0] == u ? 0 : t[1] == u ? 1 : 2;
+    const std::uint32_t a = t[i == 2 ? 0 : i + 1], b = t[i == 0 ? 2 : i - 1];
+    manifold &= (a != u) & (b != u) & (a != b);
+    for (std::size_t e = 0; e < j; ++e) manifold &= (as[e] != a) & (bs[e] != b);
+    as[j] = a;
+    bs[j] = b;
+  }
+  if (!manifold) return Kind::kComplex;
+  const auto next = [&](std::uint32_t a) {  // the face whose a is `a`, or k
+    std::size_t j = 0;
+    while (j < k && as[j] != a) ++j;
+    return j;
+  };
+  std::uint32_t starts[kSmallFan];  // a's that are no face's b: open fans' first entries
+  std::size_t open = 0;
+  for (std::size_t j = 0; j < k; ++j) {
+    bool is_b = false;
+    for (std::size_t e = 0; e < k; ++e) is_b |= bs[e] == as[j];
+    if (!is_b) starts[open++] = as[j];
+  }
+  if (open != 0) {
+    std::sort(starts, starts + open);
+    std::size_t used = 0;
+    for (std::size_t f = 0; f < open; ++f) {
+      if (f != 0) entries[count++] = VertexRings::kSeparator;
+      std::uint32_t a = starts[f];
+      for (std::size_t j = next(a); j < k; j = next(a)) {
+        entries[count++] = a;
+        a = bs[j];
+        ++used;
+      }
+      entries[count++] = a;
+    }
+    if (used != k) return Kind::kComplex;
+    fans = open;
+    return open == 1 ? Kind::kOpen : Kind::kFans;
+  }
+  if (k < 3) return Kind::kComplex;
+  std::uint32_t a = as[0];
+  for (std::size_t step = 0; step < k; ++step) {
+    if (step != 0 && a == as[0]) return Kind::kComplex;
+    entries[count++] = a;
+    a = bs[next(a)];
+  }
+  return a == as[0] ? Kind::kClosed : Kind::kComplex;
+}
+
 }  // namespace
 
 VertexRings::VertexRings(const std::vector<Triangle>& triangles, std::size_t vertex_count)
@@ -140,18 +207,30 @@ VertexRings::VertexRings(const std::vector<Triangle>& triangles, std::size_t ver
   std::vector<std::uint8_t> too_big(vertex_count, 0);
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, vertex_count),
                     [&](const tbb::blocked_range<std::size_t>& range) {
-                      FanIndex& fan = work.local();
+                      std::uint32_t small[3 * kSmallFan];
                       for (std::size_t v = range.begin(); v != range.end(); ++v) {
-                        order(static_cast<std::uint32_t>(v), fan);
+                        const auto u = static_cast<std::uint32_t>(v);
                         Slot& slot = slots_[v];
+                        const std::uint32_t* entries = small;
+                        std::size_t count = 0;
+                        if (around.end(u) - around.begin(u) <= std::ptrdiff_t{kSmallFan}) {
+                          std::size_t fans = 1;
+                          slot.kind = order_small_fan(u, around.begin(u), around.end(u), triangles,
+                                                      small, count, fans);
+                          slot.fans = static_cast<std::uint16_t>(fans);
+                        } else {
+                          FanIndex& fan = work.local();
+                          order(u, fan);
+                          entries = fan.entries.data();
+                          count = fan.entries.size();
+                        }
                         if (slot.kind == Kind::kComplex) continue;
-                        if (fan.entries.size() > slot.capacity) {
+                        if (count > slot.capacity) {
                           too_big[v] = 1;
                           continue;
                         }
-                        std::copy(fan.entries.begin(), fan.entries.end(),
-                                  data_.begin() + slot.offset);
-                        slot.size = static_cast<std::uint32_t>(fan.entries.size());
+                        std::copy(entries, entries + count, data_.begin() + slot.offset);
+                        slot.size = static_cast<std::uint32_t>(count);
                       }
                     });
   for (std::uint32_t v = 0; v < vertex_count; ++v)

@@ -5,6 +5,7 @@
 #include <optional>
 #include <sstream>
 
+#include "nodes/decimate/qem_finding_features.h"
 #include "nodes/optimize/planar/plane_intersections.h"
 #include "runtime/error.h"
 #include "runtime/half_edge_mesh.h"
@@ -202,9 +203,15 @@ TriangleMesh decimate_step(const TriangleMesh& mesh, const OptimizeConfig& confi
                            CarriedState& carried, OptimizeStepReport& step) {
   QemReport r;
   const MeshFeatures none;
-  const MeshFeatures& features =
-      config.decimate_keeps_features ? carried_features(mesh, config, carried) : none;
-  TriangleMesh out = qem_decimate(mesh, features.edges, config.decimate, &r);
+  const MeshFeatures* found = &none;  // detected beside the decimation's setup
+  TriangleMesh out = qem_decimate_finding_features(
+      mesh,
+      [&]() -> const QemFeatureEdges& {
+        if (config.decimate_keeps_features) found = &carried_features(mesh, config, carried);
+        return found->edges;
+      },
+      config.decimate, &r);
+  const MeshFeatures& features = *found;
   step.detail = format("%zu collapses in %zu passes", r.collapses, r.passes) +
                 format("; refused %zu topology, %zu normal, %zu border", r.rejected_topology,
                        r.rejected_normal, r.rejected_border) +

@@ -134,6 +134,46 @@ TEST(VertexRings, BowTiesNonManifoldEdgesAndRepeatedCorners) {
   EXPECT_EQ(canonical_sorted(c.triangles()), canonical_sorted(repeated));
 }
 
+// A fan of n faces around vertex 0 (rim 1 .. n, faces (0, i, i + 1) listed from face `first`
+// on) is ordered alike on either side of the size where the ring build stops scanning a fan
+// and indexes it (16 faces): closed from the first face listed, open from the rim vertex that
+// starts it, two open fans in the order of their first vertices.
+TEST(VertexRings, SmallAndLargeFansOrderAlike) {
+  for (std::uint32_t n : {3u, 15u, 16u, 17u, 40u}) {
+    const auto rim = [n](std::uint32_t i) { return 1 + i % n; };
+    const auto fan = [&](std::uint32_t first, std::vector<std::uint32_t> dropped) {
+      std::vector<Triangle> faces;
+      for (std::uint32_t k = 0; k < n; ++k) {
+        const std::uint32_t i = (first + k) % n;
+        if (std::find(dropped.begin(), dropped.end(), i) == dropped.end())
+          faces.push_back({0, rim(i), rim(i + 1)});
+      }
+      return VertexRings(faces, n + 1);
+    };
+    const std::string what = std::to_string(n) + " faces";
+    const VertexRings closed = fan(2, {});
+    ASSERT_EQ(closed.kind(0), Kind::kClosed) << what;
+    std::vector<std::uint32_t> expected;
+    for (std::uint32_t k = 0; k < n; ++k) expected.push_back(rim(2 + k));
+    EXPECT_EQ(std::vector<std::uint32_t>(closed.begin(0), closed.end(0)), expected) << what;
+
+    const VertexRings open = fan(2, {n - 1});  // face (0, n, 1) gone: the ring runs 1 .. n
+    ASSERT_EQ(open.kind(0), Kind::kOpen) << what;
+    expected.clear();
+    for (std::uint32_t i = 0; i < n; ++i) expected.push_back(rim(i));
+    EXPECT_EQ(std::vector<std::uint32_t>(open.begin(0), open.end(0)), expected) << what;
+
+    if (n < 4) continue;
+    const VertexRings two = fan(n / 2 + 1, {n - 1, n / 2});  // 1 .. n/2+1 | n/2+2 .. n
+    ASSERT_EQ(two.kind(0), Kind::kFans) << what;
+    expected.clear();
+    for (std::uint32_t i = 0; i <= n / 2; ++i) expected.push_back(rim(i));
+    expected.push_back(VertexRings::kSeparator);
+    for (std::uint32_t i = n / 2 + 1; i < n; ++i) expected.push_back(rim(i));
+    EXPECT_EQ(std::vector<std::uint32_t>(two.begin(0), two.end(0)), expected) << what;
+  }
+}
+
 // neighbours_among() against set intersection: every vertex's ring (v listed too, which never
 // counts) and random lists of up to twenty distinct vertices (more than one block of eight), on
 // grids with holes and bow ties, and around a hub of forty faces.

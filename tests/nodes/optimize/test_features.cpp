@@ -219,5 +219,23 @@ TEST(Features, NoFeaturesGivesThePlainDecimation) {
   EXPECT_EQ(a.triangles, b.triangles);
 }
 
+// The same oracle on the faces an edge map must tell apart: a third face on an edge, a face given
+// twice and a face with a repeated corner (none of their edges is sharp).
+TEST(Features, SharpEdgesMatchABruteForceEdgeMap) {
+  TriangleMesh mesh = bumpy_cube(9, 0.35f);
+  const auto n = static_cast<std::uint32_t>(mesh.vertices.size());
+  const Triangle first = mesh.triangles[0], last = mesh.triangles.back();
+  mesh.vertices.push_back({0.5f, 0.5f, 2.0f});
+  mesh.triangles.push_back({first[0], first[1], n});  // a third face on an edge
+  mesh.triangles.push_back(last);                     // a face given twice
+  mesh.triangles.push_back({first[2], first[2], n});  // a repeated corner
+  const auto expected = brute_force_sharp_edges(mesh, 40.0f);
+  ASSERT_GT(expected.size(), 12u * 9u);  // the cube's edges and the bumps'
+  for (int threads : {1, 2}) {
+    ThreadLimit limit(threads);
+    EXPECT_EQ(detect_features(mesh, 40.0f, -1.0f).edges, expected) << threads << " threads";
+  }
+}
+
 }  // namespace
 }  // namespace meshflow

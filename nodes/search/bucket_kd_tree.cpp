@@ -34,6 +34,17 @@ struct BucketView {
   const std::uint32_t* ids;
 };
 
+// The squared length of the per-axis gaps max(below, above, 0), summed x + y, then + z (the
+// order every caller's bound relies on).
+inline float bucket_gap_distance2(const Floats4& below, const Floats4& above) {
+  Floats4 d = below > above ? below : above;
+  d = d > 0.0f ? d : Floats4{};
+  d *= d;
+  float s = d[0] + d[1];
+  s += d[2];
+  return s;
+}
+
 // Squared distance from q to the node's box (0 inside). Rounding is monotone, so for every point
 // p of the box each axis term is at most p's and the sum, taken in the same order as a point's,
 // never exceeds p's computed squared distance: a box is skipped only when all of its points lie
@@ -42,13 +53,7 @@ inline float bucket_box_distance2(const BucketTree::Node& n, const Floats4& q) {
   Floats4 lo, hi;
   std::memcpy(&lo, n.lo, sizeof lo);
   std::memcpy(&hi, n.hi, sizeof hi);
-  Floats4 below = lo - q, above = q - hi;
-  Floats4 d = below > above ? below : above;
-  d = d > 0.0f ? d : Floats4{};
-  d *= d;
-  float s = d[0] + d[1];
-  s += d[2];
-  return s;
+  return bucket_gap_distance2(lo - q, q - hi);
 }
 
 // Scratch slots a k-best list (BucketKnn) takes: a sentinel, then k rounded up to whole vectors.
@@ -222,13 +227,7 @@ inline float bucket_boxes_distance2(const BucketTree::Node& a, const BucketTree:
   std::memcpy(&ahi, a.hi, sizeof ahi);
   std::memcpy(&blo, b.lo, sizeof blo);
   std::memcpy(&bhi, b.hi, sizeof bhi);
-  Floats4 below = blo - ahi, above = alo - bhi;
-  Floats4 d = below > above ? below : above;
-  d = d > 0.0f ? d : Floats4{};
-  d *= d;
-  float s = d[0] + d[1];
-  s += d[2];
-  return s;
+  return bucket_gap_distance2(blo - ahi, alo - bhi);
 }
 
 // What the searches of one block of leaves reuse: two k-best lists' keys, the leaves near the

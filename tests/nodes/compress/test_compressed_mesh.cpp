@@ -142,11 +142,13 @@ void expect_same_mesh(const TriangleMesh& input, const TriangleMesh& decoded,
   }
 }
 
-void round_trip(const TriangleMesh& mesh, const CompressConfig& config = {}) {
+// Compresses, decodes and compares; returns the compression's report.
+CompressReport round_trip(const TriangleMesh& mesh, const CompressConfig& config = {}) {
   CompressReport report;
   const std::vector<unsigned char> bytes = compress::compress_mesh(mesh, config, &report);
   EXPECT_EQ(report.total_bytes, bytes.size());
   expect_same_mesh(mesh, compress::decompress_mesh(bytes, "memory"), report);
+  return report;
 }
 
 TEST(RangeCoder, IntegersAndSymbolsRoundTrip) {
@@ -827,9 +829,7 @@ TEST(PositionCoding, ConstrainedPredictionTrustsParallelogramsOnSmoothSurfaces) 
   CompressConfig config;
   config.position_bits = 16;
   config.normals = config.colors = false;
-  round_trip(mesh, config);
-  CompressReport report;
-  compress::compress_mesh(mesh, config, &report);
+  const CompressReport report = round_trip(mesh, config);
   EXPECT_GT(report.body.trusted_parallelograms, mesh.vertices.size() * 9 / 10);
 }
 
@@ -847,9 +847,7 @@ TEST(PositionCoding, ConstrainedPredictionRefusesParallelogramsAcrossCreases) {
   CompressConfig config;
   config.step = 0.25;
   config.normals = config.colors = false;
-  round_trip(mesh, config);
-  CompressReport report;
-  compress::compress_mesh(mesh, config, &report);
+  const CompressReport report = round_trip(mesh, config);
   const std::size_t offered = report.body.offered_parallelograms;
   EXPECT_LT(report.body.trusted_parallelograms, offered * 95 / 100);
   EXPECT_GT(report.body.trusted_parallelograms, offered / 2);
@@ -900,9 +898,7 @@ TEST(PositionCoding, LatticeCoordinatesSnapToTheirNeighbours) {
   CompressConfig config;
   config.position_bits = 14;
   config.normals = config.colors = false;
-  round_trip(mesh, config);
-  CompressReport report;
-  compress::compress_mesh(mesh, config, &report);
+  const CompressReport report = round_trip(mesh, config);
   const double bits = 8.0 * static_cast<double>(report.body.position_bytes) / mesh.vertices.size();
   RecordProperty("position_bits_per_vertex", std::to_string(bits));
   EXPECT_LT(bits, 12.0);

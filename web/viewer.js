@@ -64,6 +64,10 @@ try {
 const material = new THREE.MeshLambertMaterial({ color: 0xb8c4d0, side: THREE.DoubleSide });
 let mesh = null;
 let fitted = false;  // the camera is fitted to the first mesh only (a run's frames keep the view)
+// The camera was last fitted to a growing map's blocks: the whole mesh that replaces them (a
+// fused run's final one) is fitted again, unless the user moved the camera. (The blocks can
+// arrive before the final mesh is decoded; the view then framed only the first blocks.)
+let fittedToBlocks = false;
 let ended = false;   // the server said nothing more will come
 let userMoved = false;  // the camera follows a growing map until the user moves it
 // A fused map's blocks (see onBlocks).
@@ -253,9 +257,10 @@ function show(result, header, level) {
   scene.add(mesh);
   applyColors();
   blockGroup.visible = false;  // a whole mesh (a fused run's final one) replaces the blocks
-  if (!fitted) {
+  if (!fitted || (fittedToBlocks && !userMoved)) {
     result.geometry.computeBoundingSphere();
     fitCamera(result.geometry.boundingSphere);
+    fittedToBlocks = false;
   }
   showCounts(result.vertices, result.triangles, level);
   $('decode-ms').textContent = result.ms.toFixed(1) + ' ms';
@@ -360,7 +365,10 @@ function onBlocks(buffer) {
   }
   document.body.dataset.blocks = blocks.size;
   if (mesh) return;  // a whole mesh is shown: the blocks stay hidden
-  if (!userMoved && blocks.size > 0) fitCamera(blockBox.getBoundingSphere(new THREE.Sphere()));
+  if (!userMoved && blocks.size > 0) {
+    fitCamera(blockBox.getBoundingSphere(new THREE.Sphere()));
+    fittedToBlocks = true;
+  }
   applyColors();
   showCounts(blockInterior + sharedEdges.size, blockTriangles, `map: ${blocks.size} blocks`);
   $('decode-ms').textContent = ms.toFixed(1) + ' ms';

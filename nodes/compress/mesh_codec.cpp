@@ -362,6 +362,7 @@ std::vector<std::array<std::int32_t, 3>> encode_positions(
   RangeEncoder enc[3];
   PositionModels m;
   SnapModels snap;
+  SnapNeighbourhood neighbourhood(decoded);
   Grid grid(decoded);
   std::array<std::int32_t, 3> last{};
   const auto code = [&](const std::array<std::int32_t, 3>& q,
@@ -379,11 +380,12 @@ std::vector<std::array<std::int32_t, 3>> encode_positions(
     }
     const std::array<std::int32_t, 3> q = quantizer.quantize(mesh.vertices[input_of_decoded[k]]);
     const Candidates offer = candidates(k, replayed.predictors[k], ring, roles.hole, grid, last);
-    const SnapNeighbours nb = gather_snap_neighbours(k, replayed.predictors[k], ring, roles.hole);
+    const SnapNeighbours& nb =
+        neighbourhood.gather(k, replayed.predictors[k], ring, roles.hole, grid);
     // Only the coordinates no neighbour shares pay a residual; one that does costs least when
     // predicted exactly (about a bit more otherwise).
     std::array<bool, 3> free{};
-    for (std::size_t a = 0; a < 3; ++a) free[a] = !shares_value(nb, grid, a, q[a]);
+    for (std::size_t a = 0; a < 3; ++a) free[a] = !shares_value(nb, a, q[a]);
     unsigned best = 0;
     std::uint32_t best_cost = ~0u;
     std::array<std::size_t, 3> context;
@@ -406,7 +408,7 @@ std::vector<std::array<std::int32_t, 3>> encode_positions(
     stats.offered_parallelograms += offer.n;
     const std::array<std::int32_t, 3> predicted = predict(offer, best, context);
     for (std::size_t a = 0; a < 3; ++a) {
-      if (snap.encode(enc[a], a, snap_candidates(nb, grid, a, predicted[a]), predicted[a], q[a])) {
+      if (snap.encode(enc[a], a, snap_candidates(nb, a, predicted[a]), q[a])) {
         ++stats.snapped_coordinates;
         continue;
       }
@@ -631,6 +633,7 @@ std::vector<std::array<std::int32_t, 3>> decode_positions(
                          RangeDecoder(z.bytes, z.size, source, "position section z")};
   PositionModels m;
   SnapModels snap;
+  SnapNeighbourhood neighbourhood(decoded);
   Grid grid(decoded);
   std::array<std::int32_t, 3> last{};
   {
@@ -662,12 +665,12 @@ std::vector<std::array<std::int32_t, 3>> decode_positions(
           offer.n > 0 ? m.trusted[offer.n - 1].decode(cx) & ((1u << offer.n) - 1u) : 0u;
       std::array<std::size_t, 3> context;
       const std::array<std::int32_t, 3> predicted = predict(offer, trusted, context);
-      const SnapNeighbours nb = gather_snap_neighbours(k, replayed.predictors[k], ring, roles.hole);
+      const SnapNeighbours& nb =
+          neighbourhood.gather(k, replayed.predictors[k], ring, roles.hole, grid);
       RangeDecoderCore* core[3] = {&cx, &cy, &cz};
       std::array<std::int32_t, 3> q{};
       for (std::size_t a = 0; a < 3; ++a) {
-        if (snap.decode(*core[a], a, snap_candidates(nb, grid, a, predicted[a]), predicted[a],
-                        q[a]))
+        if (snap.decode(*core[a], a, snap_candidates(nb, a, predicted[a]), q[a]))
           continue;
         q[a] = static_cast<std::int32_t>(
             static_cast<std::uint32_t>(predicted[a]) +

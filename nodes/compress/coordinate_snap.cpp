@@ -4,9 +4,9 @@ namespace meshflow::compress {
 
 std::int32_t SnapCandidates::ranked(unsigned r) const {
   for (unsigned i = 0; i < distinct; ++i) {
-    const std::uint64_t k = key(value[i]);
+    const std::uint64_t k = rank_key[i];
     unsigned below = 0;
-    for (unsigned j = 0; j < distinct; ++j) below += key(value[j]) < k ? 1u : 0u;
+    for (unsigned j = 0; j < distinct; ++j) below += rank_key[j] < k ? 1u : 0u;
     if (below == r) return value[i];
   }
   return nearest;  // not reached for r < n
@@ -18,7 +18,7 @@ unsigned SnapCandidates::symbol_of(std::int32_t v) const {
   if (!present) return 0;
   const std::uint64_t k = key(v);
   unsigned below = 0;
-  for (unsigned i = 0; i < distinct; ++i) below += key(value[i]) < k ? 1u : 0u;
+  for (unsigned i = 0; i < distinct; ++i) below += rank_key[i] < k ? 1u : 0u;
   return below < n ? below + 1 : 0;
 }
 

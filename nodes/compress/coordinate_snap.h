@@ -64,7 +64,9 @@ class SnapNeighbourhood {
 /// offered. Both coder sides rank the same decoded data.
 inline constexpr unsigned kSnapCandidates = 4;
 struct SnapCandidates {
-  std::array<std::int32_t, SnapNeighbours::kMax> value{};  ///< distinct, in neighbour order
+  // Only [0, distinct) is set (no clearing: a coder builds three per vertex).
+  std::array<std::int32_t, SnapNeighbours::kMax> value;      ///< distinct, in neighbour order
+  std::array<std::uint64_t, SnapNeighbours::kMax> rank_key;  ///< key() of each value
   unsigned distinct = 0;
   unsigned n = 0;            ///< offered: min(distinct, kSnapCandidates)
   std::int32_t nearest = 0;  ///< the value of rank 0 (when n > 0)
@@ -95,8 +97,9 @@ inline SnapCandidates snap_candidates(const SnapNeighbours& nb, std::size_t axis
     bool seen = false;
     for (unsigned j = 0; j < c.distinct; ++j) seen |= c.value[j] == v;
     if (seen) continue;
-    c.value[c.distinct++] = v;
     const std::uint64_t k = c.key(v);
+    c.rank_key[c.distinct] = k;
+    c.value[c.distinct++] = v;
     if (k < best) {
       best = k;
       c.nearest = v;

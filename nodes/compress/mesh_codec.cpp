@@ -670,8 +670,7 @@ std::vector<std::array<std::int32_t, 3>> decode_positions(
       RangeDecoderCore* core[3] = {&cx, &cy, &cz};
       std::array<std::int32_t, 3> q{};
       for (std::size_t a = 0; a < 3; ++a) {
-        if (snap.decode(*core[a], a, snap_candidates(nb, a, predicted[a]), q[a]))
-          continue;
+        if (snap.decode(*core[a], a, snap_candidates(nb, a, predicted[a]), q[a])) continue;
         q[a] = static_cast<std::int32_t>(
             static_cast<std::uint32_t>(predicted[a]) +
             static_cast<std::uint32_t>(m.residual[context[a]][a].decode(*core[a])));

@@ -868,8 +868,7 @@ TEST(PositionCoding, SnapCandidatesAreTheNearestDistinctNeighbourValues) {
     nb.count = next(compress::SnapNeighbours::kMax + 1);
     const std::size_t axis = next(3);
     for (unsigned i = 0; i < nb.count; ++i)
-      for (auto& coordinate : nb.coordinate)
-        coordinate[i] = static_cast<std::int32_t>(next(9)) - 4;
+      for (auto& coordinate : nb.coordinate) coordinate[i] = static_cast<std::int32_t>(next(9)) - 4;
     const auto predicted = static_cast<std::int32_t>(next(11)) - 5;
     std::vector<std::int32_t> values(nb.coordinate[axis].begin(),
                                      nb.coordinate[axis].begin() + nb.count);
@@ -883,7 +882,9 @@ TEST(PositionCoding, SnapCandidatesAreTheNearestDistinctNeighbourValues) {
     const compress::SnapCandidates c = compress::snap_candidates(nb, axis, predicted);
     ASSERT_EQ(c.n, values.size()) << trial;
     ASSERT_EQ(c.distinct, all.size()) << trial;
-    if (c.n > 0) EXPECT_EQ(c.nearest, values[0]) << trial;
+    if (c.n > 0) {
+      EXPECT_EQ(c.nearest, values[0]) << trial;
+    }
     for (unsigned j = 0; j < c.n; ++j) EXPECT_EQ(c.ranked(j), values[j]) << trial << " " << j;
     for (std::int32_t v = -6; v <= 6; ++v) {
       const auto at = std::find(values.begin(), values.end(), v);

@@ -326,7 +326,10 @@ std::vector<Eigen::Vector3f> decode_normals(const DecodedGeometry& g, RangeDecod
     std::array<std::int32_t, 2> q{};
     q[0] = m.first[p.context].decode(session.core);
     q[1] = m.second[p.context][q[0] == 0 ? 1 : 0].decode(session.core);
-    decoded[i] = previous = tangent_normal(TangentFrame::of(p.normal), q, step);
+    // A zero residual is the prediction itself (tangent_normal()'s first case, without the frame).
+    decoded[i] = previous = q[0] == 0 && q[1] == 0
+                                ? p.normal.cast<float>()
+                                : tangent_normal(TangentFrame::of(p.normal), q, step);
   }
   return decoded;
 }

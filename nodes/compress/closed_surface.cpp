@@ -1,6 +1,7 @@
 #include "nodes/compress/closed_surface.h"
 
 #include <algorithm>
+#include <memory>
 
 namespace meshflow::compress {
 namespace {
@@ -12,7 +13,11 @@ namespace {
 void pair_twins(const std::vector<std::uint32_t>& corners, std::size_t vertices,
                 std::vector<std::uint32_t>& twin) {
   const auto halves = static_cast<std::uint32_t>(corners.size());
-  std::vector<std::uint32_t> first(vertices + 1, 0), by_origin(halves), end(halves);
+  std::vector<std::uint32_t> first(vertices + 1, 0);
+  // Every entry of these is written below: no clearing.
+  const std::unique_ptr<std::uint32_t[]> by_origin(new std::uint32_t[halves]),
+      end(new std::uint32_t[halves]);
+  const std::unique_ptr<std::uint8_t[]> single(new std::uint8_t[halves]);
   for (std::uint32_t v : corners) ++first[v + 1];
   for (std::size_t v = 0; v < vertices; ++v) first[v + 1] += first[v];
   {
@@ -25,7 +30,6 @@ void pair_twins(const std::vector<std::uint32_t>& corners, std::size_t vertices,
       }
   }
   // single[i]: list entry i is its origin's only half-edge to its end.
-  std::vector<std::uint8_t> single(halves);
   {
     std::vector<std::uint32_t> count(vertices, 0);
     for (std::uint32_t a = 0; a < vertices; ++a) {

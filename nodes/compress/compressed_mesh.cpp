@@ -170,8 +170,7 @@ CompressedMeshInfo read_header(io::ByteReader& in, const std::vector<unsigned ch
 
 std::vector<unsigned char> compress_mesh(const TriangleMesh& mesh, const CompressConfig& config,
                                          CompressReport* report) {
-  require_corners_in_range(mesh.triangles, mesh.vertices.size(), "mesh");
-  const Quantizer quantizer = choose_quantizer(mesh, config);
+  const Quantizer quantizer = choose_quantizer(mesh, config);  // checks the corners first
   const AttributeFlags flags = detail::attribute_flags(mesh, config);
   io::ByteWriter out;
   detail::write_header(out, CompressionKind::kEdgebreaker, flags, mesh.vertices.size(),

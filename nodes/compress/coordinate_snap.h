@@ -17,40 +17,103 @@
 
 namespace meshflow::compress {
 
-/// The decoded neighbours of a vertex whose coordinates it may equal: the ring's parallelogram
-/// corners and the gate's vertices (ids may repeat). Filled by gather_snap_neighbours().
+/// The distinct decoded neighbours of a vertex whose coordinates it may equal (the ring's
+/// parallelogram corners and the gate's vertices, each once): their grid coordinates per axis.
+/// Filled by SnapNeighbourhood::gather().
 struct SnapNeighbours {
   static constexpr unsigned kMax = 3 * ParallelogramRing::kMaxParallelograms + 3;
-  std::array<std::uint32_t, kMax> id{};
+  std::array<std::array<std::int32_t, kMax>, 3> coordinate{};  ///< [axis][neighbour]
   unsigned count = 0;
 };
 
-/// The neighbours of decoded vertex `k`: its ring corners and those of its gate predictors `p`
-/// that exist and are not holes (`hole`, per decoded vertex). Every id is below k. O(1).
-SnapNeighbours gather_snap_neighbours(std::uint32_t k, const VertexPredictors& p,
-                                      const ParallelogramRing& ring, const std::vector<char>& hole);
+/// Gathers a vertex's SnapNeighbours, each neighbour once (a stamp per vertex drops repeats).
+/// Not thread-safe; one per position section. O(V) memory.
+class SnapNeighbourhood {
+ public:
+  /// For a surface of `vertices` decoded vertices.
+  explicit SnapNeighbourhood(std::size_t vertices) : stamp_(vertices, kNone) {}
+  /// The neighbours of decoded vertex `k`: its ring corners and those of its gate predictors
+  /// `p` that exist, come before k and are not holes (`hole`, per decoded vertex), with their
+  /// positions in `grid` (decoded before k). Valid until the next call. O(1).
+  const SnapNeighbours& gather(std::uint32_t k, const VertexPredictors& p,
+                               const ParallelogramRing& ring, const std::vector<char>& hole,
+                               const std::vector<std::array<std::int32_t, 3>>& grid) {
+    std::uint32_t id[SnapNeighbours::kMax];
+    unsigned n = ring.corners(k, id);
+    for (std::uint32_t v : {p.a, p.b, p.w})
+      if (v != kNone && v < k && !hole[v]) id[n++] = v;
+    nb_.count = 0;
+    for (unsigned i = 0; i < n; ++i) {
+      const std::uint32_t v = id[i];
+      if (stamp_[v] == k) continue;
+      stamp_[v] = k;
+      const std::array<std::int32_t, 3>& g = grid[v];
+      for (std::size_t a = 0; a < 3; ++a) nb_.coordinate[a][nb_.count] = g[a];
+      ++nb_.count;
+    }
+    return nb_;
+  }
 
-/// Up to kSnapCandidates distinct coordinate values, ordered by distance from the prediction
-/// (the smaller value first on a tie).
-inline constexpr unsigned kSnapCandidates = 4;
-struct SnapCandidates {
-  std::array<std::int32_t, kSnapCandidates> value{};
-  unsigned n = 0;
+ private:
+  std::vector<std::uint32_t> stamp_;  // per decoded vertex: the last k that gathered it
+  SnapNeighbours nb_;
 };
 
-/// The candidates on `axis` (0 .. 2) for a coordinate predicted at `predicted`, from the
-/// neighbours' grid positions. Both coder sides call it with the same decoded data. O(count).
-SnapCandidates snap_candidates(const SnapNeighbours& nb,
-                               const std::vector<std::array<std::int32_t, 3>>& grid,
-                               std::size_t axis, std::int32_t predicted);
+/// A coordinate's snap candidates: the distinct neighbour values on its axis ranked by distance
+/// from the prediction (the smaller value first on a tie); the kSnapCandidates nearest are
+/// offered. Both coder sides rank the same decoded data.
+inline constexpr unsigned kSnapCandidates = 4;
+struct SnapCandidates {
+  // Only [0, distinct) is set (no clearing: a coder builds three per vertex).
+  std::array<std::int32_t, SnapNeighbours::kMax> value;      ///< distinct, in neighbour order
+  std::array<std::uint64_t, SnapNeighbours::kMax> rank_key;  ///< key() of each value
+  unsigned distinct = 0;
+  unsigned n = 0;            ///< offered: min(distinct, kSnapCandidates)
+  std::int32_t nearest = 0;  ///< the value of rank 0 (when n > 0)
+  std::int32_t predicted = 0;
+
+  /// The rank order's key of value v: distance from the prediction, the side below first.
+  std::uint64_t key(std::int32_t v) const {
+    const std::int64_t d = std::int64_t{v} - predicted;
+    return (static_cast<std::uint64_t>(d < 0 ? -d : d) << 1) | (d > 0 ? 1u : 0u);
+  }
+  /// The value of rank r < n. O(distinct^2) (distinct is small; a decoder asks only for a
+  /// snap past the nearest candidate).
+  std::int32_t ranked(unsigned r) const;
+  /// The snap symbol of `v`: 1 + its rank when it is one of the n offered, else 0. O(distinct).
+  unsigned symbol_of(std::int32_t v) const;
+};
+
+/// The candidates on `axis` (0 .. 2) for a coordinate predicted at `predicted`. O(count x
+/// distinct).
+inline SnapCandidates snap_candidates(const SnapNeighbours& nb, std::size_t axis,
+                                      std::int32_t predicted) {
+  SnapCandidates c;
+  c.predicted = predicted;
+  const std::int32_t* in = nb.coordinate[axis].data();
+  std::uint64_t best = ~std::uint64_t{0};
+  for (unsigned i = 0; i < nb.count; ++i) {
+    const std::int32_t v = in[i];
+    bool seen = false;
+    for (unsigned j = 0; j < c.distinct; ++j) seen |= c.value[j] == v;
+    if (seen) continue;
+    const std::uint64_t k = c.key(v);
+    c.rank_key[c.distinct] = k;
+    c.value[c.distinct++] = v;
+    if (k < best) {
+      best = k;
+      c.nearest = v;
+    }
+  }
+  c.n = c.distinct < kSnapCandidates ? c.distinct : kSnapCandidates;
+  return c;
+}
 
 /// Whether some neighbour's grid coordinate on `axis` is `value` (the encoder's guess that the
 /// coordinate will snap). O(count).
-inline bool shares_value(const SnapNeighbours& nb,
-                         const std::vector<std::array<std::int32_t, 3>>& grid, std::size_t axis,
-                         std::int32_t value) {
+inline bool shares_value(const SnapNeighbours& nb, std::size_t axis, std::int32_t value) {
   bool shared = false;
-  for (unsigned i = 0; i < nb.count; ++i) shared |= grid[nb.id[i]][axis] == value;
+  for (unsigned i = 0; i < nb.count; ++i) shared |= nb.coordinate[axis][i] == value;
   return shared;
 }
 
@@ -60,21 +123,29 @@ inline bool shares_value(const SnapNeighbours& nb,
 /// Axes are coded 0, 1, 2 for each vertex. Not thread-safe; one per position section.
 class SnapModels {
  public:
-  /// Codes which candidate `value` equals (or none) on `axis` for a coordinate predicted at
-  /// `predicted`; returns true if one did (the coordinate is then coded), false if the caller
-  /// must code its residual. Nothing is coded without candidates. O(1).
-  bool encode(RangeEncoder& enc, std::size_t axis, const SnapCandidates& c, std::int32_t predicted,
-              std::int32_t value);
+  /// Codes which candidate `value` equals (or none) on `axis`; returns true if one did (the
+  /// coordinate is then coded), false if the caller must code its residual. Nothing is coded
+  /// without candidates. O(distinct).
+  bool encode(RangeEncoder& enc, std::size_t axis, const SnapCandidates& c, std::int32_t value);
   /// The decoder's side: sets `value` and returns true when the stream names a candidate; false
-  /// when the residual follows. A corrupt symbol past the candidates reads as none. O(1).
+  /// when the residual follows. A corrupt symbol past the candidates reads as none. O(1) for
+  /// none or the nearest candidate, O(distinct^2) past it.
   bool decode(RangeDecoderCore& dec, std::size_t axis, const SnapCandidates& c,
-              std::int32_t predicted, std::int32_t& value);
+              std::int32_t& value) {
+    if (axis == 0) earlier_ = 0;
+    if (c.n == 0) return false;
+    const unsigned symbol = model(axis, c).decode(dec);
+    const bool snapped = symbol != 0 && symbol <= c.n;
+    record(axis, snapped);
+    if (snapped) value = symbol == 1 ? c.nearest : c.ranked(symbol - 1);
+    return snapped;
+  }
 
  private:
   static constexpr unsigned kContexts = kSnapCandidates * 2 * 3 * 2;
   // The model of `axis` with c.n > 0 candidates.
-  FrequencyModel<8>& model(std::size_t axis, const SnapCandidates& c, std::int32_t predicted) {
-    const unsigned exact = c.value[0] == predicted;
+  FrequencyModel<8>& model(std::size_t axis, const SnapCandidates& c) {
+    const unsigned exact = c.nearest == c.predicted;
     return symbol_[axis][(((c.n - 1) * 2 + exact) * 3 + earlier_) * 2 + last_[axis]];
   }
   void record(std::size_t axis, bool snapped) {

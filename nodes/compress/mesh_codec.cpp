@@ -239,7 +239,7 @@ static_assert(kMaxParallelograms == 4, "kTrustChoices lists one entry per offer 
 // sum / n rounded half away from zero, n in 1 .. kMaxParallelograms: a division by a constant
 // per case (a multiply and shifts; a 64-bit division by a variable takes tens of cycles, three
 // per vertex and up to 30 per vertex in the encoder's trials).
-std::int64_t rounded_mean(std::int64_t sum, std::int64_t n) {
+std::int64_t rounded_mean(std::int64_t sum, unsigned n) {
   static_assert(kMaxParallelograms == 4, "rounded_mean() has a case per count");
   const std::int64_t half = n / 2, biased = sum >= 0 ? sum + half : sum - half;
   switch (n) {
@@ -254,21 +254,11 @@ std::int64_t rounded_mean(std::int64_t sum, std::int64_t n) {
   }
 }
 
-// The prediction from the parallelograms `trusted` selects (bit i: parallelogram i), their
-// rounded mean, or the fallback when none; sets each axis's residual context.
-std::array<std::int32_t, 3> predict(const Candidates& c, unsigned trusted,
-                                    std::array<std::size_t, 3>& context) {
-  if (trusted == 0) {
-    for (std::size_t a = 0; a < 3; ++a) context[a] = kind_context(c.fallback_kind, c.shape[a]);
-    return c.fallback;
-  }
-  std::array<std::int64_t, 3> sum{};
-  std::int64_t n = 0;
-  for (unsigned i = 0; i < c.n; ++i) {
-    if (((trusted >> i) & 1u) == 0) continue;
-    ++n;
-    for (std::size_t a = 0; a < 3; ++a) sum[a] += c.parallelogram[i][a];
-  }
+// The mean of `n` >= 1 trusted parallelograms whose coordinates sum to `sum`, rounded; sets each
+// axis's residual context.
+std::array<std::int32_t, 3> mean_prediction(const Candidates& c,
+                                            const std::array<std::int64_t, 3>& sum, unsigned n,
+                                            std::array<std::size_t, 3>& context) {
   const Prediction kind = n == 1 ? kParallelogram : n == 2 ? kMean2 : kMean3;
   std::array<std::int32_t, 3> out;
   for (std::size_t a = 0; a < 3; ++a) {
@@ -276,6 +266,43 @@ std::array<std::int32_t, 3> predict(const Candidates& c, unsigned trusted,
     context[a] = kind_context(kind, c.shape[a]);
   }
   return out;
+}
+
+// The prediction without trusted parallelograms: the fallback; sets the contexts.
+std::array<std::int32_t, 3> fallback_prediction(const Candidates& c,
+                                                std::array<std::size_t, 3>& context) {
+  for (std::size_t a = 0; a < 3; ++a) context[a] = kind_context(c.fallback_kind, c.shape[a]);
+  return c.fallback;
+}
+
+// The prediction from the parallelograms `trusted` selects (bit i: parallelogram i), their
+// rounded mean, or the fallback when none; sets each axis's residual context.
+std::array<std::int32_t, 3> predict(const Candidates& c, unsigned trusted,
+                                    std::array<std::size_t, 3>& context) {
+  if (trusted == 0) return fallback_prediction(c, context);
+  std::array<std::int64_t, 3> sum{};
+  unsigned n = 0;
+  for (unsigned i = 0; i < c.n; ++i) {
+    if (((trusted >> i) & 1u) == 0) continue;
+    ++n;
+    for (std::size_t a = 0; a < 3; ++a) sum[a] += c.parallelogram[i][a];
+  }
+  return mean_prediction(c, sum, n, context);
+}
+
+// The coordinate sums of every subset of the offered parallelograms (index: the subset's mask),
+// each from a smaller one: the encoder's trials read them instead of summing per trial.
+using SubsetSums = std::array<std::array<std::int64_t, 3>, 1u << kMaxParallelograms>;
+// The number of parallelograms in each subset (mask).
+constexpr std::array<unsigned, 1u << kMaxParallelograms> kSubsetSize = {0, 1, 1, 2, 1, 2, 2, 3,
+                                                                        1, 2, 2, 3, 2, 3, 3, 4};
+void subset_sums(const Candidates& c, SubsetSums& sums) {
+  sums[0] = {0, 0, 0};
+  for (unsigned mask = 1; mask < (1u << c.n); ++mask) {
+    const auto low = static_cast<unsigned>(__builtin_ctz(mask));
+    for (std::size_t a = 0; a < 3; ++a)
+      sums[mask][a] = sums[mask & (mask - 1)][a] + c.parallelogram[low][a];
+  }
 }
 
 void write_section(io::ByteWriter& out, const std::vector<unsigned char>& bytes) {
@@ -362,6 +389,7 @@ std::vector<std::array<std::int32_t, 3>> encode_positions(
   RangeEncoder enc[3];
   PositionModels m;
   SnapModels snap;
+  SnapNeighbourhood neighbourhood(decoded);
   Grid grid(decoded);
   std::array<std::int32_t, 3> last{};
   const auto code = [&](const std::array<std::int32_t, 3>& q,
@@ -379,18 +407,23 @@ std::vector<std::array<std::int32_t, 3>> encode_positions(
     }
     const std::array<std::int32_t, 3> q = quantizer.quantize(mesh.vertices[input_of_decoded[k]]);
     const Candidates offer = candidates(k, replayed.predictors[k], ring, roles.hole, grid, last);
-    const SnapNeighbours nb = gather_snap_neighbours(k, replayed.predictors[k], ring, roles.hole);
+    const SnapNeighbours& nb =
+        neighbourhood.gather(k, replayed.predictors[k], ring, roles.hole, grid);
     // Only the coordinates no neighbour shares pay a residual; one that does costs least when
     // predicted exactly (about a bit more otherwise).
     std::array<bool, 3> free{};
-    for (std::size_t a = 0; a < 3; ++a) free[a] = !shares_value(nb, grid, a, q[a]);
+    for (std::size_t a = 0; a < 3; ++a) free[a] = !shares_value(nb, a, q[a]);
     unsigned best = 0;
     std::uint32_t best_cost = ~0u;
     std::array<std::size_t, 3> context;
     const TrustChoices& choices = kTrustChoices[offer.n];
+    SubsetSums sums;
+    subset_sums(offer, sums);
     for (unsigned choice = 0; choice < choices.count; ++choice) {
       const unsigned trusted = choices.mask[choice];
-      const std::array<std::int32_t, 3> predicted = predict(offer, trusted, context);
+      const std::array<std::int32_t, 3> predicted =
+          trusted == 0 ? fallback_prediction(offer, context)
+                       : mean_prediction(offer, sums[trusted], kSubsetSize[trusted], context);
       std::uint32_t cost = m.trusted[offer.n - 1].cost(trusted);  // n > 0: there are choices
       for (std::size_t a = 0; a < 3; ++a)
         cost += free[a]                ? m.residual[context[a]][a].cost(q[a] - predicted[a])
@@ -406,7 +439,7 @@ std::vector<std::array<std::int32_t, 3>> encode_positions(
     stats.offered_parallelograms += offer.n;
     const std::array<std::int32_t, 3> predicted = predict(offer, best, context);
     for (std::size_t a = 0; a < 3; ++a) {
-      if (snap.encode(enc[a], a, snap_candidates(nb, grid, a, predicted[a]), predicted[a], q[a])) {
+      if (snap.encode(enc[a], a, snap_candidates(nb, a, predicted[a]), q[a])) {
         ++stats.snapped_coordinates;
         continue;
       }
@@ -631,6 +664,7 @@ std::vector<std::array<std::int32_t, 3>> decode_positions(
                          RangeDecoder(z.bytes, z.size, source, "position section z")};
   PositionModels m;
   SnapModels snap;
+  SnapNeighbourhood neighbourhood(decoded);
   Grid grid(decoded);
   std::array<std::int32_t, 3> last{};
   {
@@ -662,13 +696,12 @@ std::vector<std::array<std::int32_t, 3>> decode_positions(
           offer.n > 0 ? m.trusted[offer.n - 1].decode(cx) & ((1u << offer.n) - 1u) : 0u;
       std::array<std::size_t, 3> context;
       const std::array<std::int32_t, 3> predicted = predict(offer, trusted, context);
-      const SnapNeighbours nb = gather_snap_neighbours(k, replayed.predictors[k], ring, roles.hole);
+      const SnapNeighbours& nb =
+          neighbourhood.gather(k, replayed.predictors[k], ring, roles.hole, grid);
       RangeDecoderCore* core[3] = {&cx, &cy, &cz};
       std::array<std::int32_t, 3> q{};
       for (std::size_t a = 0; a < 3; ++a) {
-        if (snap.decode(*core[a], a, snap_candidates(nb, grid, a, predicted[a]), predicted[a],
-                        q[a]))
-          continue;
+        if (snap.decode(*core[a], a, snap_candidates(nb, a, predicted[a]), q[a])) continue;
         q[a] = static_cast<std::int32_t>(
             static_cast<std::uint32_t>(predicted[a]) +
             static_cast<std::uint32_t>(m.residual[context[a]][a].decode(*core[a])));

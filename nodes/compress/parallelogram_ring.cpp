@@ -6,7 +6,7 @@ namespace meshflow::compress {
 
 ParallelogramRing::ParallelogramRing(const std::vector<EdgeDiamond>& diamonds,
                                      const std::vector<char>& hole, std::size_t vertices)
-    : count_(vertices, 0), corners_(vertices * kMaxParallelograms) {
+    : count_(vertices, 0), corners_(new Corners[vertices * kMaxParallelograms]) {
   // Each edge predicts the later of its two third vertices, k, if the edge's ends and the
   // earlier one w come before k and none is a hole.
   for (const EdgeDiamond& d : diamonds) {

@@ -9,6 +9,7 @@
 
 #include <array>
 #include <cstdint>
+#include <memory>
 #include <vector>
 
 #include "nodes/compress/edgebreaker_connectivity.h"
@@ -35,7 +36,7 @@ class ParallelogramRing {
   unsigned gather(std::uint32_t k, const std::vector<std::array<std::int32_t, 3>>& grid,
                   Parallelograms& out) const {
     const unsigned count = count_[k];
-    const Corners* c = &corners_[std::size_t{k} * kMaxParallelograms];
+    const Corners* c = corners_.get() + std::size_t{k} * kMaxParallelograms;
     for (unsigned i = 0; i < count; ++i) {
       const auto &x = grid[c[i].x], &y = grid[c[i].y], &w = grid[c[i].w];
       for (std::size_t a = 0; a < 3; ++a) out[i][a] = std::int64_t{x[a]} + y[a] - w[a];
@@ -47,7 +48,7 @@ class ParallelogramRing {
   /// order; decoded vertex numbers below k) and returns 3 n. O(n).
   unsigned corners(std::uint32_t k, std::uint32_t* out) const {
     const unsigned count = count_[k];
-    const Corners* c = &corners_[std::size_t{k} * kMaxParallelograms];
+    const Corners* c = corners_.get() + std::size_t{k} * kMaxParallelograms;
     for (unsigned i = 0; i < count; ++i) {
       out[3 * i] = c[i].x;
       out[3 * i + 1] = c[i].y;
@@ -61,7 +62,8 @@ class ParallelogramRing {
     std::uint32_t x, y, w;
   };
   std::vector<std::uint8_t> count_;  // per vertex: parallelograms offered (<= 4)
-  std::vector<Corners> corners_;     // kMaxParallelograms slots per vertex
+  // kMaxParallelograms slots per vertex, the first count_ set (no clearing: 48 bytes a vertex).
+  std::unique_ptr<Corners[]> corners_;
 };
 
 }  // namespace meshflow::compress

@@ -855,7 +855,8 @@ TEST(PositionCoding, ConstrainedPredictionRefusesParallelogramsAcrossCreases) {
 }
 
 // A snap's candidates are the distinct neighbour values on the axis nearest the prediction (the
-// smaller first on a tie), at most kSnapCandidates: against sorting every distinct value.
+// smaller first on a tie), at most kSnapCandidates: against sorting every distinct value. Each
+// offered value's symbol is 1 + its rank; any other value's is 0.
 TEST(PositionCoding, SnapCandidatesAreTheNearestDistinctNeighbourValues) {
   std::uint32_t state = 7;
   const auto next = [&state](std::uint32_t n) {
@@ -863,25 +864,37 @@ TEST(PositionCoding, SnapCandidatesAreTheNearestDistinctNeighbourValues) {
     return (state >> 8) % n;
   };
   for (int trial = 0; trial < 2000; ++trial) {
-    std::vector<std::array<std::int32_t, 3>> grid(20);
-    for (auto& p : grid)
-      for (std::int32_t& v : p) v = static_cast<std::int32_t>(next(9)) - 4;
     compress::SnapNeighbours nb;
     nb.count = next(compress::SnapNeighbours::kMax + 1);
-    for (unsigned i = 0; i < nb.count; ++i) nb.id[i] = next(20);
     const std::size_t axis = next(3);
+    for (unsigned i = 0; i < nb.count; ++i)
+      for (auto& coordinate : nb.coordinate) coordinate[i] = static_cast<std::int32_t>(next(9)) - 4;
     const auto predicted = static_cast<std::int32_t>(next(11)) - 5;
-    std::vector<std::int32_t> values;
-    for (unsigned i = 0; i < nb.count; ++i) values.push_back(grid[nb.id[i]][axis]);
+    std::vector<std::int32_t> values(nb.coordinate[axis].begin(),
+                                     nb.coordinate[axis].begin() + nb.count);
     std::sort(values.begin(), values.end(), [predicted](std::int32_t a, std::int32_t b) {
       const std::int32_t da = std::abs(a - predicted), db = std::abs(b - predicted);
       return da != db ? da < db : a < b;
     });
     values.erase(std::unique(values.begin(), values.end()), values.end());
+    const std::vector<std::int32_t> all = values;
     values.resize(std::min<std::size_t>(values.size(), compress::kSnapCandidates));
-    const compress::SnapCandidates c = compress::snap_candidates(nb, grid, axis, predicted);
+    const compress::SnapCandidates c = compress::snap_candidates(nb, axis, predicted);
     ASSERT_EQ(c.n, values.size()) << trial;
-    for (unsigned j = 0; j < c.n; ++j) EXPECT_EQ(c.value[j], values[j]) << trial << " " << j;
+    ASSERT_EQ(c.distinct, all.size()) << trial;
+    if (c.n > 0) {
+      EXPECT_EQ(c.nearest, values[0]) << trial;
+    }
+    for (unsigned j = 0; j < c.n; ++j) EXPECT_EQ(c.ranked(j), values[j]) << trial << " " << j;
+    for (std::int32_t v = -6; v <= 6; ++v) {
+      const auto at = std::find(values.begin(), values.end(), v);
+      const unsigned symbol =
+          at == values.end() ? 0u : static_cast<unsigned>(at - values.begin()) + 1u;
+      EXPECT_EQ(c.symbol_of(v), symbol) << trial << " " << v;
+      EXPECT_EQ(compress::shares_value(nb, axis, v),
+                std::find(all.begin(), all.end(), v) != all.end())
+          << trial << " " << v;
+    }
   }
 }
 

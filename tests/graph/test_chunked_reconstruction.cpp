@@ -324,7 +324,9 @@ TEST(ChunkedReconstruction, StreamedOutputIsTheHeldMeshsFileByteForByte) {
     chunking.in_flight = normals ? 1 : 3;
     const ChunkedResult held = reconstruct_chunked(input.path, "", defaults, chunking);
     ASSERT_FALSE(held.mesh.empty());
-    if (normals) EXPECT_EQ(held.report.decided.method, ExtractMethod::kExtendedMarchingCubes);
+    if (normals) {
+      EXPECT_EQ(held.report.decided.method, ExtractMethod::kExtendedMarchingCubes);
+    }
     const std::string held_path = test::temp_dir() + "/chunk_held.ply";
     const std::string streamed_path = test::temp_dir() + "/chunk_streamed.ply";
     io::write_mesh(held_path, held.mesh, held.origin);

@@ -42,7 +42,7 @@ TriangleMesh ply_rows(const TriangleMesh& m, std::size_t first, std::size_t coun
 
 TEST(PlyMeshFile, PartsInAnyOrderAndRewrittenRowsGiveWritePlysBytes) {
   const std::string dir = test::temp_dir();
-  for (const Eigen::Vector3d origin : {Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(5e5, 4e6, 12)}) {
+  for (const Eigen::Vector3d& origin : {Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(5e5, 4e6, 12)}) {
     TriangleMesh final_mesh = ply_strip(9);
     write_ply(dir + "/whole.ply", final_mesh, PlyEncoding::kBinary, origin);
     // Written from an earlier state: two triangles and a normal differ until rewritten.

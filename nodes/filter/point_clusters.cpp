@@ -153,11 +153,12 @@ bool grid_cluster_sizes(const PointCloud& cloud, float radius, std::size_t min_p
   const std::size_t cells = first.size();
   first.push_back(static_cast<std::uint32_t>(n));
   std::size_t capacity = 16;
-  while (capacity < 2 * cells) capacity *= 2;
+  int bits = 4;
+  for (; capacity < 2 * cells; capacity *= 2) ++bits;
   constexpr std::uint32_t kEmpty = std::numeric_limits<std::uint32_t>::max();
   std::vector<std::uint32_t> table(capacity, kEmpty);
-  const auto slot = [&](std::uint64_t key) {
-    return static_cast<std::size_t>((key * 0x9e3779b97f4a7c15ULL) >> 20) & (capacity - 1);
+  const auto slot = [&](std::uint64_t key) {  // the product's top bits: every axis counts
+    return static_cast<std::size_t>((key * 0x9e3779b97f4a7c15ULL) >> (64 - bits));
   };
   for (std::uint32_t c = 0; c < cells; ++c) {
     std::size_t s = slot(order[first[c]].first);
@@ -170,35 +171,40 @@ bool grid_cluster_sizes(const PointCloud& cloud, float radius, std::size_t min_p
       if (order[first[table[s]]].first == key) return table[s];
     }
   };
-  // The 62 neighbours after a cell in key order (offsets within 2 along each axis).
-  std::vector<std::int64_t> forward;
+  // The 62 neighbours after a cell in key order (offsets within 2 along each axis): the 13
+  // adjacent ones first, over every cell, so that the others, whose points are mostly beyond
+  // the radius, are mostly in one component already and cost a lookup (components do not
+  // depend on the order of the unions).
+  std::vector<std::int64_t> forward[2];
   for (std::int64_t dx = -2; dx <= 2; ++dx)
     for (std::int64_t dy = -2; dy <= 2; ++dy)
       for (std::int64_t dz = -2; dz <= 2; ++dz) {
         const std::int64_t offset =
             (dx * (std::int64_t{1} << kCellBits) + dy) * (std::int64_t{1} << kCellBits) + dz;
-        if (offset > 0) forward.push_back(offset);
+        const bool adjacent = std::abs(dx) <= 1 && std::abs(dy) <= 1 && std::abs(dz) <= 1;
+        if (offset > 0) forward[adjacent ? 0 : 1].push_back(offset);
       }
   std::vector<std::uint32_t> parent(cells);
   std::iota(parent.begin(), parent.end(), 0u);
   const float r2 = radius * radius;
-  for (std::uint32_t c = 0; c < cells; ++c) {
-    const std::uint64_t key = order[first[c]].first;
-    for (const std::int64_t offset : forward) {
-      const std::uint32_t d = find_cell(key + static_cast<std::uint64_t>(offset));
-      if (d == kEmpty) continue;
-      std::uint32_t a = cluster_root(parent, c), b = cluster_root(parent, d);
-      if (a == b) continue;
-      bool linked = false;
-      for (std::uint32_t i = first[c]; i < first[c + 1] && !linked; ++i)
-        for (std::uint32_t j = first[d]; j < first[d + 1] && !linked; ++j)
-          linked = cluster_distance2(cloud.positions[order[j].second],
-                                     cloud.positions[order[i].second]) <= r2;
-      if (!linked) continue;
-      if (a > b) std::swap(a, b);
-      parent[b] = a;
+  for (const std::vector<std::int64_t>& offsets : forward)
+    for (std::uint32_t c = 0; c < cells; ++c) {
+      const std::uint64_t key = order[first[c]].first;
+      for (const std::int64_t offset : offsets) {
+        const std::uint32_t d = find_cell(key + static_cast<std::uint64_t>(offset));
+        if (d == kEmpty) continue;
+        std::uint32_t a = cluster_root(parent, c), b = cluster_root(parent, d);
+        if (a == b) continue;
+        bool linked = false;
+        for (std::uint32_t i = first[c]; i < first[c + 1] && !linked; ++i)
+          for (std::uint32_t j = first[d]; j < first[d + 1] && !linked; ++j)
+            linked = cluster_distance2(cloud.positions[order[j].second],
+                                       cloud.positions[order[i].second]) <= r2;
+        if (!linked) continue;
+        if (a > b) std::swap(a, b);
+        parent[b] = a;
+      }
     }
-  }
   std::vector<std::uint32_t> points(cells, 0);
   for (std::uint32_t c = 0; c < cells; ++c) {
     parent[c] = cluster_root(parent, c);  // every cell points at its root from here on

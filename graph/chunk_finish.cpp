@@ -92,14 +92,21 @@ std::size_t finish_seams(TriangleMesh& mesh, const std::vector<std::uint8_t>& fe
     sub_features[v] = features[original[v]];
     sub_seam[v] = seam[original[v]];
   }
-  const std::size_t flips = flip_edges_between_features(sub, sub_features, &sub_seam);
+  const std::size_t flips = finish_seam_neighbourhood(sub, sub_features, std::move(sub_seam));
   for (std::size_t i = 0; i < around.size(); ++i)
     for (int k = 0; k < 3; ++k) mesh.triangles[around[i]][k] = original[sub.triangles[i][k]];
   if (!mesh.normals.empty() && mesh.normals.size() == n) {
-    compute_vertex_normals(sub);
     for (std::size_t v = 0; v < original.size(); ++v)
       if (near[original[v]]) mesh.normals[original[v]] = sub.normals[v];
   }
+  return flips;
+}
+
+std::size_t finish_seam_neighbourhood(TriangleMesh& around,
+                                      const std::vector<std::uint8_t>& features,
+                                      std::vector<std::uint8_t> seam) {
+  const std::size_t flips = flip_edges_between_features(around, features, &seam);
+  if (!around.normals.empty()) compute_vertex_normals(around);
   return flips;
 }
 

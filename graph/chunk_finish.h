@@ -61,4 +61,14 @@ TriangleMesh finish_chunk_mesh(const TriangleMesh& mesh, const std::vector<std::
 std::size_t finish_seams(TriangleMesh& mesh, const std::vector<std::uint8_t>& features,
                          float voxel_size, int chunk_cells);
 
+/// finish_seams()'s work on the seams' neighbourhood `around`: the triangles of the stitched
+/// mesh touching a seam vertex's neighbour, in mesh order, over their vertices in the order of
+/// their mesh index (`features`, `seam` one byte each). Flips between feature vertices whose
+/// edge joins two seam vertices, then recomputes `around`'s normals (when it has them); the
+/// caller copies back the triangles and the normals of the vertices next to a seam. Returns
+/// the flips made. O(S log S).
+std::size_t finish_seam_neighbourhood(TriangleMesh& around,
+                                      const std::vector<std::uint8_t>& features,
+                                      std::vector<std::uint8_t> seam);
+
 }  // namespace meshflow::chunk

@@ -2,16 +2,23 @@
 
 #include <tbb/global_control.h>
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_pipeline.h>
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
+#include <memory>
 
 #include "graph/chunk_finish.h"
+#include "graph/chunk_output.h"
 #include "graph/pipeline.h"
+#include "nodes/chunk/mesh_spill.h"
 #include "nodes/chunk/mesh_stitch.h"
 #include "nodes/extract/feature_edge_flips.h"
 #include "nodes/extract/rim_trim.h"
 #include "nodes/filter/filter.h"
+#include "nodes/io/mesh_writers.h"
+#include "nodes/io/parse_util.h"
 #include "nodes/io/read_point_cloud.h"
 #include "nodes/normals/scene_side.h"
 #include "nodes/search/spatial_index.h"
@@ -352,16 +359,21 @@ void mesh_chunk_files(const std::vector<chunk::ChunkFile>& files, const chunk::C
       in_flight, finish_in_place, name, sink);
 }
 
-void collect_chunk_frame(Frame& frame, chunk::MeshStitcher& stitcher, ChunkedReport& report) {
+bool report_chunk_frame(const Frame& frame, ChunkedReport& report) {
   report.timings.insert(report.timings.end(), frame.timings.begin(), frame.timings.end());
   if (!frame.ok()) {
     report.failed.push_back(frame.name + ": " + frame.error);
-    return;
+    return false;
   }
   if (frame.chunk && frame.chunk->finish_cells > 0) {
     report.rim_trimmed += frame.rim_trimmed;
     chunked_add_optimize(report.optimize, frame.optimize);
   }
+  return true;
+}
+
+void collect_chunk_frame(Frame& frame, chunk::MeshStitcher& stitcher, ChunkedReport& report) {
+  if (!report_chunk_frame(frame, report)) return;
   std::vector<std::uint8_t> flags = chunk_vertex_flags(frame);
   stitcher.add(std::move(frame.mesh), std::move(flags));
   frame.mesh = TriangleMesh{};
@@ -429,6 +441,30 @@ TriangleMesh finish_joined_mesh(TriangleMesh joined, const std::vector<std::uint
   return mesh;
 }
 
+namespace {
+
+// reconstruct_chunked()'s first part: partition_input() into `files`, the report's input and
+// chunk fields and result.origin filled. Returns the store (its destructor removes the files).
+std::unique_ptr<chunk::ChunkStore> partition_into(
+    const std::string& path, const std::string& columns, const ReconstructionConfig& config,
+    const ChunkingConfig& chunking, std::vector<chunk::ChunkFile>& files, ChunkedResult& result) {
+  ChunkedReport& report = result.report;
+  std::unique_ptr<chunk::ChunkStore> store =
+      partition_input(path, columns, config, chunking, files, report.decided, &report.clock);
+  report.voxel_size = report.decided.voxel_size;
+  report.chunk_cells = store->grid().chunk_cells;
+  report.chunks = files.size();
+  report.points = store->points_read();
+  report.dropped = store->points_dropped();
+  report.rows_written = store->rows_written();
+  for (const chunk::ChunkFile& f : files)
+    report.max_chunk_points = std::max(report.max_chunk_points, f.points);
+  result.origin = store->rows().origin;
+  return store;
+}
+
+}  // namespace
+
 ChunkedResult reconstruct_chunked(const std::string& path, const std::string& columns,
                                   const ReconstructionConfig& config,
                                   const ChunkingConfig& chunking,
@@ -441,17 +477,8 @@ ChunkedResult reconstruct_chunked(const std::string& path, const std::string& co
   tell("partition");
   std::vector<chunk::ChunkFile> files;
   const std::unique_ptr<chunk::ChunkStore> store =
-      partition_input(path, columns, config, chunking, files, report.decided, &report.clock);
-  const float voxel = report.decided.voxel_size;
-  report.voxel_size = voxel;
-  report.chunk_cells = store->grid().chunk_cells;
-  report.chunks = files.size();
-  report.points = store->points_read();
-  report.dropped = store->points_dropped();
-  report.rows_written = store->rows_written();
-  for (const chunk::ChunkFile& f : files)
-    report.max_chunk_points = std::max(report.max_chunk_points, f.points);
-  result.origin = store->rows().origin;
+      partition_into(path, columns, config, chunking, files, result);
+  const float voxel = report.voxel_size;
 
   report.clock.begin("chunks", false);
   chunk::MeshStitcher stitcher = chunk_stitcher(voxel, report.chunk_cells);
@@ -468,6 +495,117 @@ ChunkedResult reconstruct_chunked(const std::string& path, const std::string& co
   tell("stitch");
   result.mesh =
       finish_chunked_mesh(stitcher, config, voxel, report, tell, in_place, report.chunk_cells);
+  report.output_vertices = result.mesh.vertices.size();
+  report.output_triangles = result.mesh.triangles.size();
+  return result;
+}
+
+bool streams_output(const std::string& output, const ReconstructionConfig& config,
+                    const ChunkingConfig& chunking) {
+  return io::lower_extension(output) == ".ply" && finishes_in_place(config, chunking);
+}
+
+ChunkedResult reconstruct_chunked_to_ply(const std::string& path, const std::string& columns,
+                                         const ReconstructionConfig& config,
+                                         const ChunkingConfig& chunking, const std::string& output,
+                                         const std::function<void(const std::string&)>& on_stage) {
+  if (!streams_output(output, config, chunking)) {
+    ChunkedResult result = reconstruct_chunked(path, columns, config, chunking, on_stage);
+    if (!result.mesh.empty()) {
+      result.report.clock.begin("write", true);
+      io::write_mesh(output, result.mesh, result.origin);
+      result.report.clock.end();
+    }
+    return result;
+  }
+  const auto tell = [&](const std::string& what) {
+    if (on_stage) on_stage(what);
+  };
+  ChunkedResult result;
+  ChunkedReport& report = result.report;
+  tell("partition");
+  std::vector<chunk::ChunkFile> files;
+  const std::unique_ptr<chunk::ChunkStore> store =
+      partition_into(path, columns, config, chunking, files, result);
+  const float voxel = report.voxel_size;
+  const int cells = report.chunk_cells;
+
+  // Each chunk's seam summarized and its mesh spilled as it arrives: the chunks in flight are
+  // all that is held.
+  report.clock.begin("chunks", false);
+  std::vector<chunk::ChunkSeams> seams;
+  const auto spill_path = [&](std::size_t c) {
+    return store->directory() + "/mesh_" + std::to_string(c) + ".bin";
+  };
+  std::size_t done = 0;
+  mesh_chunk_files(files, store->grid(), store->rows(), config, report.decided, chunking.in_flight,
+                   true, path, [&](const FramePtr& frame) {
+                     ++done;
+                     tell("chunk " + std::to_string(done) + "/" + std::to_string(files.size()));
+                     if (!report_chunk_frame(*frame, report)) return;
+                     chunk::SpilledMesh spilled;
+                     spilled.flags = chunk_vertex_flags(*frame);
+                     spilled.mesh = std::move(frame->mesh);
+                     frame->mesh = TriangleMesh{};
+                     frame->chunk.reset();
+                     seams.push_back(chunk::summarize_seams(spilled.mesh, spilled.flags, voxel,
+                                                            cells, kFeatureFlag));
+                     spilled.vertex_piece = std::move(seams.back().vertex_piece);
+                     seams.back().vertex_piece = {};
+                     chunk::write_mesh_spill(spill_path(seams.size() - 1), spilled);
+                   });
+  report.clock.end();
+
+  tell("stitch");
+  report.clock.begin("stitch", true);  // the weld's plan, from the seam summaries alone
+  std::vector<const chunk::ChunkSeams*> summaries;
+  for (const chunk::ChunkSeams& s : seams) summaries.push_back(&s);
+  const chunk::WeldPlan plan = chunk::plan_weld(summaries);
+  report.seam_vertices = plan.merged;
+  report.output_vertices = plan.vertices;
+  report.output_triangles = plan.triangles;
+  if (plan.triangles == 0) {
+    report.clock.end();
+    return result;  // nothing to write; the caller reports the empty mesh
+  }
+
+  // Each chunk welded (in parallel, a few at a time) and written in chunk order.
+  tell("write");
+  report.clock.begin("write", true);
+  chunk::StreamedChunkOutput out(output, plan, result.origin, voxel, cells, kFeatureFlag);
+  struct Welded {
+    TriangleMesh part;
+    std::vector<std::uint8_t> flags;
+  };
+  std::size_t next = 0;
+  const std::size_t threads = static_cast<std::size_t>(
+      tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism));
+  tbb::parallel_pipeline(
+      std::max<std::size_t>(2, threads),
+      tbb::make_filter<void, std::size_t>(tbb::filter_mode::serial_in_order,
+                                          [&](tbb::flow_control& fc) -> std::size_t {
+                                            if (next == seams.size()) fc.stop();
+                                            return next++;
+                                          }) &
+          tbb::make_filter<std::size_t, std::shared_ptr<Welded>>(
+              tbb::filter_mode::parallel,
+              [&](std::size_t c) {
+                chunk::SpilledMesh spilled = chunk::read_mesh_spill(spill_path(c));
+                std::remove(spill_path(c).c_str());
+                chunk::ChunkSeams& s = seams[c];
+                s.vertex_piece = std::move(spilled.vertex_piece);
+                auto welded = std::make_shared<Welded>();
+                welded->part =
+                    chunk::weld_chunk(spilled.mesh, spilled.flags, s, plan, c, &welded->flags);
+                s = chunk::ChunkSeams{};
+                return welded;
+              }) &
+          tbb::make_filter<std::shared_ptr<Welded>, void>(
+              tbb::filter_mode::serial_in_order,
+              [&](const std::shared_ptr<Welded>& w) { out.add(w->part, w->flags); }));
+  report.clock.begin("finish", true);  // the seams: flips and normals, their rows rewritten
+  out.finish();
+  report.clock.end();
   return result;
 }
 

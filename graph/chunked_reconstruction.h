@@ -99,10 +99,12 @@ struct ChunkedReport {
   std::uint64_t dropped = 0;       ///< NaN / Inf points dropped
   std::uint64_t rows_written = 0;  ///< points spilled, overlap copies included
   std::uint64_t max_chunk_points = 0;
-  std::size_t seam_vertices = 0;     ///< vertices welded across chunk seams
-  std::size_t rim_trimmed = 0;       ///< triangles peeled off the rim (max_rim_voxels), stitched
-  std::vector<std::string> failed;   ///< "chunk name: error" of chunks that failed (skipped)
-  std::vector<StageRecord> timings;  ///< every stage record of every chunk
+  std::size_t seam_vertices = 0;       ///< vertices welded across chunk seams
+  std::uint64_t output_vertices = 0;   ///< of the output mesh (held or streamed)
+  std::uint64_t output_triangles = 0;  ///< of the output mesh (held or streamed)
+  std::size_t rim_trimmed = 0;         ///< triangles peeled off the rim (max_rim_voxels), stitched
+  std::vector<std::string> failed;     ///< "chunk name: error" of chunks that failed (skipped)
+  std::vector<StageRecord> timings;    ///< every stage record of every chunk
   /// The phases of this process: "decide" (the whole-input sample), "partition" (spilling to
   /// chunk files), "chunks", then "stitch" (welding, feature flips, rim trim) and "finish"
   /// (optimize), serial; the caller adds "write".
@@ -223,6 +225,10 @@ chunk::MeshStitcher chunk_stitcher(float voxel_size, int chunk_cells);
 /// when it has neither.
 std::vector<std::uint8_t> chunk_vertex_flags(const Frame& frame);
 
+/// A chunk's stage records (and, finished in place, its rim trim and optimize counts) into
+/// `report`, or its error into report.failed; returns whether it has a mesh (frame.ok()).
+bool report_chunk_frame(const Frame& frame, ChunkedReport& report);
+
 /// What a chunk's sink does: its stage records (and, finished in place, its rim trim and
 /// optimize counts) into `report`, its mesh (and rim verdicts) into `stitcher`, or its error
 /// into report.failed; frees the frame's mesh.
@@ -260,5 +266,27 @@ ChunkedResult reconstruct_chunked(const std::string& path, const std::string& co
                                   const ReconstructionConfig& config,
                                   const ChunkingConfig& chunking,
                                   const std::function<void(const std::string&)>& on_stage = {});
+
+/// Whether reconstruct_chunked_to_ply() streams `output`: a .ply file (binary) from chunks
+/// finished in place (finishes_in_place()). O(1).
+bool streams_output(const std::string& output, const ReconstructionConfig& config,
+                    const ChunkingConfig& chunking);
+
+/// reconstruct_chunked() with the mesh written to `output` instead of returned (result.mesh
+/// stays empty; report.output_vertices and output_triangles count it). When streams_output():
+/// each finished chunk's seam is summarized and its mesh spilled beside the chunk files as it
+/// arrives; once all are in, the weld is planned from the summaries, each chunk is read back,
+/// welded (a few at once) and written at its rows (chunk::StreamedChunkOutput), then the seams
+/// are finished and their rows rewritten. The file is byte for byte io::write_mesh() of
+/// reconstruct_chunked()'s mesh; memory: the chunks in flight and the seams' neighbourhood, not
+/// the output; disk: the chunk meshes once more until written. Otherwise reconstruct_chunked()
+/// then io::write_mesh(). Nothing is written when no triangle was extracted. Times "chunks",
+/// "stitch" (the plan), "write" and "finish" (the seams) on report.clock. Throws
+/// meshflow::Error as reconstruct_chunked() and for a failed write (no file left under
+/// `output`).
+ChunkedResult reconstruct_chunked_to_ply(
+    const std::string& path, const std::string& columns, const ReconstructionConfig& config,
+    const ChunkingConfig& chunking, const std::string& output,
+    const std::function<void(const std::string&)>& on_stage = {});
 
 }  // namespace meshflow

@@ -27,18 +27,24 @@ void run_chunked_reconstruct(const std::string& input, const std::string& column
   io::check_mesh_output_format(output);
   auto progress = std::make_unique<StepProgress>();
   const double t0 = monotonic_seconds();
-  ChunkedResult result = reconstruct_chunked(
-      input, columns, config, chunking, [&](const std::string& what) { progress->begin(what); });
+  // Streamed to the file as the chunks are welded unless tiles are cut from the whole mesh.
+  const bool stream = tiles_dir.empty() && streams_output(output, config, chunking);
+  const auto tell = [&](const std::string& what) { progress->begin(what); };
+  ChunkedResult result =
+      stream ? reconstruct_chunked_to_ply(input, columns, config, chunking, output, tell)
+             : reconstruct_chunked(input, columns, config, chunking, tell);
   ChunkedReport& r = result.report;
-  if (result.mesh.empty()) {
+  if (r.output_triangles == 0) {
     throw Error(input, "",
                 "no surface was extracted from " + std::to_string(r.chunks) +
                     " chunks (voxel size " + std::to_string(r.voxel_size) +
                     " m too small or too large?)");
   }
-  progress->begin("write");
-  r.clock.begin("write", true);
-  io::write_mesh(output, result.mesh, result.origin);
+  if (!stream) {
+    progress->begin("write");
+    r.clock.begin("write", true);
+    io::write_mesh(output, result.mesh, result.origin);
+  }
   std::size_t tiles = 0;
   if (!tiles_dir.empty()) {
     progress->begin("tiles");
@@ -74,8 +80,8 @@ void run_chunked_reconstruct(const std::string& input, const std::string& column
         {"max_chunk_points", r.max_chunk_points},
         {"seam_vertices", r.seam_vertices},
         {"mesh",
-         {{"vertices", result.mesh.vertices.size()},
-          {"triangles", result.mesh.triangles.size()},
+         {{"vertices", r.output_vertices},
+          {"triangles", r.output_triangles},
           {"extract", extract_method_name(r.decided.method)}}},
         {"decided",  // once, from the whole input, for every chunk
          {{"voxel_automatic", r.decided.voxel_automatic},
@@ -96,8 +102,9 @@ void run_chunked_reconstruct(const std::string& input, const std::string& column
       extract_method_name(r.decided.method),
       static_cast<double>(r.rows_written) / static_cast<double>(r.points),
       static_cast<unsigned long long>(r.max_chunk_points));
-  report("mesh       %zu vertices, %zu triangles; %zu seam vertices welded\n",
-         result.mesh.vertices.size(), result.mesh.triangles.size(), r.seam_vertices);
+  report("mesh       %llu vertices, %llu triangles; %zu seam vertices welded\n",
+         static_cast<unsigned long long>(r.output_vertices),
+         static_cast<unsigned long long>(r.output_triangles), r.seam_vertices);
   detail("%s", format_optimize_report(r.optimize).c_str());
   report(
       "time       %.1f s on %d thread%s: decide %.1f s, partition %.1f s, chunks %.1f s, "

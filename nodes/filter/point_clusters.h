@@ -25,20 +25,23 @@ struct ClusterConfig {
   std::size_t min_points = 20;
   /// Longest link between two points of one cluster, metres (> 0).
   float link_radius = 0.0f;
-  /// Nearest neighbours each point links to first (when within link_radius): enough to join a
-  /// densely sampled surface, a thin wall or a pole without a radius query per point.
+  /// Nearest neighbours each point links to first (when within link_radius) where the grid
+  /// cannot be used (a cloud wider than 2^21 cells): enough to join a densely sampled surface,
+  /// a thin wall or a pole without a radius query per point.
   int k = 8;
 };
 
 /// Indices (ascending) of the points in clusters of at least config.min_points points, where a
 /// cluster is a connected component of the graph linking every two points at most
-/// config.link_radius apart. Found by linking each point to its k nearest neighbours within the
-/// radius, then the points of clusters still too small to all their neighbours within it (exact:
-/// see the .cpp). `index` must be built over cloud.positions. A thin structure sampled at the
+/// config.link_radius apart (the kd-tree's squared distance, inclusive). Found on a grid of
+/// cells a little under link_radius / sqrt(3) (a cell's points are linked; two cells within 2
+/// along each axis are linked when some pair of their points is); `index` (built over
+/// cloud.positions) only for a cloud wider than 2^21 cells, linked through each point's
+/// config.k nearest neighbours within the radius, then the points of clusters still too small
+/// to all their neighbours within it (the same clusters). A thin structure sampled at the
 /// surface's spacing stays one cluster; a point farther than link_radius from every other is
-/// isolated. Parallel queries, then a serial union-find in index order: the result does not
-/// depend on the thread count. O(n k log n) time plus a radius query per point of a small
-/// cluster; O(n k) memory. Thread-safe (reads only).
+/// isolated. Serial, deterministic. O(n log n) for the sort plus the point pairs of unlinked
+/// neighbouring cells; O(n) memory. Thread-safe (reads only).
 std::vector<std::uint32_t> surface_cluster_indices(const PointCloud& cloud,
                                                    const SpatialIndex& index,
                                                    const ClusterConfig& config,

@@ -9,6 +9,7 @@
 #include "nodes/io/atomic_file.h"
 #include "nodes/io/glb_writer.h"
 #include "nodes/io/parse_util.h"
+#include "nodes/io/ply_mesh_rows.h"
 #include "runtime/error.h"
 
 namespace meshflow::io {
@@ -51,20 +52,9 @@ void write_ply(const std::string& path, const TriangleMesh& mesh, PlyEncoding en
   }
   AtomicOutputFile file(path);
   std::ostream& out = file.stream();
-  const bool normals = mesh.normals.size() == mesh.vertices.size() && !mesh.normals.empty();
-  const bool colors = mesh.colors.size() == mesh.vertices.size() && !mesh.colors.empty();
-  out << "ply\nformat " << (encoding == PlyEncoding::kBinary ? "binary_little_endian" : "ascii")
-      << " 1.0\ncomment written by meshflow\nelement vertex " << mesh.vertices.size() << '\n';
-  // Georeferenced meshes: world coordinates, in doubles (floats hold millions of metres only to
-  // decimetres).
-  const bool world = !origin.isZero();
-  out << (world ? "property double x\nproperty double y\nproperty double z\n"
-                : "property float x\nproperty float y\nproperty float z\n");
-  if (normals) out << "property float nx\nproperty float ny\nproperty float nz\n";
-  if (colors) out << "property uchar red\nproperty uchar green\nproperty uchar blue\n";
-  for (const VertexScalar& scalar : scalars) out << "property float " << scalar.name << '\n';
-  out << "element face " << mesh.triangles.size()
-      << "\nproperty list uchar uint vertex_indices\nend_header\n";
+  const PlyMeshLayout layout = ply_mesh_layout(mesh, origin, scalars.size());
+  const bool normals = layout.normals, colors = layout.colors, world = layout.world;
+  out << ply_mesh_header(encoding, layout, mesh.vertices.size(), mesh.triangles.size(), scalars);
   if (encoding == PlyEncoding::kAscii) {
     char line[256];
     for (std::size_t i = 0; i < mesh.vertices.size(); ++i) {
@@ -91,12 +81,11 @@ void write_ply(const std::string& path, const TriangleMesh& mesh, PlyEncoding en
     for (const Triangle& t : mesh.triangles)
       out << "3 " << t[0] << ' ' << t[1] << ' ' << t[2] << '\n';
   } else {
-    const std::size_t vertex_bytes =
-        (world ? 24 : 12) + (normals ? 12 : 0) + (colors ? 3 : 0) + 4 * scalars.size();
+    const std::size_t vertex_bytes = layout.vertex_bytes();
     // Written in blocks of 4 MiB: a mesh of millions of triangles is not held a second time
     // as its file.
     constexpr std::size_t kBlock = std::size_t{4} << 20;
-    std::vector<char> buf(kBlock + std::max<std::size_t>(vertex_bytes, 13));
+    std::vector<char> buf(kBlock + std::max(vertex_bytes, PlyMeshLayout::kFaceBytes));
     char* at = buf.data();
     const auto flush_full = [&](bool always) {
       if (!always && static_cast<std::size_t>(at - buf.data()) < kBlock) return;
@@ -105,21 +94,11 @@ void write_ply(const std::string& path, const TriangleMesh& mesh, PlyEncoding en
     };
     for (std::size_t i = 0; i < mesh.vertices.size(); ++i) {
       flush_full(false);
-      for (int k = 0; k < 3; ++k)
-        at = world ? put(at, static_cast<double>(mesh.vertices[i][k]) + origin[k])
-                   : put(at, mesh.vertices[i][k]);
-      if (normals)
-        for (int k = 0; k < 3; ++k) at = put(at, mesh.normals[i][k]);
-      if (colors) {
-        const Rgb8& c = mesh.colors[i];
-        for (std::uint8_t channel : {c.r, c.g, c.b}) at = put(at, channel);
-      }
-      for (const VertexScalar& scalar : scalars) at = put(at, scalar.values[i]);
+      at = put_ply_vertex(at, mesh, i, origin, layout, scalars);
     }
     for (const Triangle& t : mesh.triangles) {
       flush_full(false);
-      at = put(at, std::uint8_t{3});
-      for (std::uint32_t v : t) at = put(at, v);
+      at = put_ply_face(at, t);
     }
     flush_full(true);
   }

@@ -34,6 +34,7 @@
 #include <thread>
 #include <vector>
 
+#include "graph/chunk_output.h"
 #include "graph/chunked_reconstruction.h"
 #include "nodes/chunk/mesh_tiles.h"
 #include "nodes/chunk/phase_times.h"
@@ -157,6 +158,42 @@ struct Options {
 
 // --chunk as `reconstruct --chunk` takes it: "auto" lets the chunks in flight have half of
 // --max-memory (the rest: the welded mesh).
+// Rank 0's output streamed (chunk::StreamedChunkOutput): the welded parts `results` (in chunk
+// order, failed ones emptied) written at their rows and freed one by one, then the seams
+// finished; times "write" and "finish" on `clock`, counts into `report`. Returns false, writing
+// nothing, when no triangle was extracted.
+bool write_streamed(const std::string& output, std::vector<ChunkResult>& results, const Plan& plan,
+                    chunk::PhaseClock& clock, ChunkedReport& report) {
+  std::uint64_t vertices = 0, triangles = 0;
+  bool normals = true, colors = true, flags = true;
+  for (const ChunkResult& r : results) {
+    if (!r.error.empty()) continue;
+    const std::size_t n = r.mesh.vertices.size();
+    vertices += n;
+    triangles += r.mesh.triangles.size();
+    normals = normals && r.mesh.normals.size() == n;
+    colors = colors && r.mesh.colors.size() == n;
+    flags = flags && r.flags.size() == n;
+  }
+  report.output_vertices = vertices;
+  report.output_triangles = triangles;
+  if (triangles == 0) return false;
+  clock.begin("write", true);
+  io::PlyMeshLayout layout;
+  layout.world = !plan.rows.origin.isZero();
+  layout.normals = normals && vertices > 0;
+  layout.colors = colors && vertices > 0;
+  chunk::StreamedChunkOutput out(output, vertices, triangles, layout, flags, plan.rows.origin,
+                                 plan.grid.voxel_size, plan.grid.chunk_cells, kFeatureFlag);
+  for (ChunkResult& r : results) {
+    if (r.error.empty()) out.add(r.mesh, r.flags);
+    r = ChunkResult{};
+  }
+  clock.begin("finish", true);
+  out.finish();
+  return true;
+}
+
 ChunkingConfig chunking_of(const Options& o, const ReconstructionConfig& config) {
   ChunkingConfig chunking = o.chunking;
   chunking.chunk_size = o.chunk == "auto" ? 0.0f : std::stof(o.chunk);
@@ -167,8 +204,8 @@ ChunkingConfig chunking_of(const Options& o, const ReconstructionConfig& config)
 // Rank 0's report: the text lines, or with --json one document (the keys of `reconstruct
 // --chunk --json` where they mean the same, plus every rank's timing).
 void print_report(const Options& o, const Plan& plan, const ChunkedReport& report,
-                  const TriangleMesh& mesh, const std::vector<chunk::RankTimes>& times,
-                  std::size_t gathered_bytes, std::size_t tiles, double wall, int threads) {
+                  const std::vector<chunk::RankTimes>& times, std::size_t gathered_bytes,
+                  std::size_t tiles, double wall, int threads) {
   const chunk::SerialFraction serial = chunk::serial_fraction(times, wall);
   const float voxel = plan.grid.voxel_size;
   if (o.json) {
@@ -186,8 +223,8 @@ void print_report(const Options& o, const Plan& plan, const ChunkedReport& repor
         {"gathered_bytes", gathered_bytes},
         {"tiles", tiles},
         {"mesh",
-         {{"vertices", mesh.vertices.size()},
-          {"triangles", mesh.triangles.size()},
+         {{"vertices", report.output_vertices},
+          {"triangles", report.output_triangles},
           {"extract", extract_method_name(plan.decided.method)}}},
         {"optimize", options::optimize_json(report.optimize)},
         {"timing", options::chunked_timing_json(times, wall)}};
@@ -196,8 +233,9 @@ void print_report(const Options& o, const Plan& plan, const ChunkedReport& repor
   }
   std::printf("input      %s: %zu chunks of %d cells at voxel %.4f m over %zu ranks\n",
               o.input.c_str(), plan.files.size(), plan.grid.chunk_cells, voxel, times.size());
-  std::printf("mesh       %zu vertices, %zu triangles\n", mesh.vertices.size(),
-              mesh.triangles.size());
+  std::printf("mesh       %llu vertices, %llu triangles\n",
+              static_cast<unsigned long long>(report.output_vertices),
+              static_cast<unsigned long long>(report.output_triangles));
   const std::vector<chunk::PhaseTime>& own = times.front().phases;
   const auto phase = [&](const char* name) { return chunk::phase_wall(own, name); };
   std::printf(
@@ -349,48 +387,59 @@ int run(const Options& o, int rank, int ranks) {
   }
   std::sort(results.begin(), results.end(),
             [](const ChunkResult& a, const ChunkResult& b) { return a.position < b.position; });
-  TriangleMesh joined;
-  std::vector<std::uint8_t> flags;
-  std::size_t vertices = 0, triangles = 0;
-  for (const ChunkResult& r : results) {
-    vertices += r.mesh.vertices.size();
-    triangles += r.mesh.triangles.size();
-  }
-  joined.vertices.reserve(vertices);
-  joined.triangles.reserve(triangles);
-  for (ChunkResult& r : results) {
+  for (ChunkResult& r : results)
     if (!r.error.empty()) {
       std::fprintf(stderr, "meshflow-mpi: chunk failed, its cells are missing: %s\n",
                    r.error.c_str());
       report.failed.push_back(r.error);
-      continue;
+      r = ChunkResult{};
     }
-    chunk::append_welded(joined, r.mesh);
-    flags.insert(flags.end(), r.flags.begin(), r.flags.end());
-    r = ChunkResult{};
-  }
-  if (flags.size() != joined.vertices.size()) flags.clear();  // some chunk gave none
-  clock.begin("stitch", true);  // with --finish-after-stitch: flips and rim trim
-  const TriangleMesh mesh =
-      finish_joined_mesh(std::move(joined), flags, config, plan.grid.voxel_size, report, {},
-                         in_place, plan.grid.chunk_cells);
-  if (mesh.empty()) {
-    std::fprintf(stderr, "meshflow-mpi: error: %s: no surface was extracted\n", o.input.c_str());
-    return 1;
-  }
-  clock.begin("write", true);
-  io::write_mesh(o.output, mesh, plan.rows.origin);
   std::size_t tiles = 0;
-  if (!o.tiles.empty()) {
-    clock.begin("tiles", true);
-    const std::vector<chunk::MeshTile> split = chunk::split_into_tiles(mesh, plan.grid);
-    chunk::write_tiles(o.tiles, split, plan.grid, plan.rows.origin);
-    tiles = split.size();
+  if (o.tiles.empty() && streams_output(o.output, config, chunking)) {
+    // The welded parts written as they are (graph/chunk_output.h), never joined.
+    if (!write_streamed(o.output, results, plan, clock, report)) {
+      std::fprintf(stderr, "meshflow-mpi: error: %s: no surface was extracted\n", o.input.c_str());
+      return 1;
+    }
+  } else {
+    TriangleMesh joined;
+    std::vector<std::uint8_t> flags;
+    std::size_t vertices = 0, triangles = 0;
+    for (const ChunkResult& r : results) {
+      vertices += r.mesh.vertices.size();
+      triangles += r.mesh.triangles.size();
+    }
+    joined.vertices.reserve(vertices);
+    joined.triangles.reserve(triangles);
+    for (ChunkResult& r : results) {
+      chunk::append_welded(joined, r.mesh);
+      flags.insert(flags.end(), r.flags.begin(), r.flags.end());
+      r = ChunkResult{};
+    }
+    if (flags.size() != joined.vertices.size()) flags.clear();  // some chunk gave none
+    clock.begin("stitch", true);  // with --finish-after-stitch: flips and rim trim
+    const TriangleMesh mesh =
+        finish_joined_mesh(std::move(joined), flags, config, plan.grid.voxel_size, report, {},
+                           in_place, plan.grid.chunk_cells);
+    if (mesh.empty()) {
+      std::fprintf(stderr, "meshflow-mpi: error: %s: no surface was extracted\n", o.input.c_str());
+      return 1;
+    }
+    report.output_vertices = mesh.vertices.size();
+    report.output_triangles = mesh.triangles.size();
+    clock.begin("write", true);
+    io::write_mesh(o.output, mesh, plan.rows.origin);
+    if (!o.tiles.empty()) {
+      clock.begin("tiles", true);
+      const std::vector<chunk::MeshTile> split = chunk::split_into_tiles(mesh, plan.grid);
+      chunk::write_tiles(o.tiles, split, plan.grid, plan.rows.origin);
+      tiles = split.size();
+    }
   }
   clock.end();
   times.front().phases = clock.phases();
   times.front().peak_bytes = chunk::peak_resident_bytes();
-  print_report(o, plan, report, mesh, times, gathered_bytes, tiles, monotonic_seconds() - t0,
+  print_report(o, plan, report, times, gathered_bytes, tiles, monotonic_seconds() - t0,
                limit.threads());
   return 0;
 }

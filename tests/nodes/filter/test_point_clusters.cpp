@@ -66,6 +66,29 @@ TEST(PointClusters, MatchesAllPairsRadiusComponents) {
   }
 }
 
+// A cloud wider than the grid's packed cells (2^21 per axis: a stray point a hundred thousand
+// radii away) is linked through the nearest neighbours instead: the same components.
+TEST(PointClusters, WideCloudsGiveTheSameComponents) {
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<float> u(0.0f, 1.0f);
+  PointCloud cloud;
+  for (int i = 0; i < 800; ++i) cloud.positions.emplace_back(u(rng), u(rng), u(rng));
+  for (int i = 0; i < 30; ++i)  // a far cluster of 30 points, linked along a line
+    cloud.positions.emplace_back(50000.0f + 0.02f * static_cast<float>(i), 0.0f, 0.0f);
+  cloud.positions.emplace_back(-50000.0f, 0.0f, 0.0f);  // isolated
+  const KdTreeIndex index(cloud.positions);
+  ClusterConfig config;
+  config.link_radius = 0.07f;
+  for (std::size_t min_points : {2u, 20u, 40u}) {
+    config.min_points = min_points;
+    ClusterCounts counts;
+    const std::vector<std::uint32_t> got = surface_cluster_indices(cloud, index, config, &counts);
+    EXPECT_EQ(got, all_pairs_clusters(cloud, config.link_radius, min_points)) << min_points;
+    EXPECT_EQ(got.size() + counts.isolated + counts.sparse, cloud.size());
+    EXPECT_GE(counts.isolated, 1u);
+  }
+}
+
 TEST(PointClusters, DropsScatteredOutliersKeepsTheScannedSurface) {
   const synthetic::ClosedObject object = synthetic::sphere_object();
   synthetic::ObjectScanConfig sc;

@@ -1,0 +1,136 @@
+#include "nodes/io/ply_mesh_file.h"
+
+#include <fcntl.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <cstring>
+#include <filesystem>
+
+#include "runtime/error.h"
+
+namespace meshflow::io {
+namespace {
+
+constexpr std::size_t kBlockBytes = std::size_t{4} << 20;
+
+// Encodes rows [0, count) with `put_row(at, i)` (each `row_bytes`) into blocks of about 4 MiB
+// and hands each block to `write(first_row, bytes, size)`.
+template <typename PutRow, typename Write>
+void write_rows(std::size_t count, std::size_t row_bytes, PutRow put_row, Write write) {
+  const std::size_t per_block = std::max<std::size_t>(1, kBlockBytes / row_bytes);
+  std::vector<char> buf(std::min(count, per_block) * row_bytes);
+  for (std::size_t first = 0; first < count; first += per_block) {
+    const std::size_t end = std::min(count, first + per_block);
+    char* at = buf.data();
+    for (std::size_t i = first; i < end; ++i) at = put_row(at, i);
+    write(first, buf.data(), static_cast<std::size_t>(at - buf.data()));
+  }
+}
+
+}  // namespace
+
+PlyMeshFile::PlyMeshFile(std::string path, const PlyMeshLayout& layout, std::uint64_t vertices,
+                         std::uint64_t triangles, const Eigen::Vector3d& origin)
+    : path_(std::move(path)),
+      temp_path_(path_ + ".tmp"),
+      layout_(layout),
+      vertices_(vertices),
+      triangles_(triangles),
+      origin_(origin) {
+  layout_.scalars = 0;
+  std::error_code ec;
+  if (std::filesystem::is_directory(path_, ec))
+    throw Error(path_, "", "cannot write the output: it is a directory");
+  fd_ = ::open(temp_path_.c_str(), O_RDWR | O_CREAT | O_TRUNC | O_CLOEXEC, 0666);
+  if (fd_ < 0)
+    throw Error(path_, "", std::string("cannot create output file: ") + std::strerror(errno));
+  const std::string header = ply_mesh_header(PlyEncoding::kBinary, layout_, vertices, triangles);
+  header_bytes_ = header.size();
+  write_at(0, header.data(), header.size());
+}
+
+PlyMeshFile::~PlyMeshFile() {
+  if (fd_ >= 0) ::close(fd_);
+  if (!committed_) {
+    std::error_code ec;
+    std::filesystem::remove(temp_path_, ec);
+  }
+}
+
+void PlyMeshFile::write_at(std::uint64_t offset, const char* bytes, std::size_t count) {
+  while (count > 0) {
+    const ssize_t n = ::pwrite(fd_, bytes, count, static_cast<off_t>(offset));
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0)
+      throw Error(path_, "", std::string("write failed: ") + std::strerror(n < 0 ? errno : EIO));
+    bytes += n;
+    offset += static_cast<std::uint64_t>(n);
+    count -= static_cast<std::size_t>(n);
+  }
+}
+
+void PlyMeshFile::write_vertices(std::uint64_t first, const TriangleMesh& part) {
+  const std::size_t count = part.vertices.size();
+  if (first + count > vertices_)
+    throw Error(path_, "vertices", "more rows than the " + std::to_string(vertices_) + " declared");
+  const std::size_t row = layout_.vertex_bytes();
+  write_rows(
+      count, row,
+      [&](char* at, std::size_t i) { return put_ply_vertex(at, part, i, origin_, layout_); },
+      [&](std::size_t i, const char* bytes, std::size_t size) {
+        write_at(header_bytes_ + (first + i) * row, bytes, size);
+      });
+  vertex_rows_written_ += count;
+}
+
+void PlyMeshFile::write_triangles(std::uint64_t first, const std::vector<Triangle>& triangles) {
+  const std::size_t count = triangles.size();
+  if (first + count > triangles_)
+    throw Error(path_, "faces", "more rows than the " + std::to_string(triangles_) + " declared");
+  const std::uint64_t faces = header_bytes_ + vertices_ * layout_.vertex_bytes();
+  constexpr std::size_t row = PlyMeshLayout::kFaceBytes;
+  write_rows(
+      count, row, [&](char* at, std::size_t i) { return put_ply_face(at, triangles[i]); },
+      [&](std::size_t i, const char* bytes, std::size_t size) {
+        write_at(faces + (first + i) * row, bytes, size);
+      });
+  face_rows_written_ += count;
+}
+
+void PlyMeshFile::write_normal(std::uint64_t vertex, const Eigen::Vector3f& normal) {
+  if (!layout_.normals || vertex >= vertices_)
+    throw Error(path_, "normals", "no normal row " + std::to_string(vertex));
+  char bytes[12];
+  std::memcpy(bytes, normal.data(), sizeof bytes);
+  write_at(header_bytes_ + vertex * layout_.vertex_bytes() + layout_.normal_offset(), bytes,
+           sizeof bytes);
+}
+
+void PlyMeshFile::write_triangle(std::uint64_t index, const Triangle& triangle) {
+  if (index >= triangles_) throw Error(path_, "faces", "no face row " + std::to_string(index));
+  char bytes[PlyMeshLayout::kFaceBytes];
+  put_ply_face(bytes, triangle);
+  write_at(header_bytes_ + vertices_ * layout_.vertex_bytes() + index * sizeof bytes, bytes,
+           sizeof bytes);
+}
+
+void PlyMeshFile::commit() {
+  if (vertex_rows_written_ < vertices_ || face_rows_written_ < triangles_)
+    throw Error(path_, "",
+                "incomplete: " + std::to_string(vertex_rows_written_) + " of " +
+                    std::to_string(vertices_) + " vertices and " +
+                    std::to_string(face_rows_written_) + " of " + std::to_string(triangles_) +
+                    " faces written");
+  const int fd = fd_;
+  fd_ = -1;
+  if (::close(fd) != 0)
+    throw Error(path_, "", std::string("write failed: ") + std::strerror(errno));
+  std::error_code ec;
+  std::filesystem::rename(temp_path_, path_, ec);
+  if (ec) throw Error(path_, "", "cannot rename temporary file: " + ec.message());
+  committed_ = true;
+}
+
+}  // namespace meshflow::io

@@ -292,11 +292,18 @@ std::uint64_t extract(Frame& f, const ReconstructionConfig& c) {
     if (f.chunk)  // a chunk: the rim is trimmed once the chunks are stitched
       f.chunk->beyond_data =
           vertices_beyond_data(f.mesh.vertices, f.cloud.positions, *f.index, limit);
-    else
-      f.mesh = trim_rim(f.mesh, f.cloud.positions, *f.index, limit, &f.rim_trimmed);
+    else {
+      std::vector<std::uint32_t> kept;  // the feature vertices follow their vertices
+      f.mesh = trim_rim(f.mesh, f.cloud.positions, *f.index, limit, &f.rim_trimmed,
+                        f.feature_vertices.empty() ? nullptr : &kept);
+      if (!f.feature_vertices.empty() && f.rim_trimmed > 0) {
+        std::vector<std::uint8_t> flags(kept.size());
+        for (std::size_t v = 0; v < kept.size(); ++v) flags[v] = f.feature_vertices[kept[v]];
+        f.feature_vertices = std::move(flags);
+      }
+    }
   }
-  if (f.rim_trimmed > 0 || f.feature_vertices.size() != f.mesh.vertices.size())
-    f.feature_vertices.clear();  // other vertices: the optimize stage detects the graph
+  if (f.feature_vertices.size() != f.mesh.vertices.size()) f.feature_vertices.clear();
   // A frame without a surface fails here, on every path (reconstruct, run, the embedding API),
   // rather than passing on as an "ok" frame with an empty mesh. A chunk may own no surface.
   if (f.mesh.triangles.empty() && !f.chunk) {

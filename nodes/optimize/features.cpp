@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <iterator>
 
 #include <tbb/blocked_range.h>
 #include <tbb/enumerable_thread_specific.h>
@@ -18,6 +19,7 @@ namespace {
 struct FeatureCandidate {
   std::array<std::uint32_t, 2> ends;
   Eigen::Vector3f left, right;
+  bool marked = false;  ///< both ends marked by the mesh's maker (a seed): never noise
 };
 
 /// The sides of edge {a, b} (a != b) among the triangles around a: how many there are, and the
@@ -290,7 +292,7 @@ std::vector<FeatureCandidate> seeded_candidates(const TriangleMesh& mesh,
       const Eigen::Vector3f n0 = face_normal(mesh, mesh.triangles[sides[i].face]);
       const Eigen::Vector3f n1 = face_normal(mesh, mesh.triangles[sides[i + 1].face]);
       if (n0.squaredNorm() > 0.0f && n1.squaredNorm() > 0.0f && n0.dot(n1) < cos_limit)
-        c.push_back({sides[i].ends, sides[i].forward ? n0 : n1, sides[i].forward ? n1 : n0});
+        c.push_back({sides[i].ends, sides[i].forward ? n0 : n1, sides[i].forward ? n1 : n0, true});
     }
     i = j;
   }
@@ -316,8 +318,18 @@ MeshFeatures detect_features(const TriangleMesh& mesh, const std::vector<std::ui
   if (seed.size() != mesh.vertices.size() || !(angle_deg < 180.0f))
     return detect_features(mesh, angle_deg, min_line_length);
   const float cos_limit = static_cast<float>(std::cos(radians(static_cast<double>(angle_deg))));
-  return features_from_candidates(mesh, seeded_candidates(mesh, seed, cos_limit), angle_deg,
-                                  min_line_length);
+  std::vector<FeatureCandidate> found = sharp_candidates(mesh, angle_deg, cos_limit);
+  const std::vector<FeatureCandidate> seeded = seeded_candidates(mesh, seed, cos_limit);
+  std::vector<FeatureCandidate> all;  // the union, sorted; an edge in both: the marked copy
+  all.reserve(found.size() + seeded.size());
+  std::merge(seeded.begin(), seeded.end(), found.begin(), found.end(), std::back_inserter(all),
+             [](const FeatureCandidate& x, const FeatureCandidate& y) { return x.ends < y.ends; });
+  all.erase(std::unique(all.begin(), all.end(),
+                        [](const FeatureCandidate& x, const FeatureCandidate& y) {
+                          return x.ends == y.ends;
+                        }),
+            all.end());
+  return features_from_candidates(mesh, std::move(all), angle_deg, min_line_length);
 }
 
 namespace {
@@ -354,6 +366,8 @@ MeshFeatures features_from_candidates(const TriangleMesh& mesh, std::vector<Feat
     for (std::size_t l = 0; l < long_line.size(); ++l)
       long_line[l] = lines.length[l] >= min_line_length;
     std::vector<std::uint8_t> keep = long_line;
+    for (std::size_t i = 0; i < c.size(); ++i)  // a line with a marked edge is no noise
+      if (alive[i] && c[i].marked) keep[lines.line_of[i]] = 1;
     for (std::uint32_t l = 0; l < keep.size(); ++l) {
       const auto& [a, b] = lines.ends[l];
       if (!keep[l] && a != kNoEnd && b != kNoEnd)

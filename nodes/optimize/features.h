@@ -60,11 +60,14 @@ MeshFeatures detect_features(const TriangleMesh& mesh, float angle_deg = kDefaul
 
 /// detect_features() on a mesh whose maker marked the vertices it placed on sharp features
 /// (`seed`, one byte per vertex, non-zero on such a vertex: extended marching cubes' feature
-/// vertices, extract_surface()): the candidates are only the edges between two marked vertices
-/// that pass the same angle test; lines and vertex kinds as detect_features(). No search of the
-/// rest of the mesh: one parallel pass over the faces reading three bytes each, then a sort of
-/// the marked edges' sides; deterministic. O(T + S log S) for S sides of marked edges.
-/// A `seed` of another size than the vertex count: detect_features(mesh, angle_deg,
+/// vertices, extract_surface()): detect_features(), except that a line holding an edge between
+/// two marked vertices is never dropped as noise, however short (EMC's lines break into short
+/// pieces at a cell where it fell back to marching cubes: the L-shape's true edges are covered
+/// 99.5 % instead of 95.6 % at a voxel of 1 % of its diagonal). The marked edges alone are no
+/// graph (90.8 % there), nor do marked edges at a lower angle help (20 degrees: 94.1 %).
+/// The marked edges in one more parallel pass over the faces reading three bytes each, then a
+/// sort of their sides; deterministic. O(detect_features() + S log S) for S sides of marked
+/// edges. A `seed` of another size than the vertex count: detect_features(mesh, angle_deg,
 /// min_line_length).
 MeshFeatures detect_features(const TriangleMesh& mesh, const std::vector<std::uint8_t>& seed,
                              float angle_deg = kDefaultFeatureAngleDeg,

@@ -38,7 +38,7 @@ std::string not_planar_note(const PlanarSegmentation& s) {
 // What one step hands to the next: the feature graph (detected once, then carried while the
 // mesh stays what it is: clean and holes on a clean, closed mesh, and planes, which only moves
 // vertices), the mesh maker's feature vertices (one byte per vertex while the steps keep the
-// vertices: they seed the graph instead of a search of the whole mesh) and the planes
+// vertices: lines of their edges are no noise) and the planes
 // step's plane tolerance (for retriangulate or sharpen right after it: measured again on the
 // flattened mesh, a scan's roughness would be gone).
 struct CarriedState {

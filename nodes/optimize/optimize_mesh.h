@@ -87,11 +87,10 @@ TriangleMesh optimize_mesh(const TriangleMesh& mesh, const OptimizeConfig& confi
 
 /// optimize_mesh() on a mesh whose maker marked the vertices it placed on sharp features
 /// (`feature_vertices`, one byte per vertex of `mesh`, non-zero on such a vertex: extended
-/// marching cubes' feature vertices from extract_surface()). The feature graph is seeded from
-/// them (detect_features(mesh, seed, ...): only edges between two marked vertices are looked at,
-/// no search of the whole mesh) while the steps keep the vertices (clean, holes and planes; the
-/// bytes follow them, 0 on added ones); after a step that remeshes, the graph is detected.
-/// Flags of another size are ignored. Same costs, less the searches.
+/// marching cubes' feature vertices from extract_surface()). The feature graph keeps lines of
+/// edges between marked vertices (detect_features(mesh, seed, ...)) while the steps keep the
+/// vertices (clean, holes and planes; the bytes follow them, 0 on added ones); after a step
+/// that remeshes, the graph is detected. Flags of another size are ignored. Same costs.
 TriangleMesh optimize_mesh(const TriangleMesh& mesh, const OptimizeConfig& config,
                            OptimizeReport* report,
                            const std::vector<std::uint8_t>& feature_vertices);

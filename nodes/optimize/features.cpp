@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <iterator>
 
 #include <tbb/blocked_range.h>
 #include <tbb/enumerable_thread_specific.h>
@@ -83,8 +82,10 @@ std::vector<std::uint8_t> bent_vertices(const VertexTriangles& around,
 /// angle of one another left out (bent_vertices), then one parallel pass over the faces: each
 /// edge between two other vertices is looked at from the lowest face holding it, through the
 /// triangles around its first end. O(T x valence) at most; O(T) where the mesh is smooth.
+/// `seed` (optional, one byte per vertex): candidates between two marked vertices are `marked`.
 std::vector<FeatureCandidate> sharp_candidates(const TriangleMesh& mesh, float angle_deg,
-                                               float cos_limit) {
+                                               float cos_limit,
+                                               const std::vector<std::uint8_t>* seed = nullptr) {
   const std::size_t t_count = mesh.triangles.size();
   std::vector<Eigen::Vector3f> normals(t_count);
   tbb::parallel_for(std::size_t{0}, t_count,
@@ -110,7 +111,9 @@ std::vector<FeatureCandidate> sharp_candidates(const TriangleMesh& mesh, float a
           continue;
         // t runs a -> b: its normal is on the left of {min, max} when a < b.
         const bool forward = a < b;
-        out.push_back({{std::min(a, b), std::max(a, b)}, forward ? n0 : n1, forward ? n1 : n0});
+        const bool marked = seed != nullptr && (*seed)[a] != 0 && (*seed)[b] != 0;
+        out.push_back(
+            {{std::min(a, b), std::max(a, b)}, forward ? n0 : n1, forward ? n1 : n0, marked});
       }
     }
   });
@@ -247,58 +250,6 @@ std::size_t MeshFeatures::count(VertexKind kind) const {
 
 namespace {
 
-/// One side of an edge between two seeded vertices: the edge {a, b} (a < b), the face holding
-/// it and whether that face runs a -> b.
-struct SeededSide {
-  std::array<std::uint32_t, 2> ends;
-  std::uint32_t face;
-  bool forward;
-};
-
-/// The candidates among the edges whose two ends are seeded (seed[v] != 0): each such edge with
-/// exactly two faces meeting at a normal angle whose cosine is below cos_limit, sorted. One
-/// parallel pass over the faces (only a face with two seeded corners gives sides), then a sort
-/// of the sides. O(T + S log S) for S sides.
-std::vector<FeatureCandidate> seeded_candidates(const TriangleMesh& mesh,
-                                                const std::vector<std::uint8_t>& seed,
-                                                float cos_limit) {
-  const std::size_t n = mesh.vertices.size();
-  tbb::enumerable_thread_specific<std::vector<SeededSide>> found;
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, mesh.triangles.size()), [&](const auto& r) {
-    std::vector<SeededSide>& out = found.local();
-    for (std::size_t i = r.begin(); i != r.end(); ++i) {
-      const Triangle& tri = mesh.triangles[i];
-      if (tri[0] >= n || tri[1] >= n || tri[2] >= n) continue;
-      if ((seed[tri[0]] != 0) + (seed[tri[1]] != 0) + (seed[tri[2]] != 0) < 2) continue;
-      for (int k = 0; k < 3; ++k) {
-        const std::uint32_t a = tri[k], b = tri[(k + 1) % 3];
-        if (a != b && seed[a] != 0 && seed[b] != 0)
-          out.push_back({{std::min(a, b), std::max(a, b)}, static_cast<std::uint32_t>(i), a < b});
-      }
-    }
-  });
-  std::vector<SeededSide> sides;
-  for (const std::vector<SeededSide>& part : found)
-    sides.insert(sides.end(), part.begin(), part.end());
-  std::sort(sides.begin(), sides.end(), [](const SeededSide& x, const SeededSide& y) {
-    return x.ends != y.ends ? x.ends < y.ends : x.face < y.face;
-  });
-  std::vector<FeatureCandidate> c;
-  for (std::size_t i = 0; i < sides.size();) {
-    std::size_t j = i + 1;
-    while (j < sides.size() && sides[j].ends == sides[i].ends) ++j;
-    // Exactly two faces, each holding the edge once (as the side search counts them).
-    if (j - i == 2 && sides[i].face != sides[i + 1].face) {
-      const Eigen::Vector3f n0 = face_normal(mesh, mesh.triangles[sides[i].face]);
-      const Eigen::Vector3f n1 = face_normal(mesh, mesh.triangles[sides[i + 1].face]);
-      if (n0.squaredNorm() > 0.0f && n1.squaredNorm() > 0.0f && n0.dot(n1) < cos_limit)
-        c.push_back({sides[i].ends, sides[i].forward ? n0 : n1, sides[i].forward ? n1 : n0, true});
-    }
-    i = j;
-  }
-  return c;
-}
-
 /// The feature graph from sorted candidates (see detect_features): lines traced, short ones
 /// dropped, vertex kinds.
 MeshFeatures features_from_candidates(const TriangleMesh& mesh, std::vector<FeatureCandidate> c,
@@ -318,18 +269,8 @@ MeshFeatures detect_features(const TriangleMesh& mesh, const std::vector<std::ui
   if (seed.size() != mesh.vertices.size() || !(angle_deg < 180.0f))
     return detect_features(mesh, angle_deg, min_line_length);
   const float cos_limit = static_cast<float>(std::cos(radians(static_cast<double>(angle_deg))));
-  std::vector<FeatureCandidate> found = sharp_candidates(mesh, angle_deg, cos_limit);
-  const std::vector<FeatureCandidate> seeded = seeded_candidates(mesh, seed, cos_limit);
-  std::vector<FeatureCandidate> all;  // the union, sorted; an edge in both: the marked copy
-  all.reserve(found.size() + seeded.size());
-  std::merge(seeded.begin(), seeded.end(), found.begin(), found.end(), std::back_inserter(all),
-             [](const FeatureCandidate& x, const FeatureCandidate& y) { return x.ends < y.ends; });
-  all.erase(std::unique(all.begin(), all.end(),
-                        [](const FeatureCandidate& x, const FeatureCandidate& y) {
-                          return x.ends == y.ends;
-                        }),
-            all.end());
-  return features_from_candidates(mesh, std::move(all), angle_deg, min_line_length);
+  return features_from_candidates(mesh, sharp_candidates(mesh, angle_deg, cos_limit, &seed),
+                                  angle_deg, min_line_length);
 }
 
 namespace {

@@ -65,9 +65,9 @@ MeshFeatures detect_features(const TriangleMesh& mesh, float angle_deg = kDefaul
 /// pieces at a cell where it fell back to marching cubes: the L-shape's true edges are covered
 /// 99.5 % instead of 95.6 % at a voxel of 1 % of its diagonal). The marked edges alone are no
 /// graph (90.8 % there), nor do marked edges at a lower angle help (20 degrees: 94.1 %).
-/// The marked edges in one more parallel pass over the faces reading three bytes each, then a
-/// sort of their sides; deterministic. O(detect_features() + S log S) for S sides of marked
-/// edges. A `seed` of another size than the vertex count: detect_features(mesh, angle_deg,
+/// The marks are read where detect_features() finds its candidates: the same pass, the same
+/// costs, deterministic. A `seed` of another size than the vertex count:
+/// detect_features(mesh, angle_deg,
 /// min_line_length).
 MeshFeatures detect_features(const TriangleMesh& mesh, const std::vector<std::uint8_t>& seed,
                              float angle_deg = kDefaultFeatureAngleDeg,

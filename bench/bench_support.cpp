@@ -90,11 +90,15 @@ void count_distance_to_input(benchmark::State& state, const TriangleMesh& input,
   state.counters["dist_p95_mm"] = 1e3 * d.p95;
 }
 
-void time_optimize(benchmark::State& state, const TriangleMesh& mesh,
-                   const OptimizeConfig& config) {
+void time_optimize(benchmark::State& state, const TriangleMesh& mesh, const OptimizeConfig& config,
+                   const std::vector<std::uint8_t>* feature_vertices) {
   ThreadLimit limit(static_cast<int>(state.range(0)));
   std::size_t out = 0;
-  for (auto _ : state) benchmark::DoNotOptimize(out = optimize_mesh(mesh, config).triangles.size());
+  for (auto _ : state)
+    benchmark::DoNotOptimize(out = (feature_vertices
+                                        ? optimize_mesh(mesh, config, nullptr, *feature_vertices)
+                                        : optimize_mesh(mesh, config))
+                                       .triangles.size());
   count_triangles(state, mesh, out);
 }
 

@@ -55,8 +55,10 @@ void count_triangles(benchmark::State& state, const TriangleMesh& in, std::size_
 void count_distance_to_input(benchmark::State& state, const TriangleMesh& input,
                              const TriangleMesh& output);
 
-/// Times optimize_mesh(mesh, config) on state.range(0) threads, then count_triangles().
-void time_optimize(benchmark::State& state, const TriangleMesh& mesh, const OptimizeConfig& config);
+/// Times optimize_mesh(mesh, config) on state.range(0) threads, then count_triangles(). With
+/// `feature_vertices` (the extraction's, one per vertex): the seeded optimize_mesh().
+void time_optimize(benchmark::State& state, const TriangleMesh& mesh, const OptimizeConfig& config,
+                   const std::vector<std::uint8_t>* feature_vertices = nullptr);
 
 /// Registers the standard argument grid: threads {1, 2} x inputs {synthetic, kurt3d}.
 void thread_and_input_args(benchmark::internal::Benchmark* b);

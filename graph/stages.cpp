@@ -279,18 +279,31 @@ std::uint64_t extract(Frame& f, const ReconstructionConfig& c) {
     config.method =
         f.normals.sharp ? ExtractMethod::kExtendedMarchingCubes : ExtractMethod::kMarchingCubes;
   f.extract_method = config.method;
-  f.mesh =
-      extract_surface(f.grid, f.distance, f.cloud, f.index.get(), config,
-                      config.defer_feature_flips && f.chunk ? &f.chunk->feature_vertices : nullptr);
+  // Extended marching cubes' feature vertices: a chunk's for its deferred flips, a whole
+  // mesh's for the optimize stage's feature graph.
+  const bool emc = config.method == ExtractMethod::kExtendedMarchingCubes;
+  std::vector<std::uint8_t>* feature_vertices =
+      f.chunk ? (config.defer_feature_flips ? &f.chunk->feature_vertices : nullptr)
+              : (emc ? &f.feature_vertices : nullptr);
+  f.mesh = extract_surface(f.grid, f.distance, f.cloud, f.index.get(), config, feature_vertices);
   const std::size_t extracted = f.mesh.triangles.size();
   if (f.index && c.max_rim_voxels > 0.0f) {
     const float limit = c.max_rim_voxels * f.voxel_size;
     if (f.chunk)  // a chunk: the rim is trimmed once the chunks are stitched
       f.chunk->beyond_data =
           vertices_beyond_data(f.mesh.vertices, f.cloud.positions, *f.index, limit);
-    else
-      f.mesh = trim_rim(f.mesh, f.cloud.positions, *f.index, limit, &f.rim_trimmed);
+    else {
+      std::vector<std::uint32_t> kept;  // the feature vertices follow their vertices
+      f.mesh = trim_rim(f.mesh, f.cloud.positions, *f.index, limit, &f.rim_trimmed,
+                        f.feature_vertices.empty() ? nullptr : &kept);
+      if (!f.feature_vertices.empty() && f.rim_trimmed > 0) {
+        std::vector<std::uint8_t> flags(kept.size());
+        for (std::size_t v = 0; v < kept.size(); ++v) flags[v] = f.feature_vertices[kept[v]];
+        f.feature_vertices = std::move(flags);
+      }
+    }
   }
+  if (f.feature_vertices.size() != f.mesh.vertices.size()) f.feature_vertices.clear();
   // A frame without a surface fails here, on every path (reconstruct, run, the embedding API),
   // rather than passing on as an "ok" frame with an empty mesh. A chunk may own no surface.
   if (f.mesh.triangles.empty() && !f.chunk) {
@@ -334,7 +347,8 @@ std::uint64_t optimize(Frame& f, const ReconstructionConfig& c) {
     return f.mesh.triangles.size();
   }
   const std::size_t before = f.mesh.triangles.size();
-  f.mesh = optimize_mesh(f.mesh, config, &f.optimize);
+  f.mesh = optimize_mesh(f.mesh, config, &f.optimize, f.feature_vertices);
+  if (!config.steps.empty()) f.feature_vertices = {};        // no longer this mesh's vertices
   if (f.mesh.triangles.empty() && before > 0 && !f.chunk) {  // nothing left: a failed frame
     std::string why = "the steps removed all " + std::to_string(before) + " triangles";
     for (const OptimizeStepReport& step : f.optimize.steps) {

@@ -115,13 +115,14 @@ TriangleMesh peel_rim(const TriangleMesh& mesh, const Measure& measure, std::siz
 }  // namespace
 
 TriangleMesh trim_rim(const TriangleMesh& mesh, const std::vector<Eigen::Vector3f>& positions,
-                      const SpatialIndex& points, float max_distance, std::size_t* removed) {
+                      const SpatialIndex& points, float max_distance, std::size_t* removed,
+                      std::vector<std::uint32_t>* kept) {
   return peel_rim(
       mesh,
       [&](std::uint32_t v) {
         return beyond_data(mesh.vertices[v], positions, points, max_distance);
       },
-      removed);
+      removed, kept);
 }
 
 TriangleMesh trim_rim(const TriangleMesh& mesh, const std::vector<std::uint8_t>& beyond,

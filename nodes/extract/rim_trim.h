@@ -21,12 +21,13 @@ namespace meshflow {
 /// unreferenced vertices are dropped (normals and colours follow). A closed mesh, and an open
 /// one whose border lies on the data, is returned unchanged. Interior triangles are never
 /// tested, so sparse data inside a surface opens no holes. `removed` (optional) receives the
-/// number of triangles removed. Deterministic; O(V + T) for the incidence, then O(B (d + log n))
-/// for B triangles tested (the border and the triangles each removal uncovers) of vertex
-/// degree d.
+/// number of triangles removed; `kept` (optional) the input index of each output vertex
+/// (ascending), for per-vertex data to follow. Deterministic; O(V + T) for the incidence, then O(B
+/// (d + log n)) for B triangles tested (the border and the triangles each removal uncovers) of
+/// vertex degree d.
 TriangleMesh trim_rim(const TriangleMesh& mesh, const std::vector<Eigen::Vector3f>& positions,
                       const SpatialIndex& points, float max_distance,
-                      std::size_t* removed = nullptr);
+                      std::size_t* removed = nullptr, std::vector<std::uint32_t>* kept = nullptr);
 
 /// Per vertex, 1 if it lies beyond the data as trim_rim() judges a border corner (farther than
 /// `max_distance` from the nearest point and than twice that point's spacing), else 0. For

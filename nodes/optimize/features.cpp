@@ -18,6 +18,7 @@ namespace {
 struct FeatureCandidate {
   std::array<std::uint32_t, 2> ends;
   Eigen::Vector3f left, right;
+  bool marked = false;  ///< both ends marked by the mesh's maker (a seed): never noise
 };
 
 /// The sides of edge {a, b} (a != b) among the triangles around a: how many there are, and the
@@ -47,15 +48,51 @@ FeatureEdgeSides feature_edge_sides(const TriangleMesh& mesh, const VertexTriang
   return s;
 }
 
-/// Edges with two faces meeting at a normal angle whose cosine is below cos_limit, sorted.
-/// Face normals once, then one parallel pass over the faces: each edge is looked at from the
-/// lowest face holding it, through the triangles around its first end. O(T x valence).
-std::vector<FeatureCandidate> sharp_candidates(const TriangleMesh& mesh, float cos_limit) {
+/// Per vertex, whether two of its faces may meet at more than `angle_deg`: 0 where every face
+/// normal around it lies within half that angle (less a margin for rounding) of their mean, so
+/// that no two of them are farther apart than the angle (the edges at such a vertex are not
+/// sharp, and need no search for their sides). Parallel over vertices; O(T).
+std::vector<std::uint8_t> bent_vertices(const VertexTriangles& around,
+                                        const std::vector<Eigen::Vector3f>& normals,
+                                        std::size_t vertex_count, float angle_deg) {
+  constexpr double kRoundingMarginDeg = 0.1;
+  const double half = std::max(0.0, 0.5 * static_cast<double>(angle_deg) - kRoundingMarginDeg);
+  const auto cos_half = static_cast<float>(std::cos(radians(half)));
+  std::vector<std::uint8_t> bent(vertex_count, 0);
+  tbb::parallel_for(std::size_t{0}, vertex_count, [&](std::size_t i) {
+    const auto v = static_cast<std::uint32_t>(i);
+    Eigen::Vector3f mean = Eigen::Vector3f::Zero();
+    for (const std::uint32_t* t = around.begin(v); t != around.end(v); ++t) mean += normals[*t];
+    if (!(mean.squaredNorm() > 0.0f)) {  // opposite faces, or none with area: look
+      bent[i] = around.end(v) - around.begin(v) > 1 ? 1 : 0;
+      return;
+    }
+    mean.normalize();
+    for (const std::uint32_t* t = around.begin(v); t != around.end(v); ++t)
+      if (normals[*t].squaredNorm() > 0.0f && !(normals[*t].dot(mean) >= cos_half)) {
+        bent[i] = 1;
+        return;
+      }
+  });
+  return bent;
+}
+
+/// Edges with two faces meeting at a normal angle whose cosine is below cos_limit (the angle
+/// `angle_deg`), sorted. Face normals once, the vertices whose faces all lie within half the
+/// angle of one another left out (bent_vertices), then one parallel pass over the faces: each
+/// edge between two other vertices is looked at from the lowest face holding it, through the
+/// triangles around its first end. O(T x valence) at most; O(T) where the mesh is smooth.
+/// `seed` (optional, one byte per vertex): candidates between two marked vertices are `marked`.
+std::vector<FeatureCandidate> sharp_candidates(const TriangleMesh& mesh, float angle_deg,
+                                               float cos_limit,
+                                               const std::vector<std::uint8_t>* seed = nullptr) {
   const std::size_t t_count = mesh.triangles.size();
   std::vector<Eigen::Vector3f> normals(t_count);
   tbb::parallel_for(std::size_t{0}, t_count,
                     [&](std::size_t t) { normals[t] = face_normal(mesh, mesh.triangles[t]); });
   const VertexTriangles around = vertex_triangles(mesh);
+  const std::vector<std::uint8_t> bent =
+      bent_vertices(around, normals, mesh.vertices.size(), angle_deg);
   tbb::enumerable_thread_specific<std::vector<FeatureCandidate>> found;
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, t_count), [&](const auto& range) {
     std::vector<FeatureCandidate>& out = found.local();
@@ -65,6 +102,7 @@ std::vector<FeatureCandidate> sharp_candidates(const TriangleMesh& mesh, float c
       for (int k = 0; k < 3; ++k) {
         const std::uint32_t a = tri[k], b = tri[(k + 1) % 3];
         if (a == b || a >= mesh.vertices.size() || b >= mesh.vertices.size()) continue;
+        if (!bent[a] || !bent[b]) continue;
         const FeatureEdgeSides s = feature_edge_sides(mesh, around, a, b);
         if (s.count != 2 || s.first != t || s.second == t) continue;
         const Eigen::Vector3f& n0 = normals[s.first];
@@ -73,7 +111,9 @@ std::vector<FeatureCandidate> sharp_candidates(const TriangleMesh& mesh, float c
           continue;
         // t runs a -> b: its normal is on the left of {min, max} when a < b.
         const bool forward = a < b;
-        out.push_back({{std::min(a, b), std::max(a, b)}, forward ? n0 : n1, forward ? n1 : n0});
+        const bool marked = seed != nullptr && (*seed)[a] != 0 && (*seed)[b] != 0;
+        out.push_back(
+            {{std::min(a, b), std::max(a, b)}, forward ? n0 : n1, forward ? n1 : n0, marked});
       }
     }
   });
@@ -208,12 +248,37 @@ std::size_t MeshFeatures::count(VertexKind kind) const {
   return static_cast<std::size_t>(std::count(vertex_kind.begin(), vertex_kind.end(), kind));
 }
 
+namespace {
+
+/// The feature graph from sorted candidates (see detect_features): lines traced, short ones
+/// dropped, vertex kinds.
+MeshFeatures features_from_candidates(const TriangleMesh& mesh, std::vector<FeatureCandidate> c,
+                                      float angle_deg, float min_line_length);
+
+}  // namespace
+
 MeshFeatures detect_features(const TriangleMesh& mesh, float angle_deg, float min_line_length) {
+  if (!(angle_deg < 180.0f)) return features_from_candidates(mesh, {}, angle_deg, min_line_length);
+  const float cos_limit = static_cast<float>(std::cos(radians(static_cast<double>(angle_deg))));
+  return features_from_candidates(mesh, sharp_candidates(mesh, angle_deg, cos_limit), angle_deg,
+                                  min_line_length);
+}
+
+MeshFeatures detect_features(const TriangleMesh& mesh, const std::vector<std::uint8_t>& seed,
+                             float angle_deg, float min_line_length) {
+  if (seed.size() != mesh.vertices.size() || !(angle_deg < 180.0f))
+    return detect_features(mesh, angle_deg, min_line_length);
+  const float cos_limit = static_cast<float>(std::cos(radians(static_cast<double>(angle_deg))));
+  return features_from_candidates(mesh, sharp_candidates(mesh, angle_deg, cos_limit, &seed),
+                                  angle_deg, min_line_length);
+}
+
+namespace {
+
+MeshFeatures features_from_candidates(const TriangleMesh& mesh, std::vector<FeatureCandidate> c,
+                                      float angle_deg, float min_line_length) {
   MeshFeatures f;
   f.vertex_kind.assign(mesh.vertices.size(), MeshFeatures::VertexKind::kFree);
-  if (!(angle_deg < 180.0f)) return f;
-  const float cos_limit = static_cast<float>(std::cos(radians(static_cast<double>(angle_deg))));
-  std::vector<FeatureCandidate> c = sharp_candidates(mesh, cos_limit);
   if (c.empty()) return f;
   if (min_line_length == 0.0f) min_line_length = kMinFeatureLineEdges * median_edge_length(mesh);
   // The lines are traced on the candidates' own vertices only (numbered in mesh order, so the
@@ -242,6 +307,8 @@ MeshFeatures detect_features(const TriangleMesh& mesh, float angle_deg, float mi
     for (std::size_t l = 0; l < long_line.size(); ++l)
       long_line[l] = lines.length[l] >= min_line_length;
     std::vector<std::uint8_t> keep = long_line;
+    for (std::size_t i = 0; i < c.size(); ++i)  // a line with a marked edge is no noise
+      if (alive[i] && c[i].marked) keep[lines.line_of[i]] = 1;
     for (std::uint32_t l = 0; l < keep.size(); ++l) {
       const auto& [a, b] = lines.ends[l];
       if (!keep[l] && a != kNoEnd && b != kNoEnd)
@@ -271,5 +338,7 @@ MeshFeatures detect_features(const TriangleMesh& mesh, float angle_deg, float mi
           breaks[v] ? MeshFeatures::VertexKind::kCorner : MeshFeatures::VertexKind::kLine;
   return f;
 }
+
+}  // namespace
 
 }  // namespace meshflow

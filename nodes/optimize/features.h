@@ -50,11 +50,27 @@ struct MeshFeatures {
 /// others once no spur is left; the lines left then join anew and the test repeats until
 /// nothing changes. min_line_length 0: kMinFeatureLineEdges x the mesh's median edge length;
 /// negative: no line is dropped. angle_deg >= 180: no features. Candidates in one pass over the
-/// faces, parallel (face normals once, each edge looked at from its lowest face through the
+/// faces, parallel (face normals once; vertices whose faces all lie within half the angle of
+/// their mean normal skipped; each other edge looked at from its lowest face through the
 /// triangles around its first end), the lines on the candidates' vertices only; deterministic,
 /// the same for any thread count. O(T x valence + V + rounds x candidates log candidates),
-/// rounds about the depth of the noise's branching.
+/// rounds about the depth of the noise's branching; O(T) for the candidates of a smooth mesh.
 MeshFeatures detect_features(const TriangleMesh& mesh, float angle_deg = kDefaultFeatureAngleDeg,
+                             float min_line_length = 0.0f);
+
+/// detect_features() on a mesh whose maker marked the vertices it placed on sharp features
+/// (`seed`, one byte per vertex, non-zero on such a vertex: extended marching cubes' feature
+/// vertices, extract_surface()): detect_features(), except that a line holding an edge between
+/// two marked vertices is never dropped as noise, however short (EMC's lines break into short
+/// pieces at a cell where it fell back to marching cubes: the L-shape's true edges are covered
+/// 99.5 % instead of 95.6 % at a voxel of 1 % of its diagonal). The marked edges alone are no
+/// graph (90.8 % there), nor do marked edges at a lower angle help (20 degrees: 94.1 %).
+/// The marks are read where detect_features() finds its candidates: the same pass, the same
+/// costs, deterministic. A `seed` of another size than the vertex count:
+/// detect_features(mesh, angle_deg,
+/// min_line_length).
+MeshFeatures detect_features(const TriangleMesh& mesh, const std::vector<std::uint8_t>& seed,
+                             float angle_deg = kDefaultFeatureAngleDeg,
                              float min_line_length = 0.0f);
 
 }  // namespace meshflow

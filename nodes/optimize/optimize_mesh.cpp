@@ -36,19 +36,27 @@ std::string not_planar_note(const PlanarSegmentation& s) {
 }
 
 // What one step hands to the next: the feature graph (detected once, then carried while the
-// mesh stays what it is: clean and holes on a clean, closed mesh) and the planes
+// mesh stays what it is: clean and holes on a clean, closed mesh, and planes, which only moves
+// vertices), the mesh maker's feature vertices (one byte per vertex while the steps keep the
+// vertices: lines of their edges are no noise) and the planes
 // step's plane tolerance (for retriangulate or sharpen right after it: measured again on the
 // flattened mesh, a scan's roughness would be gone).
 struct CarriedState {
   std::optional<MeshFeatures> features;
+  std::vector<std::uint8_t> seed;
   float plane_tolerance = 0.0f;
 };
 
-// The feature graph of `mesh`, detected once while the topology lasts.
+// The feature graph of `mesh`, detected once while the topology lasts (from the seed while
+// there is one for these vertices).
 const MeshFeatures& carried_features(const TriangleMesh& mesh, const OptimizeConfig& config,
                                      CarriedState& carried) {
   if (!carried.features)
-    carried.features = detect_features(mesh, config.feature_angle_deg, config.feature_min_length);
+    carried.features =
+        carried.seed.size() == mesh.vertices.size()
+            ? detect_features(mesh, carried.seed, config.feature_angle_deg,
+                              config.feature_min_length)
+            : detect_features(mesh, config.feature_angle_deg, config.feature_min_length);
   return *carried.features;
 }
 
@@ -70,18 +78,28 @@ std::vector<std::uint8_t> held_mask(const HeldVertices* held) {
   return mask;
 }
 
+// `flags` (one per vertex of the mesh clean_mesh() received) for the vertices it kept (`kept`,
+// one input index per output vertex); none when `kept` does not describe `out` (split vertices).
+std::vector<std::uint8_t> kept_flags(const std::vector<std::uint8_t>& flags,
+                                     const std::vector<std::uint32_t>& kept,
+                                     const TriangleMesh& out) {
+  std::vector<std::uint8_t> result;
+  if (kept.size() != out.vertices.size()) return result;
+  result.resize(kept.size());
+  for (std::size_t v = 0; v < kept.size(); ++v) result[v] = flags[kept[v]];
+  return result;
+}
+
 TriangleMesh clean_step(const TriangleMesh& mesh, const OptimizeConfig& config,
-                        OptimizeReport& report, OptimizeStepReport& step,
+                        OptimizeReport& report, CarriedState& carried, OptimizeStepReport& step,
                         HeldVertices* held = nullptr) {
   const std::vector<std::uint8_t> mask = held_mask(held);
   std::vector<std::uint32_t> kept;
+  const bool follow = held != nullptr || !carried.seed.empty();
   TriangleMesh out = clean_mesh(mesh, config.cleanup, &report.cleanup, held ? &mask : nullptr,
-                                held ? &kept : nullptr);
-  if (held != nullptr) {
-    std::vector<std::uint8_t> flags(kept.size());
-    for (std::size_t v = 0; v < kept.size(); ++v) flags[v] = held->flags[kept[v]];
-    held->flags = std::move(flags);
-  }
+                                follow ? &kept : nullptr);
+  if (held != nullptr) held->flags = kept_flags(held->flags, kept, out);
+  if (!carried.seed.empty()) carried.seed = kept_flags(carried.seed, kept, out);
   const CleanupReport& c = report.cleanup;
   step.detail =
       format("removed %zu degenerate/duplicate, %zu in %zu small components",
@@ -95,7 +113,8 @@ TriangleMesh clean_step(const TriangleMesh& mesh, const OptimizeConfig& config,
 }
 
 TriangleMesh holes_step(const TriangleMesh& mesh, const OptimizeConfig& config,
-                        OptimizeStepReport& step, HeldVertices* held = nullptr) {
+                        CarriedState& carried, OptimizeStepReport& step,
+                        HeldVertices* held = nullptr) {
   HoleFillingReport r;
   HoleFillingConfig holes = config.holes;
   holes.feature_angle_deg = config.feature_angle_deg;
@@ -103,6 +122,7 @@ TriangleMesh holes_step(const TriangleMesh& mesh, const OptimizeConfig& config,
   const std::vector<std::uint8_t> mask = held_mask(held);
   TriangleMesh out = fill_holes(mesh, holes, &r, held ? &mask : nullptr);
   if (held != nullptr) held->flags.resize(out.vertices.size(), 0);  // added vertices: none
+  if (!carried.seed.empty()) carried.seed.resize(out.vertices.size(), 0);
   step.detail = format("%zu holes filled (+%zu triangles), %zu larger than allowed, %zu outlines",
                        r.filled, r.added_triangles, r.too_large, r.outer_borders);
   if (r.not_fillable > 0) step.detail += format(", %zu not fillable", r.not_fillable);
@@ -266,13 +286,16 @@ std::vector<OptimizeStep> parse_optimize_steps(const std::string& list) {
 namespace {
 
 TriangleMesh run_steps(const TriangleMesh& mesh, const OptimizeConfig& given,
-                       OptimizeReport* report, HeldVertices* held) {
+                       OptimizeReport* report, HeldVertices* held,
+                       const std::vector<std::uint8_t>* feature_vertices) {
   OptimizeConfig config = given;
   if (config.feature_min_length == 0.0f)  // one scale for every step: the input's
     config.feature_min_length = kMinFeatureLineEdges * median_edge_length(mesh);
   OptimizeReport r;
   TriangleMesh current = mesh;
   CarriedState carried;
+  if (feature_vertices != nullptr && feature_vertices->size() == mesh.vertices.size())
+    carried.seed = *feature_vertices;
   const bool had_normals = !mesh.normals.empty() && mesh.normals.size() == mesh.vertices.size();
   for (OptimizeStep s : config.steps) {
     OptimizeStepReport step;
@@ -288,10 +311,10 @@ TriangleMesh run_steps(const TriangleMesh& mesh, const OptimizeConfig& given,
     try {
       switch (s) {
         case OptimizeStep::kClean:
-          current = clean_step(current, config, r, step, held);
+          current = clean_step(current, config, r, carried, step, held);
           break;
         case OptimizeStep::kHoles:
-          current = holes_step(current, config, step, held);
+          current = holes_step(current, config, carried, step, held);
           break;
         case OptimizeStep::kPlanes:
           current = planes_step(current, config, carried, step);
@@ -313,12 +336,17 @@ TriangleMesh run_steps(const TriangleMesh& mesh, const OptimizeConfig& given,
       step.skipped = true;
       step.detail = std::string("skipped: ") + e.what();
     }
-    // The feature graph is detected anew after planes too (positions moved: other dihedral
-    // angles).
+    // The planes step moves vertices onto their planes and keeps the topology: its input's
+    // feature graph goes on (its sharp edges stay sharp, only flatter elsewhere), so the planar
+    // list detects once. The steps that change the topology end the graph and the seed.
     const bool same_mesh =
-        step.skipped || ((s == OptimizeStep::kClean || s == OptimizeStep::kHoles) &&
-                         current.vertices.size() == vertices_before && current.triangles == before);
+        step.skipped || s == OptimizeStep::kPlanes ||
+        ((s == OptimizeStep::kClean || s == OptimizeStep::kHoles) &&
+         current.vertices.size() == vertices_before && current.triangles == before);
     if (!same_mesh) carried.features.reset();
+    const bool same_vertices = step.skipped || s == OptimizeStep::kClean ||
+                               s == OptimizeStep::kHoles || s == OptimizeStep::kPlanes;
+    if (!same_vertices) carried.seed.clear();
     if (s != OptimizeStep::kPlanes || step.skipped) carried.plane_tolerance = 0.0f;
     step.seconds = monotonic_seconds() - start;
     step.triangles_out = current.triangles.size();
@@ -339,7 +367,13 @@ TriangleMesh run_steps(const TriangleMesh& mesh, const OptimizeConfig& given,
 
 TriangleMesh optimize_mesh(const TriangleMesh& mesh, const OptimizeConfig& config,
                            OptimizeReport* report) {
-  return run_steps(mesh, config, report, nullptr);
+  return run_steps(mesh, config, report, nullptr, nullptr);
+}
+
+TriangleMesh optimize_mesh(const TriangleMesh& mesh, const OptimizeConfig& config,
+                           OptimizeReport* report,
+                           const std::vector<std::uint8_t>& feature_vertices) {
+  return run_steps(mesh, config, report, nullptr, &feature_vertices);
 }
 
 TriangleMesh optimize_mesh(const TriangleMesh& mesh, const OptimizeConfig& config,
@@ -356,7 +390,7 @@ TriangleMesh optimize_mesh(const TriangleMesh& mesh, const OptimizeConfig& confi
   if (config.cleanup.non_manifold_vertices == NonManifoldVertexRepair::kSplit)
     throw Error("optimize", "clean",
                 "splitting non-manifold vertices cannot hold seam vertices fixed");
-  return run_steps(mesh, config, report, &held);
+  return run_steps(mesh, config, report, &held, nullptr);
 }
 
 std::string format_optimize_report(const OptimizeReport& report) {

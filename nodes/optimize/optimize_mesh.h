@@ -85,6 +85,16 @@ struct OptimizeReport {
 TriangleMesh optimize_mesh(const TriangleMesh& mesh, const OptimizeConfig& config,
                            OptimizeReport* report = nullptr);
 
+/// optimize_mesh() on a mesh whose maker marked the vertices it placed on sharp features
+/// (`feature_vertices`, one byte per vertex of `mesh`, non-zero on such a vertex: extended
+/// marching cubes' feature vertices from extract_surface()). The feature graph keeps lines of
+/// edges between marked vertices (detect_features(mesh, seed, ...)) while the steps keep the
+/// vertices (clean, holes and planes; the bytes follow them, 0 on added ones); after a step
+/// that remeshes, the graph is detected. Flags of another size are ignored. Same costs.
+TriangleMesh optimize_mesh(const TriangleMesh& mesh, const OptimizeConfig& config,
+                           OptimizeReport* report,
+                           const std::vector<std::uint8_t>& feature_vertices);
+
 /// A byte per vertex that follows the vertices through the steps (0 on vertices a step adds);
 /// vertices with any of `held_bits` set are held fixed: the clean step keeps all their fans and
 /// the components holding them, the holes step leaves loops through them open (a chunk's seam,

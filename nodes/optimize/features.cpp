@@ -339,9 +339,9 @@ MeshFeatures detect_features_reaching(const TriangleMesh& mesh, const VertexTria
                                       float min_line_length) {
   if (!(angle_deg < 180.0f) || seeds.empty())
     return features_of_candidates(mesh, {}, angle_deg, min_line_length);
-  return features_of_candidates(
-      mesh, candidates_reaching(mesh, around, seeds, cos_of_degrees(angle_deg)), angle_deg,
-      min_line_length);
+  return features_of_candidates(mesh,
+                                candidates_reaching(mesh, around, seeds, cos_of_degrees(angle_deg)),
+                                angle_deg, min_line_length);
 }
 
 }  // namespace meshflow

@@ -11,8 +11,8 @@
 #include <cstdint>
 #include <memory>
 
-#include "runtime/disjoint_sets.h"
 #include "runtime/error.h"
+#include "runtime/mesh_components.h"
 #include "runtime/parallel.h"
 #include "runtime/vertex_triangles.h"
 
@@ -201,18 +201,14 @@ std::vector<std::uint32_t> renumber_used_vertices(std::vector<Triangle>& triangl
 void remove_small_components(std::vector<Triangle>& triangles, std::size_t vertex_count,
                              std::size_t min_triangles, ComponentCounts* counts,
                              const std::vector<std::uint8_t>* held) {
-  DisjointSets sets(vertex_count);
-  for (const Triangle& t : triangles) {
-    sets.unite(t[0], t[1]);
-    sets.unite(t[1], t[2]);
-  }
+  const std::vector<std::uint32_t> component = vertex_component_labels(triangles, vertex_count);
   std::vector<std::uint32_t> component_size(vertex_count, 0);
-  for (const Triangle& t : triangles) ++component_size[sets.find(t[0])];
+  for (const Triangle& t : triangles) ++component_size[component[t[0]]];
   if (held != nullptr)  // a component with a held vertex stays: counted as large enough
     for (const Triangle& t : triangles)
       for (const std::uint32_t v : t)
         if (v < held->size() && (*held)[v] != 0) {
-          std::uint32_t& size = component_size[sets.find(v)];
+          std::uint32_t& size = component_size[component[v]];
           size = std::max<std::uint32_t>(size, static_cast<std::uint32_t>(min_triangles));
         }
   ComponentCounts c;
@@ -232,7 +228,7 @@ void remove_small_components(std::vector<Triangle>& triangles, std::size_t verte
   if (c.removed_components == 0) return;
   triangles.erase(std::remove_if(triangles.begin(), triangles.end(),
                                  [&](const Triangle& t) {
-                                   return component_size[sets.find(t[0])] < min_triangles;
+                                   return component_size[component[t[0]]] < min_triangles;
                                  }),
                   triangles.end());
 }

@@ -275,6 +275,54 @@ MeshFeatures detect_features(const TriangleMesh& mesh, const std::vector<std::ui
 
 namespace {
 
+/// The candidates (sorted) of the candidate components holding a vertex of `seeds`: a search
+/// from the seeds through the candidates found around each vertex reached (each edge judged as
+/// sharp_candidates() judges it, normals of its lowest two faces). O(seeds + reached vertices x
+/// valence^2), serial.
+std::vector<FeatureCandidate> candidates_reaching(const TriangleMesh& mesh,
+                                                  const VertexTriangles& around,
+                                                  const std::vector<std::uint32_t>& seeds,
+                                                  float cos_limit) {
+  const std::size_t n = mesh.vertices.size();
+  std::vector<std::uint8_t> reached(n, 0);
+  std::vector<std::uint32_t> queue;
+  for (std::uint32_t v : seeds)
+    if (v < n && !reached[v]) reached[v] = 1, queue.push_back(v);
+  std::vector<FeatureCandidate> found;
+  for (std::size_t q = 0; q < queue.size(); ++q) {
+    const std::uint32_t a = queue[q];
+    for (const std::uint32_t* it = around.begin(a); it != around.end(a); ++it) {
+      const Triangle& tri = mesh.triangles[*it];
+      for (int k = 0; k < 3; ++k) {
+        const std::uint32_t p = tri[k], r = tri[(k + 1) % 3];
+        if (p == r || (p != a && r != a)) continue;
+        const std::uint32_t b = p == a ? r : p;
+        if (b >= n) continue;
+        const FeatureEdgeSides s = feature_edge_sides(mesh, around, a, b);
+        // Judged once per vertex, from the side of the edge in its lowest face.
+        if (s.count != 2 || s.first != *it || s.second == *it) continue;
+        const Eigen::Vector3f n0 = face_normal(mesh, tri);
+        const Eigen::Vector3f n1 = face_normal(mesh, mesh.triangles[s.second]);
+        if (!(n0.squaredNorm() > 0.0f && n1.squaredNorm() > 0.0f && n0.dot(n1) < cos_limit))
+          continue;
+        const bool forward = p < r;  // the lowest face runs min -> max: its normal on the left
+        found.push_back({{std::min(a, b), std::max(a, b)}, forward ? n0 : n1, forward ? n1 : n0});
+        if (!reached[b]) reached[b] = 1, queue.push_back(b);
+      }
+    }
+  }
+  const auto by_ends = [](const FeatureCandidate& x, const FeatureCandidate& y) {
+    return x.ends < y.ends;
+  };
+  std::sort(found.begin(), found.end(), by_ends);  // each edge was found from both its ends
+  found.erase(std::unique(found.begin(), found.end(),
+                          [](const FeatureCandidate& x, const FeatureCandidate& y) {
+                            return x.ends == y.ends;
+                          }),
+              found.end());
+  return found;
+}
+
 MeshFeatures features_from_candidates(const TriangleMesh& mesh, std::vector<FeatureCandidate> c,
                                       float angle_deg, float min_line_length) {
   MeshFeatures f;
@@ -340,5 +388,15 @@ MeshFeatures features_from_candidates(const TriangleMesh& mesh, std::vector<Feat
 }
 
 }  // namespace
+
+MeshFeatures detect_features_reaching(const TriangleMesh& mesh, const VertexTriangles& around,
+                                      const std::vector<std::uint32_t>& seeds, float angle_deg,
+                                      float min_line_length) {
+  if (!(angle_deg < 180.0f) || seeds.empty())
+    return features_from_candidates(mesh, {}, angle_deg, min_line_length);
+  const float cos_limit = static_cast<float>(std::cos(radians(static_cast<double>(angle_deg))));
+  return features_from_candidates(mesh, candidates_reaching(mesh, around, seeds, cos_limit),
+                                  angle_deg, min_line_length);
+}
 
 }  // namespace meshflow

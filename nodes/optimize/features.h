@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "runtime/triangle_mesh.h"
+#include "runtime/vertex_triangles.h"
 
 namespace meshflow {
 
@@ -72,5 +73,19 @@ MeshFeatures detect_features(const TriangleMesh& mesh, float angle_deg = kDefaul
 MeshFeatures detect_features(const TriangleMesh& mesh, const std::vector<std::uint8_t>& seed,
                              float angle_deg = kDefaultFeatureAngleDeg,
                              float min_line_length = 0.0f);
+
+/// detect_features() on the feature lines that reach `seeds` (vertex indices) only: the sharp
+/// edges and vertex kinds detect_features(mesh, angle_deg, min_line_length) gives on the
+/// connected sets of candidate edges (joined at shared vertices) that hold a seed; nothing
+/// elsewhere (those vertices kFree). Each such set is judged on its own there too, so this is
+/// exactly that part of the whole mesh's graph, found by a search from the seeds through the
+/// candidates instead of a pass over every face: for a step that needs the lines at a few places
+/// (the hole filler: the lines ending on a hole's border). `around` is vertex_triangles(mesh).
+/// Serial; deterministic. O(seeds + V + reached vertices x valence^2 + rounds x their
+/// candidates log candidates); min_line_length 0 adds the whole mesh's median edge length.
+MeshFeatures detect_features_reaching(const TriangleMesh& mesh, const VertexTriangles& around,
+                                      const std::vector<std::uint32_t>& seeds,
+                                      float angle_deg = kDefaultFeatureAngleDeg,
+                                      float min_line_length = 0.0f);
 
 }  // namespace meshflow

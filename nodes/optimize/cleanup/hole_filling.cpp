@@ -12,7 +12,7 @@
 #include <optional>
 #include <vector>
 
-#include "runtime/disjoint_sets.h"
+#include "runtime/mesh_components.h"
 #include "runtime/vertex_triangles.h"
 
 namespace meshflow {
@@ -71,16 +71,6 @@ std::vector<std::vector<std::uint32_t>> border_loops(const TriangleMesh& mesh,
       ++ambiguous;
   }
   return loops;
-}
-
-// Component label (a representative vertex) of every vertex: union-find over triangle corners.
-std::vector<std::uint32_t> vertex_components(const TriangleMesh& mesh) {
-  DisjointSets sets(mesh.vertices.size());
-  for (const Triangle& t : mesh.triangles) {
-    sets.unite(t[0], t[1]);
-    sets.unite(t[0], t[2]);
-  }
-  return sets.labels();
 }
 
 // Stands for a vertex a hole's fill adds (a lost corner) until it has its index.
@@ -371,7 +361,8 @@ std::vector<Triangle> fan_from_centre(const std::vector<std::uint32_t>& loop, Tr
   return fan;
 }
 
-// Area of each component (indexed by its label, as vertex_components() gives per vertex), m^2.
+// Area of each component (indexed by its label, as vertex_component_labels() gives per vertex),
+// m^2.
 std::vector<double> component_areas(const TriangleMesh& mesh,
                                     const std::vector<std::uint32_t>& component) {
   std::vector<double> area(mesh.vertices.size(), 0.0);
@@ -411,7 +402,8 @@ TriangleMesh fill_holes(const TriangleMesh& mesh, const HoleFillingConfig& confi
           (mesh.vertices[loops[l][(i + 1) % loops[l].size()]] - mesh.vertices[loops[l][i]]).norm());
   std::vector<std::uint8_t> outer(loops.size(), 0);
   if (config.keep_outer_border) {
-    const std::vector<std::uint32_t> component = vertex_components(mesh);
+    const std::vector<std::uint32_t> component =
+        vertex_component_labels(mesh.triangles, mesh.vertices.size());
     std::vector<std::size_t> longest(mesh.vertices.size(), SIZE_MAX);
     for (std::size_t l = 0; l < loops.size(); ++l) {
       std::size_t& best = longest[component[loops[l].front()]];
@@ -448,8 +440,12 @@ TriangleMesh fill_holes(const TriangleMesh& mesh, const HoleFillingConfig& confi
     for (std::uint32_t v : *hole) in_hole[v] = 1;
   std::optional<HoleFeatureLinks> links;
   if (!holes.empty() && config.feature_angle_deg < 180.0f) {
-    const MeshFeatures features =
-        detect_features(mesh, config.feature_angle_deg, config.feature_min_length);
+    // Only the lines that reach a hole's border matter: found from its vertices, not from a pass
+    // over every face (most of a depth frame's clean-up time when it was).
+    std::vector<std::uint32_t> seeds;
+    for (const auto* hole : holes) seeds.insert(seeds.end(), hole->begin(), hole->end());
+    const MeshFeatures features = detect_features_reaching(
+        mesh, around, seeds, config.feature_angle_deg, config.feature_min_length);
     if (!features.edges.empty()) links = hole_feature_links(mesh.vertices.size(), features);
   }
   std::vector<HoleFill> fills(holes.size());

@@ -60,8 +60,9 @@ struct HoleFillingReport {
 /// (the diagonal exists, the corner lies off the hole) the plain fill is used.
 /// Vertices, normals and colours are kept as they are; new triangles follow the old ones, holes in
 /// the order of their first border edge. Loops are triangulated in parallel; the output does not
-/// depend on the thread count. O(T + sum of n^3 over holes), plus detect_features() when a
-/// hole is to be filled and features are on.
+/// depend on the thread count. O(T + sum of n^3 over holes), plus, when a hole is to be filled
+/// and features are on, detect_features_reaching() from the holes' vertices (the lines that
+/// reach a hole; the same lines as the whole mesh's detect_features() there).
 /// `held` (optional, one byte per vertex): loops through a vertex whose byte is non-zero stay
 /// open (a chunk's seam, finished in place: its loops go on in the neighbouring chunk).
 TriangleMesh fill_holes(const TriangleMesh& mesh, const HoleFillingConfig& config = {},

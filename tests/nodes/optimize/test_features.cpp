@@ -10,7 +10,9 @@
 #include "fixtures/mesh_fixtures.h"
 #include "nodes/decimate/qem_decimation.h"
 #include "nodes/optimize/feature_snap.h"
+#include "runtime/disjoint_sets.h"
 #include "runtime/threads.h"
+#include "runtime/vertex_triangles.h"
 
 namespace meshflow {
 namespace {
@@ -235,6 +237,66 @@ TEST(Features, SharpEdgesMatchABruteForceEdgeMap) {
     ThreadLimit limit(threads);
     EXPECT_EQ(detect_features(mesh, 40.0f, -1.0f).edges, expected) << threads << " threads";
   }
+}
+
+// The whole mesh's feature graph on the sets of brute-force candidates (joined at shared
+// vertices) that hold a seed, kFree elsewhere: what detect_features_reaching() must give.
+MeshFeatures whole_graph_reaching(const TriangleMesh& m, const std::vector<std::uint32_t>& seeds,
+                                  float min_line_length) {
+  const auto candidates = brute_force_sharp_edges(m, kDefaultFeatureAngleDeg);
+  DisjointSets sets(m.vertices.size());
+  std::vector<std::uint8_t> on_candidate(m.vertices.size(), 0);
+  for (const auto& e : candidates) {
+    sets.unite(e[0], e[1]);
+    on_candidate[e[0]] = on_candidate[e[1]] = 1;
+  }
+  const std::vector<std::uint32_t> set_of = sets.labels();
+  std::vector<std::uint8_t> reached(m.vertices.size(), 0);
+  for (std::uint32_t v : seeds)
+    if (on_candidate[v]) reached[set_of[v]] = 1;
+  const MeshFeatures whole = detect_features(m, kDefaultFeatureAngleDeg, min_line_length);
+  MeshFeatures expected;
+  for (const auto& e : whole.edges)
+    if (reached[set_of[e[0]]]) expected.edges.push_back(e);
+  expected.vertex_kind.assign(m.vertices.size(), MeshFeatures::VertexKind::kFree);
+  for (std::uint32_t v = 0; v < m.vertices.size(); ++v)
+    if (on_candidate[v] && reached[set_of[v]]) expected.vertex_kind[v] = whole.vertex_kind[v];
+  return expected;
+}
+
+// The lines found from a few seeds are the whole mesh's lines there, for the noisy bumps'
+// candidate sets (most dropped as short) as for the cube's edges (kept), for any thread count;
+// seeded everywhere, the whole graph.
+TEST(Features, LinesReachingSeedsAreTheWholeGraphsThere) {
+  TriangleMesh m = bumpy_cube(12, 0.35f);
+  m.triangles.erase(m.triangles.begin() + 40, m.triangles.begin() + 42);  // a border
+  const VertexTriangles around = vertex_triangles(m);
+  std::vector<std::uint32_t> everywhere(m.vertices.size());
+  for (std::uint32_t v = 0; v < everywhere.size(); ++v) everywhere[v] = v;
+  std::vector<std::uint32_t> corner;  // a cube corner: the graph of the cube's edges
+  for (std::uint32_t v = 0; v < m.vertices.size() && corner.empty(); ++v)
+    if (is_cube_corner(m.vertices[v])) corner.push_back(v);
+  std::vector<std::uint32_t> scattered;  // every 37th vertex: bumps, edges and flat places
+  for (std::uint32_t v = 0; v < m.vertices.size(); v += 37) scattered.push_back(v);
+  std::vector<std::uint32_t> border(m.triangles[40].begin(), m.triangles[40].end());
+  std::size_t nonempty = 0;
+  for (float min_line_length : {0.0f, -1.0f, 0.3f})
+    for (const auto* seeds : {&everywhere, &corner, &scattered, &border}) {
+      const MeshFeatures expected = whole_graph_reaching(m, *seeds, min_line_length);
+      nonempty += expected.edges.empty() ? 0 : 1;
+      for (int threads : {1, 2}) {
+        ThreadLimit limit(threads);
+        const MeshFeatures f =
+            detect_features_reaching(m, around, *seeds, kDefaultFeatureAngleDeg, min_line_length);
+        EXPECT_EQ(f.edges, expected.edges) << min_line_length << ", " << seeds->size();
+        EXPECT_EQ(f.vertex_kind, expected.vertex_kind) << min_line_length << ", " << seeds->size();
+      }
+    }
+  EXPECT_GE(nonempty, 9u);
+  const MeshFeatures whole = detect_features(m);
+  EXPECT_EQ(detect_features_reaching(m, around, everywhere).edges, whole.edges);
+  EXPECT_TRUE(detect_features_reaching(m, around, {}).edges.empty());
+  EXPECT_TRUE(detect_features_reaching(m, around, everywhere, 180.0f).edges.empty());
 }
 
 }  // namespace

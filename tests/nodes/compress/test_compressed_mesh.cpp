@@ -737,9 +737,10 @@ TEST(ProgressiveMesh, ResealingRewritesEveryChecksum) {
 }
 
 // Files of older versions (2: before the prefix checksums and the new attribute coders; 7:
-// before the coordinate snap symbols) are refused with the versions named.
+// before the coordinate snap symbols; 8: before the colour coder's distance-weighted prediction
+// and channel decorrelation) are refused with the versions named.
 TEST(CompressedMeshFile, OldVersionsAreRefusedByName) {
-  for (const unsigned char old : {2, 7}) {
+  for (const unsigned char old : {2, 7, 8}) {
     std::vector<unsigned char> bytes = compress::compress_mesh(torus(8, 6));
     bytes[8] = old;
     compress::reseal_compressed_mesh(bytes);
@@ -748,7 +749,7 @@ TEST(CompressedMeshFile, OldVersionsAreRefusedByName) {
       ADD_FAILURE() << "version " << int{old} << " was read";
     } catch (const Error& e) {
       const std::string what = e.what();
-      EXPECT_NE(what.find("is " + std::to_string(old) + "; this build reads version 8"),
+      EXPECT_NE(what.find("is " + std::to_string(old) + "; this build reads version 9"),
                 std::string::npos)
           << what;
       EXPECT_NE(what.find("old.mfc"), std::string::npos) << what;

@@ -205,6 +205,12 @@ ColorTransform choose_transform(const std::vector<Channels>& residuals) {
     return static_cast<std::int32_t>(
         std::clamp(std::lround(v * (1 << kCoefficientShift)), -128L, 127L));
   };
+  // log2(1 + m) for the residuals of valid streams (|r| <= 1275), looked up.
+  static const std::array<double, 2048> log2_one_plus = [] {
+    std::array<double, 2048> t{};
+    for (std::size_t m = 0; m < t.size(); ++m) t[m] = std::log2(1.0 + static_cast<double>(m));
+    return t;
+  }();
   ColorTransform best;
   double best_cost = -1.0;
   for (std::uint8_t o = 0; o < kOrders.size(); ++o) {
@@ -222,7 +228,10 @@ ColorTransform choose_transform(const std::vector<Channels>& residuals) {
     }
     double cost = 0.0;
     for (const Channels& e : residuals)
-      for (std::int32_t r : t.forward(e)) cost += std::log2(1.0 + magnitude(r));
+      for (std::int32_t r : t.forward(e)) {
+        const std::uint32_t m = magnitude(r);
+        cost += m < log2_one_plus.size() ? log2_one_plus[m] : std::log2(1.0 + m);
+      }
     if (best_cost < 0.0 || cost < best_cost) {
       best = t;
       best_cost = cost;

@@ -1,5 +1,5 @@
 #pragma once
-// The per-vertex attribute coders of a compressed mesh body (nodes/compress/mesh_codec.h). Both
+// The per-vertex attribute coders of a compressed mesh body (nodes/compress/mesh_codec.h). They
 // run after the connectivity and the positions, so a decoder already holds the whole decoded
 // geometry when it reads the attributes:
 //  - normals: predicted by the area-weighted normal of the vertex's one ring of decoded faces

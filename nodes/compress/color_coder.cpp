@@ -105,13 +105,13 @@ ColorPrediction predict_color(const VertexAdjacency& adj,
   return p;
 }
 
-// Contexts. Each of the first two channels' expected residual size s (in 1/16) is the mean over
-// the decoded neighbours of how far each is from the prediction and of the residual it was
-// coded with, plus the mean residual so far at vertices whose nearest decoded neighbour is as
-// far (by distance_bits, halved past kLearntWindow vertices); the second adds half the first's
+// Contexts. Each channel's expected residual size s (in 1/16) is the mean over the decoded
+// neighbours of how far each is from the prediction and of the residual it was coded with, plus
+// the mean residual so far at vertices whose nearest decoded neighbour is as far (by
+// distance_bits, halved past kLearntWindow vertices); the second and third add half the first's
 // residual. Classes of s: two per factor of 2 in 1 + s (kScaleClasses). The first channel's
 // models also by the distance (kDistanceClasses); the second by the first's residual size, the
-// third by the second's context and residual size (kMagnitudeClasses each).
+// third by the first's and the second's (kMagnitudeClasses each).
 constexpr std::size_t kScaleClasses = 12, kDistanceClasses = 4, kMagnitudeClasses = 4;
 constexpr std::size_t kDistanceBits = 50;  // distance_bits <= 49 (distance2() < 2^48)
 constexpr std::uint32_t kLearntWindow = 64;
@@ -121,10 +121,10 @@ struct ColorContexts {
   std::vector<IntegerModel> second = std::vector<IntegerModel>(kScaleClasses * kMagnitudeClasses);
   std::vector<IntegerModel> third =
       std::vector<IntegerModel>(kScaleClasses * kMagnitudeClasses * kMagnitudeClasses);
-  // Per distance_bits: the first two channels' residual magnitude sums and the vertex count.
-  std::array<std::array<std::uint32_t, 3>, kDistanceBits> learnt{};
-  // Per vertex: the magnitudes its first two channels were coded with (capped).
-  std::vector<std::array<std::uint16_t, 2>> magnitude;
+  // Per distance_bits: the channels' residual magnitude sums and the vertex count.
+  std::array<std::array<std::uint32_t, 4>, kDistanceBits> learnt{};
+  // Per vertex: the magnitudes its channels were coded with (capped).
+  std::vector<std::array<std::uint16_t, 3>> magnitude;
 };
 
 std::uint32_t magnitude(std::int32_t v) {
@@ -144,10 +144,10 @@ std::size_t scale_class(std::uint64_t s16) {
   return std::min(c, kScaleClasses - 1);
 }
 
-// The first two channels' expected sizes s16 (before the second's share of the first residual),
-// and the first channel's model index.
+// The channels' expected sizes s16 (before the later ones' share of the first residual), and
+// the first channel's model index.
 struct ColorScales {
-  std::uint64_t s16[2] = {0, 0};
+  std::uint64_t s16[3] = {0, 0, 0};
   std::size_t first = 0;
 };
 
@@ -156,16 +156,16 @@ ColorScales color_scales(const VertexAdjacency& adj, const std::vector<Rgb8>& co
                          const ColorPrediction& p) {
   ColorScales s;
   if (p.count() == 0) return s;
-  std::uint64_t sum[2] = {0, 0};
+  std::uint64_t sum[3] = {0, 0, 0};
   for (std::uint32_t k = p.begin; k < p.end; ++k) {
     const std::uint32_t n = adj.neighbour[k];
     const Channels f =
         t.forward({colors[n].r - p.rgb[0], colors[n].g - p.rgb[1], colors[n].b - p.rgb[2]});
-    for (std::size_t c = 0; c < 2; ++c) sum[c] += magnitude(f[c]) + m.magnitude[n][c];
+    for (std::size_t c = 0; c < 3; ++c) sum[c] += magnitude(f[c]) + m.magnitude[n][c];
   }
   const auto& learnt = m.learnt[std::min<std::size_t>(p.distance_bits, kDistanceBits - 1)];
-  for (std::size_t c = 0; c < 2; ++c)
-    s.s16[c] = 16 * sum[c] / p.count() + (learnt[2] > 0 ? 16u * learnt[c] / learnt[2] : 0u);
+  for (std::size_t c = 0; c < 3; ++c)
+    s.s16[c] = 16 * sum[c] / p.count() + (learnt[3] > 0 ? 16u * learnt[c] / learnt[3] : 0u);
   const std::size_t distance =
       std::clamp<std::size_t>(p.distance_bits / 2, 2, kDistanceClasses + 1) - 2;
   s.first = scale_class(s.s16[0]) * kDistanceClasses + distance;
@@ -177,19 +177,21 @@ std::size_t second_context(const ColorPrediction& p, const ColorScales& s, std::
   return scale * kMagnitudeClasses + magnitude_class(r0);
 }
 
-std::size_t third_context(std::size_t second, std::int32_t r1) {
-  return second * kMagnitudeClasses + magnitude_class(r1);
+std::size_t third_context(const ColorPrediction& p, const ColorScales& s, std::int32_t r0,
+                          std::int32_t r1) {
+  const std::size_t scale = p.count() == 0 ? 0 : scale_class(s.s16[2] + 8 * magnitude(r0));
+  return (scale * kMagnitudeClasses + magnitude_class(r0)) * kMagnitudeClasses +
+         magnitude_class(r1);
 }
 
 // After vertex i's residuals r: its magnitudes, and what its distance class has needed.
 void learn(ColorContexts& m, const ColorPrediction& p, std::uint32_t i, const Channels& r) {
-  for (std::size_t c = 0; c < 2; ++c)
+  for (std::size_t c = 0; c < 3; ++c)
     m.magnitude[i][c] = static_cast<std::uint16_t>(std::min<std::uint32_t>(magnitude(r[c]), 65535));
   if (p.count() == 0) return;
   auto& learnt = m.learnt[std::min<std::size_t>(p.distance_bits, kDistanceBits - 1)];
-  learnt[0] += m.magnitude[i][0];
-  learnt[1] += m.magnitude[i][1];
-  if (++learnt[2] > kLearntWindow)
+  for (std::size_t c = 0; c < 3; ++c) learnt[c] += m.magnitude[i][c];
+  if (++learnt[3] > kLearntWindow)
     for (std::uint32_t& v : learnt) v >>= 1;
 }
 
@@ -267,7 +269,7 @@ void encode_colors(const DecodedGeometry& g, const std::vector<Rgb8>& colors, Ra
     m.first[s.first].encode(enc, r[0]);
     const std::size_t second = second_context(p, s, r[0]);
     m.second[second].encode(enc, r[1]);
-    m.third[third_context(second, r[1])].encode(enc, r[2]);
+    m.third[third_context(p, s, r[0], r[1])].encode(enc, r[2]);
     learn(m, p, i, r);
   }
 }
@@ -297,7 +299,7 @@ std::vector<Rgb8> decode_colors(const DecodedGeometry& g, RangeDecoder& dec,
     r[0] = std::clamp(m.first[s.first].decode(session.core), -4096, 4096);
     const std::size_t second = second_context(p, s, r[0]);
     r[1] = std::clamp(m.second[second].decode(session.core), -4096, 4096);
-    r[2] = std::clamp(m.third[third_context(second, r[1])].decode(session.core), -4096, 4096);
+    r[2] = std::clamp(m.third[third_context(p, s, r[0], r[1])].decode(session.core), -4096, 4096);
     const Channels e = t.inverse(r);
     const auto channel = [](std::int32_t v) {
       return static_cast<std::uint8_t>(std::clamp(v, 0, 255));

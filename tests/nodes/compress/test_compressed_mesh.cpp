@@ -604,7 +604,7 @@ TEST(NormalCoding, ArbitraryNormalsAndRecomputedNormals) {
 }
 
 // Colours predicted from decoded neighbours and coded channel after channel: exact, and a smooth
-// gradient costs under half of 24 bits per vertex (measured 9.4; version 8's coder 11.0).
+// gradient costs under half of 24 bits per vertex (measured 8.3; version 8's coder 11.0).
 TEST(ColorCoding, SmoothAndNoisyColoursRoundTripExactly) {
   TriangleMesh smooth = sphere(60, 80), noisy = smooth;
   std::mt19937 rng(11);

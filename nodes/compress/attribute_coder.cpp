@@ -6,7 +6,6 @@
 #include <string>
 
 #include "nodes/compress/quantizer.h"
-#include "nodes/compress/vertex_adjacency.h"
 #include "runtime/error.h"
 
 namespace meshflow::compress {
@@ -173,102 +172,6 @@ NormalPrediction predict_normal(const RingSums& r, std::size_t i, double step,
   return p;
 }
 
-// Vertex adjacency (both directions, sorted, unique) in compressed rows.
-using Adjacency = VertexAdjacency;
-
-Adjacency adjacency(const DecodedGeometry& g) {
-  return vertex_adjacency(g.grid.size(), g.triangles);
-}
-
-// Reversible YCoCg-R lifting on integers (any range).
-std::array<std::int32_t, 3> to_ycocg(std::int32_t r, std::int32_t g, std::int32_t b) {
-  const std::int32_t co = r - b, t = b + (co >> 1), cg = g - t;
-  return {t + (cg >> 1), co, cg};
-}
-std::array<std::int32_t, 3> from_ycocg(const std::array<std::int32_t, 3>& y) {
-  const std::int32_t t = y[0] - (y[2] >> 1), g = y[2] + t, b = t - (y[1] >> 1);
-  return {b + y[1], g, b};
-}
-
-// Colour contexts (LOCO-I style: the neighbourhood's activity predicts the residual's size).
-// Y by how much the decoded neighbours' Y differ from the prediction (kActivityClasses) and how
-// many there are (0 .. 3+); Co by the neighbours' chroma activity and |dY| (kLumaClasses); Cg by
-// those and |dCo| (kCoClasses): a residual at an edge is large on every channel.
-constexpr std::size_t kActivityClasses = 10, kLumaClasses = 7, kCoClasses = 4;
-// Activity class k: the mean absolute difference is above kActivityEdge[k - 1].
-constexpr std::array<std::int32_t, kActivityClasses - 1> kActivityEdge = {1,  2,  3,  5, 8,
-                                                                          12, 20, 32, 50};
-
-struct ColorModels {
-  std::vector<IntegerModel> y = std::vector<IntegerModel>(kActivityClasses * 4);
-  std::vector<IntegerModel> co = std::vector<IntegerModel>(kActivityClasses * kLumaClasses);
-  std::vector<IntegerModel> cg =
-      std::vector<IntegerModel>(kActivityClasses * kLumaClasses * kCoClasses);
-};
-
-// The class of a sum of absolute differences over `count` neighbours (integers only).
-std::size_t activity_class(std::int64_t sum, std::int64_t count) {
-  std::size_t k = 0;
-  while (k < kActivityEdge.size() && kActivityEdge[k] * count < sum) ++k;
-  return k;
-}
-
-// The class of |v| for the chroma contexts: 0, 1, 2-3, 4-7, 8-15, 16-31, 32+ (capped at `n`).
-std::size_t magnitude_class(std::int32_t v, std::size_t n) {
-  const std::uint32_t a = static_cast<std::uint32_t>(v < 0 ? -std::int64_t{v} : v);
-  const std::size_t bits = a == 0 ? 0 : 32u - static_cast<std::size_t>(__builtin_clz(a));
-  return std::min(bits, n - 1);
-}
-
-// What both sides know of vertex i's colour: the prediction (the mean of its neighbours below
-// i, else vertex i - 1's) and the contexts of its Y residual and chroma activity.
-struct ColorPrediction {
-  std::array<std::int32_t, 3> rgb{};
-  std::size_t y_context = 0, chroma_activity = 0;
-};
-
-ColorPrediction predict_color(const Adjacency& adj, const std::vector<Rgb8>& colors,
-                              const std::vector<std::array<std::int32_t, 3>>& ycocg,
-                              std::uint32_t i) {
-  ColorPrediction p;
-  std::int32_t sum[3] = {0, 0, 0};
-  std::uint32_t count = 0;
-  const std::uint32_t begin = adj.first[i];
-  std::uint32_t end = begin;
-  for (; end < adj.first[i + 1]; ++end) {
-    const std::uint32_t n = adj.neighbour[end];
-    if (n >= i) break;  // sorted: the rest are decoded later
-    sum[0] += colors[n].r;
-    sum[1] += colors[n].g;
-    sum[2] += colors[n].b;
-    ++count;
-  }
-  if (count == 0) {
-    if (i > 0) p.rgb = {colors[i - 1].r, colors[i - 1].g, colors[i - 1].b};
-    return p;
-  }
-  const auto c = static_cast<std::int32_t>(count);
-  p.rgb = {(sum[0] + c / 2) / c, (sum[1] + c / 2) / c, (sum[2] + c / 2) / c};
-  const std::array<std::int32_t, 3> q = to_ycocg(p.rgb[0], p.rgb[1], p.rgb[2]);
-  std::int64_t luma = 0, chroma = 0;
-  for (std::uint32_t k = begin; k < end; ++k) {
-    const std::array<std::int32_t, 3>& n = ycocg[adj.neighbour[k]];
-    luma += std::abs(n[0] - q[0]);
-    chroma += std::abs(n[1] - q[1]) + std::abs(n[2] - q[2]);
-  }
-  p.y_context = activity_class(luma, c) * 4 + std::min<std::size_t>(count, 3);
-  p.chroma_activity = activity_class(chroma, c);
-  return p;
-}
-
-// The Co and Cg model indices of a vertex from its prediction and the residuals before them.
-std::size_t co_context(const ColorPrediction& p, std::int32_t dy) {
-  return p.chroma_activity * kLumaClasses + magnitude_class(dy, kLumaClasses);
-}
-std::size_t cg_context(const ColorPrediction& p, std::int32_t dy, std::int32_t dco) {
-  return co_context(p, dy) * kCoClasses + magnitude_class(dco, kCoClasses);
-}
-
 }  // namespace
 
 std::vector<std::array<double, 3>> ring_normal_sums(const DecodedGeometry& g) {
@@ -349,47 +252,6 @@ Eigen::Vector3f apply_normal_residual(const Eigen::Vector3f& predicted,
   const Frame f = Frame::of({predicted.x(), predicted.y(), predicted.z()});
   const std::array<std::int32_t, 2> p = octahedral_encode(f.to(predicted), bits);
   return f.from(octahedral_decode(clamped_code(p, residual, bits), bits));
-}
-
-void encode_colors(const DecodedGeometry& g, const std::vector<Rgb8>& colors, RangeEncoder& enc) {
-  const Adjacency adj = adjacency(g);
-  ColorModels m;
-  std::vector<std::array<std::int32_t, 3>> ycocg(g.grid.size());
-  for (std::uint32_t i = 0; i < g.grid.size(); ++i) {
-    const ColorPrediction p = predict_color(adj, colors, ycocg, i);
-    const Rgb8 c = colors[i];
-    const std::array<std::int32_t, 3> d = to_ycocg(c.r - p.rgb[0], c.g - p.rgb[1], c.b - p.rgb[2]);
-    m.y[p.y_context].encode(enc, d[0]);
-    m.co[co_context(p, d[0])].encode(enc, d[1]);
-    m.cg[cg_context(p, d[0], d[1])].encode(enc, d[2]);
-    ycocg[i] = to_ycocg(c.r, c.g, c.b);
-  }
-}
-
-std::vector<Rgb8> decode_colors(const DecodedGeometry& g, RangeDecoder& dec) {
-  const Adjacency adj = adjacency(g);
-  ColorModels m;
-  std::vector<Rgb8> colors(g.grid.size());
-  std::vector<std::array<std::int32_t, 3>> ycocg(g.grid.size());
-  RangeDecoder::Session session(dec);
-  for (std::uint32_t i = 0; i < g.grid.size(); ++i) {
-    const ColorPrediction p = predict_color(adj, colors, ycocg, i);
-    std::array<std::int32_t, 3> d{};
-    // Residuals of a valid stream are within +-1020; clamping keeps corrupt ones from
-    // overflowing (the checksum reports the corruption), each before a context uses it.
-    d[0] = std::clamp(m.y[p.y_context].decode(session.core), -4096, 4096);
-    d[1] = std::clamp(m.co[co_context(p, d[0])].decode(session.core), -4096, 4096);
-    d[2] = std::clamp(m.cg[cg_context(p, d[0], d[1])].decode(session.core), -4096, 4096);
-    const std::array<std::int32_t, 3> rgb = from_ycocg(d);
-    const auto channel = [](std::int32_t v) {
-      return static_cast<std::uint8_t>(std::clamp(v, 0, 255));
-    };
-    const Rgb8 c{channel(p.rgb[0] + rgb[0]), channel(p.rgb[1] + rgb[1]),
-                 channel(p.rgb[2] + rgb[2])};
-    colors[i] = c;
-    ycocg[i] = to_ycocg(c.r, c.g, c.b);
-  }
-  return colors;
 }
 
 }  // namespace meshflow::compress

@@ -1,5 +1,5 @@
 #pragma once
-// The per-vertex attribute coders of a compressed mesh body (nodes/compress/mesh_codec.h). Both
+// The per-vertex attribute coders of a compressed mesh body (nodes/compress/mesh_codec.h). They
 // run after the connectivity and the positions, so a decoder already holds the whole decoded
 // geometry when it reads the attributes:
 //  - normals: predicted by the area-weighted normal of the vertex's one ring of decoded faces
@@ -12,11 +12,7 @@
 //    grid's noise on the ring's normal is against the step. Meshes whose normals are
 //    area-weighted face normals (the extractors') cost well under a bit per normal at 0.5
 //    degrees.
-//  - colours: predicted by the mean of the vertex's one-ring neighbours decoded before it (the
-//    previous vertex's colour without any), the difference mapped to YCoCg-R (reversible on
-//    integers) and range-coded in contexts of the neighbourhood's activity (how far those
-//    neighbours are from the prediction) and, for Co and Cg, the size of the residuals coded
-//    before them. Exact at 8 bits.
+//  - colours: nodes/compress/color_coder.h.
 // Not thread-safe per coder; O(V + T).
 
 #include <array>
@@ -68,11 +64,5 @@ std::array<std::int32_t, 2> normal_residual(const Eigen::Vector3f& predicted,
 /// The normal of a residual from normal_residual() (codes clamped to the grid). O(1).
 Eigen::Vector3f apply_normal_residual(const Eigen::Vector3f& predicted,
                                       const std::array<std::int32_t, 2>& residual, unsigned bits);
-
-/// Codes `colors` (one per grid vertex, output order), exactly. O(V + T).
-void encode_colors(const DecodedGeometry& g, const std::vector<Rgb8>& colors, RangeEncoder& enc);
-
-/// Reads what encode_colors() wrote for the same geometry. O(V + T).
-std::vector<Rgb8> decode_colors(const DecodedGeometry& g, RangeDecoder& dec);
 
 }  // namespace meshflow::compress

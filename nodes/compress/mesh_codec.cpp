@@ -4,6 +4,7 @@
 
 #include "nodes/compress/attribute_coder.h"
 #include "nodes/compress/closed_surface.h"
+#include "nodes/compress/color_coder.h"
 #include "nodes/compress/coordinate_snap.h"
 #include "nodes/compress/edgebreaker_connectivity.h"
 #include "nodes/compress/edgebreaker_replay.h"
@@ -762,7 +763,7 @@ unsigned decode_attributes(io::ByteReader& in, AttributeFlags flags,
   RangeDecoder dec(section.bytes, section.size, source, "attribute section");
   const DecodedGeometry geometry{grid, mesh.triangles};
   if (flags.normals) mesh.normals = decode_normals(geometry, dec, source);
-  if (flags.colors) mesh.colors = decode_colors(geometry, dec);
+  if (flags.colors) mesh.colors = decode_colors(geometry, dec, source);
   dec.check();
   return normal_bits;
 }

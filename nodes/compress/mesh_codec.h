@@ -3,9 +3,9 @@
 // the quantisation grid by the mean of the parallelograms the encoder flags as trusted among
 // those the decoder can form (nodes/compress/parallelogram_ring.h; constrained
 // multi-parallelogram prediction),
-// normals and colours predicted from the decoded geometry (nodes/compress/attribute_coder.h), all
-// range-coded. The container (header, checksum) is compressed_mesh.h's; the progressive format
-// stores its base mesh as such a body.
+// normals and colours predicted from the decoded geometry (nodes/compress/attribute_coder.h,
+// color_coder.h), all range-coded. The container (header, checksum) is compressed_mesh.h's;
+// the progressive format stores its base mesh as such a body.
 //
 // Body layout (little-endian): u32 components, u64 symbols, u64 surface vertices, then six
 // sections, each a u64 byte count and a range-coded stream: side data (handles, hole vertices,
@@ -15,7 +15,8 @@
 // decoder's three dependency chains overlap; each vertex's trusted subset of the offered
 // parallelograms, one choice, precedes its x residual); then a u8 of octahedral normal bits (0
 // without normals; the progressive splits' grid) and the attribute section (with normals their
-// residual step, a float's 32 bits at even odds, and the normals; then colours).
+// residual step, a float's 32 bits at even odds, and the normals; then colours: their channel
+// order in 3 bits and three int8 coefficients at even odds, and the residuals).
 
 #include <array>
 #include <cstdint>

@@ -202,7 +202,7 @@ class Decimator {
       targets_.clear();
       bound_marked_costs();
       if (!sort_candidates()) break;
-      const std::size_t collapsed = walk_pass();
+      const std::size_t collapsed = cfg_.independent_collapses ? independent_pass() : walk_pass();
       report.collapses += collapsed;
       ++report.passes;
       // A pass may collapse nothing when every candidate it walked cost more, evaluated, than its
@@ -452,10 +452,76 @@ class Decimator {
         continue;
       }
       alive_ -= collapse(c.from, c.to, ++walk.clock, pass_);
+      if (cfg_.record_collapses) sequence_.push_back({c.from, c.to});
       targets_.push_back(c.to);
       best_[c.from].cost = kNoCollapse;  // removed
       ++walk.collapsed;
     }
+  }
+
+  // Phase 4 with independent collapses: every candidate whose bound is within the pass's limit
+  // (as walk_pass() sets it) evaluated fully, in parallel on the mesh as the pass starts; those
+  // still within it taken cheapest first (cost, then vertex) unless a vertex of u's closed
+  // neighbourhood (u and its ring) is in that of a collapse taken before. Disjoint
+  // neighbourhoods keep every evaluation exact for the mesh the others leave (a collapse reads
+  // and writes only its own: collapse()), so the taken ones are applied together, in parallel.
+  // Returns the collapses.
+  std::size_t independent_pass() {
+    const std::size_t goal = std::min(order_.size(), (alive_ - target_ + 1) / 2);
+    const double limit = kPassLimit * candidate(std::max<std::size_t>(goal, 1) - 1).cost;
+    std::fill(pass_.begin(), pass_.end(), PassNumbers{});
+    std::size_t within = 0;  // candidates [0, within) have bounds within the limit
+    while (within < order_.size() && candidate(within).cost <= limit) ++within;
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, within, 16),
+                      [&](const tbb::blocked_range<std::size_t>& range) {
+                        Scratch& local = local_scratch();
+                        for (std::size_t i = range.begin(); i != range.end(); ++i) {
+                          const std::uint32_t u = order_[i] & vertex_mask_;
+                          if (validated_[u]) continue;
+                          best_[u] = best_collapse(u, local);
+                          validated_[u] = 1;
+                        }
+                      });
+    // The evaluated costs within the limit, cheapest first.
+    picks_.clear();
+    for (std::size_t i = 0; i < within; ++i) {
+      const Candidate& c = candidate(i);
+      if (c.cost <= limit) picks_.push_back(order_key(c, vertex_bits_));
+    }
+    radix_sort(picks_);
+    // Taken cheapest first while their closed neighbourhoods stay apart (claimed_ holds the
+    // pass's number where one is taken).
+    if (claimed_.size() != best_.size()) claimed_.assign(best_.size(), 0);
+    if (++pass_stamp_ == 0) {  // wrapped around: start the stamps again
+      std::fill(claimed_.begin(), claimed_.end(), 0);
+      pass_stamp_ = 1;
+    }
+    taken_.clear();
+    for (std::uint64_t key : picks_) {
+      if (alive_ <= target_) break;
+      const Candidate& c = best_[key & vertex_mask_];
+      const std::uint32_t u = c.from;
+      bool apart = claimed_[u] != pass_stamp_;
+      for (const std::uint32_t* x = rings_.begin(u); x != rings_.end(u); ++x)
+        apart &= claimed_[*x] != pass_stamp_;
+      if (!apart) continue;
+      claimed_[u] = pass_stamp_;
+      for (const std::uint32_t* x = rings_.begin(u); x != rings_.end(u); ++x)
+        claimed_[*x] = pass_stamp_;
+      rings_.reserve_collapse(u, c.to);
+      alive_ -= rings_.kind(u) == VertexRings::Kind::kOpen ? 1 : 2;
+      taken_.push_back({u, c.to});
+      targets_.push_back(c.to);
+      best_[u].cost = kNoCollapse;  // removed
+    }
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, taken_.size(), 32),
+                      [&](const tbb::blocked_range<std::size_t>& range) {
+                        for (std::size_t j = range.begin(); j != range.end(); ++j)
+                          collapse(taken_[j][0], taken_[j][1],
+                                   static_cast<std::uint32_t>(j + 1), pass_);
+                      });
+    if (cfg_.record_collapses) sequence_.insert(sequence_.end(), taken_.begin(), taken_.end());
+    return taken_.size();
   }
 
   // Phase 5: the refusals every thread counted.
@@ -747,7 +813,9 @@ class Decimator {
 
   // Applies u -> v, the pass's collapse `number`, and writes that number as `changed` for u
   // and its neighbours (v among them): the vertices whose faces or quadric change. Returns the
-  // faces removed (one on a border edge, two inside).
+  // faces removed (one on a border edge, two inside). Writes only the state of u's closed
+  // neighbourhood (u and its ring): collapses of disjoint ones may run in parallel, each after
+  // VertexRings::reserve_collapse().
   std::size_t collapse(std::uint32_t u, std::uint32_t v, std::uint32_t number,
                        std::vector<PassNumbers>& pass) {
     pass[u].changed = number;
@@ -763,7 +831,6 @@ class Decimator {
         if (feature_degree_[x] == 2) (line_[x][0] == from ? line_[x][0] : line_[x][1]) = to;
     }
     const std::size_t removed = rings_.collapse(u, v);
-    if (cfg_.record_collapses) sequence_.push_back({u, v});
     q_[v].add(q_[u]);
     terms_[v].own_error = q_[v].error(p(v));
     return removed;
@@ -796,6 +863,11 @@ class Decimator {
   std::uint64_t vertex_mask_ = 0;
   std::vector<Candidate> ahead_;         ///< a chunk's candidates evaluated in parallel
   std::vector<std::uint8_t> has_ahead_;  ///< 1 where ahead_ holds one
+  // independent_pass()'s memory:
+  std::vector<std::uint64_t> picks_;    ///< candidates within the limit, evaluated, cheapest first
+  std::vector<std::uint32_t> claimed_;  ///< pass_stamp_ on the closed neighbourhoods taken
+  std::uint32_t pass_stamp_ = 0;
+  std::vector<std::array<std::uint32_t, 2>> taken_;  ///< the pass's collapses {u, v}
 };
 
 }  // namespace

@@ -35,11 +35,11 @@ struct QemConfig {
   /// evaluated on the mesh its earlier collapses left. The output depends on it, never on the
   /// thread count.
   bool independent_collapses = true;
-  /// Without independent_collapses, a pass's walk evaluates its candidates (and again those next to earlier collapses) in
-  /// chunks of this many, in parallel at each chunk's start (again serially only where the
-  /// chunk's earlier collapses changed them): a single mesh scales with threads. 0 = one at a
-  /// time, serially: fewer evaluations and no waits, for callers that keep every core busy with
-  /// other work (frames in flight). The output depends on it, never on the thread count.
+  /// Without independent_collapses, a pass's walk evaluates its candidates (and again those next to
+  /// earlier collapses) in chunks of this many, in parallel at each chunk's start (again serially
+  /// only where the chunk's earlier collapses changed them): a single mesh scales with threads. 0 =
+  /// one at a time, serially: fewer evaluations and no waits, for callers that keep every core busy
+  /// with other work (frames in flight). The output depends on it, never on the thread count.
   std::size_t walk_chunk = 256;
   /// Record every collapse, in the order applied, in QemReport::collapse_sequence (for
   /// progressive meshes: replayed in reverse they are the vertex splits).

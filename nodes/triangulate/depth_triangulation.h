@@ -41,11 +41,9 @@ struct DepthTriangulationConfig {
   float decimate_to = 0.0f;
   /// Its other settings (target_ratio and viewpoint are set per frame). Per-frame meshes are
   /// made with frames in flight (the embedding API, sequences), which keep the cores busy: the
-  /// walk's re-evaluations stay serial (one collapse at a time, walk_chunk = 0: the fewest
-  /// evaluations).
+  /// walk's re-evaluations stay serial (walk_chunk = 0, the fewest evaluations).
   QemConfig decimation = [] {
     QemConfig q;
-    q.independent_collapses = false;
     q.walk_chunk = 0;
     return q;
   }();

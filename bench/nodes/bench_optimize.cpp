@@ -40,5 +40,23 @@ BENCHMARK(BM_OptimizeStep)
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
 
+// The decimate step (features kept) with QemConfig::independent_collapses: passes of
+// collapses whose neighbourhoods are disjoint, applied in parallel; beside BM_OptimizeStep's
+// step 3 (the one-at-a-time walk) and BM_MeshoptSimplify.
+void BM_OptimizeDecimateIndependent(benchmark::State& state) {
+  const TriangleMesh* mesh = cleaned_mesh(state);
+  if (mesh == nullptr) return;
+  OptimizeConfig config;
+  config.steps = {OptimizeStep::kDecimate};
+  config.decimate.independent_collapses = true;
+  time_optimize(state, *mesh, config);
+  count_distance_to_input(state, *mesh, optimize_mesh(*mesh, config));
+}
+BENCHMARK(BM_OptimizeDecimateIndependent)
+    ->ArgsProduct({{1, 2}, {kSynthetic, kKurt3d}})
+    ->ArgNames({"threads", "input"})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
+
 }  // namespace
 }  // namespace meshflow::bench

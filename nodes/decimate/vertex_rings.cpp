@@ -283,6 +283,17 @@ void VertexRings::erase_or_replace(std::uint32_t w, std::uint32_t u, std::uint32
   --slot.size;
 }
 
+void VertexRings::reserve_collapse(std::uint32_t u, std::uint32_t v) {
+  // v's ring loses u and gains u's ring but v and the one or two wings (collapse()'s run).
+  const std::size_t run_length = size(u) - (kind(u) == Kind::kClosed ? 3 : 2);
+  const std::size_t new_size = size(v) - 1 + run_length;
+  Slot& slot = slots_[v];
+  if (new_size <= slot.capacity) return;
+  const std::uint32_t old_offset = move_to_end(slot, new_size);
+  std::copy(data_.begin() + old_offset, data_.begin() + old_offset + slot.size,
+            data_.begin() + slot.offset);
+}
+
 std::size_t VertexRings::collapse(std::uint32_t u, std::uint32_t v) {
   const std::size_t n = slots_[u].size;
   const std::uint32_t* ring_u = begin(u);

@@ -73,8 +73,15 @@ class VertexRings {
   /// Preconditions (the caller's checks): u is not locked; v is in u's ring; v is one of the two
   /// border neighbours if u is open; the link condition holds (the common neighbours of u and v
   /// are exactly the opposite corners of the removed faces). O(valence of u and v), amortised.
-  /// Not thread-safe (rings of u, v and u's neighbours change; storage may move).
+  /// Not thread-safe (rings of u, v and u's neighbours change; storage may move), except as
+  /// reserve_collapse() says.
   std::size_t collapse(std::uint32_t u, std::uint32_t v);
+
+  /// Gives v's ring the room collapse(u, v) needs (same preconditions), moving it to the end of
+  /// the storage when it has too little: after this, collapse(u, v) moves no storage, so
+  /// collapses whose u's closed neighbourhoods (u and its ring) are disjoint may run in
+  /// parallel, each prepared by this beforehand. Not thread-safe (storage may move). O(valence).
+  void reserve_collapse(std::uint32_t u, std::uint32_t v);
 
   /// The faces of the mesh as it is now: every face with a non-complex corner, from the ring of
   /// the smallest such corner (in vertex order, then ring order), then the faces of only

@@ -65,10 +65,14 @@ void expect_quarter_with_one_border(const TriangleMesh& in, const TriangleMesh& 
   EXPECT_EQ(topology.boundary_loops, 1u) << what;
 }
 
-TEST(QemDecimation, KeepsMeasuredVerticesTopologyBorderAndNormals) {
+// The wave decimated to a quarter, by the walk or independent collapses: measured vertices,
+// manifold, the border's shape and corners, no face turned over, close to the input.
+void keeps_measured_vertices_topology_border_and_normals(bool independent) {
   const TriangleMesh in = height_field(80, wave);
   QemReport report;
-  const TriangleMesh out = qem_decimate(in, plain_config(), &report);
+  QemConfig config = plain_config();
+  config.independent_collapses = independent;
+  const TriangleMesh out = qem_decimate(in, config, &report);
   std::printf(
       "[ qem ] %zu -> %zu triangles; %zu collapses, rejected: %zu topology, %zu normal, "
       "%zu border; Hausdorff %.5f\n",
@@ -97,6 +101,13 @@ TEST(QemDecimation, KeepsMeasuredVerticesTopologyBorderAndNormals) {
     EXPECT_GT(face_normal(out, t).dot(wave_normal(c.x(), c.y())), 0.5f);
   }
   EXPECT_LT(hausdorff_distance(out, in), 0.01);
+}
+
+TEST(QemDecimation, KeepsMeasuredVerticesTopologyBorderAndNormals) {
+  for (bool independent : {false, true}) {
+    SCOPED_TRACE(independent ? "independent collapses" : "walk");
+    keeps_measured_vertices_topology_border_and_normals(independent);
+  }
 }
 
 TEST(QemDecimation, NeedleAndSharpEdgePenaltiesLeaveFewerThinTriangles) {
@@ -204,13 +215,14 @@ TEST(QemDecimation, SameResultWithOneAndTwoThreads) {
 }
 
 // On a plane every collapse costs nothing, so every collapse a pass re-evaluates stays within
-// its limit: vertices that took a collapse (reading the faces they took over) and their
-// neighbours collapse again in the same pass, and one pass reaches the target (re-evaluating
-// serially or in parallel chunks).
+// its limit: in the walk (one collapse at a time), vertices that took a collapse (reading the
+// faces they took over) and their neighbours collapse again in the same pass, and one pass
+// reaches the target (re-evaluating serially or in parallel chunks).
 TEST(QemDecimation, GrownVerticesCollapseAgainInTheSamePass) {
   const TriangleMesh in = height_field(60, [](float, float) { return 0.0f; });
   for (std::size_t walk_chunk : {std::size_t{0}, std::size_t{64}}) {
     QemConfig config = plain_config();
+    config.independent_collapses = false;
     config.walk_chunk = walk_chunk;
     QemReport report;
     const TriangleMesh out = qem_decimate(in, config, &report);
@@ -266,8 +278,10 @@ TEST(QemDecimation, RandomNoisyMeshesWithHolesStayManifold) {
     for (float ratio : {0.05f, 0.25f, 0.6f}) {
       QemConfig config;
       config.target_ratio = ratio;
-      // The walk's re-evaluations serial, in parallel chunks of 7 (many chunks) or of 256.
-      config.walk_chunk = static_cast<std::size_t>(trial % 3 == 0 ? 0 : trial % 3 == 1 ? 7 : 256);
+      // Independent collapses, or the walk's re-evaluations serial, in parallel chunks of 7
+      // (many chunks) or of 256.
+      config.independent_collapses = trial % 4 == 3;
+      config.walk_chunk = static_cast<std::size_t>(trial % 4 == 0 ? 0 : trial % 4 == 1 ? 7 : 256);
       config.divide_by_depth2 = trial % 2 == 0;
       config.viewpoint = Eigen::Vector3f(0.5f, 0.5f, -1.0f);
       std::vector<TriangleMesh> out;
@@ -276,9 +290,9 @@ TEST(QemDecimation, RandomNoisyMeshesWithHolesStayManifold) {
         out.push_back(qem_decimate(in, config));
       }
       const MeshTopology topology = mesh_topology(out[0]);
-      const std::string what = "trial " + std::to_string(trial) + ", ratio " +
-                               std::to_string(ratio) + ", chunk " +
-                               std::to_string(config.walk_chunk);
+      const std::string what =
+          "trial " + std::to_string(trial) + ", ratio " + std::to_string(ratio) + ", chunk " +
+          std::to_string(config.walk_chunk) + (config.independent_collapses ? ", independent" : "");
       EXPECT_LT(out[0].triangles.size(), in.triangles.size()) << what;
       EXPECT_EQ(topology.edges.non_manifold_edges, 0u) << what;
       EXPECT_EQ(topology.edges.inconsistent_edges, 0u) << what;
@@ -322,6 +336,7 @@ TEST(QemDecimation, HubsAndRepeatedCornersAreHandled) {
     in.triangles.push_back(in.triangles[well_formed / 2]);   // a face given twice
     QemConfig config = plain_config();
     config.target_ratio = 0.3f;
+    config.independent_collapses = spokes % 2 == 0;
     std::vector<TriangleMesh> out;
     for (int threads : {1, 2}) {
       ThreadLimit limit(threads);
@@ -348,6 +363,62 @@ TEST(QemDecimation, HubsAndRepeatedCornersAreHandled) {
   }
 }
 
+// A noisy wave (about 29 k faces, a border) decimated to a quarter with independent
+// collapses: the same mesh with one and two threads, manifold and consistently oriented, every
+// face within 5 mm of the wave (centroids; the noise is 2 mm), no more faces standing on edge or
+// turned against the wave's normal than the one-at-a-time walk leaves (both keep the measured,
+// noisy vertices; KeepsMeasuredVerticesTopologyBorderAndNormals has none on a clean wave), and as
+// close to the input as the walk (mean and p95 distance from the input's vertices, within 10 %:
+// the two take their collapses in a slightly different order).
+TEST(QemDecimation, IndependentCollapsesMatchTheWalkAndTheThreadCount) {
+  std::mt19937 rng(11);
+  std::normal_distribution<float> gauss(0.0f, 0.002f);
+  TriangleMesh in = height_field(121, wave);
+  for (Eigen::Vector3f& v : in.vertices) v.z() += gauss(rng);
+  QemConfig config = plain_config();
+  config.independent_collapses = true;
+  std::vector<TriangleMesh> out;
+  std::vector<QemReport> reports(2);
+  for (int threads : {1, 2}) {
+    ThreadLimit limit(threads);
+    out.push_back(qem_decimate(in, config, &reports[static_cast<std::size_t>(threads - 1)]));
+  }
+  EXPECT_EQ(out[0].triangles, out[1].triangles);
+  EXPECT_EQ(out[0].vertices, out[1].vertices);
+  EXPECT_EQ(reports[0].passes, reports[1].passes);
+  EXPECT_EQ(reports[0].rejected_topology, reports[1].rejected_topology);
+  EXPECT_EQ(reports[0].rejected_normal, reports[1].rejected_normal);
+  expect_quarter_with_one_border(in, out[0], "independent");
+  EXPECT_GE(out[0].triangles.size(), in.triangles.size() / 4 - 2);
+  config.independent_collapses = false;
+  const TriangleMesh walked = qem_decimate(in, config);
+  // {faces not facing along the wave's normal at their centroid, faces 5 mm or more off it}
+  const auto off_the_wave = [](const TriangleMesh& m) {
+    std::array<std::size_t, 2> off = {0, 0};
+    for (const Triangle& t : m.triangles) {
+      const Eigen::Vector3f& a = m.vertices[t[0]];
+      const Eigen::Vector3f n = (m.vertices[t[1]] - a).cross(m.vertices[t[2]] - a);
+      const Eigen::Vector3f c = (a + m.vertices[t[1]] + m.vertices[t[2]]) / 3.0f;
+      off[0] += n.dot(wave_normal(c.x(), c.y())) > 0.0f ? 0 : 1;
+      off[1] += std::abs(c.z() - wave(c.x(), c.y())) < 0.005f ? 0 : 1;
+    }
+    return off;
+  };
+  const auto off = off_the_wave(out[0]), off_walk = off_the_wave(walked);
+  const DistanceStats independent = evaluate_surface(out[0], in).reference_to_mesh;
+  const DistanceStats walk = evaluate_surface(walked, in).reference_to_mesh;
+  std::printf(
+      "[ qem ] independent collapses: %zu passes, mean %.3g p95 %.3g m, %zu faces on edge; "
+      "walk %.3g %.3g m, %zu\n",
+      reports[0].passes, independent.mean, independent.p95, off[0], walk.mean, walk.p95,
+      off_walk[0]);
+  EXPECT_LE(off[0], off_walk[0]);
+  EXPECT_EQ(off[1], 0u);
+  EXPECT_EQ(off_walk[1], 0u);
+  EXPECT_LE(independent.mean, 1.1 * walk.mean);
+  EXPECT_LE(independent.p95, 1.1 * walk.p95);
+}
+
 // A closed tetrahedron has no valid collapse (each would fold a face onto another), though
 // every vertex has a finite cost bound: the pass that finds none and the one after it end the
 // decimation, the mesh unchanged.
@@ -355,8 +426,9 @@ TEST(QemDecimation, NoValidCollapseEndsWithTheMeshUnchanged) {
   TriangleMesh m;
   m.vertices = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
   m.triangles = {{0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {1, 2, 3}};
-  for (std::size_t walk_chunk : {std::size_t{0}, std::size_t{256}}) {
+  for (std::size_t walk_chunk : {std::size_t{0}, std::size_t{256}, std::size_t{1}}) {
     QemConfig config = plain_config();
+    config.independent_collapses = walk_chunk == 1;  // (walk_chunk then does not matter)
     config.walk_chunk = walk_chunk;
     QemReport report;
     const TriangleMesh out = qem_decimate(m, config, &report);

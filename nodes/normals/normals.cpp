@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "nodes/normals/smallest_eigen.h"
 #include "nodes/search/neighbour_table.h"
 #include "runtime/error.h"
 #include "runtime/parallel.h"
@@ -20,15 +21,31 @@ struct LocalFrame {
   Eigen::Vector3d values;  // the covariance's eigenvalues, ascending
 };
 
+// Mean and scatter (the sum of the outer products about the mean) of the n points at(0 .. n-1),
+// in double; the scatter's lower triangle mirrors the upper.
+template <class At>
+void scatter_of(std::size_t n, const At& at, Eigen::Vector3d& mean, Eigen::Matrix3d& scatter) {
+  mean.setZero();
+  for (std::size_t i = 0; i < n; ++i) mean += at(i).template cast<double>();
+  mean /= static_cast<double>(n);
+  double s00 = 0.0, s01 = 0.0, s02 = 0.0, s11 = 0.0, s12 = 0.0, s22 = 0.0;
+  for (std::size_t i = 0; i < n; ++i) {
+    const Eigen::Vector3d d = at(i).template cast<double>() - mean;
+    s00 += d.x() * d.x();
+    s01 += d.x() * d.y();
+    s02 += d.x() * d.z();
+    s11 += d.y() * d.y();
+    s12 += d.y() * d.z();
+    s22 += d.z() * d.z();
+  }
+  scatter << s00, s01, s02, s01, s11, s12, s02, s12, s22;
+}
+
 LocalFrame principal_frame(const std::vector<Eigen::Vector3f>& pts, std::size_t n) {
   LocalFrame f{Eigen::Vector3d::Zero(), Eigen::Matrix3d::Identity(), Eigen::Vector3d::Zero()};
-  for (std::size_t i = 0; i < n; ++i) f.mean += pts[i].cast<double>();
-  f.mean /= static_cast<double>(n);
-  Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
-  for (std::size_t i = 0; i < n; ++i) {
-    const Eigen::Vector3d d = pts[i].cast<double>() - f.mean;
-    cov.noalias() += d * d.transpose();
-  }
+  Eigen::Matrix3d cov;
+  scatter_of(
+      n, [&](std::size_t i) -> const Eigen::Vector3f& { return pts[i]; }, f.mean, cov);
   Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> solver;
   solver.computeDirect(cov);
   f.axes = solver.eigenvectors();
@@ -94,20 +111,36 @@ std::vector<PlaneFit> plane_fits(const PointCloud& cloud, const SpatialIndex& in
           if (!wanted.empty() && !wanted[i]) continue;
           std::size_t k = std::min<std::size_t>(kn, table.counts[i]);
           if (k < 3) continue;
-          for (std::size_t j = 0; j < k; ++j) pts[j] = cloud.positions[table.row(i)[j]];
-          LocalFrame frame = principal_frame(pts, k);
-          while (config.adaptive_k && !box_well_shaped(pts, k, frame, config.adaptive_ratio) &&
-                 k < max_k && k < index.size()) {
-            k = index.knn(cloud.positions[i], std::min(2 * k, max_k), idx.data(), d2.data());
-            for (std::size_t j = 0; j < k; ++j) pts[j] = cloud.positions[idx[j]];
-            frame = principal_frame(pts, k);
+          const std::uint32_t* row = table.row(i);
+          Eigen::Vector3d mean, values;
+          Eigen::Vector3f normal;
+          if (!config.adaptive_k) {  // the smallest eigenvector only, in closed form
+            Eigen::Matrix3d scatter;
+            scatter_of(
+                k, [&](std::size_t j) -> const Eigen::Vector3f& { return cloud.positions[row[j]]; },
+                mean, scatter);
+            const SmallestEigen e = smallest_eigen(scatter);
+            values = e.values;
+            normal = e.vector.cast<float>();
+          } else {
+            for (std::size_t j = 0; j < k; ++j) pts[j] = cloud.positions[row[j]];
+            LocalFrame frame = principal_frame(pts, k);
+            while (!box_well_shaped(pts, k, frame, config.adaptive_ratio) && k < max_k &&
+                   k < index.size()) {
+              k = index.knn(cloud.positions[i], std::min(2 * k, max_k), idx.data(), d2.data());
+              for (std::size_t j = 0; j < k; ++j) pts[j] = cloud.positions[idx[j]];
+              frame = principal_frame(pts, k);
+            }
+            mean = frame.mean;
+            values = frame.values;
+            normal = frame.axes.col(0).normalized().cast<float>();
           }
           PlaneFit& f = fits[i];
-          f.normal = frame.axes.col(0).normalized().cast<float>();
-          f.centroid = frame.mean.cast<float>();
-          const double total = frame.values.sum();
-          f.variation = total > 0.0 ? static_cast<float>(frame.values[0] / total) : 1.0f;
-          f.thickness = static_cast<float>(std::sqrt(std::max(0.0, frame.values[0]) / k));
+          f.normal = normal;
+          f.centroid = mean.cast<float>();
+          const double total = values.sum();
+          f.variation = total > 0.0 ? static_cast<float>(values[0] / total) : 1.0f;
+          f.thickness = static_cast<float>(std::sqrt(std::max(0.0, values[0]) / k));
           f.spread = static_cast<float>(std::sqrt(std::max(0.0, total) / k));
         }
       });

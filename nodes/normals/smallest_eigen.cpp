@@ -11,6 +11,8 @@ namespace {
 // of 1) the cubic's smallest root is too coarse for one Rayleigh refinement (measured: the
 // vector within 5e-16 / gap rad of Eigen's iterative solver down to this gap).
 constexpr double kMinGap = 1e-5;
+// Newton steps onto the smallest root at most.
+constexpr int kMaxSteps = 40;
 
 SmallestEigen by_compute_direct(const Eigen::Matrix3d& a) {
   const Eigen::Matrix3d full = a.selfadjointView<Eigen::Upper>();
@@ -37,27 +39,31 @@ SmallestEigen smallest_eigen(const Eigen::Matrix3d& a) {
   const double p = std::sqrt(p2);
   const double det =
       c00 * (c11 * c22 - b12 * b12) - b01 * (b01 * c22 - b12 * b02) + b02 * (b01 * b12 - c11 * b02);
-  const double r = std::clamp(det / (2.0 * p2 * p), -1.0, 1.0);
-  const double phi = std::acos(r) / 3.0;
-  const double top = 2.0 * p * std::cos(phi);                    // mu2 >= mu1 >= mu0
-  double low = 2.0 * p * std::cos(phi + 2.0943951023931954923);  // + 2 pi / 3
-  // The gap from the cubic's roots as found (near a double root they split by about 1e-8 of
-  // their true split: far below kMinGap), before anything moves them.
-  const double gap = -(low + top) - low;  // mu1 - mu0
-  if (!(gap > kMinGap)) return by_compute_direct(a);
-  // Near r = 1 (the two largest roots close) acos loses half the digits: Newton on the simple
-  // root mu0 restores them (g'(mu0) = 3 (p2 - mu0^2) < 0, the step well inside the gap).
-  const double first = low;
-  for (int step = 0; step < 2; ++step) {
+  // mu0 by Newton from the bound -2 p: g(mu) = det + mu (3 p2 - mu^2) is convex and decreasing
+  // left of mu0 (mu0 <= -p < 0), so the steps rise monotonically onto it; converged when a step
+  // is below 1e-12 p (the next would be below 1e-24 / gap). Near a double root mu0 = mu1 = -p
+  // they slow to halving: no convergence in kMaxSteps is a gap far below kMinGap.
+  double low = -2.0 * p;
+  bool converged = false;
+  for (int step = 0; step < kMaxSteps && !converged; ++step) {
     const double slope = 3.0 * (p2 - low * low);
-    if (slope < 0.0) low -= (det + low * (3.0 * p2 - low * low)) / slope;
+    if (!(slope < 0.0)) break;
+    const double move = (det + low * (3.0 * p2 - low * low)) / slope;
+    low -= move;
+    converged = std::abs(move) <= 1e-12 * p;
   }
-  if (!(std::abs(low - first) < 0.25 * gap)) return by_compute_direct(a);
+  if (!converged) return by_compute_direct(a);
+  // The other two roots: g(mu) = -(mu - mu0) (mu^2 + mu0 mu + mu0^2 - 3 p2).
+  const double half_split = 0.5 * std::sqrt(std::max(0.0, 12.0 * p2 - 3.0 * low * low));
+  const double middle = -0.5 * low - half_split, top = -0.5 * low + half_split;
+  const double gap = middle - low;
+  if (!(gap > kMinGap)) return by_compute_direct(a);
   // The rows of C - mu0 I span the plane of the other two eigenvectors: their cross products
   // are multiples of the wanted one (the adjugate's columns); the longest is the best. mu0's
-  // error (from the cubic: about 1e-16 / gap) tilts it by that over the gap; the Rayleigh
-  // quotient of the vector found gives mu0 to rounding (its error is the square of the tilt's)
-  // and a second pass the vector to about 1e-16 / gap.
+  // rounding (about 1e-16 / gap) tilts it by that over the gap (1e-12 rad at gap 1e-2: enough
+  // to change a float normal's bits now and then); the Rayleigh quotient of the vector found
+  // gives mu0 to rounding (its error is the square of the tilt's) and a second pass the vector
+  // to about 1e-16 / gap, as Eigen's iterative solver.
   Eigen::Vector3d x;
   for (int pass = 0; pass < 2; ++pass) {
     if (pass == 1) {
@@ -73,7 +79,7 @@ SmallestEigen smallest_eigen(const Eigen::Matrix3d& a) {
     x = (n01 >= n02 ? (n01 >= n12 ? x01 : x12) : (n02 >= n12 ? x02 : x12)) / std::sqrt(n);
   }
   SmallestEigen out;
-  out.values = Eigen::Vector3d(m + low, m - (low + top), m + top) * scale;
+  out.values = Eigen::Vector3d(m + low, m + middle, m + top) * scale;
   out.vector = x;
   return out;
 }

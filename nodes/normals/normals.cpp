@@ -9,6 +9,7 @@
 
 #include "nodes/normals/smallest_eigen.h"
 #include "nodes/search/neighbour_table.h"
+#include "runtime/default_init.h"
 #include "runtime/error.h"
 #include "runtime/parallel.h"
 
@@ -82,25 +83,27 @@ std::vector<std::uint8_t> usable_input_normals(const PointCloud& cloud) {
   return usable;
 }
 
-// The least-squares plane of a point's neighbourhood.
+// The least-squares plane of a point's neighbourhood (no member initialisers: a vector of them
+// is left for plane_fits()'s threads to write; no_fit() where none was fitted).
 struct PlaneFit {
-  Eigen::Vector3f normal = Eigen::Vector3f::Zero();  // unit, either sign; zero: < 3 neighbours
-  Eigen::Vector3f centroid = Eigen::Vector3f::Zero();
-  float variation = 1.0f;  // smallest eigenvalue / their sum: 0 on a plane, 1/3 at most
-  float thickness = 0.0f;  // RMS distance of the neighbours to the plane
-  float spread = 0.0f;     // RMS distance of the neighbours to their centroid
+  Eigen::Vector3f normal;    // unit, either sign; zero: < 3 neighbours
+  Eigen::Vector3f centroid;  //
+  float variation;           // smallest eigenvalue / their sum: 0 on a plane, 1/3 at most
+  float thickness;           // RMS distance of the neighbours to the plane
+  float spread;              // RMS distance of the neighbours to their centroid
 };
+PlaneFit no_fit() { return {Eigen::Vector3f::Zero(), Eigen::Vector3f::Zero(), 1.0f, 0.0f, 0.0f}; }
+using PlaneFits = UninitVector<PlaneFit>;
 
 // Plane fits of the points with wanted[i] (all when `wanted` is empty), from the table's first
 // kn neighbours (more under the adaptive criterion).
-std::vector<PlaneFit> plane_fits(const PointCloud& cloud, const SpatialIndex& index,
-                                 const NeighbourTable& table,
-                                 const std::vector<std::uint8_t>& wanted,
-                                 const NormalsConfig& config) {
+PlaneFits plane_fits(const PointCloud& cloud, const SpatialIndex& index,
+                     const NeighbourTable& table, const std::vector<std::uint8_t>& wanted,
+                     const NormalsConfig& config) {
   const std::size_t kn = static_cast<std::size_t>(std::max(config.kn, 3));
   const std::size_t max_k =
       std::max<std::size_t>(static_cast<std::size_t>(std::max(config.adaptive_max_k, 3)), kn);
-  std::vector<PlaneFit> fits(cloud.size());
+  PlaneFits fits(cloud.size());  // every one written below, by the threads
   tbb::parallel_for(
       tbb::blocked_range<std::size_t>(0, cloud.size(), 512),
       [&](const tbb::blocked_range<std::size_t>& r) {
@@ -108,6 +111,7 @@ std::vector<PlaneFit> plane_fits(const PointCloud& cloud, const SpatialIndex& in
         std::vector<float> d2(max_k);
         std::vector<Eigen::Vector3f> pts(max_k);
         for (std::size_t i = r.begin(); i != r.end(); ++i) {
+          fits[i] = no_fit();
           if (!wanted.empty() && !wanted[i]) continue;
           std::size_t k = std::min<std::size_t>(kn, table.counts[i]);
           if (k < 3) continue;
@@ -148,7 +152,7 @@ std::vector<PlaneFit> plane_fits(const PointCloud& cloud, const SpatialIndex& in
 }
 
 // The median variation of the fits of the points with wanted[i] (all when empty); 0 for none.
-float median_variation(const std::vector<PlaneFit>& fits, const std::vector<std::uint8_t>& wanted) {
+float median_variation(const PlaneFits& fits, const std::vector<std::uint8_t>& wanted) {
   std::vector<float> v;
   v.reserve(fits.size());
   for (std::size_t i = 0; i < fits.size(); ++i)
@@ -159,9 +163,13 @@ float median_variation(const std::vector<PlaneFit>& fits, const std::vector<std:
   return *middle;
 }
 
-std::vector<Eigen::Vector3f> normals_of(const std::vector<PlaneFit>& fits) {
-  std::vector<Eigen::Vector3f> normals(fits.size());
-  for (std::size_t i = 0; i < fits.size(); ++i) normals[i] = fits[i].normal;
+std::vector<Eigen::Vector3f> normals_of(const PlaneFits& fits) {
+  std::vector<Eigen::Vector3f> normals(fits.size());  // Vector3f: left uninitialised
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, fits.size(), 8192),
+                    [&](const tbb::blocked_range<std::size_t>& r) {
+                      for (std::size_t i = r.begin(); i != r.end(); ++i)
+                        normals[i] = fits[i].normal;
+                    });
   return normals;
 }
 
@@ -172,8 +180,7 @@ std::vector<Eigen::Vector3f> normals_of(const std::vector<PlaneFit>& fits) {
 // around a point straddles the edge, but some a little farther along the point's own face do
 // not, and their plane is that face's (measured on a box: normals more than 5 degrees off 5 800
 // -> 83 of 100 000). Parallel over points; O(n k^2).
-std::vector<Eigen::Vector3f> flattest_plane_normals(const std::vector<PlaneFit>& fits,
-                                                    const PointCloud& cloud,
+std::vector<Eigen::Vector3f> flattest_plane_normals(const PlaneFits& fits, const PointCloud& cloud,
                                                     const NeighbourTable& table,
                                                     const std::vector<std::uint8_t>& wanted) {
   std::vector<Eigen::Vector3f> normals = normals_of(fits);
@@ -420,7 +427,7 @@ ComputedNormals normals_before_flip(const PointCloud& cloud, const SpatialIndex&
   const std::size_t ki = static_cast<std::size_t>(std::max(config.ki, 1));
   NeighbourTable table = build_neighbour_table(
       cloud.positions, index, std::max(static_cast<std::size_t>(fit_config.kn), ki));
-  std::vector<PlaneFit> fits = plane_fits(cloud, index, table, estimate, fit_config);
+  PlaneFits fits = plane_fits(cloud, index, table, estimate, fit_config);
   report.median_variation = median_variation(fits, estimate);
   if (config.noisy_variation > 0.0f && report.median_variation > config.noisy_variation) {
     fit_config.kn *= 2;  // noisy points: fit planes over twice the neighbours

@@ -7,7 +7,9 @@
 #include <algorithm>
 #include <cmath>
 
+#include "nodes/normals/smallest_eigen.h"
 #include "nodes/search/neighbour_table.h"
+#include "runtime/default_init.h"
 #include "runtime/error.h"
 #include "runtime/parallel.h"
 
@@ -20,15 +22,31 @@ struct LocalFrame {
   Eigen::Vector3d values;  // the covariance's eigenvalues, ascending
 };
 
+// Mean and scatter (the sum of the outer products about the mean) of the n points at(0 .. n-1),
+// in double; the scatter's lower triangle mirrors the upper.
+template <class At>
+void scatter_of(std::size_t n, const At& at, Eigen::Vector3d& mean, Eigen::Matrix3d& scatter) {
+  mean.setZero();
+  for (std::size_t i = 0; i < n; ++i) mean += at(i).template cast<double>();
+  mean /= static_cast<double>(n);
+  double s00 = 0.0, s01 = 0.0, s02 = 0.0, s11 = 0.0, s12 = 0.0, s22 = 0.0;
+  for (std::size_t i = 0; i < n; ++i) {
+    const Eigen::Vector3d d = at(i).template cast<double>() - mean;
+    s00 += d.x() * d.x();
+    s01 += d.x() * d.y();
+    s02 += d.x() * d.z();
+    s11 += d.y() * d.y();
+    s12 += d.y() * d.z();
+    s22 += d.z() * d.z();
+  }
+  scatter << s00, s01, s02, s01, s11, s12, s02, s12, s22;
+}
+
 LocalFrame principal_frame(const std::vector<Eigen::Vector3f>& pts, std::size_t n) {
   LocalFrame f{Eigen::Vector3d::Zero(), Eigen::Matrix3d::Identity(), Eigen::Vector3d::Zero()};
-  for (std::size_t i = 0; i < n; ++i) f.mean += pts[i].cast<double>();
-  f.mean /= static_cast<double>(n);
-  Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
-  for (std::size_t i = 0; i < n; ++i) {
-    const Eigen::Vector3d d = pts[i].cast<double>() - f.mean;
-    cov.noalias() += d * d.transpose();
-  }
+  Eigen::Matrix3d cov;
+  scatter_of(
+      n, [&](std::size_t i) -> const Eigen::Vector3f& { return pts[i]; }, f.mean, cov);
   Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> solver;
   solver.computeDirect(cov);
   f.axes = solver.eigenvectors();
@@ -65,25 +83,27 @@ std::vector<std::uint8_t> usable_input_normals(const PointCloud& cloud) {
   return usable;
 }
 
-// The least-squares plane of a point's neighbourhood.
+// The least-squares plane of a point's neighbourhood (no member initialisers: a vector of them
+// is left for plane_fits()'s threads to write; no_fit() where none was fitted).
 struct PlaneFit {
-  Eigen::Vector3f normal = Eigen::Vector3f::Zero();  // unit, either sign; zero: < 3 neighbours
-  Eigen::Vector3f centroid = Eigen::Vector3f::Zero();
-  float variation = 1.0f;  // smallest eigenvalue / their sum: 0 on a plane, 1/3 at most
-  float thickness = 0.0f;  // RMS distance of the neighbours to the plane
-  float spread = 0.0f;     // RMS distance of the neighbours to their centroid
+  Eigen::Vector3f normal;    // unit, either sign; zero: < 3 neighbours
+  Eigen::Vector3f centroid;  //
+  float variation;           // smallest eigenvalue / their sum: 0 on a plane, 1/3 at most
+  float thickness;           // RMS distance of the neighbours to the plane
+  float spread;              // RMS distance of the neighbours to their centroid
 };
+PlaneFit no_fit() { return {Eigen::Vector3f::Zero(), Eigen::Vector3f::Zero(), 1.0f, 0.0f, 0.0f}; }
+using PlaneFits = UninitVector<PlaneFit>;
 
 // Plane fits of the points with wanted[i] (all when `wanted` is empty), from the table's first
 // kn neighbours (more under the adaptive criterion).
-std::vector<PlaneFit> plane_fits(const PointCloud& cloud, const SpatialIndex& index,
-                                 const NeighbourTable& table,
-                                 const std::vector<std::uint8_t>& wanted,
-                                 const NormalsConfig& config) {
+PlaneFits plane_fits(const PointCloud& cloud, const SpatialIndex& index,
+                     const NeighbourTable& table, const std::vector<std::uint8_t>& wanted,
+                     const NormalsConfig& config) {
   const std::size_t kn = static_cast<std::size_t>(std::max(config.kn, 3));
   const std::size_t max_k =
       std::max<std::size_t>(static_cast<std::size_t>(std::max(config.adaptive_max_k, 3)), kn);
-  std::vector<PlaneFit> fits(cloud.size());
+  PlaneFits fits(cloud.size());  // every one written below, by the threads
   tbb::parallel_for(
       tbb::blocked_range<std::size_t>(0, cloud.size(), 512),
       [&](const tbb::blocked_range<std::size_t>& r) {
@@ -91,23 +111,40 @@ std::vector<PlaneFit> plane_fits(const PointCloud& cloud, const SpatialIndex& in
         std::vector<float> d2(max_k);
         std::vector<Eigen::Vector3f> pts(max_k);
         for (std::size_t i = r.begin(); i != r.end(); ++i) {
+          fits[i] = no_fit();
           if (!wanted.empty() && !wanted[i]) continue;
           std::size_t k = std::min<std::size_t>(kn, table.counts[i]);
           if (k < 3) continue;
-          for (std::size_t j = 0; j < k; ++j) pts[j] = cloud.positions[table.row(i)[j]];
-          LocalFrame frame = principal_frame(pts, k);
-          while (config.adaptive_k && !box_well_shaped(pts, k, frame, config.adaptive_ratio) &&
-                 k < max_k && k < index.size()) {
-            k = index.knn(cloud.positions[i], std::min(2 * k, max_k), idx.data(), d2.data());
-            for (std::size_t j = 0; j < k; ++j) pts[j] = cloud.positions[idx[j]];
-            frame = principal_frame(pts, k);
+          const std::uint32_t* row = table.row(i);
+          Eigen::Vector3d mean, values;
+          Eigen::Vector3f normal;
+          if (!config.adaptive_k) {  // the smallest eigenvector only, in closed form
+            Eigen::Matrix3d scatter;
+            scatter_of(
+                k, [&](std::size_t j) -> const Eigen::Vector3f& { return cloud.positions[row[j]]; },
+                mean, scatter);
+            const SmallestEigen e = smallest_eigen(scatter);
+            values = e.values;
+            normal = e.vector.cast<float>();
+          } else {
+            for (std::size_t j = 0; j < k; ++j) pts[j] = cloud.positions[row[j]];
+            LocalFrame frame = principal_frame(pts, k);
+            while (!box_well_shaped(pts, k, frame, config.adaptive_ratio) && k < max_k &&
+                   k < index.size()) {
+              k = index.knn(cloud.positions[i], std::min(2 * k, max_k), idx.data(), d2.data());
+              for (std::size_t j = 0; j < k; ++j) pts[j] = cloud.positions[idx[j]];
+              frame = principal_frame(pts, k);
+            }
+            mean = frame.mean;
+            values = frame.values;
+            normal = frame.axes.col(0).normalized().cast<float>();
           }
           PlaneFit& f = fits[i];
-          f.normal = frame.axes.col(0).normalized().cast<float>();
-          f.centroid = frame.mean.cast<float>();
-          const double total = frame.values.sum();
-          f.variation = total > 0.0 ? static_cast<float>(frame.values[0] / total) : 1.0f;
-          f.thickness = static_cast<float>(std::sqrt(std::max(0.0, frame.values[0]) / k));
+          f.normal = normal;
+          f.centroid = mean.cast<float>();
+          const double total = values.sum();
+          f.variation = total > 0.0 ? static_cast<float>(values[0] / total) : 1.0f;
+          f.thickness = static_cast<float>(std::sqrt(std::max(0.0, values[0]) / k));
           f.spread = static_cast<float>(std::sqrt(std::max(0.0, total) / k));
         }
       });
@@ -115,7 +152,7 @@ std::vector<PlaneFit> plane_fits(const PointCloud& cloud, const SpatialIndex& in
 }
 
 // The median variation of the fits of the points with wanted[i] (all when empty); 0 for none.
-float median_variation(const std::vector<PlaneFit>& fits, const std::vector<std::uint8_t>& wanted) {
+float median_variation(const PlaneFits& fits, const std::vector<std::uint8_t>& wanted) {
   std::vector<float> v;
   v.reserve(fits.size());
   for (std::size_t i = 0; i < fits.size(); ++i)
@@ -126,9 +163,13 @@ float median_variation(const std::vector<PlaneFit>& fits, const std::vector<std:
   return *middle;
 }
 
-std::vector<Eigen::Vector3f> normals_of(const std::vector<PlaneFit>& fits) {
-  std::vector<Eigen::Vector3f> normals(fits.size());
-  for (std::size_t i = 0; i < fits.size(); ++i) normals[i] = fits[i].normal;
+std::vector<Eigen::Vector3f> normals_of(const PlaneFits& fits) {
+  std::vector<Eigen::Vector3f> normals(fits.size());  // Vector3f: left uninitialised
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, fits.size(), 8192),
+                    [&](const tbb::blocked_range<std::size_t>& r) {
+                      for (std::size_t i = r.begin(); i != r.end(); ++i)
+                        normals[i] = fits[i].normal;
+                    });
   return normals;
 }
 
@@ -139,8 +180,7 @@ std::vector<Eigen::Vector3f> normals_of(const std::vector<PlaneFit>& fits) {
 // around a point straddles the edge, but some a little farther along the point's own face do
 // not, and their plane is that face's (measured on a box: normals more than 5 degrees off 5 800
 // -> 83 of 100 000). Parallel over points; O(n k^2).
-std::vector<Eigen::Vector3f> flattest_plane_normals(const std::vector<PlaneFit>& fits,
-                                                    const PointCloud& cloud,
+std::vector<Eigen::Vector3f> flattest_plane_normals(const PlaneFits& fits, const PointCloud& cloud,
                                                     const NeighbourTable& table,
                                                     const std::vector<std::uint8_t>& wanted) {
   std::vector<Eigen::Vector3f> normals = normals_of(fits);
@@ -387,7 +427,7 @@ ComputedNormals normals_before_flip(const PointCloud& cloud, const SpatialIndex&
   const std::size_t ki = static_cast<std::size_t>(std::max(config.ki, 1));
   NeighbourTable table = build_neighbour_table(
       cloud.positions, index, std::max(static_cast<std::size_t>(fit_config.kn), ki));
-  std::vector<PlaneFit> fits = plane_fits(cloud, index, table, estimate, fit_config);
+  PlaneFits fits = plane_fits(cloud, index, table, estimate, fit_config);
   report.median_variation = median_variation(fits, estimate);
   if (config.noisy_variation > 0.0f && report.median_variation > config.noisy_variation) {
     fit_config.kn *= 2;  // noisy points: fit planes over twice the neighbours

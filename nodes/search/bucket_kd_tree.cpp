@@ -378,7 +378,7 @@ BucketTree::BucketTree(const std::vector<Eigen::Vector3f>& points) {
   int depth = 0;  // of the deepest leaf: the larger half is taken at every split
   for (std::uint32_t s = n; s > kLeafSize; s -= s / 2) ++depth;
   nodes_.resize((std::size_t{2} << depth) - 1);
-  std::vector<Item> items(n);
+  UninitVector<Item> items(n);  // first written by the threads below
   tbb::parallel_for(tbb::blocked_range<std::uint32_t>(0, n, 8192),
                     [&](const tbb::blocked_range<std::uint32_t>& r) {
                       for (std::uint32_t i = r.begin(); i != r.end(); ++i)
@@ -396,10 +396,10 @@ BucketTree::BucketTree(const std::vector<Eigen::Vector3f>& points) {
       stack.push_back(2 * node + 1);
     }
   }
-  const float pad = std::numeric_limits<float>::quiet_NaN();  // never within any bound
-  xs_.assign(n + 8, pad);
-  ys_.assign(n + 8, pad);
-  zs_.assign(n + 8, pad);
+  // Written whole by the threads (no serial fill first), then the padding.
+  xs_.resize(n + 8);
+  ys_.resize(n + 8);
+  zs_.resize(n + 8);
   ids_.resize(n);
   tbb::parallel_for(tbb::blocked_range<std::uint32_t>(0, n, 8192),
                     [&](const tbb::blocked_range<std::uint32_t>& r) {
@@ -410,6 +410,10 @@ BucketTree::BucketTree(const std::vector<Eigen::Vector3f>& points) {
                         ids_[i] = items[i].id;
                       }
                     });
+  const float pad = std::numeric_limits<float>::quiet_NaN();  // never within any bound
+  std::fill(xs_.begin() + n, xs_.end(), pad);
+  std::fill(ys_.begin() + n, ys_.end(), pad);
+  std::fill(zs_.begin() + n, zs_.end(), pad);
 }
 
 void BucketTree::build(std::size_t node, std::uint32_t begin, std::uint32_t end, Item* items) {

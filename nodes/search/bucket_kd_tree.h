@@ -7,6 +7,8 @@
 #include <utility>
 #include <vector>
 
+#include "runtime/default_init.h"
+
 namespace meshflow::kd_tree {
 
 /// Balanced kd-tree: each node splits its points at the median of its bounding box's longest
@@ -58,8 +60,8 @@ class BucketTree {
   std::vector<Node> nodes_;
   // Points in leaf order, followed by 8 slots of padding (a leaf's last block of 8 reads past
   // its end), and each one's index in the caller's set.
-  std::vector<float> xs_, ys_, zs_;
-  std::vector<std::uint32_t> ids_;
+  UninitVector<float> xs_, ys_, zs_;
+  UninitVector<std::uint32_t> ids_;
   std::vector<std::uint32_t> leaves_;  // leaf nodes in leaf order
 };
 

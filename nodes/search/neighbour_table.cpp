@@ -6,7 +6,7 @@ NeighbourTable build_neighbour_table(const std::vector<Eigen::Vector3f>& positio
                                      const SpatialIndex& index, std::size_t k) {
   NeighbourTable table;
   table.k = k;
-  table.indices.resize(positions.size() * k);
+  table.indices.resize(positions.size() * k);  // first written (faulted in) by the threads
   table.counts.resize(positions.size());
   index.knn_rows(positions, k, table.indices.data(), table.counts.data());
   return table;

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "nodes/search/spatial_index.h"
+#include "runtime/default_init.h"
 
 namespace meshflow {
 
@@ -14,8 +15,9 @@ namespace meshflow {
 /// first neighbour. Rows are k wide; only the first counts[i] entries of a row are used.
 struct NeighbourTable {
   std::size_t k = 0;
-  std::vector<std::uint32_t> indices;  ///< size() * k
-  std::vector<std::uint32_t> counts;   ///< one per point, min(k, number of points)
+  /// size() * k; the entries of a row past its count are left uninitialised.
+  UninitVector<std::uint32_t> indices;
+  UninitVector<std::uint32_t> counts;  ///< one per point, min(k, number of points)
 
   /// Number of points (rows).
   std::size_t size() const { return counts.size(); }

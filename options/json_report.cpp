@@ -87,11 +87,19 @@ nlohmann::json optimize_json(const OptimizeReport& report) {
 }
 
 nlohmann::json close_json(const CloseReport& c) {
-  return {{"ran", c.ran},           {"filled", c.filled},
-          {"observed", c.observed}, {"seen_empty", c.seen_empty},
-          {"through", c.through},   {"cells_added", c.cells_added},
-          {"levels", c.levels},     {"coarse_step", c.coarse_step},
-          {"tiles", c.tiles}};
+  return {{"ran", c.ran},
+          {"filled", c.filled},
+          {"observed", c.observed},
+          {"seen_empty", c.seen_empty},
+          {"through", c.through},
+          {"cells_added", c.cells_added},
+          {"levels", c.levels},
+          {"coarse_step", c.coarse_step},
+          {"tiles", c.tiles},
+          {"fill", c.indicator ? "indicator" : "diffusion"},
+          {"held_out", c.held_out},
+          {"held_out_error_diffusion", c.held_out_error_diffusion},
+          {"held_out_error_indicator", c.held_out_error_indicator}};
 }
 
 nlohmann::json frame_json(const Frame& f, double wall_s, int threads) {

@@ -107,6 +107,14 @@ void report_closing(const CloseReport& c) {
       "%zu seen empty, %zu on lines through observed tunnels; %zu cells added\n",
       c.filled, c.levels, c.lattice.x(), c.lattice.y(), c.lattice.z(), c.observed, c.seen_empty,
       c.through, c.cells_added);
+  if (c.held_out > 0)
+    report(
+        "           fill: %s (%zu observed corners near the rim held out, predicted with a mean "
+        "error of %.2f voxels by diffusion, %.2f by the indicator)\n",
+        c.indicator ? "indicator" : "diffusion", c.held_out, c.held_out_error_diffusion,
+        c.held_out_error_indicator);
+  else
+    report("           fill: %s\n", c.indicator ? "indicator" : "diffusion");
   if (c.coarse_step > 1)
     report(
         "           tiled: a coarse lattice of every %d-th corner, %zu tiles solved at full "

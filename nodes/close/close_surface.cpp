@@ -14,6 +14,7 @@
 #include <iterator>
 #include <memory>
 #include <utility>
+#include <vector>
 
 #include "nodes/close/through_lines.h"
 #include "runtime/error.h"
@@ -239,6 +240,64 @@ int close_fill_by_indicator(DiffusionLattice& l, const std::vector<std::uint8_t>
   return levels;
 }
 
+// Observed nodes of `l` within `reach` steps (6-neighbours, through observed nodes) of the
+// observed surface's rim: observed nodes within a voxel of the surface with a free neighbour
+// across the gradient of the observed distances there (the step and the gradient at least 60
+// degrees apart): where the surface goes on into unobserved space, not where its band ends
+// beside it. Parallel over z-planes, one step at a time; O(nodes x reach).
+std::vector<std::uint8_t> close_rim_band(const DiffusionLattice& l,
+                                         const std::vector<std::uint8_t>& observed, float voxel,
+                                         int reach) {
+  const Eigen::Vector3i n = l.size;
+  std::vector<std::uint8_t> band(l.node_count(), 0);
+  const auto at = [&](const Eigen::Vector3i& q) { return l.index(q.x(), q.y(), q.z()); };
+  const auto inside = [&](const Eigen::Vector3i& q) {
+    return (q.array() >= 0).all() && (q.array() < n.array()).all();
+  };
+  tbb::parallel_for(0, n.z(), [&](int z) {
+    for (int y = 0; y < n.y(); ++y)
+      for (int x = 0; x < n.x(); ++x) {
+        const Eigen::Vector3i q(x, y, z);
+        const std::size_t i = at(q);
+        if (!observed[i] || !(std::abs(l.values[i]) < voxel)) continue;
+        Eigen::Vector3f g = Eigen::Vector3f::Zero();  // central or one-sided differences
+        for (int k = 0; k < 3; ++k) {
+          const Eigen::Vector3i e = Eigen::Vector3i::Unit(k);
+          const bool minus = inside(q - e) && observed[at(q - e)];
+          const bool plus = inside(q + e) && observed[at(q + e)];
+          const float lo = minus ? l.values[at(q - e)] : l.values[i];
+          const float hi = plus ? l.values[at(q + e)] : l.values[i];
+          g[k] = minus && plus ? 0.5f * (hi - lo) : hi - lo;
+        }
+        const float norm = g.norm();
+        if (!(norm > 0.3f * voxel)) continue;
+        for (int k = 0; k < 3 && !band[i]; ++k)
+          for (const int sign : {-1, 1}) {
+            const Eigen::Vector3i j = q + sign * Eigen::Vector3i::Unit(k);
+            if (inside(j) && !l.fixed[at(j)] && std::abs(g[k]) < 0.5f * norm) band[i] = 1;
+          }
+      }
+  });
+  std::vector<std::uint8_t> next(band.size());
+  for (int step = 0; step < reach; ++step) {
+    tbb::parallel_for(0, n.z(), [&](int z) {
+      for (int y = 0; y < n.y(); ++y)
+        for (int x = 0; x < n.x(); ++x) {
+          const Eigen::Vector3i q(x, y, z);
+          const std::size_t i = at(q);
+          bool reached = band[i] != 0;
+          for (int k = 0; k < 6 && !reached && observed[i]; ++k) {
+            const Eigen::Vector3i j = q + (k % 2 == 0 ? -1 : 1) * Eigen::Vector3i::Unit(k / 2);
+            reached = inside(j) && band[at(j)] != 0;
+          }
+          next[i] = reached ? 1 : 0;
+        }
+    });
+    band.swap(next);
+  }
+  return band;
+}
+
 // What one tile gives back: its crossed cells, the values of their corners and of the grid's
 // corners in the tile (sorted by key), and its counts. A skipped tile gives its grid corners
 // the coarse solution's values in `fallback` instead.
@@ -274,6 +333,108 @@ std::size_t hold_outside(DiffusionLattice& l, float stop, const Marked& marked,
         return count;
       },
       std::plus<>());
+}
+
+// through_line_nodes() on every second node of the lattice (an eighth of the nodes: coarse
+// node c is node min(2 c, size - 1), with its side), brought back to the lattice: a node
+// without data is on a through line when all the coarse nodes around it (the 1 to 8 at
+// floor(q / 2) and ceil(q / 2) per axis) are. Tunnels narrower than about two coarse spacings
+// (four voxels) are not found. Parallel over planes; O(230 x nodes / 8).
+std::vector<std::uint8_t> close_through_nodes(const Eigen::Vector3i& size,
+                                              const std::vector<std::uint8_t>& side) {
+  const Eigen::Vector3i last = size - Eigen::Vector3i::Ones();
+  const Eigen::Vector3i coarse = (size.array() / 2 + 1).matrix();
+  const auto fine_index = [&](const Eigen::Vector3i& q) {
+    return (static_cast<std::size_t>(q.z()) * static_cast<std::size_t>(size.y()) +
+            static_cast<std::size_t>(q.y())) *
+               static_cast<std::size_t>(size.x()) +
+           static_cast<std::size_t>(q.x());
+  };
+  const auto coarse_index = [&](const Eigen::Vector3i& c) {
+    return (static_cast<std::size_t>(c.z()) * static_cast<std::size_t>(coarse.y()) +
+            static_cast<std::size_t>(c.y())) *
+               static_cast<std::size_t>(coarse.x()) +
+           static_cast<std::size_t>(c.x());
+  };
+  std::vector<std::uint8_t> coarse_side(static_cast<std::size_t>(coarse.prod()));
+  tbb::parallel_for(0, coarse.z(), [&](int z) {
+    for (int y = 0; y < coarse.y(); ++y)
+      for (int x = 0; x < coarse.x(); ++x) {
+        const Eigen::Vector3i c(x, y, z);
+        coarse_side[coarse_index(c)] = side[fine_index((2 * c).cwiseMin(last))];
+      }
+  });
+  const std::vector<std::uint8_t> coarse_through = through_line_nodes(coarse, coarse_side);
+  std::vector<std::uint8_t> through(side.size(), 0);
+  tbb::parallel_for(0, size.z(), [&](int z) {
+    for (int y = 0; y < size.y(); ++y)
+      for (int x = 0; x < size.x(); ++x) {
+        const Eigen::Vector3i q(x, y, z);
+        if (side[fine_index(q)] != 0) continue;
+        const Eigen::Vector3i lo = q / 2, hi = ((q.array() + 1) / 2)
+                                                   .matrix()
+                                                   .cwiseMin(coarse - Eigen::Vector3i::Ones());
+        bool all = true;
+        for (int cz = lo.z(); cz <= hi.z() && all; ++cz)
+          for (int cy = lo.y(); cy <= hi.y() && all; ++cy)
+            for (int cx = lo.x(); cx <= hi.x() && all; ++cx)
+              all = coarse_through[coarse_index({cx, cy, cz})] != 0;
+        through[fine_index(q)] = all ? 1 : 0;
+      }
+  });
+  return through;
+}
+
+// Self-validation of a whole lattice's two fills: the observed nodes near the observed
+// surface's rim (close_rim_band) are freed, both fills (the indicator's with the `through`
+// nodes held outside at `stop`) predict them from the rest, and each fill's error is the mean
+// over them of |prediction - observed distance| in voxels, clamped at 2 a node (a far miss
+// counts as a miss). The two solves take an eighth of the fill's sweeps per level (they rank
+// the fills, the final fill converges). Records both errors and the held-out count in
+// `counts`; true when the indicator's is lower. No held-out node: false (diffusion).
+bool close_indicator_predicts_better(const DiffusionLattice& l,
+                                     const std::vector<std::uint8_t>& observed,
+                                     const std::vector<std::uint8_t>& through, float voxel,
+                                     float stop, const CloseConfig& config, CloseReport& counts) {
+  const std::vector<std::uint8_t> held_out =
+      close_rim_band(l, observed, voxel, std::max(0, config.validation_band));
+  counts.held_out = static_cast<std::size_t>(std::count(held_out.begin(), held_out.end(), 1));
+  if (counts.held_out == 0) return false;
+  DiffusionLattice diffused = l;
+  std::vector<std::uint8_t> kept = observed;
+  for (std::size_t i = 0; i < held_out.size(); ++i)
+    if (held_out[i]) {
+      diffused.fixed[i] = 0;
+      diffused.values[i] = 0.0f;
+      kept[i] = 0;
+    }
+  DiffusionLattice indicator = diffused;
+  DiffusionConfig quick = config.diffusion;
+  quick.sweeps_per_level = std::max(1, quick.sweeps_per_level / 8);
+  diffuse_free_nodes(diffused, quick);
+  hold_outside(
+      indicator, stop, [&](std::size_t i) { return through[i] != 0; },
+      [](int, int, int) { return false; });
+  float unused = 0.0f;
+  close_fill_by_indicator(indicator, kept, voxel, quick, unused);
+  const auto error = [&](const DiffusionLattice& fill) {
+    std::vector<double> per_plane(static_cast<std::size_t>(l.size.z()), 0.0);
+    tbb::parallel_for(0, l.size.z(), [&](int z) {
+      for (int y = 0; y < l.size.y(); ++y)
+        for (int x = 0; x < l.size.x(); ++x) {
+          const std::size_t i = l.index(x, y, z);
+          if (held_out[i])
+            per_plane[static_cast<std::size_t>(z)] +=
+                std::min(std::abs(fill.values[i] - l.values[i]) / voxel, 2.0f);
+        }
+    });
+    double sum = 0.0;
+    for (const double v : per_plane) sum += v;
+    return sum / static_cast<double>(counts.held_out);
+  };
+  counts.held_out_error_diffusion = static_cast<float>(error(diffused));
+  counts.held_out_error_indicator = static_cast<float>(error(indicator));
+  return counts.held_out_error_indicator < counts.held_out_error_diffusion;
 }
 
 // Solves the tile of lattice nodes [a, b] (inclusive, relative to the lattice): held nodes are
@@ -346,8 +507,10 @@ TileResult close_solve_tile(const CloseProblem& p, const Eigen::Vector3i& a,
   // both sides, and the double layer of its ragged band's ends left small extra shells
   // (CliClose.FusedAndMergedDepthSequencesCloseWatertight).
   float grow_below = 0.0f;  // a free node on the data's box below this: the lattice is too small
-  const bool indicator = p.config->indicator_fill && p.coarse == nullptr && !p.cloud->empty();
-  if (indicator) {
+  const CloseFill method =
+      p.coarse == nullptr && !p.cloud->empty() ? p.config->fill : CloseFill::diffusion;
+  bool indicator = method == CloseFill::indicator;
+  if (method != CloseFill::diffusion) {
     // Lines through observed tunnels are held outside like lines of sight: the double layer
     // of an open tunnel's upper part would cap it where its walls were unseen.
     const float stop = p.config->free_space_stop_voxels * p.grid->voxel_size;
@@ -355,10 +518,15 @@ TileResult close_solve_tile(const CloseProblem& p, const Eigen::Vector3i& a,
     tbb::parallel_for(std::size_t{0}, side.size(), [&](std::size_t i) {
       if (observed[i]) side[i] = l.values[i] > 0.0f ? 1 : 2;
     });
-    const std::vector<std::uint8_t> through = through_line_nodes(n, side);
-    out.counts.through = hold_outside(
-        l, stop, [&](std::size_t i) { return through[i] != 0; }, owned);
+    const std::vector<std::uint8_t> through = close_through_nodes(n, side);
+    if (method == CloseFill::automatic)
+      indicator = close_indicator_predicts_better(l, observed, through, p.grid->voxel_size, stop,
+                                                  *p.config, out.counts);
+    if (indicator)
+      out.counts.through = hold_outside(
+          l, stop, [&](std::size_t i) { return through[i] != 0; }, owned);
   }
+  out.counts.indicator = indicator;
   if (indicator)
     out.counts.levels =
         close_fill_by_indicator(l, observed, p.grid->voxel_size, p.config->diffusion, grow_below);
@@ -532,13 +700,24 @@ ClosedDistance close_distance_field(const SparseGrid& grid, const DistanceField&
     if (report != nullptr) *report = r;
     return out;
   }
-  // 1. The lattice: the grid's corners grown by the margin.
-  Eigen::Vector3i lo = unpack_key(grid.corners.front()), hi = lo;
-  for (VoxelKey k : grid.corners) {
-    const Eigen::Vector3i c = unpack_key(k);
-    lo = lo.cwiseMin(c);
-    hi = hi.cwiseMax(c);
-  }
+  // 1. The lattice: the grid's corners grown by the margin (their bounds: a min / max
+  // reduction, the same whatever the order of its parts).
+  using Bounds = std::pair<Eigen::Vector3i, Eigen::Vector3i>;
+  const Eigen::Vector3i first = unpack_key(grid.corners.front());
+  const Bounds bounds = tbb::parallel_reduce(
+      tbb::blocked_range<std::size_t>(0, grid.corners.size(), 1 << 14), Bounds{first, first},
+      [&](const tbb::blocked_range<std::size_t>& range, Bounds b) {
+        for (std::size_t c = range.begin(); c != range.end(); ++c) {
+          const Eigen::Vector3i q = unpack_key(grid.corners[c]);
+          b.first = b.first.cwiseMin(q);
+          b.second = b.second.cwiseMax(q);
+        }
+        return b;
+      },
+      [](const Bounds& x, const Bounds& y) {
+        return Bounds{x.first.cwiseMin(y.first), x.second.cwiseMax(y.second)};
+      });
+  Eigen::Vector3i lo = bounds.first, hi = bounds.second;
   const int margin = std::max(1, static_cast<int>(std::ceil(config.margin_voxels)));
   lo.array() -= margin;
   hi.array() += margin;
@@ -579,19 +758,40 @@ ClosedDistance close_distance_field(const SparseGrid& grid, const DistanceField&
     const auto tile_index = [&](const Eigen::Vector3i& t) {
       return (static_cast<std::size_t>(t.z()) * tiles.y() + t.y()) * tiles.x() + t.x();
     };
-    std::vector<std::vector<std::uint32_t>> tile_corners(tile_count);
-    for (std::uint32_t c = 0; c < grid.corners.size(); ++c) {
-      const Eigen::Vector3i q = unpack_key(grid.corners[c]) - lo;
-      Eigen::Vector3i first, last;
-      for (int a = 0; a < 3; ++a) {
-        last[a] = std::min(q[a] / cells, tiles[a] - 1);
-        first[a] = q[a] % cells == 0 && q[a] > 0 ? q[a] / cells - 1 : last[a];
+    // (tile, corner) pairs per fixed block of corners, joined in block order and sorted (the
+    // pairs are distinct: any sort gives one order), then cut into each tile's range.
+    constexpr std::size_t block = std::size_t{1} << 16;
+    const std::size_t blocks = (grid.corners.size() + block - 1) / block;
+    std::vector<std::vector<std::pair<std::uint32_t, std::uint32_t>>> per_block(blocks);
+    tbb::parallel_for(std::size_t{0}, blocks, [&](std::size_t k) {
+      const auto end = static_cast<std::uint32_t>(std::min(grid.corners.size(), (k + 1) * block));
+      for (auto c = static_cast<std::uint32_t>(k * block); c < end; ++c) {
+        const Eigen::Vector3i q = unpack_key(grid.corners[c]) - lo;
+        Eigen::Vector3i from, to;
+        for (int a = 0; a < 3; ++a) {
+          to[a] = std::min(q[a] / cells, tiles[a] - 1);
+          from[a] = q[a] % cells == 0 && q[a] > 0 ? q[a] / cells - 1 : to[a];
+        }
+        for (int z = from.z(); z <= to.z(); ++z)
+          for (int y = from.y(); y <= to.y(); ++y)
+            for (int x = from.x(); x <= to.x(); ++x)
+              per_block[k].emplace_back(static_cast<std::uint32_t>(tile_index({x, y, z})), c);
       }
-      for (int z = first.z(); z <= last.z(); ++z)
-        for (int y = first.y(); y <= last.y(); ++y)
-          for (int x = first.x(); x <= last.x(); ++x)
-            tile_corners[tile_index({x, y, z})].push_back(c);
+    });
+    std::vector<std::pair<std::uint32_t, std::uint32_t>> pairs;
+    for (auto& b : per_block) {
+      pairs.insert(pairs.end(), b.begin(), b.end());
+      b = {};
     }
+    tbb::parallel_sort(pairs.begin(), pairs.end());
+    std::vector<std::vector<std::uint32_t>> tile_corners(tile_count);
+    tbb::parallel_for(std::size_t{0}, tile_count, [&](std::size_t t) {
+      const auto tile = static_cast<std::uint32_t>(t);
+      const auto begin = std::lower_bound(pairs.begin(), pairs.end(), std::make_pair(tile, 0u));
+      const auto end = std::lower_bound(begin, pairs.end(), std::make_pair(tile + 1, 0u));
+      tile_corners[t].reserve(static_cast<std::size_t>(end - begin));
+      for (auto at = begin; at != end; ++at) tile_corners[t].push_back(at->second);
+    });
 
     // 3. Each tile: skipped when it holds no data and the coarse solution is outside all over it
     // (its fine solution, bounded by its faces' values, is then outside too), else solved.
@@ -660,6 +860,10 @@ ClosedDistance close_distance_field(const SparseGrid& grid, const DistanceField&
     r.through += t.counts.through;
     r.filled += t.counts.filled;
     r.levels = std::max(r.levels, t.counts.levels);
+    r.indicator = r.indicator || t.counts.indicator;
+    r.held_out += t.counts.held_out;
+    r.held_out_error_diffusion += t.counts.held_out_error_diffusion;
+    r.held_out_error_indicator += t.counts.held_out_error_indicator;
     t = TileResult{};
   }
   tbb::parallel_sort(added.begin(), added.end());

@@ -17,13 +17,20 @@
 // values are all outside are skipped (nothing crosses them). Memory stays that of one lattice
 // of max_dense_corners plus a tile per thread, whatever the scene's size.
 //
-// With CloseConfig::indicator_fill, a whole lattice of a cloud's distances is filled instead
-// from the observed surface's inside indicator spread as a double layer (a Poisson solve, the
-// field Poisson surface reconstruction solves for: an unseen box bottom closes flat at its rim),
-// and the corners on lattice lines through observed tunnels (through_lines.h) are held outside
-// like lines of sight, so a through-hole seen from above stays open where its lower part was
-// unseen. Not the default: it closes a sphere's unseen cap flat, and on the scanned L-shape and
-// box with a hole its fill is less accurate than diffusion's (bench/RESULTS.md).
+// A whole lattice of a cloud's distances has two fills (CloseConfig::fill). Diffusion, above.
+// The indicator fill: the observed surface's inside indicator spread as a double layer (a
+// Poisson solve, the field Poisson surface reconstruction solves for: an unseen box bottom
+// closes flat at its rim), with the corners on lattice lines through observed tunnels
+// (through_lines.h) held outside like lines of sight, so a through-hole seen from above stays
+// open where its lower part was unseen. Neither wins on every object or scan (diffusion closes
+// a box's unseen bottom as a deep dome, the indicator a sphere's cap flat), so diffusion stays
+// the default. CloseFill::automatic lets the data choose without ground truth: the observed
+// corners near the rim of the observed surface (where it goes on into unobserved space) are
+// held out, both fills predict them from the rest, and the fill whose prediction is closer to
+// their observed distances fills the lattice (self-validation). Experimental: that rim error
+// does not yet rank the fills as their filled-region error does (tests/graph/
+// test_scanned_objects.cpp prints both), and it costs two more solves.
+// Large (tiled) lattices and fused maps (no points) keep diffusion.
 
 #include <Eigen/Core>
 #include <cstddef>
@@ -35,6 +42,13 @@
 #include "runtime/sparse_grid.h"
 
 namespace meshflow {
+
+/// The fill of a whole lattice of a cloud's distances (file comment).
+enum class CloseFill : std::uint8_t {
+  automatic,  ///< the one that predicts held-out observed corners better (self-validation)
+  diffusion,  ///< volumetric diffusion of the distance
+  indicator,  ///< the observed surface's indicator as a double layer, observed tunnels kept open
+};
 
 struct CloseConfig {
   bool enabled = false;  ///< the pipeline's close stage runs only when set (--close)
@@ -52,10 +66,14 @@ struct CloseConfig {
   /// Cells along each side of a tile of a large lattice (its faces are held at the coarse
   /// solution; larger tiles follow the fine data farther, at 6.7 bytes a corner per thread).
   int tile_cells = 128;
-  /// Fill a whole lattice of a cloud from the observed surface's indicator (file comment)
-  /// rather than by diffusion of the distance; its solve takes about 23 bytes a corner (set
-  /// max_dense_corners to 2^23 for about 190 MB). Large lattices and fused maps keep diffusion.
-  bool indicator_fill = false;
+  /// How a whole lattice of a cloud's distances is filled (file comment): diffusion, the
+  /// indicator, or chosen per lattice by self-validation (automatic, experimental). The indicator's
+  /// solve takes about 23 bytes a corner (set max_dense_corners to 2^23 for about 190 MB). Large
+  /// lattices and fused maps keep diffusion whatever this says.
+  CloseFill fill = CloseFill::diffusion;
+  /// Automatic fill: observed corners within this many lattice steps of the observed surface's
+  /// rim are held out and predicted by both fills.
+  int validation_band = 3;
   DiffusionConfig diffusion;
 };
 
@@ -73,6 +91,12 @@ struct CloseReport {
   std::size_t filled = 0;       ///< corners whose distance came from the diffusion
   std::size_t cells_added = 0;  ///< cells the closed surface crosses that the grid lacked
   bool grown = false;           ///< the fill reached the lattice's faces: it grew beyond the margin
+  bool indicator = false;       ///< the lattice was filled from the indicator (else diffused)
+  /// Automatic fill: observed corners held out near the surface's rim (0: no validation ran),
+  /// and each fill's mean error predicting their distances, in voxels (clamped at 2 a corner).
+  std::size_t held_out = 0;
+  float held_out_error_diffusion = 0.0f;
+  float held_out_error_indicator = 0.0f;
 };
 
 /// The grid and distances the extract stage meshes into a closed surface.

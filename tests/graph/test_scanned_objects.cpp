@@ -182,58 +182,107 @@ SplitErrors split_errors(const TriangleMesh& mesh, const synthetic::ClosedObject
 // tiles of 32 cells: the path of scenes over CloseConfig::max_dense_corners).
 TEST_P(ScannedObject, CloseGivesOneWatertightOutwardSurfaceExactWhereObserved) {
   const synthetic::ClosedObject object = this->object();
-  const synthetic::ObjectScan scan = scan_with_outliers(object, 33);
-  ReconstructionConfig config = scan_config(object);
-  const float voxel = config.voxelize.voxel_size;
-  const FramePtr open = ReconstructionPipeline(config).reconstruct(scan.cloud);
-  ASSERT_TRUE(open->ok()) << open->error;
-  const EdgeStatistics open_edges = edge_statistics(open->mesh);
-  const PointCloud surface = [&] {
-    PointCloud c;
-    c.positions.assign(scan.cloud.positions.begin(),
-                       scan.cloud.positions.end() - static_cast<std::ptrdiff_t>(scan.outliers));
-    return c;
-  }();
-  const KdTreeIndex index(surface.positions);
-  const SplitErrors e_open = split_errors(open->mesh, object, index, voxel);
-  config.close.enabled = true;
-  // Dense and tiled diffusion, then the indicator fill (dense; lines through observed tunnels
-  // held outside: the box with a hole keeps it).
-  for (const char* mode : {"dense", "tiled", "indicator"}) {
-    SCOPED_TRACE(mode);
-    const bool tiled = std::string(mode) == "tiled";
-    config.close.max_dense_corners = tiled ? std::size_t{1} << 16 : CloseConfig{}.max_dense_corners;
-    config.close.tile_cells = tiled ? 32 : CloseConfig{}.tile_cells;
-    config.close.indicator_fill = std::string(mode) == "indicator";
-    const FramePtr closed = ReconstructionPipeline(config).reconstruct(scan.cloud);
-    ASSERT_TRUE(closed->ok()) << closed->error;
-    EXPECT_TRUE(closed->closing.ran);
-    EXPECT_GT(closed->closing.filled, 0u);
-    EXPECT_EQ(closed->closing.tiles > 1, tiled);
+  // The tests' scan (seed 33) and the one `meshflow sample OBJECT --scan 8 --outliers 0.005`
+  // writes (seed 1, bench/python/bench_close_vs_poisson.py's input).
+  for (const std::uint32_t seed : {33u, 1u}) {
+    SCOPED_TRACE(seed);
+    const synthetic::ObjectScan scan = scan_with_outliers(object, seed);
+    ReconstructionConfig config = scan_config(object);
+    const float voxel = config.voxelize.voxel_size;
+    const FramePtr open = ReconstructionPipeline(config).reconstruct(scan.cloud);
+    ASSERT_TRUE(open->ok()) << open->error;
+    const EdgeStatistics open_edges = edge_statistics(open->mesh);
+    const PointCloud surface = [&] {
+      PointCloud c;
+      c.positions.assign(scan.cloud.positions.begin(),
+                         scan.cloud.positions.end() - static_cast<std::ptrdiff_t>(scan.outliers));
+      return c;
+    }();
+    const KdTreeIndex index(surface.positions);
+    const SplitErrors e_open = split_errors(open->mesh, object, index, voxel);
+    config.close.enabled = true;
+    // Dense and tiled diffusion (the default), the indicator fill (dense; lines through observed
+    // tunnels held outside: the box with a hole keeps it), then the fill the self-validation
+    // picks (CloseFill::automatic).
+    double filled_diffusion = 0.0, filled_indicator = 0.0;
+    for (const char* mode : {"dense", "tiled", "indicator", "automatic"}) {
+      SCOPED_TRACE(mode);
+      const bool tiled = std::string(mode) == "tiled";
+      if (tiled && seed != 33) continue;
+      config.close.max_dense_corners =
+          tiled ? std::size_t{1} << 16 : CloseConfig{}.max_dense_corners;
+      config.close.tile_cells = tiled ? 32 : CloseConfig{}.tile_cells;
+      config.close.fill = std::string(mode) == "indicator"   ? CloseFill::indicator
+                          : std::string(mode) == "automatic" ? CloseFill::automatic
+                                                             : CloseFill::diffusion;
+      const FramePtr closed = ReconstructionPipeline(config).reconstruct(scan.cloud);
+      ASSERT_TRUE(closed->ok()) << closed->error;
+      EXPECT_TRUE(closed->closing.ran);
+      EXPECT_GT(closed->closing.filled, 0u);
+      EXPECT_EQ(closed->closing.tiles > 1, tiled);
 
-    const EdgeStatistics stats = edge_statistics(closed->mesh);
+      const EdgeStatistics stats = edge_statistics(closed->mesh);
+      EXPECT_EQ(stats.boundary_edges, 0u);
+      EXPECT_EQ(stats.non_manifold_edges, 0u);
+      EXPECT_EQ(stats.inconsistent_edges, 0u);
+      EXPECT_EQ(mesh_components(closed->mesh).size(), 1u);
+      const MeshStatistics info = mesh_statistics(closed->mesh);
+      EXPECT_GT(info.volume.value_or(0.0), 0.0) << "faces wind inward";
+      EXPECT_EQ(info.non_manifold_vertices, 0u);
+      // The torus and the box with a hole keep their (observed) through-hole: genus 1.
+      const long long genus = object.name == "torus" || object.name == "box-with-hole" ? 1 : 0;
+      ASSERT_TRUE(info.genus.has_value());
+      EXPECT_EQ(*info.genus, genus);
+
+      const SplitErrors e_closed = split_errors(closed->mesh, object, index, voxel);
+      std::printf(
+          "[ close ] %s seed %u %s: open %zu border edges; closed: observed mean %.3e (open "
+          "%.3e) of the diagonal, filled %zu vertices mean %.3e max %.3e, genus %lld, %zu "
+          "tiles, fill %s (held out %zu: %.3f / %.3f voxels)\n",
+          object.name.c_str(), seed, mode, open_edges.boundary_edges,
+          e_closed.observed_mean / object.diagonal(), e_open.observed_mean / object.diagonal(),
+          e_closed.filled, e_closed.filled_mean / object.diagonal(),
+          e_closed.filled_max / object.diagonal(), info.genus.value_or(-1), closed->closing.tiles,
+          closed->closing.indicator ? "indicator" : "diffusion", closed->closing.held_out,
+          closed->closing.held_out_error_diffusion, closed->closing.held_out_error_indicator);
+      if (std::string(mode) == "dense") filled_diffusion = e_closed.filled_mean;
+      if (std::string(mode) == "indicator") filled_indicator = e_closed.filled_mean;
+      if (std::string(mode) == "automatic") {
+        // The self-validation ran; that it picks the better fill is not yet so (close_surface.h).
+        EXPECT_GT(closed->closing.held_out, 0u);
+        std::printf("[ close ] %s seed %u automatic: %.2fx the better fill's filled error\n",
+                    object.name.c_str(), seed,
+                    e_closed.filled_mean / std::min(filled_diffusion, filled_indicator));
+      }
+      EXPECT_LE(e_closed.observed_mean, 1.05 * e_open.observed_mean + 1e-6)
+          << "the observed surface must stay as exact as the open reconstruction's";
+    }
+  }
+}
+
+// --close then extended marching cubes (--extract emc): the closed field's filled corners
+// have no points near them, and the extraction still gives one watertight, manifold, outward
+// surface with the box's genus 0 and the box with a hole's genus 1.
+TEST(ScannedObjects, CloseThenExtendedMarchingCubesIsWatertight) {
+  for (const synthetic::ClosedObject& object :
+       {synthetic::box_object(), synthetic::box_with_hole_object()}) {
+    SCOPED_TRACE(object.name);
+    ReconstructionConfig config = scan_config(object);
+    config.close.enabled = true;
+    config.extract.method = ExtractMethod::kExtendedMarchingCubes;
+    const FramePtr f =
+        ReconstructionPipeline(config).reconstruct(scan_with_outliers(object, 35).cloud);
+    ASSERT_TRUE(f->ok()) << f->error;
+    EXPECT_EQ(f->extract_method, ExtractMethod::kExtendedMarchingCubes);
+    const EdgeStatistics stats = edge_statistics(f->mesh);
     EXPECT_EQ(stats.boundary_edges, 0u);
     EXPECT_EQ(stats.non_manifold_edges, 0u);
     EXPECT_EQ(stats.inconsistent_edges, 0u);
-    EXPECT_EQ(mesh_components(closed->mesh).size(), 1u);
-    const MeshStatistics info = mesh_statistics(closed->mesh);
+    EXPECT_EQ(mesh_components(f->mesh).size(), 1u);
+    const MeshStatistics info = mesh_statistics(f->mesh);
     EXPECT_GT(info.volume.value_or(0.0), 0.0) << "faces wind inward";
-    EXPECT_EQ(info.non_manifold_vertices, 0u);
-    // The torus and the box with a hole keep their (observed) through-hole: genus 1.
-    const long long genus = object.name == "torus" || object.name == "box-with-hole" ? 1 : 0;
     ASSERT_TRUE(info.genus.has_value());
-    EXPECT_EQ(*info.genus, genus);
-
-    const SplitErrors e_closed = split_errors(closed->mesh, object, index, voxel);
-    std::printf(
-        "[ close ] %s %s: open %zu border edges; closed: observed mean %.3e (open %.3e) of the "
-        "diagonal, filled %zu vertices mean %.3e max %.3e, genus %lld, %zu tiles\n",
-        object.name.c_str(), mode, open_edges.boundary_edges,
-        e_closed.observed_mean / object.diagonal(), e_open.observed_mean / object.diagonal(),
-        e_closed.filled, e_closed.filled_mean / object.diagonal(),
-        e_closed.filled_max / object.diagonal(), info.genus.value_or(-1), closed->closing.tiles);
-    EXPECT_LE(e_closed.observed_mean, 1.05 * e_open.observed_mean + 1e-6)
-        << "the observed surface must stay as exact as the open reconstruction's";
+    EXPECT_EQ(*info.genus, object.name == "box-with-hole" ? 1 : 0);
   }
 }
 

@@ -158,7 +158,7 @@ TEST(CloseSurface, UnseenBoxBottomClosesFlatAtItsRim) {
     field.valid[c] = q.z() > -half.z() + voxel ? 1 : 0;  // the bottom unseen
   }
   CloseConfig config;
-  config.indicator_fill = true;
+  config.fill = CloseFill::indicator;
   const ClosedDistance closed = close_distance_field(grid, field, cloud, config);
   const TriangleMesh mesh = marching_cubes(closed.grid, closed.distance);
   ASSERT_TRUE(edge_statistics(mesh).closed());

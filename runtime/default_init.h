@@ -23,10 +23,12 @@ class DefaultInitAllocator : public A {
     using other = DefaultInitAllocator<U, typename Traits::template rebind_alloc<U>>;
   };
   using A::A;
+  /// Default-initialises a U at p (a trivial U: nothing written). O(1).
   template <class U>
   void construct(U* p) noexcept(std::is_nothrow_default_constructible<U>::value) {
     ::new (static_cast<void*>(p)) U;
   }
+  /// Constructs a U at p from args, as std::allocator does.
   template <class U, class... Args>
   void construct(U* p, Args&&... args) {
     Traits::construct(static_cast<A&>(*this), p, std::forward<Args>(args)...);

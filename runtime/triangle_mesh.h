@@ -89,8 +89,9 @@ struct ComponentCounts {
 /// counts); corners index `vertex_count` vertices. The one component filter of meshflow: the
 /// clean step and the per-frame triangulations both use it. Adds to `counts` when given.
 /// `held` (optional, one byte per vertex): a component with a vertex whose byte is non-zero is
-/// kept whatever its size (a piece of a chunk that goes on across a seam). Serial,
-/// deterministic; O(V + T).
+/// kept whatever its size (a piece of a chunk that goes on across a seam). The components are
+/// labelled in parallel (runtime/mesh_components.h: the same labels for any thread count), the
+/// counting and the erase are serial; deterministic; O(V + T).
 void remove_small_components(std::vector<Triangle>& triangles, std::size_t vertex_count,
                              std::size_t min_triangles, ComponentCounts* counts = nullptr,
                              const std::vector<std::uint8_t>* held = nullptr);

@@ -92,7 +92,7 @@ std::size_t finish_seams(TriangleMesh& mesh, const std::vector<std::uint8_t>& fe
     sub_features[v] = features[original[v]];
     sub_seam[v] = seam[original[v]];
   }
-  const std::size_t flips = finish_seam_neighbourhood(sub, sub_features, std::move(sub_seam));
+  const std::size_t flips = finish_seam_neighbourhood(sub, sub_features, sub_seam);
   for (std::size_t i = 0; i < around.size(); ++i)
     for (int k = 0; k < 3; ++k) mesh.triangles[around[i]][k] = original[sub.triangles[i][k]];
   if (!mesh.normals.empty() && mesh.normals.size() == n) {
@@ -104,7 +104,7 @@ std::size_t finish_seams(TriangleMesh& mesh, const std::vector<std::uint8_t>& fe
 
 std::size_t finish_seam_neighbourhood(TriangleMesh& around,
                                       const std::vector<std::uint8_t>& features,
-                                      std::vector<std::uint8_t> seam) {
+                                      const std::vector<std::uint8_t>& seam) {
   const std::size_t flips = flip_edges_between_features(around, features, &seam);
   if (!around.normals.empty()) compute_vertex_normals(around);
   return flips;

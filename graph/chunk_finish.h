@@ -69,6 +69,6 @@ std::size_t finish_seams(TriangleMesh& mesh, const std::vector<std::uint8_t>& fe
 /// the flips made. O(S log S).
 std::size_t finish_seam_neighbourhood(TriangleMesh& around,
                                       const std::vector<std::uint8_t>& features,
-                                      std::vector<std::uint8_t> seam);
+                                      const std::vector<std::uint8_t>& seam);
 
 }  // namespace meshflow::chunk

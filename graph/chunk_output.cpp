@@ -1,7 +1,9 @@
 #include "graph/chunk_output.h"
 
 #include <algorithm>
+#include <array>
 #include <cassert>
+#include <cstdint>
 #include <cstring>
 
 #include "graph/chunk_finish.h"
@@ -9,6 +11,18 @@
 #include "runtime/error.h"
 
 namespace meshflow::chunk {
+namespace {
+
+// Whether a and b are the same floats bit for bit (a normal the file already holds: -0 and +0
+// differ, as the written bytes would).
+bool same_bits(const Eigen::Vector3f& a, const Eigen::Vector3f& b) {
+  std::array<std::uint32_t, 3> x{}, y{};
+  std::memcpy(x.data(), a.data(), sizeof x);
+  std::memcpy(y.data(), b.data(), sizeof y);
+  return x == y;
+}
+
+}  // namespace
 
 StreamedChunkOutput::StreamedChunkOutput(const std::string& path, std::uint64_t vertices,
                                          std::uint64_t triangles, const io::PlyMeshLayout& layout,
@@ -110,8 +124,7 @@ std::size_t StreamedChunkOutput::finish() {
     }
     if (normals_)
       for (std::size_t v = 0; v < vertex_index_.size(); ++v) {
-        if (!near_[v] || std::memcmp(around.normals[v].data(), vertex_normals_[v].data(), 12) == 0)
-          continue;
+        if (!near_[v] || same_bits(around.normals[v], vertex_normals_[v])) continue;
         file_.write_normal(vertex_index_[v], around.normals[v]);
         ++rewritten_;
       }

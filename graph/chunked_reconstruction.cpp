@@ -559,6 +559,7 @@ ChunkedResult reconstruct_chunked_to_ply(const std::string& path, const std::str
   tell("stitch");
   report.clock.begin("stitch", true);  // the weld's plan, from the seam summaries alone
   std::vector<const chunk::ChunkSeams*> summaries;
+  summaries.reserve(seams.size());
   for (const chunk::ChunkSeams& s : seams) summaries.push_back(&s);
   const chunk::WeldPlan plan = chunk::plan_weld(summaries);
   report.seam_vertices = plan.merged;

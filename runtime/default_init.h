@@ -19,7 +19,7 @@ class DefaultInitAllocator : public A {
 
  public:
   template <class U>
-  struct rebind {
+  struct rebind {  // NOLINT(readability-identifier-naming): the allocator requirements' name
     using other = DefaultInitAllocator<U, typename Traits::template rebind_alloc<U>>;
   };
   using A::A;

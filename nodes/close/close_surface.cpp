@@ -760,12 +760,12 @@ ClosedDistance close_distance_field(const SparseGrid& grid, const DistanceField&
     };
     // (tile, corner) pairs per fixed block of corners, joined in block order and sorted (the
     // pairs are distinct: any sort gives one order), then cut into each tile's range.
-    constexpr std::size_t block = std::size_t{1} << 16;
-    const std::size_t blocks = (grid.corners.size() + block - 1) / block;
+    constexpr std::size_t kBlock = std::size_t{1} << 16;
+    const std::size_t blocks = (grid.corners.size() + kBlock - 1) / kBlock;
     std::vector<std::vector<std::pair<std::uint32_t, std::uint32_t>>> per_block(blocks);
     tbb::parallel_for(std::size_t{0}, blocks, [&](std::size_t k) {
-      const auto end = static_cast<std::uint32_t>(std::min(grid.corners.size(), (k + 1) * block));
-      for (auto c = static_cast<std::uint32_t>(k * block); c < end; ++c) {
+      const auto end = static_cast<std::uint32_t>(std::min(grid.corners.size(), (k + 1) * kBlock));
+      for (auto c = static_cast<std::uint32_t>(k * kBlock); c < end; ++c) {
         const Eigen::Vector3i q = unpack_key(grid.corners[c]) - lo;
         Eigen::Vector3i from, to;
         for (int a = 0; a < 3; ++a) {

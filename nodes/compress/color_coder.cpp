@@ -215,11 +215,11 @@ ColorTransform choose_transform(const std::vector<Channels>& residuals) {
   }();
   ColorTransform best;
   double best_cost = -1.0;
-  for (std::uint8_t o = 0; o < kOrders.size(); ++o) {
+  for (std::size_t o = 0; o < kOrders.size(); ++o) {
     const auto& ord = kOrders[o];
     const auto s = [&](std::size_t a, std::size_t b) { return moment[ord[a]][ord[b]]; };
     ColorTransform t;
-    t.order = o;
+    t.order = static_cast<std::uint8_t>(o);
     if (s(0, 0) > 0.0) t.a = coefficient(s(0, 1) / s(0, 0));
     const double det = s(0, 0) * s(1, 1) - s(0, 1) * s(0, 1);
     if (det > 1e-9 * s(0, 0) * s(1, 1)) {
@@ -285,7 +285,7 @@ std::vector<Rgb8> decode_colors(const DecodedGeometry& g, RangeDecoder& dec,
                 std::to_string(order) + " is not 0 .. " + std::to_string(kOrders.size() - 1));
   t.order = static_cast<std::uint8_t>(order);
   for (std::int32_t* v : {&t.a, &t.b, &t.c})
-    *v = static_cast<std::int8_t>(static_cast<std::uint8_t>(dec.decode_direct(8)));
+    *v = static_cast<std::int32_t>(dec.decode_direct(8) ^ 0x80u) - 128;  // the int8's byte
   ColorContexts m;
   m.magnitude.resize(vertices);
   std::vector<Rgb8> colors(vertices);

@@ -90,11 +90,11 @@ void PlyMeshFile::write_triangles(std::uint64_t first, const std::vector<Triangl
   if (first + count > triangles_)
     throw Error(path_, "faces", "more rows than the " + std::to_string(triangles_) + " declared");
   const std::uint64_t faces = header_bytes_ + vertices_ * layout_.vertex_bytes();
-  constexpr std::size_t row = PlyMeshLayout::kFaceBytes;
+  constexpr std::size_t kRow = PlyMeshLayout::kFaceBytes;
   write_rows(
-      count, row, [&](char* at, std::size_t i) { return put_ply_face(at, triangles[i]); },
+      count, kRow, [&](char* at, std::size_t i) { return put_ply_face(at, triangles[i]); },
       [&](std::size_t i, const char* bytes, std::size_t size) {
-        write_at(faces + (first + i) * row, bytes, size);
+        write_at(faces + (first + i) * kRow, bytes, size);
       });
   face_rows_written_ += count;
 }

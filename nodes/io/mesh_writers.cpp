@@ -14,14 +14,6 @@
 
 namespace meshflow::io {
 namespace {
-// Copies v's bytes to `at` and returns the byte after them (the buffer is sized beforehand:
-// no growth check per value).
-template <typename T>
-char* put(char* at, const T& v) {
-  std::memcpy(at, &v, sizeof(T));
-  return at + sizeof(T);
-}
-
 // "PREFIXx y z" of a vertex in world coordinates: as the float it is (9 digits) without an
 // origin, else vertex + origin in double precision (12 digits: millimetres at 1e8 m).
 std::string world_position_text(const char* prefix, const Eigen::Vector3f& v,
@@ -151,13 +143,13 @@ void write_stl(const std::string& path, const TriangleMesh& mesh, const Eigen::V
     std::snprintf(header, sizeof header, "meshflow; local frame, origin %.3f %.3f %.3f", origin.x(),
                   origin.y(), origin.z());
   std::memcpy(buf.data(), header, std::strlen(header));
-  char* at = put(buf.data() + 80, static_cast<std::uint32_t>(mesh.triangles.size()));
+  char* at = put_bytes(buf.data() + 80, static_cast<std::uint32_t>(mesh.triangles.size()));
   for (const Triangle& t : mesh.triangles) {
     const Eigen::Vector3f n = face_normal(mesh, t);
-    for (int k = 0; k < 3; ++k) at = put(at, n[k]);
+    for (int k = 0; k < 3; ++k) at = put_bytes(at, n[k]);
     for (std::uint32_t v : t)
-      for (int k = 0; k < 3; ++k) at = put(at, mesh.vertices[v][k]);
-    at = put(at, std::uint16_t{0});  // attribute byte count
+      for (int k = 0; k < 3; ++k) at = put_bytes(at, mesh.vertices[v][k]);
+    at = put_bytes(at, std::uint16_t{0});  // attribute byte count
   }
   file.stream().write(buf.data(), static_cast<std::streamsize>(buf.size()));
   file.commit();

@@ -4,16 +4,6 @@
 #include <sstream>
 
 namespace meshflow::io {
-namespace {
-
-// Copies v's bytes to `at` and returns the byte after them (the buffer is sized beforehand).
-template <typename T>
-char* put(char* at, const T& v) {
-  std::memcpy(at, &v, sizeof(T));
-  return at + sizeof(T);
-}
-
-}  // namespace
 
 PlyMeshLayout ply_mesh_layout(const TriangleMesh& mesh, const Eigen::Vector3d& origin,
                               std::size_t scalars) {
@@ -46,21 +36,21 @@ char* put_ply_vertex(char* at, const TriangleMesh& mesh, std::size_t i,
                      const Eigen::Vector3d& origin, const PlyMeshLayout& layout,
                      const std::vector<VertexScalar>& scalars) {
   for (int k = 0; k < 3; ++k)
-    at = layout.world ? put(at, static_cast<double>(mesh.vertices[i][k]) + origin[k])
-                      : put(at, mesh.vertices[i][k]);
+    at = layout.world ? put_bytes(at, static_cast<double>(mesh.vertices[i][k]) + origin[k])
+                      : put_bytes(at, mesh.vertices[i][k]);
   if (layout.normals)
-    for (int k = 0; k < 3; ++k) at = put(at, mesh.normals[i][k]);
+    for (int k = 0; k < 3; ++k) at = put_bytes(at, mesh.normals[i][k]);
   if (layout.colors) {
     const Rgb8& c = mesh.colors[i];
-    for (std::uint8_t channel : {c.r, c.g, c.b}) at = put(at, channel);
+    for (std::uint8_t channel : {c.r, c.g, c.b}) at = put_bytes(at, channel);
   }
-  for (const VertexScalar& scalar : scalars) at = put(at, scalar.values[i]);
+  for (const VertexScalar& scalar : scalars) at = put_bytes(at, scalar.values[i]);
   return at;
 }
 
 char* put_ply_face(char* at, const Triangle& t) {
-  at = put(at, std::uint8_t{3});
-  for (std::uint32_t v : t) at = put(at, v);
+  at = put_bytes(at, std::uint8_t{3});
+  for (std::uint32_t v : t) at = put_bytes(at, v);
   return at;
 }
 

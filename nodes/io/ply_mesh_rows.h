@@ -5,6 +5,7 @@
 #include <Eigen/Core>
 #include <cstddef>
 #include <cstdint>
+#include <cstring>
 #include <string>
 #include <vector>
 
@@ -49,5 +50,13 @@ char* put_ply_vertex(char* at, const TriangleMesh& mesh, std::size_t i,
 
 /// Writes `t` as a binary face row (kFaceBytes) at `at`; returns the byte after it. O(1).
 char* put_ply_face(char* at, const Triangle& t);
+
+/// Copies v's bytes (native order: little-endian on the supported platforms) to `at` and
+/// returns the byte after them; the caller sized the buffer. O(sizeof(T)).
+template <typename T>
+char* put_bytes(char* at, const T& v) {
+  std::memcpy(at, &v, sizeof(T));
+  return at + sizeof(T);
+}
 
 }  // namespace meshflow::io

@@ -1,6 +1,7 @@
 #include "runtime/point_cloud.h"
 
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_reduce.h>
 
 namespace meshflow {
 namespace {
@@ -40,11 +41,17 @@ std::size_t count_finite_points(const PointCloud& cloud) {
 }
 
 Eigen::AlignedBox3f finite_bounds(const PointCloud& cloud) {
-  Eigen::AlignedBox3f box;
-  for (const auto& p : cloud.positions) {
-    if (p.allFinite()) box.extend(p);
-  }
-  return box;
+  // Blocks joined in order, the earlier box first: the serial loop's result, bit for bit.
+  return tbb::parallel_reduce(
+      tbb::blocked_range<std::size_t>(0, cloud.positions.size(), 16384), Eigen::AlignedBox3f(),
+      [&](const tbb::blocked_range<std::size_t>& r, Eigen::AlignedBox3f box) {
+        for (std::size_t i = r.begin(); i != r.end(); ++i) {
+          const Eigen::Vector3f& p = cloud.positions[i];
+          if (p.allFinite()) box.extend(p);
+        }
+        return box;
+      },
+      [](Eigen::AlignedBox3f a, const Eigen::AlignedBox3f& b) { return a.extend(b); });
 }
 
 }  // namespace meshflow

@@ -1,29 +1,38 @@
 #include "runtime/radix_sort.h"
 
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_reduce.h>
 
 #include <algorithm>
 #include <array>
+#include <utility>
 
 namespace meshflow {
 namespace {
 
 constexpr int kBits = 11;
 constexpr std::size_t kBuckets = std::size_t{1} << kBits;
-constexpr std::size_t kBlock = std::size_t{1} << 16;  // keys per parallel block
+
+// Keys per parallel block: an eighth of the keys, between 2^13 and 2^16 (so that a few ten
+// thousand keys still make blocks for every thread, while the serial prefix over the blocks'
+// histograms stays a small fraction of a pass). Any size sorts the same (a stable pass).
+std::size_t block_size(std::size_t n) {
+  return std::clamp<std::size_t>(n / 8, std::size_t{1} << 13, std::size_t{1} << 16);
+}
 
 // One stable counting-sort pass on the digit at `shift`, src -> dst. Blocks are fixed-size and
 // their offsets are laid out bucket by bucket, block by block, so the result does not depend
 // on how blocks are scheduled.
 void radix_pass(const std::vector<std::uint64_t>& src, std::vector<std::uint64_t>& dst, int shift) {
   const std::size_t n = src.size();
-  const std::size_t blocks = (n + kBlock - 1) / kBlock;
+  const std::size_t block = block_size(n);
+  const std::size_t blocks = (n + block - 1) / block;
   std::vector<std::array<std::size_t, kBuckets>> offsets(blocks);
   tbb::parallel_for(std::size_t{0}, blocks, [&](std::size_t b) {
     auto& h = offsets[b];
     h.fill(0);
-    const std::size_t end = std::min(n, (b + 1) * kBlock);
-    for (std::size_t i = b * kBlock; i < end; ++i) ++h[(src[i] >> shift) & (kBuckets - 1)];
+    const std::size_t end = std::min(n, (b + 1) * block);
+    for (std::size_t i = b * block; i < end; ++i) ++h[(src[i] >> shift) & (kBuckets - 1)];
   });
   std::size_t sum = 0;
   for (std::size_t d = 0; d < kBuckets; ++d) {
@@ -35,8 +44,8 @@ void radix_pass(const std::vector<std::uint64_t>& src, std::vector<std::uint64_t
   }
   tbb::parallel_for(std::size_t{0}, blocks, [&](std::size_t b) {
     auto& at = offsets[b];
-    const std::size_t end = std::min(n, (b + 1) * kBlock);
-    for (std::size_t i = b * kBlock; i < end; ++i)
+    const std::size_t end = std::min(n, (b + 1) * block);
+    for (std::size_t i = b * block; i < end; ++i)
       dst[at[(src[i] >> shift) & (kBuckets - 1)]++] = src[i];
   });
 }
@@ -45,12 +54,21 @@ void radix_pass(const std::vector<std::uint64_t>& src, std::vector<std::uint64_t
 
 void radix_sort(std::vector<std::uint64_t>& keys) {
   if (keys.size() < 2) return;
-  std::uint64_t all_or = 0, all_and = ~std::uint64_t{0};
-  for (std::uint64_t k : keys) {
-    all_or |= k;
-    all_and &= k;
-  }
-  const std::uint64_t varying = all_or ^ all_and;  // bits that differ between some keys
+  using Bits = std::pair<std::uint64_t, std::uint64_t>;  // the keys' or, and
+  const Bits bits = tbb::parallel_reduce(
+      tbb::blocked_range<std::size_t>(0, keys.size(), block_size(keys.size())),
+      Bits{0, ~std::uint64_t{0}},
+      [&](const tbb::blocked_range<std::size_t>& r, Bits b) {
+        for (std::size_t i = r.begin(); i != r.end(); ++i) {
+          b.first |= keys[i];
+          b.second &= keys[i];
+        }
+        return b;
+      },
+      [](const Bits& a, const Bits& b) {
+        return Bits{a.first | b.first, a.second & b.second};
+      });
+  const std::uint64_t varying = bits.first ^ bits.second;  // bits that differ between some keys
   std::vector<std::uint64_t> buffer(keys.size());
   std::vector<std::uint64_t>* src = &keys;
   std::vector<std::uint64_t>* dst = &buffer;

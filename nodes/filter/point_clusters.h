@@ -40,8 +40,10 @@ struct ClusterConfig {
 /// config.k nearest neighbours within the radius, then the points of clusters still too small
 /// to all their neighbours within it (the same clusters). A thin structure sampled at the
 /// surface's spacing stays one cluster; a point farther than link_radius from every other is
-/// isolated. Serial, deterministic. O(n log n) for the sort plus the point pairs of unlinked
-/// neighbouring cells; O(n) memory. Thread-safe (reads only).
+/// isolated. Parallel on the grid (a radix sort of the points by cell, a concurrent union-find
+/// of the cells), deterministic: the result does not depend on the thread count. O(n log n) at most
+/// for the sort, plus the point pairs of unlinked neighbouring cells; O(n) memory. Thread-safe
+/// (reads only).
 std::vector<std::uint32_t> surface_cluster_indices(const PointCloud& cloud,
                                                    const SpatialIndex& index,
                                                    const ClusterConfig& config,

@@ -89,6 +89,32 @@ TEST(PointClusters, WideCloudsGiveTheSameComponents) {
   }
 }
 
+// Cells spread so far (2^20 cells on every axis: 63 bits of cell offsets) that the sort keys
+// and the points' indices do not fit in 64 bits: the grid sorts pairs instead; the same
+// components, at 1, 2 and 4 threads.
+TEST(PointClusters, WideGridKeysGiveTheSameComponents) {
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<float> u(0.0f, 1.0f);
+  PointCloud cloud;
+  for (int i = 0; i < 700; ++i) cloud.positions.emplace_back(u(rng), u(rng), u(rng));
+  const float far = 40000.0f;  // 40 km: 10^6 cells of 4 cm, within the grid's 2^21
+  for (int i = 0; i < 25; ++i)
+    cloud.positions.emplace_back(far + 0.03f * static_cast<float>(i), far, far);
+  cloud.positions.emplace_back(-far, far, -far);  // isolated
+  const KdTreeIndex index(cloud.positions);
+  ClusterConfig config;
+  config.link_radius = 0.07f;
+  for (std::size_t min_points : {2u, 20u, 30u}) {
+    config.min_points = min_points;
+    const auto run = [&] { return surface_cluster_indices(cloud, index, config); };
+    const std::vector<std::uint32_t> expected =
+        all_pairs_clusters(cloud, config.link_radius, min_points);
+    EXPECT_EQ(test::with_threads(1, run), expected) << min_points;
+    EXPECT_EQ(test::with_threads(2, run), expected) << min_points;
+    EXPECT_EQ(test::with_threads(4, run), expected) << min_points;
+  }
+}
+
 TEST(PointClusters, DropsScatteredOutliersKeepsTheScannedSurface) {
   const synthetic::ClosedObject object = synthetic::sphere_object();
   synthetic::ObjectScanConfig sc;

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <vector>
 
+#include "runtime/parallel.h"
 #include "runtime/vertex_triangles.h"
 
 namespace meshflow {
@@ -54,9 +55,8 @@ TriangleMesh peel_rim(const TriangleMesh& mesh, const Measure& measure, std::siz
                           on_border[t] = border_edge(tri[k], tri[(k + 1) % 3]) ? 1 : 0;
                       }
                     });
-  std::vector<std::uint32_t> candidates;
-  for (std::size_t t = 0; t < on_border.size(); ++t)
-    if (on_border[t]) candidates.push_back(static_cast<std::uint32_t>(t));
+  std::vector<std::uint32_t> candidates =
+      parallel_select_indices(on_border.size(), [&](std::size_t t) { return on_border[t] != 0; });
   std::size_t total = 0;
   for (int round = 0; round < kMaxRounds && !candidates.empty(); ++round) {
     // Each candidate's corners on its border edges (bit k: corner k), then their distances.
@@ -105,10 +105,14 @@ TriangleMesh peel_rim(const TriangleMesh& mesh, const Measure& measure, std::siz
     }
     return mesh;
   }
-  std::vector<Triangle> kept;
-  kept.reserve(mesh.triangles.size() - total);
-  for (std::size_t t = 0; t < mesh.triangles.size(); ++t)
-    if (alive[t]) kept.push_back(mesh.triangles[t]);
+  const std::vector<std::uint32_t> live =
+      parallel_select_indices(alive.size(), [&](std::size_t t) { return alive[t] != 0; });
+  std::vector<Triangle> kept(live.size());
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, live.size(), 16384),
+                    [&](const tbb::blocked_range<std::size_t>& r) {
+                      for (std::size_t i = r.begin(); i != r.end(); ++i)
+                        kept[i] = mesh.triangles[live[i]];
+                    });
   return compact_vertices(mesh, kept, kept_vertices);
 }
 

@@ -7,6 +7,7 @@
 #include "nodes/io/parse_util.h"
 #include "nodes/io/text_chunks.h"
 #include "runtime/error.h"
+#include "runtime/parallel.h"
 
 namespace meshflow::io {
 namespace {
@@ -107,10 +108,7 @@ PointCloud read_3dtk_scan(const std::string& path, const Scan3dOptions& options,
         }
       });
   PointCloud cloud;
-  std::size_t total = 0;
-  for (const Points& p : parts) total += p.size();
-  cloud.positions.reserve(total);
-  for (const Points& p : parts) cloud.positions.insert(cloud.positions.end(), p.begin(), p.end());
+  concatenate_parts(parts, cloud.positions);  // the copies in parallel
   cloud.sensor_origin = T_world_scan.translation();
   cloud.has_sensor_origin = true;
   return cloud;

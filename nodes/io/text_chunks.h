@@ -20,7 +20,8 @@ struct TextChunk {
 /// The file's bytes; throws meshflow::Error if it cannot be opened or read.
 std::string read_whole_file(const std::string& path);
 
-/// Splits `text` into chunks of about `chunk_bytes` that end at line ends. O(n).
+/// Splits `text` into chunks of about `chunk_bytes` that end at line ends, each with its first
+/// line's number (the chunks' lines counted in parallel). O(n).
 std::vector<TextChunk> split_into_line_chunks(std::string_view text,
                                               std::size_t chunk_bytes = 1 << 18);
 

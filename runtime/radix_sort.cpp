@@ -7,6 +7,8 @@
 #include <array>
 #include <utility>
 
+#include "runtime/default_init.h"
+
 namespace meshflow {
 namespace {
 
@@ -23,11 +25,10 @@ std::size_t block_size(std::size_t n) {
 // One stable counting-sort pass on the digit at `shift`, src -> dst. Blocks are fixed-size and
 // their offsets are laid out bucket by bucket, block by block, so the result does not depend
 // on how blocks are scheduled.
-void radix_pass(const std::vector<std::uint64_t>& src, std::vector<std::uint64_t>& dst, int shift) {
-  const std::size_t n = src.size();
+void radix_pass(const std::uint64_t* src, std::uint64_t* dst, std::size_t n, int shift) {
   const std::size_t block = block_size(n);
   const std::size_t blocks = (n + block - 1) / block;
-  std::vector<std::array<std::size_t, kBuckets>> offsets(blocks);
+  UninitVector<std::array<std::size_t, kBuckets>> offsets(blocks);  // zeroed by the threads
   tbb::parallel_for(std::size_t{0}, blocks, [&](std::size_t b) {
     auto& h = offsets[b];
     h.fill(0);
@@ -69,15 +70,21 @@ void radix_sort(std::vector<std::uint64_t>& keys) {
         return Bits{a.first | b.first, a.second & b.second};
       });
   const std::uint64_t varying = bits.first ^ bits.second;  // bits that differ between some keys
-  std::vector<std::uint64_t> buffer(keys.size());
-  std::vector<std::uint64_t>* src = &keys;
-  std::vector<std::uint64_t>* dst = &buffer;
+  const std::size_t n = keys.size();
+  UninitVector<std::uint64_t> buffer(n);  // first written by the threads of the first pass
+  std::uint64_t* src = keys.data();
+  std::uint64_t* dst = buffer.data();
   for (int shift = 0; shift < 64; shift += kBits) {
     if (((varying >> shift) & (kBuckets - 1)) == 0) continue;
-    radix_pass(*src, *dst, shift);
+    radix_pass(src, dst, n, shift);
     std::swap(src, dst);
   }
-  if (src != &keys) keys.swap(buffer);
+  if (src != keys.data())  // an odd number of passes: the keys back, in parallel
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, block_size(n)),
+                      [&](const tbb::blocked_range<std::size_t>& r) {
+                        std::copy(src + r.begin(), src + r.end(),
+                                  keys.begin() + static_cast<std::ptrdiff_t>(r.begin()));
+                      });
 }
 
 void radix_sort_unique(std::vector<std::uint64_t>& keys) {

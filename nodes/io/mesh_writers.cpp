@@ -1,5 +1,8 @@
 #include "nodes/io/mesh_writers.h"
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
 #include <algorithm>
 #include <cctype>
 #include <cstdint>
@@ -10,6 +13,7 @@
 #include "nodes/io/glb_writer.h"
 #include "nodes/io/parse_util.h"
 #include "nodes/io/ply_mesh_rows.h"
+#include "runtime/default_init.h"
 #include "runtime/error.h"
 
 namespace meshflow::io {
@@ -73,26 +77,29 @@ void write_ply(const std::string& path, const TriangleMesh& mesh, PlyEncoding en
     for (const Triangle& t : mesh.triangles)
       out << "3 " << t[0] << ' ' << t[1] << ' ' << t[2] << '\n';
   } else {
-    const std::size_t vertex_bytes = layout.vertex_bytes();
-    // Written in blocks of 4 MiB: a mesh of millions of triangles is not held a second time
-    // as its file.
+    // Rows of fixed size, formatted in parallel into blocks of 4 MiB (row i of a block at
+    // (i - first) x row bytes), each block written once filled: the file's bytes in order,
+    // and a mesh of millions of triangles is not held a second time as its file.
     constexpr std::size_t kBlock = std::size_t{4} << 20;
-    std::vector<char> buf(kBlock + std::max(vertex_bytes, PlyMeshLayout::kFaceBytes));
-    char* at = buf.data();
-    const auto flush_full = [&](bool always) {
-      if (!always && static_cast<std::size_t>(at - buf.data()) < kBlock) return;
-      out.write(buf.data(), static_cast<std::streamsize>(at - buf.data()));
-      at = buf.data();
+    const std::size_t vertex_bytes = layout.vertex_bytes();
+    UninitVector<char> buf(std::max({kBlock, vertex_bytes, PlyMeshLayout::kFaceBytes}));
+    const auto write_rows = [&](std::size_t count, std::size_t row_bytes, const auto& put) {
+      const std::size_t per_block = std::max<std::size_t>(1, kBlock / row_bytes);
+      for (std::size_t first = 0; first < count; first += per_block) {
+        const std::size_t last = std::min(count, first + per_block);
+        tbb::parallel_for(tbb::blocked_range<std::size_t>(first, last, 8192),
+                          [&](const tbb::blocked_range<std::size_t>& r) {
+                            for (std::size_t i = r.begin(); i != r.end(); ++i)
+                              put(buf.data() + (i - first) * row_bytes, i);
+                          });
+        out.write(buf.data(), static_cast<std::streamsize>((last - first) * row_bytes));
+      }
     };
-    for (std::size_t i = 0; i < mesh.vertices.size(); ++i) {
-      flush_full(false);
-      at = put_ply_vertex(at, mesh, i, origin, layout, scalars);
-    }
-    for (const Triangle& t : mesh.triangles) {
-      flush_full(false);
-      at = put_ply_face(at, t);
-    }
-    flush_full(true);
+    write_rows(mesh.vertices.size(), vertex_bytes, [&](char* at, std::size_t i) {
+      put_ply_vertex(at, mesh, i, origin, layout, scalars);
+    });
+    write_rows(mesh.triangles.size(), PlyMeshLayout::kFaceBytes,
+               [&](char* at, std::size_t t) { put_ply_face(at, mesh.triangles[t]); });
   }
   file.commit();
 }

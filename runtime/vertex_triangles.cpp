@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <numeric>
 
+#include "runtime/default_init.h"
 #include "runtime/parallel.h"
 
 namespace meshflow {
@@ -32,9 +33,10 @@ VertexTriangles vertex_triangles(const std::vector<Triangle>& tris, std::size_t 
   const std::size_t chunks =
       std::max<std::size_t>(1, std::min(tris.size() / kMinTrianglesPerChunk, most));
   const auto chunk_begin = [&](std::size_t c) { return tris.size() * c / chunks; };
-  std::vector<std::uint32_t> slots(chunks * vertex_count, 0);
+  UninitVector<std::uint32_t> slots(chunks * vertex_count);  // each row zeroed by its chunk
   tbb::parallel_for(std::size_t{0}, chunks, [&](std::size_t c) {
     std::uint32_t* count = slots.data() + c * vertex_count;
+    std::fill(count, count + vertex_count, 0u);
     for (std::size_t t = chunk_begin(c); t < chunk_begin(c + 1); ++t)
       for (std::uint32_t v : tris[t])
         if (v < vertex_count) ++count[v];  // (an index past the vertices is not listed)

@@ -3,6 +3,7 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <atomic>
 #include <vector>
 
 #include "runtime/parallel.h"
@@ -26,8 +27,8 @@ bool beyond_data(const Eigen::Vector3f& v, const std::vector<Eigen::Vector3f>& p
   return d2 > 4.0f * pair_d2[1];
 }
 
-// The peeling rounds of trim_rim(); measure(v) tells whether vertex v lies beyond the data
-// (called in parallel, at most once per vertex).
+// The peeling rounds of trim_rim(), every pass parallel; measure(v) tells whether vertex v lies
+// beyond the data (called in parallel, at most once per vertex).
 template <typename Measure>
 TriangleMesh peel_rim(const TriangleMesh& mesh, const Measure& measure, std::size_t* removed,
                       std::vector<std::uint32_t>* kept_vertices = nullptr) {
@@ -43,7 +44,10 @@ TriangleMesh peel_rim(const TriangleMesh& mesh, const Measure& measure, std::siz
     }
     return faces == 1;
   };
-  std::vector<std::int8_t> far(mesh.vertices.size(), -1);  // -1: not yet measured
+  // Per vertex: claimed for measuring (once), and the verdict; per triangle: a next candidate.
+  std::vector<std::atomic<std::uint8_t>> claimed(mesh.vertices.size());
+  std::vector<std::uint8_t> far(mesh.vertices.size(), 0);
+  std::vector<std::atomic<std::uint8_t>> next(mesh.triangles.size());
   // The border triangles: a scan of each triangle's edges over the incidence (no per-thread
   // vertex arrays, which cost more in page faults than the scan itself).
   std::vector<std::uint8_t> on_border(mesh.triangles.size(), 0);
@@ -59,42 +63,42 @@ TriangleMesh peel_rim(const TriangleMesh& mesh, const Measure& measure, std::siz
       parallel_select_indices(on_border.size(), [&](std::size_t t) { return on_border[t] != 0; });
   std::size_t total = 0;
   for (int round = 0; round < kMaxRounds && !candidates.empty(); ++round) {
-    // Each candidate's corners on its border edges (bit k: corner k), then their distances.
+    // Each candidate's corners on its border edges (bit k: corner k); each such corner not yet
+    // measured is measured by the one thread that claims it.
     std::vector<std::uint8_t> rim_corners(candidates.size(), 0);
     tbb::parallel_for(std::size_t{0}, candidates.size(), [&](std::size_t i) {
       const Triangle& t = mesh.triangles[candidates[i]];
+      std::uint8_t corners = 0;
       for (int k = 0; k < 3; ++k)
-        if (border_edge(t[k], t[(k + 1) % 3])) rim_corners[i] |= (1 << k) | (1 << (k + 1) % 3);
+        if (border_edge(t[k], t[(k + 1) % 3])) corners |= (1 << k) | (1 << (k + 1) % 3);
+      rim_corners[i] = corners;
+      for (int k = 0; k < 3; ++k)
+        if ((corners >> k & 1) && claimed[t[k]].exchange(1, std::memory_order_relaxed) == 0)
+          far[t[k]] = measure(t[k]) ? 1 : 0;
     });
-    std::vector<std::uint32_t> unmeasured;
-    for (std::size_t i = 0; i < candidates.size(); ++i)
-      for (int k = 0; k < 3; ++k)
-        if ((rim_corners[i] >> k & 1) && far[mesh.triangles[candidates[i]][k]] < 0)
-          unmeasured.push_back(mesh.triangles[candidates[i]][k]);
-    std::sort(unmeasured.begin(), unmeasured.end());
-    unmeasured.erase(std::unique(unmeasured.begin(), unmeasured.end()), unmeasured.end());
-    tbb::parallel_for(std::size_t{0}, unmeasured.size(),
-                      [&](std::size_t i) { far[unmeasured[i]] = measure(unmeasured[i]) ? 1 : 0; });
-    std::vector<std::uint32_t> dropped;
-    for (std::size_t i = 0; i < candidates.size(); ++i) {
-      const Triangle& t = mesh.triangles[candidates[i]];
-      for (int k = 0; k < 3; ++k) {
-        if ((rim_corners[i] >> k & 1) && far[t[k]] == 1) {
-          dropped.push_back(candidates[i]);
-          break;
-        }
-      }
-    }
-    for (std::uint32_t t : dropped) alive[t] = 0;
-    total += dropped.size();
-    // Next round: the live triangles next to the ones just removed.
-    candidates.clear();
-    for (std::uint32_t t : dropped)
-      for (std::uint32_t v : mesh.triangles[t])
+    // The candidates with a rim corner beyond the data go (in candidate order).
+    const std::vector<std::uint32_t> hit =
+        parallel_select_indices(candidates.size(), [&](std::size_t i) {
+          const Triangle& t = mesh.triangles[candidates[i]];
+          for (int k = 0; k < 3; ++k)
+            if ((rim_corners[i] >> k & 1) && far[t[k]] == 1) return true;
+          return false;
+        });
+    tbb::parallel_for(std::size_t{0}, hit.size(),
+                      [&](std::size_t j) { alive[candidates[hit[j]]] = 0; });
+    total += hit.size();
+    // Next round: the live triangles next to the ones just removed, ascending.
+    tbb::parallel_for(std::size_t{0}, hit.size(), [&](std::size_t j) {
+      for (std::uint32_t v : mesh.triangles[candidates[hit[j]]])
         for (const std::uint32_t* n = around.begin(v); n != around.end(v); ++n)
-          if (alive[*n]) candidates.push_back(*n);
-    std::sort(candidates.begin(), candidates.end());
-    candidates.erase(std::unique(candidates.begin(), candidates.end()), candidates.end());
+          if (alive[*n]) next[*n].store(1, std::memory_order_relaxed);
+    });
+    candidates = parallel_select_indices(mesh.triangles.size(), [&](std::size_t t) {
+      return next[t].load(std::memory_order_relaxed) != 0;
+    });
+    tbb::parallel_for(std::size_t{0}, candidates.size(), [&](std::size_t i) {
+      next[candidates[i]].store(0, std::memory_order_relaxed);
+    });
   }
   if (removed != nullptr) *removed = total;
   if (total == 0) {  // unchanged, unused vertices included

@@ -337,16 +337,36 @@ class Decimator {
 
   // Phase 2: a lower bound of the best collapse of every marked vertex, in parallel on the mesh
   // as the pass starts.
+  // After the first pass the marked vertices are few and apart (next to the last pass's
+  // collapses): a range's are listed first, and each one's ring, quadric and its neighbours'
+  // terms requested ahead, in three stages (each from addresses the one before brought in).
   void bound_marked_costs() {
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, best_.size()),
                       [&](const tbb::blocked_range<std::size_t>& range) {
                         Scratch& scratch = local_scratch();  // a lookup: once per range
+                        std::vector<std::uint32_t>& marked = scratch.marked;
+                        marked.clear();
                         for (std::size_t u = range.begin(); u != range.end(); ++u)
-                          if (dirty_[u]) {
-                            best_[u] = cost_bound(static_cast<std::uint32_t>(u), scratch);
-                            validated_[u] = 0;
-                          }
+                          if (dirty_[u]) marked.push_back(static_cast<std::uint32_t>(u));
+                        const std::size_t count = marked.size();
+                        for (std::size_t i = 0; i < count; ++i) {
+                          if (i + 2 * kLookAhead < count)
+                            rings_.prefetch_ring(marked[i + 2 * kLookAhead]);
+                          if (i + kLookAhead < count) prefetch_bound(marked[i + kLookAhead]);
+                          const std::uint32_t u = marked[i];
+                          best_[u] = cost_bound(u, scratch);
+                          validated_[u] = 0;
+                        }
                       });
+  }
+
+  // Requests what cost_bound(u) reads besides u's ring (requested earlier): u's quadric and
+  // its neighbours' terms.
+  void prefetch_bound(std::uint32_t u) const {
+    __builtin_prefetch(&q_[u].q[0]);
+    __builtin_prefetch(&q_[u].q[8]);
+    for (const std::uint32_t* x = rings_.begin(u); x != rings_.end(u); ++x)
+      if (*x != VertexRings::kSeparator) __builtin_prefetch(&terms_[*x]);
   }
 
   // Phase 3: the candidates cheapest first, as keys (cost as float bits, vertex), radix-sorted;
@@ -428,7 +448,11 @@ class Decimator {
   void prefetch_walk(std::size_t i, bool ahead_in_parallel) const {
     const std::size_t n = order_.size();
     if (ahead_in_parallel) {
+      // Evaluated at the chunk's start: u's ring is near; what the collapse itself then reads
+      // and writes, u's neighbours' slots, rings and numbers, is requested in two more stages.
       if (i + kLookAhead < n) prefetch(candidate(i + kLookAhead), false);
+      if (i + kLookAhead / 2 < n) prefetch_corners(candidate(i + kLookAhead / 2));
+      if (i + kLookAhead / 4 < n) prefetch_neighbour_rings(candidate(i + kLookAhead / 4));
       return;
     }
     if (i + 3 * kLookAhead < n)
@@ -507,8 +531,21 @@ class Decimator {
     }
     chosen_.clear();
     evaluated = false;
-    for (std::uint64_t key : picks_) {
-      const auto u = static_cast<std::uint32_t>(key & vertex_mask_);
+    // The picks lie all over the mesh: each one's slot, ring and claims are requested ahead,
+    // in three stages (each from addresses the one before brought in).
+    const auto pick = [&](std::size_t i) {
+      return static_cast<std::uint32_t>(picks_[i] & vertex_mask_);
+    };
+    for (std::size_t i = 0; i < picks_.size(); ++i) {
+      if (i + 2 * kLookAhead < picks_.size()) rings_.prefetch_slot(pick(i + 2 * kLookAhead));
+      if (i + kLookAhead < picks_.size()) rings_.prefetch_ring(pick(i + kLookAhead));
+      if (i + kLookAhead / 2 < picks_.size()) {
+        const std::uint32_t w = pick(i + kLookAhead / 2);
+        __builtin_prefetch(&claimed_[w]);
+        for (const std::uint32_t* x = rings_.begin(w); x != rings_.end(w); ++x)
+          __builtin_prefetch(&claimed_[*x]);
+      }
+      const std::uint32_t u = pick(i);
       bool apart = claimed_[u] != pass_stamp_;
       for (const std::uint32_t* x = rings_.begin(u); x != rings_.end(u); ++x)
         apart &= claimed_[*x] != pass_stamp_;
@@ -567,14 +604,15 @@ class Decimator {
     explicit Scratch(const Decimator& d) : fan(d.cos_turn_, d.cos2_min_angle_) {}
     const std::uint32_t* neighbours = nullptr;  ///< u's ring
     std::size_t neighbour_count = 0;
-    std::uint32_t border[2] = {0, 0};  ///< u's neighbours along its border, if it is on one
-    std::size_t border_count = 0;      ///< 2 on a border, else 0
-    std::uint32_t line[2] = {0, 0};    ///< u's neighbours along its feature line, if on one
-    bool on_line = false;              ///< u is an inner vertex or a loose end of a feature line
-    std::size_t line_count = 0;        ///< 2 for an inner vertex, 1 for a loose end
-    std::vector<Target> candidates;    ///< u's targets by quadric cost
-    std::vector<double> costs;         ///< quadric_costs() of u's targets
-    CollapseFan fan;                   ///< u's faces
+    std::uint32_t border[2] = {0, 0};   ///< u's neighbours along its border, if it is on one
+    std::size_t border_count = 0;       ///< 2 on a border, else 0
+    std::uint32_t line[2] = {0, 0};     ///< u's neighbours along its feature line, if on one
+    bool on_line = false;               ///< u is an inner vertex or a loose end of a feature line
+    std::size_t line_count = 0;         ///< 2 for an inner vertex, 1 for a loose end
+    std::vector<Target> candidates;     ///< u's targets by quadric cost
+    std::vector<double> costs;          ///< quadric_costs() of u's targets
+    std::vector<std::uint32_t> marked;  ///< bound_marked_costs(): a range's marked vertices
+    CollapseFan fan;                    ///< u's faces
 
     // The quadric costs of moving u onto each of its `count` targets (see quadric_costs()).
     const double* target_costs(const Decimator& d, std::uint32_t u, const std::uint32_t* targets,
@@ -739,6 +777,7 @@ class Decimator {
   void prefetch_corners(const Candidate& c) const {
     for (const std::uint32_t* x = rings_.begin(c.from); x != rings_.end(c.from); ++x) {
       __builtin_prefetch(&terms_[*x]);
+      __builtin_prefetch(&pass_[*x]);
       rings_.prefetch_slot(*x);
     }
   }

@@ -11,6 +11,7 @@
 #include "nodes/compress/progressive_mesh.h"
 #include "nodes/depth/organized_depth.h"
 #include "nodes/extract/extract_surface.h"
+#include "nodes/extract/planar_marching_cubes.h"
 #include "nodes/extract/rim_trim.h"
 #include "nodes/extract/vertex_colors.h"
 #include "nodes/filter/point_clusters.h"
@@ -286,6 +287,13 @@ std::uint64_t extract(Frame& f, const ReconstructionConfig& c) {
       f.chunk ? (config.defer_feature_flips ? &f.chunk->feature_vertices : nullptr)
               : (emc ? &f.feature_vertices : nullptr);
   f.mesh = extract_surface(f.grid, f.distance, f.cloud, f.index.get(), config, feature_vertices);
+  // Planar marching cubes places no vertex on a feature, but knows the data: on clean samples
+  // (sharp normals, or estimated ones whose plane fits are as exact as NormalsConfig's
+  // clean_variation; a scan's would flag nearly every vertex) the vertices where it shows one.
+  const bool clean = f.normals.sharp || (f.normals.estimated > 0 &&
+                                         f.normals.median_variation < c.normals.clean_variation);
+  if (!f.chunk && f.index && clean && config.method == ExtractMethod::kPlanarMarchingCubes)
+    f.feature_vertices = data_feature_vertices(f.mesh, f.cloud, *f.index, f.grid.voxel_size);
   const std::size_t extracted = f.mesh.triangles.size();
   if (f.index && c.max_rim_voxels > 0.0f) {
     const float limit = c.max_rim_voxels * f.voxel_size;

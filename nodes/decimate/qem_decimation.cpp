@@ -156,12 +156,12 @@ int bits_for(std::size_t count) {
 // changed the ends once more. The next pass bounds again only the vertices next to a change.
 class Decimator {
  public:
-  // The setup that needs no feature edges: rings, positions, scales, face quadrics. constrain()
-  // must follow before run().
-  Decimator(const TriangleMesh& mesh, const QemConfig& config)
+  // The setup that needs no feature edges: rings (from `around`, vertex_triangles(mesh)),
+  // positions, scales, face quadrics. constrain() must follow before run().
+  Decimator(const TriangleMesh& mesh, const VertexTriangles& around, const QemConfig& config)
       : in_(mesh),
         cfg_(config),
-        rings_(mesh.triangles, mesh.vertices.size()),
+        rings_(mesh.triangles, around),
         q_(mesh.vertices.size()),
         terms_(mesh.vertices.size()),
         cos_turn_(cos_degrees(config.max_normal_turn_deg)),
@@ -946,11 +946,14 @@ TriangleMesh qem_decimate(const TriangleMesh& mesh,
                           const std::vector<std::array<std::uint32_t, 2>>& feature_edges,
                           const QemConfig& config, QemReport* report) {
   return qem_decimate_finding_features(
-      mesh, [&feature_edges]() -> const QemFeatureEdges& { return feature_edges; }, config, report);
+      mesh,
+      [&feature_edges](const VertexTriangles&) -> const QemFeatureEdges& { return feature_edges; },
+      config, report);
 }
 
 TriangleMesh qem_decimate_finding_features(
-    const TriangleMesh& mesh, const std::function<const QemFeatureEdges&()>& find_features,
+    const TriangleMesh& mesh,
+    const std::function<const QemFeatureEdges&(const VertexTriangles&)>& find_features,
     const QemConfig& config, QemReport* report) {
   require_corners_in_range(mesh.triangles, mesh.vertices.size(), "QEM decimation");
   QemReport r;
@@ -958,8 +961,11 @@ TriangleMesh qem_decimate_finding_features(
       static_cast<double>(mesh.triangles.size()) * static_cast<double>(config.target_ratio)));
   std::optional<Decimator> decimator;
   const QemFeatureEdges* feature_edges = nullptr;
-  tbb::parallel_invoke([&] { decimator.emplace(mesh, config); },
-                       [&] { feature_edges = &find_features(); });
+  {
+    const VertexTriangles around = vertex_triangles(mesh);  // the rings' and the features'
+    tbb::parallel_invoke([&] { decimator.emplace(mesh, around, config); },
+                         [&] { feature_edges = &find_features(around); });
+  }
   decimator->constrain(*feature_edges);
   TriangleMesh out = decimator->run(target, r);
   if (report != nullptr) *report = r;

@@ -181,8 +181,11 @@ VertexRings::Kind order_small_fan(std::uint32_t u, const std::uint32_t* first,
 }  // namespace
 
 VertexRings::VertexRings(const std::vector<Triangle>& triangles, std::size_t vertex_count)
-    : slots_(vertex_count), locked_(vertex_count, 0) {
-  const VertexTriangles around = vertex_triangles(triangles, vertex_count);
+    : VertexRings(triangles, vertex_triangles(triangles, vertex_count)) {}
+
+VertexRings::VertexRings(const std::vector<Triangle>& triangles, const VertexTriangles& around)
+    : slots_(around.offsets.size() - 1), locked_(around.offsets.size() - 1, 0) {
+  const std::size_t vertex_count = around.offsets.size() - 1;
   std::uint32_t total = 0;
   for (std::size_t v = 0; v < vertex_count; ++v) {
     const std::uint32_t faces = around.offsets[v + 1] - around.offsets[v];

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "runtime/triangle_mesh.h"
+#include "runtime/vertex_triangles.h"
 
 namespace meshflow {
 
@@ -34,6 +35,9 @@ class VertexRings {
   /// the faces are. In parallel over vertices; the same for any thread count. O(V + T) time,
   /// about 4 x (valence + 7) bytes per vertex.
   VertexRings(const std::vector<Triangle>& triangles, std::size_t vertex_count);
+  /// The same from the incidence `around` = vertex_triangles(triangles, vertex_count) (a caller
+  /// that needs it too builds it once); the vertex count is its row count.
+  VertexRings(const std::vector<Triangle>& triangles, const VertexTriangles& around);
 
   /// Between two fans of a kFans ring: skip it wherever ring entries are read as vertices.
   static constexpr std::uint32_t kSeparator = 0xFFFFFFFFu;

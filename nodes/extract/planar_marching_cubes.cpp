@@ -4,8 +4,10 @@
 
 #include <Eigen/Geometry>
 #include <algorithm>
+#include <cmath>
 #include <utility>
 
+#include "runtime/angles.h"
 #include "runtime/parallel.h"
 
 namespace meshflow {
@@ -81,6 +83,26 @@ void move_border_to_contour(TriangleMesh& mesh, const PointCloud& cloud, const S
   tbb::parallel_for(std::size_t{0}, kept.size(),
                     [&](std::size_t k) { triangles[k] = mesh.triangles[kept[k]]; });
   mesh.triangles = std::move(triangles);
+}
+
+std::vector<std::uint8_t> data_feature_vertices(const TriangleMesh& mesh, const PointCloud& cloud,
+                                                const SpatialIndex& index, float voxel_size,
+                                                float angle_deg, float reach_voxels) {
+  std::vector<std::uint8_t> flags(mesh.vertices.size(), 0);
+  if (cloud.normals.size() != cloud.positions.size() || cloud.positions.empty()) return flags;
+  const auto cos_limit = static_cast<float>(std::cos(radians(static_cast<double>(angle_deg))));
+  const float reach = reach_voxels * voxel_size;
+  tbb::parallel_for(std::size_t{0}, mesh.vertices.size(), [&](std::size_t v) {
+    const std::vector<std::uint32_t> near = index.radius_search(mesh.vertices[v], reach);
+    if (near.empty()) return;
+    const Eigen::Vector3f& reference = cloud.normals[near.front()];  // the nearest point's
+    for (std::uint32_t p : near)
+      if (reference.dot(cloud.normals[p]) < cos_limit) {
+        flags[v] = 1;
+        return;
+      }
+  });
+  return flags;
 }
 
 TriangleMesh planar_marching_cubes(const SparseGrid& grid, const DistanceField& field,

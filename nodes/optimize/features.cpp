@@ -8,6 +8,7 @@
 #include <tbb/parallel_for.h>
 
 #include "runtime/angles.h"
+#include "runtime/parallel.h"
 #include "runtime/vertex_triangles.h"
 
 namespace meshflow {
@@ -48,81 +49,107 @@ FeatureEdgeSides feature_edge_sides(const TriangleMesh& mesh, const VertexTriang
   return s;
 }
 
-/// Per vertex, whether two of its faces may meet at more than `angle_deg`: 0 where every face
-/// normal around it lies within half that angle (less a margin for rounding) of their mean, so
-/// that no two of them are farther apart than the angle (the edges at such a vertex are not
-/// sharp, and need no search for their sides). Parallel over vertices; O(T).
-std::vector<std::uint8_t> bent_vertices(const VertexTriangles& around,
-                                        const std::vector<Eigen::Vector3f>& normals,
-                                        std::size_t vertex_count, float angle_deg) {
-  constexpr double kRoundingMarginDeg = 0.1;
-  const double half = std::max(0.0, 0.5 * static_cast<double>(angle_deg) - kRoundingMarginDeg);
-  const auto cos_half = static_cast<float>(std::cos(radians(half)));
-  std::vector<std::uint8_t> bent(vertex_count, 0);
-  tbb::parallel_for(std::size_t{0}, vertex_count, [&](std::size_t i) {
-    const auto v = static_cast<std::uint32_t>(i);
-    Eigen::Vector3f mean = Eigen::Vector3f::Zero();
-    for (const std::uint32_t* t = around.begin(v); t != around.end(v); ++t) mean += normals[*t];
-    if (!(mean.squaredNorm() > 0.0f)) {  // opposite faces, or none with area: look
-      bent[i] = around.end(v) - around.begin(v) > 1 ? 1 : 0;
-      return;
+/// Whether two of v's faces may meet at more than the feature angle: false where every face
+/// normal around v lies within half that angle (less a margin for rounding: `cos_half`) of
+/// their mean, so that no two of them are farther apart than the angle (no edge at v is sharp).
+/// O(valence).
+bool bent_vertex(const VertexTriangles& around, const std::vector<Eigen::Vector3f>& normals,
+                 std::uint32_t v, float cos_half) {
+  Eigen::Vector3f mean = Eigen::Vector3f::Zero();
+  for (const std::uint32_t* t = around.begin(v); t != around.end(v); ++t) mean += normals[*t];
+  if (!(mean.squaredNorm() > 0.0f))  // opposite faces, or none with area: look
+    return around.end(v) - around.begin(v) > 1;
+  mean.normalize();
+  for (const std::uint32_t* t = around.begin(v); t != around.end(v); ++t)
+    if (normals[*t].squaredNorm() > 0.0f && !(normals[*t].dot(mean) >= cos_half)) return true;
+  return false;
+}
+
+/// One side of an edge {a, b} seen from its lower end a: the other end, the face, and whether the
+/// face runs a -> b.
+struct EdgeSide {
+  std::uint32_t b, face;
+  bool forward;
+};
+
+/// The candidates whose lower end is `a` (see sharp_candidates), ascending by their other end,
+/// appended to `out`; `sides` is scratch memory. Every edge {a, b} (b > a) of a's faces (each face
+/// once) is judged: exactly two sides in distinct faces, their normals apart by more than the
+/// angle; `left` the normal of the face that runs min -> max, read from the lower face (as the
+/// lowest face holding the edge sees it). O(valence log valence).
+void candidates_at(const TriangleMesh& mesh, const VertexTriangles& around,
+                   const std::vector<Eigen::Vector3f>& normals, std::uint32_t a, float cos_limit,
+                   const std::vector<std::uint8_t>* seed, std::vector<EdgeSide>& sides,
+                   std::vector<FeatureCandidate>& out) {
+  sides.clear();
+  std::uint32_t previous = 0xFFFFFFFFu;
+  const std::size_t n = mesh.vertices.size();
+  for (const std::uint32_t* it = around.begin(a); it != around.end(a); ++it) {
+    if (*it == previous) continue;  // a triangle repeating a is listed once per repetition
+    previous = *it;
+    const Triangle& t = mesh.triangles[*it];
+    for (int k = 0; k < 3; ++k) {
+      const std::uint32_t p = t[k], q = t[(k + 1) % 3];
+      if (p == q || (p != a && q != a)) continue;
+      const std::uint32_t b = p == a ? q : p;
+      if (b > a && b < n) sides.push_back({b, *it, p < q});
     }
-    mean.normalize();
-    for (const std::uint32_t* t = around.begin(v); t != around.end(v); ++t)
-      if (normals[*t].squaredNorm() > 0.0f && !(normals[*t].dot(mean) >= cos_half)) {
-        bent[i] = 1;
-        return;
+  }
+  // By other end, then face (faces come ascending: a stable sort keeps them so).
+  for (std::size_t i = 1; i < sides.size(); ++i)
+    for (std::size_t j = i; j > 0 && sides[j].b < sides[j - 1].b; --j)
+      std::swap(sides[j], sides[j - 1]);
+  for (std::size_t i = 0; i < sides.size();) {
+    std::size_t j = i + 1;
+    while (j < sides.size() && sides[j].b == sides[i].b) ++j;
+    if (j - i == 2 && sides[i].face != sides[i + 1].face) {
+      const Eigen::Vector3f& n0 = normals[sides[i].face];
+      const Eigen::Vector3f& n1 = normals[sides[i + 1].face];
+      if (n0.squaredNorm() > 0.0f && n1.squaredNorm() > 0.0f && n0.dot(n1) < cos_limit) {
+        const std::uint32_t b = sides[i].b;
+        const bool marked = seed != nullptr && (*seed)[a] != 0 && (*seed)[b] != 0;
+        const bool forward = sides[i].forward;
+        out.push_back({{a, b}, forward ? n0 : n1, forward ? n1 : n0, marked});
       }
-  });
-  return bent;
+    }
+    i = j;
+  }
 }
 
 /// Edges with two faces meeting at a normal angle whose cosine is below cos_limit (the angle
-/// `angle_deg`), sorted. Face normals once, the vertices whose faces all lie within half the
-/// angle of one another left out (bent_vertices), then one parallel pass over the faces: each
-/// edge between two other vertices is looked at from the lowest face holding it, through the
-/// triangles around its first end. O(T x valence) at most; O(T) where the mesh is smooth.
+/// `angle_deg`), sorted. Face normals once, then one parallel pass over the vertices in fixed
+/// blocks: a vertex whose faces all lie within half the angle of their mean (bent_vertex) ends
+/// no sharp edge; the others judge their edges to higher vertices (candidates_at). The blocks'
+/// lists, each sorted, joined in block order: sorted, the same for any thread count.
+/// O(T + bent vertices x valence log valence). `around` is vertex_triangles(mesh).
 /// `seed` (optional, one byte per vertex): candidates between two marked vertices are `marked`.
-std::vector<FeatureCandidate> sharp_candidates(const TriangleMesh& mesh, float angle_deg,
+std::vector<FeatureCandidate> sharp_candidates(const TriangleMesh& mesh,
+                                               const VertexTriangles& around, float angle_deg,
                                                float cos_limit,
                                                const std::vector<std::uint8_t>* seed = nullptr) {
   const std::size_t t_count = mesh.triangles.size();
   std::vector<Eigen::Vector3f> normals(t_count);
-  tbb::parallel_for(std::size_t{0}, t_count,
-                    [&](std::size_t t) { normals[t] = face_normal(mesh, mesh.triangles[t]); });
-  const VertexTriangles around = vertex_triangles(mesh);
-  const std::vector<std::uint8_t> bent =
-      bent_vertices(around, normals, mesh.vertices.size(), angle_deg);
-  tbb::enumerable_thread_specific<std::vector<FeatureCandidate>> found;
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, t_count), [&](const auto& range) {
-    std::vector<FeatureCandidate>& out = found.local();
-    for (std::size_t i = range.begin(); i != range.end(); ++i) {
-      const auto t = static_cast<std::uint32_t>(i);
-      const Triangle& tri = mesh.triangles[t];
-      for (int k = 0; k < 3; ++k) {
-        const std::uint32_t a = tri[k], b = tri[(k + 1) % 3];
-        if (a == b || a >= mesh.vertices.size() || b >= mesh.vertices.size()) continue;
-        if (!bent[a] || !bent[b]) continue;
-        const FeatureEdgeSides s = feature_edge_sides(mesh, around, a, b);
-        if (s.count != 2 || s.first != t || s.second == t) continue;
-        const Eigen::Vector3f& n0 = normals[s.first];
-        const Eigen::Vector3f& n1 = normals[s.second];
-        if (!(n0.squaredNorm() > 0.0f && n1.squaredNorm() > 0.0f && n0.dot(n1) < cos_limit))
-          continue;
-        // t runs a -> b: its normal is on the left of {min, max} when a < b.
-        const bool forward = a < b;
-        const bool marked = seed != nullptr && (*seed)[a] != 0 && (*seed)[b] != 0;
-        out.push_back(
-            {{std::min(a, b), std::max(a, b)}, forward ? n0 : n1, forward ? n1 : n0, marked});
-      }
+    for (std::size_t t = range.begin(); t != range.end(); ++t)
+      normals[t] = face_normal(mesh, mesh.triangles[t]);
+  });
+  constexpr double kRoundingMarginDeg = 0.1;
+  const double half = std::max(0.0, 0.5 * static_cast<double>(angle_deg) - kRoundingMarginDeg);
+  const auto cos_half = static_cast<float>(std::cos(radians(half)));
+  const std::size_t n = mesh.vertices.size();
+  const std::size_t blocks = (n + kParallelBlock - 1) / kParallelBlock;
+  std::vector<std::vector<FeatureCandidate>> parts(blocks);
+  tbb::enumerable_thread_specific<std::vector<EdgeSide>> scratch;
+  tbb::parallel_for(std::size_t{0}, blocks, [&](std::size_t block) {
+    std::vector<EdgeSide>& sides = scratch.local();
+    const std::size_t end = std::min(n, (block + 1) * kParallelBlock);
+    for (std::size_t v = block * kParallelBlock; v < end; ++v) {
+      const auto a = static_cast<std::uint32_t>(v);
+      if (bent_vertex(around, normals, a, cos_half))
+        candidates_at(mesh, around, normals, a, cos_limit, seed, sides, parts[block]);
     }
   });
-  std::vector<FeatureCandidate> all;
-  for (const std::vector<FeatureCandidate>& part : found)
-    all.insert(all.end(), part.begin(), part.end());
-  std::sort(all.begin(), all.end(),
-            [](const FeatureCandidate& x, const FeatureCandidate& y) { return x.ends < y.ends; });
-  return all;
+  return concatenate_parts(parts);
 }
 
 /// The live candidates around every vertex (compressed rows of candidate indices).
@@ -257,20 +284,26 @@ MeshFeatures features_from_candidates(const TriangleMesh& mesh, std::vector<Feat
 
 }  // namespace
 
+MeshFeatures detect_features(const TriangleMesh& mesh, const VertexTriangles& around,
+                             const std::vector<std::uint8_t>* seed, float angle_deg,
+                             float min_line_length) {
+  if (!(angle_deg < 180.0f)) return features_from_candidates(mesh, {}, angle_deg, min_line_length);
+  if (seed != nullptr && seed->size() != mesh.vertices.size()) seed = nullptr;
+  const float cos_limit = static_cast<float>(std::cos(radians(static_cast<double>(angle_deg))));
+  return features_from_candidates(mesh, sharp_candidates(mesh, around, angle_deg, cos_limit, seed),
+                                  angle_deg, min_line_length);
+}
+
 MeshFeatures detect_features(const TriangleMesh& mesh, float angle_deg, float min_line_length) {
   if (!(angle_deg < 180.0f)) return features_from_candidates(mesh, {}, angle_deg, min_line_length);
-  const float cos_limit = static_cast<float>(std::cos(radians(static_cast<double>(angle_deg))));
-  return features_from_candidates(mesh, sharp_candidates(mesh, angle_deg, cos_limit), angle_deg,
-                                  min_line_length);
+  return detect_features(mesh, vertex_triangles(mesh), nullptr, angle_deg, min_line_length);
 }
 
 MeshFeatures detect_features(const TriangleMesh& mesh, const std::vector<std::uint8_t>& seed,
                              float angle_deg, float min_line_length) {
   if (seed.size() != mesh.vertices.size() || !(angle_deg < 180.0f))
     return detect_features(mesh, angle_deg, min_line_length);
-  const float cos_limit = static_cast<float>(std::cos(radians(static_cast<double>(angle_deg))));
-  return features_from_candidates(mesh, sharp_candidates(mesh, angle_deg, cos_limit, &seed),
-                                  angle_deg, min_line_length);
+  return detect_features(mesh, vertex_triangles(mesh), &seed, angle_deg, min_line_length);
 }
 
 namespace {
@@ -282,7 +315,8 @@ namespace {
 std::vector<FeatureCandidate> candidates_reaching(const TriangleMesh& mesh,
                                                   const VertexTriangles& around,
                                                   const std::vector<std::uint32_t>& seeds,
-                                                  float cos_limit) {
+                                                  float cos_limit,
+                                                  const std::vector<std::uint8_t>* marks) {
   const std::size_t n = mesh.vertices.size();
   std::vector<std::uint8_t> reached(n, 0);
   std::vector<std::uint32_t> queue;
@@ -306,7 +340,9 @@ std::vector<FeatureCandidate> candidates_reaching(const TriangleMesh& mesh,
         if (!(n0.squaredNorm() > 0.0f && n1.squaredNorm() > 0.0f && n0.dot(n1) < cos_limit))
           continue;
         const bool forward = p < r;  // the lowest face runs min -> max: its normal on the left
-        found.push_back({{std::min(a, b), std::max(a, b)}, forward ? n0 : n1, forward ? n1 : n0});
+        const bool marked = marks != nullptr && (*marks)[a] != 0 && (*marks)[b] != 0;
+        found.push_back(
+            {{std::min(a, b), std::max(a, b)}, forward ? n0 : n1, forward ? n1 : n0, marked});
         if (!reached[b]) reached[b] = 1, queue.push_back(b);
       }
     }
@@ -391,11 +427,13 @@ MeshFeatures features_from_candidates(const TriangleMesh& mesh, std::vector<Feat
 
 MeshFeatures detect_features_reaching(const TriangleMesh& mesh, const VertexTriangles& around,
                                       const std::vector<std::uint32_t>& seeds, float angle_deg,
-                                      float min_line_length) {
+                                      float min_line_length,
+                                      const std::vector<std::uint8_t>* marks) {
   if (!(angle_deg < 180.0f) || seeds.empty())
     return features_from_candidates(mesh, {}, angle_deg, min_line_length);
+  if (marks != nullptr && marks->size() != mesh.vertices.size()) marks = nullptr;
   const float cos_limit = static_cast<float>(std::cos(radians(static_cast<double>(angle_deg))));
-  return features_from_candidates(mesh, candidates_reaching(mesh, around, seeds, cos_limit),
+  return features_from_candidates(mesh, candidates_reaching(mesh, around, seeds, cos_limit, marks),
                                   angle_deg, min_line_length);
 }
 

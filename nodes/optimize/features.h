@@ -50,12 +50,12 @@ struct MeshFeatures {
 /// chamfer's short edge): short lines with a loose end (spurs) and short loops first, the
 /// others once no spur is left; the lines left then join anew and the test repeats until
 /// nothing changes. min_line_length 0: kMinFeatureLineEdges x the mesh's median edge length;
-/// negative: no line is dropped. angle_deg >= 180: no features. Candidates in one pass over the
-/// faces, parallel (face normals once; vertices whose faces all lie within half the angle of
-/// their mean normal skipped; each other edge looked at from its lowest face through the
-/// triangles around its first end), the lines on the candidates' vertices only; deterministic,
-/// the same for any thread count. O(T x valence + V + rounds x candidates log candidates),
-/// rounds about the depth of the noise's branching; O(T) for the candidates of a smooth mesh.
+/// negative: no line is dropped. angle_deg >= 180: no features. Candidates from face normals
+/// (once) in one parallel pass over the vertices: a vertex whose faces all lie within half the
+/// angle of their mean normal ends no sharp edge; every other one judges its edges to higher
+/// vertices from its own faces. The lines on the candidates' vertices only; deterministic, the
+/// same for any thread count. O(T + V + bent vertices x valence log valence + rounds x
+/// candidates log candidates), rounds about the depth of the noise's branching.
 MeshFeatures detect_features(const TriangleMesh& mesh, float angle_deg = kDefaultFeatureAngleDeg,
                              float min_line_length = 0.0f);
 
@@ -74,6 +74,15 @@ MeshFeatures detect_features(const TriangleMesh& mesh, const std::vector<std::ui
                              float angle_deg = kDefaultFeatureAngleDeg,
                              float min_line_length = 0.0f);
 
+/// detect_features(mesh, ...) or, with `seed` (nullptr, or one of another size: none),
+/// detect_features(mesh, *seed, ...), on the incidence `around` = vertex_triangles(mesh) that the
+/// caller has built anyway (the decimator, for its rings): the same graph, without building it
+/// again. Same costs otherwise.
+MeshFeatures detect_features(const TriangleMesh& mesh, const VertexTriangles& around,
+                             const std::vector<std::uint8_t>* seed,
+                             float angle_deg = kDefaultFeatureAngleDeg,
+                             float min_line_length = 0.0f);
+
 /// detect_features() on the feature lines that reach `seeds` (vertex indices) only: the sharp
 /// edges and vertex kinds detect_features(mesh, angle_deg, min_line_length) gives on the
 /// connected sets of candidate edges (joined at shared vertices) that hold a seed; nothing
@@ -81,11 +90,14 @@ MeshFeatures detect_features(const TriangleMesh& mesh, const std::vector<std::ui
 /// exactly that part of the whole mesh's graph, found by a search from the seeds through the
 /// candidates instead of a pass over every face: for a step that needs the lines at a few places
 /// (the hole filler: the lines ending on a hole's border). `around` is vertex_triangles(mesh).
+/// `marks` (optional, one byte per vertex; another size: none): the mesh maker's feature
+/// vertices, as detect_features(mesh, marks, ...) reads them (that graph's part then).
 /// Serial; deterministic. O(seeds + V + reached vertices x valence^2 + rounds x their
 /// candidates log candidates); min_line_length 0 adds the whole mesh's median edge length.
 MeshFeatures detect_features_reaching(const TriangleMesh& mesh, const VertexTriangles& around,
                                       const std::vector<std::uint32_t>& seeds,
                                       float angle_deg = kDefaultFeatureAngleDeg,
-                                      float min_line_length = 0.0f);
+                                      float min_line_length = 0.0f,
+                                      const std::vector<std::uint8_t>* marks = nullptr);
 
 }  // namespace meshflow

@@ -48,15 +48,21 @@ struct CarriedState {
 };
 
 // The feature graph of `mesh`, detected once while the topology lasts (from the seed while
-// there is one for these vertices).
+// there is one for these vertices); `around` (optional): vertex_triangles(mesh), when the step
+// has it.
 const MeshFeatures& carried_features(const TriangleMesh& mesh, const OptimizeConfig& config,
-                                     CarriedState& carried) {
-  if (!carried.features)
-    carried.features =
-        carried.seed.size() == mesh.vertices.size()
-            ? detect_features(mesh, carried.seed, config.feature_angle_deg,
-                              config.feature_min_length)
-            : detect_features(mesh, config.feature_angle_deg, config.feature_min_length);
+                                     CarriedState& carried,
+                                     const VertexTriangles* around = nullptr) {
+  if (!carried.features) {
+    const std::vector<std::uint8_t>* seed = carried.seed.empty() ? nullptr : &carried.seed;
+    const float angle = config.feature_angle_deg, length = config.feature_min_length;
+    if (around != nullptr)
+      carried.features = detect_features(mesh, *around, seed, angle, length);
+    else if (seed != nullptr)
+      carried.features = detect_features(mesh, *seed, angle, length);
+    else
+      carried.features = detect_features(mesh, angle, length);
+  }
   return *carried.features;
 }
 
@@ -120,7 +126,12 @@ TriangleMesh holes_step(const TriangleMesh& mesh, const OptimizeConfig& config,
   holes.feature_angle_deg = config.feature_angle_deg;
   holes.feature_min_length = config.feature_min_length;
   const std::vector<std::uint8_t> mask = held_mask(held);
-  TriangleMesh out = fill_holes(mesh, holes, &r, held ? &mask : nullptr);
+  // The graph carried from an earlier step on this mesh, else the maker's feature vertices: the
+  // fills continue the lines the later steps keep, nothing detected twice.
+  HoleFeatures known;
+  if (carried.features) known.graph = &*carried.features;
+  if (!carried.seed.empty()) known.marks = &carried.seed;
+  TriangleMesh out = fill_holes(mesh, holes, &r, held ? &mask : nullptr, known);
   if (held != nullptr) held->flags.resize(out.vertices.size(), 0);  // added vertices: none
   if (!carried.seed.empty()) carried.seed.resize(out.vertices.size(), 0);
   step.detail = format("%zu holes filled (+%zu triangles), %zu larger than allowed, %zu outlines",
@@ -226,8 +237,9 @@ TriangleMesh decimate_step(const TriangleMesh& mesh, const OptimizeConfig& confi
   const MeshFeatures* found = &none;  // detected beside the decimation's setup
   TriangleMesh out = qem_decimate_finding_features(
       mesh,
-      [&]() -> const QemFeatureEdges& {
-        if (config.decimate_keeps_features) found = &carried_features(mesh, config, carried);
+      [&](const VertexTriangles& around) -> const QemFeatureEdges& {
+        if (config.decimate_keeps_features)
+          found = &carried_features(mesh, config, carried, &around);
         return found->edges;
       },
       config.decimate, &r);

@@ -386,7 +386,8 @@ bool could_be_outline(double length, double area) {
 }  // namespace
 
 TriangleMesh fill_holes(const TriangleMesh& mesh, const HoleFillingConfig& config,
-                        HoleFillingReport* report, const std::vector<std::uint8_t>* held) {
+                        HoleFillingReport* report, const std::vector<std::uint8_t>* held,
+                        const HoleFeatures& known) {
   HoleFillingReport r;
   std::size_t ambiguous = 0;
   const VertexTriangles around = vertex_triangles(mesh);
@@ -440,13 +441,18 @@ TriangleMesh fill_holes(const TriangleMesh& mesh, const HoleFillingConfig& confi
     for (std::uint32_t v : *hole) in_hole[v] = 1;
   std::optional<HoleFeatureLinks> links;
   if (!holes.empty() && config.feature_angle_deg < 180.0f) {
-    // Only the lines that reach a hole's border matter: found from its vertices, not from a pass
-    // over every face (most of a depth frame's clean-up time when it was).
-    std::vector<std::uint32_t> seeds;
-    for (const auto* hole : holes) seeds.insert(seeds.end(), hole->begin(), hole->end());
-    const MeshFeatures features = detect_features_reaching(
-        mesh, around, seeds, config.feature_angle_deg, config.feature_min_length);
-    if (!features.edges.empty()) links = hole_feature_links(mesh.vertices.size(), features);
+    if (known.graph != nullptr && known.graph->vertex_kind.size() == mesh.vertices.size()) {
+      if (!known.graph->edges.empty())
+        links = hole_feature_links(mesh.vertices.size(), *known.graph);
+    } else {
+      // Only the lines that reach a hole's border matter: found from its vertices, not from a
+      // pass over every face (most of a depth frame's clean-up time when it was).
+      std::vector<std::uint32_t> seeds;
+      for (const auto* hole : holes) seeds.insert(seeds.end(), hole->begin(), hole->end());
+      const MeshFeatures features = detect_features_reaching(
+          mesh, around, seeds, config.feature_angle_deg, config.feature_min_length, known.marks);
+      if (!features.edges.empty()) links = hole_feature_links(mesh.vertices.size(), features);
+    }
   }
   std::vector<HoleFill> fills(holes.size());
   tbb::parallel_for(std::size_t{0}, holes.size(), [&](std::size_t i) {

@@ -41,6 +41,19 @@ struct HoleFillingReport {
   std::size_t added_triangles = 0;
 };
 
+/// The features of the mesh fill_holes() receives, where its caller has them (the optimize
+/// steps carry them): with `graph`, nothing is detected; else with `marks`, the lines reaching
+/// a hole are found as the seeded graph has them.
+struct HoleFeatures {
+  /// The whole mesh's graph (detect_features() at the config's angle and shortest line, or its
+  /// seeded form): its lines ending on a hole are the ones detect_features_reaching() finds
+  /// (the same fills, no detection).
+  const MeshFeatures* graph = nullptr;
+  /// The mesh maker's feature vertices (one byte per vertex; another size: ignored): lines
+  /// holding an edge between two of them are no noise (detect_features(mesh, seed, ...)).
+  const std::vector<std::uint8_t>* marks = nullptr;
+};
+
 /// Returns `mesh` with its small holes closed. Border loops are followed along the border
 /// edges (runtime border_edges); a loop through a vertex with two border edges leaving it (a
 /// non-manifold vertex, which the clean step splits) is ambiguous, left open and counted as not
@@ -65,8 +78,10 @@ struct HoleFillingReport {
 /// reach a hole; the same lines as the whole mesh's detect_features() there).
 /// `held` (optional, one byte per vertex): loops through a vertex whose byte is non-zero stay
 /// open (a chunk's seam, finished in place: its loops go on in the neighbouring chunk).
+/// `known` (optional): what the caller knows of the features already (HoleFeatures).
 TriangleMesh fill_holes(const TriangleMesh& mesh, const HoleFillingConfig& config = {},
                         HoleFillingReport* report = nullptr,
-                        const std::vector<std::uint8_t>* held = nullptr);
+                        const std::vector<std::uint8_t>* held = nullptr,
+                        const HoleFeatures& known = {});
 
 }  // namespace meshflow

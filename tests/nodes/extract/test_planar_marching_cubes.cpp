@@ -2,8 +2,12 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
 #include <cstdio>
+#include <limits>
 
+#include "fixtures/solid_fixture.h"
 #include "nodes/distance/hoppe_distance.h"
 #include "nodes/eval/surface_eval.h"
 #include "nodes/voxelize/voxelize.h"
@@ -98,6 +102,69 @@ TEST(PlanarMarchingCubes, SameOutputWithOneAndTwoThreads) {
   EXPECT_GT(one.triangles.size(), 100u);
   EXPECT_EQ(one.vertices, two.vertices);
   EXPECT_EQ(one.triangles, two.triangles);
+}
+
+// Distance from p to the nearest of the 12 edges of the box centred at c with half sides h.
+float to_box_edges(const Eigen::Vector3f& p, const Eigen::Vector3f& c, float h) {
+  const Eigen::Vector3f q = (p - c).cwiseAbs() - Eigen::Vector3f::Constant(h);
+  float best = std::numeric_limits<float>::infinity();
+  for (int k = 0; k < 3; ++k) {  // the edges along axis k
+    const int i = (k + 1) % 3, j = (k + 2) % 3;
+    const float along = std::max(q[k], 0.0f);
+    best = std::min(best, std::sqrt(q[i] * q[i] + q[j] * q[j] + along * along));
+  }
+  return best;
+}
+
+// Planar marching cubes places no vertex on the box's edges (it cuts them off, as marching
+// cubes does), but the data shows where they are: the vertices flagged there lie within about a
+// voxel of a true edge (none farther: the faces' vertices are not flagged), and every true
+// edge has flagged vertices all along it
+// (the feature graph's seed, as extended marching cubes' feature vertices are).
+TEST(PlanarMarchingCubes, FlagsTheVerticesAtTheBoxEdges) {
+  const auto s = test::sampled_solid(test::test_solids(kPlanarVoxel)[0].solid, kPlanarVoxel);
+  const Eigen::Vector3f c(0.013f, -0.021f, 0.007f);
+  constexpr float kHalf = 0.4f;
+  const TriangleMesh mesh = planar_marching_cubes(s.grid, s.field, s.solid.samples, *s.index);
+  const std::vector<std::uint8_t> flags =
+      data_feature_vertices(mesh, s.solid.samples, *s.index, kPlanarVoxel);
+  ASSERT_EQ(flags.size(), mesh.vertices.size());
+  std::size_t flagged = 0;
+  float farthest = 0.0f;
+  for (std::size_t v = 0; v < flags.size(); ++v)
+    if (flags[v]) {
+      ++flagged;
+      farthest = std::max(farthest, to_box_edges(mesh.vertices[v], c, kHalf) / kPlanarVoxel);
+    }
+  // Coverage: points along every edge, each with a flagged vertex within 1.5 voxels.
+  std::size_t samples = 0, covered = 0;
+  for (int corner = 0; corner < 8; ++corner)
+    for (int axis = 0; axis < 3; ++axis) {
+      const Eigen::Vector3f sign(corner & 1 ? 1.f : -1.f, corner & 2 ? 1.f : -1.f,
+                                 corner & 4 ? 1.f : -1.f);
+      if (sign[axis] > 0) continue;  // each edge once, from its lower end
+      for (float t = 0.0f; t <= 2.0f * kHalf; t += 0.25f * kPlanarVoxel) {
+        Eigen::Vector3f p = c + kHalf * sign;
+        p[axis] += t;
+        ++samples;
+        for (std::size_t v = 0; v < flags.size(); ++v)
+          if (flags[v] && (mesh.vertices[v] - p).norm() <= 1.5f * kPlanarVoxel) {
+            ++covered;
+            break;
+          }
+      }
+    }
+  std::printf(
+      "[ pmc ] box: %zu of %zu vertices flagged, farthest %.2f voxels from an edge, "
+      "%zu of %zu points along the edges within 1.5 voxels of one\n",
+      flagged, mesh.vertices.size(), static_cast<double>(farthest), covered, samples);
+  EXPECT_GT(flagged, 0u);
+  EXPECT_LT(farthest, 1.5f);
+  EXPECT_EQ(covered, samples);
+  PointCloud no_normals = s.solid.samples;
+  no_normals.normals.clear();
+  const auto none = data_feature_vertices(mesh, no_normals, *s.index, kPlanarVoxel);
+  EXPECT_EQ(std::count(none.begin(), none.end(), 1), 0);
 }
 
 }  // namespace

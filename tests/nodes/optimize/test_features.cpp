@@ -293,6 +293,19 @@ TEST(Features, LinesReachingSeedsAreTheWholeGraphsThere) {
       }
     }
   EXPECT_GE(nonempty, 9u);
+  // With the maker's marks (every 5th vertex and the cube's edges; short marked lines stay): the
+  // seeded whole graph, and the seeded graph on a given incidence is the same.
+  std::vector<std::uint8_t> marks(m.vertices.size(), 0);
+  for (std::uint32_t v = 0; v < marks.size(); ++v)
+    marks[v] = v % 5 == 0 || on_cube_edge(m.vertices[v]) ? 1 : 0;
+  const MeshFeatures seeded = detect_features(m, marks);
+  EXPECT_EQ(
+      detect_features_reaching(m, around, everywhere, kDefaultFeatureAngleDeg, 0.0f, &marks).edges,
+      seeded.edges);
+  EXPECT_NE(seeded.edges, detect_features(m).edges);  // the marks kept short lines
+  EXPECT_EQ(detect_features(m, around, &marks).edges, seeded.edges);
+  EXPECT_EQ(detect_features(m, around, &marks).vertex_kind, seeded.vertex_kind);
+  EXPECT_EQ(detect_features(m, around, nullptr).edges, detect_features(m).edges);
   const MeshFeatures whole = detect_features(m);
   EXPECT_EQ(detect_features_reaching(m, around, everywhere).edges, whole.edges);
   EXPECT_TRUE(detect_features_reaching(m, around, {}).edges.empty());

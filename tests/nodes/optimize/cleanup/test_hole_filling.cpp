@@ -194,6 +194,46 @@ TEST(HoleFilling, AHoleOverACornerGetsTheCornerBack) {
   EXPECT_EQ(f.count(MeshFeatures::VertexKind::kCorner), 8u);
 }
 
+// The features the optimize steps carry: the whole mesh's graph gives the fills the detection
+// from the holes gives (edge and corner holes); the mesh maker's marks keep lines the length
+// test would drop (every line shorter than 10 m here): the fill continues them, as with lines
+// long enough, where without the marks it cuts the edge off.
+TEST(HoleFilling, CarriedGraphAndMarksGiveTheFillsOfTheirLines) {
+  for (const Eigen::Vector3f& at : {Eigen::Vector3f(0.5f, 0.0f, 0.0f), Eigen::Vector3f(1, 1, 1)}) {
+    const TriangleMesh holed = cube_with_hole(at, 0.15f);
+    HoleFillingConfig config;
+    config.feature_min_length = 0.1f;
+    const MeshFeatures graph =
+        detect_features(holed, config.feature_angle_deg, config.feature_min_length);
+    HoleFeatures known;
+    known.graph = &graph;
+    HoleFillingReport detected, carried;
+    const TriangleMesh a = fill_holes(holed, config, &detected);
+    const TriangleMesh b = fill_holes(holed, config, &carried, nullptr, known);
+    EXPECT_EQ(a.triangles, b.triangles);
+    EXPECT_EQ(a.vertices, b.vertices);
+    EXPECT_EQ(carried.along_features, 1u);
+
+    config.feature_min_length = 10.0f;  // every line is noise now
+    std::vector<std::uint8_t> marks(holed.vertices.size(), 0);
+    for (std::size_t v = 0; v < marks.size(); ++v) {
+      int extreme = 0;  // on a cube edge: two coordinates at 0 or 1
+      for (int k = 0; k < 3; ++k)
+        extreme += holed.vertices[v][k] == 0.0f || holed.vertices[v][k] == 1.0f ? 1 : 0;
+      marks[v] = extreme >= 2 ? 1 : 0;
+    }
+    HoleFillingReport unmarked, marked;
+    const TriangleMesh plain = fill_holes(holed, config, &unmarked);
+    HoleFeatures from_marks;
+    from_marks.marks = &marks;
+    const TriangleMesh seeded = fill_holes(holed, config, &marked, nullptr, from_marks);
+    EXPECT_EQ(unmarked.along_features, 0u);
+    EXPECT_EQ(marked.along_features, 1u);
+    EXPECT_EQ(seeded.triangles, b.triangles);  // the fill of the long lines
+    EXPECT_NE(plain.triangles, b.triangles);
+  }
+}
+
 TEST(HoleFilling, SameTrianglesWithOneAndTwoThreads) {
   const TriangleMesh in = holed_grid();
   const auto one = test::with_threads(1, [&] { return fill_holes(in).triangles; });

@@ -8,7 +8,7 @@
 # bench/compress_vs_draco.sh (room 0.6, kurt3d 0.8, Kinect 0.6 degrees), colours exact. Positions
 # only: both without normals and colours (Draco reads a positions-only PLY). Prints markdown rows;
 # ratio = Draco's instructions / meshflow's (> 1: meshflow faster).
-#   bench/codec_callgrind.sh [BUILD_DIR]     (needs valgrind and the `draco` package)
+#   bench/codec_callgrind.sh [BUILD_DIR]     (needs valgrind, taskset and the `draco` package)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 tool="$(pwd)/${1:-build}/meshflow"
@@ -18,11 +18,14 @@ trap 'rm -rf "$work"' EXIT
 command -v valgrind > /dev/null || { echo "needs valgrind" >&2; exit 2; }
 command -v draco_encoder > /dev/null || { echo "needs draco_encoder (apt-get install draco)" >&2; exit 2; }
 cd "$work"
-# Instructions of the calls matching $1 while running the rest.
+# Instructions of the calls matching $1 while running the rest, on one core: callgrind counts
+# a call on its own thread only, and the decoder hands independent jobs to a second thread where
+# oneTBB has one (nodes/compress/side_by_side.h); on one core it runs them itself, so every
+# instruction of the call is counted.
 count() {
   local toggle=$1
   shift
-  valgrind --tool=callgrind --callgrind-out-file=cg.out --toggle-collect="$toggle" "$@" \
+  taskset -c 0 valgrind --tool=callgrind --callgrind-out-file=cg.out --toggle-collect="$toggle" "$@" \
     > /dev/null 2> cg.log
   grep -o 'refs: *[0-9,]*' cg.log | tr -dc '0-9'
 }

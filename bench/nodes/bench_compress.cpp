@@ -131,6 +131,29 @@ void BM_EdgebreakerDecode(benchmark::State& state) {
 }
 BENCHMARK(BM_EdgebreakerDecode)->Apply(codec_args);
 
+// One mesh as written (normals, and colours where the input has them) decoded at a time on
+// state.range(0) threads: the decoder's own second thread (the output triangles and the colours'
+// neighbourhood beside the positions and the normals; nodes/compress/side_by_side.h).
+void BM_EdgebreakerDecodeOne(benchmark::State& state) {
+  const TriangleMesh* mesh = cleaned_mesh(state);
+  if (mesh == nullptr) return;
+  ThreadLimit limit(static_cast<int>(state.range(0)));
+  compress::CompressConfig config = codec_config(with_normals(state, *mesh), state.range(1));
+  config.colors = mesh->colors.size() == mesh->vertices.size();
+  compress::CompressReport report;
+  const std::vector<unsigned char> bytes = compress::compress_mesh(*mesh, config, &report);
+  for (auto _ : state)
+    benchmark::DoNotOptimize(compress::decompress_mesh(bytes, "bench").triangles.size());
+  count_coding(state, *mesh, bytes.size(), static_cast<double>(report.body.connectivity_bytes), 1,
+               config.normals);
+  state.counters["colors"] = config.colors ? 1.0 : 0.0;
+}
+BENCHMARK(BM_EdgebreakerDecodeOne)
+    ->ArgNames({"threads", "input", "normals"})
+    ->ArgsProduct({{1, 2}, {kSynthetic, kKurt3d, kRedwood}, {0, 1}})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
+
 // Progressive: the whole file, and the share of it the base mesh needs.
 void BM_ProgressiveEncode(benchmark::State& state) {
   const TriangleMesh* mesh = cleaned_mesh(state);

@@ -8,8 +8,9 @@ namespace {
 
 // Pairs the half-edges of edges used by exactly two faces in opposite directions: half-edges
 // listed by origin with their ends beside them (a counting sort); per origin a, how many a -> b
-// there are for each end b (a counter per vertex, cleared after a); then each single a -> b
-// looks for b -> a among b's, reading one short run of the list. O(T x valence).
+// there are for each end b (a counter per vertex, cleared after a); then each single a -> b with
+// b > a looks for b -> a among b's, reading one short run of the list (an edge b -> a with b < a
+// was tried from b: the pairing asks the same of both sides). O(T x valence).
 void pair_twins(const std::vector<std::uint32_t>& corners, std::size_t vertices,
                 std::vector<std::uint32_t>& twin) {
   const auto halves = static_cast<std::uint32_t>(corners.size());
@@ -17,33 +18,31 @@ void pair_twins(const std::vector<std::uint32_t>& corners, std::size_t vertices,
   // Every entry of these is written below: no clearing.
   const std::unique_ptr<std::uint32_t[]> by_origin(new std::uint32_t[halves]),
       end(new std::uint32_t[halves]);
-  const std::unique_ptr<std::uint8_t[]> single(new std::uint8_t[halves]);
   for (std::uint32_t v : corners) ++first[v + 1];
   for (std::size_t v = 0; v < vertices; ++v) first[v + 1] += first[v];
   {
     std::vector<std::uint32_t> fill(first.begin(), first.end() - 1);
-    for (std::uint32_t t = 0; t < halves; t += 3)
-      for (std::uint32_t j = 0; j < 3; ++j) {
-        const std::uint32_t i = fill[corners[t + j]]++;
-        by_origin[i] = t + j;
-        end[i] = corners[t + (j == 2 ? 0 : j + 1)];
-      }
-  }
-  // single[i]: list entry i is its origin's only half-edge to its end.
-  {
-    std::vector<std::uint32_t> count(vertices, 0);
-    for (std::uint32_t a = 0; a < vertices; ++a) {
-      for (std::uint32_t j = first[a]; j < first[a + 1]; ++j) ++count[end[j]];
-      for (std::uint32_t j = first[a]; j < first[a + 1]; ++j) single[j] = count[end[j]] == 1;
-      for (std::uint32_t j = first[a]; j < first[a + 1]; ++j) count[end[j]] = 0;
+    for (std::uint32_t t = 0; t < halves; t += 3) {
+      const std::uint32_t c0 = corners[t], c1 = corners[t + 1], c2 = corners[t + 2];
+      std::uint32_t i = fill[c0]++;
+      by_origin[i] = t;
+      end[i] = c1;
+      i = fill[c1]++;
+      by_origin[i] = t + 1;
+      end[i] = c2;
+      i = fill[c2]++;
+      by_origin[i] = t + 2;
+      end[i] = c0;
     }
   }
   twin.assign(halves, kNone);
-  for (std::uint32_t a = 0; a < vertices; ++a)
-    for (std::uint32_t j = first[a]; j < first[a + 1]; ++j) {
-      const std::uint32_t h = by_origin[j];
-      if (twin[h] != kNone || !single[j]) continue;
+  std::vector<std::uint32_t> count(vertices, 0);
+  for (std::uint32_t a = 0; a < vertices; ++a) {
+    const std::uint32_t begin = first[a], stop = first[a + 1];
+    for (std::uint32_t j = begin; j < stop; ++j) ++count[end[j]];
+    for (std::uint32_t j = begin; j < stop; ++j) {
       const std::uint32_t b = end[j];
+      if (b < a || count[b] != 1) continue;
       std::uint32_t reverse = kNone, reverse_count = 0;
       for (std::uint32_t i = first[b]; i < first[b + 1]; ++i)
         if (end[i] == a) {
@@ -51,10 +50,12 @@ void pair_twins(const std::vector<std::uint32_t>& corners, std::size_t vertices,
           ++reverse_count;
         }
       if (reverse_count == 1) {
-        twin[h] = reverse;
-        twin[reverse] = h;
+        twin[by_origin[j]] = reverse;
+        twin[reverse] = by_origin[j];
       }
     }
+    for (std::uint32_t j = begin; j < stop; ++j) count[end[j]] = 0;
+  }
 }
 
 }  // namespace
@@ -64,6 +65,7 @@ ClosedSurface build_closed_surface(const std::vector<Triangle>& triangles) {
   std::vector<std::uint32_t> input_corners(3 * triangles.size());  // input vertex per corner
   s.input_triangle.reserve(triangles.size());
   std::size_t kept = 0;
+  std::uint32_t largest = 0;  // the largest corner kept
   for (std::uint32_t t = 0; t < triangles.size(); ++t) {
     const Triangle& f = triangles[t];
     if (f[0] == f[1] || f[1] == f[2] || f[0] == f[2]) {
@@ -71,12 +73,12 @@ ClosedSurface build_closed_surface(const std::vector<Triangle>& triangles) {
       continue;
     }
     for (std::size_t j = 0; j < 3; ++j) input_corners[3 * kept + j] = f[j];
+    largest = std::max({largest, f[0], f[1], f[2]});
     ++kept;
     s.input_triangle.push_back(t);
   }
   input_corners.resize(3 * kept);
-  std::size_t vertices = 0;
-  for (std::uint32_t v : input_corners) vertices = std::max<std::size_t>(vertices, v + 1);
+  const std::size_t vertices = kept == 0 ? 0 : std::size_t{largest} + 1;
   pair_twins(input_corners, vertices, s.twin);
 
   // Fans: the corners around a vertex joined across shared edges. Around origin v, the corner

@@ -65,6 +65,52 @@ unsigned bit_length(std::uint64_t v) {
   return v == 0 ? 0u : 64u - static_cast<unsigned>(__builtin_clzll(v));
 }
 
+// The weight ratio ((nearest + 1) << 16) / (d + 1) (d >= nearest, so at most 2^16): 2^16 for
+// the nearest itself, a 32-bit division while the dividend fits (any grid closer than 2^8
+// steps), the 64-bit one otherwise; the same quotient in every case.
+std::uint32_t weight_ratio(std::uint64_t nearest, std::uint64_t d) {
+  if (d == nearest) return 1u << 16;
+  if (nearest < 0xFFFFu) {
+    if (d >= 0xFFFFFFFFu) return 0;  // the dividend is below 2^32 <= d + 1
+    return static_cast<std::uint32_t>(((nearest + 1) << 16)) / static_cast<std::uint32_t>(d + 1);
+  }
+  return static_cast<std::uint32_t>(((nearest + 1) << 16) / (d + 1));
+}
+
+}  // namespace
+
+ColorNeighbourhood color_neighbourhood(VertexAdjacency adjacency,
+                                       const std::vector<std::array<std::int32_t, 3>>& grid) {
+  ColorNeighbourhood n;
+  n.adj = std::move(adjacency);
+  const auto vertices = static_cast<std::uint32_t>(grid.size());
+  n.decoded_end.resize(vertices);
+  n.distance_bits.resize(vertices);
+  n.weight.resize(n.adj.neighbour.size());
+  std::vector<std::uint64_t> d2;  // the row's squared distances
+  for (std::uint32_t i = 0; i < vertices; ++i) {
+    const std::uint32_t begin = n.adj.first[i];
+    std::uint32_t end = begin;
+    std::uint64_t nearest = ~std::uint64_t{0};
+    d2.clear();
+    // Sorted rows: the neighbours decoded before i come first.
+    for (; end < n.adj.first[i + 1] && n.adj.neighbour[end] < i; ++end) {
+      d2.push_back(distance2(grid[n.adj.neighbour[end]], grid[i]));
+      nearest = std::min(nearest, d2.back());
+    }
+    n.decoded_end[i] = end;
+    if (end == begin) continue;
+    n.distance_bits[i] = static_cast<std::uint8_t>(bit_length(nearest + 1));
+    for (std::uint32_t k = begin; k < end; ++k) {
+      const std::uint64_t r = weight_ratio(nearest, d2[k - begin]);
+      n.weight[k] = static_cast<std::uint32_t>((r * r) >> 16);  // r <= 2^16
+    }
+  }
+  return n;
+}
+
+namespace {
+
 // What both sides know of vertex i's colour before its residuals: the predicted RGB, the
 // decoded neighbours (adjacency row entries [begin, end)) and the bit length of the squared
 // distance to the nearest of them plus one.
@@ -76,28 +122,25 @@ struct ColorPrediction {
 };
 
 // The neighbours' colours weighted by (nearest distance^2 + 1)^2 / (distance^2 + 1)^2 in
-// 1/2^16 (the nearest weighs 2^16), rounded; vertex i - 1's colour without any, black first.
-ColorPrediction predict_color(const VertexAdjacency& adj,
-                              const std::vector<std::array<std::int32_t, 3>>& grid,
-                              const std::vector<Rgb8>& colors, std::uint32_t i) {
+// 1/2^16 (the nearest weighs 2^16; color_neighbourhood()), rounded; vertex i - 1's colour
+// without any, black first.
+ColorPrediction predict_color(const ColorNeighbourhood& nb, const std::vector<Rgb8>& colors,
+                              std::uint32_t i) {
   ColorPrediction p;
-  p.begin = p.end = adj.first[i];
-  std::uint64_t nearest = ~std::uint64_t{0};
-  for (; p.end < adj.first[i + 1] && adj.neighbour[p.end] < i; ++p.end)  // sorted: decoded first
-    nearest = std::min(nearest, distance2(grid[adj.neighbour[p.end]], grid[i]));
+  p.begin = nb.adj.first[i];
+  p.end = nb.decoded_end[i];
   if (p.count() == 0) {
     if (i > 0) p.rgb = {colors[i - 1].r, colors[i - 1].g, colors[i - 1].b};
     return p;
   }
-  p.distance_bits = bit_length(nearest + 1);
+  p.distance_bits = nb.distance_bits[i];
   std::uint64_t sum[3] = {0, 0, 0}, total = 0;
   for (std::uint32_t k = p.begin; k < p.end; ++k) {
-    const std::uint32_t n = adj.neighbour[k];
-    const std::uint64_t r = ((nearest + 1) << 16) / (distance2(grid[n], grid[i]) + 1);
-    const std::uint64_t w = (r * r) >> 16;  // r <= 2^16
-    sum[0] += w * colors[n].r;
-    sum[1] += w * colors[n].g;
-    sum[2] += w * colors[n].b;
+    const Rgb8 c = colors[nb.adj.neighbour[k]];
+    const std::uint64_t w = nb.weight[k];
+    sum[0] += w * c.r;
+    sum[1] += w * c.g;
+    sum[2] += w * c.b;
     total += w;  // >= 2^16: the nearest's
   }
   for (std::size_t k = 0; k < 3; ++k)
@@ -245,13 +288,15 @@ ColorTransform choose_transform(const std::vector<Channels>& residuals) {
 }  // namespace
 
 void encode_colors(const DecodedGeometry& g, const std::vector<Rgb8>& colors, RangeEncoder& enc) {
-  const VertexAdjacency adj = vertex_adjacency(g.grid.size(), g.triangles);
+  const ColorNeighbourhood nb =
+      color_neighbourhood(vertex_adjacency(g.grid.size(), g.triangles), g.grid);
+  const VertexAdjacency& adj = nb.adj;
   const auto vertices = static_cast<std::uint32_t>(g.grid.size());
   std::vector<ColorPrediction> predictions(vertices);
   std::vector<Channels> residuals;
   residuals.reserve(vertices);
   for (std::uint32_t i = 0; i < vertices; ++i) {
-    predictions[i] = predict_color(adj, g.grid, colors, i);
+    predictions[i] = predict_color(nb, colors, i);
     const Channels& p = predictions[i].rgb;
     if (predictions[i].count() > 0)
       residuals.push_back({colors[i].r - p[0], colors[i].g - p[1], colors[i].b - p[2]});
@@ -274,10 +319,10 @@ void encode_colors(const DecodedGeometry& g, const std::vector<Rgb8>& colors, Ra
   }
 }
 
-std::vector<Rgb8> decode_colors(const DecodedGeometry& g, RangeDecoder& dec,
+std::vector<Rgb8> decode_colors(const ColorNeighbourhood& nb, RangeDecoder& dec,
                                 const std::string& source) {
-  const VertexAdjacency adj = vertex_adjacency(g.grid.size(), g.triangles);
-  const auto vertices = static_cast<std::uint32_t>(g.grid.size());
+  const VertexAdjacency& adj = nb.adj;
+  const auto vertices = static_cast<std::uint32_t>(nb.decoded_end.size());
   ColorTransform t;
   const std::uint32_t order = dec.decode_direct(3);
   if (order >= kOrders.size())
@@ -291,7 +336,7 @@ std::vector<Rgb8> decode_colors(const DecodedGeometry& g, RangeDecoder& dec,
   std::vector<Rgb8> colors(vertices);
   RangeDecoder::Session session(dec);
   for (std::uint32_t i = 0; i < vertices; ++i) {
-    const ColorPrediction p = predict_color(adj, g.grid, colors, i);
+    const ColorPrediction p = predict_color(nb, colors, i);
     const ColorScales s = color_scales(adj, colors, m, t, p);
     // Residuals of a valid stream are within +-1275; clamping keeps corrupt ones from
     // overflowing (the checksum reports the corruption), each before a context uses it.

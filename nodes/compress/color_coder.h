@@ -17,11 +17,14 @@
 //    coded before them.
 // Exact at 8 bits. Not thread-safe per call; O(V + T) (a row sort per vertex of the adjacency).
 
+#include <array>
+#include <cstdint>
 #include <string>
 #include <vector>
 
 #include "nodes/compress/attribute_coder.h"
 #include "nodes/compress/range_coder.h"
+#include "nodes/compress/vertex_adjacency.h"
 #include "runtime/rgb8.h"
 
 namespace meshflow::compress {
@@ -29,9 +32,25 @@ namespace meshflow::compress {
 /// Codes `colors` (one per grid vertex, output order), exactly. Serial; O(V + T).
 void encode_colors(const DecodedGeometry& g, const std::vector<Rgb8>& colors, RangeEncoder& enc);
 
-/// Reads what encode_colors() wrote for the same geometry; a corrupt stream gives some colours
-/// (RangeDecoder::check() or the file's checksum reports it). Serial; O(V + T).
-std::vector<Rgb8> decode_colors(const DecodedGeometry& g, RangeDecoder& dec,
+/// What the colour prediction needs of the geometry alone (no colour): the adjacency and, per
+/// vertex, the weights of its neighbours decoded before it. A decoder builds it beside the
+/// normals (nodes/compress/mesh_codec.cpp: on a second thread).
+struct ColorNeighbourhood {
+  VertexAdjacency adj;
+  std::vector<std::uint32_t> decoded_end;   ///< per vertex: end of its row's decoded prefix
+  std::vector<std::uint8_t> distance_bits;  ///< per vertex: bit length of nearest distance^2 + 1
+  std::vector<std::uint32_t> weight;        ///< per prefix entry: its weight (<= 2^16)
+};
+
+/// The neighbourhood of the vertices of `grid` (output order) from their adjacency `adjacency`
+/// (vertex_adjacency() of the output triangles). Thread-safe (reads only its inputs);
+/// O(V + T).
+ColorNeighbourhood color_neighbourhood(VertexAdjacency adjacency,
+                                       const std::vector<std::array<std::int32_t, 3>>& grid);
+
+/// Reads what encode_colors() wrote for the geometry `nb` was built from; a corrupt stream gives
+/// some colours (RangeDecoder::check() or the file's checksum reports it). Serial; O(V + T).
+std::vector<Rgb8> decode_colors(const ColorNeighbourhood& nb, RangeDecoder& dec,
                                 const std::string& source);
 
 }  // namespace meshflow::compress

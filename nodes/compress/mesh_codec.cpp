@@ -10,6 +10,8 @@
 #include "nodes/compress/edgebreaker_replay.h"
 #include "nodes/compress/parallelogram_ring.h"
 #include "nodes/compress/range_coder.h"
+#include "nodes/compress/side_by_side.h"
+#include "nodes/compress/vertex_adjacency.h"
 #include "runtime/error.h"
 
 namespace meshflow::compress {
@@ -748,9 +750,12 @@ std::vector<Triangle> output_triangles(const ReplayedSurface& replayed, const Ve
 }
 
 // Reads the normal bits and the attribute section into `mesh` (whose vertices, grid positions
-// `grid` and triangles are decoded); returns the normal bits.
+// `grid` and triangles are decoded; `adjacency`: vertex_adjacency() of the triangles when the
+// body has colours); returns the normal bits. The colours' neighbourhood is built beside the
+// normals (on a second thread when there is one).
 unsigned decode_attributes(io::ByteReader& in, AttributeFlags flags,
-                           const std::vector<std::array<std::int32_t, 3>>& grid, TriangleMesh& mesh,
+                           const std::vector<std::array<std::int32_t, 3>>& grid,
+                           VertexAdjacency adjacency, TriangleMesh& mesh,
                            const std::string& source) {
   const unsigned normal_bits = in.u8("normal bits");
   if (flags.normals && (normal_bits < kMinNormalBits || normal_bits > kMaxNormalBits))
@@ -762,8 +767,15 @@ unsigned decode_attributes(io::ByteReader& in, AttributeFlags flags,
   const Section section = read_section(in, "attribute section");
   RangeDecoder dec(section.bytes, section.size, source, "attribute section");
   const DecodedGeometry geometry{grid, mesh.triangles};
-  if (flags.normals) mesh.normals = decode_normals(geometry, dec, source);
-  if (flags.colors) mesh.colors = decode_colors(geometry, dec, source);
+  ColorNeighbourhood colour_neighbourhood;
+  side_by_side(
+      [&] {
+        if (flags.normals) mesh.normals = decode_normals(geometry, dec, source);
+      },
+      [&] {
+        if (flags.colors) colour_neighbourhood = color_neighbourhood(std::move(adjacency), grid);
+      });
+  if (flags.colors) mesh.colors = decode_colors(colour_neighbourhood, dec, source);
   dec.check();
   return normal_bits;
 }
@@ -794,10 +806,18 @@ TriangleMesh decode_body(io::ByteReader& in, const Quantizer& quantizer, Attribu
   const std::size_t outputs = roles.surface_outputs + static_cast<std::size_t>(side.off_surface);
   TriangleMesh mesh;
   mesh.vertices.resize(outputs);
-  std::vector<std::array<std::int32_t, 3>> grid =
-      decode_positions(in, replayed, roles, quantizer, source, mesh.vertices);
-  mesh.triangles = output_triangles(replayed, roles, side.degenerate, outputs, source);
-  const unsigned normal_bits = decode_attributes(in, flags, grid, mesh, source);
+  // The positions, and beside them what needs only the connectivity: the output triangles and
+  // the colours' adjacency.
+  std::vector<std::array<std::int32_t, 3>> grid;
+  VertexAdjacency adjacency;
+  side_by_side(
+      [&] { grid = decode_positions(in, replayed, roles, quantizer, source, mesh.vertices); },
+      [&] {
+        mesh.triangles = output_triangles(replayed, roles, side.degenerate, outputs, source);
+        if (flags.colors) adjacency = vertex_adjacency(outputs, mesh.triangles);
+      });
+  const unsigned normal_bits =
+      decode_attributes(in, flags, grid, std::move(adjacency), mesh, source);
   if (codes != nullptr) {
     codes->positions = std::move(grid);
     codes->normals = mesh.normals;

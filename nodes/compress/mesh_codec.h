@@ -79,7 +79,10 @@ BodyStats encode_body(const TriangleMesh& mesh, const Quantizer& quantizer, Attr
                       io::ByteWriter& out, BodyOrder* order = nullptr, BodyCodes* codes = nullptr);
 
 /// Reads a body written by encode_body() with the same quantiser and flags. Throws Error naming
-/// `source` and the field for truncated or inconsistent data. O(T log T).
+/// `source` and the field for truncated or inconsistent data. Runs what needs only the
+/// connectivity beside the positions, and the colours' neighbour weights beside the normals, on
+/// a second thread where oneTBB has one (nodes/compress/side_by_side.h): the same mesh and the
+/// same error at any thread count. O(T log T).
 TriangleMesh decode_body(io::ByteReader& in, const Quantizer& quantizer, AttributeFlags flags,
                          const std::string& source, BodyCodes* codes = nullptr);
 

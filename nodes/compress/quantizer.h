@@ -15,12 +15,21 @@ struct Quantizer {
   double step = 1.0;  ///< metres per grid unit; a position moves by at most step / 2 per axis
   unsigned bits = 16;
 
+  /// std::round(x) (halves away from zero) without its library call where 0 <= x < 2^52: the
+  /// truncation c of x + 0.5, less one where that sum rounded up to c past x + 0.5 (c - 0.5 is
+  /// exact there, so the test is). O(1).
+  static double round_half_away(double x) {
+    if (!(x >= 0.0 && x < 4503599627370496.0)) return std::round(x);
+    auto c = static_cast<std::int64_t>(x + 0.5);
+    if (static_cast<double>(c) - 0.5 > x) --c;
+    return static_cast<double>(c);
+  }
   /// The grid coordinates of p, each clamped to [0, 2^bits).
   std::array<std::int32_t, 3> quantize(const Eigen::Vector3f& p) const {
     const double top = static_cast<double>((std::uint64_t{1} << bits) - 1);
     std::array<std::int32_t, 3> q{};
     for (int a = 0; a < 3; ++a) {
-      const double g = std::round((static_cast<double>(p[a]) - origin[a]) / step);
+      const double g = round_half_away((static_cast<double>(p[a]) - origin[a]) / step);
       q[static_cast<std::size_t>(a)] = static_cast<std::int32_t>(std::min(std::max(g, 0.0), top));
     }
     return q;

@@ -19,7 +19,8 @@ struct VertexAdjacency {
 
 /// The adjacency of `triangles` over `vertices` vertices: u and v are neighbours when some
 /// triangle has the edge u-v (either direction) with u != v. Every corner must be below
-/// `vertices` (the decoders' triangles are). Serial (the codecs run one thread per mesh);
+/// `vertices` (the decoders' triangles are). Serial (a decoder runs it beside the positions:
+/// nodes/compress/mesh_codec.cpp);
 /// O(V + T x valence) time (each row sorted by insertion, its repeats skipped first: a vertex's
 /// valence is small; rows past 64 entries by std::sort, so O(T log T) at worst) and O(V + T)
 /// memory.

@@ -19,6 +19,7 @@
 #include "nodes/io/read_point_cloud.h"
 #include "nodes/synthetic/scan_simulator.h"
 #include "runtime/error.h"
+#include "runtime/threads.h"
 #include "test_support.h"
 
 namespace meshflow {
@@ -627,6 +628,39 @@ TEST(ColorCoding, SmoothAndNoisyColoursRoundTripExactly) {
       EXPECT_LT(per_vertex, 12.0);
     }
   }
+}
+
+// The decoder's second thread (the output triangles and the colours' neighbourhood beside the
+// positions and the normals) changes nothing: the same mesh at 1 and 2 threads, and the same
+// error for a cut file.
+TEST(ColorCoding, DecodingIsTheSameOnOneAndTwoThreads) {
+  TriangleMesh mesh = sphere(60, 80);
+  for (const Eigen::Vector3f& p : mesh.vertices)
+    mesh.colors.push_back(Rgb8{static_cast<std::uint8_t>(128 + 127 * p.x()), 40,
+                               static_cast<std::uint8_t>(128 + 100 * p.z())});
+  const std::vector<unsigned char> bytes = compress::compress_mesh(mesh, {});
+  std::vector<unsigned char> cut(bytes.begin(), bytes.end() - 100);
+  TriangleMesh decoded[2];
+  std::string error[2];
+  for (int threads : {1, 2}) {
+    ThreadLimit limit(threads);
+    decoded[threads - 1] = compress::decompress_mesh(bytes, "memory");
+    try {
+      compress::decompress_mesh(cut, "memory");
+    } catch (const Error& e) {
+      error[threads - 1] = e.what();
+    }
+  }
+  EXPECT_EQ(decoded[0].vertices, decoded[1].vertices);
+  EXPECT_EQ(decoded[0].triangles, decoded[1].triangles);
+  EXPECT_EQ(decoded[0].normals, decoded[1].normals);
+  ASSERT_EQ(decoded[0].colors.size(), mesh.vertices.size());
+  for (std::size_t k = 0; k < mesh.vertices.size(); ++k) {
+    const Rgb8 a = decoded[0].colors[k], b = decoded[1].colors[k];
+    EXPECT_TRUE(a.r == b.r && a.g == b.g && a.b == b.b) << k;
+  }
+  EXPECT_FALSE(error[0].empty());
+  EXPECT_EQ(error[0], error[1]);
 }
 
 // Channels that move together (a sensor whose red and green are one, Kinect's): the coder codes

@@ -443,24 +443,45 @@ TriangleMesh finish_joined_mesh(TriangleMesh joined, const std::vector<std::uint
 
 namespace {
 
-// reconstruct_chunked()'s first part: partition_input() into `files`, the report's input and
-// chunk fields and result.origin filled. Returns the store (its destructor removes the files).
-std::unique_ptr<chunk::ChunkStore> partition_into(
-    const std::string& path, const std::string& columns, const ReconstructionConfig& config,
-    const ChunkingConfig& chunking, std::vector<chunk::ChunkFile>& files, ChunkedResult& result) {
-  ChunkedReport& report = result.report;
-  std::unique_ptr<chunk::ChunkStore> store =
-      partition_input(path, columns, config, chunking, files, report.decided, &report.clock);
+// What reconstruct_chunked() and reconstruct_chunked_to_ply() start from: the input partitioned
+// (partition_input() into `files`; the report's input and chunk fields and result.origin
+// filled; `store`'s destructor removes the files) and the progress callback.
+struct ChunkedRun {
+  std::function<void(const std::string&)> on_stage;
+  ChunkedResult result;
+  std::vector<chunk::ChunkFile> files;
+  std::unique_ptr<chunk::ChunkStore> store;
+  std::size_t done = 0;  // chunks delivered
+
+  void tell(const std::string& what) const {
+    if (on_stage) on_stage(what);
+  }
+  // One more chunk delivered: "chunk i/n".
+  void chunk_done() {
+    ++done;
+    tell("chunk " + std::to_string(done) + "/" + std::to_string(files.size()));
+  }
+};
+
+ChunkedRun start_chunked_run(const std::string& path, const std::string& columns,
+                             const ReconstructionConfig& config, const ChunkingConfig& chunking,
+                             const std::function<void(const std::string&)>& on_stage) {
+  ChunkedRun run;
+  run.on_stage = on_stage;
+  run.tell("partition");
+  ChunkedReport& report = run.result.report;
+  run.store =
+      partition_input(path, columns, config, chunking, run.files, report.decided, &report.clock);
   report.voxel_size = report.decided.voxel_size;
-  report.chunk_cells = store->grid().chunk_cells;
-  report.chunks = files.size();
-  report.points = store->points_read();
-  report.dropped = store->points_dropped();
-  report.rows_written = store->rows_written();
-  for (const chunk::ChunkFile& f : files)
+  report.chunk_cells = run.store->grid().chunk_cells;
+  report.chunks = run.files.size();
+  report.points = run.store->points_read();
+  report.dropped = run.store->points_dropped();
+  report.rows_written = run.store->rows_written();
+  for (const chunk::ChunkFile& f : run.files)
     report.max_chunk_points = std::max(report.max_chunk_points, f.points);
-  result.origin = store->rows().origin;
-  return store;
+  run.result.origin = run.store->rows().origin;
+  return run;
 }
 
 }  // namespace
@@ -469,35 +490,27 @@ ChunkedResult reconstruct_chunked(const std::string& path, const std::string& co
                                   const ReconstructionConfig& config,
                                   const ChunkingConfig& chunking,
                                   const std::function<void(const std::string&)>& on_stage) {
-  const auto tell = [&](const std::string& what) {
-    if (on_stage) on_stage(what);
-  };
-  ChunkedResult result;
+  ChunkedRun run = start_chunked_run(path, columns, config, chunking, on_stage);
+  ChunkedResult& result = run.result;
   ChunkedReport& report = result.report;
-  tell("partition");
-  std::vector<chunk::ChunkFile> files;
-  const std::unique_ptr<chunk::ChunkStore> store =
-      partition_into(path, columns, config, chunking, files, result);
   const float voxel = report.voxel_size;
 
   report.clock.begin("chunks", false);
   chunk::MeshStitcher stitcher = chunk_stitcher(voxel, report.chunk_cells);
-  std::size_t done = 0;
   const bool in_place = finishes_in_place(config, chunking);
-  mesh_chunk_files(files, store->grid(), store->rows(), config, report.decided, chunking.in_flight,
-                   in_place, path, [&](const FramePtr& frame) {
-                     ++done;
-                     tell("chunk " + std::to_string(done) + "/" + std::to_string(files.size()));
+  mesh_chunk_files(run.files, run.store->grid(), run.store->rows(), config, report.decided,
+                   chunking.in_flight, in_place, path, [&](const FramePtr& frame) {
+                     run.chunk_done();
                      collect_chunk_frame(*frame, stitcher, report);
                    });
   report.clock.end();
 
-  tell("stitch");
+  run.tell("stitch");
   result.mesh =
-      finish_chunked_mesh(stitcher, config, voxel, report, tell, in_place, report.chunk_cells);
+      finish_chunked_mesh(stitcher, config, voxel, report, on_stage, in_place, report.chunk_cells);
   report.output_vertices = result.mesh.vertices.size();
   report.output_triangles = result.mesh.triangles.size();
-  return result;
+  return std::move(result);
 }
 
 bool streams_output(const std::string& output, const ReconstructionConfig& config,
@@ -518,15 +531,11 @@ ChunkedResult reconstruct_chunked_to_ply(const std::string& path, const std::str
     }
     return result;
   }
-  const auto tell = [&](const std::string& what) {
-    if (on_stage) on_stage(what);
-  };
-  ChunkedResult result;
+  ChunkedRun run = start_chunked_run(path, columns, config, chunking, on_stage);
+  ChunkedResult& result = run.result;
   ChunkedReport& report = result.report;
-  tell("partition");
-  std::vector<chunk::ChunkFile> files;
-  const std::unique_ptr<chunk::ChunkStore> store =
-      partition_into(path, columns, config, chunking, files, result);
+  const std::vector<chunk::ChunkFile>& files = run.files;
+  const std::unique_ptr<chunk::ChunkStore>& store = run.store;
   const float voxel = report.voxel_size;
   const int cells = report.chunk_cells;
 
@@ -537,11 +546,9 @@ ChunkedResult reconstruct_chunked_to_ply(const std::string& path, const std::str
   const auto spill_path = [&](std::size_t c) {
     return store->directory() + "/mesh_" + std::to_string(c) + ".bin";
   };
-  std::size_t done = 0;
   mesh_chunk_files(files, store->grid(), store->rows(), config, report.decided, chunking.in_flight,
                    true, path, [&](const FramePtr& frame) {
-                     ++done;
-                     tell("chunk " + std::to_string(done) + "/" + std::to_string(files.size()));
+                     run.chunk_done();
                      if (!report_chunk_frame(*frame, report)) return;
                      chunk::SpilledMesh spilled;
                      spilled.flags = chunk_vertex_flags(*frame);
@@ -556,7 +563,7 @@ ChunkedResult reconstruct_chunked_to_ply(const std::string& path, const std::str
                    });
   report.clock.end();
 
-  tell("stitch");
+  run.tell("stitch");
   report.clock.begin("stitch", true);  // the weld's plan, from the seam summaries alone
   std::vector<const chunk::ChunkSeams*> summaries;
   summaries.reserve(seams.size());
@@ -567,11 +574,11 @@ ChunkedResult reconstruct_chunked_to_ply(const std::string& path, const std::str
   report.output_triangles = plan.triangles;
   if (plan.triangles == 0) {
     report.clock.end();
-    return result;  // nothing to write; the caller reports the empty mesh
+    return std::move(result);  // nothing to write; the caller reports the empty mesh
   }
 
   // Each chunk welded (in parallel, a few at a time) and written in chunk order.
-  tell("write");
+  run.tell("write");
   report.clock.begin("write", true);
   chunk::StreamedChunkOutput out(output, plan, result.origin, voxel, cells, kFeatureFlag);
   struct Welded {
@@ -607,7 +614,7 @@ ChunkedResult reconstruct_chunked_to_ply(const std::string& path, const std::str
   report.clock.begin("finish", true);  // the seams: flips and normals, their rows rewritten
   out.finish();
   report.clock.end();
-  return result;
+  return std::move(result);
 }
 
 }  // namespace meshflow

@@ -32,28 +32,35 @@ void write_rows(std::size_t count, std::size_t row_bytes, PutRow put_row, Write 
 }  // namespace
 
 PlyMeshFile::PlyMeshFile(std::string path, const PlyMeshLayout& layout, std::uint64_t vertices,
-                         std::uint64_t triangles, const Eigen::Vector3d& origin)
+                         std::uint64_t triangles, const Eigen::Vector3d& origin, Role role)
     : path_(std::move(path)),
       temp_path_(path_ + ".tmp"),
       layout_(layout),
       vertices_(vertices),
       triangles_(triangles),
-      origin_(origin) {
+      origin_(origin),
+      role_(role) {
   layout_.scalars = 0;
+  const std::string header = ply_mesh_header(PlyEncoding::kBinary, layout_, vertices, triangles);
+  header_bytes_ = header.size();
+  if (role_ == Role::kJoin) {
+    fd_ = ::open(temp_path_.c_str(), O_WRONLY | O_CLOEXEC);
+    if (fd_ < 0)
+      throw Error(path_, "", std::string("cannot open output file: ") + std::strerror(errno));
+    return;
+  }
   std::error_code ec;
   if (std::filesystem::is_directory(path_, ec))
     throw Error(path_, "", "cannot write the output: it is a directory");
   fd_ = ::open(temp_path_.c_str(), O_RDWR | O_CREAT | O_TRUNC | O_CLOEXEC, 0666);
   if (fd_ < 0)
     throw Error(path_, "", std::string("cannot create output file: ") + std::strerror(errno));
-  const std::string header = ply_mesh_header(PlyEncoding::kBinary, layout_, vertices, triangles);
-  header_bytes_ = header.size();
   write_at(0, header.data(), header.size());
 }
 
 PlyMeshFile::~PlyMeshFile() {
   if (fd_ >= 0) ::close(fd_);
-  if (!committed_) {
+  if (!committed_ && role_ == Role::kCreate) {
     std::error_code ec;
     std::filesystem::remove(temp_path_, ec);
   }
@@ -116,7 +123,21 @@ void PlyMeshFile::write_triangle(std::uint64_t index, const Triangle& triangle) 
            sizeof bytes);
 }
 
+void PlyMeshFile::add_rows_written_elsewhere(std::uint64_t vertices, std::uint64_t triangles) {
+  vertex_rows_written_ += vertices;
+  face_rows_written_ += triangles;
+}
+
+void PlyMeshFile::close() {
+  if (role_ != Role::kJoin) throw Error(path_, "", "the file's creator commits it");
+  const int fd = fd_;
+  fd_ = -1;
+  if (fd >= 0 && ::close(fd) != 0)
+    throw Error(path_, "", std::string("write failed: ") + std::strerror(errno));
+}
+
 void PlyMeshFile::commit() {
+  if (role_ != Role::kCreate) throw Error(path_, "", "a joined writer cannot commit");
   if (vertex_rows_written_ < vertices_ || face_rows_written_ < triangles_)
     throw Error(path_, "",
                 "incomplete: " + std::to_string(vertex_rows_written_) + " of " +

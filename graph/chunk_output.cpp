@@ -8,6 +8,7 @@
 
 #include "graph/chunk_finish.h"
 #include "nodes/chunk/mesh_stitch.h"
+#include "nodes/chunk/mesh_tiles.h"
 #include "runtime/error.h"
 
 namespace meshflow::chunk {
@@ -137,13 +138,16 @@ StreamedChunkOutput::StreamedChunkOutput(const std::string& path, const WeldPlan
                                          const Eigen::Vector3d& origin, float voxel_size,
                                          int chunk_cells, std::uint8_t feature_bit)
     : file_(path, streamed_layout(plan, origin), plan.vertices, plan.triangles, origin),
+      origin_(origin),
       normals_(streamed_layout(plan, origin).normals),
       flags_(plan.flags),
       voxel_size_(voxel_size),
       chunk_cells_(chunk_cells),
       feature_bit_(feature_bit) {}
 
-void StreamedChunkOutput::add(const TriangleMesh& part, const std::vector<std::uint8_t>& flags) {
+void StreamedChunkOutput::add(const TriangleMesh& part, const std::vector<std::uint8_t>& flags,
+                              const Eigen::Vector3i& chunk) {
+  parts_.push_back(PartRows{chunk, triangles_, part.triangles.size()});
   file_.write_vertices(vertices_, part);
   file_.write_triangles(triangles_, part.triangles);
   if (flags_)
@@ -153,10 +157,15 @@ void StreamedChunkOutput::add(const TriangleMesh& part, const std::vector<std::u
   triangles_ += part.triangles.size();
 }
 
-std::size_t StreamedChunkOutput::finish() {
-  const std::size_t flips = finish_seam_rows(near_, file_, &rewritten_);
-  file_.commit();
-  return flips;
+std::size_t StreamedChunkOutput::finish_seams() {
+  return finish_seam_rows(near_, file_, &rewritten_);
+}
+
+std::size_t StreamedChunkOutput::write_tiles(const std::string& dir) {
+  TileWriter tiles(dir, ChunkGrid{voxel_size_, chunk_cells_, 0}, origin_);
+  for (const PartRows& p : parts_)
+    tiles.add(read_tile(file_, p.chunk, p.first_triangle, p.triangles));
+  return tiles.finish();
 }
 
 }  // namespace meshflow::chunk

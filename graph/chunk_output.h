@@ -70,20 +70,33 @@ class StreamedChunkOutput {
                       float voxel_size, int chunk_cells, std::uint8_t feature_bit);
 
   /// Writes the next chunk's welded part (weld_chunk() of the chunks in plan order, failed
-  /// chunks left out; `flags` its kept vertices' bytes, or empty when plan.flags is false) and
-  /// keeps the triangles that touch a vertex next to a seam. Not thread-safe. O(part).
-  void add(const TriangleMesh& part, const std::vector<std::uint8_t>& flags);
+  /// chunks left out; `flags` its kept vertices' bytes, or empty when plan.flags is false; `chunk`
+  /// its chunk index, for its tile) and keeps the triangles that touch a vertex next to a seam.
+  /// Not thread-safe. O(part).
+  void add(const TriangleMesh& part, const std::vector<std::uint8_t>& flags,
+           const Eigen::Vector3i& chunk = Eigen::Vector3i::Zero());
 
-  /// Finishes the seams (finish_seam_rows() of the kept neighbourhood) and commits the file.
-  /// Returns the flips made. Throws meshflow::Error when the parts did not fill the plan or a
-  /// write failed. O(S log S) for S triangles near the seams, plus their rewrites.
-  std::size_t finish();
+  /// Finishes the seams (finish_seam_rows() of the kept neighbourhood) once every part was
+  /// added. Returns the flips made. Throws meshflow::Error when a write failed. O(S log S) for
+  /// S triangles near the seams, plus their rewrites.
+  std::size_t finish_seams();
 
-  /// Rows rewritten by finish() (triangles flipped, normals changed).
+  /// After finish_seams(): each part's finished rows read back as its chunk's tile
+  /// (chunk::read_tile()) and written to `dir` (chunk::TileWriter: one tile in memory at a
+  /// time). Returns the tiles written. Throws meshflow::Error naming a file that cannot be
+  /// written. O(output).
+  std::size_t write_tiles(const std::string& dir);
+
+  /// Renames the file into place. Throws meshflow::Error when the parts did not fill the plan
+  /// or the close or rename failed (no file left under the path).
+  void commit() { file_.commit(); }
+
+  /// Rows rewritten by finish_seams() (triangles flipped, normals changed).
   std::size_t rewritten() const { return rewritten_; }
 
  private:
   io::PlyMeshFile file_;
+  Eigen::Vector3d origin_;
   bool normals_, flags_;
   float voxel_size_;
   int chunk_cells_;
@@ -91,6 +104,11 @@ class StreamedChunkOutput {
   std::uint64_t vertices_ = 0, triangles_ = 0;  // rows written so far
   std::size_t rewritten_ = 0;
   SeamNeighbourhood near_;
+  struct PartRows {
+    Eigen::Vector3i chunk;
+    std::uint64_t first_triangle, triangles;
+  };
+  std::vector<PartRows> parts_;
 };
 
 }  // namespace meshflow::chunk

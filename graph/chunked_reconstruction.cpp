@@ -14,6 +14,7 @@
 #include "graph/pipeline.h"
 #include "nodes/chunk/mesh_spill.h"
 #include "nodes/chunk/mesh_stitch.h"
+#include "nodes/chunk/mesh_tiles.h"
 #include "nodes/extract/feature_edge_flips.h"
 #include "nodes/extract/rim_trim.h"
 #include "nodes/filter/filter.h"
@@ -521,13 +522,24 @@ bool streams_output(const std::string& output, const ReconstructionConfig& confi
 ChunkedResult reconstruct_chunked_to_ply(const std::string& path, const std::string& columns,
                                          const ReconstructionConfig& config,
                                          const ChunkingConfig& chunking, const std::string& output,
+                                         const std::string& tiles_dir,
                                          const std::function<void(const std::string&)>& on_stage) {
   if (!streams_output(output, config, chunking)) {
     ChunkedResult result = reconstruct_chunked(path, columns, config, chunking, on_stage);
+    ChunkedReport& r = result.report;
     if (!result.mesh.empty()) {
-      result.report.clock.begin("write", true);
+      if (on_stage) on_stage("write");
+      r.clock.begin("write", true);
       io::write_mesh(output, result.mesh, result.origin);
-      result.report.clock.end();
+      if (!tiles_dir.empty()) {  // cut from the whole mesh
+        if (on_stage) on_stage("tiles");
+        r.clock.begin("tiles", true);
+        const chunk::ChunkGrid grid{r.voxel_size, r.chunk_cells, 0};
+        const std::vector<chunk::MeshTile> split = chunk::split_into_tiles(result.mesh, grid);
+        chunk::write_tiles(tiles_dir, split, grid, result.origin);
+        r.tiles = split.size();
+      }
+      r.clock.end();
     }
     return result;
   }
@@ -543,6 +555,7 @@ ChunkedResult reconstruct_chunked_to_ply(const std::string& path, const std::str
   // all that is held.
   report.clock.begin("chunks", false);
   std::vector<chunk::ChunkSeams> seams;
+  std::vector<Eigen::Vector3i> chunk_of;  // per seams entry: its chunk index (its tile)
   const auto spill_path = [&](std::size_t c) {
     return store->directory() + "/mesh_" + std::to_string(c) + ".bin";
   };
@@ -555,6 +568,7 @@ ChunkedResult reconstruct_chunked_to_ply(const std::string& path, const std::str
                      spilled.mesh = std::move(frame->mesh);
                      frame->mesh = TriangleMesh{};
                      frame->chunk.reset();
+                     chunk_of.push_back(files[frame->source_index].index);
                      seams.push_back(chunk::summarize_seams(spilled.mesh, spilled.flags, voxel,
                                                             cells, kFeatureFlag));
                      spilled.vertex_piece = std::move(seams.back().vertex_piece);
@@ -584,6 +598,7 @@ ChunkedResult reconstruct_chunked_to_ply(const std::string& path, const std::str
   struct Welded {
     TriangleMesh part;
     std::vector<std::uint8_t> flags;
+    std::size_t index = 0;
   };
   std::size_t next = 0;
   const std::size_t threads = static_cast<std::size_t>(
@@ -603,16 +618,23 @@ ChunkedResult reconstruct_chunked_to_ply(const std::string& path, const std::str
                 chunk::ChunkSeams& s = seams[c];
                 s.vertex_piece = std::move(spilled.vertex_piece);
                 auto welded = std::make_shared<Welded>();
+                welded->index = c;
                 welded->part =
                     chunk::weld_chunk(spilled.mesh, spilled.flags, s, plan, c, &welded->flags);
                 s = chunk::ChunkSeams{};
                 return welded;
               }) &
           tbb::make_filter<std::shared_ptr<Welded>, void>(
-              tbb::filter_mode::serial_in_order,
-              [&](const std::shared_ptr<Welded>& w) { out.add(w->part, w->flags); }));
+              tbb::filter_mode::serial_in_order, [&](const std::shared_ptr<Welded>& w) {
+                out.add(w->part, w->flags, chunk_of[w->index]);
+              }));
   report.clock.begin("finish", true);  // the seams: flips and normals, their rows rewritten
-  out.finish();
+  out.finish_seams();
+  if (!tiles_dir.empty()) {
+    report.clock.begin("tiles", true);  // each chunk's finished rows read back
+    report.tiles = out.write_tiles(tiles_dir);
+  }
+  out.commit();
   report.clock.end();
   return std::move(result);
 }

@@ -46,6 +46,15 @@ class PlyMeshFile {
   /// Rewrites face row `index`. O(1), one write.
   void write_triangle(std::uint64_t index, const Triangle& triangle);
 
+  /// Reads face rows [first, first + count) back (as written so far). Throws meshflow::Error
+  /// past the declared rows or on a short read. O(count).
+  std::vector<Triangle> read_triangles(std::uint64_t first, std::uint64_t count) const;
+  /// Reads vertex rows `rows` (ascending) back as a mesh of their own: positions in the local
+  /// frame (`origin` subtracted when layout.world: the floats written, when the sum was exact),
+  /// normals and colours as the layout has them. Throws as read_triangles(). O(rows), one read
+  /// per run of consecutive rows.
+  TriangleMesh read_vertices(const std::vector<std::uint64_t>& rows) const;
+
   /// Counts `vertices` and `triangles` rows written by joined writers (kJoin) toward commit()'s
   /// check. O(1).
   void add_rows_written_elsewhere(std::uint64_t vertices, std::uint64_t triangles);
@@ -65,6 +74,7 @@ class PlyMeshFile {
 
  private:
   void write_at(std::uint64_t offset, const char* bytes, std::size_t count);
+  void read_at(std::uint64_t offset, char* bytes, std::size_t count) const;
 
   std::string path_, temp_path_;
   PlyMeshLayout layout_;

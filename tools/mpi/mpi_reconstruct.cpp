@@ -12,8 +12,9 @@
 // rank meshes what it gets through its own flow graph (each chunk finished in place) and welds
 // its own chunks once every rank's seam summaries are known (tools/mpi/mpi_weld.h); rank 0
 // plans OUT's header, every rank writes its welded parts into it at their rows, and rank 0
-// finishes the seams and renames the file into place (with --tiles: rank 0 gathers the parts
-// and writes the whole mesh). The weld and
+// finishes the seams (with --tiles: writes each chunk's finished rows as its tile) and renames
+// the file into place (not streamed: another format, or --finish-after-stitch: rank 0 gathers
+// the parts and writes the whole mesh). The weld and
 // the seam orientation are planned over the chunks in the one-process order, so the mesh is
 // the same for any N and any assignment (and equals `meshflow reconstruct --chunk`).
 
@@ -338,13 +339,13 @@ int run(const Options& o, int rank, int ranks) {
                results.size(), mesh_s);
   // Every rank welds its own chunks (seam summaries exchanged through rank 0), then writes
   // them into the output at their rows (tools/mpi/mpi_write.h): rank 0 plans the file and
-  // finishes the seams. With --tiles or a format not streamed, rank 0 gathers the welded parts,
+  // finishes the seams (and writes the tiles). Not streamed, rank 0 gathers the welded parts,
   // concatenates them, finishes the seams and writes.
   const chunk::WeldPlan weld = weld_on_ranks(results, clock, rank, ranks);
   report.seam_vertices = weld.merged;
-  if (o.tiles.empty() && streams_output(o.output, config, chunking)) {
+  if (streams_output(o.output, config, chunking)) {
     RanksWritten written = write_on_ranks(o.output, results, weld, plan.grid, plan.rows.origin,
-                                          results.size(), clock, rank, ranks);
+                                          results.size(), o.tiles, plan.files, clock, rank, ranks);
     if (rank != 0) return 0;
     for (const std::string& e : written.failed) {
       std::fprintf(stderr, "meshflow-mpi: chunk failed, its cells are missing: %s\n", e.c_str());
@@ -359,7 +360,7 @@ int run(const Options& o, int rank, int ranks) {
     report.output_triangles = weld.triangles;
     written.times.front().phases = clock.phases();
     written.times.front().peak_bytes = chunk::peak_resident_bytes();
-    print_report(o, plan, report, written.times, written.gathered_bytes, 0,
+    print_report(o, plan, report, written.times, written.gathered_bytes, written.tiles,
                  monotonic_seconds() - t0, limit.threads());
     return 0;
   }

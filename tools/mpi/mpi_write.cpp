@@ -1,6 +1,7 @@
 #include "tools/mpi/mpi_write.h"
 
 #include <algorithm>
+#include <array>
 #include <cstdio>
 #include <exception>
 #include <memory>
@@ -8,6 +9,7 @@
 
 #include "graph/chunk_output.h"
 #include "graph/chunked_reconstruction.h"
+#include "nodes/chunk/mesh_tiles.h"
 #include "nodes/io/ply_mesh_file.h"
 #include "tools/mpi/mpi_bytes.h"
 
@@ -21,6 +23,7 @@ struct RankWrite {
   std::string error;                                                      // its writing failed
   std::uint64_t vertices = 0, triangles = 0;                              // rows written
   std::vector<std::pair<std::uint64_t, chunk::SeamNeighbourhood>> parts;  // by position
+  std::vector<std::array<std::uint64_t, 3>> rows;  // position, first face row, faces
 };
 
 void put_neighbourhood(io::ByteWriter& w, const chunk::SeamNeighbourhood& n) {
@@ -70,6 +73,7 @@ std::vector<unsigned char> encode(const RankWrite& m) {
     w.u64(position);
     put_neighbourhood(w, n);
   }
+  put_vector(w, m.rows);
   return std::move(w.out);
 }
 
@@ -91,6 +95,7 @@ RankWrite decode(const std::vector<unsigned char>& message, int from) {
     const std::uint64_t position = r.u64("part");
     m.parts.emplace_back(position, get_neighbourhood(r));
   }
+  m.rows = get_vector<std::array<std::uint64_t, 3>>(r, "part rows");
   return m;
 }
 
@@ -105,6 +110,7 @@ void write_parts(std::vector<ChunkResult>& results, const chunk::WeldPlan& weld,
     file.write_triangles(r.first_triangle, r.mesh.triangles);
     mine.vertices += r.mesh.vertices.size();
     mine.triangles += r.mesh.triangles.size();
+    mine.rows.push_back({r.position, r.first_triangle, r.mesh.triangles.size()});
     if (weld.flags) {
       chunk::SeamNeighbourhood n;
       chunk::add_seam_neighbourhood(r.mesh, r.flags, r.first_vertex, r.first_triangle,
@@ -120,7 +126,9 @@ void write_parts(std::vector<ChunkResult>& results, const chunk::WeldPlan& weld,
 RanksWritten write_on_ranks(const std::string& output, std::vector<ChunkResult>& results,
                             const chunk::WeldPlan& weld, const chunk::ChunkGrid& grid,
                             const Eigen::Vector3d& origin, std::size_t chunks,
-                            chunk::PhaseClock& clock, int rank, int ranks) {
+                            const std::string& tiles_dir,
+                            const std::vector<chunk::ChunkFile>& files, chunk::PhaseClock& clock,
+                            int rank, int ranks) {
   const io::PlyMeshLayout layout = chunk::streamed_layout(weld, origin);
   const bool any = weld.triangles > 0;
   RankWrite mine;
@@ -183,8 +191,10 @@ RanksWritten write_on_ranks(const std::string& output, std::vector<ChunkResult>&
   }
   std::vector<std::pair<std::uint64_t, std::string>> failed;
   std::vector<std::pair<std::uint64_t, chunk::SeamNeighbourhood*>> parts;
+  std::vector<std::array<std::uint64_t, 3>> rows;
   std::uint64_t vertices = 0, triangles = 0;
   for (RankWrite& m : all) {
+    rows.insert(rows.end(), m.rows.begin(), m.rows.end());
     written.times.push_back(m.times);
     failed.insert(failed.end(), m.failed.begin(), m.failed.end());
     if (written.error.empty() && !m.error.empty())
@@ -210,6 +220,14 @@ RanksWritten write_on_ranks(const std::string& output, std::vector<ChunkResult>&
       file->add_rows_written_elsewhere(vertices - all.front().vertices,
                                        triangles - all.front().triangles);
       chunk::finish_seam_rows(seams, *file, &written.rewritten);
+      if (!tiles_dir.empty()) {
+        clock.begin("tiles", true);  // each chunk's finished rows read back
+        std::sort(rows.begin(), rows.end());
+        chunk::TileWriter tiles(tiles_dir, grid, origin);
+        for (const auto& [position, first, count] : rows)
+          tiles.add(chunk::read_tile(*file, files.at(position).index, first, count));
+        written.tiles = tiles.finish();
+      }
       file->commit();
     } catch (const std::exception& e) {
       written.error = e.what();

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "nodes/chunk/chunk_grid.h"
+#include "nodes/chunk/chunk_store.h"
 #include "nodes/chunk/phase_times.h"
 #include "nodes/chunk/seam_weld.h"
 #include "tools/mpi/mpi_weld.h"
@@ -24,6 +25,7 @@ struct RanksWritten {
   std::string error;                    ///< "": OUT was written; else why not
   std::size_t gathered_bytes = 0;       ///< the ranks' messages to rank 0
   std::size_t rewritten = 0;            ///< rows rewritten by the seams' finish
+  std::size_t tiles = 0;                ///< tiles written
 };
 
 /// Collective: writes `output` (binary PLY; `origin` non-zero: world coordinates) from the
@@ -32,7 +34,9 @@ struct RanksWritten {
 /// "create"), every rank opens it and writes its parts at their rows, freeing each (phase
 /// "write", parallel), then sends rank 0 its timing (`chunks` meshed, its phases), failed chunks
 /// and the parts' seam neighbourhoods (add_seam_neighbourhood()); rank 0 (phase "gather", then
-/// "finish": finish_seam_rows()) rewrites the seams' rows and renames OUT.tmp to OUT. Nothing
+/// "finish": finish_seam_rows()) rewrites the seams' rows, with a non-empty `tiles_dir` writes
+/// each chunk's finished rows as its tile (chunk::read_tile(); `files`: the chunks by position,
+/// for their index; phase "tiles") and renames OUT.tmp to OUT. Nothing
 /// appears under OUT unless every rank wrote all its rows (a failed or dead rank leaves at most
 /// OUT.tmp; a failure that rank 0 learns of removes it). Returns rank 0's view (other ranks:
 /// their own failures only). No triangle at all: nothing is written, `error` says so. Memory:
@@ -40,6 +44,8 @@ struct RanksWritten {
 RanksWritten write_on_ranks(const std::string& output, std::vector<ChunkResult>& results,
                             const chunk::WeldPlan& weld, const chunk::ChunkGrid& grid,
                             const Eigen::Vector3d& origin, std::size_t chunks,
-                            chunk::PhaseClock& clock, int rank, int ranks);
+                            const std::string& tiles_dir,
+                            const std::vector<chunk::ChunkFile>& files, chunk::PhaseClock& clock,
+                            int rank, int ranks);
 
 }  // namespace meshflow::cli

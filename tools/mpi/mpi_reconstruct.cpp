@@ -208,10 +208,11 @@ void print_report(const Options& o, const Plan& plan, const ChunkedReport& repor
   const auto phase = [&](const char* name) { return chunk::phase_wall(own, name); };
   std::printf(
       "time       %.1f s: decide %.1f s, partition %.1f s, chunks %.1f s, seams %.1f s, weld "
-      "%.1f s, gather %.1f s (%.1f MB), stitch %.1f s, finish %.1f s, write %.1f s\n",
+      "%.1f s, write %.1f s, gather %.1f s (%.1f MB), stitch %.1f s, finish %.1f s, tiles "
+      "%.1f s\n",
       wall, phase("decide"), phase("setup") + phase("partition") + phase("join"), phase("chunks"),
-      phase("seams"), phase("weld"), phase("gather"), static_cast<double>(gathered_bytes) / 1e6,
-      phase("stitch"), phase("finish"), phase("write"));
+      phase("seams"), phase("weld"), phase("create") + phase("write"), phase("gather"),
+      static_cast<double>(gathered_bytes) / 1e6, phase("stitch"), phase("finish"), phase("tiles"));
   std::printf("serial     %.1f s of %.1f s on one core (Amdahl: f = %.3f, at most %.1fx faster)\n",
               serial.serial_s, serial.serial_s + serial.parallel_work_s, serial.fraction,
               serial.max_speedup);

@@ -68,8 +68,9 @@ class PlyMeshFile {
   /// for kCreate (use commit()).
   void close();
 
-  /// Rows written by this object so far (rewrites counted again).
+  /// Vertex rows written by this object so far (plus add_rows_written_elsewhere()'s). O(1).
   std::uint64_t vertex_rows_written() const { return vertex_rows_written_; }
+  /// Face rows written by this object so far (plus add_rows_written_elsewhere()'s). O(1).
   std::uint64_t face_rows_written() const { return face_rows_written_; }
 
  private:

@@ -14,6 +14,7 @@
 #include "graph/pipeline.h"
 #include "nodes/chunk/mesh_spill.h"
 #include "nodes/chunk/mesh_stitch.h"
+#include "nodes/chunk/mesh_tiles.h"
 #include "nodes/extract/feature_edge_flips.h"
 #include "nodes/extract/rim_trim.h"
 #include "nodes/filter/filter.h"
@@ -443,24 +444,45 @@ TriangleMesh finish_joined_mesh(TriangleMesh joined, const std::vector<std::uint
 
 namespace {
 
-// reconstruct_chunked()'s first part: partition_input() into `files`, the report's input and
-// chunk fields and result.origin filled. Returns the store (its destructor removes the files).
-std::unique_ptr<chunk::ChunkStore> partition_into(
-    const std::string& path, const std::string& columns, const ReconstructionConfig& config,
-    const ChunkingConfig& chunking, std::vector<chunk::ChunkFile>& files, ChunkedResult& result) {
-  ChunkedReport& report = result.report;
-  std::unique_ptr<chunk::ChunkStore> store =
-      partition_input(path, columns, config, chunking, files, report.decided, &report.clock);
+// What reconstruct_chunked() and reconstruct_chunked_to_ply() start from: the input partitioned
+// (partition_input() into `files`; the report's input and chunk fields and result.origin
+// filled; `store`'s destructor removes the files) and the progress callback.
+struct ChunkedRun {
+  std::function<void(const std::string&)> on_stage;
+  ChunkedResult result;
+  std::vector<chunk::ChunkFile> files;
+  std::unique_ptr<chunk::ChunkStore> store;
+  std::size_t done = 0;  // chunks delivered
+
+  void tell(const std::string& what) const {
+    if (on_stage) on_stage(what);
+  }
+  // One more chunk delivered: "chunk i/n".
+  void chunk_done() {
+    ++done;
+    tell("chunk " + std::to_string(done) + "/" + std::to_string(files.size()));
+  }
+};
+
+ChunkedRun start_chunked_run(const std::string& path, const std::string& columns,
+                             const ReconstructionConfig& config, const ChunkingConfig& chunking,
+                             const std::function<void(const std::string&)>& on_stage) {
+  ChunkedRun run;
+  run.on_stage = on_stage;
+  run.tell("partition");
+  ChunkedReport& report = run.result.report;
+  run.store =
+      partition_input(path, columns, config, chunking, run.files, report.decided, &report.clock);
   report.voxel_size = report.decided.voxel_size;
-  report.chunk_cells = store->grid().chunk_cells;
-  report.chunks = files.size();
-  report.points = store->points_read();
-  report.dropped = store->points_dropped();
-  report.rows_written = store->rows_written();
-  for (const chunk::ChunkFile& f : files)
+  report.chunk_cells = run.store->grid().chunk_cells;
+  report.chunks = run.files.size();
+  report.points = run.store->points_read();
+  report.dropped = run.store->points_dropped();
+  report.rows_written = run.store->rows_written();
+  for (const chunk::ChunkFile& f : run.files)
     report.max_chunk_points = std::max(report.max_chunk_points, f.points);
-  result.origin = store->rows().origin;
-  return store;
+  run.result.origin = run.store->rows().origin;
+  return run;
 }
 
 }  // namespace
@@ -469,35 +491,27 @@ ChunkedResult reconstruct_chunked(const std::string& path, const std::string& co
                                   const ReconstructionConfig& config,
                                   const ChunkingConfig& chunking,
                                   const std::function<void(const std::string&)>& on_stage) {
-  const auto tell = [&](const std::string& what) {
-    if (on_stage) on_stage(what);
-  };
-  ChunkedResult result;
+  ChunkedRun run = start_chunked_run(path, columns, config, chunking, on_stage);
+  ChunkedResult& result = run.result;
   ChunkedReport& report = result.report;
-  tell("partition");
-  std::vector<chunk::ChunkFile> files;
-  const std::unique_ptr<chunk::ChunkStore> store =
-      partition_into(path, columns, config, chunking, files, result);
   const float voxel = report.voxel_size;
 
   report.clock.begin("chunks", false);
   chunk::MeshStitcher stitcher = chunk_stitcher(voxel, report.chunk_cells);
-  std::size_t done = 0;
   const bool in_place = finishes_in_place(config, chunking);
-  mesh_chunk_files(files, store->grid(), store->rows(), config, report.decided, chunking.in_flight,
-                   in_place, path, [&](const FramePtr& frame) {
-                     ++done;
-                     tell("chunk " + std::to_string(done) + "/" + std::to_string(files.size()));
+  mesh_chunk_files(run.files, run.store->grid(), run.store->rows(), config, report.decided,
+                   chunking.in_flight, in_place, path, [&](const FramePtr& frame) {
+                     run.chunk_done();
                      collect_chunk_frame(*frame, stitcher, report);
                    });
   report.clock.end();
 
-  tell("stitch");
+  run.tell("stitch");
   result.mesh =
-      finish_chunked_mesh(stitcher, config, voxel, report, tell, in_place, report.chunk_cells);
+      finish_chunked_mesh(stitcher, config, voxel, report, on_stage, in_place, report.chunk_cells);
   report.output_vertices = result.mesh.vertices.size();
   report.output_triangles = result.mesh.triangles.size();
-  return result;
+  return std::move(result);
 }
 
 bool streams_output(const std::string& output, const ReconstructionConfig& config,
@@ -508,25 +522,32 @@ bool streams_output(const std::string& output, const ReconstructionConfig& confi
 ChunkedResult reconstruct_chunked_to_ply(const std::string& path, const std::string& columns,
                                          const ReconstructionConfig& config,
                                          const ChunkingConfig& chunking, const std::string& output,
+                                         const std::string& tiles_dir,
                                          const std::function<void(const std::string&)>& on_stage) {
   if (!streams_output(output, config, chunking)) {
     ChunkedResult result = reconstruct_chunked(path, columns, config, chunking, on_stage);
+    ChunkedReport& r = result.report;
     if (!result.mesh.empty()) {
-      result.report.clock.begin("write", true);
+      if (on_stage) on_stage("write");
+      r.clock.begin("write", true);
       io::write_mesh(output, result.mesh, result.origin);
-      result.report.clock.end();
+      if (!tiles_dir.empty()) {  // cut from the whole mesh
+        if (on_stage) on_stage("tiles");
+        r.clock.begin("tiles", true);
+        const chunk::ChunkGrid grid{r.voxel_size, r.chunk_cells, 0};
+        const std::vector<chunk::MeshTile> split = chunk::split_into_tiles(result.mesh, grid);
+        chunk::write_tiles(tiles_dir, split, grid, result.origin);
+        r.tiles = split.size();
+      }
+      r.clock.end();
     }
     return result;
   }
-  const auto tell = [&](const std::string& what) {
-    if (on_stage) on_stage(what);
-  };
-  ChunkedResult result;
+  ChunkedRun run = start_chunked_run(path, columns, config, chunking, on_stage);
+  ChunkedResult& result = run.result;
   ChunkedReport& report = result.report;
-  tell("partition");
-  std::vector<chunk::ChunkFile> files;
-  const std::unique_ptr<chunk::ChunkStore> store =
-      partition_into(path, columns, config, chunking, files, result);
+  const std::vector<chunk::ChunkFile>& files = run.files;
+  const std::unique_ptr<chunk::ChunkStore>& store = run.store;
   const float voxel = report.voxel_size;
   const int cells = report.chunk_cells;
 
@@ -534,20 +555,20 @@ ChunkedResult reconstruct_chunked_to_ply(const std::string& path, const std::str
   // all that is held.
   report.clock.begin("chunks", false);
   std::vector<chunk::ChunkSeams> seams;
+  std::vector<Eigen::Vector3i> chunk_of;  // per seams entry: its chunk index (its tile)
   const auto spill_path = [&](std::size_t c) {
     return store->directory() + "/mesh_" + std::to_string(c) + ".bin";
   };
-  std::size_t done = 0;
   mesh_chunk_files(files, store->grid(), store->rows(), config, report.decided, chunking.in_flight,
                    true, path, [&](const FramePtr& frame) {
-                     ++done;
-                     tell("chunk " + std::to_string(done) + "/" + std::to_string(files.size()));
+                     run.chunk_done();
                      if (!report_chunk_frame(*frame, report)) return;
                      chunk::SpilledMesh spilled;
                      spilled.flags = chunk_vertex_flags(*frame);
                      spilled.mesh = std::move(frame->mesh);
                      frame->mesh = TriangleMesh{};
                      frame->chunk.reset();
+                     chunk_of.push_back(files[frame->source_index].index);
                      seams.push_back(chunk::summarize_seams(spilled.mesh, spilled.flags, voxel,
                                                             cells, kFeatureFlag));
                      spilled.vertex_piece = std::move(seams.back().vertex_piece);
@@ -556,7 +577,7 @@ ChunkedResult reconstruct_chunked_to_ply(const std::string& path, const std::str
                    });
   report.clock.end();
 
-  tell("stitch");
+  run.tell("stitch");
   report.clock.begin("stitch", true);  // the weld's plan, from the seam summaries alone
   std::vector<const chunk::ChunkSeams*> summaries;
   summaries.reserve(seams.size());
@@ -567,16 +588,17 @@ ChunkedResult reconstruct_chunked_to_ply(const std::string& path, const std::str
   report.output_triangles = plan.triangles;
   if (plan.triangles == 0) {
     report.clock.end();
-    return result;  // nothing to write; the caller reports the empty mesh
+    return std::move(result);  // nothing to write; the caller reports the empty mesh
   }
 
   // Each chunk welded (in parallel, a few at a time) and written in chunk order.
-  tell("write");
+  run.tell("write");
   report.clock.begin("write", true);
   chunk::StreamedChunkOutput out(output, plan, result.origin, voxel, cells, kFeatureFlag);
   struct Welded {
     TriangleMesh part;
     std::vector<std::uint8_t> flags;
+    std::size_t index = 0;
   };
   std::size_t next = 0;
   const std::size_t threads = static_cast<std::size_t>(
@@ -596,18 +618,25 @@ ChunkedResult reconstruct_chunked_to_ply(const std::string& path, const std::str
                 chunk::ChunkSeams& s = seams[c];
                 s.vertex_piece = std::move(spilled.vertex_piece);
                 auto welded = std::make_shared<Welded>();
+                welded->index = c;
                 welded->part =
                     chunk::weld_chunk(spilled.mesh, spilled.flags, s, plan, c, &welded->flags);
                 s = chunk::ChunkSeams{};
                 return welded;
               }) &
           tbb::make_filter<std::shared_ptr<Welded>, void>(
-              tbb::filter_mode::serial_in_order,
-              [&](const std::shared_ptr<Welded>& w) { out.add(w->part, w->flags); }));
+              tbb::filter_mode::serial_in_order, [&](const std::shared_ptr<Welded>& w) {
+                out.add(w->part, w->flags, chunk_of[w->index]);
+              }));
   report.clock.begin("finish", true);  // the seams: flips and normals, their rows rewritten
-  out.finish();
+  out.finish_seams();
+  if (!tiles_dir.empty()) {
+    report.clock.begin("tiles", true);  // each chunk's finished rows read back
+    report.tiles = out.write_tiles(tiles_dir);
+  }
+  out.commit();
   report.clock.end();
-  return result;
+  return std::move(result);
 }
 
 }  // namespace meshflow

@@ -103,8 +103,9 @@ struct ChunkedReport {
   std::uint64_t output_vertices = 0;   ///< of the output mesh (held or streamed)
   std::uint64_t output_triangles = 0;  ///< of the output mesh (held or streamed)
   std::size_t rim_trimmed = 0;         ///< triangles peeled off the rim (max_rim_voxels), stitched
-  std::vector<std::string> failed;     ///< "chunk name: error" of chunks that failed (skipped)
-  std::vector<StageRecord> timings;    ///< every stage record of every chunk
+  std::size_t tiles = 0;            ///< tiles written by reconstruct_chunked_to_ply() (`tiles_dir`)
+  std::vector<std::string> failed;  ///< "chunk name: error" of chunks that failed (skipped)
+  std::vector<StageRecord> timings;  ///< every stage record of every chunk
   /// The phases of this process: "decide" (the whole-input sample), "partition" (spilling to
   /// chunk files), "chunks", then "stitch" (welding, feature flips, rim trim) and "finish"
   /// (optimize), serial; the caller adds "write".
@@ -277,16 +278,18 @@ bool streams_output(const std::string& output, const ReconstructionConfig& confi
 /// each finished chunk's seam is summarized and its mesh spilled beside the chunk files as it
 /// arrives; once all are in, the weld is planned from the summaries, each chunk is read back,
 /// welded (a few at once) and written at its rows (chunk::StreamedChunkOutput), then the seams
-/// are finished and their rows rewritten. The file is byte for byte io::write_mesh() of
+/// are finished and their rows rewritten; with a non-empty `tiles_dir` each chunk's finished
+/// rows are read back as its tile (StreamedChunkOutput::finish(); report.tiles counts them;
+/// phase "tiles"). The file is byte for byte io::write_mesh() of
 /// reconstruct_chunked()'s mesh; memory: the chunks in flight and the seams' neighbourhood, not
 /// the output; disk: the chunk meshes once more until written. Otherwise reconstruct_chunked()
-/// then io::write_mesh(). Nothing is written when no triangle was extracted. Times "chunks",
-/// "stitch" (the plan), "write" and "finish" (the seams) on report.clock. Throws
-/// meshflow::Error as reconstruct_chunked() and for a failed write (no file left under
-/// `output`).
+/// then io::write_mesh() (and the tiles cut from the mesh: chunk::split_into_tiles()). Nothing is
+/// written when no triangle was extracted. Times "chunks", "stitch" (the plan), "write" and
+/// "finish" (the seams) on report.clock. Throws meshflow::Error as reconstruct_chunked() and for a
+/// failed write (no file left under `output`).
 ChunkedResult reconstruct_chunked_to_ply(
     const std::string& path, const std::string& columns, const ReconstructionConfig& config,
-    const ChunkingConfig& chunking, const std::string& output,
+    const ChunkingConfig& chunking, const std::string& output, const std::string& tiles_dir = {},
     const std::function<void(const std::string&)>& on_stage = {});
 
 }  // namespace meshflow

@@ -7,7 +7,6 @@
 #include <vector>
 
 #include "graph/chunked_reconstruction.h"
-#include "nodes/chunk/mesh_tiles.h"
 #include "nodes/chunk/phase_times.h"
 #include "nodes/extract/extract_surface.h"
 #include "nodes/io/mesh_writers.h"
@@ -27,12 +26,11 @@ void run_chunked_reconstruct(const std::string& input, const std::string& column
   io::check_mesh_output_format(output);
   auto progress = std::make_unique<StepProgress>();
   const double t0 = monotonic_seconds();
-  // Streamed to the file as the chunks are welded unless tiles are cut from the whole mesh.
-  const bool stream = tiles_dir.empty() && streams_output(output, config, chunking);
+  // Streamed to the file as the chunks are welded (the tiles: each chunk's finished rows),
+  // else held whole and written (the tiles cut from it).
   const auto tell = [&](const std::string& what) { progress->begin(what); };
   ChunkedResult result =
-      stream ? reconstruct_chunked_to_ply(input, columns, config, chunking, output, tell)
-             : reconstruct_chunked(input, columns, config, chunking, tell);
+      reconstruct_chunked_to_ply(input, columns, config, chunking, output, tiles_dir, tell);
   ChunkedReport& r = result.report;
   if (r.output_triangles == 0) {
     throw Error(input, "",
@@ -40,20 +38,7 @@ void run_chunked_reconstruct(const std::string& input, const std::string& column
                     " chunks (voxel size " + std::to_string(r.voxel_size) +
                     " m too small or too large?)");
   }
-  if (!stream) {
-    progress->begin("write");
-    r.clock.begin("write", true);
-    io::write_mesh(output, result.mesh, result.origin);
-  }
-  std::size_t tiles = 0;
-  if (!tiles_dir.empty()) {
-    progress->begin("tiles");
-    r.clock.begin("tiles", true);
-    const chunk::ChunkGrid grid{r.voxel_size, r.chunk_cells, 0};
-    const std::vector<chunk::MeshTile> split = chunk::split_into_tiles(result.mesh, grid);
-    chunk::write_tiles(tiles_dir, split, grid, result.origin);
-    tiles = split.size();
-  }
+  const std::size_t tiles = r.tiles;
   r.clock.end();
   progress.reset();
   const double wall = monotonic_seconds() - t0;

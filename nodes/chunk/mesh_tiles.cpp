@@ -84,37 +84,77 @@ std::string tile_file_name(const Eigen::Vector3i& chunk) {
          std::to_string(chunk.z()) + ".glb";
 }
 
+MeshTile read_tile(const io::PlyMeshFile& file, const Eigen::Vector3i& chunk,
+                   std::uint64_t first_triangle, std::uint64_t triangles) {
+  MeshTile tile;
+  tile.chunk = chunk;
+  tile.mesh.triangles = file.read_triangles(first_triangle, triangles);
+  // Vertex rows in order of first use, then read in ascending order.
+  std::vector<std::uint64_t> used;
+  std::map<std::uint32_t, std::uint32_t> renumbered;
+  for (Triangle& t : tile.mesh.triangles)
+    for (std::uint32_t& v : t) {
+      const auto [it, added] = renumbered.emplace(v, static_cast<std::uint32_t>(renumbered.size()));
+      if (added) used.push_back(v);
+      v = it->second;
+    }
+  std::vector<std::uint64_t> rows(used);
+  std::sort(rows.begin(), rows.end());
+  const TriangleMesh read = file.read_vertices(rows);
+  TriangleMesh& m = tile.mesh;
+  m.vertices.resize(used.size());
+  if (!read.normals.empty()) m.normals.resize(used.size());
+  if (!read.colors.empty()) m.colors.resize(used.size());
+  for (std::size_t i = 0; i < rows.size(); ++i) {
+    const std::uint32_t to = renumbered.at(static_cast<std::uint32_t>(rows[i]));
+    m.vertices[to] = read.vertices[i];
+    if (!read.normals.empty()) m.normals[to] = read.normals[i];
+    if (!read.colors.empty()) m.colors[to] = read.colors[i];
+  }
+  return tile;
+}
+
+TileWriter::TileWriter(std::string dir, const ChunkGrid& grid, const Eigen::Vector3d& origin)
+    : dir_(std::move(dir)), origin_(origin) {
+  std::error_code ec;
+  std::filesystem::create_directories(dir_, ec);
+  if (ec || !std::filesystem::is_directory(dir_))
+    throw Error(dir_, "",
+                "cannot create the tiles' directory" + (ec ? ": " + ec.message() : std::string()));
+  index_ = "{\n  \"format\": \"meshflow-tiles-1\",\n  \"origin\": " + tiles_json_triple(origin) +
+           ",\n  \"voxel\": " + tiles_json_number(grid.voxel_size) + ",\n  \"chunk_metres\": " +
+           tiles_json_number(static_cast<double>(grid.voxel_size) * grid.chunk_cells) +
+           ",\n  \"tiles\": [";
+}
+
+void TileWriter::add(const MeshTile& tile) {
+  if (tile.mesh.triangles.empty()) return;
+  const std::string name = tile_file_name(tile.chunk);
+  io::write_glb((std::filesystem::path(dir_) / name).string(), tile.mesh, origin_);
+  Eigen::AlignedBox3f box;
+  for (const Eigen::Vector3f& v : tile.mesh.vertices) box.extend(v);
+  index_ += std::string(tiles_ == 0 ? "\n" : ",\n") + "    {\"chunk\": [" +
+            std::to_string(tile.chunk.x()) + ", " + std::to_string(tile.chunk.y()) + ", " +
+            std::to_string(tile.chunk.z()) + "], \"file\": \"" + name +
+            "\", \"vertices\": " + std::to_string(tile.mesh.vertices.size()) +
+            ", \"triangles\": " + std::to_string(tile.mesh.triangles.size()) +
+            ", \"min\": " + tiles_json_triple(box.min()) +
+            ", \"max\": " + tiles_json_triple(box.max()) + "}";
+  ++tiles_;
+}
+
+std::size_t TileWriter::finish() {
+  io::AtomicOutputFile out((std::filesystem::path(dir_) / "tiles.json").string());
+  out.stream() << index_ << (tiles_ == 0 ? "]\n}\n" : "\n  ]\n}\n");
+  out.commit();
+  return tiles_;
+}
+
 void write_tiles(const std::string& dir, const std::vector<MeshTile>& tiles, const ChunkGrid& grid,
                  const Eigen::Vector3d& origin) {
-  std::error_code ec;
-  std::filesystem::create_directories(dir, ec);
-  if (ec || !std::filesystem::is_directory(dir))
-    throw Error(dir, "",
-                "cannot create the tiles' directory" + (ec ? ": " + ec.message() : std::string()));
-  const std::filesystem::path base(dir);
-  std::string index =
-      "{\n  \"format\": \"meshflow-tiles-1\",\n  \"origin\": " + tiles_json_triple(origin) +
-      ",\n  \"voxel\": " + tiles_json_number(grid.voxel_size) + ",\n  \"chunk_metres\": " +
-      tiles_json_number(static_cast<double>(grid.voxel_size) * grid.chunk_cells) +
-      ",\n  \"tiles\": [";
-  for (std::size_t i = 0; i < tiles.size(); ++i) {
-    const MeshTile& tile = tiles[i];
-    const std::string name = tile_file_name(tile.chunk);
-    io::write_glb((base / name).string(), tile.mesh, origin);
-    Eigen::AlignedBox3f box;
-    for (const Eigen::Vector3f& v : tile.mesh.vertices) box.extend(v);
-    index += std::string(i == 0 ? "\n" : ",\n") + "    {\"chunk\": [" +
-             std::to_string(tile.chunk.x()) + ", " + std::to_string(tile.chunk.y()) + ", " +
-             std::to_string(tile.chunk.z()) + "], \"file\": \"" + name +
-             "\", \"vertices\": " + std::to_string(tile.mesh.vertices.size()) +
-             ", \"triangles\": " + std::to_string(tile.mesh.triangles.size()) +
-             ", \"min\": " + tiles_json_triple(box.min()) +
-             ", \"max\": " + tiles_json_triple(box.max()) + "}";
-  }
-  index += tiles.empty() ? "]\n}\n" : "\n  ]\n}\n";
-  io::AtomicOutputFile out((base / "tiles.json").string());
-  out.stream() << index;
-  out.commit();
+  TileWriter writer(dir, grid, origin);
+  for (const MeshTile& tile : tiles) writer.add(tile);
+  writer.finish();
 }
 
 }  // namespace meshflow::chunk

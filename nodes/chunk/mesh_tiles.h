@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "nodes/chunk/chunk_grid.h"
+#include "nodes/io/ply_mesh_file.h"
 #include "runtime/triangle_mesh.h"
 
 namespace meshflow::chunk {
@@ -26,6 +27,31 @@ std::vector<MeshTile> split_into_tiles(const TriangleMesh& mesh, const ChunkGrid
 
 /// The file name of `chunk`'s tile: "tile_I_J_K.glb". O(1).
 std::string tile_file_name(const Eigen::Vector3i& chunk);
+
+/// A chunk's tile read back from the finished rows of a streamed output `file`: face rows
+/// [first_triangle, first_triangle + triangles) (the chunk's welded, finished part) and the
+/// vertices they use (seam vertices kept by an earlier chunk copied in), renumbered in order
+/// of first use, normals and colours as the file has them. Throws meshflow::Error on a failed
+/// read. O(triangles) plus one read per run of consecutive vertex rows.
+MeshTile read_tile(const io::PlyMeshFile& file, const Eigen::Vector3i& chunk,
+                   std::uint64_t first_triangle, std::uint64_t triangles);
+
+/// write_tiles() one tile at a time: memory holds the index, not the tiles.
+class TileWriter {
+ public:
+  /// Creates `dir` (tiles.json is written by finish()). Throws meshflow::Error naming it.
+  TileWriter(std::string dir, const ChunkGrid& grid, const Eigen::Vector3d& origin);
+  /// Writes `tile` to DIR/tile_file_name() (glTF binary, `origin` as its node's translation;
+  /// an empty tile is skipped) and adds it to the index. Not thread-safe. O(tile).
+  void add(const MeshTile& tile);
+  /// Writes DIR/tiles.json (atomically). Returns the tiles written. O(tiles).
+  std::size_t finish();
+
+ private:
+  std::string dir_, index_;
+  Eigen::Vector3d origin_;
+  std::size_t tiles_ = 0;
+};
 
 /// Writes each tile to DIR/tile_file_name() (glTF binary, `origin` as its node's translation)
 /// and then DIR/tiles.json, the index: {"format": "meshflow-tiles-1", "origin": [x, y, z],

@@ -492,6 +492,52 @@ TEST(MeshTiles, TheTilesUnionIsTheWholeMesh) {
   std::filesystem::remove_all(dir);
 }
 
+// --tiles on the streamed output: each tile is one chunk's finished rows of the file (read
+// back, never the whole mesh held), every triangle of the mesh in exactly one tile, each tile's
+// vertices all used; the streamed file itself unchanged by writing tiles.
+TEST(MeshTiles, TheStreamedTilesAreTheChunksFinishedRowsAndUnionToTheMesh) {
+  const ReconstructionConfig defaults;
+  const CityInput input(60000, true);
+  ChunkingConfig chunking = chunks_of(20.0f);
+  chunking.finish_in_place = true;
+  ASSERT_TRUE(streams_output("tiles.ply", defaults, chunking));
+  const ChunkedResult held = reconstruct_chunked(input.path, "", defaults, chunking);
+  ASSERT_FALSE(held.mesh.empty());
+  const std::string dir = test::temp_dir() + "/streamed_tiles";
+  std::filesystem::remove_all(dir);
+  const std::string plain = test::temp_dir() + "/tiles_plain.ply";
+  const std::string tiled = test::temp_dir() + "/tiles_tiled.ply";
+  reconstruct_chunked_to_ply(input.path, "", defaults, chunking, plain);
+  const ChunkedResult r =
+      reconstruct_chunked_to_ply(input.path, "", defaults, chunking, tiled, dir);
+  EXPECT_TRUE(test::read_file(plain) == test::read_file(tiled)) << "tiles changed the file";
+  EXPECT_GT(r.report.tiles, 4u);
+  std::ifstream index_file(dir + "/tiles.json");
+  const nlohmann::json index = nlohmann::json::parse(index_file);
+  ASSERT_EQ(index["tiles"].size(), r.report.tiles);
+  std::set<TriangleKey> joined;
+  std::size_t keys = 0, triangles = 0;
+  for (const nlohmann::json& entry : index["tiles"]) {
+    const TriangleMesh m = io::read_glb_mesh(dir + "/" + entry["file"].get<std::string>());
+    EXPECT_EQ(entry["triangles"].get<std::size_t>(), m.triangles.size());
+    EXPECT_EQ(m.normals.size(), m.vertices.size());
+    std::vector<bool> used(m.vertices.size(), false);
+    for (const Triangle& t : m.triangles)
+      for (std::uint32_t v : t) used[v] = true;
+    EXPECT_EQ(std::count(used.begin(), used.end(), false), 0) << "no unused vertex";
+    const std::set<TriangleKey> own = triangle_keys(m);
+    keys += own.size();
+    triangles += m.triangles.size();
+    joined.insert(own.begin(), own.end());
+  }
+  EXPECT_EQ(triangles, held.mesh.triangles.size());
+  EXPECT_EQ(keys, joined.size()) << "no triangle in two tiles";
+  EXPECT_EQ(joined, triangle_keys(held.mesh));
+  std::filesystem::remove_all(dir);
+  std::filesystem::remove(plain);
+  std::filesystem::remove(tiled);
+}
+
 TEST(MeshStitch, TurnsAChunkWoundAgainstItsNeighbourOver) {
   // A 2 x 2 grid of unit cells at height 0.5 (vertices on vertical lattice edges), split at the
   // chunk plane x = 1 (chunk edge 1 cell); the right chunk arrives wound the other way.

@@ -41,12 +41,15 @@ ranks = d["timing"]["ranks"]
 assert [r["rank"] for r in ranks] == [0, 1], ranks
 assert sum(r["chunks"] for r in ranks) == d["chunks"], (ranks, d["chunks"])
 names = [[p["phase"] for p in r["phases"]] for r in ranks]
+# Every rank writes its own parts into the file ("write", parallel); rank 0 gathers only the
+# seams' neighbourhoods, finishes them and writes the tiles from the file's finished rows.
 assert names[0] == ["decide", "setup", "partition", "join", "chunks", "exchange", "seams", "weld",
-                    "gather", "stitch", "finish", "write", "tiles"], names[0]
+                    "create", "write", "gather", "finish", "tiles"], names[0]
 assert names[1] == ["decide", "setup", "partition", "plan", "chunks", "exchange", "seams",
-                    "weld"], names[1]
+                    "weld", "create", "write"], names[1]
 assert all(p["work_s"] == 0 for p in ranks[1]["phases"]
-           if p["phase"] in ("setup", "plan", "exchange", "seams"))
+           if p["phase"] in ("setup", "plan", "exchange", "seams", "create"))
+assert [p["work_s"] > 0 for p in ranks[1]["phases"] if p["phase"] == "write"] == [True], ranks[1]
 assert not any(p["serial"] for p in ranks[1]["phases"]), "only rank 0's phases are serial"
 s = d["timing"]["serial"]
 assert 0 < s["fraction"] < 1 and s["max_speedup"] > 1, s

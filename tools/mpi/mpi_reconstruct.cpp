@@ -11,7 +11,10 @@
 // on rank 0 in Morton order, each to the rank that asks first (rank 0's own graph included); each
 // rank meshes what it gets through its own flow graph (each chunk finished in place) and welds
 // its own chunks once every rank's seam summaries are known (tools/mpi/mpi_weld.h); rank 0
-// gathers the welded parts, concatenates them, finishes the seams and writes OUT. The weld and
+// plans OUT's header, every rank writes its welded parts into it at their rows, and rank 0
+// finishes the seams (with --tiles: writes each chunk's finished rows as its tile) and renames
+// the file into place (not streamed: another format, or --finish-after-stitch: rank 0 gathers
+// the parts and writes the whole mesh). The weld and
 // the seam orientation are planned over the chunks in the one-process order, so the mesh is
 // the same for any N and any assignment (and equals `meshflow reconstruct --chunk`).
 
@@ -48,6 +51,7 @@
 #include "tools/mpi/mpi_commands.h"
 #include "tools/mpi/mpi_partition.h"
 #include "tools/mpi/mpi_weld.h"
+#include "tools/mpi/mpi_write.h"
 #include "tools/pipeline_options.h"
 
 namespace meshflow::cli {
@@ -158,42 +162,6 @@ struct Options {
 
 // --chunk as `reconstruct --chunk` takes it: "auto" lets the chunks in flight have half of
 // --max-memory (the rest: the welded mesh).
-// Rank 0's output streamed (chunk::StreamedChunkOutput): the welded parts `results` (in chunk
-// order, failed ones emptied) written at their rows and freed one by one, then the seams
-// finished; times "write" and "finish" on `clock`, counts into `report`. Returns false, writing
-// nothing, when no triangle was extracted.
-bool write_streamed(const std::string& output, std::vector<ChunkResult>& results, const Plan& plan,
-                    chunk::PhaseClock& clock, ChunkedReport& report) {
-  std::uint64_t vertices = 0, triangles = 0;
-  bool normals = true, colors = true, flags = true;
-  for (const ChunkResult& r : results) {
-    if (!r.error.empty()) continue;
-    const std::size_t n = r.mesh.vertices.size();
-    vertices += n;
-    triangles += r.mesh.triangles.size();
-    normals = normals && r.mesh.normals.size() == n;
-    colors = colors && r.mesh.colors.size() == n;
-    flags = flags && r.flags.size() == n;
-  }
-  report.output_vertices = vertices;
-  report.output_triangles = triangles;
-  if (triangles == 0) return false;
-  clock.begin("write", true);
-  io::PlyMeshLayout layout;
-  layout.world = !plan.rows.origin.isZero();
-  layout.normals = normals && vertices > 0;
-  layout.colors = colors && vertices > 0;
-  chunk::StreamedChunkOutput out(output, vertices, triangles, layout, flags, plan.rows.origin,
-                                 plan.grid.voxel_size, plan.grid.chunk_cells, kFeatureFlag);
-  for (ChunkResult& r : results) {
-    if (r.error.empty()) out.add(r.mesh, r.flags);
-    r = ChunkResult{};
-  }
-  clock.begin("finish", true);
-  out.finish();
-  return true;
-}
-
 ChunkingConfig chunking_of(const Options& o, const ReconstructionConfig& config) {
   ChunkingConfig chunking = o.chunking;
   chunking.chunk_size = o.chunk == "auto" ? 0.0f : std::stof(o.chunk);
@@ -240,10 +208,11 @@ void print_report(const Options& o, const Plan& plan, const ChunkedReport& repor
   const auto phase = [&](const char* name) { return chunk::phase_wall(own, name); };
   std::printf(
       "time       %.1f s: decide %.1f s, partition %.1f s, chunks %.1f s, seams %.1f s, weld "
-      "%.1f s, gather %.1f s (%.1f MB), stitch %.1f s, finish %.1f s, write %.1f s\n",
+      "%.1f s, write %.1f s, gather %.1f s (%.1f MB), stitch %.1f s, finish %.1f s, tiles "
+      "%.1f s\n",
       wall, phase("decide"), phase("setup") + phase("partition") + phase("join"), phase("chunks"),
-      phase("seams"), phase("weld"), phase("gather"), static_cast<double>(gathered_bytes) / 1e6,
-      phase("stitch"), phase("finish"), phase("write"));
+      phase("seams"), phase("weld"), phase("create") + phase("write"), phase("gather"),
+      static_cast<double>(gathered_bytes) / 1e6, phase("stitch"), phase("finish"), phase("tiles"));
   std::printf("serial     %.1f s of %.1f s on one core (Amdahl: f = %.3f, at most %.1fx faster)\n",
               serial.serial_s, serial.serial_s + serial.parallel_work_s, serial.fraction,
               serial.max_speedup);
@@ -369,9 +338,33 @@ int run(const Options& o, int rank, int ranks) {
   const double mesh_s = chunk::phase_wall(clock.phases(), "chunks");
   std::fprintf(stderr, "meshflow-mpi: rank %d/%d: %zu chunks meshed in %.2f s\n", rank, ranks,
                results.size(), mesh_s);
-  // Every rank welds its own chunks (seam summaries exchanged through rank 0); rank 0 then
-  // only concatenates the welded parts in Morton order, finishes the seams and writes.
-  report.seam_vertices = weld_on_ranks(results, clock, rank, ranks);
+  // Every rank welds its own chunks (seam summaries exchanged through rank 0), then writes
+  // them into the output at their rows (tools/mpi/mpi_write.h): rank 0 plans the file and
+  // finishes the seams (and writes the tiles). Not streamed, rank 0 gathers the welded parts,
+  // concatenates them, finishes the seams and writes.
+  const chunk::WeldPlan weld = weld_on_ranks(results, clock, rank, ranks);
+  report.seam_vertices = weld.merged;
+  if (streams_output(o.output, config, chunking)) {
+    RanksWritten written = write_on_ranks(o.output, results, weld, plan.grid, plan.rows.origin,
+                                          results.size(), o.tiles, plan.files, clock, rank, ranks);
+    if (rank != 0) return 0;
+    for (const std::string& e : written.failed) {
+      std::fprintf(stderr, "meshflow-mpi: chunk failed, its cells are missing: %s\n", e.c_str());
+      report.failed.push_back(e);
+    }
+    if (!written.error.empty()) {
+      std::fprintf(stderr, "meshflow-mpi: error: %s: %s\n",
+                   (weld.triangles == 0 ? o.input : o.output).c_str(), written.error.c_str());
+      return 1;
+    }
+    report.output_vertices = weld.vertices;
+    report.output_triangles = weld.triangles;
+    written.times.front().phases = clock.phases();
+    written.times.front().peak_bytes = chunk::peak_resident_bytes();
+    print_report(o, plan, report, written.times, written.gathered_bytes, written.tiles,
+                 monotonic_seconds() - t0, limit.threads());
+    return 0;
+  }
   std::vector<chunk::RankTimes> times = {
       {rank, results.size(), chunk::peak_resident_bytes(), clock.phases()}};
   if (rank != 0) {
@@ -395,13 +388,7 @@ int run(const Options& o, int rank, int ranks) {
       r = ChunkResult{};
     }
   std::size_t tiles = 0;
-  if (o.tiles.empty() && streams_output(o.output, config, chunking)) {
-    // The welded parts written as they are (graph/chunk_output.h), never joined.
-    if (!write_streamed(o.output, results, plan, clock, report)) {
-      std::fprintf(stderr, "meshflow-mpi: error: %s: no surface was extracted\n", o.input.c_str());
-      return 1;
-    }
-  } else {
+  {
     TriangleMesh joined;
     std::vector<std::uint8_t> flags;
     std::size_t vertices = 0, triangles = 0;

@@ -53,8 +53,8 @@ void summarize_result(ChunkResult& result, float voxel_size, int chunk_cells) {
         chunk::summarize_seams(result.mesh, result.flags, voxel_size, chunk_cells, kFeatureFlag);
 }
 
-std::size_t weld_on_ranks(std::vector<ChunkResult>& results, chunk::PhaseClock& clock, int rank,
-                          int ranks) {
+chunk::WeldPlan weld_on_ranks(std::vector<ChunkResult>& results, chunk::PhaseClock& clock, int rank,
+                              int ranks) {
   clock.wait("exchange");  // the slowest rank's chunks, then every rank's summaries
   io::ByteWriter w;
   std::uint64_t ok = 0;
@@ -95,23 +95,32 @@ std::size_t weld_on_ranks(std::vector<ChunkResult>& results, chunk::PhaseClock& 
   }
   std::map<std::uint64_t, std::size_t> index;  // position -> index in the plan
   std::vector<const chunk::ChunkSeams*> chunks;
+  std::vector<std::uint64_t> first_triangle;  // per plan index: its part's first face row
+  std::uint64_t triangles = 0;
   for (const auto& entry : by_position) {
     index[entry.first] = chunks.size();
     chunks.push_back(&entry.second);
+    first_triangle.push_back(triangles);
+    for (const std::uint64_t t : entry.second.piece_triangles) triangles += t;
   }
-  const chunk::WeldPlan plan = chunk::plan_weld(chunks);
+  chunk::WeldPlan plan = chunk::plan_weld(chunks);
   by_position.clear();
   clock.begin("weld", false);
   tbb::parallel_for(std::size_t{0}, results.size(), [&](std::size_t i) {
     ChunkResult& r = results[i];
     if (!r.error.empty()) return;
     std::vector<std::uint8_t> kept;
-    r.mesh = chunk::weld_chunk(r.mesh, r.flags, r.seams, plan, index.at(r.position), &kept);
+    const std::size_t c = index.at(r.position);
+    r.mesh = chunk::weld_chunk(r.mesh, r.flags, r.seams, plan, c, &kept);
     r.flags = std::move(kept);
     r.seams = chunk::ChunkSeams{};
+    r.first_vertex = plan.vertex_offset[c];
+    r.first_triangle = first_triangle[c];
   });
   clock.end();
-  return plan.merged;
+  plan.seam_target = {};
+  plan.turn = {};
+  return plan;
 }
 
 }  // namespace meshflow::cli

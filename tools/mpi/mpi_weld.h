@@ -20,6 +20,8 @@ struct ChunkResult {
   std::vector<std::uint8_t> flags;  ///< chunk_vertex_flags()
   std::string error;                ///< non-empty: the chunk failed
   chunk::ChunkSeams seams;          ///< summarize_result()'s, on the rank that meshed it
+  /// weld_on_ranks(): the welded part's first vertex and face row in the output.
+  std::uint64_t first_vertex = 0, first_triangle = 0;
 };
 
 /// Fills `result.seams` (summarize_seams() of its mesh and flags, feature vertices apart) when
@@ -32,12 +34,14 @@ void summarize_result(ChunkResult& result, float voxel_size, int chunk_cells);
 /// plans the weld of all chunks in position order from them (plan_weld(), seam-sized), then welds
 /// its own chunks in parallel (weld_chunk()): each result's mesh becomes its part of the welded
 /// mesh (the vertices kept in it, triangles in output indices), its flags the kept vertices' bytes.
-/// Failed chunks are left out. Concatenating every rank's parts in position order (append_welded())
-/// gives MeshStitcher::stitch()'s mesh of all chunks. Times "exchange" (waiting for every rank's
-/// summaries), "seams" (the plan: serial on rank 0; the others, making the same plan, count as
-/// waiting) and "weld" (parallel) on `clock`. Returns the seam vertices merged. Throws
-/// meshflow::Error for a malformed message.
-std::size_t weld_on_ranks(std::vector<ChunkResult>& results, chunk::PhaseClock& clock, int rank,
-                          int ranks);
+/// Failed chunks are left out; each other result's first_vertex and first_triangle receive its
+/// part's rows in the output. Concatenating every rank's parts in position order
+/// (append_welded()) gives MeshStitcher::stitch()'s mesh of all chunks. Times "exchange"
+/// (waiting for every rank's summaries), "seams" (the plan: serial on rank 0; the others, making
+/// the same plan, count as waiting) and "weld" (parallel) on `clock`. Returns the plan (the
+/// same on every rank; its per-seam-vertex targets dropped): counts, attributes, seam vertices
+/// merged. Throws meshflow::Error for a malformed message.
+chunk::WeldPlan weld_on_ranks(std::vector<ChunkResult>& results, chunk::PhaseClock& clock, int rank,
+                              int ranks);
 
 }  // namespace meshflow::cli

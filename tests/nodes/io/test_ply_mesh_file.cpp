@@ -82,5 +82,38 @@ TEST(PlyMeshFile, AnIncompleteFileIsAnErrorAndLeavesNothing) {
   EXPECT_FALSE(std::filesystem::exists(path + ".tmp"));
 }
 
+// meshflow-mpi's ranks: joined writers fill their rows of the creator's temporary file; the
+// creator counts their rows, and the file appears only at its commit, as write_ply()'s.
+TEST(PlyMeshFile, JoinedWritersFillTheirRowsAndOnlyTheCreatorCommits) {
+  const std::string dir = test::temp_dir();
+  const Eigen::Vector3d origin(5e5, 4e6, 12);
+  const TriangleMesh m = ply_strip(9);
+  write_ply(dir + "/whole.ply", m, PlyEncoding::kBinary, origin);
+  const std::string path = dir + "/joined.ply";
+  std::filesystem::remove(path);
+  const PlyMeshLayout layout = ply_mesh_layout(m, origin);
+  {
+    PlyMeshFile creator(path, layout, m.vertices.size(), m.triangles.size(), origin);
+    creator.write_vertices(0, ply_rows(m, 0, 6));
+    creator.write_triangles(0, {m.triangles.begin(), m.triangles.begin() + 4});
+    {
+      PlyMeshFile joined(path, layout, m.vertices.size(), m.triangles.size(), origin,
+                         PlyMeshFile::Role::kJoin);
+      joined.write_vertices(6, ply_rows(m, 6, 5));
+      joined.write_triangles(4, {m.triangles.begin() + 4, m.triangles.end()});
+      EXPECT_THROW(joined.commit(), Error) << "only the creator commits";
+      joined.close();
+    }
+    EXPECT_TRUE(std::filesystem::exists(path + ".tmp")) << "a joined writer removes nothing";
+    EXPECT_FALSE(std::filesystem::exists(path));
+    EXPECT_THROW(creator.close(), Error) << "the creator commits";
+    EXPECT_EQ(creator.vertex_rows_written(), 6u);
+    creator.add_rows_written_elsewhere(5, m.triangles.size() - 4);
+    creator.commit();
+  }
+  EXPECT_EQ(test::read_file(path), test::read_file(dir + "/whole.ply"));
+  EXPECT_FALSE(std::filesystem::exists(path + ".tmp"));
+}
+
 }  // namespace
 }  // namespace meshflow::io

@@ -38,8 +38,8 @@ int gradient_fill(DiffusionLattice& l, const std::vector<std::uint8_t>& observed
                   const DiffusionConfig& config) {
   const Eigen::Vector3i n = l.size;
   if (l.node_count() == 0) return 0;
-  // 1. The field on every second node (coarse node c is node min(2 c, n - 1)): held where a
-  // node within one step of 2 c has a gradient, at their mean (summed in a fixed order).
+  // 1. The field on every second node (coarse node c is node min(2 c, n - 1)): held where node
+  // 2 c or one of its 6 neighbours has a gradient, at their mean (summed in a fixed order).
   const Eigen::Vector3i cn = ((n.array() + 1) / 2).matrix();
   std::array<DiffusionLattice, 3> g;
   for (DiffusionLattice& c : g) {
@@ -50,20 +50,19 @@ int gradient_fill(DiffusionLattice& l, const std::vector<std::uint8_t>& observed
   tbb::parallel_for(0, cn.z(), [&](int z) {
     for (int y = 0; y < cn.y(); ++y)
       for (int x = 0; x < cn.x(); ++x) {
-        const Eigen::Vector3i c(x, y, z);
-        const Eigen::Vector3i from = (2 * c - Eigen::Vector3i::Ones()).cwiseMax(0);
-        const Eigen::Vector3i to =
-            (2 * c + Eigen::Vector3i::Ones()).cwiseMin(n - Eigen::Vector3i::Ones());
+        const Eigen::Vector3i q =
+            (2 * Eigen::Vector3i(x, y, z)).cwiseMin(n - Eigen::Vector3i::Ones());
         Eigen::Vector3f sum = Eigen::Vector3f::Zero();
         int count = 0;
-        for (int fz = from.z(); fz <= to.z(); ++fz)
-          for (int fy = from.y(); fy <= to.y(); ++fy)
-            for (int fx = from.x(); fx <= to.x(); ++fx) {
-              Eigen::Vector3f d;
-              if (!observed_gradient(l, observed, voxel, {fx, fy, fz}, d)) continue;
-              sum += d;
-              ++count;
-            }
+        for (int k = -1; k < 6; ++k) {  // q, then q -+ each axis
+          Eigen::Vector3i f = q;
+          if (k >= 0) f[k / 2] += k % 2 == 0 ? -1 : 1;
+          if ((f.array() < 0).any() || (f.array() >= n.array()).any()) continue;
+          Eigen::Vector3f d;
+          if (!observed_gradient(l, observed, voxel, f, d)) continue;
+          sum += d;
+          ++count;
+        }
         if (count == 0) continue;
         const std::size_t i = g[0].index(x, y, z);
         for (std::size_t k = 0; k < 3; ++k) {
@@ -100,9 +99,9 @@ int gradient_fill(DiffusionLattice& l, const std::vector<std::uint8_t>& observed
   });
   for (DiffusionLattice& c : g) c = DiffusionLattice{};
 
-  // 3. The potential: sum_j (u_i - u_j) = -voxel div g at the free nodes, with half the sweeps
-  // per level (the levels below give it a close start: 20 instead of 40 changed the tests'
-  // filled errors by under 5 %).
+  // 3. The potential: sum_j (u_i - u_j) = -voxel div g at the free nodes, with a quarter of the
+  // sweeps per level (the levels below give it a close start: 10 or 20 instead of 40 moved the
+  // tests' filled errors by under 20 %, both ways, their mean by 1 %).
   l.source.assign(l.node_count(), 0.0f);
   tbb::parallel_for(0, n.z(), [&](int z) {
     for (int y = 0; y < n.y(); ++y)
@@ -113,7 +112,7 @@ int gradient_fill(DiffusionLattice& l, const std::vector<std::uint8_t>& observed
       }
   });
   DiffusionConfig potential = config;
-  potential.sweeps_per_level = std::max(1, config.sweeps_per_level / 2);
+  potential.sweeps_per_level = std::max(1, config.sweeps_per_level / 4);
   const int levels = diffuse_free_nodes(l, potential);
   l.source.clear();
   return levels;

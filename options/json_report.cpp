@@ -96,7 +96,7 @@ nlohmann::json close_json(const CloseReport& c) {
           {"levels", c.levels},
           {"coarse_step", c.coarse_step},
           {"tiles", c.tiles},
-          {"fill", c.indicator ? "indicator" : "diffusion"},
+          {"fill", close_fill_name(c.fill)},
           {"held_out", c.held_out},
           {"held_out_error_diffusion", c.held_out_error_diffusion},
           {"held_out_error_indicator", c.held_out_error_indicator}};

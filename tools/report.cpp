@@ -111,10 +111,10 @@ void report_closing(const CloseReport& c) {
     report(
         "           fill: %s (%zu observed corners near the rim held out, predicted with a mean "
         "error of %.2f voxels by diffusion, %.2f by the indicator)\n",
-        c.indicator ? "indicator" : "diffusion", c.held_out, c.held_out_error_diffusion,
+        close_fill_name(c.fill), c.held_out, c.held_out_error_diffusion,
         c.held_out_error_indicator);
   else
-    report("           fill: %s\n", c.indicator ? "indicator" : "diffusion");
+    report("           fill: %s\n", close_fill_name(c.fill));
   if (c.coarse_step > 1)
     report(
         "           tiled: a coarse lattice of every %d-th corner, %zu tiles solved at full "

@@ -16,6 +16,7 @@
 #include <utility>
 #include <vector>
 
+#include "nodes/close/gradient_fill.h"
 #include "nodes/close/through_lines.h"
 #include "runtime/error.h"
 #include "runtime/voxel_key.h"
@@ -501,18 +502,24 @@ TileResult close_solve_tile(const CloseProblem& p, const Eigen::Vector3i& a,
         l, stop, [&](std::size_t i) { return marks[i].load(std::memory_order_relaxed) != 0; },
         owned);
   }
-  // A whole lattice of a cloud's distances: the indicator's fill; a tile: diffusion between
-  // its faces, which hold the coarse solution (the double layer needs the whole surface). A
-  // fused map (no points) is diffused too: its observed voxels fill the truncation band on
-  // both sides, and the double layer of its ragged band's ends left small extra shells
-  // (CliClose.FusedAndMergedDepthSequencesCloseWatertight).
+  // A whole lattice of a cloud's distances: config.fill (by default the gradient fill); a tile:
+  // diffusion between its faces, which hold the coarse solution (the double layer and the
+  // gradient's potential need the whole surface). A fused map (no points) is diffused too: its
+  // observed voxels fill the truncation band on both sides, and the double layer of its ragged
+  // band's ends left small extra shells (CliClose.FusedAndMergedDepthSequencesCloseWatertight).
+  // The gradient fill never grows the lattice: a fill reaching the data's box there is the
+  // surface carrying on as it was heading, and a grown lattice let it carry on to the new faces
+  // (a box's unseen bottom 20 voxels deep).
   float grow_below = 0.0f;  // a free node on the data's box below this: the lattice is too small
   const CloseFill method =
       p.coarse == nullptr && !p.cloud->empty() ? p.config->fill : CloseFill::diffusion;
   bool indicator = method == CloseFill::indicator;
+  const bool gradient = method == CloseFill::gradient;
   if (method != CloseFill::diffusion) {
     // Lines through observed tunnels are held outside like lines of sight: the double layer
-    // of an open tunnel's upper part would cap it where its walls were unseen.
+    // of an open tunnel's upper part would cap it where its walls were unseen, and so would the
+    // gradient fill (the top's field carried down past the tunnel's unseen lower walls closed
+    // the box with a hole's hole at the bottom).
     const float stop = p.config->free_space_stop_voxels * p.grid->voxel_size;
     std::vector<std::uint8_t> side(l.node_count(), 0);
     tbb::parallel_for(std::size_t{0}, side.size(), [&](std::size_t i) {
@@ -522,16 +529,23 @@ TileResult close_solve_tile(const CloseProblem& p, const Eigen::Vector3i& a,
     if (method == CloseFill::automatic)
       indicator = close_indicator_predicts_better(l, observed, through, p.grid->voxel_size, stop,
                                                   *p.config, out.counts);
-    if (indicator)
+    if (indicator || gradient)
       out.counts.through = hold_outside(
           l, stop, [&](std::size_t i) { return through[i] != 0; }, owned);
   }
   out.counts.indicator = indicator;
+  out.counts.fill = indicator  ? CloseFill::indicator
+                    : gradient ? CloseFill::gradient
+                               : CloseFill::diffusion;
   if (indicator)
     out.counts.levels =
         close_fill_by_indicator(l, observed, p.grid->voxel_size, p.config->diffusion, grow_below);
-  else
+  else if (gradient) {
+    out.counts.levels = gradient_fill(l, observed, p.grid->voxel_size, p.config->diffusion);
+    close_drop_pockets(l);
+  } else {
     out.counts.levels = diffuse_free_nodes(l, p.config->diffusion);
+  }
   // Filled nodes, and the sides where one next to the lattice's face is inside (per plane,
   // joined in plane order).
   std::vector<std::size_t> filled(static_cast<std::size_t>(n.z()), 0);
@@ -542,7 +556,7 @@ TileResult close_solve_tile(const CloseProblem& p, const Eigen::Vector3i& a,
         const std::size_t i = l.index(x, y, z);
         if (l.fixed[i]) continue;
         filled[static_cast<std::size_t>(z)] += owned(x, y, z) ? 1 : 0;
-        if (!(l.values[i] < grow_below) || p.coarse != nullptr) continue;
+        if (!(l.values[i] < grow_below) || p.coarse != nullptr || gradient) continue;
         const Eigen::Vector3i q(x, y, z);
         for (int k = 0; k < 3; ++k) {
           if (q[k] == p.margin)
@@ -687,6 +701,20 @@ SparseGrid close_grid_of_cells(std::vector<VoxelKey> cells, float voxel) {
 int close_tile_count(int nodes, int cells) { return std::max(1, (nodes - 2) / cells + 1); }
 
 }  // namespace
+
+const char* close_fill_name(CloseFill fill) {
+  switch (fill) {
+    case CloseFill::automatic:
+      return "automatic";
+    case CloseFill::diffusion:
+      return "diffusion";
+    case CloseFill::indicator:
+      return "indicator";
+    case CloseFill::gradient:
+      return "gradient";
+  }
+  return "diffusion";
+}
 
 ClosedDistance close_distance_field(const SparseGrid& grid, const DistanceField& field,
                                     const PointCloud& cloud, const CloseConfig& config,
@@ -861,6 +889,7 @@ ClosedDistance close_distance_field(const SparseGrid& grid, const DistanceField&
     r.filled += t.counts.filled;
     r.levels = std::max(r.levels, t.counts.levels);
     r.indicator = r.indicator || t.counts.indicator;
+    if (results.size() == 1) r.fill = t.counts.fill;
     r.held_out += t.counts.held_out;
     r.held_out_error_diffusion += t.counts.held_out_error_diffusion;
     r.held_out_error_indicator += t.counts.held_out_error_indicator;

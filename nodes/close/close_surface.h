@@ -1,13 +1,14 @@
 #pragma once
 // The close stage (--close): a watertight surface from a scan with unseen parts. Between the
 // distance and extract stages, the signed distance of the corners without data (the unseen
-// undersides, holes, the inside and outside away from the data) is filled by volumetric
-// diffusion (volume_diffusion.h) over a lattice of the grid's corners around the data; corners
-// with data keep their distances exactly, so the surface where there is data is the one the
-// open reconstruction extracts. A lattice whose fill is inside on the data's box (the fill
-// would go on past the lattice) grows on that side by a quarter of its extent, twice at most,
-// and is solved again. Where the cloud knows its sensor, corners its lines of sight crossed
-// before reaching their points are seen empty: held outside, never filled.
+// undersides, holes, the inside and outside away from the data) is filled over a lattice of the
+// grid's corners around the data, by default from the diffused gradient of the observed
+// distances (below; volume_diffusion.h's solver); corners with data keep their distances
+// exactly, so the surface where there is data is the one the open reconstruction extracts. A
+// lattice whose diffusion or indicator fill is inside on the data's box (the fill would go on
+// past the lattice) grows on that side by a quarter of its extent, twice at most, and is solved
+// again. Where the cloud knows its sensor, corners its lines of sight crossed before reaching
+// their points are seen empty: held outside, never filled.
 //
 // A lattice of up to max_dense_corners is solved at once. A larger one (a building, a street)
 // is solved in two passes: a coarse lattice (every 2^k-th corner, as few as fit the limit)
@@ -17,19 +18,24 @@
 // values are all outside are skipped (nothing crosses them). Memory stays that of one lattice
 // of max_dense_corners plus a tile per thread, whatever the scene's size.
 //
-// A whole lattice of a cloud's distances has two fills (CloseConfig::fill). Diffusion, above.
-// The indicator fill: the observed surface's inside indicator spread as a double layer (a
-// Poisson solve, the field Poisson surface reconstruction solves for: an unseen box bottom
-// closes flat at its rim), with the corners on lattice lines through observed tunnels
-// (through_lines.h) held outside like lines of sight, so a through-hole seen from above stays
-// open where its lower part was unseen. Neither wins on every object or scan (diffusion closes
-// a box's unseen bottom as a deep dome, the indicator a sphere's cap flat), so diffusion stays
-// the default. CloseFill::automatic lets the data choose without ground truth: the observed
-// corners near the rim of the observed surface (where it goes on into unobserved space) are
-// held out, both fills predict them from the rest, and the fill whose prediction is closer to
-// their observed distances fills the lattice (self-validation). Experimental: that rim error
-// does not yet rank the fills as their filled-region error does (tests/graph/
-// test_scanned_objects.cpp prints both), and it costs two more solves.
+// A whole lattice of a cloud's distances has three fills (CloseConfig::fill). The gradient
+// fill, the default (gradient_fill.h): the observed distance's gradient diffused, the distance
+// its potential, so the surface goes on across unseen parts the way it was heading (a sphere's
+// unseen cap curves on, a box's unseen bottom closes nearly flat near the data's box), with the
+// corners on lattice lines through observed tunnels (through_lines.h) held outside like lines
+// of sight, so a through-hole seen from above stays open where its lower part was unseen; its
+// lattice never grows. Diffusion of the distance itself (above): a harmonic fill stays between
+// its held values, so it closes a box's unseen bottom as a deep dome (5x the gradient fill's
+// filled error on the tests' box and chamfered cube). The indicator fill: the observed
+// surface's inside indicator spread as a double layer (a Poisson solve, the field Poisson
+// surface reconstruction solves for: an unseen box bottom closes flat at its rim, a sphere's
+// cap too flat), tunnels kept open as the gradient fill's. CloseFill::automatic lets the data
+// choose between diffusion and the indicator without ground truth: the observed corners near
+// the rim of the observed surface (where it goes on into unobserved space) are held out, both
+// fills predict them from the rest, and the fill whose prediction is closer to their observed
+// distances fills the lattice (self-validation). Experimental: that rim error does not rank the
+// fills as their filled-region error does (tests/graph/test_scanned_objects.cpp prints both),
+// and it costs two more solves.
 // Large (tiled) lattices and fused maps (no points) keep diffusion.
 
 #include <Eigen/Core>
@@ -45,9 +51,10 @@ namespace meshflow {
 
 /// The fill of a whole lattice of a cloud's distances (file comment).
 enum class CloseFill : std::uint8_t {
-  automatic,  ///< the one that predicts held-out observed corners better (self-validation)
+  automatic,  ///< diffusion or indicator, the one predicting held-out observed corners better
   diffusion,  ///< volumetric diffusion of the distance
   indicator,  ///< the observed surface's indicator as a double layer, observed tunnels kept open
+  gradient,   ///< the diffused gradient's potential, observed tunnels kept open (the default)
 };
 
 struct CloseConfig {
@@ -66,11 +73,12 @@ struct CloseConfig {
   /// Cells along each side of a tile of a large lattice (its faces are held at the coarse
   /// solution; larger tiles follow the fine data farther, at 6.7 bytes a corner per thread).
   int tile_cells = 128;
-  /// How a whole lattice of a cloud's distances is filled (file comment): diffusion, the
-  /// indicator, or chosen per lattice by self-validation (automatic, experimental). The indicator's
-  /// solve takes about 23 bytes a corner (set max_dense_corners to 2^23 for about 190 MB). Large
-  /// lattices and fused maps keep diffusion whatever this says.
-  CloseFill fill = CloseFill::diffusion;
+  /// How a whole lattice of a cloud's distances is filled (file comment): the gradient's
+  /// potential, diffusion, the indicator, or diffusion / indicator chosen per lattice by
+  /// self-validation (automatic, experimental). The gradient fill takes about 10 bytes a corner
+  /// more than diffusion, the indicator's solve about 23 (set max_dense_corners to 2^23 for
+  /// about 190 MB). Large lattices and fused maps keep diffusion whatever this says.
+  CloseFill fill = CloseFill::gradient;
   /// Automatic fill: observed corners within this many lattice steps of the observed surface's
   /// rim are held out and predicted by both fills.
   int validation_band = 3;
@@ -91,13 +99,20 @@ struct CloseReport {
   std::size_t filled = 0;       ///< corners whose distance came from the diffusion
   std::size_t cells_added = 0;  ///< cells the closed surface crosses that the grid lacked
   bool grown = false;           ///< the fill reached the lattice's faces: it grew beyond the margin
-  bool indicator = false;       ///< the lattice was filled from the indicator (else diffused)
+  bool indicator = false;       ///< the lattice was filled from the indicator
+  /// How the (whole) lattice was filled: config.fill, automatic's choice, or diffusion (tiles,
+  /// fused maps).
+  CloseFill fill = CloseFill::diffusion;
   /// Automatic fill: observed corners held out near the surface's rim (0: no validation ran),
   /// and each fill's mean error predicting their distances, in voxels (clamped at 2 a corner).
   std::size_t held_out = 0;
   float held_out_error_diffusion = 0.0f;
   float held_out_error_indicator = 0.0f;
 };
+
+/// The fill's name as --json and the report print it: "gradient", "diffusion", "indicator" or
+/// "automatic". Thread-safe; O(1).
+const char* close_fill_name(CloseFill fill);
 
 /// The grid and distances the extract stage meshes into a closed surface.
 struct ClosedDistance {

@@ -132,7 +132,8 @@ INSTANTIATE_TEST_SUITE_P(DenseAndTiled, CloseSurfaceModes, ::testing::Bool(),
 // and top only, with the exact signed distance at the grid's corners away from the bottom.
 // Diffusing the distance between the band's few held values domed the bottom deep into the
 // box (the harmonic fill of a cavity takes the value of its nearest held wall); the double
-// layer spans the planar rim with the plane.
+// layer spans the planar rim with the plane, the gradient fill closes it where the walls' and
+// the top's fields meet near the lattice's face.
 TEST(CloseSurface, UnseenBoxBottomClosesFlatAtItsRim) {
   const float voxel = 0.02f;
   const Eigen::Vector3f half(0.4f, 0.3f, 0.25f);
@@ -157,28 +158,31 @@ TEST(CloseSurface, UnseenBoxBottomClosesFlatAtItsRim) {
     field.values[c] = d.cwiseMax(0.0f).norm() + std::min(d.maxCoeff(), 0.0f);
     field.valid[c] = q.z() > -half.z() + voxel ? 1 : 0;  // the bottom unseen
   }
-  CloseConfig config;
-  config.fill = CloseFill::indicator;
-  const ClosedDistance closed = close_distance_field(grid, field, cloud, config);
-  const TriangleMesh mesh = marching_cubes(closed.grid, closed.distance);
-  ASSERT_TRUE(edge_statistics(mesh).closed());
-  double sum = 0.0, worst = 0.0;
-  std::size_t bottom = 0;
-  for (const Eigen::Vector3f& v : mesh.vertices) {
-    // The bottom's inner part, seen from below (away from the walls' bands).
-    if (std::abs(v.x()) > half.x() - 3.0f * voxel || std::abs(v.y()) > half.y() - 3.0f * voxel ||
-        v.z() > 0.0f)
-      continue;
-    const double error = std::abs(static_cast<double>(v.z()) + half.z());
-    sum += error;
-    worst = std::max(worst, error);
-    ++bottom;
+  for (const CloseFill fill : {CloseFill::indicator, CloseFill::gradient}) {
+    SCOPED_TRACE(close_fill_name(fill));
+    CloseConfig config;
+    config.fill = fill;
+    const ClosedDistance closed = close_distance_field(grid, field, cloud, config);
+    const TriangleMesh mesh = marching_cubes(closed.grid, closed.distance);
+    ASSERT_TRUE(edge_statistics(mesh).closed());
+    double sum = 0.0, worst = 0.0;
+    std::size_t bottom = 0;
+    for (const Eigen::Vector3f& v : mesh.vertices) {
+      // The bottom's inner part, seen from below (away from the walls' bands).
+      if (std::abs(v.x()) > half.x() - 3.0f * voxel || std::abs(v.y()) > half.y() - 3.0f * voxel ||
+          v.z() > 0.0f)
+        continue;
+      const double error = std::abs(static_cast<double>(v.z()) + half.z());
+      sum += error;
+      worst = std::max(worst, error);
+      ++bottom;
+    }
+    ASSERT_GT(bottom, 100u);
+    std::printf("[ bottom ] %s: %zu vertices: mean %.4f, largest %.4f m from the box's bottom\n",
+                close_fill_name(fill), bottom, sum / static_cast<double>(bottom), worst);
+    EXPECT_LT(sum / static_cast<double>(bottom), 2.0 * voxel) << "mean distance to the bottom";
+    EXPECT_LT(worst, 3.0 * voxel) << "largest distance to the bottom";
   }
-  ASSERT_GT(bottom, 100u);
-  std::printf("[ bottom ] %zu vertices: mean %.4f, largest %.4f m from the box's bottom\n", bottom,
-              sum / static_cast<double>(bottom), worst);
-  EXPECT_LT(sum / static_cast<double>(bottom), 2.0 * voxel) << "mean distance to the bottom";
-  EXPECT_LT(worst, 3.0 * voxel) << "largest distance to the bottom";
 }
 
 TEST(CloseSurface, SameResultForOneAndTwoThreads) {
@@ -191,12 +195,14 @@ TEST(CloseSurface, SameResultForOneAndTwoThreads) {
   }
 }
 
-// The tiled solve follows the dense one: the filled cap's corners differ by little (its tile
-// faces hold the coarse solution of every 4th corner).
+// The tiled solve follows the dense diffusion: the filled cap's corners differ by little (its
+// tile faces hold the coarse solution of every 4th corner).
 TEST(CloseSurface, TiledFillFollowsTheDenseOne) {
   const float voxel = 0.02f;
   const CappedSphere s = capped_sphere(voxel);
-  const ClosedDistance dense = close_distance_field(s.grid, s.field, s.cloud);
+  CloseConfig diffusion;  // the tiles' fill
+  diffusion.fill = CloseFill::diffusion;
+  const ClosedDistance dense = close_distance_field(s.grid, s.field, s.cloud, diffusion);
   const ClosedDistance tiled = close_distance_field(s.grid, s.field, s.cloud, tiled_config());
   double worst = 0.0, sum = 0.0;
   std::size_t compared = 0;

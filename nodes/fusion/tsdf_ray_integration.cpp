@@ -25,6 +25,7 @@
 #include "runtime/error.h"
 #include "runtime/parallel.h"
 #include "runtime/radix_sort.h"
+#include "runtime/simd.h"
 
 namespace meshflow {
 namespace {
@@ -56,7 +57,7 @@ constexpr int kTile = 8;
 
 // The rays of the tiles in tile row `tile_row` (tiles left to right, each tile's rays in the
 // order of their first pixel), appended to `out`; adds the valid pixels to `pixels`.
-void rays_of_tile_row(int tile_row, const Image& depth, const float* band_pixels,
+MESHFLOW_AVX2_CLONES void rays_of_tile_row(int tile_row, const Image& depth, const float* band_pixels,
                       const PinholeIntrinsics& k, const Eigen::Isometry3f& T_world_camera,
                       const Image* color, TsdfWeighting weighting, float inv_voxel,
                       std::vector<MergedRay>& out, std::size_t& pixels) {
@@ -176,43 +177,53 @@ class RecentKeys {
   std::array<std::uint32_t, std::size_t{1} << kSlotBits> values_{};
 };
 
+[[noreturn, gnu::cold, gnu::noinline]] void throw_out_of_range(std::size_t ray) {
+  throw Error("tsdf", "ray " + std::to_string(ray),
+              "reaches outside the volume's range (pose or depth far too large)");
+}
+
+// The (block, ray) pairs of rays [begin, end) into `pairs` (ray by ray, blocks in walk order)
+// and their keys into `keys`, less those the slice met recently; throws when a ray reaches
+// outside the volume's range.
+MESHFLOW_AVX2_CLONES void blocks_of_rays(const std::vector<RaySegment>& segments,
+                                         std::size_t begin, std::size_t end,
+                                         std::vector<RayBlock>& pairs,
+                                         std::vector<VoxelKey>& keys) {
+  RecentKeys recent;
+  for (std::size_t r = begin; r < end; ++r) {
+    const RaySegment& s = segments[r];
+    Eigen::Vector3i previous(std::numeric_limits<int>::min(), 0, 0);  // never a block
+    walk_voxels(ray_walk::load4(s.from.data()), ray_walk::load4(s.to.data()),
+                [&](const ray_walk::Ints4& voxel) {
+                  const Eigen::Vector3i block =
+                      tsdf_block_of_voxel(Eigen::Vector3i(voxel[0], voxel[1], voxel[2]));
+                  if (block == previous) return;
+                  previous = block;
+                  if (!tsdf_block_in_range(block)) throw_out_of_range(r);
+                  const VoxelKey key = pack_key(block);
+                  pairs.push_back({key, static_cast<std::uint32_t>(r)});
+                  if (recent.find(key) == nullptr) {
+                    recent.put(key, 0);
+                    keys.push_back(key);
+                  }
+                });
+  }
+}
+
 // The (block, ray) pairs of every ray's segment into x.pairs (in ray order) and the keys of the
 // blocks crossed, sorted and unique, into `keys`: rays in fixed slices (parallel, into
-// x.slice_pairs and x.slice_keys, which drop the keys the slice met recently); throws when a
-// ray reaches outside the volume's range.
+// x.slice_pairs and x.slice_keys); throws when a ray reaches outside the volume's range.
 void blocks_crossed(RayScratch& x, std::vector<VoxelKey>& keys) {
   const std::vector<RaySegment>& segments = x.segments;
   const std::size_t slices = (segments.size() + kRaysPerTask - 1) / kRaysPerTask;
   x.slice_pairs.resize(slices);
   x.slice_keys.resize(slices);
   tbb::parallel_for(std::size_t{0}, slices, [&](std::size_t slice) {
-    std::vector<RayBlock>& pairs = x.slice_pairs[slice];
-    std::vector<VoxelKey>& slice_keys = x.slice_keys[slice];
-    pairs.clear();
-    slice_keys.clear();
-    RecentKeys recent;
-    const std::size_t end = std::min(segments.size(), (slice + 1) * kRaysPerTask);
-    for (std::size_t r = slice * kRaysPerTask; r < end; ++r) {
-      const RaySegment& s = segments[r];
-      Eigen::Vector3i previous(std::numeric_limits<int>::min(), 0, 0);  // never a block
-      walk_voxels(ray_walk::load4(s.from.data()), ray_walk::load4(s.to.data()),
-                  [&](const ray_walk::Ints4& voxel) {
-        const Eigen::Vector3i block =
-            tsdf_block_of_voxel(Eigen::Vector3i(voxel[0], voxel[1], voxel[2]));
-        if (block == previous) return;
-        previous = block;
-        if (!tsdf_block_in_range(block)) {
-          throw Error("tsdf", "ray " + std::to_string(r),
-                      "reaches outside the volume's range (pose or depth far too large)");
-        }
-        const VoxelKey key = pack_key(block);
-        pairs.push_back({key, static_cast<std::uint32_t>(r)});
-        if (recent.find(key) == nullptr) {
-          recent.put(key, 0);
-          slice_keys.push_back(key);
-        }
-      });
-    }
+    x.slice_pairs[slice].clear();
+    x.slice_keys[slice].clear();
+    blocks_of_rays(segments, slice * kRaysPerTask,
+                   std::min(segments.size(), (slice + 1) * kRaysPerTask), x.slice_pairs[slice],
+                   x.slice_keys[slice]);
   });
   concatenate_parts(x.slice_pairs, x.pairs);
   concatenate_parts(x.slice_keys, keys);
@@ -266,6 +277,48 @@ void blend(TsdfVoxel& voxel, float sdf_metres, float truncation, float w,
   voxel.weight = std::min(total, max_weight);
 }
 
+// What every ray blends the same way.
+struct BlendSettings {
+  float voxel_size, truncation, max_weight;
+  bool color;
+};
+
+// Applies rays[0 .. count) (indices into `segments`, in pixel order) to the voxels of `block`
+// along each ray's segment inside it; returns the voxels updated.
+MESHFLOW_AVX2_CLONES std::size_t apply_rays(TsdfBlock& block, const std::uint32_t* rays,
+                                            std::size_t count,
+                                            const std::vector<RaySegment>& segments,
+                                            const BlendSettings& settings) {
+  const Eigen::Vector3i origin = block.coords * kTsdfBlockSide;
+  const ray_walk::Ints4 first_voxel{origin.x(), origin.y(), origin.z(), 0};
+  std::size_t updated = 0;
+  for (std::size_t i = 0; i < count; ++i) {
+    const RaySegment& s = segments[rays[i]];
+    ray_walk::Floats4 from, to;
+    if (!clip_to_block(ray_walk::load4(s.from.data()), ray_walk::load4(s.span.data()), origin,
+                       from, to))
+      continue;
+    const ray_walk::Floats4 point{s.point.x(), s.point.y(), s.point.z(), 0.0f};
+    const ray_walk::Floats4 direction{s.direction.x(), s.direction.y(), s.direction.z(), 0.0f};
+    const ray_walk::Floats4 ray_color{s.color[0], s.color[1], s.color[2], 0.0f};
+    walk_voxels(from, to, [&](const ray_walk::Ints4& voxel) {
+      const ray_walk::Ints4 local = voxel - first_voxel;
+      if (((local[0] | local[1] | local[2]) & ~(kTsdfBlockSide - 1)) != 0) return;  // outside
+      // (point - voxel) . direction, summed as Eigen's dot product: x + (y + z).
+      const ray_walk::Floats4 along =
+          (point - __builtin_convertvector(voxel, ray_walk::Floats4)) * direction;
+      const float sdf = along[0] + (along[1] + along[2]);  // voxel units
+      if (sdf < -s.band) return;  // beyond the band behind the surface: unknown
+      blend(block.voxels[static_cast<std::size_t>(
+                local[0] + kTsdfBlockSide * (local[1] + kTsdfBlockSide * local[2]))],
+            sdf * settings.voxel_size, settings.truncation, s.weight, ray_color, settings.color,
+            settings.max_weight);
+      ++updated;
+    });
+  }
+  return updated;
+}
+
 }  // namespace
 
 void TsdfFrameIntegrator::integrate_along_rays(TsdfMap& map, const DepthFrame& frame,
@@ -287,48 +340,21 @@ void TsdfFrameIntegrator::integrate_along_rays(TsdfMap& map, const DepthFrame& f
                        stats.blocks_allocated, touched_);
   rays_by_block(x, keys);
 
-  const std::vector<std::uint32_t>& blocks = touched_;
-  const std::vector<RaySegment>& segments = x.segments;
-  const std::vector<std::uint32_t>& block_rays = x.block_rays;
-  const std::vector<std::size_t>& starts = x.starts;
-  const float voxel_size = config_.voxel_size, max_weight = config_.max_weight;
+  const BlendSettings settings{config_.voxel_size, truncation, config_.max_weight, color};
   const std::uint64_t generation = map.begin_change();
   // Applies block b's rays in pixel order; returns the voxels it updated.
-  const auto apply_rays = [&](std::size_t b) {
-    TsdfBlock& block = map.block_for_update(blocks[b]);
-    const Eigen::Vector3i origin = block.coords * kTsdfBlockSide;
-    std::size_t count = 0;
-    const ray_walk::Ints4 first_voxel{origin.x(), origin.y(), origin.z(), 0};
-    for (std::size_t i = starts[b]; i < starts[b + 1]; ++i) {
-      const RaySegment& s = segments[block_rays[i]];
-      ray_walk::Floats4 from, to;
-      if (!clip_to_block(ray_walk::load4(s.from.data()), ray_walk::load4(s.span.data()), origin,
-                         from, to))
-        continue;
-      const ray_walk::Floats4 point{s.point.x(), s.point.y(), s.point.z(), 0.0f};
-      const ray_walk::Floats4 direction{s.direction.x(), s.direction.y(), s.direction.z(), 0.0f};
-      const ray_walk::Floats4 ray_color{s.color[0], s.color[1], s.color[2], 0.0f};
-      walk_voxels(from, to, [&](const ray_walk::Ints4& voxel) {
-        const ray_walk::Ints4 local = voxel - first_voxel;
-        if (((local[0] | local[1] | local[2]) & ~(kTsdfBlockSide - 1)) != 0) return;  // outside
-        // (point - voxel) . direction, summed as Eigen's dot product: x + (y + z).
-        const ray_walk::Floats4 along =
-            (point - __builtin_convertvector(voxel, ray_walk::Floats4)) * direction;
-        const float sdf = along[0] + (along[1] + along[2]);  // voxel units
-        if (sdf < -s.band) return;  // beyond the band behind the surface: unknown
-        blend(block.voxels[static_cast<std::size_t>(
-                  local[0] + kTsdfBlockSide * (local[1] + kTsdfBlockSide * local[2]))],
-              sdf * voxel_size, truncation, s.weight, ray_color, color, max_weight);
-        ++count;
-      });
-    }
+  const auto apply_rays_of = [&](std::size_t b) {
+    TsdfBlock& block = map.block_for_update(touched_[b]);
+    const std::size_t count =
+        apply_rays(block, x.block_rays.data() + x.starts[b], x.starts[b + 1] - x.starts[b],
+                   x.segments, settings);
     if (count > 0) block.modified = generation;
     return count;
   };
   stats.voxels_updated += tbb::parallel_reduce(
       tbb::blocked_range<std::size_t>(0, keys.size()), std::size_t{0},
       [&](const tbb::blocked_range<std::size_t>& range, std::size_t sum) {
-        for (std::size_t b = range.begin(); b != range.end(); ++b) sum += apply_rays(b);
+        for (std::size_t b = range.begin(); b != range.end(); ++b) sum += apply_rays_of(b);
         return sum;
       },
       std::plus<>());

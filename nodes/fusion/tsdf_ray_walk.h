@@ -1,7 +1,8 @@
 #pragma once
 // The voxel traversal of the along-ray integrator (tsdf_ray_integration.cpp): which voxels a ray
 // segment crosses, and the part of a segment inside one block. Internal to nodes/fusion; inline,
-// as both run once per (ray, block) in the integrator's inner loops. Points are 4-lane vectors
+// as both run once per (ray, block) in the integrator's inner loops (always inlined, so that
+// they take the instruction set of the function calling them: MESHFLOW_AVX2_CLONES). Points are 4-lane vectors
 // (x, y, z, unused) so that the three axes' products, quotients and floors are one instruction
 // each; every lane sees the IEEE operations the scalar code would, so results do not depend on
 // the vector width.
@@ -46,7 +47,7 @@ inline Ints4 floor4(const Floats4& x) {
 /// the end cells needs (rounding can miss the last cell by one). Branch-free steps (the axis
 /// order is data, not control flow). O(cells).
 template <class Visit>
-inline void walk_voxels(const ray_walk::Floats4& from, const ray_walk::Floats4& to,
+[[gnu::always_inline]] inline void walk_voxels(const ray_walk::Floats4& from, const ray_walk::Floats4& to,
                         Visit&& visit) {
   using ray_walk::Floats4;
   using ray_walk::Ints4;
@@ -83,7 +84,7 @@ inline void walk_voxels(const ray_walk::Floats4& from, const ray_walk::Floats4& 
 /// The part of the segment from -> from + span (voxel units, lanes 0..2) inside the cells of the
 /// block whose first voxel is `origin`, with a little margin (cells outside are the caller's to
 /// skip), into clipped_from / clipped_to; false when it misses them (the slab method). O(1).
-inline bool clip_to_block(const ray_walk::Floats4& from, const ray_walk::Floats4& span,
+[[gnu::always_inline]] inline bool clip_to_block(const ray_walk::Floats4& from, const ray_walk::Floats4& span,
                           const Eigen::Vector3i& origin, ray_walk::Floats4& clipped_from,
                           ray_walk::Floats4& clipped_to) {
   using ray_walk::Floats4;

@@ -67,15 +67,14 @@ template <class Visit>
   for (int s = 0;; ++s) {
     visit(cell);
     if (s == steps) break;
+    // Axis i goes first when its boundary comes before every lower axis' and no later than
+    // every higher axis': x <= y, z; y < x, y <= z; z < x, y. Independent compares keep the
+    // step's dependency chain short.
     const Floats4 yzx = __builtin_shufflevector(next, next, 1, 2, 0, 3);
     const Floats4 zxy = __builtin_shufflevector(next, next, 2, 0, 1, 3);
-    Floats4 first = next < yzx ? next : yzx;
-    first = first < zxy ? first : zxy;
-    const Ints4 at_first = (next == first) & Ints4{-1, -1, -1, 0};
-    // The lowest of the axes at the first boundary: none of the lower ones is.
-    const Ints4 lower = __builtin_shufflevector(at_first, at_first, 3, 0, 1, 3) |
-                        __builtin_shufflevector(at_first, at_first, 3, 3, 0, 3);
-    const Ints4 take = at_first & ~lower;
+    const Ints4 before_yzx = ((next <= yzx) & Ints4{-1, -1, 0, 0}) | ((next < yzx) & Ints4{0, 0, -1, 0});
+    const Ints4 before_zxy = ((next <= zxy) & Ints4{-1, 0, 0, 0}) | ((next < zxy) & Ints4{0, -1, -1, 0});
+    const Ints4 take = before_yzx & before_zxy;
     cell += step & take;
     next += take ? delta : Floats4{};
   }

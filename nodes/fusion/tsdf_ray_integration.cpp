@@ -57,10 +57,12 @@ constexpr int kTile = 8;
 
 // The rays of the tiles in tile row `tile_row` (tiles left to right, each tile's rays in the
 // order of their first pixel), appended to `out`; adds the valid pixels to `pixels`.
-MESHFLOW_AVX2_CLONES void rays_of_tile_row(int tile_row, const Image& depth, const float* band_pixels,
-                      const PinholeIntrinsics& k, const Eigen::Isometry3f& T_world_camera,
-                      const Image* color, TsdfWeighting weighting, float inv_voxel,
-                      std::vector<MergedRay>& out, std::size_t& pixels) {
+MESHFLOW_AVX2_CLONES void rays_of_tile_row(int tile_row, const Image& depth,
+                                           const float* band_pixels, const PinholeIntrinsics& k,
+                                           const Eigen::Isometry3f& T_world_camera,
+                                           const Image* color, TsdfWeighting weighting,
+                                           float inv_voxel, std::vector<MergedRay>& out,
+                                           std::size_t& pixels) {
   using ray_walk::Floats4;
   // The pose's columns: a point is ((c0 x + c1 y) + c2 z) + c3, as Eigen's product gives it.
   const Eigen::Matrix4f& m = T_world_camera.matrix();
@@ -185,9 +187,8 @@ class RecentKeys {
 // The (block, ray) pairs of rays [begin, end) into `pairs` (ray by ray, blocks in walk order)
 // and their keys into `keys`, less those the slice met recently; throws when a ray reaches
 // outside the volume's range.
-MESHFLOW_AVX2_CLONES void blocks_of_rays(const std::vector<RaySegment>& segments,
-                                         std::size_t begin, std::size_t end,
-                                         std::vector<RayBlock>& pairs,
+MESHFLOW_AVX2_CLONES void blocks_of_rays(const std::vector<RaySegment>& segments, std::size_t begin,
+                                         std::size_t end, std::vector<RayBlock>& pairs,
                                          std::vector<VoxelKey>& keys) {
   RecentKeys recent;
   for (std::size_t r = begin; r < end; ++r) {
@@ -243,8 +244,8 @@ void rays_by_block(RayScratch& x, const std::vector<VoxelKey>& keys) {
       const VoxelKey key = pairs[i].block;
       const std::uint32_t* found = recent.find(key);
       if (found == nullptr) {
-        const auto at = static_cast<std::uint32_t>(
-            std::lower_bound(keys.begin(), keys.end(), key) - keys.begin());
+        const auto at = static_cast<std::uint32_t>(std::lower_bound(keys.begin(), keys.end(), key) -
+                                                   keys.begin());
         recent.put(key, at);
         found = recent.find(key);
       }
@@ -295,8 +296,8 @@ MESHFLOW_AVX2_CLONES std::size_t apply_rays(TsdfBlock& block, const std::uint32_
   for (std::size_t i = 0; i < count; ++i) {
     const RaySegment& s = segments[rays[i]];
     ray_walk::Floats4 from, to;
-    if (!clip_to_block(ray_walk::load4(s.from.data()), ray_walk::load4(s.span.data()), origin,
-                       from, to))
+    if (!clip_to_block(ray_walk::load4(s.from.data()), ray_walk::load4(s.span.data()), origin, from,
+                       to))
       continue;
     const ray_walk::Floats4 point{s.point.x(), s.point.y(), s.point.z(), 0.0f};
     const ray_walk::Floats4 direction{s.direction.x(), s.direction.y(), s.direction.z(), 0.0f};
@@ -345,9 +346,8 @@ void TsdfFrameIntegrator::integrate_along_rays(TsdfMap& map, const DepthFrame& f
   // Applies block b's rays in pixel order; returns the voxels it updated.
   const auto apply_rays_of = [&](std::size_t b) {
     TsdfBlock& block = map.block_for_update(touched_[b]);
-    const std::size_t count =
-        apply_rays(block, x.block_rays.data() + x.starts[b], x.starts[b + 1] - x.starts[b],
-                   x.segments, settings);
+    const std::size_t count = apply_rays(block, x.block_rays.data() + x.starts[b],
+                                         x.starts[b + 1] - x.starts[b], x.segments, settings);
     if (count > 0) block.modified = generation;
     return count;
   };

@@ -27,7 +27,7 @@ struct MergedRay {
 /// camera) to its band behind it, with the unit direction from the camera; and what the ray
 /// blends into a voxel.
 struct RaySegment {
-  Eigen::Vector4f from, to, span;   ///< voxel units (x, y, z, 0); span = to - from
+  Eigen::Vector4f from, to, span;    ///< voxel units (x, y, z, 0); span = to - from
   Eigen::Vector3f point, direction;  ///< point in voxel units
   float band = 0.0f;                 ///< voxel units
   float weight = 0.0f;               ///< the ray's weight (MergedRay::weight)

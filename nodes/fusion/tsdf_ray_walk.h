@@ -1,11 +1,11 @@
 #pragma once
 // The voxel traversal of the along-ray integrator (tsdf_ray_integration.cpp): which voxels a ray
-// segment crosses, and the part of a segment inside one block. Internal to nodes/fusion; inline,
-// as both run once per (ray, block) in the integrator's inner loops (always inlined, so that
-// they take the instruction set of the function calling them: MESHFLOW_AVX2_CLONES). Points are 4-lane vectors
+// segment crosses, and the part of a segment inside one block. Internal to nodes/fusion; always
+// inlined, as both run once per (ray, block) in the integrator's inner loops and take the
+// instruction set of the function calling them (MESHFLOW_AVX2_CLONES). Points are 4-lane vectors
 // (x, y, z, unused) so that the three axes' products, quotients and floors are one instruction
-// each; every lane sees the IEEE operations the scalar code would, so results do not depend on
-// the vector width.
+// each; every lane sees the IEEE operations the scalar code would (no FMA), so results do not
+// depend on the vector width.
 
 #include <algorithm>
 #include <cstdint>
@@ -34,7 +34,7 @@ inline Ints4 floor4(const Floats4& x) {
   const Floats4 low = Floats4{} - kLimit, high = Floats4{} + kLimit;
   Floats4 c = x >= low ? x : low;  // NaN fails: low
   c = c <= high ? c : high;
-  const Ints4 i = __builtin_convertvector(c, Ints4);  // rounds towards zero
+  const Ints4 i = __builtin_convertvector(c, Ints4);     // rounds towards zero
   return i + (c < __builtin_convertvector(i, Floats4));  // a true lane is -1
 }
 
@@ -47,8 +47,8 @@ inline Ints4 floor4(const Floats4& x) {
 /// the end cells needs (rounding can miss the last cell by one). Branch-free steps (the axis
 /// order is data, not control flow). O(cells).
 template <class Visit>
-[[gnu::always_inline]] inline void walk_voxels(const ray_walk::Floats4& from, const ray_walk::Floats4& to,
-                        Visit&& visit) {
+[[gnu::always_inline]] inline void walk_voxels(const ray_walk::Floats4& from,
+                                               const ray_walk::Floats4& to, Visit&& visit) {
   using ray_walk::Floats4;
   using ray_walk::Ints4;
   const Floats4 a = from + 0.5f, b = to + 0.5f;  // cells [i, i + 1)
@@ -72,8 +72,10 @@ template <class Visit>
     // step's dependency chain short.
     const Floats4 yzx = __builtin_shufflevector(next, next, 1, 2, 0, 3);
     const Floats4 zxy = __builtin_shufflevector(next, next, 2, 0, 1, 3);
-    const Ints4 before_yzx = ((next <= yzx) & Ints4{-1, -1, 0, 0}) | ((next < yzx) & Ints4{0, 0, -1, 0});
-    const Ints4 before_zxy = ((next <= zxy) & Ints4{-1, 0, 0, 0}) | ((next < zxy) & Ints4{0, -1, -1, 0});
+    const Ints4 before_yzx =
+        ((next <= yzx) & Ints4{-1, -1, 0, 0}) | ((next < yzx) & Ints4{0, 0, -1, 0});
+    const Ints4 before_zxy =
+        ((next <= zxy) & Ints4{-1, 0, 0, 0}) | ((next < zxy) & Ints4{0, -1, -1, 0});
     const Ints4 take = before_yzx & before_zxy;
     cell += step & take;
     next += take ? delta : Floats4{};
@@ -83,16 +85,17 @@ template <class Visit>
 /// The part of the segment from -> from + span (voxel units, lanes 0..2) inside the cells of the
 /// block whose first voxel is `origin`, with a little margin (cells outside are the caller's to
 /// skip), into clipped_from / clipped_to; false when it misses them (the slab method). O(1).
-[[gnu::always_inline]] inline bool clip_to_block(const ray_walk::Floats4& from, const ray_walk::Floats4& span,
-                          const Eigen::Vector3i& origin, ray_walk::Floats4& clipped_from,
-                          ray_walk::Floats4& clipped_to) {
+[[gnu::always_inline]] inline bool clip_to_block(const ray_walk::Floats4& from,
+                                                 const ray_walk::Floats4& span,
+                                                 const Eigen::Vector3i& origin,
+                                                 ray_walk::Floats4& clipped_from,
+                                                 ray_walk::Floats4& clipped_to) {
   using ray_walk::Floats4;
   using ray_walk::Ints4;
   constexpr float kMargin = 1e-3f;
   constexpr float kLow = 0.5f + kMargin, kSide = static_cast<float>(kTsdfBlockSide) + 2 * kMargin;
-  const Floats4 lo = __builtin_convertvector(Ints4{origin.x(), origin.y(), origin.z(), 0},
-                                             Floats4) -
-                     kLow;
+  const Floats4 lo =
+      __builtin_convertvector(Ints4{origin.x(), origin.y(), origin.z(), 0}, Floats4) - kLow;
   const Floats4 hi = lo + kSide;
   const Ints4 still = span == 0.0f;
   const Floats4 a = (lo - from) / span, b = (hi - from) / span;  // still lanes: unused

@@ -1,10 +1,11 @@
 // TsdfIntegrator::kAlongRay: each (merged) pixel ray walks the voxels of its band.
 //
 // Phases, each parallel: (1) per tile of 8 x 8 pixels, pixels whose points fall in one voxel
-// merge into one ray; (2) each ray walks its segment through the voxel grid and
-// lists the blocks it crosses; the blocks are found or allocated as for the projective
-// integrator; (3) one task per block applies the rays crossing it in pixel order, so the map
-// does not depend on the number of threads.
+// merge into one ray; (2) each ray walks its segment through the voxel grid and lists the
+// blocks it crosses; the blocks are found or allocated as for the projective integrator, and
+// the (block, ray) pairs are bucketed by block (a stable counting sort: each block's rays stay
+// in pixel order); (3) one task per block applies the rays crossing it in pixel order, so the
+// map does not depend on the number of threads.
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -19,10 +20,12 @@
 
 #include "nodes/fusion/tsdf_band.h"
 #include "nodes/fusion/tsdf_ray_scratch.h"
+#include "nodes/fusion/tsdf_ray_walk.h"
 #include "nodes/fusion/tsdf_volume.h"
 #include "runtime/error.h"
 #include "runtime/parallel.h"
 #include "runtime/radix_sort.h"
+#include "runtime/simd.h"
 
 namespace meshflow {
 namespace {
@@ -36,70 +39,16 @@ RaySegment segment_of(const MergedRay& ray, const Eigen::Vector3f& camera, float
   s.direction = to_point / range;
   s.point = point * inv_voxel;
   s.band = ray.band * inv_voxel;
-  s.from = s.point - s.direction * (std::min(truncation, range) * inv_voxel);
-  s.to = s.point + s.direction * s.band;
+  const Eigen::Vector3f from = s.point - s.direction * (std::min(truncation, range) * inv_voxel);
+  const Eigen::Vector3f to = s.point + s.direction * s.band;
+  const Eigen::Vector3f span = to - from;
+  s.from = Eigen::Vector4f(from.x(), from.y(), from.z(), 0.0f);
+  s.to = Eigen::Vector4f(to.x(), to.y(), to.z(), 0.0f);
+  s.span = Eigen::Vector4f(span.x(), span.y(), span.z(), 0.0f);
+  s.weight = ray.weight;
+  const float inv_pixels = 1.0f / static_cast<float>(ray.pixels);
+  for (int c = 0; c < 3; ++c) s.color[c] = ray.color_sum[c] * inv_pixels * ray.weight;
   return s;
-}
-
-// Calls visit(voxel) for every voxel whose cell (the unit cube centred on its sample point)
-// the segment from -> to (voxel units) crosses, in order (Amanatides & Woo's traversal).
-template <class Visit>
-void walk_voxels(const Eigen::Vector3f& from, const Eigen::Vector3f& to, Visit&& visit) {
-  const Eigen::Vector3f a = from.array() + 0.5f, b = to.array() + 0.5f;  // cells [i, i + 1)
-  Eigen::Vector3i cell(floor_to_int(a.x()), floor_to_int(a.y()), floor_to_int(a.z()));
-  const Eigen::Vector3i last(floor_to_int(b.x()), floor_to_int(b.y()), floor_to_int(b.z()));
-  const Eigen::Vector3f d = b - a;
-  Eigen::Vector3i step;
-  Eigen::Vector3f next, delta;  // segment parameter of the next boundary per axis, per cell
-  constexpr float kNever = std::numeric_limits<float>::infinity();
-  for (int i = 0; i < 3; ++i) {
-    step[i] = d[i] > 0.0f ? 1 : (d[i] < 0.0f ? -1 : 0);
-    if (step[i] == 0) {
-      next[i] = delta[i] = kNever;
-      continue;
-    }
-    const float boundary = static_cast<float>(cell[i] + (step[i] > 0 ? 1 : 0));
-    next[i] = (boundary - a[i]) / d[i];
-    delta[i] = static_cast<float>(step[i]) / d[i];
-  }
-  // Rounding can miss `last` by a cell: the walk stops after the cells a straight line needs.
-  const int steps = (last - cell).cwiseAbs().sum();
-  for (int s = 0;; ++s) {
-    visit(cell);
-    if (s == steps) break;
-    int axis = 0;
-    if (next[1] < next[axis]) axis = 1;
-    if (next[2] < next[axis]) axis = 2;
-    cell[axis] += step[axis];
-    next[axis] += delta[axis];
-  }
-}
-
-// The part of the segment from -> to (voxel units) inside the cells of the block whose first
-// voxel is `origin` (with a little margin: cells outside are skipped by the caller), or false
-// when it misses them (the slab method).
-bool clip_to_block(const Eigen::Vector3f& from, const Eigen::Vector3f& to,
-                   const Eigen::Vector3i& origin, Eigen::Vector3f& clipped_from,
-                   Eigen::Vector3f& clipped_to) {
-  constexpr float kMargin = 1e-3f;
-  const Eigen::Vector3f lo = origin.cast<float>().array() - (0.5f + kMargin);
-  const Eigen::Vector3f hi = lo.array() + (static_cast<float>(kTsdfBlockSide) + 2.0f * kMargin);
-  const Eigen::Vector3f d = to - from;
-  float t0 = 0.0f, t1 = 1.0f;
-  for (int i = 0; i < 3; ++i) {
-    if (d[i] == 0.0f) {
-      if (from[i] < lo[i] || from[i] > hi[i]) return false;
-      continue;
-    }
-    float a = (lo[i] - from[i]) / d[i], b = (hi[i] - from[i]) / d[i];
-    if (a > b) std::swap(a, b);
-    t0 = std::max(t0, a);
-    t1 = std::min(t1, b);
-  }
-  if (t0 > t1) return false;
-  clipped_from = from + t0 * d;
-  clipped_to = from + t1 * d;
-  return true;
 }
 
 // Pixels are merged in tiles of kTile x kTile: those whose points fall in one voxel become one
@@ -108,40 +57,68 @@ constexpr int kTile = 8;
 
 // The rays of the tiles in tile row `tile_row` (tiles left to right, each tile's rays in the
 // order of their first pixel), appended to `out`; adds the valid pixels to `pixels`.
-void rays_of_tile_row(int tile_row, const Image& depth, const float* band_pixels,
-                      const PinholeIntrinsics& k, const Eigen::Isometry3f& T_world_camera,
-                      const Image* color, TsdfWeighting weighting, float inv_voxel,
-                      std::vector<MergedRay>& out, std::size_t& pixels) {
+MESHFLOW_AVX2_CLONES void rays_of_tile_row(int tile_row, const Image& depth,
+                                           const float* band_pixels, const PinholeIntrinsics& k,
+                                           const Eigen::Isometry3f& T_world_camera,
+                                           const Image* color, TsdfWeighting weighting,
+                                           float inv_voxel, std::vector<MergedRay>& out,
+                                           std::size_t& pixels) {
+  using ray_walk::Floats4;
+  // The pose's columns: a point is ((c0 x + c1 y) + c2 z) + c3, as Eigen's product gives it.
+  const Eigen::Matrix4f& m = T_world_camera.matrix();
+  const Floats4 c0 = ray_walk::load4(m.data()), c1 = ray_walk::load4(m.data() + 4),
+                c2 = ray_walk::load4(m.data() + 8), c3 = ray_walk::load4(m.data() + 12);
+  // The tile's rays by voxel, in a table of twice a tile's pixels (short probes); a slot belongs
+  // to the tile that stamped it. A tile's rays hold distinct voxels.
+  struct Slot {
+    Eigen::Vector3i voxel;
+    std::uint32_t tile, ray;
+  };
+  constexpr std::uint32_t kSlots = 2 * kTile * kTile;
+  std::array<Slot, kSlots> slots;
+  for (Slot& slot : slots) slot.tile = 0;
+  std::uint32_t tile = 0;
   const int width = depth.cols(), v0 = tile_row * kTile, v1 = std::min(depth.rows(), v0 + kTile);
   for (int u0 = 0; u0 < width; u0 += kTile) {
-    const std::size_t first = out.size();
+    ++tile;
     const int u1 = std::min(width, u0 + kTile);
+    std::array<float, kTile> xs;  // (u - cx) / fx per column of the tile
+    for (int u = u0; u < u1; ++u) xs[u - u0] = (static_cast<float>(u) - k.cx) / k.fx;
     for (int v = v0; v < v1; ++v) {
       const float* row =
           band_pixels + 2 * static_cast<std::size_t>(v) * static_cast<std::size_t>(width);
+      const Rgb8* colors = color != nullptr ? color->ptr<Rgb8>(v) : nullptr;
       const float y = (static_cast<float>(v) - k.cy) / k.fy;
       for (int u = u0; u < u1; ++u) {
         const float d = row[2 * u];
         if (!(d > 0.0f)) continue;
         ++pixels;
-        const Eigen::Vector3f point =
-            T_world_camera * Eigen::Vector3f((static_cast<float>(u) - k.cx) / k.fx * d, y * d, d);
-        const Eigen::Vector3f q = point * inv_voxel;
-        const Eigen::Vector3i voxel(floor_to_int(q.x() + 0.5f), floor_to_int(q.y() + 0.5f),
-                                    floor_to_int(q.z() + 0.5f));
-        std::size_t r = first;
-        while (r < out.size() && out[r].voxel != voxel) ++r;
-        if (r == out.size()) {
+        const Floats4 point = ((c0 * (xs[u - u0] * d) + c1 * (y * d)) + c2 * d) + c3;
+        const ray_walk::Ints4 cell = ray_walk::floor4(point * inv_voxel + 0.5f);
+        const Eigen::Vector3i voxel(cell[0], cell[1], cell[2]);
+        std::uint32_t h = (static_cast<std::uint32_t>(cell[0]) * 0x9e3779b1u +
+                           static_cast<std::uint32_t>(cell[1]) * 0x85ebca77u +
+                           static_cast<std::uint32_t>(cell[2]) * 0xc2b2ae3du) >>
+                          (32 - 7);
+        static_assert(kSlots == 1u << 7, "the hash's bits");
+        const auto other = [&](const Slot& slot) {
+          return ((slot.voxel.x() ^ voxel.x()) | (slot.voxel.y() ^ voxel.y()) |
+                  (slot.voxel.z() ^ voxel.z())) != 0;
+        };
+        while (slots[h].tile == tile && other(slots[h])) h = (h + 1) & (kSlots - 1);
+        if (slots[h].tile != tile) {  // a new ray
+          slots[h] = {voxel, tile, static_cast<std::uint32_t>(out.size())};
           out.emplace_back();
           out.back().voxel = voxel;
         }
+        const std::size_t r = slots[h].ray;
         MergedRay& ray = out[r];
-        ray.point_sum += point;
+        ray.point_sum += Eigen::Vector3f(point[0], point[1], point[2]);
         ray.weight += observation_weight(weighting, d);
         ray.band = std::max(ray.band, row[2 * u + 1]);
         ++ray.pixels;
-        if (color != nullptr) {
-          const Rgb8 c = color->at<Rgb8>(v, u);
+        if (colors != nullptr) {
+          const Rgb8 c = colors[u];
           ray.color_sum[0] += c.r;
           ray.color_sum[1] += c.g;
           ray.color_sum[2] += c.b;
@@ -174,52 +151,173 @@ void merged_rays(const Image& depth, const float* band_pixels, const DepthFrame&
 
 constexpr std::size_t kRaysPerTask = 2048;
 
-// The (block, ray) pairs of every ray's segment into `pairs`, rays in fixed slices (parallel,
-// into `per_slice`); throws when a ray reaches outside the volume's range.
-void blocks_crossed(const std::vector<RaySegment>& segments,
-                    std::vector<std::vector<RayBlock>>& per_slice, std::vector<RayBlock>& pairs) {
-  const std::size_t slices = (segments.size() + kRaysPerTask - 1) / kRaysPerTask;
-  per_slice.resize(slices);
-  tbb::parallel_for(std::size_t{0}, slices, [&](std::size_t slice) {
-    per_slice[slice].clear();
-    const std::size_t end = std::min(segments.size(), (slice + 1) * kRaysPerTask);
-    for (std::size_t r = slice * kRaysPerTask; r < end; ++r) {
-      const RaySegment& s = segments[r];
-      VoxelKey previous = ~VoxelKey{0};  // never a packed key
-      walk_voxels(s.from, s.to, [&](const Eigen::Vector3i& voxel) {
-        const Eigen::Vector3i block = tsdf_block_of_voxel(voxel);
-        if (!tsdf_block_in_range(block)) {
-          throw Error("tsdf", "ray " + std::to_string(r),
-                      "reaches outside the volume's range (pose or depth far too large)");
-        }
-        const VoxelKey key = pack_key(block);
-        if (key == previous) return;
-        previous = key;
-        per_slice[slice].push_back({key, static_cast<std::uint32_t>(r)});
-      });
-    }
-  });
-  concatenate_parts(per_slice, pairs);
+// A few keys a slice of rays met recently, each with a value, in slots picked by the key's hash:
+// neighbouring rays cross the same few blocks, so most repeats hit.
+class RecentKeys {
+ public:
+  // The value stored with `key`, or nullptr when it was not met recently.
+  const std::uint32_t* find(VoxelKey key) const {
+    const std::size_t s = slot(key);
+    return keys_[s] == key ? &values_[s] : nullptr;
+  }
+  void put(VoxelKey key, std::uint32_t value) {
+    const std::size_t s = slot(key);
+    keys_[s] = key;
+    values_[s] = value;
+  }
+
+ private:
+  static constexpr int kSlotBits = 6;
+  static std::size_t slot(VoxelKey key) {
+    return static_cast<std::size_t>((key * 0x9e3779b97f4a7c15ull) >> (64 - kSlotBits));
+  }
+  std::array<VoxelKey, std::size_t{1} << kSlotBits> keys_ = [] {
+    std::array<VoxelKey, std::size_t{1} << kSlotBits> a;
+    a.fill(~VoxelKey{0});  // never a packed key
+    return a;
+  }();
+  std::array<std::uint32_t, std::size_t{1} << kSlotBits> values_{};
+};
+
+[[noreturn, gnu::cold, gnu::noinline]] void throw_out_of_range(std::size_t ray) {
+  throw Error("tsdf", "ray " + std::to_string(ray),
+              "reaches outside the volume's range (pose or depth far too large)");
 }
 
-// Blends one ray's distance (metres, clipped to the truncation) and colour into a voxel.
-void blend(TsdfVoxel& voxel, float sdf_metres, float truncation, const MergedRay& ray, bool color,
-           float max_weight) {
-  const float w = ray.weight;
+// The (block, ray) pairs of rays [begin, end) into `pairs` (ray by ray, blocks in walk order)
+// and their keys into `keys`, less those the slice met recently; throws when a ray reaches
+// outside the volume's range.
+MESHFLOW_AVX2_CLONES void blocks_of_rays(const std::vector<RaySegment>& segments, std::size_t begin,
+                                         std::size_t end, std::vector<RayBlock>& pairs,
+                                         std::vector<VoxelKey>& keys) {
+  RecentKeys recent;
+  for (std::size_t r = begin; r < end; ++r) {
+    const RaySegment& s = segments[r];
+    Eigen::Vector3i previous(std::numeric_limits<int>::min(), 0, 0);  // never a block
+    walk_voxels(ray_walk::load4(s.from.data()), ray_walk::load4(s.to.data()),
+                [&](const ray_walk::Ints4& voxel) {
+                  const Eigen::Vector3i block =
+                      tsdf_block_of_voxel(Eigen::Vector3i(voxel[0], voxel[1], voxel[2]));
+                  if (block == previous) return;
+                  previous = block;
+                  if (!tsdf_block_in_range(block)) throw_out_of_range(r);
+                  const VoxelKey key = pack_key(block);
+                  pairs.push_back({key, static_cast<std::uint32_t>(r)});
+                  if (recent.find(key) == nullptr) {
+                    recent.put(key, 0);
+                    keys.push_back(key);
+                  }
+                });
+  }
+}
+
+// The (block, ray) pairs of every ray's segment into x.pairs (in ray order) and the keys of the
+// blocks crossed, sorted and unique, into `keys`: rays in fixed slices (parallel, into
+// x.slice_pairs and x.slice_keys); throws when a ray reaches outside the volume's range.
+void blocks_crossed(RayScratch& x, std::vector<VoxelKey>& keys) {
+  const std::vector<RaySegment>& segments = x.segments;
+  const std::size_t slices = (segments.size() + kRaysPerTask - 1) / kRaysPerTask;
+  x.slice_pairs.resize(slices);
+  x.slice_keys.resize(slices);
+  tbb::parallel_for(std::size_t{0}, slices, [&](std::size_t slice) {
+    x.slice_pairs[slice].clear();
+    x.slice_keys[slice].clear();
+    blocks_of_rays(segments, slice * kRaysPerTask,
+                   std::min(segments.size(), (slice + 1) * kRaysPerTask), x.slice_pairs[slice],
+                   x.slice_keys[slice]);
+  });
+  concatenate_parts(x.slice_pairs, x.pairs);
+  concatenate_parts(x.slice_keys, keys);
+  radix_sort_unique(keys);
+}
+
+// The pairs' rays bucketed by block into x.block_rays (each block's in ray order) and x.starts
+// (per position in `keys`, sorted: where its rays begin; one more entry for the end).
+void rays_by_block(RayScratch& x, const std::vector<VoxelKey>& keys) {
+  const std::vector<RayBlock>& pairs = x.pairs;
+  x.pair_blocks.resize(pairs.size());
+  const std::size_t chunks = (pairs.size() + kParallelBlock - 1) / kParallelBlock;
+  tbb::parallel_for(std::size_t{0}, chunks, [&](std::size_t chunk) {
+    RecentKeys recent;  // key -> position
+    const std::size_t end = std::min(pairs.size(), (chunk + 1) * kParallelBlock);
+    for (std::size_t i = chunk * kParallelBlock; i < end; ++i) {
+      const VoxelKey key = pairs[i].block;
+      const std::uint32_t* found = recent.find(key);
+      if (found == nullptr) {
+        const auto at = static_cast<std::uint32_t>(std::lower_bound(keys.begin(), keys.end(), key) -
+                                                   keys.begin());
+        recent.put(key, at);
+        found = recent.find(key);
+      }
+      x.pair_blocks[i] = *found;
+    }
+  });
+  counting_sort(
+      pairs.size(), keys.size(), [&](std::size_t i) { return std::size_t{x.pair_blocks[i]}; },
+      [&](std::size_t i) { return pairs[i].ray; }, x.block_rays, x.starts);
+}
+
+// Blends a ray's distance (metres, clipped to the truncation) with weight w into a voxel, and
+// its colour when `color`: (mean RGB x w, 0), each channel as the scalar
+// uint8((old x weight + mean x w) / total + 0.5) would be.
+void blend(TsdfVoxel& voxel, float sdf_metres, float truncation, float w,
+           const ray_walk::Floats4& ray_color, bool color, float max_weight) {
   const float total = voxel.weight + w;
   const float inv_total = 1.0f / total;
   voxel.distance =
       (voxel.distance * voxel.weight + std::min(sdf_metres, truncation) * w) * inv_total;
   if (color) {
-    const float inv_pixels = 1.0f / static_cast<float>(ray.pixels);
-    auto mix = [&](std::uint8_t old, float sum) {
-      return static_cast<std::uint8_t>(
-          (static_cast<float>(old) * voxel.weight + sum * inv_pixels * w) * inv_total + 0.5f);
-    };
-    voxel.color = Rgb8{mix(voxel.color.r, ray.color_sum[0]), mix(voxel.color.g, ray.color_sum[1]),
-                       mix(voxel.color.b, ray.color_sum[2])};
+    using Bytes4 = std::uint8_t __attribute__((vector_size(4)));
+    Bytes4 rgb{voxel.color.r, voxel.color.g, voxel.color.b, 0};
+    const ray_walk::Floats4 mixed =
+        (__builtin_convertvector(rgb, ray_walk::Floats4) * voxel.weight + ray_color) * inv_total +
+        0.5f;
+    rgb = __builtin_convertvector(__builtin_convertvector(mixed, ray_walk::Ints4), Bytes4);
+    voxel.color = Rgb8{rgb[0], rgb[1], rgb[2]};
   }
   voxel.weight = std::min(total, max_weight);
+}
+
+// What every ray blends the same way.
+struct BlendSettings {
+  float voxel_size, truncation, max_weight;
+  bool color;
+};
+
+// Applies rays[0 .. count) (indices into `segments`, in pixel order) to the voxels of `block`
+// along each ray's segment inside it; returns the voxels updated.
+MESHFLOW_AVX2_CLONES std::size_t apply_rays(TsdfBlock& block, const std::uint32_t* rays,
+                                            std::size_t count,
+                                            const std::vector<RaySegment>& segments,
+                                            const BlendSettings& settings) {
+  const Eigen::Vector3i origin = block.coords * kTsdfBlockSide;
+  const ray_walk::Ints4 first_voxel{origin.x(), origin.y(), origin.z(), 0};
+  std::size_t updated = 0;
+  for (std::size_t i = 0; i < count; ++i) {
+    const RaySegment& s = segments[rays[i]];
+    ray_walk::Floats4 from, to;
+    if (!clip_to_block(ray_walk::load4(s.from.data()), ray_walk::load4(s.span.data()), origin, from,
+                       to))
+      continue;
+    const ray_walk::Floats4 point{s.point.x(), s.point.y(), s.point.z(), 0.0f};
+    const ray_walk::Floats4 direction{s.direction.x(), s.direction.y(), s.direction.z(), 0.0f};
+    const ray_walk::Floats4 ray_color{s.color[0], s.color[1], s.color[2], 0.0f};
+    walk_voxels(from, to, [&](const ray_walk::Ints4& voxel) {
+      const ray_walk::Ints4 local = voxel - first_voxel;
+      if (((local[0] | local[1] | local[2]) & ~(kTsdfBlockSide - 1)) != 0) return;  // outside
+      // (point - voxel) . direction, summed as Eigen's dot product: x + (y + z).
+      const ray_walk::Floats4 along =
+          (point - __builtin_convertvector(voxel, ray_walk::Floats4)) * direction;
+      const float sdf = along[0] + (along[1] + along[2]);  // voxel units
+      if (sdf < -s.band) return;  // beyond the band behind the surface: unknown
+      blend(block.voxels[static_cast<std::size_t>(
+                local[0] + kTsdfBlockSide * (local[1] + kTsdfBlockSide * local[2]))],
+            sdf * settings.voxel_size, settings.truncation, s.weight, ray_color, settings.color,
+            settings.max_weight);
+      ++updated;
+    });
+  }
+  return updated;
 }
 
 }  // namespace
@@ -237,62 +335,26 @@ void TsdfFrameIntegrator::integrate_along_rays(TsdfMap& map, const DepthFrame& f
   tbb::parallel_for(std::size_t{0}, rays.size(), [&](std::size_t r) {
     x.segments[r] = segment_of(rays[r], camera, inv_voxel, truncation);
   });
-  const std::vector<RaySegment>& segments = x.segments;
-  blocks_crossed(segments, x.slice_pairs, x.pairs);
-  const std::vector<RayBlock>& pairs = x.pairs;
   std::vector<VoxelKey>& keys = keys_;
-  keys.resize(pairs.size());
-  for (std::size_t i = 0; i < pairs.size(); ++i) keys[i] = pairs[i].block;
-  radix_sort_unique(keys);
+  blocks_crossed(x, keys);
   map.find_or_allocate(keys, config_.max_new_blocks_per_frame, config_.max_memory_bytes,
                        stats.blocks_allocated, touched_);
-  const std::vector<std::uint32_t>& blocks = touched_;
+  rays_by_block(x, keys);
 
-  // (position of the block among the keys, ray): sorted, the rays of each block in pixel order.
-  std::vector<std::uint64_t>& block_rays = x.block_rays;
-  block_rays.resize(pairs.size());
-  tbb::parallel_for(std::size_t{0}, pairs.size(), [&](std::size_t i) {
-    const auto at = std::lower_bound(keys.begin(), keys.end(), pairs[i].block) - keys.begin();
-    block_rays[i] = (static_cast<std::uint64_t>(at) << 32) | pairs[i].ray;
-  });
-  radix_sort(block_rays);
-  std::vector<std::size_t>& starts = x.starts;
-  starts.assign(keys.size() + 1, block_rays.size());  // every key has a ray
-  for (std::size_t i = 0; i < block_rays.size(); ++i) {
-    const std::size_t b = block_rays[i] >> 32;
-    if (i == 0 || (block_rays[i - 1] >> 32) != b) starts[b] = i;
-  }
-
+  const BlendSettings settings{config_.voxel_size, truncation, config_.max_weight, color};
   const std::uint64_t generation = map.begin_change();
   // Applies block b's rays in pixel order; returns the voxels it updated.
-  const auto apply_rays = [&](std::size_t b) {
-    TsdfBlock& block = map.block_for_update(blocks[b]);
-    const Eigen::Vector3i origin = block.coords * kTsdfBlockSide;
-    std::size_t count = 0;
-    for (std::size_t i = starts[b]; i < starts[b + 1]; ++i) {
-      const std::size_t r = block_rays[i] & 0xffffffffu;
-      const MergedRay& ray = rays[r];
-      const RaySegment& s = segments[r];
-      Eigen::Vector3f from, to;
-      if (!clip_to_block(s.from, s.to, origin, from, to)) continue;
-      walk_voxels(from, to, [&](const Eigen::Vector3i& voxel) {
-        const Eigen::Vector3i local = voxel - origin;
-        if ((local.array() < 0).any() || (local.array() >= kTsdfBlockSide).any()) return;
-        const float sdf = (s.point - voxel.cast<float>()).dot(s.direction);  // voxel units
-        if (sdf < -s.band) return;  // beyond the band behind the surface: unknown
-        TsdfVoxel& v = block.voxels[static_cast<std::size_t>(
-            local.x() + kTsdfBlockSide * (local.y() + kTsdfBlockSide * local.z()))];
-        blend(v, sdf * config_.voxel_size, truncation, ray, color, config_.max_weight);
-        ++count;
-      });
-    }
+  const auto apply_rays_of = [&](std::size_t b) {
+    TsdfBlock& block = map.block_for_update(touched_[b]);
+    const std::size_t count = apply_rays(block, x.block_rays.data() + x.starts[b],
+                                         x.starts[b + 1] - x.starts[b], x.segments, settings);
     if (count > 0) block.modified = generation;
     return count;
   };
   stats.voxels_updated += tbb::parallel_reduce(
       tbb::blocked_range<std::size_t>(0, keys.size()), std::size_t{0},
       [&](const tbb::blocked_range<std::size_t>& range, std::size_t sum) {
-        for (std::size_t b = range.begin(); b != range.end(); ++b) sum += apply_rays(b);
+        for (std::size_t b = range.begin(); b != range.end(); ++b) sum += apply_rays_of(b);
         return sum;
       },
       std::plus<>());

@@ -24,10 +24,14 @@ struct MergedRay {
 };
 
 /// A ray's segment in voxel units: from `truncation` in front of its mean point (not behind the
-/// camera) to its band behind it, with the unit direction from the camera.
+/// camera) to its band behind it, with the unit direction from the camera; and what the ray
+/// blends into a voxel.
 struct RaySegment {
-  Eigen::Vector3f point, direction, from, to;  ///< point, from, to in voxel units
-  float band = 0.0f;                           ///< voxel units
+  Eigen::Vector4f from, to, span;    ///< voxel units (x, y, z, 0); span = to - from
+  Eigen::Vector3f point, direction;  ///< point in voxel units
+  float band = 0.0f;                 ///< voxel units
+  float weight = 0.0f;               ///< the ray's weight (MergedRay::weight)
+  std::array<float, 3> color{};      ///< mean RGB x weight
 };
 
 /// A block a ray crosses.
@@ -42,9 +46,11 @@ struct RayScratch {
   std::vector<MergedRay> rays;                        ///< joined in tile order
   std::vector<RaySegment> segments;                   ///< per ray
   std::vector<std::vector<RayBlock>> slice_pairs;     ///< (block, ray) per slice of rays
+  std::vector<std::vector<VoxelKey>> slice_keys;      ///< per slice of rays: its blocks' keys
   std::vector<RayBlock> pairs;                        ///< joined in ray order
-  std::vector<std::uint64_t> block_rays;              ///< (block position, ray), sorted
-  std::vector<std::size_t> starts;                    ///< per block: its first entry in block_rays
+  std::vector<std::uint32_t> pair_blocks;  ///< per pair: its block's position among the keys
+  std::vector<std::uint32_t> block_rays;   ///< the pairs' rays by block, each block's in order
+  std::vector<std::size_t> starts;         ///< per block: its first entry in block_rays
 };
 
 }  // namespace meshflow

@@ -45,6 +45,21 @@ TEST(RadixSort, CountingSortMatchesStdStableSortAndSkipsSentinels) {
   for (std::size_t i = 0; i < tagged.size(); ++i)
     ASSERT_EQ(tagged[i], (std::uint64_t{1} << 63) | expected[i]);
   EXPECT_TRUE(counting_sort<std::uint32_t>(0, 2048, key_of, index).empty());
+  // Into reused vectors, with each key's first item: key k's items are [starts[k], starts[k+1]).
+  std::vector<std::uint32_t> sorted(7, 99);
+  std::vector<std::size_t> starts;
+  counting_sort(key.size(), 2048, key_of, index, sorted, starts);
+  EXPECT_EQ(sorted, expected);
+  ASSERT_EQ(starts.size(), 2049u);
+  EXPECT_EQ(starts.front(), 0u);
+  EXPECT_EQ(starts.back(), expected.size());
+  for (std::size_t k = 0; k < 2048; ++k) {
+    ASSERT_LE(starts[k], starts[k + 1]);
+    for (std::size_t i = starts[k]; i < starts[k + 1]; ++i) ASSERT_EQ(key[sorted[i]], k);
+  }
+  counting_sort(0, 3, key_of, index, sorted, starts);
+  EXPECT_TRUE(sorted.empty());
+  EXPECT_EQ(starts, std::vector<std::size_t>(4, 0));
 }
 
 }  // namespace

@@ -1,0 +1,119 @@
+#pragma once
+// The voxel traversal of the along-ray integrator (tsdf_ray_integration.cpp): which voxels a ray
+// segment crosses, and the part of a segment inside one block. Internal to nodes/fusion; always
+// inlined, as both run once per (ray, block) in the integrator's inner loops and take the
+// instruction set of the function calling them (MESHFLOW_AVX2_CLONES). Points are 4-lane vectors
+// (x, y, z, unused) so that the three axes' products, quotients and floors are one instruction
+// each; every lane sees the IEEE operations the scalar code would (no FMA), so results do not
+// depend on the vector width.
+
+#include <algorithm>
+#include <cstdint>
+#include <cstring>
+#include <limits>
+
+#include "nodes/fusion/tsdf_map.h"
+
+namespace meshflow {
+
+namespace ray_walk {
+
+using Floats4 = float __attribute__((vector_size(16)));
+using Ints4 = std::int32_t __attribute__((vector_size(16)));
+
+/// The four floats at `v`.
+inline Floats4 load4(const float* v) {
+  Floats4 out;
+  std::memcpy(&out, v, sizeof out);
+  return out;
+}
+
+/// floor_to_int() of each lane: floor, saturating at +-2^30 (NaN gives -2^30).
+inline Ints4 floor4(const Floats4& x) {
+  constexpr float kLimit = 1073741824.0f;  // 2^30
+  const Floats4 low = Floats4{} - kLimit, high = Floats4{} + kLimit;
+  Floats4 c = x >= low ? x : low;  // NaN fails: low
+  c = c <= high ? c : high;
+  const Ints4 i = __builtin_convertvector(c, Ints4);     // rounds towards zero
+  return i + (c < __builtin_convertvector(i, Floats4));  // a true lane is -1
+}
+
+}  // namespace ray_walk
+
+/// Calls visit(cell) for every voxel whose cell (the unit cube centred on its sample point) the
+/// segment from -> to (voxel units, lanes 0..2) crosses, in order (Amanatides & Woo's
+/// traversal); `cell` holds the voxel's (x, y, z, 0). Each step crosses the boundary the segment
+/// meets first, the lowest axis on a tie; the walk stops after the cells a straight line between
+/// the end cells needs (rounding can miss the last cell by one). Branch-free steps (the axis
+/// order is data, not control flow). O(cells).
+template <class Visit>
+[[gnu::always_inline]] inline void walk_voxels(const ray_walk::Floats4& from,
+                                               const ray_walk::Floats4& to, Visit&& visit) {
+  using ray_walk::Floats4;
+  using ray_walk::Ints4;
+  const Floats4 a = from + 0.5f, b = to + 0.5f;  // cells [i, i + 1)
+  Ints4 cell = ray_walk::floor4(a);
+  const Ints4 gap = ray_walk::floor4(b) - cell;
+  const int steps = std::abs(gap[0]) + std::abs(gap[1]) + std::abs(gap[2]);
+  const Floats4 d = b - a;
+  const Ints4 up = d > 0.0f, down = d < 0.0f;  // -1 where true
+  const Ints4 moving = (up | down) & Ints4{-1, -1, -1, 0};
+  const Ints4 step = (down - up) & moving;
+  // The segment parameter of the next boundary per axis (never on a still axis, which keeps it
+  // as it adds 0), and per cell.
+  const Floats4 boundary = __builtin_convertvector(cell - up, Floats4);  // cell + 1 going up
+  Floats4 next = moving ? (boundary - a) / d : Floats4{} + std::numeric_limits<float>::infinity();
+  const Floats4 delta = moving ? __builtin_convertvector(step, Floats4) / d : Floats4{};
+  for (int s = 0;; ++s) {
+    visit(cell);
+    if (s == steps) break;
+    // Axis i goes first when its boundary comes before every lower axis' and no later than
+    // every higher axis': x <= y, z; y < x, y <= z; z < x, y. Independent compares keep the
+    // step's dependency chain short.
+    const Floats4 yzx = __builtin_shufflevector(next, next, 1, 2, 0, 3);
+    const Floats4 zxy = __builtin_shufflevector(next, next, 2, 0, 1, 3);
+    const Ints4 before_yzx =
+        ((next <= yzx) & Ints4{-1, -1, 0, 0}) | ((next < yzx) & Ints4{0, 0, -1, 0});
+    const Ints4 before_zxy =
+        ((next <= zxy) & Ints4{-1, 0, 0, 0}) | ((next < zxy) & Ints4{0, -1, -1, 0});
+    const Ints4 take = before_yzx & before_zxy;
+    cell += step & take;
+    next += take ? delta : Floats4{};
+  }
+}
+
+/// The part of the segment from -> from + span (voxel units, lanes 0..2) inside the cells of the
+/// block whose first voxel is `origin`, with a little margin (cells outside are the caller's to
+/// skip), into clipped_from / clipped_to; false when it misses them (the slab method). O(1).
+[[gnu::always_inline]] inline bool clip_to_block(const ray_walk::Floats4& from,
+                                                 const ray_walk::Floats4& span,
+                                                 const Eigen::Vector3i& origin,
+                                                 ray_walk::Floats4& clipped_from,
+                                                 ray_walk::Floats4& clipped_to) {
+  using ray_walk::Floats4;
+  using ray_walk::Ints4;
+  constexpr float kMargin = 1e-3f;
+  constexpr float kLow = 0.5f + kMargin, kSide = static_cast<float>(kTsdfBlockSide) + 2 * kMargin;
+  const Floats4 lo =
+      __builtin_convertvector(Ints4{origin.x(), origin.y(), origin.z(), 0}, Floats4) - kLow;
+  const Floats4 hi = lo + kSide;
+  const Ints4 still = span == 0.0f;
+  const Floats4 a = (lo - from) / span, b = (hi - from) / span;  // still lanes: unused
+  const Ints4 swapped = a > b;
+  const Floats4 enter = swapped ? b : a, leave = swapped ? a : b;
+  float t0 = 0.0f, t1 = 1.0f;
+  for (int i = 0; i < 3; ++i) {
+    if (still[i] != 0) {
+      if (from[i] < lo[i] || from[i] > hi[i]) return false;
+      continue;
+    }
+    t0 = std::max(t0, enter[i]);
+    t1 = std::min(t1, leave[i]);
+  }
+  if (t0 > t1) return false;
+  clipped_from = from + t0 * span;
+  clipped_to = from + t1 * span;
+  return true;
+}
+
+}  // namespace meshflow

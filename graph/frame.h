@@ -103,10 +103,12 @@ struct Frame {
   ExtractMethod extract_method = ExtractMethod::kAuto;  ///< the method "extract" used
   std::size_t rim_trimmed = 0;  ///< triangles "extract" peeled off the rim (max_rim_voxels)
   TriangleMesh mesh;  ///< after extract: raw; after optimize: optimised (fusion: the map so far)
-  /// After "extract" by extended marching cubes (not a chunk's): one byte per mesh vertex, 1 on
-  /// the vertices it placed on sharp features (following them through the rim trim), empty for
-  /// the other methods; "optimize" seeds its feature graph from them, then releases them
-  /// (kept when it runs no step: the mesh is still the extraction).
+  /// After "extract" (not a chunk's): one byte per mesh vertex, 1 on the vertices extended
+  /// marching cubes placed on sharp features, or, for planar marching cubes on clean samples,
+  /// where the data shows one (data_feature_vertices), following them through the rim trim;
+  /// empty for the other methods. "optimize" seeds its feature graph (and the holes step's
+  /// lines) from them, then releases them (kept when it runs no step: the mesh is still the
+  /// extraction).
   std::vector<std::uint8_t> feature_vertices;
   OptimizeReport optimize;  ///< what each optimisation step did
   /// With ReconstructionConfig::compression: the mesh as a compressed mesh file's bytes (.mfc,

@@ -307,16 +307,24 @@ HoleFill fill_hole(const std::vector<std::uint32_t>& loop,
     const std::vector<HoleEntry> entries = hole_entries(loop, positions, *links);
     const std::vector<std::vector<std::uint32_t>> polygons =
         feature_polygons(loop, positions, entries, edges, fill.corner_point);
+    // The mesh's edges and those of the parts already triangulated: two parts share vertices
+    // (a split line's ends, the lost corner), so a diagonal one part drew is not drawn again
+    // by the next (it would carry four faces).
+    std::vector<std::uint64_t> taken = edges;
     for (const std::vector<std::uint32_t>& poly : polygons) {
       std::vector<Eigen::Vector3f> points;
       points.reserve(poly.size());
       for (std::uint32_t v : poly)
         points.push_back(v == kAddedVertex ? fill.corner_point : positions[v]);
-      const std::vector<Triangle> part = triangulate_loop(poly, points, edges);
+      const std::vector<Triangle> part = triangulate_loop(poly, points, taken);
       if (part.empty()) {
         fill.triangles.clear();
         break;
       }
+      for (const Triangle& t : part)
+        for (int k = 0; k < 3; ++k) taken.push_back(undirected_edge_key(t[k], t[(k + 1) % 3]));
+      std::sort(taken.begin(), taken.end());
+      taken.erase(std::unique(taken.begin(), taken.end()), taken.end());
       fill.corner |= poly.back() == kAddedVertex;
       fill.triangles.insert(fill.triangles.end(), part.begin(), part.end());
     }

@@ -132,36 +132,45 @@ class BucketRadius {
   std::vector<std::pair<std::uint32_t, float>>& hits_;
 };
 
+// Bit j set where lane j of `in` (all ones or zero per lane) is set: the lanes' bits ORed
+// together by three halving shuffles (no movemask: the baseline clone has no AVX).
+inline __attribute__((always_inline)) unsigned bucket_lane_bits(const simd::Ints8& in) {
+  simd::Ints8 s = in & simd::Ints8{1, 2, 4, 8, 16, 32, 64, 128};
+  s |= __builtin_shufflevector(s, s, 4, 5, 6, 7, 0, 1, 2, 3);
+  s |= __builtin_shufflevector(s, s, 2, 3, 0, 1, 6, 7, 4, 5);
+  s |= __builtin_shufflevector(s, s, 1, 0, 3, 2, 5, 4, 7, 6);
+  return static_cast<unsigned>(s[0]);
+}
+
 // Offers the leaf's points to `sink`, 8 squared distances at a time: ((dx dx + dy dy) + dz dz),
-// the brute-force oracle's order (no FMA: the AVX2 clones do not enable it). Blocks with no lane
-// within the bound are passed over whole.
+// the brute-force oracle's order (no FMA: the AVX2 clones do not enable it). Only lanes within
+// the bound when their block is computed are offered; the sink checks each against its bound
+// as it stands then.
 template <class Sink>
 inline __attribute__((always_inline)) void bucket_scan_leaf(const BucketView& v,
                                                             const BucketTree::Node& leaf,
                                                             const float* q, Sink& sink) {
+  const float* const xs = v.xs;
+  const float* const ys = v.ys;
+  const float* const zs = v.zs;
+  const std::uint32_t* const ids = v.ids;
+  const float qx = q[0], qy = q[1], qz = q[2];
+  const std::uint32_t begin = leaf.begin, count = leaf.count;
   const simd::Ints8 lane = {0, 1, 2, 3, 4, 5, 6, 7};
-  for (std::uint32_t b = 0; b < leaf.count; b += 8) {
-    const std::uint32_t at = leaf.begin + b;
+  for (std::uint32_t b = 0; b < count; b += 8) {
+    const std::uint32_t at = begin + b;
     Floats8 x, y, z;
-    std::memcpy(&x, v.xs + at, sizeof x);
-    std::memcpy(&y, v.ys + at, sizeof y);
-    std::memcpy(&z, v.zs + at, sizeof z);
-    const Floats8 dx = x - q[0], dy = y - q[1], dz = z - q[2];
+    std::memcpy(&x, xs + at, sizeof x);
+    std::memcpy(&y, ys + at, sizeof y);
+    std::memcpy(&z, zs + at, sizeof z);
+    const Floats8 dx = x - qx, dy = y - qy, dz = z - qz;
     Floats8 d = dx * dx;
     d += dy * dy;
     d += dz * dz;
-    const simd::Ints8 in = (d <= sink.worst()) & (lane < static_cast<int>(leaf.count - b));
-    std::uint64_t words[4];
-    std::memcpy(words, &in, sizeof words);
-    if ((words[0] | words[1] | words[2] | words[3]) == 0) continue;
-    const simd::Ints8 flags = in & simd::Ints8{1, 2, 4, 8, 16, 32, 64, 128};
-    unsigned mask = 0;
-    for (int j = 0; j < 8; ++j) mask |= static_cast<unsigned>(flags[j]);
-    float dd[8];
-    std::memcpy(dd, &d, sizeof dd);
+    unsigned mask = bucket_lane_bits((d <= sink.worst()) & (lane < static_cast<int>(count - b)));
     for (; mask != 0; mask &= mask - 1) {
-      const int j = __builtin_ctz(mask);
-      if (dd[j] <= sink.worst()) sink.add(dd[j], v.ids[at + j]);
+      const unsigned j = static_cast<unsigned>(__builtin_ctz(mask));
+      sink.add(d[j], ids[at + j]);
     }
   }
 }
@@ -236,7 +245,6 @@ struct BucketRowScratch {
   std::vector<std::uint64_t> keys;
   std::vector<std::uint32_t> near;  // leaf nodes
   std::vector<float> lo[3], hi[3];  // their boxes, axis by axis
-  std::vector<float> gap;           // their squared distances to one point
   std::vector<std::uint32_t> stack;
 };
 
@@ -266,7 +274,6 @@ void bucket_leaves_near(const BucketView& v, std::uint32_t own, float bound, Buc
     s.lo[a].resize(padded);
     s.hi[a].resize(padded);
   }
-  s.gap.resize(padded);
   for (std::size_t c = 0; c < padded; ++c) {
     const BucketTree::Node& n = v.nodes[c < s.near.size() ? s.near[c] : own];
     for (int a = 0; a < 3; ++a) {
@@ -276,10 +283,16 @@ void bucket_leaves_near(const BucketView& v, std::uint32_t own, float bound, Buc
   }
 }
 
-// s.gap[c] = bucket_box_distance2() of the c-th near leaf's box and q, 8 boxes at a time (the
-// same operations, lane by lane).
-inline __attribute__((always_inline)) void bucket_gaps(const float* q, BucketRowScratch& s) {
-  for (std::size_t c = 0; c < s.gap.size(); c += 8) {
+// Scans for q the listed near leaves whose boxes lie within the sink's bound: their squared
+// distances to q (bucket_box_distance2()'s operations, lane by lane) 8 boxes at a time, the
+// leaves within the bound as it stands then, each checked again against the bound as it has
+// tightened by its turn.
+template <class Sink>
+inline __attribute__((always_inline)) void bucket_scan_near(const BucketView& v, const float* q,
+                                                            const BucketRowScratch& s, Sink& sink) {
+  const simd::Ints8 lane = {0, 1, 2, 3, 4, 5, 6, 7};
+  const std::size_t listed = s.near.size();
+  for (std::size_t c = 0; c < listed; c += 8) {
     Floats8 total{};
     for (int a = 0; a < 3; ++a) {
       Floats8 lo, hi;
@@ -293,7 +306,12 @@ inline __attribute__((always_inline)) void bucket_gaps(const float* q, BucketRow
       else
         total += d * d;
     }
-    std::memcpy(s.gap.data() + c, &total, sizeof total);
+    unsigned mask =
+        bucket_lane_bits((total <= sink.worst()) & (lane < static_cast<int>(listed - c)));
+    for (; mask != 0; mask &= mask - 1) {
+      const unsigned j = static_cast<unsigned>(__builtin_ctz(mask));
+      if (total[j] <= sink.worst()) bucket_scan_leaf(v, v.nodes[s.near[c + j]], q, sink);
+    }
   }
 }
 
@@ -345,9 +363,7 @@ MESHFLOW_AVX2_CLONES void bucket_knn_leaves(const BucketView& v, const Eigen::Ve
       }
       BucketKnn best(k, s.keys.data(), cap);
       bucket_scan_leaf(v, own, q, best);
-      bucket_gaps(q, s);
-      for (std::size_t c = 0; c < s.near.size(); ++c)
-        if (s.gap[c] <= best.worst()) bucket_scan_leaf(v, v.nodes[s.near[c]], q, best);
+      bucket_scan_near(v, q, s, best);
       const std::uint32_t id = v.ids[j];
       std::uint32_t* row = indices + static_cast<std::size_t>(id) * stride;
       if (best.worst() <= bound) {

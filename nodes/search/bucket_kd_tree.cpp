@@ -64,7 +64,9 @@ constexpr std::size_t bucket_knn_slots(std::size_t k) { return 1 + ((k + 3) & ~s
 // non-negative floats order as their bits, so one integer comparison orders pairs by distance,
 // then index. The keys are kept sorted; a closer point is inserted without branches, four keys
 // at a time: slot i becomes min(key[i], max(key[i - 1], new)). `slots` is the caller's scratch
-// of bucket_knn_slots(k) entries.
+// of bucket_knn_slots(k) entries. kGroups: the number of four-key groups when the caller knows
+// it at compile time ((k + 3) / 4: the insertion unrolled), 0 otherwise.
+template <int kGroups = 0>
 class BucketKnn {
  public:
   // Only points within squared distance `cap` (inclusive) are taken: for a search known to have
@@ -75,7 +77,8 @@ class BucketKnn {
     std::memcpy(&bits, &cap, sizeof bits);
     slots[0] = 0;  // below every key
     // Empty slots: at the cap, after every index.
-    std::fill(keys_, keys_ + ((k + 3) & ~std::size_t{3}), std::uint64_t{bits} << 32 | 0xffffffffu);
+    worst_key_ = std::uint64_t{bits} << 32 | 0xffffffffu;
+    std::fill(keys_, keys_ + ((k + 3) & ~std::size_t{3}), worst_key_);
   }
   // Candidates farther than this cannot enter (equal ones can, with a smaller index).
   float worst() const { return worst_; }
@@ -84,19 +87,21 @@ class BucketKnn {
     std::uint32_t bits = 0;
     std::memcpy(&bits, &dist, sizeof bits);
     const std::uint64_t key = static_cast<std::uint64_t>(bits) << 32 | idx;
-    if (key >= keys_[k_ - 1]) return;
+    if (key >= worst_key_) return;
     const Keys4 in = Keys4{} + static_cast<std::int64_t>(key);
-    for (std::size_t i = (k_ - 1) & ~std::size_t{3};; i -= 4) {  // from the top: reads first
+    const int groups = kGroups != 0 ? kGroups : static_cast<int>((k_ + 3) / 4);
+    for (int g = groups - 1; g >= 0; --g) {  // from the top: reads first
+      const auto i = static_cast<std::size_t>(4 * g);
       Keys4 at, below;
       std::memcpy(&at, keys_ + i, sizeof at);
       std::memcpy(&below, keys_ + i - 1, sizeof below);
       below = below > in ? below : in;
       at = at < below ? at : below;
       std::memcpy(keys_ + i, &at, sizeof at);
-      if (i == 0) break;
     }
     count_ += count_ < k_;
-    const auto hi = static_cast<std::uint32_t>(keys_[k_ - 1] >> 32);
+    worst_key_ = keys_[k_ - 1];
+    const auto hi = static_cast<std::uint32_t>(worst_key_ >> 32);
     std::memcpy(&worst_, &hi, sizeof worst_);
   }
   std::size_t size() const { return count_; }
@@ -115,7 +120,8 @@ class BucketKnn {
  private:
   std::size_t k_;
   std::uint64_t* keys_;
-  float worst_;
+  std::uint64_t worst_key_;  // keys_[k_ - 1]
+  float worst_;              // its distance
   std::size_t count_ = 0;
 };
 
@@ -221,7 +227,7 @@ MESHFLOW_AVX2_CLONES std::size_t bucket_knn_one(const BucketView& v, const float
                                                 std::uint32_t* indices, float* squared_distances) {
   std::uint64_t local[bucket_knn_slots(64)];
   std::vector<std::uint64_t> heap(k > 64 ? bucket_knn_slots(k) : 0);
-  BucketKnn best(k, k > 64 ? heap.data() : local);
+  BucketKnn<> best(k, k > 64 ? heap.data() : local);
   bucket_search(v, q, best);
   return best.finish(indices, squared_distances);
 }
@@ -332,11 +338,11 @@ inline float bucket_distance2(const float* q, const float* p) {
 // leaf's box, so when d <= bound all of them were offered; a point whose d ends beyond `bound`
 // is searched again from the root. Each search starts bounded by the farthest of the previous
 // point's k neighbours (k points lie within it, so its k nearest do too).
-MESHFLOW_AVX2_CLONES void bucket_knn_leaves(const BucketView& v, const Eigen::Vector3f* points,
-                                            const std::uint32_t* leaves, std::size_t first,
-                                            std::size_t last, std::size_t k, std::size_t stride,
-                                            std::uint32_t* indices, std::uint32_t* counts,
-                                            BucketRowScratch& s) {
+template <int kGroups>
+inline __attribute__((always_inline)) void bucket_knn_leaves_with(
+    const BucketView& v, const Eigen::Vector3f* points, const std::uint32_t* leaves,
+    std::size_t first, std::size_t last, std::size_t k, std::size_t stride, std::uint32_t* indices,
+    std::uint32_t* counts, BucketRowScratch& s) {
   const std::size_t slots = bucket_knn_slots(k);
   s.keys.resize(2 * slots);
   const std::uint32_t* previous = nullptr;  // the last full row
@@ -344,7 +350,7 @@ MESHFLOW_AVX2_CLONES void bucket_knn_leaves(const BucketView& v, const Eigen::Ve
   {
     const BucketTree::Node& own = v.nodes[leaves[first]];
     const float q[3] = {v.xs[own.begin], v.ys[own.begin], v.zs[own.begin]};
-    BucketKnn probe(k, s.keys.data());
+    BucketKnn<kGroups> probe(k, s.keys.data());
     bucket_search(v, q, probe);
     bound = 4.0f * probe.worst();
   }
@@ -361,7 +367,7 @@ MESHFLOW_AVX2_CLONES void bucket_knn_leaves(const BucketView& v, const Eigen::Ve
         for (std::size_t a = 0; a < k; ++a)
           cap = std::max(cap, bucket_distance2(q, points[previous[a]].data()));
       }
-      BucketKnn best(k, s.keys.data(), cap);
+      BucketKnn<kGroups> best(k, s.keys.data(), cap);
       bucket_scan_leaf(v, own, q, best);
       bucket_scan_near(v, q, s, best);
       const std::uint32_t id = v.ids[j];
@@ -369,7 +375,7 @@ MESHFLOW_AVX2_CLONES void bucket_knn_leaves(const BucketView& v, const Eigen::Ve
       if (best.worst() <= bound) {
         counts[id] = static_cast<std::uint32_t>(best.finish(row, nullptr));
       } else {  // points beyond `bound` may be missing: search again
-        BucketKnn again(k, s.keys.data() + slots, best.worst());
+        BucketKnn<kGroups> again(k, s.keys.data() + slots, best.worst());
         bucket_search(v, q, again);
         counts[id] = static_cast<std::uint32_t>(again.finish(row, nullptr));
       }
@@ -378,6 +384,18 @@ MESHFLOW_AVX2_CLONES void bucket_knn_leaves(const BucketView& v, const Eigen::Ve
     }
     bound = 2.0f * next_bound;  // margin: few points are searched again (kurt3d: 1.7 %)
   }
+}
+
+// bucket_knn_leaves_with() for k's number of four-key groups: unrolled for k = 9 to 12.
+MESHFLOW_AVX2_CLONES void bucket_knn_leaves(const BucketView& v, const Eigen::Vector3f* points,
+                                            const std::uint32_t* leaves, std::size_t first,
+                                            std::size_t last, std::size_t k, std::size_t stride,
+                                            std::uint32_t* indices, std::uint32_t* counts,
+                                            BucketRowScratch& s) {
+  if ((k + 3) / 4 == 3)
+    bucket_knn_leaves_with<3>(v, points, leaves, first, last, k, stride, indices, counts, s);
+  else
+    bucket_knn_leaves_with<0>(v, points, leaves, first, last, k, stride, indices, counts, s);
 }
 
 MESHFLOW_AVX2_CLONES void bucket_radius(const BucketView& v, const float* q, float squared_radius,

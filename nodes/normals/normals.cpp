@@ -248,6 +248,28 @@ void orient_to_viewpoint(const PointCloud& cloud, const Eigen::Vector3f& viewpoi
                     });
 }
 
+// interpolate() for the points [begin, end): smoothed[i] for each.
+MESHFLOW_AVX2_CLONES void interpolate_range(const std::vector<Eigen::Vector3f>& normals,
+                                            const NeighbourTable& table, std::size_t ki,
+                                            const std::vector<std::uint8_t>& smooth,
+                                            float min_agreement, std::size_t begin, std::size_t end,
+                                            Eigen::Vector3f* smoothed) {
+  for (std::size_t i = begin; i != end; ++i) {
+    if (!smooth.empty() && !smooth[i]) {
+      smoothed[i] = normals[i];
+      continue;
+    }
+    Eigen::Vector3f sum = Eigen::Vector3f::Zero();
+    const std::size_t k = std::min<std::size_t>(ki, table.counts[i]);
+    for (std::size_t j = 0; j < k; ++j) {
+      const Eigen::Vector3f& n = normals[table.row(i)[j]];
+      if (n.dot(normals[i]) >= min_agreement) sum += n;
+    }
+    const float len = sum.norm();
+    smoothed[i] = len > 0.0f ? Eigen::Vector3f(sum / len) : normals[i];
+  }
+}
+
 // Normal interpolation (thesis ki): each point with `smooth[i]` (all when empty) takes the
 // normalised sum of its ki nearest neighbours' oriented normals, leaving out those whose dot
 // product with its own is below `min_agreement` (-1: none left out).
@@ -258,20 +280,8 @@ std::vector<Eigen::Vector3f> interpolate(const std::vector<Eigen::Vector3f>& nor
   std::vector<Eigen::Vector3f> smoothed(normals.size());
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, normals.size(), 1024),
                     [&](const tbb::blocked_range<std::size_t>& r) {
-                      for (std::size_t i = r.begin(); i != r.end(); ++i) {
-                        if (!smooth.empty() && !smooth[i]) {
-                          smoothed[i] = normals[i];
-                          continue;
-                        }
-                        Eigen::Vector3f sum = Eigen::Vector3f::Zero();
-                        const std::size_t k = std::min<std::size_t>(ki, table.counts[i]);
-                        for (std::size_t j = 0; j < k; ++j) {
-                          const Eigen::Vector3f& n = normals[table.row(i)[j]];
-                          if (n.dot(normals[i]) >= min_agreement) sum += n;
-                        }
-                        const float len = sum.norm();
-                        smoothed[i] = len > 0.0f ? Eigen::Vector3f(sum / len) : normals[i];
-                      }
+                      interpolate_range(normals, table, ki, smooth, min_agreement, r.begin(),
+                                        r.end(), smoothed.data());
                     });
   return smoothed;
 }

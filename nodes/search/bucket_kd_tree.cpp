@@ -125,6 +125,61 @@ class BucketKnn {
   std::size_t count_ = 0;
 };
 
+// BucketKnn<> for a k known at compile time, its keys held in vector values (registers) rather
+// than in the caller's scratch: each group's lower neighbour comes from a lane shuffle of the
+// groups as they were, not from an unaligned reload of the keys just stored (which the store
+// buffer cannot forward). The same keys, the same result.
+template <int kK>
+class BucketKnnFixed {
+ public:
+  BucketKnnFixed(std::size_t /*k*/, std::uint64_t* /*slots*/,
+                 float cap = std::numeric_limits<float>::infinity())
+      : worst_(cap) {
+    std::uint32_t bits = 0;
+    std::memcpy(&bits, &cap, sizeof bits);
+    worst_key_ = std::uint64_t{bits} << 32 | 0xffffffffu;
+    for (Keys4& g : groups_) g = Keys4{} + static_cast<std::int64_t>(worst_key_);
+  }
+  float worst() const { return worst_; }
+  void add(float dist, std::uint32_t idx) {
+    std::uint32_t bits = 0;
+    std::memcpy(&bits, &dist, sizeof bits);
+    const std::uint64_t key = static_cast<std::uint64_t>(bits) << 32 | idx;
+    if (key >= worst_key_) return;
+    const Keys4 in = Keys4{} + static_cast<std::int64_t>(key);
+    for (int g = kGroups - 1; g >= 0; --g) {  // from the top: each reads the group below unchanged
+      const Keys4 lower = g > 0 ? groups_[g - 1] : Keys4{};
+      Keys4 below = __builtin_shufflevector(lower, groups_[g], 3, 4, 5, 6);
+      below = below > in ? below : in;
+      groups_[g] = groups_[g] < below ? groups_[g] : below;
+    }
+    count_ += count_ < kK;
+    worst_key_ = static_cast<std::uint64_t>(groups_[(kK - 1) / 4][(kK - 1) % 4]);
+    const auto hi = static_cast<std::uint32_t>(worst_key_ >> 32);
+    std::memcpy(&worst_, &hi, sizeof worst_);
+  }
+  std::size_t size() const { return count_; }
+  std::size_t finish(std::uint32_t* indices, float* dists) const {
+    for (std::size_t i = 0; i < count_; ++i) {
+      const auto key = static_cast<std::uint64_t>(groups_[i / 4][i % 4]);
+      indices[i] = static_cast<std::uint32_t>(key);
+      if (dists != nullptr) {
+        const auto top = static_cast<std::uint32_t>(key >> 32);
+        std::memcpy(dists + i, &top, sizeof top);
+      }
+    }
+    return count_;
+  }
+
+ private:
+  using Keys4 = std::int64_t __attribute__((vector_size(32)));  // keys are below 2^63
+  static constexpr int kGroups = (kK + 3) / 4;
+  Keys4 groups_[kGroups];
+  std::uint64_t worst_key_;
+  float worst_;
+  std::size_t count_ = 0;
+};
+
 // Every point within a fixed squared radius (inclusive).
 class BucketRadius {
  public:
@@ -338,7 +393,7 @@ inline float bucket_distance2(const float* q, const float* p) {
 // leaf's box, so when d <= bound all of them were offered; a point whose d ends beyond `bound`
 // is searched again from the root. Each search starts bounded by the farthest of the previous
 // point's k neighbours (k points lie within it, so its k nearest do too).
-template <int kGroups>
+template <class Knn>
 inline __attribute__((always_inline)) void bucket_knn_leaves_with(
     const BucketView& v, const Eigen::Vector3f* points, const std::uint32_t* leaves,
     std::size_t first, std::size_t last, std::size_t k, std::size_t stride, std::uint32_t* indices,
@@ -350,7 +405,7 @@ inline __attribute__((always_inline)) void bucket_knn_leaves_with(
   {
     const BucketTree::Node& own = v.nodes[leaves[first]];
     const float q[3] = {v.xs[own.begin], v.ys[own.begin], v.zs[own.begin]};
-    BucketKnn<kGroups> probe(k, s.keys.data());
+    Knn probe(k, s.keys.data());
     bucket_search(v, q, probe);
     bound = 4.0f * probe.worst();
   }
@@ -367,7 +422,7 @@ inline __attribute__((always_inline)) void bucket_knn_leaves_with(
         for (std::size_t a = 0; a < k; ++a)
           cap = std::max(cap, bucket_distance2(q, points[previous[a]].data()));
       }
-      BucketKnn<kGroups> best(k, s.keys.data(), cap);
+      Knn best(k, s.keys.data(), cap);
       bucket_scan_leaf(v, own, q, best);
       bucket_scan_near(v, q, s, best);
       const std::uint32_t id = v.ids[j];
@@ -375,7 +430,7 @@ inline __attribute__((always_inline)) void bucket_knn_leaves_with(
       if (best.worst() <= bound) {
         counts[id] = static_cast<std::uint32_t>(best.finish(row, nullptr));
       } else {  // points beyond `bound` may be missing: search again
-        BucketKnn<kGroups> again(k, s.keys.data() + slots, best.worst());
+        Knn again(k, s.keys.data() + slots, best.worst());
         bucket_search(v, q, again);
         counts[id] = static_cast<std::uint32_t>(again.finish(row, nullptr));
       }
@@ -386,16 +441,21 @@ inline __attribute__((always_inline)) void bucket_knn_leaves_with(
   }
 }
 
-// bucket_knn_leaves_with() for k's number of four-key groups: unrolled for k = 9 to 12.
+// bucket_knn_leaves_with() with k's k-best list: in registers for k = 10, unrolled for 9 to 12.
 MESHFLOW_AVX2_CLONES void bucket_knn_leaves(const BucketView& v, const Eigen::Vector3f* points,
                                             const std::uint32_t* leaves, std::size_t first,
                                             std::size_t last, std::size_t k, std::size_t stride,
                                             std::uint32_t* indices, std::uint32_t* counts,
                                             BucketRowScratch& s) {
-  if ((k + 3) / 4 == 3)
-    bucket_knn_leaves_with<3>(v, points, leaves, first, last, k, stride, indices, counts, s);
+  if (k == 10)  // the normals' default (kn = ki = 10)
+    bucket_knn_leaves_with<BucketKnnFixed<10>>(v, points, leaves, first, last, k, stride, indices,
+                                               counts, s);
+  else if ((k + 3) / 4 == 3)
+    bucket_knn_leaves_with<BucketKnn<3>>(v, points, leaves, first, last, k, stride, indices, counts,
+                                         s);
   else
-    bucket_knn_leaves_with<0>(v, points, leaves, first, last, k, stride, indices, counts, s);
+    bucket_knn_leaves_with<BucketKnn<0>>(v, points, leaves, first, last, k, stride, indices, counts,
+                                         s);
 }
 
 MESHFLOW_AVX2_CLONES void bucket_radius(const BucketView& v, const float* q, float squared_radius,

@@ -90,11 +90,14 @@ class BucketKnn {
     if (key >= worst_key_) return;
     const Keys4 in = Keys4{} + static_cast<std::int64_t>(key);
     const int groups = kGroups != 0 ? kGroups : static_cast<int>((k_ + 3) / 4);
-    for (int g = groups - 1; g >= 0; --g) {  // from the top: reads first
+    for (int g = groups - 1; g >= 0; --g) {  // from the top: each reads the group below unchanged
       const auto i = static_cast<std::size_t>(4 * g);
-      Keys4 at, below;
+      // The group below read whole, where the last insertion stored it (a load spanning two
+      // stores is not forwarded), its top key shifted in by a lane shuffle.
+      Keys4 at, lower{};
       std::memcpy(&at, keys_ + i, sizeof at);
-      std::memcpy(&below, keys_ + i - 1, sizeof below);
+      if (g > 0) std::memcpy(&lower, keys_ + i - 4, sizeof lower);
+      Keys4 below = __builtin_shufflevector(lower, at, 3, 4, 5, 6);
       below = below > in ? below : in;
       at = at < below ? at : below;
       std::memcpy(keys_ + i, &at, sizeof at);

@@ -12,6 +12,7 @@
 #include "runtime/default_init.h"
 #include "runtime/error.h"
 #include "runtime/parallel.h"
+#include "runtime/simd.h"
 
 namespace meshflow {
 namespace {
@@ -22,31 +23,47 @@ struct LocalFrame {
   Eigen::Vector3d values;  // the covariance's eigenvalues, ascending
 };
 
-// Mean and scatter (the sum of the outer products about the mean) of the n points at(0 .. n-1),
-// in double; the scatter's lower triangle mirrors the upper.
-template <class At>
-void scatter_of(std::size_t n, const At& at, Eigen::Vector3d& mean, Eigen::Matrix3d& scatter) {
-  mean.setZero();
-  for (std::size_t i = 0; i < n; ++i) mean += at(i).template cast<double>();
-  mean /= static_cast<double>(n);
-  double s00 = 0.0, s01 = 0.0, s02 = 0.0, s11 = 0.0, s12 = 0.0, s22 = 0.0;
+// Mean and scatter (the sum of the outer products about the mean) of the n points base[row[i]]
+// (base[i] when `row` is null), in double; the scatter's lower triangle mirrors the upper. Each
+// sum is taken point by point in the order given, lane by lane in vectors: (x, y, z) for the
+// mean, (xx, xy, xz, yy) and (yz, zz) for the scatter (no FMA: the same rounding as scalar code).
+MESHFLOW_AVX2_CLONES void scatter_of(const Eigen::Vector3f* base, const std::uint32_t* row,
+                                     std::size_t n, Eigen::Vector3d& mean,
+                                     Eigen::Matrix3d& scatter) {
+  using simd::Doubles4;
+  using Floats4 = float __attribute__((vector_size(16)));
+  constexpr std::size_t kKept = 16;  // points kept converted between the two passes
+  Doubles4 kept[kKept];
+  Doubles4 sum{}, p;
+  const auto load = [&](std::size_t i, Doubles4& out) {  // (x, y, z, 0)
+    const Eigen::Vector3f& v = base[row != nullptr ? row[i] : i];
+    const Floats4 f = {v.x(), v.y(), v.z(), 0.0f};
+    out = __builtin_convertvector(f, Doubles4);
+  };
   for (std::size_t i = 0; i < n; ++i) {
-    const Eigen::Vector3d d = at(i).template cast<double>() - mean;
-    s00 += d.x() * d.x();
-    s01 += d.x() * d.y();
-    s02 += d.x() * d.z();
-    s11 += d.y() * d.y();
-    s12 += d.y() * d.z();
-    s22 += d.z() * d.z();
+    load(i, p);
+    if (i < kKept) kept[i] = p;
+    sum += p;
   }
-  scatter << s00, s01, s02, s01, s11, s12, s02, s12, s22;
+  const Doubles4 m = sum / static_cast<double>(n);
+  Doubles4 a{}, b{};  // (s00, s01, s02, s11), (s12, s22, -, -)
+  for (std::size_t i = 0; i < n; ++i) {
+    if (i < kKept)
+      p = kept[i];
+    else
+      load(i, p);
+    const Doubles4 d = p - m;
+    a += __builtin_shufflevector(d, d, 0, 0, 0, 1) * __builtin_shufflevector(d, d, 0, 1, 2, 1);
+    b += __builtin_shufflevector(d, d, 1, 2, 3, 3) * __builtin_shufflevector(d, d, 2, 2, 3, 3);
+  }
+  mean = Eigen::Vector3d(m[0], m[1], m[2]);
+  scatter << a[0], a[1], a[2], a[1], a[3], b[0], a[2], b[0], b[1];
 }
 
 LocalFrame principal_frame(const std::vector<Eigen::Vector3f>& pts, std::size_t n) {
   LocalFrame f{Eigen::Vector3d::Zero(), Eigen::Matrix3d::Identity(), Eigen::Vector3d::Zero()};
   Eigen::Matrix3d cov;
-  scatter_of(
-      n, [&](std::size_t i) -> const Eigen::Vector3f& { return pts[i]; }, f.mean, cov);
+  scatter_of(pts.data(), nullptr, n, f.mean, cov);
   Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> solver;
   solver.computeDirect(cov);
   f.axes = solver.eigenvectors();
@@ -104,50 +121,48 @@ PlaneFits plane_fits(const PointCloud& cloud, const SpatialIndex& index,
   const std::size_t max_k =
       std::max<std::size_t>(static_cast<std::size_t>(std::max(config.adaptive_max_k, 3)), kn);
   PlaneFits fits(cloud.size());  // every one written below, by the threads
-  tbb::parallel_for(
-      tbb::blocked_range<std::size_t>(0, cloud.size(), 512),
-      [&](const tbb::blocked_range<std::size_t>& r) {
-        std::vector<std::uint32_t> idx(max_k);
-        std::vector<float> d2(max_k);
-        std::vector<Eigen::Vector3f> pts(max_k);
-        for (std::size_t i = r.begin(); i != r.end(); ++i) {
-          fits[i] = no_fit();
-          if (!wanted.empty() && !wanted[i]) continue;
-          std::size_t k = std::min<std::size_t>(kn, table.counts[i]);
-          if (k < 3) continue;
-          const std::uint32_t* row = table.row(i);
-          Eigen::Vector3d mean, values;
-          Eigen::Vector3f normal;
-          if (!config.adaptive_k) {  // the smallest eigenvector only, in closed form
-            Eigen::Matrix3d scatter;
-            scatter_of(
-                k, [&](std::size_t j) -> const Eigen::Vector3f& { return cloud.positions[row[j]]; },
-                mean, scatter);
-            const SmallestEigen e = smallest_eigen(scatter);
-            values = e.values;
-            normal = e.vector.cast<float>();
-          } else {
-            for (std::size_t j = 0; j < k; ++j) pts[j] = cloud.positions[row[j]];
-            LocalFrame frame = principal_frame(pts, k);
-            while (!box_well_shaped(pts, k, frame, config.adaptive_ratio) && k < max_k &&
-                   k < index.size()) {
-              k = index.knn(cloud.positions[i], std::min(2 * k, max_k), idx.data(), d2.data());
-              for (std::size_t j = 0; j < k; ++j) pts[j] = cloud.positions[idx[j]];
-              frame = principal_frame(pts, k);
-            }
-            mean = frame.mean;
-            values = frame.values;
-            normal = frame.axes.col(0).normalized().cast<float>();
-          }
-          PlaneFit& f = fits[i];
-          f.normal = normal;
-          f.centroid = mean.cast<float>();
-          const double total = values.sum();
-          f.variation = total > 0.0 ? static_cast<float>(values[0] / total) : 1.0f;
-          f.thickness = static_cast<float>(std::sqrt(std::max(0.0, values[0]) / k));
-          f.spread = static_cast<float>(std::sqrt(std::max(0.0, total) / k));
-        }
-      });
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, cloud.size(), 512),
+                    [&](const tbb::blocked_range<std::size_t>& r) {
+                      std::vector<std::uint32_t> idx(max_k);
+                      std::vector<float> d2(max_k);
+                      std::vector<Eigen::Vector3f> pts(max_k);
+                      for (std::size_t i = r.begin(); i != r.end(); ++i) {
+                        fits[i] = no_fit();
+                        if (!wanted.empty() && !wanted[i]) continue;
+                        std::size_t k = std::min<std::size_t>(kn, table.counts[i]);
+                        if (k < 3) continue;
+                        const std::uint32_t* row = table.row(i);
+                        Eigen::Vector3d mean, values;
+                        Eigen::Vector3f normal;
+                        if (!config.adaptive_k) {  // the smallest eigenvector only, in closed form
+                          Eigen::Matrix3d scatter;
+                          scatter_of(cloud.positions.data(), row, k, mean, scatter);
+                          const SmallestEigen e = smallest_eigen(scatter);
+                          values = e.values;
+                          normal = e.vector.cast<float>();
+                        } else {
+                          for (std::size_t j = 0; j < k; ++j) pts[j] = cloud.positions[row[j]];
+                          LocalFrame frame = principal_frame(pts, k);
+                          while (!box_well_shaped(pts, k, frame, config.adaptive_ratio) &&
+                                 k < max_k && k < index.size()) {
+                            k = index.knn(cloud.positions[i], std::min(2 * k, max_k), idx.data(),
+                                          d2.data());
+                            for (std::size_t j = 0; j < k; ++j) pts[j] = cloud.positions[idx[j]];
+                            frame = principal_frame(pts, k);
+                          }
+                          mean = frame.mean;
+                          values = frame.values;
+                          normal = frame.axes.col(0).normalized().cast<float>();
+                        }
+                        PlaneFit& f = fits[i];
+                        f.normal = normal;
+                        f.centroid = mean.cast<float>();
+                        const double total = values.sum();
+                        f.variation = total > 0.0 ? static_cast<float>(values[0] / total) : 1.0f;
+                        f.thickness = static_cast<float>(std::sqrt(std::max(0.0, values[0]) / k));
+                        f.spread = static_cast<float>(std::sqrt(std::max(0.0, total) / k));
+                      }
+                    });
   return fits;
 }
 
@@ -233,6 +248,28 @@ void orient_to_viewpoint(const PointCloud& cloud, const Eigen::Vector3f& viewpoi
                     });
 }
 
+// interpolate() for the points [begin, end): smoothed[i] for each.
+MESHFLOW_AVX2_CLONES void interpolate_range(const std::vector<Eigen::Vector3f>& normals,
+                                            const NeighbourTable& table, std::size_t ki,
+                                            const std::vector<std::uint8_t>& smooth,
+                                            float min_agreement, std::size_t begin, std::size_t end,
+                                            Eigen::Vector3f* smoothed) {
+  for (std::size_t i = begin; i != end; ++i) {
+    if (!smooth.empty() && !smooth[i]) {
+      smoothed[i] = normals[i];
+      continue;
+    }
+    Eigen::Vector3f sum = Eigen::Vector3f::Zero();
+    const std::size_t k = std::min<std::size_t>(ki, table.counts[i]);
+    for (std::size_t j = 0; j < k; ++j) {
+      const Eigen::Vector3f& n = normals[table.row(i)[j]];
+      if (n.dot(normals[i]) >= min_agreement) sum += n;
+    }
+    const float len = sum.norm();
+    smoothed[i] = len > 0.0f ? Eigen::Vector3f(sum / len) : normals[i];
+  }
+}
+
 // Normal interpolation (thesis ki): each point with `smooth[i]` (all when empty) takes the
 // normalised sum of its ki nearest neighbours' oriented normals, leaving out those whose dot
 // product with its own is below `min_agreement` (-1: none left out).
@@ -243,20 +280,8 @@ std::vector<Eigen::Vector3f> interpolate(const std::vector<Eigen::Vector3f>& nor
   std::vector<Eigen::Vector3f> smoothed(normals.size());
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, normals.size(), 1024),
                     [&](const tbb::blocked_range<std::size_t>& r) {
-                      for (std::size_t i = r.begin(); i != r.end(); ++i) {
-                        if (!smooth.empty() && !smooth[i]) {
-                          smoothed[i] = normals[i];
-                          continue;
-                        }
-                        Eigen::Vector3f sum = Eigen::Vector3f::Zero();
-                        const std::size_t k = std::min<std::size_t>(ki, table.counts[i]);
-                        for (std::size_t j = 0; j < k; ++j) {
-                          const Eigen::Vector3f& n = normals[table.row(i)[j]];
-                          if (n.dot(normals[i]) >= min_agreement) sum += n;
-                        }
-                        const float len = sum.norm();
-                        smoothed[i] = len > 0.0f ? Eigen::Vector3f(sum / len) : normals[i];
-                      }
+                      interpolate_range(normals, table, ki, smooth, min_agreement, r.begin(),
+                                        r.end(), smoothed.data());
                     });
   return smoothed;
 }

@@ -4,6 +4,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "runtime/simd.h"
+
 namespace meshflow {
 namespace {
 
@@ -23,7 +25,7 @@ SmallestEigen by_compute_direct(const Eigen::Matrix3d& a) {
 
 }  // namespace
 
-SmallestEigen smallest_eigen(const Eigen::Matrix3d& a) {
+MESHFLOW_AVX2_CLONES SmallestEigen smallest_eigen(const Eigen::Matrix3d& a) {
   const double scale = std::max({std::abs(a(0, 0)), std::abs(a(0, 1)), std::abs(a(0, 2)),
                                  std::abs(a(1, 1)), std::abs(a(1, 2)), std::abs(a(2, 2))});
   if (!(scale > 0.0) || !std::isfinite(scale)) return by_compute_direct(a);

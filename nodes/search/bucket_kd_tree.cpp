@@ -64,7 +64,9 @@ constexpr std::size_t bucket_knn_slots(std::size_t k) { return 1 + ((k + 3) & ~s
 // non-negative floats order as their bits, so one integer comparison orders pairs by distance,
 // then index. The keys are kept sorted; a closer point is inserted without branches, four keys
 // at a time: slot i becomes min(key[i], max(key[i - 1], new)). `slots` is the caller's scratch
-// of bucket_knn_slots(k) entries.
+// of bucket_knn_slots(k) entries. kGroups: the number of four-key groups when the caller knows
+// it at compile time ((k + 3) / 4: the insertion unrolled), 0 otherwise.
+template <int kGroups = 0>
 class BucketKnn {
  public:
   // Only points within squared distance `cap` (inclusive) are taken: for a search known to have
@@ -75,7 +77,8 @@ class BucketKnn {
     std::memcpy(&bits, &cap, sizeof bits);
     slots[0] = 0;  // below every key
     // Empty slots: at the cap, after every index.
-    std::fill(keys_, keys_ + ((k + 3) & ~std::size_t{3}), std::uint64_t{bits} << 32 | 0xffffffffu);
+    worst_key_ = std::uint64_t{bits} << 32 | 0xffffffffu;
+    std::fill(keys_, keys_ + ((k + 3) & ~std::size_t{3}), worst_key_);
   }
   // Candidates farther than this cannot enter (equal ones can, with a smaller index).
   float worst() const { return worst_; }
@@ -84,19 +87,24 @@ class BucketKnn {
     std::uint32_t bits = 0;
     std::memcpy(&bits, &dist, sizeof bits);
     const std::uint64_t key = static_cast<std::uint64_t>(bits) << 32 | idx;
-    if (key >= keys_[k_ - 1]) return;
+    if (key >= worst_key_) return;
     const Keys4 in = Keys4{} + static_cast<std::int64_t>(key);
-    for (std::size_t i = (k_ - 1) & ~std::size_t{3};; i -= 4) {  // from the top: reads first
-      Keys4 at, below;
+    const int groups = kGroups != 0 ? kGroups : static_cast<int>((k_ + 3) / 4);
+    for (int g = groups - 1; g >= 0; --g) {  // from the top: each reads the group below unchanged
+      const auto i = static_cast<std::size_t>(4 * g);
+      // The group below read whole, where the last insertion stored it (a load spanning two
+      // stores is not forwarded), its top key shifted in by a lane shuffle.
+      Keys4 at, lower{};
       std::memcpy(&at, keys_ + i, sizeof at);
-      std::memcpy(&below, keys_ + i - 1, sizeof below);
+      if (g > 0) std::memcpy(&lower, keys_ + i - 4, sizeof lower);
+      Keys4 below = __builtin_shufflevector(lower, at, 3, 4, 5, 6);
       below = below > in ? below : in;
       at = at < below ? at : below;
       std::memcpy(keys_ + i, &at, sizeof at);
-      if (i == 0) break;
     }
     count_ += count_ < k_;
-    const auto hi = static_cast<std::uint32_t>(keys_[k_ - 1] >> 32);
+    worst_key_ = keys_[k_ - 1];
+    const auto hi = static_cast<std::uint32_t>(worst_key_ >> 32);
     std::memcpy(&worst_, &hi, sizeof worst_);
   }
   std::size_t size() const { return count_; }
@@ -115,6 +123,62 @@ class BucketKnn {
  private:
   std::size_t k_;
   std::uint64_t* keys_;
+  std::uint64_t worst_key_;  // keys_[k_ - 1]
+  float worst_;              // its distance
+  std::size_t count_ = 0;
+};
+
+// BucketKnn<> for a k known at compile time, its keys held in vector values (registers) rather
+// than in the caller's scratch: each group's lower neighbour comes from a lane shuffle of the
+// groups as they were, not from an unaligned reload of the keys just stored (which the store
+// buffer cannot forward). The same keys, the same result.
+template <int kK>
+class BucketKnnFixed {
+ public:
+  BucketKnnFixed(std::size_t /*k*/, std::uint64_t* /*slots*/,
+                 float cap = std::numeric_limits<float>::infinity())
+      : worst_(cap) {
+    std::uint32_t bits = 0;
+    std::memcpy(&bits, &cap, sizeof bits);
+    worst_key_ = std::uint64_t{bits} << 32 | 0xffffffffu;
+    for (Keys4& g : groups_) g = Keys4{} + static_cast<std::int64_t>(worst_key_);
+  }
+  float worst() const { return worst_; }
+  void add(float dist, std::uint32_t idx) {
+    std::uint32_t bits = 0;
+    std::memcpy(&bits, &dist, sizeof bits);
+    const std::uint64_t key = static_cast<std::uint64_t>(bits) << 32 | idx;
+    if (key >= worst_key_) return;
+    const Keys4 in = Keys4{} + static_cast<std::int64_t>(key);
+    for (int g = kGroups - 1; g >= 0; --g) {  // from the top: each reads the group below unchanged
+      const Keys4 lower = g > 0 ? groups_[g - 1] : Keys4{};
+      Keys4 below = __builtin_shufflevector(lower, groups_[g], 3, 4, 5, 6);
+      below = below > in ? below : in;
+      groups_[g] = groups_[g] < below ? groups_[g] : below;
+    }
+    count_ += count_ < kK;
+    worst_key_ = static_cast<std::uint64_t>(groups_[(kK - 1) / 4][(kK - 1) % 4]);
+    const auto hi = static_cast<std::uint32_t>(worst_key_ >> 32);
+    std::memcpy(&worst_, &hi, sizeof worst_);
+  }
+  std::size_t size() const { return count_; }
+  std::size_t finish(std::uint32_t* indices, float* dists) const {
+    for (std::size_t i = 0; i < count_; ++i) {
+      const auto key = static_cast<std::uint64_t>(groups_[i / 4][i % 4]);
+      indices[i] = static_cast<std::uint32_t>(key);
+      if (dists != nullptr) {
+        const auto top = static_cast<std::uint32_t>(key >> 32);
+        std::memcpy(dists + i, &top, sizeof top);
+      }
+    }
+    return count_;
+  }
+
+ private:
+  using Keys4 = std::int64_t __attribute__((vector_size(32)));  // keys are below 2^63
+  static constexpr int kGroups = (kK + 3) / 4;
+  Keys4 groups_[kGroups];
+  std::uint64_t worst_key_;
   float worst_;
   std::size_t count_ = 0;
 };
@@ -132,36 +196,45 @@ class BucketRadius {
   std::vector<std::pair<std::uint32_t, float>>& hits_;
 };
 
+// Bit j set where lane j of `in` (all ones or zero per lane) is set: the lanes' bits ORed
+// together by three halving shuffles (no movemask: the baseline clone has no AVX).
+inline __attribute__((always_inline)) unsigned bucket_lane_bits(const simd::Ints8& in) {
+  simd::Ints8 s = in & simd::Ints8{1, 2, 4, 8, 16, 32, 64, 128};
+  s |= __builtin_shufflevector(s, s, 4, 5, 6, 7, 0, 1, 2, 3);
+  s |= __builtin_shufflevector(s, s, 2, 3, 0, 1, 6, 7, 4, 5);
+  s |= __builtin_shufflevector(s, s, 1, 0, 3, 2, 5, 4, 7, 6);
+  return static_cast<unsigned>(s[0]);
+}
+
 // Offers the leaf's points to `sink`, 8 squared distances at a time: ((dx dx + dy dy) + dz dz),
-// the brute-force oracle's order (no FMA: the AVX2 clones do not enable it). Blocks with no lane
-// within the bound are passed over whole.
+// the brute-force oracle's order (no FMA: the AVX2 clones do not enable it). Only lanes within
+// the bound when their block is computed are offered; the sink checks each against its bound
+// as it stands then.
 template <class Sink>
 inline __attribute__((always_inline)) void bucket_scan_leaf(const BucketView& v,
                                                             const BucketTree::Node& leaf,
                                                             const float* q, Sink& sink) {
+  const float* const xs = v.xs;
+  const float* const ys = v.ys;
+  const float* const zs = v.zs;
+  const std::uint32_t* const ids = v.ids;
+  const float qx = q[0], qy = q[1], qz = q[2];
+  const std::uint32_t begin = leaf.begin, count = leaf.count;
   const simd::Ints8 lane = {0, 1, 2, 3, 4, 5, 6, 7};
-  for (std::uint32_t b = 0; b < leaf.count; b += 8) {
-    const std::uint32_t at = leaf.begin + b;
+  for (std::uint32_t b = 0; b < count; b += 8) {
+    const std::uint32_t at = begin + b;
     Floats8 x, y, z;
-    std::memcpy(&x, v.xs + at, sizeof x);
-    std::memcpy(&y, v.ys + at, sizeof y);
-    std::memcpy(&z, v.zs + at, sizeof z);
-    const Floats8 dx = x - q[0], dy = y - q[1], dz = z - q[2];
+    std::memcpy(&x, xs + at, sizeof x);
+    std::memcpy(&y, ys + at, sizeof y);
+    std::memcpy(&z, zs + at, sizeof z);
+    const Floats8 dx = x - qx, dy = y - qy, dz = z - qz;
     Floats8 d = dx * dx;
     d += dy * dy;
     d += dz * dz;
-    const simd::Ints8 in = (d <= sink.worst()) & (lane < static_cast<int>(leaf.count - b));
-    std::uint64_t words[4];
-    std::memcpy(words, &in, sizeof words);
-    if ((words[0] | words[1] | words[2] | words[3]) == 0) continue;
-    const simd::Ints8 flags = in & simd::Ints8{1, 2, 4, 8, 16, 32, 64, 128};
-    unsigned mask = 0;
-    for (int j = 0; j < 8; ++j) mask |= static_cast<unsigned>(flags[j]);
-    float dd[8];
-    std::memcpy(dd, &d, sizeof dd);
+    unsigned mask = bucket_lane_bits((d <= sink.worst()) & (lane < static_cast<int>(count - b)));
     for (; mask != 0; mask &= mask - 1) {
-      const int j = __builtin_ctz(mask);
-      if (dd[j] <= sink.worst()) sink.add(dd[j], v.ids[at + j]);
+      const unsigned j = static_cast<unsigned>(__builtin_ctz(mask));
+      sink.add(d[j], ids[at + j]);
     }
   }
 }
@@ -212,7 +285,7 @@ MESHFLOW_AVX2_CLONES std::size_t bucket_knn_one(const BucketView& v, const float
                                                 std::uint32_t* indices, float* squared_distances) {
   std::uint64_t local[bucket_knn_slots(64)];
   std::vector<std::uint64_t> heap(k > 64 ? bucket_knn_slots(k) : 0);
-  BucketKnn best(k, k > 64 ? heap.data() : local);
+  BucketKnn<> best(k, k > 64 ? heap.data() : local);
   bucket_search(v, q, best);
   return best.finish(indices, squared_distances);
 }
@@ -236,7 +309,6 @@ struct BucketRowScratch {
   std::vector<std::uint64_t> keys;
   std::vector<std::uint32_t> near;  // leaf nodes
   std::vector<float> lo[3], hi[3];  // their boxes, axis by axis
-  std::vector<float> gap;           // their squared distances to one point
   std::vector<std::uint32_t> stack;
 };
 
@@ -266,7 +338,6 @@ void bucket_leaves_near(const BucketView& v, std::uint32_t own, float bound, Buc
     s.lo[a].resize(padded);
     s.hi[a].resize(padded);
   }
-  s.gap.resize(padded);
   for (std::size_t c = 0; c < padded; ++c) {
     const BucketTree::Node& n = v.nodes[c < s.near.size() ? s.near[c] : own];
     for (int a = 0; a < 3; ++a) {
@@ -276,10 +347,16 @@ void bucket_leaves_near(const BucketView& v, std::uint32_t own, float bound, Buc
   }
 }
 
-// s.gap[c] = bucket_box_distance2() of the c-th near leaf's box and q, 8 boxes at a time (the
-// same operations, lane by lane).
-inline __attribute__((always_inline)) void bucket_gaps(const float* q, BucketRowScratch& s) {
-  for (std::size_t c = 0; c < s.gap.size(); c += 8) {
+// Scans for q the listed near leaves whose boxes lie within the sink's bound: their squared
+// distances to q (bucket_box_distance2()'s operations, lane by lane) 8 boxes at a time, the
+// leaves within the bound as it stands then, each checked again against the bound as it has
+// tightened by its turn.
+template <class Sink>
+inline __attribute__((always_inline)) void bucket_scan_near(const BucketView& v, const float* q,
+                                                            const BucketRowScratch& s, Sink& sink) {
+  const simd::Ints8 lane = {0, 1, 2, 3, 4, 5, 6, 7};
+  const std::size_t listed = s.near.size();
+  for (std::size_t c = 0; c < listed; c += 8) {
     Floats8 total{};
     for (int a = 0; a < 3; ++a) {
       Floats8 lo, hi;
@@ -293,7 +370,12 @@ inline __attribute__((always_inline)) void bucket_gaps(const float* q, BucketRow
       else
         total += d * d;
     }
-    std::memcpy(s.gap.data() + c, &total, sizeof total);
+    unsigned mask =
+        bucket_lane_bits((total <= sink.worst()) & (lane < static_cast<int>(listed - c)));
+    for (; mask != 0; mask &= mask - 1) {
+      const unsigned j = static_cast<unsigned>(__builtin_ctz(mask));
+      if (total[j] <= sink.worst()) bucket_scan_leaf(v, v.nodes[s.near[c + j]], q, sink);
+    }
   }
 }
 
@@ -314,11 +396,11 @@ inline float bucket_distance2(const float* q, const float* p) {
 // leaf's box, so when d <= bound all of them were offered; a point whose d ends beyond `bound`
 // is searched again from the root. Each search starts bounded by the farthest of the previous
 // point's k neighbours (k points lie within it, so its k nearest do too).
-MESHFLOW_AVX2_CLONES void bucket_knn_leaves(const BucketView& v, const Eigen::Vector3f* points,
-                                            const std::uint32_t* leaves, std::size_t first,
-                                            std::size_t last, std::size_t k, std::size_t stride,
-                                            std::uint32_t* indices, std::uint32_t* counts,
-                                            BucketRowScratch& s) {
+template <class Knn>
+inline __attribute__((always_inline)) void bucket_knn_leaves_with(
+    const BucketView& v, const Eigen::Vector3f* points, const std::uint32_t* leaves,
+    std::size_t first, std::size_t last, std::size_t k, std::size_t stride, std::uint32_t* indices,
+    std::uint32_t* counts, BucketRowScratch& s) {
   const std::size_t slots = bucket_knn_slots(k);
   s.keys.resize(2 * slots);
   const std::uint32_t* previous = nullptr;  // the last full row
@@ -326,7 +408,7 @@ MESHFLOW_AVX2_CLONES void bucket_knn_leaves(const BucketView& v, const Eigen::Ve
   {
     const BucketTree::Node& own = v.nodes[leaves[first]];
     const float q[3] = {v.xs[own.begin], v.ys[own.begin], v.zs[own.begin]};
-    BucketKnn probe(k, s.keys.data());
+    Knn probe(k, s.keys.data());
     bucket_search(v, q, probe);
     bound = 4.0f * probe.worst();
   }
@@ -343,17 +425,15 @@ MESHFLOW_AVX2_CLONES void bucket_knn_leaves(const BucketView& v, const Eigen::Ve
         for (std::size_t a = 0; a < k; ++a)
           cap = std::max(cap, bucket_distance2(q, points[previous[a]].data()));
       }
-      BucketKnn best(k, s.keys.data(), cap);
+      Knn best(k, s.keys.data(), cap);
       bucket_scan_leaf(v, own, q, best);
-      bucket_gaps(q, s);
-      for (std::size_t c = 0; c < s.near.size(); ++c)
-        if (s.gap[c] <= best.worst()) bucket_scan_leaf(v, v.nodes[s.near[c]], q, best);
+      bucket_scan_near(v, q, s, best);
       const std::uint32_t id = v.ids[j];
       std::uint32_t* row = indices + static_cast<std::size_t>(id) * stride;
       if (best.worst() <= bound) {
         counts[id] = static_cast<std::uint32_t>(best.finish(row, nullptr));
       } else {  // points beyond `bound` may be missing: search again
-        BucketKnn again(k, s.keys.data() + slots, best.worst());
+        Knn again(k, s.keys.data() + slots, best.worst());
         bucket_search(v, q, again);
         counts[id] = static_cast<std::uint32_t>(again.finish(row, nullptr));
       }
@@ -362,6 +442,23 @@ MESHFLOW_AVX2_CLONES void bucket_knn_leaves(const BucketView& v, const Eigen::Ve
     }
     bound = 2.0f * next_bound;  // margin: few points are searched again (kurt3d: 1.7 %)
   }
+}
+
+// bucket_knn_leaves_with() with k's k-best list: in registers for k = 10, unrolled for 9 to 12.
+MESHFLOW_AVX2_CLONES void bucket_knn_leaves(const BucketView& v, const Eigen::Vector3f* points,
+                                            const std::uint32_t* leaves, std::size_t first,
+                                            std::size_t last, std::size_t k, std::size_t stride,
+                                            std::uint32_t* indices, std::uint32_t* counts,
+                                            BucketRowScratch& s) {
+  if (k == 10)  // the normals' default (kn = ki = 10)
+    bucket_knn_leaves_with<BucketKnnFixed<10>>(v, points, leaves, first, last, k, stride, indices,
+                                               counts, s);
+  else if ((k + 3) / 4 == 3)
+    bucket_knn_leaves_with<BucketKnn<3>>(v, points, leaves, first, last, k, stride, indices, counts,
+                                         s);
+  else
+    bucket_knn_leaves_with<BucketKnn<0>>(v, points, leaves, first, last, k, stride, indices, counts,
+                                         s);
 }
 
 MESHFLOW_AVX2_CLONES void bucket_radius(const BucketView& v, const float* q, float squared_radius,

@@ -51,7 +51,7 @@ TriangleMesh finish_chunk_mesh(const TriangleMesh& mesh, const std::vector<std::
   }
   r.seam_vertices = static_cast<std::size_t>(
       std::count_if(flags.begin(), flags.end(), [](std::uint8_t f) { return f & kHeldBit; }));
-  HeldVertices held{std::move(flags), kHeldBit};
+  HeldVertices held{std::move(flags), kHeldBit, with_features ? kFeatureBit : std::uint8_t{0}};
   out = optimize_mesh(out, config.optimize, &r.optimize, held);
   if (with_features) {
     features.assign(held.flags.size(), 0);

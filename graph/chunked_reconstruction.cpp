@@ -432,12 +432,18 @@ TriangleMesh finish_joined_mesh(TriangleMesh joined, const std::vector<std::uint
     flip_edges_between_features(joined, features);
     if (!joined.normals.empty()) compute_vertex_normals(joined);
   }
-  if (!beyond.empty() && config.max_rim_voxels > 0.0f)
-    joined = trim_rim(joined, beyond, &report.rim_trimmed);
+  if (!beyond.empty() && config.max_rim_voxels > 0.0f) {
+    std::vector<std::uint32_t> kept;
+    joined = trim_rim(joined, beyond, &report.rim_trimmed, &kept);
+    std::vector<std::uint8_t> moved(kept.size());
+    for (std::size_t v = 0; v < kept.size(); ++v) moved[v] = features[kept[v]];
+    features = std::move(moved);
+  }
   report.clock.begin("finish", true);
   OptimizeConfig optimize = optimize_config_for_voxel(config, voxel_size);
   if (on_step) optimize.on_step = [&](OptimizeStep step) { on_step(optimize_step_name(step)); };
-  TriangleMesh mesh = optimize_mesh(joined, optimize, &report.optimize);
+  // The feature vertices seed the steps' graph as one process's extraction seeds them.
+  TriangleMesh mesh = optimize_mesh(joined, optimize, &report.optimize, features);
   report.clock.end();
   return mesh;
 }

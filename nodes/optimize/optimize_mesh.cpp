@@ -308,6 +308,13 @@ TriangleMesh run_steps(const TriangleMesh& mesh, const OptimizeConfig& given,
   CarriedState carried;
   if (feature_vertices != nullptr && feature_vertices->size() == mesh.vertices.size())
     carried.seed = *feature_vertices;
+  if (held != nullptr && held->feature_bits != 0 &&
+      std::any_of(held->flags.begin(), held->flags.end(),
+                  [&](std::uint8_t f) { return (f & held->feature_bits) != 0; })) {
+    carried.seed.resize(held->flags.size());
+    for (std::size_t v = 0; v < held->flags.size(); ++v)
+      carried.seed[v] = (held->flags[v] & held->feature_bits) != 0 ? 1 : 0;
+  }
   const bool had_normals = !mesh.normals.empty() && mesh.normals.size() == mesh.vertices.size();
   for (OptimizeStep s : config.steps) {
     OptimizeStepReport step;

@@ -103,6 +103,10 @@ TriangleMesh optimize_mesh(const TriangleMesh& mesh, const OptimizeConfig& confi
 struct HeldVertices {
   std::vector<std::uint8_t> flags;  ///< one per vertex of the mesh
   std::uint8_t held_bits = 1;
+  /// Vertices with any of these bits set are the mesh maker's feature vertices: the seed of the
+  /// feature graph, as optimize_mesh(mesh, config, report, feature_vertices) takes it (a chunk's
+  /// extended marching cubes vertices, so that its holes step fills as one process's does).
+  std::uint8_t feature_bits = 0;
 };
 
 /// optimize_mesh() with `held` (flags one per vertex of `mesh`; on return one per vertex of the

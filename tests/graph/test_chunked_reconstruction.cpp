@@ -53,6 +53,30 @@ std::set<TriangleKey> triangle_keys(const TriangleMesh& mesh) {
   return keys;
 }
 
+// Tiles read back one by one: every vertex of a tile used, no triangle in two tiles, and
+// together exactly the triangles of the whole mesh.
+struct TileUnion {
+  std::set<TriangleKey> joined;
+  std::size_t keys = 0, triangles = 0;
+
+  void add(const TriangleMesh& tile) {
+    std::vector<bool> used(tile.vertices.size(), false);
+    for (const Triangle& t : tile.triangles)
+      for (std::uint32_t v : t) used[v] = true;
+    EXPECT_EQ(std::count(used.begin(), used.end(), false), 0) << "no unused vertex";
+    const std::set<TriangleKey> own = triangle_keys(tile);
+    keys += own.size();
+    triangles += tile.triangles.size();
+    joined.insert(own.begin(), own.end());
+  }
+
+  void expect_the_mesh(const TriangleMesh& whole) const {
+    EXPECT_EQ(triangles, whole.triangles.size());
+    EXPECT_EQ(keys, joined.size()) << "no triangle in two tiles";
+    EXPECT_EQ(joined, triangle_keys(whole));
+  }
+};
+
 struct CityInput {
   synthetic::CityScene scene{[] {
     synthetic::CitySceneConfig c;
@@ -465,8 +489,7 @@ TEST(MeshTiles, TheTilesUnionIsTheWholeMesh) {
   EXPECT_EQ(index["origin"][1].get<double>(), origin.y());
   EXPECT_EQ(index["voxel"].get<float>(), grid.voxel_size);
   ASSERT_EQ(index["tiles"].size(), tiles.size());
-  std::set<TriangleKey> joined;
-  std::size_t keys = 0, triangles = 0;
+  TileUnion tiles_read;
   for (std::size_t i = 0; i < tiles.size(); ++i) {
     const nlohmann::json& entry = index["tiles"][i];
     EXPECT_EQ(entry["file"], chunk::tile_file_name(tiles[i].chunk));
@@ -474,21 +497,13 @@ TEST(MeshTiles, TheTilesUnionIsTheWholeMesh) {
     const TriangleMesh m = io::read_glb_mesh(dir + "/" + entry["file"].get<std::string>());
     EXPECT_EQ(entry["triangles"].get<std::size_t>(), m.triangles.size());
     EXPECT_EQ(entry["vertices"].get<std::size_t>(), m.vertices.size());
-    std::vector<bool> used(m.vertices.size(), false);
     for (const Triangle& t : m.triangles) {
       const Eigen::Vector3f c = (m.vertices[t[0]] + m.vertices[t[1]] + m.vertices[t[2]]) / 3.0f;
       EXPECT_EQ(grid.chunk_of_cell(cell_of(c, grid.voxel_size)), tiles[i].chunk);
-      for (std::uint32_t v : t) used[v] = true;
     }
-    EXPECT_EQ(std::count(used.begin(), used.end(), false), 0) << "no unused vertex";
-    const std::set<TriangleKey> own = triangle_keys(m);
-    keys += own.size();
-    triangles += m.triangles.size();
-    joined.insert(own.begin(), own.end());
+    tiles_read.add(m);
   }
-  EXPECT_EQ(triangles, r.mesh.triangles.size());
-  EXPECT_EQ(keys, joined.size()) << "no triangle in two tiles";
-  EXPECT_EQ(joined, triangle_keys(r.mesh));
+  tiles_read.expect_the_mesh(r.mesh);
   std::filesystem::remove_all(dir);
 }
 
@@ -515,24 +530,14 @@ TEST(MeshTiles, TheStreamedTilesAreTheChunksFinishedRowsAndUnionToTheMesh) {
   std::ifstream index_file(dir + "/tiles.json");
   const nlohmann::json index = nlohmann::json::parse(index_file);
   ASSERT_EQ(index["tiles"].size(), r.report.tiles);
-  std::set<TriangleKey> joined;
-  std::size_t keys = 0, triangles = 0;
+  TileUnion tiles_read;
   for (const nlohmann::json& entry : index["tiles"]) {
     const TriangleMesh m = io::read_glb_mesh(dir + "/" + entry["file"].get<std::string>());
     EXPECT_EQ(entry["triangles"].get<std::size_t>(), m.triangles.size());
     EXPECT_EQ(m.normals.size(), m.vertices.size());
-    std::vector<bool> used(m.vertices.size(), false);
-    for (const Triangle& t : m.triangles)
-      for (std::uint32_t v : t) used[v] = true;
-    EXPECT_EQ(std::count(used.begin(), used.end(), false), 0) << "no unused vertex";
-    const std::set<TriangleKey> own = triangle_keys(m);
-    keys += own.size();
-    triangles += m.triangles.size();
-    joined.insert(own.begin(), own.end());
+    tiles_read.add(m);
   }
-  EXPECT_EQ(triangles, held.mesh.triangles.size());
-  EXPECT_EQ(keys, joined.size()) << "no triangle in two tiles";
-  EXPECT_EQ(joined, triangle_keys(held.mesh));
+  tiles_read.expect_the_mesh(held.mesh);
   std::filesystem::remove_all(dir);
   std::filesystem::remove(plain);
   std::filesystem::remove(tiled);

@@ -153,7 +153,7 @@ constexpr std::size_t kRaysPerTask = 2048;
 
 // A few keys a slice of rays met recently, each with a value, in slots picked by the key's hash:
 // neighbouring rays cross the same few blocks, so most repeats hit.
-class RecentKeys {
+class RecentKeyValues {
  public:
   // The value stored with `key`, or nullptr when it was not met recently.
   const std::uint32_t* find(VoxelKey key) const {
@@ -190,7 +190,7 @@ class RecentKeys {
 MESHFLOW_AVX2_CLONES void blocks_of_rays(const std::vector<RaySegment>& segments, std::size_t begin,
                                          std::size_t end, std::vector<RayBlock>& pairs,
                                          std::vector<VoxelKey>& keys) {
-  RecentKeys recent;
+  RecentKeyValues recent;
   for (std::size_t r = begin; r < end; ++r) {
     const RaySegment& s = segments[r];
     Eigen::Vector3i previous(std::numeric_limits<int>::min(), 0, 0);  // never a block
@@ -238,7 +238,7 @@ void rays_by_block(RayScratch& x, const std::vector<VoxelKey>& keys) {
   x.pair_blocks.resize(pairs.size());
   const std::size_t chunks = (pairs.size() + kParallelBlock - 1) / kParallelBlock;
   tbb::parallel_for(std::size_t{0}, chunks, [&](std::size_t chunk) {
-    RecentKeys recent;  // key -> position
+    RecentKeyValues recent;  // key -> position
     const std::size_t end = std::min(pairs.size(), (chunk + 1) * kParallelBlock);
     for (std::size_t i = chunk * kParallelBlock; i < end; ++i) {
       const VoxelKey key = pairs[i].block;

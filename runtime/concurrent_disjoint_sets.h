@@ -3,16 +3,31 @@
 // compare-and-swap, always the larger index under the smaller, so each set's root is its lowest
 // index whatever the order of the links (the labels DisjointSets gives serially).
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
 #include <atomic>
+#include <cstddef>
 #include <cstdint>
 #include <utility>
 #include <vector>
 
 namespace meshflow {
 
-/// Parent links of a concurrent union-find over 0 .. n - 1; parent[i] == i for a root. Fill
-/// with parent[i] = i before the first unite.
+/// Parent links of a concurrent union-find over 0 .. n - 1; parent[i] == i for a root.
 using ConcurrentParents = std::vector<std::atomic<std::uint32_t>>;
+
+/// n sets of one element each (parent[i] = i), written in parallel by the threads that will
+/// unite them. n < 2^32. O(n).
+inline ConcurrentParents concurrent_singletons(std::size_t n) {
+  ConcurrentParents parent(n);
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 16384),
+                    [&](const tbb::blocked_range<std::size_t>& r) {
+                      for (std::size_t i = r.begin(); i != r.end(); ++i)
+                        parent[i].store(static_cast<std::uint32_t>(i), std::memory_order_relaxed);
+                    });
+  return parent;
+}
 
 /// The root (lowest index) of x's set at the time of the call. Every parent is an ancestor and
 /// no larger than its child, and an ancestor stays one, so pointing x at its grandparent (path

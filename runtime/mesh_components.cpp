@@ -9,11 +9,7 @@ namespace meshflow {
 
 std::vector<std::uint32_t> vertex_component_labels(const std::vector<Triangle>& triangles,
                                                    std::size_t vertex_count) {
-  ConcurrentParents parent(vertex_count);
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, vertex_count, 16384), [&](const auto& r) {
-    for (std::size_t v = r.begin(); v != r.end(); ++v)
-      parent[v].store(static_cast<std::uint32_t>(v), std::memory_order_relaxed);
-  });
+  ConcurrentParents parent = concurrent_singletons(vertex_count);
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, triangles.size(), 4096), [&](const auto& r) {
     for (std::size_t i = r.begin(); i != r.end(); ++i) {
       const Triangle& t = triangles[i];

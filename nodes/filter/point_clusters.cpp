@@ -332,12 +332,7 @@ bool grid_cluster_sizes(const PointCloud& cloud, float radius, std::size_t min_p
         const bool adjacent = std::abs(dx) <= 1 && std::abs(dy) <= 1 && std::abs(dz) <= 1;
         if (offset > 0) forward[adjacent ? 0 : 1].push_back(offset);
       }
-  ConcurrentParents parent(cells);
-  tbb::parallel_for(tbb::blocked_range<std::uint32_t>(0, cells, kPointGrain),
-                    [&](const tbb::blocked_range<std::uint32_t>& r) {
-                      for (std::uint32_t c = r.begin(); c != r.end(); ++c)
-                        parent[c].store(c, std::memory_order_relaxed);
-                    });
+  ConcurrentParents parent = concurrent_singletons(cells);
   const float r2 = radius * radius;
   for (const std::vector<std::int64_t>& offsets : forward) {
     tbb::parallel_for(tbb::blocked_range<std::uint32_t>(0, cells, kCellGrain),

@@ -1,9 +1,10 @@
 #pragma once
 // meshflow's compressed mesh files (".mfc"): one triangle mesh, coded single-rate (Edgebreaker)
-// or progressively (a base mesh and vertex splits). Format, version 9, little-endian:
+// or progressively (a base mesh and vertex splits). Format, version 10, little-endian:
 //
 //   bytes 0-7   magic "MFMESH\r\n"
-//   u32         version (9; 8 predicted colours by the plain mean of the decoded neighbours
+//   u32         version (10; 9 also offered the parallelograms' far corners as snap
+//               candidates, 8 predicted colours by the plain mean of the decoded neighbours
 //               and coded YCoCg-R residuals, 7 coded every coordinate as a residual, without
 //               the snap symbols of nodes/compress/coordinate_snap.h, 6 coded normals on an
 //               octahedral grid, 5 coded symbols, residual lengths and trust flags bit by

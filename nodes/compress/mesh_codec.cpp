@@ -438,7 +438,8 @@ std::vector<std::array<std::int32_t, 3>> encode_positions(
       }
     }
     if (offer.n > 0) m.trusted[offer.n - 1].encode(enc[0], best);
-    stats.trusted_parallelograms += static_cast<std::size_t>(__builtin_popcount(best));
+    // A table, not __builtin_popcount: the baseline ISA has no popcnt (a libgcc call).
+    stats.trusted_parallelograms += kSubsetSize[best];
     stats.offered_parallelograms += offer.n;
     const std::array<std::int32_t, 3> predicted = predict(offer, best, context);
     for (std::size_t a = 0; a < 3; ++a) {

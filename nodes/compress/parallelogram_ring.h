@@ -44,17 +44,16 @@ class ParallelogramRing {
     return count;
   }
 
-  /// Writes to out[0 .. 3 n) the corners x, y and w of vertex `k`'s n parallelograms (gather()'s
-  /// order; decoded vertex numbers below k) and returns 3 n. O(n).
-  unsigned corners(std::uint32_t k, std::uint32_t* out) const {
+  /// Writes to out[0 .. 2 n) the shared-edge corners x and y of vertex `k`'s n parallelograms
+  /// (gather()'s order; decoded neighbours of k, numbered below k) and returns 2 n. O(n).
+  unsigned sides(std::uint32_t k, std::uint32_t* out) const {
     const unsigned count = count_[k];
     const Corners* c = corners_.get() + std::size_t{k} * kMaxParallelograms;
     for (unsigned i = 0; i < count; ++i) {
-      out[3 * i] = c[i].x;
-      out[3 * i + 1] = c[i].y;
-      out[3 * i + 2] = c[i].w;
+      out[2 * i] = c[i].x;
+      out[2 * i + 1] = c[i].y;
     }
-    return 3 * count;
+    return 2 * count;
   }
 
  private:

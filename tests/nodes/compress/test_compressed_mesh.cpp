@@ -420,11 +420,11 @@ TEST(CompressedMeshFile, TruncatedFlippedAndWrongVersionFilesFailClearly) {
       EXPECT_NE(std::string(e.what()).find("checksum"), std::string::npos) << e.what();
     }
     std::vector<unsigned char> version = good;
-    version[8] = 10;
+    version[8] = 11;
     compress::reseal_compressed_mesh(version);
     try {
       compress::decompress_mesh(version, "bad.mfc");
-      ADD_FAILURE() << "version 10 was read";
+      ADD_FAILURE() << "version 11 was read";
     } catch (const Error& e) {
       EXPECT_NE(std::string(e.what()).find("version"), std::string::npos) << e.what();
     }
@@ -794,9 +794,10 @@ TEST(ProgressiveMesh, ResealingRewritesEveryChecksum) {
 
 // Files of older versions (2: before the prefix checksums and the new attribute coders; 7:
 // before the coordinate snap symbols; 8: before the colour coder's distance-weighted prediction
-// and channel decorrelation) are refused with the versions named.
+// and channel decorrelation; 9: snap candidates from the parallelograms' far corners too) are
+// refused with the versions named.
 TEST(CompressedMeshFile, OldVersionsAreRefusedByName) {
-  for (const unsigned char old : {2, 7, 8}) {
+  for (const unsigned char old : {2, 7, 8, 9}) {
     std::vector<unsigned char> bytes = compress::compress_mesh(torus(8, 6));
     bytes[8] = old;
     compress::reseal_compressed_mesh(bytes);
@@ -805,7 +806,7 @@ TEST(CompressedMeshFile, OldVersionsAreRefusedByName) {
       ADD_FAILURE() << "version " << int{old} << " was read";
     } catch (const Error& e) {
       const std::string what = e.what();
-      EXPECT_NE(what.find("is " + std::to_string(old) + "; this build reads version 9"),
+      EXPECT_NE(what.find("is " + std::to_string(old) + "; this build reads version 10"),
                 std::string::npos)
           << what;
       EXPECT_NE(what.find("old.mfc"), std::string::npos) << what;

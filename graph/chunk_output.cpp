@@ -161,8 +161,8 @@ std::size_t StreamedChunkOutput::finish_seams() {
   return finish_seam_rows(near_, file_, &rewritten_);
 }
 
-std::size_t StreamedChunkOutput::write_tiles(const std::string& dir) {
-  TileWriter tiles(dir, ChunkGrid{voxel_size_, chunk_cells_, 0}, origin_);
+std::size_t StreamedChunkOutput::write_tiles(const std::string& dir, const CoarserLevels& levels) {
+  TileWriter tiles(dir, ChunkGrid{voxel_size_, chunk_cells_, 0}, origin_, levels);
   for (const PartRows& p : parts_)
     tiles.add(read_tile(file_, p.chunk, p.first_triangle, p.triangles));
   return tiles.finish();

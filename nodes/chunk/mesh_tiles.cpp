@@ -1,16 +1,21 @@
 #include "nodes/chunk/mesh_tiles.h"
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_reduce.h>
 #include <Eigen/Geometry>
 
 #include <algorithm>
 #include <cstdint>
 #include <cstdio>
 #include <filesystem>
+#include <limits>
 #include <map>
 #include <system_error>
 
 #include "nodes/io/atomic_file.h"
 #include "nodes/io/glb_writer.h"
+#include "nodes/search/mesh_distance_index.h"
 #include "runtime/error.h"
 #include "runtime/voxel_key.h"
 
@@ -114,47 +119,137 @@ MeshTile read_tile(const io::PlyMeshFile& file, const Eigen::Vector3i& chunk,
   return tile;
 }
 
-TileWriter::TileWriter(std::string dir, const ChunkGrid& grid, const Eigen::Vector3d& origin)
-    : dir_(std::move(dir)), origin_(origin) {
+std::string tile_level_file_name(const Eigen::Vector3i& chunk, std::size_t level) {
+  std::string name = tile_file_name(chunk);
+  name.resize(name.size() - 4);  // ".glb"
+  return name + "_lod" + std::to_string(level) + ".glb";
+}
+
+double level_error(const TriangleMesh& fine, const TriangleMesh& coarse) {
+  if (fine.triangles.empty() || coarse.triangles.empty())
+    return std::numeric_limits<double>::infinity();
+  // The largest distance of `from`'s vertices to `to`'s surface (max: the same at any split).
+  const auto farthest = [](const TriangleMesh& from, const TriangleMesh& to) {
+    const MeshDistanceIndex index(to);
+    return tbb::parallel_reduce(
+        tbb::blocked_range<std::size_t>(0, from.vertices.size()), 0.0f,
+        [&](const tbb::blocked_range<std::size_t>& range, float most) {
+          for (std::size_t v = range.begin(); v < range.end(); ++v)
+            most = std::max(most, index.closest(from.vertices[v]).distance);
+          return most;
+        },
+        [](float a, float b) { return std::max(a, b); });
+  };
+  return std::max(static_cast<double>(farthest(fine, coarse)),
+                  static_cast<double>(farthest(coarse, fine)));
+}
+
+void create_tile_directory(const std::string& dir) {
   std::error_code ec;
-  std::filesystem::create_directories(dir_, ec);
-  if (ec || !std::filesystem::is_directory(dir_))
-    throw Error(dir_, "",
+  std::filesystem::create_directories(dir, ec);
+  if (ec || !std::filesystem::is_directory(dir))
+    throw Error(dir, "",
                 "cannot create the tiles' directory" + (ec ? ": " + ec.message() : std::string()));
-  index_ = "{\n  \"format\": \"meshflow-tiles-1\",\n  \"origin\": " + tiles_json_triple(origin) +
-           ",\n  \"voxel\": " + tiles_json_number(grid.voxel_size) + ",\n  \"chunk_metres\": " +
-           tiles_json_number(static_cast<double>(grid.voxel_size) * grid.chunk_cells) +
-           ",\n  \"tiles\": [";
+}
+
+TileRecord write_tile(const std::string& dir, const MeshTile& tile, const Eigen::Vector3d& origin,
+                      const std::vector<TriangleMesh>& coarser) {
+  TileRecord record;
+  record.chunk = tile.chunk;
+  record.file = tile_file_name(tile.chunk);
+  if (tile.mesh.triangles.empty()) throw Error(dir, record.file, "a tile without triangles");
+  record.vertices = tile.mesh.vertices.size();
+  record.triangles = tile.mesh.triangles.size();
+  Eigen::AlignedBox3f box;
+  for (const Eigen::Vector3f& v : tile.mesh.vertices) box.extend(v);
+  record.min = box.min();
+  record.max = box.max();
+  // The levels' files, coarse to fine, then their errors from the finest up, each at least the
+  // next finer level's.
+  const auto write = [&](const std::string& name, const TriangleMesh& mesh) {
+    const std::string path = (std::filesystem::path(dir) / name).string();
+    io::write_glb(path, mesh, origin);
+    return TileLevel{name, mesh.triangles.size(), std::filesystem::file_size(path), 0.0};
+  };
+  for (std::size_t i = 0; i < coarser.size(); ++i) {
+    const std::size_t finer =
+        i + 1 < coarser.size() ? coarser[i + 1].triangles.size() : tile.mesh.triangles.size();
+    if (coarser[i].triangles.empty() || coarser[i].triangles.size() >= finer)
+      throw Error(dir, tile_level_file_name(tile.chunk, i),
+                  "a coarser level must have fewer triangles than the next, and some");
+    record.levels.push_back(write(tile_level_file_name(tile.chunk, i), coarser[i]));
+  }
+  record.levels.push_back(write(record.file, tile.mesh));
+  double error = 0.0;
+  for (std::size_t i = coarser.size(); i-- > 0;) {
+    error = std::max(error, level_error(tile.mesh, coarser[i]));
+    record.levels[i].geometric_error = error;
+  }
+  return record;
+}
+
+void write_tile_index(const std::string& dir, const ChunkGrid& grid, const Eigen::Vector3d& origin,
+                      const std::vector<TileRecord>& records) {
+  std::string index =
+      "{\n  \"format\": \"meshflow-tiles-2\",\n  \"origin\": " + tiles_json_triple(origin) +
+      ",\n  \"voxel\": " + tiles_json_number(grid.voxel_size) + ",\n  \"chunk_metres\": " +
+      tiles_json_number(static_cast<double>(grid.voxel_size) * grid.chunk_cells) +
+      ",\n  \"tiles\": [";
+  for (std::size_t t = 0; t < records.size(); ++t) {
+    const TileRecord& r = records[t];
+    index += std::string(t == 0 ? "\n" : ",\n") + "    {\"chunk\": [" +
+             std::to_string(r.chunk.x()) + ", " + std::to_string(r.chunk.y()) + ", " +
+             std::to_string(r.chunk.z()) + "], \"file\": \"" + r.file +
+             "\", \"vertices\": " + std::to_string(r.vertices) +
+             ", \"triangles\": " + std::to_string(r.triangles) +
+             ", \"min\": " + tiles_json_triple(r.min) + ", \"max\": " + tiles_json_triple(r.max) +
+             ",\n     \"levels\": [";
+    for (std::size_t l = 0; l < r.levels.size(); ++l) {
+      const TileLevel& level = r.levels[l];
+      index += std::string(l == 0 ? "" : ",\n                ") + "{\"file\": \"" + level.file +
+               "\", \"triangles\": " + std::to_string(level.triangles) +
+               ", \"bytes\": " + std::to_string(level.bytes) +
+               ", \"geometric_error\": " + tiles_json_number(level.geometric_error) + "}";
+    }
+    index += "]}";
+  }
+  io::AtomicOutputFile out((std::filesystem::path(dir) / "tiles.json").string());
+  out.stream() << index << (records.empty() ? "]\n}\n" : "\n  ]\n}\n");
+  out.commit();
+}
+
+TileWriter::TileWriter(std::string dir, const ChunkGrid& grid, const Eigen::Vector3d& origin,
+                       CoarserLevels levels)
+    : dir_(std::move(dir)), grid_(grid), origin_(origin), levels_(std::move(levels)) {
+  create_tile_directory(dir_);
 }
 
 void TileWriter::add(const MeshTile& tile) {
   if (tile.mesh.triangles.empty()) return;
-  const std::string name = tile_file_name(tile.chunk);
-  io::write_glb((std::filesystem::path(dir_) / name).string(), tile.mesh, origin_);
-  Eigen::AlignedBox3f box;
-  for (const Eigen::Vector3f& v : tile.mesh.vertices) box.extend(v);
-  index_ += std::string(tiles_ == 0 ? "\n" : ",\n") + "    {\"chunk\": [" +
-            std::to_string(tile.chunk.x()) + ", " + std::to_string(tile.chunk.y()) + ", " +
-            std::to_string(tile.chunk.z()) + "], \"file\": \"" + name +
-            "\", \"vertices\": " + std::to_string(tile.mesh.vertices.size()) +
-            ", \"triangles\": " + std::to_string(tile.mesh.triangles.size()) +
-            ", \"min\": " + tiles_json_triple(box.min()) +
-            ", \"max\": " + tiles_json_triple(box.max()) + "}";
-  ++tiles_;
+  records_.push_back(
+      write_tile(dir_, tile, origin_, levels_ ? levels_(tile.mesh) : std::vector<TriangleMesh>{}));
 }
 
 std::size_t TileWriter::finish() {
-  io::AtomicOutputFile out((std::filesystem::path(dir_) / "tiles.json").string());
-  out.stream() << index_ << (tiles_ == 0 ? "]\n}\n" : "\n  ]\n}\n");
-  out.commit();
-  return tiles_;
+  write_tile_index(dir_, grid_, origin_, records_);
+  return records_.size();
 }
 
 void write_tiles(const std::string& dir, const std::vector<MeshTile>& tiles, const ChunkGrid& grid,
-                 const Eigen::Vector3d& origin) {
-  TileWriter writer(dir, grid, origin);
-  for (const MeshTile& tile : tiles) writer.add(tile);
-  writer.finish();
+                 const Eigen::Vector3d& origin, const CoarserLevels& levels) {
+  create_tile_directory(dir);
+  std::vector<TileRecord> records(tiles.size());
+  std::vector<std::uint8_t> written(tiles.size(), 0);
+  tbb::parallel_for(std::size_t{0}, tiles.size(), [&](std::size_t i) {
+    if (tiles[i].mesh.triangles.empty()) return;
+    records[i] = write_tile(dir, tiles[i], origin,
+                            levels ? levels(tiles[i].mesh) : std::vector<TriangleMesh>{});
+    written[i] = 1;
+  });
+  std::vector<TileRecord> index;
+  for (std::size_t i = 0; i < tiles.size(); ++i)
+    if (written[i]) index.push_back(std::move(records[i]));
+  write_tile_index(dir, grid, origin, index);
 }
 
 }  // namespace meshflow::chunk

@@ -38,6 +38,29 @@ std::string tiles_json_number(double v) {
   return text;
 }
 
+// The largest distance of `from`'s vertices to the surface `to` indexes (max: the same at any
+// split). A vertex needs a full search only when it is farther than the largest distance so far
+// (Taha and Hanbury's early break): exact, and most vertices stop at their first triangle.
+float farthest(const TriangleMesh& from, const MeshDistanceIndex& to) {
+  return tbb::parallel_reduce(
+      tbb::blocked_range<std::size_t>(0, from.vertices.size()), 0.0f,
+      [&](const tbb::blocked_range<std::size_t>& range, float most) {
+        for (std::size_t v = range.begin(); v < range.end(); ++v)
+          most = std::max(most, to.closest(from.vertices[v], most).distance);
+        return most;
+      },
+      [](float a, float b) { return std::max(a, b); });
+}
+
+// level_error() with `fine`'s index built once for all its levels.
+double level_error(const TriangleMesh& fine, const MeshDistanceIndex& fine_index,
+                   const TriangleMesh& coarse) {
+  if (fine.triangles.empty() || coarse.triangles.empty())
+    return std::numeric_limits<double>::infinity();
+  return std::max(static_cast<double>(farthest(fine, MeshDistanceIndex(coarse))),
+                  static_cast<double>(farthest(coarse, fine_index)));
+}
+
 }  // namespace
 
 std::vector<MeshTile> split_into_tiles(const TriangleMesh& mesh, const ChunkGrid& grid) {
@@ -126,22 +149,7 @@ std::string tile_level_file_name(const Eigen::Vector3i& chunk, std::size_t level
 }
 
 double level_error(const TriangleMesh& fine, const TriangleMesh& coarse) {
-  if (fine.triangles.empty() || coarse.triangles.empty())
-    return std::numeric_limits<double>::infinity();
-  // The largest distance of `from`'s vertices to `to`'s surface (max: the same at any split).
-  const auto farthest = [](const TriangleMesh& from, const TriangleMesh& to) {
-    const MeshDistanceIndex index(to);
-    return tbb::parallel_reduce(
-        tbb::blocked_range<std::size_t>(0, from.vertices.size()), 0.0f,
-        [&](const tbb::blocked_range<std::size_t>& range, float most) {
-          for (std::size_t v = range.begin(); v < range.end(); ++v)
-            most = std::max(most, index.closest(from.vertices[v]).distance);
-          return most;
-        },
-        [](float a, float b) { return std::max(a, b); });
-  };
-  return std::max(static_cast<double>(farthest(fine, coarse)),
-                  static_cast<double>(farthest(coarse, fine)));
+  return level_error(fine, MeshDistanceIndex(fine), coarse);
 }
 
 void create_tile_directory(const std::string& dir) {
@@ -181,8 +189,9 @@ TileRecord write_tile(const std::string& dir, const MeshTile& tile, const Eigen:
   }
   record.levels.push_back(write(record.file, tile.mesh));
   double error = 0.0;
+  const MeshDistanceIndex fine(tile.mesh);
   for (std::size_t i = coarser.size(); i-- > 0;) {
-    error = std::max(error, level_error(tile.mesh, coarser[i]));
+    error = std::max(error, level_error(tile.mesh, fine, coarser[i]));
     record.levels[i].geometric_error = error;
   }
   return record;

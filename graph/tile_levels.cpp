@@ -15,8 +15,7 @@ std::vector<TriangleMesh> progressive_tile_levels(const TriangleMesh& tile,
   const auto target = [&](std::size_t k) {  // the tile's triangles / ratio^k
     return static_cast<std::size_t>(static_cast<double>(triangles) / std::pow(config.ratio, k));
   };
-  if (config.levels == 0 || config.ratio <= 1.0 || target(1) < config.min_triangles)
-    return levels;
+  if (config.levels == 0 || config.ratio <= 1.0 || target(1) < config.min_triangles) return levels;
   compress::CompressConfig coding;
   coding.base_ratio = static_cast<float>(1.0 / std::pow(config.ratio, config.levels));
   const std::vector<unsigned char> bytes = compress::compress_progressive(tile, coding);

@@ -2,6 +2,7 @@
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_pipeline.h>
 #include <tbb/parallel_reduce.h>
 #include <Eigen/Geometry>
 
@@ -11,6 +12,7 @@
 #include <filesystem>
 #include <limits>
 #include <map>
+#include <memory>
 #include <system_error>
 
 #include "nodes/io/atomic_file.h"
@@ -227,21 +229,36 @@ void write_tile_index(const std::string& dir, const ChunkGrid& grid, const Eigen
   out.commit();
 }
 
-TileWriter::TileWriter(std::string dir, const ChunkGrid& grid, const Eigen::Vector3d& origin,
-                       CoarserLevels levels)
-    : dir_(std::move(dir)), grid_(grid), origin_(origin), levels_(std::move(levels)) {
-  create_tile_directory(dir_);
-}
-
-void TileWriter::add(const MeshTile& tile) {
-  if (tile.mesh.triangles.empty()) return;
-  records_.push_back(
-      write_tile(dir_, tile, origin_, levels_ ? levels_(tile.mesh) : std::vector<TriangleMesh>{}));
-}
-
-std::size_t TileWriter::finish() {
-  write_tile_index(dir_, grid_, origin_, records_);
-  return records_.size();
+std::vector<TileRecord> write_tiles_in_flight(const std::string& dir, std::size_t count,
+                                              const std::function<MeshTile(std::size_t)>& read,
+                                              const Eigen::Vector3d& origin,
+                                              const CoarserLevels& levels, std::size_t in_flight) {
+  std::vector<TileRecord> records;
+  std::size_t next = 0;
+  using Tile = std::shared_ptr<MeshTile>;
+  using Record = std::shared_ptr<TileRecord>;  // null: an empty tile
+  tbb::parallel_pipeline(
+      std::max<std::size_t>(in_flight, 1),
+      tbb::make_filter<void, Tile>(tbb::filter_mode::serial_in_order,
+                                   [&](tbb::flow_control& fc) -> Tile {
+                                     if (next == count) {
+                                       fc.stop();
+                                       return nullptr;
+                                     }
+                                     return std::make_shared<MeshTile>(read(next++));
+                                   }) &
+          tbb::make_filter<Tile, Record>(
+              tbb::filter_mode::parallel,
+              [&](const Tile& tile) -> Record {
+                if (tile->mesh.triangles.empty()) return nullptr;
+                return std::make_shared<TileRecord>(write_tile(
+                    dir, *tile, origin, levels ? levels(tile->mesh) : std::vector<TriangleMesh>{}));
+              }) &
+          tbb::make_filter<Record, void>(tbb::filter_mode::serial_in_order,
+                                         [&](const Record& record) {
+                                           if (record) records.push_back(std::move(*record));
+                                         }));
+  return records;
 }
 
 void write_tiles(const std::string& dir, const std::vector<MeshTile>& tiles, const ChunkGrid& grid,

@@ -97,26 +97,16 @@ void write_tile_index(const std::string& dir, const ChunkGrid& grid, const Eigen
 /// Creates `dir` and every directory above it. Throws meshflow::Error naming it. O(1).
 void create_tile_directory(const std::string& dir);
 
-/// write_tiles() one tile at a time: memory holds the index, not the tiles.
-class TileWriter {
- public:
-  /// Creates `dir` (tiles.json is written by finish()); `levels`, if set, makes each tile's
-  /// coarser levels. Throws meshflow::Error naming it.
-  TileWriter(std::string dir, const ChunkGrid& grid, const Eigen::Vector3d& origin,
-             CoarserLevels levels = {});
-  /// write_tile() of `tile` and its coarser levels (an empty tile is skipped); its record goes
-  /// to the index. Not thread-safe. O(tile).
-  void add(const MeshTile& tile);
-  /// Writes DIR/tiles.json (write_tile_index()). Returns the tiles written. O(tiles).
-  std::size_t finish();
-
- private:
-  std::string dir_;
-  ChunkGrid grid_;
-  Eigen::Vector3d origin_;
-  CoarserLevels levels_;
-  std::vector<TileRecord> records_;
-};
+/// Reads the tiles `read(0)`, ..., `read(count - 1)` (in order, one call at a time) and writes
+/// each with the coarser levels `levels` makes (write_tile(); an empty tile is skipped), at
+/// most `in_flight` (>= 1) tiles at once, the tiles in flight in parallel; returns their
+/// records in read order. Memory: `in_flight` tiles. The files are the same for any
+/// `in_flight` and thread count. Throws the first meshflow::Error of a read or a write.
+/// O(tiles) plus the levels' cost.
+std::vector<TileRecord> write_tiles_in_flight(const std::string& dir, std::size_t count,
+                                              const std::function<MeshTile(std::size_t)>& read,
+                                              const Eigen::Vector3d& origin,
+                                              const CoarserLevels& levels, std::size_t in_flight);
 
 /// Writes each tile with its coarser levels (`levels`, if set; the tiles in parallel, the files
 /// the same at any thread count) and then DIR/tiles.json (write_tile_index()). Creates DIR;

@@ -88,16 +88,19 @@ RankTiles write_own_tiles(const TileJob& job) {
     chunk::create_tile_directory(job.dir);
     io::PlyMeshFile file(job.output, job.layout, job.vertices, job.triangles, job.origin,
                          io::PlyMeshFile::Role::kJoin);
-    const chunk::CoarserLevels levels = progressive_levels();
-    std::vector<std::array<std::uint64_t, 3>> rows = job.rows;
+    std::vector<std::array<std::uint64_t, 3>> rows;  // the non-empty ones, by position
+    for (const auto& row : job.rows)
+      if (row[2] > 0) rows.push_back(row);  // as write_tiles_in_flight() skips an empty tile
     std::sort(rows.begin(), rows.end());
-    for (const auto& [position, first, count] : rows) {
-      if (count == 0) continue;  // as chunk::TileWriter skips an empty tile
-      const chunk::MeshTile tile =
-          chunk::read_tile(file, job.files->at(position).index, first, count);
-      mine.records.emplace_back(position,
-                                chunk::write_tile(job.dir, tile, job.origin, levels(tile.mesh)));
-    }
+    std::vector<chunk::TileRecord> records = chunk::write_tiles_in_flight(
+        job.dir, rows.size(),
+        [&](std::size_t i) {
+          const auto& [position, first, count] = rows[i];
+          return chunk::read_tile(file, job.files->at(position).index, first, count);
+        },
+        job.origin, progressive_levels(), job.in_flight);
+    for (std::size_t i = 0; i < rows.size(); ++i)
+      mine.records.emplace_back(rows[i][0], std::move(records[i]));
     file.close();
   } catch (const std::exception& e) {
     mine.error = e.what();

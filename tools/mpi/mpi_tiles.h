@@ -31,7 +31,8 @@ struct TileJob {
   const std::vector<chunk::ChunkFile>* files = nullptr;  ///< the chunks by position
   /// This rank's parts: position, first face row, faces.
   std::vector<std::array<std::uint64_t, 3>> rows;
-  std::size_t chunks = 0;  ///< chunks this rank meshed (its timing's)
+  std::size_t chunks = 0;     ///< chunks this rank meshed (its timing's)
+  std::size_t in_flight = 2;  ///< tiles written at once (chunk::write_tiles_in_flight())
 };
 
 /// What rank 0 learns.
@@ -45,10 +46,10 @@ struct TilesWritten {
 /// ("" to go on, else why not) goes to every rank (a rank that hears an error writes nothing).
 /// Each rank (phase "tiles", parallel) opens the temporary file (kJoin), reads each of its parts'
 /// finished rows as its chunk's tile (chunk::read_tile()) and writes it with its progressive
-/// levels (chunk::write_tile(), graph/tile_levels.h); ranks other than 0 send rank 0 their
-/// records, error and timing. Rank 0 (phase "index", serial) writes DIR/tiles.json from every
+/// levels (chunk::write_tiles_in_flight(), graph/tile_levels.h); ranks other than 0 send rank 0
+/// their records, error and timing. Rank 0 (phase "index", serial) writes DIR/tiles.json from every
 /// rank's records in chunk position order, as one process orders them. Returns rank 0's view;
-/// other ranks: their own error. Memory: one tile at a time per rank; rank 0 every record.
+/// other ranks: their own error. Memory: `in_flight` tiles per rank; rank 0 every record.
 TilesWritten write_tiles_on_ranks(const TileJob& job, const std::string& verdict,
                                   chunk::PhaseClock& clock, int rank, int ranks);
 

@@ -227,6 +227,57 @@ void write_tile_index(const std::string& dir, const ChunkGrid& grid, const Eigen
   io::AtomicOutputFile out((std::filesystem::path(dir) / "tiles.json").string());
   out.stream() << index << (records.empty() ? "]\n}\n" : "\n  ]\n}\n");
   out.commit();
+  write_tileset_json(dir, grid, origin, records);
+}
+
+void write_tileset_json(const std::string& dir, const ChunkGrid& grid,
+                        const Eigen::Vector3d& origin, const std::vector<TileRecord>& records) {
+  // 3D Tiles reads glTF y-up and turns it z-up, (x, y, z) -> (x, -z, y); the root's transform
+  // (column-major) turns that back, so boxes below it are in the turned frame.
+  const auto turned = [](const Eigen::Vector3d& p) {
+    return Eigen::Vector3d(p.x(), -p.z(), p.y());
+  };
+  const auto box = [&](const Eigen::Vector3f& lo, const Eigen::Vector3f& hi) {
+    const double pad = grid.voxel_size;
+    const Eigen::Vector3d a = lo.cast<double>() + origin, b = hi.cast<double>() + origin;
+    const Eigen::Vector3d c = turned((a + b) / 2.0);
+    const Eigen::Vector3d h = turned((b - a) / 2.0).cwiseAbs() + Eigen::Vector3d::Constant(pad);
+    char text[512];
+    std::snprintf(text, sizeof text,
+                  "{\"box\": [%.17g, %.17g, %.17g, %.17g, 0, 0, 0, %.17g, 0, 0, 0, %.17g]}", c.x(),
+                  c.y(), c.z(), h.x(), h.y(), h.z());
+    return std::string(text);
+  };
+  Eigen::AlignedBox3f all;
+  double most = 0.0;
+  for (const TileRecord& r : records) {
+    all.extend(r.min);
+    all.extend(r.max);
+    for (const TileLevel& l : r.levels) most = std::max(most, l.geometric_error);
+  }
+  if (records.empty()) all.extend(Eigen::Vector3f::Zero());
+  const double root_error = std::max(most, static_cast<double>(all.diagonal().norm()));
+  std::string children;
+  for (const TileRecord& r : records) {
+    // The chain, finest innermost.
+    std::string chain;
+    for (std::size_t l = r.levels.size(); l-- > 0;) {
+      const TileLevel& level = r.levels[l];
+      chain = "{\"boundingVolume\": " + box(r.min, r.max) +
+              ", \"geometricError\": " + tiles_json_number(level.geometric_error) +
+              ", \"refine\": \"REPLACE\", \"content\": {\"uri\": \"" + level.file + "\"}" +
+              (chain.empty() ? "" : ", \"children\": [" + chain + "]") + "}";
+    }
+    children += std::string(children.empty() ? "\n    " : ",\n    ") + chain;
+  }
+  io::AtomicOutputFile out((std::filesystem::path(dir) / "tileset.json").string());
+  out.stream() << "{\"asset\": {\"version\": \"1.1\", \"generator\": \"meshflow\"},\n"
+               << " \"geometricError\": " << tiles_json_number(root_error) << ",\n"
+               << " \"root\": {\"transform\": [1, 0, 0, 0, 0, 0, -1, 0, 0, 1, 0, 0, 0, 0, 0, 1],\n"
+               << "  \"boundingVolume\": " << box(all.min(), all.max())
+               << ", \"geometricError\": " << tiles_json_number(root_error)
+               << ", \"refine\": \"REPLACE\",\n  \"children\": [" << children << "]}}\n";
+  out.commit();
 }
 
 std::vector<TileRecord> write_tiles_in_flight(const std::string& dir, std::size_t count,

@@ -89,10 +89,21 @@ TileRecord write_tile(const std::string& dir, const MeshTile& tile, const Eigen:
 ///               "max": [x, y, z], "levels": [{"file", "triangles", "bytes",
 ///               "geometric_error"}, ...]}]}
 /// (bounds in the tiles' coordinates: add `origin` for the world's; levels coarse to fine, the
-/// last the tile's own file with geometric_error 0; docs/OUT_OF_CORE.md). Throws
-/// meshflow::Error naming the file. O(records).
+/// last the tile's own file with geometric_error 0; docs/OUT_OF_CORE.md), and DIR/tileset.json
+/// (write_tileset_json()). Throws meshflow::Error naming the file. O(records).
 void write_tile_index(const std::string& dir, const ChunkGrid& grid, const Eigen::Vector3d& origin,
                       const std::vector<TileRecord>& records);
+
+/// Writes DIR/tileset.json (atomically), the same tiles as a 3D Tiles 1.1 tileset with glTF
+/// content, for generic viewers: a root without content (geometricError: the tiles' bounding
+/// box's diagonal, at least every coarsest level's error) whose transform turns the glTF
+/// content, which 3D Tiles reads y-up, back to the tiles' z-up coordinates; under it per tile
+/// a chain of tiles with REPLACE refinement, the coarsest level first, each level's content its
+/// file and its geometricError the index's geometric_error (the tile's own file: 0). Bounding
+/// boxes: the tile's, padded by `grid`'s voxel (the coarser levels' quantised positions), with
+/// `origin` added, in the root's frame. Throws meshflow::Error naming the file. O(records).
+void write_tileset_json(const std::string& dir, const ChunkGrid& grid,
+                        const Eigen::Vector3d& origin, const std::vector<TileRecord>& records);
 
 /// Creates `dir` and every directory above it. Throws meshflow::Error naming it. O(1).
 void create_tile_directory(const std::string& dir);

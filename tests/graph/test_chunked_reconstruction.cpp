@@ -81,6 +81,48 @@ struct TileUnion {
   }
 };
 
+// DIR/tileset.json is the index as 3D Tiles 1.1: a root turning glTF's y-up back to z-up, per
+// tile a chain of REPLACE tiles from the coarsest level to the tile's own file with the index's
+// files and geometric errors, each box holding its content (read back, `origin` added, in the
+// root's turned frame), the errors never growing down a chain and 0 at its end.
+void expect_tileset_as_index(const std::string& dir) {
+  const nlohmann::json index = nlohmann::json::parse(std::ifstream(dir + "/tiles.json"));
+  const nlohmann::json tileset = nlohmann::json::parse(std::ifstream(dir + "/tileset.json"));
+  EXPECT_EQ(tileset["asset"]["version"], "1.1");
+  const nlohmann::json& root = tileset["root"];
+  EXPECT_EQ(root["transform"],
+            nlohmann::json::parse("[1, 0, 0, 0, 0, 0, -1, 0, 0, 1, 0, 0, 0, 0, 0, 1]"));
+  const Eigen::Vector3d origin(index["origin"][0].get<double>(), index["origin"][1].get<double>(),
+                               index["origin"][2].get<double>());
+  ASSERT_EQ(root["children"].size(), index["tiles"].size());
+  for (std::size_t t = 0; t < index["tiles"].size(); ++t) {
+    const nlohmann::json* node = &root["children"][t];
+    double parent_error = root["geometricError"].get<double>();
+    for (const nlohmann::json& level : index["tiles"][t]["levels"]) {
+      EXPECT_EQ((*node)["refine"], "REPLACE");
+      EXPECT_EQ((*node)["content"]["uri"], level["file"]);
+      const double error = (*node)["geometricError"].get<double>();
+      EXPECT_EQ(error, level["geometric_error"].get<double>());
+      EXPECT_LE(error, parent_error);
+      parent_error = error;
+      const std::vector<double> box = (*node)["boundingVolume"]["box"].get<std::vector<double>>();
+      const TriangleMesh m = io::read_glb_mesh(dir + "/" + level["file"].get<std::string>());
+      for (const Eigen::Vector3f& v : m.vertices) {
+        const Eigen::Vector3d p = v.cast<double>() + origin;
+        const Eigen::Vector3d q(p.x(), -p.z(), p.y());  // as 3D Tiles turns glTF
+        EXPECT_LE(std::abs(q.x() - box[0]), box[3]);
+        EXPECT_LE(std::abs(q.y() - box[1]), box[7]);
+        EXPECT_LE(std::abs(q.z() - box[2]), box[11]);
+      }
+      if (!node->contains("children")) break;
+      ASSERT_EQ((*node)["children"].size(), 1u);
+      node = &(*node)["children"][0];
+    }
+    EXPECT_FALSE(node->contains("children")) << "the chain ends at the tile's own file";
+    EXPECT_EQ((*node)["geometricError"].get<double>(), 0.0);
+  }
+}
+
 struct CityInput {
   synthetic::CityScene scene{[] {
     synthetic::CitySceneConfig c;
@@ -508,6 +550,7 @@ TEST(MeshTiles, TheTilesUnionIsTheWholeMesh) {
     tiles_read.add(m);
   }
   tiles_read.expect_the_mesh(r.mesh);
+  expect_tileset_as_index(dir);
   std::filesystem::remove_all(dir);
 }
 
@@ -620,8 +663,8 @@ TEST(MeshTiles, ProgressiveLevelsAreCoarseToFineApproximationsOfTheTile) {
 // --tiles with levels (issue 61): every level of every tile decodes, the levels go coarse to
 // fine with growing triangles and errors that never grow, the finest is the tile's own file
 // (which the union tests cover), and the index's triangles, bytes and geometric errors are
-// those of the files (the errors recomputed from the files read back). The files are the same
-// at one thread and at all.
+// those of the files (the errors recomputed from the files read back); tileset.json says the
+// same as 3D Tiles. The files are the same at one thread and at all.
 TEST(MeshTiles, EveryLevelOfEveryTileDecodesAndTheIndexMatchesTheFiles) {
   const CityInput input(60000, true);
   ChunkingConfig chunking = chunks_of(20.0f);
@@ -635,7 +678,7 @@ TEST(MeshTiles, EveryLevelOfEveryTileDecodesAndTheIndexMatchesTheFiles) {
   const nlohmann::json index = nlohmann::json::parse(index_file);
   EXPECT_EQ(index["format"], "meshflow-tiles-2");
   ASSERT_EQ(index["tiles"].size(), r.report.tiles);
-  std::size_t with_levels = 0, files = 1;  // tiles.json
+  std::size_t with_levels = 0, files = 2;  // tiles.json, tileset.json
   for (const nlohmann::json& entry : index["tiles"]) {
     const nlohmann::json& levels = entry["levels"];
     ASSERT_GE(levels.size(), 1u);
@@ -670,6 +713,7 @@ TEST(MeshTiles, EveryLevelOfEveryTileDecodesAndTheIndexMatchesTheFiles) {
                                                    std::filesystem::directory_iterator())),
             files)
       << "every file listed once";
+  expect_tileset_as_index(dir);
   // The same files at one thread.
   const std::string one = test::temp_dir() + "/level_tiles_1";
   std::filesystem::remove_all(one);

@@ -161,11 +161,18 @@ std::size_t StreamedChunkOutput::finish_seams() {
   return finish_seam_rows(near_, file_, &rewritten_);
 }
 
-std::size_t StreamedChunkOutput::write_tiles(const std::string& dir) {
-  TileWriter tiles(dir, ChunkGrid{voxel_size_, chunk_cells_, 0}, origin_);
-  for (const PartRows& p : parts_)
-    tiles.add(read_tile(file_, p.chunk, p.first_triangle, p.triangles));
-  return tiles.finish();
+std::size_t StreamedChunkOutput::write_tiles(const std::string& dir, const CoarserLevels& levels,
+                                             std::size_t in_flight) {
+  create_tile_directory(dir);
+  const std::vector<TileRecord> records = write_tiles_in_flight(
+      dir, parts_.size(),
+      [&](std::size_t i) {
+        const PartRows& p = parts_[i];
+        return read_tile(file_, p.chunk, p.first_triangle, p.triangles);
+      },
+      origin_, levels, in_flight);
+  write_tile_index(dir, ChunkGrid{voxel_size_, chunk_cells_, 0}, origin_, records);
+  return records.size();
 }
 
 }  // namespace meshflow::chunk

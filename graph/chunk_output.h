@@ -12,6 +12,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "nodes/chunk/mesh_tiles.h"
 #include "nodes/chunk/seam_weld.h"
 #include "nodes/io/ply_mesh_file.h"
 #include "runtime/triangle_mesh.h"
@@ -82,10 +83,12 @@ class StreamedChunkOutput {
   std::size_t finish_seams();
 
   /// After finish_seams(): each part's finished rows read back as its chunk's tile
-  /// (chunk::read_tile()) and written to `dir` (chunk::TileWriter: one tile in memory at a
-  /// time). Returns the tiles written. Throws meshflow::Error naming a file that cannot be
-  /// written. O(output).
-  std::size_t write_tiles(const std::string& dir);
+  /// (chunk::read_tile()) and written to `dir` with the coarser levels `levels` makes, then
+  /// the index (chunk::write_tiles_in_flight(): `in_flight` tiles in memory at a time, in
+  /// parallel; chunk::write_tile_index()). Returns the tiles written. Throws meshflow::Error
+  /// naming a file that cannot be written. O(output) plus the levels' cost.
+  std::size_t write_tiles(const std::string& dir, const CoarserLevels& levels = {},
+                          std::size_t in_flight = 2);
 
   /// Renames the file into place. Throws meshflow::Error when the parts did not fill the plan
   /// or the close or rename failed (no file left under the path).

@@ -12,6 +12,7 @@
 #include "graph/chunk_finish.h"
 #include "graph/chunk_output.h"
 #include "graph/pipeline.h"
+#include "graph/tile_levels.h"
 #include "nodes/chunk/mesh_spill.h"
 #include "nodes/chunk/mesh_stitch.h"
 #include "nodes/chunk/mesh_tiles.h"
@@ -539,10 +540,10 @@ ChunkedResult reconstruct_chunked_to_ply(const std::string& path, const std::str
       io::write_mesh(output, result.mesh, result.origin);
       if (!tiles_dir.empty()) {  // cut from the whole mesh
         if (on_stage) on_stage("tiles");
-        r.clock.begin("tiles", true);
+        r.clock.begin("tiles", false);  // the tiles and their levels in parallel
         const chunk::ChunkGrid grid{r.voxel_size, r.chunk_cells, 0};
         const std::vector<chunk::MeshTile> split = chunk::split_into_tiles(result.mesh, grid);
-        chunk::write_tiles(tiles_dir, split, grid, result.origin);
+        chunk::write_tiles(tiles_dir, split, grid, result.origin, progressive_levels());
         r.tiles = split.size();
       }
       r.clock.end();
@@ -638,7 +639,7 @@ ChunkedResult reconstruct_chunked_to_ply(const std::string& path, const std::str
   out.finish_seams();
   if (!tiles_dir.empty()) {
     report.clock.begin("tiles", true);  // each chunk's finished rows read back
-    report.tiles = out.write_tiles(tiles_dir);
+    report.tiles = out.write_tiles(tiles_dir, progressive_levels());
   }
   out.commit();
   report.clock.end();

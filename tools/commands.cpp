@@ -324,8 +324,9 @@ void add_reconstruct_options(CLI::App* cmd) {
                 "triangles; serial, and the whole mesh several times in memory)");
   cmd->add_option(
          "--tiles", opts->tiles,
-         "With --chunk: also write the mesh as one glTF file per chunk (DIR/tile_I_J_K.glb) "
-         "and their index DIR/tiles.json, for viewers that load what they look at")
+         "With --chunk: also write the mesh as one glTF file per chunk (DIR/tile_I_J_K.glb), "
+         "each also at coarser levels from the progressive coder (tile_I_J_K_lodL.glb), and "
+         "their index DIR/tiles.json, for viewers that load what they look at")
       ->needs("--chunk");
   cmd->callback([opts] { run_reconstruct(*opts); });
 }

@@ -199,6 +199,11 @@ void PlyMeshFile::add_rows_written_elsewhere(std::uint64_t vertices, std::uint64
   face_rows_written_ += triangles;
 }
 
+void PlyMeshFile::sync() {
+  if (fd_ >= 0 && ::fsync(fd_) != 0)
+    throw Error(path_, "", std::string("write failed: ") + std::strerror(errno));
+}
+
 void PlyMeshFile::close() {
   if (role_ != Role::kJoin) throw Error(path_, "", "the file's creator commits it");
   const int fd = fd_;

@@ -59,6 +59,11 @@ class PlyMeshFile {
   /// check. O(1).
   void add_rows_written_elsewhere(std::uint64_t vertices, std::uint64_t triangles);
 
+  /// Flushes the rows written so far to the file system (fsync), so that processes opening the
+  /// temporary file afterwards (kJoin: meshflow-mpi's ranks, also on a network file system)
+  /// read them. Throws meshflow::Error when it fails. O(rows not yet flushed).
+  void sync();
+
   /// Closes the file and renames it to its path. Throws meshflow::Error (the temporary file
   /// removed) when fewer rows than declared were written or the close or rename failed; with
   /// kJoin throws (use close()).

@@ -51,13 +51,15 @@ MeshDistanceIndex::MeshDistanceIndex(const TriangleMesh& mesh) : mesh_(mesh) {
   offsets_.push_back(static_cast<std::uint32_t>(pairs.size()));
 }
 
-MeshDistanceIndex::Hit MeshDistanceIndex::closest(const Eigen::Vector3f& p) const {
+MeshDistanceIndex::Hit MeshDistanceIndex::closest(const Eigen::Vector3f& p, float enough) const {
   Hit best;
   best.distance = std::numeric_limits<float>::infinity();
   if (keys_.empty()) return best;
   float best_sq = std::numeric_limits<float>::infinity();
+  const float enough_sq = enough > 0.0f ? enough * enough : -1.0f;  // -1: exact
   const Eigen::Vector3i c = cell_of(p, cell_);
   auto visit = [&](int x, int y, int z) {
+    if (best_sq <= enough_sq) return;  // close enough already
     const Eigen::Vector3i cell(x, y, z);
     if ((cell.array() < lo_.array()).any() || (cell.array() > hi_.array()).any()) return;
     const VoxelKey key = pack_key(cell);
@@ -95,7 +97,7 @@ MeshDistanceIndex::Hit MeshDistanceIndex::closest(const Eigen::Vector3f& p) cons
         }
       }
     const float reach = static_cast<float>(r) * cell_;
-    if (best_sq <= reach * reach) break;
+    if (best_sq <= reach * reach || best_sq <= enough_sq) break;
   }
   best.distance = std::sqrt(best_sq);
   return best;

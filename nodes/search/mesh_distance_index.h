@@ -25,9 +25,12 @@ class MeshDistanceIndex {
   /// O(T log T).
   explicit MeshDistanceIndex(const TriangleMesh& mesh);
 
-  /// The nearest point of the surface to p (exact). Thread-safe (const). About O(triangles in
-  /// the rings searched); far-away queries search up to the whole grid.
-  Hit closest(const Eigen::Vector3f& p) const;
+  /// The nearest point of the surface to p (exact). With `enough` > 0 the search stops at the
+  /// first point it finds within `enough` of p, if there is one (then not necessarily the
+  /// nearest: for maxima of distances, such as a Hausdorff distance, where a point closer than
+  /// the maximum so far is all a query needs to know); else it is exact. Thread-safe (const).
+  /// About O(triangles in the rings searched); far-away queries search up to the whole grid.
+  Hit closest(const Eigen::Vector3f& p, float enough = 0.0f) const;
 
  private:
   const TriangleMesh& mesh_;

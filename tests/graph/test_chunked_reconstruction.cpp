@@ -6,6 +6,7 @@
 
 #include <gtest/gtest.h>
 
+#include <tbb/global_control.h>
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
@@ -13,10 +14,12 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <map>
 #include <set>
 
 #include "graph/pipeline.h"
+#include "graph/tile_levels.h"
 #include "nodes/chunk/mesh_stitch.h"
 #include "nodes/chunk/mesh_tiles.h"
 #include "nodes/io/glb_reader.h"
@@ -24,6 +27,7 @@
 #include "nodes/io/ply_point_writer.h"
 #include "nodes/io/read_point_cloud.h"
 #include "nodes/optimize/cleanup/hole_filling.h"
+#include "nodes/search/mesh_distance_index.h"
 #include "nodes/search/spatial_index.h"
 #include "nodes/synthetic/city_scene.h"
 #include "nodes/voxelize/spacing_sample.h"
@@ -76,6 +80,48 @@ struct TileUnion {
     EXPECT_EQ(joined, triangle_keys(whole));
   }
 };
+
+// DIR/tileset.json is the index as 3D Tiles 1.1: a root turning glTF's y-up back to z-up, per
+// tile a chain of REPLACE tiles from the coarsest level to the tile's own file with the index's
+// files and geometric errors, each box holding its content (read back, `origin` added, in the
+// root's turned frame), the errors never growing down a chain and 0 at its end.
+void expect_tileset_as_index(const std::string& dir) {
+  const nlohmann::json index = nlohmann::json::parse(std::ifstream(dir + "/tiles.json"));
+  const nlohmann::json tileset = nlohmann::json::parse(std::ifstream(dir + "/tileset.json"));
+  EXPECT_EQ(tileset["asset"]["version"], "1.1");
+  const nlohmann::json& root = tileset["root"];
+  EXPECT_EQ(root["transform"],
+            nlohmann::json::parse("[1, 0, 0, 0, 0, 0, -1, 0, 0, 1, 0, 0, 0, 0, 0, 1]"));
+  const Eigen::Vector3d origin(index["origin"][0].get<double>(), index["origin"][1].get<double>(),
+                               index["origin"][2].get<double>());
+  ASSERT_EQ(root["children"].size(), index["tiles"].size());
+  for (std::size_t t = 0; t < index["tiles"].size(); ++t) {
+    const nlohmann::json* node = &root["children"][t];
+    double parent_error = root["geometricError"].get<double>();
+    for (const nlohmann::json& level : index["tiles"][t]["levels"]) {
+      EXPECT_EQ((*node)["refine"], "REPLACE");
+      EXPECT_EQ((*node)["content"]["uri"], level["file"]);
+      const double error = (*node)["geometricError"].get<double>();
+      EXPECT_EQ(error, level["geometric_error"].get<double>());
+      EXPECT_LE(error, parent_error);
+      parent_error = error;
+      const std::vector<double> box = (*node)["boundingVolume"]["box"].get<std::vector<double>>();
+      const TriangleMesh m = io::read_glb_mesh(dir + "/" + level["file"].get<std::string>());
+      for (const Eigen::Vector3f& v : m.vertices) {
+        const Eigen::Vector3d p = v.cast<double>() + origin;
+        const Eigen::Vector3d q(p.x(), -p.z(), p.y());  // as 3D Tiles turns glTF
+        EXPECT_LE(std::abs(q.x() - box[0]), box[3]);
+        EXPECT_LE(std::abs(q.y() - box[1]), box[7]);
+        EXPECT_LE(std::abs(q.z() - box[2]), box[11]);
+      }
+      if (!node->contains("children")) break;
+      ASSERT_EQ((*node)["children"].size(), 1u);
+      node = &(*node)["children"][0];
+    }
+    EXPECT_FALSE(node->contains("children")) << "the chain ends at the tile's own file";
+    EXPECT_EQ((*node)["geometricError"].get<double>(), 0.0);
+  }
+}
 
 struct CityInput {
   synthetic::CityScene scene{[] {
@@ -484,7 +530,7 @@ TEST(MeshTiles, TheTilesUnionIsTheWholeMesh) {
   chunk::write_tiles(dir, tiles, grid, origin);
   std::ifstream index_file(dir + "/tiles.json");
   const nlohmann::json index = nlohmann::json::parse(index_file);
-  EXPECT_EQ(index["format"], "meshflow-tiles-1");
+  EXPECT_EQ(index["format"], "meshflow-tiles-2");
   EXPECT_EQ(index["origin"][0].get<double>(), origin.x());
   EXPECT_EQ(index["origin"][1].get<double>(), origin.y());
   EXPECT_EQ(index["voxel"].get<float>(), grid.voxel_size);
@@ -504,6 +550,7 @@ TEST(MeshTiles, TheTilesUnionIsTheWholeMesh) {
     tiles_read.add(m);
   }
   tiles_read.expect_the_mesh(r.mesh);
+  expect_tileset_as_index(dir);
   std::filesystem::remove_all(dir);
 }
 
@@ -541,6 +588,146 @@ TEST(MeshTiles, TheStreamedTilesAreTheChunksFinishedRowsAndUnionToTheMesh) {
   std::filesystem::remove_all(dir);
   std::filesystem::remove(plain);
   std::filesystem::remove(tiled);
+}
+
+// A grid of n x n squares (two triangles each) of edge `step` over the x-y plane at height
+// z(x, y).
+template <typename Height>
+TriangleMesh height_field(int n, float step, Height z) {
+  TriangleMesh m;
+  for (int j = 0; j <= n; ++j)
+    for (int i = 0; i <= n; ++i) m.vertices.emplace_back(i * step, j * step, z(i * step, j * step));
+  const auto at = [n](int i, int j) { return static_cast<std::uint32_t>(j * (n + 1) + i); };
+  for (int j = 0; j < n; ++j)
+    for (int i = 0; i < n; ++i) {
+      m.triangles.push_back(Triangle{at(i, j), at(i + 1, j), at(i + 1, j + 1)});
+      m.triangles.push_back(Triangle{at(i, j), at(i + 1, j + 1), at(i, j + 1)});
+    }
+  return m;
+}
+
+// level_error() against analytic distances: a mesh is 0 from itself; a flat grid is `d` from
+// the same grid lifted by d, and from a coarser grid of the same plane lifted by d.
+TEST(MeshTiles, LevelErrorIsTheDistanceBetweenTheSurfaces) {
+  const auto flat = [](float, float) { return 0.0f; };
+  const TriangleMesh fine = height_field(16, 0.5f, flat);
+  EXPECT_EQ(chunk::level_error(fine, fine), 0.0);
+  const TriangleMesh lifted = height_field(16, 0.5f, [](float, float) { return 0.25f; });
+  EXPECT_NEAR(chunk::level_error(fine, lifted), 0.25, 1e-6);
+  const TriangleMesh coarse = height_field(4, 2.0f, [](float, float) { return -0.125f; });
+  EXPECT_NEAR(chunk::level_error(fine, coarse), 0.125, 1e-6);
+  // A bump the coarse grid misses: the fine vertex at its top is 1 from the coarse plane.
+  const TriangleMesh bump =
+      height_field(16, 0.5f, [](float x, float y) { return x == 3.5f && y == 4.5f ? 1.0f : 0.0f; });
+  EXPECT_NEAR(chunk::level_error(bump, height_field(4, 2.0f, flat)), 1.0, 1e-6);
+  EXPECT_TRUE(std::isinf(chunk::level_error(fine, TriangleMesh{})));
+}
+
+// The progressive coder's levels of a smooth surface: at most `levels` of them, coarse to fine,
+// each of fewer triangles than the next and than the tile, near the tile's triangles / 4^k, the
+// coarser the farther from the tile (the coder rounds a tile's corners off: the error is the
+// fine corner's distance to the coarse border, most at the coarsest level), their vertices on
+// the tile within the coder's quantisation (half a step of 1/64 of the median edge, per axis);
+// a small tile gets none.
+TEST(MeshTiles, ProgressiveLevelsAreCoarseToFineApproximationsOfTheTile) {
+  const TriangleMesh tile = height_field(
+      96, 0.25f, [](float x, float y) { return 2.0f * std::sin(x * 0.3f) * std::cos(y * 0.25f); });
+  const std::size_t t = tile.triangles.size();
+  float max_edge = 0.0f;
+  for (const Triangle& f : tile.triangles)
+    for (int k = 0; k < 3; ++k)
+      max_edge = std::max(max_edge, (tile.vertices[f[k]] - tile.vertices[f[(k + 1) % 3]]).norm());
+  const std::vector<TriangleMesh> levels = progressive_tile_levels(tile);
+  ASSERT_EQ(levels.size(), 3u);
+  std::vector<double> errors;
+  for (std::size_t k = 0; k < levels.size(); ++k) {
+    const std::size_t n = levels[k].triangles.size();
+    const std::size_t finer = k + 1 < levels.size() ? levels[k + 1].triangles.size() : t;
+    EXPECT_LT(n, finer);
+    EXPECT_GE(static_cast<double>(n), static_cast<double>(t) / std::pow(4.0, 3 - k) * 0.9) << k;
+    EXPECT_LE(static_cast<double>(n), static_cast<double>(t) / std::pow(4.0, 3 - k) * 1.5) << k;
+    errors.push_back(chunk::level_error(tile, levels[k]));
+    const MeshDistanceIndex on_tile(tile);
+    for (const Eigen::Vector3f& v : levels[k].vertices)
+      EXPECT_LE(on_tile.closest(v).distance, std::sqrt(3.0f) * max_edge / 128.0f) << k;
+  }
+  EXPECT_GT(errors[0], errors[1]);
+  EXPECT_GT(errors[1], errors[2]);
+  EXPECT_GT(errors[2], 0.0);
+  EXPECT_LT(errors[2], errors[0] / 4.0) << "finer levels converge on the tile";
+  EXPECT_LT(errors[0], 24.0f / 4.0f) << "a quarter of the tile's side";
+  EXPECT_TRUE(
+      progressive_tile_levels(height_field(8, 1.0f, [](float, float) { return 0.0f; })).empty());
+}
+
+// --tiles with levels (issue 61): every level of every tile decodes, the levels go coarse to
+// fine with growing triangles and errors that never grow, the finest is the tile's own file
+// (which the union tests cover), and the index's triangles, bytes and geometric errors are
+// those of the files (the errors recomputed from the files read back); tileset.json says the
+// same as 3D Tiles. The files are the same at one thread and at all.
+TEST(MeshTiles, EveryLevelOfEveryTileDecodesAndTheIndexMatchesTheFiles) {
+  const CityInput input(60000, true);
+  ChunkingConfig chunking = chunks_of(20.0f);
+  chunking.finish_in_place = true;
+  const std::string dir = test::temp_dir() + "/level_tiles";
+  const std::string output = test::temp_dir() + "/level_tiles.ply";
+  std::filesystem::remove_all(dir);
+  const ChunkedResult r =
+      reconstruct_chunked_to_ply(input.path, "", ReconstructionConfig{}, chunking, output, dir);
+  std::ifstream index_file(dir + "/tiles.json");
+  const nlohmann::json index = nlohmann::json::parse(index_file);
+  EXPECT_EQ(index["format"], "meshflow-tiles-2");
+  ASSERT_EQ(index["tiles"].size(), r.report.tiles);
+  std::size_t with_levels = 0, files = 2;  // tiles.json, tileset.json
+  for (const nlohmann::json& entry : index["tiles"]) {
+    const nlohmann::json& levels = entry["levels"];
+    ASSERT_GE(levels.size(), 1u);
+    files += levels.size();
+    with_levels += levels.size() > 1 ? 1 : 0;
+    const nlohmann::json& finest = levels.back();
+    EXPECT_EQ(finest["file"], entry["file"]);
+    EXPECT_EQ(finest["triangles"], entry["triangles"]);
+    EXPECT_EQ(finest["geometric_error"].get<double>(), 0.0);
+    const TriangleMesh tile = io::read_glb_mesh(dir + "/" + entry["file"].get<std::string>());
+    double finer_error = 0.0;
+    std::size_t finer_triangles = std::numeric_limits<std::size_t>::max();
+    for (std::size_t k = levels.size(); k-- > 0;) {
+      const nlohmann::json& level = levels[k];
+      const std::string path = dir + "/" + level["file"].get<std::string>();
+      const TriangleMesh m = io::read_glb_mesh(path);
+      EXPECT_EQ(level["triangles"].get<std::size_t>(), m.triangles.size());
+      EXPECT_EQ(level["bytes"].get<std::uintmax_t>(), std::filesystem::file_size(path));
+      EXPECT_LT(m.triangles.size(), finer_triangles) << "coarse to fine";
+      const double error = level["geometric_error"].get<double>();
+      EXPECT_GE(error, finer_error) << "errors never grow from coarse to fine";
+      finer_error = std::max(finer_error, chunk::level_error(tile, m));
+      EXPECT_EQ(static_cast<float>(error), static_cast<float>(finer_error)) << path;
+      if (k + 1 < levels.size()) {
+        EXPECT_GT(error, 0.0);
+      }
+      finer_triangles = m.triangles.size();
+    }
+  }
+  EXPECT_GT(with_levels, r.report.tiles / 2) << "most city tiles get coarser levels";
+  EXPECT_EQ(static_cast<std::size_t>(std::distance(std::filesystem::directory_iterator(dir),
+                                                   std::filesystem::directory_iterator())),
+            files)
+      << "every file listed once";
+  expect_tileset_as_index(dir);
+  // The same files at one thread.
+  const std::string one = test::temp_dir() + "/level_tiles_1";
+  std::filesystem::remove_all(one);
+  {
+    const tbb::global_control threads(tbb::global_control::max_allowed_parallelism, 1);
+    reconstruct_chunked_to_ply(input.path, "", ReconstructionConfig{}, chunking, output, one);
+  }
+  for (const auto& file : std::filesystem::directory_iterator(dir))
+    EXPECT_TRUE(test::read_file(file.path().string()) ==
+                test::read_file(one + "/" + file.path().filename().string()))
+        << file.path();
+  std::filesystem::remove_all(dir);
+  std::filesystem::remove_all(one);
+  std::filesystem::remove(output);
 }
 
 TEST(MeshStitch, TurnsAChunkWoundAgainstItsNeighbourOver) {

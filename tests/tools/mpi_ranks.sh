@@ -26,14 +26,21 @@ for cloud in normals plain; do
   done
 done
 # --json (the mesh as without it): every rank's phases in order, the chunks they meshed adding
-# up to all, and the serial fraction those phases imply; --tiles: the tiles of one process.
+# up to all, and the serial fraction those phases imply; --tiles (each rank its own chunks'
+# tiles and their levels, rank 0 the index): the tiles of one process, on 1 and 2 ranks.
 mpirun --bind-to none -n 2 "$meshflow_mpi" reconstruct "$work/normals.ply" -o "$work/json_2.ply" \
   "${args[@]}" --json --tiles "$work/tiles_2" > "$work/json_2.txt"
+mpirun --bind-to none -n 1 "$meshflow_mpi" reconstruct "$work/normals.ply" -o "$work/tiled_1.ply" \
+  "${args[@]}" --tiles "$work/tiles_rank_1" > "$work/log_tiles_1.txt"
 "$meshflow" reconstruct "$work/normals.ply" -o "$work/one_process.ply" "${args[@]}" -q \
   --tiles "$work/tiles_1"
 cmp "$work/one_process.ply" "$work/json_2.ply" || { echo "FAIL: --json changed the mesh"; exit 1; }
-diff -r "$work/tiles_1" "$work/tiles_2" || { echo "FAIL: 2 ranks wrote other tiles"; exit 1; }
-echo "--tiles, 2 ranks: $(ls "$work/tiles_2" | wc -l) files, as one process's"
+cmp "$work/one_process.ply" "$work/tiled_1.ply" || { echo "FAIL: --tiles changed the mesh"; exit 1; }
+for n in rank_1 2; do
+  diff -r "$work/tiles_1" "$work/tiles_$n" || { echo "FAIL: tiles_$n: other tiles"; exit 1; }
+done
+compgen -G "$work/tiles_1/*_lod0.glb" > /dev/null || { echo "FAIL: no coarser levels"; exit 1; }
+echo "--tiles, 1 and 2 ranks: $(ls "$work/tiles_2" | wc -l) files ($(ls "$work/tiles_2" | grep -c _lod) levels), as one process's"
 /usr/bin/python3 - "$work/json_2.txt" <<'PY'
 import json, sys
 d = json.load(open(sys.argv[1]))
@@ -42,14 +49,17 @@ assert [r["rank"] for r in ranks] == [0, 1], ranks
 assert sum(r["chunks"] for r in ranks) == d["chunks"], (ranks, d["chunks"])
 names = [[p["phase"] for p in r["phases"]] for r in ranks]
 # Every rank writes its own parts into the file ("write", parallel); rank 0 gathers only the
-# seams' neighbourhoods, finishes them and writes the tiles from the file's finished rows.
+# seams' neighbourhoods and finishes them; then every rank writes its own chunks' tiles from
+# the file's finished rows ("tiles", parallel) and rank 0 joins their records ("index").
 assert names[0] == ["decide", "setup", "partition", "join", "chunks", "exchange", "seams", "weld",
-                    "create", "write", "gather", "finish", "tiles"], names[0]
+                    "create", "write", "gather", "finish", "tiles", "index"], names[0]
 assert names[1] == ["decide", "setup", "partition", "plan", "chunks", "exchange", "seams",
-                    "weld", "create", "write"], names[1]
+                    "weld", "create", "write", "finish", "tiles"], names[1]
 assert all(p["work_s"] == 0 for p in ranks[1]["phases"]
-           if p["phase"] in ("setup", "plan", "exchange", "seams", "create"))
-assert [p["work_s"] > 0 for p in ranks[1]["phases"] if p["phase"] == "write"] == [True], ranks[1]
+           if p["phase"] in ("setup", "plan", "exchange", "seams", "create", "finish"))
+for phase in ("write", "tiles"):
+  assert [p["work_s"] > 0 for p in ranks[1]["phases"] if p["phase"] == phase] == [True], ranks[1]
+assert not [p for p in ranks[0]["phases"] if p["phase"] == "tiles" and p["serial"]], ranks[0]
 assert not any(p["serial"] for p in ranks[1]["phases"]), "only rank 0's phases are serial"
 s = d["timing"]["serial"]
 assert 0 < s["fraction"] < 1 and s["max_speedup"] > 1, s

@@ -39,6 +39,7 @@
 
 #include "graph/chunk_output.h"
 #include "graph/chunked_reconstruction.h"
+#include "graph/tile_levels.h"
 #include "nodes/chunk/mesh_tiles.h"
 #include "nodes/chunk/phase_times.h"
 #include "nodes/extract/extract_surface.h"
@@ -419,7 +420,7 @@ int run(const Options& o, int rank, int ranks) {
     if (!o.tiles.empty()) {
       clock.begin("tiles", true);
       const std::vector<chunk::MeshTile> split = chunk::split_into_tiles(mesh, plan.grid);
-      chunk::write_tiles(o.tiles, split, plan.grid, plan.rows.origin);
+      chunk::write_tiles(o.tiles, split, plan.grid, plan.rows.origin, progressive_levels());
       tiles = split.size();
     }
   }
@@ -468,7 +469,8 @@ void add_mpi_reconstruct(CLI::App* cmd, const MpiWorld& world, int& status) {
       "of per chunk with seams held fixed (the single-process mesh but for a few "
       "triangles; serial, and the whole mesh several times in memory)");
   cmd->add_option("--tiles", o->tiles,
-                  "Rank 0 also writes the mesh as one glTF file per chunk (DIR/tile_I_J_K.glb) and "
+                  "Also write the mesh as one glTF file per chunk (DIR/tile_I_J_K.glb, each rank "
+                  "its own chunks'), each also at coarser levels (tile_I_J_K_lodL.glb), and "
                   "their index DIR/tiles.json");
   cmd->add_flag("--json", o->json,
                 "Rank 0 prints one JSON document: the mesh, and every rank's phases (wall, CPU "

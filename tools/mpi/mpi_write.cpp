@@ -9,9 +9,9 @@
 
 #include "graph/chunk_output.h"
 #include "graph/chunked_reconstruction.h"
-#include "nodes/chunk/mesh_tiles.h"
 #include "nodes/io/ply_mesh_file.h"
 #include "tools/mpi/mpi_bytes.h"
+#include "tools/mpi/mpi_tiles.h"
 
 namespace meshflow::cli {
 namespace {
@@ -23,7 +23,8 @@ struct RankWrite {
   std::string error;                                                      // its writing failed
   std::uint64_t vertices = 0, triangles = 0;                              // rows written
   std::vector<std::pair<std::uint64_t, chunk::SeamNeighbourhood>> parts;  // by position
-  std::vector<std::array<std::uint64_t, 3>> rows;  // position, first face row, faces
+  std::vector<std::array<std::uint64_t, 3>>
+      rows;  // position, first face row, faces: its tiles (not sent)
 };
 
 void put_neighbourhood(io::ByteWriter& w, const chunk::SeamNeighbourhood& n) {
@@ -73,7 +74,6 @@ std::vector<unsigned char> encode(const RankWrite& m) {
     w.u64(position);
     put_neighbourhood(w, n);
   }
-  put_vector(w, m.rows);
   return std::move(w.out);
 }
 
@@ -95,7 +95,6 @@ RankWrite decode(const std::vector<unsigned char>& message, int from) {
     const std::uint64_t position = r.u64("part");
     m.parts.emplace_back(position, get_neighbourhood(r));
   }
-  m.rows = get_vector<std::array<std::uint64_t, 3>>(r, "part rows");
   return m;
 }
 
@@ -172,11 +171,14 @@ RanksWritten write_on_ranks(const std::string& output, std::vector<ChunkResult>&
   }
   mine.times = {rank, chunks, chunk::peak_resident_bytes(), clock.phases()};
   RanksWritten written;
+  TileJob tiles{output,    layout, weld.vertices, weld.triangles, origin,
+                tiles_dir, grid,   &files,        mine.rows,      chunks};
   if (rank != 0) {
     clock.end();
     mine.times.phases = clock.phases();
     send_bytes(encode(mine), 0);
     for (const auto& f : mine.failed) written.failed.push_back(f.second);
+    if (!tiles_dir.empty()) write_tiles_on_ranks(tiles, "", clock, rank, ranks);
     return written;
   }
 
@@ -191,10 +193,8 @@ RanksWritten write_on_ranks(const std::string& output, std::vector<ChunkResult>&
   }
   std::vector<std::pair<std::uint64_t, std::string>> failed;
   std::vector<std::pair<std::uint64_t, chunk::SeamNeighbourhood*>> parts;
-  std::vector<std::array<std::uint64_t, 3>> rows;
   std::uint64_t vertices = 0, triangles = 0;
   for (RankWrite& m : all) {
-    rows.insert(rows.end(), m.rows.begin(), m.rows.end());
     written.times.push_back(m.times);
     failed.insert(failed.end(), m.failed.begin(), m.failed.end());
     if (written.error.empty() && !m.error.empty())
@@ -220,14 +220,20 @@ RanksWritten write_on_ranks(const std::string& output, std::vector<ChunkResult>&
       file->add_rows_written_elsewhere(vertices - all.front().vertices,
                                        triangles - all.front().triangles);
       chunk::finish_seam_rows(seams, *file, &written.rewritten);
-      if (!tiles_dir.empty()) {
-        clock.begin("tiles", true);  // each chunk's finished rows read back
-        std::sort(rows.begin(), rows.end());
-        chunk::TileWriter tiles(tiles_dir, grid, origin);
-        for (const auto& [position, first, count] : rows)
-          tiles.add(chunk::read_tile(*file, files.at(position).index, first, count));
-        written.tiles = tiles.finish();
-      }
+      if (!tiles_dir.empty()) file->sync();  // the ranks read their tiles' finished rows
+    } catch (const std::exception& e) {
+      written.error = e.what();
+    }
+  }
+  if (!tiles_dir.empty()) {  // every rank its own chunks' tiles, rank 0 the index
+    const TilesWritten tiled = write_tiles_on_ranks(
+        tiles, written.error.empty() ? "" : "rank 0 did not finish the output", clock, rank, ranks);
+    for (const chunk::RankTimes& t : tiled.others) written.times.at(t.rank) = t;
+    if (written.error.empty()) written.error = tiled.error;
+    written.tiles = tiled.tiles;
+  }
+  if (written.error.empty()) {
+    try {
       file->commit();
     } catch (const std::exception& e) {
       written.error = e.what();

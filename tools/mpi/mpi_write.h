@@ -34,9 +34,10 @@ struct RanksWritten {
 /// "create"), every rank opens it and writes its parts at their rows, freeing each (phase
 /// "write", parallel), then sends rank 0 its timing (`chunks` meshed, its phases), failed chunks
 /// and the parts' seam neighbourhoods (add_seam_neighbourhood()); rank 0 (phase "gather", then
-/// "finish": finish_seam_rows()) rewrites the seams' rows, with a non-empty `tiles_dir` writes
-/// each chunk's finished rows as its tile (chunk::read_tile(); `files`: the chunks by position,
-/// for their index; phase "tiles") and renames OUT.tmp to OUT. Nothing
+/// "finish": finish_seam_rows()) rewrites the seams' rows; with a non-empty `tiles_dir` every
+/// rank then writes its own chunks' finished rows as their tiles with their coarser levels and
+/// rank 0 their index (write_tiles_on_ranks(); `files`: the chunks by position); rank 0 renames
+/// OUT.tmp to OUT. Nothing
 /// appears under OUT unless every rank wrote all its rows (a failed or dead rank leaves at most
 /// OUT.tmp; a failure that rank 0 learns of removes it). Returns rank 0's view (other ranks:
 /// their own failures only). No triangle at all: nothing is written, `error` says so. Memory:

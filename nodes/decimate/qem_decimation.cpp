@@ -170,25 +170,30 @@ class Decimator {
         cos2_min_angle_(static_cast<float>(
             std::pow(std::cos(radians(static_cast<double>(config.min_angle_deg))), 2))),
         scratch_([this] { return Scratch(*this); }) {
-    // Positions (they never change) and 1 / depth^2 of every vertex, or 1.
-    for (std::size_t v = 0; v < mesh.vertices.size(); ++v) {
-      terms_[v].position = mesh.vertices[v];
-      if (config.divide_by_depth2)
-        terms_[v].scale =
-            1.0 / std::max(1e-6, static_cast<double>(
-                                     (mesh.vertices[v] - config.viewpoint).squaredNorm()));
-    }
-    // Area-weighted plane quadric of every face, summed at its corners (serial: the sums must
-    // not depend on the thread count).
-    for (const Triangle& t : mesh.triangles) {
-      const Eigen::Vector3d a = p(t[0]).cast<double>();
-      const Eigen::Vector3d n = (p(t[1]).cast<double>() - a).cross(p(t[2]).cast<double>() - a);
-      const double area2 = n.norm();
-      if (!(area2 > 0.0)) continue;
-      const Eigen::Vector3d unit = n / area2;
-      const Quadric k = Quadric::plane(unit, -unit.dot(a), 0.5 * area2);
-      for (std::uint32_t v : t) q_[v].add(k);
-    }
+    // Every face's plane, then per vertex its position (it never changes), 1 / depth^2 (or 1)
+    // and the area-weighted plane quadrics of its faces summed in face order (`around` lists
+    // them ascending): the sums a serial loop over the faces would make, in parallel.
+    std::vector<FacePlane> planes(mesh.triangles.size());
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, planes.size()),
+                      [&](const tbb::blocked_range<std::size_t>& range) {
+                        for (std::size_t f = range.begin(); f != range.end(); ++f)
+                          planes[f] = face_plane(mesh.triangles[f]);
+                      });
+    tbb::parallel_for(
+        tbb::blocked_range<std::size_t>(0, mesh.vertices.size()),
+        [&](const tbb::blocked_range<std::size_t>& range) {
+          for (std::size_t v = range.begin(); v != range.end(); ++v) {
+            const auto u = static_cast<std::uint32_t>(v);
+            terms_[v].position = mesh.vertices[v];
+            if (config.divide_by_depth2)
+              terms_[v].scale =
+                  1.0 / std::max(1e-6, static_cast<double>(
+                                           (mesh.vertices[v] - config.viewpoint).squaredNorm()));
+            for (const std::uint32_t* f = around.begin(u); f != around.end(u); ++f)
+              if (planes[*f].weight > 0.0)
+                q_[v].add(Quadric::plane(planes[*f].unit, planes[*f].d, planes[*f].weight));
+          }
+        });
   }
 
   // The rest of the setup: the feature edges' lines and constraint quadrics (none when empty),
@@ -286,6 +291,22 @@ class Decimator {
     }
   }
 
+  // A face's plane through its first corner and its quadric weight (half its area; 0 for a
+  // face without area, which adds nothing).
+  struct FacePlane {
+    Eigen::Vector3d unit = Eigen::Vector3d::Zero();
+    double d = 0.0, weight = 0.0;
+  };
+  FacePlane face_plane(const Triangle& t) const {
+    const Eigen::Vector3d a = in_.vertices[t[0]].cast<double>();
+    const Eigen::Vector3d n =
+        (in_.vertices[t[1]].cast<double>() - a).cross(in_.vertices[t[2]].cast<double>() - a);
+    const double area2 = n.norm();
+    if (!(area2 > 0.0)) return {};
+    const Eigen::Vector3d unit = n / area2;
+    return {unit, -unit.dot(a), 0.5 * area2};
+  }
+
   // Whether u lies on a feature edge (with features given).
   bool on_feature(std::uint32_t u) const {
     return !feature_degree_.empty() && feature_degree_[u] != 0;
@@ -351,7 +372,7 @@ class Decimator {
                         const std::size_t count = marked.size();
                         for (std::size_t i = 0; i < count; ++i) {
                           if (i + 2 * kLookAhead < count)
-                            rings_.prefetch_ring(marked[i + 2 * kLookAhead]);
+                            rings_.prefetch_slot(marked[i + 2 * kLookAhead]);
                           if (i + kLookAhead < count) prefetch_bound(marked[i + kLookAhead]);
                           const std::uint32_t u = marked[i];
                           best_[u] = cost_bound(u, scratch);
@@ -430,6 +451,7 @@ class Decimator {
         [&](const tbb::blocked_range<std::size_t>& range) {
           Scratch& local = local_scratch();
           for (std::size_t i = range.begin(); i != range.end(); ++i) {
+            prefetch_walk(i, false);  // (the serial walk's stages: each u is evaluated here)
             const Candidate& c = candidate(i);
             if (c.cost > walk.limit ||
                 (validated_[c.from] && !pass_[c.from].changed && !pass_[c.to].changed))
@@ -761,7 +783,10 @@ class Decimator {
       __builtin_prefetch(&q_[x].q[8]);  // a quadric spans two cache lines
     }
     __builtin_prefetch(&terms_[c.to]);
-    if (!slots_in_cache) prefetch_slots(c);
+    if (!slots_in_cache) {  // (a record holds most rings: the rest are not waited for)
+      prefetch_slots(c);
+      return;
+    }
     rings_.prefetch_ring(c.from);
     rings_.prefetch_ring(c.to);
   }

@@ -471,10 +471,9 @@ class Decimator {
     const std::size_t n = order_.size();
     if (ahead_in_parallel) {
       // Evaluated at the chunk's start: u's ring is near; what the collapse itself then reads
-      // and writes, u's neighbours' slots, rings and numbers, is requested in two more stages.
+      // and writes, u's neighbours' records (their rings) and numbers, in one more stage.
       if (i + kLookAhead < n) prefetch(candidate(i + kLookAhead), false);
       if (i + kLookAhead / 2 < n) prefetch_corners(candidate(i + kLookAhead / 2));
-      if (i + kLookAhead / 4 < n) prefetch_neighbour_rings(candidate(i + kLookAhead / 4));
       return;
     }
     if (i + 3 * kLookAhead < n)
@@ -482,7 +481,6 @@ class Decimator {
     if (i + 2 * kLookAhead < n) prefetch_slots(candidate(i + 2 * kLookAhead));
     if (i + kLookAhead < n) prefetch(candidate(i + kLookAhead), true);
     if (i + kLookAhead / 2 < n) prefetch_corners(candidate(i + kLookAhead / 2));
-    if (i + kLookAhead / 4 < n) prefetch_neighbour_rings(candidate(i + kLookAhead / 4));
   }
 
   // Walks candidates [first, last): each is taken, if it is still valid and within the limit
@@ -797,7 +795,7 @@ class Decimator {
     rings_.prefetch_slot(c.to);
   }
 
-  // Requests the terms (position, target terms) and ring slots of u's neighbours
+  // Requests the terms (position, target terms) and ring records of u's neighbours
   // (prefetch(c, true) ran earlier, so u's ring is in cache).
   void prefetch_corners(const Candidate& c) const {
     for (const std::uint32_t* x = rings_.begin(c.from); x != rings_.end(c.from); ++x) {
@@ -805,13 +803,6 @@ class Decimator {
       __builtin_prefetch(&pass_[*x]);
       rings_.prefetch_slot(*x);
     }
-  }
-
-  // Requests the rings of u's neighbours, which a collapse of u rewrites (prefetch_corners()
-  // ran earlier, so their slots are in cache).
-  void prefetch_neighbour_rings(const Candidate& c) const {
-    for (const std::uint32_t* x = rings_.begin(c.from); x != rings_.end(c.from); ++x)
-      rings_.prefetch_ring(*x);
   }
 
   // Whether the border w -> u -> v turns by less than max_border_turn_deg at u (the same for

@@ -450,14 +450,25 @@ class Decimator {
         tbb::blocked_range<std::size_t>(first, last, 16),
         [&](const tbb::blocked_range<std::size_t>& range) {
           Scratch& local = local_scratch();
+          // The range's candidates to evaluate are listed first, then what each evaluation reads
+          // is requested a few evaluations ahead, in stages (as the serial walk's, but counted
+          // in evaluations: most candidates need none).
+          std::vector<std::uint32_t>& due = local.marked;
+          due.clear();
           for (std::size_t i = range.begin(); i != range.end(); ++i) {
-            prefetch_walk(i, false);  // (the serial walk's stages: each u is evaluated here)
             const Candidate& c = candidate(i);
             if (c.cost > walk.limit ||
                 (validated_[c.from] && !pass_[c.from].changed && !pass_[c.to].changed))
               continue;
+            due.push_back(static_cast<std::uint32_t>(i));
+          }
+          const std::size_t count = due.size();
+          for (std::size_t k = 0; k < count; ++k) {
+            if (k + kLookAhead < count) prefetch(candidate(due[k + kLookAhead]), false);
+            if (k + kLookAhead / 2 < count) prefetch_corners(candidate(due[k + kLookAhead / 2]));
+            const std::size_t i = due[k];
             has_ahead_[i - first] = 1;
-            ahead_[i - first] = best_collapse(c.from, local);
+            ahead_[i - first] = best_collapse(candidate(i).from, local);
           }
         });
   }
@@ -624,15 +635,17 @@ class Decimator {
     explicit Scratch(const Decimator& d) : fan(d.cos_turn_, d.cos2_min_angle_) {}
     const std::uint32_t* neighbours = nullptr;  ///< u's ring
     std::size_t neighbour_count = 0;
-    std::uint32_t border[2] = {0, 0};   ///< u's neighbours along its border, if it is on one
-    std::size_t border_count = 0;       ///< 2 on a border, else 0
-    std::uint32_t line[2] = {0, 0};     ///< u's neighbours along its feature line, if on one
-    bool on_line = false;               ///< u is an inner vertex or a loose end of a feature line
-    std::size_t line_count = 0;         ///< 2 for an inner vertex, 1 for a loose end
-    std::vector<Target> candidates;     ///< u's targets by quadric cost
-    std::vector<double> costs;          ///< quadric_costs() of u's targets
-    std::vector<std::uint32_t> marked;  ///< bound_marked_costs(): a range's marked vertices
-    CollapseFan fan;                    ///< u's faces
+    std::uint32_t border[2] = {0, 0};  ///< u's neighbours along its border, if it is on one
+    std::size_t border_count = 0;      ///< 2 on a border, else 0
+    std::uint32_t line[2] = {0, 0};    ///< u's neighbours along its feature line, if on one
+    bool on_line = false;              ///< u is an inner vertex or a loose end of a feature line
+    std::size_t line_count = 0;        ///< 2 for an inner vertex, 1 for a loose end
+    std::vector<Target> candidates;    ///< u's targets by quadric cost
+    std::vector<double> costs;         ///< quadric_costs() of u's targets
+    /// bound_marked_costs(): a range's marked vertices; evaluate_ahead(): a range's candidates
+    /// to evaluate
+    std::vector<std::uint32_t> marked;
+    CollapseFan fan;  ///< u's faces
 
     // The quadric costs of moving u onto each of its `count` targets (see quadric_costs()).
     const double* target_costs(const Decimator& d, std::uint32_t u, const std::uint32_t* targets,

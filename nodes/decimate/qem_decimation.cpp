@@ -2,8 +2,10 @@
 
 #include <tbb/blocked_range.h>
 #include <tbb/enumerable_thread_specific.h>
+#include <tbb/global_control.h>
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_invoke.h>
+#include <tbb/task_arena.h>
 
 #include <Eigen/Geometry>
 #include <algorithm>
@@ -170,9 +172,34 @@ class Decimator {
         cos2_min_angle_(static_cast<float>(
             std::pow(std::cos(radians(static_cast<double>(config.min_angle_deg))), 2))),
         scratch_([this] { return Scratch(*this); }) {
-    // Every face's plane, then per vertex its position (it never changes), 1 / depth^2 (or 1)
-    // and the area-weighted plane quadrics of its faces summed in face order (`around` lists
-    // them ascending): the sums a serial loop over the faces would make, in parallel.
+    // Per vertex its position (it never changes) and 1 / depth^2 (or 1).
+    tbb::parallel_for(
+        tbb::blocked_range<std::size_t>(0, mesh.vertices.size()),
+        [&](const tbb::blocked_range<std::size_t>& range) {
+          for (std::size_t v = range.begin(); v != range.end(); ++v) {
+            terms_[v].position = mesh.vertices[v];
+            if (config.divide_by_depth2)
+              terms_[v].scale =
+                  1.0 / std::max(1e-6, static_cast<double>(
+                                           (mesh.vertices[v] - config.viewpoint).squaredNorm()));
+          }
+        });
+    // The area-weighted plane quadrics of every vertex's faces, summed in face order: on one
+    // thread, face by face into their corners; else every face's plane first, then per vertex
+    // in parallel (`around` lists its faces ascending). The same sums either way.
+    const bool one_thread =
+        std::min<std::size_t>(
+            tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism),
+            static_cast<std::size_t>(tbb::this_task_arena::max_concurrency())) <= 1;
+    if (one_thread) {
+      for (const Triangle& t : mesh.triangles) {
+        const FacePlane f = face_plane(t);
+        if (!(f.weight > 0.0)) continue;
+        const Quadric k = Quadric::plane(f.unit, f.d, f.weight);
+        for (std::uint32_t v : t) q_[v].add(k);
+      }
+      return;
+    }
     std::vector<FacePlane> planes(mesh.triangles.size());
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, planes.size()),
                       [&](const tbb::blocked_range<std::size_t>& range) {
@@ -180,19 +207,12 @@ class Decimator {
                           planes[f] = face_plane(mesh.triangles[f]);
                       });
     tbb::parallel_for(
-        tbb::blocked_range<std::size_t>(0, mesh.vertices.size()),
-        [&](const tbb::blocked_range<std::size_t>& range) {
-          for (std::size_t v = range.begin(); v != range.end(); ++v) {
-            const auto u = static_cast<std::uint32_t>(v);
-            terms_[v].position = mesh.vertices[v];
-            if (config.divide_by_depth2)
-              terms_[v].scale =
-                  1.0 / std::max(1e-6, static_cast<double>(
-                                           (mesh.vertices[v] - config.viewpoint).squaredNorm()));
-            for (const std::uint32_t* f = around.begin(u); f != around.end(u); ++f)
+        tbb::blocked_range<std::uint32_t>(0, static_cast<std::uint32_t>(mesh.vertices.size())),
+        [&](const tbb::blocked_range<std::uint32_t>& range) {
+          for (std::uint32_t v = range.begin(); v != range.end(); ++v)
+            for (const std::uint32_t* f = around.begin(v); f != around.end(v); ++f)
               if (planes[*f].weight > 0.0)
                 q_[v].add(Quadric::plane(planes[*f].unit, planes[*f].d, planes[*f].weight));
-          }
         });
   }
 

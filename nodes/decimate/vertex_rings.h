@@ -33,8 +33,8 @@ class VertexRings {
 
   /// Rings of the `vertex_count` vertices of `triangles` (corners < vertex_count), oriented as
   /// the faces are. In parallel over vertices; the same for any thread count. O(V + T) time,
-  /// 64 bytes per vertex (one cache line: kind, size and a ring of up to
-  /// 14 entries), longer rings 4 x (1.5 x entries + 6) bytes beside.
+  /// 64 bytes per vertex (one cache line: kind, size and a ring of up to 14 entries), and
+  /// 4 x (1.5 x entries + 6) bytes beside for each longer ring.
   VertexRings(const std::vector<Triangle>& triangles, std::size_t vertex_count);
   /// The same from the incidence `around` = vertex_triangles(triangles, vertex_count) (a caller
   /// that needs it too builds it once); the vertex count is its row count.
@@ -124,12 +124,14 @@ class VertexRings {
     Record() : local{} {}
   };
   static_assert(sizeof(Record) == 64, "one cache line per vertex");
+  // The ring's first entry, in the record or in data_.
   const std::uint32_t* entries(const Record& r) const {
     return (r.flags & kSpilled) != 0 ? data_.data() + r.outside.offset : r.local;
   }
   std::uint32_t* entries(Record& r) {
     return (r.flags & kSpilled) != 0 ? data_.data() + r.outside.offset : r.local;
   }
+  // The entries the ring has room for where it lies.
   static std::size_t capacity(const Record& r) {
     return (r.flags & kSpilled) != 0 ? r.outside.capacity : kInline;
   }

@@ -2,8 +2,10 @@
 
 #include <tbb/blocked_range.h>
 #include <tbb/enumerable_thread_specific.h>
+#include <tbb/global_control.h>
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_invoke.h>
+#include <tbb/task_arena.h>
 
 #include <Eigen/Geometry>
 #include <algorithm>
@@ -170,25 +172,48 @@ class Decimator {
         cos2_min_angle_(static_cast<float>(
             std::pow(std::cos(radians(static_cast<double>(config.min_angle_deg))), 2))),
         scratch_([this] { return Scratch(*this); }) {
-    // Positions (they never change) and 1 / depth^2 of every vertex, or 1.
-    for (std::size_t v = 0; v < mesh.vertices.size(); ++v) {
-      terms_[v].position = mesh.vertices[v];
-      if (config.divide_by_depth2)
-        terms_[v].scale =
-            1.0 / std::max(1e-6, static_cast<double>(
-                                     (mesh.vertices[v] - config.viewpoint).squaredNorm()));
+    // Per vertex its position (it never changes) and 1 / depth^2 (or 1).
+    tbb::parallel_for(
+        tbb::blocked_range<std::size_t>(0, mesh.vertices.size()),
+        [&](const tbb::blocked_range<std::size_t>& range) {
+          for (std::size_t v = range.begin(); v != range.end(); ++v) {
+            terms_[v].position = mesh.vertices[v];
+            if (config.divide_by_depth2)
+              terms_[v].scale =
+                  1.0 / std::max(1e-6, static_cast<double>(
+                                           (mesh.vertices[v] - config.viewpoint).squaredNorm()));
+          }
+        });
+    // The area-weighted plane quadrics of every vertex's faces, summed in face order: on one
+    // thread, face by face into their corners; else every face's plane first, then per vertex
+    // in parallel (`around` lists its faces ascending). The same sums either way.
+    const bool one_thread =
+        std::min<std::size_t>(
+            tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism),
+            static_cast<std::size_t>(tbb::this_task_arena::max_concurrency())) <= 1;
+    if (one_thread) {
+      for (const Triangle& t : mesh.triangles) {
+        const FacePlane f = face_plane(t);
+        if (!(f.weight > 0.0)) continue;
+        const Quadric k = Quadric::plane(f.unit, f.d, f.weight);
+        for (std::uint32_t v : t) q_[v].add(k);
+      }
+      return;
     }
-    // Area-weighted plane quadric of every face, summed at its corners (serial: the sums must
-    // not depend on the thread count).
-    for (const Triangle& t : mesh.triangles) {
-      const Eigen::Vector3d a = p(t[0]).cast<double>();
-      const Eigen::Vector3d n = (p(t[1]).cast<double>() - a).cross(p(t[2]).cast<double>() - a);
-      const double area2 = n.norm();
-      if (!(area2 > 0.0)) continue;
-      const Eigen::Vector3d unit = n / area2;
-      const Quadric k = Quadric::plane(unit, -unit.dot(a), 0.5 * area2);
-      for (std::uint32_t v : t) q_[v].add(k);
-    }
+    std::vector<FacePlane> planes(mesh.triangles.size());
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, planes.size()),
+                      [&](const tbb::blocked_range<std::size_t>& range) {
+                        for (std::size_t f = range.begin(); f != range.end(); ++f)
+                          planes[f] = face_plane(mesh.triangles[f]);
+                      });
+    tbb::parallel_for(
+        tbb::blocked_range<std::uint32_t>(0, static_cast<std::uint32_t>(mesh.vertices.size())),
+        [&](const tbb::blocked_range<std::uint32_t>& range) {
+          for (std::uint32_t v = range.begin(); v != range.end(); ++v)
+            for (const std::uint32_t* f = around.begin(v); f != around.end(v); ++f)
+              if (planes[*f].weight > 0.0)
+                q_[v].add(Quadric::plane(planes[*f].unit, planes[*f].d, planes[*f].weight));
+        });
   }
 
   // The rest of the setup: the feature edges' lines and constraint quadrics (none when empty),
@@ -286,6 +311,22 @@ class Decimator {
     }
   }
 
+  // A face's plane through its first corner and its quadric weight (half its area; 0 for a
+  // face without area, which adds nothing).
+  struct FacePlane {
+    Eigen::Vector3d unit = Eigen::Vector3d::Zero();
+    double d = 0.0, weight = 0.0;
+  };
+  FacePlane face_plane(const Triangle& t) const {
+    const Eigen::Vector3d a = in_.vertices[t[0]].cast<double>();
+    const Eigen::Vector3d n =
+        (in_.vertices[t[1]].cast<double>() - a).cross(in_.vertices[t[2]].cast<double>() - a);
+    const double area2 = n.norm();
+    if (!(area2 > 0.0)) return {};
+    const Eigen::Vector3d unit = n / area2;
+    return {unit, -unit.dot(a), 0.5 * area2};
+  }
+
   // Whether u lies on a feature edge (with features given).
   bool on_feature(std::uint32_t u) const {
     return !feature_degree_.empty() && feature_degree_[u] != 0;
@@ -351,7 +392,7 @@ class Decimator {
                         const std::size_t count = marked.size();
                         for (std::size_t i = 0; i < count; ++i) {
                           if (i + 2 * kLookAhead < count)
-                            rings_.prefetch_ring(marked[i + 2 * kLookAhead]);
+                            rings_.prefetch_slot(marked[i + 2 * kLookAhead]);
                           if (i + kLookAhead < count) prefetch_bound(marked[i + kLookAhead]);
                           const std::uint32_t u = marked[i];
                           best_[u] = cost_bound(u, scratch);
@@ -429,13 +470,25 @@ class Decimator {
         tbb::blocked_range<std::size_t>(first, last, 16),
         [&](const tbb::blocked_range<std::size_t>& range) {
           Scratch& local = local_scratch();
+          // The range's candidates to evaluate are listed first, then what each evaluation reads
+          // is requested a few evaluations ahead, in stages (as the serial walk's, but counted
+          // in evaluations: most candidates need none).
+          std::vector<std::uint32_t>& due = local.marked;
+          due.clear();
           for (std::size_t i = range.begin(); i != range.end(); ++i) {
             const Candidate& c = candidate(i);
             if (c.cost > walk.limit ||
                 (validated_[c.from] && !pass_[c.from].changed && !pass_[c.to].changed))
               continue;
+            due.push_back(static_cast<std::uint32_t>(i));
+          }
+          const std::size_t count = due.size();
+          for (std::size_t k = 0; k < count; ++k) {
+            if (k + kLookAhead < count) prefetch(candidate(due[k + kLookAhead]), false);
+            if (k + kLookAhead / 2 < count) prefetch_corners(candidate(due[k + kLookAhead / 2]));
+            const std::size_t i = due[k];
             has_ahead_[i - first] = 1;
-            ahead_[i - first] = best_collapse(c.from, local);
+            ahead_[i - first] = best_collapse(candidate(i).from, local);
           }
         });
   }
@@ -449,10 +502,9 @@ class Decimator {
     const std::size_t n = order_.size();
     if (ahead_in_parallel) {
       // Evaluated at the chunk's start: u's ring is near; what the collapse itself then reads
-      // and writes, u's neighbours' slots, rings and numbers, is requested in two more stages.
+      // and writes, u's neighbours' records (their rings) and numbers, in one more stage.
       if (i + kLookAhead < n) prefetch(candidate(i + kLookAhead), false);
       if (i + kLookAhead / 2 < n) prefetch_corners(candidate(i + kLookAhead / 2));
-      if (i + kLookAhead / 4 < n) prefetch_neighbour_rings(candidate(i + kLookAhead / 4));
       return;
     }
     if (i + 3 * kLookAhead < n)
@@ -460,7 +512,6 @@ class Decimator {
     if (i + 2 * kLookAhead < n) prefetch_slots(candidate(i + 2 * kLookAhead));
     if (i + kLookAhead < n) prefetch(candidate(i + kLookAhead), true);
     if (i + kLookAhead / 2 < n) prefetch_corners(candidate(i + kLookAhead / 2));
-    if (i + kLookAhead / 4 < n) prefetch_neighbour_rings(candidate(i + kLookAhead / 4));
   }
 
   // Walks candidates [first, last): each is taken, if it is still valid and within the limit
@@ -604,15 +655,17 @@ class Decimator {
     explicit Scratch(const Decimator& d) : fan(d.cos_turn_, d.cos2_min_angle_) {}
     const std::uint32_t* neighbours = nullptr;  ///< u's ring
     std::size_t neighbour_count = 0;
-    std::uint32_t border[2] = {0, 0};   ///< u's neighbours along its border, if it is on one
-    std::size_t border_count = 0;       ///< 2 on a border, else 0
-    std::uint32_t line[2] = {0, 0};     ///< u's neighbours along its feature line, if on one
-    bool on_line = false;               ///< u is an inner vertex or a loose end of a feature line
-    std::size_t line_count = 0;         ///< 2 for an inner vertex, 1 for a loose end
-    std::vector<Target> candidates;     ///< u's targets by quadric cost
-    std::vector<double> costs;          ///< quadric_costs() of u's targets
-    std::vector<std::uint32_t> marked;  ///< bound_marked_costs(): a range's marked vertices
-    CollapseFan fan;                    ///< u's faces
+    std::uint32_t border[2] = {0, 0};  ///< u's neighbours along its border, if it is on one
+    std::size_t border_count = 0;      ///< 2 on a border, else 0
+    std::uint32_t line[2] = {0, 0};    ///< u's neighbours along its feature line, if on one
+    bool on_line = false;              ///< u is an inner vertex or a loose end of a feature line
+    std::size_t line_count = 0;        ///< 2 for an inner vertex, 1 for a loose end
+    std::vector<Target> candidates;    ///< u's targets by quadric cost
+    std::vector<double> costs;         ///< quadric_costs() of u's targets
+    /// bound_marked_costs(): a range's marked vertices; evaluate_ahead(): a range's candidates
+    /// to evaluate
+    std::vector<std::uint32_t> marked;
+    CollapseFan fan;  ///< u's faces
 
     // The quadric costs of moving u onto each of its `count` targets (see quadric_costs()).
     const double* target_costs(const Decimator& d, std::uint32_t u, const std::uint32_t* targets,
@@ -761,7 +814,10 @@ class Decimator {
       __builtin_prefetch(&q_[x].q[8]);  // a quadric spans two cache lines
     }
     __builtin_prefetch(&terms_[c.to]);
-    if (!slots_in_cache) prefetch_slots(c);
+    if (!slots_in_cache) {  // (a record holds most rings: the rest are not waited for)
+      prefetch_slots(c);
+      return;
+    }
     rings_.prefetch_ring(c.from);
     rings_.prefetch_ring(c.to);
   }
@@ -772,7 +828,7 @@ class Decimator {
     rings_.prefetch_slot(c.to);
   }
 
-  // Requests the terms (position, target terms) and ring slots of u's neighbours
+  // Requests the terms (position, target terms) and ring records of u's neighbours
   // (prefetch(c, true) ran earlier, so u's ring is in cache).
   void prefetch_corners(const Candidate& c) const {
     for (const std::uint32_t* x = rings_.begin(c.from); x != rings_.end(c.from); ++x) {
@@ -780,13 +836,6 @@ class Decimator {
       __builtin_prefetch(&pass_[*x]);
       rings_.prefetch_slot(*x);
     }
-  }
-
-  // Requests the rings of u's neighbours, which a collapse of u rewrites (prefetch_corners()
-  // ran earlier, so their slots are in cache).
-  void prefetch_neighbour_rings(const Candidate& c) const {
-    for (const std::uint32_t* x = rings_.begin(c.from); x != rings_.end(c.from); ++x)
-      rings_.prefetch_ring(*x);
   }
 
   // Whether the border w -> u -> v turns by less than max_border_turn_deg at u (the same for

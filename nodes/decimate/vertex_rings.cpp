@@ -14,8 +14,9 @@
 namespace meshflow {
 namespace {
 
-// Room left in every ring beyond its first size: a collapse onto a vertex usually grows its
-// ring by a few entries, and a ring that outgrows its room moves to the end of the storage.
+// Room left in a ring placed in VertexRings::data_ beyond its size: a collapse onto a vertex
+// usually grows its ring by a few entries, and a ring that outgrows its room moves to the end
+// of the storage.
 constexpr std::uint32_t kSlack = 6;
 
 using Pair = std::pair<std::uint32_t, std::uint32_t>;  // (a, b) of a face (u, a, b)
@@ -184,56 +185,47 @@ VertexRings::VertexRings(const std::vector<Triangle>& triangles, std::size_t ver
     : VertexRings(triangles, vertex_triangles(triangles, vertex_count)) {}
 
 VertexRings::VertexRings(const std::vector<Triangle>& triangles, const VertexTriangles& around)
-    : slots_(around.offsets.size() - 1), locked_(around.offsets.size() - 1, 0) {
+    : records_(around.offsets.size() - 1) {
   const std::size_t vertex_count = around.offsets.size() - 1;
-  std::uint32_t total = 0;
-  for (std::size_t v = 0; v < vertex_count; ++v) {
-    const std::uint32_t faces = around.offsets[v + 1] - around.offsets[v];
-    slots_[v].offset = total;
-    slots_[v].capacity = faces + 1 + kSlack;
-    total += slots_[v].capacity;
-  }
-  data_.reserve(total + total / 4);  // room for rings that move (a few dozen per depth frame)
-  data_.resize(total);
   tbb::enumerable_thread_specific<FanIndex> work([vertex_count] { return FanIndex(vertex_count); });
   // Orders v's fan into fan.entries and sets v's kind and fan count.
   const auto order = [&](std::uint32_t v, FanIndex& fan) {
     const bool gathered = fan.gather(v, around.begin(v), around.end(v), triangles);
     std::size_t fans = 1;
-    Slot& slot = slots_[v];
-    slot.kind = order_fan(gathered, fan, fans);
-    if (fans > 0xFFFF) slot.kind = Kind::kComplex;
-    slot.fans = static_cast<std::uint16_t>(fans);
+    Record& record = records_[v];
+    record.kind = order_fan(gathered, fan, fans);
+    if (fans > 0xFFFF) record.kind = Kind::kComplex;
+    record.fans = static_cast<std::uint16_t>(fans);
   };
-  // In parallel into the room of every ring; a vertex of several fans whose separators do not
-  // fit (more than kSlack / 2 + 1 fans) is left for a serial pass that moves it to the end.
+  // In parallel into every record; a ring longer than a record holds (rare: a vertex of
+  // valence above kInline) is left for a serial pass that places it in data_.
   std::vector<std::uint8_t> too_big(vertex_count, 0);
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, vertex_count),
                     [&](const tbb::blocked_range<std::size_t>& range) {
                       std::uint32_t small[3 * kSmallFan];
                       for (std::size_t v = range.begin(); v != range.end(); ++v) {
                         const auto u = static_cast<std::uint32_t>(v);
-                        Slot& slot = slots_[v];
+                        Record& record = records_[v];
                         const std::uint32_t* entries = small;
                         std::size_t count = 0;
                         if (around.end(u) - around.begin(u) <= std::ptrdiff_t{kSmallFan}) {
                           std::size_t fans = 1;
-                          slot.kind = order_small_fan(u, around.begin(u), around.end(u), triangles,
-                                                      small, count, fans);
-                          slot.fans = static_cast<std::uint16_t>(fans);
+                          record.kind = order_small_fan(u, around.begin(u), around.end(u),
+                                                        triangles, small, count, fans);
+                          record.fans = static_cast<std::uint16_t>(fans);
                         } else {
                           FanIndex& fan = work.local();
                           order(u, fan);
                           entries = fan.entries.data();
                           count = fan.entries.size();
                         }
-                        if (slot.kind == Kind::kComplex) continue;
-                        if (count > slot.capacity) {
+                        if (record.kind == Kind::kComplex) continue;
+                        if (count > kInline) {
                           too_big[v] = 1;
                           continue;
                         }
-                        std::copy(entries, entries + count, data_.begin() + slot.offset);
-                        slot.size = static_cast<std::uint32_t>(count);
+                        std::copy(entries, entries + count, record.local);
+                        record.size = static_cast<std::uint32_t>(count);
                       }
                     });
   for (std::uint32_t v = 0; v < vertex_count; ++v)
@@ -246,11 +238,11 @@ VertexRings::VertexRings(const std::vector<Triangle>& triangles, const VertexTri
   // neighbours; a complex vertex has no ring to list them). Complex vertices are few: their
   // faces are visited, not every vertex's ring.
   for (std::uint32_t v = 0; v < vertex_count; ++v) {
-    if (kind(v) == Kind::kFans) locked_[v] = 1;
+    if (kind(v) == Kind::kFans) records_[v].flags |= kLocked;
     if (kind(v) != Kind::kComplex) continue;
-    locked_[v] = 1;
+    records_[v].flags |= kLocked;
     for (const std::uint32_t* t = around.begin(v); t != around.end(v); ++t)
-      for (const std::uint32_t corner : triangles[*t]) locked_[corner] = 1;
+      for (const std::uint32_t corner : triangles[*t]) records_[corner].flags |= kLocked;
   }
   for (const Triangle& t : triangles)
     if (kind(t[0]) == Kind::kComplex && kind(t[1]) == Kind::kComplex &&
@@ -258,47 +250,50 @@ VertexRings::VertexRings(const std::vector<Triangle>& triangles, const VertexTri
       complex_only_.push_back(t);
 }
 
-std::uint32_t VertexRings::move_to_end(Slot& slot, std::size_t count) {
-  const std::uint32_t old_offset = slot.offset;
-  slot.offset = static_cast<std::uint32_t>(data_.size());
-  slot.capacity = static_cast<std::uint32_t>(count + count / 2 + kSlack);
-  data_.resize(data_.size() + slot.capacity);
-  return old_offset;
+void VertexRings::make_room(std::uint32_t v, std::size_t count) {
+  Record& record = records_[v];
+  if (count <= capacity(record)) return;
+  const bool spilled = (record.flags & kSpilled) != 0;
+  const std::uint32_t old_offset = spilled ? record.outside.offset : 0;
+  const auto offset = static_cast<std::uint32_t>(data_.size());
+  const auto room = static_cast<std::uint32_t>(count + count / 2 + kSlack);
+  data_.resize(data_.size() + room);
+  // (Copied before `outside` is written: a record's own entries share its storage.)
+  const std::uint32_t* from = spilled ? data_.data() + old_offset : record.local;
+  std::copy(from, from + record.size, data_.data() + offset);
+  record.outside = {offset, room};
+  record.flags |= kSpilled;
 }
 
-void VertexRings::assign(std::uint32_t v, const std::uint32_t* entries, std::size_t count) {
-  Slot& slot = slots_[v];
-  if (count > slot.capacity) move_to_end(slot, count);
-  std::copy(entries, entries + count, data_.begin() + slot.offset);
-  slot.size = static_cast<std::uint32_t>(count);
+void VertexRings::assign(std::uint32_t v, const std::uint32_t* entries_in, std::size_t count) {
+  Record& record = records_[v];
+  record.size = 0;  // (nothing to keep)
+  make_room(v, count);
+  std::copy(entries_in, entries_in + count, entries(record));
+  record.size = static_cast<std::uint32_t>(count);
 }
 
 void VertexRings::erase_or_replace(std::uint32_t w, std::uint32_t u, std::uint32_t v, bool erase) {
-  Slot& slot = slots_[w];
-  std::uint32_t* ring = data_.data() + slot.offset;
-  std::uint32_t* at = std::find(ring, ring + slot.size, u);
-  if (at == ring + slot.size) return;  // (cannot happen: u is w's neighbour)
+  Record& record = records_[w];
+  std::uint32_t* ring = entries(record);
+  std::uint32_t* at = std::find(ring, ring + record.size, u);
+  if (at == ring + record.size) return;  // (cannot happen: u is w's neighbour)
   if (!erase) {
     *at = v;
     return;
   }
-  std::copy(at + 1, ring + slot.size, at);
-  --slot.size;
+  std::copy(at + 1, ring + record.size, at);
+  --record.size;
 }
 
 void VertexRings::reserve_collapse(std::uint32_t u, std::uint32_t v) {
   // v's ring loses u and gains u's ring but v and the one or two wings (collapse()'s run).
   const std::size_t run_length = size(u) - (kind(u) == Kind::kClosed ? 3 : 2);
-  const std::size_t new_size = size(v) - 1 + run_length;
-  Slot& slot = slots_[v];
-  if (new_size <= slot.capacity) return;
-  const std::uint32_t old_offset = move_to_end(slot, new_size);
-  std::copy(data_.begin() + old_offset, data_.begin() + old_offset + slot.size,
-            data_.begin() + slot.offset);
+  make_room(v, size(v) - 1 + run_length);
 }
 
 std::size_t VertexRings::collapse(std::uint32_t u, std::uint32_t v) {
-  const std::size_t n = slots_[u].size;
+  const std::size_t n = records_[u].size;
   const std::uint32_t* ring_u = begin(u);
   const std::size_t j = static_cast<std::size_t>(std::find(ring_u, ring_u + n, v) - ring_u);
   // The wings (opposite corners of the faces that vanish) and the run of u's ring between them,
@@ -317,29 +312,21 @@ std::size_t VertexRings::collapse(std::uint32_t u, std::uint32_t v) {
     run_length = n - 2;
     removed = 1;
   }
-  // v's ring with u replaced by the run: in place when it fits, else rebuilt at the end of the
-  // storage (which may move it all: pointers are taken after).
-  Slot& slot_v = slots_[v];
-  const std::size_t old_size = slot_v.size;
+  // v's ring with u replaced by the run, in place once it has the room (moving it to the end
+  // of data_, which may move it all: pointers are taken after).
+  Record& record_v = records_[v];
+  const std::size_t old_size = record_v.size;
   const std::size_t at = static_cast<std::size_t>(std::find(begin(v), end(v), u) - begin(v));
   const std::size_t tail = at < old_size ? old_size - at - 1 : 0;  // entries after u
   const std::size_t new_size = at + run_length + tail;
-  std::uint32_t* to = nullptr;
-  if (new_size > slot_v.capacity) {
-    const std::uint32_t old_offset = move_to_end(slot_v, new_size);
-    const std::uint32_t* from = data_.data() + old_offset;
-    to = data_.data() + slot_v.offset;
-    std::copy(from, from + at, to);
-    std::copy(from + at + 1, from + at + 1 + tail, to + at + run_length);
-  } else {
-    to = data_.data() + slot_v.offset;
-    std::uint32_t* const after = to + at + 1;
-    if (run_length > 1)
-      std::copy_backward(after, after + tail, to + new_size);
-    else if (run_length == 0)
-      std::copy(after, after + tail, to + at);
-  }
-  slot_v.size = static_cast<std::uint32_t>(new_size);
+  make_room(v, new_size);
+  std::uint32_t* const to = entries(record_v);
+  std::uint32_t* const after = to + at + 1;
+  if (run_length > 1)
+    std::copy_backward(after, after + tail, to + new_size);
+  else if (run_length == 0)
+    std::copy(after, after + tail, to + at);
+  record_v.size = static_cast<std::uint32_t>(new_size);
   ring_u = begin(u);
   for (std::size_t i = 0, k = run_begin; i < run_length; ++i, k = k + 1 == n ? 0 : k + 1)
     to[at + i] = ring_u[k];
@@ -347,7 +334,7 @@ std::size_t VertexRings::collapse(std::uint32_t u, std::uint32_t v) {
     const std::uint32_t w = ring_u[i];
     if (w != v) erase_or_replace(w, u, v, w == wing_a || w == wing_b);
   }
-  slots_[u].size = 0;
+  records_[u].size = 0;
   return removed;
 }
 
@@ -386,7 +373,7 @@ std::vector<Triangle> VertexRings::triangles() const {
   const auto owner_or_later = [this](std::uint32_t corner, std::uint32_t owner) {
     return corner > owner || kind(corner) == Kind::kComplex;
   };
-  for (std::uint32_t m = 0; m < slots_.size(); ++m)
+  for (std::uint32_t m = 0; m < records_.size(); ++m)
     for_each_face(m, [&](std::uint32_t b, std::uint32_t c) {
       if (owner_or_later(b, m) && owner_or_later(c, m)) out.push_back({m, b, c});
     });

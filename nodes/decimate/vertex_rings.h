@@ -33,7 +33,8 @@ class VertexRings {
 
   /// Rings of the `vertex_count` vertices of `triangles` (corners < vertex_count), oriented as
   /// the faces are. In parallel over vertices; the same for any thread count. O(V + T) time,
-  /// about 4 x (valence + 7) bytes per vertex.
+  /// 64 bytes per vertex (one cache line: kind, size and a ring of up to 14 entries), and
+  /// 4 x (1.5 x entries + 6) bytes beside for each longer ring.
   VertexRings(const std::vector<Triangle>& triangles, std::size_t vertex_count);
   /// The same from the incidence `around` = vertex_triangles(triangles, vertex_count) (a caller
   /// that needs it too builds it once); the vertex count is its row count.
@@ -43,24 +44,24 @@ class VertexRings {
   static constexpr std::uint32_t kSeparator = 0xFFFFFFFFu;
 
   /// What v's ring is: closed, open, several fans or complex (Kind).
-  Kind kind(std::uint32_t v) const { return slots_[v].kind; }
+  Kind kind(std::uint32_t v) const { return records_[v].kind; }
   /// Whether v is kFans or kComplex, or next to a complex vertex: v must never be collapsed
   /// (a vertex of several fans has more than two border neighbours, so the decimator's border
   /// rule refuses it; a complex one's neighbours could not be updated). Fixed at construction:
   /// collapses of other vertices only ever give a vertex neighbours that are not complex.
-  bool locked(std::uint32_t v) const { return locked_[v] != 0; }
+  bool locked(std::uint32_t v) const { return (records_[v].flags & kLocked) != 0; }
   /// First entry of v's ring (neighbour vertices, kSeparator between fans).
-  const std::uint32_t* begin(std::uint32_t v) const { return data_.data() + slots_[v].offset; }
+  const std::uint32_t* begin(std::uint32_t v) const { return entries(records_[v]); }
   /// One past the last entry of v's ring.
-  const std::uint32_t* end(std::uint32_t v) const { return begin(v) + slots_[v].size; }
+  const std::uint32_t* end(std::uint32_t v) const { return begin(v) + records_[v].size; }
   /// Entries in v's ring, separators included.
-  std::size_t size(std::uint32_t v) const { return slots_[v].size; }
+  std::size_t size(std::uint32_t v) const { return records_[v].size; }
   /// The faces around v: size for a closed ring, size - 1 for an open one, one less per fan
   /// and separator for several, 0 for a complex vertex or one removed by a collapse.
   std::size_t face_count(std::uint32_t v) const {
-    const Slot& s = slots_[v];
-    if (s.size == 0 || s.kind == Kind::kClosed) return s.size;
-    return s.size + 1 - 2 * std::size_t{s.fans};
+    const Record& r = records_[v];
+    if (r.size == 0 || r.kind == Kind::kClosed) return r.size;
+    return r.size + 1 - 2 * std::size_t{r.fans};
   }
 
   /// How many of the `count` distinct vertices in `list` are neighbours of v (v itself, if
@@ -92,17 +93,48 @@ class VertexRings {
   /// complex corners, as in the input (collapses never change them). O(V + T).
   std::vector<Triangle> triangles() const;
 
-  /// Requests v's slot (offset and size), then, in a later call, its ring.
-  void prefetch_slot(std::uint32_t v) const { __builtin_prefetch(&slots_[v]); }
-  /// Requests v's ring entries (after prefetch_slot(v)).
-  void prefetch_ring(std::uint32_t v) const { __builtin_prefetch(begin(v)); }
+  /// Requests v's record (kind, size and, for rings of up to kInline entries, the ring).
+  void prefetch_slot(std::uint32_t v) const { __builtin_prefetch(&records_[v]); }
+  /// Requests v's ring entries where they lie outside its record (after prefetch_slot(v)).
+  void prefetch_ring(std::uint32_t v) const {
+    const Record& r = records_[v];
+    if ((r.flags & kSpilled) != 0) __builtin_prefetch(data_.data() + r.outside.offset);
+  }
 
  private:
-  struct Slot {
-    std::uint32_t offset = 0, size = 0, capacity = 0;
+  /// Ring entries a record holds itself: most rings (a vertex of valence up to 14) are read
+  /// from the one cache line that also holds their size and kind.
+  static constexpr std::uint32_t kInline = 14;
+  static constexpr std::uint8_t kLocked = 1;   ///< Record::flags: locked()
+  static constexpr std::uint8_t kSpilled = 2;  ///< Record::flags: the ring lies in data_
+  /// One vertex's ring, one cache line: its entries in `local`, or, once it outgrew them, at
+  /// `outside` in data_ (it stays there).
+  struct alignas(64) Record {
+    std::uint32_t size = 0;
     Kind kind = Kind::kClosed;
+    std::uint8_t flags = 0;  ///< kLocked, kSpilled
     std::uint16_t fans = 1;  ///< of a kOpen or kFans ring (collapses never change it)
+    struct Outside {
+      std::uint32_t offset, capacity;
+    };
+    union {
+      std::uint32_t local[kInline];
+      Outside outside;
+    };
+    Record() : local{} {}
   };
+  static_assert(sizeof(Record) == 64, "one cache line per vertex");
+  // The ring's first entry, in the record or in data_.
+  const std::uint32_t* entries(const Record& r) const {
+    return (r.flags & kSpilled) != 0 ? data_.data() + r.outside.offset : r.local;
+  }
+  std::uint32_t* entries(Record& r) {
+    return (r.flags & kSpilled) != 0 ? data_.data() + r.outside.offset : r.local;
+  }
+  // The entries the ring has room for where it lies.
+  static std::size_t capacity(const Record& r) {
+    return (r.flags & kSpilled) != 0 ? r.outside.capacity : kInline;
+  }
   // Calls fn(a, b) for every face (v, a, b) of v's ring: consecutive entries, around for a closed
   // ring, none across a separator.
   template <typename Fn>
@@ -115,18 +147,17 @@ class VertexRings {
       if (a != kSeparator && b != kSeparator) fn(a, b);
     }
   }
-  // Gives the slot fresh room for `count` entries (plus growth slack) at the end of data_ and
-  // returns its old offset; the old entries stay where they were (the caller copies them).
-  // May reallocate data_: pointers into it are invalid afterwards.
-  std::uint32_t move_to_end(Slot& slot, std::size_t count);
+  // Gives v's ring room for `count` entries (plus growth slack) at the end of data_, its
+  // entries copied there, when it has less. May reallocate data_: pointers into it are invalid
+  // afterwards.
+  void make_room(std::uint32_t v, std::size_t count);
   // Writes `count` entries as v's ring, moving it to the end of data_ when it does not fit.
   void assign(std::uint32_t v, const std::uint32_t* entries, std::size_t count);
   // In w's ring: u removed (`erase`) or replaced by v.
   void erase_or_replace(std::uint32_t w, std::uint32_t u, std::uint32_t v, bool erase);
 
-  std::vector<Slot> slots_;
-  std::vector<std::uint32_t> data_;
-  std::vector<std::uint8_t> locked_;
+  std::vector<Record> records_;
+  std::vector<std::uint32_t> data_;     ///< rings longer than kInline
   std::vector<Triangle> complex_only_;  ///< faces whose corners are all complex
 };
 

@@ -207,9 +207,13 @@ TEST(VertexRings, NeighboursAmongMatchesSetIntersection) {
 // Random collapses that meet collapse()'s preconditions, checked against the same collapses
 // applied to a plain face list (faces with both ends vanish, the others get v for u), on grids
 // with holes and bow ties, after every collapse; the rings must also be what a fresh build
-// from the face list gives (the same kinds and face counts).
+// from the face list gives (the same kinds and face counts). Every other collapse is prepared by
+// reserve_collapse() (as parallel collapses are). Rings grow past the 14 entries a vertex's record
+// holds (collapses onto one vertex), so collapses move rings out of their records and on within
+// the shared storage.
 TEST(VertexRings, CollapsesMatchAFaceListOracle) {
   std::mt19937 rng(5);
+  std::size_t largest_ring = 0;
   for (int trial = 0; trial < 20; ++trial) {
     const int n = 5 + trial % 6;
     const std::size_t vertex_count = static_cast<std::size_t>(n * n);
@@ -217,13 +221,21 @@ TEST(VertexRings, CollapsesMatchAFaceListOracle) {
     const ThreadLimit threads(1 + trial % 2);  // rings built on one or two threads
     VertexRings rings(faces, vertex_count);
     std::size_t collapses = 0;
+    // In every other trial, every other attempt moves a neighbour of the middle vertex onto it:
+    // its ring grows.
+    const auto hub = static_cast<std::uint32_t>((n / 2) * n + n / 2);
     for (int attempt = 0; attempt < 400 && faces.size() > 4; ++attempt) {
-      const auto u = static_cast<std::uint32_t>(rng() % vertex_count);
-      if (rings.locked(u) || rings.face_count(u) == 0) continue;
+      const bool grow = trial % 2 == 0 && attempt % 2 == 0 && rings.face_count(hub) != 0;
+      const std::uint32_t u = grow ? rings.begin(hub)[rng() % rings.size(hub)]
+                                   : static_cast<std::uint32_t>(rng() % vertex_count);
+      if (u == VertexRings::kSeparator || rings.locked(u) || rings.face_count(u) == 0) continue;
       const std::uint32_t* r = rings.begin(u);
       const std::size_t size = rings.size(u);
       const bool open = rings.kind(u) == Kind::kOpen;
-      const std::uint32_t v = open ? (rng() % 2 == 0 ? r[0] : r[size - 1]) : r[rng() % size];
+      const std::uint32_t v = grow   ? hub
+                              : open ? (rng() % 2 == 0 ? r[0] : r[size - 1])
+                                     : r[rng() % size];
+      if (open && v != r[0] && v != r[size - 1]) continue;
       // Link condition: the common neighbours are the opposite corners of the faces of u-v.
       std::set<std::uint32_t> opposite, common;
       std::size_t shared = 0;
@@ -262,7 +274,9 @@ TEST(VertexRings, CollapsesMatchAFaceListOracle) {
       const std::string what = "trial " + std::to_string(trial) + ", " + std::to_string(u) +
                                " -> " + std::to_string(v) + " (collapse " +
                                std::to_string(collapses) + ")";
+      if (collapses % 2 == 1) rings.reserve_collapse(u, v);
       ASSERT_EQ(rings.collapse(u, v), shared) << what;
+      largest_ring = std::max(largest_ring, rings.size(v));
       faces = next;
       ++collapses;
       ASSERT_EQ(canonical_sorted(rings.triangles()), sorted) << what;
@@ -277,6 +291,7 @@ TEST(VertexRings, CollapsesMatchAFaceListOracle) {
     }
     EXPECT_GT(collapses, 5u) << "trial " << trial;
   }
+  EXPECT_GT(largest_ring, 20u);
 }
 
 }  // namespace

@@ -112,12 +112,14 @@ struct EdgeSide {
 /// A candidate {a, b} (a < b) between the faces `first` (the lower, which runs a -> b where
 /// `forward`) and `second` when their normals are apart by more than the angle (cos_limit),
 /// appended to `out`.
-void judge_edge(const std::vector<Eigen::Vector4f>& normals, std::uint32_t a, std::uint32_t b,
-                std::uint32_t first, std::uint32_t second, bool forward, float cos_limit,
-                const std::vector<std::uint8_t>* seed, std::vector<FeatureCandidate>& out) {
-  const Eigen::Vector3f n0 = normals[first].head<3>();
-  const Eigen::Vector3f n1 = normals[second].head<3>();
-  if (n0.squaredNorm() > 0.0f && n1.squaredNorm() > 0.0f && n0.dot(n1) < cos_limit) {
+inline void judge_edge(const std::vector<Eigen::Vector4f>& normals, std::uint32_t a,
+                       std::uint32_t b, std::uint32_t first, std::uint32_t second, bool forward,
+                       float cos_limit, const std::vector<std::uint8_t>* seed,
+                       std::vector<FeatureCandidate>& out) {
+  const Eigen::Vector4f &row0 = normals[first], &row1 = normals[second];
+  if (row0.w() == 0.0f || row1.w() == 0.0f) return;  // a face without a normal: never sharp
+  const Eigen::Vector3f n0 = row0.head<3>(), n1 = row1.head<3>();
+  if (n0.dot(n1) < cos_limit) {
     const bool marked = seed != nullptr && (*seed)[a] != 0 && (*seed)[b] != 0;
     out.push_back({{a, b}, forward ? n0 : n1, forward ? n1 : n0, marked});
   }

@@ -69,9 +69,9 @@ constexpr float kSumRounding = 2e-7f;
 using NormalRow = float __attribute__((vector_size(16), may_alias));
 
 /// Whether two of v's faces (`begin`, `end`: its row of vertex_triangles()) may meet at more
-/// than the feature angle: false where every face
-/// normal around v lies within half that angle (test.cos_half) of their mean, so that no two of
-/// them are farther apart than the angle (no edge at v is sharp). `normals`:
+/// than the feature angle: false where every face normal around v lies within half that angle
+/// (test.cos_half) of their mean, so that no two of them are farther apart than the angle (no
+/// edge at v is sharp). `normals`:
 /// counted_face_normals() (w: 1 for a face with a normal). First without a second pass over the
 /// normals: for k unit normals n_i with sum m, the sum over i of (1 - n_i . m / |m|) is k - |m|,
 /// so where k - |m| <= 1 - cos_half every term is (a flat fan: most vertices); else each

@@ -8,6 +8,7 @@
 #include <tbb/parallel_for.h>
 
 #include "runtime/angles.h"
+#include "runtime/face_normals.h"
 #include "runtime/parallel.h"
 #include "runtime/vertex_triangles.h"
 
@@ -20,6 +21,7 @@ struct FeatureCandidate {
   std::array<std::uint32_t, 2> ends;
   Eigen::Vector3f left, right;
   bool marked = false;  ///< both ends marked by the mesh's maker (a seed): never noise
+  float length = 0.0f;  ///< |ends[0] - ends[1]|, metres (set where the lines are traced)
 };
 
 /// The sides of edge {a, b} (a != b) among the triangles around a: how many there are, and the
@@ -49,19 +51,54 @@ FeatureEdgeSides feature_edge_sides(const TriangleMesh& mesh, const VertexTriang
   return s;
 }
 
-/// Whether two of v's faces may meet at more than the feature angle: false where every face
-/// normal around v lies within half that angle (less a margin for rounding: `cos_half`) of
-/// their mean, so that no two of them are farther apart than the angle (no edge at v is sharp).
-/// O(valence).
-bool bent_vertex(const VertexTriangles& around, const std::vector<Eigen::Vector3f>& normals,
-                 std::uint32_t v, float cos_half) {
-  Eigen::Vector3f mean = Eigen::Vector3f::Zero();
-  for (const std::uint32_t* t = around.begin(v); t != around.end(v); ++t) mean += normals[*t];
-  if (!(mean.squaredNorm() > 0.0f))  // opposite faces, or none with area: look
-    return around.end(v) - around.begin(v) > 1;
-  mean.normalize();
-  for (const std::uint32_t* t = around.begin(v); t != around.end(v); ++t)
-    if (normals[*t].squaredNorm() > 0.0f && !(normals[*t].dot(mean) >= cos_half)) return true;
+/// The test of bent_vertex(): cos_half is the cosine of half the feature angle less a margin
+/// for rounding (0.1 degrees), so that two normals within that of one axis are closer than the
+/// angle.
+struct BendTest {
+  float cos_half;
+  /// 1 - cos_half: the most the k normals of a vertex may fall short of k in the length of
+  /// their sum, less kSumRounding x k x (k + 4), where all of them lie within half the angle.
+  float spread;
+};
+/// Bounds the float rounding of summing k unit normals and taking the sum's length (a few k^2
+/// float epsilons) in BendTest::spread's allowance.
+constexpr float kSumRounding = 2e-7f;
+
+/// A row of counted_face_normals() as one SSE register (GCC / Clang vector extension; it may
+/// alias the Eigen rows it is read from).
+using NormalRow = float __attribute__((vector_size(16), may_alias));
+
+/// Whether two of v's faces (`begin`, `end`: its row of vertex_triangles()) may meet at more
+/// than the feature angle: false where every face normal around v lies within half that angle
+/// (test.cos_half) of their mean, so that no two of them are farther apart than the angle (no
+/// edge at v is sharp). `normals`:
+/// counted_face_normals() (w: 1 for a face with a normal). First without a second pass over the
+/// normals: for k unit normals n_i with sum m, the sum over i of (1 - n_i . m / |m|) is k - |m|,
+/// so where k - |m| <= 1 - cos_half every term is (a flat fan: most vertices); else each
+/// normal's dot with the mean. A face without a normal is never sharp and counts in neither.
+/// O(valence), one vector operation per face.
+bool bent_vertex(const std::uint32_t* begin, const std::uint32_t* end, const NormalRow* normals,
+                 const BendTest& test) {
+  const std::uint32_t* t = begin;
+  NormalRow sum = {0.0f, 0.0f, 0.0f, 0.0f}, odd = sum;  // two sums: half the dependent adds
+  for (; t + 1 < end; t += 2) {
+    sum += normals[t[0]];
+    odd += normals[t[1]];
+  }
+  if (t != end) sum += normals[*t];
+  sum += odd;
+  const float k = sum[3];  // the faces with a normal
+  const NormalRow squares = sum * sum;
+  const float length = std::sqrt(squares[0] + squares[1] + squares[2]);
+  if (k - length <= test.spread - kSumRounding * k * (k + 4.0f)) return false;  // none: k = 0
+  if (!(length > 0.0f)) return true;  // opposite faces (or a non-finite sum): look
+  // (n, w) . (mean, -1) + 1 is n . mean for a face with a normal (w = 1), 1 for one without.
+  NormalRow axis = sum / length;
+  axis[3] = -1.0f;
+  for (t = begin; t != end; ++t) {
+    const NormalRow d = normals[*t] * axis;
+    if (!((d[0] + d[1]) + (d[2] + d[3]) + 1.0f >= test.cos_half)) return true;
+  }
   return false;
 }
 
@@ -72,15 +109,75 @@ struct EdgeSide {
   bool forward;
 };
 
+/// A candidate {a, b} (a < b) between the faces `first` (the lower, which runs a -> b where
+/// `forward`) and `second` when their normals are apart by more than the angle (cos_limit),
+/// appended to `out`.
+inline void judge_edge(const std::vector<Eigen::Vector4f>& normals, std::uint32_t a,
+                       std::uint32_t b, std::uint32_t first, std::uint32_t second, bool forward,
+                       float cos_limit, const std::vector<std::uint8_t>* seed,
+                       std::vector<FeatureCandidate>& out) {
+  const Eigen::Vector4f &row0 = normals[first], &row1 = normals[second];
+  if (row0.w() == 0.0f || row1.w() == 0.0f) return;  // a face without a normal: never sharp
+  const Eigen::Vector3f n0 = row0.head<3>(), n1 = row1.head<3>();
+  if (n0.dot(n1) < cos_limit) {
+    const bool marked = seed != nullptr && (*seed)[a] != 0 && (*seed)[b] != 0;
+    out.push_back({{a, b}, forward ? n0 : n1, forward ? n1 : n0, marked});
+  }
+}
+
+/// candidates_at() where every face around a has three distinct corners and there are at most
+/// kFanFaces of them (most vertices): each face's two edges at a (a -> next, previous -> a) with
+/// b > a as keys (b, position of the face around a, forward), sorted (faces come ascending, so
+/// two sides of one edge sort lower face first), each edge with exactly two sides judged.
+/// Returns false (nothing appended) for another fan. O(valence^2) on a few words, no allocation.
+constexpr std::size_t kFanFaces = 32;
+bool candidates_at_plain_fan(const TriangleMesh& mesh, const VertexTriangles& around,
+                             const std::vector<Eigen::Vector4f>& normals, std::uint32_t a,
+                             float cos_limit, const std::vector<std::uint8_t>* seed,
+                             std::vector<FeatureCandidate>& out) {
+  const std::uint32_t* faces = around.begin(a);
+  const auto k = static_cast<std::size_t>(around.end(a) - faces);
+  if (k > kFanFaces) return false;
+  const std::uint64_t n = mesh.vertices.size();
+  std::uint64_t keys[2 * kFanFaces];
+  std::size_t count = 0;
+  for (std::size_t i = 0; i < k; ++i) {
+    const Triangle& t = mesh.triangles[faces[i]];
+    if (t[0] == t[1] || t[1] == t[2] || t[2] == t[0]) return false;
+    const int c = t[0] == a ? 0 : (t[1] == a ? 1 : 2);
+    const std::uint64_t next = t[c == 2 ? 0 : c + 1], previous = t[c == 0 ? 2 : c - 1];
+    keys[count] = next << 32 | i << 1 | 1;  // a -> next: forward
+    count += next > a && next < n ? 1 : 0;
+    keys[count] = previous << 32 | i << 1;
+    count += previous > a && previous < n ? 1 : 0;
+  }
+  for (std::size_t i = 1; i < count; ++i)
+    for (std::size_t j = i; j > 0 && keys[j] < keys[j - 1]; --j) std::swap(keys[j], keys[j - 1]);
+  for (std::size_t i = 0; i < count;) {
+    const std::uint64_t b = keys[i] >> 32;
+    std::size_t j = i + 1;
+    while (j < count && keys[j] >> 32 == b) ++j;
+    if (j - i == 2) {
+      const std::uint32_t lower = faces[(keys[i] & 0xFFFFFFFFu) >> 1];
+      const std::uint32_t upper = faces[(keys[i + 1] & 0xFFFFFFFFu) >> 1];
+      judge_edge(normals, a, static_cast<std::uint32_t>(b), lower, upper, (keys[i] & 1) != 0,
+                 cos_limit, seed, out);
+    }
+    i = j;
+  }
+  return true;
+}
+
 /// The candidates whose lower end is `a` (see sharp_candidates), ascending by their other end,
 /// appended to `out`; `sides` is scratch memory. Every edge {a, b} (b > a) of a's faces (each face
 /// once) is judged: exactly two sides in distinct faces, their normals apart by more than the
 /// angle; `left` the normal of the face that runs min -> max, read from the lower face (as the
 /// lowest face holding the edge sees it). O(valence log valence).
 void candidates_at(const TriangleMesh& mesh, const VertexTriangles& around,
-                   const std::vector<Eigen::Vector3f>& normals, std::uint32_t a, float cos_limit,
+                   const std::vector<Eigen::Vector4f>& normals, std::uint32_t a, float cos_limit,
                    const std::vector<std::uint8_t>* seed, std::vector<EdgeSide>& sides,
                    std::vector<FeatureCandidate>& out) {
+  if (candidates_at_plain_fan(mesh, around, normals, a, cos_limit, seed, out)) return;
   sides.clear();
   std::uint32_t previous = 0xFFFFFFFFu;
   const std::size_t n = mesh.vertices.size();
@@ -102,76 +199,73 @@ void candidates_at(const TriangleMesh& mesh, const VertexTriangles& around,
   for (std::size_t i = 0; i < sides.size();) {
     std::size_t j = i + 1;
     while (j < sides.size() && sides[j].b == sides[i].b) ++j;
-    if (j - i == 2 && sides[i].face != sides[i + 1].face) {
-      const Eigen::Vector3f& n0 = normals[sides[i].face];
-      const Eigen::Vector3f& n1 = normals[sides[i + 1].face];
-      if (n0.squaredNorm() > 0.0f && n1.squaredNorm() > 0.0f && n0.dot(n1) < cos_limit) {
-        const std::uint32_t b = sides[i].b;
-        const bool marked = seed != nullptr && (*seed)[a] != 0 && (*seed)[b] != 0;
-        const bool forward = sides[i].forward;
-        out.push_back({{a, b}, forward ? n0 : n1, forward ? n1 : n0, marked});
-      }
-    }
+    if (j - i == 2 && sides[i].face != sides[i + 1].face)
+      judge_edge(normals, a, sides[i].b, sides[i].face, sides[i + 1].face, sides[i].forward,
+                 cos_limit, seed, out);
     i = j;
   }
 }
 
 /// Edges with two faces meeting at a normal angle whose cosine is below cos_limit (the angle
-/// `angle_deg`), sorted. Face normals once, then one parallel pass over the vertices in fixed
-/// blocks: a vertex whose faces all lie within half the angle of their mean (bent_vertex) ends
-/// no sharp edge; the others judge their edges to higher vertices (candidates_at). The blocks'
-/// lists, each sorted, joined in block order: sorted, the same for any thread count.
-/// O(T + bent vertices x valence log valence). `around` is vertex_triangles(mesh).
-/// `seed` (optional, one byte per vertex): candidates between two marked vertices are `marked`.
+/// `angle_deg`), sorted. Face normals once (counted_face_normals(): face_normal()'s values),
+/// then one parallel pass over the vertices in fixed blocks: a vertex whose faces all lie within
+/// half the angle of their mean (bent_vertex) ends no sharp edge; the others judge their edges to
+/// higher vertices (candidates_at). The blocks' lists, each sorted, joined in block order:
+/// sorted, the same for any thread count. O(T + bent vertices x valence log valence). `around`
+/// is vertex_triangles(mesh). `seed` (optional, one byte per vertex): candidates between two
+/// marked vertices are `marked`.
 std::vector<FeatureCandidate> sharp_candidates(const TriangleMesh& mesh,
                                                const VertexTriangles& around, float angle_deg,
                                                float cos_limit,
                                                const std::vector<std::uint8_t>* seed = nullptr) {
-  const std::size_t t_count = mesh.triangles.size();
-  std::vector<Eigen::Vector3f> normals(t_count);
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, t_count), [&](const auto& range) {
-    for (std::size_t t = range.begin(); t != range.end(); ++t)
-      normals[t] = face_normal(mesh, mesh.triangles[t]);
-  });
+  const std::vector<Eigen::Vector4f> normals = counted_face_normals(mesh);
   constexpr double kRoundingMarginDeg = 0.1;
   const double half = std::max(0.0, 0.5 * static_cast<double>(angle_deg) - kRoundingMarginDeg);
   const auto cos_half = static_cast<float>(std::cos(radians(half)));
+  const BendTest test{cos_half, 1.0f - cos_half};
+  const auto* rows = reinterpret_cast<const NormalRow*>(normals.data());
   const std::size_t n = mesh.vertices.size();
   const std::size_t blocks = (n + kParallelBlock - 1) / kParallelBlock;
   std::vector<std::vector<FeatureCandidate>> parts(blocks);
   tbb::enumerable_thread_specific<std::vector<EdgeSide>> scratch;
   tbb::parallel_for(std::size_t{0}, blocks, [&](std::size_t block) {
-    std::vector<EdgeSide>& sides = scratch.local();
-    const std::size_t end = std::min(n, (block + 1) * kParallelBlock);
-    for (std::size_t v = block * kParallelBlock; v < end; ++v) {
-      const auto a = static_cast<std::uint32_t>(v);
-      if (bent_vertex(around, normals, a, cos_half))
-        candidates_at(mesh, around, normals, a, cos_limit, seed, sides, parts[block]);
+    // The bent vertices first, in a loop of their own (its values stay in registers).
+    const BendTest fan_test = test;
+    const NormalRow* const fan_normals = rows;
+    const std::uint32_t *const offsets = around.offsets.data(), *const faces =
+                                                                    around.triangles.data();
+    const auto first = static_cast<std::uint32_t>(block * kParallelBlock);
+    const auto end = static_cast<std::uint32_t>(std::min(n, (block + 1) * kParallelBlock));
+    std::uint32_t bent[kParallelBlock];
+    std::size_t count = 0;
+    for (std::uint32_t v = first; v < end; ++v) {
+      bent[count] = v;
+      count += bent_vertex(faces + offsets[v], faces + offsets[v + 1], fan_normals, fan_test);
     }
+    std::vector<EdgeSide>& sides = scratch.local();
+    for (std::size_t i = 0; i < count; ++i)
+      candidates_at(mesh, around, normals, bent[i], cos_limit, seed, sides, parts[block]);
   });
   return concatenate_parts(parts);
 }
 
-/// The live candidates around every vertex (compressed rows of candidate indices).
+/// The candidates around every vertex (compressed rows of candidate indices).
 struct FeatureIncidence {
   std::vector<std::uint32_t> offsets, edges;
   std::uint32_t degree(std::uint32_t v) const { return offsets[v + 1] - offsets[v]; }
   std::uint32_t edge(std::uint32_t v, std::uint32_t k) const { return edges[offsets[v] + k]; }
 };
 
-FeatureIncidence feature_incidence(std::size_t n, const std::vector<FeatureCandidate>& c,
-                                   const std::vector<std::uint8_t>& alive) {
+FeatureIncidence feature_incidence(std::size_t n, const std::vector<FeatureCandidate>& c) {
   FeatureIncidence inc;
   inc.offsets.assign(n + 1, 0);
-  for (std::size_t i = 0; i < c.size(); ++i)
-    if (alive[i])
-      for (std::uint32_t v : c[i].ends) ++inc.offsets[v + 1];
+  for (const FeatureCandidate& e : c)
+    for (std::uint32_t v : e.ends) ++inc.offsets[v + 1];
   for (std::size_t v = 0; v < n; ++v) inc.offsets[v + 1] += inc.offsets[v];
   inc.edges.resize(inc.offsets[n]);
   std::vector<std::uint32_t> fill(inc.offsets.begin(), inc.offsets.end() - 1);
   for (std::size_t i = 0; i < c.size(); ++i)
-    if (alive[i])
-      for (std::uint32_t v : c[i].ends) inc.edges[fill[v]++] = static_cast<std::uint32_t>(i);
+    for (std::uint32_t v : c[i].ends) inc.edges[fill[v]++] = static_cast<std::uint32_t>(i);
   return inc;
 }
 
@@ -197,43 +291,39 @@ bool continues_line(const std::vector<Eigen::Vector3f>& points, const FeatureCan
 }
 
 /// Per vertex: whether it ends, branches or breaks a line (has candidates and is no line
-/// vertex).
-std::vector<std::uint8_t> line_breaks(const std::vector<Eigen::Vector3f>& points,
-                                      const std::vector<FeatureCandidate>& c,
-                                      const FeatureIncidence& inc, float angle_deg) {
+/// vertex), written to `breaks` (one byte per vertex) where `changed` is non-zero: the others
+/// keep the candidates they had when it was written.
+void line_breaks(const std::vector<Eigen::Vector3f>& points, const std::vector<FeatureCandidate>& c,
+                 const FeatureIncidence& inc, float angle_deg,
+                 const std::vector<std::uint8_t>& changed, std::vector<std::uint8_t>& breaks) {
   const float cos_limit = static_cast<float>(std::cos(radians(static_cast<double>(angle_deg))));
   const float cos_side =
       static_cast<float>(std::cos(radians(std::min(90.0, 2.0 * static_cast<double>(angle_deg)))));
-  const std::size_t n = points.size();
-  std::vector<std::uint8_t> breaks(n, 0);
-  for (std::uint32_t v = 0; v < n; ++v) {
+  for (std::uint32_t v = 0; v < points.size(); ++v) {
+    if (!changed[v]) continue;
     const std::uint32_t d = inc.degree(v);
-    if (d == 0) continue;
-    breaks[v] = d != 2 || !continues_line(points, c[inc.edge(v, 0)], c[inc.edge(v, 1)], v,
-                                          cos_limit, cos_side);
+    breaks[v] = d != 0 && (d != 2 || !continues_line(points, c[inc.edge(v, 0)], c[inc.edge(v, 1)],
+                                                     v, cos_limit, cos_side));
   }
-  return breaks;
 }
 
 /// The lines: runs of candidates between breaks (or closed loops without one).
 struct FeatureLines {
-  std::vector<std::uint32_t> line_of;              ///< per candidate (alive ones only)
+  std::vector<std::uint32_t> line_of;              ///< per candidate
   std::vector<float> length;                       ///< per line, metres
   std::vector<std::array<std::uint32_t, 2>> ends;  ///< per line; a loop: {kNoEnd, kNoEnd}
 };
 constexpr std::uint32_t kNoEnd = 0xFFFFFFFFu;
 
-FeatureLines trace_lines(const std::vector<Eigen::Vector3f>& points,
-                         const std::vector<FeatureCandidate>& c,
-                         const std::vector<std::uint8_t>& alive, const FeatureIncidence& inc,
+FeatureLines trace_lines(const std::vector<FeatureCandidate>& c, const FeatureIncidence& inc,
                          const std::vector<std::uint8_t>& breaks) {
   FeatureLines lines;
   lines.line_of.assign(c.size(), kNoEnd);
   for (std::uint32_t start = 0; start < c.size(); ++start) {
-    if (!alive[start] || lines.line_of[start] != kNoEnd) continue;
+    if (lines.line_of[start] != kNoEnd) continue;
     const auto id = static_cast<std::uint32_t>(lines.length.size());
     lines.line_of[start] = id;
-    float length = (points[c[start].ends[0]] - points[c[start].ends[1]]).norm();
+    float length = c[start].length;
     std::array<std::uint32_t, 2> ends{kNoEnd, kNoEnd};
     for (int side = 0; side < 2; ++side) {  // walk away from start through both of its ends
       std::uint32_t edge = start, v = c[start].ends[side];
@@ -241,7 +331,7 @@ FeatureLines trace_lines(const std::vector<Eigen::Vector3f>& points,
         edge = inc.edge(v, 0) == edge ? inc.edge(v, 1) : inc.edge(v, 0);
         if (lines.line_of[edge] == id) break;  // a closed loop
         lines.line_of[edge] = id;
-        length += (points[c[edge].ends[0]] - points[c[edge].ends[1]]).norm();
+        length += c[edge].length;
         v = other_end(c[edge], v);
       }
       if (breaks[v]) ends[side] = v;
@@ -359,6 +449,40 @@ std::vector<FeatureCandidate> candidates_reaching(const TriangleMesh& mesh,
   return found;
 }
 
+/// Keeps the candidates whose byte in `keep` is non-zero (in order) and renumbers their vertices
+/// in order (`global`, `points` and `breaks` follow, their other vertices dropped): a later round
+/// costs what is left, not what the first one met. The candidates stay sorted; `changed` marks
+/// the vertices left that lost a candidate. O(candidates + vertices).
+void keep_candidates(std::vector<FeatureCandidate>& c, const std::vector<std::uint8_t>& keep,
+                     std::vector<std::uint32_t>& global, std::vector<Eigen::Vector3f>& points,
+                     std::vector<std::uint8_t>& breaks, std::vector<std::uint8_t>& changed) {
+  changed.assign(global.size(), 0);
+  for (std::size_t i = 0; i < c.size(); ++i)
+    if (!keep[i]) changed[c[i].ends[0]] = changed[c[i].ends[1]] = 1;
+  std::size_t kept = 0;
+  for (std::size_t i = 0; i < c.size(); ++i)
+    if (keep[i]) c[kept++] = c[i];
+  c.resize(kept);
+  std::vector<std::uint32_t> renumbered(global.size(), kNoEnd);
+  for (const FeatureCandidate& e : c) renumbered[e.ends[0]] = renumbered[e.ends[1]] = 0;
+  std::uint32_t count = 0;
+  for (std::size_t v = 0; v < global.size(); ++v) {
+    if (renumbered[v] == kNoEnd) continue;
+    renumbered[v] = count;
+    global[count] = global[v];
+    points[count] = points[v];
+    breaks[count] = breaks[v];
+    changed[count] = changed[v];
+    ++count;
+  }
+  global.resize(count);
+  points.resize(count);
+  breaks.resize(count);
+  changed.resize(count);
+  for (FeatureCandidate& e : c)
+    for (std::uint32_t& v : e.ends) v = renumbered[v];
+}
+
 MeshFeatures features_from_candidates(const TriangleMesh& mesh, std::vector<FeatureCandidate> c,
                                       float angle_deg, float min_line_length) {
   MeshFeatures f;
@@ -366,33 +490,33 @@ MeshFeatures features_from_candidates(const TriangleMesh& mesh, std::vector<Feat
   if (c.empty()) return f;
   if (min_line_length == 0.0f) min_line_length = kMinFeatureLineEdges * median_edge_length(mesh);
   // The lines are traced on the candidates' own vertices only (numbered in mesh order, so the
-  // candidates stay sorted): each round costs O(candidates), not O(V).
-  std::vector<std::uint32_t> global;
-  global.reserve(2 * c.size());
-  for (const FeatureCandidate& e : c) global.insert(global.end(), e.ends.begin(), e.ends.end());
-  std::sort(global.begin(), global.end());
-  global.erase(std::unique(global.begin(), global.end()), global.end());
+  // candidates stay sorted), and each round on those of the candidates left: each round costs
+  // O(candidates left), not O(V).
+  std::vector<std::uint32_t> global, local(mesh.vertices.size(), 0);
+  for (const FeatureCandidate& e : c) local[e.ends[0]] = local[e.ends[1]] = 1;
+  for (std::size_t v = 0; v < local.size(); ++v)
+    if (local[v] != 0) {
+      local[v] = static_cast<std::uint32_t>(global.size());
+      global.push_back(static_cast<std::uint32_t>(v));
+    }
   for (FeatureCandidate& e : c)
-    for (std::uint32_t& v : e.ends)
-      v = static_cast<std::uint32_t>(std::lower_bound(global.begin(), global.end(), v) -
-                                     global.begin());
-  const std::size_t n = global.size();
-  std::vector<Eigen::Vector3f> points(n);
-  for (std::size_t v = 0; v < n; ++v) points[v] = mesh.vertices[global[v]];
-  std::vector<std::uint8_t> alive(c.size(), 1);
+    for (std::uint32_t& v : e.ends) v = local[v];
+  std::vector<Eigen::Vector3f> points(global.size());
+  for (std::size_t v = 0; v < global.size(); ++v) points[v] = mesh.vertices[global[v]];
+  for (FeatureCandidate& e : c) e.length = (points[e.ends[0]] - points[e.ends[1]]).norm();
   FeatureIncidence inc;
-  std::vector<std::uint8_t> breaks;
+  std::vector<std::uint8_t> breaks(global.size(), 0), changed(global.size(), 1);
   for (;;) {  // drop short lines until every line left is long or a bridge between long ones
-    inc = feature_incidence(n, c, alive);
-    breaks = line_breaks(points, c, inc, angle_deg);
+    inc = feature_incidence(global.size(), c);
+    line_breaks(points, c, inc, angle_deg, changed, breaks);
     if (min_line_length < 0.0f) break;
-    const FeatureLines lines = trace_lines(points, c, alive, inc, breaks);
+    const FeatureLines lines = trace_lines(c, inc, breaks);
     std::vector<std::uint8_t> long_line(lines.length.size());
     for (std::size_t l = 0; l < long_line.size(); ++l)
       long_line[l] = lines.length[l] >= min_line_length;
     std::vector<std::uint8_t> keep = long_line;
     for (std::size_t i = 0; i < c.size(); ++i)  // a line with a marked edge is no noise
-      if (alive[i] && c[i].marked) keep[lines.line_of[i]] = 1;
+      if (c[i].marked) keep[lines.line_of[i]] = 1;
     for (std::uint32_t l = 0; l < keep.size(); ++l) {
       const auto& [a, b] = lines.ends[l];
       if (!keep[l] && a != kNoEnd && b != kNoEnd)
@@ -409,14 +533,17 @@ MeshFeatures features_from_candidates(const TriangleMesh& mesh, std::vector<Feat
     for (std::uint32_t l = 0; l < keep.size(); ++l) spurs |= !keep[l] && loose(l);
     if (spurs)
       for (std::uint32_t l = 0; l < keep.size(); ++l) keep[l] |= !loose(l);
+    std::vector<std::uint8_t> kept(c.size());
     bool dropped = false;
-    for (std::size_t i = 0; i < c.size(); ++i)
-      if (alive[i] && !keep[lines.line_of[i]]) alive[i] = 0, dropped = true;
+    for (std::size_t i = 0; i < c.size(); ++i) {
+      kept[i] = keep[lines.line_of[i]];
+      dropped |= kept[i] == 0;
+    }
     if (!dropped) break;
+    keep_candidates(c, kept, global, points, breaks, changed);
   }
-  for (std::size_t i = 0; i < c.size(); ++i)
-    if (alive[i]) f.edges.push_back({global[c[i].ends[0]], global[c[i].ends[1]]});
-  for (std::uint32_t v = 0; v < n; ++v)
+  for (const FeatureCandidate& e : c) f.edges.push_back({global[e.ends[0]], global[e.ends[1]]});
+  for (std::uint32_t v = 0; v < global.size(); ++v)
     if (inc.degree(v) > 0)
       f.vertex_kind[global[v]] =
           breaks[v] ? MeshFeatures::VertexKind::kCorner : MeshFeatures::VertexKind::kLine;

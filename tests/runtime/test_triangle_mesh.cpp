@@ -4,8 +4,12 @@
 #include <tbb/task_arena.h>
 
 #include <algorithm>
+#include <cstring>
+#include <limits>
 #include <map>
+#include <random>
 
+#include "runtime/face_normals.h"
 #include "runtime/threads.h"
 #include "runtime/vertex_triangles.h"
 #include "test_support.h"
@@ -30,6 +34,62 @@ TEST(TriangleMesh, DetectsBoundaryNonManifoldAndFlippedFaces) {
   fan.vertices = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}};
   fan.triangles = {{0, 1, 2}, {0, 1, 3}, {0, 1, 4}};  // edge 0-1 has three faces
   EXPECT_EQ(edge_statistics(fan).non_manifold_edges, 1u);
+}
+
+// counted_face_normals() is face_normal() bit for bit, on random faces (coordinates of many
+// magnitudes, slivers, faces without area or with a repeated corner, non-finite coordinates),
+// for any face count (short last groups) and thread count; its fourth lane counts the faces with
+// a normal.
+TEST(TriangleMesh, CountedFaceNormalsAreFaceNormalBitForBit) {
+  std::mt19937 random(59);
+  std::uniform_real_distribution<float> unit(-1.0f, 1.0f);
+  std::uniform_int_distribution<int> exponent(-20, 20);
+  TriangleMesh m;
+  for (int i = 0; i < 3000; ++i)
+    m.vertices.emplace_back(std::ldexp(unit(random), exponent(random)), unit(random),
+                            unit(random) * 1e3f);
+  m.vertices.emplace_back(std::numeric_limits<float>::quiet_NaN(), 0.0f, 0.0f);
+  m.vertices.emplace_back(std::numeric_limits<float>::infinity(), 1.0f, 0.0f);
+  m.vertices.emplace_back(3e19f, 3e19f, 1.0f);  // squares overflow: length infinite
+  const auto n = static_cast<std::uint32_t>(m.vertices.size());
+  std::uniform_int_distribution<std::uint32_t> vertex(0, n - 1);
+  for (int i = 0; i < 20000; ++i) {
+    const std::uint32_t a = vertex(random), b = vertex(random), c = vertex(random);
+    m.triangles.push_back({a, b, c});
+    if (i % 7 == 0) m.triangles.push_back({a, a, c});  // no area
+    if (i % 11 == 0) {                                 // a sliver: c just off the line a-b
+      m.vertices.push_back(0.5f * (m.vertices[a] + m.vertices[b]) +
+                           Eigen::Vector3f(1e-6f, 0.0f, 0.0f));
+      m.triangles.push_back({a, b, static_cast<std::uint32_t>(m.vertices.size() - 1)});
+    }
+  }
+  m.triangles.push_back({n - 3, 0, 1});
+  m.triangles.push_back({n - 2, 0, 1});
+  m.triangles.push_back({n - 1, n - 2, 0});
+  m.triangles.push_back({n - 1, 0, 1});
+  for (std::size_t count :
+       {std::size_t{0}, std::size_t{5}, std::size_t{8}, std::size_t{13}, m.triangles.size()}) {
+    TriangleMesh part = m;
+    part.triangles.resize(count);
+    for (int threads : {1, 2}) {
+      ThreadLimit limit(threads);
+      const std::vector<Eigen::Vector4f> normals = counted_face_normals(part);
+      ASSERT_EQ(normals.size(), count);
+      std::size_t with_normal = 0, mismatches = 0;
+      for (std::size_t t = 0; t < count; ++t) {
+        const Eigen::Vector3f expected = face_normal(part, part.triangles[t]);
+        const Eigen::Vector3f got = normals[t].head<3>();
+        mismatches += std::memcmp(expected.data(), got.data(), sizeof(float) * 3) != 0 ? 1 : 0;
+        EXPECT_EQ(normals[t].w(), expected.squaredNorm() > 0.0f ? 1.0f : 0.0f) << t;
+        with_normal += normals[t].w() != 0.0f ? 1 : 0;
+      }
+      EXPECT_EQ(mismatches, 0u) << count << " faces, " << threads << " threads";
+      if (count == m.triangles.size()) {
+        EXPECT_GT(with_normal, 20000u);
+        EXPECT_LT(with_normal, count);
+      }
+    }
+  }
 }
 
 TEST(TriangleMesh, VertexNormalsPointOutwardOnATetrahedron) {

@@ -670,30 +670,62 @@ DiffusionLattice close_coarse_solution(const CloseProblem& p, int step, int& lev
   return coarse;
 }
 
-// A grid of the given sorted cells: their corners (sorted, unique) and each cell's corner
-// indices.
-SparseGrid close_grid_of_cells(std::vector<VoxelKey> cells, float voxel) {
-  SparseGrid grid;
-  grid.voxel_size = voxel;
-  grid.cells = std::move(cells);
-  std::vector<VoxelKey> corners(grid.cells.size() * 8);
-  tbb::parallel_for(std::size_t{0}, grid.cells.size(), [&](std::size_t i) {
-    const Eigen::Vector3i c = unpack_key(grid.cells[i]);
+// `grid` with the sorted cells `added` (none of them the grid's): the cells merged, the corners
+// of both (sorted, unique; a corner of the grid that none of its cells uses is dropped) and
+// each cell's corner indices (the grid's renumbered, the added cells' looked up). Linear merges
+// plus O(added log corners); the same grid as building it from all the cells at once.
+SparseGrid close_grid_with_cells(const SparseGrid& grid, const std::vector<VoxelKey>& added) {
+  SparseGrid out;
+  out.voxel_size = grid.voxel_size;
+  std::vector<VoxelKey> added_corners(added.size() * 8);
+  tbb::parallel_for(std::size_t{0}, added.size(), [&](std::size_t i) {
+    const Eigen::Vector3i c = unpack_key(added[i]);
     for (int k = 0; k < 8; ++k)
-      corners[i * 8 + static_cast<std::size_t>(k)] =
+      added_corners[i * 8 + static_cast<std::size_t>(k)] =
           pack_key(c + Eigen::Vector3i(k & 1, (k >> 1) & 1, (k >> 2) & 1));
   });
-  tbb::parallel_sort(corners.begin(), corners.end());
-  corners.erase(std::unique(corners.begin(), corners.end()), corners.end());
-  grid.corners = std::move(corners);
-  grid.cell_corners.resize(grid.cells.size());
-  tbb::parallel_for(std::size_t{0}, grid.cells.size(), [&](std::size_t i) {
-    const Eigen::Vector3i c = unpack_key(grid.cells[i]);
-    for (int k = 0; k < 8; ++k)
-      grid.cell_corners[i][static_cast<std::size_t>(k)] =
-          grid.find_corner(c + Eigen::Vector3i(k & 1, (k >> 1) & 1, (k >> 2) & 1));
+  tbb::parallel_sort(added_corners.begin(), added_corners.end());
+  added_corners.erase(std::unique(added_corners.begin(), added_corners.end()), added_corners.end());
+  std::vector<std::uint8_t> used(grid.corners.size(), 0);
+  for (const auto& cell : grid.cell_corners)
+    for (const std::uint32_t c : cell) used[c] = 1;
+  // The corners merged; renumbered[c]: the new index of the grid's corner c.
+  std::vector<std::uint32_t> renumbered(grid.corners.size(), 0);
+  out.corners.reserve(grid.corners.size() + added_corners.size());
+  std::size_t j = 0;
+  for (std::size_t c = 0; c < grid.corners.size(); ++c) {
+    if (!used[c]) continue;
+    for (; j < added_corners.size() && added_corners[j] < grid.corners[c]; ++j)
+      out.corners.push_back(added_corners[j]);
+    if (j < added_corners.size() && added_corners[j] == grid.corners[c]) ++j;
+    renumbered[c] = static_cast<std::uint32_t>(out.corners.size());
+    out.corners.push_back(grid.corners[c]);
+  }
+  out.corners.insert(out.corners.end(), added_corners.begin() + static_cast<std::ptrdiff_t>(j),
+                     added_corners.end());
+  // The cells merged, each with its corners.
+  out.cells.resize(grid.cells.size() + added.size());
+  out.cell_corners.resize(out.cells.size());
+  std::size_t g = 0, k = 0;
+  for (std::size_t i = 0; i < out.cells.size(); ++i) {
+    if (k == added.size() || (g < grid.cells.size() && grid.cells[g] < added[k])) {
+      out.cells[i] = grid.cells[g];
+      for (std::size_t c = 0; c < 8; ++c)
+        out.cell_corners[i][c] = renumbered[grid.cell_corners[g][c]];
+      ++g;
+    } else {
+      out.cells[i] = added[k++];
+      out.cell_corners[i][0] = UINT32_MAX;  // looked up below
+    }
+  }
+  tbb::parallel_for(std::size_t{0}, out.cells.size(), [&](std::size_t i) {
+    if (out.cell_corners[i][0] != UINT32_MAX) return;
+    const Eigen::Vector3i c = unpack_key(out.cells[i]);
+    for (int q = 0; q < 8; ++q)
+      out.cell_corners[i][static_cast<std::size_t>(q)] =
+          out.find_corner(c + Eigen::Vector3i(q & 1, (q >> 1) & 1, (q >> 2) & 1));
   });
-  return grid;
+  return out;
 }
 
 // The tiles of side `cells` along one axis of `nodes` nodes: tile t spans nodes
@@ -905,11 +937,7 @@ ClosedDistance close_distance_field(const SparseGrid& grid, const DistanceField&
     v->erase(std::unique(v->begin(), v->end(), same_key), v->end());
   }
   r.cells_added = added.size();
-  std::vector<VoxelKey> all_cells;
-  all_cells.reserve(grid.cells.size() + added.size());
-  std::merge(grid.cells.begin(), grid.cells.end(), added.begin(), added.end(),
-             std::back_inserter(all_cells));
-  out.grid = close_grid_of_cells(std::move(all_cells), voxel);
+  out.grid = close_grid_with_cells(grid, added);
   out.distance.values.resize(out.grid.corners.size());
   out.distance.valid.assign(out.grid.corners.size(), 1);
   tbb::parallel_for(std::size_t{0}, out.grid.corners.size(), [&](std::size_t c) {

@@ -104,12 +104,13 @@ int gradient_fill(DiffusionLattice& l, const std::vector<std::uint8_t>& observed
   // tests' filled errors by under 20 %, both ways, their mean by 1 %).
   l.source.assign(l.node_count(), 0.0f);
   tbb::parallel_for(0, n.z(), [&](int z) {
-    for (int y = 0; y < n.y(); ++y)
+    for (int y = 0; y < n.y(); ++y) {
+      const CoarseRowInterpolation row(div, Eigen::Vector3i::Constant(2), y, z);
       for (int x = 0; x < n.x(); ++x) {
         const std::size_t i = l.index(x, y, z);
-        if (!l.fixed[i])
-          l.source[i] = -voxel * interpolate_coarse(div, Eigen::Vector3i::Constant(2), {x, y, z});
+        if (!l.fixed[i]) l.source[i] = -voxel * row.at(x);
       }
+    }
   });
   DiffusionConfig potential = config;
   potential.sweeps_per_level = std::max(1, config.sweeps_per_level / 4);

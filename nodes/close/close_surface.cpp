@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <array>
 #include <atomic>
+#include <cassert>
 #include <cmath>
 #include <cstdint>
 #include <functional>
@@ -114,8 +115,9 @@ struct CloseProblem {
 // Free nodes on one side of zero that no held node on that side reaches through free nodes
 // of the same side (6-neighbours) flip to the other side: pockets of the fill, which would be
 // extra components inside or beside the object (the double layer wobbles near the band's
-// ends). Inside first (a pocket inside joins the outside next to it), then outside. Serial
-// breadth-first fills; the set reached does not depend on the order. O(nodes).
+// ends). Inside first (a pocket inside joins the outside next to it), then outside. The
+// lattice's faces are held (a free node has all 6 neighbours). Serial breadth-first fills; the
+// set reached does not depend on the order. O(nodes).
 void close_drop_pockets(DiffusionLattice& l) {
   const Eigen::Vector3i n = l.size;
   const std::size_t nodes = l.node_count();
@@ -130,17 +132,29 @@ void close_drop_pockets(DiffusionLattice& l) {
         reached[i] = 1;
         queue.push_back(i);
       }
+    const std::size_t row = static_cast<std::size_t>(n.x()), plane = row * n.y();
     for (std::size_t head = 0; head < queue.size(); ++head) {
       const std::size_t i = queue[head];
-      const int x = static_cast<int>(i % static_cast<std::size_t>(n.x()));
-      const int y =
-          static_cast<int>(i / static_cast<std::size_t>(n.x()) % static_cast<std::size_t>(n.y()));
-      const int z = static_cast<int>(i / (static_cast<std::size_t>(n.x()) * n.y()));
       const auto visit = [&](std::size_t j) {
         if (reached[j] || l.fixed[j] || !side(j)) return;
         reached[j] = 1;
         queue.push_back(j);
       };
+      if (!l.fixed[i]) {  // a free node is off the faces: all 6 neighbours exist
+        assert(i % row != 0 && i % row + 1 != row && i / row % n.y() != 0 &&
+               i / row % n.y() + 1 != static_cast<std::size_t>(n.y()) && i >= plane &&
+               i + plane < nodes);
+        visit(i - 1);
+        visit(i + 1);
+        visit(i - row);
+        visit(i + row);
+        visit(i - plane);
+        visit(i + plane);
+        continue;
+      }
+      const int x = static_cast<int>(i % row);
+      const int y = static_cast<int>(i / row % static_cast<std::size_t>(n.y()));
+      const int z = static_cast<int>(i / plane);
       if (x > 0) visit(i - 1);
       if (x + 1 < n.x()) visit(i + 1);
       if (y > 0) visit(l.index(x, y - 1, z));

@@ -98,6 +98,7 @@ nlohmann::json close_json(const CloseReport& c) {
           {"tiles", c.tiles},
           {"fill", close_fill_name(c.fill)},
           {"held_out", c.held_out},
+          {"held_out_error_gradient", c.held_out_error_gradient},
           {"held_out_error_diffusion", c.held_out_error_diffusion},
           {"held_out_error_indicator", c.held_out_error_indicator}};
 }

@@ -110,8 +110,8 @@ void report_closing(const CloseReport& c) {
   if (c.held_out > 0)
     report(
         "           fill: %s (%zu observed corners near the rim held out, predicted with a mean "
-        "error of %.2f voxels by diffusion, %.2f by the indicator)\n",
-        close_fill_name(c.fill), c.held_out, c.held_out_error_diffusion,
+        "error of %.2f voxels by the gradient fill, %.2f by diffusion, %.2f by the indicator)\n",
+        close_fill_name(c.fill), c.held_out, c.held_out_error_gradient, c.held_out_error_diffusion,
         c.held_out_error_indicator);
   else
     report("           fill: %s\n", close_fill_name(c.fill));

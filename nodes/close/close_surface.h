@@ -30,12 +30,12 @@
 // surface's inside indicator spread as a double layer (a Poisson solve, the field Poisson
 // surface reconstruction solves for: an unseen box bottom closes flat at its rim, a sphere's
 // cap too flat), tunnels kept open as the gradient fill's. CloseFill::automatic lets the data
-// choose between diffusion and the indicator without ground truth: the observed corners near
-// the rim of the observed surface (where it goes on into unobserved space) are held out, both
-// fills predict them from the rest, and the fill whose prediction is closer to their observed
-// distances fills the lattice (self-validation). Experimental: that rim error does not rank the
-// fills as their filled-region error does (tests/graph/test_scanned_objects.cpp prints both),
-// and it costs two more solves.
+// choose among the three without ground truth: the observed corners near the rim of the
+// observed surface (where it goes on into unobserved space) are held out, each fill predicts
+// them from the rest, and the fill whose prediction is closest to their observed distances
+// fills the lattice (self-validation). Experimental: that rim error does not rank the fills as
+// their filled-region error does (tests/graph/test_scanned_objects.cpp prints both), and it
+// costs three more solves.
 // Large (tiled) lattices and fused maps (no points) keep diffusion.
 
 #include <Eigen/Core>
@@ -51,7 +51,8 @@ namespace meshflow {
 
 /// The fill of a whole lattice of a cloud's distances (file comment).
 enum class CloseFill : std::uint8_t {
-  automatic,  ///< diffusion or indicator, the one predicting held-out observed corners better
+  automatic,  ///< gradient, diffusion or indicator: the one predicting held-out observed corners
+              ///< best
   diffusion,  ///< volumetric diffusion of the distance
   indicator,  ///< the observed surface's indicator as a double layer, observed tunnels kept open
   gradient,   ///< the diffused gradient's potential, observed tunnels kept open (the default)
@@ -74,7 +75,7 @@ struct CloseConfig {
   /// solution; larger tiles follow the fine data farther, at 6.7 bytes a corner per thread).
   int tile_cells = 128;
   /// How a whole lattice of a cloud's distances is filled (file comment): the gradient's
-  /// potential, diffusion, the indicator, or diffusion / indicator chosen per lattice by
+  /// potential, diffusion, the indicator, or one of the three chosen per lattice by
   /// self-validation (automatic, experimental). The gradient fill takes about 10 bytes a corner
   /// more than diffusion, the indicator's solve about 23 (set max_dense_corners to 2^23 for
   /// about 190 MB). Large lattices and fused maps keep diffusion whatever this says.
@@ -104,8 +105,10 @@ struct CloseReport {
   /// fused maps).
   CloseFill fill = CloseFill::diffusion;
   /// Automatic fill: observed corners held out near the surface's rim (0: no validation ran),
-  /// and each fill's mean error predicting their distances, in voxels (clamped at 2 a corner).
+  /// and each fill's mean error predicting their distances, in voxels (clamped at 2 a corner):
+  /// the gradient fill's, diffusion's and the indicator's.
   std::size_t held_out = 0;
+  float held_out_error_gradient = 0.0f;
   float held_out_error_diffusion = 0.0f;
   float held_out_error_indicator = 0.0f;
 };

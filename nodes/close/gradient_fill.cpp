@@ -71,8 +71,11 @@ int gradient_fill(DiffusionLattice& l, const std::vector<std::uint8_t>& observed
         }
       }
   });
+  // Half the sweeps per level (on an eighth of the nodes): a field nearer convergence closes
+  // unseen parts nearer the data (an eighth: the three-view sphere orbit's largest deviation
+  // 5.2 voxels, a half 4.7; the 12 scans' mean filled error 10.6 -> 10.4e-3).
   DiffusionConfig field = config;
-  field.sweeps_per_level = std::max(1, config.sweeps_per_level / 8);
+  field.sweeps_per_level = std::max(1, config.sweeps_per_level / 2);
   for (DiffusionLattice& c : g) diffuse_free_nodes(c, field);
 
   // 2. Its divergence per voxel on the coarse lattice (central differences over two coarse
@@ -104,12 +107,13 @@ int gradient_fill(DiffusionLattice& l, const std::vector<std::uint8_t>& observed
   // tests' filled errors by under 20 %, both ways, their mean by 1 %).
   l.source.assign(l.node_count(), 0.0f);
   tbb::parallel_for(0, n.z(), [&](int z) {
-    for (int y = 0; y < n.y(); ++y)
+    for (int y = 0; y < n.y(); ++y) {
+      const CoarseRowInterpolation row(div, Eigen::Vector3i::Constant(2), y, z);
       for (int x = 0; x < n.x(); ++x) {
         const std::size_t i = l.index(x, y, z);
-        if (!l.fixed[i])
-          l.source[i] = -voxel * interpolate_coarse(div, Eigen::Vector3i::Constant(2), {x, y, z});
+        if (!l.fixed[i]) l.source[i] = -voxel * row.at(x);
       }
+    }
   });
   DiffusionConfig potential = config;
   potential.sweeps_per_level = std::max(1, config.sweeps_per_level / 4);

@@ -25,13 +25,13 @@ namespace meshflow {
 /// marks the nodes with data; `voxel` is the lattice spacing in metres, the values' unit. The
 /// gradient is taken at observed nodes off the lattice's faces with an observed neighbour along
 /// each axis (central differences where both are), averaged onto every second node from it and
-/// its 6 neighbours, diffused there with config's levels and an eighth of its sweeps per level
+/// its 6 neighbours, diffused there with config's levels and half its sweeps per level
 /// (the half-resolution lattice's faces are free: the field goes on past the data); u solves
 /// sum over the 6 neighbours j of (u_i - u_j) = -voxel x div g_i at the free nodes with config's
 /// levels and a quarter of its sweeps per level. Held nodes keep their values. Returns the
 /// levels of the potential's solve. Parallel over planes; the result does not depend on the
-/// thread count. Time O(nodes x sweeps_per_level / 4) (the field's solves cost about a tenth of
-/// the potential's); extra memory about 10 bytes a node.
+/// thread count. Time O(nodes x sweeps_per_level / 4) (the field's three solves on an eighth of
+/// the nodes cost about 40 % of the potential's); extra memory about 10 bytes a node.
 int gradient_fill(DiffusionLattice& l, const std::vector<std::uint8_t>& observed, float voxel,
                   const DiffusionConfig& config = {});
 

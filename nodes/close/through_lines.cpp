@@ -80,14 +80,14 @@ void through_rays(const Eigen::Vector3i& n, const Eigen::Vector3i& d,
 // diagonal through its middle). Parallel over nodes; O(7 x nodes).
 void through_step_hits(const Eigen::Vector3i& n, const Eigen::Vector3i& d,
                        const std::vector<std::uint8_t>& side, std::vector<std::uint8_t>& step) {
-  const auto index = [&](const Eigen::Vector3i& q) {
-    return (static_cast<std::size_t>(q.z()) * static_cast<std::size_t>(n.y()) +
-            static_cast<std::size_t>(q.y())) *
-               static_cast<std::size_t>(n.x()) +
-           static_cast<std::size_t>(q.x());
+  const std::ptrdiff_t sx = 1, sy = n.x(), sz = static_cast<std::ptrdiff_t>(n.x()) * n.y();
+  const auto offset = [&](const Eigen::Vector3i& q) {
+    return q.x() * sx + q.y() * sy + q.z() * sz;
   };
-  // The offsets from j - d of the nodes the step passes, grouped by their axis steps.
-  std::array<std::vector<Eigen::Vector3i>, 3> levels;
+  // The offsets from j - d of the nodes the step passes, grouped by their axis steps (the
+  // nodes between j - d and j: inside the lattice when both ends are).
+  std::array<std::array<std::ptrdiff_t, 3>, 3> levels{};
+  std::array<int, 3> level_size{};
   for (int mask = 1; mask < 8; ++mask) {
     Eigen::Vector3i s = Eigen::Vector3i::Zero();
     int count = 0;
@@ -98,22 +98,38 @@ void through_step_hits(const Eigen::Vector3i& n, const Eigen::Vector3i& d,
         s[a] = d[a];
         ++count;
       }
-    if (fits) levels[static_cast<std::size_t>(count - 1)].push_back(s);
+    if (!fits) continue;
+    const auto l = static_cast<std::size_t>(count - 1);
+    levels[l][static_cast<std::size_t>(level_size[l]++)] = offset(s);
   }
+  const std::ptrdiff_t back = offset(d);
+  // Nodes j with j - d inside: x in [x0, x1) of rows y - d.y() and z - d.z() inside.
+  const int x0 = std::max(0, d.x()), x1 = n.x() + std::min(0, d.x());
   tbb::parallel_for(0, n.z(), [&](int z) {
-    for (int y = 0; y < n.y(); ++y)
-      for (int x = 0; x < n.x(); ++x) {
-        const Eigen::Vector3i j(x, y, z), from = j - d;
-        std::uint8_t hit = 0;
-        if ((from.array() >= 0).all() && (from.array() < n.array()).all())
-          for (const auto& level : levels) {
-            for (const Eigen::Vector3i& s : level) hit = std::max(hit, side[index(from + s)]);
-            if (hit != 0) break;
-          }
-        else
-          hit = side[index(j)];
-        step[index(j)] = hit;
+    std::vector<std::uint8_t> level_row(static_cast<std::size_t>(n.x()));
+    std::uint8_t* level = level_row.data();
+    for (int y = 0; y < n.y(); ++y) {
+      const std::ptrdiff_t row = y * sy + z * sz;
+      const std::uint8_t* in = side.data() + row;
+      std::uint8_t* out = step.data() + row;
+      const bool row_inside =
+          y - d.y() >= 0 && y - d.y() < n.y() && z - d.z() >= 0 && z - d.z() < n.z();
+      const int from_x = row_inside ? x0 : n.x(), to_x = row_inside ? x1 : n.x();
+      for (int x = 0; x < from_x; ++x) out[x] = in[x];
+      for (int x = to_x; x < n.x(); ++x) out[x] = in[x];
+      // Level by level over the row (vectorisable): a level counts where those before met
+      // nothing.
+      std::fill(out + from_x, out + to_x, std::uint8_t{0});
+      for (std::size_t l = 0; l < 3; ++l) {
+        if (level_size[l] == 0) continue;
+        for (int x = from_x; x < to_x; ++x) level[x] = 0;
+        for (int k = 0; k < level_size[l]; ++k) {
+          const std::uint8_t* from = in - back + levels[l][static_cast<std::size_t>(k)];
+          for (int x = from_x; x < to_x; ++x) level[x] = std::max(level[x], from[x]);
+        }
+        for (int x = from_x; x < to_x; ++x) out[x] = out[x] != 0 ? out[x] : level[x];
       }
+    }
   });
 }
 
@@ -123,22 +139,26 @@ void through_step_hits(const Eigen::Vector3i& n, const Eigen::Vector3i& d,
 // patches' outside layers), not a tunnel. Parallel over nodes; O(kThroughRun x nodes).
 void through_runs(const Eigen::Vector3i& n, const Eigen::Vector3i& d,
                   const std::vector<std::uint8_t>& walled, std::vector<std::uint8_t>& run) {
+  const std::ptrdiff_t sy = n.x(), sz = static_cast<std::ptrdiff_t>(n.x()) * n.y();
+  const std::ptrdiff_t forward = d.x() + d.y() * sy + d.z() * sz;
+  const int reach = kThroughRun - 1;
+  // Nodes whose whole run q, q + d, ..., q + reach d is inside: x in [x0, x1).
+  const int x0 = std::max(0, -reach * d.x()), x1 = n.x() - std::max(0, reach * d.x());
   tbb::parallel_for(0, n.z(), [&](int z) {
-    for (int y = 0; y < n.y(); ++y)
-      for (int x = 0; x < n.x(); ++x) {
-        Eigen::Vector3i q(x, y, z);
+    for (int y = 0; y < n.y(); ++y) {
+      std::uint8_t* out = run.data() + y * sy + z * sz;
+      const std::uint8_t* in = walled.data() + y * sy + z * sz;
+      const bool row_inside = y + reach * d.y() >= 0 && y + reach * d.y() < n.y() &&
+                              z + reach * d.z() >= 0 && z + reach * d.z() < n.z();
+      const int from_x = row_inside ? x0 : n.x(), to_x = row_inside ? x1 : n.x();
+      for (int x = 0; x < from_x; ++x) out[x] = 0;
+      for (int x = to_x; x < n.x(); ++x) out[x] = 0;
+      for (int x = from_x; x < to_x; ++x) {
         std::uint8_t all = 1;
-        for (int t = 0; t < kThroughRun && all; ++t, q += d)
-          all = (q.array() >= 0).all() && (q.array() < n.array()).all() &&
-                walled[(static_cast<std::size_t>(q.z()) * static_cast<std::size_t>(n.y()) +
-                        static_cast<std::size_t>(q.y())) *
-                           static_cast<std::size_t>(n.x()) +
-                       static_cast<std::size_t>(q.x())];
-        run[(static_cast<std::size_t>(z) * static_cast<std::size_t>(n.y()) +
-             static_cast<std::size_t>(y)) *
-                static_cast<std::size_t>(n.x()) +
-            static_cast<std::size_t>(x)] = all;
+        for (int t = 0; t < kThroughRun && all; ++t) all = in[x + t * forward];
+        out[x] = all;
       }
+    }
   });
 }
 

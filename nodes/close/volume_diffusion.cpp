@@ -150,9 +150,10 @@ void prolong_free(const DiffusionLattice& coarse, DiffusionLattice& fine,
                   const Eigen::Vector3i& step) {
   tbb::parallel_for(0, fine.size.z(), [&](int z) {
     for (int y = 0; y < fine.size.y(); ++y) {
+      const CoarseRowInterpolation row(coarse, step, y, z);
       for (int x = 0; x < fine.size.x(); ++x) {
         const std::size_t i = fine.index(x, y, z);
-        if (!fine.fixed[i]) fine.values[i] = interpolate_coarse(coarse, step, {x, y, z});
+        if (!fine.fixed[i]) fine.values[i] = row.at(x);
       }
     }
   });
@@ -177,29 +178,52 @@ int diffuse_levels(DiffusionLattice& lattice, const DiffusionConfig& config) {
 
 }  // namespace
 
-float interpolate_coarse(const DiffusionLattice& coarse, const Eigen::Vector3i& step,
-                         const Eigen::Vector3i& fine_node) {
-  int lo[3], hi[3];
-  float w[3];
-  for (int a = 0; a < 3; ++a) {
-    lo[a] = std::min(fine_node[a] / step[a], coarse.size[a] - 1);
-    hi[a] = std::min(lo[a] + 1, coarse.size[a] - 1);
-    w[a] = hi[a] == lo[a]
-               ? 0.0f
-               : static_cast<float>(fine_node[a] - lo[a] * step[a]) / static_cast<float>(step[a]);
-  }
+namespace {
+
+// The coarse nodes around fine coordinate `fine` along an axis of `size` coarse nodes, coarse
+// node c standing for fine node step x c, and the upper one's weight (0 past the last node).
+void coarse_bracket(int fine, int step, int size, int& lo, int& hi, float& w) {
+  lo = std::min(fine / step, size - 1);
+  hi = std::min(lo + 1, size - 1);
+  w = hi == lo ? 0.0f : static_cast<float>(fine - lo * step) / static_cast<float>(step);
+}
+
+}  // namespace
+
+CoarseRowInterpolation::CoarseRowInterpolation(const DiffusionLattice& coarse,
+                                               const Eigen::Vector3i& step, int y, int z)
+    : coarse_(coarse), step_x_(step.x()) {
+  int y0, y1, z0, z1;
+  coarse_bracket(y, step.y(), coarse.size.y(), y0, y1, wy_);
+  coarse_bracket(z, step.z(), coarse.size.z(), z0, z1, wz_);
+  rows_[0] = coarse.index(0, y0, z0);
+  rows_[1] = coarse.index(0, y1, z0);
+  rows_[2] = coarse.index(0, y0, z1);
+  rows_[3] = coarse.index(0, y1, z1);
+}
+
+float CoarseRowInterpolation::at(int x) const {
+  int x0, x1;
+  float wx;
+  coarse_bracket(x, step_x_, coarse_.size.x(), x0, x1, wx);
+  // The 8 corners in interpolate_coarse()'s order (x fastest), each weight the product of the
+  // x, y and z factors in that order; corners of weight 0 are skipped.
+  const float fx[2] = {1.0f - wx, wx}, fy[2] = {1.0f - wy_, wy_}, fz[2] = {1.0f - wz_, wz_};
+  const int xs[2] = {x0, x1};
   float v = 0.0f;
   for (int corner = 0; corner < 8; ++corner) {
-    float weight = 1.0f;
-    int q[3];
-    for (int a = 0; a < 3; ++a) {
-      const bool upper = (corner >> a) & 1;
-      q[a] = upper ? hi[a] : lo[a];
-      weight *= upper ? w[a] : 1.0f - w[a];
-    }
-    if (weight > 0.0f) v += weight * coarse.values[coarse.index(q[0], q[1], q[2])];
+    const int a = corner & 1, b = (corner >> 1) & 1, c = (corner >> 2) & 1;
+    const float weight = fx[a] * fy[b] * fz[c];
+    if (weight > 0.0f)
+      v += weight * coarse_.values[rows_[static_cast<std::size_t>(b + 2 * c)] +
+                                   static_cast<std::size_t>(xs[a])];
   }
   return v;
+}
+
+float interpolate_coarse(const DiffusionLattice& coarse, const Eigen::Vector3i& step,
+                         const Eigen::Vector3i& fine_node) {
+  return CoarseRowInterpolation(coarse, step, fine_node.y(), fine_node.z()).at(fine_node.x());
 }
 
 int diffuse_free_nodes(DiffusionLattice& lattice, const DiffusionConfig& config) {

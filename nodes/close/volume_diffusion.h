@@ -61,4 +61,20 @@ int diffuse_free_nodes(DiffusionLattice& lattice, const DiffusionConfig& config 
 float interpolate_coarse(const DiffusionLattice& coarse, const Eigen::Vector3i& step,
                          const Eigen::Vector3i& fine_node);
 
+/// interpolate_coarse() along one row of the fine lattice (fine nodes (x, y, z), x varying):
+/// the y and z parts found once, the same value at each node. Reads only; O(1) a node.
+class CoarseRowInterpolation {
+ public:
+  CoarseRowInterpolation(const DiffusionLattice& coarse, const Eigen::Vector3i& step, int y, int z);
+  /// interpolate_coarse(coarse, step, {x, y, z}).
+  float at(int x) const;
+
+ private:
+  const DiffusionLattice& coarse_;
+  int step_x_;
+  std::size_t
+      rows_[4];    // the coarse rows at (lo y, lo z), (hi y, lo z), (lo y, hi z), (hi y, hi z)
+  float wy_, wz_;  // the weights of the hi rows along y and z
+};
+
 }  // namespace meshflow

@@ -67,10 +67,10 @@ TEST(CliClose, FusedAndMergedDepthSequencesCloseWatertight) {
     const double open_median = open.eval["vertices_to_truth"]["median"].get<double>();
     const double closed_median = closed.eval["vertices_to_truth"]["median"].get<double>();
     EXPECT_LT(closed_median, 1.5 * open_median + 0.05 * voxel);
-    // The merged cloud's fill (the gradient fill, CloseFill's default) runs on past the unseen
-    // parts more than diffusion did: largest 5.2 voxels (mean 5.1 mm, p95 41 mm) against
-    // diffusion's 3.0 (2.1 mm, 6.4 mm) on this orbit; the fused map keeps diffusion (3.6).
-    EXPECT_LT(closed.eval["vertices_to_truth"]["max"].get<double>(), 6.0 * voxel);
+    // The merged cloud's fill (the gradient fill, CloseFill's default): largest 2.7 voxels
+    // (mean 2.8 mm, p95 20 mm) on this orbit, diffusion's 3.0 (2.1 mm, 6.4 mm); the fused map
+    // keeps diffusion (3.6).
+    EXPECT_LT(closed.eval["vertices_to_truth"]["max"].get<double>(), 4.0 * voxel);
     std::printf("[ %s ] median %.5f -> %.5f m, max %.4f m, border edges %zu -> 0\n", mode.c_str(),
                 open_median, closed_median, closed.eval["vertices_to_truth"]["max"].get<double>(),
                 open.info["border_edges"].get<std::size_t>());

@@ -184,7 +184,7 @@ InputDecisions decide_from_input(const std::string& path, const std::string& col
   for_each_input_part(
       path, columns, parts, batch_points, [&](std::size_t part, const PointCloud& batch) {
         const std::vector<Eigen::Vector3f> points = points_to_sample(batch, config.filter);
-        samples[part].measure(points);  // a kd-tree over the part's first batch only
+        samples[part].measure(points);  // no kd-tree per batch: see measure()
       });
   for (std::size_t part = 1; part < count; ++part) samples[0].merge_measured(samples[part]);
   return decisions_from_sample(samples[0], config, normals, sensor, path);

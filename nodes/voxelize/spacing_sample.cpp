@@ -158,15 +158,18 @@ namespace {
 
 // A cell of a grid, hashed (two cells may share a key: their samples are then both checked,
 // by exact distance, so a collision costs time only).
-std::uint64_t reach_cell_key(const Eigen::Vector3d& cell) {
-  std::uint64_t key = 0;
-  for (int k = 0; k < 3; ++k)
-    key = spacing_mix(key ^ static_cast<std::uint64_t>(static_cast<std::int64_t>(cell[k])));
-  return key;
+std::uint64_t reach_cell_key(std::int64_t x, std::int64_t y, std::int64_t z) {
+  return static_cast<std::uint64_t>(x) * 0x9e3779b97f4a7c15ULL ^
+         static_cast<std::uint64_t>(y) * 0xc2b2ae3d27d4eb4fULL ^
+         static_cast<std::uint64_t>(z) * 0x165667b19e3779f9ULL;
 }
 
-// The cell of a grid of `size` metres holding coordinate `x` (metres).
-double reach_cell(double x, double size) { return std::floor(x / size); }
+// The cell holding coordinate `x` on a grid of cells 1 / `inverse` metres: float arithmetic
+// (cheap per point), monotonic in x (a product and floor are), so a point within a ball lies
+// in a cell between those of the ball's box's ends.
+std::int64_t reach_cell(float x, float inverse) {
+  return static_cast<std::int64_t>(std::floor(x * inverse));
+}
 
 // Squared distance as the kd-tree's leaf scan computes it (bucket_distance2(): the same
 // rounding, so a neighbour found either way has the same distance).
@@ -182,10 +185,12 @@ float reach_distance2(const Eigen::Vector3f& query, const Eigen::Vector3f& p) {
 // that says whether any does (most points are near no sample: one bit test each).
 struct ReachGrid {
   double cell = 0.0;
+  float inverse = 0.0f;  // 1 / cell
   std::unordered_map<std::uint64_t, std::vector<std::uint32_t>> samples;
   std::vector<std::uint64_t> bits;  // kReachBits bits
 };
-constexpr std::size_t kReachBits = std::size_t{1} << 18;
+constexpr int kReachShift = 64 - 18;  // a key's top 18 bits: its bit
+constexpr std::size_t kReachBits = std::size_t{1} << (64 - kReachShift);
 constexpr int kReachLevels = 24;  // cells of h0, 4 h0, 16 h0, ...
 
 }  // namespace
@@ -214,25 +219,31 @@ void SpacingSample::measure_within_reach(const std::vector<Eigen::Vector3f>& poi
   }
   // Each sample on the first level whose cells are at least twice its reach (<= 8 cells).
   std::vector<ReachGrid> levels(kReachLevels);
-  for (int l = 0; l < kReachLevels; ++l) levels[l].cell = base * std::pow(4.0, l);
+  for (int l = 0; l < kReachLevels; ++l) {
+    levels[l].cell = base * std::pow(4.0, l);
+    levels[l].inverse = static_cast<float>(1.0 / levels[l].cell);
+  }
   for (std::size_t s = 0; s < samples_.size(); ++s) {
     if (!near_box[s]) continue;
     int l = 0;
     while (l + 1 < kReachLevels && 2.0 * reach[s] > levels[l].cell) ++l;
     ReachGrid& grid = levels[l];
     const Eigen::Vector3d c = samples_[s].position.cast<double>();
-    Eigen::Vector3d lo, hi;
-    for (int k = 0; k < 3; ++k) {  // the cells of the ball's box (rounding is monotonic)
-      lo[k] = reach_cell(c[k] - reach[s], grid.cell);
-      hi[k] = reach_cell(c[k] + reach[s], grid.cell);
+    std::int64_t lo[3], hi[3];
+    for (int k = 0; k < 3; ++k) {  // the cells of the ball's box, its ends rounded outwards
+      const float low = std::nextafter(static_cast<float>(c[k] - reach[s]), -HUGE_VALF);
+      const float high = std::nextafter(static_cast<float>(c[k] + reach[s]), HUGE_VALF);
+      lo[k] = reach_cell(low, grid.inverse);
+      hi[k] = reach_cell(high, grid.inverse);
     }
     if (grid.bits.empty()) grid.bits.assign(kReachBits / 64, 0);
-    for (double x = lo[0]; x <= hi[0]; ++x)
-      for (double y = lo[1]; y <= hi[1]; ++y)
-        for (double z = lo[2]; z <= hi[2]; ++z) {
-          const std::uint64_t key = reach_cell_key(Eigen::Vector3d(x, y, z));
+    for (std::int64_t x = lo[0]; x <= hi[0]; ++x)
+      for (std::int64_t y = lo[1]; y <= hi[1]; ++y)
+        for (std::int64_t z = lo[2]; z <= hi[2]; ++z) {
+          const std::uint64_t key = reach_cell_key(x, y, z);
           grid.samples[key].push_back(static_cast<std::uint32_t>(s));
-          grid.bits[(key % kReachBits) / 64] |= std::uint64_t{1} << (key % 64);
+          const std::uint64_t bit = key >> kReachShift;
+          grid.bits[bit / 64] |= std::uint64_t{1} << (bit % 64);
         }
   }
   std::vector<const ReachGrid*> used;
@@ -255,9 +266,11 @@ void SpacingSample::measure_within_reach(const std::vector<Eigen::Vector3f>& poi
       const Eigen::Vector3f& p = points[i];
       if (!p.allFinite()) continue;
       for (const ReachGrid* g : used) {
-        const std::uint64_t key = reach_cell_key(Eigen::Vector3d(
-            reach_cell(p[0], g->cell), reach_cell(p[1], g->cell), reach_cell(p[2], g->cell)));
-        if (!((g->bits[(key % kReachBits) / 64] >> (key % 64)) & 1)) continue;
+        const std::uint64_t key =
+            reach_cell_key(reach_cell(p[0], g->inverse), reach_cell(p[1], g->inverse),
+                           reach_cell(p[2], g->inverse));
+        const std::uint64_t bit = key >> kReachShift;
+        if (!((g->bits[bit / 64] >> (bit % 64)) & 1)) continue;
         const auto hit = g->samples.find(key);
         if (hit == g->samples.end()) continue;
         for (const std::uint32_t s : hit->second) {

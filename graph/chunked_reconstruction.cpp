@@ -23,7 +23,6 @@
 #include "nodes/io/parse_util.h"
 #include "nodes/io/read_point_cloud.h"
 #include "nodes/normals/scene_side.h"
-#include "nodes/search/spatial_index.h"
 #include "nodes/voxelize/spacing_sample.h"
 #include "runtime/error.h"
 #include "runtime/tracing.h"
@@ -157,8 +156,8 @@ void for_each_input_part(const std::string& path, const std::string& columns,
 
 InputDecisions decide_from_input(const std::string& path, const std::string& columns,
                                  const ReconstructionConfig& config, std::size_t batch_points,
-                                 const InputParts& given_parts) {
-  if (!decisions_need_sample(config)) {
+                                 const InputParts& given_parts, bool measure_density) {
+  if (!decisions_need_sample(config) && !measure_density) {
     InputDecisions decided;
     decided.voxel_size = config.voxelize.voxel_size;
     decided.method = config.extract.method;
@@ -186,9 +185,7 @@ InputDecisions decide_from_input(const std::string& path, const std::string& col
   for_each_input_part(
       path, columns, parts, batch_points, [&](std::size_t part, const PointCloud& batch) {
         const std::vector<Eigen::Vector3f> points = points_to_sample(batch, config.filter);
-        if (points.empty()) return;
-        const KdTreeIndex index(points);
-        samples[part].measure(points, index);
+        samples[part].measure(points);  // no kd-tree per batch: see measure()
       });
   for (std::size_t part = 1; part < count; ++part) samples[0].merge_measured(samples[part]);
   return decisions_from_sample(samples[0], config, normals, sensor, path);
@@ -200,6 +197,10 @@ SpacingSample empty_input_sample(const ReconstructionConfig& config) {
 
 bool decisions_need_sample(const ReconstructionConfig& config) {
   return !(config.voxelize.voxel_size > 0.0f) || config.extract.method == ExtractMethod::kAuto;
+}
+
+bool input_needs_sample(const ReconstructionConfig& config, const ChunkingConfig& chunking) {
+  return decisions_need_sample(config) || !(chunking.chunk_size > 0.0f);
 }
 
 InputDecisions decisions_from_sample(const SpacingSample& sample,
@@ -217,6 +218,7 @@ InputDecisions decisions_from_sample(const SpacingSample& sample,
                   "give --voxel");
   }
   decided.median_variation = sample.median_variation();
+  decided.density = sample.surface_density();
   if (config.extract.method == ExtractMethod::kAuto)
     decided.method = sharp_for_input(config, decided.median_variation, input_normals, sensor)
                          ? ExtractMethod::kExtendedMarchingCubes
@@ -227,17 +229,26 @@ InputDecisions decisions_from_sample(const SpacingSample& sample,
   return decided;
 }
 
-float auto_chunk_size(const PointCloud& sample, const SpatialIndex& index, float voxel_size,
-                      std::size_t memory_budget, std::size_t in_flight) {
+double chunk_bytes_estimate(double edge, double density, double voxel_size, int overlap_voxels) {
+  const double seen = edge + 2.0 * std::max(0, overlap_voxels) * voxel_size;
+  const double surface = 2.0 * seen * seen;
+  const double per_m2 = std::max(0.0, density) * static_cast<double>(kChunkBytesPerPoint) +
+                        static_cast<double>(kChunkBytesPerCell) / (voxel_size * voxel_size);
+  return surface * per_m2;
+}
+
+float auto_chunk_size(float density, float voxel_size, std::size_t memory_budget,
+                      std::size_t in_flight, int overlap_voxels) {
   const std::size_t budget = memory_budget > 0 ? memory_budget : std::size_t{1} << 30;
-  const double points = static_cast<double>(budget) /
-                        static_cast<double>(std::max<std::size_t>(in_flight, 1)) /
-                        static_cast<double>(kChunkBytesPerPoint);
-  // suggest_voxel_size() with factor 1: the median nearest-neighbour spacing (or 1/2000 of the
-  // sample's diagonal, whichever is larger).
-  const double spacing = suggest_voxel_size(sample, index, 1.0f);
-  const double edge = spacing * std::sqrt(4.5 * points / 2.0);
-  return static_cast<float>(std::max(edge, 4.0 * static_cast<double>(voxel_size)));
+  const double per_chunk =
+      static_cast<double>(budget) / static_cast<double>(std::max<std::size_t>(in_flight, 1));
+  const double v = static_cast<double>(voxel_size);
+  const double density_or_none = std::isfinite(density) ? static_cast<double>(density) : 0.0;
+  // chunk_bytes_estimate() grows as the square of the edge with its overlap: the edge whose
+  // estimate is the chunk's share.
+  const double seen = std::sqrt(per_chunk / chunk_bytes_estimate(1.0, density_or_none, v, 0));
+  const double edge = seen - 2.0 * std::max(0, overlap_voxels) * v;
+  return static_cast<float>(std::max(edge, 4.0 * v));
 }
 
 chunk::ChunkGrid make_chunk_grid(float voxel_size, const ChunkingConfig& chunking) {
@@ -252,20 +263,12 @@ chunk::ChunkGrid make_chunk_grid(float voxel_size, const ChunkingConfig& chunkin
   return grid;
 }
 
-chunk::ChunkGrid grid_from_first_batch(const PointCloud& batch, float voxel_size,
-                                       ChunkingConfig chunking) {
-  if (!(chunking.chunk_size > 0.0f)) {
-    PointCloud finite;
-    for (const Eigen::Vector3f& p : batch.positions)
-      if (p.allFinite()) finite.positions.push_back(p);
-    chunking.chunk_size = 4.0f * voxel_size;
-    if (finite.size() >= 2) {
-      const KdTreeIndex index(finite.positions);
-      chunking.chunk_size =
-          auto_chunk_size(finite, index, voxel_size, chunking.memory_budget, chunking.in_flight);
-    }
-  }
-  return make_chunk_grid(voxel_size, chunking);
+chunk::ChunkGrid grid_for_input(const InputDecisions& decided, ChunkingConfig chunking) {
+  if (!(chunking.chunk_size > 0.0f))
+    chunking.chunk_size =
+        auto_chunk_size(decided.density, decided.voxel_size, chunking.memory_budget,
+                        chunking.in_flight, chunking.overlap_voxels);
+  return make_chunk_grid(decided.voxel_size, chunking);
 }
 
 std::unique_ptr<chunk::ChunkStore> partition_input(
@@ -278,15 +281,17 @@ std::unique_ptr<chunk::ChunkStore> partition_input(
       input_parts(path, columns, chunking.read_parts > 0 ? chunking.read_parts : threads);
   const bool serial = !parts.by_byte_range;  // else as many parts as workers
   if (clock) clock->begin("decide", serial);
-  decided = decide_from_input(path, columns, config, chunking.batch_points, parts);
+  decided = decide_from_input(path, columns, config, chunking.batch_points, parts,
+                              input_needs_sample(config, chunking));
   if (clock) clock->begin("partition", serial);
-  // The grid from the first batch (the first part's), made before the parts are read at once.
+  // The grid from the whole input's decisions; the first batch (the first part's) tells the
+  // scene's kind, before the parts are read at once.
   std::unique_ptr<chunk::ChunkStore> store;
   bool z_up = false;
   const auto first_batch = [&](const PointCloud& batch) {
     if (store) return;
-    const chunk::ChunkGrid grid = grid_from_first_batch(batch, decided.voxel_size, chunking);
-    store = std::make_unique<chunk::ChunkStore>(grid, chunking.directory);
+    store =
+        std::make_unique<chunk::ChunkStore>(grid_for_input(decided, chunking), chunking.directory);
     // A chunk cannot tell a terrain from an object by itself (whole_scene is off for chunks):
     // the first batch decides for all, as one process decides for the whole cloud.
     z_up = !batch.has_normals() && classify_scene(batch) == SceneKind::kHeightField;

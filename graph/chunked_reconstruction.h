@@ -29,7 +29,7 @@ namespace meshflow {
 
 struct ChunkingConfig {
   /// Chunk edge, metres (rounded to whole voxels); <= 0: chosen from `memory_budget` and the
-  /// first points' spacing (auto_chunk_size).
+  /// whole input's point density (auto_chunk_size(), from decide_from_input()'s sample).
   float chunk_size = 10.0f;
   /// Bytes the chunks in flight may take together (the automatic chunk size); 0 = 1 GiB.
   std::size_t memory_budget = 0;
@@ -87,6 +87,9 @@ struct InputDecisions {
   /// NormalsConfig::noisy_variation.
   bool noisy = false;
   float median_variation = 0.0f;  ///< of the sample's kn-neighbourhoods (0: not measured)
+  /// Points per m^2 of surface (SpacingSample::surface_density() of the whole input's sample),
+  /// what the automatic chunk size is made from; 0: not measured (no sample taken).
+  float density = 0.0f;
 };
 
 /// What a chunked reconstruction did.
@@ -129,27 +132,36 @@ ReconstructionConfig chunk_stage_config(const ReconstructionConfig& config,
                                         bool finish_in_place = false);
 
 /// The decisions of `config` for a cloud streamed from `path` in batches of `batch_points`:
-/// when the voxel or the extraction method is automatic, two passes over the input (the
-/// sample and its nearest neighbours; memory: one batch and its kd-tree per part, the `parts`
-/// read at once; no parts: the input streamed whole). Points outside the
+/// when the voxel or the extraction method is automatic, or `measure_density` (the automatic
+/// chunk size needs InputDecisions::density), two passes over the input (the sample and its
+/// nearest neighbours; memory: one batch and its kd-tree per part, the `parts` read at once;
+/// no parts: the input streamed whole). Points outside the
 /// crop box are left out as the filter stage leaves them; voxel-grid downsampling and
 /// statistical outlier removal (--filter-voxel, --outlier-k) are not applied to the sample,
 /// so with them the automatic voxel can differ from one process's. Throws meshflow::Error
 /// naming `path` when no voxel can be chosen.
 InputDecisions decide_from_input(const std::string& path, const std::string& columns,
                                  const ReconstructionConfig& config, std::size_t batch_points,
-                                 const InputParts& parts = {});
+                                 const InputParts& parts = {}, bool measure_density = false);
 
-/// Bytes a chunk holds per point while in the graph (points, normals, kd-tree, grid, distances,
-/// mesh; measured on the synthetic city at 3-6 points per voxel, with margin).
-constexpr std::size_t kChunkBytesPerPoint = 1024;
+/// Bytes a chunk holds in the graph per point (points, normals, Morton order, kd-tree, the
+/// normals' neighbours) and per cell of surface (voxel^2 of it: the grid's cells and corners
+/// in the band, distances, the extracted mesh and the finish's tables); measured on the
+/// synthetic city (bench/RESULTS.md, "Clouds larger than memory"), with margin.
+constexpr std::size_t kChunkBytesPerPoint = 160;
+constexpr std::size_t kChunkBytesPerCell = 1024;
 
-/// A chunk edge (metres) for which `in_flight` chunks fit `memory_budget` bytes: a chunk of edge
-/// c holds about 2 c^2 of surface (terrain and walls), sampled as densely as `sample` (a piece of
-/// the input: its median nearest-neighbour spacing d gives about 4.5 d^2 of surface per point),
-/// at kChunkBytesPerPoint. At least 4 voxels. `index` is over sample.positions. O(log n).
-float auto_chunk_size(const PointCloud& sample, const SpatialIndex& index, float voxel_size,
-                      std::size_t memory_budget, std::size_t in_flight);
+/// The bytes auto_chunk_size()'s model gives a chunk of edge `edge` metres with
+/// `overlap_voxels` of overlap at `density` points per m^2 of surface and `voxel_size`: 2 e^2
+/// of surface (terrain and walls; e the edge with the overlap on both sides), its points at
+/// kChunkBytesPerPoint and its cells at kChunkBytesPerCell. O(1).
+double chunk_bytes_estimate(double edge, double density, double voxel_size, int overlap_voxels);
+
+/// A chunk edge (metres) for which `in_flight` chunks fit `memory_budget` bytes (0 = 1 GiB) by
+/// chunk_bytes_estimate(), at the whole input's `density` (InputDecisions::density; 0: unknown,
+/// the cells alone); at least 4 voxels. O(1).
+float auto_chunk_size(float density, float voxel_size, std::size_t memory_budget,
+                      std::size_t in_flight, int overlap_voxels);
 
 /// The chunk grid for `voxel_size` and `chunking` (chunk edge rounded to whole cells, >= 1).
 chunk::ChunkGrid make_chunk_grid(float voxel_size, const ChunkingConfig& chunking);
@@ -157,6 +169,10 @@ chunk::ChunkGrid make_chunk_grid(float voxel_size, const ChunkingConfig& chunkin
 /// Whether `config` leaves the voxel or the extraction method to decide_from_input() (then it
 /// needs the sample of the whole input). O(1).
 bool decisions_need_sample(const ReconstructionConfig& config);
+
+/// Whether a chunked run of `config` with `chunking` takes the whole input's sample: its
+/// decisions need it, or the chunk size is automatic (the density). O(1).
+bool input_needs_sample(const ReconstructionConfig& config, const ChunkingConfig& chunking);
 
 /// An empty sample keeping the neighbourhood size `config`'s normals fit over (kn, at least 3),
 /// for callers that read the parts of the input themselves (MPI ranks). O(1).
@@ -173,19 +189,19 @@ InputDecisions decisions_from_sample(const SpacingSample& sample,
                                      const ReconstructionConfig& config, bool input_normals,
                                      bool sensor, const std::string& path);
 
-/// The chunk grid at `voxel_size`: chunking.chunk_size, or when that is <= 0 auto_chunk_size()
-/// of the input's first batch `batch` (its finite points). O(batch log batch).
-chunk::ChunkGrid grid_from_first_batch(const PointCloud& batch, float voxel_size,
-                                       ChunkingConfig chunking);
+/// The chunk grid at decided.voxel_size: chunking.chunk_size, or when that is <= 0
+/// auto_chunk_size() of the whole input's decided.density (chunking's budget and chunks in
+/// flight). O(1).
+chunk::ChunkGrid grid_for_input(const InputDecisions& decided, ChunkingConfig chunking);
 
 /// Streams `path` (columns as io::read_point_cloud) into chunk files, its byte ranges
 /// (input_parts(), chunking.read_parts) each read by a thread of its own into its own part of
 /// the chunk files (ChunkWriter; a chunk's points stay in file order), after decide_from_input()
 /// (`decided` receives its result; the voxel is one process's automatic voxel when none is
 /// given); the chunk edge is chunking.chunk_size or, when that is <= 0, auto_chunk_size() of
-/// the first batch (the store's grid() holds the one used). Returns the store; `files`
-/// receives the chunks to mesh in Morton order. `clock` (optional) times the phases "decide"
-/// and "partition" (serial when the input cannot be read by byte range: one thread streams
+/// the whole input's density (grid_for_input(); the store's grid() holds the one used). Returns the
+/// store; `files` receives the chunks to mesh in Morton order. `clock` (optional) times the phases
+/// "decide" and "partition" (serial when the input cannot be read by byte range: one thread streams
 /// it). Throws meshflow::Error for unreadable input or a cloud without finite points.
 std::unique_ptr<chunk::ChunkStore> partition_input(
     const std::string& path, const std::string& columns, const ReconstructionConfig& config,

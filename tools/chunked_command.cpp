@@ -71,7 +71,8 @@ void run_chunked_reconstruct(const std::string& input, const std::string& column
         {"decided",  // once, from the whole input, for every chunk
          {{"voxel_automatic", r.decided.voxel_automatic},
           {"median_variation", r.decided.median_variation},
-          {"noisy", r.decided.noisy}}},
+          {"noisy", r.decided.noisy},
+          {"density", r.decided.density}}},
         {"tiles", tiles},
         {"timing", options::chunked_timing_json(ranks, wall)},
         {"optimize", options::optimize_json(r.optimize)},

@@ -106,9 +106,10 @@ void run_reconstruct(const ReconstructOptions& o) {
                   "writes a mesh file (.ply .obj .stl .off .glb): no --texture, --quality or "
                   "--compress");
     ChunkingConfig chunking = o.chunking;
-    // "auto": the chunks in flight get half of --max-memory (the rest: the welded mesh).
+    // "auto": the chunks in flight get half of --max-memory (the rest: the seams and the
+    // output's buffers), 1 GiB when none is given (ChunkingConfig::memory_budget 0).
     chunking.chunk_size = o.chunk == "auto" ? 0.0f : std::stof(o.chunk);
-    chunking.memory_budget = config.max_memory_bytes / 2;
+    chunking.memory_budget = o.pipeline.max_memory.empty() ? 0 : config.max_memory_bytes / 2;
     if (o.serve.enabled()) throw Error("--serve", "", "a reconstruction without --chunk");
     print_settings(config);
     return run_chunked_reconstruct(o.input, o.columns, o.output, o.tiles, config, chunking,
@@ -306,7 +307,8 @@ void add_reconstruct_options(CLI::App* cmd) {
   cmd->add_option("--chunk", opts->chunk,
                   "Out of core: stream the input into chunks of this edge (metres) on disk and "
                   "mesh them a few at a time, seams welded exactly; 'auto': the edge that lets "
-                  "the chunks in flight fit half of --max-memory (default: whole cloud in memory)")
+                  "the chunks in flight fit half of --max-memory, 1 GiB when none is given "
+                  "(default: whole cloud in memory)")
       ->check(CLI::IsMember({"auto"}) | number_in(0, 1e6))
       ->excludes("--close");  // the diffusion needs the whole object's grid
   cmd->add_option("--chunk-overlap", opts->chunking.overlap_voxels,

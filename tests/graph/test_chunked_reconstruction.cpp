@@ -772,15 +772,32 @@ TEST(MeshStitch, TurnsAChunkWoundAgainstItsNeighbourOver) {
 }
 
 TEST(ChunkedReconstruction, AutomaticChunkSizeKeepsChunksNearTheMemoryBudget) {
-  const CityInput input(120000, true);
+  const std::uint64_t points = 120000;
+  const CityInput input(points, true);
+  const float voxel = 0.9f;
+  const ReconstructionConfig config = raw_config(voxel);
   ChunkingConfig automatic = chunks_of(0.0f);
-  const std::size_t target = 10000;  // points per chunk
-  automatic.memory_budget = automatic.in_flight * kChunkBytesPerPoint * target;
-  const ChunkedResult chunked = reconstruct_chunked(input.path, "", raw_config(0.9f), automatic);
-  EXPECT_GT(chunked.report.chunks, 6u);
-  EXPECT_LT(chunked.report.max_chunk_points, 4 * target) << "chunks far over the budget";
-  EXPECT_GT(chunked.report.max_chunk_points, target / 4) << "chunks far under the budget";
+  // The whole input's density (the scene's points over its surface; the file is written patch
+  // by patch, so no first batch sees it), as the partition measures it.
+  const InputDecisions decided =
+      decide_from_input(input.path, "", config, automatic.batch_points, {}, true);
+  const double truth = static_cast<double>(points) / input.scene.area();
+  EXPECT_NEAR(decided.density, truth, 0.25 * truth);
+  const double edge = 12.0;  // metres: the budget of chunks of this edge by the model
+  const int overlap = automatic.overlap_voxels;
+  automatic.memory_budget = static_cast<std::size_t>(
+      static_cast<double>(automatic.in_flight) * chunk_bytes_estimate(edge, truth, voxel, overlap));
+  const ChunkedResult chunked = reconstruct_chunked(input.path, "", config, automatic);
+  const ChunkedReport& r = chunked.report;
+  EXPECT_NEAR(r.chunk_cells * voxel, edge, 0.2 * edge);
+  EXPECT_GT(r.chunks, 6u);
+  const double seen = edge + 2.0 * overlap * voxel;  // the model's points per chunk
+  const double expected = truth * 2.0 * seen * seen;
+  EXPECT_LT(static_cast<double>(r.max_chunk_points), 4.0 * expected) << "far over the budget";
+  EXPECT_GT(static_cast<double>(r.max_chunk_points), expected / 4.0) << "far under the budget";
   EXPECT_FALSE(chunked.mesh.empty());
+  // A given voxel and method take the sample for the density alone.
+  EXPECT_EQ(decide_from_input(input.path, "", config, automatic.batch_points).density, 0.0f);
 }
 
 TEST(ChunkGrid, OwnedRangesTileSpaceAndOverlapReachesNeighbours) {

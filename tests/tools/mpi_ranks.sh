@@ -48,13 +48,14 @@ ranks = d["timing"]["ranks"]
 assert [r["rank"] for r in ranks] == [0, 1], ranks
 assert sum(r["chunks"] for r in ranks) == d["chunks"], (ranks, d["chunks"])
 names = [[p["phase"] for p in r["phases"]] for r in ranks]
-# Every rank writes its own parts into the file ("write", parallel); rank 0 gathers only the
-# seams' neighbourhoods and finishes them; then every rank writes its own chunks' tiles from
-# the file's finished rows ("tiles", parallel) and rank 0 joins their records ("index").
-assert names[0] == ["decide", "setup", "partition", "join", "chunks", "exchange", "seams", "weld",
+# Every rank welds and writes its own parts into the file ("write", parallel: each chunk read
+# back from its spill, welded and written, a few at once); rank 0 gathers only the seams'
+# neighbourhoods and finishes them; then every rank writes its own chunks' tiles from the
+# file's finished rows ("tiles", parallel) and rank 0 joins their records ("index").
+assert names[0] == ["decide", "setup", "partition", "join", "chunks", "exchange", "seams",
                     "create", "write", "gather", "finish", "tiles", "index"], names[0]
 assert names[1] == ["decide", "setup", "partition", "plan", "chunks", "exchange", "seams",
-                    "weld", "create", "write", "finish", "tiles"], names[1]
+                    "create", "write", "finish", "tiles"], names[1]
 assert all(p["work_s"] == 0 for p in ranks[1]["phases"]
            if p["phase"] in ("setup", "plan", "exchange", "seams", "create", "finish"))
 for phase in ("write", "tiles"):

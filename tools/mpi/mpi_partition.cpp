@@ -114,12 +114,8 @@ std::string decide_by_ranks(const std::string& input, const std::string& columns
   error = gather_step(
       [&] {
         read_own_range(
-            input, columns, parts, chunking.batch_points, rank, [&](const PointCloud& b) {
-              const std::vector<Eigen::Vector3f> points = points_to_sample(b, config.filter);
-              if (points.empty()) return;
-              const KdTreeIndex index(points);
-              sample.measure(points, index);
-            });
+            input, columns, parts, chunking.batch_points, rank,
+            [&](const PointCloud& b) { sample.measure(points_to_sample(b, config.filter)); });
         return sample.to_bytes();
       },
       rank, ranks, gathered);
@@ -168,11 +164,12 @@ RankedPartition partition_by_ranks(const std::string& input, const std::string& 
   RankedPartition out;
   SpacingSample sample = empty_input_sample(config);
   clock.begin("decide", false);
-  if (decisions_need_sample(config)) {
+  const bool sampled = input_needs_sample(config, chunking);
+  if (sampled) {
     out.error = decide_by_ranks(input, columns, config, chunking, parts, rank, ranks, sample);
     if (!out.error.empty()) return out;
   }
-  // Rank 0: the decisions, the grid from the file's first batch, the directory.
+  // Rank 0: the decisions, the grid from them, the directory.
   std::vector<unsigned char> setup;
   bool z_up = false;
   if (rank == 0)
@@ -193,14 +190,14 @@ RankedPartition partition_by_ranks(const std::string& input, const std::string& 
           });
       normals = head.has_normals();
       sensor = head.has_sensor_origin;
-      if (decisions_need_sample(config)) {
+      if (sampled) {
         out.decided = decisions_from_sample(sample, config, normals, sensor, input);
       } else {
         out.decided.voxel_size = config.voxelize.voxel_size;
         out.decided.method = config.extract.method;
       }
-      out.store = std::make_unique<chunk::ChunkStore>(
-          grid_from_first_batch(head, out.decided.voxel_size, chunking), chunking.directory);
+      out.store = std::make_unique<chunk::ChunkStore>(grid_for_input(out.decided, chunking),
+                                                      chunking.directory);
       out.grid = out.store->grid();
       z_up = !head.has_normals() && classify_scene(head) == SceneKind::kHeightField;
     } catch (const std::exception& e) {

@@ -32,6 +32,7 @@
 #include <cstdio>
 #include <cstring>
 #include <exception>
+#include <filesystem>
 #include <functional>
 #include <string>
 #include <thread>
@@ -162,11 +163,11 @@ struct Options {
 };
 
 // --chunk as `reconstruct --chunk` takes it: "auto" lets the chunks in flight have half of
-// --max-memory (the rest: the welded mesh).
+// --max-memory (the rest: the seams and the output's buffers), 1 GiB when none is given.
 ChunkingConfig chunking_of(const Options& o, const ReconstructionConfig& config) {
   ChunkingConfig chunking = o.chunking;
   chunking.chunk_size = o.chunk == "auto" ? 0.0f : std::stof(o.chunk);
-  chunking.memory_budget = config.max_memory_bytes / 2;
+  chunking.memory_budget = o.pipeline.max_memory.empty() ? 0 : config.max_memory_bytes / 2;
   return chunking;
 }
 
@@ -288,6 +289,11 @@ int run(const Options& o, int rank, int ranks) {
   const bool in_place = finishes_in_place(config, chunking);
   const std::size_t n = plan.files.size();
   const auto chunks = static_cast<long long>(n);
+  // Streamed output: each chunk's mesh waits for the weld on disk beside the chunk files (a
+  // directory every rank sees), so a rank holds its chunks in flight, not all it meshed.
+  const bool streamed = streams_output(o.output, config, chunking);
+  const std::string spill_directory =
+      n > 0 ? std::filesystem::path(plan.files.front().path).parent_path().string() : "";
   std::vector<ChunkResult> results;
   const auto collect = [&](const FramePtr& frame) {
     report.timings.insert(report.timings.end(), frame->timings.begin(), frame->timings.end());
@@ -297,7 +303,11 @@ int run(const Options& o, int rank, int ranks) {
     if (frame->ok()) {
       r.flags = chunk_vertex_flags(*frame);
       r.mesh = std::move(frame->mesh);
+      frame->mesh = TriangleMesh{};
+      frame->chunk.reset();
       summarize_result(r, plan.grid.voxel_size, plan.grid.chunk_cells);
+      if (streamed)
+        spill_result(r, spill_directory + "/mesh_" + std::to_string(r.position) + ".bin");
     } else {
       r.error = frame->name + ": " + frame->error;
     }
@@ -343,9 +353,9 @@ int run(const Options& o, int rank, int ranks) {
   // them into the output at their rows (tools/mpi/mpi_write.h): rank 0 plans the file and
   // finishes the seams (and writes the tiles). Not streamed, rank 0 gathers the welded parts,
   // concatenates them, finishes the seams and writes.
-  const chunk::WeldPlan weld = weld_on_ranks(results, clock, rank, ranks);
+  const chunk::WeldPlan weld = weld_on_ranks(results, clock, rank, ranks, !streamed);
   report.seam_vertices = weld.merged;
-  if (streams_output(o.output, config, chunking)) {
+  if (streamed) {
     RanksWritten written = write_on_ranks(o.output, results, weld, plan.grid, plan.rows.origin,
                                           results.size(), o.tiles, plan.files, clock, rank, ranks);
     if (rank != 0) return 0;

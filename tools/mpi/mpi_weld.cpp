@@ -3,9 +3,11 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <cstdio>
 #include <map>
 
 #include "graph/chunked_reconstruction.h"
+#include "nodes/chunk/mesh_spill.h"
 #include "nodes/chunk/seam_weld.h"
 #include "tools/mpi/mpi_bytes.h"
 
@@ -53,8 +55,38 @@ void summarize_result(ChunkResult& result, float voxel_size, int chunk_cells) {
         chunk::summarize_seams(result.mesh, result.flags, voxel_size, chunk_cells, kFeatureFlag);
 }
 
+void spill_result(ChunkResult& result, const std::string& path) {
+  if (!result.error.empty()) return;
+  chunk::SpilledMesh spilled;
+  spilled.mesh = std::move(result.mesh);
+  spilled.flags = std::move(result.flags);
+  spilled.vertex_piece = std::move(result.seams.vertex_piece);
+  result.mesh = TriangleMesh{};
+  result.flags = {};
+  result.seams.vertex_piece = {};
+  chunk::write_mesh_spill(path, spilled);
+  result.spill = path;
+}
+
+void weld_result(ChunkResult& r, const chunk::WeldPlan& plan) {
+  if (!r.error.empty()) return;
+  if (!r.spill.empty()) {
+    chunk::SpilledMesh spilled = chunk::read_mesh_spill(r.spill);
+    std::remove(r.spill.c_str());
+    r.spill.clear();
+    r.mesh = std::move(spilled.mesh);
+    r.flags = std::move(spilled.flags);
+    r.seams.vertex_piece = std::move(spilled.vertex_piece);
+  }
+  std::vector<std::uint8_t> kept;
+  r.mesh = chunk::weld_chunk(r.mesh, r.flags, r.seams, plan, r.plan_index, &kept);
+  r.flags = std::move(kept);
+  r.seams = chunk::ChunkSeams{};
+  r.welded = true;
+}
+
 chunk::WeldPlan weld_on_ranks(std::vector<ChunkResult>& results, chunk::PhaseClock& clock, int rank,
-                              int ranks) {
+                              int ranks, bool weld_now) {
   clock.wait("exchange");  // the slowest rank's chunks, then every rank's summaries
   io::ByteWriter w;
   std::uint64_t ok = 0;
@@ -105,18 +137,19 @@ chunk::WeldPlan weld_on_ranks(std::vector<ChunkResult>& results, chunk::PhaseClo
   }
   chunk::WeldPlan plan = chunk::plan_weld(chunks);
   by_position.clear();
+  for (ChunkResult& r : results) {
+    if (!r.error.empty()) continue;
+    r.plan_index = index.at(r.position);
+    r.first_vertex = plan.vertex_offset[r.plan_index];
+    r.first_triangle = first_triangle[r.plan_index];
+  }
+  if (!weld_now) {
+    clock.end();
+    return plan;
+  }
   clock.begin("weld", false);
-  tbb::parallel_for(std::size_t{0}, results.size(), [&](std::size_t i) {
-    ChunkResult& r = results[i];
-    if (!r.error.empty()) return;
-    std::vector<std::uint8_t> kept;
-    const std::size_t c = index.at(r.position);
-    r.mesh = chunk::weld_chunk(r.mesh, r.flags, r.seams, plan, c, &kept);
-    r.flags = std::move(kept);
-    r.seams = chunk::ChunkSeams{};
-    r.first_vertex = plan.vertex_offset[c];
-    r.first_triangle = first_triangle[c];
-  });
+  tbb::parallel_for(std::size_t{0}, results.size(),
+                    [&](std::size_t i) { weld_result(results[i], plan); });
   clock.end();
   plan.seam_target = {};
   plan.turn = {};

@@ -1,5 +1,8 @@
 #include "tools/mpi/mpi_write.h"
 
+#include <tbb/global_control.h>
+#include <tbb/parallel_pipeline.h>
+
 #include <algorithm>
 #include <array>
 #include <cstdio>
@@ -98,26 +101,54 @@ RankWrite decode(const std::vector<unsigned char>& message, int from) {
   return m;
 }
 
-// Writes this rank's parts into `file` at their rows (each freed once written; failed chunks
-// skipped) and keeps their seam neighbourhoods.
+// Writes one welded part into `file` at its rows (failed chunks skipped), keeps its seam
+// neighbourhood (when the plan has flags) and frees it.
+void write_part(ChunkResult& r, const chunk::ChunkGrid& grid, bool normals, bool flags,
+                io::PlyMeshFile& file, RankWrite& mine) {
+  if (!r.error.empty()) return;
+  file.write_vertices(r.first_vertex, r.mesh);
+  file.write_triangles(r.first_triangle, r.mesh.triangles);
+  mine.vertices += r.mesh.vertices.size();
+  mine.triangles += r.mesh.triangles.size();
+  mine.rows.push_back({r.position, r.first_triangle, r.mesh.triangles.size()});
+  if (flags) {
+    chunk::SeamNeighbourhood n;
+    chunk::add_seam_neighbourhood(r.mesh, r.flags, r.first_vertex, r.first_triangle,
+                                  grid.voxel_size, grid.chunk_cells, kFeatureFlag, normals, n);
+    mine.parts.emplace_back(r.position, std::move(n));
+  }
+  r = ChunkResult{};
+}
+
+// Writes this rank's parts into `file` at their rows, in order (each freed once written) and
+// keeps their seam neighbourhoods. Parts not yet welded (weld_on_ranks() without weld_now,
+// perhaps spilled) are welded here, a few at once, each just before it is written: memory is
+// the parts in the pipeline, not all of them.
 void write_parts(std::vector<ChunkResult>& results, const chunk::WeldPlan& weld,
                  const chunk::ChunkGrid& grid, bool normals, io::PlyMeshFile& file,
                  RankWrite& mine) {
-  for (ChunkResult& r : results) {
-    if (!r.error.empty()) continue;
-    file.write_vertices(r.first_vertex, r.mesh);
-    file.write_triangles(r.first_triangle, r.mesh.triangles);
-    mine.vertices += r.mesh.vertices.size();
-    mine.triangles += r.mesh.triangles.size();
-    mine.rows.push_back({r.position, r.first_triangle, r.mesh.triangles.size()});
-    if (weld.flags) {
-      chunk::SeamNeighbourhood n;
-      chunk::add_seam_neighbourhood(r.mesh, r.flags, r.first_vertex, r.first_triangle,
-                                    grid.voxel_size, grid.chunk_cells, kFeatureFlag, normals, n);
-      mine.parts.emplace_back(r.position, std::move(n));
+  std::size_t next = 0;
+  const auto threads = static_cast<std::size_t>(
+      tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism));
+  const auto take = [&](tbb::flow_control& fc) -> ChunkResult* {
+    if (next == results.size()) {
+      fc.stop();
+      return nullptr;
     }
-    r = ChunkResult{};
-  }
+    return &results[next++];
+  };
+  const auto weld_it = [&](ChunkResult* r) {
+    if (!r->welded) weld_result(*r, weld);
+    return r;
+  };
+  const auto write_it = [&](ChunkResult* r) {
+    write_part(*r, grid, normals, weld.flags, file, mine);
+  };
+  tbb::parallel_pipeline(
+      std::max<std::size_t>(2, threads),
+      tbb::make_filter<void, ChunkResult*>(tbb::filter_mode::serial_in_order, take) &
+          tbb::make_filter<ChunkResult*, ChunkResult*>(tbb::filter_mode::parallel, weld_it) &
+          tbb::make_filter<ChunkResult*, void>(tbb::filter_mode::serial_in_order, write_it));
 }
 
 }  // namespace

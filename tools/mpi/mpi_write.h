@@ -29,19 +29,21 @@ struct RanksWritten {
 };
 
 /// Collective: writes `output` (binary PLY; `origin` non-zero: world coordinates) from the
-/// welded parts `results` of every rank (weld_on_ranks()'s, with `weld` its plan, the same on
-/// every rank), on `grid`. Rank 0 creates OUT.tmp with the header for weld's counts (phase
-/// "create"), every rank opens it and writes its parts at their rows, freeing each (phase
-/// "write", parallel), then sends rank 0 its timing (`chunks` meshed, its phases), failed chunks
-/// and the parts' seam neighbourhoods (add_seam_neighbourhood()); rank 0 (phase "gather", then
-/// "finish": finish_seam_rows()) rewrites the seams' rows; with a non-empty `tiles_dir` every
-/// rank then writes its own chunks' finished rows as their tiles with their coarser levels and
-/// rank 0 their index (write_tiles_on_ranks(); `files`: the chunks by position); rank 0 renames
-/// OUT.tmp to OUT. Nothing
-/// appears under OUT unless every rank wrote all its rows (a failed or dead rank leaves at most
-/// OUT.tmp; a failure that rank 0 learns of removes it). Returns rank 0's view (other ranks:
-/// their own failures only). No triangle at all: nothing is written, `error` says so. Memory:
-/// each rank its own parts and their seam neighbourhoods; rank 0 all neighbourhoods (seam-sized).
+/// parts `results` of every rank (placed by weld_on_ranks(), with `weld` its plan, the same on
+/// every rank; welded there, or here when weld_on_ranks() left them to weld_result(), spilled or
+/// held), on `grid`. Rank 0 creates OUT.tmp with the header for weld's counts (phase "create"),
+/// every rank opens it and writes its parts at their rows in order, each welded first if it is
+/// not yet (a few at once) and freed once written (phase "write", parallel), then sends rank 0 its
+/// timing (`chunks` meshed, its phases), failed chunks and the parts' seam neighbourhoods
+/// (add_seam_neighbourhood()); rank 0 (phase "gather", then "finish": finish_seam_rows()) rewrites
+/// the seams' rows; with a non-empty `tiles_dir` every rank then writes its own chunks' finished
+/// rows as their tiles with their coarser levels and rank 0 their index (write_tiles_on_ranks();
+/// `files`: the chunks by position); rank 0 renames OUT.tmp to OUT. Nothing appears under OUT
+/// unless every rank wrote all its rows (a failed or dead rank leaves at most OUT.tmp; a failure
+/// that rank 0 learns of removes it). Returns rank 0's view (other ranks: their own failures
+/// only). No triangle at all: nothing is written, `error` says so. Memory: each rank its parts
+/// being welded and written (all its parts when they were welded before) and their seam
+/// neighbourhoods; rank 0 all neighbourhoods (seam-sized).
 RanksWritten write_on_ranks(const std::string& output, std::vector<ChunkResult>& results,
                             const chunk::WeldPlan& weld, const chunk::ChunkGrid& grid,
                             const Eigen::Vector3d& origin, std::size_t chunks,

@@ -45,6 +45,45 @@ SpacingSample streamed(const PointCloud& cloud, std::size_t batch, std::size_t n
   return sample;
 }
 
+// The same with measure()'s own search (a kd-tree over the first batch only).
+SpacingSample streamed_without_index(const PointCloud& cloud, std::size_t batch,
+                                     std::size_t neighbours) {
+  SpacingSample sample(neighbours);
+  std::vector<std::vector<Eigen::Vector3f>> pieces;
+  for (std::size_t at = 0; at < cloud.size(); at += batch)
+    pieces.emplace_back(
+        cloud.positions.begin() + static_cast<std::ptrdiff_t>(at),
+        cloud.positions.begin() + static_cast<std::ptrdiff_t>(std::min(cloud.size(), at + batch)));
+  for (const auto& piece : pieces) sample.offer(piece);
+  for (const auto& piece : pieces) sample.measure(piece);
+  return sample;
+}
+
+TEST(SpacingSample, MeasuresWithoutAnIndexAsTheKdTreeDoes) {
+  // Shuffled, and sorted along x (each batch is one strip); every sample's neighbours as one
+  // kd-tree over the whole cloud finds them, bit for bit.
+  // The large one has more points than the scouts keep: their reach is wider than the
+  // neighbours' until the sample's own strip arrives.
+  const auto by_x = [](PointCloud cloud) {
+    std::sort(cloud.positions.begin(), cloud.positions.end(),
+              [](const Eigen::Vector3f& a, const Eigen::Vector3f& b) { return a.x() < b.x(); });
+    return cloud;
+  };
+  const PointCloud shuffled = wavy_sheet(60000, 5), sorted = by_x(shuffled);
+  const PointCloud large = by_x(wavy_sheet(600000, 6));
+  for (const PointCloud* cloud : {&shuffled, &sorted, &large}) {
+    const KdTreeIndex index(cloud->positions);
+    SpacingSample whole(10);
+    whole.offer(cloud->positions);
+    whole.measure(cloud->positions, index);
+    const SpacingSample batches =
+        streamed_without_index(*cloud, cloud->size() > 100000 ? 50000 : 7000, 10);
+    EXPECT_EQ(batches.to_bytes(), whole.to_bytes());
+    EXPECT_EQ(batches.voxel_size(), whole.voxel_size());
+    EXPECT_EQ(batches.median_variation(), whole.median_variation());
+  }
+}
+
 TEST(SpacingSample, SameVoxelWhateverTheOrderAndTheBatches) {
   const PointCloud cloud = wavy_sheet(60000, 3);
   const KdTreeIndex index(cloud.positions);
@@ -119,6 +158,17 @@ TEST(SpacingSample, MeasuresTheNearestNeighbourSpacingOfTheSample) {
   EXPECT_FLOAT_EQ(sample.voxel_size(3.0f), 3.0f * spacing[kSpacingSamples / 2]);
   // About the stride sample's estimate (suggest_voxel_size): the same statistic.
   EXPECT_NEAR(sample.voxel_size(), suggest_voxel_size(cloud, index), 0.1 * sample.voxel_size());
+}
+
+TEST(SpacingSample, SurfaceDensityIsThePointsPerSquareMetre) {
+  // Uniform on a 20 m x 20 m (gently wavy: 2 % more area) sheet: n / 400 points per m^2,
+  // streamed in batches as the out-of-core path measures it.
+  for (const std::size_t n : {20000u, 80000u}) {
+    const PointCloud cloud = wavy_sheet(n, 11);
+    const double truth = static_cast<double>(n) / 400.0;
+    EXPECT_NEAR(streamed(cloud, 7000, 10).surface_density(), truth, 0.1 * truth) << n;
+  }
+  EXPECT_EQ(SpacingSample(10).surface_density(), 0.0f) << "no sample: no density";
 }
 
 TEST(SpacingSample, MedianVariationTellsASurfaceFromAVolume) {

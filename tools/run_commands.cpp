@@ -612,8 +612,8 @@ void add_run_options(CLI::App* cmd) {
   cmd->add_option("--integrator", o->integrator,
                   "With --fuse: how frames reach the voxels: projective (each voxel of a touched "
                   "block projected into the image; fastest) or along-ray (each pixel's ray walks "
-                  "its band, pixels in one voxel merged as in voxblox; more accurate, about 2-3x "
-                  "slower at 1 cm)")
+                  "its band, pixels in one voxel merged as in voxblox; more accurate, about "
+                  "1.6-1.8x slower)")
       ->check(CLI::IsMember({"projective", "along-ray"}))
       ->needs(fuse);
   cmd->add_flag("--no-carve", o->no_carve,

@@ -14,6 +14,8 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstddef>
+#include <cstring>
 #include <functional>
 #include <limits>
 #include <string>
@@ -36,18 +38,20 @@ RaySegment segment_of(const MergedRay& ray, const Eigen::Vector3f& camera, float
   const Eigen::Vector3f point = ray.point_sum / static_cast<float>(ray.pixels);
   const Eigen::Vector3f to_point = point - camera;
   const float range = to_point.norm();
-  s.direction = to_point / range;
-  s.point = point * inv_voxel;
-  s.band = ray.band * inv_voxel;
-  const Eigen::Vector3f from = s.point - s.direction * (std::min(truncation, range) * inv_voxel);
-  const Eigen::Vector3f to = s.point + s.direction * s.band;
+  const Eigen::Vector3f direction = to_point / range;
+  const Eigen::Vector3f scaled = point * inv_voxel;
+  const float band = ray.band * inv_voxel;
+  const Eigen::Vector3f from = scaled - direction * (std::min(truncation, range) * inv_voxel);
+  const Eigen::Vector3f to = scaled + direction * band;
   const Eigen::Vector3f span = to - from;
   s.from = Eigen::Vector4f(from.x(), from.y(), from.z(), 0.0f);
   s.to = Eigen::Vector4f(to.x(), to.y(), to.z(), 0.0f);
   s.span = Eigen::Vector4f(span.x(), span.y(), span.z(), 0.0f);
-  s.weight = ray.weight;
+  s.point_band = Eigen::Vector4f(scaled.x(), scaled.y(), scaled.z(), band);
+  s.direction_weight = Eigen::Vector4f(direction.x(), direction.y(), direction.z(), ray.weight);
   const float inv_pixels = 1.0f / static_cast<float>(ray.pixels);
   for (int c = 0; c < 3; ++c) s.color[c] = ray.color_sum[c] * inv_pixels * ray.weight;
+  s.color[3] = 0.0f;
   return s;
 }
 
@@ -128,29 +132,6 @@ MESHFLOW_AVX2_CLONES void rays_of_tile_row(int tile_row, const Image& depth,
   }
 }
 
-// Every ray of the frame in tile order into `rays` (tile rows in parallel into `row_rays`,
-// then joined).
-void merged_rays(const Image& depth, const float* band_pixels, const DepthFrame& frame,
-                 const Image* color, const TsdfConfig& config,
-                 std::vector<std::vector<MergedRay>>& row_rays, std::vector<MergedRay>& rays,
-                 std::size_t& pixels_used) {
-  const int tile_rows = (depth.rows() + kTile - 1) / kTile;
-  const auto rows = static_cast<std::size_t>(tile_rows);
-  row_rays.resize(rows);
-  std::vector<std::size_t> row_pixels(rows, 0);
-  const float inv_voxel = 1.0f / config.voxel_size;
-  tbb::parallel_for(0, tile_rows, [&](int t) {
-    const auto r = static_cast<std::size_t>(t);
-    row_rays[r].clear();
-    rays_of_tile_row(t, depth, band_pixels, frame.intrinsics, frame.T_world_camera, color,
-                     config.weighting, inv_voxel, row_rays[r], row_pixels[r]);
-  });
-  for (std::size_t pixels : row_pixels) pixels_used += pixels;
-  concatenate_parts(row_rays, rays);
-}
-
-constexpr std::size_t kRaysPerTask = 2048;
-
 // A few keys a slice of rays met recently, each with a value, in slots picked by the key's hash:
 // neighbouring rays cross the same few blocks, so most repeats hit.
 class RecentKeyValues {
@@ -184,25 +165,28 @@ class RecentKeyValues {
               "reaches outside the volume's range (pose or depth far too large)");
 }
 
-// The (block, ray) pairs of rays [begin, end) into `pairs` (ray by ray, blocks in walk order)
-// and their keys into `keys`, less those the slice met recently; throws when a ray reaches
-// outside the volume's range.
-MESHFLOW_AVX2_CLONES void blocks_of_rays(const std::vector<RaySegment>& segments, std::size_t begin,
-                                         std::size_t end, std::vector<RayBlock>& pairs,
+// The (block, ray) pairs of the `count` rays segments[0 ..) (numbered from `first`) into
+// `pairs` (ray by ray, blocks in walk order) and their keys into `keys`, less those met
+// recently; throws when a ray reaches outside the volume's range.
+MESHFLOW_AVX2_CLONES void blocks_of_rays(const RaySegment* segments, std::uint32_t first,
+                                         std::size_t count, std::vector<RayBlock>& pairs,
                                          std::vector<VoxelKey>& keys) {
   RecentKeyValues recent;
-  for (std::size_t r = begin; r < end; ++r) {
-    const RaySegment& s = segments[r];
-    Eigen::Vector3i previous(std::numeric_limits<int>::min(), 0, 0);  // never a block
+  for (std::size_t j = 0; j < count; ++j) {
+    const RaySegment& s = segments[j];
+    const auto ray = static_cast<std::uint32_t>(first + j);
+    // The block of the last voxel (floor division by 8, as tsdf_block_of_voxel()); lane 3 of
+    // the walk's voxels is 0.
+    ray_walk::Ints4 previous{std::numeric_limits<int>::min(), 0, 0, 0};  // never a block
     walk_voxels(ray_walk::load4(s.from.data()), ray_walk::load4(s.to.data()),
                 [&](const ray_walk::Ints4& voxel) {
-                  const Eigen::Vector3i block =
-                      tsdf_block_of_voxel(Eigen::Vector3i(voxel[0], voxel[1], voxel[2]));
-                  if (block == previous) return;
-                  previous = block;
-                  if (!tsdf_block_in_range(block)) throw_out_of_range(r);
+                  const ray_walk::Ints4 lanes = voxel >> 3;
+                  if (std::memcmp(&lanes, &previous, sizeof lanes) == 0) return;
+                  previous = lanes;
+                  const Eigen::Vector3i block(lanes[0], lanes[1], lanes[2]);
+                  if (!tsdf_block_in_range(block)) throw_out_of_range(ray);
                   const VoxelKey key = pack_key(block);
-                  pairs.push_back({key, static_cast<std::uint32_t>(r)});
+                  pairs.push_back({key, ray});
                   if (recent.find(key) == nullptr) {
                     recent.put(key, 0);
                     keys.push_back(key);
@@ -211,23 +195,48 @@ MESHFLOW_AVX2_CLONES void blocks_of_rays(const std::vector<RaySegment>& segments
   }
 }
 
-// The (block, ray) pairs of every ray's segment into x.pairs (in ray order) and the keys of the
-// blocks crossed, sorted and unique, into `keys`: rays in fixed slices (parallel, into
-// x.slice_pairs and x.slice_keys); throws when a ray reaches outside the volume's range.
-void blocks_crossed(RayScratch& x, std::vector<VoxelKey>& keys) {
-  const std::vector<RaySegment>& segments = x.segments;
-  const std::size_t slices = (segments.size() + kRaysPerTask - 1) / kRaysPerTask;
-  x.slice_pairs.resize(slices);
-  x.slice_keys.resize(slices);
-  tbb::parallel_for(std::size_t{0}, slices, [&](std::size_t slice) {
-    x.slice_pairs[slice].clear();
-    x.slice_keys[slice].clear();
-    blocks_of_rays(segments, slice * kRaysPerTask,
-                   std::min(segments.size(), (slice + 1) * kRaysPerTask), x.slice_pairs[slice],
-                   x.slice_keys[slice]);
+// Every ray of the frame: per row of tiles (in parallel), its pixels merged into rays
+// (x.tile_row_rays), their segments into x.segments from row x kTile x width on (tile order:
+// a ray's number is its row's first plus its place in the row) and the (block, ray) pairs of
+// the blocks they cross (x.row_pairs, x.row_keys); then the pairs joined in ray order into
+// x.pairs and the blocks' keys, sorted and unique, into `keys`. Adds the valid pixels to
+// `pixels_used`; throws when a ray reaches outside the volume's range.
+void rays_and_blocks(const Image& depth, const float* band_pixels, const DepthFrame& frame,
+                     const Image* color, const TsdfConfig& config, RayScratch& x,
+                     std::vector<VoxelKey>& keys, std::size_t& pixels_used) {
+  const int tile_rows = (depth.rows() + kTile - 1) / kTile;
+  const auto rows = static_cast<std::size_t>(tile_rows);
+  const std::size_t stride =
+      static_cast<std::size_t>(kTile) * static_cast<std::size_t>(depth.cols());
+  if (rows * stride > std::numeric_limits<std::uint32_t>::max())
+    throw Error("tsdf", "depth image", "at most 2^32 pixels");
+  if (x.segment_capacity < rows * stride) {
+    x.segments.reset(new RaySegment[rows * stride]);  // pages touched only where rays are
+    x.segment_capacity = rows * stride;
+  }
+  x.tile_row_rays.resize(rows);
+  x.row_pairs.resize(rows);
+  x.row_keys.resize(rows);
+  std::vector<std::size_t> row_pixels(rows, 0);
+  const Eigen::Vector3f camera = frame.T_world_camera.translation();
+  const float inv_voxel = 1.0f / config.voxel_size, truncation = config.truncation();
+  tbb::parallel_for(0, tile_rows, [&](int t) {
+    const auto r = static_cast<std::size_t>(t);
+    std::vector<MergedRay>& rays = x.tile_row_rays[r];
+    rays.clear();
+    rays_of_tile_row(t, depth, band_pixels, frame.intrinsics, frame.T_world_camera, color,
+                     config.weighting, inv_voxel, rays, row_pixels[r]);
+    RaySegment* segments = x.segments.get() + r * stride;
+    for (std::size_t j = 0; j < rays.size(); ++j)
+      segments[j] = segment_of(rays[j], camera, inv_voxel, truncation);
+    x.row_pairs[r].clear();
+    x.row_keys[r].clear();
+    blocks_of_rays(segments, static_cast<std::uint32_t>(r * stride), rays.size(), x.row_pairs[r],
+                   x.row_keys[r]);
   });
-  concatenate_parts(x.slice_pairs, x.pairs);
-  concatenate_parts(x.slice_keys, keys);
+  for (std::size_t pixels : row_pixels) pixels_used += pixels;
+  concatenate_parts(x.row_pairs, x.pairs);
+  concatenate_parts(x.row_keys, keys);
   radix_sort_unique(keys);
 }
 
@@ -257,67 +266,101 @@ void rays_by_block(RayScratch& x, const std::vector<VoxelKey>& keys) {
       [&](std::size_t i) { return pairs[i].ray; }, x.block_rays, x.starts);
 }
 
-// Blends a ray's distance (metres, clipped to the truncation) with weight w into a voxel, and
-// its colour when `color`: (mean RGB x w, 0), each channel as the scalar
-// uint8((old x weight + mean x w) / total + 0.5) would be.
-void blend(TsdfVoxel& voxel, float sdf_metres, float truncation, float w,
-           const ray_walk::Floats4& ray_color, bool color, float max_weight) {
-  const float total = voxel.weight + w;
-  const float inv_total = 1.0f / total;
-  voxel.distance =
-      (voxel.distance * voxel.weight + std::min(sdf_metres, truncation) * w) * inv_total;
-  if (color) {
-    using Bytes4 = std::uint8_t __attribute__((vector_size(4)));
-    Bytes4 rgb{voxel.color.r, voxel.color.g, voxel.color.b, 0};
-    const ray_walk::Floats4 mixed =
-        (__builtin_convertvector(rgb, ray_walk::Floats4) * voxel.weight + ray_color) * inv_total +
-        0.5f;
-    rgb = __builtin_convertvector(__builtin_convertvector(mixed, ray_walk::Ints4), Bytes4);
-    voxel.color = Rgb8{rgb[0], rgb[1], rgb[2]};
-  }
-  voxel.weight = std::min(total, max_weight);
-}
-
 // What every ray blends the same way.
 struct BlendSettings {
   float voxel_size, truncation, max_weight;
   bool color;
 };
 
+// Blends a ray's distance (metres, clipped to `truncation`) with weight w into a voxel, and, when
+// kColor, its colour (`ray_color`: mean RGB x w, 0), each channel as the scalar
+// uint8((old x weight + mean x w) / total + 0.5) would be; the byte after the colour (padding)
+// keeps its value.
+template <bool kColor>
+[[gnu::always_inline]] inline void blend(TsdfVoxel& voxel, float sdf_metres, float truncation,
+                                         float w, const ray_walk::Floats4& ray_color,
+                                         float max_weight) {
+  const float weight = voxel.weight;
+  const float total = weight + w;
+  const float inv_total = 1.0f / total;
+  voxel.distance = (voxel.distance * weight + std::min(sdf_metres, truncation) * w) * inv_total;
+  if (kColor) {
+    // The four bytes r, g, b, padding widened to lanes and packed back by byte shuffles.
+    using Bytes16 = std::uint8_t __attribute__((vector_size(16)));
+    static_assert(sizeof(TsdfVoxel) >= offsetof(TsdfVoxel, color) + 4, "colour and padding");
+    unsigned char* bytes = reinterpret_cast<unsigned char*>(&voxel) + offsetof(TsdfVoxel, color);
+    Bytes16 packed{};
+    std::memcpy(&packed, bytes, 4);
+    const Bytes16 zero{};
+    const auto wide = reinterpret_cast<ray_walk::Ints4>(__builtin_shufflevector(
+        packed, zero, 0, 16, 16, 16, 1, 16, 16, 16, 2, 16, 16, 16, 3, 16, 16, 16));
+    const ray_walk::Floats4 mixed =
+        (__builtin_convertvector(wide, ray_walk::Floats4) * weight + ray_color) * inv_total + 0.5f;
+    // Lanes 0..2 hold 0..255: their low bytes are uint8(lane); lane 3 keeps the padding byte.
+    const auto lanes = reinterpret_cast<Bytes16>(__builtin_convertvector(mixed, ray_walk::Ints4));
+    const Bytes16 out =
+        __builtin_shufflevector(lanes, packed, 0, 4, 8, 19, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0);
+    std::memcpy(bytes, &out, 4);
+  }
+  voxel.weight = std::min(total, max_weight);
+}
+
 // Applies rays[0 .. count) (indices into `segments`, in pixel order) to the voxels of `block`
 // along each ray's segment inside it; returns the voxels updated.
-MESHFLOW_AVX2_CLONES std::size_t apply_rays(TsdfBlock& block, const std::uint32_t* rays,
-                                            std::size_t count,
-                                            const std::vector<RaySegment>& segments,
-                                            const BlendSettings& settings) {
+template <bool kColor>
+[[gnu::always_inline]] inline std::size_t apply_rays_to(TsdfBlock& block, const std::uint32_t* rays,
+                                                        std::size_t count,
+                                                        const RaySegment* segments,
+                                                        const BlendSettings& settings) {
+  using ray_walk::Floats4;
+  using ray_walk::Ints4;
+  const float voxel_size = settings.voxel_size, truncation = settings.truncation,
+              max_weight = settings.max_weight;
   const Eigen::Vector3i origin = block.coords * kTsdfBlockSide;
-  const ray_walk::Ints4 first_voxel{origin.x(), origin.y(), origin.z(), 0};
+  const Ints4 first_voxel{origin.x(), origin.y(), origin.z(), 0};
+  TsdfVoxel* voxels = block.voxels.data();
   std::size_t updated = 0;
   for (std::size_t i = 0; i < count; ++i) {
+    if (i + 4 < count) __builtin_prefetch(&segments[rays[i + 4]]);
     const RaySegment& s = segments[rays[i]];
-    ray_walk::Floats4 from, to;
+    Floats4 from, to;
     if (!clip_to_block(ray_walk::load4(s.from.data()), ray_walk::load4(s.span.data()), origin, from,
                        to))
       continue;
-    const ray_walk::Floats4 point{s.point.x(), s.point.y(), s.point.z(), 0.0f};
-    const ray_walk::Floats4 direction{s.direction.x(), s.direction.y(), s.direction.z(), 0.0f};
-    const ray_walk::Floats4 ray_color{s.color[0], s.color[1], s.color[2], 0.0f};
-    walk_voxels(from, to, [&](const ray_walk::Ints4& voxel) {
-      const ray_walk::Ints4 local = voxel - first_voxel;
+    const Floats4 point_band = ray_walk::load4(s.point_band.data());
+    const Floats4 direction_weight = ray_walk::load4(s.direction_weight.data());
+    const Floats4 ray_color = ray_walk::load4(s.color.data());
+    const float neg_band = -point_band[3], w = direction_weight[3];
+    walk_voxels(from, to, [&](const Ints4& voxel) {
+      const Ints4 local = voxel - first_voxel;
       if (((local[0] | local[1] | local[2]) & ~(kTsdfBlockSide - 1)) != 0) return;  // outside
       // (point - voxel) . direction, summed as Eigen's dot product: x + (y + z).
-      const ray_walk::Floats4 along =
-          (point - __builtin_convertvector(voxel, ray_walk::Floats4)) * direction;
+      const Floats4 along =
+          (point_band - __builtin_convertvector(voxel, Floats4)) * direction_weight;
       const float sdf = along[0] + (along[1] + along[2]);  // voxel units
-      if (sdf < -s.band) return;  // beyond the band behind the surface: unknown
-      blend(block.voxels[static_cast<std::size_t>(
-                local[0] + kTsdfBlockSide * (local[1] + kTsdfBlockSide * local[2]))],
-            sdf * settings.voxel_size, settings.truncation, s.weight, ray_color, settings.color,
-            settings.max_weight);
+      if (sdf < neg_band) return;  // beyond the band behind the surface: unknown
+      blend<kColor>(voxels[static_cast<std::size_t>(
+                        local[0] + kTsdfBlockSide * (local[1] + kTsdfBlockSide * local[2]))],
+                    sdf * voxel_size, truncation, w, ray_color, max_weight);
       ++updated;
     });
   }
   return updated;
+}
+
+// apply_rays_to() with or without colour.
+MESHFLOW_AVX2_CLONES std::size_t apply_rays(TsdfBlock& block, const std::uint32_t* rays,
+                                            std::size_t count, const RaySegment* segments,
+                                            const BlendSettings& settings) {
+  return settings.color ? apply_rays_to<true>(block, rays, count, segments, settings)
+                        : apply_rays_to<false>(block, rays, count, segments, settings);
+}
+
+// Requests the voxels of `block` into the cache (read for writing).
+void prefetch_block(const TsdfBlock& block) {
+  const char* bytes = reinterpret_cast<const char*>(block.voxels.data());
+  for (std::size_t offset = 0; offset < sizeof block.voxels; offset += 64)
+    __builtin_prefetch(bytes + offset, 1);
 }
 
 }  // namespace
@@ -326,28 +369,23 @@ void TsdfFrameIntegrator::integrate_along_rays(TsdfMap& map, const DepthFrame& f
                                                const Image& depth, IntegrationStats& stats) {
   RayScratch& x = ray_scratch_;
   const bool color = fuses_color_of(frame, depth);
-  merged_rays(depth, band_pixels_.data(), frame, color ? &frame.color : nullptr, config_,
-              x.tile_row_rays, x.rays, stats.pixels_used);
-  const std::vector<MergedRay>& rays = x.rays;
-  const Eigen::Vector3f camera = frame.T_world_camera.translation();
-  const float inv_voxel = 1.0f / config_.voxel_size, truncation = config_.truncation();
-  x.segments.resize(rays.size());
-  tbb::parallel_for(std::size_t{0}, rays.size(), [&](std::size_t r) {
-    x.segments[r] = segment_of(rays[r], camera, inv_voxel, truncation);
-  });
   std::vector<VoxelKey>& keys = keys_;
-  blocks_crossed(x, keys);
+  rays_and_blocks(depth, band_pixels_.data(), frame, color ? &frame.color : nullptr, config_, x,
+                  keys, stats.pixels_used);
+  const float truncation = config_.truncation();
   map.find_or_allocate(keys, config_.max_new_blocks_per_frame, config_.max_memory_bytes,
                        stats.blocks_allocated, touched_);
   rays_by_block(x, keys);
 
   const BlendSettings settings{config_.voxel_size, truncation, config_.max_weight, color};
   const std::uint64_t generation = map.begin_change();
-  // Applies block b's rays in pixel order; returns the voxels it updated.
+  // Applies block b's rays in pixel order, the next block's voxels requested meanwhile; returns
+  // the voxels it updated.
   const auto apply_rays_of = [&](std::size_t b) {
+    if (b + 1 < touched_.size()) prefetch_block(map.block_for_update(touched_[b + 1]));
     TsdfBlock& block = map.block_for_update(touched_[b]);
     const std::size_t count = apply_rays(block, x.block_rays.data() + x.starts[b],
-                                         x.starts[b + 1] - x.starts[b], x.segments, settings);
+                                         x.starts[b + 1] - x.starts[b], x.segments.get(), settings);
     if (count > 0) block.modified = generation;
     return count;
   };

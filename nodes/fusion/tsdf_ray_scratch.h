@@ -7,6 +7,7 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <memory>
 #include <vector>
 
 #include "runtime/voxel_key.h"
@@ -25,32 +26,32 @@ struct MergedRay {
 
 /// A ray's segment in voxel units: from `truncation` in front of its mean point (not behind the
 /// camera) to its band behind it, with the unit direction from the camera; and what the ray
-/// blends into a voxel.
+/// blends into a voxel. Four-lane fields, so that the blend loop loads each with one instruction.
 struct RaySegment {
   Eigen::Vector4f from, to, span;    ///< voxel units (x, y, z, 0); span = to - from
-  Eigen::Vector3f point, direction;  ///< point in voxel units
-  float band = 0.0f;                 ///< voxel units
-  float weight = 0.0f;               ///< the ray's weight (MergedRay::weight)
-  std::array<float, 3> color{};      ///< mean RGB x weight
+  Eigen::Vector4f point_band;        ///< mean point (voxel units), band behind it (voxel units)
+  Eigen::Vector4f direction_weight;  ///< unit direction, the ray's weight (MergedRay::weight)
+  Eigen::Vector4f color;             ///< mean RGB x weight, 0
 };
 
 /// A block a ray crosses.
 struct RayBlock {
   VoxelKey block;     ///< pack_key() of its coordinates
-  std::uint32_t ray;  ///< index into RayScratch::segments
+  std::uint32_t ray;  ///< its number: index into RayScratch::segments
 };
 
 /// One frame's lists of the along-ray integration, cleared and refilled every frame.
 struct RayScratch {
   std::vector<std::vector<MergedRay>> tile_row_rays;  ///< per row of 8 x 8 pixel tiles
-  std::vector<MergedRay> rays;                        ///< joined in tile order
-  std::vector<RaySegment> segments;                   ///< per ray
-  std::vector<std::vector<RayBlock>> slice_pairs;     ///< (block, ray) per slice of rays
-  std::vector<std::vector<VoxelKey>> slice_keys;      ///< per slice of rays: its blocks' keys
-  std::vector<RayBlock> pairs;                        ///< joined in ray order
-  std::vector<std::uint32_t> pair_blocks;  ///< per pair: its block's position among the keys
-  std::vector<std::uint32_t> block_rays;   ///< the pairs' rays by block, each block's in order
-  std::vector<std::size_t> starts;         ///< per block: its first entry in block_rays
+  /// Per row of tiles r, its rays' segments from r x 8 x width on (a ray's number).
+  std::unique_ptr<RaySegment[]> segments;
+  std::size_t segment_capacity = 0;              ///< entries allocated in `segments`
+  std::vector<std::vector<RayBlock>> row_pairs;  ///< (block, ray) per row of tiles
+  std::vector<std::vector<VoxelKey>> row_keys;   ///< per row of tiles: its blocks' keys
+  std::vector<RayBlock> pairs;                   ///< joined in ray order
+  std::vector<std::uint32_t> pair_blocks;        ///< per pair: its block's position among the keys
+  std::vector<std::uint32_t> block_rays;  ///< the pairs' rays by block, each block's in order
+  std::vector<std::size_t> starts;        ///< per block: its first entry in block_rays
 };
 
 }  // namespace meshflow

@@ -68,17 +68,20 @@ template <class Visit>
     visit(cell);
     if (s == steps) break;
     // Axis i goes first when its boundary comes before every lower axis' and no later than
-    // every higher axis': x <= y, z; y < x, y <= z; z < x, y. Independent compares keep the
-    // step's dependency chain short.
+    // every higher axis': x <= y, z; y < x, y <= z; z < x, y. That is, the lowest axis whose
+    // boundary is the nearest (next is never NaN: 0 <= next, delta <= +inf): every lane 0..2 of
+    // `nearest` holds the minimum, and a lane is taken where it equals it and no lower lane does.
     const Floats4 yzx = __builtin_shufflevector(next, next, 1, 2, 0, 3);
     const Floats4 zxy = __builtin_shufflevector(next, next, 2, 0, 1, 3);
-    const Ints4 before_yzx =
-        ((next <= yzx) & Ints4{-1, -1, 0, 0}) | ((next < yzx) & Ints4{0, 0, -1, 0});
-    const Ints4 before_zxy =
-        ((next <= zxy) & Ints4{-1, 0, 0, 0}) | ((next < zxy) & Ints4{0, -1, -1, 0});
-    const Ints4 take = before_yzx & before_zxy;
+    const Floats4 nearer = yzx < next ? yzx : next;
+    const Floats4 nearest = zxy < nearer ? zxy : nearer;
+    const Ints4 at_nearest = next == nearest;
+    const Ints4 zero{};
+    const Ints4 lower = __builtin_shufflevector(at_nearest, zero, 4, 0, 1, 4) |
+                        __builtin_shufflevector(at_nearest, zero, 4, 4, 0, 4);
+    const Ints4 take = at_nearest & ~lower;
     cell += step & take;
-    next += take ? delta : Floats4{};
+    next += reinterpret_cast<Floats4>(reinterpret_cast<Ints4>(delta) & take);  // + 0 elsewhere
   }
 }
 

@@ -4,11 +4,12 @@
 // truth samples one mesh covers and the other misses broken down by meshflow's map there.
 //
 //   meshflow_fusion_vs_open3d [--object perforated-box] [--voxel 0.01] [--truncation 4]
-//       [--frames 24] [--cache DIR] [--behind B] [--no-carve] [--drop-edges] [--no-optimize]
-//       [--min-weight W]
+//       [--frames 24] [--width 640] [--cache DIR] [--behind B] [--no-carve] [--drop-edges]
+//       [--no-optimize] [--along-ray] [--min-weight W] [--tau 0.5] [--patches]
 //
-// Objects: perforated-box and pocketed-block (nodes/synthetic/perforated_box.h) or a built-in
-// closed test object. --cache DIR: the rendered frames as a TUM RGB-D directory, written once
+// Objects: perforated-box and pocketed-block (nodes/synthetic/perforated_box.h), sieve (below)
+// or a built-in closed test object. --tau: the completeness threshold in voxels (also reported
+// at twice it); --patches: the differences per patch of the object as well. --cache DIR: the rendered frames as a TUM RGB-D directory, written once
 // and read back on later runs (rendering the perforated box's 24 frames takes minutes).
 // Completeness: of 200 000 points on the exact surface, the share within half a voxel of the
 // mesh (and the mean distance, a fraction of the diagonal as in bench/python); accuracy: the

@@ -9,8 +9,8 @@
 //
 // Objects: perforated-box and pocketed-block (nodes/synthetic/perforated_box.h), sieve (below)
 // or a built-in closed test object. --tau: the completeness threshold in voxels (also reported
-// at twice it); --patches: the differences per patch of the object as well. --cache DIR: the rendered frames as a TUM RGB-D directory, written once
-// and read back on later runs (rendering the perforated box's 24 frames takes minutes).
+// at twice it); --patches: the differences per patch of the object as well. --cache DIR: the
+// rendered frames as a TUM RGB-D directory, written once and read back on later runs.
 // Completeness: of 200 000 points on the exact surface, the share within half a voxel of the
 // mesh (and the mean distance, a fraction of the diagonal as in bench/python); accuracy: the
 // mesh's area-sampled mean distance to the surface. Open3D runs on the same frames (depth

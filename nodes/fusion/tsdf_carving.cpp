@@ -147,7 +147,8 @@ void TsdfFrameIntegrator::carve_free_blocks(TsdfMap& map, const DepthFrame& fram
                          nullptr,
                          frame.intrinsics,
                          frame.T_world_camera.inverse(),
-                         config_};
+                         config_,
+                         0.0f};  // carving updates no voxel behind a surface
   const float voxel = config_.voxel_size, truncation = config_.truncation();
   const float block_radius = kHalfDiagonal * static_cast<float>(kTsdfBlockSide - 1) * voxel;
   const std::uint64_t generation = map.generation();   // the frame's (its band's update began it)

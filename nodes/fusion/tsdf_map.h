@@ -58,15 +58,15 @@ enum class TsdfIntegrator {
 struct TsdfConfig {
   float voxel_size = 0.01f;        ///< metres
   float truncation_voxels = 4.0f;  ///< truncation distance in voxels (in front of the surface)
-  /// The band behind a measured surface that a frame updates, along the ray, in voxels at least.
+  /// The band behind a measured surface that a frame updates, along the ray, in voxels at least,
+  /// and to kBehindNoiseMultiple x the frame's estimated depth noise (noise_per_depth2 x depth^2).
   /// Per pixel it widens to one voxel across the surface (divided by the cosine between the ray
-  /// and the surface normal, estimated from the depth two pixels either side on the same
-  /// surface — within a 6 % depth jump — up to 76 degrees, assumed at silhouettes) and to
-  /// kBehindNoiseMultiple x the frame's estimated depth noise (estimate_noise_per_depth2() x
-  /// depth^2), never past the truncation. A short band keeps the far side of thin walls and the
-  /// faces beside sharp edges from being overwritten by views of the near side (a 2 cm plate at
-  /// 1 cm voxels: 5x more accurate, 7x more complete than the symmetric band);
-  /// truncation_voxels gives KinectFusion's / Open3D's symmetric band.
+  /// and the surface normal, from the depth two pixels either side on the same surface, within a
+  /// 6 % jump, up to 76 degrees, assumed at silhouettes), never past the truncation; projective
+  /// integration lets the widening reach only voxels no frame has observed (the far wall of a
+  /// narrow hole stays as its own views saw it). A short band keeps the far side of thin walls
+  /// and faces beside sharp edges from being overwritten by views of the near side (a 2 cm plate
+  /// at 1 cm: 5x more accurate, 7x more complete than truncation_voxels, Open3D's symmetric band).
   float behind_voxels = 2.0f;
   TsdfWeighting weighting = TsdfWeighting::kConstant;
   float max_weight = 256.0f;  ///< accumulated weight is capped here (a slowly moving average)

@@ -102,6 +102,7 @@ MESHFLOW_AVX2_CLONES std::size_t blend_voxel_rows(TsdfBlock& block, const BlockU
   const Floats8 max_u = Floats8{} + (static_cast<float>(frame.width) - 0.5f);
   const Floats8 max_v = Floats8{} + (static_cast<float>(frame.height) - 0.5f);
   const float truncation = frame.config.truncation();
+  const Floats8 least = Floats8{} + frame.config.behind_voxels * frame.config.voxel_size;
   const float max_weight = frame.config.max_weight;
   const bool inverse_depth = frame.config.weighting == TsdfWeighting::kInverseDepth;
   const Rgb8* const colors =
@@ -128,6 +129,9 @@ MESHFLOW_AVX2_CLONES std::size_t blend_voxel_rows(TsdfBlock& block, const BlockU
       band[j] = frame.pixels[at + 1];
     }
     valid &= d > 0.0f;
+    // The band observed voxels take: the least band or the noise allowance at this depth.
+    const Floats8 noise = frame.noise_band_per_depth2 * d * d;
+    const Floats8 held = noise < least ? least : noise;
     if (frame.slopes != nullptr) {
       for (int j = 0; j < 8; ++j) {
         const auto at = 2 * static_cast<std::size_t>(pixel[j]);
@@ -146,6 +150,7 @@ MESHFLOW_AVX2_CLONES std::size_t blend_voxel_rows(TsdfBlock& block, const BlockU
       distance[j] = row[j].distance;
       weight[j] = row[j].weight;
     }
+    valid &= ~((weight > 0.0f) & (sdf < -held));  // observed, past the held band: kept
     // (Lanes left out divide by 1, never by 0, and store their voxel's own values.)
     const Floats8 one = Floats8{} + 1.0f;
     const Floats8 w = inverse_depth ? 1.0f / ((valid ? d : one) * (valid ? d : one)) : one;

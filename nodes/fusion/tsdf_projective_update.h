@@ -34,6 +34,10 @@ struct BlockUpdate {
   const PinholeIntrinsics& intrinsics;
   Eigen::Isometry3f T_camera_world;
   const TsdfConfig& config;
+  /// kBehindNoiseMultiple x the frame's estimate_noise_per_depth2() (1/m): with the least band
+  /// (config.behind_voxels), how far behind its measured depth a pixel updates voxels that
+  /// earlier frames observed (update_block()).
+  float noise_band_per_depth2 = 0.0f;
 };
 
 /// Every voxel of a block in the frame's camera: depth z (metres) and image position (uf, vf),
@@ -51,8 +55,12 @@ void project_block(const Eigen::Vector3i& origin, const BlockUpdate& frame, Bloc
 
 /// Projects every voxel of the block into the frame and blends the truncated distance (and
 /// colour) of the pixel it lands on into it; voxels outside the image, behind an invalid pixel or
-/// farther behind the surface than its band keep their state. Returns the voxels updated. Reads
-/// only `frame`; safe on distinct blocks in parallel. O(512).
+/// farther behind the surface than its band keep their state. The band's widening beyond the
+/// least band and the noise allowance (max(behind_voxels x voxel, noise_band_per_depth2 x
+/// depth^2)) reaches only voxels no frame has observed (weight 0): it gives a grazing view's
+/// cells corners behind the surface, while what other frames measured there — the far wall of a
+/// narrow hole, the other side of a thin part — is not overwritten. Returns the voxels updated.
+/// Reads only `frame`; safe on distinct blocks in parallel. O(512).
 std::size_t update_block(TsdfBlock& block, const BlockUpdate& frame);
 
 }  // namespace meshflow

@@ -175,7 +175,7 @@ IntegrationStats TsdfFrameIntegrator::integrate(TsdfMap& map, const DepthFrame& 
                        stats.pixels_used);
     map.find_or_allocate(keys_, config_.max_new_blocks_per_frame, config_.max_memory_bytes,
                          stats.blocks_allocated, touched_);
-    stats.voxels_updated = update_blocks(map, touched_, depth, frame);
+    stats.voxels_updated = update_blocks(map, touched_, depth, frame, stats.noise_per_depth2);
   }
   stats.blocks_touched = touched_.size();
   if (config_.carve_free_space) carve_free_blocks(map, frame, depth, touched_, stats);
@@ -189,7 +189,8 @@ bool TsdfFrameIntegrator::fuses_color_of(const DepthFrame& frame, const Image& d
 
 std::size_t TsdfFrameIntegrator::update_blocks(TsdfMap& map,
                                                const std::vector<std::uint32_t>& touched,
-                                               const Image& depth, const DepthFrame& frame) {
+                                               const Image& depth, const DepthFrame& frame,
+                                               float noise_per_depth2) {
   // One task per block; a voxel's new state depends only on its old state and the frame, so the
   // order of blocks does not matter.
   const std::uint64_t generation = map.begin_change();
@@ -204,7 +205,8 @@ std::size_t TsdfFrameIntegrator::update_blocks(TsdfMap& map,
                            color ? &frame.color : nullptr,
                            frame.intrinsics,
                            frame.T_world_camera.inverse(),
-                           config_};
+                           config_,
+                           kBehindNoiseMultiple * noise_per_depth2};
   return tbb::parallel_reduce(
       tbb::blocked_range<std::size_t>(0, touched.size()), std::size_t{0},
       [&](const tbb::blocked_range<std::size_t>& range, std::size_t sum) {

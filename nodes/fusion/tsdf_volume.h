@@ -47,9 +47,10 @@ class TsdfFrameIntegrator {
   const TsdfConfig& config() const { return config_; }
 
  private:
-  // integrate()'s projective update of the touched blocks' voxels (returns the voxels updated).
+  // integrate()'s projective update of the touched blocks' voxels, with the frame's depth noise
+  // estimate (estimate_noise_per_depth2()); returns the voxels updated.
   std::size_t update_blocks(TsdfMap& map, const std::vector<std::uint32_t>& touched,
-                            const Image& depth, const DepthFrame& frame);
+                            const Image& depth, const DepthFrame& frame, float noise_per_depth2);
   // TsdfIntegrator::kAlongRay's phases after the band (tsdf_ray_integration.cpp); the blocks it
   // touched into touched_.
   void integrate_along_rays(TsdfMap& map, const DepthFrame& frame, const Image& depth,

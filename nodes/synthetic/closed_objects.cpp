@@ -5,16 +5,13 @@
 #include <limits>
 
 #include "nodes/search/closest_point.h"
+#include "nodes/synthetic/uniform_draw.h"
 
 namespace meshflow::synthetic {
 namespace {
 
 // Offset of every object from the origin, so that no face lies on a grid plane by accident.
 const Eigen::Vector3f kOffset(0.013f, -0.021f, 0.007f);
-
-double uniform01(std::mt19937_64& rng) {
-  return static_cast<double>(rng() >> 11) * (1.0 / 9007199254740992.0);  // 53 bits
-}
 
 double gaussian(std::mt19937_64& rng) {  // Box-Muller
   const double u1 = std::max(uniform01(rng), 1e-300);

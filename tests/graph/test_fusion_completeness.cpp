@@ -4,7 +4,9 @@
 // behind the surface against the symmetric band of KinectFusion / Open3D.
 
 #include <gtest/gtest.h>
+#include <tbb/parallel_for.h>
 
+#include <algorithm>
 #include <cstdio>
 #include <utility>
 
@@ -14,8 +16,10 @@
 #include "nodes/eval/truth_eval.h"
 #include "nodes/io/sequence.h"
 #include "nodes/io/tum_writer.h"
+#include "nodes/search/mesh_distance_index.h"
 #include "nodes/synthetic/depth_sequence.h"
 #include "nodes/synthetic/object_orbit.h"
+#include "nodes/synthetic/perforated_box.h"
 #include "test_support.h"
 
 namespace meshflow {
@@ -77,6 +81,49 @@ TEST(FusionCompleteness, ThinPlateKeepsBothSidesWithTheShortBand) {
   EXPECT_LT(band.completeness, 0.4 * symmetric.completeness);
   EXPECT_LT(band.accuracy, 0.5 * symmetric.accuracy);
   EXPECT_LT(band.completeness, 2e-3);
+}
+
+// The share of `truth` within `tau` metres of the mesh's surface. Parallel; O(truth x log).
+double share_within(const TriangleMesh& mesh, const std::vector<Eigen::Vector3f>& truth,
+                    float tau) {
+  const MeshDistanceIndex index(mesh);
+  std::vector<std::uint8_t> near(truth.size());
+  tbb::parallel_for(std::size_t{0}, truth.size(), [&](std::size_t i) {
+    near[i] = index.closest(truth[i]).distance <= tau ? 1 : 0;
+  });
+  return static_cast<double>(std::count(near.begin(), near.end(), 1)) /
+         static_cast<double>(truth.size());
+}
+
+TEST(FusionCompleteness, ConcaveObjectKeepsTheWallsOfItsHoles) {
+  // A block drilled with three blind pockets, a through hole and a side hole (perforated_box.h),
+  // 24 views on the orbit at 320 x 240. Their walls are seen at grazing angles, their floors
+  // hardly at all: about 15 % of the surface is never seen. The band's widening on slanted
+  // surfaces reaches only voxels no frame observed, so a grazing view of one wall does not
+  // overwrite the opposite wall; measured 0.838 of the surface within half a voxel (Open3D
+  // 0.808 on the same frames, bench/peers/fusion_vs_open3d.cpp) and accuracy 5.8e-4 of the
+  // diagonal (Open3D 1.6e-3). The symmetric band (Open3D's) is both less complete and less
+  // accurate.
+  const synthetic::ClosedObject block = synthetic::pocketed_block_object();
+  synthetic::ObjectOrbitConfig c;
+  c.frames = 24;
+  c.intrinsics = synthetic::scaled_default_camera(320, 240);
+  const auto orbit = synthetic::make_object_orbit(block, c);
+  const FusedFigures band = fuse_and_measure(*orbit, block, TsdfConfig{}.behind_voxels);
+  const FusedFigures symmetric = fuse_and_measure(*orbit, block, TsdfConfig{}.truncation_voxels);
+  const std::vector<Eigen::Vector3f> truth = block.sample(50000, 0.0f, 11).positions;
+  const double half_voxel = share_within(band.mesh, truth, 0.005f);
+  const double half_voxel_symmetric = share_within(symmetric.mesh, truth, 0.005f);
+  std::printf(
+      "[ %s ] within half a voxel %.4f, accuracy %.2e, completeness %.2e; symmetric band "
+      "%.4f, %.2e, %.2e\n",
+      block.name.c_str(), half_voxel, band.accuracy, band.completeness, half_voxel_symmetric,
+      symmetric.accuracy, symmetric.completeness);
+  EXPECT_GT(half_voxel, 0.83);
+  EXPECT_GT(half_voxel, half_voxel_symmetric + 0.02);
+  EXPECT_LT(band.accuracy, 7e-4);
+  EXPECT_LT(band.accuracy, 0.5 * symmetric.accuracy);
+  EXPECT_LT(band.completeness, symmetric.completeness);
 }
 
 TEST(FusionCompleteness, SharpEdgedObjectIsAsCompleteAndMoreAccurate) {

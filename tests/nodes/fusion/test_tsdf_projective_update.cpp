@@ -13,7 +13,8 @@ namespace meshflow {
 namespace {
 
 // The projective rule one voxel at a time, as update_block() applied it before it blended eight
-// voxels per vector: the oracle its vector code must match bit for bit.
+// voxels per vector (with the held band for observed voxels since): the oracle its vector code
+// must match bit for bit.
 std::size_t update_block_voxel_by_voxel(TsdfBlock& block, const BlockUpdate& frame) {
   const std::size_t width = static_cast<std::size_t>(frame.width);
   const float max_u = static_cast<float>(frame.width) - 0.5f;
@@ -31,12 +32,16 @@ std::size_t update_block_voxel_by_voxel(TsdfBlock& block, const BlockUpdate& fra
     const std::size_t pixel = static_cast<std::size_t>(v) * width + static_cast<std::size_t>(u);
     float d = frame.pixels[2 * pixel];
     if (!(d > 0.0f)) continue;
+    const float least = frame.config.behind_voxels * frame.config.voxel_size;
+    const float noise = frame.noise_band_per_depth2 * d * d;
+    const float held = noise < least ? least : noise;
     if (frame.slopes != nullptr)
       d += frame.slopes[2 * pixel] * (uf - static_cast<float>(u)) +
            frame.slopes[2 * pixel + 1] * (vf - static_cast<float>(v));
     const float sdf = d - pz;
     if (sdf < -frame.pixels[2 * pixel + 1]) continue;
     TsdfVoxel& vox = block.voxels[i];
+    if (vox.weight > 0.0f && sdf < -held) continue;  // observed: only the held band
     const float w = observation_weight(frame.config.weighting, d);
     const float total = vox.weight + w;
     const float inv_total = 1.0f / total;
@@ -104,7 +109,8 @@ TEST(TsdfProjectiveUpdate, BlendsEightVoxelsExactlyAsOneAtATime) {
                                 with_color ? &color : nullptr,
                                 k,
                                 T_world_camera.inverse(),
-                                config};
+                                config,
+                                0.05f};  // held band max(2 cm, 0.05 depth^2): both win
         for (int z = -2; z <= 8; ++z)
           for (int y = -6; y <= 5; y += 2)
             for (int x = -7; x <= 6; x += 3) {

@@ -263,10 +263,20 @@ void write_tileset_json(const std::string& dir, const ChunkGrid& grid,
     std::string chain;
     for (std::size_t l = r.levels.size(); l-- > 0;) {
       const TileLevel& level = r.levels[l];
-      chain = "{\"boundingVolume\": " + box(r.min, r.max) +
-              ", \"geometricError\": " + tiles_json_number(level.geometric_error) +
-              ", \"refine\": \"REPLACE\", \"content\": {\"uri\": \"" + level.file + "\"}" +
-              (chain.empty() ? "" : ", \"children\": [" + chain + "]") + "}";
+      std::string node = "{\"boundingVolume\": ";
+      node += box(r.min, r.max);
+      node += ", \"geometricError\": ";
+      node += tiles_json_number(level.geometric_error);
+      node += ", \"refine\": \"REPLACE\", \"content\": {\"uri\": \"";
+      node += level.file;
+      node += "\"}";
+      if (!chain.empty()) {
+        node += ", \"children\": [";
+        node += chain;
+        node += "]";
+      }
+      node += "}";
+      chain = std::move(node);
     }
     children += std::string(children.empty() ? "\n    " : ",\n    ") + chain;
   }

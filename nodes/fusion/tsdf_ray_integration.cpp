@@ -181,7 +181,8 @@ MESHFLOW_AVX2_CLONES void blocks_of_rays(const RaySegment* segments, std::uint32
     walk_voxels(ray_walk::load4(s.from.data()), ray_walk::load4(s.to.data()),
                 [&](const ray_walk::Ints4& voxel) {
                   const ray_walk::Ints4 lanes = voxel >> 3;
-                  if (std::memcmp(&lanes, &previous, sizeof lanes) == 0) return;
+                  if (lanes[0] == previous[0] && lanes[1] == previous[1] && lanes[2] == previous[2])
+                    return;
                   previous = lanes;
                   const Eigen::Vector3i block(lanes[0], lanes[1], lanes[2]);
                   if (!tsdf_block_in_range(block)) throw_out_of_range(ray);

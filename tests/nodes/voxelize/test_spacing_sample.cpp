@@ -29,14 +29,20 @@ PointCloud wavy_sheet(std::size_t n, std::uint32_t seed) {
   return cloud;
 }
 
-// SpacingSample fed `cloud` in batches of `batch` points, both passes.
-SpacingSample streamed(const PointCloud& cloud, std::size_t batch, std::size_t neighbours) {
-  SpacingSample sample(neighbours);
+// `cloud`'s positions cut into batches of `batch` points, in order.
+std::vector<std::vector<Eigen::Vector3f>> batches(const PointCloud& cloud, std::size_t batch) {
   std::vector<std::vector<Eigen::Vector3f>> pieces;
   for (std::size_t at = 0; at < cloud.size(); at += batch)
     pieces.emplace_back(
         cloud.positions.begin() + static_cast<std::ptrdiff_t>(at),
         cloud.positions.begin() + static_cast<std::ptrdiff_t>(std::min(cloud.size(), at + batch)));
+  return pieces;
+}
+
+// SpacingSample fed `cloud` in batches of `batch` points, both passes.
+SpacingSample streamed(const PointCloud& cloud, std::size_t batch, std::size_t neighbours) {
+  SpacingSample sample(neighbours);
+  const auto pieces = batches(cloud, batch);
   for (const auto& piece : pieces) sample.offer(piece);
   for (const auto& piece : pieces) {
     const KdTreeIndex index(piece);
@@ -49,11 +55,7 @@ SpacingSample streamed(const PointCloud& cloud, std::size_t batch, std::size_t n
 SpacingSample streamed_without_index(const PointCloud& cloud, std::size_t batch,
                                      std::size_t neighbours) {
   SpacingSample sample(neighbours);
-  std::vector<std::vector<Eigen::Vector3f>> pieces;
-  for (std::size_t at = 0; at < cloud.size(); at += batch)
-    pieces.emplace_back(
-        cloud.positions.begin() + static_cast<std::ptrdiff_t>(at),
-        cloud.positions.begin() + static_cast<std::ptrdiff_t>(std::min(cloud.size(), at + batch)));
+  const auto pieces = batches(cloud, batch);
   for (const auto& piece : pieces) sample.offer(piece);
   for (const auto& piece : pieces) sample.measure(piece);
   return sample;

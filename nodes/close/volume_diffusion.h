@@ -65,6 +65,8 @@ float interpolate_coarse(const DiffusionLattice& coarse, const Eigen::Vector3i& 
 /// the y and z parts found once, the same value at each node. Reads only; O(1) a node.
 class CoarseRowInterpolation {
  public:
+  /// The row of fine nodes (x, y, z) over `coarse` (kept by reference: it must outlive this),
+  /// `step` as interpolate_coarse()'s; the row's y and z weights computed here. O(1).
   CoarseRowInterpolation(const DiffusionLattice& coarse, const Eigen::Vector3i& step, int y, int z);
   /// interpolate_coarse(coarse, step, {x, y, z}).
   float at(int x) const;

@@ -61,7 +61,8 @@ enum class CloseFill : std::uint8_t {
 struct CloseConfig {
   bool enabled = false;  ///< the pipeline's close stage runs only when set (--close)
   /// The lattice reaches this many voxels beyond the grid's corners; its faces are held outside
-  /// (at +margin_voxels voxels), so every object ends up enclosed.
+  /// (at +margin_voxels voxels; the gradient fill's 2 voxels further out), so every object ends
+  /// up enclosed.
   float margin_voxels = 3.0f;
   /// A line of sight marks the corners it passes as seen empty up to this many voxels before
   /// its point (the noise and the distance band stay data's).

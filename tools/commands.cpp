@@ -328,7 +328,8 @@ void add_reconstruct_options(CLI::App* cmd) {
          "--tiles", opts->tiles,
          "With --chunk: also write the mesh as one glTF file per chunk (DIR/tile_I_J_K.glb), "
          "each also at coarser levels from the progressive coder (tile_I_J_K_lodL.glb), and "
-         "their index DIR/tiles.json, for viewers that load what they look at")
+         "their index DIR/tiles.json (and DIR/tileset.json, 3D Tiles 1.1), for viewers that load "
+         "what they look at")
       ->needs("--chunk");
   cmd->callback([opts] { run_reconstruct(*opts); });
 }

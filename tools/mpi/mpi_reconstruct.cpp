@@ -481,7 +481,7 @@ void add_mpi_reconstruct(CLI::App* cmd, const MpiWorld& world, int& status) {
   cmd->add_option("--tiles", o->tiles,
                   "Also write the mesh as one glTF file per chunk (DIR/tile_I_J_K.glb, each rank "
                   "its own chunks'), each also at coarser levels (tile_I_J_K_lodL.glb), and "
-                  "their index DIR/tiles.json");
+                  "their index DIR/tiles.json (and DIR/tileset.json, 3D Tiles 1.1)");
   cmd->add_flag("--json", o->json,
                 "Rank 0 prints one JSON document: the mesh, and every rank's phases (wall, CPU "
                 "and work seconds, peak memory) with the serial fraction they imply");

@@ -24,6 +24,21 @@ struct FeatureCandidate {
   float length = 0.0f;  ///< |ends[0] - ends[1]|, metres (set where the lines are traced)
 };
 
+/// Calls f(triangle, p, q) for each directed edge p -> q of each distinct triangle around `a`
+/// (VertexTriangles lists a triangle once per corner at `a`; repeats are adjacent), triangles in
+/// ascending order. O(valence).
+template <typename EdgeVisitor>
+void for_each_edge_around(const TriangleMesh& mesh, const VertexTriangles& around, std::uint32_t a,
+                          EdgeVisitor&& f) {
+  std::uint32_t previous = 0xFFFFFFFFu;
+  for (const std::uint32_t* it = around.begin(a); it != around.end(a); ++it) {
+    if (*it == previous) continue;
+    previous = *it;
+    const Triangle& t = mesh.triangles[*it];
+    for (int k = 0; k < 3; ++k) f(*it, t[k], t[(k + 1) % 3]);
+  }
+}
+
 /// The sides of edge {a, b} (a != b) among the triangles around a: how many there are, and the
 /// two lowest triangles holding one.
 struct FeatureEdgeSides {
@@ -34,20 +49,14 @@ struct FeatureEdgeSides {
 FeatureEdgeSides feature_edge_sides(const TriangleMesh& mesh, const VertexTriangles& around,
                                     std::uint32_t a, std::uint32_t b) {
   FeatureEdgeSides s;
-  std::uint32_t previous = 0xFFFFFFFFu;
-  for (const std::uint32_t* it = around.begin(a); it != around.end(a); ++it) {
-    if (*it == previous) continue;  // a triangle repeating a is listed once per repetition
-    previous = *it;
-    const Triangle& t = mesh.triangles[*it];
-    for (int k = 0; k < 3; ++k) {
-      const std::uint32_t p = t[k], q = t[(k + 1) % 3];
-      if ((p == a && q == b) || (p == b && q == a)) {
-        if (s.count == 0) s.first = *it;
-        if (s.count == 1) s.second = *it;
-        ++s.count;
-      }
-    }
-  }
+  for_each_edge_around(mesh, around, a,
+                       [&](std::uint32_t triangle, std::uint32_t p, std::uint32_t q) {
+                         if ((p == a && q == b) || (p == b && q == a)) {
+                           if (s.count == 0) s.first = triangle;
+                           if (s.count == 1) s.second = triangle;
+                           ++s.count;
+                         }
+                       });
   return s;
 }
 
@@ -179,19 +188,13 @@ void candidates_at(const TriangleMesh& mesh, const VertexTriangles& around,
                    std::vector<FeatureCandidate>& out) {
   if (candidates_at_plain_fan(mesh, around, normals, a, cos_limit, seed, out)) return;
   sides.clear();
-  std::uint32_t previous = 0xFFFFFFFFu;
   const std::size_t n = mesh.vertices.size();
-  for (const std::uint32_t* it = around.begin(a); it != around.end(a); ++it) {
-    if (*it == previous) continue;  // a triangle repeating a is listed once per repetition
-    previous = *it;
-    const Triangle& t = mesh.triangles[*it];
-    for (int k = 0; k < 3; ++k) {
-      const std::uint32_t p = t[k], q = t[(k + 1) % 3];
-      if (p == q || (p != a && q != a)) continue;
-      const std::uint32_t b = p == a ? q : p;
-      if (b > a && b < n) sides.push_back({b, *it, p < q});
-    }
-  }
+  for_each_edge_around(mesh, around, a,
+                       [&](std::uint32_t triangle, std::uint32_t p, std::uint32_t q) {
+                         if (p == q || (p != a && q != a)) return;
+                         const std::uint32_t b = p == a ? q : p;
+                         if (b > a && b < n) sides.push_back({b, triangle, p < q});
+                       });
   // By other end, then face (faces come ascending: a stable sort keeps them so).
   for (std::size_t i = 1; i < sides.size(); ++i)
     for (std::size_t j = i; j > 0 && sides[j].b < sides[j - 1].b; --j)

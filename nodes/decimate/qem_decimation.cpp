@@ -217,10 +217,14 @@ class Decimator {
   }
 
   // The rest of the setup: the feature edges' lines and constraint quadrics (none when empty),
-  // then every vertex's own error.
+  // then every vertex's own error (in parallel).
   void constrain(const std::vector<std::array<std::uint32_t, 2>>& feature_edges) {
     if (!feature_edges.empty()) add_feature_constraints(feature_edges);
-    for (std::size_t v = 0; v < in_.vertices.size(); ++v) terms_[v].own_error = q_[v].error(p(v));
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, in_.vertices.size()),
+                      [&](const tbb::blocked_range<std::size_t>& range) {
+                        for (std::size_t v = range.begin(); v != range.end(); ++v)
+                          terms_[v].own_error = q_[v].error(p(static_cast<std::uint32_t>(v)));
+                      });
   }
 
   // Decimates to at most `target` faces, or until no collapse is valid, in passes (see the

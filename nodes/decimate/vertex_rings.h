@@ -90,7 +90,8 @@ class VertexRings {
 
   /// The faces of the mesh as it is now: every face with a non-complex corner, from the ring of
   /// the smallest such corner (in vertex order, then ring order), then the faces of only
-  /// complex corners, as in the input (collapses never change them). O(V + T).
+  /// complex corners, as in the input (collapses never change them). O(V + T), in parallel over
+  /// blocks of vertices; the same order for any thread count.
   std::vector<Triangle> triangles() const;
 
   /// Requests v's record (kind, size and, for rings of up to kInline entries, the ring).

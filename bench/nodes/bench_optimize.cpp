@@ -58,5 +58,23 @@ BENCHMARK(BM_OptimizeDecimateIndependent)
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
 
+// The decimate step (features kept, the walk) with QemConfig::walk_chunk = range(2) (0: serial
+// re-evaluation; 256: the default): how the chunk trades evaluations (and the error) against
+// the waits at each chunk's start, at 1 and 2 threads.
+void BM_OptimizeDecimateChunk(benchmark::State& state) {
+  const TriangleMesh* mesh = cleaned_mesh(state);
+  if (mesh == nullptr) return;
+  OptimizeConfig config;
+  config.steps = {OptimizeStep::kDecimate};
+  config.decimate.walk_chunk = static_cast<std::size_t>(state.range(2));
+  time_optimize(state, *mesh, config);
+  count_distance_to_input(state, *mesh, optimize_mesh(*mesh, config));
+}
+BENCHMARK(BM_OptimizeDecimateChunk)
+    ->ArgsProduct({{1, 2}, {kSynthetic, kKurt3d}, {0, 256, 1024, 4096}})
+    ->ArgNames({"threads", "input", "chunk"})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
+
 }  // namespace
 }  // namespace meshflow::bench

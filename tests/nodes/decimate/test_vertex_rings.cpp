@@ -174,6 +174,54 @@ TEST(VertexRings, SmallAndLargeFansOrderAlike) {
   }
 }
 
+// triangles() against its definition, written out serially from the rings: every face of a
+// non-complex corner from the ring of its smallest such corner (vertex order, then ring order),
+// then the faces of only complex corners; the same on one and two threads. A grid of 12 100
+// vertices with holes (its vertices span several of triangles()'s parallel blocks), after
+// collapses along a row, which reorder rings.
+TEST(VertexRings, TrianglesListFacesInVertexThenRingOrder) {
+  std::mt19937 rng(11);
+  const int n = 110;
+  const std::vector<Triangle> faces = grid_faces(n, 0.9, rng);
+  VertexRings rings(faces, static_cast<std::size_t>(n * n));
+  std::size_t collapsed = 0;
+  for (std::uint32_t u = 3 * n + 1; u + 1 < 4u * n; u += 3) {
+    if (rings.locked(u) || rings.kind(u) != Kind::kClosed) continue;
+    const std::uint32_t v = rings.begin(u)[0];
+    const std::set<std::uint32_t> nu(rings.begin(u), rings.end(u));
+    std::size_t common = 0;
+    for (const std::uint32_t* x = rings.begin(v); x != rings.end(v); ++x) common += nu.count(*x);
+    if (common == 2 && !rings.locked(v)) {  // the link condition holds
+      rings.collapse(u, v);
+      ++collapsed;
+    }
+  }
+  ASSERT_GT(collapsed, 10u);
+  const auto listed_later = [&](std::uint32_t corner, std::uint32_t owner) {
+    return corner > owner || rings.kind(corner) == Kind::kComplex;
+  };
+  std::vector<Triangle> expected;
+  for (std::uint32_t m = 0; m < static_cast<std::uint32_t>(n * n); ++m) {
+    const std::uint32_t* r = rings.begin(m);
+    const std::size_t size = rings.size(m);
+    const std::size_t pairs = rings.kind(m) == Kind::kClosed ? size : (size == 0 ? 0 : size - 1);
+    for (std::size_t i = 0; i < pairs; ++i) {
+      const std::uint32_t b = r[i], c = r[(i + 1) % size];
+      if (b == VertexRings::kSeparator || c == VertexRings::kSeparator) continue;
+      if (listed_later(b, m) && listed_later(c, m)) expected.push_back({m, b, c});
+    }
+  }
+  for (const Triangle& t : faces)
+    if (rings.kind(t[0]) == Kind::kComplex && rings.kind(t[1]) == Kind::kComplex &&
+        rings.kind(t[2]) == Kind::kComplex)
+      expected.push_back(t);
+  ASSERT_GT(expected.size(), 15000u);
+  for (int threads : {1, 2}) {
+    const ThreadLimit limit(threads);
+    EXPECT_EQ(rings.triangles(), expected) << threads << " threads";
+  }
+}
+
 // neighbours_among() against set intersection: every vertex's ring (v listed too, which never
 // counts) and random lists of up to twenty distinct vertices (more than one block of eight), on
 // grids with holes and bow ties, and around a hub of forty faces.

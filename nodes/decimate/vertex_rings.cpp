@@ -8,6 +8,10 @@
 #include <cstring>
 #include <utility>
 
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+
 #include "runtime/simd.h"
 #include "runtime/vertex_triangles.h"
 
@@ -116,14 +120,27 @@ VertexRings::Kind order_fan(bool gathered, FanIndex& fan, std::size_t& fans) {
 // larger fans go through FanIndex's per-vertex stamps.
 constexpr std::size_t kSmallFan = 16;
 
-// Bit j set where lane j of the `vectors` x 4 lanes at `lanes` equals x (lanes 0 .. 15).
+// Bit j set where lane j of the `vectors` x 4 lanes at `lanes` equals x (lanes 0 .. 15): with
+// SSE2 (every x86-64), one compare and one sign-bit mask per vector.
 std::uint32_t lanes_equal(const simd::Uints4* lanes, std::size_t vectors, std::uint32_t x) {
+#if defined(__SSE2__)
+  const __m128i key = _mm_set1_epi32(static_cast<int>(x));
+  std::uint32_t bits = 0;
+  for (std::size_t i = 0; i < vectors; ++i) {
+    __m128i four;
+    std::memcpy(&four, &lanes[i], sizeof four);
+    const int signs = _mm_movemask_ps(_mm_castsi128_ps(_mm_cmpeq_epi32(four, key)));
+    bits |= static_cast<std::uint32_t>(signs) << (4 * i);
+  }
+  return bits;
+#else
   const simd::Uints4 weights = {1, 2, 4, 8};
   simd::Uints4 hits = {0, 0, 0, 0};
   for (std::size_t i = 0; i < vectors; ++i)
     hits |= reinterpret_cast<simd::Uints4>(lanes[i] == x) &
             (weights << static_cast<std::uint32_t>(4 * i));
   return hits[0] | hits[1] | hits[2] | hits[3];
+#endif
 }
 
 // gather() and order_fan() for a vertex u of at most kSmallFan faces, the triangles listed in
@@ -406,35 +423,31 @@ bool VertexRings::share_face(std::uint32_t v, std::uint32_t x, std::uint32_t y) 
 }
 
 std::vector<Triangle> VertexRings::triangles() const {
-  // In blocks of vertices, in parallel: each block's faces counted, then written at the block's
-  // place (the counts' prefix sums), so the order is the serial one for any thread count.
+  // In blocks of vertices, in parallel: each block's faces listed on their own, then copied to
+  // the block's place (the prefix sums of their counts), so the order is the serial one for any
+  // thread count.
   constexpr std::size_t kBlockVertices = 4096;
   const std::size_t n = records_.size();
   const std::size_t blocks = (n + kBlockVertices - 1) / kBlockVertices;
   const auto owner_or_later = [this](std::uint32_t corner, std::uint32_t owner) {
     return corner > owner || kind(corner) == Kind::kComplex;
   };
-  // Calls fn(m, b, c) for the faces block `block`'s vertices own.
-  const auto for_each_owned = [&](std::size_t block, auto&& fn) {
+  std::vector<std::vector<Triangle>> listed(blocks);
+  tbb::parallel_for(std::size_t{0}, blocks, [&](std::size_t block) {
+    std::vector<Triangle>& faces = listed[block];
     const auto last = static_cast<std::uint32_t>(std::min(n, (block + 1) * kBlockVertices));
     for (auto m = static_cast<std::uint32_t>(block * kBlockVertices); m < last; ++m)
       for_each_face(m, [&](std::uint32_t b, std::uint32_t c) {
-        if (owner_or_later(b, m) && owner_or_later(c, m)) fn(m, b, c);
+        if (owner_or_later(b, m) && owner_or_later(c, m)) faces.push_back({m, b, c});
       });
-  };
-  std::vector<std::size_t> starts(blocks + 1, 0);
-  tbb::parallel_for(std::size_t{0}, blocks, [&](std::size_t block) {
-    std::size_t faces = 0;
-    for_each_owned(block, [&](std::uint32_t, std::uint32_t, std::uint32_t) { ++faces; });
-    starts[block + 1] = faces;
   });
-  for (std::size_t block = 0; block < blocks; ++block) starts[block + 1] += starts[block];
+  std::vector<std::size_t> starts(blocks + 1, 0);
+  for (std::size_t block = 0; block < blocks; ++block)
+    starts[block + 1] = starts[block] + listed[block].size();
   std::vector<Triangle> out(starts[blocks] + complex_only_.size());
   tbb::parallel_for(std::size_t{0}, blocks, [&](std::size_t block) {
-    Triangle* to = out.data() + starts[block];
-    for_each_owned(block, [&](std::uint32_t m, std::uint32_t b, std::uint32_t c) {
-      *to++ = {m, b, c};
-    });
+    std::copy(listed[block].begin(), listed[block].end(),
+              out.begin() + static_cast<std::ptrdiff_t>(starts[block]));
   });
   std::copy(complex_only_.begin(), complex_only_.end(),
             out.begin() + static_cast<std::ptrdiff_t>(starts[blocks]));

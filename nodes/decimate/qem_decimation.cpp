@@ -13,6 +13,7 @@
 #include <cstring>
 #include <limits>
 #include <optional>
+#include <utility>
 #include <vector>
 
 #include "nodes/decimate/collapse_fan.h"
@@ -424,11 +425,32 @@ class Decimator {
   }
 
   // Phase 3 with independent collapses: the candidates' keys, unordered (independent_pass()
-  // orders only those it needs). False when no vertex has a collapse.
+  // orders only those it needs), in vertex order: in blocks of vertices, in parallel, each
+  // block's candidates counted, then written at the block's place (the counts' prefix sums).
+  // False when no vertex has a collapse.
   bool gather_candidates() {
-    order_.clear();
-    for (const Candidate& c : best_)
-      if (c.cost < kNoCollapse) order_.push_back(order_key(c, vertex_bits_));
+    constexpr std::size_t kBlockVertices = 8192;
+    const std::size_t blocks = (best_.size() + kBlockVertices - 1) / kBlockVertices;
+    block_starts_.assign(blocks + 1, 0);
+    const auto block_range = [&](std::size_t block) {
+      return std::make_pair(block * kBlockVertices,
+                            std::min(best_.size(), (block + 1) * kBlockVertices));
+    };
+    tbb::parallel_for(std::size_t{0}, blocks, [&](std::size_t block) {
+      const auto [first, last] = block_range(block);
+      std::size_t count = 0;
+      for (std::size_t u = first; u < last; ++u) count += best_[u].cost < kNoCollapse ? 1 : 0;
+      block_starts_[block + 1] = count;
+    });
+    for (std::size_t block = 0; block < blocks; ++block)
+      block_starts_[block + 1] += block_starts_[block];
+    order_.resize(block_starts_[blocks]);
+    tbb::parallel_for(std::size_t{0}, blocks, [&](std::size_t block) {
+      const auto [first, last] = block_range(block);
+      std::uint64_t* to = order_.data() + block_starts_[block];
+      for (std::size_t u = first; u < last; ++u)
+        if (best_[u].cost < kNoCollapse) *to++ = order_key(best_[u], vertex_bits_);
+    });
     return !order_.empty();
   }
 
@@ -975,8 +997,9 @@ class Decimator {
   /// evaluated (else a lower bound of its cost). (A vertex is listed once per pass, so a
   /// removed one is never met again in it.)
   std::vector<std::uint8_t> dirty_, validated_;
-  std::vector<std::uint32_t> targets_;  ///< the kept vertex of every collapse of the last pass
-  std::vector<std::uint64_t> order_;    ///< a pass's candidates, cheapest first (order_key())
+  std::vector<std::uint32_t> targets_;     ///< the kept vertex of every collapse of the last pass
+  std::vector<std::uint64_t> order_;       ///< a pass's candidates, cheapest first (order_key())
+  std::vector<std::size_t> block_starts_;  ///< gather_candidates(): where each block's keys go
   int vertex_bits_ = 0;
   std::uint64_t vertex_mask_ = 0;
   std::vector<Candidate> ahead_;         ///< a chunk's candidates evaluated in parallel

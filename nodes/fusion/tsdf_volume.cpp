@@ -56,13 +56,16 @@ using simd::Ints8;
 
 // Eight consecutive pixels of a row: their world rays at unit depth and their depth and band
 // (voxel units; depth 0 = invalid), and the blocks lo..hi (per axis) of the box around each
-// one's ray segment.
+// one's ray segment; whether that box lies inside the previous pixel's, a valid one's (that
+// pixel left the last box emitted around its own, so this one adds nothing).
 struct EightPixels {
   alignas(32) float ray[3][8];
   alignas(32) float depth[8];
   alignas(32) float band[8];
-  alignas(32) std::int32_t lo[3][8];
+  float previous_depth = 0.0f;        ///< of the pixel before the first (0: none or invalid)
+  alignas(32) std::int32_t lo[3][8];  ///< on entry, lane 7: the previous pixel's box
   alignas(32) std::int32_t hi[3][8];
+  alignas(32) std::int32_t inside_previous[8];  ///< all ones or zero
 };
 
 // floor_to_int() lane by lane.
@@ -86,6 +89,11 @@ MESHFLOW_AVX2_CLONES void boxes_of_eight(const Eigen::Vector3f& origin, float tr
   const Floats8 ahead = d - truncation;
   const Floats8 near = ahead < 0.0f ? Floats8{} : ahead;  // std::max(d - truncation, 0)
   const Floats8 far = d + band;
+  Floats8 previous_d;
+  __builtin_memcpy(&previous_d, p.depth, sizeof previous_d);
+  previous_d = __builtin_shufflevector(Floats8{} + p.previous_depth, previous_d, 0, 8, 9, 10, 11,
+                                       12, 13, 14);
+  Ints8 inside = previous_d > 0.0f;
   for (int axis = 0; axis < 3; ++axis) {
     Floats8 ray;
     __builtin_memcpy(&ray, p.ray[axis], sizeof ray);
@@ -95,9 +103,16 @@ MESHFLOW_AVX2_CLONES void boxes_of_eight(const Eigen::Vector3f& origin, float tr
     MESHFLOW_FLOOR_TO_INT8(lo, vlo);
     MESHFLOW_FLOOR_TO_INT8(hi, vhi);
     const Ints8 blo = vlo >> 3, bhi = (vhi + 1) >> 3;  // tsdf_block_of_voxel()
+    Ints8 before_lo, before_hi;                        // the previous pixel's
+    __builtin_memcpy(&before_lo, p.lo[axis], sizeof before_lo);
+    __builtin_memcpy(&before_hi, p.hi[axis], sizeof before_hi);
+    before_lo = __builtin_shufflevector(before_lo, blo, 7, 8, 9, 10, 11, 12, 13, 14);
+    before_hi = __builtin_shufflevector(before_hi, bhi, 7, 8, 9, 10, 11, 12, 13, 14);
+    inside &= (blo >= before_lo) & (bhi <= before_hi);
     __builtin_memcpy(p.lo[axis], &blo, sizeof blo);
     __builtin_memcpy(p.hi[axis], &bhi, sizeof bhi);
   }
+  __builtin_memcpy(p.inside_previous, &inside, sizeof inside);
 }
 
 #undef MESHFLOW_FLOOR_TO_INT8
@@ -126,9 +141,10 @@ void touched_blocks_of_row(int width, int v, const BandGeometry& band,
     return p.x() >= lo.x() && p.y() >= lo.y() && p.z() >= lo.z() && p.x() <= hi.x() &&
            p.y() <= hi.y() && p.z() <= hi.z();
   };
-  EightPixels eight;
+  EightPixels eight{};
   for (int u0 = 0; u0 < width; u0 += 8) {
     const int n = std::min(8, width - u0);
+    eight.previous_depth = u0 > 0 ? eight.depth[7] : 0.0f;
     int valid = 0;
     for (int j = 0; j < 8; ++j) {
       const bool in_row = j < n;
@@ -142,7 +158,7 @@ void touched_blocks_of_row(int width, int v, const BandGeometry& band,
     pixels += static_cast<std::size_t>(valid);
     boxes_of_eight(origin, truncation, eight);
     for (int j = 0; j < n; ++j) {
-      if (!(eight.depth[j] > 0.0f)) continue;
+      if (!(eight.depth[j] > 0.0f) || eight.inside_previous[j] != 0) continue;
       const Eigen::Vector3i blo(eight.lo[0][j], eight.lo[1][j], eight.lo[2][j]);
       const Eigen::Vector3i bhi(eight.hi[0][j], eight.hi[1][j], eight.hi[2][j]);
       if (inside(blo, last_lo, last_hi) && inside(bhi, last_lo, last_hi)) continue;

@@ -54,18 +54,17 @@ struct BandGeometry {
 using simd::Floats8;
 using simd::Ints8;
 
-// Eight consecutive pixels of a row: their world rays at unit depth and their depth and band
-// (voxel units; depth 0 = invalid), and the blocks lo..hi (per axis) of the box around each
-// one's ray segment; whether that box lies inside the previous pixel's, a valid one's (that
-// pixel left the last box emitted around its own, so this one adds nothing).
+// Eight consecutive pixels of a row: their depth (0 = invalid or past the row's end), the
+// blocks lo..hi (per axis) of the box around each one's ray segment, and whether that box lies
+// inside the previous pixel's, a valid one's (that pixel left the last box emitted around its
+// own, so this one adds nothing).
 struct EightPixels {
-  alignas(32) float ray[3][8];
-  alignas(32) float depth[8];
-  alignas(32) float band[8];
-  float previous_depth = 0.0f;        ///< of the pixel before the first (0: none or invalid)
-  alignas(32) std::int32_t lo[3][8];  ///< on entry, lane 7: the previous pixel's box
-  alignas(32) std::int32_t hi[3][8];
-  alignas(32) std::int32_t inside_previous[8];  ///< all ones or zero
+  float ray[3] = {};            ///< the first pixel's world ray (voxel units); then the next's
+  float previous_depth = 0.0f;  ///< of the pixel before the first (0: none or invalid)
+  alignas(32) float depth[8] = {};
+  alignas(32) std::int32_t lo[3][8] = {};  ///< on entry, lane 7: the previous pixel's box
+  alignas(32) std::int32_t hi[3][8] = {};
+  alignas(32) std::int32_t inside_previous[8] = {};  ///< all ones or zero
 };
 
 // floor_to_int() lane by lane.
@@ -76,27 +75,38 @@ struct EightPixels {
     (out) = i + (c < __builtin_convertvector(i, Floats8));                               \
   } while (false)
 
-// The block boxes of eight pixels (touched_blocks_of_row()'s per-pixel arithmetic, each lane
-// exactly the scalar operations: IEEE products and sums, no FMA contraction); lanes of invalid
-// pixels are filled but meaningless. `origin`: the camera centre in voxel units.
-MESHFLOW_AVX2_CLONES void boxes_of_eight(const Eigen::Vector3f& origin, float truncation,
-                                         EightPixels& p) {
+// The block boxes of the `n` <= 8 pixels whose (depth, band) start at `pixels`
+// (touched_blocks_of_row()'s per-pixel arithmetic, each lane exactly the scalar operations:
+// IEEE products and sums, no FMA contraction; lane j's ray is p.ray plus `step` added j times,
+// one sum after another); lanes of invalid pixels are filled but meaningless. `origin`: the
+// camera centre in voxel units. Advances p.ray past the eight pixels; returns how many are valid.
+MESHFLOW_AVX2_CLONES int boxes_of_eight(const Eigen::Vector3f& origin, const Eigen::Vector3f& step,
+                                        float truncation, const float* pixels, int n,
+                                        EightPixels& p) {
   constexpr float kFloorLimit = 1073741824.0f;  // floor_to_int()'s 2^30
   const Floats8 limit = Floats8{} + kFloorLimit;
-  Floats8 d, band;
-  __builtin_memcpy(&d, p.depth, sizeof d);
-  __builtin_memcpy(&band, p.band, sizeof band);
+  float padded[16] = {};
+  const float* source = pixels;
+  if (n < 8) {
+    for (int j = 0; j < 2 * n; ++j) padded[j] = pixels[j];
+    source = padded;
+  }
+  Floats8 first, second;
+  __builtin_memcpy(&first, source, sizeof first);
+  __builtin_memcpy(&second, source + 8, sizeof second);
+  const Floats8 d = __builtin_shufflevector(first, second, 0, 2, 4, 6, 8, 10, 12, 14);
+  const Floats8 band = __builtin_shufflevector(first, second, 1, 3, 5, 7, 9, 11, 13, 15);
   const Floats8 ahead = d - truncation;
   const Floats8 near = ahead < 0.0f ? Floats8{} : ahead;  // std::max(d - truncation, 0)
   const Floats8 far = d + band;
-  Floats8 previous_d;
-  __builtin_memcpy(&previous_d, p.depth, sizeof previous_d);
-  previous_d = __builtin_shufflevector(Floats8{} + p.previous_depth, previous_d, 0, 8, 9, 10, 11,
-                                       12, 13, 14);
+  const Floats8 previous_d =
+      __builtin_shufflevector(Floats8{} + p.previous_depth, d, 0, 8, 9, 10, 11, 12, 13, 14);
   Ints8 inside = previous_d > 0.0f;
+  const Ints8 lane = {0, 1, 2, 3, 4, 5, 6, 7};
   for (int axis = 0; axis < 3; ++axis) {
-    Floats8 ray;
-    __builtin_memcpy(&ray, p.ray[axis], sizeof ray);
+    Floats8 ray = Floats8{} + p.ray[axis];
+    for (int k = 1; k < 8; ++k) ray = lane >= k ? ray + step[axis] : ray;
+    p.ray[axis] = ray[7] + step[axis];
     const Floats8 a = origin[axis] + ray * near, b = origin[axis] + ray * far;
     const Floats8 lo = b < a ? b : a, hi = a < b ? b : a;  // std::min, std::max
     Ints8 vlo, vhi;
@@ -113,6 +123,11 @@ MESHFLOW_AVX2_CLONES void boxes_of_eight(const Eigen::Vector3f& origin, float tr
     __builtin_memcpy(p.hi[axis], &bhi, sizeof bhi);
   }
   __builtin_memcpy(p.inside_previous, &inside, sizeof inside);
+  __builtin_memcpy(p.depth, &d, sizeof d);
+  const Ints8 valid = d > 0.0f;
+  int count = 0;
+  for (int j = 0; j < 8; ++j) count -= valid[j];
+  return count;
 }
 
 #undef MESHFLOW_FLOOR_TO_INT8
@@ -135,28 +150,20 @@ void touched_blocks_of_row(int width, int v, const BandGeometry& band,
   const Eigen::Matrix3f rotation = T_world_camera.linear() * inv_voxel;
   const Eigen::Vector3f origin = T_world_camera.translation() * inv_voxel;
   const float ry = (static_cast<float>(v) - k.cy) / k.fy;
-  const Eigen::Vector3f ray_step = rotation.col(0) / k.fx;                   // per pixel along u
-  Eigen::Vector3f ray = rotation * Eigen::Vector3f(-k.cx / k.fx, ry, 1.0f);  // world ray at u = 0
+  const Eigen::Vector3f ray_step = rotation.col(0) / k.fx;  // per pixel along u
+  const Eigen::Vector3f ray = rotation * Eigen::Vector3f(-k.cx / k.fx, ry, 1.0f);  // at u = 0
   auto inside = [](const Eigen::Vector3i& p, const Eigen::Vector3i& lo, const Eigen::Vector3i& hi) {
     return p.x() >= lo.x() && p.y() >= lo.y() && p.z() >= lo.z() && p.x() <= hi.x() &&
            p.y() <= hi.y() && p.z() <= hi.z();
   };
-  EightPixels eight{};
+  EightPixels eight;
+  for (int axis = 0; axis < 3; ++axis) eight.ray[axis] = ray[axis];
   for (int u0 = 0; u0 < width; u0 += 8) {
     const int n = std::min(8, width - u0);
-    eight.previous_depth = u0 > 0 ? eight.depth[7] : 0.0f;
-    int valid = 0;
-    for (int j = 0; j < 8; ++j) {
-      const bool in_row = j < n;
-      eight.depth[j] = in_row ? row[2 * (u0 + j)] : 0.0f;  // 0 when invalid
-      eight.band[j] = in_row ? row[2 * (u0 + j) + 1] : 0.0f;
-      for (int axis = 0; axis < 3; ++axis) eight.ray[axis][j] = ray[axis];
-      if (in_row) ray += ray_step;
-      valid += eight.depth[j] > 0.0f ? 1 : 0;
-    }
+    eight.previous_depth = eight.depth[7];  // 0 before the first pixel
+    const int valid = boxes_of_eight(origin, ray_step, truncation, row + 2 * u0, n, eight);
     if (valid == 0) continue;
     pixels += static_cast<std::size_t>(valid);
-    boxes_of_eight(origin, truncation, eight);
     for (int j = 0; j < n; ++j) {
       if (!(eight.depth[j] > 0.0f) || eight.inside_previous[j] != 0) continue;
       const Eigen::Vector3i blo(eight.lo[0][j], eight.lo[1][j], eight.lo[2][j]);

@@ -50,36 +50,50 @@ MESHFLOW_AVX2_CLONES void row_slopes(const float* here, const float* above, cons
                                      std::size_t w, float one_surface, float* out) {
   const auto pixel = [&](std::size_t u) {
     const float d = here[2 * u];
+    out[4 * u] = d;
+    out[4 * u + 1] = here[2 * u + 1];
     if (!(d > 0.0f)) {
-      out[2 * u] = out[2 * u + 1] = 0.0f;
+      out[4 * u + 2] = out[4 * u + 3] = 0.0f;
       return;
     }
-    out[2 * u] = surface_slope(u > 0 ? here[2 * u - 2] : 0.0f, d,
-                               u + 1 < w ? here[2 * u + 2] : 0.0f, one_surface);
-    out[2 * u + 1] =
+    out[4 * u + 2] = surface_slope(u > 0 ? here[2 * u - 2] : 0.0f, d,
+                                   u + 1 < w ? here[2 * u + 2] : 0.0f, one_surface);
+    out[4 * u + 3] =
         surface_slope(above ? above[2 * u] : 0.0f, d, below ? below[2 * u] : 0.0f, one_surface);
   };
   std::size_t u = 0;
   for (; u < std::min<std::size_t>(1, w); ++u) pixel(u);
   for (; u + 9 <= w; u += 8) {  // u - 1 .. u + 8 inside the row
-    Floats8 d, left, right, up{}, down{};
-    for (int j = 0; j < 8; ++j) {
-      d[j] = here[2 * (u + j)];
-      left[j] = here[2 * (u + j) - 2];
-      right[j] = here[2 * (u + j) + 2];
-      if (above) up[j] = above[2 * (u + j)];
-      if (below) down[j] = below[2 * (u + j)];
-    }
+    // Pixels' (depth, band) pairs as two vectors each; the depths are their even lanes.
+    const auto pairs = [](const float* at, Floats8& first, Floats8& second) {
+      __builtin_memcpy(&first, at, sizeof first);
+      __builtin_memcpy(&second, at + 8, sizeof second);
+    };
+    Floats8 p0, p1, l0, l1, r0, r1, a0{}, a1{}, b0{}, b1{};
+    pairs(here + 2 * u, p0, p1);
+    pairs(here + 2 * u - 2, l0, l1);
+    pairs(here + 2 * u + 2, r0, r1);
+    if (above) pairs(above + 2 * u, a0, a1);
+    if (below) pairs(below + 2 * u, b0, b1);
+#define MESHFLOW_EVEN_LANES(x0, x1) __builtin_shufflevector(x0, x1, 0, 2, 4, 6, 8, 10, 12, 14)
+    const Floats8 d = MESHFLOW_EVEN_LANES(p0, p1), left = MESHFLOW_EVEN_LANES(l0, l1),
+                  right = MESHFLOW_EVEN_LANES(r0, r1), up = MESHFLOW_EVEN_LANES(a0, a1),
+                  down = MESHFLOW_EVEN_LANES(b0, b1);
+#undef MESHFLOW_EVEN_LANES
     Floats8 du, dv;
     MESHFLOW_SURFACE_SLOPE8(left, d, right, du);
     MESHFLOW_SURFACE_SLOPE8(up, d, down, dv);
     const Ints8 valid = d > 0.0f;
     du = valid ? du : Floats8{};
     dv = valid ? dv : Floats8{};
-    for (int j = 0; j < 8; ++j) {
-      out[2 * (u + j)] = du[j];
-      out[2 * (u + j) + 1] = dv[j];
-    }
+    // Records (depth, band, du, dv): the pairs interleaved with the slopes.
+    const Floats8 s0 = __builtin_shufflevector(du, dv, 0, 8, 1, 9, 2, 10, 3, 11);
+    const Floats8 s1 = __builtin_shufflevector(du, dv, 4, 12, 5, 13, 6, 14, 7, 15);
+    const Floats8 records[4] = {__builtin_shufflevector(p0, s0, 0, 1, 8, 9, 2, 3, 10, 11),
+                                __builtin_shufflevector(p0, s0, 4, 5, 12, 13, 6, 7, 14, 15),
+                                __builtin_shufflevector(p1, s1, 0, 1, 8, 9, 2, 3, 10, 11),
+                                __builtin_shufflevector(p1, s1, 4, 5, 12, 13, 6, 7, 14, 15)};
+    __builtin_memcpy(out + 4 * u, records, sizeof records);
   }
   for (; u < w; ++u) pixel(u);
 }
@@ -92,13 +106,13 @@ MESHFLOW_AVX2_CLONES void row_slopes(const float* here, const float* above, cons
 void depth_slopes(const std::vector<float>& pixels, int width, int height, float one_surface,
                   std::vector<float>& slopes) {
   const auto w = static_cast<std::size_t>(width);
-  slopes.resize(pixels.size());
+  slopes.resize(2 * pixels.size());
   tbb::parallel_for(0, height, [&](int v) {
     const std::size_t row = static_cast<std::size_t>(v) * w;
     const float* here = pixels.data() + 2 * row;
     const float* above = v > 0 ? here - 2 * w : nullptr;
     const float* below = v + 1 < height ? here + 2 * w : nullptr;
-    row_slopes(here, above, below, w, one_surface, slopes.data() + 2 * row);
+    row_slopes(here, above, below, w, one_surface, slopes.data() + 4 * row);
   });
 }
 
@@ -141,6 +155,7 @@ void project_block(const Eigen::Vector3i& origin, const BlockUpdate& frame, Bloc
 namespace {
 
 using Pairs4 = std::uint64_t __attribute__((vector_size(32)));  // four 8-byte pairs
+using Floats4 = float __attribute__((vector_size(16)));         // one 16-byte record
 
 // A voxel record as three 32-bit words: distance, weight, colour (r, g, b and the padding byte).
 static_assert(sizeof(TsdfVoxel) == 12 && offsetof(TsdfVoxel, weight) == 4 &&
@@ -168,12 +183,32 @@ inline bool any_lane(const Ints8& mask) {
     (second) = __builtin_shufflevector(a_, b_, 1, 3, 5, 7, 9, 11, 13, 15);                  \
   } while (false)
 
+// The four floats of eight 16-byte records at `base` + 4 x index[j] (loaded as records and
+// transposed).
+#define MESHFLOW_GATHER_RECORDS(base, index, first, second, third, fourth)                       \
+  do {                                                                                           \
+    Floats4 r_[8];                                                                               \
+    for (int j = 0; j < 8; ++j)                                                                  \
+      __builtin_memcpy(&r_[j], (base) + 4 * static_cast<std::size_t>((index)[j]), sizeof r_[j]); \
+    Floats8 q_[4];                                                                               \
+    for (int j = 0; j < 4; ++j)                                                                  \
+      q_[j] = __builtin_shufflevector(r_[j], r_[j + 4], 0, 1, 2, 3, 4, 5, 6, 7);                 \
+    const Floats8 lo01_ = __builtin_shufflevector(q_[0], q_[1], 0, 8, 1, 9, 4, 12, 5, 13);       \
+    const Floats8 hi01_ = __builtin_shufflevector(q_[0], q_[1], 2, 10, 3, 11, 6, 14, 7, 15);     \
+    const Floats8 lo23_ = __builtin_shufflevector(q_[2], q_[3], 0, 8, 1, 9, 4, 12, 5, 13);       \
+    const Floats8 hi23_ = __builtin_shufflevector(q_[2], q_[3], 2, 10, 3, 11, 6, 14, 7, 15);     \
+    (first) = __builtin_shufflevector(lo01_, lo23_, 0, 1, 8, 9, 4, 5, 12, 13);                   \
+    (second) = __builtin_shufflevector(lo01_, lo23_, 2, 3, 10, 11, 6, 7, 14, 15);                \
+    (third) = __builtin_shufflevector(hi01_, hi23_, 0, 1, 8, 9, 4, 5, 12, 13);                   \
+    (fourth) = __builtin_shufflevector(hi01_, hi23_, 2, 3, 10, 11, 6, 7, 14, 15);                \
+  } while (false)
+
 // update_block()'s voxel loop, eight voxels (one voxel row) at a time: the tests as lane masks,
 // the blend in vectors, each lane exactly the arithmetic of one voxel alone (plain IEEE products,
 // sums and quotients in the same order, no FMA contraction), so every CPU and either build gives
 // the same floats. A row's eight 12-byte voxels are loaded and stored as three vectors of
-// words; each pixel's (depth, band) and (slope u, slope v) as one 8-byte pair, its colour as one
-// 4-byte word.
+// words; each pixel's (depth, band, slope u, slope v) as one 16-byte record (or its (depth,
+// band) as one 8-byte pair), its colour as one 4-byte word.
 MESHFLOW_AVX2_CLONES std::size_t blend_voxel_rows(TsdfBlock& block, const BlockUpdate& frame,
                                                   const BlockProjection& projection) {
   const auto width = static_cast<std::int32_t>(frame.width);
@@ -203,18 +238,18 @@ MESHFLOW_AVX2_CLONES std::size_t blend_voxel_rows(TsdfBlock& block, const BlockU
     const Ints8 pixel = v * width + u;
     // Gathered in every lane (lanes left out read pixel 0 and their own voxels: in bounds),
     // without branches.
-    Floats8 d, band;
-    MESHFLOW_GATHER_PAIRS(frame.pixels, pixel, d, band);  // depth 0 when invalid
+    Floats8 d, band, slope_u{}, slope_v{};
+    if (frame.slopes != nullptr)
+      MESHFLOW_GATHER_RECORDS(frame.slopes, pixel, d, band, slope_u, slope_v);
+    else
+      MESHFLOW_GATHER_PAIRS(frame.pixels, pixel, d, band);  // depth 0 when invalid
     valid &= d > 0.0f;
     // The band observed voxels take: the least band or the noise allowance at this depth.
     const Floats8 noise = frame.noise_band_per_depth2 * d * d;
     const Floats8 held = noise < least ? least : noise;
-    if (frame.slopes != nullptr) {
-      Floats8 slope_u, slope_v;
-      MESHFLOW_GATHER_PAIRS(frame.slopes, pixel, slope_u, slope_v);
+    if (frame.slopes != nullptr)
       d = d + (slope_u * (uf - __builtin_convertvector(u, Floats8)) +
                slope_v * (vf - __builtin_convertvector(v, Floats8)));
-    }
     const Floats8 sdf = d - pz;
     valid &= ~(sdf < -band);  // hidden behind the surface: unknown
     if (!any_lane(valid)) continue;
@@ -283,6 +318,7 @@ MESHFLOW_AVX2_CLONES std::size_t blend_voxel_rows(TsdfBlock& block, const BlockU
   return count;
 }
 
+#undef MESHFLOW_GATHER_RECORDS
 #undef MESHFLOW_GATHER_PAIRS
 
 }  // namespace

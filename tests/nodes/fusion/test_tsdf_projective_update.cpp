@@ -38,8 +38,8 @@ std::size_t update_block_voxel_by_voxel(TsdfBlock& block, const BlockUpdate& fra
     const float noise = frame.noise_band_per_depth2 * d * d;
     const float held = noise < least ? least : noise;
     if (frame.slopes != nullptr)
-      d += frame.slopes[2 * pixel] * (uf - static_cast<float>(u)) +
-           frame.slopes[2 * pixel + 1] * (vf - static_cast<float>(v));
+      d += frame.slopes[4 * pixel + 2] * (uf - static_cast<float>(u)) +
+           frame.slopes[4 * pixel + 3] * (vf - static_cast<float>(v));
     const float sdf = d - pz;
     if (sdf < -frame.pixels[2 * pixel + 1]) continue;
     TsdfVoxel& vox = block.voxels[i];
@@ -94,7 +94,7 @@ TEST(TsdfProjectiveUpdate, BlendsEightVoxelsExactlyAsOneAtATime) {
   k.fx = k.fy = 50.0f;
   k.cx = 31.5f;
   k.cy = 23.5f;
-  std::vector<float> pixels(2 * width * height), slopes(2 * width * height);
+  std::vector<float> pixels(2 * width * height), slopes(4 * width * height);
   Image color(height, width, PixelFormat::RGB8);
   for (int v = 0; v < height; ++v)
     for (int u = 0; u < width; ++u) {
@@ -102,8 +102,10 @@ TEST(TsdfProjectiveUpdate, BlendsEightVoxelsExactlyAsOneAtATime) {
       const bool hole = unit(rng) < 0.1f;
       pixels[2 * p] = hole ? 0.0f : 0.3f + 0.4f * unit(rng) + 0.002f * static_cast<float>(u);
       pixels[2 * p + 1] = hole ? 0.0f : 0.02f + 0.02f * unit(rng);
-      slopes[2 * p] = hole ? 0.0f : 0.02f * (unit(rng) - 0.5f);
-      slopes[2 * p + 1] = hole ? 0.0f : 0.02f * (unit(rng) - 0.5f);
+      slopes[4 * p] = pixels[2 * p];  // depth_slopes()' records: depth, band, du, dv
+      slopes[4 * p + 1] = pixels[2 * p + 1];
+      slopes[4 * p + 2] = hole ? 0.0f : 0.02f * (unit(rng) - 0.5f);
+      slopes[4 * p + 3] = hole ? 0.0f : 0.02f * (unit(rng) - 0.5f);
       color.at<Rgb8>(v, u) =
           Rgb8{static_cast<std::uint8_t>(rng() & 255), static_cast<std::uint8_t>(rng() & 255),
                static_cast<std::uint8_t>(rng() & 255)};
@@ -189,7 +191,8 @@ TEST(TsdfProjectiveUpdate, FusesTheColourOfTheLastPixelAndOfOnePixelImages) {
 }
 
 // depth_slopes() (eight pixels at a time) against the rule one pixel at a time, on rows that are
-// no multiple of eight pixels, with holes and depth edges.
+// no multiple of eight pixels, with holes and depth edges: each record is the pixel's depth and
+// band and the oracle's slopes, bit for bit.
 TEST(TsdfProjectiveUpdate, DepthSlopesMatchThePixelByPixelRule) {
   std::mt19937 rng(5);
   std::uniform_real_distribution<float> unit(0.0f, 1.0f);
@@ -198,12 +201,12 @@ TEST(TsdfProjectiveUpdate, DepthSlopesMatchThePixelByPixelRule) {
     for (std::size_t p = 0; p < pixels.size() / 2; ++p) {
       const float r = unit(rng);
       pixels[2 * p] = r < 0.15f ? 0.0f : (r < 0.3f ? 2.0f : 1.0f) + 0.01f * unit(rng);
-      pixels[2 * p + 1] = 0.02f;
+      pixels[2 * p + 1] = 0.01f + 0.02f * unit(rng);
     }
     const float one_surface = 0.03f;
     std::vector<float> slopes;
     depth_slopes(pixels, width, height, one_surface, slopes);
-    ASSERT_EQ(slopes.size(), pixels.size());
+    ASSERT_EQ(slopes.size(), 2 * pixels.size());
     const auto depth = [&](int u, int v) {
       const bool inside = u >= 0 && v >= 0 && u < width && v < height;
       return inside ? pixels[2 * static_cast<std::size_t>(v * width + u)] : 0.0f;
@@ -219,7 +222,10 @@ TEST(TsdfProjectiveUpdate, DepthSlopesMatchThePixelByPixelRule) {
         const std::size_t p = static_cast<std::size_t>(v * width + u);
         const float du = d > 0.0f ? slope(depth(u - 1, v), d, depth(u + 1, v)) : 0.0f;
         const float dv = d > 0.0f ? slope(depth(u, v - 1), d, depth(u, v + 1)) : 0.0f;
-        EXPECT_TRUE(voxel_same_bits(slopes[2 * p], du) && voxel_same_bits(slopes[2 * p + 1], dv))
+        EXPECT_TRUE(voxel_same_bits(slopes[4 * p], pixels[2 * p]) &&
+                    voxel_same_bits(slopes[4 * p + 1], pixels[2 * p + 1]) &&
+                    voxel_same_bits(slopes[4 * p + 2], du) &&
+                    voxel_same_bits(slopes[4 * p + 3], dv))
             << "pixel (" << u << ", " << v << ")";
       }
   }

@@ -55,16 +55,17 @@ using simd::Floats8;
 using simd::Ints8;
 
 // Eight consecutive pixels of a row: their depth (0 = invalid or past the row's end), the
-// blocks lo..hi (per axis) of the box around each one's ray segment, and whether that box lies
-// inside the previous pixel's, a valid one's (that pixel left the last box emitted around its
-// own, so this one adds nothing).
+// blocks lo..hi (per axis) of the box around each one's ray segment, and those whose box does
+// not lie inside the previous pixel's, a valid one's (that pixel left the last box emitted
+// around its own, so a box inside it adds nothing).
 struct EightPixels {
   float ray[3] = {};            ///< the first pixel's world ray (voxel units); then the next's
   float previous_depth = 0.0f;  ///< of the pixel before the first (0: none or invalid)
   alignas(32) float depth[8] = {};
   alignas(32) std::int32_t lo[3][8] = {};  ///< on entry, lane 7: the previous pixel's box
   alignas(32) std::int32_t hi[3][8] = {};
-  alignas(32) std::int32_t inside_previous[8] = {};  ///< all ones or zero
+  unsigned valid = 0;  ///< bit j: pixel j is valid
+  unsigned open = 0;   ///< bit j: pixel j is valid and its box not inside the previous pixel's
 };
 
 // floor_to_int() lane by lane.
@@ -79,10 +80,10 @@ struct EightPixels {
 // (touched_blocks_of_row()'s per-pixel arithmetic, each lane exactly the scalar operations:
 // IEEE products and sums, no FMA contraction; lane j's ray is p.ray plus `step` added j times,
 // one sum after another); lanes of invalid pixels are filled but meaningless. `origin`: the
-// camera centre in voxel units. Advances p.ray past the eight pixels; returns how many are valid.
-MESHFLOW_AVX2_CLONES int boxes_of_eight(const Eigen::Vector3f& origin, const Eigen::Vector3f& step,
-                                        float truncation, const float* pixels, int n,
-                                        EightPixels& p) {
+// camera centre in voxel units. Advances p.ray past the eight pixels.
+MESHFLOW_AVX2_CLONES void boxes_of_eight(const Eigen::Vector3f& origin, const Eigen::Vector3f& step,
+                                         float truncation, const float* pixels, int n,
+                                         EightPixels& p) {
   constexpr float kFloorLimit = 1073741824.0f;  // floor_to_int()'s 2^30
   const Floats8 limit = Floats8{} + kFloorLimit;
   float padded[16] = {};
@@ -122,12 +123,14 @@ MESHFLOW_AVX2_CLONES int boxes_of_eight(const Eigen::Vector3f& origin, const Eig
     __builtin_memcpy(p.lo[axis], &blo, sizeof blo);
     __builtin_memcpy(p.hi[axis], &bhi, sizeof bhi);
   }
-  __builtin_memcpy(p.inside_previous, &inside, sizeof inside);
   __builtin_memcpy(p.depth, &d, sizeof d);
-  const Ints8 valid = d > 0.0f;
-  int count = 0;
-  for (int j = 0; j < 8; ++j) count -= valid[j];
-  return count;
+  const Ints8 valid = d > 0.0f, open = valid & ~inside;
+  p.valid = 0;
+  p.open = 0;
+  for (int j = 0; j < 8; ++j) {
+    p.valid += static_cast<unsigned>(valid[j] & 1) << j;
+    p.open += static_cast<unsigned>(open[j] & 1) << j;
+  }
 }
 
 #undef MESHFLOW_FLOOR_TO_INT8
@@ -161,11 +164,10 @@ void touched_blocks_of_row(int width, int v, const BandGeometry& band,
   for (int u0 = 0; u0 < width; u0 += 8) {
     const int n = std::min(8, width - u0);
     eight.previous_depth = eight.depth[7];  // 0 before the first pixel
-    const int valid = boxes_of_eight(origin, ray_step, truncation, row + 2 * u0, n, eight);
-    if (valid == 0) continue;
-    pixels += static_cast<std::size_t>(valid);
-    for (int j = 0; j < n; ++j) {
-      if (!(eight.depth[j] > 0.0f) || eight.inside_previous[j] != 0) continue;
+    boxes_of_eight(origin, ray_step, truncation, row + 2 * u0, n, eight);
+    pixels += static_cast<std::size_t>(__builtin_popcount(eight.valid));
+    for (unsigned open = eight.open; open != 0; open &= open - 1) {
+      const int j = __builtin_ctz(open);
       const Eigen::Vector3i blo(eight.lo[0][j], eight.lo[1][j], eight.lo[2][j]);
       const Eigen::Vector3i bhi(eight.hi[0][j], eight.hi[1][j], eight.hi[2][j]);
       if (inside(blo, last_lo, last_hi) && inside(bhi, last_lo, last_hi)) continue;

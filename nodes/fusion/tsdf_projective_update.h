@@ -20,8 +20,9 @@ constexpr float kSlopeFootprints = 6.0f;
 /// The depth slope at each pixel, in metres per pixel along u and along v: the central
 /// difference where both neighbours are valid and within `one_surface` x depth of the pixel (one
 /// surface), else the one-sided difference to a neighbour that is, else 0. A voxel reads its
-/// nearest pixel's depth corrected by the slope to its exact projection. Layout: (du, dv) per
-/// pixel. Parallel over rows; O(pixels).
+/// nearest pixel's depth corrected by the slope to its exact projection. `pixels`: (depth,
+/// band) per pixel (band_pixels()). Layout: (depth, band, du, dv) per pixel, `pixels`' pair and
+/// its slopes, so that a voxel reads all four at once. Parallel over rows; O(pixels).
 void depth_slopes(const std::vector<float>& pixels, int width, int height, float one_surface,
                   std::vector<float>& slopes);
 
@@ -29,8 +30,10 @@ void depth_slopes(const std::vector<float>& pixels, int width, int height, float
 struct BlockUpdate {
   const float* pixels;  ///< per pixel: depth, band behind it (metres; depth 0 = invalid)
   int width, height;    ///< of the depth image
-  const float* slopes;  ///< per pixel: depth slopes along u and v (depth_slopes()), or null
-  const Image* color;   ///< RGB8 of the depth's size, or null: no colour fused
+  /// per pixel: depth, band (as `pixels`) and depth slopes along u and v (depth_slopes()), or
+  /// null: no slopes
+  const float* slopes;
+  const Image* color;  ///< RGB8 of the depth's size, or null: no colour fused
   const PinholeIntrinsics& intrinsics;
   Eigen::Isometry3f T_camera_world;
   const TsdfConfig& config;

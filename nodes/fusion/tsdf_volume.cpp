@@ -17,30 +17,31 @@
 #include "runtime/error.h"
 #include "runtime/parallel.h"
 #include "runtime/radix_sort.h"
+#include "runtime/simd.h"
 
 namespace meshflow {
 namespace {
 
-// The last few distinct keys a row emitted: neighbouring pixels touch the same handful of
-// blocks, so checking these few drops almost every repeat before the global sort.
+// The keys a row emitted lately, one slot per block coordinates modulo 4 on each axis (direct
+// mapped): neighbouring pixels touch the same handful of adjacent blocks, which never share a
+// slot, so one comparison drops almost every repeat before the global sort (a repeat that gets
+// through is removed there).
 class RecentKeys {
  public:
-  bool seen_or_add(VoxelKey key) {
-    for (VoxelKey k : keys_) {
-      if (k == key) return true;
-    }
-    keys_[next_] = key;
-    next_ = (next_ + 1) % keys_.size();
+  bool seen_or_add(const Eigen::Vector3i& block, VoxelKey key) {
+    VoxelKey& slot = keys_[static_cast<std::size_t>((block.x() & 3) | (block.y() & 3) << 2 |
+                                                    (block.z() & 3) << 4)];
+    if (slot == key) return true;
+    slot = key;
     return false;
   }
 
  private:
-  std::array<VoxelKey, 16> keys_ = [] {
-    std::array<VoxelKey, 16> a;
+  std::array<VoxelKey, 64> keys_ = [] {
+    std::array<VoxelKey, 64> a;
     a.fill(~VoxelKey{0});  // never a packed key
     return a;
   }();
-  std::size_t next_ = 0;
 };
 
 // What the blocks a frame touches depend on besides its pose.
@@ -50,11 +51,95 @@ struct BandGeometry {
   const float* pixels;  ///< per pixel: depth, band behind it (metres; depth 0 = invalid)
 };
 
+using simd::Floats8;
+using simd::Ints8;
+
+// Eight consecutive pixels of a row: their depth (0 = invalid or past the row's end), the
+// blocks lo..hi (per axis) of the box around each one's ray segment, and those whose box does
+// not lie inside the previous pixel's, a valid one's (that pixel left the last box emitted
+// around its own, so a box inside it adds nothing).
+struct EightPixels {
+  float ray[3] = {};            ///< the first pixel's world ray (voxel units); then the next's
+  float previous_depth = 0.0f;  ///< of the pixel before the first (0: none or invalid)
+  alignas(32) float depth[8] = {};
+  alignas(32) std::int32_t lo[3][8] = {};  ///< on entry, lane 7: the previous pixel's box
+  alignas(32) std::int32_t hi[3][8] = {};
+  unsigned valid = 0;  ///< bit j: pixel j is valid
+  unsigned open = 0;   ///< bit j: pixel j is valid and its box not inside the previous pixel's
+};
+
+// floor_to_int() lane by lane.
+#define MESHFLOW_FLOOR_TO_INT8(x, out)                                                   \
+  do {                                                                                   \
+    const Floats8 c = (x) >= -kFloorLimit ? ((x) <= kFloorLimit ? (x) : limit) : -limit; \
+    const Ints8 i = __builtin_convertvector(c, Ints8);                                   \
+    (out) = i + (c < __builtin_convertvector(i, Floats8));                               \
+  } while (false)
+
+// The block boxes of the `n` <= 8 pixels whose (depth, band) start at `pixels`
+// (touched_blocks_of_row()'s per-pixel arithmetic, each lane exactly the scalar operations:
+// IEEE products and sums, no FMA contraction; lane j's ray is p.ray plus `step` added j times,
+// one sum after another); lanes of invalid pixels are filled but meaningless. `origin`: the
+// camera centre in voxel units. Advances p.ray past the eight pixels.
+MESHFLOW_AVX2_CLONES void boxes_of_eight(const Eigen::Vector3f& origin, const Eigen::Vector3f& step,
+                                         float truncation, const float* pixels, int n,
+                                         EightPixels& p) {
+  constexpr float kFloorLimit = 1073741824.0f;  // floor_to_int()'s 2^30
+  const Floats8 limit = Floats8{} + kFloorLimit;
+  float padded[16] = {};
+  const float* source = pixels;
+  if (n < 8) {
+    for (int j = 0; j < 2 * n; ++j) padded[j] = pixels[j];
+    source = padded;
+  }
+  Floats8 first, second;
+  __builtin_memcpy(&first, source, sizeof first);
+  __builtin_memcpy(&second, source + 8, sizeof second);
+  const Floats8 d = __builtin_shufflevector(first, second, 0, 2, 4, 6, 8, 10, 12, 14);
+  const Floats8 band = __builtin_shufflevector(first, second, 1, 3, 5, 7, 9, 11, 13, 15);
+  const Floats8 ahead = d - truncation;
+  const Floats8 near = ahead < 0.0f ? Floats8{} : ahead;  // std::max(d - truncation, 0)
+  const Floats8 far = d + band;
+  const Floats8 previous_d =
+      __builtin_shufflevector(Floats8{} + p.previous_depth, d, 0, 8, 9, 10, 11, 12, 13, 14);
+  Ints8 inside = previous_d > 0.0f;
+  const Ints8 lane = {0, 1, 2, 3, 4, 5, 6, 7};
+  for (int axis = 0; axis < 3; ++axis) {
+    Floats8 ray = Floats8{} + p.ray[axis];
+    for (int k = 1; k < 8; ++k) ray = lane >= k ? ray + step[axis] : ray;
+    p.ray[axis] = ray[7] + step[axis];
+    const Floats8 a = origin[axis] + ray * near, b = origin[axis] + ray * far;
+    const Floats8 lo = b < a ? b : a, hi = a < b ? b : a;  // std::min, std::max
+    Ints8 vlo, vhi;
+    MESHFLOW_FLOOR_TO_INT8(lo, vlo);
+    MESHFLOW_FLOOR_TO_INT8(hi, vhi);
+    const Ints8 blo = vlo >> 3, bhi = (vhi + 1) >> 3;  // tsdf_block_of_voxel()
+    Ints8 before_lo, before_hi;                        // the previous pixel's
+    __builtin_memcpy(&before_lo, p.lo[axis], sizeof before_lo);
+    __builtin_memcpy(&before_hi, p.hi[axis], sizeof before_hi);
+    before_lo = __builtin_shufflevector(before_lo, blo, 7, 8, 9, 10, 11, 12, 13, 14);
+    before_hi = __builtin_shufflevector(before_hi, bhi, 7, 8, 9, 10, 11, 12, 13, 14);
+    inside &= (blo >= before_lo) & (bhi <= before_hi);
+    __builtin_memcpy(p.lo[axis], &blo, sizeof blo);
+    __builtin_memcpy(p.hi[axis], &bhi, sizeof bhi);
+  }
+  __builtin_memcpy(p.depth, &d, sizeof d);
+  const Ints8 valid = d > 0.0f, open = valid & ~inside;
+  p.valid = 0;
+  p.open = 0;
+  for (int j = 0; j < 8; ++j) {
+    p.valid += static_cast<unsigned>(valid[j] & 1) << j;
+    p.open += static_cast<unsigned>(open[j] & 1) << j;
+  }
+}
+
+#undef MESHFLOW_FLOOR_TO_INT8
+
 // Keys of the blocks whose voxels lie within the band of row v's valid pixels: for each pixel,
 // every block overlapping the box around the ray segment from the truncation in front of the
 // depth to its band behind it (band_pixels()). Keys inside the previous pixel's box or emitted
 // recently are skipped; the caller sorts and dedupes the rest. The ray is advanced
-// incrementally along the row (in voxel units).
+// incrementally along the row (in voxel units); the boxes are found eight pixels at a time.
 void touched_blocks_of_row(int width, int v, const BandGeometry& band,
                            const Eigen::Isometry3f& T_world_camera, std::vector<VoxelKey>& out,
                            std::size_t& pixels) {
@@ -68,39 +153,39 @@ void touched_blocks_of_row(int width, int v, const BandGeometry& band,
   const Eigen::Matrix3f rotation = T_world_camera.linear() * inv_voxel;
   const Eigen::Vector3f origin = T_world_camera.translation() * inv_voxel;
   const float ry = (static_cast<float>(v) - k.cy) / k.fy;
-  const Eigen::Vector3f ray_step = rotation.col(0) / k.fx;                   // per pixel along u
-  Eigen::Vector3f ray = rotation * Eigen::Vector3f(-k.cx / k.fx, ry, 1.0f);  // world ray at u = 0
+  const Eigen::Vector3f ray_step = rotation.col(0) / k.fx;  // per pixel along u
+  const Eigen::Vector3f ray = rotation * Eigen::Vector3f(-k.cx / k.fx, ry, 1.0f);  // at u = 0
   auto inside = [](const Eigen::Vector3i& p, const Eigen::Vector3i& lo, const Eigen::Vector3i& hi) {
     return p.x() >= lo.x() && p.y() >= lo.y() && p.z() >= lo.z() && p.x() <= hi.x() &&
            p.y() <= hi.y() && p.z() <= hi.z();
   };
-  for (int u = 0; u < width; ++u, ray += ray_step) {
-    const float d = row[2 * u];  // 0 when invalid
-    if (!(d > 0.0f)) continue;
-    ++pixels;
-    const Eigen::Vector3f near_point = origin + ray * std::max(d - truncation, 0.0f);
-    const Eigen::Vector3f far_point = origin + ray * (d + row[2 * u + 1]);
-    const Eigen::Vector3f lo = near_point.cwiseMin(far_point);
-    const Eigen::Vector3f hi = near_point.cwiseMax(far_point);
-    const Eigen::Vector3i vlo(floor_to_int(lo.x()), floor_to_int(lo.y()), floor_to_int(lo.z()));
-    const Eigen::Vector3i vhi(floor_to_int(hi.x()) + 1, floor_to_int(hi.y()) + 1,
-                              floor_to_int(hi.z()) + 1);
-    const Eigen::Vector3i blo = tsdf_block_of_voxel(vlo), bhi = tsdf_block_of_voxel(vhi);
-    if (inside(blo, last_lo, last_hi) && inside(bhi, last_lo, last_hi)) continue;
-    if (!tsdf_block_in_range(blo) || !tsdf_block_in_range(bhi)) {
-      throw Error("tsdf", "pixel (" + std::to_string(u) + ", " + std::to_string(v) + ")",
-                  "maps outside the volume's range (pose or depth far too large)");
+  EightPixels eight;
+  for (int axis = 0; axis < 3; ++axis) eight.ray[axis] = ray[axis];
+  for (int u0 = 0; u0 < width; u0 += 8) {
+    const int n = std::min(8, width - u0);
+    eight.previous_depth = eight.depth[7];  // 0 before the first pixel
+    boxes_of_eight(origin, ray_step, truncation, row + 2 * u0, n, eight);
+    pixels += static_cast<std::size_t>(__builtin_popcount(eight.valid));
+    for (unsigned open = eight.open; open != 0; open &= open - 1) {
+      const int j = __builtin_ctz(open);
+      const Eigen::Vector3i blo(eight.lo[0][j], eight.lo[1][j], eight.lo[2][j]);
+      const Eigen::Vector3i bhi(eight.hi[0][j], eight.hi[1][j], eight.hi[2][j]);
+      if (inside(blo, last_lo, last_hi) && inside(bhi, last_lo, last_hi)) continue;
+      if (!tsdf_block_in_range(blo) || !tsdf_block_in_range(bhi)) {
+        throw Error("tsdf", "pixel (" + std::to_string(u0 + j) + ", " + std::to_string(v) + ")",
+                    "maps outside the volume's range (pose or depth far too large)");
+      }
+      for (int z = blo.z(); z <= bhi.z(); ++z)
+        for (int y = blo.y(); y <= bhi.y(); ++y)
+          for (int x = blo.x(); x <= bhi.x(); ++x) {
+            const Eigen::Vector3i b(x, y, z);
+            if (inside(b, last_lo, last_hi)) continue;
+            const VoxelKey key = pack_key(b);
+            if (!recent.seen_or_add(b, key)) out.push_back(key);
+          }
+      last_lo = blo;
+      last_hi = bhi;
     }
-    for (int z = blo.z(); z <= bhi.z(); ++z)
-      for (int y = blo.y(); y <= bhi.y(); ++y)
-        for (int x = blo.x(); x <= bhi.x(); ++x) {
-          const Eigen::Vector3i b(x, y, z);
-          if (inside(b, last_lo, last_hi)) continue;
-          const VoxelKey key = pack_key(b);
-          if (!recent.seen_or_add(key)) out.push_back(key);
-        }
-    last_lo = blo;
-    last_hi = bhi;
   }
 }
 

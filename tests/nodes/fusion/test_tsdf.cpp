@@ -3,6 +3,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -12,6 +13,8 @@
 #include <unordered_map>
 #include <utility>
 
+#include "nodes/depth/depth_noise.h"
+#include "nodes/fusion/tsdf_band.h"
 #include "nodes/fusion/tsdf_map_file.h"
 #include "nodes/fusion/tsdf_mesher.h"
 #include "nodes/fusion/tsdf_volume.h"
@@ -156,6 +159,53 @@ TEST(Tsdf, BlocksStayInTheTruncationBand) {
         << volume.block(i).coords.transpose();
   }
   EXPECT_GT(volume.memory_bytes(), volume.block_count() * sizeof(TsdfBlock) - 1);
+}
+
+// The blocks a frame allocates in an empty map are exactly those a pixel-by-pixel walk finds:
+// every block overlapping the box around each valid pixel's ray segment, from the truncation in
+// front of its depth to its band behind it (band_pixels()), the ray advanced along the row as
+// the integrator advances it; at the test's voxel and at one that gives many boxes per block.
+TEST(Tsdf, AllocatesExactlyTheBlocksOfEveryPixelsBand) {
+  const std::vector<DepthFrame> frames = room_frames(3);
+  for (const float voxel : {kTsdfVoxel, 0.01f})
+    for (const DepthFrame& frame : frames) {
+      TsdfConfig config;
+      config.voxel_size = voxel;
+      TsdfVolume volume(config);
+      volume.integrate(frame);
+      std::set<VoxelKey> got;
+      for (std::size_t i = 0; i < volume.block_count(); ++i)
+        got.insert(pack_key(volume.block(i).coords));
+      const Image depth = depth_in_metres(frame);
+      std::vector<float> pixels;
+      band_pixels(depth, frame.intrinsics, config, estimate_noise_per_depth2(depth), pixels);
+      const PinholeIntrinsics& k = frame.intrinsics;
+      const Eigen::Matrix3f rotation = frame.T_world_camera.linear() * (1.0f / voxel);
+      const Eigen::Vector3f origin = frame.T_world_camera.translation() * (1.0f / voxel);
+      std::set<VoxelKey> want;
+      for (int v = 0; v < depth.rows(); ++v) {
+        const float ry = (static_cast<float>(v) - k.cy) / k.fy;
+        const Eigen::Vector3f step = rotation.col(0) / k.fx;
+        Eigen::Vector3f ray = rotation * Eigen::Vector3f(-k.cx / k.fx, ry, 1.0f);
+        for (int u = 0; u < depth.cols(); ++u, ray += step) {
+          const std::size_t p = static_cast<std::size_t>(v * depth.cols() + u);
+          const float d = pixels[2 * p];
+          if (!(d > 0.0f)) continue;
+          const Eigen::Vector3f a = origin + ray * std::max(d - config.truncation(), 0.0f);
+          const Eigen::Vector3f b = origin + ray * (d + pixels[2 * p + 1]);
+          Eigen::Vector3i lo, hi;
+          for (int axis = 0; axis < 3; ++axis) {
+            lo[axis] = static_cast<int>(std::floor(std::min(a[axis], b[axis]))) >> 3;
+            hi[axis] = (static_cast<int>(std::floor(std::max(a[axis], b[axis]))) + 1) >> 3;
+          }
+          for (int z = lo.z(); z <= hi.z(); ++z)
+            for (int y = lo.y(); y <= hi.y(); ++y)
+              for (int x = lo.x(); x <= hi.x(); ++x) want.insert(pack_key({x, y, z}));
+        }
+      }
+      EXPECT_GT(want.size(), 10u);
+      EXPECT_EQ(got, want) << "voxel " << voxel;
+    }
 }
 
 TEST(Tsdf, SameMapWithOneAndTwoThreads) {

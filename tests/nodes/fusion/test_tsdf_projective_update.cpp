@@ -3,8 +3,10 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstring>
 #include <random>
+#include <utility>
 #include <vector>
 
 #include "nodes/fusion/tsdf_band.h"
@@ -36,8 +38,8 @@ std::size_t update_block_voxel_by_voxel(TsdfBlock& block, const BlockUpdate& fra
     const float noise = frame.noise_band_per_depth2 * d * d;
     const float held = noise < least ? least : noise;
     if (frame.slopes != nullptr)
-      d += frame.slopes[2 * pixel] * (uf - static_cast<float>(u)) +
-           frame.slopes[2 * pixel + 1] * (vf - static_cast<float>(v));
+      d += frame.slopes[4 * pixel + 2] * (uf - static_cast<float>(u)) +
+           frame.slopes[4 * pixel + 3] * (vf - static_cast<float>(v));
     const float sdf = d - pz;
     if (sdf < -frame.pixels[2 * pixel + 1]) continue;
     TsdfVoxel& vox = block.voxels[i];
@@ -63,6 +65,21 @@ std::size_t update_block_voxel_by_voxel(TsdfBlock& block, const BlockUpdate& fra
 
 bool voxel_same_bits(float a, float b) { return std::memcmp(&a, &b, sizeof a) == 0; }
 
+// Updates `block` with update_block() and a copy with the oracle: same count, same bits.
+// Returns the count.
+std::size_t expect_oracle_update(TsdfBlock& block, const BlockUpdate& frame) {
+  TsdfBlock expected = block;
+  const std::size_t want = update_block_voxel_by_voxel(expected, frame);
+  EXPECT_EQ(update_block(block, frame), want);
+  for (std::size_t i = 0; i < kTsdfBlockVoxels; ++i) {
+    const TsdfVoxel &a = block.voxels[i], &b = expected.voxels[i];
+    EXPECT_TRUE(voxel_same_bits(a.distance, b.distance) && voxel_same_bits(a.weight, b.weight) &&
+                a.color == b.color)
+        << "block (" << block.coords.transpose() << ") voxel " << i;
+  }
+  return want;
+}
+
 // Random frames (depth with holes, steep slopes, colour) seen by blocks all around the camera
 // (behind it, across the image's edges, in front and behind the surface) whose voxels hold
 // random earlier states: update_block() gives each voxel exactly the oracle's bits, with and
@@ -77,7 +94,7 @@ TEST(TsdfProjectiveUpdate, BlendsEightVoxelsExactlyAsOneAtATime) {
   k.fx = k.fy = 50.0f;
   k.cx = 31.5f;
   k.cy = 23.5f;
-  std::vector<float> pixels(2 * width * height), slopes(2 * width * height);
+  std::vector<float> pixels(2 * width * height), slopes(4 * width * height);
   Image color(height, width, PixelFormat::RGB8);
   for (int v = 0; v < height; ++v)
     for (int u = 0; u < width; ++u) {
@@ -85,8 +102,10 @@ TEST(TsdfProjectiveUpdate, BlendsEightVoxelsExactlyAsOneAtATime) {
       const bool hole = unit(rng) < 0.1f;
       pixels[2 * p] = hole ? 0.0f : 0.3f + 0.4f * unit(rng) + 0.002f * static_cast<float>(u);
       pixels[2 * p + 1] = hole ? 0.0f : 0.02f + 0.02f * unit(rng);
-      slopes[2 * p] = hole ? 0.0f : 0.02f * (unit(rng) - 0.5f);
-      slopes[2 * p + 1] = hole ? 0.0f : 0.02f * (unit(rng) - 0.5f);
+      slopes[4 * p] = pixels[2 * p];  // depth_slopes()' records: depth, band, du, dv
+      slopes[4 * p + 1] = pixels[2 * p + 1];
+      slopes[4 * p + 2] = hole ? 0.0f : 0.02f * (unit(rng) - 0.5f);
+      slopes[4 * p + 3] = hole ? 0.0f : 0.02f * (unit(rng) - 0.5f);
       color.at<Rgb8>(v, u) =
           Rgb8{static_cast<std::uint8_t>(rng() & 255), static_cast<std::uint8_t>(rng() & 255),
                static_cast<std::uint8_t>(rng() & 255)};
@@ -124,19 +143,92 @@ TEST(TsdfProjectiveUpdate, BlendsEightVoxelsExactlyAsOneAtATime) {
                                  static_cast<std::uint8_t>(rng() & 255),
                                  static_cast<std::uint8_t>(rng() & 255)};
               }
-              TsdfBlock expected = block;
-              const std::size_t want = update_block_voxel_by_voxel(expected, frame);
-              ASSERT_EQ(update_block(block, frame), want);
-              updated += want;
-              for (std::size_t i = 0; i < kTsdfBlockVoxels; ++i) {
-                const TsdfVoxel &a = block.voxels[i], &b = expected.voxels[i];
-                ASSERT_TRUE(voxel_same_bits(a.distance, b.distance) &&
-                            voxel_same_bits(a.weight, b.weight) && a.color == b.color)
-                    << "block (" << x << ", " << y << ", " << z << ") voxel " << i;
-              }
+              updated += expect_oracle_update(block, frame);
             }
       }
   EXPECT_GT(updated, 20000u);  // the blocks reach the band, not only empty space
+}
+
+// Images of one, two and six pixels with colour, every voxel of two blocks landing on them: the
+// colour of the last pixel (read without passing the image's end) and of a one-pixel image
+// blend as the oracle's.
+TEST(TsdfProjectiveUpdate, FusesTheColourOfTheLastPixelAndOfOnePixelImages) {
+  for (const auto& [width, height] : {std::pair{1, 1}, std::pair{2, 1}, std::pair{3, 2}}) {
+    PinholeIntrinsics k;
+    k.width = width;
+    k.height = height;
+    k.fx = k.fy = 0.5f;  // a block 0.4 m away spans a tenth of a pixel each side of the centre
+    k.cx = 0.5f * static_cast<float>(width - 1);
+    k.cy = 0.5f * static_cast<float>(height - 1);
+    const auto n = static_cast<std::size_t>(width * height);
+    std::vector<float> pixels(2 * n);
+    Image color(height, width, PixelFormat::RGB8);
+    for (std::size_t p = 0; p < n; ++p) {
+      pixels[2 * p] = 0.45f;
+      pixels[2 * p + 1] = 0.02f;
+      const auto c = static_cast<std::uint8_t>(40 * p + 17);
+      color.data()[3 * p] = c;
+      color.data()[3 * p + 1] = static_cast<std::uint8_t>(c + 100);
+      color.data()[3 * p + 2] = static_cast<std::uint8_t>(c + 200);
+    }
+    TsdfConfig config;
+    config.voxel_size = 0.01f;
+    const BlockUpdate frame{
+        pixels.data(), width, height, nullptr, &color, k, Eigen::Isometry3f::Identity(),
+        config,        0.0f};
+    std::size_t updated = 0;
+    for (const int x : {-1, 0}) {
+      TsdfBlock block;
+      block.coords = Eigen::Vector3i(x, -1, 5);  // z 0.40 .. 0.47 m: sdf -0.02 .. 0.05 m
+      for (std::size_t i = 0; i < kTsdfBlockVoxels; ++i) {
+        block.voxels[i].weight = static_cast<float>(i % 3);
+        block.voxels[i].color = Rgb8{static_cast<std::uint8_t>(i), 9, 250};
+      }
+      updated += expect_oracle_update(block, frame);
+    }
+    EXPECT_EQ(updated, 2 * kTsdfBlockVoxels) << width << " x " << height;
+  }
+}
+
+// depth_slopes() (eight pixels at a time) against the rule one pixel at a time, on rows that are
+// no multiple of eight pixels, with holes and depth edges: each record is the pixel's depth and
+// band and the oracle's slopes, bit for bit.
+TEST(TsdfProjectiveUpdate, DepthSlopesMatchThePixelByPixelRule) {
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<float> unit(0.0f, 1.0f);
+  for (const auto& [width, height] : {std::pair{1, 1}, std::pair{9, 2}, std::pair{37, 5}}) {
+    std::vector<float> pixels(2 * static_cast<std::size_t>(width * height));
+    for (std::size_t p = 0; p < pixels.size() / 2; ++p) {
+      const float r = unit(rng);
+      pixels[2 * p] = r < 0.15f ? 0.0f : (r < 0.3f ? 2.0f : 1.0f) + 0.01f * unit(rng);
+      pixels[2 * p + 1] = 0.01f + 0.02f * unit(rng);
+    }
+    const float one_surface = 0.03f;
+    std::vector<float> slopes;
+    depth_slopes(pixels, width, height, one_surface, slopes);
+    ASSERT_EQ(slopes.size(), 2 * pixels.size());
+    const auto depth = [&](int u, int v) {
+      const bool inside = u >= 0 && v >= 0 && u < width && v < height;
+      return inside ? pixels[2 * static_cast<std::size_t>(v * width + u)] : 0.0f;
+    };
+    const auto slope = [&](float before, float d, float after) {
+      const bool b = before > 0.0f && std::abs(before - d) <= one_surface * d;
+      const bool a = after > 0.0f && std::abs(after - d) <= one_surface * d;
+      return a && b ? 0.5f * (after - before) : a ? after - d : b ? d - before : 0.0f;
+    };
+    for (int v = 0; v < height; ++v)
+      for (int u = 0; u < width; ++u) {
+        const float d = depth(u, v);
+        const std::size_t p = static_cast<std::size_t>(v * width + u);
+        const float du = d > 0.0f ? slope(depth(u - 1, v), d, depth(u + 1, v)) : 0.0f;
+        const float dv = d > 0.0f ? slope(depth(u, v - 1), d, depth(u, v + 1)) : 0.0f;
+        EXPECT_TRUE(voxel_same_bits(slopes[4 * p], pixels[2 * p]) &&
+                    voxel_same_bits(slopes[4 * p + 1], pixels[2 * p + 1]) &&
+                    voxel_same_bits(slopes[4 * p + 2], du) &&
+                    voxel_same_bits(slopes[4 * p + 3], dv))
+            << "pixel (" << u << ", " << v << ")";
+      }
+  }
 }
 
 }  // namespace

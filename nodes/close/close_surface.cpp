@@ -406,43 +406,22 @@ std::vector<std::uint8_t> close_through_nodes(const Eigen::Vector3i& size,
   return through;
 }
 
-// The gradient fill holds a whole lattice's faces this many voxels further outside than the
-// margin puts them (3 + 2 = 5 voxels at the default margin): the potential then rises more
-// steeply near the faces, and a fill carried on past the data (the top's field down through a
-// box's inside) turns back sooner. Measured (filled e-3, seeds 1 / 33; faces at 3 / 4 / 5 / 6
-// voxels): box 12.5 / 6.4 / 5.4 / 9.2, chamfered cube 16.2 / 10.0 / 4.9 / 5.4, L-shape 11.3 /
-// 6.6 / 5.0 / 6.5, box with a hole 9.4 / 10.6 / 13.2 / 15.9, torus 2.0 / 2.1 / 3.5 / 4.4,
-// sphere 11.2 / 12.5 / 13.9 / 15.5 (seed 1); the three-view sphere orbit's largest deviation
-// 4.7 / 3.5 / 2.7 / 2.0 voxels.
-constexpr float kGradientFaceExtraVoxels = 2.0f;
-
-// The gradient fill's room past the data's box: on a side where the observed surface turns to
-// face it (a sphere's or a tube's unseen underside), the lattice grows by this fraction of
-// gradient_fill_reach()'s depth, the surface's closing by its own curvature, before the fill
-// solves; sides where it does not turn (a box's walls: the reach is infinite, or deeper than the
-// data is long on that axis) keep the margin. The fill's potential overshoots a cap whose faces
-// are far (the sphere scan's filled error, seed 33 / 1, by nodes grown below: 5: 5.2 / 5.2, 7:
-// 3.4 / 3.2, 8: 4.1 / 4.0, 10: 8.1 / 7.8, 13: 15.3 / 15.0e-3, none 13.9; its reach 12.2 / 12.6,
-// so 0.35 / 0.5 / 0.6 / 0.75 / 1 of it grow 5 / 7 / 8 / 10 / 13), so the face at half the
-// reach closes it best; the torus (reach 2.7 / 3.2 under its tube): 1 or 2 nodes: 1.8 / 1.8-2.4,
-// 3: 2.4 / 4.5, 4: 4.5, none 5.1 / 3.5.
-constexpr float kGradientReachFraction = 0.5f;
 // The observed nodes within this many nodes of the data's box on a side fit the reach.
 constexpr int kGradientReachWindow = 8;
 
 // Per side of `l` (a whole lattice with `margin` nodes between its faces and the data's box):
-// the nodes the gradient fill needs past the face (kGradientReachFraction of the reach, rounded
-// up; 0 where the surface does not turn within the data's length on that axis). O(nodes).
+// the nodes the gradient fill needs past the face (`fraction` of the reach, rounded up; 0 where
+// the surface does not turn within the data's length on that axis). O(nodes).
 std::array<int, 6> close_gradient_room(const DiffusionLattice& l,
                                        const std::vector<std::uint8_t>& observed, float voxel,
-                                       int margin) {
+                                       int margin, float fraction) {
   const std::array<float, 6> reach =
       gradient_fill_reach(l, observed, voxel, margin, kGradientReachWindow);
   std::array<int, 6> room{};
   for (std::size_t side = 0; side < 6; ++side) {
     const int length = l.size[static_cast<int>(side / 2)] - 2 * margin;
     if (reach[side] > 0.0f && reach[side] <= static_cast<float>(length))
-      room[side] = static_cast<int>(std::ceil(kGradientReachFraction * reach[side]));
+      room[side] = static_cast<int>(std::ceil(std::max(0.0f, fraction) * reach[side]));
   }
   return room;
 }
@@ -480,7 +459,7 @@ constexpr float kAutomaticMargin = 0.5f;
 // held-out count in `counts`; returns the gradient fill unless diffusion or the indicator has
 // an error below kAutomaticMargin of its own (then the lower, diffusion among equals). No
 // held-out node: the gradient fill (the default). The
-// gradient fill's faces are held at `gradient_faces` (kGradientFaceExtraVoxels).
+// gradient fill's faces are held at `gradient_faces` (CloseConfig::gradient_face_voxels).
 CloseFill close_choose_fill(const DiffusionLattice& l, const std::vector<std::uint8_t>& observed,
                             const std::vector<std::uint8_t>& through, float voxel, float stop,
                             float gradient_faces, const CloseConfig& config, CloseReport& counts) {
@@ -606,19 +585,21 @@ TileResult close_solve_tile(const CloseProblem& p, const Eigen::Vector3i& a,
   // gradient's potential need the whole surface). A fused map (no points) is diffused too: its
   // observed voxels fill the truncation band on both sides, and the double layer of its ragged
   // band's ends left small extra shells (CliClose.FusedAndMergedDepthSequencesCloseWatertight).
-  // The gradient fill never grows the lattice: a fill reaching the data's box there is the
-  // surface carrying on as it was heading, and a grown lattice let it carry on to the new faces
-  // (a box's unseen bottom 20 voxels deep).
+  // The gradient fill grows the lattice only before it solves, where the observed surface turns
+  // to close past the data's box (close_gradient_room), never after: a fill reaching the data's
+  // box there is the surface carrying on as it was heading, and a grown lattice let it carry on
+  // to the new faces (a box's unseen bottom 20 voxels deep).
   float grow_below = 0.0f;  // a free node on the data's box below this: the lattice is too small
   CloseFill method =
       p.coarse == nullptr && !p.cloud->empty() ? p.config->fill : CloseFill::diffusion;
   if (p.reach && (method == CloseFill::gradient || method == CloseFill::automatic)) {
-    out.grow = close_gradient_room(l, observed, p.grid->voxel_size, p.margin);
+    out.grow = close_gradient_room(l, observed, p.grid->voxel_size, p.margin,
+                                   p.config->gradient_reach_fraction);
     if (std::any_of(out.grow.begin(), out.grow.end(), [](int g) { return g > 0; })) return out;
   }
   // A whole lattice's faces for the gradient fill (the lattice is one tile: all its faces are
   // the lattice's).
-  const float gradient_faces = p.outside + kGradientFaceExtraVoxels * p.grid->voxel_size;
+  const float gradient_faces = p.outside + p.config->gradient_face_voxels * p.grid->voxel_size;
   if (method != CloseFill::diffusion) {
     // Lines through observed tunnels are held outside like lines of sight: the double layer
     // of an open tunnel's upper part would cap it where its walls were unseen, and so would the

@@ -108,6 +108,9 @@ struct CloseProblem {
   Eigen::Vector3i size = Eigen::Vector3i::Zero();
   float outside = 0.0f;  // the value held at the lattice's faces
   int margin = 1;        // nodes between the lattice's faces and the data's box
+  /// A whole lattice for the gradient fill (or the automatic choice) not yet grown for it: the
+  /// solve first asks for room past the data's box (TileResult::grow).
+  bool reach = false;
   const DiffusionLattice* coarse = nullptr;
   int coarse_step = 1;
 };
@@ -325,6 +328,9 @@ struct TileResult {
   /// from the lattice's face) is inside or near it, so the fill would go on past the lattice
   /// or feels the face (a solve of the whole lattice only).
   std::array<bool, 6> cut{};
+  /// Per side: nodes to add past the lattice's face before the gradient fill solves (the
+  /// observed surface turns to close beyond it; close_gradient_room()). Nonzero: not solved.
+  std::array<int, 6> grow{};
 };
 
 // Holds the free nodes `marked` (by lattice index) outside at distance `stop`, in parallel over
@@ -400,15 +406,25 @@ std::vector<std::uint8_t> close_through_nodes(const Eigen::Vector3i& size,
   return through;
 }
 
-// The gradient fill holds a whole lattice's faces this many voxels further outside than the
-// margin puts them (3 + 2 = 5 voxels at the default margin): the potential then rises more
-// steeply near the faces, and a fill carried on past the data (the top's field down through a
-// box's inside) turns back sooner. Measured (filled e-3, seeds 1 / 33; faces at 3 / 4 / 5 / 6
-// voxels): box 12.5 / 6.4 / 5.4 / 9.2, chamfered cube 16.2 / 10.0 / 4.9 / 5.4, L-shape 11.3 /
-// 6.6 / 5.0 / 6.5, box with a hole 9.4 / 10.6 / 13.2 / 15.9, torus 2.0 / 2.1 / 3.5 / 4.4,
-// sphere 11.2 / 12.5 / 13.9 / 15.5 (seed 1); the three-view sphere orbit's largest deviation
-// 4.7 / 3.5 / 2.7 / 2.0 voxels.
-constexpr float kGradientFaceExtraVoxels = 2.0f;
+// The observed nodes within this many nodes of the data's box on a side fit the reach.
+constexpr int kGradientReachWindow = 8;
+
+// Per side of `l` (a whole lattice with `margin` nodes between its faces and the data's box):
+// the nodes the gradient fill needs past the face (`fraction` of the reach, rounded up; 0 where
+// the surface does not turn within the data's length on that axis). O(nodes).
+std::array<int, 6> close_gradient_room(const DiffusionLattice& l,
+                                       const std::vector<std::uint8_t>& observed, float voxel,
+                                       int margin, float fraction) {
+  const std::array<float, 6> reach =
+      gradient_fill_reach(l, observed, voxel, margin, kGradientReachWindow);
+  std::array<int, 6> room{};
+  for (std::size_t side = 0; side < 6; ++side) {
+    const int length = l.size[static_cast<int>(side / 2)] - 2 * margin;
+    if (reach[side] > 0.0f && reach[side] <= static_cast<float>(length))
+      room[side] = static_cast<int>(std::ceil(std::max(0.0f, fraction) * reach[side]));
+  }
+  return room;
+}
 
 // Sets the values of the nodes on the faces of `l` (held) to `value`. Parallel over planes.
 void close_set_faces(DiffusionLattice& l, float value) {
@@ -421,6 +437,18 @@ void close_set_faces(DiffusionLattice& l, float value) {
   });
 }
 
+// The automatic fill keeps the gradient fill unless another fill predicts the held-out rim
+// below this fraction of the gradient fill's error. The rim error does not rank the fills by
+// their filled error: on the 12 scans of tests/graph/test_scanned_objects.cpp the gradient fill
+// has the lowest filled error on all 12, but the highest rim error on 8 (the flat-bottomed
+// shapes: at a sharp rim a fill that stays near its held values predicts better), where the
+// lower of the others' rim errors was 0.54-0.75 of its own (diffusion's filled error 1.4-13x
+// the gradient fill's, the indicator's 1.5-3.9x); choosing the lowest rim error gave a mean
+// filled error of 11.3e-3 against the gradient fill's 5.6e-3. The sign of the prediction, the
+// nodes within a voxel of the surface only, or a band of 6 steps ranked them no better (8 of
+// 12 wrong each).
+constexpr float kAutomaticMargin = 0.5f;
+
 // Self-validation of a whole lattice's three fills: the observed nodes near the observed
 // surface's rim (close_rim_band) are freed, each fill (the gradient's and the indicator's with
 // the `through` nodes held outside at `stop`) predicts them from the rest, and each fill's
@@ -428,9 +456,10 @@ void close_set_faces(DiffusionLattice& l, float value) {
 // node (a far miss counts as a miss). Diffusion and the indicator take an eighth of the fill's
 // sweeps per level (they rank the fills, the final fill converges); the gradient fill, whose
 // solves already take a quarter and an eighth, the fill's own. Records the errors and the
-// held-out count in `counts`; returns the fill with the lowest error (the earlier of gradient,
-// diffusion, indicator among equals). No held-out node: the gradient fill (the default). The
-// gradient fill's faces are held at `gradient_faces` (kGradientFaceExtraVoxels).
+// held-out count in `counts`; returns the gradient fill unless diffusion or the indicator has
+// an error below kAutomaticMargin of its own (then the lower, diffusion among equals). No
+// held-out node: the gradient fill (the default). The
+// gradient fill's faces are held at `gradient_faces` (CloseConfig::gradient_face_voxels).
 CloseFill close_choose_fill(const DiffusionLattice& l, const std::vector<std::uint8_t>& observed,
                             const std::vector<std::uint8_t>& through, float voxel, float stop,
                             float gradient_faces, const CloseConfig& config, CloseReport& counts) {
@@ -477,14 +506,14 @@ CloseFill close_choose_fill(const DiffusionLattice& l, const std::vector<std::ui
   counts.held_out_error_gradient = error(gradient);
   counts.held_out_error_diffusion = error(diffused);
   counts.held_out_error_indicator = error(indicator);
-  CloseFill best = CloseFill::gradient;
-  float best_error = counts.held_out_error_gradient;
-  if (counts.held_out_error_diffusion < best_error) {
-    best = CloseFill::diffusion;
-    best_error = counts.held_out_error_diffusion;
-  }
-  if (counts.held_out_error_indicator < best_error) best = CloseFill::indicator;
-  return best;
+  // The gradient fill unless another's error is below kAutomaticMargin of its own (then the
+  // lower of the two others').
+  const float bar = kAutomaticMargin * counts.held_out_error_gradient;
+  if (counts.held_out_error_diffusion < bar &&
+      counts.held_out_error_diffusion <= counts.held_out_error_indicator)
+    return CloseFill::diffusion;
+  if (counts.held_out_error_indicator < bar) return CloseFill::indicator;
+  return CloseFill::gradient;
 }
 
 // Solves the tile of lattice nodes [a, b] (inclusive, relative to the lattice): held nodes are
@@ -556,15 +585,21 @@ TileResult close_solve_tile(const CloseProblem& p, const Eigen::Vector3i& a,
   // gradient's potential need the whole surface). A fused map (no points) is diffused too: its
   // observed voxels fill the truncation band on both sides, and the double layer of its ragged
   // band's ends left small extra shells (CliClose.FusedAndMergedDepthSequencesCloseWatertight).
-  // The gradient fill never grows the lattice: a fill reaching the data's box there is the
-  // surface carrying on as it was heading, and a grown lattice let it carry on to the new faces
-  // (a box's unseen bottom 20 voxels deep).
+  // The gradient fill grows the lattice only before it solves, where the observed surface turns
+  // to close past the data's box (close_gradient_room), never after: a fill reaching the data's
+  // box there is the surface carrying on as it was heading, and a grown lattice let it carry on
+  // to the new faces (a box's unseen bottom 20 voxels deep).
   float grow_below = 0.0f;  // a free node on the data's box below this: the lattice is too small
   CloseFill method =
       p.coarse == nullptr && !p.cloud->empty() ? p.config->fill : CloseFill::diffusion;
+  if (p.reach && (method == CloseFill::gradient || method == CloseFill::automatic)) {
+    out.grow = close_gradient_room(l, observed, p.grid->voxel_size, p.margin,
+                                   p.config->gradient_reach_fraction);
+    if (std::any_of(out.grow.begin(), out.grow.end(), [](int g) { return g > 0; })) return out;
+  }
   // A whole lattice's faces for the gradient fill (the lattice is one tile: all its faces are
   // the lattice's).
-  const float gradient_faces = p.outside + kGradientFaceExtraVoxels * p.grid->voxel_size;
+  const float gradient_faces = p.outside + p.config->gradient_face_voxels * p.grid->voxel_size;
   if (method != CloseFill::diffusion) {
     // Lines through observed tunnels are held outside like lines of sight: the double layer
     // of an open tunnel's upper part would cap it where its walls were unseen, and so would the
@@ -846,6 +881,7 @@ ClosedDistance close_distance_field(const SparseGrid& grid, const DistanceField&
   p.size = hi - lo + Eigen::Vector3i::Ones();
   p.outside = static_cast<float>(margin) * voxel;
   p.margin = margin;
+  p.reach = config.fill == CloseFill::gradient || config.fill == CloseFill::automatic;
   r.lattice = p.size;
   const auto nodes_of = [](const Eigen::Vector3i& s) {
     return static_cast<double>(s.x()) * s.y() * s.z();
@@ -950,6 +986,22 @@ ClosedDistance close_distance_field(const SparseGrid& grid, const DistanceField&
     // lattice's extent there, at least the margin) and the lattice is solved again, at most
     // twice and while it stays under the dense limit.
     if (p.coarse != nullptr || round == 2) break;
+    // The gradient fill's room (asked once, before it solved): those sides grow (unless that
+    // passes the dense limit) and it solves; not one of the two growths below.
+    const std::array<int, 6> room = results.front().grow;
+    if (std::exchange(p.reach, false) &&
+        std::any_of(room.begin(), room.end(), [](int g) { return g > 0; })) {
+      const Eigen::Vector3i room_lo(room[0], room[2], room[4]), room_hi(room[1], room[3], room[5]);
+      if (nodes_of(p.size + room_lo + room_hi) <= limit) {
+        lo -= room_lo;
+        p.lo = lo;
+        p.size += room_lo + room_hi;
+        r.lattice = p.size;
+        r.grown = true;
+      }
+      --round;
+      continue;
+    }
     Eigen::Vector3i grow_lo = Eigen::Vector3i::Zero(), grow_hi = Eigen::Vector3i::Zero();
     for (int k = 0; k < 3; ++k) {
       const int g = std::max(margin, p.size[k] / 4);

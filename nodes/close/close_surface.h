@@ -23,19 +23,24 @@
 // its potential, so the surface goes on across unseen parts the way it was heading (a sphere's
 // unseen cap curves on, a box's unseen bottom closes nearly flat near the data's box), with the
 // corners on lattice lines through observed tunnels (through_lines.h) held outside like lines
-// of sight, so a through-hole seen from above stays open where its lower part was unseen; its
-// lattice never grows. Diffusion of the distance itself (above): a harmonic fill stays between
-// its held values, so it closes a box's unseen bottom as a deep dome (5x the gradient fill's
-// filled error on the tests' box and chamfered cube). The indicator fill: the observed
-// surface's inside indicator spread as a double layer (a Poisson solve, the field Poisson
-// surface reconstruction solves for: an unseen box bottom closes flat at its rim, a sphere's
-// cap too flat), tunnels kept open as the gradient fill's. CloseFill::automatic lets the data
-// choose among the three without ground truth: the observed corners near the rim of the
-// observed surface (where it goes on into unobserved space) are held out, each fill predicts
-// them from the rest, and the fill whose prediction is closest to their observed distances
-// fills the lattice (self-validation). Experimental: that rim error does not rank the fills as
-// their filled-region error does (tests/graph/test_scanned_objects.cpp prints both), and it
-// costs three more solves.
+// of sight, so a through-hole seen from above stays open where its lower part was unseen. Its
+// lattice grows once, before it solves, on the sides where the observed surface turns to close
+// past the data's box (a sphere's unseen cap, a tube's underside: gradient_fill_reach(), the
+// depth at which the surface's fitted turn would face that side; grown by
+// gradient_reach_fraction of it), and never after (a box's walls do not turn: its faces stay
+// near, which closes its unseen bottom nearly flat). Diffusion of the distance itself (above): a
+// harmonic fill stays between its held values, so it closes a box's unseen bottom as a deep dome
+// (5x the gradient fill's filled error on the tests' box and chamfered cube). The indicator fill:
+// the observed surface's inside indicator spread as a double layer (a Poisson solve, the field
+// Poisson surface reconstruction solves for: an unseen box bottom closes flat at its rim, a
+// sphere's cap too flat), tunnels kept open as the gradient fill's. CloseFill::automatic validates
+// the three without ground truth: the observed corners near the rim of the observed surface (where
+// it goes on into unobserved space) are held out and each fill predicts them from the rest.
+// Experimental: that rim error does not rank the fills as their filled-region error does (at a
+// sharp rim, a box's, diffusion and the indicator predict the held-out walls better and fill
+// far worse; tests/graph/test_scanned_objects.cpp prints both), so automatic keeps the gradient
+// fill unless another's rim error is below half of its own (the gradient fill on all 12 test
+// scans, whose filled error is the lowest of the three on each); it costs three more solves.
 // Large (tiled) lattices and fused maps (no points) keep diffusion.
 
 #include <Eigen/Core>
@@ -51,8 +56,8 @@ namespace meshflow {
 
 /// The fill of a whole lattice of a cloud's distances (file comment).
 enum class CloseFill : std::uint8_t {
-  automatic,  ///< gradient, diffusion or indicator: the one predicting held-out observed corners
-              ///< best
+  automatic,  ///< gradient, unless diffusion or the indicator predicts held-out observed corners
+              ///< far better (file comment)
   diffusion,  ///< volumetric diffusion of the distance
   indicator,  ///< the observed surface's indicator as a double layer, observed tunnels kept open
   gradient,   ///< the diffused gradient's potential, observed tunnels kept open (the default)
@@ -60,10 +65,24 @@ enum class CloseFill : std::uint8_t {
 
 struct CloseConfig {
   bool enabled = false;  ///< the pipeline's close stage runs only when set (--close)
-  /// The lattice reaches this many voxels beyond the grid's corners; its faces are held outside
-  /// (at +margin_voxels voxels; the gradient fill's 2 voxels further out), so every object ends
-  /// up enclosed.
+  /// The lattice reaches this many voxels beyond the grid's corners (the gradient fill's farther
+  /// where the surface turns to close: gradient_reach_fraction); its faces are held outside (at
+  /// +margin_voxels voxels; the gradient fill's gradient_face_voxels further out), so every
+  /// object ends up enclosed.
   float margin_voxels = 3.0f;
+  /// The gradient fill holds a whole lattice's faces this many voxels further outside than
+  /// margin_voxels (default 2: at +5 voxels, 3 voxels beyond the data's box): the potential then
+  /// rises more steeply near the faces, and a fill carried on past the data (the top's field
+  /// down through a box's inside) turns back sooner. Measured (the 12 test scans' filled error,
+  /// before the room below): 0 / 1 / 2 / 3 gave the box 12.5 / 6.4 / 5.4 / 9.2e-3, the chamfered
+  /// cube 16.2 / 10.0 / 4.9 / 5.4, the box with a hole 9.4 / 10.6 / 13.2 / 15.9.
+  float gradient_face_voxels = 2.0f;
+  /// The gradient fill's lattice grows past the data's box, before it solves, by this fraction
+  /// of gradient_fill_reach()'s depth on each side where the observed surface turns to close
+  /// within the data's length (0: never grows). Default 0.5: the potential overshoots a cap
+  /// whose faces are far; on the sphere scan 0.35 / 0.5 / 0.6 / 0.75 / 1 gave filled errors
+  /// 5.2 / 3.3 / 4.0 / 8.0 / 15e-3 (13.9 without), on the torus 0.5 gave 1.8 / 2.4 (5.1 / 3.5).
+  float gradient_reach_fraction = 0.5f;
   /// A line of sight marks the corners it passes as seen empty up to this many voxels before
   /// its point (the noise and the distance band stay data's).
   float free_space_stop_voxels = 2.0f;
@@ -100,8 +119,10 @@ struct CloseReport {
   std::size_t through = 0;
   std::size_t filled = 0;       ///< corners whose distance came from the diffusion
   std::size_t cells_added = 0;  ///< cells the closed surface crosses that the grid lacked
-  bool grown = false;           ///< the fill reached the lattice's faces: it grew beyond the margin
-  bool indicator = false;       ///< the lattice was filled from the indicator
+  /// The lattice grew beyond the margin: room for the gradient fill where the surface turns to
+  /// close, or a diffusion or indicator fill that reached its faces.
+  bool grown = false;
+  bool indicator = false;  ///< the lattice was filled from the indicator
   /// How the (whole) lattice was filled: config.fill, automatic's choice, or diffusion (tiles,
   /// fused maps).
   CloseFill fill = CloseFill::diffusion;

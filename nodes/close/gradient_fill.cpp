@@ -4,6 +4,8 @@
 
 #include <algorithm>
 #include <array>
+#include <cmath>
+#include <limits>
 
 namespace meshflow {
 namespace {
@@ -33,6 +35,56 @@ bool observed_gradient(const DiffusionLattice& l, const std::vector<std::uint8_t
 }
 
 }  // namespace
+
+std::array<float, 6> gradient_fill_reach(const DiffusionLattice& l,
+                                         const std::vector<std::uint8_t>& observed, float voxel,
+                                         int margin, int window) {
+  const Eigen::Vector3i n = l.size;
+  // Per plane and side: count, sum h, sum c, sum h^2, sum h c (added in plane order).
+  using Sums = std::array<std::array<double, 5>, 6>;
+  std::vector<Sums> per_plane(static_cast<std::size_t>(std::max(0, n.z())), Sums{});
+  tbb::parallel_for(0, n.z(), [&](int z) {
+    Sums& sums = per_plane[static_cast<std::size_t>(z)];
+    for (int y = 0; y < n.y(); ++y)
+      for (int x = 0; x < n.x(); ++x) {
+        const Eigen::Vector3i q(x, y, z);
+        const std::size_t i = l.index(x, y, z);
+        if (!observed[i] || !(std::abs(l.values[i]) < voxel)) continue;
+        Eigen::Vector3f g;
+        if (!observed_gradient(l, observed, voxel, q, g) || !(g.norm() > 0.5f)) continue;
+        g.normalize();
+        for (int side = 0; side < 6; ++side) {
+          const int k = side / 2;
+          const bool high = side % 2 == 1;
+          const int h = high ? n[k] - 1 - margin - q[k] : q[k] - margin;
+          if (h < 0 || h > window) continue;
+          const double c = high ? g[k] : -g[k];
+          std::array<double, 5>& s = sums[static_cast<std::size_t>(side)];
+          s[0] += 1.0;
+          s[1] += h;
+          s[2] += c;
+          s[3] += static_cast<double>(h) * h;
+          s[4] += h * c;
+        }
+      }
+  });
+  std::array<float, 6> reach{};
+  for (std::size_t side = 0; side < 6; ++side) {
+    std::array<double, 5> s{};
+    for (const Sums& plane : per_plane)
+      for (std::size_t j = 0; j < 5; ++j) s[j] += plane[side][j];
+    const double det = s[0] * s[3] - s[1] * s[1];
+    reach[side] = std::numeric_limits<float>::infinity();
+    if (s[0] < 16.0 || !(det > 0.0)) continue;
+    const double slope = (s[0] * s[4] - s[1] * s[2]) / det;
+    const double c0 = (s[2] - slope * s[1]) / s[0];
+    if (c0 >= 1.0)
+      reach[side] = 0.0f;
+    else if (slope < 0.0 && c0 > 0.0)
+      reach[side] = static_cast<float>((1.0 - c0) / -slope);
+  }
+  return reach;
+}
 
 int gradient_fill(DiffusionLattice& l, const std::vector<std::uint8_t>& observed, float voxel,
                   const DiffusionConfig& config) {

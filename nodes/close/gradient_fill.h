@@ -13,6 +13,7 @@
 // The field is smooth where there is no data, so it is diffused on a lattice of every second
 // node (an eighth of the nodes); only the potential is solved at full resolution.
 
+#include <array>
 #include <cstdint>
 #include <vector>
 
@@ -32,6 +33,19 @@ namespace meshflow {
 /// levels of the potential's solve. Parallel over planes; the result does not depend on the
 /// thread count. Time O(nodes x sweeps_per_level / 4) (the field's three solves on an eighth of
 /// the nodes cost about 40 % of the potential's); extra memory about 10 bytes a node.
+/// Per side of `l` (-x, +x, -y, +y, -z, +z): how far, in nodes, past the data's box (the plane
+/// `margin` nodes inside that face) the observed surface would close by its own turn. Over the
+/// observed nodes within a voxel of the surface and within `window` nodes of that plane, the
+/// unit normal's component c along the side's outward axis is fitted as c0 + s h (h: nodes from
+/// the plane, least squares): a surface turning to face the side (s < 0, c0 > 0), as a sphere's
+/// or a tube's underside does, faces it at h = -(1 - c0) / s, on a circle of its curvature -s;
+/// the reach is that depth, 0 where the surface already faces the side, and infinite where it
+/// does not turn (a box's walls) or too few nodes fit. Parallel over planes; the result does not
+/// depend on the thread count. O(nodes).
+std::array<float, 6> gradient_fill_reach(const DiffusionLattice& l,
+                                         const std::vector<std::uint8_t>& observed, float voxel,
+                                         int margin, int window);
+
 int gradient_fill(DiffusionLattice& l, const std::vector<std::uint8_t>& observed, float voxel,
                   const DiffusionConfig& config = {});
 

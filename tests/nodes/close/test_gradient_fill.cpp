@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <functional>
@@ -114,6 +115,39 @@ TEST(GradientFill, CarriesASphereOnAcrossItsUnseenCap) {
   // (q - centre) / radius, its potential at the centre about -radius / 2; diffusion: a shallow
   // well near the band's values).
   EXPECT_LT(gradient.lattice.values[gradient.lattice.index(c, c, 14)], -0.35f * radius);
+}
+
+// gradient_fill_reach() against analytic depths: a sphere of radius 12 nodes seen down to 4
+// nodes above its bottom (the data's box 4 nodes above it) turns to close exactly 4 nodes below
+// the box (the fitted turn of its normal is a circle of its radius); the sides it faces fully
+// reach the sphere's extreme past their plane; a box's vertical walls seen down to the same plane
+// never turn (infinite reach, or deeper than the lattice where rounding tilts them).
+TEST(GradientFill, ReachIsTheDepthWhereTheObservedSurfaceTurnsToClose) {
+  const Eigen::Vector3i size = Eigen::Vector3i::Constant(40);
+  const Eigen::Vector3f c(20.0f, 20.0f, 20.0f);
+  const float r = 12.0f;
+  const float cut = 12.0f;  // seen where z >= 12; the sphere's bottom is at z = 8
+  const auto seen = [&](const Eigen::Vector3f& q) { return q.z() >= cut; };
+  const int margin = 8;  // faces at 0 and 39: the data's box from 8 (the sphere's extent)
+  const Problem sphere = make_problem(
+      size, 1.5f, [&](const Eigen::Vector3f& q) { return (q - c).norm() - r; }, seen, 5.0f);
+  // The -z side's plane: the data's lowest observed node, z = 12 (margin 12 on that axis).
+  const std::array<float, 6> reach =
+      gradient_fill_reach(sphere.lattice, sphere.observed, 1.0f, margin, 8);
+  // The planes at 8 and 31 (39 - 8): the sphere reaches 0 past the low ones, 1 past the high.
+  for (const std::size_t side : {0, 1, 2, 3, 5})
+    EXPECT_NEAR(reach[side], side % 2 == 0 ? 0.0f : 1.0f, 0.6f) << side;
+  const std::array<float, 6> below =
+      gradient_fill_reach(sphere.lattice, sphere.observed, 1.0f, 12, 8);
+  std::printf("[ reach ] sphere cap below the data: %.2f nodes (exact 4)\n", below[4]);
+  EXPECT_NEAR(below[4], 4.0f, 0.6f);
+
+  const Problem box = make_problem(
+      size, 1.5f,
+      [&](const Eigen::Vector3f& q) { return ((q - c).cwiseAbs().array() - r).maxCoeff(); }, seen,
+      5.0f);
+  const std::array<float, 6> walls = gradient_fill_reach(box.lattice, box.observed, 1.0f, 12, 8);
+  EXPECT_GT(walls[4], 40.0f);  // deeper than the lattice: no turn
 }
 
 }  // namespace

@@ -5,6 +5,7 @@
 // would see at that many triangles.
 
 #include <cstddef>
+#include <cstdint>
 #include <vector>
 
 #include "nodes/chunk/mesh_tiles.h"
@@ -20,7 +21,15 @@ struct TileLevelConfig {
   double ratio = 4.0;
   /// A level of fewer triangles is left out (a tile smaller than this times `ratio` gets none).
   std::size_t min_triangles = 64;
+  /// Lock the tile's border (every vertex on an edge of one of its triangles only: its seams
+  /// with the neighbouring tiles and the mesh's own borders): no level removes or moves one, so
+  /// any levels of two neighbouring tiles meet along their seam without a crack.
+  bool lock_border = true;
 };
+
+/// Per vertex of `mesh`, 1 when it is on a border edge of the triangles without a repeated corner
+/// (an edge of one of them only), else 0. Thread-safe. O(V + T).
+std::vector<std::uint8_t> border_vertex_flags(const TriangleMesh& mesh);
 
 /// The coarser levels of `tile`, coarse to fine, each of fewer triangles than the next and than
 /// the tile: compress_progressive() with the base mesh at 1 / ratio^levels of the triangles,
@@ -28,8 +37,11 @@ struct TileLevelConfig {
 /// split reaching tile triangles / ratio^k for k = levels - 1 .. 1; levels below
 /// `min_triangles` or not below the next are dropped. Positions as the progressive coder
 /// decodes them (its default step: within 1/128 of the median edge of the tile's); normals
-/// and colours kept where the tile has them. Thread-safe. Throws meshflow::Error as the coder
-/// does. O(T log T) plus the decimation's cost (parallel) and one decode per level.
+/// and colours kept where the tile has them. With lock_border, the border vertices
+/// (border_vertex_flags()) are locked in the coder and every level has them exactly as the tile
+/// does (position, normal, colour: bit for bit), with the tile's border edges. Thread-safe. Throws
+/// meshflow::Error as the coder does. O(T log T) plus the decimation's cost (parallel) and one
+/// decode per level.
 std::vector<TriangleMesh> progressive_tile_levels(const TriangleMesh& tile,
                                                   const TileLevelConfig& config = {});
 

@@ -1,6 +1,7 @@
 #include "nodes/compress/progressive_mesh.h"
 
 #include <algorithm>
+#include <string>
 
 #include "nodes/compress/attribute_coder.h"
 #include "nodes/compress/closed_surface.h"
@@ -123,9 +124,10 @@ struct BaseLevel {
 };
 
 // Decimates the triangles without a repeated corner to config.base_ratio, recording the
-// collapses, and keeps what is left (with the attributes `flags` names) as the base mesh.
+// collapses (none removing a `locked` vertex), and keeps what is left (with the attributes
+// `flags` names) as the base mesh.
 BaseLevel decimate_to_base(const TriangleMesh& mesh, const CompressConfig& config,
-                           AttributeFlags flags) {
+                           AttributeFlags flags, const std::vector<std::uint8_t>& locked) {
   const std::size_t n = mesh.vertices.size();
   BaseLevel level;
   TriangleMesh work;
@@ -147,6 +149,7 @@ BaseLevel decimate_to_base(const TriangleMesh& mesh, const CompressConfig& confi
   // triangles were left, 5.2 % of the file; now 4.3 % and 3.6 %).
   qem.max_border_turn_deg = 180.0f;
   qem.record_collapses = true;
+  qem.locked = locked;
   QemReport decimation;
   qem_decimate(work, qem, &decimation);
   std::vector<Triangle> triangles = work.triangles;
@@ -318,12 +321,22 @@ void write_split_packets(io::ByteWriter& out, const std::vector<Collapse>& colla
 std::vector<unsigned char> compress_progressive(const TriangleMesh& mesh,
                                                 const CompressConfig& config,
                                                 CompressReport* report) {
+  return compress_progressive(mesh, {}, config, report);
+}
+
+std::vector<unsigned char> compress_progressive(const TriangleMesh& mesh,
+                                                const std::vector<std::uint8_t>& locked,
+                                                const CompressConfig& config,
+                                                CompressReport* report) {
   require_corners_in_range(mesh.triangles, mesh.vertices.size(), "mesh");
+  const std::size_t n = mesh.vertices.size();
+  if (!locked.empty() && locked.size() != n)
+    throw Error("progressive mesh", "locked vertices",
+                std::to_string(locked.size()) + " flags for " + std::to_string(n) + " vertices");
   const Quantizer quantizer = choose_quantizer(mesh, config);
   const AttributeFlags flags = detail::attribute_flags(mesh, config);
-  const std::size_t n = mesh.vertices.size();
 
-  BaseLevel level = decimate_to_base(mesh, config, flags);
+  BaseLevel level = decimate_to_base(mesh, config, flags, locked);
 
   io::ByteWriter out;
   detail::write_header(out, CompressionKind::kProgressive, flags, n, mesh.triangles.size(),

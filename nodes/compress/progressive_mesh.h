@@ -18,6 +18,7 @@
 // or an escape and the vertex) and the order of its corners.
 
 #include <cstddef>
+#include <cstdint>
 #include <limits>
 #include <string>
 #include <vector>
@@ -40,6 +41,18 @@ struct ProgressiveLevel {
 /// of range or a non-finite position. O(T log T) plus the decimation's cost; the decimation
 /// runs in parallel, the coding serially.
 std::vector<unsigned char> compress_progressive(const TriangleMesh& mesh,
+                                                const CompressConfig& config = {},
+                                                CompressReport* report = nullptr);
+
+/// compress_progressive() keeping the vertices `locked` flags (one per vertex of `mesh`, nonzero:
+/// locked) through every level: no collapse removes one, so each is in the base mesh, at its
+/// quantised position like every vertex (other vertices may collapse onto it). Locking every
+/// vertex of a border keeps that border's edges in every level (a tile's seams, so neighbouring
+/// tiles' levels meet: graph/tile_levels.h). Empty `locked`: compress_progressive(mesh, config,
+/// report), the same bytes. Throws Error as it does, and for a `locked` of another size than the
+/// vertices. Same cost.
+std::vector<unsigned char> compress_progressive(const TriangleMesh& mesh,
+                                                const std::vector<std::uint8_t>& locked,
                                                 const CompressConfig& config = {},
                                                 CompressReport* report = nullptr);
 

@@ -13,6 +13,7 @@
 #include <cstring>
 #include <limits>
 #include <optional>
+#include <string>
 #include <utility>
 #include <vector>
 
@@ -20,6 +21,7 @@
 #include "nodes/decimate/qem_finding_features.h"
 #include "nodes/decimate/vertex_rings.h"
 #include "runtime/angles.h"
+#include "runtime/error.h"
 #include "runtime/radix_sort.h"
 #include "runtime/simd.h"
 
@@ -719,7 +721,8 @@ class Decimator {
     scratch.border_count = 0;
     scratch.on_line = false;
     scratch.line_count = 0;
-    if (rings_.face_count(u) == 0 || rings_.locked(u)) return 0;
+    if (rings_.face_count(u) == 0 || rings_.locked(u) || (!cfg_.locked.empty() && cfg_.locked[u]))
+      return 0;
     const std::uint32_t* const ring = rings_.begin(u);
     const std::size_t n = rings_.size(u);
     scratch.neighbours = ring;
@@ -1032,6 +1035,10 @@ TriangleMesh qem_decimate_finding_features(
     const std::function<const QemFeatureEdges&(const VertexTriangles&)>& find_features,
     const QemConfig& config, QemReport* report) {
   require_corners_in_range(mesh.triangles, mesh.vertices.size(), "QEM decimation");
+  if (!config.locked.empty() && config.locked.size() != mesh.vertices.size())
+    throw Error("QEM decimation", "locked vertices",
+                std::to_string(config.locked.size()) + " flags for " +
+                    std::to_string(mesh.vertices.size()) + " vertices");
   QemReport r;
   const auto target = static_cast<std::size_t>(std::ceil(
       static_cast<double>(mesh.triangles.size()) * static_cast<double>(config.target_ratio)));

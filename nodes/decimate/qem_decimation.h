@@ -45,6 +45,11 @@ struct QemConfig {
   /// Record every collapse, in the order applied, in QemReport::collapse_sequence (for
   /// progressive meshes: replayed in reverse they are the vertex splits).
   bool record_collapses = false;
+  /// Per input vertex, nonzero: locked, never removed (never the u of a collapse; other vertices
+  /// may still collapse onto it, and it keeps its position as every kept vertex does). Empty: none
+  /// locked; otherwise one entry per vertex (else qem_decimate() throws Error). Locking every
+  /// vertex of a border keeps that border's edges as they are (progressive tiles' seams).
+  std::vector<std::uint8_t> locked;
 };
 
 struct QemReport {

@@ -12,11 +12,14 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <limits>
 #include <map>
 #include <set>
+#include <utility>
 
 #include "graph/pipeline.h"
 #include "graph/tile_levels.h"
@@ -588,6 +591,84 @@ TEST(MeshTiles, TheStreamedTilesAreTheChunksFinishedRowsAndUnionToTheMesh) {
   std::filesystem::remove_all(dir);
   std::filesystem::remove(plain);
   std::filesystem::remove(tiled);
+}
+
+// A position's bits (positions equal bit for bit join).
+using PositionBits = std::array<std::uint32_t, 3>;
+PositionBits bits_of(const Eigen::Vector3f& p) {
+  PositionBits b;
+  std::memcpy(b.data(), p.data(), sizeof b);
+  return b;
+}
+
+// The border of the union of `meshes`, their vertices joined where their positions are equal
+// bit for bit: the undirected edges of exactly one of their triangles (a triangle repeating a
+// corner counts none), each as its two ends' positions.
+std::set<std::pair<PositionBits, PositionBits>> union_border(
+    const std::vector<const TriangleMesh*>& meshes) {
+  std::map<std::pair<PositionBits, PositionBits>, int> uses;
+  for (const TriangleMesh* m : meshes)
+    for (const Triangle& t : m->triangles) {
+      if (t[0] == t[1] || t[1] == t[2] || t[0] == t[2]) continue;
+      for (int k = 0; k < 3; ++k)
+        ++uses[std::minmax(bits_of(m->vertices[t[k]]), bits_of(m->vertices[t[(k + 1) % 3]]))];
+    }
+  std::set<std::pair<PositionBits, PositionBits>> border;
+  for (const auto& [edge, count] : uses)
+    if (count == 1) border.insert(edge);
+  return border;
+}
+
+// Tile levels with locked borders (issue 61): every coarser level of every tile has the tile's
+// border edges exactly (their ends bit for bit the tile's, so the neighbour's), and the union of
+// any choice of levels (all tiles at the same depth, and coarsest / full in a checkerboard
+// and its inverse) has border edges exactly where the whole mesh has them: no crack. Without
+// locking, some tile's coarse level leaves its border (the crack the lock removes).
+TEST(MeshTiles, LockedBordersLetAnyLevelsOfNeighbouringTilesMeetWithoutCracks) {
+  const CityInput input(60000, true);
+  const ChunkedResult r = reconstruct_chunked(input.path, "", raw_config(0.5f), chunks_of(45.0f));
+  const chunk::ChunkGrid grid{r.report.voxel_size, r.report.chunk_cells, 0};
+  const std::vector<chunk::MeshTile> tiles = chunk::split_into_tiles(r.mesh, grid);
+  ASSERT_GE(tiles.size(), 4u);
+  std::vector<std::vector<TriangleMesh>> levels;  // per tile: coarse to fine, the tile last
+  std::size_t coarse = 0, deep = 0;
+  bool unlocked_left_a_border = false;
+  TileLevelConfig unlocked;
+  unlocked.lock_border = false;
+  for (const chunk::MeshTile& tile : tiles) {
+    levels.push_back(progressive_tile_levels(tile.mesh));
+    coarse += levels.back().size();
+    deep += levels.back().size() >= 2 ? 1 : 0;
+    const auto own = union_border({&tile.mesh});
+    for (const TriangleMesh& level : levels.back())
+      EXPECT_EQ(union_border({&level}), own) << tile.chunk.transpose();
+    const std::vector<TriangleMesh> free = progressive_tile_levels(tile.mesh, unlocked);
+    if (!free.empty() && union_border({&free.front()}) != own) unlocked_left_a_border = true;
+    levels.back().push_back(tile.mesh);
+  }
+  // (17 tiles, some small corners of a chunk: 11 coarser levels, 5 tiles with two or three.)
+  EXPECT_GE(coarse, 10u);
+  EXPECT_GE(deep, 4u) << "tiles with two coarser levels or more";
+  EXPECT_TRUE(unlocked_left_a_border);
+  const auto whole = union_border({&r.mesh});
+  ASSERT_FALSE(whole.empty()) << "the city's mesh has borders of its own";
+  const auto choose = [&](const auto& pick) {
+    std::vector<const TriangleMesh*> chosen;
+    for (std::size_t i = 0; i < tiles.size(); ++i)
+      chosen.push_back(&levels[i][std::min(pick(i), levels[i].size() - 1)]);
+    return union_border(chosen);
+  };
+  for (std::size_t depth = 0; depth <= 3; ++depth)
+    EXPECT_EQ(choose([&](std::size_t) { return depth; }), whole) << "every tile at " << depth;
+  for (std::size_t parity : {0, 1}) {
+    const auto checker = [&](std::size_t i) -> std::size_t {
+      const Eigen::Vector3i& c = tiles[i].chunk;
+      return static_cast<std::size_t>(c.x() + c.y() + c.z() + 64) % 2 == parity ? 0 : 3;
+    };
+    EXPECT_EQ(choose(checker), whole) << "checkerboard " << parity;
+  }
+  std::printf("%zu tiles, %zu coarser levels (%zu tiles with two or more)\n", tiles.size(), coarse,
+              deep);
 }
 
 // A grid of n x n squares (two triangles each) of edge `step` over the x-y plane at height

@@ -41,6 +41,32 @@ for n in rank_1 2; do
 done
 compgen -G "$work/tiles_1/*_lod0.glb" > /dev/null || { echo "FAIL: no coarser levels"; exit 1; }
 echo "--tiles, 1 and 2 ranks: $(ls "$work/tiles_2" | wc -l) files ($(ls "$work/tiles_2" | grep -c _lod) levels), as one process's"
+# Not streamed (--finish-after-stitch: rank 0 gathers the parts and finishes the whole mesh):
+# rank 0 cuts the tiles and sends each rank those of the chunks it meshed, every rank writes its
+# own, rank 0 the index; the tiles of one process on 1, 2 and 4 ranks, and on 2 ranks rank 1
+# wrote tiles ("tiles", its work > 0) while rank 0 scattered them and wrote the index.
+"$meshflow" reconstruct "$work/normals.ply" -o "$work/stitched_one.ply" "${args[@]}" -q \
+  --finish-after-stitch --tiles "$work/stitched_tiles_one"
+for n in 1 2 4; do
+  mpirun --bind-to none -n $n "$meshflow_mpi" reconstruct "$work/normals.ply" \
+    -o "$work/stitched_$n.ply" "${args[@]}" --finish-after-stitch --json \
+    --tiles "$work/stitched_tiles_$n" > "$work/stitched_$n.txt"
+  cmp "$work/stitched_one.ply" "$work/stitched_$n.ply" || {
+    echo "FAIL: not streamed, $n ranks: another mesh"; cat "$work/stitched_$n.txt"; exit 1; }
+  diff -r "$work/stitched_tiles_one" "$work/stitched_tiles_$n" || {
+    echo "FAIL: not streamed, $n ranks: other tiles"; exit 1; }
+done
+compgen -G "$work/stitched_tiles_one/*_lod0.glb" > /dev/null || { echo "FAIL: not streamed: no coarser levels"; exit 1; }
+/usr/bin/python3 - "$work/stitched_2.txt" <<'PY'
+import json, sys
+ranks = json.load(open(sys.argv[1]))["timing"]["ranks"]
+names = [[p["phase"] for p in r["phases"]] for r in ranks]
+assert names[0][-4:] == ["write", "scatter", "tiles", "index"], names[0]
+assert names[1][-2:] == ["finish", "tiles"], names[1]
+tiles = [p for p in ranks[1]["phases"] if p["phase"] == "tiles"]
+assert len(tiles) == 1 and tiles[0]["work_s"] > 0 and not tiles[0]["serial"], ranks[1]
+PY
+echo "--tiles, not streamed, 1, 2 and 4 ranks: $(ls "$work/stitched_tiles_2" | wc -l) files, as one process's, each rank its own chunks'"
 /usr/bin/python3 - "$work/json_2.txt" <<'PY'
 import json, sys
 d = json.load(open(sys.argv[1]))

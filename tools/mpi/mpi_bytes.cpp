@@ -10,6 +10,22 @@ constexpr std::size_t kMessagePiece = std::size_t{1} << 30;  // MPI counts are i
 
 }  // namespace
 
+void put_mesh(io::ByteWriter& w, const TriangleMesh& mesh) {
+  put_vector(w, mesh.vertices);
+  put_vector(w, mesh.normals);
+  put_vector(w, mesh.colors);
+  put_vector(w, mesh.triangles);
+}
+
+TriangleMesh get_mesh(io::ByteReader& r) {
+  TriangleMesh mesh;
+  mesh.vertices = get_vector<Eigen::Vector3f>(r, "vertices");
+  mesh.normals = get_vector<Eigen::Vector3f>(r, "normals");
+  mesh.colors = get_vector<Rgb8>(r, "colors");
+  mesh.triangles = get_vector<Triangle>(r, "triangles");
+  return mesh;
+}
+
 void put_rows(io::ByteWriter& w, const chunk::ChunkRows& rows) {
   put(w, rows.normals);
   put(w, rows.colors);

@@ -11,6 +11,7 @@
 #include "nodes/chunk/chunk_store.h"
 #include "nodes/chunk/phase_times.h"
 #include "nodes/io/byte_buffer.h"
+#include "runtime/triangle_mesh.h"
 
 namespace meshflow::cli {
 
@@ -56,6 +57,11 @@ inline std::string get_string(io::ByteReader& r, const char* field) {
   const unsigned char* at = r.bytes(n, field);
   return std::string(reinterpret_cast<const char*>(at), n);
 }
+
+/// Appends a mesh: its vertices, normals, colours and triangles (put_vector()). O(size).
+void put_mesh(io::ByteWriter& w, const TriangleMesh& mesh);
+/// Reads a mesh written by put_mesh(); errors name the field. O(size).
+TriangleMesh get_mesh(io::ByteReader& r);
 
 /// Appends what a chunk file's rows hold (normals, colours) and their frame (origin, z_up),
 /// field by field. O(1).

@@ -14,7 +14,8 @@
 // plans OUT's header, every rank writes its welded parts into it at their rows, and rank 0
 // finishes the seams (with --tiles: writes each chunk's finished rows as its tile) and renames
 // the file into place (not streamed: another format, or --finish-after-stitch: rank 0 gathers
-// the parts and writes the whole mesh). The weld and
+// the parts and writes the whole mesh, and with --tiles sends each rank the tiles of the chunks
+// it meshed, which it writes; tools/mpi/mpi_tiles.h). The weld and
 // the seam orientation are planned over the chunks in the one-process order, so the mesh is
 // the same for any N and any assignment (and equals `meshflow reconstruct --chunk`).
 
@@ -25,6 +26,7 @@
 #include <memory>
 
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <chrono>
 #include <cmath>
@@ -34,14 +36,13 @@
 #include <exception>
 #include <filesystem>
 #include <functional>
+#include <map>
 #include <string>
 #include <thread>
 #include <vector>
 
 #include "graph/chunk_output.h"
 #include "graph/chunked_reconstruction.h"
-#include "graph/tile_levels.h"
-#include "nodes/chunk/mesh_tiles.h"
 #include "nodes/chunk/phase_times.h"
 #include "nodes/extract/extract_surface.h"
 #include "nodes/io/mesh_writers.h"
@@ -52,6 +53,7 @@
 #include "tools/mpi/mpi_bytes.h"
 #include "tools/mpi/mpi_commands.h"
 #include "tools/mpi/mpi_partition.h"
+#include "tools/mpi/mpi_tiles.h"
 #include "tools/mpi/mpi_weld.h"
 #include "tools/mpi/mpi_write.h"
 #include "tools/pipeline_options.h"
@@ -102,10 +104,7 @@ std::vector<unsigned char> encode(const std::vector<ChunkResult>& results,
   for (const ChunkResult& r : results) {
     w.u64(r.position);
     put_string(w, r.error);
-    put_vector(w, r.mesh.vertices);
-    put_vector(w, r.mesh.normals);
-    put_vector(w, r.mesh.colors);
-    put_vector(w, r.mesh.triangles);
+    put_mesh(w, r.mesh);
     put_vector(w, r.flags);
   }
   return std::move(w.out);
@@ -123,10 +122,7 @@ chunk::RankTimes decode_into(const std::vector<unsigned char>& message, int from
     ChunkResult c;
     c.position = r.u64("position");
     c.error = get_string(r, "error");
-    c.mesh.vertices = get_vector<Eigen::Vector3f>(r, "vertices");
-    c.mesh.normals = get_vector<Eigen::Vector3f>(r, "normals");
-    c.mesh.colors = get_vector<Rgb8>(r, "colors");
-    c.mesh.triangles = get_vector<Triangle>(r, "triangles");
+    c.mesh = get_mesh(r);
     c.flags = get_vector<std::uint8_t>(r, "vertex flags");
     results.push_back(std::move(c));
   }
@@ -351,8 +347,9 @@ int run(const Options& o, int rank, int ranks) {
                results.size(), mesh_s);
   // Every rank welds its own chunks (seam summaries exchanged through rank 0), then writes
   // them into the output at their rows (tools/mpi/mpi_write.h): rank 0 plans the file and
-  // finishes the seams (and writes the tiles). Not streamed, rank 0 gathers the welded parts,
-  // concatenates them, finishes the seams and writes.
+  // finishes the seams (and every rank writes its tiles). Not streamed, rank 0 gathers the
+  // welded parts, concatenates them, finishes the seams and writes (and sends each rank the
+  // tiles of the chunks it meshed, which it writes).
   const chunk::WeldPlan weld = weld_on_ranks(results, clock, rank, ranks, !streamed);
   report.seam_vertices = weld.merged;
   if (streamed) {
@@ -378,17 +375,31 @@ int run(const Options& o, int rank, int ranks) {
   }
   std::vector<chunk::RankTimes> times = {
       {rank, results.size(), chunk::peak_resident_bytes(), clock.phases()}};
+  const ScatterJob tiling{o.tiles, plan.grid, plan.rows.origin, results.size()};
   if (rank != 0) {
     send_bytes(encode(results, times.front()), 0);
+    std::vector<ChunkResult>().swap(results);
+    // Every rank writes the tiles of the chunks it meshed, cut from rank 0's finished mesh.
+    if (!o.tiles.empty()) scatter_tiles_to_ranks(tiling, {}, {}, "", clock, rank, ranks);
     return 0;
   }
   clock.begin("gather", true);
   std::size_t gathered_bytes = 0;
+  std::map<std::array<int, 3>, int> meshed_by;  // chunk index -> the rank that meshed it
   for (int from = 1; from < ranks; ++from) {
     const std::vector<unsigned char> received = receive_bytes(from);
     gathered_bytes += received.size();
+    const std::size_t before = results.size();
     times.push_back(decode_into(received, from, results));
+    for (std::size_t i = before; i < results.size(); ++i) {
+      const Eigen::Vector3i& c = plan.files.at(results[i].position).index;
+      meshed_by[{c.x(), c.y(), c.z()}] = from;
+    }
   }
+  const auto owner = [&](const Eigen::Vector3i& c) {  // rank 0: its own chunks and any other
+    const auto it = meshed_by.find({c.x(), c.y(), c.z()});
+    return it == meshed_by.end() ? 0 : it->second;
+  };
   std::sort(results.begin(), results.end(),
             [](const ChunkResult& a, const ChunkResult& b) { return a.position < b.position; });
   for (ChunkResult& r : results)
@@ -421,17 +432,23 @@ int run(const Options& o, int rank, int ranks) {
                            in_place, plan.grid.chunk_cells);
     if (mesh.empty()) {
       std::fprintf(stderr, "meshflow-mpi: error: %s: no surface was extracted\n", o.input.c_str());
+      if (!o.tiles.empty())
+        scatter_tiles_to_ranks(tiling, {}, {}, "no surface was extracted", clock, rank, ranks);
       return 1;
     }
     report.output_vertices = mesh.vertices.size();
     report.output_triangles = mesh.triangles.size();
     clock.begin("write", true);
     io::write_mesh(o.output, mesh, plan.rows.origin);
-    if (!o.tiles.empty()) {
-      clock.begin("tiles", true);
-      const std::vector<chunk::MeshTile> split = chunk::split_into_tiles(mesh, plan.grid);
-      chunk::write_tiles(o.tiles, split, plan.grid, plan.rows.origin, progressive_levels());
-      tiles = split.size();
+    if (!o.tiles.empty()) {  // every rank its own chunks' tiles, rank 0 the index
+      const TilesWritten tiled =
+          scatter_tiles_to_ranks(tiling, mesh, owner, "", clock, rank, ranks);
+      for (const chunk::RankTimes& t : tiled.others) times.at(static_cast<std::size_t>(t.rank)) = t;
+      if (!tiled.error.empty()) {
+        std::fprintf(stderr, "meshflow-mpi: error: %s: %s\n", o.tiles.c_str(), tiled.error.c_str());
+        return 1;
+      }
+      tiles = tiled.tiles;
     }
   }
   clock.end();

@@ -2,9 +2,12 @@
 
 #include <algorithm>
 #include <exception>
+#include <functional>
+#include <string>
 #include <utility>
 
 #include "graph/tile_levels.h"
+#include "runtime/error.h"
 #include "tools/mpi/mpi_bytes.h"
 
 namespace meshflow::cli {
@@ -81,26 +84,43 @@ RankTiles decode(const std::vector<unsigned char>& message, int from) {
   return m;
 }
 
+// Writes the tiles read(0), ..., read(n - 1), none empty, at `positions` (n of them) with their
+// levels (chunk::write_tiles_in_flight()): their records by position. Throws meshflow::Error.
+std::vector<PositionedRecord> write_read_tiles(
+    const std::string& dir, const std::vector<std::uint64_t>& positions,
+    const std::function<chunk::MeshTile(std::size_t)>& read, const Eigen::Vector3d& origin,
+    std::size_t in_flight) {
+  chunk::create_tile_directory(dir);
+  std::vector<chunk::TileRecord> records = chunk::write_tiles_in_flight(
+      dir, positions.size(), read, origin, progressive_levels(), in_flight);
+  if (records.size() != positions.size())
+    throw Error(dir, "tiles", "an empty tile was handed out to be written");
+  std::vector<PositionedRecord> positioned;
+  positioned.reserve(records.size());
+  for (std::size_t i = 0; i < records.size(); ++i)
+    positioned.emplace_back(positions[i], std::move(records[i]));
+  return positioned;
+}
+
 // This rank's tiles, read back from the output's finished rows one at a time.
 RankTiles write_own_tiles(const TileJob& job) {
   RankTiles mine;
   try {
-    chunk::create_tile_directory(job.dir);
     io::PlyMeshFile file(job.output, job.layout, job.vertices, job.triangles, job.origin,
                          io::PlyMeshFile::Role::kJoin);
     std::vector<std::array<std::uint64_t, 3>> rows;  // the non-empty ones, by position
     for (const auto& row : job.rows)
       if (row[2] > 0) rows.push_back(row);  // as write_tiles_in_flight() skips an empty tile
     std::sort(rows.begin(), rows.end());
-    std::vector<chunk::TileRecord> records = chunk::write_tiles_in_flight(
-        job.dir, rows.size(),
+    std::vector<std::uint64_t> positions;
+    for (const auto& row : rows) positions.push_back(row[0]);
+    mine.records = write_read_tiles(
+        job.dir, positions,
         [&](std::size_t i) {
           const auto& [position, first, count] = rows[i];
           return chunk::read_tile(file, job.files->at(position).index, first, count);
         },
-        job.origin, progressive_levels(), job.in_flight);
-    for (std::size_t i = 0; i < rows.size(); ++i)
-      mine.records.emplace_back(rows[i][0], std::move(records[i]));
+        job.origin, job.in_flight);
     file.close();
   } catch (const std::exception& e) {
     mine.error = e.what();
@@ -108,21 +128,23 @@ RankTiles write_own_tiles(const TileJob& job) {
   return mine;
 }
 
-}  // namespace
-
-TilesWritten write_tiles_on_ranks(const TileJob& job, const std::string& verdict,
-                                  chunk::PhaseClock& clock, int rank, int ranks) {
-  TilesWritten written;
-  if (rank != 0) clock.wait("finish");  // rank 0 gathers the seams and finishes them
+// Hears rank 0's verdict (every rank): "" to go on, else why no rank writes tiles.
+std::string hear_verdict(const std::string& verdict) {
   std::vector<unsigned char> heard(verdict.begin(), verdict.end());
   broadcast_bytes(heard);
-  written.error.assign(heard.begin(), heard.end());
-  if (!written.error.empty()) return written;  // no rank writes tiles
-  clock.begin("tiles", false);
-  RankTiles mine = write_own_tiles(job);
+  return std::string(heard.begin(), heard.end());
+}
+
+// After every rank wrote `mine` (phase "tiles" running): ranks other than 0 send rank 0 their
+// records, error and timing (`chunks`: theirs); rank 0 (phase "index", serial) joins every
+// rank's records in position order and writes the index.
+TilesWritten join_tile_records(RankTiles mine, const std::string& dir, const chunk::ChunkGrid& grid,
+                               const Eigen::Vector3d& origin, std::size_t chunks,
+                               chunk::PhaseClock& clock, int rank, int ranks) {
+  TilesWritten written;
   if (rank != 0) {
     clock.end();
-    mine.times = {rank, job.chunks, chunk::peak_resident_bytes(), clock.phases()};
+    mine.times = {rank, chunks, chunk::peak_resident_bytes(), clock.phases()};
     send_bytes(encode(mine), 0);
     written.error = mine.error;
     return written;
@@ -144,12 +166,107 @@ TilesWritten write_tiles_on_ranks(const TileJob& job, const std::string& verdict
   index.reserve(records.size());
   for (PositionedRecord& r : records) index.push_back(std::move(r.second));
   try {
-    chunk::write_tile_index(job.dir, job.grid, job.origin, index);
+    chunk::write_tile_index(dir, grid, origin, index);
     written.tiles = index.size();
   } catch (const std::exception& e) {
     written.error = e.what();
   }
   return written;
+}
+
+// The tiles rank 0 hands one rank: each its position, chunk and mesh.
+std::vector<unsigned char> encode_tiles(const std::vector<chunk::MeshTile>& tiles,
+                                        const std::vector<std::size_t>& positions) {
+  io::ByteWriter w;
+  w.u64(positions.size());
+  for (std::size_t i : positions) {
+    w.u64(i);
+    put(w, tiles[i].chunk);
+    put_mesh(w, tiles[i].mesh);
+  }
+  return std::move(w.out);
+}
+
+// Reads what encode_tiles() sent: the tiles and their positions.
+std::vector<chunk::MeshTile> decode_tiles(const std::vector<unsigned char>& message,
+                                          std::vector<std::uint64_t>& positions) {
+  io::ByteReader r("tiles sent by rank 0", message);
+  const std::uint64_t count = r.u64("tiles");
+  std::vector<chunk::MeshTile> tiles;
+  for (std::uint64_t k = 0; k < count; ++k) {
+    positions.push_back(r.u64("tile position"));
+    chunk::MeshTile t;
+    t.chunk = get<Eigen::Vector3i>(r, "tile chunk");
+    t.mesh = get_mesh(r);
+    tiles.push_back(std::move(t));
+  }
+  return tiles;
+}
+
+// Writes `tiles` (at `positions`), this rank's share, on this rank.
+RankTiles write_given_tiles(const std::vector<chunk::MeshTile>& tiles,
+                            const std::vector<std::uint64_t>& positions, const std::string& dir,
+                            const Eigen::Vector3d& origin, std::size_t in_flight) {
+  RankTiles mine;
+  try {
+    mine.records = write_read_tiles(
+        dir, positions, [&](std::size_t i) { return tiles[i]; }, origin, in_flight);
+  } catch (const std::exception& e) {
+    mine.error = e.what();
+  }
+  return mine;
+}
+
+}  // namespace
+
+TilesWritten write_tiles_on_ranks(const TileJob& job, const std::string& verdict,
+                                  chunk::PhaseClock& clock, int rank, int ranks) {
+  if (rank != 0) clock.wait("finish");  // rank 0 gathers the seams and finishes them
+  TilesWritten written;
+  written.error = hear_verdict(verdict);
+  if (!written.error.empty()) return written;  // no rank writes tiles
+  clock.begin("tiles", false);
+  return join_tile_records(write_own_tiles(job), job.dir, job.grid, job.origin, job.chunks, clock,
+                           rank, ranks);
+}
+
+TilesWritten scatter_tiles_to_ranks(const ScatterJob& job, const TriangleMesh& mesh,
+                                    const std::function<int(const Eigen::Vector3i&)>& owner,
+                                    const std::string& verdict, chunk::PhaseClock& clock, int rank,
+                                    int ranks) {
+  if (rank != 0) clock.wait("finish");  // rank 0 gathers the parts and finishes the mesh
+  TilesWritten written;
+  written.error = hear_verdict(verdict);
+  if (!written.error.empty()) return written;  // no rank writes tiles
+  std::vector<chunk::MeshTile> tiles;
+  std::vector<std::uint64_t> positions;
+  if (rank == 0) {
+    clock.begin("scatter", true);  // the tiles cut, every other rank's sent, rank 0's kept
+    tiles = chunk::split_into_tiles(mesh, job.grid);
+    std::vector<std::vector<std::size_t>> dealt(static_cast<std::size_t>(ranks));
+    for (std::size_t i = 0; i < tiles.size(); ++i) {
+      const int to = owner(tiles[i].chunk);
+      dealt[to > 0 && to < ranks ? static_cast<std::size_t>(to) : 0].push_back(i);
+    }
+    for (int to = 1; to < ranks; ++to) {
+      const std::vector<std::size_t>& theirs = dealt[static_cast<std::size_t>(to)];
+      send_bytes(encode_tiles(tiles, theirs), to);
+      for (std::size_t i : theirs) tiles[i] = chunk::MeshTile{};
+    }
+    std::vector<chunk::MeshTile> own;
+    for (std::size_t i : dealt.front()) {
+      own.push_back(std::move(tiles[i]));
+      positions.push_back(i);
+    }
+    tiles = std::move(own);
+  } else {
+    tiles = decode_tiles(receive_bytes(0), positions);
+  }
+  clock.begin("tiles", false);
+  RankTiles mine = write_given_tiles(tiles, positions, job.dir, job.origin, job.in_flight);
+  tiles = {};
+  return join_tile_records(std::move(mine), job.dir, job.grid, job.origin, job.chunks, clock, rank,
+                           ranks);
 }
 
 }  // namespace meshflow::cli

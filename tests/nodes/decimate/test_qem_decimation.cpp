@@ -474,5 +474,44 @@ TEST(QemDecimation, CornerOutOfRangeFailsNamingTheFace) {
   }
 }
 
+// Locked vertices (QemConfig::locked) are never removed, on the border or inside, while the
+// rest still decimates (the wave with its whole border and every 5th vertex locked, recorded
+// collapses: no locked u); no flags decimate as before, bit for bit; flags of another size
+// than the vertices are an error.
+TEST(QemDecimation, LockedVerticesAreNeverRemoved) {
+  const TriangleMesh in = height_field(40, wave);
+  QemConfig config = plain_config();
+  config.record_collapses = true;
+  const TriangleMesh free = qem_decimate(in, config);
+  config.locked.assign(in.vertices.size(), 0);
+  std::size_t locked = 0;
+  for (std::size_t v = 0; v < in.vertices.size(); ++v) {
+    const std::size_t i = v % 40, j = v / 40;
+    if (i == 0 || j == 0 || i == 39 || j == 39 || v % 5 == 0) {
+      config.locked[v] = 1;
+      ++locked;
+    }
+  }
+  QemReport report;
+  const TriangleMesh out = qem_decimate(in, config, &report);
+  EXPECT_GT(report.collapses, in.vertices.size() / 2) << "the rest decimates";
+  for (const auto& [u, v] : report.collapse_sequence) EXPECT_EQ(config.locked[u], 0) << u;
+  std::size_t kept = 0;  // output vertices are input vertices, in input order
+  for (std::size_t v = 0, k = 0; v < in.vertices.size() && k < out.vertices.size(); ++v)
+    if (in.vertices[v] == out.vertices[k]) {
+      kept += config.locked[v];
+      ++k;
+    }
+  EXPECT_EQ(kept, locked);
+  EXPECT_EQ(edge_statistics(out).non_manifold_edges, 0u);
+  EXPECT_EQ(mesh_topology(out).boundary_loops, 1u);
+  config.locked.clear();
+  const TriangleMesh unlocked = qem_decimate(in, config);
+  EXPECT_EQ(unlocked.triangles, free.triangles);
+  EXPECT_EQ(unlocked.vertices, free.vertices);
+  config.locked.assign(in.vertices.size() - 1, 0);
+  EXPECT_THROW(qem_decimate(in, config), Error);
+}
+
 }  // namespace
 }  // namespace meshflow

@@ -82,20 +82,20 @@ ClosedSurface build_closed_surface(const std::vector<Triangle>& triangles) {
   pair_twins(input_corners, vertices, s.twin);
 
   // Fans: the corners around a vertex joined across shared edges. Around origin v, the corner
-  // after h is next(twin(h)), the one before twin(prev(h)); each fan is walked from its first
-  // corner (after a cut) or, if closed, from the corner met first.
+  // after h is next(twin(h)), the one before twin(prev(h)) (each step the other's inverse: a
+  // fan is a cycle or a path). Each fan is walked from the corner met first: forward to its
+  // end or round to that corner again, then, if it ended at a cut, backward to its start.
   const auto corners = static_cast<std::uint32_t>(input_corners.size());
   s.corner_vertex.assign(corners, kNone);
   for (std::uint32_t h = 0; h < corners; ++h) {
     if (s.corner_vertex[h] != kNone) continue;
-    std::uint32_t start = h;
-    for (std::uint32_t before = s.twin[prev_half(start)]; before != kNone && before != h;
-         before = s.twin[prev_half(start)])
-      start = before;
     const auto fan = static_cast<std::uint32_t>(s.input_vertex.size());
     s.input_vertex.push_back(input_corners[h]);
-    for (std::uint32_t c = start; c != kNone && s.corner_vertex[c] == kNone;
+    for (std::uint32_t c = h; c != kNone && s.corner_vertex[c] == kNone;
          c = s.twin[c] == kNone ? kNone : next_half(s.twin[c]))
+      s.corner_vertex[c] = fan;
+    for (std::uint32_t c = s.twin[prev_half(h)]; c != kNone && s.corner_vertex[c] == kNone;
+         c = s.twin[prev_half(c)])
       s.corner_vertex[c] = fan;
   }
 

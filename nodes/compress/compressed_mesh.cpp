@@ -12,7 +12,7 @@ namespace meshflow::compress {
 namespace {
 
 constexpr char kMagic[8] = {'M', 'F', 'M', 'E', 'S', 'H', '\r', '\n'};
-constexpr std::uint32_t kVersion = 10;
+constexpr std::uint32_t kVersion = 11;
 
 }  // namespace
 

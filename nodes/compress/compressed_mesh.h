@@ -1,15 +1,16 @@
 #pragma once
 // meshflow's compressed mesh files (".mfc"): one triangle mesh, coded single-rate (Edgebreaker)
-// or progressively (a base mesh and vertex splits). Format, version 10, little-endian:
+// or progressively (a base mesh and vertex splits). Format, version 11, little-endian:
 //
 //   bytes 0-7   magic "MFMESH\r\n"
-//   u32         version (10; 9 also offered the parallelograms' far corners as snap
-//               candidates, 8 predicted colours by the plain mean of the decoded neighbours
-//               and coded YCoCg-R residuals, 7 coded every coordinate as a residual, without
-//               the snap symbols of nodes/compress/coordinate_snap.h, 6 coded normals on an
-//               octahedral grid, 5 coded symbols, residual lengths and trust flags bit by
-//               bit, 4 had a position mode byte and no trust flags, 3 no position mode byte,
-//               2 no prefix checksums and coded attributes from one neighbour)
+//   u32         version (11; 10 coded the snap symbols axis by axis, 9 also offered the
+//               parallelograms' far corners as snap candidates, 8 predicted colours by the plain
+//               mean of the decoded neighbours and coded YCoCg-R residuals, 7 coded every
+//               coordinate as a residual, without the snap symbols of
+//               nodes/compress/coordinate_snap.h, 6 coded normals on an octahedral grid, 5 coded
+//               symbols, residual lengths and trust flags bit by bit, 4 had a position mode byte
+//               and no trust flags, 3 no position mode byte, 2 no prefix checksums and coded
+//               attributes from one neighbour)
 //   u32         kind: 1 = Edgebreaker, 2 = progressive
 //   u32         flags: bit 0 per-vertex normals stored, bit 1 per-vertex colours, bit 2 normals
 //               not stored: the decoder recomputes them from the decoded geometry

@@ -22,14 +22,21 @@ unsigned SnapCandidates::symbol_of(std::int32_t v) const {
   return below < n ? below + 1 : 0;
 }
 
-bool SnapModels::encode(RangeEncoder& enc, std::size_t axis, const SnapCandidates& c,
-                        std::int32_t value) {
-  if (axis == 0) earlier_ = 0;
-  if (c.n == 0) return false;
-  const unsigned symbol = c.symbol_of(value);
-  model(axis, c).encode(enc, symbol);
-  record(axis, symbol != 0);
-  return symbol != 0;
+unsigned SnapModels::encode(RangeEncoder& enc, const Axes& c,
+                            const std::array<std::int32_t, 3>& value) {
+  const unsigned context = state(c[0]) + kStates * (state(c[1]) + kStates * state(c[2]));
+  if (context == 0) return 0;
+  std::array<unsigned, 3> rank{};
+  unsigned symbol = 0, mask = 0;
+  for (unsigned a = 0; a < 3; ++a) {
+    rank[a] = c[a].n == 0 ? 0u : c[a].symbol_of(value[a]);
+    symbol |= (rank[a] < 3 ? rank[a] : 3u) << (2 * a);
+    mask |= rank[a] != 0 ? 1u << a : 0u;
+  }
+  joint_[context].encode(enc, symbol);
+  for (unsigned a = 0; a < 3; ++a)
+    if (rank[a] >= 3 && c[a].n == kSnapCandidates) enc.encode(fourth_, rank[a] - 3);
+  return mask;
 }
 
 }  // namespace meshflow::compress

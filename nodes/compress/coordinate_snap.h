@@ -4,8 +4,9 @@
 // three coordinates are lattice values its neighbours share exactly (about two thirds of all
 // coordinates on reconstructed meshes). Per axis the coder first says which of the few
 // distinct values the vertex's decoded neighbours have on that axis (nearest the prediction
-// first) the coordinate equals, or none; only a coordinate equal to none of them codes its
-// residual. A symbol of about a bit then replaces a residual of four to five bits.
+// first) the coordinate equals, or none (one symbol for the three axes); only a coordinate equal
+// to none of them codes its residual. A symbol of about a bit then replaces a residual of four
+// to five bits.
 
 #include <array>
 #include <cstdint>
@@ -121,44 +122,49 @@ inline bool shares_value(const SnapNeighbours& nb, std::size_t axis, std::int32_
   return shared;
 }
 
-/// The snap symbols' adaptive models, per axis and context: the candidate count, whether the
-/// nearest candidate is the prediction itself, how many of the vertex's earlier axes snapped (a
-/// lattice vertex has one free coordinate) and whether the previous vertex snapped on the axis.
-/// Axes are coded 0, 1, 2 for each vertex. Not thread-safe; one per position section.
+/// The snap symbols' adaptive models: one joint symbol per vertex (version 11) saying, for its
+/// three axes at once, whether each coordinate is none of its candidates (0), the nearest (1),
+/// the second (2) or a later one (3; with four offered, an adaptive bit tells the third from
+/// the fourth); context: per axis the candidate count (0, 1, 2, 3 or more) and whether the
+/// nearest candidate is the prediction itself. One range-coder step instead of three: the axes
+/// of a lattice vertex snap together (two of three), which the joint symbol also learns. Not
+/// thread-safe; one per position section.
 class SnapModels {
  public:
-  /// Codes which candidate `value` equals (or none) on `axis`; returns true if one did (the
-  /// coordinate is then coded), false if the caller must code its residual. Nothing is coded
-  /// without candidates. O(distinct).
-  bool encode(RangeEncoder& enc, std::size_t axis, const SnapCandidates& c, std::int32_t value);
-  /// The decoder's side: sets `value` and returns true when the stream names a candidate; false
-  /// when the residual follows. A corrupt symbol past the candidates reads as none. O(1) for
-  /// none or the nearest candidate, O(distinct^2) past it.
-  bool decode(RangeDecoderCore& dec, std::size_t axis, const SnapCandidates& c,
-              std::int32_t& value) {
-    if (axis == 0) earlier_ = 0;
-    if (c.n == 0) return false;
-    const unsigned symbol = model(axis, c).decode(dec);
-    const bool snapped = symbol != 0 && symbol <= c.n;
-    record(axis, snapped);
-    if (snapped) value = symbol == 1 ? c.nearest : c.ranked(symbol - 1);
-    return snapped;
+  using Axes = std::array<SnapCandidates, 3>;
+  /// Codes which candidate each of `value`'s coordinates equals (or none) and returns the mask
+  /// of those that did (bit a: axis a; those coordinates are then coded), the others' residuals
+  /// being the caller's. Nothing is coded when no axis has candidates. O(distinct).
+  unsigned encode(RangeEncoder& enc, const Axes& c, const std::array<std::int32_t, 3>& value);
+  /// The decoder's side: sets the snapped coordinates of `value` and returns their mask. A
+  /// corrupt symbol naming a rank past an axis's candidates reads as none. O(1) for none or the
+  /// nearest candidate, O(distinct^2) past it.
+  [[gnu::always_inline]] unsigned decode(RangeDecoderCore& dec, const Axes& c,
+                                         std::array<std::int32_t, 3>& value) {
+    const unsigned context = state(c[0]) + kStates * (state(c[1]) + kStates * state(c[2]));
+    if (context == 0) return 0;  // no candidates on any axis
+    const unsigned symbol = joint_[context].decode(dec);
+    unsigned mask = 0;
+    for (unsigned a = 0; a < 3; ++a) {
+      unsigned rank = (symbol >> (2 * a)) & 3u;
+      if (rank == 0) continue;
+      if (rank == 3 && c[a].n == kSnapCandidates) rank += dec.decode(fourth_);
+      if (rank > c[a].n) continue;
+      value[a] = rank == 1 ? c[a].nearest : c[a].ranked(rank - 1);
+      mask |= 1u << a;
+    }
+    return mask;
   }
 
  private:
-  static constexpr unsigned kContexts = kSnapCandidates * 2 * 3 * 2;
-  // The model of `axis` with c.n > 0 candidates.
-  FrequencyModel<8>& model(std::size_t axis, const SnapCandidates& c) {
-    const unsigned exact = c.nearest == c.predicted;
-    return symbol_[axis][(((c.n - 1) * 2 + exact) * 3 + earlier_) * 2 + last_[axis]];
+  // Per axis: 0 without candidates, else 1 + 2 (min(n, 3) - 1) + (nearest == prediction).
+  static constexpr unsigned kStates = 7, kContexts = kStates * kStates * kStates;
+  static unsigned state(const SnapCandidates& c) {
+    if (c.n == 0) return 0;
+    return 1 + 2 * ((c.n < 3 ? c.n : 3) - 1) + (c.nearest == c.predicted ? 1u : 0u);
   }
-  void record(std::size_t axis, bool snapped) {
-    last_[axis] = snapped;
-    earlier_ += snapped;
-  }
-  std::array<std::array<FrequencyModel<8>, kContexts>, 3> symbol_{};
-  std::array<unsigned, 3> last_{};  // per axis: the previous coded vertex snapped (1) or not
-  unsigned earlier_ = 0;            // this vertex's axes before the current one that snapped
+  std::vector<FrequencyModel<64>> joint_ = std::vector<FrequencyModel<64>>(kContexts);
+  BitModel fourth_;  // rank 4 (1) or 3 (0) where four candidates are offered
 };
 
 }  // namespace meshflow::compress

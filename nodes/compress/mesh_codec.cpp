@@ -308,6 +308,12 @@ void subset_sums(const Candidates& c, SubsetSums& sums) {
   }
 }
 
+// The snap candidates of a vertex predicted at `predicted` on its three axes.
+SnapModels::Axes snap_axes(const SnapNeighbours& nb, const std::array<std::int32_t, 3>& predicted) {
+  return {snap_candidates(nb, 0, predicted[0]), snap_candidates(nb, 1, predicted[1]),
+          snap_candidates(nb, 2, predicted[2])};
+}
+
 void write_section(io::ByteWriter& out, const std::vector<unsigned char>& bytes) {
   out.u64(bytes.size());
   out.bytes(bytes.data(), bytes.size());
@@ -424,10 +430,13 @@ std::vector<std::array<std::int32_t, 3>> encode_positions(
     subset_sums(offer, sums);
     for (unsigned choice = 0; choice < choices.count; ++choice) {
       const unsigned trusted = choices.mask[choice];
+      std::uint32_t cost = m.trusted[offer.n - 1].cost(trusted);  // n > 0: there are choices
+      // Residual costs only add: a choice whose flag alone costs as much as the best cannot
+      // beat it (the same choice as pricing it in full, fewer trials).
+      if (cost >= best_cost) continue;
       const std::array<std::int32_t, 3> predicted =
           trusted == 0 ? fallback_prediction(offer, context)
                        : mean_prediction(offer, sums[trusted], kSubsetSize[trusted], context);
-      std::uint32_t cost = m.trusted[offer.n - 1].cost(trusted);  // n > 0: there are choices
       for (std::size_t a = 0; a < 3; ++a)
         cost += free[a]                ? m.residual[context[a]][a].cost(q[a] - predicted[a])
                 : q[a] == predicted[a] ? 0u
@@ -442,8 +451,9 @@ std::vector<std::array<std::int32_t, 3>> encode_positions(
     stats.trusted_parallelograms += kSubsetSize[best];
     stats.offered_parallelograms += offer.n;
     const std::array<std::int32_t, 3> predicted = predict(offer, best, context);
+    const unsigned snapped = snap.encode(enc[0], snap_axes(nb, predicted), q);
     for (std::size_t a = 0; a < 3; ++a) {
-      if (snap.encode(enc[a], a, snap_candidates(nb, a, predicted[a]), q[a])) {
+      if ((snapped >> a) & 1u) {
         ++stats.snapped_coordinates;
         continue;
       }
@@ -704,8 +714,9 @@ std::vector<std::array<std::int32_t, 3>> decode_positions(
           neighbourhood.gather(k, replayed.predictors[k], ring, roles.hole, grid);
       RangeDecoderCore* core[3] = {&cx, &cy, &cz};
       std::array<std::int32_t, 3> q{};
+      const unsigned snapped = snap.decode(cx, snap_axes(nb, predicted), q);
       for (std::size_t a = 0; a < 3; ++a) {
-        if (snap.decode(*core[a], a, snap_candidates(nb, a, predicted[a]), q[a])) continue;
+        if ((snapped >> a) & 1u) continue;
         q[a] = static_cast<std::int32_t>(
             static_cast<std::uint32_t>(predicted[a]) +
             static_cast<std::uint32_t>(m.residual[context[a]][a].decode(*core[a])));

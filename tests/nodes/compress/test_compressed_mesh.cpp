@@ -420,11 +420,11 @@ TEST(CompressedMeshFile, TruncatedFlippedAndWrongVersionFilesFailClearly) {
       EXPECT_NE(std::string(e.what()).find("checksum"), std::string::npos) << e.what();
     }
     std::vector<unsigned char> version = good;
-    version[8] = 11;
+    version[8] = 12;
     compress::reseal_compressed_mesh(version);
     try {
       compress::decompress_mesh(version, "bad.mfc");
-      ADD_FAILURE() << "version 11 was read";
+      ADD_FAILURE() << "version 12 was read";
     } catch (const Error& e) {
       EXPECT_NE(std::string(e.what()).find("version"), std::string::npos) << e.what();
     }
@@ -794,10 +794,10 @@ TEST(ProgressiveMesh, ResealingRewritesEveryChecksum) {
 
 // Files of older versions (2: before the prefix checksums and the new attribute coders; 7:
 // before the coordinate snap symbols; 8: before the colour coder's distance-weighted prediction
-// and channel decorrelation; 9: snap candidates from the parallelograms' far corners too) are
-// refused with the versions named.
+// and channel decorrelation; 9: snap candidates from the parallelograms' far corners too; 10:
+// snap symbols axis by axis) are refused with the versions named.
 TEST(CompressedMeshFile, OldVersionsAreRefusedByName) {
-  for (const unsigned char old : {2, 7, 8, 9}) {
+  for (const unsigned char old : {2, 7, 8, 9, 10}) {
     std::vector<unsigned char> bytes = compress::compress_mesh(torus(8, 6));
     bytes[8] = old;
     compress::reseal_compressed_mesh(bytes);
@@ -806,7 +806,7 @@ TEST(CompressedMeshFile, OldVersionsAreRefusedByName) {
       ADD_FAILURE() << "version " << int{old} << " was read";
     } catch (const Error& e) {
       const std::string what = e.what();
-      EXPECT_NE(what.find("is " + std::to_string(old) + "; this build reads version 10"),
+      EXPECT_NE(what.find("is " + std::to_string(old) + "; this build reads version 11"),
                 std::string::npos)
           << what;
       EXPECT_NE(what.find("old.mfc"), std::string::npos) << what;

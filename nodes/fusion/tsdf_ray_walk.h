@@ -1,8 +1,8 @@
 #pragma once
 // The voxel traversal of the along-ray integrator (tsdf_ray_integration.cpp): which voxels a ray
-// segment crosses, and the part of a segment inside one block. Internal to nodes/fusion; always
-// inlined, as both run once per (ray, block) in the integrator's inner loops and take the
-// instruction set of the function calling them (MESHFLOW_AVX2_CLONES). Points are 4-lane vectors
+// segment crosses. Internal to nodes/fusion; always inlined, as it runs once per ray in the
+// integrator's inner loop and takes the instruction set of the function calling it
+// (MESHFLOW_AVX2_CLONES). Points are 4-lane vectors
 // (x, y, z, unused) so that the three axes' products, quotients and floors are one instruction
 // each; every lane sees the IEEE operations the scalar code would (no FMA), so results do not
 // depend on the vector width.
@@ -83,40 +83,6 @@ template <class Visit>
     cell += step & take;
     next += reinterpret_cast<Floats4>(reinterpret_cast<Ints4>(delta) & take);  // + 0 elsewhere
   }
-}
-
-/// The part of the segment from -> from + span (voxel units, lanes 0..2) inside the cells of the
-/// block whose first voxel is `origin`, with a little margin (cells outside are the caller's to
-/// skip), into clipped_from / clipped_to; false when it misses them (the slab method). O(1).
-[[gnu::always_inline]] inline bool clip_to_block(const ray_walk::Floats4& from,
-                                                 const ray_walk::Floats4& span,
-                                                 const Eigen::Vector3i& origin,
-                                                 ray_walk::Floats4& clipped_from,
-                                                 ray_walk::Floats4& clipped_to) {
-  using ray_walk::Floats4;
-  using ray_walk::Ints4;
-  constexpr float kMargin = 1e-3f;
-  constexpr float kLow = 0.5f + kMargin, kSide = static_cast<float>(kTsdfBlockSide) + 2 * kMargin;
-  const Floats4 lo =
-      __builtin_convertvector(Ints4{origin.x(), origin.y(), origin.z(), 0}, Floats4) - kLow;
-  const Floats4 hi = lo + kSide;
-  const Ints4 still = span == 0.0f;
-  const Floats4 a = (lo - from) / span, b = (hi - from) / span;  // still lanes: unused
-  const Ints4 swapped = a > b;
-  const Floats4 enter = swapped ? b : a, leave = swapped ? a : b;
-  float t0 = 0.0f, t1 = 1.0f;
-  for (int i = 0; i < 3; ++i) {
-    if (still[i] != 0) {
-      if (from[i] < lo[i] || from[i] > hi[i]) return false;
-      continue;
-    }
-    t0 = std::max(t0, enter[i]);
-    t1 = std::min(t1, leave[i]);
-  }
-  if (t0 > t1) return false;
-  clipped_from = from + t0 * span;
-  clipped_to = from + t1 * span;
-  return true;
 }
 
 }  // namespace meshflow

@@ -49,7 +49,6 @@
 #include "nodes/eval/truth_eval.h"
 #include "nodes/io/sequence.h"
 #include "nodes/io/tum_writer.h"
-#include "nodes/normals/organized_normals.h"
 #include "nodes/search/mesh_distance_index.h"
 #include "nodes/synthetic/depth_sequence.h"
 #include "nodes/synthetic/object_orbit.h"
@@ -243,20 +242,20 @@ std::vector<char> seen_by_frames(const io::Sequence& sequence,
 }
 
 // Every second pixel of every second row of every frame with a depth in (0.1, 10) m, in the
-// world (meshflow's back-projection of the frame's depth in metres).
+// world: T_world_camera ((u - cx) z / fx, (v - cy) z / fy, z) (depth_frame.h's camera).
 std::vector<Eigen::Vector3f> frame_points(const io::Sequence& sequence) {
   std::vector<Eigen::Vector3f> out;
   for (std::size_t i = 0; i < sequence.size(); ++i) {
     const DepthFrame f = sequence.frame(i).load_depth();
     const Image depth = depth_in_metres(f);
-    const PointCloud cloud = back_project(f, depth);
+    const PinholeIntrinsics& k = f.intrinsics;
     for (int v = 0; v < depth.rows(); v += 2)
       for (int u = 0; u < depth.cols(); u += 2) {
         const float z = depth.at<float>(v, u);
         if (z > 0.1f && z < 10.0f)
-          out.push_back(
-              cloud.positions[static_cast<std::size_t>(v) * static_cast<std::size_t>(depth.cols()) +
-                              static_cast<std::size_t>(u)]);
+          out.push_back(f.T_world_camera *
+                        Eigen::Vector3f((static_cast<float>(u) - k.cx) * z / k.fx,
+                                        (static_cast<float>(v) - k.cy) * z / k.fy, z));
       }
   }
   return out;

@@ -1,22 +1,30 @@
-// meshflow_fusion_vs_open3d: one object's orbit fused by meshflow (FusionPipeline, the defaults
+// meshflow_fusion_vs_open3d: one input's frames fused by meshflow (FusionPipeline, the defaults
 // of `meshflow run --fuse`) and by Open3D 0.16 (ScalableTSDFVolume, integrate + extract) at the
-// same voxel and truncation, both meshes measured against the object's exact surface, and the
-// truth samples one mesh covers and the other misses broken down by meshflow's map there.
+// same voxel and truncation, both meshes measured against one reference, and the reference
+// points one mesh covers and the other misses broken down by meshflow's map there.
 //
 //   meshflow_fusion_vs_open3d [--object perforated-box] [--voxel 0.01] [--truncation 4]
 //       [--frames 24] [--width 640] [--cache DIR] [--behind B] [--no-carve] [--drop-edges]
 //       [--no-optimize] [--along-ray] [--min-weight W] [--tau 0.5] [--patches]
+//   meshflow_fusion_vs_open3d --table [--voxel 0.01] [--truncation 4] [--frames 24]
 //
-// Objects: perforated-box and pocketed-block (nodes/synthetic/perforated_box.h), sieve (below)
-// or a built-in closed test object. --tau: the completeness threshold in voxels (also reported
-// at twice it); --patches: the differences per patch of the object as well. --cache DIR: the
-// rendered frames as a TUM RGB-D directory, written once and read back on later runs.
-// Completeness: of 200 000 points on the exact surface, the share within half a voxel of the
-// mesh (and the mean distance, a fraction of the diagonal as in bench/python); accuracy: the
-// mesh's area-sampled mean distance to the surface. Open3D runs on the same frames (depth
-// quantised to 1 mm, 1 mm noise) with its own rules: a voxel is updated wherever it lies less
-// than a truncation behind the measured depth (along the ray), and a cell is meshed only when
-// all eight corners were observed.
+// Inputs: an orbit of 24 views (1 mm noise, `meshflow sample OBJECT --orbit 24`) around
+// perforated-box or pocketed-block (nodes/synthetic/perforated_box.h), sieve (below) or a
+// built-in closed test object, against its exact surface; or "redwood": the Redwood RGB-D frames
+// in $MESHFLOW_DATA/rgbd_redwood (default ../shared/data), against the frames themselves.
+// Completeness: the mean distance of the reference points to the mesh and the shares within
+// --tau voxels (default half a voxel) and twice that; reference: 200 000 points on the exact
+// surface, or every second pixel of every second row of every Redwood frame with a depth in
+// (0.1, 10) m, back-projected with the frame's pose (what bench/python/bench_fusion_vs_open3d.py
+// used). Accuracy: the mesh's area-sampled mean distance to the exact surface; for Redwood the
+// mean distance of the mesh's vertices to the nearest reference point (`meshflow eval
+// --reference`). Objects' distances are fractions of the diagonal, Redwood's millimetres.
+// --patches: the differences per patch of the object as well. --cache DIR: the rendered frames
+// as a TUM RGB-D directory, written once and read back on later runs. --table: every input of
+// bench/RESULTS.md's fused-map table (meshflow projective and along-ray, Open3D), one Markdown
+// row each. Open3D runs on the same frames (depth in mm) with its own rules: a voxel of every
+// 16^3 unit near a measured point is updated wherever it lies less than a truncation behind the
+// measured depth (along the ray), and a cell is meshed only when all eight corners were observed.
 
 #include <open3d/camera/PinholeCameraIntrinsic.h>
 #include <open3d/geometry/Image.h>
@@ -34,18 +42,23 @@
 #include <string>
 #include <vector>
 
+#include "bench/peers/fused_map_measures.h"
 #include "graph/fusion_pipeline.h"
 #include "graph/sequence_runner.h"
-#include "nodes/eval/truth_eval.h"
 #include "nodes/io/sequence.h"
 #include "nodes/io/tum_writer.h"
-#include "nodes/search/mesh_distance_index.h"
 #include "nodes/synthetic/depth_sequence.h"
 #include "nodes/synthetic/object_orbit.h"
 #include "nodes/synthetic/perforated_box.h"
 
 namespace meshflow {
 namespace {
+
+using fusion_peer::breakdown;
+using fusion_peer::measure;
+using fusion_peer::Measures;
+using fusion_peer::report;
+using fusion_peer::Scene;
 
 struct Options {
   std::string object = "perforated-box";
@@ -55,7 +68,7 @@ struct Options {
   bool patches = false;     // also break the differences down by the object's patch
   int frames = 24, width = 640;
   std::string cache;
-  bool carve = true, keep_edges = true, optimize = true, along_ray = false;
+  bool carve = true, keep_edges = true, optimize = true, along_ray = false, table = false;
 };
 
 Options parse(int argc, char** argv) {
@@ -97,6 +110,8 @@ Options parse(int argc, char** argv) {
       o.tau_voxels = std::stof(value());
     else if (a == "--patches")
       o.patches = true;
+    else if (a == "--table")
+      o.table = true;
     else {
       std::fprintf(stderr, "unknown argument %s (see the file's header)\n", a.c_str());
       std::exit(2);
@@ -190,123 +205,121 @@ TriangleMesh fuse_open3d(const io::Sequence& sequence, const Options& o) {
   return mesh;
 }
 
-// Each truth point's distance to the mesh's surface.
-std::vector<float> distances_to(const TriangleMesh& mesh, const std::vector<Eigen::Vector3f>& at) {
-  std::vector<float> out(at.size(), std::numeric_limits<float>::infinity());
-  if (mesh.triangles.empty()) return out;
-  const MeshDistanceIndex index(mesh);
-  tbb::parallel_for(std::size_t{0}, at.size(),
-                    [&](std::size_t i) { out[i] = index.closest(at[i]).distance; });
+Scene make_scene(const std::string& name, const Options& o) {
+  Scene scene;
+  scene.name = name;
+  if (name == "redwood") {
+    const char* data = std::getenv("MESHFLOW_DATA");
+    scene.sequence =
+        io::open_sequence(std::string(data ? data : "../shared/data") + "/rgbd_redwood");
+    scene.reference = fusion_peer::frame_points(*scene.sequence);
+    scene.unit = 1e-3;
+    scene.seen.assign(scene.reference.size(), 1);  // every point is a measurement
+    return scene;
+  }
+  scene.object = object_named(name);
+  scene.sequence = orbit(*scene.object, o);
+  scene.reference = scene.object->sample(200000, 0.0f, 7).positions;
+  scene.unit = scene.object->diagonal();
+  scene.seen = fusion_peer::seen_by_frames(*scene.sequence, scene.reference, o.voxel);
+  return scene;
+}
+
+// One input in detail: both tools' measures and the breakdown.
+int run_one(const Options& o) {
+  const Scene scene = make_scene(o.object, o);
+  const float tau = o.tau_voxels * o.voxel;
+  std::printf(
+      "%s: %zu frames, voxel %.3f m, truncation %.1f voxels, meshflow band behind %.1f%s%s%s; "
+      "distances in %s\n",
+      scene.name.c_str(), scene.sequence->size(), o.voxel, o.truncation,
+      std::min(o.behind, o.truncation), o.carve ? "" : ", no carving",
+      o.keep_edges ? "" : ", occlusion edges dropped", o.optimize ? "" : ", no clean-up",
+      scene.object ? "fractions of the diagonal" : "mm");
+  const auto pipeline = fuse_meshflow(*scene.sequence, o);
+  TsdfExtractStats stats;
+  const TriangleMesh ours = pipeline->extract_mesh(&stats);
+  std::printf("meshflow cells: %zu meshed (%zu completed behind), %zu left out\n",
+              stats.cells.cells_meshed, stats.cells.cells_completed, stats.cells.cells_left_out);
+  const Measures our = measure(ours, scene, tau);
+  const Measures their = measure(fuse_open3d(*scene.sequence, o), scene, tau);
+  report(o.along_ray ? "along-ray" : "meshflow", our, tau);
+  report("Open3D", their, tau);
+  breakdown(scene, pipeline->map(), our, their, tau, o.min_weight, o.patches);
+  return 0;
+}
+
+// " | a | b | c" with the best of the three figures `v` in bold (the least, with `most` the
+// largest; every one that prints as the best does); `text`: how each is printed.
+std::string row_cells(const std::string (&text)[3], const double (&v)[3], bool most) {
+  int best = 0;
+  for (int k = 1; k < 3; ++k)
+    if (most ? v[k] > v[best] : v[k] < v[best]) best = k;
+  std::string out;
+  for (int k = 0; k < 3; ++k)
+    out += text[k] == text[best] ? " | **" + text[k] + "**" : " | " + text[k];
   return out;
 }
 
-void report(const char* tool, const TriangleMesh& mesh, const std::vector<float>& to_mesh,
-            const synthetic::ClosedObject& object, float tau) {
-  const double diagonal = object.diagonal();
-  const double accuracy =
-      evaluate_against_truth(
-          mesh, [&](const Eigen::Vector3f& p) { return object.distance(p); }, 200000)
-          .area.mean /
-      diagonal;
-  double sum = 0.0;
-  std::size_t within = 0, within_voxel = 0;
-  for (float d : to_mesh) {
-    sum += std::min(d, 1.0f);
-    within += d <= tau ? 1 : 0;
-    within_voxel += d <= 2.0f * tau ? 1 : 0;
+// The three figures printed with `format`, the least in bold.
+std::string row_cells(const double (&v)[3], const char* format) {
+  std::string text[3];
+  for (int k = 0; k < 3; ++k) {
+    char buffer[32];
+    std::snprintf(buffer, sizeof buffer, format, v[k]);
+    text[k] = buffer;
   }
-  const double n = static_cast<double>(to_mesh.size());
-  std::printf(
-      "%-9s accuracy %.3e  completeness mean %.3e  within %.1f mm %.4f  within %.1f mm %.4f  "
-      "triangles %zu  border edges %zu\n",
-      tool, accuracy, sum / n / diagonal, 1e3 * tau, static_cast<double>(within) / n, 2e3 * tau,
-      static_cast<double>(within_voxel) / n, mesh.triangles.size(),
-      edge_statistics(mesh).boundary_edges);
+  return row_cells(text, v, false);
 }
 
-// What meshflow's map holds in the cell around p.
-enum Cell { kNothing, kPartlyObserved, kAllInFront, kAllBehind, kSignChange, kCellKinds };
-const char* const kCellNames[kCellKinds] = {"no corner observed", "some corners unobserved",
-                                            "all observed, in front (+)",
-                                            "all observed, behind (-)", "a sign change (meshed)"};
-
-Cell cell_at(const TsdfMap& map, const Eigen::Vector3f& p, float min_weight) {
-  const float voxel = map.config().voxel_size;
-  const Eigen::Vector3i base = (p / voxel).array().floor().cast<int>();
-  int observed = 0, in_front = 0;
-  for (int c = 0; c < 8; ++c) {
-    const Eigen::Vector3i v = base + Eigen::Vector3i(c & 1, (c >> 1) & 1, (c >> 2) & 1);
-    const Eigen::Vector3i block = (v.cast<float>() / kTsdfBlockSide).array().floor().cast<int>();
-    const TsdfBlock* b = map.find(block);
-    if (b == nullptr) continue;
-    const Eigen::Vector3i local = v - block * kTsdfBlockSide;
-    const TsdfVoxel& voxel_at = b->voxels[static_cast<std::size_t>(
-        local.x() + kTsdfBlockSide * (local.y() + kTsdfBlockSide * local.z()))];
-    if (!(voxel_at.weight > min_weight)) continue;
-    ++observed;
-    in_front += voxel_at.distance >= 0.0f ? 1 : 0;
+// bench/RESULTS.md's fused-map table: every input, meshflow projective and along-ray and Open3D.
+int run_table(const Options& o) {
+  const float tau = o.tau_voxels * o.voxel;
+  std::printf(
+      "| input | accuracy meshflow | along-ray | Open3D | completeness meshflow | along-ray | "
+      "Open3D | within %g / %g voxel meshflow | along-ray | Open3D | border edges meshflow / "
+      "Open3D |\n|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n",
+      o.tau_voxels, 2.0 * o.tau_voxels);
+  const char* const inputs[] = {"sphere",        "torus",  "l-shape",    "chamfered-cube",
+                                "box-with-hole", "box",    "thin-plate", "perforated-box",
+                                "sieve",         "redwood"};
+  for (const char* name : inputs) {
+    Options projective = o, along_ray = o;
+    if (!o.cache.empty()) projective.cache = along_ray.cache = o.cache + "/" + name;
+    along_ray.along_ray = true;
+    const Scene scene = make_scene(name, projective);
+    const Measures m[3] = {
+        measure(fuse_meshflow(*scene.sequence, projective)->extract_mesh(), scene, tau),
+        measure(fuse_meshflow(*scene.sequence, along_ray)->extract_mesh(), scene, tau),
+        measure(fuse_open3d(*scene.sequence, o), scene, tau)};
+    char label[96];
+    if (scene.object)
+      std::snprintf(label, sizeof label, "%s (diag. %.2f m)", name, scene.unit);
+    else
+      std::snprintf(label, sizeof label, "Redwood, %zu frames (mm, against the frames)",
+                    scene.sequence->size());
+    const char* format = scene.object ? "%.3e" : "%.2f";
+    const double accuracy[3] = {m[0].accuracy, m[1].accuracy, m[2].accuracy};
+    const double completeness[3] = {m[0].completeness, m[1].completeness, m[2].completeness};
+    const double within_twice[3] = {m[0].within_twice, m[1].within_twice, m[2].within_twice};
+    std::string within[3];  // "share within tau / within twice tau", the latter ranked
+    for (int k = 0; k < 3; ++k) {
+      char text[32];
+      std::snprintf(text, sizeof text, "%.4f / %.4f", m[k].within, m[k].within_twice);
+      within[k] = text;
+    }
+    std::printf("| %s%s%s%s | %zu / %zu |\n", label, row_cells(accuracy, format).c_str(),
+                row_cells(completeness, format).c_str(),
+                row_cells(within, within_twice, true).c_str(), m[0].border_edges,
+                m[2].border_edges);
+    std::fflush(stdout);
   }
-  if (observed == 0) return kNothing;
-  if (in_front > 0 && in_front < observed) return kSignChange;
-  if (observed < 8) return kPartlyObserved;
-  return in_front == 8 ? kAllInFront : kAllBehind;
+  return 0;
 }
 
 int run(int argc, char** argv) {
   const Options o = parse(argc, argv);
-  const synthetic::ClosedObject object = object_named(o.object);
-  const auto sequence = orbit(object, o);
-  const float tau = o.tau_voxels * o.voxel;
-  std::printf(
-      "%s: %zu frames, voxel %.3f m, truncation %.1f voxels, meshflow band behind %.1f%s%s%s\n",
-      object.name.c_str(), sequence->size(), o.voxel, o.truncation,
-      std::min(o.behind, o.truncation), o.carve ? "" : ", no carving",
-      o.keep_edges ? "" : ", occlusion edges dropped", o.optimize ? "" : ", no clean-up");
-  const auto pipeline = fuse_meshflow(*sequence, o);
-  TsdfExtractStats stats;
-  const TriangleMesh ours = pipeline->extract_mesh(&stats);
-  const TsdfMap& map = pipeline->map();
-  std::printf("meshflow cells: %zu meshed (%zu completed behind), %zu left out\n",
-              stats.cells.cells_meshed, stats.cells.cells_completed, stats.cells.cells_left_out);
-  const TriangleMesh theirs = fuse_open3d(*sequence, o);
-  const std::vector<Eigen::Vector3f> truth = object.sample(200000, 0.0f, 7).positions;
-  const std::vector<float> to_ours = distances_to(ours, truth);
-  const std::vector<float> to_theirs = distances_to(theirs, truth);
-  report("meshflow", ours, to_ours, object, tau);
-  report("Open3D", theirs, to_theirs, object, tau);
-  std::size_t kinds[2][kCellKinds] = {};
-  std::size_t only[2] = {};
-  std::vector<std::size_t> by_patch[2];
-  by_patch[0].assign(object.patches.size(), 0);
-  by_patch[1].assign(object.patches.size(), 0);
-  for (std::size_t i = 0; i < truth.size(); ++i) {
-    const bool ours_has = to_ours[i] <= tau, theirs_has = to_theirs[i] <= tau;
-    if (ours_has == theirs_has) continue;
-    const int side = theirs_has ? 0 : 1;  // 0: Open3D keeps, meshflow drops
-    ++only[side];
-    ++kinds[side][cell_at(map, truth[i], o.min_weight)];
-    if (o.patches) {
-      std::size_t nearest = 0;
-      for (std::size_t k = 1; k < object.patches.size(); ++k)
-        if (object.patches[k].distance(truth[i]) < object.patches[nearest].distance(truth[i]))
-          nearest = k;
-      ++by_patch[side][nearest];
-    }
-  }
-  const char* const sides[2] = {"Open3D keeps, meshflow drops", "meshflow keeps, Open3D drops"};
-  for (int side = 0; side < 2; ++side) {
-    std::printf("%s: %zu of %zu truth points (%.2f %%); meshflow's cell there:\n", sides[side],
-                only[side], truth.size(), 100.0 * static_cast<double>(only[side]) / 200000.0);
-    for (int k = 0; k < kCellKinds; ++k)
-      std::printf("  %-28s %zu\n", kCellNames[k], kinds[side][k]);
-    if (o.patches) {
-      std::printf("  by patch:");
-      for (std::size_t k = 0; k < by_patch[side].size(); ++k)
-        if (by_patch[side][k] > 0) std::printf(" %zu:%zu", k, by_patch[side][k]);
-      std::printf("\n");
-    }
-  }
-  return 0;
+  return o.table ? run_table(o) : run_one(o);
 }
 
 }  // namespace

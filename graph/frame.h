@@ -94,12 +94,14 @@ struct Frame {
   /// writers add it back (io::write_mesh).
   Eigen::Vector3d origin = Eigen::Vector3d::Zero();
   FilterCounts filter_counts;
-  std::shared_ptr<const SpatialIndex> index;  ///< over cloud.positions (cloud route: "index")
-  NormalsReport normals;                      ///< where the cloud's normals came from
+  /// Over cloud.positions (cloud route: "index"); released by "extract" (no later stage searches).
+  std::shared_ptr<const SpatialIndex> index;
+  NormalsReport normals;  ///< where the cloud's normals came from
   float voxel_size = 0.0f;
+  /// After "extract" only its cells and corners (the cell corners are released: memory).
   SparseGrid grid;
-  DistanceField distance;
-  CloseReport closing;  ///< what the close stage did (closing.ran: it ran)
+  DistanceField distance;  ///< after "extract" only its valid flags and counts (values released)
+  CloseReport closing;     ///< what the close stage did (closing.ran: it ran)
   ExtractMethod extract_method = ExtractMethod::kAuto;  ///< the method "extract" used
   std::size_t rim_trimmed = 0;  ///< triangles "extract" peeled off the rim (max_rim_voxels)
   TriangleMesh mesh;  ///< after extract: raw; after optimize: optimised (fusion: the map so far)

@@ -1,6 +1,7 @@
 #include "graph/stages.h"
 
 #include <algorithm>
+#include <array>
 #include <cstdio>
 #include <exception>
 #include <optional>
@@ -274,6 +275,18 @@ std::uint64_t close(Frame& f, const ReconstructionConfig& c) {
   return f.closing.filled;
 }
 
+namespace {
+
+// Frees the grid's cell corners and the distance values once the surface is extracted: no stage
+// after "extract" reads them (the reports count the grid's cells and corners and the valid
+// samples, which stay). 32 bytes per cell and 4 per corner, at the run's peak.
+void release_extracted_field(Frame& f) {
+  std::vector<std::array<std::uint32_t, 8>>().swap(f.grid.cell_corners);
+  std::vector<float>().swap(f.distance.values);
+}
+
+}  // namespace
+
 std::uint64_t extract(Frame& f, const ReconstructionConfig& c) {
   ExtractConfig config = c.extract;
   if (config.method == ExtractMethod::kAuto)  // sharp normals were estimated for clean samples
@@ -287,6 +300,7 @@ std::uint64_t extract(Frame& f, const ReconstructionConfig& c) {
       f.chunk ? (config.defer_feature_flips ? &f.chunk->feature_vertices : nullptr)
               : (emc ? &f.feature_vertices : nullptr);
   f.mesh = extract_surface(f.grid, f.distance, f.cloud, f.index.get(), config, feature_vertices);
+  release_extracted_field(f);
   // Planar marching cubes places no vertex on a feature, but knows the data: on clean samples
   // (sharp normals, or estimated ones whose plane fits are as exact as NormalsConfig's
   // clean_variation; a scan's would flag nearly every vertex) the vertices where it shows one.
@@ -333,6 +347,7 @@ std::uint64_t extract(Frame& f, const ReconstructionConfig& c) {
     f.depth->image = DepthFrame{};             // the counts stay for the report
   } else if (f.cloud.has_colors() && f.index)  // so does a coloured cloud
     f.mesh.colors = vertex_colors(f.mesh.vertices, f.cloud, *f.index);
+  f.index.reset();  // no stage after "extract" searches the points (about 16 bytes per point)
   return f.mesh.triangles.size();
 }
 

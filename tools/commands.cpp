@@ -4,6 +4,7 @@
 #include <string>
 
 #include "graph/pipeline.h"
+#include "nodes/chunk/phase_times.h"
 #include "nodes/compress/compressed_mesh.h"
 #include "nodes/depth/organized_depth.h"
 #include "nodes/eval/vertex_quality.h"
@@ -176,6 +177,7 @@ void run_reconstruct(const ReconstructOptions& o) {
   if (console().json) {
     nlohmann::json doc = options::frame_json(*frame, wall, limit.threads());
     doc["output"] = o.output;
+    doc["peak_bytes"] = chunk::peak_resident_bytes();  // the process's, as --chunk reports it
     if (o.texture) doc["textures"] = textures;
     if (compressed) doc["compressed_bytes"] = frame->compressed.size();
     if (o.quality) {

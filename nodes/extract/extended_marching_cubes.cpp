@@ -12,13 +12,6 @@
 namespace meshflow {
 namespace {
 
-constexpr std::size_t kMaxLoops = 4;  // contour loops per cube case (at most 4)
-
-// The feature vertex (if any) of each loop of one active cell.
-struct CellFeatures {
-  std::array<FeaturePoint, kMaxLoops> loop;
-};
-
 // The active cells of a grid and their crossed edges, which every phase reads.
 struct ActiveCells {
   const SparseGrid& grid;
@@ -51,21 +44,30 @@ std::vector<Eigen::Vector3f> move_onto_data(std::vector<Eigen::Vector3f>& vertic
   return normals;
 }
 
-// The feature vertex of every loop of every active cell, and where each cell's feature vertices
-// and triangles start in the output (exclusive sums).
+// Whether each contour loop of the active cells fans around a feature vertex, the loops in cell
+// order (a cell's own from loop_offsets: a byte per loop, where a feature point per possible
+// loop took 64 bytes per cell), and where each cell's loops, feature vertices and triangles
+// start in the output (exclusive sums).
 struct CellLayout {
-  std::vector<CellFeatures> features;
-  std::vector<std::uint32_t> vertex_offsets, triangle_offsets;
+  std::vector<std::uint8_t> fan;
+  std::vector<std::uint32_t> loop_offsets, vertex_offsets, triangle_offsets;
   std::uint32_t feature_vertices = 0, triangles = 0;
 };
 
-CellLayout detect_features(const ActiveCells& at, const std::vector<Eigen::Vector3f>& vertices,
+// The feature point of every loop (sharp_feature()) from the edge vertices `vertices` and the
+// data's `normals` at them; the feature vertices appended to `vertices` in cell and loop order.
+CellLayout detect_features(const ActiveCells& at, std::vector<Eigen::Vector3f>& vertices,
                            const std::vector<Eigen::Vector3f>& normals,
                            const SharpFeatureConfig& feature) {
   const auto& cases = cube_cases();
   const std::size_t count = at.cells.active.size();
   CellLayout layout;
-  layout.features.resize(count);
+  layout.loop_offsets.resize(count);
+  tbb::parallel_for(std::size_t{0}, count, [&](std::size_t a) {
+    layout.loop_offsets[a] =
+        static_cast<std::uint32_t>(cases[at.cells.pattern[at.cells.active[a]]].loops.size());
+  });
+  std::vector<FeaturePoint> features(exclusive_scan_in_place(layout.loop_offsets));
   layout.vertex_offsets.resize(count);
   layout.triangle_offsets.resize(count);
   tbb::parallel_for(std::size_t{0}, count, [&](std::size_t a) {
@@ -82,7 +84,7 @@ CellLayout detect_features(const ActiveCells& at, const std::vector<Eigen::Vecto
         points[k] = vertices[v];
         loop_normals[k] = normals[v];
       }
-      FeaturePoint& f = layout.features[a].loop[l];
+      FeaturePoint& f = features[layout.loop_offsets[a] + l];
       f = sharp_feature(points.data(), loop_normals.data(), loop.size(), box, feature);
       const bool fan = f.kind != FeatureKind::kNone;
       feature_count += fan ? 1u : 0u;
@@ -93,11 +95,24 @@ CellLayout detect_features(const ActiveCells& at, const std::vector<Eigen::Vecto
   });
   layout.feature_vertices = exclusive_scan_in_place(layout.vertex_offsets);
   layout.triangles = exclusive_scan_in_place(layout.triangle_offsets);
+  const std::size_t first_feature = vertices.size();
+  vertices.resize(first_feature + layout.feature_vertices);
+  layout.fan.resize(features.size());
+  tbb::parallel_for(std::size_t{0}, count, [&](std::size_t a) {
+    std::size_t next = first_feature + layout.vertex_offsets[a];
+    const std::uint32_t end =
+        a + 1 < count ? layout.loop_offsets[a + 1] : static_cast<std::uint32_t>(features.size());
+    for (std::uint32_t l = layout.loop_offsets[a]; l < end; ++l) {
+      const bool fan = features[l].kind != FeatureKind::kNone;
+      layout.fan[l] = fan ? 1 : 0;
+      if (fan) vertices[next++] = features[l].position;
+    }
+  });
   return layout;
 }
 
 // Fans around feature vertices, marching cubes' triangles elsewhere, in cell and loop order;
-// feature vertices numbered from `first_feature`.
+// feature vertices numbered from `first_feature` (placed by detect_features()).
 void emit_triangles(const ActiveCells& at, const CellLayout& layout, std::uint32_t first_feature,
                     TriangleMesh& mesh) {
   const auto& cases = cube_cases();
@@ -109,10 +124,8 @@ void emit_triangles(const ActiveCells& at, const CellLayout& layout, std::uint32
     for (std::size_t l = 0; l < cube.loops.size(); ++l) {
       const auto& loop = cube.loops[l];
       const std::size_t n = loop.size();
-      const FeaturePoint& feature = layout.features[a].loop[l];
-      if (feature.kind != FeatureKind::kNone) {
+      if (layout.fan[layout.loop_offsets[a] + l]) {
         const std::uint32_t f = next_feature++;
-        mesh.vertices[f] = feature.position;
         for (std::size_t k = 0; k < n; ++k)
           mesh.triangles[out++] =
               Triangle{f, at.vertex(a, loop[(k + 1) % n]), at.vertex(a, loop[k])};
@@ -136,18 +149,23 @@ TriangleMesh extended_marching_cubes(const SparseGrid& grid, const DistanceField
                                      std::vector<std::uint8_t>* feature_vertices) {
   if (cloud.normals.size() != cloud.positions.size())
     throw Error("extract", "method emc", "needs point normals");
-  const CellPatterns cells = cell_patterns(grid, field, config.iso);
-  EdgeVertexTable edges = mark_crossed_cube_edges(grid, cells);
   TriangleMesh mesh;
-  mesh.vertices = edges.place_vertices(grid, field, config.iso);
-  const ActiveCells active{grid, cells, edges};
-  const auto edge_vertices = static_cast<std::uint32_t>(mesh.vertices.size());
-  const std::vector<Eigen::Vector3f> normals =
-      move_onto_data(mesh.vertices, active, field, cloud, index, config.iso, emc.directed);
-  const CellLayout layout = detect_features(active, mesh.vertices, normals, emc.feature);
-  mesh.vertices.resize(edge_vertices + layout.feature_vertices);
-  mesh.triangles.resize(layout.triangles);
-  emit_triangles(active, layout, edge_vertices, mesh);
+  std::uint32_t edge_vertices = 0;
+  {  // the cells' tables, freed before the flips and the normals
+    const CellPatterns cells = cell_patterns(grid, field, config.iso);
+    EdgeVertexTable edges = mark_crossed_cube_edges(grid, cells);
+    mesh.vertices = edges.place_vertices(grid, field, config.iso);
+    const ActiveCells active{grid, cells, edges};
+    edge_vertices = static_cast<std::uint32_t>(mesh.vertices.size());
+    const CellLayout layout = [&] {  // the data's normals at the vertices are freed after it
+      const std::vector<Eigen::Vector3f> normals =
+          move_onto_data(mesh.vertices, active, field, cloud, index, config.iso, emc.directed);
+      return detect_features(active, mesh.vertices, normals, emc.feature);
+    }();
+    edges.release_marks();  // the triangles need only the vertex numbers
+    mesh.triangles.resize(layout.triangles);
+    emit_triangles(active, layout, edge_vertices, mesh);
+  }
   std::vector<std::uint8_t> is_feature(mesh.vertices.size(), 0);
   std::fill(is_feature.begin() + static_cast<std::ptrdiff_t>(edge_vertices), is_feature.end(),
             std::uint8_t{1});

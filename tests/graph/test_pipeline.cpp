@@ -7,6 +7,7 @@
 #include <thread>
 
 #include "graph/stages.h"
+#include "nodes/extract/extract_surface.h"
 #include "nodes/synthetic/shapes.h"
 #include "runtime/error.h"
 
@@ -153,6 +154,42 @@ TEST(Pipeline, StagesRecordTimingsAndItems) {
   EXPECT_EQ(f.timings[2].items, f.cloud.size());
   EXPECT_GE(f.timings[2].end_s, f.timings[2].start_s);
   EXPECT_EQ(f.cloud.normals.size(), f.cloud.size());
+}
+
+// After "extract" the frame keeps what the reports count (the grid's cells and corners, the valid
+// samples) and the mesh, not what only extraction reads: the cell corners, the distance values
+// and the spatial index are released (the whole cloud's peak memory), the mesh unchanged.
+TEST(Pipeline, ExtractReleasesTheFieldAndTheIndexAndKeepsTheCounts) {
+  for (const ExtractMethod method :
+       {ExtractMethod::kMarchingCubes, ExtractMethod::kExtendedMarchingCubes}) {
+    Frame f;
+    f.cloud = synthetic::sample_surface(synthetic::Sphere{}, 0.05f, 0.0f, 1);
+    ReconstructionConfig c = sphere_config();
+    c.extract.method = method;
+    c.max_rim_voxels = 0.0f;  // the stage's mesh is then extract_surface()'s
+    for (const stages::NamedStage& stage :
+         {stages::NamedStage{"filter", stages::filter}, stages::NamedStage{"index", stages::index},
+          stages::NamedStage{"normals", stages::normals},
+          stages::NamedStage{"voxelize", stages::voxelize},
+          stages::NamedStage{"distance", stages::distance}})
+      stages::run_stage(stage.name, stage.body, f, c);
+    ASSERT_TRUE(f.ok()) << f.error;
+    const SparseGrid grid = f.grid;
+    const DistanceField field = f.distance;
+    const TriangleMesh expected = extract_surface(grid, field, f.cloud, f.index.get(), c.extract);
+    ASSERT_FALSE(expected.triangles.empty());
+    stages::run_stage("extract", stages::extract, f, c);
+    ASSERT_TRUE(f.ok()) << f.error;
+    EXPECT_EQ(f.mesh.vertices, expected.vertices);
+    EXPECT_EQ(f.mesh.triangles, expected.triangles);
+    EXPECT_EQ(f.index, nullptr);
+    EXPECT_TRUE(f.grid.cell_corners.empty());
+    EXPECT_TRUE(f.distance.values.empty());
+    EXPECT_EQ(f.grid.cells, grid.cells);
+    EXPECT_EQ(f.grid.corners, grid.corners);
+    EXPECT_EQ(f.distance.valid_count(), field.valid_count());
+    EXPECT_GT(field.valid_count(), 0u);
+  }
 }
 
 }  // namespace

@@ -174,9 +174,12 @@ inline bool any_lane(const Ints8& mask) {
 #define MESHFLOW_GATHER_PAIRS(base, index, first, second)                                   \
   do {                                                                                      \
     Pairs4 lo_, hi_;                                                                        \
-    for (int j = 0; j < 4; ++j) {                                                           \
-      __builtin_memcpy(&lo_[j], (base) + 2 * static_cast<std::size_t>((index)[j]), 8);      \
-      __builtin_memcpy(&hi_[j], (base) + 2 * static_cast<std::size_t>((index)[j + 4]), 8);  \
+    for (int j = 0; j < 4; ++j) { /* via scalars: no address of a vector lane (clang) */    \
+      std::uint64_t l_, h_;                                                                 \
+      __builtin_memcpy(&l_, (base) + 2 * static_cast<std::size_t>((index)[j]), 8);          \
+      __builtin_memcpy(&h_, (base) + 2 * static_cast<std::size_t>((index)[j + 4]), 8);      \
+      lo_[j] = l_;                                                                          \
+      hi_[j] = h_;                                                                          \
     }                                                                                       \
     const Floats8 a_ = reinterpret_cast<Floats8>(lo_), b_ = reinterpret_cast<Floats8>(hi_); \
     (first) = __builtin_shufflevector(a_, b_, 0, 2, 4, 6, 8, 10, 12, 14);                   \
@@ -282,7 +285,11 @@ MESHFLOW_AVX2_CLONES std::size_t blend_voxel_rows(TsdfBlock& block, const BlockU
       Ints8 seen;  // the pixel's r, g, b in the low bytes
       if (last_word >= 0) {
         const Ints8 start = at < last_word ? at : Ints8{} + last_word;
-        for (int j = 0; j < 8; ++j) __builtin_memcpy(&seen[j], colors + start[j], 4);
+        for (int j = 0; j < 8; ++j) {  // via a scalar: no address of a vector lane (clang)
+          std::int32_t word;
+          __builtin_memcpy(&word, colors + start[j], 4);
+          seen[j] = word;
+        }
         seen = seen >> ((at - start) << 3);
       } else {  // an image of one pixel: no 4-byte word inside it
         for (int j = 0; j < 8; ++j)

@@ -519,14 +519,26 @@ TEST(ChunkedReconstruction, TimesEveryPhaseSerialOnlyWhereOneCoreWorks) {
   std::filesystem::remove(text);
 }
 
+// The city of `points` points meshed at `voxel` in chunks of `chunk_edge` m, and its tiles.
+struct CityTiles {
+  ChunkedResult result;
+  chunk::ChunkGrid grid;
+  std::vector<chunk::MeshTile> tiles;
+};
+CityTiles city_tiles(std::uint64_t points, float voxel, float chunk_edge) {
+  const CityInput input(points, true);
+  CityTiles out;
+  out.result = reconstruct_chunked(input.path, "", raw_config(voxel), chunks_of(chunk_edge));
+  out.grid = chunk::ChunkGrid{out.result.report.voxel_size, out.result.report.chunk_cells, 0};
+  out.tiles = chunk::split_into_tiles(out.result.mesh, out.grid);
+  return out;
+}
+
 // --tiles: every triangle of the mesh in exactly one tile, the one of the chunk holding its
 // centroid; the tiles written as glTF files and an index read back to the whole mesh (issue 61:
 // the tiles' union equals the whole mesh).
 TEST(MeshTiles, TheTilesUnionIsTheWholeMesh) {
-  const CityInput input(30000, true);
-  const ChunkedResult r = reconstruct_chunked(input.path, "", raw_config(1.0f), chunks_of(15.0f));
-  const chunk::ChunkGrid grid{r.report.voxel_size, r.report.chunk_cells, 0};
-  const std::vector<chunk::MeshTile> tiles = chunk::split_into_tiles(r.mesh, grid);
+  const auto& [r, grid, tiles] = city_tiles(30000, 1.0f, 15.0f);
   EXPECT_GT(tiles.size(), 4u);
   const std::string dir = test::temp_dir() + "/tiles";
   const Eigen::Vector3d origin(100.5, -200.25, 3.0);
@@ -625,10 +637,8 @@ std::set<std::pair<PositionBits, PositionBits>> union_border(
 // and its inverse) has border edges exactly where the whole mesh has them: no crack. Without
 // locking, some tile's coarse level leaves its border (the crack the lock removes).
 TEST(MeshTiles, LockedBordersLetAnyLevelsOfNeighbouringTilesMeetWithoutCracks) {
-  const CityInput input(60000, true);
-  const ChunkedResult r = reconstruct_chunked(input.path, "", raw_config(0.5f), chunks_of(45.0f));
-  const chunk::ChunkGrid grid{r.report.voxel_size, r.report.chunk_cells, 0};
-  const std::vector<chunk::MeshTile> tiles = chunk::split_into_tiles(r.mesh, grid);
+  const CityTiles city = city_tiles(60000, 0.5f, 45.0f);
+  const std::vector<chunk::MeshTile>& tiles = city.tiles;  // (a lambda below captures it)
   ASSERT_GE(tiles.size(), 4u);
   std::vector<std::vector<TriangleMesh>> levels;  // per tile: coarse to fine, the tile last
   std::size_t coarse = 0, deep = 0;
@@ -650,7 +660,7 @@ TEST(MeshTiles, LockedBordersLetAnyLevelsOfNeighbouringTilesMeetWithoutCracks) {
   EXPECT_GE(coarse, 10u);
   EXPECT_GE(deep, 4u) << "tiles with two coarser levels or more";
   EXPECT_TRUE(unlocked_left_a_border);
-  const auto whole = union_border({&r.mesh});
+  const auto whole = union_border({&city.result.mesh});
   ASSERT_FALSE(whole.empty()) << "the city's mesh has borders of its own";
   const auto choose = [&](const auto& pick) {
     std::vector<const TriangleMesh*> chosen;

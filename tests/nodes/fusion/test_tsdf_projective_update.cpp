@@ -196,7 +196,8 @@ TEST(TsdfProjectiveUpdate, FusesTheColourOfTheLastPixelAndOfOnePixelImages) {
 TEST(TsdfProjectiveUpdate, DepthSlopesMatchThePixelByPixelRule) {
   std::mt19937 rng(5);
   std::uniform_real_distribution<float> unit(0.0f, 1.0f);
-  for (const auto& [width, height] : {std::pair{1, 1}, std::pair{9, 2}, std::pair{37, 5}}) {
+  for (const auto& size : {std::pair{1, 1}, std::pair{9, 2}, std::pair{37, 5}}) {
+    const int width = size.first, height = size.second;  // (lambdas below capture them)
     std::vector<float> pixels(2 * static_cast<std::size_t>(width * height));
     for (std::size_t p = 0; p < pixels.size() / 2; ++p) {
       const float r = unit(rng);

@@ -613,7 +613,7 @@ void add_run_options(CLI::App* cmd) {
                   "With --fuse: how frames reach the voxels: projective (each voxel of a touched "
                   "block projected into the image; fastest) or along-ray (each pixel's ray walks "
                   "its band, pixels in one voxel merged as in voxblox; more accurate, about "
-                  "1.4-1.8x slower)")
+                  "2-2.6x slower)")
       ->check(CLI::IsMember({"projective", "along-ray"}))
       ->needs(fuse);
   cmd->add_flag("--no-carve", o->no_carve,

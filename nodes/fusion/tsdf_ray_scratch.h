@@ -59,8 +59,11 @@ struct RayRun {
 template <typename T>
 class RayList {
  public:
+  /// Entries counted so far. O(1).
   std::size_t size() const { return size_; }
+  /// The first entry (size() of them, contiguous); null before the first room(). O(1).
   const T* data() const { return data_.get(); }
+  /// Forgets the entries and keeps the room (no deallocation). O(1).
   void clear() { size_ = 0; }
   /// Room for n entries past size() (pointers from earlier calls are invalidated); returns
   /// where they begin. Amortised O(n).

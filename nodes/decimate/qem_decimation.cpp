@@ -175,6 +175,9 @@ class Decimator {
         cos2_min_angle_(static_cast<float>(
             std::pow(std::cos(radians(static_cast<double>(config.min_angle_deg))), 2))),
         scratch_([this] { return Scratch(*this); }) {
+    // The caller's locked vertices (QemConfig::locked) join the rings' own.
+    for (std::size_t v = 0; v < config.locked.size(); ++v)
+      if (config.locked[v] != 0) rings_.lock(static_cast<std::uint32_t>(v));
     // Per vertex its position (it never changes) and 1 / depth^2 (or 1).
     tbb::parallel_for(
         tbb::blocked_range<std::size_t>(0, mesh.vertices.size()),
@@ -721,8 +724,7 @@ class Decimator {
     scratch.border_count = 0;
     scratch.on_line = false;
     scratch.line_count = 0;
-    if (rings_.face_count(u) == 0 || rings_.locked(u) || (!cfg_.locked.empty() && cfg_.locked[u]))
-      return 0;
+    if (rings_.face_count(u) == 0 || rings_.locked(u)) return 0;
     const std::uint32_t* const ring = rings_.begin(u);
     const std::size_t n = rings_.size(u);
     scratch.neighbours = ring;

@@ -45,11 +45,15 @@ class VertexRings {
 
   /// What v's ring is: closed, open, several fans or complex (Kind).
   Kind kind(std::uint32_t v) const { return records_[v].kind; }
-  /// Whether v is kFans or kComplex, or next to a complex vertex: v must never be collapsed
-  /// (a vertex of several fans has more than two border neighbours, so the decimator's border
-  /// rule refuses it; a complex one's neighbours could not be updated). Fixed at construction:
-  /// collapses of other vertices only ever give a vertex neighbours that are not complex.
+  /// Whether v must never be collapsed: v is kFans or kComplex, or next to a complex vertex (a
+  /// vertex of several fans has more than two border neighbours, so the decimator's border
+  /// rule refuses it; a complex one's neighbours could not be updated; fixed at construction:
+  /// collapses of other vertices only ever give a vertex neighbours that are not complex), or
+  /// the caller locked it (lock()).
   bool locked(std::uint32_t v) const { return (records_[v].flags & kLocked) != 0; }
+  /// Locks v: locked() from now on (never the removed end of a collapse; other vertices may
+  /// still collapse onto it). Not thread-safe for the same v. O(1).
+  void lock(std::uint32_t v) { records_[v].flags |= kLocked; }
   /// First entry of v's ring (neighbour vertices, kSeparator between fans).
   const std::uint32_t* begin(std::uint32_t v) const { return entries(records_[v]); }
   /// One past the last entry of v's ring.
